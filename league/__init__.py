@@ -1,0 +1,1 @@
+"""League data: the SQLite store, rankings, nights and seasons, sync stores."""

@@ -1,0 +1,1 @@
+"""racer-tui front ends: the command line (headless) and the Textual app."""

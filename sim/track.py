@@ -1,0 +1,275 @@
+"""Tracks in AWS DeepRacer's own layout, validated.
+
+A track file is a float64 NumPy array of shape (N, 6): centre x,y / inner border x,y /
+outer border x,y in metres. It is a loop when the first row equals the last, and the
+driving direction is the row order. The road is the outer polygon minus the inner one.
+
+This is the one place that reads and checks track arrays: every error is a `TrackError`
+whose message names the file and the problem in one sentence.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import shapely
+from shapely.geometry import LinearRing, Polygon
+
+from sim.atomic import write_bytes_atomic
+from sim.geometry import FloatArray, PolylineProjector, segment_lengths, signed_area
+
+Direction = Literal["counter-clockwise", "clockwise"]
+
+# Thinner than this anywhere and the road is not drivable (the car is 0.196 m wide).
+MIN_WIDTH = 0.2
+# An open file whose ends are this close (in median segment lengths) is a loop missing its
+# closing row; DeepRacer exports sometimes drop it.
+_CLOSE_GAP_SEGMENTS = 3.0
+
+
+class TrackError(ValueError):
+    """A track file or array that cannot be used; the message is meant for the user."""
+
+
+@dataclass(frozen=True, eq=False)
+class Track:
+    """A validated closed track. Build one with `Track.from_array` or `load_track`."""
+
+    name: str
+    points: FloatArray
+    description: str = ""
+    source: str = field(default="", compare=False)
+
+    @classmethod
+    def from_array(
+        cls, array: object, name: str, *, description: str = "", source: str = ""
+    ) -> Track:
+        """Validate a DeepRacer (N, 6) array and make a track of it.
+
+        `source` names the file in error messages ("<name>" when there is none).
+        """
+        label = source or f"track {name!r}"
+        points = _normalise(array, label)
+        _check_borders(points, label)
+        return cls(name=name, points=points, description=description, source=source)
+
+    # --- the three lines -------------------------------------------------------------
+    @property
+    def center(self) -> FloatArray:
+        return self.points[:, 0:2]
+
+    @property
+    def inner(self) -> FloatArray:
+        return self.points[:, 2:4]
+
+    @property
+    def outer(self) -> FloatArray:
+        return self.points[:, 4:6]
+
+    # --- derived facts ------------------------------------------------------------------
+    @cached_property
+    def centerline(self) -> PolylineProjector:
+        return PolylineProjector(self.center)
+
+    @cached_property
+    def inner_border(self) -> PolylineProjector:
+        return PolylineProjector(_dedupe_ring(self.inner))
+
+    @cached_property
+    def outer_border(self) -> PolylineProjector:
+        return PolylineProjector(_dedupe_ring(self.outer))
+
+    @property
+    def length(self) -> float:
+        """Centre line length in metres (DeepRacer's `track_length`)."""
+        return self.centerline.total_length
+
+    @cached_property
+    def widths(self) -> FloatArray:
+        """Road width at each waypoint: distance between its inner and outer border points."""
+        return np.asarray(np.hypot(*(self.outer - self.inner).T), dtype=np.float64)
+
+    @property
+    def width(self) -> float:
+        """Typical road width (mean over waypoints, as DeepRacer tools report it), in metres."""
+        return float(np.mean(self.widths))
+
+    @property
+    def direction(self) -> Direction:
+        return "counter-clockwise" if signed_area(self.center[:-1]) > 0 else "clockwise"
+
+    @property
+    def waypoints(self) -> list[tuple[float, float]]:
+        """Centre points as DeepRacer's `waypoints` param lists them (closing point included)."""
+        return [(float(x), float(y)) for x, y in self.center]
+
+    @cached_property
+    def road(self) -> Polygon:
+        """The drivable surface: outer polygon minus inner polygon (prepared for fast tests)."""
+        polygon = Polygon(self.outer, holes=[self.inner])
+        shapely.prepare(polygon)
+        return polygon
+
+    @cached_property
+    def content_hash(self) -> str:
+        """SHA-256 of the float64 array: the same track imported twice hashes the same."""
+        return hashlib.sha256(np.ascontiguousarray(self.points).tobytes()).hexdigest()
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(min x, min y, max x, max y) over both borders."""
+        both = np.vstack([self.inner, self.outer])
+        lo, hi = both.min(axis=0), both.max(axis=0)
+        return float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])
+
+    def on_road(self, xy: FloatArray) -> np.ndarray:
+        """Boolean per point (M, 2): inside the outer border and outside the inner one."""
+        pts = np.atleast_2d(xy)
+        return np.asarray(shapely.contains_xy(self.road, pts[:, 0], pts[:, 1]))
+
+    def reversed(self) -> Track:
+        """The same road driven the other way (row order reversed; inner stays inner)."""
+        return Track(
+            name=self.name,
+            points=np.ascontiguousarray(self.points[::-1]),
+            description=self.description,
+            source=self.source,
+        )
+
+    def renamed(self, name: str, description: str | None = None) -> Track:
+        return Track(
+            name=name,
+            points=self.points,
+            description=self.description if description is None else description,
+            source=self.source,
+        )
+
+    def to_npy_bytes(self) -> bytes:
+        buffer = io.BytesIO()
+        np.save(buffer, self.points, allow_pickle=False)
+        return buffer.getvalue()
+
+    def save(self, path: Path) -> None:
+        """Write the DeepRacer .npy file atomically."""
+        write_bytes_atomic(path, self.to_npy_bytes())
+
+    def summary(self) -> dict[str, object]:
+        return {
+            "name": self.name,
+            "description": self.description,
+            "length_m": round(self.length, 2),
+            "width_m": round(self.width, 3),
+            "direction": self.direction,
+            "waypoints": len(self.points),
+        }
+
+
+def load_track(
+    path: Path | str, name: str | None = None, *, description: str = "", reverse: bool = False
+) -> Track:
+    """Load and validate a DeepRacer .npy track file."""
+    file = Path(path)
+    label = str(file)
+    if not file.exists():
+        raise TrackError(f"{label}: no such file; give the path of a DeepRacer .npy track file.")
+    try:
+        # allow_pickle=False: a track file is data and must never run code when loaded.
+        array = np.load(file, allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise TrackError(
+            f"{label}: not a NumPy .npy array file ({_first_line(exc)}); "
+            "export the track as a DeepRacer .npy file."
+        ) from None
+    track = Track.from_array(array, name or file.stem, description=description, source=label)
+    return track.reversed() if reverse else track
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def _normalise(array: object, label: str) -> FloatArray:
+    raw = np.asarray(array)
+    if raw.dtype.kind not in "fiu":
+        raise TrackError(f"{label}: holds {raw.dtype} values; a track is an array of numbers.")
+    if raw.ndim != 2 or raw.shape[1] != 6:
+        raise TrackError(
+            f"{label}: has shape {raw.shape}; a DeepRacer track is (N, 6): "
+            "centre x,y, inner border x,y, outer border x,y."
+        )
+    points = raw.astype(np.float64)
+    bad = ~np.isfinite(points)
+    if bad.any():
+        row = int(np.argwhere(bad)[0][0])
+        raise TrackError(f"{label}: row {row} holds NaN or infinity; every coordinate must be a number.")
+    # DeepRacer's own files repeat a centre point now and then; the repeat carries no
+    # information and would make a zero-length segment.
+    keep = np.ones(len(points), dtype=bool)
+    keep[1:] = np.any(np.abs(np.diff(points[:, 0:2], axis=0)) > 1e-9, axis=1)
+    points = points[keep]
+    distinct = len(points) - (1 if len(points) > 1 and np.allclose(points[0], points[-1]) else 0)
+    if distinct < 3:
+        raise TrackError(f"{label}: has {distinct} distinct points; a track needs at least 3.")
+    if not np.allclose(points[0, 0:2], points[-1, 0:2]):
+        seg = segment_lengths(points[:, 0:2])
+        gap = float(np.hypot(*(points[0, 0:2] - points[-1, 0:2])))
+        if gap > _CLOSE_GAP_SEGMENTS * float(np.median(seg)):
+            raise TrackError(
+                f"{label}: is not a closed loop (its ends are {gap:.2f} m apart); "
+                "racer-tui races laps, so the last row must repeat the first."
+            )
+        points = np.vstack([points, points[:1]])
+    else:
+        points[-1] = points[0]
+    return np.ascontiguousarray(points)
+
+
+def _dedupe_ring(ring: FloatArray) -> FloatArray:
+    keep = np.ones(len(ring), dtype=bool)
+    keep[1:] = np.any(np.abs(np.diff(ring, axis=0)) > 1e-9, axis=1)
+    out = ring[keep]
+    if not np.allclose(out[0], out[-1]):
+        out = np.vstack([out, out[:1]])
+    return np.asarray(out, dtype=np.float64)
+
+
+def _check_borders(points: FloatArray, label: str) -> None:
+    widths = np.hypot(*(points[:, 4:6] - points[:, 2:4]).T)
+    narrow = np.flatnonzero(widths < MIN_WIDTH)
+    if len(narrow):
+        row = int(narrow[0])
+        raise TrackError(
+            f"{label}: the road is {widths[row]:.3f} m wide at waypoint {row}; "
+            f"it must be at least {MIN_WIDTH} m wide everywhere."
+        )
+    rings = {}
+    for name, cols in (("centre line", slice(0, 2)), ("inner border", slice(2, 4)), ("outer border", slice(4, 6))):
+        ring = _dedupe_ring(points[:, cols])
+        if len(ring) < 4:
+            raise TrackError(f"{label}: the {name} has fewer than 3 distinct points.")
+        linear = LinearRing(ring)
+        if not linear.is_simple:
+            raise TrackError(f"{label}: the {name} crosses itself; a track's lines must not intersect.")
+        rings[name] = ring
+    inner_poly = Polygon(rings["inner border"])
+    outer_poly = Polygon(rings["outer border"])
+    if LinearRing(rings["inner border"]).intersects(LinearRing(rings["outer border"])):
+        raise TrackError(f"{label}: the inner and outer borders cross each other.")
+    if inner_poly.area >= outer_poly.area and inner_poly.contains(outer_poly):
+        raise TrackError(
+            f"{label}: the inner and outer borders are swapped (columns 2-3 must be the "
+            "inside of the loop, 4-5 the outside)."
+        )
+    if not outer_poly.contains(inner_poly):
+        raise TrackError(f"{label}: the inner border is not inside the outer border.")
+    centre = LinearRing(rings["centre line"])
+    road = Polygon(rings["outer border"], holes=[rings["inner border"]])
+    if not road.buffer(1e-6).contains(centre):
+        raise TrackError(f"{label}: the centre line leaves the road between the borders.")
