@@ -1,0 +1,221 @@
+"""The DeepRacer gymnasium environment, single and batched.
+
+Configuration is what a DeepRacer model is made of: a track, an action space in
+`model_metadata.json` form, a sensor list and a reward function. Episodes follow
+DeepRacer training: off-track, reversed, immobilized and crashed end an episode, a lap
+completes it, and starts move round the track from one episode to the next. The first
+step of each episode is DeepRacer's "prepare" step: reward 0, the function is not called.
+
+`DeepRacerEnv` is the standard single-car env (registered as `RacerTui/DeepRacer-v0`);
+`BatchedDeepRacer` steps many cars in one process with automatic resets, which is how
+training keeps two CPU cores busy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sim.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
+from sim.car import DEEPRACER_CAR, CarSpec
+from sim.observations import Observer, SensorOptions, normalise_sensors
+from sim.simulation import TERMINAL_STATUSES as _TERMINAL
+from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.track import Track
+
+ENV_ID = "RacerTui/DeepRacer-v0"
+RewardCallable = Callable[[Mapping[str, Any]], float]
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """Everything that defines a training or evaluation environment."""
+
+    track: Track
+    action_space: ActionSpace = FULL_RANGE_CONTINUOUS
+    sensors: tuple[str, ...] = ("vector",)
+    reward: RewardCallable | None = None  # None: DeepRacer's follow-the-centre-line sample
+    rules: EpisodeRules = field(default_factory=EpisodeRules)
+    sensor_options: SensorOptions = field(default_factory=SensorOptions)
+    car: CarSpec = DEEPRACER_CAR
+
+    @classmethod
+    def build(
+        cls,
+        track: Track | str,
+        action_space: object = None,
+        sensors: object = ("vector",),
+        reward: RewardCallable | str | None = None,
+        **kwargs: Any,
+    ) -> EnvConfig:
+        """Accept the loose forms people write: names, metadata dicts, file paths."""
+        if isinstance(track, str):
+            from sim.track_catalog import resolve_track
+
+            track = resolve_track(track)
+        if action_space is None:
+            space = FULL_RANGE_CONTINUOUS
+        elif isinstance(action_space, ActionSpace):
+            space = action_space
+        else:
+            space = parse_action_space(action_space)
+        if isinstance(reward, str):
+            from sim.reward_function import load_reward_function
+
+            reward = load_reward_function(reward)
+        return cls(
+            track=track,
+            action_space=space,
+            sensors=normalise_sensors(sensors),  # type: ignore[arg-type]
+            reward=reward,
+            **kwargs,
+        )
+
+    def reward_function(self) -> RewardCallable:
+        if self.reward is not None:
+            return self.reward
+        from sim.reward_function import load_template
+
+        return load_template("follow_center_line")
+
+
+@dataclass
+class StepInfo:
+    """Per-car outcome of one batched step."""
+
+    status: EpisodeStatus
+    progress: float
+    steps: int
+
+
+class BatchedDeepRacer:
+    """N cars, one process: step them together, reset finished ones automatically.
+
+    `step` returns observations of the *next* episode for cars that just finished, and
+    puts the final observation in `final_observations` (the convention of SB3's VecEnv).
+    """
+
+    def __init__(self, config: EnvConfig, n_cars: int) -> None:
+        self.config = config
+        self.n = n_cars
+        self.sim = TrackSimulation(config.track, n_cars, car=config.car, rules=config.rules)
+        self.observer = Observer(self.sim, config.sensors, config.sensor_options)
+        self.observation_space = self.observer.space
+        self.action_space = config.action_space.gym_space()
+        self._reward = config.reward_function()
+        self.final_observations: list[Any] = [None] * n_cars
+
+    def reset(self) -> Any:
+        self.sim.reset_all()
+        return self.observer.observe()
+
+    def step(self, actions: np.ndarray) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, list[StepInfo]]:
+        sim = self.sim
+        steering, speed = self.config.action_space.targets(actions)
+        sim.apply(steering, speed)
+        rewards = self._rewards()
+        status = sim.status.copy()
+        progress = sim.progress
+        infos = [
+            StepInfo(status=status[i], progress=float(progress[i]), steps=int(sim.steps[i]))
+            for i in range(self.n)
+        ]
+        terminated = np.array([s in _TERMINAL for s in status], dtype=bool)
+        truncated = np.array([s == EpisodeStatus.TIME_UP for s in status], dtype=bool)
+        finished = np.flatnonzero(terminated | truncated)
+        obs = self.observer.observe()
+        if len(finished):
+            for car in finished:
+                self.final_observations[car] = _row(obs, car)
+                sim.reset_car(int(car))
+            obs = self.observer.observe()
+        return obs, rewards, terminated, truncated, infos
+
+    def _rewards(self) -> np.ndarray:
+        rewards = np.zeros(self.n, dtype=np.float64)
+        reward = self._reward
+        steps = self.sim.steps
+        for i, params in enumerate(self.sim.all_params()):
+            if steps[i] > 1:  # step 1 is DeepRacer's "prepare" step
+                rewards[i] = reward(params)
+        return rewards
+
+
+def _row(obs: Any, car: int) -> Any:
+    if isinstance(obs, dict):
+        return {key: value[car].copy() for key, value in obs.items()}
+    return obs[car].copy()
+
+
+class DeepRacerEnv(gym.Env[Any, Any]):
+    """A single-car DeepRacer environment following the gymnasium API."""
+
+    metadata = {"render_modes": [], "render_fps": 15}  # noqa: RUF012 - gymnasium's convention
+
+    def __init__(self, config: EnvConfig | None = None, **build_kwargs: Any) -> None:
+        super().__init__()
+        self.config = config if config is not None else EnvConfig.build(**build_kwargs)
+        self.sim = TrackSimulation(self.config.track, 1, car=self.config.car, rules=self.config.rules)
+        self.observer = Observer(self.sim, self.config.sensors, self.config.sensor_options)
+        self.observation_space = self.observer.space
+        self.action_space = self.config.action_space.gym_space()
+        self._reward = self.config.reward_function()
+        self._episodes = 0
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """Start an episode. `options={"start": fraction}` fixes the start (0..1 of a lap).
+
+        Without it the start moves round the track each episode (DeepRacer's round robin);
+        a seed makes the first start a seeded random point instead, reproducibly.
+        """
+        super().reset(seed=seed)
+        start_s: float | None = None
+        length = self.config.track.length
+        if options and "start" in options:
+            start_s = (float(options["start"]) % 1.0) * length
+        elif seed is not None:
+            start_s = float(self.np_random.uniform(0.0, length))
+        self.sim.reset_car(0, start_s)
+        self._episodes += 1
+        return _row(self.observer.observe(), 0), self._info()
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        steering, speed = self.config.action_space.targets(np.asarray(action)[None, ...])
+        self.sim.apply(steering, speed)
+        params = self.sim.all_params()[0]
+        reward = float(self._reward(params)) if self.sim.steps[0] > 1 else 0.0
+        status = self.sim.status[0]
+        terminated = status in _TERMINAL
+        truncated = status == EpisodeStatus.TIME_UP
+        return _row(self.observer.observe(), 0), reward, terminated, truncated, self._info()
+
+    def _info(self) -> dict[str, Any]:
+        sim = self.sim
+        return {
+            "status": str(sim.status[0]),
+            "progress": float(sim.progress[0]),
+            "steps": int(sim.steps[0]),
+            "x": float(sim.fleet.x[0]),
+            "y": float(sim.fleet.y[0]),
+            "heading": float(sim.heading_deg[0]),
+            "speed": float(sim.fleet.speed[0]),
+        }
+
+    def params(self) -> dict[str, Any]:
+        """DeepRacer's reward params for the current state."""
+        return self.sim.all_params()[0]
+
+
+def register() -> None:
+    """Register `RacerTui/DeepRacer-v0` with gymnasium (idempotent)."""
+    if ENV_ID not in gym.registry:
+        gym.register(id=ENV_ID, entry_point="sim.env:DeepRacerEnv")
+
+
+register()

@@ -1,0 +1,148 @@
+"""What a model sees: camera, lidar, or the compact `vector` state, for N cars at once.
+
+DeepRacer's sensor names map onto these: FRONT_FACING_CAMERA and STEREO_CAMERAS -> camera
+(the stereo pair is rendered as one front camera here), LIDAR -> lidar, SECTOR_LIDAR ->
+sector_lidar (8 sectors, 1 when a border is closer than 0.5 m). `vector` is privileged
+state for fast training on a CPU: speed, steering, heading error, offset from the centre
+line and look-ahead points of the centre line in the car's frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sim.geometry import FloatArray
+from sim.simulation import TrackSimulation
+
+SENSOR_NAMES = ("camera", "lidar", "sector_lidar", "vector")
+DEEPRACER_SENSORS = {
+    "FRONT_FACING_CAMERA": "camera",
+    "STEREO_CAMERAS": "camera",
+    "LIDAR": "lidar",
+    "SECTOR_LIDAR": "sector_lidar",
+}
+# Metres ahead along the centre line at which the vector sensor reports the track.
+LOOK_AHEAD_DISTANCES = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0)
+_LOOK_AHEAD_SCALE = 3.0
+VECTOR_SIZE = 5 + 2 * len(LOOK_AHEAD_DISTANCES)
+
+
+class SensorError(ValueError):
+    """An unknown or badly combined sensor; the message lists the valid names."""
+
+
+def normalise_sensors(names: str | Iterable[str]) -> tuple[str, ...]:
+    """Our sensor names for DeepRacer's or ours, deduplicated, in a stable order."""
+    items = [names] if isinstance(names, str) else list(names)
+    if not items:
+        raise SensorError("no sensor given; choose camera, lidar, sector_lidar or vector.")
+    chosen: set[str] = set()
+    for item in items:
+        key = DEEPRACER_SENSORS.get(str(item).upper(), str(item).lower())
+        if key not in SENSOR_NAMES:
+            valid = ", ".join([*SENSOR_NAMES, *DEEPRACER_SENSORS])
+            raise SensorError(f"unknown sensor {item!r}; choose from {valid}.")
+        chosen.add(key)
+    if {"lidar", "sector_lidar"} <= chosen:
+        raise SensorError("choose either LIDAR or SECTOR_LIDAR, not both.")
+    return tuple(name for name in SENSOR_NAMES if name in chosen)
+
+
+@dataclass(frozen=True)
+class SensorOptions:
+    camera_width: int = 160
+    camera_height: int = 120
+    lidar_rays: int = 64
+    lidar_range: float = 2.0
+
+
+class Observer:
+    """Builds batched observations of a `TrackSimulation` for the chosen sensors."""
+
+    def __init__(
+        self, sim: TrackSimulation, sensors: tuple[str, ...], options: SensorOptions | None = None
+    ) -> None:
+        self.sim = sim
+        self.sensors = sensors
+        self.options = options or SensorOptions()
+        spaces: dict[str, gym.spaces.Space[Any]] = {}
+        self._camera: Any = None
+        self._lidar: Any = None
+        opts = self.options
+        if "camera" in sensors:
+            from sim.sensors import Camera, CameraSpec, camera_space
+
+            spec = CameraSpec(width=opts.camera_width, height=opts.camera_height)
+            self._camera = Camera(sim.track, spec)
+            spaces["camera"] = camera_space(spec)
+        if "lidar" in sensors or "sector_lidar" in sensors:
+            from sim.sensors import Lidar, LidarSpec, lidar_space
+
+            lidar_spec = LidarSpec(rays=opts.lidar_rays, max_range=opts.lidar_range)
+            self._lidar = Lidar(sim.track, lidar_spec)
+            if "lidar" in sensors:
+                spaces["lidar"] = lidar_space(lidar_spec)
+            else:
+                spaces["sector_lidar"] = gym.spaces.Box(0.0, 1.0, shape=(8,), dtype=np.float32)
+        if "vector" in sensors:
+            spaces["vector"] = gym.spaces.Box(-5.0, 5.0, shape=(VECTOR_SIZE,), dtype=np.float32)
+        self.spaces = spaces
+        self.space: gym.spaces.Space[Any] = (
+            next(iter(spaces.values())) if len(spaces) == 1 else gym.spaces.Dict(spaces)
+        )
+
+    def observe(self) -> Any:
+        """Observations for all N cars: an (N, ...) array, or a dict of them."""
+        parts: dict[str, np.ndarray] = {}
+        fleet = self.sim.fleet
+        if self._camera is not None:
+            frames = self._camera.render(fleet.x, fleet.y, fleet.yaw)
+            parts["camera"] = frames[..., None]
+        if self._lidar is not None:
+            scan = self._lidar.scan(fleet.x, fleet.y, fleet.yaw)
+            if "lidar" in self.spaces:
+                parts["lidar"] = scan
+            else:
+                from sim.sensors import sectors
+
+                parts["sector_lidar"] = sectors(scan)
+        if "vector" in self.spaces:
+            parts["vector"] = vector_state(self.sim)
+        if len(parts) == 1:
+            return next(iter(parts.values()))
+        return parts
+
+
+def vector_state(sim: TrackSimulation) -> np.ndarray:
+    """The compact `vector` observation, (N, VECTOR_SIZE) float32."""
+    fleet = sim.fleet
+    spec = fleet.spec
+    centre = sim.track.centerline
+    tangent = centre.direction_at(sim.s)
+    cos_yaw, sin_yaw = np.cos(fleet.yaw), np.sin(fleet.yaw)
+    # Heading error as sine and cosine: continuous across +-180 degrees.
+    sin_err = cos_yaw * tangent[:, 1] - sin_yaw * tangent[:, 0]
+    cos_err = cos_yaw * tangent[:, 0] + sin_yaw * tangent[:, 1]
+    half_width = np.maximum(sim.track_width / 2.0, 1e-6)
+    offset = np.where(sim.left_of_center, 1.0, -1.0) * sim.distance_from_center / half_width
+    ahead_s = sim.s[:, None] + np.asarray(LOOK_AHEAD_DISTANCES)[None, :]
+    points: FloatArray = centre.point_at(ahead_s)
+    dx = points[..., 0] - fleet.x[:, None]
+    dy = points[..., 1] - fleet.y[:, None]
+    forward = (dx * cos_yaw[:, None] + dy * sin_yaw[:, None]) / _LOOK_AHEAD_SCALE
+    left = (-dx * sin_yaw[:, None] + dy * cos_yaw[:, None]) / _LOOK_AHEAD_SCALE
+    out = np.empty((sim.n, VECTOR_SIZE), dtype=np.float32)
+    out[:, 0] = fleet.speed / spec.max_speed
+    out[:, 1] = fleet.steering / np.radians(spec.max_steering_deg)
+    out[:, 2] = sin_err
+    out[:, 3] = cos_err
+    out[:, 4] = offset
+    out[:, 5::2] = forward
+    out[:, 6::2] = left
+    np.clip(out, -5.0, 5.0, out=out)
+    return out

@@ -1,0 +1,267 @@
+"""N cars on one track, with DeepRacer's geometry measurements and episode rules.
+
+This is the shared core under the gymnasium env, the vectorised training env, the
+reference driver and races: it steps the physics, measures where every car is relative
+to the track (all at once, in numpy), keeps DeepRacer's episode bookkeeping (progress from
+the episode's start, reversed and immobilized counters), and builds the reward `params`.
+
+Measurements follow DeepRacer: `x`, `y`, `progress`, `distance_from_center` and
+`closest_waypoints` use the point 0.14 m ahead of the car centre; off-track means all four
+wheel centres are off the road; `all_wheels_on_track` is False as soon as one is.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
+from sim.geometry import FloatArray
+from sim.track import Track
+
+#: DeepRacer measures the car at this point ahead of its centre.
+LOOK_AHEAD = 0.14
+
+
+class EpisodeStatus(StrEnum):
+    """DeepRacer's episode status labels, as they appear in metrics and sim-trace files."""
+
+    IN_PROGRESS = "In progress"
+    LAP_COMPLETE = "Lap complete"
+    OFF_TRACK = "Off track"
+    CRASHED = "Crashed"
+    REVERSED = "Reversed"
+    IMMOBILIZED = "Immobilized"
+    TIME_UP = "Time Up"
+
+
+TERMINAL_STATUSES = frozenset(
+    {
+        EpisodeStatus.LAP_COMPLETE,
+        EpisodeStatus.OFF_TRACK,
+        EpisodeStatus.CRASHED,
+        EpisodeStatus.REVERSED,
+        EpisodeStatus.IMMOBILIZED,
+    }
+)
+
+
+@dataclass(frozen=True)
+class EpisodeRules:
+    """DeepRacer training's episode rules."""
+
+    reversed_steps: int = 15  # consecutive steps of falling progress
+    immobilized_steps: int = 15  # consecutive steps moving at most `immobile_distance`
+    immobile_distance: float = 0.0003
+    start_advance: float = 0.05  # round-robin: each episode starts this fraction further on
+    max_steps: int = STEP_HZ * 180  # a 3-minute safety net; a lap ends episodes long before
+
+
+class TrackSimulation:
+    """Steps N independent cars on one track and measures them the way DeepRacer does."""
+
+    def __init__(
+        self,
+        track: Track,
+        n_cars: int = 1,
+        *,
+        car: CarSpec = DEEPRACER_CAR,
+        rules: EpisodeRules | None = None,
+        cars_collide: bool = False,
+        is_reversed: bool = False,
+    ) -> None:
+        self.track = track
+        self.n = n_cars
+        self.car = car
+        self.rules = rules or EpisodeRules()
+        self.fleet = Fleet(n_cars, car, cars_collide=cars_collide)
+        # The episode-direction flag DeepRacer passes (True when a model trains the
+        # track the other way round); it does not change the geometry here.
+        self.is_reversed = is_reversed
+        centre = track.centerline
+        self._centre = centre
+        self._length = centre.total_length
+        self._waypoints = track.waypoints
+        self._track_length = float(self._length)
+
+        n = n_cars
+        self.episode = np.zeros(n, dtype=np.int64)  # episodes started by each car
+        self.steps = np.zeros(n, dtype=np.int64)
+        self.start_s = np.zeros(n)
+        self.travelled = np.zeros(n)  # signed arc length covered since the episode started
+        self.status = np.full(n, EpisodeStatus.IN_PROGRESS, dtype=object)
+        self.steering_cmd = np.zeros(n)  # commanded action, as DeepRacer's params report it
+        self.speed_cmd = np.zeros(n)
+        self._falling = np.zeros(n, dtype=np.int64)
+        self._still = np.zeros(n, dtype=np.int64)
+        # Measurements, refreshed by `_measure`.
+        self.ahead = np.zeros((n, 2))
+        self.s = np.zeros(n)
+        self.segment = np.zeros(n, dtype=np.intp)
+        self.foot = np.zeros((n, 2))
+        self.distance_from_center = np.zeros(n)
+        self.left_of_center = np.zeros(n, dtype=bool)
+        self.track_width = np.zeros(n)
+        self.wheels_on = np.ones((n, 4), dtype=bool)
+
+    # --- episodes ------------------------------------------------------------------------
+    def start_position(self, car: int, episode: int) -> float:
+        """Arc length where `car` starts `episode`: round-robin round the track, cars spread."""
+        fraction = episode * self.rules.start_advance + car / self.n
+        return (fraction % 1.0) * self._length
+
+    def reset_car(self, car: int, start_s: float | None = None) -> None:
+        """Put a car on the centre line, pointing along the track, for a new episode."""
+        s = self.start_position(car, int(self.episode[car])) if start_s is None else start_s
+        self.episode[car] += 1
+        self.place(car, s)
+        self.steps[car] = 0
+        self.travelled[car] = 0.0
+        self._falling[car] = 0
+        self._still[car] = 0
+        self.status[car] = EpisodeStatus.IN_PROGRESS
+        self.steering_cmd[car] = 0.0
+        self.speed_cmd[car] = 0.0
+        self._measure()
+        self.start_s[car] = self.s[car]
+
+    def place(self, car: int, s: float, offset: float = 0.0, speed: float = 0.0) -> None:
+        """Teleport a car to arc length `s` (and `offset` metres left of the centre line)."""
+        point = self._centre.point_at(np.array([s]))[0]
+        tangent = self._centre.direction_at(np.array([s]))[0]
+        normal = np.array([-tangent[1], tangent[0]])
+        x, y = point + offset * normal
+        self.fleet.place(car, float(x), float(y), math.atan2(tangent[1], tangent[0]), speed)
+
+    def reset_all(self) -> None:
+        for car in range(self.n):
+            self.reset_car(car)
+
+    # --- stepping ------------------------------------------------------------------------
+    def apply(self, steering_deg: FloatArray, speed: FloatArray) -> None:
+        """Drive every car for one 1/15 s step and update measurements and episode status."""
+        self.steering_cmd[:] = steering_deg
+        self.speed_cmd[:] = speed
+        before_s = self.s.copy()
+        before_x, before_y = self.fleet.x.copy(), self.fleet.y.copy()
+        self.fleet.set_targets(steering_deg, speed)
+        self.fleet.step()
+        self._measure()
+        self.steps += 1
+        delta = np.mod(self.s - before_s + self._length / 2.0, self._length) - self._length / 2.0
+        self.travelled += delta
+        self._falling = np.where(delta < 0.0, self._falling + 1, 0)
+        moved = np.hypot(self.fleet.x - before_x, self.fleet.y - before_y)
+        self._still = np.where(moved <= self.rules.immobile_distance, self._still + 1, 0)
+        self._judge()
+
+    def _measure(self) -> None:
+        fleet = self.fleet
+        track = self.track
+        self.ahead = fleet.points_ahead(LOOK_AHEAD)
+        seg, t, foot = self._centre.project(self.ahead)
+        self.segment, self.foot = seg, foot
+        self.s = self._centre.arc_length(seg, t)
+        rel = self.ahead - foot
+        self.distance_from_center = np.hypot(rel[:, 0], rel[:, 1])
+        vec = self._centre.vectors[seg]
+        self.left_of_center = vec[:, 0] * rel[:, 1] - vec[:, 1] * rel[:, 0] > 0.0
+        _, _, inner_foot = track.inner_border.project(self.ahead)
+        _, _, outer_foot = track.outer_border.project(self.ahead)
+        self.track_width = np.hypot(*(outer_foot - inner_foot).T)
+        wheels = fleet.wheel_positions().reshape(-1, 2)
+        self.wheels_on = track.on_road(wheels).reshape(self.n, 4)
+
+    def _judge(self) -> None:
+        rules = self.rules
+        status = self.status
+        progress = self.progress
+        for car in range(self.n):
+            if status[car] in TERMINAL_STATUSES:
+                continue
+            if self.fleet.crashed[car]:
+                status[car] = EpisodeStatus.CRASHED
+            elif not self.wheels_on[car].any():
+                status[car] = EpisodeStatus.OFF_TRACK
+            elif progress[car] >= 100.0:
+                status[car] = EpisodeStatus.LAP_COMPLETE
+            elif self._falling[car] >= rules.reversed_steps:
+                status[car] = EpisodeStatus.REVERSED
+            elif self._still[car] >= rules.immobilized_steps:
+                status[car] = EpisodeStatus.IMMOBILIZED
+            elif self.steps[car] >= rules.max_steps:
+                status[car] = EpisodeStatus.TIME_UP
+
+    # --- what the reward function and observers see ----------------------------------------
+    @property
+    def progress(self) -> FloatArray:
+        """Percent of a lap covered since the episode started, 0..100."""
+        return np.clip(self.travelled / self._length * 100.0, 0.0, 100.0)
+
+    @property
+    def heading_deg(self) -> FloatArray:
+        yaw = np.degrees(self.fleet.yaw)
+        return np.asarray(180.0 - np.mod(180.0 - yaw, 360.0), dtype=np.float64)
+
+    @property
+    def offtrack(self) -> NDArray[np.bool_]:
+        return np.asarray(~self.wheels_on.any(axis=1))
+
+    @property
+    def done(self) -> NDArray[np.bool_]:
+        return np.array([s != EpisodeStatus.IN_PROGRESS for s in self.status], dtype=bool)
+
+    def all_params(self) -> list[dict[str, Any]]:
+        """DeepRacer's reward `params` for every car, every key present."""
+        x, y = self.ahead[:, 0].tolist(), self.ahead[:, 1].tolist()
+        heading = self.heading_deg.tolist()
+        dfc = self.distance_from_center.tolist()
+        left = self.left_of_center.tolist()
+        width = self.track_width.tolist()
+        progress = self.progress.tolist()
+        steps = self.steps.tolist()
+        speed = self.speed_cmd.tolist()
+        steer = self.steering_cmd.tolist()
+        all_on = self.wheels_on.all(axis=1).tolist()
+        offtrack = self.offtrack.tolist()
+        crashed = self.fleet.crashed.tolist()
+        proj = self.s.tolist()
+        seg = self.segment.tolist()
+        sim_time = (self.steps * STEP_SECONDS).tolist()
+        return [
+            {
+                "all_wheels_on_track": all_on[i],
+                "x": x[i],
+                "y": y[i],
+                "heading": heading[i],
+                "distance_from_center": dfc[i],
+                "is_left_of_center": left[i],
+                "track_width": width[i],
+                "track_length": self._track_length,
+                "waypoints": self._waypoints,
+                "closest_waypoints": [seg[i], seg[i] + 1],
+                "progress": progress[i],
+                "steps": steps[i],
+                "speed": speed[i],
+                "steering_angle": steer[i],
+                "is_reversed": self.is_reversed,
+                "is_offtrack": offtrack[i],
+                "is_crashed": crashed[i],
+                "projection_distance": proj[i],
+                "sim_time": sim_time[i],
+                "closest_objects": [0, 0],
+                "objects_location": [],
+                "objects_left_of_center": [],
+                "objects_speed": [],
+                "objects_heading": [],
+                "objects_distance": [],
+                "objects_distance_from_center": [],
+                "object_in_camera": False,
+            }
+            for i in range(self.n)
+        ]
