@@ -1,0 +1,212 @@
+"""The reference driver: no learning, a racing line driven at the car's grip limit.
+
+Its lap time on a track is the "reference lap" that trained models are compared with, and
+it lets a new racer watch a race before training anything.
+
+1. Racing line: a minimum-curvature line inside the road (minus a safety margin), found by
+   iterating the bi-Laplacian smoothing step on lateral offsets from the centre line.
+2. Speed profile: v = sqrt(grip * margin / curvature), then a forward pass limits
+   acceleration and a backward pass limits braking.
+3. Control: pure pursuit on the racing line, speed target read a little ahead so the
+   motor's lag is covered.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
+from sim.geometry import FloatArray, PolylineProjector
+from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.track import Track
+
+_SPACING = 0.05  # racing-line resolution, metres
+_EDGE_MARGIN = 0.13  # keep the car centre this far inside the border lines
+_GRIP_USE = 0.92  # fraction of the grip limit the speed profile plans for
+_SMOOTHING_ITERATIONS = 4000
+
+
+@dataclass(frozen=True)
+class RacingLine:
+    """A closed line through the track with a planned speed at every point."""
+
+    points: FloatArray  # (M+1, 2), closed
+    speeds: FloatArray  # (M+1,) m/s
+    curvature: FloatArray  # (M+1,) 1/m, signed (positive = turning left)
+
+    def planned_lap_time(self) -> float:
+        seg = np.hypot(*np.diff(self.points, axis=0).T)
+        mean_speed = 0.5 * (self.speeds[:-1] + self.speeds[1:])
+        return float(np.sum(seg / mean_speed))
+
+
+def _border_extents(track: Track, s_query: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Signed lateral extents (right, left) of the road at arc lengths `s_query`."""
+    centre = track.centerline
+    tangents = centre.vectors / centre.lengths[:, None]
+    # Tangent at each waypoint: average of the segments meeting there (loop: wraps).
+    at_point = tangents + np.roll(tangents, 1, axis=0)
+    at_point /= np.maximum(np.hypot(*at_point.T), 1e-12)[:, None]
+    at_point = np.vstack([at_point, at_point[:1]])
+    normals = np.stack([-at_point[:, 1], at_point[:, 0]], axis=1)
+    inner_off = np.einsum("ij,ij->i", track.inner - track.center, normals)
+    outer_off = np.einsum("ij,ij->i", track.outer - track.center, normals)
+    left = np.maximum(inner_off, outer_off)
+    right = np.minimum(inner_off, outer_off)
+    return np.interp(s_query, centre.cumulative, right), np.interp(s_query, centre.cumulative, left)
+
+
+def _curvature(points: FloatArray, span: int) -> FloatArray:
+    """Signed curvature of a closed point loop (without its closing point), via circumcircles."""
+    prev_p = np.roll(points, span, axis=0)
+    next_p = np.roll(points, -span, axis=0)
+    a = np.hypot(*(points - prev_p).T)
+    b = np.hypot(*(next_p - points).T)
+    c = np.hypot(*(next_p - prev_p).T)
+    cross = (points[:, 0] - prev_p[:, 0]) * (next_p[:, 1] - points[:, 1]) - (
+        points[:, 1] - prev_p[:, 1]
+    ) * (next_p[:, 0] - points[:, 0])
+    return np.asarray(2.0 * cross / np.maximum(a * b * c, 1e-12), dtype=np.float64)
+
+
+def plan_racing_line(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
+    centre = track.centerline
+    count = max(int(round(centre.total_length / _SPACING)), 60)
+    s = np.linspace(0.0, centre.total_length, count, endpoint=False)
+    base = centre.point_at(s)
+    tangent = centre.direction_at(s)
+    # Smooth the tangents so the normals do not jump at polyline corners.
+    for _ in range(3):
+        tangent = (np.roll(tangent, 1, axis=0) + tangent + np.roll(tangent, -1, axis=0)) / 3.0
+        tangent /= np.hypot(*tangent.T)[:, None]
+    normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+    right, left = _border_extents(track, s)
+    low = np.minimum(right + _EDGE_MARGIN, 0.0)
+    high = np.maximum(left - _EDGE_MARGIN, 0.0)
+
+    offset = np.zeros(count)
+    for _ in range(_SMOOTHING_ITERATIONS):
+        pts = base + offset[:, None] * normal
+        # Bi-Laplacian step: minimises the summed squared second difference (curvature).
+        target = (
+            4.0 * (np.roll(pts, 1, axis=0) + np.roll(pts, -1, axis=0))
+            - (np.roll(pts, 2, axis=0) + np.roll(pts, -2, axis=0))
+        ) / 6.0
+        offset += 0.5 * np.einsum("ij,ij->i", target - pts, normal)
+        np.clip(offset, low, high, out=offset)
+    points = base + offset[:, None] * normal
+
+    span = max(1, int(round(0.15 / _SPACING)))
+    curvature = _curvature(points, span)
+    speeds = _speed_profile(points, curvature, car)
+    closed = np.vstack([points, points[:1]])
+    return RacingLine(
+        points=closed,
+        speeds=np.append(speeds, speeds[0]),
+        curvature=np.append(curvature, curvature[0]),
+    )
+
+
+def _speed_profile(points: FloatArray, curvature: FloatArray, car: CarSpec) -> FloatArray:
+    grip = car.grip * _GRIP_USE
+    limit = np.minimum(car.max_speed, np.sqrt(grip / np.maximum(np.abs(curvature), 1e-6)))
+    step = np.hypot(*(np.roll(points, -1, axis=0) - points).T)
+    speeds = limit.copy()
+    n = len(speeds)
+    # Two laps of each pass so the limits carry across the start/finish line.
+    for _ in range(2):
+        for i in range(n):
+            prev = (i - 1) % n
+            reachable = math.sqrt(speeds[prev] ** 2 + 2.0 * car.max_acceleration * 0.8 * step[prev])
+            speeds[i] = min(speeds[i], reachable)
+    for _ in range(2):
+        for i in range(n - 1, -1, -1):
+            nxt = (i + 1) % n
+            stoppable = math.sqrt(speeds[nxt] ** 2 + 2.0 * car.max_braking * 0.8 * step[i])
+            speeds[i] = min(speeds[i], stoppable)
+    return np.maximum(speeds, car.min_speed)
+
+
+@lru_cache(maxsize=32)
+def _cached_line(track_hash: str, track: Track, car: CarSpec) -> RacingLine:
+    return plan_racing_line(track, car)
+
+
+def racing_line_for(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
+    return _cached_line(track.content_hash, track, car)
+
+
+class ReferenceDriver:
+    """Drives any number of cars of a `TrackSimulation` along the racing line."""
+
+    def __init__(self, track: Track, car: CarSpec = DEEPRACER_CAR) -> None:
+        self.track = track
+        self.car = car
+        self.line = racing_line_for(track, car)
+        self._projector = PolylineProjector(self.line.points)
+
+    def act(self, sim: TrackSimulation) -> tuple[FloatArray, FloatArray]:
+        """(steering degrees, target speed m/s) for every car of `sim`."""
+        fleet = sim.fleet
+        cos_yaw, sin_yaw = np.cos(fleet.yaw), np.sin(fleet.yaw)
+        half_base = self.car.wheelbase / 2.0
+        rear_x, rear_y = fleet.x - half_base * cos_yaw, fleet.y - half_base * sin_yaw
+        position = np.stack([fleet.x, fleet.y], axis=1)
+        seg, t, _ = self._projector.project(position)
+        s_here = self._projector.arc_length(seg, t)
+        speed = np.maximum(fleet.speed, 0.3)
+        look = 0.25 + 0.12 * speed
+        target = self._projector.point_at(s_here + look)
+        dx, dy = target[:, 0] - rear_x, target[:, 1] - rear_y
+        local_x = dx * cos_yaw + dy * sin_yaw
+        local_y = -dx * sin_yaw + dy * cos_yaw
+        distance = np.maximum(np.hypot(local_x, local_y), 1e-6)
+        alpha = np.arctan2(local_y, local_x)
+        steering = np.degrees(np.arctan(2.0 * self.car.wheelbase * np.sin(alpha) / distance))
+        # Plan speed for where the car will be once the motor has responded.
+        horizon = s_here[:, None] + speed[:, None] * np.linspace(0.0, 0.35, 6)[None, :]
+        planned = np.interp(
+            np.mod(horizon, self._projector.total_length), self._projector.cumulative, self.line.speeds
+        ).min(axis=1)
+        limit = self.car.max_steering_deg
+        return np.clip(steering, -limit, limit), planned
+
+
+@dataclass(frozen=True)
+class ReferenceLap:
+    """The reference driver's lap on a track, timed like a DeepRacer evaluation trial."""
+
+    track: str
+    lap_time: float  # standing start at the start line, seconds; nan if it did not finish
+    status: str
+    planned_time: float  # what the speed profile promises for a flying lap
+
+    @property
+    def completed(self) -> bool:
+        return self.status == EpisodeStatus.LAP_COMPLETE
+
+
+def reference_lap(track: Track, car: CarSpec = DEEPRACER_CAR, max_seconds: float = 120.0) -> ReferenceLap:
+    """Drive one lap from a standing start at waypoint 0 and time it to the sub-step."""
+    sim = TrackSimulation(track, 1, car=car)
+    driver = ReferenceDriver(track, car)
+    sim.reset_car(0, start_s=0.0)
+    previous_progress = 0.0
+    for _ in range(int(max_seconds * STEP_HZ)):
+        steering, speed = driver.act(sim)
+        sim.apply(steering, speed)
+        status = sim.status[0]
+        progress = float(sim.travelled[0] / track.length * 100.0)  # unclipped, for interpolation
+        if status == EpisodeStatus.LAP_COMPLETE:
+            # Interpolate inside the last step so lap times are not quantised to 1/15 s.
+            fraction = (100.0 - previous_progress) / max(progress - previous_progress, 1e-9)
+            elapsed = (int(sim.steps[0]) - 1 + min(max(fraction, 0.0), 1.0)) * STEP_SECONDS
+            return ReferenceLap(track.name, elapsed, str(status), driver.line.planned_lap_time())
+        if status != EpisodeStatus.IN_PROGRESS:
+            return ReferenceLap(track.name, float("nan"), str(status), driver.line.planned_lap_time())
+        previous_progress = progress
+    return ReferenceLap(track.name, float("nan"), str(EpisodeStatus.TIME_UP), driver.line.planned_lap_time())
