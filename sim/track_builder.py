@@ -80,7 +80,7 @@ class CentreLine:
 # --- straights and arcs -------------------------------------------------------------------
 
 
-def close_loop(segments: Sequence[Segment]) -> list[Straight | Arc]:
+def close_loop(segments: Sequence[Segment], *, heading_deg: float = 0.0) -> list[Straight | Arc]:
     """Give the two free straights (`length=None`) the lengths that make the chain a loop.
 
     Headings do not depend on straight lengths, so the end point is linear in the two free
@@ -97,12 +97,13 @@ def close_loop(segments: Sequence[Segment]) -> list[Straight | Arc]:
             f"the design has {len(free)} free straights; give exactly two (or none)."
         )
     fixed = [Straight(0.0) if i in free else seg for i, seg in enumerate(segments)]
-    gap = -_chain_end(fixed)
+    initial = math.radians(heading_deg)
+    gap = -_chain_end(fixed, initial)
     if not free:
         if float(np.hypot(*gap)) > 1e-6:
             raise TrackDesignError(f"the design ends {np.hypot(*gap):.3f} m from where it starts.")
         return fixed
-    headings = _start_headings(fixed)
+    headings = _start_headings(fixed, initial)
     directions = np.array([[math.cos(headings[i]), math.sin(headings[i])] for i in free]).T
     if abs(np.linalg.det(directions)) < 1e-6:
         raise TrackDesignError("the two free straights are parallel, so they cannot close the loop.")
@@ -117,16 +118,16 @@ def close_loop(segments: Sequence[Segment]) -> list[Straight | Arc]:
     return fixed
 
 
-def _start_headings(segments: Sequence[Segment]) -> list[float]:
-    headings = [0.0]
+def _start_headings(segments: Sequence[Segment], initial: float = 0.0) -> list[float]:
+    headings = [initial]
     for seg in segments[:-1]:
         headings.append(headings[-1] + (math.radians(seg.degrees) if isinstance(seg, Arc) else 0.0))
     return headings
 
 
-def _chain_end(segments: Sequence[Segment]) -> FloatArray:
+def _chain_end(segments: Sequence[Segment], initial: float) -> FloatArray:
     position = np.zeros(2)
-    for seg, heading in zip(segments, _start_headings(segments), strict=True):
+    for seg, heading in zip(segments, _start_headings(segments, initial), strict=True):
         position, _ = _along(seg, position, heading, np.array([_seg_length(seg)]))
         position = position[0]
     return position
@@ -152,10 +153,17 @@ def _along(
 
 
 def centre_line_from_segments(
-    segments: Sequence[Segment], *, spacing: float = WAYPOINT_SPACING, start_fraction: float = 0.5
+    segments: Sequence[Segment],
+    *,
+    heading_deg: float = 0.0,
+    spacing: float = WAYPOINT_SPACING,
+    start_fraction: float = 0.5,
 ) -> CentreLine:
-    """Sample a closed chain of pieces evenly; the first row lies `start_fraction` into piece 0."""
-    pieces = close_loop(segments)
+    """Sample a closed chain of pieces evenly; the first row lies `start_fraction` into piece 0.
+
+    Piece 0 starts at the origin heading `heading_deg` (0 = +x, counter-clockwise positive).
+    """
+    pieces = close_loop(segments, heading_deg=heading_deg)
     for seg in pieces:
         if isinstance(seg, Arc) and seg.radius <= 0:
             raise TrackDesignError(f"an arc has radius {seg.radius:g} m; radii must be positive.")
@@ -168,7 +176,8 @@ def centre_line_from_segments(
     points = np.empty((count, 2))
     headings = np.empty(count)
     position = np.zeros(2)
-    for index, (seg, heading) in enumerate(zip(pieces, _start_headings(pieces), strict=True)):
+    initial = math.radians(heading_deg)
+    for index, (seg, heading) in enumerate(zip(pieces, _start_headings(pieces, initial), strict=True)):
         mine = owner == index
         points[mine], headings[mine] = _along(seg, position, heading, s[mine] - starts[index])
         position = _along(seg, position, heading, np.array([lengths[index]]))[0][0]
@@ -284,11 +293,14 @@ def build_from_segments(
     *,
     width: float,
     description: str = "",
+    heading_deg: float = 0.0,
     start_fraction: float = 0.5,
     clearance: float = DEFAULT_CLEARANCE,
 ) -> Track:
     """A track from straights and arcs (two free straights close the loop)."""
-    line = centre_line_from_segments(segments, start_fraction=start_fraction)
+    line = centre_line_from_segments(
+        segments, heading_deg=heading_deg, start_fraction=start_fraction
+    )
     return track_from_centre_line(
         line, name, width=width, description=description, clearance=clearance
     )

@@ -1,0 +1,349 @@
+"""Racers' reward functions: load a DeepRacer `reward_function(params)` file and call it safely.
+
+A reward function is ordinary Python written by the racer, so everything that can go wrong
+with it (a syntax error, a failing import, an exception on some step, a reward that is not a
+number) becomes a `RewardFunctionError`: one sentence naming the file and, where there is one,
+the line in *their* file to look at. Training calls the function ~30,000 times a second, so the
+happy path of `RewardFunction.__call__` is one dict copy, one call and one type check.
+
+The four AWS DeepRacer sample functions ship as plain files in `sim/reward_templates/` and
+load through the same path as a racer's file.
+"""
+
+from __future__ import annotations
+
+import inspect
+import linecache
+import math
+import numbers
+import os
+import sys
+import types
+from collections.abc import Callable, Mapping
+from importlib import resources
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+# DeepRacer rejects rewards outside this range (and NaN or inf).
+MAX_ABS_REWARD = 1e5
+
+FIX_ADVICE = "fix the function and try again"
+RETURN_ADVICE = "make it return a number, for example `return float(reward)`"
+DEFINE_HINT = "`def reward_function(params):`"
+
+TEMPLATES: dict[str, str] = {
+    "follow_center_line": "follow_center_line.py",
+    "stay_inside_borders": "stay_inside_borders.py",
+    "prevent_zigzag": "prevent_zigzag.py",
+    "object_avoidance": "object_avoidance.py",
+}
+
+# The racer's module gets its own name so `if __name__ == "__main__":` test code in their file
+# does not run, and it is never put in sys.modules so two loaded files cannot see each other.
+_MODULE_NAME = "deepracer_reward_function"
+# Exception messages are quoted inside one sentence; a numpy array repr can be pages long.
+_MAX_DETAIL = 200
+
+RewardParams = Mapping[str, object]
+
+
+class RewardFunctionError(Exception):
+    """A reward function that cannot be loaded or run; `str()` is one sentence for the racer."""
+
+    def __init__(
+        self,
+        path: Path | str,
+        problem: str,
+        line: int | None = None,
+        advice: str = FIX_ADVICE,
+    ) -> None:
+        self.display = str(path)
+        self.path = Path(path)
+        self.problem = problem
+        self.line = line
+        self.advice = advice
+        super().__init__(str(self))
+
+    def __str__(self) -> str:
+        where = self.display if self.line is None else f"{self.display} line {self.line}"
+        return f"{where}: {self.problem}; {self.advice}."
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # The training worker may hand the error across a process boundary.
+        return (type(self), (self.display, self.problem, self.line, self.advice))
+
+
+class RewardFunction:
+    """A loaded reward function. Call it with DeepRacer params; it returns a checked float."""
+
+    __slots__ = ("_filename", "_function", "name", "path", "source")
+
+    def __init__(
+        self,
+        function: Callable[[dict[str, object]], object],
+        *,
+        source: str,
+        name: str,
+        filename: str,
+    ) -> None:
+        self._function = function
+        # The file name the code was compiled with: traceback frames carrying it are the racer's.
+        self._filename = filename
+        self.source = source
+        self.name = name
+        self.path = Path(name)
+
+    def __call__(self, params: RewardParams) -> float:
+        try:
+            # A shallow copy: the racer's function may add, change or delete keys freely.
+            value = self._function(dict(params))
+        except (Exception, SystemExit) as error:
+            raise self._raised_error(error) from error
+        # NaN and inf fail this comparison too, so only unusual values take the slow path.
+        if type(value) is float and -MAX_ABS_REWARD <= value <= MAX_ABS_REWARD:
+            return value
+        return self._checked(value, params)
+
+    def __repr__(self) -> str:
+        return f"RewardFunction({self.name!r})"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Vector envs may pickle the env into worker processes; the function travels as source.
+        return (_rebuild, (self.source, self.name, self._filename))
+
+    # --- error paths (never on the hot path) -------------------------------------------
+    def _raised_error(self, error: BaseException) -> RewardFunctionError:
+        problem = f"reward_function raised {_describe_exception(error)}"
+        return RewardFunctionError(self.name, problem, _user_line(error, self._filename))
+
+    def _checked(self, value: object, params: RewardParams) -> float:
+        reward = _as_reward(value)
+        if isinstance(reward, float):
+            return reward
+        line = self._return_line(params)
+        raise RewardFunctionError(self.name, reward.problem, line, reward.advice)
+
+    def _return_line(self, params: RewardParams) -> int | None:
+        """The line of the `return` that produced a bad reward, else the `def` line.
+
+        Python does not record where a value was returned, so this runs the function once more
+        under a profiler that notes the line its frame returns from. That costs nothing on the
+        hot path, and the run is about to stop on this error anyway. If the second run does not
+        reproduce the problem (random numbers, state kept between calls) the `def` line is the
+        honest answer.
+        """
+        code = getattr(self._function, "__code__", None)
+        if not isinstance(code, types.CodeType):
+            return None
+        returned_from: list[int] = []
+
+        def profiler(frame: types.FrameType, event: str, arg: object) -> None:
+            if event == "return" and frame.f_code is code and frame.f_lineno is not None:
+                returned_from.append(frame.f_lineno)
+
+        previous = sys.getprofile()
+        sys.setprofile(profiler)
+        try:
+            value = self._function(dict(params))
+        except (Exception, SystemExit):
+            return code.co_firstlineno
+        finally:
+            sys.setprofile(previous)
+        if isinstance(_as_reward(value), float) or not returned_from:
+            return code.co_firstlineno
+        # The outermost call returns last; earlier entries are recursive calls.
+        return returned_from[-1]
+
+
+def load_reward_function(path: Path | str) -> RewardFunction:
+    """Load a racer's reward function file.
+
+    Raises `RewardFunctionError` when the file is missing, unreadable, not UTF-8, not valid
+    Python, fails while importing, or does not define `reward_function(params)`.
+    """
+    display = str(path)
+    file_path = Path(path)
+    try:
+        data = file_path.read_bytes()
+    except FileNotFoundError:
+        raise RewardFunctionError(
+            display, "no such file", advice="check the path and try again"
+        ) from None
+    except IsADirectoryError:
+        raise RewardFunctionError(
+            display,
+            "is a folder, not a Python file",
+            advice="give the path of the reward function file",
+        ) from None
+    except OSError as error:
+        raise RewardFunctionError(
+            display,
+            f"cannot be read ({error.strerror or error})",
+            advice="check that the file exists and that you may read it",
+        ) from None
+    try:
+        # utf-8-sig: editors on Windows often save a byte-order mark in front.
+        source = data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        line = data[: error.start].count(b"\n") + 1
+        raise RewardFunctionError(
+            display,
+            f"is not UTF-8 text (byte 0x{data[error.start]:02x})",
+            line,
+            advice="save it as UTF-8 and try again",
+        ) from None
+    # Absolute, so the traceback frames still match after a change of working directory.
+    return _load(source, display, os.path.abspath(file_path))
+
+
+def load_reward_source(source: str, name: str) -> RewardFunction:
+    """Load reward function code held in memory; errors name it `name`."""
+    return _load(source, name, name)
+
+
+def template_source(name: str) -> str:
+    """The text of one of AWS DeepRacer's sample reward functions (see `TEMPLATES`)."""
+    try:
+        file_name = TEMPLATES[name]
+    except KeyError:
+        raise RewardFunctionError(
+            name,
+            "is not a reward function template",
+            advice=f"choose one of {', '.join(TEMPLATES)}",
+        ) from None
+    return resources.files("sim.reward_templates").joinpath(file_name).read_text(encoding="utf-8")
+
+
+def load_template(name: str) -> RewardFunction:
+    """Load one of AWS DeepRacer's sample reward functions, named like its file."""
+    return load_reward_source(template_source(name), TEMPLATES[name])
+
+
+# --- loading -----------------------------------------------------------------------------
+def _rebuild(source: str, name: str, filename: str) -> RewardFunction:
+    return _load(source, name, filename)
+
+
+def _load(source: str, display: str, filename: str) -> RewardFunction:
+    try:
+        code = compile(source, filename, "exec", dont_inherit=True)
+    except SyntaxError as error:
+        detail = error.msg or "invalid syntax"
+        kind = type(error).__name__
+        problem = "syntax error" if kind == "SyntaxError" else kind
+        raise RewardFunctionError(display, f"{problem}: {detail}", error.lineno) from None
+    except ValueError as error:
+        # Python 3.11 reports NUL bytes in source as ValueError, not SyntaxError.
+        raise RewardFunctionError(
+            display, f"is not valid Python source ({error})", advice="save it as plain text"
+        ) from None
+    # Tracebacks then show the racer's lines as they were loaded, even from memory and even
+    # if the file changes later; a None mtime keeps linecache.checkcache from dropping them.
+    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+
+    module = types.ModuleType(_MODULE_NAME)
+    module.__file__ = filename
+    try:
+        exec(code, module.__dict__)
+    except (Exception, SystemExit) as error:
+        problem = f"loading the file raised {_describe_exception(error)}"
+        raise RewardFunctionError(display, problem, _user_line(error, filename)) from error
+
+    function = module.__dict__.get("reward_function")
+    if function is None:
+        raise RewardFunctionError(
+            display,
+            f"there is no reward function in it; the file must define {DEFINE_HINT}",
+            advice="add that function and try again",
+        )
+    if not callable(function):
+        raise RewardFunctionError(
+            display,
+            f"reward_function is a {type(function).__name__}, not a function; "
+            f"the file must define {DEFINE_HINT}",
+        )
+    _check_takes_params(function, display)
+    return RewardFunction(function, source=source, name=display, filename=filename)
+
+
+def _check_takes_params(function: Callable[..., object], display: str) -> None:
+    """DeepRacer calls `reward_function(params)`: one positional argument must bind."""
+    try:
+        signature = inspect.signature(function)
+    except (TypeError, ValueError):
+        return  # Some callables have no introspectable signature; the first call will tell.
+    try:
+        signature.bind(None)
+    except TypeError:
+        code = getattr(function, "__code__", None)
+        line = code.co_firstlineno if isinstance(code, types.CodeType) else None
+        raise RewardFunctionError(
+            display,
+            f"reward_function{signature} must take exactly one argument, params",
+            line,
+            advice=f"define it as {DEFINE_HINT} and try again",
+        ) from None
+
+
+# --- checking results and describing failures --------------------------------------------
+class _BadReward(NamedTuple):
+    problem: str
+    advice: str
+
+
+def _as_reward(value: object) -> float | _BadReward:
+    """The reward as a Python float, or what is wrong with it."""
+    shown = _shorten(repr(value), 60)
+    # bool is an int to Python, but a True/False reward is always a bug in the function.
+    if isinstance(value, bool | np.bool_):
+        return _BadReward(
+            f"reward_function returned {shown} (a bool) instead of a number", RETURN_ADVICE
+        )
+    # A 0-d array is what some numpy reductions hand back; DeepRacer's float() accepts it.
+    is_scalar_array = isinstance(value, np.ndarray) and value.ndim == 0
+    if isinstance(value, numbers.Real) or (is_scalar_array and value.dtype.kind in "iuf"):
+        reward = float(value)
+    elif value is None:
+        return _BadReward("reward_function returned None instead of a number", RETURN_ADVICE)
+    else:
+        kind = type(value).__name__
+        return _BadReward(
+            f"reward_function returned {shown} (a {kind}) instead of a number", RETURN_ADVICE
+        )
+    if math.isnan(reward):
+        return _BadReward("reward_function returned NaN (not a number)", FIX_ADVICE)
+    if math.isinf(reward):
+        return _BadReward(f"reward_function returned {reward}, an infinite reward", FIX_ADVICE)
+    if abs(reward) > MAX_ABS_REWARD:
+        limit = int(MAX_ABS_REWARD)
+        return _BadReward(
+            f"reward_function returned {reward}, outside DeepRacer's allowed range "
+            f"-{limit}..{limit}",
+            FIX_ADVICE,
+        )
+    return reward
+
+
+def _user_line(error: BaseException, filename: str) -> int | None:
+    """The line of the deepest traceback frame that runs code from the racer's file."""
+    line: int | None = None
+    traceback = error.__traceback__
+    while traceback is not None:
+        if traceback.tb_frame.f_code.co_filename == filename:
+            line = traceback.tb_lineno
+        traceback = traceback.tb_next
+    return line
+
+
+def _describe_exception(error: BaseException) -> str:
+    name = type(error).__name__
+    detail = _shorten(str(error), _MAX_DETAIL)
+    return f"{name}: {detail}" if detail else name
+
+
+def _shorten(text: str, limit: int) -> str:
+    # The message must stay one line and one sentence inside our own.
+    flat = " ".join(text.split())
+    return flat if len(flat) <= limit else flat[: limit - 3] + "..."
