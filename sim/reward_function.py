@@ -301,10 +301,8 @@ def _as_reward(value: object) -> float | _BadReward:
         return _BadReward(
             f"reward_function returned {shown} (a bool) instead of a number", RETURN_ADVICE
         )
-    # A 0-d array is what some numpy reductions hand back; DeepRacer's float() accepts it.
-    is_scalar_array = isinstance(value, np.ndarray) and value.ndim == 0
-    if isinstance(value, numbers.Real) or (is_scalar_array and value.dtype.kind in "iuf"):
-        reward = float(value)
+    if isinstance(value, numbers.Real) or _is_real_scalar_array(value):
+        reward = float(value)  # type: ignore[arg-type]
     elif value is None:
         return _BadReward("reward_function returned None instead of a number", RETURN_ADVICE)
     else:
@@ -324,6 +322,11 @@ def _as_reward(value: object) -> float | _BadReward:
             FIX_ADVICE,
         )
     return reward
+
+
+def _is_real_scalar_array(value: object) -> bool:
+    # A 0-d array is what some numpy code hands back; DeepRacer's float() accepts it.
+    return isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf"
 
 
 def _user_line(error: BaseException, filename: str) -> int | None:

@@ -90,16 +90,16 @@ BOWTIE_CHICANE = TrackDesign(
     name="bowtie-chicane",
     description="Two round lobes joined at a narrow waist, crossed twice through a tight chicane.",
     width=NARROW,
-    heading_deg=-12,
+    heading_deg=-15,
     segments=(
         FREE,
-        Arc(1.1, 204),
+        Arc(1.3, 210),
         FREE,
-        *_chicane(0.55, 0.5, 33),
-        Straight(2.4),
-        Arc(1.1, 204),
-        Straight(2.4),
-        *_chicane(0.55, 0.5, 33),
+        *_chicane(0.55, 0.5, 30),
+        Straight(1.5),
+        Arc(1.3, 210),
+        Straight(1.5),
+        *_chicane(0.55, 0.5, 30),
     ),
 )
 

@@ -1,0 +1,192 @@
+"""A top-down picture of a track, rasterised once and shared by every sensor.
+
+The camera gathers pixels from `texture` (DeepRacer's look in greyscale: dark asphalt,
+white border lines, a dashed yellow centre line, grass around) and the lidar sphere-traces
+through `border_distance`, the distance to the nearest border line. Both are plain grids,
+so a sensor reading for many cars is a few vectorised gathers instead of geometry.
+
+Grid convention: cell (row j, column i) covers x in [x0 + i*res, x0 + (i+1)*res) and
+y in [y0 + j*res, y0 + (j+1)*res); a world point falls in cell floor((p - origin) / res).
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.ndimage import distance_transform_edt
+
+from sim.geometry import FloatArray
+from sim.track import Track
+
+# Greyscale levels (ITU-R 601 luma of DeepRacer's colours): the camera sees these.
+ASPHALT = 50  # dark grey road
+GRASS = 100  # green grass; also everything beyond the raster
+BORDER = 235  # white border lines
+CENTRE = 185  # yellow dashes
+SKY = 215  # light sky above the horizon
+
+RESOLUTION = 0.01  # metres per cell: the camera's near rows sample the ground at ~2 mm
+MARGIN = 1.0  # metres of grass around the borders' bounding box
+BORDER_LINE_WIDTH = 0.05
+CENTRE_LINE_WIDTH = 0.025
+DASH_LENGTH = 0.3  # painted dash, then a gap of the same length
+
+# A league night or a training run uses one or two tracks; a handful covers every case
+# without keeping stale rasters (tens of MB each for the biggest tracks) alive forever.
+_CACHE_SIZE = 4
+_cache: OrderedDict[tuple[str, float, float], TrackRaster] = OrderedDict()
+
+
+class TrackRaster:
+    """Grids over the track's bounding box plus a margin; see the module docstring."""
+
+    def __init__(self, track: Track, resolution: float = RESOLUTION, margin: float = MARGIN) -> None:
+        if resolution <= 0 or margin < 0:
+            raise ValueError("resolution must be positive and margin non-negative")
+        self.resolution = float(resolution)
+        min_x, min_y, max_x, max_y = track.bounds
+        self.origin = (min_x - margin, min_y - margin)
+        self.width = int(np.ceil((max_x - min_x + 2 * margin) / resolution)) + 1
+        self.height = int(np.ceil((max_y - min_y + 2 * margin) / resolution)) + 1
+        shape = (self.height, self.width)
+
+        self.road: NDArray[np.bool_] = _fill_even_odd([track.outer, track.inner], self, shape)
+        lines = np.zeros(shape, dtype=bool)
+        for border in (track.outer, track.inner):
+            rows, cols = self._cells(_densify(border, 0.5 * resolution))
+            lines[rows, cols] = True
+        # EDT to the centres of the cells a border passes through: within ~0.7 cell of the
+        # true distance to the polyline, which is what sphere tracing needs.
+        distance = distance_transform_edt(~lines, sampling=resolution)
+        self.border_distance: NDArray[np.float32] = np.asarray(distance, dtype=np.float32)
+
+        texture = np.full(shape, GRASS, dtype=np.uint8)
+        texture[self.road] = ASPHALT
+        texture[self.border_distance <= BORDER_LINE_WIDTH / 2] = BORDER
+        rows, cols = self._dash_cells(track.center)
+        texture[rows, cols] = CENTRE
+        # Gathers clamp to the outermost cells, so those must read as "nothing here".
+        texture[[0, -1], :] = GRASS
+        texture[:, [0, -1]] = GRASS
+        self.texture: NDArray[np.uint8] = texture
+
+    @classmethod
+    def for_track(
+        cls, track: Track, resolution: float = RESOLUTION, margin: float = MARGIN
+    ) -> TrackRaster:
+        """The raster of this track's content, built on first use and then shared."""
+        key = (track.content_hash, float(resolution), float(margin))
+        raster = _cache.get(key)
+        if raster is None:
+            raster = cls(track, resolution, margin)
+            _cache[key] = raster
+            while len(_cache) > _CACHE_SIZE:
+                _cache.popitem(last=False)
+        else:
+            _cache.move_to_end(key)
+        return raster
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.height, self.width
+
+    @cached_property
+    def signed_distance(self) -> NDArray[np.float32]:
+        """Border distance, positive on the road and negative off it (metres).
+
+        A ray crosses a border exactly where this changes sign, so a tracer that overshoots
+        the zero-width line still notices, and can interpolate back to the crossing.
+        """
+        return np.where(self.road, self.border_distance, -self.border_distance).astype(np.float32)
+
+    def cell_of(self, xy: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """(rows, columns) of the cells holding world points (M, 2), clamped to the grid."""
+        return self._cells(np.atleast_2d(np.asarray(xy, dtype=np.float64)))
+
+    def _cells(self, xy: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        cols = np.floor((xy[:, 0] - self.origin[0]) / self.resolution).astype(np.intp)
+        rows = np.floor((xy[:, 1] - self.origin[1]) / self.resolution).astype(np.intp)
+        return np.clip(rows, 0, self.height - 1), np.clip(cols, 0, self.width - 1)
+
+    def _dash_cells(self, center: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        res = self.resolution
+        points, arc = _densify_with_arc(center, 0.5 * res)
+        points = points[np.mod(arc, 2 * DASH_LENGTH) < DASH_LENGTH]
+        # Stamp a disc around each sample: the union of discs is the painted capsule.
+        reach = int(np.ceil(CENTRE_LINE_WIDTH / 2 / res)) + 1
+        offsets = np.arange(-reach, reach + 1)
+        local = (points - np.asarray(self.origin)) / res
+        base = np.floor(local).astype(np.intp)
+        cols = base[:, 0, None, None] + offsets[None, None, :]
+        rows = base[:, 1, None, None] + offsets[None, :, None]
+        dx = cols + 0.5 - local[:, 0, None, None]
+        dy = rows + 0.5 - local[:, 1, None, None]
+        inside = dx * dx + dy * dy <= (CENTRE_LINE_WIDTH / 2 / res) ** 2
+        rows, cols = np.broadcast_arrays(rows, cols)
+        return (
+            np.clip(rows[inside], 0, self.height - 1),
+            np.clip(cols[inside], 0, self.width - 1),
+        )
+
+
+def _densify(polyline: FloatArray, step: float) -> FloatArray:
+    return _densify_with_arc(polyline, step)[0]
+
+
+def _densify_with_arc(polyline: FloatArray, step: float) -> tuple[FloatArray, FloatArray]:
+    """Points along a polyline no more than `step` apart, with their arc lengths."""
+    starts = polyline[:-1]
+    vectors = np.diff(polyline, axis=0)
+    lengths = np.hypot(vectors[:, 0], vectors[:, 1])
+    counts = np.maximum(1, np.ceil(lengths / step).astype(np.intp))
+    owners = np.repeat(np.arange(len(lengths)), counts)
+    offsets = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+    t = offsets / counts[owners]
+    points = starts[owners] + vectors[owners] * t[:, None]
+    cumulative = np.concatenate([[0.0], np.cumsum(lengths)])
+    arc = cumulative[owners] + t * lengths[owners]
+    points = np.vstack([points, polyline[-1:]])
+    arc = np.append(arc, cumulative[-1])
+    return np.asarray(points, dtype=np.float64), np.asarray(arc, dtype=np.float64)
+
+
+def _fill_even_odd(
+    rings: list[FloatArray], raster: TrackRaster, shape: tuple[int, int]
+) -> NDArray[np.bool_]:
+    """Cells whose centre lies inside an odd number of rings (outer minus inner = road).
+
+    A scanline fill: every edge toggles the parity of the cells to the right of where it
+    crosses each cell-centre row, and a running sum along the row turns toggles into
+    insideness. Exact at cell centres and far faster than point-in-polygon tests.
+    """
+    height, width = shape
+    res = raster.resolution
+    origin = np.asarray(raster.origin)
+    all_rows: list[NDArray[np.intp]] = []
+    all_cols: list[NDArray[np.intp]] = []
+    for ring in rings:
+        # Coordinates in which cell centres sit on integers.
+        local = (np.asarray(ring, dtype=np.float64) - origin) / res - 0.5
+        a, b = local[:-1], local[1:]
+        low = np.minimum(a[:, 1], b[:, 1])
+        high = np.maximum(a[:, 1], b[:, 1])
+        # Half-open [low, high) so a vertex shared by two edges is counted once.
+        first = np.ceil(low).astype(np.intp)
+        counts = np.maximum(np.ceil(high).astype(np.intp) - first, 0)
+        edges = np.repeat(np.arange(len(a)), counts)
+        rows = first[edges] + (np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts))
+        ya, yb = a[edges, 1], b[edges, 1]
+        xa, xb = a[edges, 0], b[edges, 0]
+        x_cross = xa + (rows - ya) * (xb - xa) / (yb - ya)
+        cols = np.floor(x_cross).astype(np.intp) + 1
+        keep = (rows >= 0) & (rows < height)
+        all_rows.append(rows[keep])
+        all_cols.append(np.clip(cols[keep], 0, width))
+    rows_cat = np.concatenate(all_rows)
+    cols_cat = np.concatenate(all_cols)
+    toggles = np.bincount(rows_cat * (width + 1) + cols_cat, minlength=height * (width + 1))
+    parity = np.cumsum(toggles.reshape(height, width + 1).astype(np.uint8), axis=1, dtype=np.uint8)
+    return np.asarray((parity[:, :width] & 1).astype(bool))
