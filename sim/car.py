@@ -134,12 +134,18 @@ class Fleet:
         self.sliding = np.zeros(n_cars, dtype=bool)  # asked for more grip than there is
         self.crashed = np.zeros(n_cars, dtype=bool)  # touched a box or another car this step
 
-        self._motion = np.zeros((n_cars, 3))
-        self._motion_buffer = pmb.Buffer()
-        self._motion_buffer.set_float_buf(self._motion.reshape(-1))
+        self._bind_motion_buffer(extra_bodies=0)
         self._state_buffer = pmb.Buffer()
         self._max_steer = math.radians(spec.max_steering_deg)
         self._steer_step = math.radians(spec.steering_rate_deg) * self.dt
+
+    def _bind_motion_buffer(self, extra_bodies: int) -> None:
+        # pymunk.batch walks every body in the space - cars first (they are dynamic), then
+        # the static body once obstacles hang on it - so the buffer needs a row for each.
+        self._motion_rows = np.zeros((self.n + extra_bodies, 3))
+        self._motion = self._motion_rows[: self.n]
+        self._motion_buffer = pmb.Buffer()
+        self._motion_buffer.set_float_buf(self._motion_rows.reshape(-1))
 
     # --- placing cars and obstacles ------------------------------------------------------
     def place(self, car: int, x: float, y: float, yaw: float, speed: float = 0.0) -> None:
@@ -166,6 +172,8 @@ class Fleet:
         shape = pymunk.Poly(self.space.static_body, shape.get_vertices(), transform=transform)
         shape.filter = pymunk.ShapeFilter(categories=_OBSTACLE_CATEGORY)
         self.space.add(shape)
+        if not self._has_obstacles:
+            self._bind_motion_buffer(extra_bodies=1)
         self._has_obstacles = True
         return shape
 
@@ -219,7 +227,7 @@ class Fleet:
         buffer = self._state_buffer
         buffer.clear()
         pmb.get_space_bodies(self.space, _BODY_FIELDS_STATE, buffer)
-        state = np.frombuffer(buffer.float_buf(), dtype=np.float64).reshape(self.n, 3)
+        state = np.frombuffer(buffer.float_buf(), dtype=np.float64).reshape(-1, 3)[: self.n]
         self.x = state[:, 0].copy()
         self.y = state[:, 1].copy()
         self.yaw = state[:, 2].copy()

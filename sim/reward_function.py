@@ -134,8 +134,8 @@ class RewardFunction:
         reproduce the problem (random numbers, state kept between calls) the `def` line is the
         honest answer.
         """
-        code = getattr(self._function, "__code__", None)
-        if not isinstance(code, types.CodeType):
+        code = _own_code(self._function, self._filename)
+        if code is None:
             return None
         returned_from: list[int] = []
 
@@ -264,11 +264,11 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
             f"reward_function is a {type(function).__name__}, not a function; "
             f"the file must define {DEFINE_HINT}",
         )
-    _check_takes_params(function, display)
+    _check_takes_params(function, display, filename)
     return RewardFunction(function, source=source, name=display, filename=filename)
 
 
-def _check_takes_params(function: Callable[..., object], display: str) -> None:
+def _check_takes_params(function: Callable[..., object], display: str, filename: str) -> None:
     """DeepRacer calls `reward_function(params)`: one positional argument must bind."""
     try:
         signature = inspect.signature(function)
@@ -277,8 +277,8 @@ def _check_takes_params(function: Callable[..., object], display: str) -> None:
     try:
         signature.bind(None)
     except TypeError:
-        code = getattr(function, "__code__", None)
-        line = code.co_firstlineno if isinstance(code, types.CodeType) else None
+        code = _own_code(function, filename)
+        line = None if code is None else code.co_firstlineno
         raise RewardFunctionError(
             display,
             f"reward_function{signature} must take exactly one argument, params",
@@ -295,38 +295,54 @@ class _BadReward(NamedTuple):
 
 def _as_reward(value: object) -> float | _BadReward:
     """The reward as a Python float, or what is wrong with it."""
-    shown = _shorten(repr(value), 60)
+    kind = type(value)
+    # int and numpy float64 are common returns (`reward = 1`, `np.clip(...)`): test them by
+    # exact type first, since the ABC checks below cost about a microsecond each call.
+    if kind is int or kind is np.float64 or kind is float:
+        reward = float(value)  # type: ignore[arg-type]
     # bool is an int to Python, but a True/False reward is always a bug in the function.
-    if isinstance(value, bool | np.bool_):
+    elif isinstance(value, bool | np.bool_):
         return _BadReward(
-            f"reward_function returned {shown} (a bool) instead of a number", RETURN_ADVICE
+            f"reward_function returned {value!r} (a bool) instead of a number", RETURN_ADVICE
         )
-    if isinstance(value, numbers.Real) or _is_real_scalar_array(value):
+    elif isinstance(value, numbers.Real) or _is_real_scalar_array(value):
         reward = float(value)  # type: ignore[arg-type]
     elif value is None:
         return _BadReward("reward_function returned None instead of a number", RETURN_ADVICE)
     else:
-        kind = type(value).__name__
+        shown = _shorten(repr(value), 60)
         return _BadReward(
-            f"reward_function returned {shown} (a {kind}) instead of a number", RETURN_ADVICE
+            f"reward_function returned {shown} (a {kind.__name__}) instead of a number",
+            RETURN_ADVICE,
         )
+    if -MAX_ABS_REWARD <= reward <= MAX_ABS_REWARD:
+        return reward
     if math.isnan(reward):
         return _BadReward("reward_function returned NaN (not a number)", FIX_ADVICE)
     if math.isinf(reward):
         return _BadReward(f"reward_function returned {reward}, an infinite reward", FIX_ADVICE)
-    if abs(reward) > MAX_ABS_REWARD:
-        limit = int(MAX_ABS_REWARD)
-        return _BadReward(
-            f"reward_function returned {reward}, outside DeepRacer's allowed range "
-            f"-{limit}..{limit}",
-            FIX_ADVICE,
-        )
-    return reward
+    limit = int(MAX_ABS_REWARD)
+    return _BadReward(
+        f"reward_function returned {reward}, outside DeepRacer's allowed range -{limit}..{limit}",
+        FIX_ADVICE,
+    )
 
 
 def _is_real_scalar_array(value: object) -> bool:
     # A 0-d array is what some numpy code hands back; DeepRacer's float() accepts it.
     return isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf"
+
+
+def _own_code(function: Callable[..., object], filename: str) -> types.CodeType | None:
+    """The function's code object when it was written in the racer's file.
+
+    A decorator from elsewhere puts its own code on the name; its line numbers belong to
+    another file and must not be reported as lines of this one.
+    """
+    code = getattr(function, "__code__", None)
+    if isinstance(code, types.CodeType) and code.co_filename == filename:
+        return code
+    return None
 
 
 def _user_line(error: BaseException, filename: str) -> int | None:
@@ -342,7 +358,10 @@ def _user_line(error: BaseException, filename: str) -> int | None:
 
 def _describe_exception(error: BaseException) -> str:
     name = type(error).__name__
-    detail = _shorten(str(error), _MAX_DETAIL)
+    try:
+        detail = _shorten(str(error), _MAX_DETAIL)
+    except Exception:  # The racer's own exception class may have a broken __str__.
+        detail = ""
     return f"{name}: {detail}" if detail else name
 
 

@@ -138,6 +138,11 @@ class TrackSimulation:
         x, y = point + offset * normal
         self.fleet.place(car, float(x), float(y), math.atan2(tangent[1], tangent[0]), speed)
 
+    def put(self, car: int, x: float, y: float, yaw: float, speed: float = 0.0) -> None:
+        """Place a car at an exact pose (radians) and measure it, keeping its episode going."""
+        self.fleet.place(car, x, y, yaw, speed)
+        self._measure()
+
     def reset_all(self) -> None:
         for car in range(self.n):
             self.reset_car(car)

@@ -54,15 +54,19 @@ def _pocket(entry_radius: float, leg: float, hairpin_radius: float) -> tuple[Seg
     )
 
 
-def _chicane(outer_radius: float, apex_radius: float, swing_deg: float) -> tuple[Segment, ...]:
-    """Left-right-left, turning right by `apex - 2 * swing` net, to pinch a waist."""
-    return (Arc(outer_radius, swing_deg), Arc(apex_radius, -90), Arc(outer_radius, swing_deg))
+def _chicane(
+    outer_radius: float, apex_radius: float, swing_deg: float, net_deg: float = 0.0
+) -> tuple[Segment, ...]:
+    """Left-right-left: swing out, cut back through the apex, swing out again; turns `net_deg`."""
+    apex = Arc(apex_radius, net_deg - 2 * swing_deg)
+    return (Arc(outer_radius, swing_deg), apex, Arc(outer_radius, swing_deg))
 
 
 BEGINNER_OVAL = TrackDesign(
     name="beginner-oval",
     description="A wide egg-shaped oval with one gentle and one tighter end: the first track to learn on.",
     width=WIDE,
+    heading_deg=-5,
     segments=(FREE, Arc(1.8, 190), FREE, Arc(1.3, 170)),
 )
 
@@ -90,16 +94,16 @@ BOWTIE_CHICANE = TrackDesign(
     name="bowtie-chicane",
     description="Two round lobes joined at a narrow waist, crossed twice through a tight chicane.",
     width=NARROW,
-    heading_deg=-15,
+    heading_deg=-25,
     segments=(
         FREE,
-        Arc(1.3, 210),
+        Arc(1.4, 230),
         FREE,
-        *_chicane(0.55, 0.5, 30),
-        Straight(1.5),
-        Arc(1.3, 210),
-        Straight(1.5),
-        *_chicane(0.55, 0.5, 30),
+        *_chicane(0.45, 0.45, 20, -50),
+        Straight(1.0),
+        Arc(1.4, 230),
+        Straight(1.0),
+        *_chicane(0.45, 0.45, 20, -50),
     ),
 )
 
@@ -120,27 +124,33 @@ SPEEDWAY = TrackDesign(
 
 GRAND_PRIX = TrackDesign(
     name="grand-prix",
-    description="A long circuit with a fast main straight, esses, a sweeper and two hairpin pockets.",
+    description="A long circuit: a fast main straight with a bus-stop chicane, esses, a sweeper and two hairpin pockets.",
     width=NARROW,
     segments=(
         FREE,
+        *_chicane(0.8, 0.8, 40),
+        Straight(3.0),
         Arc(1.0, 90),
-        Straight(1.5),
+        Straight(1.8),
         Arc(1.2, -40),
         Arc(1.2, 80),
         Arc(1.2, -40),
-        Straight(1.0),
+        Straight(1.8),
         Arc(1.0, 90),
-        Straight(2.0),
-        *_pocket(0.8, 1.5, 0.6),
+        Straight(3.0),
+        *_pocket(0.8, 3.2, 0.6),
         Straight(2.0),
         Arc(2.5, 45),
         FREE,
+        Arc(1.5, -40),
+        Straight(1.0),
+        Arc(1.5, 40),
+        Straight(1.0),
         Arc(1.0, 45),
         Straight(1.0),
         Arc(1.2, 90),
         Straight(2.0),
-        *_pocket(0.7, 0.8, 0.5),
+        *_pocket(0.7, 1.6, 0.5),
     ),
 )
 

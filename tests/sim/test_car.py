@@ -1,0 +1,119 @@
+"""Car physics: DeepRacer's dimensions, actuator lag, the grip limit, determinism."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from sim.car import DEEPRACER_CAR, STEP_HZ, Fleet
+
+
+def drive(fleet: Fleet, steering: float, speed: float, steps: int) -> None:
+    fleet.set_targets(np.full(fleet.n, steering), np.full(fleet.n, speed))
+    for _ in range(steps):
+        fleet.step()
+
+
+def test_deepracer_dimensions() -> None:
+    assert DEEPRACER_CAR.length == 0.324
+    assert DEEPRACER_CAR.width == 0.196
+    assert DEEPRACER_CAR.wheelbase == 0.164
+    shape = next(iter(Fleet(1).bodies[0].shapes))
+    xs = [v.x for v in shape.get_vertices()]
+    ys = [v.y for v in shape.get_vertices()]
+    assert math.isclose(max(xs) - min(xs), 0.324)
+    assert math.isclose(max(ys) - min(ys), 0.196)
+
+
+def test_speed_is_reached_with_a_lag_not_instantly() -> None:
+    fleet = Fleet(1)
+    fleet.place(0, 0.0, 0.0, 0.0)
+    drive(fleet, 0.0, 4.0, 1)
+    assert 0.0 < fleet.speed[0] < 1.0  # one step (1/15 s) is far from 4 m/s
+    drive(fleet, 0.0, 4.0, 3 * STEP_HZ)
+    assert math.isclose(fleet.speed[0], 4.0, rel_tol=0.01)
+    assert fleet.x[0] > 5.0
+
+
+def test_steering_turns_left_for_positive_angles() -> None:
+    fleet = Fleet(1)
+    fleet.place(0, 0.0, 0.0, 0.0)
+    drive(fleet, 20.0, 1.0, 10)
+    assert fleet.y[0] > 0.0
+    assert fleet.yaw[0] > 0.0
+    assert 0.0 < fleet.steering[0] <= math.radians(20.0) + 1e-9
+
+
+def test_steering_servo_has_a_rate_limit() -> None:
+    fleet = Fleet(1)
+    fleet.place(0, 0.0, 0.0, 0.0)
+    fleet.set_targets(np.array([30.0]), np.array([1.0]))
+    fleet.step()
+    assert 0.0 < fleet.steering[0] < math.radians(30.0)
+
+
+def test_slow_full_lock_turn_follows_the_bicycle_model() -> None:
+    fleet = Fleet(1)
+    fleet.place(0, 0.0, 0.0, 0.0)
+    drive(fleet, 30.0, 1.0, 4 * STEP_HZ)
+    radius = fleet.speed[0] / abs(fleet.yaw_rate[0])
+    assert math.isclose(radius, DEEPRACER_CAR.min_turn_radius, rel_tol=0.02)
+    assert not fleet.sliding[0]
+
+
+def test_too_fast_for_the_corner_understeers_wide() -> None:
+    slow, fast = Fleet(1), Fleet(1)
+    for fleet in (slow, fast):
+        fleet.place(0, 0.0, 0.0, 0.0)
+    drive(slow, 15.0, 1.0, 3 * STEP_HZ)
+    drive(fast, 15.0, 4.0, 3 * STEP_HZ)
+    slow_radius = slow.speed[0] / abs(slow.yaw_rate[0])
+    fast_radius = fast.speed[0] / abs(fast.yaw_rate[0])
+    assert fast.sliding[0]
+    assert fast_radius > 2.0 * slow_radius
+    lateral_acceleration = fast.speed[0] * abs(fast.yaw_rate[0])
+    assert lateral_acceleration <= DEEPRACER_CAR.grip + 1e-6
+    assert fast.speed[0] < 4.0  # scrubbing tyres lose speed
+
+
+def test_physics_is_deterministic() -> None:
+    runs = []
+    for _ in range(2):
+        fleet = Fleet(3)
+        for car in range(3):
+            fleet.place(car, car * 1.0, 0.0, 0.1 * car)
+        rng = np.random.default_rng(7)
+        for _ in range(100):
+            fleet.set_targets(rng.uniform(-30, 30, 3), rng.uniform(0.1, 4, 3))
+            fleet.step()
+        runs.append(np.concatenate([fleet.x, fleet.y, fleet.yaw]))
+    assert np.array_equal(runs[0], runs[1])
+
+
+def test_batched_cars_move_independently_like_single_cars() -> None:
+    batch = Fleet(2)
+    single = Fleet(1)
+    batch.place(0, 0.0, 0.0, 0.0)
+    batch.place(1, 5.0, 5.0, 1.0)
+    single.place(0, 5.0, 5.0, 1.0)
+    for _ in range(30):
+        batch.set_targets(np.array([-10.0, 25.0]), np.array([2.0, 3.0]))
+        single.set_targets(np.array([25.0]), np.array([3.0]))
+        batch.step()
+        single.step()
+    assert math.isclose(batch.x[1], single.x[0], abs_tol=1e-9)
+    assert math.isclose(batch.y[1], single.y[0], abs_tol=1e-9)
+
+
+def test_cars_collide_only_when_asked() -> None:
+    for collide in (False, True):
+        fleet = Fleet(2, cars_collide=collide)
+        fleet.place(0, 0.0, 0.0, 0.0)
+        fleet.place(1, 0.6, 0.0, math.pi)
+        fleet.set_targets(np.zeros(2), np.ones(2))
+        touched = np.zeros(2, dtype=bool)
+        for _ in range(15):
+            fleet.step()
+            touched |= fleet.crashed
+        assert bool(touched.all()) is collide
