@@ -14,7 +14,6 @@ from typing import Any
 
 from rich.console import Console
 from rich.table import Table
-from rich.text import Text
 
 from sim.action_space import ActionSpaceError
 from sim.observations import SensorError
@@ -76,7 +75,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return _dispatch(args)
     except _user_errors() as exc:
-        Console(stderr=True, highlight=False).print(Text(f"racer-tui: {exc}"))
+        # Plain print: one unwrapped sentence, and no markup interpretation of user text.
+        print(f"racer-tui: {exc}", file=sys.stderr)
         return EXIT_USER_ERROR
     except KeyboardInterrupt:
         return 130

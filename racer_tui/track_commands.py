@@ -44,15 +44,19 @@ def _list(as_json: bool) -> int:
         )
         return 0
     table = Table(title="Tracks")
-    for column in ("name", "length", "width", "direction", "kind", "description"):
-        table.add_column(column, justify="right" if column in ("length", "width") else "left")
+    table.add_column("name", no_wrap=True)
+    table.add_column("length", justify="right", no_wrap=True)
+    table.add_column("width", justify="right", no_wrap=True)
+    table.add_column("dir", no_wrap=True)
+    table.add_column("kind", no_wrap=True)
+    table.add_column("description", ratio=1, min_width=20)
     for info in infos:
         # Names and descriptions are user data: Text() keeps them plain, never markup.
         table.add_row(
             Text(info.name),
             f"{info.length_m:.2f} m",
             f"{info.width_m:.3f} m",
-            info.direction,
+            "ccw" if info.direction == "counter-clockwise" else "cw",
             "built-in" if info.builtin else "imported",
             Text(info.description),
         )

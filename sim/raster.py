@@ -54,14 +54,30 @@ class TrackRaster:
         shape = (self.height, self.width)
 
         self.road: NDArray[np.bool_] = _fill_even_odd([track.outer, track.inner], self, shape)
-        lines = np.zeros(shape, dtype=bool)
-        for border in (track.outer, track.inner):
-            rows, cols = self._cells(_densify(border, 0.5 * resolution))
-            lines[rows, cols] = True
+
+        # Both borders as one list of segments; `ring_start`/`ring_size` say which ring a
+        # segment belongs to, so a sensor can walk to its neighbours around the loop.
+        rings = [track.outer_border, track.inner_border]
+        self.segment_start: FloatArray = np.vstack([ring.starts for ring in rings])
+        self.segment_vector: FloatArray = np.vstack([ring.vectors for ring in rings])
+        sizes = [len(ring.starts) for ring in rings]
+        self.ring_size: NDArray[np.int32] = np.repeat(sizes, sizes).astype(np.int32)
+        self.ring_start: NDArray[np.int32] = np.repeat(np.cumsum([0, *sizes[:-1]]), sizes).astype(
+            np.int32
+        )
+        points, owners = _densify(self.segment_start, self.segment_vector, 0.5 * resolution)
+        rows, cols = self._cells(points)
+        owner_grid = np.full(shape, -1, dtype=np.int32)
+        owner_grid[rows, cols] = owners
         # EDT to the centres of the cells a border passes through: within ~0.7 cell of the
-        # true distance to the polyline, which is what sphere tracing needs.
-        distance = distance_transform_edt(~lines, sampling=resolution)
+        # true distance to the polyline, which is what sphere tracing needs. The nearest
+        # such cell also names a border segment close to every point, so a sensor near a
+        # border can finish with exact geometry.
+        distance, nearest = distance_transform_edt(
+            owner_grid < 0, sampling=resolution, return_indices=True
+        )
         self.border_distance: NDArray[np.float32] = np.asarray(distance, dtype=np.float32)
+        self.border_segment: NDArray[np.int32] = owner_grid[nearest[0], nearest[1]]
 
         texture = np.full(shape, GRASS, dtype=np.uint8)
         texture[self.road] = ASPHALT
@@ -132,8 +148,17 @@ class TrackRaster:
         )
 
 
-def _densify(polyline: FloatArray, step: float) -> FloatArray:
-    return _densify_with_arc(polyline, step)[0]
+def _densify(
+    starts: FloatArray, vectors: FloatArray, step: float
+) -> tuple[FloatArray, NDArray[np.int32]]:
+    """Points along segments no more than `step` apart, with the segment each lies on."""
+    lengths = np.hypot(vectors[:, 0], vectors[:, 1])
+    counts = np.ceil(lengths / step).astype(np.intp) + 1
+    owners = np.repeat(np.arange(len(lengths), dtype=np.int32), counts)
+    offsets = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+    t = offsets / (counts[owners] - 1)
+    points = starts[owners] + vectors[owners] * t[:, None]
+    return np.asarray(points, dtype=np.float64), owners
 
 
 def _densify_with_arc(polyline: FloatArray, step: float) -> tuple[FloatArray, FloatArray]:

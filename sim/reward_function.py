@@ -254,15 +254,13 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
     function = module.__dict__.get("reward_function")
     if function is None:
         raise RewardFunctionError(
-            display,
-            f"there is no reward function in it; the file must define {DEFINE_HINT}",
-            advice="add that function and try again",
+            display, "no reward_function found", advice=f"the file must define {DEFINE_HINT}"
         )
     if not callable(function):
         raise RewardFunctionError(
             display,
-            f"reward_function is a {type(function).__name__}, not a function; "
-            f"the file must define {DEFINE_HINT}",
+            f"reward_function is a {type(function).__name__}, not a function",
+            advice=f"the file must define {DEFINE_HINT}",
         )
     _check_takes_params(function, display, filename)
     return RewardFunction(function, source=source, name=display, filename=filename)

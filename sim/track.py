@@ -179,20 +179,23 @@ def load_track(
     if not file.exists():
         raise TrackError(f"{label}: no such file; give the path of a DeepRacer .npy track file.")
     try:
+        with file.open("rb") as handle:
+            magic = handle.read(6)
         # allow_pickle=False: a track file is data and must never run code when loaded.
-        array = np.load(file, allow_pickle=False)
-    except (ValueError, OSError, EOFError) as exc:
+        array = np.load(file, allow_pickle=False) if magic == b"\x93NUMPY" else None
+    except OSError as exc:
+        raise TrackError(f"{label}: cannot be read ({exc.strerror}).") from None
+    except ValueError:
         raise TrackError(
-            f"{label}: not a NumPy .npy array file ({_first_line(exc)}); "
-            "export the track as a DeepRacer .npy file."
+            f"{label}: holds pickled Python objects, which racer-tui never loads; "
+            "a track file is a plain float array."
         ) from None
+    except EOFError:
+        array = None
+    if array is None:
+        raise TrackError(f"{label}: is not a NumPy .npy file; export the track as a DeepRacer .npy file.")
     track = Track.from_array(array, name or file.stem, description=description, source=label)
     return track.reversed() if reverse else track
-
-
-def _first_line(exc: BaseException) -> str:
-    text = str(exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
 
 
 def _normalise(array: object, label: str) -> FloatArray:

@@ -113,7 +113,7 @@ SPEEDWAY = TrackDesign(
     width=WIDE,
     heading_deg=-20,
     segments=(
-        Straight(2.5),
+        Straight(2.4),
         Arc(3.0, 40),
         FREE,
         Arc(2.0, 160),

@@ -1,0 +1,54 @@
+"""Import rules from the design: sim and league never pull in textual; torch only where a
+policy is trained or run, so the headless paths start fast."""
+
+from __future__ import annotations
+
+import json
+import pkgutil
+import subprocess
+import sys
+
+import league
+import sim
+
+# Modules that train or run a policy may import torch; nothing else may.
+TORCH_ALLOWED = {"sim.training", "sim.policy", "sim.train_worker", "sim.ppo"}
+
+
+def _modules(package: object) -> list[str]:
+    path = package.__path__  # type: ignore[attr-defined]
+    prefix = package.__name__ + "."  # type: ignore[attr-defined]
+    return sorted(info.name for info in pkgutil.walk_packages(path, prefix))
+
+
+def _import_report(modules: list[str]) -> dict[str, list[str]]:
+    """Import modules one at a time in a fresh interpreter, noting heavy imports after each."""
+    script = f"""
+import importlib, json, sys
+report = {{}}
+for name in {modules!r}:
+    importlib.import_module(name)
+    report[name] = sorted(m for m in ("textual", "torch", "stable_baselines3") if m in sys.modules)
+print(json.dumps(report))
+"""
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    return dict(json.loads(out.stdout))
+
+
+def test_sim_and_league_never_import_textual_or_torch_outside_policy_modules() -> None:
+    names = _modules(sim) + _modules(league)
+    ordinary = [n for n in names if n not in TORCH_ALLOWED and ".reward_templates" not in n]
+    report = _import_report(ordinary)
+    assert report, "no modules were imported"
+    offenders = {name: heavy for name, heavy in report.items() if heavy}
+    assert offenders == {}
+
+
+def test_headless_cli_does_not_import_textual_or_torch() -> None:
+    report = _import_report(["racer_tui.cli", "racer_tui.track_commands", "racer_tui.reward_commands"])
+    assert all(heavy == [] for heavy in report.values()), report
+
+
+def test_the_app_module_is_the_one_that_imports_textual() -> None:
+    report = _import_report(["racer_tui.app"])
+    assert "textual" in report["racer_tui.app"]
