@@ -196,17 +196,19 @@ class Fleet:
 
     def _update_actuators(self) -> None:
         spec, dt = self.spec, self.dt
+        # np.minimum/np.maximum rather than np.clip: same result, a fraction of the overhead
+        # on small arrays, and this runs four times per step.
         steer_error = self.target_steering - self.steering
-        self.steering += np.clip(steer_error, -self._steer_step, self._steer_step)
+        self.steering += np.minimum(np.maximum(steer_error, -self._steer_step), self._steer_step)
         wanted = (self.target_speed - self.speed) * (dt / spec.speed_time_constant)
-        self.speed += np.clip(wanted, -spec.max_braking * dt, spec.max_acceleration * dt)
+        self.speed += np.minimum(np.maximum(wanted, -spec.max_braking * dt), spec.max_acceleration * dt)
 
     def _apply_tyre_model(self) -> None:
         spec = self.spec
         speed = self.speed
         asked_curvature = np.tan(self.steering) / spec.wheelbase
         grip_curvature = spec.grip / np.maximum(speed * speed, 1e-6)
-        curvature = np.clip(asked_curvature, -grip_curvature, grip_curvature)
+        curvature = np.minimum(np.maximum(asked_curvature, -grip_curvature), grip_curvature)
         overload = np.abs(asked_curvature) / grip_curvature - 1.0
         self.sliding = overload > 0.0
         # Scrubbing tyres bleed speed in proportion to how far past the limit they are.

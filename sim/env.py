@@ -131,7 +131,7 @@ class BatchedDeepRacer:
         if len(finished):
             for car in finished:
                 self.final_observations[car] = _row(obs, car)
-                sim.reset_car(int(car))
+            sim.reset_cars(finished.tolist())
             obs = self.observer.observe()
         return obs, rewards, terminated, truncated, infos
 

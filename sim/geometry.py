@@ -17,6 +17,14 @@ FloatArray = NDArray[np.float64]
 # Resampling step for the KD-tree. Any step works for exactness as long as segments are
 # longer than it; 1 cm keeps the tree small even for a 60 m track.
 _SAMPLE_STEP = 0.01
+# Lookup grid: each cell remembers the segment nearest its centre, so a per-step query is
+# one gather instead of a tree search. A point is at most half a cell diagonal (2.1 cm)
+# from its cell centre; checking two segments either side covers that, except near a
+# medial axis (inside a hairpin) where far-apart segments are equally close: such cells
+# are marked ambiguous and fall back to the exact tree search.
+_GRID_CELL = 0.03
+_GRID_MARGIN = 1.5
+_NEIGHBOURS = np.arange(-2, 3)
 
 
 def segment_lengths(points: FloatArray) -> FloatArray:
@@ -43,6 +51,11 @@ class PolylineProjector:
         samples, owners = self._resample()
         self._tree = cKDTree(samples)
         self._owners = owners
+        self._grid: NDArray[np.int32] | None = None
+        self._ambiguous: NDArray[np.bool_] | None = None
+        self._grid_origin = pts.min(axis=0) - _GRID_MARGIN
+        extent = pts.max(axis=0) + _GRID_MARGIN - self._grid_origin
+        self._grid_shape = (int(np.ceil(extent[0] / _GRID_CELL)), int(np.ceil(extent[1] / _GRID_CELL)))
 
     def _resample(self) -> tuple[FloatArray, NDArray[np.intp]]:
         counts = np.maximum(1, np.ceil(self.lengths / _SAMPLE_STEP).astype(np.intp))
@@ -52,21 +65,56 @@ class PolylineProjector:
         samples = self.starts[owners] + self.vectors[owners] * t[:, None]
         return samples, owners
 
+    def _build_grid(self) -> NDArray[np.int32]:
+        nx, ny = self._grid_shape
+        ix, iy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+        centres = self._grid_origin + (np.stack([ix.ravel(), iy.ravel()], axis=1) + 0.5) * _GRID_CELL
+        _, nearest = self._tree.query(centres)
+        grid = np.asarray(self._owners[nearest].reshape(nx, ny), dtype=np.int32)
+        n_seg = len(self.lengths)
+        padded = np.pad(grid, 1, mode="edge")
+        ambiguous = np.zeros((nx, ny), dtype=bool)
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                other = padded[1 + dx : 1 + dx + nx, 1 + dy : 1 + dy + ny]
+                gap = np.abs(grid - other)
+                if self.closed:
+                    gap = np.minimum(gap, n_seg - gap)
+                ambiguous |= gap > 1
+        self._ambiguous = ambiguous
+        return grid
+
+    def _nearest_segments(self, query: FloatArray) -> NDArray[np.intp]:
+        if self._grid is None:
+            self._grid = self._build_grid()
+        assert self._ambiguous is not None
+        cell = ((query - self._grid_origin) * (1.0 / _GRID_CELL)).astype(np.intp)
+        nx, ny = self._grid_shape
+        inside = (cell[:, 0] >= 0) & (cell[:, 0] < nx) & (cell[:, 1] >= 0) & (cell[:, 1] < ny)
+        cx = np.where(inside, cell[:, 0], 0)
+        cy = np.where(inside, cell[:, 1], 0)
+        seg = self._grid[cx, cy].astype(np.intp)
+        exact = ~inside | self._ambiguous[cx, cy]
+        if exact.any():
+            _, nearest = self._tree.query(query[exact])
+            seg[exact] = self._owners[nearest]
+        return seg
+
     def project(self, xy: FloatArray) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
         """For points (M, 2): nearest segment index, fraction along it, and the nearest point."""
         query = np.atleast_2d(np.asarray(xy, dtype=np.float64))
-        _, nearest = self._tree.query(query)
-        seg = self._owners[nearest]
+        seg = self._nearest_segments(query)
         n_seg = len(self.lengths)
-        # Look at the owning segment and both neighbours; the closest projection wins.
-        candidates = np.stack([seg - 1, seg, seg + 1], axis=1)
+        # The closest projection among nearby segments wins.
+        candidates = seg[:, None] + _NEIGHBOURS[None, :]
         if self.closed:
             candidates %= n_seg
         else:
             candidates = np.clip(candidates, 0, n_seg - 1)
         rel = query[:, None, :] - self.starts[candidates]
         vec = self.vectors[candidates]
-        t = np.clip(np.einsum("mkd,mkd->mk", rel, vec) * self._inv_len_sq[candidates], 0.0, 1.0)
+        t = np.einsum("mkd,mkd->mk", rel, vec) * self._inv_len_sq[candidates]
+        t = np.minimum(np.maximum(t, 0.0), 1.0)
         foot = self.starts[candidates] + vec * t[..., None]
         dist_sq = np.sum((query[:, None, :] - foot) ** 2, axis=2)
         best = np.argmin(dist_sq, axis=1)

@@ -43,7 +43,9 @@ _cache: OrderedDict[tuple[str, float, float], TrackRaster] = OrderedDict()
 class TrackRaster:
     """Grids over the track's bounding box plus a margin; see the module docstring."""
 
-    def __init__(self, track: Track, resolution: float = RESOLUTION, margin: float = MARGIN) -> None:
+    def __init__(
+        self, track: Track, resolution: float = RESOLUTION, margin: float = MARGIN
+    ) -> None:
         if resolution <= 0 or margin < 0:
             raise ValueError("resolution must be positive and margin non-negative")
         self.resolution = float(resolution)
@@ -202,7 +204,9 @@ def _fill_even_odd(
         first = np.ceil(low).astype(np.intp)
         counts = np.maximum(np.ceil(high).astype(np.intp) - first, 0)
         edges = np.repeat(np.arange(len(a)), counts)
-        rows = first[edges] + (np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts))
+        rows = first[edges] + (
+            np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+        )
         ya, yb = a[edges, 1], b[edges, 1]
         xa, xb = a[edges, 0], b[edges, 0]
         x_cross = xa + (rows - ya) * (xb - xa) / (yb - ya)

@@ -235,7 +235,7 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
         problem = "syntax error" if kind == "SyntaxError" else kind
         raise RewardFunctionError(display, f"{problem}: {detail}", error.lineno) from None
     except ValueError as error:
-        # Python 3.11 reports NUL bytes in source as ValueError, not SyntaxError.
+        # Older Pythons report NUL bytes in source as ValueError rather than SyntaxError.
         raise RewardFunctionError(
             display, f"is not valid Python source ({error})", advice="save it as plain text"
         ) from None
@@ -249,7 +249,8 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
         exec(code, module.__dict__)
     except (Exception, SystemExit) as error:
         problem = f"loading the file raised {_describe_exception(error)}"
-        raise RewardFunctionError(display, problem, _user_line(error, filename)) from error
+        line = _user_line(error, filename)
+        raise RewardFunctionError(display, problem, line, "fix the file and try again") from error
 
     function = module.__dict__.get("reward_function")
     if function is None:
@@ -259,7 +260,7 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
     if not callable(function):
         raise RewardFunctionError(
             display,
-            f"reward_function is a {type(function).__name__}, not a function",
+            f"reward_function is {_a(type(function).__name__)}, not a function",
             advice=f"the file must define {DEFINE_HINT}",
         )
     _check_takes_params(function, display, filename)
@@ -310,7 +311,7 @@ def _as_reward(value: object) -> float | _BadReward:
     else:
         shown = _shorten(repr(value), 60)
         return _BadReward(
-            f"reward_function returned {shown} (a {kind.__name__}) instead of a number",
+            f"reward_function returned {shown} ({_a(kind.__name__)}) instead of a number",
             RETURN_ADVICE,
         )
     if -MAX_ABS_REWARD <= reward <= MAX_ABS_REWARD:
@@ -361,6 +362,10 @@ def _describe_exception(error: BaseException) -> str:
     except Exception:  # The racer's own exception class may have a broken __str__.
         detail = ""
     return f"{name}: {detail}" if detail else name
+
+
+def _a(noun: str) -> str:
+    return f"an {noun}" if noun[:1].lower() in "aeiou" else f"a {noun}"
 
 
 def _shorten(text: str, limit: int) -> str:

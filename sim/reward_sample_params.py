@@ -2,9 +2,10 @@
 
 The car is on the first straight of a small stadium-shaped loop (two 6 m straights joined by
 half circles of radius 1.5 m, driven counter-clockwise from the origin along +x). Every value
-follows DeepRacer's rules, so a reward function that runs here runs on the simulator: `x`, `y`,
-`progress` and the centre-line figures describe the point 0.14 m ahead of the car's centre,
-`heading` is in degrees from +x, and `speed` / `steering_angle` are the commanded action.
+follows DeepRacer's rules and types: `x`, `y`, `progress` and the centre-line figures describe
+the point 0.14 m ahead of the car's centre, `heading` is in degrees from +x, and `speed` /
+`steering_angle` are the commanded action. By default two boxes stand on the straight, neither
+close to the car in its lane, so functions written for object avoidance run too.
 
 `PARAM_KEYS` is the one definition of the key set: the simulator builds its params from it.
 """

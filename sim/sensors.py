@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal, overload
 
 import gymnasium as gym
 import numpy as np
@@ -38,14 +38,26 @@ MAX_VIEW_DISTANCE = 30.0
 # Pixels gathered per chunk: the working arrays (~16 bytes a pixel) then stay in L2 cache.
 _CHUNK_PIXELS = 40_000
 
-# Sphere tracing: over-relaxed steps (checked, see `Lidar.scan`) reach grazing hits in
-# fewer iterations; the iteration cap bounds the cost of a scan.
+# Lidar marching: over-relaxed steps (checked, see `Lidar._march`) reach grazing hits in
+# fewer iterations; the iteration caps bound the cost of a scan.
 _RELAXATION = 1.6
-_TRACE_ITERATIONS = 16
-_REFINE_ITERATIONS = 2
+_MAX_ITERATIONS = 32
+_EXACT_ITERATIONS = 48
 # Minimum step in raster cells: the field is only exact to about a cell, so smaller
 # steps near a border would stall instead of crossing it.
 _MIN_STEP_CELLS = 1.0
+# A ray this close to a border (cells) is tested exactly against the segments nearby.
+_NEAR_CELLS = 2.0
+# Segments on either side of the one nearest the probe point that are tested exactly.
+_EXACT_NEIGHBOURS = 3
+# Slack (cells) past the marched crossing when accepting an exact one: the field, and so
+# the marching, is only good to about a cell.
+_WINDOW_CELLS = 2.0
+# Metres: following a grazing ray on exact distances must still make progress. Steps
+# longer than the distance are safe because every probe tests the segments around it for
+# crossings all the way back to the previous probe; this stays well under the length of
+# a DeepRacer track segment (10-30 cm), so a crossing is always near one of the probes.
+_EXACT_MIN_STEP = 0.05
 
 
 # --- camera -------------------------------------------------------------------------------
@@ -66,7 +78,9 @@ class CameraSpec:
         if self.width < 1 or self.height < 1:
             raise ValueError(f"camera size {self.width}x{self.height} must be at least 1x1")
         if not 0.0 < self.fov_deg < 180.0:
-            raise ValueError(f"camera field of view {self.fov_deg} must be between 0 and 180 degrees")
+            raise ValueError(
+                f"camera field of view {self.fov_deg} must be between 0 and 180 degrees"
+            )
         if self.mount_height <= 0.0:
             raise ValueError("the camera must be mounted above the ground (mount_height > 0)")
 
@@ -215,102 +229,206 @@ class LidarSpec:
 
 
 class Lidar:
-    """Distances from each car's centre to the first border line along each ray."""
+    """Distances from each car's centre to the first border line along each ray.
+
+    Rays are marched through the raster's signed border distance (cheap, good to about a
+    cell) until they cross a border or come within a couple of cells of one; there each is
+    intersected exactly with the few border segments around that spot. The rare ray that
+    only grazes past a border is then followed on exact geometry alone.
+    """
 
     def __init__(self, track: Track, spec: LidarSpec | None = None) -> None:
         self.spec = spec or LidarSpec()
         self.raster = TrackRaster.for_track(track)
         self.angles = np.radians(self.spec.angles_deg)
-        res = self.raster.resolution
+        raster = self.raster
         # In cells: positions, steps and distances then share one unit.
-        self._field = (self.raster.signed_distance / np.float32(res)).astype(np.float32).ravel()
-        self._max_cells = np.float32(self.spec.max_range / res)
+        self._field = (raster.signed_distance / np.float32(raster.resolution)).ravel()
+        self._segment_of_cell = raster.border_segment.ravel()
+        self._limit = np.float32(self.spec.max_range / raster.resolution)
+        window = np.arange(-_EXACT_NEIGHBOURS, _EXACT_NEIGHBOURS + 1)
+        within = (np.arange(len(raster.segment_start)) - raster.ring_start)[:, None] + window
+        self._candidates = raster.ring_start[:, None] + np.mod(within, raster.ring_size[:, None])
+        vector = raster.segment_vector
+        self._inv_length_sq = 1.0 / np.maximum(np.sum(vector * vector, axis=1), 1e-18)
 
     def scan(self, x: ArrayLike, y: ArrayLike, yaw: ArrayLike) -> Float32Array:
         """(N, rays) float32 distances in metres, clipped to [min_range, max_range]."""
         xs, ys, yaws = _poses(x, y, yaw)
+        n, count = len(xs), len(self.angles)
         res = self.raster.resolution
-        col0 = ((xs - self.raster.origin[0]) / res).astype(np.float32)[:, None]
-        row0 = ((ys - self.raster.origin[1]) / res).astype(np.float32)[:, None]
-        theta = yaws[:, None] + self.angles[None, :]
-        dx = np.cos(theta).astype(np.float32)
-        dy = np.sin(theta).astype(np.float32)
+        theta = (yaws[:, None] + self.angles[None, :]).ravel()
+        cos, sin = np.cos(theta), np.sin(theta)
+        car = np.repeat(np.arange(n), count)
+        col0 = ((xs - self.raster.origin[0]) / res).astype(np.float32)
+        row0 = ((ys - self.raster.origin[1]) / res).astype(np.float32)
         start = self._sample(col0, row0)
         # Measure everything as seen from the car's side of the border: a car off the road
         # looks for the crossing onto it, one on the road for the crossing off it.
         side = np.where(start < 0, np.float32(-1.0), np.float32(1.0)).astype(np.float32)
-
-        def distance_at(t: Float32Array) -> Float32Array:
-            return side * self._sample(col0 + dx * t, row0 + dy * t)
-
-        shape = theta.shape
-        limit = self._max_cells
-        t = np.zeros(shape, dtype=np.float32)
-        g = np.broadcast_to(np.abs(start), shape).astype(np.float32)
-        t_prev, g_prev = t.copy(), g.copy()
-        omega = np.full(shape, _RELAXATION, dtype=np.float32)
-        hit = np.full(shape, limit, dtype=np.float32)
-        lo_t, lo_g = t.copy(), g.copy()
-        hi_t, hi_g = t.copy(), g.copy()
-        bracketed = np.zeros(shape, dtype=bool)
-        active = np.ones(shape, dtype=bool)
-        for _ in range(_TRACE_ITERATIONS):
-            step = np.maximum(omega * g, np.float32(_MIN_STEP_CELLS))
-            t_next = t + step
-            g_next = distance_at(t_next)
-            # Over-relaxed steps are safe only while the free discs around both ends cover
-            # the step; otherwise a thin strip could hide between them. Retry unrelaxed.
-            failed = (omega > 1.0) & (g + np.abs(g_next) < step) & active
-            omega[failed] = 1.0
-            accepted = active & ~failed
-            crossed = accepted & (g_next <= 0)
-            lo_t[crossed], lo_g[crossed] = t[crossed], g[crossed]
-            hi_t[crossed], hi_g[crossed] = t_next[crossed], g_next[crossed]
-            bracketed |= crossed
-            moved = accepted & ~crossed
-            t_prev[moved], g_prev[moved] = t[moved], g[moved]
-            t[moved], g[moved] = t_next[moved], g_next[moved]
-            active &= ~crossed & ~(moved & (t_next >= limit))
-            if not active.any():
-                break
-
-        hit = self._refine(bracketed, lo_t, lo_g, hi_t, hi_g, distance_at, hit)
-        if active.any():
-            # Still converging on a grazing hit: a border is locally straight, so the
-            # distance falls linearly along the ray; extrapolate to where it reaches zero.
-            slope = (g - g_prev) / np.maximum(t - t_prev, np.float32(1e-6))
-            guess = np.where(slope < 0, t - g / np.minimum(slope, np.float32(-1e-6)), limit)
-            hit = np.where(active, guess, hit).astype(np.float32)
-        result = hit * np.float32(res)
+        rays = _Rays(
+            ids=np.arange(n * count),
+            col=col0[car],
+            row=row0[car],
+            dx=cos.astype(np.float32),
+            dy=sin.astype(np.float32),
+            side=side[car],
+            t=np.zeros(n * count, dtype=np.float32),
+            g=np.abs(start)[car],
+            omega=np.full(n * count, _RELAXATION, dtype=np.float32),
+        )
+        geometry = _RayGeometry(xs[car], ys[car], cos, sin)
+        hit = np.full(n * count, self.spec.max_range, dtype=np.float64)
+        stops = self._march(rays)
+        exact = self._intersect(
+            geometry, stops.ids, stops.probe * res, stops.clear * res, stops.upper * res
+        )
+        found = np.isfinite(exact)
+        hit[stops.ids[found]] = exact[found]
+        missed = ~found
+        self._follow_exactly(geometry, stops.ids[missed], stops.clear[missed] * res, hit)
+        result = hit.reshape(n, count).astype(np.float32)
         np.clip(result, self.spec.min_range, self.spec.max_range, out=result)
         return result
 
-    def _refine(
+    def _march(self, rays: _Rays) -> _Stops:
+        """Sphere-trace every ray until it crosses a border, nears one or leaves the range.
+
+        Rays that leave the range drop out (they read max_range); the others come back as
+        stops: where to look for the border, and how far along the ray is known clear.
+        """
+        stops: list[_Stops] = []
+        for _ in range(_MAX_ITERATIONS):
+            if not len(rays.ids):
+                break
+            step = np.maximum(rays.omega * rays.g, np.float32(_MIN_STEP_CELLS))
+            t_next = rays.t + step
+            g_next = rays.side * self._sample(
+                rays.col + rays.dx * t_next, rays.row + rays.dy * t_next
+            )
+            # An over-relaxed step is safe only while the free discs around both ends cover
+            # it; otherwise a thin strip could hide between them. Retry it unrelaxed.
+            failed = (rays.omega > 1.0) & (rays.g + np.abs(g_next) < step)
+            ok = ~failed
+            crossed = ok & (g_next <= 0)
+            near = ok & ~crossed & (g_next < _NEAR_CELLS)
+            finished = crossed | near | (ok & (t_next >= self._limit))
+            if crossed.any():
+                before, after = rays.g[crossed], g_next[crossed]
+                span = np.maximum(before - after, np.float32(1e-6))
+                probe = rays.t[crossed] + step[crossed] * before / span
+                stops.append(
+                    _Stops(
+                        rays.ids[crossed],
+                        rays.t[crossed],
+                        probe,
+                        t_next[crossed] + np.float32(_WINDOW_CELLS),
+                    )
+                )
+            if near.any():
+                upper = np.full(int(near.sum()), np.inf, dtype=np.float32)
+                stops.append(_Stops(rays.ids[near], rays.t[near], t_next[near], upper))
+            rays.t = np.where(ok, t_next, rays.t)
+            rays.g = np.where(ok, g_next, rays.g)
+            rays.omega[failed] = 1.0
+            if finished.any():
+                rays = rays.kept(~finished)
+        if len(rays.ids):
+            # Out of iterations: a ray creeping up on a border at a grazing angle.
+            upper = np.full(len(rays.ids), np.inf, dtype=np.float32)
+            stops.append(_Stops(rays.ids, rays.t, rays.t, upper))
+        return _Stops.joined(stops)
+
+    def _follow_exactly(
         self,
-        bracketed: NDArray[np.bool_],
-        lo_t: Float32Array,
-        lo_g: Float32Array,
-        hi_t: Float32Array,
-        hi_g: Float32Array,
-        distance_at: Any,
-        hit: Float32Array,
-    ) -> Float32Array:
-        """Regula falsi inside each crossing bracket (lo on the car's side, hi across)."""
+        geometry: _RayGeometry,
+        ids: NDArray[np.intp],
+        clear_m: NDArray[np.float64],
+        hit: NDArray[np.float64],
+    ) -> None:
+        """Sphere-trace on exact distances to nearby segments: for rays that grazed past a
+        border, where the raster's cell-sized errors would call a miss a hit."""
+        t = clear_m.astype(np.float64)
+        checked = t.copy()
+        for _ in range(_EXACT_ITERATIONS):
+            if not len(ids):
+                return
+            exact, distance = self._intersect(
+                geometry, ids, t, checked, np.full(len(ids), np.inf), with_distance=True
+            )
+            found = np.isfinite(exact)
+            hit[ids[found]] = exact[found]
+            checked = t
+            t = t + np.maximum(_RELAXATION * distance, _EXACT_MIN_STEP)
+            going = ~found & (t < self.spec.max_range)
+            ids, t, checked = ids[going], t[going], checked[going]
+        # Still undecided after all that: report nothing seen, as an escaped ray would.
 
-        def secant() -> Float32Array:
-            span = np.maximum(lo_g - hi_g, np.float32(1e-6))
-            return (lo_t + (hi_t - lo_t) * lo_g / span).astype(np.float32)
+    @overload
+    def _intersect(
+        self,
+        geometry: _RayGeometry,
+        ids: NDArray[np.intp],
+        probe_m: NDArray[Any],
+        lo_m: NDArray[Any],
+        hi_m: NDArray[Any],
+        with_distance: Literal[False] = False,
+    ) -> NDArray[np.float64]: ...
 
-        if not bracketed.any():
-            return hit
-        for _ in range(_REFINE_ITERATIONS):
-            mid = secant()
-            g_mid = distance_at(mid)
-            same_side = bracketed & (g_mid > 0)
-            other_side = bracketed & ~same_side
-            lo_t[same_side], lo_g[same_side] = mid[same_side], g_mid[same_side]
-            hi_t[other_side], hi_g[other_side] = mid[other_side], g_mid[other_side]
-        return np.where(bracketed, secant(), hit).astype(np.float32)
+    @overload
+    def _intersect(
+        self,
+        geometry: _RayGeometry,
+        ids: NDArray[np.intp],
+        probe_m: NDArray[Any],
+        lo_m: NDArray[Any],
+        hi_m: NDArray[Any],
+        with_distance: Literal[True],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+
+    def _intersect(
+        self,
+        geometry: _RayGeometry,
+        ids: NDArray[np.intp],
+        probe_m: NDArray[Any],
+        lo_m: NDArray[Any],
+        hi_m: NDArray[Any],
+        with_distance: bool = False,
+    ) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Nearest exact crossing in [lo, hi] metres of each ray with the border segments
+        around the point `probe` metres along it (inf where none); optionally also that
+        point's distance to those segments."""
+        ox, oy = geometry.x[ids], geometry.y[ids]
+        cos, sin = geometry.cos[ids][:, None], geometry.sin[ids][:, None]
+        px = ox + probe_m * cos[:, 0]
+        py = oy + probe_m * sin[:, 0]
+        rows, cols = self.raster.cell_of(np.stack([px, py], axis=1))
+        segments = self._candidates[self._segment_of_cell[rows * self.raster.width + cols]]
+        start = self.raster.segment_start[segments]
+        vector = self.raster.segment_vector[segments]
+        wx, wy = start[..., 0] - ox[:, None], start[..., 1] - oy[:, None]
+        vx, vy = vector[..., 0], vector[..., 1]
+        # Solve origin + t * direction = start + u * vector with 2-D cross products.
+        denom = cos * vy - sin * vx
+        parallel = np.abs(denom) < 1e-12
+        safe = np.where(parallel, 1.0, denom)
+        t = (wx * vy - wy * vx) / safe
+        u = (wx * sin - wy * cos) / safe
+        valid = (
+            ~parallel
+            & (u >= -1e-9)
+            & (u <= 1.0 + 1e-9)
+            & (t >= np.asarray(lo_m)[:, None] - 1e-9)
+            & (t <= np.asarray(hi_m)[:, None])
+        )
+        crossing = np.asarray(np.where(valid, t, np.inf).min(axis=1), dtype=np.float64)
+        if not with_distance:
+            return crossing
+        # Distance from the probe point to each segment: project, clamp, measure.
+        rx, ry = px[:, None] - start[..., 0], py[:, None] - start[..., 1]
+        along = np.clip((rx * vx + ry * vy) * self._inv_length_sq[segments], 0.0, 1.0)
+        distance = np.hypot(rx - along * vx, ry - along * vy).min(axis=1)
+        return crossing, np.asarray(distance, dtype=np.float64)
 
     def _sample(self, col: Float32Array, row: Float32Array) -> Float32Array:
         """Signed distance (cells) of the cells under grid positions, clamped to the grid."""
@@ -319,6 +437,67 @@ class Lidar:
         rows *= self.raster.width
         rows += cols
         return np.asarray(self._field.take(rows), dtype=np.float32)
+
+
+@dataclass
+class _RayGeometry:
+    """Each ray's origin (metres) and direction, in float64 for the exact intersections."""
+
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    cos: NDArray[np.float64]
+    sin: NDArray[np.float64]
+
+
+@dataclass
+class _Stops:
+    """Where marching stopped rays (in cells along each): known clear up to `clear`; look
+    for the border around `probe`; accept crossings up to `upper`."""
+
+    ids: NDArray[np.intp]
+    clear: Float32Array
+    probe: Float32Array
+    upper: Float32Array
+
+    @staticmethod
+    def joined(parts: list[_Stops]) -> _Stops:
+        if not parts:
+            nothing = np.zeros(0, dtype=np.float32)
+            return _Stops(np.zeros(0, dtype=np.intp), nothing, nothing, nothing)
+        return _Stops(
+            np.concatenate([p.ids for p in parts]),
+            np.concatenate([p.clear for p in parts]),
+            np.concatenate([p.probe for p in parts]),
+            np.concatenate([p.upper for p in parts]),
+        )
+
+
+@dataclass
+class _Rays:
+    """The rays still marching, compacted: finished rays drop out so later steps are cheap."""
+
+    ids: NDArray[np.intp]
+    col: Float32Array
+    row: Float32Array
+    dx: Float32Array
+    dy: Float32Array
+    side: Float32Array
+    t: Float32Array
+    g: Float32Array
+    omega: Float32Array
+
+    def kept(self, mask: NDArray[np.bool_]) -> _Rays:
+        return _Rays(
+            self.ids[mask],
+            self.col[mask],
+            self.row[mask],
+            self.dx[mask],
+            self.dy[mask],
+            self.side[mask],
+            self.t[mask],
+            self.g[mask],
+            self.omega[mask],
+        )
 
 
 def lidar_space(spec: LidarSpec | None = None) -> gym.spaces.Box:

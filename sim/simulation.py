@@ -13,6 +13,7 @@ wheel centres are off the road; `all_wheels_on_track` is False as soon as one is
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
@@ -117,18 +118,24 @@ class TrackSimulation:
 
     def reset_car(self, car: int, start_s: float | None = None) -> None:
         """Put a car on the centre line, pointing along the track, for a new episode."""
-        s = self.start_position(car, int(self.episode[car])) if start_s is None else start_s
-        self.episode[car] += 1
-        self.place(car, s)
-        self.steps[car] = 0
-        self.travelled[car] = 0.0
-        self._falling[car] = 0
-        self._still[car] = 0
-        self.status[car] = EpisodeStatus.IN_PROGRESS
-        self.steering_cmd[car] = 0.0
-        self.speed_cmd[car] = 0.0
+        self.reset_cars([car], None if start_s is None else [start_s])
+
+    def reset_cars(self, cars: Sequence[int], start_s: Sequence[float] | None = None) -> None:
+        """Start new episodes for several cars with one measurement pass."""
+        for k, car in enumerate(cars):
+            s = self.start_position(car, int(self.episode[car])) if start_s is None else start_s[k]
+            self.episode[car] += 1
+            self.place(car, s)
+        index = np.asarray(cars, dtype=np.intp)
+        self.steps[index] = 0
+        self.travelled[index] = 0.0
+        self._falling[index] = 0
+        self._still[index] = 0
+        self.status[index] = EpisodeStatus.IN_PROGRESS
+        self.steering_cmd[index] = 0.0
+        self.speed_cmd[index] = 0.0
         self._measure()
-        self.start_s[car] = self.s[car]
+        self.start_s[index] = self.s[index]
 
     def place(self, car: int, s: float, offset: float = 0.0, speed: float = 0.0) -> None:
         """Teleport a car to arc length `s` (and `offset` metres left of the centre line)."""
@@ -144,8 +151,7 @@ class TrackSimulation:
         self._measure()
 
     def reset_all(self) -> None:
-        for car in range(self.n):
-            self.reset_car(car)
+        self.reset_cars(range(self.n))
 
     # --- stepping ------------------------------------------------------------------------
     def apply(self, steering_deg: FloatArray, speed: FloatArray) -> None:

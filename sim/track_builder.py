@@ -22,7 +22,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
 from sim.geometry import FloatArray, signed_area
-from sim.track import Track, TrackError
+from sim.track import MIN_WIDTH, Track, TrackError
 
 # DeepRacer's own track files space their waypoints about 0.15 m apart.
 WAYPOINT_SPACING = 0.15
@@ -80,12 +80,13 @@ class CentreLine:
 # --- straights and arcs -------------------------------------------------------------------
 
 
-def close_loop(segments: Sequence[Segment], *, heading_deg: float = 0.0) -> list[Straight | Arc]:
+def close_loop(segments: Sequence[Segment], *, heading_deg: float = 0.0) -> list[Segment]:
     """Give the two free straights (`length=None`) the lengths that make the chain a loop.
 
     Headings do not depend on straight lengths, so the end point is linear in the two free
     lengths: one 2x2 solve closes the loop exactly.
     """
+    _check_pieces(segments)
     total_turn = sum(seg.degrees for seg in segments if isinstance(seg, Arc))
     if not math.isclose(abs(total_turn), 360.0, abs_tol=1e-9):
         raise TrackDesignError(
@@ -96,7 +97,7 @@ def close_loop(segments: Sequence[Segment], *, heading_deg: float = 0.0) -> list
         raise TrackDesignError(
             f"the design has {len(free)} free straights; give exactly two (or none)."
         )
-    fixed = [Straight(0.0) if i in free else seg for i, seg in enumerate(segments)]
+    fixed: list[Segment] = [Straight(0.0) if i in free else seg for i, seg in enumerate(segments)]
     initial = math.radians(heading_deg)
     gap = -_chain_end(fixed, initial)
     if not free:
@@ -106,7 +107,9 @@ def close_loop(segments: Sequence[Segment], *, heading_deg: float = 0.0) -> list
     headings = _start_headings(fixed, initial)
     directions = np.array([[math.cos(headings[i]), math.sin(headings[i])] for i in free]).T
     if abs(np.linalg.det(directions)) < 1e-6:
-        raise TrackDesignError("the two free straights are parallel, so they cannot close the loop.")
+        raise TrackDesignError(
+            "the two free straights are parallel, so they cannot close the loop."
+        )
     lengths = np.linalg.solve(directions, gap)
     if np.any(lengths <= 0):
         raise TrackDesignError(
@@ -116,6 +119,16 @@ def close_loop(segments: Sequence[Segment], *, heading_deg: float = 0.0) -> list
     for index, length in zip(free, lengths, strict=True):
         fixed[index] = Straight(float(length))
     return fixed
+
+
+def _check_pieces(segments: Sequence[Segment]) -> None:
+    for seg in segments:
+        if isinstance(seg, Arc) and seg.radius <= 0:
+            raise TrackDesignError(f"an arc has radius {seg.radius:g} m; radii must be positive.")
+        if isinstance(seg, Straight) and seg.length is not None and seg.length < 0:
+            raise TrackDesignError(
+                f"a straight is {seg.length:g} m long; lengths cannot be negative."
+            )
 
 
 def _start_headings(segments: Sequence[Segment], initial: float = 0.0) -> list[float]:
@@ -128,9 +141,13 @@ def _start_headings(segments: Sequence[Segment], initial: float = 0.0) -> list[f
 def _chain_end(segments: Sequence[Segment], initial: float) -> FloatArray:
     position = np.zeros(2)
     for seg, heading in zip(segments, _start_headings(segments, initial), strict=True):
-        position, _ = _along(seg, position, heading, np.array([_seg_length(seg)]))
-        position = position[0]
+        position = _piece_end(seg, position, heading)
     return position
+
+
+def _piece_end(seg: Segment, start: FloatArray, heading: float) -> FloatArray:
+    points, _ = _along(seg, start, heading, np.array([_seg_length(seg)]))
+    return np.asarray(points[0], dtype=np.float64)
 
 
 def _seg_length(seg: Segment) -> float:
@@ -164,9 +181,6 @@ def centre_line_from_segments(
     Piece 0 starts at the origin heading `heading_deg` (0 = +x, counter-clockwise positive).
     """
     pieces = close_loop(segments, heading_deg=heading_deg)
-    for seg in pieces:
-        if isinstance(seg, Arc) and seg.radius <= 0:
-            raise TrackDesignError(f"an arc has radius {seg.radius:g} m; radii must be positive.")
     lengths = np.array([_seg_length(seg) for seg in pieces])
     total = float(lengths.sum())
     count = max(3, round(total / spacing))
@@ -177,10 +191,12 @@ def centre_line_from_segments(
     headings = np.empty(count)
     position = np.zeros(2)
     initial = math.radians(heading_deg)
-    for index, (seg, heading) in enumerate(zip(pieces, _start_headings(pieces, initial), strict=True)):
+    for index, (seg, heading) in enumerate(
+        zip(pieces, _start_headings(pieces, initial), strict=True)
+    ):
         mine = owner == index
         points[mine], headings[mine] = _along(seg, position, heading, s[mine] - starts[index])
-        position = _along(seg, position, heading, np.array([lengths[index]]))[0][0]
+        position = _piece_end(seg, position, heading)
     radii = [seg.radius for seg in pieces if isinstance(seg, Arc)]
     normals = np.stack([-np.sin(headings), np.cos(headings)], axis=1)
     return CentreLine(points=points, normals=normals, length=total, min_radius=min(radii))
@@ -244,7 +260,9 @@ def check_clearance(line: CentreLine, width: float, clearance: float) -> None:
     """Refuse a design where two separate parts of the road come within `clearance` of each other.
 
     Points closer than width + clearance whose distance along the loop exceeds what a turn
-    of the smallest allowed radius needs to get that close are different parts of the road.
+    of radius (width + clearance) / 2 needs to get that close are different parts of the
+    road. Callers keep turns at least that wide (`check_turn_radius` with the default
+    clearance), or a single tight turn would count as the road meeting itself.
     """
     reach = width + clearance
     step = line.length / len(line.points)
@@ -272,8 +290,12 @@ def track_from_centre_line(
     clearance: float = DEFAULT_CLEARANCE,
 ) -> Track:
     """Offset the borders, place the track near the origin, and validate it as a DeepRacer array."""
+    if width < MIN_WIDTH:
+        raise TrackDesignError(f"a {width:g} m road is too narrow; make it at least {MIN_WIDTH} m.")
     if signed_area(line.points) <= 0:
-        raise TrackDesignError(f"track {name!r} runs clockwise; built tracks run counter-clockwise.")
+        raise TrackDesignError(
+            f"track {name!r} runs clockwise; built tracks run counter-clockwise."
+        )
     check_turn_radius(line, width)
     check_clearance(line, width, clearance)
     half = width / 2

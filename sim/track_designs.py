@@ -64,7 +64,9 @@ def _chicane(
 
 BEGINNER_OVAL = TrackDesign(
     name="beginner-oval",
-    description="A wide egg-shaped oval with one gentle and one tighter end: the first track to learn on.",
+    description=(
+        "A wide egg-shaped oval with one gentle and one tighter end: the first track to learn on."
+    ),
     width=WIDE,
     heading_deg=-5,
     segments=(FREE, Arc(1.8, 190), FREE, Arc(1.3, 170)),
@@ -124,7 +126,10 @@ SPEEDWAY = TrackDesign(
 
 GRAND_PRIX = TrackDesign(
     name="grand-prix",
-    description="A long circuit: a fast main straight with a bus-stop chicane, esses, a sweeper and two hairpin pockets.",
+    description=(
+        "A long circuit: a fast main straight with a bus-stop chicane, esses, a sweeper "
+        "and two hairpin pockets."
+    ),
     width=NARROW,
     segments=(
         FREE,

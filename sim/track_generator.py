@@ -46,7 +46,9 @@ def generate_track(seed: int, *, width: float = 0.76, target_length: float | Non
     name = f"generated-{seed}"
     for attempt in range(_MAX_ATTEMPTS):
         rng = np.random.default_rng([seed, attempt])
-        length = target_length if target_length is not None else float(rng.uniform(*_RANDOM_LENGTHS))
+        length = (
+            target_length if target_length is not None else float(rng.uniform(*_RANDOM_LENGTHS))
+        )
         try:
             return _random_shape(rng, name, width, length, seed)
         except TrackError:
@@ -83,7 +85,8 @@ def _control_points(rng: np.random.Generator) -> FloatArray:
     radii = 1.0 + waves.sum(axis=0)
     # DeepRacer tracks are wider than tall; a random stretch gives that family of shapes.
     stretch = np.array([rng.uniform(1.0, 1.9), 1.0])
-    return np.stack([np.cos(angles), np.sin(angles)], axis=1) * radii[:, None] * stretch
+    points = np.stack([np.cos(angles), np.sin(angles)], axis=1) * radii[:, None] * stretch
+    return np.asarray(points, dtype=np.float64)
 
 
 def _random_shape(
@@ -97,7 +100,11 @@ def _random_shape(
     if line.min_radius < needed:
         raise TrackDesignError(f"tightest turn {line.min_radius:.2f} m is under {needed:.2f} m")
     return track_from_centre_line(
-        line, name, width=width, description=_describe(seed, line.length, width), clearance=_CLEARANCE
+        line,
+        name,
+        width=width,
+        description=_describe(seed, line.length, width),
+        clearance=_CLEARANCE,
     )
 
 
@@ -106,7 +113,11 @@ def _stadium(name: str, width: float, length: float, seed: int) -> Track:
     straight = (length - 2 * math.pi * radius) / 2
     segments = (Straight(straight), Arc(radius, 180), Straight(straight), Arc(radius, 180))
     return build_from_segments(
-        name, segments, width=width, description=_describe(seed, length, width), clearance=_CLEARANCE
+        name,
+        segments,
+        width=width,
+        description=_describe(seed, length, width),
+        clearance=_CLEARANCE,
     )
 
 
