@@ -60,7 +60,7 @@ def _border_extents(track: Track, s_query: FloatArray) -> tuple[FloatArray, Floa
     return np.interp(s_query, centre.cumulative, right), np.interp(s_query, centre.cumulative, left)
 
 
-def _curvature(points: FloatArray, span: int) -> FloatArray:
+def loop_curvature(points: FloatArray, span: int) -> FloatArray:
     """Signed curvature of a closed point loop (without its closing point), via circumcircles."""
     prev_p = np.roll(points, span, axis=0)
     next_p = np.roll(points, -span, axis=0)
@@ -101,8 +101,8 @@ def plan_racing_line(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
     points = base + offset[:, None] * normal
 
     span = max(1, int(round(0.15 / _SPACING)))
-    curvature = _curvature(points, span)
-    speeds = _speed_profile(points, curvature, car)
+    curvature = loop_curvature(points, span)
+    speeds = speed_profile(points, curvature, car)
     closed = np.vstack([points, points[:1]])
     return RacingLine(
         points=closed,
@@ -111,7 +111,7 @@ def plan_racing_line(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
     )
 
 
-def _speed_profile(points: FloatArray, curvature: FloatArray, car: CarSpec) -> FloatArray:
+def speed_profile(points: FloatArray, curvature: FloatArray, car: CarSpec) -> FloatArray:
     grip = car.grip * _GRIP_USE
     limit = np.minimum(car.max_speed, np.sqrt(grip / np.maximum(np.abs(curvature), 1e-6)))
     step = np.hypot(*(np.roll(points, -1, axis=0) - points).T)

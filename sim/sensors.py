@@ -53,11 +53,11 @@ _EXACT_NEIGHBOURS = 3
 # Slack (cells) past the marched crossing when accepting an exact one: the field, and so
 # the marching, is only good to about a cell.
 _WINDOW_CELLS = 2.0
-# Metres: following a grazing ray on exact distances must still make progress. Steps
-# longer than the distance are safe because every probe tests the segments around it for
-# crossings all the way back to the previous probe; this stays well under the length of
-# a DeepRacer track segment (10-30 cm), so a crossing is always near one of the probes.
-_EXACT_MIN_STEP = 0.05
+# Metres past the exact distance that a step may go when following a grazing ray: every
+# probe tests the segments around it for crossings back to the previous probe, and this
+# stays well under the length of a track segment (10-30 cm on DeepRacer's tracks), so a
+# crossing in the unproven stretch is always among the segments tested.
+_EXACT_SLACK = 0.05
 
 
 # --- camera -------------------------------------------------------------------------------
@@ -358,9 +358,11 @@ class Lidar:
             )
             found = np.isfinite(exact)
             hit[ids[found]] = exact[found]
+            # Nothing crosses within `distance`, so only the last _EXACT_SLACK of a step
+            # is unproven: the next probe, that close to it, tests it.
             checked = t
-            t = t + np.maximum(_RELAXATION * distance, _EXACT_MIN_STEP)
-            going = ~found & (t < self.spec.max_range)
+            t = t + distance + _EXACT_SLACK
+            going = ~found & (checked < self.spec.max_range)
             ids, t, checked = ids[going], t[going], checked[going]
         # Still undecided after all that: report nothing seen, as an escaped ray would.
 

@@ -67,8 +67,9 @@ def resolve_track(name_or_path: str) -> Track:
     for info in known:
         if info.name == name_or_path:
             return load_track(info.path, info.name, description=info.description)
-    if not _NAME.fullmatch(name_or_path):
-        return load_track(Path(name_or_path).expanduser())
+    path = Path(name_or_path).expanduser()
+    if not _NAME.fullmatch(name_or_path) or path.is_file():
+        return load_track(path)
     names = ", ".join(info.name for info in known)
     raise TrackError(
         f"there is no track named {name_or_path!r} (the tracks are: {names}); give one of "

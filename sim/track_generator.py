@@ -1,11 +1,12 @@
 """Seeded procedural tracks: the same seed always gives the same, valid track.
 
-A shape is a ring of control points at random radii around a centre, in order of
-increasing angle (so the loop runs counter-clockwise), joined by a periodic spline and
-scaled to the wanted length. Shapes whose turns are too tight for the road, or whose road
-comes close to itself, are thrown away and the next attempt draws from a fresh stream
-derived from the seed; after a bounded number of attempts a plain stadium of the same
-length is returned, so a caller always gets a track.
+A shape is a ring of control points around a centre whose radius is a few random low
+harmonics of the angle, stretched sideways. Taken in order of increasing angle (so the
+loop runs counter-clockwise), they are joined by a periodic spline and scaled to the
+wanted length. Shapes whose turns are too tight for the road, or whose road comes close
+to itself, are thrown away and the next attempt draws from a fresh stream derived from
+the seed; after a bounded number of attempts a plain stadium of the same length is
+returned, so a caller always gets a track.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import math
 import numpy as np
 
 from sim.geometry import FloatArray
-from sim.track import MIN_WIDTH, Track, TrackError
+from sim.track import Track, TrackError
 from sim.track_builder import (
     Arc,
     Straight,
@@ -27,6 +28,8 @@ from sim.track_builder import (
 
 MIN_LENGTH = 12.0
 MAX_LENGTH = 40.0
+# Narrower than twice the car (0.196 m) leaves a model no room to learn a line.
+MIN_WIDTH = 0.4
 MAX_WIDTH = 1.5
 # Random lengths stay clear of the extremes: short tracks leave no room for shape, long
 # ones take minutes per lap for a beginner's model.

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from sim import track_generator
 from sim.track import Track, TrackError
 from sim.track_generator import MAX_LENGTH, MIN_LENGTH, generate_track
 
@@ -73,7 +74,7 @@ def test_width_changes_the_road_not_the_seed_s_determinism() -> None:
     ("seed", "width", "length", "problem"),
     [
         (-1, 0.76, None, "negative"),
-        (1, 0.1, None, "width"),
+        (1, 0.3, None, "width"),
         (1, 3.0, None, "width"),
         (1, 0.76, 5.0, "length"),
         (1, 0.76, 200.0, "length"),
@@ -84,3 +85,23 @@ def test_impossible_requests_are_refused(
 ) -> None:
     with pytest.raises(TrackError, match=problem):
         generate_track(seed, width=width, target_length=length)
+
+
+def test_when_every_random_shape_fails_a_stadium_still_comes_back(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(track_generator, "_MAX_ATTEMPTS", 0)
+
+    track = generate_track(9, width=1.07, target_length=20.0)
+
+    assert track.name == "generated-9"
+    assert track.length == pytest.approx(20.0, rel=0.005)
+    assert track.direction == "counter-clockwise"
+
+
+@pytest.mark.parametrize(("width", "length"), [(0.4, 12.0), (1.5, 12.0), (1.5, 40.0), (0.4, 40.0)])
+def test_extreme_requests_still_give_valid_tracks(width: float, length: float) -> None:
+    for seed in range(5):
+        track = generate_track(seed, width=width, target_length=length)
+        assert track.width == pytest.approx(width, abs=1e-5)
+        assert track.length == pytest.approx(length, rel=0.005)

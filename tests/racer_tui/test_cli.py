@@ -1,0 +1,128 @@
+"""The headless command line: outputs a script can rely on, one-sentence errors, exit 2."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from racer_tui.cli import main
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_tracks_list_json_has_the_builtin_tracks(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "tracks", "list", "--json")
+    assert code == 0
+    names = [t["name"] for t in json.loads(out)]
+    assert {"beginner-oval", "hairpin-circuit", "bowtie-chicane", "speedway", "grand-prix"} <= set(names)
+
+
+def test_import_a_real_deepracer_track_then_show_it(
+    capsys: pytest.CaptureFixture[str], deepracer_dir: Path
+) -> None:
+    source = deepracer_dir / "tracks" / "reinvent_base.npy"
+    code, out, _ = run_cli(capsys, "tracks", "import", str(source), "--name", "reinvent-2018")
+    assert code == 0
+    assert "17.71 m" in out
+    code, out, _ = run_cli(capsys, "tracks", "show", "reinvent-2018", "--json")
+    facts = json.loads(out)
+    assert facts["length_m"] == pytest.approx(17.71, abs=0.01)
+    assert facts["reference_status"] == "Lap complete"
+    assert 4.0 < facts["reference_lap_s"] < 12.0
+
+
+def test_import_reverse_flips_the_direction(capsys: pytest.CaptureFixture[str], deepracer_dir: Path) -> None:
+    source = deepracer_dir / "tracks" / "Oval_track.npy"
+    assert run_cli(capsys, "tracks", "import", str(source), "--reverse", "--name", "oval-cw")[0] == 0
+    code, out, _ = run_cli(capsys, "tracks", "list", "--json")
+    entry = next(t for t in json.loads(out) if t["name"] == "oval-cw")
+    assert entry["direction"] == "clockwise"
+
+
+def test_generate_is_seeded(capsys: pytest.CaptureFixture[str]) -> None:
+    first = json.loads(run_cli(capsys, "tracks", "generate", "--seed", "11", "--json")[1])
+    second = json.loads(run_cli(capsys, "tracks", "generate", "--seed", "11", "--json")[1])
+    other = json.loads(run_cli(capsys, "tracks", "generate", "--seed", "12", "--json")[1])
+    assert first == second
+    assert first["length_m"] != other["length_m"]
+
+
+def test_generate_save_makes_it_a_usable_track(capsys: pytest.CaptureFixture[str]) -> None:
+    saved = json.loads(run_cli(capsys, "tracks", "generate", "--seed", "5", "--save", "--json")[1])
+    names = [t["name"] for t in json.loads(run_cli(capsys, "tracks", "list", "--json")[1])]
+    assert saved["name"] in names
+
+
+@pytest.mark.parametrize(
+    ("array", "problem"),
+    [
+        (np.zeros((10, 4)), "shape"),
+        (np.full((10, 6), np.nan), "NaN"),
+        (np.zeros((2, 6)), "at least 3"),
+    ],
+)
+def test_bad_track_files_give_one_sentence_and_exit_2(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, array: np.ndarray, problem: str
+) -> None:
+    path = tmp_path / "broken.npy"
+    np.save(path, array)
+    code, out, err = run_cli(capsys, "tracks", "import", str(path))
+    assert code == 2
+    assert out == ""
+    assert err.count("\n") == 1
+    assert "broken.npy" in err
+    assert problem in err
+    assert "Traceback" not in err
+
+
+def test_unknown_track_name_lists_the_choices(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run_cli(capsys, "tracks", "show", "no-such-track")
+    assert code == 2
+    assert "beginner-oval" in err
+
+
+def test_reward_check_reports_sample_and_lap_rewards(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    reward = tmp_path / "reward.py"
+    reward.write_text(
+        "def reward_function(params):\n"
+        "    return 1.0 - params['distance_from_center'] / (params['track_width'] / 2)\n"
+    )
+    code, out, _ = run_cli(capsys, "reward", "check", str(reward), "--track", "beginner-oval", "--json")
+    report = json.loads(out)
+    assert code == 0
+    assert report["lap_steps"] > 50
+    assert 0.0 < report["lap_reward_mean"] <= 1.0
+    assert report["lap_reward_max"] <= 1.0
+
+
+def test_reward_check_names_file_and_line_of_a_failure(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    reward = tmp_path / "broken_reward.py"
+    reward.write_text("def reward_function(params):\n    x = 1\n    return params['speed'] / 0\n")
+    code, out, err = run_cli(capsys, "reward", "check", str(reward))
+    assert code == 2
+    assert "broken_reward.py" in err
+    assert "line 3" in err
+    assert err.count("\n") == 1
+
+
+def test_console_script_runs_without_a_terminal(tmp_path: Path) -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "racer_tui.cli", "tracks", "list", "--json"],
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+        check=False,
+    )
+    assert result.returncode == 0
+    assert json.loads(result.stdout)
