@@ -90,7 +90,9 @@ def _show(track_name: str, as_json: bool) -> int:
 
 def _import(file: Path, name: str | None, reverse: bool, description: str) -> int:
     info = import_track(file, name, reverse=reverse, description=description)
-    print_table(_one_track_table(f"Imported {info.name}", info.length_m, info.width_m, info.direction))
+    print_table(
+        _one_track_table(f"Imported {info.name}", info.length_m, info.width_m, info.direction)
+    )
     return 0
 
 

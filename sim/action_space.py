@@ -91,7 +91,9 @@ def parse_action_space(value: object, kind: str | None = None) -> ActionSpace:
     """Read `action_space` (and optionally `action_space_type`) from model metadata."""
     if isinstance(value, Mapping):
         if kind not in (None, "continuous"):
-            raise ActionSpaceError("action_space is a range but action_space_type is not 'continuous'.")
+            raise ActionSpaceError(
+                "action_space is a range but action_space_type is not 'continuous'."
+            )
         return ActionSpace(
             kind="continuous",
             steering_range=_range(value, "steering_angle", -MAX_STEERING, MAX_STEERING),
@@ -99,7 +101,9 @@ def parse_action_space(value: object, kind: str | None = None) -> ActionSpace:
         )
     if isinstance(value, Sequence) and not isinstance(value, str):
         if kind not in (None, "discrete"):
-            raise ActionSpaceError("action_space is a list but action_space_type is not 'discrete'.")
+            raise ActionSpaceError(
+                "action_space is a list but action_space_type is not 'discrete'."
+            )
         if not value:
             raise ActionSpaceError("action_space is empty; give at least one action.")
         actions = tuple(_action(item, i) for i, item in enumerate(value))
@@ -121,17 +125,29 @@ def _number(value: object, where: str) -> float:
 
 def _check(value: float, low: float, high: float, where: str, unit: str) -> float:
     if not low - 1e-9 <= value <= high + 1e-9:
-        raise ActionSpaceError(f"{where} is {value:g} {unit}; it must be between {low:g} and {high:g}.")
+        raise ActionSpaceError(
+            f"{where} is {value:g} {unit}; it must be between {low:g} and {high:g}."
+        )
     return value
 
 
 def _action(item: object, i: int) -> Action:
     if not isinstance(item, Mapping) or "steering_angle" not in item or "speed" not in item:
         raise ActionSpaceError(f"action {i} must have a steering_angle and a speed.")
-    steer = _check(_number(item["steering_angle"], f"action {i} steering_angle"),
-                   -MAX_STEERING, MAX_STEERING, f"action {i} steering_angle", "degrees")
-    speed = _check(_number(item["speed"], f"action {i} speed"), MIN_SPEED, MAX_SPEED,
-                   f"action {i} speed", "m/s")
+    steer = _check(
+        _number(item["steering_angle"], f"action {i} steering_angle"),
+        -MAX_STEERING,
+        MAX_STEERING,
+        f"action {i} steering_angle",
+        "degrees",
+    )
+    speed = _check(
+        _number(item["speed"], f"action {i} speed"),
+        MIN_SPEED,
+        MAX_SPEED,
+        f"action {i} speed",
+        "m/s",
+    )
     return Action(steering_angle=steer, speed=speed)
 
 

@@ -123,7 +123,14 @@ def _print_tables(result: dict[str, Any]) -> None:
     for row in result["reference_laps"]:
         lap = "-" if row["reference_lap_s"] is None else f"{row['reference_lap_s']:.3f} s"
         speed = "-" if row["avg_speed_m_s"] is None else f"{row['avg_speed_m_s']:.2f} m/s"
-        laps.add_row(row["track"], f"{row['length_m']:.2f} m", f"{row['width_m']:.3f} m", lap, speed, row["status"])
+        laps.add_row(
+            row["track"],
+            f"{row['length_m']:.2f} m",
+            f"{row['width_m']:.3f} m",
+            lap,
+            speed,
+            row["status"],
+        )
     console.print(laps)
 
 

@@ -180,7 +180,9 @@ class Fleet:
     # --- actions -------------------------------------------------------------------------
     def set_targets(self, steering_deg: FloatArray, speed: FloatArray) -> None:
         """Actions are targets: clipped to the car's limits, reached with lag in `step`."""
-        self.target_steering[:] = np.clip(np.radians(steering_deg), -self._max_steer, self._max_steer)
+        self.target_steering[:] = np.clip(
+            np.radians(steering_deg), -self._max_steer, self._max_steer
+        )
         self.target_speed[:] = np.clip(speed, self.spec.min_speed, self.spec.max_speed)
 
     # --- physics -------------------------------------------------------------------------
@@ -201,7 +203,9 @@ class Fleet:
         steer_error = self.target_steering - self.steering
         self.steering += np.minimum(np.maximum(steer_error, -self._steer_step), self._steer_step)
         wanted = (self.target_speed - self.speed) * (dt / spec.speed_time_constant)
-        self.speed += np.minimum(np.maximum(wanted, -spec.max_braking * dt), spec.max_acceleration * dt)
+        self.speed += np.minimum(
+            np.maximum(wanted, -spec.max_braking * dt), spec.max_acceleration * dt
+        )
 
     def _apply_tyre_model(self) -> None:
         spec = self.spec

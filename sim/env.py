@@ -113,7 +113,9 @@ class BatchedDeepRacer:
         self.sim.reset_all()
         return self.observer.observe()
 
-    def step(self, actions: np.ndarray) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, list[StepInfo]]:
+    def step(
+        self, actions: np.ndarray
+    ) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, list[StepInfo]]:
         sim = self.sim
         steering, speed = self.config.action_space.targets(actions)
         sim.apply(steering, speed)
@@ -129,9 +131,10 @@ class BatchedDeepRacer:
         finished = np.flatnonzero(terminated | truncated)
         obs = self.observer.observe()
         if len(finished):
-            for car in finished:
+            finished_cars: list[int] = finished.tolist()
+            for car in finished_cars:
                 self.final_observations[car] = _row(obs, car)
-            sim.reset_cars(finished.tolist())
+            sim.reset_cars(finished_cars)
             obs = self.observer.observe()
         return obs, rewards, terminated, truncated, infos
 
@@ -159,7 +162,9 @@ class DeepRacerEnv(gym.Env[Any, Any]):
     def __init__(self, config: EnvConfig | None = None, **build_kwargs: Any) -> None:
         super().__init__()
         self.config = config if config is not None else EnvConfig.build(**build_kwargs)
-        self.sim = TrackSimulation(self.config.track, 1, car=self.config.car, rules=self.config.rules)
+        self.sim = TrackSimulation(
+            self.config.track, 1, car=self.config.car, rules=self.config.rules
+        )
         self.observer = Observer(self.sim, self.config.sensors, self.config.sensor_options)
         self.observation_space = self.observer.space
         self.action_space = self.config.action_space.gym_space()

@@ -55,7 +55,10 @@ class PolylineProjector:
         self._ambiguous: NDArray[np.bool_] | None = None
         self._grid_origin = pts.min(axis=0) - _GRID_MARGIN
         extent = pts.max(axis=0) + _GRID_MARGIN - self._grid_origin
-        self._grid_shape = (int(np.ceil(extent[0] / _GRID_CELL)), int(np.ceil(extent[1] / _GRID_CELL)))
+        self._grid_shape = (
+            int(np.ceil(extent[0] / _GRID_CELL)),
+            int(np.ceil(extent[1] / _GRID_CELL)),
+        )
 
     def _resample(self) -> tuple[FloatArray, NDArray[np.intp]]:
         counts = np.maximum(1, np.ceil(self.lengths / _SAMPLE_STEP).astype(np.intp))
@@ -68,7 +71,9 @@ class PolylineProjector:
     def _build_grid(self) -> NDArray[np.int32]:
         nx, ny = self._grid_shape
         ix, iy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-        centres = self._grid_origin + (np.stack([ix.ravel(), iy.ravel()], axis=1) + 0.5) * _GRID_CELL
+        centres = (
+            self._grid_origin + (np.stack([ix.ravel(), iy.ravel()], axis=1) + 0.5) * _GRID_CELL
+        )
         _, nearest = self._tree.query(centres)
         grid = np.asarray(self._owners[nearest].reshape(nx, ny), dtype=np.int32)
         n_seg = len(self.lengths)
@@ -131,7 +136,9 @@ class PolylineProjector:
         if self.closed:
             s_arr = np.mod(s_arr, self.total_length)
         s_arr = np.clip(s_arr, 0.0, self.total_length)
-        seg = np.clip(np.searchsorted(self.cumulative, s_arr, side="right") - 1, 0, len(self.lengths) - 1)
+        seg = np.clip(
+            np.searchsorted(self.cumulative, s_arr, side="right") - 1, 0, len(self.lengths) - 1
+        )
         t = (s_arr - self.cumulative[seg]) / self.lengths[seg]
         return np.asarray(self.starts[seg] + self.vectors[seg] * t[..., None], dtype=np.float64)
 
@@ -140,7 +147,9 @@ class PolylineProjector:
         s_arr = np.asarray(s, dtype=np.float64)
         if self.closed:
             s_arr = np.mod(s_arr, self.total_length)
-        seg = np.clip(np.searchsorted(self.cumulative, s_arr, side="right") - 1, 0, len(self.lengths) - 1)
+        seg = np.clip(
+            np.searchsorted(self.cumulative, s_arr, side="right") - 1, 0, len(self.lengths) - 1
+        )
         return np.asarray(self.vectors[seg] / self.lengths[seg][..., None], dtype=np.float64)
 
 

@@ -75,7 +75,7 @@ def loop_curvature(points: FloatArray, span: int) -> FloatArray:
 
 def plan_racing_line(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
     centre = track.centerline
-    count = max(int(round(centre.total_length / _SPACING)), 60)
+    count = max(round(centre.total_length / _SPACING), 60)
     s = np.linspace(0.0, centre.total_length, count, endpoint=False)
     base = centre.point_at(s)
     tangent = centre.direction_at(s)
@@ -100,7 +100,7 @@ def plan_racing_line(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
         np.clip(offset, low, high, out=offset)
     points = base + offset[:, None] * normal
 
-    span = max(1, int(round(0.15 / _SPACING)))
+    span = max(1, round(0.15 / _SPACING))
     curvature = loop_curvature(points, span)
     speeds = speed_profile(points, curvature, car)
     closed = np.vstack([points, points[:1]])
@@ -170,7 +170,9 @@ class ReferenceDriver:
         # Plan speed for where the car will be once the motor has responded.
         horizon = s_here[:, None] + speed[:, None] * np.linspace(0.0, 0.35, 6)[None, :]
         planned = np.interp(
-            np.mod(horizon, self._projector.total_length), self._projector.cumulative, self.line.speeds
+            np.mod(horizon, self._projector.total_length),
+            self._projector.cumulative,
+            self.line.speeds,
         ).min(axis=1)
         limit = self.car.max_steering_deg
         return np.clip(steering, -limit, limit), planned
@@ -190,7 +192,9 @@ class ReferenceLap:
         return self.status == EpisodeStatus.LAP_COMPLETE
 
 
-def reference_lap(track: Track, car: CarSpec = DEEPRACER_CAR, max_seconds: float = 120.0) -> ReferenceLap:
+def reference_lap(
+    track: Track, car: CarSpec = DEEPRACER_CAR, max_seconds: float = 120.0
+) -> ReferenceLap:
     """Drive one lap from a standing start at waypoint 0 and time it to the sub-step."""
     sim = TrackSimulation(track, 1, car=car)
     driver = ReferenceDriver(track, car)
@@ -207,6 +211,10 @@ def reference_lap(track: Track, car: CarSpec = DEEPRACER_CAR, max_seconds: float
             elapsed = (int(sim.steps[0]) - 1 + min(max(fraction, 0.0), 1.0)) * STEP_SECONDS
             return ReferenceLap(track.name, elapsed, str(status), driver.line.planned_lap_time())
         if status != EpisodeStatus.IN_PROGRESS:
-            return ReferenceLap(track.name, float("nan"), str(status), driver.line.planned_lap_time())
+            return ReferenceLap(
+                track.name, float("nan"), str(status), driver.line.planned_lap_time()
+            )
         previous_progress = progress
-    return ReferenceLap(track.name, float("nan"), str(EpisodeStatus.TIME_UP), driver.line.planned_lap_time())
+    return ReferenceLap(
+        track.name, float("nan"), str(EpisodeStatus.TIME_UP), driver.line.planned_lap_time()
+    )

@@ -42,7 +42,10 @@ _CHUNK_PIXELS = 40_000
 # fewer iterations; the iteration caps bound the cost of a scan.
 _RELAXATION = 1.6
 _MAX_ITERATIONS = 32
-_EXACT_ITERATIONS = 48
+_EXACT_ITERATIONS = 16
+# Rounds of marching then exact following; a ray needs a second round only after it
+# grazed past a border, a third after grazing past two.
+_ROUNDS = 3
 # Minimum step in raster cells: the field is only exact to about a cell, so smaller
 # steps near a border would stall instead of crossing it.
 _MIN_STEP_CELLS = 1.0
@@ -53,6 +56,8 @@ _EXACT_NEIGHBOURS = 3
 # Slack (cells) past the marched crossing when accepting an exact one: the field, and so
 # the marching, is only good to about a cell.
 _WINDOW_CELLS = 2.0
+# Cells from the nearest border beyond which an exactly followed ray goes back to marching.
+_RESUME_CELLS = 2 * _NEAR_CELLS
 # Metres past the exact distance that a step may go when following a grazing ray: every
 # probe tests the segments around it for crossings back to the previous probe, and this
 # stays well under the length of a track segment (10-30 cm on DeepRacer's tracks), so a
@@ -277,16 +282,20 @@ class Lidar:
             g=np.abs(start)[car],
             omega=np.full(n * count, _RELAXATION, dtype=np.float32),
         )
-        geometry = _RayGeometry(xs[car], ys[car], cos, sin)
+        geometry = _RayGeometry(xs[car], ys[car], cos, sin, side[car])
         hit = np.full(n * count, self.spec.max_range, dtype=np.float64)
-        stops = self._march(rays)
-        exact = self._intersect(
-            geometry, stops.ids, stops.probe * res, stops.clear * res, stops.upper * res
-        )
-        found = np.isfinite(exact)
-        hit[stops.ids[found]] = exact[found]
-        missed = ~found
-        self._follow_exactly(geometry, stops.ids[missed], stops.clear[missed] * res, hit)
+        for _ in range(_ROUNDS):
+            stops = self._march(rays)
+            exact = self._intersect(
+                geometry, stops.ids, stops.probe * res, stops.clear * res, stops.upper * res
+            )
+            found = np.isfinite(exact)
+            hit[stops.ids[found]] = exact[found]
+            missed = ~found
+            rays = self._follow_exactly(geometry, stops.ids[missed], stops.clear[missed] * res, hit)
+            if not len(rays.ids):
+                break
+        # Rays still undecided after all rounds read max_range, as escaped ones do.
         result = hit.reshape(n, count).astype(np.float32)
         np.clip(result, self.spec.min_range, self.spec.max_range, out=result)
         return result
@@ -345,26 +354,50 @@ class Lidar:
         ids: NDArray[np.intp],
         clear_m: NDArray[np.float64],
         hit: NDArray[np.float64],
-    ) -> None:
-        """Sphere-trace on exact distances to nearby segments: for rays that grazed past a
-        border, where the raster's cell-sized errors would call a miss a hit."""
+    ) -> _Rays:
+        """Sphere-trace on exact distances to the segments nearby, for rays that came close
+        to a border without meeting the segments there (grazing past it, or starting next
+        to it): within a cell or two of a border the raster's cell-sized errors could turn
+        such a miss into a hit. Rays that get clear of the border go back to marching."""
+        res = self.raster.resolution
         t = clear_m.astype(np.float64)
         checked = t.copy()
+        resumed: list[NDArray[np.intp]] = []
+        resumed_t: list[NDArray[np.float64]] = []
+        resumed_g: list[NDArray[np.float64]] = []
         for _ in range(_EXACT_ITERATIONS):
             if not len(ids):
-                return
+                break
             exact, distance = self._intersect(
                 geometry, ids, t, checked, np.full(len(ids), np.inf), with_distance=True
             )
             found = np.isfinite(exact)
             hit[ids[found]] = exact[found]
+            clear = ~found & (distance > _RESUME_CELLS * res)
+            if clear.any():
+                resumed.append(ids[clear])
+                resumed_t.append(t[clear])
+                resumed_g.append(distance[clear])
             # Nothing crosses within `distance`, so only the last _EXACT_SLACK of a step
             # is unproven: the next probe, that close to it, tests it.
             checked = t
             t = t + distance + _EXACT_SLACK
-            going = ~found & (checked < self.spec.max_range)
+            going = ~found & ~clear & (checked < self.spec.max_range)
             ids, t, checked = ids[going], t[going], checked[going]
-        # Still undecided after all that: report nothing seen, as an escaped ray would.
+        if not resumed:
+            return _Rays.empty()
+        back = np.concatenate(resumed)
+        return _Rays(
+            ids=back,
+            col=((geometry.x[back] - self.raster.origin[0]) / res).astype(np.float32),
+            row=((geometry.y[back] - self.raster.origin[1]) / res).astype(np.float32),
+            dx=geometry.cos[back].astype(np.float32),
+            dy=geometry.sin[back].astype(np.float32),
+            side=geometry.side[back],
+            t=(np.concatenate(resumed_t) / res).astype(np.float32),
+            g=(np.concatenate(resumed_g) / res).astype(np.float32),
+            omega=np.full(len(back), _RELAXATION, dtype=np.float32),
+        )
 
     @overload
     def _intersect(
@@ -449,6 +482,7 @@ class _RayGeometry:
     y: NDArray[np.float64]
     cos: NDArray[np.float64]
     sin: NDArray[np.float64]
+    side: Float32Array  # +1 where the car is on the road, -1 off it
 
 
 @dataclass
@@ -487,6 +521,11 @@ class _Rays:
     t: Float32Array
     g: Float32Array
     omega: Float32Array
+
+    @staticmethod
+    def empty() -> _Rays:
+        nothing = np.zeros(0, dtype=np.float32)
+        return _Rays(np.zeros(0, dtype=np.intp), *([nothing] * 8))
 
     def kept(self, mask: NDArray[np.bool_]) -> _Rays:
         return _Rays(

@@ -238,7 +238,7 @@ class TrackSimulation:
         steps = self.steps.tolist()
         speed = self.speed_cmd.tolist()
         steer = self.steering_cmd.tolist()
-        all_on = self.wheels_on.all(axis=1).tolist()
+        all_on: list[bool] = np.all(self.wheels_on, axis=1).tolist()
         offtrack = self.offtrack.tolist()
         crashed = self.fleet.crashed.tolist()
         proj = self.s.tolist()

@@ -193,7 +193,9 @@ def load_track(
     except EOFError:
         array = None
     if array is None:
-        raise TrackError(f"{label}: is not a NumPy .npy file; export the track as a DeepRacer .npy file.")
+        raise TrackError(
+            f"{label}: is not a NumPy .npy file; export the track as a DeepRacer .npy file."
+        )
     track = Track.from_array(array, name or file.stem, description=description, source=label)
     return track.reversed() if reverse else track
 
@@ -211,7 +213,9 @@ def _normalise(array: object, label: str) -> FloatArray:
     bad = ~np.isfinite(points)
     if bad.any():
         row = int(np.argwhere(bad)[0][0])
-        raise TrackError(f"{label}: row {row} holds NaN or infinity; every coordinate must be a number.")
+        raise TrackError(
+            f"{label}: row {row} holds NaN or infinity; every coordinate must be a number."
+        )
     # DeepRacer's own files repeat a centre point now and then; the repeat carries no
     # information and would make a zero-length segment.
     keep = np.ones(len(points), dtype=bool)
@@ -253,13 +257,19 @@ def _check_borders(points: FloatArray, label: str) -> None:
             f"it must be at least {MIN_WIDTH} m wide everywhere."
         )
     rings = {}
-    for name, cols in (("centre line", slice(0, 2)), ("inner border", slice(2, 4)), ("outer border", slice(4, 6))):
+    for name, cols in (
+        ("centre line", slice(0, 2)),
+        ("inner border", slice(2, 4)),
+        ("outer border", slice(4, 6)),
+    ):
         ring = _dedupe_ring(points[:, cols])
         if len(ring) < 4:
             raise TrackError(f"{label}: the {name} has fewer than 3 distinct points.")
         linear = LinearRing(ring)
         if not linear.is_simple:
-            raise TrackError(f"{label}: the {name} crosses itself; a track's lines must not intersect.")
+            raise TrackError(
+                f"{label}: the {name} crosses itself; a track's lines must not intersect."
+            )
         rings[name] = ring
     inner_poly = Polygon(rings["inner border"])
     outer_poly = Polygon(rings["outer border"])

@@ -22,5 +22,7 @@ def racer_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path
 def deepracer_dir() -> Path:
     """The real AWS DeepRacer files in ../shared/deepracer (skips when absent)."""
     if not SHARED_DEEPRACER.is_dir():
-        pytest.skip("../shared/deepracer is not beside this checkout; real DeepRacer files unavailable")
+        pytest.skip(
+            "../shared/deepracer is not beside this checkout; real DeepRacer files unavailable"
+        )
     return SHARED_DEEPRACER

@@ -45,7 +45,9 @@ def test_sim_and_league_never_import_textual_or_torch_outside_policy_modules() -
 
 
 def test_headless_cli_does_not_import_textual_or_torch() -> None:
-    report = _import_report(["racer_tui.cli", "racer_tui.track_commands", "racer_tui.reward_commands"])
+    report = _import_report(
+        ["racer_tui.cli", "racer_tui.track_commands", "racer_tui.reward_commands"]
+    )
     assert all(heavy == [] for heavy in report.values()), report
 
 

@@ -46,4 +46,6 @@ def _densify(line: NDArray[np.float64], step: float) -> NDArray[np.float64]:
     count = max(int(total / spacing), 2)
     cumulative = np.concatenate([[0.0], np.cumsum(seg)])
     s = np.linspace(0.0, total, count)
-    return np.stack([np.interp(s, cumulative, line[:, 0]), np.interp(s, cumulative, line[:, 1])], axis=1)
+    return np.stack(
+        [np.interp(s, cumulative, line[:, 0]), np.interp(s, cumulative, line[:, 1])], axis=1
+    )

@@ -23,7 +23,9 @@ def test_tracks_list_json_has_the_builtin_tracks(capsys: pytest.CaptureFixture[s
     code, out, _ = run_cli(capsys, "tracks", "list", "--json")
     assert code == 0
     names = [t["name"] for t in json.loads(out)]
-    assert {"beginner-oval", "hairpin-circuit", "bowtie-chicane", "speedway", "grand-prix"} <= set(names)
+    assert {"beginner-oval", "hairpin-circuit", "bowtie-chicane", "speedway", "grand-prix"} <= set(
+        names
+    )
 
 
 def test_import_a_real_deepracer_track_then_show_it(
@@ -40,10 +42,14 @@ def test_import_a_real_deepracer_track_then_show_it(
     assert 4.0 < facts["reference_lap_s"] < 12.0
 
 
-def test_import_reverse_flips_the_direction(capsys: pytest.CaptureFixture[str], deepracer_dir: Path) -> None:
+def test_import_reverse_flips_the_direction(
+    capsys: pytest.CaptureFixture[str], deepracer_dir: Path
+) -> None:
     source = deepracer_dir / "tracks" / "Oval_track.npy"
-    assert run_cli(capsys, "tracks", "import", str(source), "--reverse", "--name", "oval-cw")[0] == 0
-    code, out, _ = run_cli(capsys, "tracks", "list", "--json")
+    assert (
+        run_cli(capsys, "tracks", "import", str(source), "--reverse", "--name", "oval-cw")[0] == 0
+    )
+    _, out, _ = run_cli(capsys, "tracks", "list", "--json")
     entry = next(t for t in json.loads(out) if t["name"] == "oval-cw")
     assert entry["direction"] == "clockwise"
 
@@ -90,13 +96,17 @@ def test_unknown_track_name_lists_the_choices(capsys: pytest.CaptureFixture[str]
     assert "beginner-oval" in err
 
 
-def test_reward_check_reports_sample_and_lap_rewards(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+def test_reward_check_reports_sample_and_lap_rewards(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
     reward = tmp_path / "reward.py"
     reward.write_text(
         "def reward_function(params):\n"
         "    return 1.0 - params['distance_from_center'] / (params['track_width'] / 2)\n"
     )
-    code, out, _ = run_cli(capsys, "reward", "check", str(reward), "--track", "beginner-oval", "--json")
+    code, out, _ = run_cli(
+        capsys, "reward", "check", str(reward), "--track", "beginner-oval", "--json"
+    )
     report = json.loads(out)
     assert code == 0
     assert report["lap_steps"] > 50
@@ -109,7 +119,7 @@ def test_reward_check_names_file_and_line_of_a_failure(
 ) -> None:
     reward = tmp_path / "broken_reward.py"
     reward.write_text("def reward_function(params):\n    x = 1\n    return params['speed'] / 0\n")
-    code, out, err = run_cli(capsys, "reward", "check", str(reward))
+    code, _, err = run_cli(capsys, "reward", "check", str(reward))
     assert code == 2
     assert "broken_reward.py" in err
     assert "line 3" in err

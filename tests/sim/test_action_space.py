@@ -21,7 +21,8 @@ def test_discrete_list_maps_indices_to_targets() -> None:
 
 def test_continuous_ranges_scale_normalised_actions() -> None:
     space = parse_action_space(
-        {"steering_angle": {"low": -20, "high": 20}, "speed": {"low": 0.5, "high": 3.0}}, "continuous"
+        {"steering_angle": {"low": -20, "high": 20}, "speed": {"low": 0.5, "high": 3.0}},
+        "continuous",
     )
     steering, speed = space.targets(np.array([[-1.0, -1.0], [1.0, 1.0], [0.0, 0.0]]))
     assert steering.tolist() == [-20.0, 20.0, 0.0]
@@ -44,7 +45,10 @@ def test_real_drfc_model_action_space_parses(deepracer_dir) -> None:  # type: ig
         ([{"steering_angle": 0, "speed": 5}], "between 0.1 and 4"),
         ([{"steering_angle": 0}], "steering_angle and a speed"),
         ([], "empty"),
-        ({"steering_angle": {"low": 10, "high": -10}, "speed": {"low": 1, "high": 2}}, "must be below"),
+        (
+            {"steering_angle": {"low": 10, "high": -10}, "speed": {"low": 1, "high": 2}},
+            "must be below",
+        ),
         ({"speed": {"low": 1, "high": 2}}, "needs steering_angle"),
         ("fast", "must be a list"),
         ([{"steering_angle": "left", "speed": 1}], "must be a number"),

@@ -75,7 +75,9 @@ def test_same_seed_and_actions_give_the_same_episode() -> None:
         rng = np.random.default_rng(3)
         trace = []
         for _ in range(60):
-            obs, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+            obs, reward, terminated, truncated, info = env.step(
+                rng.uniform(-1, 1, 2).astype(np.float32)
+            )
             trace += [reward, info["x"], info["y"], float(obs["lidar"].sum())]
             if terminated or truncated:
                 env.reset()

@@ -12,9 +12,9 @@ from sim.car import DEEPRACER_CAR, CarSpec
 from sim.reference_driver import (
     ReferenceDriver,
     loop_curvature,
-    speed_profile,
     plan_racing_line,
     reference_lap,
+    speed_profile,
 )
 from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.track import load_track
@@ -32,7 +32,9 @@ def test_reference_driver_laps_every_builtin_track(name: str) -> None:
     assert 1.5 < average_speed < DEEPRACER_CAR.max_speed
 
 
-@pytest.mark.parametrize("file", ["reinvent_base.npy", "Bowtie_track.npy", "Oval_track.npy", "reInvent2019_wide.npy"])
+@pytest.mark.parametrize(
+    "file", ["reinvent_base.npy", "Bowtie_track.npy", "Oval_track.npy", "reInvent2019_wide.npy"]
+)
 def test_reference_driver_laps_real_deepracer_tracks(deepracer_dir: Path, file: str) -> None:
     lap = reference_lap(load_track(deepracer_dir / "tracks" / file))
     assert lap.completed

@@ -56,9 +56,12 @@ def test_right_of_centre_on_the_right_hand_side(sim: TrackSimulation) -> None:
 
 
 @pytest.mark.parametrize(
-    ("yaw_deg", "expected"), [(0.0, 0.0), (179.0, 179.0), (181.0, -179.0), (-90.0, -90.0), (540.0, 180.0)]
+    ("yaw_deg", "expected"),
+    [(0.0, 0.0), (179.0, 179.0), (181.0, -179.0), (-90.0, -90.0), (540.0, 180.0)],
 )
-def test_heading_is_degrees_in_minus_180_to_180(sim: TrackSimulation, yaw_deg: float, expected: float) -> None:
+def test_heading_is_degrees_in_minus_180_to_180(
+    sim: TrackSimulation, yaw_deg: float, expected: float
+) -> None:
     sim.put(0, 2.0, 0.0, math.radians(yaw_deg))
     assert sim.all_params()[0]["heading"] == pytest.approx(expected)
 
