@@ -1,8 +1,8 @@
 # AWS DeepRacer sample reward function, Example 4: stay in one lane without crashing into
 # stationary obstacles or moving vehicles (object avoidance and head-to-head races).
 # From the AWS DeepRacer developer guide, "Examples of reward functions" (sample code, MIT-0).
-# One change to AWS's text: the object part is skipped when the race has no objects
-# (objects_location is empty in time trials), where the original fails with an IndexError.
+# Shipped unchanged, so like AWS's original it needs objects on the track (object-avoidance
+# and head-to-head races); in a time trial objects_location is empty and it fails.
 # fmt: off
 
 import math
@@ -36,21 +36,20 @@ def reward_function(params):
     # Penalize if the agent is too close to the next object
     reward_avoid = 1.0
 
-    if objects_location:
-        # Distance to the next object
-        next_object_loc = objects_location[next_object_index]
-        distance_closest_object = math.sqrt((agent_x - next_object_loc[0])**2 + (agent_y - next_object_loc[1])**2)
+    # Distance to the next object
+    next_object_loc = objects_location[next_object_index]
+    distance_closest_object = math.sqrt((agent_x - next_object_loc[0])**2 + (agent_y - next_object_loc[1])**2)
 
-        # Decide if the agent and the next object is on the same lane
-        is_same_lane = objects_left_of_center[next_object_index] == is_left_of_center
+    # Decide if the agent and the next object is on the same lane
+    is_same_lane = objects_left_of_center[next_object_index] == is_left_of_center
 
-        if is_same_lane:
-            if 0.5 <= distance_closest_object < 0.8:
-                reward_avoid *= 0.5
-            elif 0.3 <= distance_closest_object < 0.5:
-                reward_avoid *= 0.2
-            elif distance_closest_object < 0.3:
-                reward_avoid = 1e-3  # Likely crashed
+    if is_same_lane:
+        if 0.5 <= distance_closest_object < 0.8:
+            reward_avoid *= 0.5
+        elif 0.3 <= distance_closest_object < 0.5:
+            reward_avoid *= 0.2
+        elif distance_closest_object < 0.3:
+            reward_avoid = 1e-3  # Likely crashed
 
     # Calculate reward by putting different weights on
     # the two aspects above

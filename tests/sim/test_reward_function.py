@@ -146,11 +146,17 @@ def test_each_template_returns_a_float_in_range(name: str) -> None:
     assert "def reward_function(params):" in reward.source
 
 
-@pytest.mark.parametrize("name", sorted(TEMPLATES))
-def test_each_template_runs_in_a_time_trial_without_objects(name: str) -> None:
+@pytest.mark.parametrize("name", sorted(set(TEMPLATES) - {"object_avoidance"}))
+def test_each_time_trial_template_runs_without_objects(name: str) -> None:
     value = load_template(name)(sample_params(objects=()))
     assert type(value) is float
     assert 0.0 < value <= 1e5
+
+
+def test_object_avoidance_template_is_unchanged_so_it_needs_objects() -> None:
+    # AWS's sample indexes objects_location: in a time trial it fails, as it does on AWS.
+    with pytest.raises(RewardFunctionError, match=r"object_avoidance\.py line \d+.*IndexError"):
+        load_template("object_avoidance")(sample_params(objects=()))
 
 
 @pytest.mark.parametrize("name", sorted(TEMPLATES))
@@ -182,10 +188,9 @@ def test_object_avoidance_pays_less_with_objects_ahead_in_the_cars_lane() -> Non
     nothing_near = reward(sample_params())
     far_ahead = reward(sample_params(objects=[(5.5, -LANE), (5.9, -LANE)]))
     close_ahead = reward(sample_params(objects=[(2.7, -LANE), (4.5, -LANE)]))
-    no_objects = reward(sample_params(objects=()))
     assert close_ahead < nothing_near
     assert close_ahead < far_ahead
-    assert far_ahead == nothing_near == no_objects
+    assert far_ahead == nothing_near
 
 
 def test_unknown_template_lists_the_names() -> None:
