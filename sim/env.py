@@ -126,8 +126,8 @@ class BatchedDeepRacer:
             StepInfo(status=status[i], progress=float(progress[i]), steps=int(sim.steps[i]))
             for i in range(self.n)
         ]
-        terminated = np.array([s in _TERMINAL for s in status], dtype=bool)
-        truncated = np.array([s == EpisodeStatus.TIME_UP for s in status], dtype=bool)
+        truncated = sim.timed_out
+        terminated = sim.done & ~truncated
         finished = np.flatnonzero(terminated | truncated)
         obs = self.observer.observe()
         if len(finished):

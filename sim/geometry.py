@@ -51,8 +51,7 @@ class PolylineProjector:
         samples, owners = self._resample()
         self._tree = cKDTree(samples)
         self._owners = owners
-        self._grid: NDArray[np.int32] | None = None
-        self._ambiguous: NDArray[np.bool_] | None = None
+        self._grid: NDArray[np.intp] | None = None
         self._grid_origin = pts.min(axis=0) - _GRID_MARGIN
         extent = pts.max(axis=0) + _GRID_MARGIN - self._grid_origin
         self._grid_shape = (
@@ -68,14 +67,13 @@ class PolylineProjector:
         samples = self.starts[owners] + self.vectors[owners] * t[:, None]
         return samples, owners
 
-    def _build_grid(self) -> NDArray[np.int32]:
+    def _build_grid(self) -> NDArray[np.intp]:
+        """Nearest segment per cell, or -1 where the exact tree search must decide."""
         nx, ny = self._grid_shape
         ix, iy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-        centres = (
-            self._grid_origin + (np.stack([ix.ravel(), iy.ravel()], axis=1) + 0.5) * _GRID_CELL
-        )
+        centres = self._grid_origin + (np.stack([ix.ravel(), iy.ravel()], axis=1) + 0.5) * _GRID_CELL
         _, nearest = self._tree.query(centres)
-        grid = np.asarray(self._owners[nearest].reshape(nx, ny), dtype=np.int32)
+        grid = np.asarray(self._owners[nearest].reshape(nx, ny), dtype=np.intp)
         n_seg = len(self.lengths)
         padded = np.pad(grid, 1, mode="edge")
         ambiguous = np.zeros((nx, ny), dtype=bool)
@@ -86,20 +84,20 @@ class PolylineProjector:
                 if self.closed:
                     gap = np.minimum(gap, n_seg - gap)
                 ambiguous |= gap > 1
-        self._ambiguous = ambiguous
-        return grid
+        # The outermost ring also catches every point beyond the grid (indices are clipped).
+        ambiguous[[0, -1], :] = True
+        ambiguous[:, [0, -1]] = True
+        grid[ambiguous] = -1
+        return grid.ravel()
 
     def _nearest_segments(self, query: FloatArray) -> NDArray[np.intp]:
         if self._grid is None:
             self._grid = self._build_grid()
-        assert self._ambiguous is not None
-        cell = ((query - self._grid_origin) * (1.0 / _GRID_CELL)).astype(np.intp)
         nx, ny = self._grid_shape
-        inside = (cell[:, 0] >= 0) & (cell[:, 0] < nx) & (cell[:, 1] >= 0) & (cell[:, 1] < ny)
-        cx = np.where(inside, cell[:, 0], 0)
-        cy = np.where(inside, cell[:, 1], 0)
-        seg = self._grid[cx, cy].astype(np.intp)
-        exact = ~inside | self._ambiguous[cx, cy]
+        cell = ((query - self._grid_origin) * (1.0 / _GRID_CELL)).astype(np.intp)
+        np.clip(cell, 0, (nx - 1, ny - 1), out=cell)
+        seg = self._grid[cell[:, 0] * ny + cell[:, 1]]
+        exact = seg < 0
         if exact.any():
             _, nearest = self._tree.query(query[exact])
             seg[exact] = self._owners[nearest]

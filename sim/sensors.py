@@ -42,7 +42,6 @@ _CHUNK_PIXELS = 40_000
 # fewer iterations; the iteration caps bound the cost of a scan.
 _RELAXATION = 1.6
 _MAX_ITERATIONS = 32
-_EXACT_ITERATIONS = 16
 # Rounds of marching then exact following; a ray needs a second round only after it
 # grazed past a border, a third after grazing past two.
 _ROUNDS = 3
@@ -56,8 +55,9 @@ _EXACT_NEIGHBOURS = 3
 # Slack (cells) past the marched crossing when accepting an exact one: the field, and so
 # the marching, is only good to about a cell.
 _WINDOW_CELLS = 2.0
-# Cells from the nearest border beyond which an exactly followed ray goes back to marching.
-_RESUME_CELLS = 2 * _NEAR_CELLS
+# Cells from the nearest border beyond which an exactly followed ray goes back to marching;
+# well past _NEAR_CELLS, so that the field's errors cannot bounce it straight back.
+_RESUME_CELLS = 3 * _NEAR_CELLS
 # Metres past the exact distance that a step may go when following a grazing ray: every
 # probe tests the segments around it for crossings back to the previous probe, and this
 # stays well under the length of a track segment (10-30 cm on DeepRacer's tracks), so a
@@ -244,6 +244,7 @@ class Lidar:
 
     def __init__(self, track: Track, spec: LidarSpec | None = None) -> None:
         self.spec = spec or LidarSpec()
+        self.track = track
         self.raster = TrackRaster.for_track(track)
         self.angles = np.radians(self.spec.angles_deg)
         raster = self.raster
@@ -270,7 +271,12 @@ class Lidar:
         start = self._sample(col0, row0)
         # Measure everything as seen from the car's side of the border: a car off the road
         # looks for the crossing onto it, one on the road for the crossing off it.
-        side = np.where(start < 0, np.float32(-1.0), np.float32(1.0)).astype(np.float32)
+        on_road = start > 0
+        close = np.abs(start) < _NEAR_CELLS
+        if close.any():
+            # Within a cell or two of a border the nearest cell may lie on the other side.
+            on_road[close] = self.track.on_road(np.stack([xs[close], ys[close]], axis=1))
+        side = np.where(on_road, np.float32(1.0), np.float32(-1.0)).astype(np.float32)
         rays = _Rays(
             ids=np.arange(n * count),
             col=col0[car],
@@ -292,7 +298,13 @@ class Lidar:
             found = np.isfinite(exact)
             hit[stops.ids[found]] = exact[found]
             missed = ~found
-            rays = self._follow_exactly(geometry, stops.ids[missed], stops.clear[missed] * res, hit)
+            rays = self._follow_exactly(
+                geometry,
+                stops.ids[missed],
+                stops.probe[missed] * res,
+                stops.clear[missed] * res,
+                hit,
+            )
             if not len(rays.ids):
                 break
         # Rays still undecided after all rounds read max_range, as escaped ones do.
@@ -352,7 +364,8 @@ class Lidar:
         self,
         geometry: _RayGeometry,
         ids: NDArray[np.intp],
-        clear_m: NDArray[np.float64],
+        start_m: NDArray[Any],
+        clear_m: NDArray[Any],
         hit: NDArray[np.float64],
     ) -> _Rays:
         """Sphere-trace on exact distances to the segments nearby, for rays that came close
@@ -360,12 +373,14 @@ class Lidar:
         to it): within a cell or two of a border the raster's cell-sized errors could turn
         such a miss into a hit. Rays that get clear of the border go back to marching."""
         res = self.raster.resolution
-        t = clear_m.astype(np.float64)
-        checked = t.copy()
+        # The first probe re-tests from where marching knew the ray clear.
+        t = np.asarray(start_m, dtype=np.float64)
+        checked = np.asarray(clear_m, dtype=np.float64)
         resumed: list[NDArray[np.intp]] = []
         resumed_t: list[NDArray[np.float64]] = []
         resumed_g: list[NDArray[np.float64]] = []
-        for _ in range(_EXACT_ITERATIONS):
+        # Each step covers at least _EXACT_SLACK, so this many always reach max_range.
+        for _ in range(int(np.ceil(self.spec.max_range / _EXACT_SLACK)) + 1):
             if not len(ids):
                 break
             exact, distance = self._intersect(

@@ -41,6 +41,18 @@ class EpisodeStatus(StrEnum):
     TIME_UP = "Time Up"
 
 
+# Outcome codes used by `TrackSimulation.terminal` (0 = still running).
+_OUTCOMES = (
+    EpisodeStatus.IN_PROGRESS,
+    EpisodeStatus.CRASHED,
+    EpisodeStatus.OFF_TRACK,
+    EpisodeStatus.LAP_COMPLETE,
+    EpisodeStatus.REVERSED,
+    EpisodeStatus.IMMOBILIZED,
+    EpisodeStatus.TIME_UP,
+)
+_TIME_UP_CODE = _OUTCOMES.index(EpisodeStatus.TIME_UP)
+
 TERMINAL_STATUSES = frozenset(
     {
         EpisodeStatus.LAP_COMPLETE,
@@ -96,6 +108,7 @@ class TrackSimulation:
         self.start_s = np.zeros(n)
         self.travelled = np.zeros(n)  # signed arc length covered since the episode started
         self.status = np.full(n, EpisodeStatus.IN_PROGRESS, dtype=object)
+        self.terminal = np.zeros(n, dtype=np.int64)  # outcome code, 0 while running
         self.steering_cmd = np.zeros(n)  # commanded action, as DeepRacer's params report it
         self.speed_cmd = np.zeros(n)
         self._falling = np.zeros(n, dtype=np.int64)
@@ -132,6 +145,7 @@ class TrackSimulation:
         self._falling[index] = 0
         self._still[index] = 0
         self.status[index] = EpisodeStatus.IN_PROGRESS
+        self.terminal[index] = 0
         self.steering_cmd[index] = 0.0
         self.speed_cmd[index] = 0.0
         self._measure()
@@ -190,23 +204,24 @@ class TrackSimulation:
 
     def _judge(self) -> None:
         rules = self.rules
-        status = self.status
-        progress = self.progress
-        for car in range(self.n):
-            if status[car] in TERMINAL_STATUSES:
-                continue
-            if self.fleet.crashed[car]:
-                status[car] = EpisodeStatus.CRASHED
-            elif not self.wheels_on[car].any():
-                status[car] = EpisodeStatus.OFF_TRACK
-            elif progress[car] >= 100.0:
-                status[car] = EpisodeStatus.LAP_COMPLETE
-            elif self._falling[car] >= rules.reversed_steps:
-                status[car] = EpisodeStatus.REVERSED
-            elif self._still[car] >= rules.immobilized_steps:
-                status[car] = EpisodeStatus.IMMOBILIZED
-            elif self.steps[car] >= rules.max_steps:
-                status[car] = EpisodeStatus.TIME_UP
+        running = self.terminal == 0
+        # DeepRacer's precedence when several things happen in one step.
+        outcomes = np.select(
+            [
+                self.fleet.crashed,
+                ~self.wheels_on.any(axis=1),
+                self.travelled >= self._length,
+                self._falling >= rules.reversed_steps,
+                self._still >= rules.immobilized_steps,
+                self.steps >= rules.max_steps,
+            ],
+            [1, 2, 3, 4, 5, 6],
+            default=0,
+        )
+        ended = np.flatnonzero(running & (outcomes > 0))
+        for car in ended.tolist():
+            self.status[car] = _OUTCOMES[outcomes[car]]
+        self.terminal[ended] = outcomes[ended]
 
     # --- what the reward function and observers see ----------------------------------------
     @property
@@ -225,7 +240,13 @@ class TrackSimulation:
 
     @property
     def done(self) -> NDArray[np.bool_]:
-        return np.array([s != EpisodeStatus.IN_PROGRESS for s in self.status], dtype=bool)
+        """Cars whose episode has ended, for any reason."""
+        return np.asarray(self.terminal != 0)
+
+    @property
+    def timed_out(self) -> NDArray[np.bool_]:
+        """Cars whose episode was cut by the step limit (truncated, not terminated)."""
+        return np.asarray(self.terminal == _TIME_UP_CODE)
 
     def all_params(self) -> list[dict[str, Any]]:
         """DeepRacer's reward `params` for every car, every key present."""
