@@ -71,7 +71,9 @@ class PolylineProjector:
         """Nearest segment per cell, or -1 where the exact tree search must decide."""
         nx, ny = self._grid_shape
         ix, iy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-        centres = self._grid_origin + (np.stack([ix.ravel(), iy.ravel()], axis=1) + 0.5) * _GRID_CELL
+        centres = (
+            self._grid_origin + (np.stack([ix.ravel(), iy.ravel()], axis=1) + 0.5) * _GRID_CELL
+        )
         _, nearest = self._tree.query(centres)
         grid = np.asarray(self._owners[nearest].reshape(nx, ny), dtype=np.intp)
         n_seg = len(self.lengths)
@@ -93,7 +95,7 @@ class PolylineProjector:
     def _nearest_segments(self, query: FloatArray) -> NDArray[np.intp]:
         if self._grid is None:
             self._grid = self._build_grid()
-        nx, ny = self._grid_shape
+        seg: NDArray[np.intp] = self._grid[cell[:, 0] * ny + cell[:, 1]]
         cell = ((query - self._grid_origin) * (1.0 / _GRID_CELL)).astype(np.intp)
         np.clip(cell, 0, (nx - 1, ny - 1), out=cell)
         seg = self._grid[cell[:, 0] * ny + cell[:, 1]]
