@@ -95,10 +95,10 @@ class PolylineProjector:
     def _nearest_segments(self, query: FloatArray) -> NDArray[np.intp]:
         if self._grid is None:
             self._grid = self._build_grid()
-        seg: NDArray[np.intp] = self._grid[cell[:, 0] * ny + cell[:, 1]]
+        nx, ny = self._grid_shape
         cell = ((query - self._grid_origin) * (1.0 / _GRID_CELL)).astype(np.intp)
         np.clip(cell, 0, (nx - 1, ny - 1), out=cell)
-        seg = self._grid[cell[:, 0] * ny + cell[:, 1]]
+        seg: NDArray[np.intp] = self._grid[cell[:, 0] * ny + cell[:, 1]]
         exact = seg < 0
         if exact.any():
             _, nearest = self._tree.query(query[exact])
