@@ -1,9 +1,11 @@
 """A top-down picture of a track, rasterised once and shared by every sensor.
 
 The camera gathers pixels from `texture` (DeepRacer's look in greyscale: dark asphalt,
-white border lines, a dashed yellow centre line, grass around) and the lidar sphere-traces
-through `border_distance`, the distance to the nearest border line. Both are plain grids,
-so a sensor reading for many cars is a few vectorised gathers instead of geometry.
+white border lines, a dashed yellow centre line, grass around). The lidar sphere-traces
+through `signed_distance` (the distance to the nearest border line, negative off the
+road) and finishes on exact geometry with the border segment `border_segment` names for
+each cell. All are plain grids, so a sensor reading for many cars is a few vectorised
+gathers instead of geometry.
 
 Grid convention: cell (row j, column i) covers x in [x0 + i*res, x0 + (i+1)*res) and
 y in [y0 + j*res, y0 + (j+1)*res); a world point falls in cell floor((p - origin) / res).

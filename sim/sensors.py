@@ -9,8 +9,9 @@ so one call for a whole batch of cars is a handful of vectorised NumPy passes:
   u[c]); per call only the car's rotation and translation are applied before gathering
   texture cells.
 * the lidar sphere-traces the signed border distance: it steps along each ray by the
-  distance to the nearest border, notices the sign change where it crosses one, and
-  interpolates back to the crossing.
+  distance to the nearest border until it crosses one (the sign changes) or comes close,
+  then intersects the ray exactly with the few border segments there, so readings match
+  the geometry to a fraction of a millimetre.
 
 Poses are (x, y, yaw): body centre in metres, yaw in radians counter-clockwise from +x.
 Sensor objects keep scratch buffers, so use one per thread.
@@ -20,7 +21,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Literal, overload
 
 import gymnasium as gym
 import numpy as np
@@ -39,30 +39,22 @@ MAX_VIEW_DISTANCE = 30.0
 _CHUNK_PIXELS = 40_000
 
 # Lidar marching: over-relaxed steps (checked, see `Lidar._march`) reach grazing hits in
-# fewer iterations; the iteration caps bound the cost of a scan.
+# fewer iterations; the iteration cap bounds the cost of a scan.
 _RELAXATION = 1.6
-_MAX_ITERATIONS = 32
-# Rounds of marching then exact following; a ray needs a second round only after it
-# grazed past a border, a third after grazing past two.
-_ROUNDS = 3
-# Minimum step in raster cells: the field is only exact to about a cell, so smaller
-# steps near a border would stall instead of crossing it.
-_MIN_STEP_CELLS = 1.0
+_MAX_ITERATIONS = 12
 # A ray this close to a border (cells) is tested exactly against the segments nearby.
-_NEAR_CELLS = 2.0
-# Segments on either side of the one nearest the probe point that are tested exactly.
-_EXACT_NEIGHBOURS = 3
-# Slack (cells) past the marched crossing when accepting an exact one: the field, and so
+_NEAR_CELLS = 4.0
+# How far past a near stop (cells) its crossing is looked for: as far as the segments
+# around the stop and around the predicted crossing are sure to be the first ones met.
+_AHEAD_CELLS = np.float32(16.0)
+# Segments on either side of the one nearest a probe point that are tested exactly: a
+# probe lies within a cell or so of the crossing, on its segment or the next.
+_EXACT_NEIGHBOURS = 1
+# Slack (cells) around a marched crossing when accepting an exact one: the field, and so
 # the marching, is only good to about a cell.
-_WINDOW_CELLS = 2.0
-# Cells from the nearest border beyond which an exactly followed ray goes back to marching;
-# well past _NEAR_CELLS, so that the field's errors cannot bounce it straight back.
-_RESUME_CELLS = 3 * _NEAR_CELLS
-# Metres past the exact distance that a step may go when following a grazing ray: every
-# probe tests the segments around it for crossings back to the previous probe, and this
-# stays well under the length of a track segment (10-30 cm on DeepRacer's tracks), so a
-# crossing in the unproven stretch is always among the segments tested.
-_EXACT_SLACK = 0.05
+_WINDOW_CELLS = np.float32(2.0)
+# Ray-segment pairs per chunk when testing rays against every segment.
+_EXHAUSTIVE_PAIRS = 200_000
 
 
 # --- camera -------------------------------------------------------------------------------
@@ -236,279 +228,229 @@ class LidarSpec:
 class Lidar:
     """Distances from each car's centre to the first border line along each ray.
 
-    Rays are marched through the raster's signed border distance (cheap, good to about a
-    cell) until they cross a border or come within a couple of cells of one; there each is
-    intersected exactly with the few border segments around that spot. The rare ray that
-    only grazes past a border is then followed on exact geometry alone.
+    Rays march through the raster's signed border distance (cheap, good to about a cell)
+    until they cross a border or come within a few cells of one; there each is intersected
+    exactly with the border segments around that spot, so readings are exact. The few rays
+    that only graze past a border are intersected with every segment instead. Everything
+    inside runs in raster cells and float32.
     """
 
     def __init__(self, track: Track, spec: LidarSpec | None = None) -> None:
         self.spec = spec or LidarSpec()
         self.track = track
-        self.raster = TrackRaster.for_track(track)
+        self.raster = raster = TrackRaster.for_track(track)
         self.angles = np.radians(self.spec.angles_deg)
-        raster = self.raster
-        # In cells: positions, steps and distances then share one unit.
-        self._field = (raster.signed_distance / np.float32(raster.resolution)).ravel()
-        self._segment_of_cell = raster.border_segment.ravel()
-        self._limit = np.float32(self.spec.max_range / raster.resolution)
+        res = raster.resolution
+        self._field = raster.signed_distance.ravel()  # metres; see `side` in `scan`
+        self._nearest_segment = raster.border_segment.ravel()
+        self._limit = np.float32(self.spec.max_range / res)
+        self._segment_start = ((raster.segment_start - raster.origin) / res).astype(np.float32)
+        self._segment_vector = (raster.segment_vector / res).astype(np.float32)
+        # float32 in cells leaves a crossing's place along a segment good to ~1e-4 cells
+        # (more at grazing angles); 1e-3 cells of slack at each end keeps a ray through a
+        # vertex from slipping between the two segments that share it.
+        lengths = np.hypot(self._segment_vector[:, 0], self._segment_vector[:, 1])
+        self._half_u_range = (0.5 + 1e-3 / np.maximum(lengths, 1e-6)).astype(np.float32)
         window = np.arange(-_EXACT_NEIGHBOURS, _EXACT_NEIGHBOURS + 1)
         within = (np.arange(len(raster.segment_start)) - raster.ring_start)[:, None] + window
         self._candidates = raster.ring_start[:, None] + np.mod(within, raster.ring_size[:, None])
-        vector = raster.segment_vector
-        self._inv_length_sq = 1.0 / np.maximum(np.sum(vector * vector, axis=1), 1e-18)
 
     def scan(self, x: ArrayLike, y: ArrayLike, yaw: ArrayLike) -> Float32Array:
         """(N, rays) float32 distances in metres, clipped to [min_range, max_range]."""
         xs, ys, yaws = _poses(x, y, yaw)
         n, count = len(xs), len(self.angles)
-        res = self.raster.resolution
+        raster = self.raster
+        res = raster.resolution
         theta = (yaws[:, None] + self.angles[None, :]).ravel()
-        cos, sin = np.cos(theta), np.sin(theta)
         car = np.repeat(np.arange(n), count)
-        col0 = ((xs - self.raster.origin[0]) / res).astype(np.float32)
-        row0 = ((ys - self.raster.origin[1]) / res).astype(np.float32)
-        start = self._sample(col0, row0)
+        col0 = ((xs - raster.origin[0]) / res).astype(np.float32)
+        row0 = ((ys - raster.origin[1]) / res).astype(np.float32)
+        start = self._field[self._cells(col0, row0)]
         # Measure everything as seen from the car's side of the border: a car off the road
         # looks for the crossing onto it, one on the road for the crossing off it.
         on_road = start > 0
-        close = np.abs(start) < _NEAR_CELLS
+        close = np.abs(start) < _NEAR_CELLS * res
         if close.any():
-            # Within a cell or two of a border the nearest cell may lie on the other side.
+            # Within a cell or so of a border the nearest cell may lie on the other side.
             on_road[close] = self.track.on_road(np.stack([xs[close], ys[close]], axis=1))
-        side = np.where(on_road, np.float32(1.0), np.float32(-1.0)).astype(np.float32)
-        rays = _Rays(
+        # Folding metres-to-cells into the sign saves a copy of the field in cells.
+        side = np.where(on_road, 1.0, -1.0).astype(np.float32) / np.float32(res)
+        batch = _Rays(
             ids=np.arange(n * count),
             col=col0[car],
             row=row0[car],
-            dx=cos.astype(np.float32),
-            dy=sin.astype(np.float32),
+            dx=np.cos(theta).astype(np.float32),
+            dy=np.sin(theta).astype(np.float32),
             side=side[car],
             t=np.zeros(n * count, dtype=np.float32),
-            g=np.abs(start)[car],
+            g=np.abs(start * side)[car],
             omega=np.full(n * count, _RELAXATION, dtype=np.float32),
         )
-        geometry = _RayGeometry(xs[car], ys[car], cos, sin, side[car])
-        hit = np.full(n * count, self.spec.max_range, dtype=np.float64)
-        for _ in range(_ROUNDS):
-            stops = self._march(rays)
-            exact = self._intersect(
-                geometry, stops.ids, stops.probe * res, stops.clear * res, stops.upper * res
-            )
-            found = np.isfinite(exact)
-            hit[stops.ids[found]] = exact[found]
-            missed = ~found
-            rays = self._follow_exactly(
-                geometry,
-                stops.ids[missed],
-                stops.probe[missed] * res,
-                stops.clear[missed] * res,
-                hit,
-            )
-            if not len(rays.ids):
-                break
-        # Rays still undecided after all rounds read max_range, as escaped ones do.
-        result = hit.reshape(n, count).astype(np.float32)
+        hit = np.full(n * count, self._limit, dtype=np.float32)
+        # Marching replaces t, g and omega as it goes; `batch` keeps every ray's origin and
+        # direction for the exact tests.
+        crossed, near, going = self._march(batch.kept(slice(None)))
+        unsettled = [
+            self._settle(batch, crossed, hit, around_stop=False).ids,
+            self._settle(batch, near, hit, around_stop=True).ids,
+            going,
+        ]
+        self._cast_exhaustively(batch, np.concatenate(unsettled), hit)
+        result = hit.reshape(n, count) * np.float32(res)
         np.clip(result, self.spec.min_range, self.spec.max_range, out=result)
         return result
 
-    def _march(self, rays: _Rays) -> _Stops:
+    def _march(self, rays: _Rays) -> tuple[_Stops, _Stops, NDArray[np.intp]]:
         """Sphere-trace every ray until it crosses a border, nears one or leaves the range.
 
         Rays that leave the range drop out (they read max_range); the others come back as
-        stops: where to look for the border, and how far along the ray is known clear.
+        stops, crossings and near ones, to be settled on exact geometry, or, when out of
+        iterations, as the ids of rays still going: those creep up on a border at a
+        grazing angle, each step costing a round of numpy calls.
         """
-        stops: list[_Stops] = []
+        crossed: list[_Stops] = []
+        near: list[_Stops] = []
         for _ in range(_MAX_ITERATIONS):
             if not len(rays.ids):
                 break
-            step = np.maximum(rays.omega * rays.g, np.float32(_MIN_STEP_CELLS))
+            step = np.maximum(rays.omega * rays.g, np.float32(1.0))
             t_next = rays.t + step
-            g_next = rays.side * self._sample(
-                rays.col + rays.dx * t_next, rays.row + rays.dy * t_next
-            )
+            g_next = self._field[
+                self._cells(rays.col + rays.dx * t_next, rays.row + rays.dy * t_next)
+            ]
+            g_next *= rays.side
             # An over-relaxed step is safe only while the free discs around both ends cover
             # it; otherwise a thin strip could hide between them. Retry it unrelaxed.
-            failed = (rays.omega > 1.0) & (rays.g + np.abs(g_next) < step)
-            ok = ~failed
-            crossed = ok & (g_next <= 0)
-            near = ok & ~crossed & (g_next < _NEAR_CELLS)
-            finished = crossed | near | (ok & (t_next >= self._limit))
-            if crossed.any():
-                before, after = rays.g[crossed], g_next[crossed]
-                span = np.maximum(before - after, np.float32(1e-6))
-                probe = rays.t[crossed] + step[crossed] * before / span
-                stops.append(
-                    _Stops(
-                        rays.ids[crossed],
-                        rays.t[crossed],
-                        probe,
-                        t_next[crossed] + np.float32(_WINDOW_CELLS),
-                    )
-                )
-            if near.any():
-                upper = np.full(int(near.sum()), np.inf, dtype=np.float32)
-                stops.append(_Stops(rays.ids[near], rays.t[near], t_next[near], upper))
+            ok = (rays.omega == 1.0) | (rays.g + np.abs(g_next) >= step)
+            over = ok & (g_next <= 0)
+            close = ok & ~over & (g_next < _NEAR_CELLS)
+            finished = over | close | (ok & (t_next >= self._limit))
+            if over.any():
+                before, after = rays.g[over], g_next[over]
+                # Secant: where the distance, linear across the border, changes sign.
+                probe = rays.t[over] + step[over] * before / np.maximum(before - after, 1e-6)
+                crossed.append(_Stops(rays.ids[over], rays.t[over], probe, t_next[over]))
+            if close.any():
+                before, after = rays.g[close], g_next[close]
+                # Probe where the distance, falling linearly towards a straight border,
+                # would reach zero, if that is not far.
+                ahead = after * step[close] / np.maximum(before - after, 1e-6)
+                ahead = np.where(before > after, np.minimum(ahead, _AHEAD_CELLS), 0.0)
+                reached = t_next[close]
+                near.append(_Stops(rays.ids[close], rays.t[close], reached + ahead, reached))
             rays.t = np.where(ok, t_next, rays.t)
             rays.g = np.where(ok, g_next, rays.g)
-            rays.omega[failed] = 1.0
+            rays.omega[~ok] = 1.0
             if finished.any():
                 rays = rays.kept(~finished)
-        if len(rays.ids):
-            # Out of iterations: a ray creeping up on a border at a grazing angle.
-            upper = np.full(len(rays.ids), np.inf, dtype=np.float32)
-            stops.append(_Stops(rays.ids, rays.t, rays.t, upper))
-        return _Stops.joined(stops)
+        return _Stops.joined(crossed), _Stops.joined(near), rays.ids
 
-    def _follow_exactly(
-        self,
-        geometry: _RayGeometry,
-        ids: NDArray[np.intp],
-        start_m: NDArray[Any],
-        clear_m: NDArray[Any],
-        hit: NDArray[np.float64],
-    ) -> _Rays:
-        """Sphere-trace on exact distances to the segments nearby, for rays that came close
-        to a border without meeting the segments there (grazing past it, or starting next
-        to it): within a cell or two of a border the raster's cell-sized errors could turn
-        such a miss into a hit. Rays that get clear of the border go back to marching."""
-        res = self.raster.resolution
-        # The first probe re-tests from where marching knew the ray clear.
-        t = np.asarray(start_m, dtype=np.float64)
-        checked = np.asarray(clear_m, dtype=np.float64)
-        resumed: list[NDArray[np.intp]] = []
-        resumed_t: list[NDArray[np.float64]] = []
-        resumed_g: list[NDArray[np.float64]] = []
-        # Each step covers at least _EXACT_SLACK, so this many always reach max_range.
-        for _ in range(int(np.ceil(self.spec.max_range / _EXACT_SLACK)) + 1):
-            if not len(ids):
-                break
-            exact, distance = self._intersect(
-                geometry, ids, t, checked, np.full(len(ids), np.inf), with_distance=True
+    def _settle(
+        self, batch: _Rays, stops: _Stops, hit: Float32Array, *, around_stop: bool
+    ) -> _Stops:
+        """Exact crossings for stopped rays; returns the stops where none was found."""
+        if not len(stops.ids):
+            return stops
+        # A secant probe lies within about a cell of the crossing, on its segment or the
+        # next one. A near stop is tested around where the ray stopped and around the
+        # predicted crossing, and only that far: a crossing farther on could come after
+        # one on another stretch of border that neither probe looks at.
+        probes = (stops.reached, stops.probe) if around_stop else (stops.probe,)
+        upper = _AHEAD_CELLS + _WINDOW_CELLS if around_stop else _WINDOW_CELLS
+        crossing = self._intersect(
+            batch,
+            stops.ids,
+            probes,
+            np.maximum(stops.clear - _WINDOW_CELLS, 0),
+            stops.reached + upper,
+        )
+        found = np.isfinite(crossing)
+        hit[stops.ids[found]] = crossing[found]
+        return stops.kept(~found)
+
+    def _cast_exhaustively(self, batch: _Rays, ids: NDArray[np.intp], hit: Float32Array) -> None:
+        """Exact first crossings against every border segment, for the few rays the local
+        tests could not settle: they graze past a border, where the raster's cell-sized
+        errors blur a near miss and a hit."""
+        segments = len(self._segment_start)
+        chunk = max(1, _EXHAUSTIVE_PAIRS // segments)
+        for first in range(0, len(ids), chunk):
+            part = ids[first : first + chunk]
+            crossing = self._crossings(
+                batch,
+                part,
+                np.broadcast_to(np.arange(segments), (len(part), segments)),
+                np.zeros(len(part), dtype=np.float32),
+                np.full(len(part), self._limit, dtype=np.float32),
             )
-            found = np.isfinite(exact)
-            hit[ids[found]] = exact[found]
-            clear = ~found & (distance > _RESUME_CELLS * res)
-            if clear.any():
-                resumed.append(ids[clear])
-                resumed_t.append(t[clear])
-                resumed_g.append(distance[clear])
-            # Nothing crosses within `distance`, so only the last _EXACT_SLACK of a step
-            # is unproven: the next probe, that close to it, tests it.
-            checked = t
-            t = t + distance + _EXACT_SLACK
-            going = ~found & ~clear & (checked < self.spec.max_range)
-            ids, t, checked = ids[going], t[going], checked[going]
-        if not resumed:
-            return _Rays.empty()
-        back = np.concatenate(resumed)
-        return _Rays(
-            ids=back,
-            col=((geometry.x[back] - self.raster.origin[0]) / res).astype(np.float32),
-            row=((geometry.y[back] - self.raster.origin[1]) / res).astype(np.float32),
-            dx=geometry.cos[back].astype(np.float32),
-            dy=geometry.sin[back].astype(np.float32),
-            side=geometry.side[back],
-            t=(np.concatenate(resumed_t) / res).astype(np.float32),
-            g=(np.concatenate(resumed_g) / res).astype(np.float32),
-            omega=np.full(len(back), _RELAXATION, dtype=np.float32),
-        )
-
-    @overload
-    def _intersect(
-        self,
-        geometry: _RayGeometry,
-        ids: NDArray[np.intp],
-        probe_m: NDArray[Any],
-        lo_m: NDArray[Any],
-        hi_m: NDArray[Any],
-        with_distance: Literal[False] = False,
-    ) -> NDArray[np.float64]: ...
-
-    @overload
-    def _intersect(
-        self,
-        geometry: _RayGeometry,
-        ids: NDArray[np.intp],
-        probe_m: NDArray[Any],
-        lo_m: NDArray[Any],
-        hi_m: NDArray[Any],
-        with_distance: Literal[True],
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
+            hit[part] = np.minimum(crossing, self._limit)
 
     def _intersect(
         self,
-        geometry: _RayGeometry,
+        batch: _Rays,
         ids: NDArray[np.intp],
-        probe_m: NDArray[Any],
-        lo_m: NDArray[Any],
-        hi_m: NDArray[Any],
-        with_distance: bool = False,
-    ) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Nearest exact crossing in [lo, hi] metres of each ray with the border segments
-        around the point `probe` metres along it (inf where none); optionally also that
-        point's distance to those segments."""
-        ox, oy = geometry.x[ids], geometry.y[ids]
-        cos, sin = geometry.cos[ids][:, None], geometry.sin[ids][:, None]
-        px = ox + probe_m * cos[:, 0]
-        py = oy + probe_m * sin[:, 0]
-        rows, cols = self.raster.cell_of(np.stack([px, py], axis=1))
-        segments = self._candidates[self._segment_of_cell[rows * self.raster.width + cols]]
-        start = self.raster.segment_start[segments]
-        vector = self.raster.segment_vector[segments]
-        wx, wy = start[..., 0] - ox[:, None], start[..., 1] - oy[:, None]
-        vx, vy = vector[..., 0], vector[..., 1]
-        # Solve origin + t * direction = start + u * vector with 2-D cross products.
-        denom = cos * vy - sin * vx
-        parallel = np.abs(denom) < 1e-12
-        safe = np.where(parallel, 1.0, denom)
-        t = (wx * vy - wy * vx) / safe
-        u = (wx * sin - wy * cos) / safe
-        valid = (
-            ~parallel
-            & (u >= -1e-9)
-            & (u <= 1.0 + 1e-9)
-            & (t >= np.asarray(lo_m)[:, None] - 1e-9)
-            & (t <= np.asarray(hi_m)[:, None])
-        )
-        crossing = np.asarray(np.where(valid, t, np.inf).min(axis=1), dtype=np.float64)
-        if not with_distance:
-            return crossing
-        # Distance from the probe point to each segment: project, clamp, measure.
-        rx, ry = px[:, None] - start[..., 0], py[:, None] - start[..., 1]
-        along = np.clip((rx * vx + ry * vy) * self._inv_length_sq[segments], 0.0, 1.0)
-        distance = np.hypot(rx - along * vx, ry - along * vy).min(axis=1)
-        return crossing, np.asarray(distance, dtype=np.float64)
+        probes: tuple[Float32Array, ...],
+        lo: Float32Array,
+        hi: Float32Array,
+    ) -> Float32Array:
+        """For rays `ids`: the nearest exact crossing within [lo, hi] cells along each with
+        the border segments next to the ones nearest the points `probes` cells along it
+        (inf where there is none)."""
+        col, row, dx, dy = batch.col[ids], batch.row[ids], batch.dx[ids], batch.dy[ids]
+        groups = [
+            self._candidates[self._nearest_segment[self._cells(col + dx * p, row + dy * p)]]
+            for p in probes
+        ]
+        segments = groups[0] if len(groups) == 1 else np.concatenate(groups, axis=1)
+        return self._crossings(batch, ids, segments, lo, hi)
 
-    def _sample(self, col: Float32Array, row: Float32Array) -> Float32Array:
-        """Signed distance (cells) of the cells under grid positions, clamped to the grid."""
-        cols = np.clip(col, 0, self.raster.width - 1).astype(np.int32)
-        rows = np.clip(row, 0, self.raster.height - 1).astype(np.int32)
-        rows *= self.raster.width
+    def _crossings(
+        self,
+        batch: _Rays,
+        ids: NDArray[np.intp],
+        segments: NDArray[np.intp],
+        lo: Float32Array,
+        hi: Float32Array,
+    ) -> Float32Array:
+        """Nearest crossing within [lo, hi] cells of each ray `ids` with its row of
+        `segments`; inf where there is none."""
+        col, row = batch.col[ids][:, None], batch.row[ids][:, None]
+        dx, dy = batch.dx[ids][:, None], batch.dy[ids][:, None]
+        # Segment starts relative to each ray's origin, and the segments' directions.
+        wx = self._segment_start[segments, 0] - col
+        wy = self._segment_start[segments, 1] - row
+        vx = self._segment_vector[segments, 0]
+        vy = self._segment_vector[segments, 1]
+        # Solve origin + t * direction = start + u * vector with 2-D cross products; a
+        # parallel segment divides by zero and then fails every comparison below.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            denom = dx * vy - dy * vx
+            t = (wx * vy - wy * vx) / denom
+            u = (wx * dy - wy * dx) / denom
+        valid = np.abs(u - 0.5) <= self._half_u_range[segments]
+        valid &= t >= lo[:, None] - 1e-3
+        valid &= t <= hi[:, None]
+        return np.asarray(np.where(valid, t, np.float32(np.inf)).min(axis=1), dtype=np.float32)
+
+    def _cells(self, col: Float32Array, row: Float32Array) -> NDArray[np.int32]:
+        """Flat indices of the raster cells under grid positions, clamped to the grid."""
+        raster = self.raster
+        cols = np.minimum(np.maximum(col, 0), raster.width - 1).astype(np.int32)
+        rows = np.minimum(np.maximum(row, 0), raster.height - 1).astype(np.int32)
+        rows *= raster.width
         rows += cols
-        return np.asarray(self._field.take(rows), dtype=np.float32)
-
-
-@dataclass
-class _RayGeometry:
-    """Each ray's origin (metres) and direction, in float64 for the exact intersections."""
-
-    x: NDArray[np.float64]
-    y: NDArray[np.float64]
-    cos: NDArray[np.float64]
-    sin: NDArray[np.float64]
-    side: Float32Array  # +1 where the car is on the road, -1 off it
+        return rows
 
 
 @dataclass
 class _Stops:
-    """Where marching stopped rays (in cells along each): known clear up to `clear`; look
-    for the border around `probe`; accept crossings up to `upper`."""
+    """Where marching stopped rays, in cells along each: the ray is known clear up to
+    `clear` and stopped at `reached`; its crossing is looked for around `probe`."""
 
     ids: NDArray[np.intp]
     clear: Float32Array
     probe: Float32Array
-    upper: Float32Array
+    reached: Float32Array
 
     @staticmethod
     def joined(parts: list[_Stops]) -> _Stops:
@@ -519,13 +461,19 @@ class _Stops:
             np.concatenate([p.ids for p in parts]),
             np.concatenate([p.clear for p in parts]),
             np.concatenate([p.probe for p in parts]),
-            np.concatenate([p.upper for p in parts]),
+            np.concatenate([p.reached for p in parts]),
         )
+
+    def kept(self, mask: NDArray[np.bool_]) -> _Stops:
+        return _Stops(self.ids[mask], self.clear[mask], self.probe[mask], self.reached[mask])
 
 
 @dataclass
 class _Rays:
-    """The rays still marching, compacted: finished rays drop out so later steps are cheap."""
+    """Rays being marched (cells): origin, direction, the side of the border the car is
+    on (as +-1/resolution, turning the field's metres into cells), distance along so far,
+    the border distance there and the relaxation factor.
+    Compacted as rays finish, so later steps only pay for the rays still going."""
 
     ids: NDArray[np.intp]
     col: Float32Array
@@ -537,22 +485,17 @@ class _Rays:
     g: Float32Array
     omega: Float32Array
 
-    @staticmethod
-    def empty() -> _Rays:
-        nothing = np.zeros(0, dtype=np.float32)
-        return _Rays(np.zeros(0, dtype=np.intp), *([nothing] * 8))
-
-    def kept(self, mask: NDArray[np.bool_]) -> _Rays:
+    def kept(self, which: NDArray[np.bool_] | NDArray[np.intp] | slice) -> _Rays:
         return _Rays(
-            self.ids[mask],
-            self.col[mask],
-            self.row[mask],
-            self.dx[mask],
-            self.dy[mask],
-            self.side[mask],
-            self.t[mask],
-            self.g[mask],
-            self.omega[mask],
+            self.ids[which],
+            self.col[which],
+            self.row[which],
+            self.dx[which],
+            self.dy[which],
+            self.side[which],
+            self.t[which],
+            self.g[which],
+            self.omega[which],
         )
 
 
@@ -589,7 +532,7 @@ def sectors(scan: Float32Array, count: int = 8, threshold: float = 0.5) -> Float
     if readings.ndim != 2 or readings.shape[1] % count:
         raise ValueError(f"a scan of shape {readings.shape} cannot be split into {count} sectors")
     nearest = readings.reshape(readings.shape[0], count, -1).min(axis=2)
-    return (nearest < threshold).astype(np.float32)
+    return np.asarray(nearest < threshold, dtype=np.float32)
 
 
 class SectorLidar:
@@ -616,4 +559,6 @@ def _poses(
     yaws = np.atleast_1d(np.asarray(yaw, dtype=np.float64))
     if not xs.shape == ys.shape == yaws.shape or xs.ndim != 1:
         raise ValueError("x, y and yaw must be 1-D arrays of the same length (one per car)")
+    if not (np.isfinite(xs).all() and np.isfinite(ys).all() and np.isfinite(yaws).all()):
+        raise ValueError("a car pose holds NaN or infinity; sensors need finite x, y and yaw")
     return xs, ys, yaws
