@@ -138,7 +138,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m sim.bench", description=__doc__.split("\n")[0])
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--track", action="append", default=[], help="also time this .npy track")
-    parser.add_argument("--cars", type=int, default=32, help="cars stepped per process")
+    parser.add_argument("--cars", type=int, default=64, help="cars stepped per process")
     parser.add_argument("--seconds", type=float, default=3.0, help="time per sensor measurement")
     args = parser.parse_args(argv)
     tracks = [resolve_track(info.name) for info in list_tracks() if info.builtin]

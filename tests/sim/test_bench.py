@@ -1,0 +1,23 @@
+"""The benchmark script keeps working (figures are printed, never judged here)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from sim.bench import main
+
+
+def test_bench_json_reports_every_sensor_and_builtin_track(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["--json", "--seconds", "0.05", "--cars", "2"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert [row["sensor"] for row in report["sensors"]] == ["vector", "lidar", "camera 160x120"]
+    assert all(row["steps_per_s"] > 0 for row in report["sensors"])
+    laps = {row["track"]: row for row in report["reference_laps"]}
+    assert {"beginner-oval", "hairpin-circuit", "bowtie-chicane", "speedway", "grand-prix"} <= set(
+        laps
+    )
+    assert all(row["status"] == "Lap complete" for row in laps.values())
