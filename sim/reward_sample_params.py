@@ -46,6 +46,21 @@ PARAM_KEYS: tuple[str, ...] = (
     "object_in_camera",
 )
 
+
+def no_objects() -> dict[str, object]:
+    """DeepRacer's object keys when a race has no objects (fresh lists every call)."""
+    return {
+        "closest_objects": [0, 0],
+        "objects_location": [],
+        "objects_left_of_center": [],
+        "objects_speed": [],
+        "objects_heading": [],
+        "objects_distance": [],
+        "objects_distance_from_center": [],
+        "object_in_camera": False,
+    }
+
+
 STRAIGHT_LENGTH = 6.0
 TURN_RADIUS = 1.5
 TRACK_WIDTH = 0.76
@@ -102,17 +117,7 @@ def _object_params(objects: Sequence[tuple[float, float]]) -> dict[str, object]:
                 f"{STRAIGHT_LENGTH} and -{TRACK_WIDTH / 2} <= y <= {TRACK_WIDTH / 2}"
             )
     if not objects:
-        # DeepRacer's defaults when a race has no objects.
-        return {
-            "closest_objects": [0, 0],
-            "objects_location": [],
-            "objects_left_of_center": [],
-            "objects_speed": [],
-            "objects_heading": [],
-            "objects_distance": [],
-            "objects_distance_from_center": [],
-            "object_in_camera": False,
-        }
+        return no_objects()
     # On the first straight the distance along the centre line from the start is just x.
     distances = [float(x) for x, _ in objects]
     ahead = [(d - CAR_X) % TRACK_LENGTH for d in distances]

@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
 from sim.geometry import FloatArray
+from sim.reward_sample_params import no_objects
 from sim.track import Track
 
 #: DeepRacer measures the car at this point ahead of its centre.
@@ -286,14 +287,7 @@ class TrackSimulation:
                 "is_crashed": crashed[i],
                 "projection_distance": proj[i],
                 "sim_time": sim_time[i],
-                "closest_objects": [0, 0],
-                "objects_location": [],
-                "objects_left_of_center": [],
-                "objects_speed": [],
-                "objects_heading": [],
-                "objects_distance": [],
-                "objects_distance_from_center": [],
-                "object_in_camera": False,
+                **no_objects(),
             }
             for i in range(self.n)
         ]
