@@ -19,6 +19,7 @@ from sim.reference_driver import ReferenceDriver
 from sim.reward_function import load_reward_function
 from sim.reward_sample_params import sample_params
 from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.track import Track
 from sim.track_catalog import list_tracks, resolve_track
 
 _MAX_LAP_STEPS = 15 * 120
@@ -29,7 +30,7 @@ def run(args: argparse.Namespace) -> int:
     sample_value = reward(sample_params())
     track_name = args.track or list_tracks()[0].name
     track = resolve_track(track_name)
-    lap_rewards = _score_reference_lap(reward, track_name)
+    lap_rewards = _score_reference_lap(reward, track)
     report: dict[str, Any] = {
         "file": str(args.file),
         "sample_params_reward": sample_value,
@@ -55,8 +56,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _score_reference_lap(reward: Any, track_name: str) -> list[float]:
-    track = resolve_track(track_name)
+def _score_reference_lap(reward: Any, track: Track) -> list[float]:
     sim = TrackSimulation(track, 1)
     driver = ReferenceDriver(track)
     sim.reset_car(0, start_s=0.0)

@@ -23,7 +23,6 @@ import numpy as np
 from sim.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
 from sim.car import DEEPRACER_CAR, CarSpec
 from sim.observations import Observer, SensorOptions, normalise_sensors
-from sim.simulation import TERMINAL_STATUSES as _TERMINAL
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
 
@@ -169,7 +168,6 @@ class DeepRacerEnv(gym.Env[Any, Any]):
         self.observation_space = self.observer.space
         self.action_space = self.config.action_space.gym_space()
         self._reward = self.config.reward_function()
-        self._episodes = 0
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -187,17 +185,15 @@ class DeepRacerEnv(gym.Env[Any, Any]):
         elif seed is not None:
             start_s = float(self.np_random.uniform(0.0, length))
         self.sim.reset_car(0, start_s)
-        self._episodes += 1
         return _row(self.observer.observe(), 0), self._info()
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         steering, speed = self.config.action_space.targets(np.asarray(action)[None, ...])
         self.sim.apply(steering, speed)
-        params = self.sim.all_params()[0]
-        reward = float(self._reward(params)) if self.sim.steps[0] > 1 else 0.0
-        status = self.sim.status[0]
-        terminated = status in _TERMINAL
-        truncated = status == EpisodeStatus.TIME_UP
+        # Step 1 is DeepRacer's "prepare" step: no params built, no function called.
+        reward = float(self._reward(self.sim.all_params()[0])) if self.sim.steps[0] > 1 else 0.0
+        truncated = bool(self.sim.timed_out[0])
+        terminated = bool(self.sim.done[0]) and not truncated
         return _row(self.observer.observe(), 0), reward, terminated, truncated, self._info()
 
     def _info(self) -> dict[str, Any]:

@@ -81,14 +81,14 @@ class Observer:
             self._camera = Camera(sim.track, spec)
             spaces["camera"] = camera_space(spec)
         if "lidar" in sensors or "sector_lidar" in sensors:
-            from sim.sensors import Lidar, LidarSpec, lidar_space
+            from sim.sensors import Lidar, LidarSpec, lidar_space, sector_lidar_space
 
             lidar_spec = LidarSpec(rays=opts.lidar_rays, max_range=opts.lidar_range)
             self._lidar = Lidar(sim.track, lidar_spec)
             if "lidar" in sensors:
                 spaces["lidar"] = lidar_space(lidar_spec)
             else:
-                spaces["sector_lidar"] = gym.spaces.Box(0.0, 1.0, shape=(8,), dtype=np.float32)
+                spaces["sector_lidar"] = sector_lidar_space()
         if "vector" in sensors:
             spaces["vector"] = gym.spaces.Box(-5.0, 5.0, shape=(VECTOR_SIZE,), dtype=np.float32)
         self.spaces = spaces

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -131,13 +130,15 @@ def speed_profile(points: FloatArray, curvature: FloatArray, car: CarSpec) -> Fl
     return np.maximum(speeds, car.min_speed)
 
 
-@lru_cache(maxsize=32)
-def _cached_line(track_hash: str, track: Track, car: CarSpec) -> RacingLine:
-    return plan_racing_line(track, car)
+# Keyed by content, not object: the same track loaded twice plans its line once.
+_lines: dict[tuple[str, CarSpec], RacingLine] = {}
 
 
 def racing_line_for(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
-    return _cached_line(track.content_hash, track, car)
+    key = (track.content_hash, car)
+    if key not in _lines:
+        _lines[key] = plan_racing_line(track, car)
+    return _lines[key]
 
 
 class ReferenceDriver:

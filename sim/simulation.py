@@ -54,16 +54,6 @@ _OUTCOMES = (
 )
 _TIME_UP_CODE = _OUTCOMES.index(EpisodeStatus.TIME_UP)
 
-TERMINAL_STATUSES = frozenset(
-    {
-        EpisodeStatus.LAP_COMPLETE,
-        EpisodeStatus.OFF_TRACK,
-        EpisodeStatus.CRASHED,
-        EpisodeStatus.REVERSED,
-        EpisodeStatus.IMMOBILIZED,
-    }
-)
-
 
 @dataclass(frozen=True)
 class EpisodeRules:
