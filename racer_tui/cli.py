@@ -7,19 +7,21 @@ A user error is one sentence on stderr and exit code 2; never a traceback.
 from __future__ import annotations
 
 import argparse
-import json
+import importlib
 import sys
 from collections.abc import Sequence
 from typing import Any
-
-from rich.console import Console
-from rich.table import Table
 
 from sim.action_space import ActionSpaceError
 from sim.observations import SensorError
 from sim.track import TrackError
 
 EXIT_USER_ERROR = 2
+# One module per command group; add a new group here.
+COMMAND_MODULES = (
+    "racer_tui.track_commands",
+    "racer_tui.reward_commands",
+)
 
 
 class UsageError(Exception):
@@ -29,7 +31,16 @@ class UsageError(Exception):
 def _user_errors() -> tuple[type[Exception], ...]:
     from sim.reward_function import RewardFunctionError
 
-    return (TrackError, ActionSpaceError, SensorError, RewardFunctionError, UsageError)
+    errors: list[type[Exception]] = [
+        TrackError,
+        ActionSpaceError,
+        SensorError,
+        RewardFunctionError,
+        UsageError,
+    ]
+    for module in _command_modules():
+        errors.extend(getattr(module, "USER_ERRORS", ()))
+    return tuple(errors)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -38,32 +49,15 @@ def build_parser() -> argparse.ArgumentParser:
         description="Build, train and race AWS-DeepRacer-style car models in the terminal.",
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-
-    tracks = commands.add_parser("tracks", help="list, show, import and generate tracks")
-    track_commands = tracks.add_subparsers(dest="tracks_command", metavar="ACTION", required=True)
-    listing = track_commands.add_parser("list", help="built-in and imported tracks")
-    listing.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    show = track_commands.add_parser("show", help="one track's facts and its reference lap")
-    show.add_argument("track", help="track name or .npy file")
-    show.add_argument("--json", action="store_true")
-    importer = track_commands.add_parser("import", help="import a DeepRacer .npy track file")
-    importer.add_argument("file", help="DeepRacer track file (.npy, shape N x 6)")
-    importer.add_argument("--name", help="name to store it under (default: the file name)")
-    importer.add_argument("--reverse", action="store_true", help="drive it the other way round")
-    importer.add_argument("--description", default="")
-    generate = track_commands.add_parser("generate", help="generate a random valid track")
-    generate.add_argument("--seed", type=int, required=True)
-    generate.add_argument("--width", type=float, default=0.76, help="road width in metres")
-    generate.add_argument("--save", action="store_true", help="save it with your tracks")
-    generate.add_argument("--json", action="store_true")
-
-    reward = commands.add_parser("reward", help="check a reward function")
-    reward_commands = reward.add_subparsers(dest="reward_command", metavar="ACTION", required=True)
-    check = reward_commands.add_parser("check", help="run a reward function on sample params")
-    check.add_argument("file", help="Python file defining reward_function(params)")
-    check.add_argument("--track", default=None, help="also score a reference lap on this track")
-    check.add_argument("--json", action="store_true")
+    for module in _command_modules():
+        module.register(commands)
     return parser
+
+
+def _command_modules() -> list[Any]:
+    """Each command module has `NAMES` (its subcommands), `register(commands)` and `run(args)`,
+    and may list its own user-error types in `USER_ERRORS`."""
+    return [importlib.import_module(name) for name in COMMAND_MODULES]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -83,23 +77,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _dispatch(args: argparse.Namespace) -> int:
-    if args.command == "tracks":
-        from racer_tui import track_commands
-
-        return track_commands.run(args)
-    if args.command == "reward":
-        from racer_tui import reward_commands
-
-        return reward_commands.run(args)
+    for module in _command_modules():
+        if args.command in module.NAMES:
+            return int(module.run(args))
     raise UsageError(f"unknown command {args.command!r}; see racer-tui --help.")
-
-
-def print_json(document: Any) -> None:
-    sys.stdout.write(json.dumps(document, indent=2, sort_keys=False) + "\n")
-
-
-def print_table(table: Table) -> None:
-    Console().print(table)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ import numpy as np
 from rich.table import Table
 from rich.text import Text
 
-from racer_tui.cli import print_json, print_table
+from racer_tui.output import print_json, print_table
 from sim.reference_driver import ReferenceDriver
 from sim.reward_function import load_reward_function
 from sim.reward_sample_params import sample_params
@@ -23,6 +23,18 @@ from sim.track import Track
 from sim.track_catalog import list_tracks, resolve_track
 
 _MAX_LAP_STEPS = 15 * 120
+
+
+NAMES = ("reward",)
+
+
+def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    reward = commands.add_parser("reward", help="check a reward function")
+    reward_commands = reward.add_subparsers(dest="reward_command", metavar="ACTION", required=True)
+    check = reward_commands.add_parser("check", help="run a reward function on sample params")
+    check.add_argument("file", help="Python file defining reward_function(params)")
+    check.add_argument("--track", default=None, help="also score a reference lap on this track")
+    check.add_argument("--json", action="store_true")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -9,10 +9,32 @@ from pathlib import Path
 from rich.table import Table
 from rich.text import Text
 
-from racer_tui.cli import print_json, print_table
+from racer_tui.output import print_json, print_table
 from sim.reference_driver import reference_lap
 from sim.track_catalog import import_track, list_tracks, resolve_track, save_user_track
 from sim.track_generator import generate_track
+
+NAMES = ("tracks",)
+
+
+def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    tracks = commands.add_parser("tracks", help="list, show, import and generate tracks")
+    track_commands = tracks.add_subparsers(dest="tracks_command", metavar="ACTION", required=True)
+    listing = track_commands.add_parser("list", help="built-in and imported tracks")
+    listing.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    show = track_commands.add_parser("show", help="one track's facts and its reference lap")
+    show.add_argument("track", help="track name or .npy file")
+    show.add_argument("--json", action="store_true")
+    importer = track_commands.add_parser("import", help="import a DeepRacer .npy track file")
+    importer.add_argument("file", help="DeepRacer track file (.npy, shape N x 6)")
+    importer.add_argument("--name", help="name to store it under (default: the file name)")
+    importer.add_argument("--reverse", action="store_true", help="drive it the other way round")
+    importer.add_argument("--description", default="")
+    generate = track_commands.add_parser("generate", help="generate a random valid track")
+    generate.add_argument("--seed", type=int, required=True)
+    generate.add_argument("--width", type=float, default=0.76, help="road width in metres")
+    generate.add_argument("--save", action="store_true", help="save it with your tracks")
+    generate.add_argument("--json", action="store_true")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,0 +1,673 @@
+"""The one place that knows AWS DeepRacer's file formats.
+
+Model folders, the league's submission assembler, model import and the race engine all
+read and write these files through this module, so a DeepRacer user's downloads and our
+own folders are the same thing:
+
+- `model_metadata.json`: action space, sensors, network, algorithm, version;
+- `hyperparameters.json`: DeepRacer's keys, defaults and allowed ranges;
+- `training_params.yaml`: the training job (track, race type, stop condition);
+- training metrics (`training.json`, DeepRacer's TrainingMetrics form);
+- evaluation metrics (`evaluation-*.json`, DeepRacer's EvaluationMetrics form);
+- sim-trace CSV files with DeepRacer's column names.
+
+Files read here may come from anyone: every value is type- and range-checked, and every
+problem is one `DeepRacerFileError` sentence that names the file.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import re
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import MISSING, asdict, dataclass, field, fields
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any, TypeVar
+
+import yaml
+
+from sim.action_space import ActionSpace, ActionSpaceError, parse_action_space
+from sim.atomic import write_text_atomic
+from sim.observations import SensorError, normalise_sensors
+from sim.simulation import EpisodeStatus
+
+MODEL_METADATA = "model_metadata.json"
+HYPERPARAMETERS = "hyperparameters.json"
+TRAINING_PARAMS = "training_params.yaml"
+TRAINING_METRICS = "training.json"
+REWARD_FUNCTION = "reward_function.py"
+EVALUATION_GLOB = "evaluation-*.json"
+SIM_TRACE_DIR = "sim-trace"
+
+MAX_METADATA_BYTES = 1_000_000
+MAX_METRICS_BYTES = 64_000_000
+
+
+class DeepRacerFileError(ValueError):
+    """A DeepRacer file that is missing or malformed; the message names the file."""
+
+
+# --- hyperparameters -------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Hyperparameter:
+    """One DeepRacer hyperparameter: its default and what values are allowed."""
+
+    name: str
+    default: float | int | str
+    low: float | None = None
+    high: float | None = None
+    choices: tuple[str, ...] = ()
+    whole: bool = False
+    tunable: bool = True  # shown in the console's form; the rest are fixed by DeepRacer
+    help: str = ""
+
+    def allowed(self) -> str:
+        if self.choices:
+            return " or ".join(repr(choice) for choice in self.choices)
+        kind = "a whole number" if self.whole else "a number"
+        return f"{kind} from {self.low:g} to {self.high:g}"
+
+    def check(self, value: object, where: str) -> float | int | str:
+        """The value as stored, or DeepRacerFileError saying what is allowed."""
+        problem = f"{where}: {self.name} must be {self.allowed()}, not {value!r}."
+        if self.choices:
+            if not isinstance(value, str) or value not in self.choices:
+                raise DeepRacerFileError(problem)
+            return value
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise DeepRacerFileError(problem)
+        if not math.isfinite(value) or self.low is None or self.high is None:
+            raise DeepRacerFileError(problem)
+        if not self.low <= value <= self.high:
+            raise DeepRacerFileError(problem)
+        if self.whole:
+            if float(value) != int(value):
+                raise DeepRacerFileError(problem)
+            return int(value)
+        return float(value)
+
+
+_HYPERPARAMETERS = (
+    Hyperparameter("batch_size", 64, 32, 512, whole=True, help="experiences per gradient step"),
+    Hyperparameter("beta_entropy", 0.01, 0.0, 1.0, help="entropy bonus: more exploration"),
+    Hyperparameter("discount_factor", 0.999, 0.0, 1.0, help="how far ahead rewards count"),
+    Hyperparameter("loss_type", "huber", choices=("huber", "mean squared error")),
+    Hyperparameter("lr", 0.0003, 1e-8, 1e-3, help="learning rate"),
+    Hyperparameter(
+        "num_episodes_between_training", 20, 5, 100, whole=True, help="episodes per update"
+    ),
+    Hyperparameter("num_epochs", 10, 3, 10, whole=True, help="passes over each batch"),
+    Hyperparameter("e_greedy_value", 0.05, 0.0, 1.0, tunable=False),
+    Hyperparameter("epsilon_steps", 10000, 0, 10_000_000, whole=True, tunable=False),
+    Hyperparameter(
+        "exploration_type", "categorical", choices=("categorical", "e-greedy"), tunable=False
+    ),
+    Hyperparameter("stack_size", 1, 1, 1, whole=True, tunable=False),
+    Hyperparameter("term_cond_avg_score", 100000.0, 0.0, 1e9, tunable=False),
+    Hyperparameter("term_cond_max_episodes", 100000, 1, 10_000_000, whole=True, tunable=False),
+    Hyperparameter("sac_alpha", 0.2, 0.0, 1.0, tunable=False),
+)
+HYPERPARAMETER_SPECS: dict[str, Hyperparameter] = {hp.name: hp for hp in _HYPERPARAMETERS}
+# Fixed PPO internals DeepRacer does not expose.
+PPO_CLIP = 0.2
+GAE_LAMBDA = 0.95
+ADAM_EPSILON = 1e-5
+
+
+def default_hyperparameters() -> dict[str, float | int | str]:
+    return {hp.name: hp.default for hp in _HYPERPARAMETERS}
+
+
+def check_hyperparameters(
+    values: Mapping[str, object],
+    where: str = HYPERPARAMETERS,
+    base: Mapping[str, float | int | str] | None = None,
+) -> dict[str, float | int | str]:
+    """Validated hyperparameters: `values` over `base` (DeepRacer's defaults if None)."""
+    result = dict(default_hyperparameters() if base is None else base)
+    for name, value in values.items():
+        spec = HYPERPARAMETER_SPECS.get(str(name))
+        if spec is None:
+            known = ", ".join(hp.name for hp in _HYPERPARAMETERS if hp.tunable)
+            raise DeepRacerFileError(
+                f"{where}: unknown hyperparameter {name!r}; the tunable ones are {known}."
+            )
+        result[spec.name] = spec.check(value, where)
+    return result
+
+
+def read_hyperparameters(path: Path) -> dict[str, float | int | str]:
+    data = _read_json_object(path, MAX_METADATA_BYTES)
+    return check_hyperparameters(data, where=str(path))
+
+
+def write_hyperparameters(path: Path, values: Mapping[str, float | int | str]) -> None:
+    write_text_atomic(path, json.dumps(dict(values), indent=2) + "\n")
+
+
+# --- model metadata --------------------------------------------------------------------
+
+SENSOR_FILE_NAMES = {
+    "camera": "FRONT_FACING_CAMERA",
+    "lidar": "LIDAR",
+    "sector_lidar": "SECTOR_LIDAR",
+    "vector": "VECTOR",  # racer-tui's own track-relative sensor; DeepRacer has no such name
+}
+NEURAL_NETWORKS = (
+    "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW",
+    "DEEP_CONVOLUTIONAL_NETWORK",
+    "DEEP_CONVOLUTIONAL_NETWORK_DEEP",
+)
+TRAINING_ALGORITHMS = ("clipped_ppo", "sac")
+METADATA_VERSION = "5"
+
+
+@dataclass(frozen=True)
+class ModelMetadata:
+    """`model_metadata.json`: what the car can do and what it senses."""
+
+    action_space: ActionSpace
+    sensors: tuple[str, ...]  # racer-tui names: camera, lidar, sector_lidar, vector
+    neural_network: str = NEURAL_NETWORKS[0]
+    training_algorithm: str = "clipped_ppo"
+    version: str = METADATA_VERSION
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "action_space": self.action_space.to_metadata(),
+            "sensor": [SENSOR_FILE_NAMES[name] for name in self.sensors],
+            "neural_network": self.neural_network,
+            "training_algorithm": self.training_algorithm,
+            "action_space_type": self.action_space.kind,
+            "version": self.version,
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any], where: str = MODEL_METADATA) -> ModelMetadata:
+        if "action_space" not in data:
+            raise DeepRacerFileError(f"{where}: there is no action_space; add one.")
+        try:
+            space = parse_action_space(data["action_space"], data.get("action_space_type"))
+        except ActionSpaceError as error:
+            raise DeepRacerFileError(f"{where}: {error}") from None
+        raw_sensors = data.get("sensor", ["FRONT_FACING_CAMERA"])
+        if not isinstance(raw_sensors, list) or not all(isinstance(s, str) for s in raw_sensors):
+            raise DeepRacerFileError(f"{where}: sensor must be a list of sensor names.")
+        try:
+            sensors = normalise_sensors(raw_sensors)
+        except SensorError as error:
+            raise DeepRacerFileError(f"{where}: {error}") from None
+        network = str(data.get("neural_network", NEURAL_NETWORKS[0]))
+        if network not in NEURAL_NETWORKS:
+            raise DeepRacerFileError(
+                f"{where}: unknown neural_network {network!r}; use one of "
+                f"{', '.join(NEURAL_NETWORKS)}."
+            )
+        algorithm = str(data.get("training_algorithm", "clipped_ppo"))
+        if algorithm not in TRAINING_ALGORITHMS:
+            raise DeepRacerFileError(
+                f"{where}: training_algorithm must be clipped_ppo or sac, not {algorithm!r}."
+            )
+        return cls(space, sensors, network, algorithm, str(data.get("version", "")))
+
+
+def read_model_metadata(path: Path) -> ModelMetadata:
+    return ModelMetadata.from_json(_read_json_object(path, MAX_METADATA_BYTES), str(path))
+
+
+def write_model_metadata(path: Path, metadata: ModelMetadata) -> None:
+    write_text_atomic(path, json.dumps(metadata.to_json(), indent=2) + "\n")
+
+
+# --- training_params.yaml --------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TrainingParams:
+    """`training_params.yaml`: the training job, in DeepRacer's upper-case keys."""
+
+    world_name: str  # the track
+    race_type: str = "TIME_TRIAL"
+    max_minutes: float = 60.0  # the console's stop condition
+    alternate_driving_direction: bool = False
+    change_start_position: bool = True
+    track_hash: str = ""  # content hash of the track the model was set up on
+    extra: Mapping[str, Any] = field(default_factory=dict)  # keys we keep but do not use
+
+    _KEYS = {  # noqa: RUF012 - a constant mapping, not a field
+        "WORLD_NAME": "world_name",
+        "RACE_TYPE": "race_type",
+        "MAX_MINUTES": "max_minutes",
+        "ALTERNATE_DRIVING_DIRECTION": "alternate_driving_direction",
+        "CHANGE_START_POSITION": "change_start_position",
+        "TRACK_HASH": "track_hash",
+    }
+
+    def to_yaml(self) -> str:
+        data: dict[str, Any] = {"JOB_TYPE": "TRAINING", **dict(self.extra)}
+        for key, attribute in self._KEYS.items():
+            data[key] = getattr(self, attribute)
+        return yaml.safe_dump(data, sort_keys=True)
+
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any], where: str) -> TrainingParams:
+        world = data.get("WORLD_NAME")
+        if not isinstance(world, str) or not world:
+            raise DeepRacerFileError(f"{where}: WORLD_NAME (the track) is missing.")
+        minutes = data.get("MAX_MINUTES", 60.0)
+        if (
+            isinstance(minutes, bool)
+            or not isinstance(minutes, int | float)
+            or not (0 < minutes <= 100_000)
+        ):
+            raise DeepRacerFileError(f"{where}: MAX_MINUTES must be a positive number.")
+        extra = {str(k): v for k, v in data.items() if k not in cls._KEYS and k != "JOB_TYPE"}
+        return cls(
+            world_name=world,
+            race_type=str(data.get("RACE_TYPE", "TIME_TRIAL")),
+            max_minutes=float(minutes),
+            alternate_driving_direction=bool(data.get("ALTERNATE_DRIVING_DIRECTION", False)),
+            change_start_position=bool(data.get("CHANGE_START_POSITION", True)),
+            track_hash=str(data.get("TRACK_HASH", "")),
+            extra=extra,
+        )
+
+
+def read_training_params(path: Path) -> TrainingParams:
+    text = _read_text(path, MAX_METADATA_BYTES)
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError:
+        raise DeepRacerFileError(f"{path}: not valid YAML; fix the syntax.") from None
+    if not isinstance(data, Mapping):
+        raise DeepRacerFileError(f"{path}: expected a mapping of KEY: value lines.")
+    return TrainingParams.from_mapping(data, str(path))
+
+
+def write_training_params(path: Path, params: TrainingParams) -> None:
+    write_text_atomic(path, params.to_yaml())
+
+
+# --- training and evaluation metrics ---------------------------------------------------
+
+METRIC_STATUSES = tuple(status.value for status in EpisodeStatus)
+
+
+@dataclass(frozen=True)
+class TrainingEpisode:
+    """One row of DeepRacer's TrainingMetrics: an episode of training or of evaluation."""
+
+    reward_score: float
+    metric_time: int  # ms since the job started, when the episode ended
+    start_time: int
+    elapsed_time_in_milliseconds: int
+    episode: int
+    trial: int
+    phase: str  # "training" or "evaluation"
+    completion_percentage: float
+    episode_status: str
+
+
+@dataclass(frozen=True)
+class EvaluationTrial:
+    """One row of DeepRacer's EvaluationMetrics: a trial, normally one lap."""
+
+    completion_percentage: float
+    metric_time: int
+    start_time: int
+    elapsed_time_in_milliseconds: int  # penalty time is inside the elapsed time
+    episode_status: str
+    crash_count: int = 0
+    immobilized_count: int = 0
+    off_track_count: int = 0
+    reversed_count: int = 0
+    reset_count: int = 0
+    trial: int = 1
+
+    @property
+    def lap_time_seconds(self) -> float | None:
+        """The lap time if the trial completed the lap, else None."""
+        if self.completion_percentage >= 100 and self.episode_status != "Off track":
+            return self.elapsed_time_in_milliseconds / 1000.0
+        return None
+
+
+@dataclass(frozen=True)
+class TrainingMetrics:
+    episodes: tuple[TrainingEpisode, ...]
+    best_model_metric: str = "progress"
+    version: float = 2.0
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "metrics": [_metric_dict(e) for e in self.episodes],
+            "version": self.version,
+            "best_model_metric": self.best_model_metric,
+        }
+
+
+def _metric_dict(row: TrainingEpisode | EvaluationTrial) -> dict[str, Any]:
+    data = asdict(row)
+    # DeepRacer writes whole percentages and scores when they are whole: keep files diffable.
+    for key in ("completion_percentage", "reward_score"):
+        if key in data and float(data[key]).is_integer():
+            data[key] = int(data[key])
+    return data
+
+
+def read_training_metrics(path: Path) -> TrainingMetrics:
+    data = _read_json_object(path, MAX_METRICS_BYTES)
+    rows = _metric_rows(data, path)
+    episodes = tuple(_row(TrainingEpisode, row, path, i) for i, row in enumerate(rows))
+    best = data.get("best_model_metric", "progress")
+    version = data.get("version", 2.0)
+    return TrainingMetrics(
+        episodes,
+        best if isinstance(best, str) else "progress",
+        float(version) if isinstance(version, int | float) else 2.0,
+    )
+
+
+def write_training_metrics(path: Path, metrics: TrainingMetrics) -> None:
+    write_text_atomic(path, json.dumps(metrics.to_json()) + "\n")
+
+
+def read_evaluation_metrics(path: Path) -> tuple[EvaluationTrial, ...]:
+    rows = _metric_rows(_read_json_object(path, MAX_METRICS_BYTES), path)
+    return tuple(_row(EvaluationTrial, row, path, i) for i, row in enumerate(rows))
+
+
+def write_evaluation_metrics(path: Path, trials: Sequence[EvaluationTrial]) -> None:
+    write_text_atomic(path, json.dumps({"metrics": [_metric_dict(t) for t in trials]}) + "\n")
+
+
+def evaluation_file_name(when: datetime | None = None) -> str:
+    """`evaluation-YYYYmmddHHMMSS.json`, which sorts by time like DeepRacer's files."""
+    stamp = (when or datetime.now(UTC)).strftime("%Y%m%d%H%M%S")
+    return f"evaluation-{stamp}.json"
+
+
+def _metric_rows(data: Mapping[str, Any], path: Path) -> list[Any]:
+    rows = data.get("metrics")
+    if not isinstance(rows, list):
+        raise DeepRacerFileError(f"{path}: expected a 'metrics' list as DeepRacer writes it.")
+    return rows
+
+
+_NUMBER_TYPES = (int, float)
+RowT = TypeVar("RowT", TrainingEpisode, EvaluationTrial)
+
+
+def _row(cls: type[RowT], row: object, path: Path, index: int) -> RowT:
+    where = f"{path}: metrics row {index + 1}"
+    if not isinstance(row, Mapping):
+        raise DeepRacerFileError(f"{where} is not an object.")
+    values: dict[str, Any] = {}
+    for spec in fields(cls):
+        if spec.name not in row:
+            if spec.default is not MISSING:  # has a default: an optional key
+                continue
+            raise DeepRacerFileError(f"{where} has no {spec.name!r}.")
+        value = row[spec.name]
+        if spec.type == "str":
+            if not isinstance(value, str) or len(value) > 64:
+                raise DeepRacerFileError(f"{where}: {spec.name} must be a short text.")
+        elif spec.type == "int":
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, _NUMBER_TYPES)
+                or not (math.isfinite(value) and float(value).is_integer())
+            ):
+                raise DeepRacerFileError(f"{where}: {spec.name} must be a whole number.")
+            value = int(value)
+        else:
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, _NUMBER_TYPES)
+                or not (math.isfinite(value))
+            ):
+                raise DeepRacerFileError(f"{where}: {spec.name} must be a number.")
+            value = float(value)
+        values[spec.name] = value
+    return cls(**values)
+
+
+# --- sim-trace CSV ---------------------------------------------------------------------
+
+SIM_TRACE_COLUMNS = (
+    "episode",
+    "steps",
+    "X",
+    "Y",
+    "yaw",
+    "steer",
+    "throttle",
+    "action",
+    "reward",
+    "done",
+    "all_wheels_on_track",
+    "progress",
+    "closest_waypoint",
+    "track_len",
+    "tstamp",
+    "episode_status",
+    "pause_duration",
+)
+PREPARE_STATUS = "prepare"
+
+
+def trace_status(status: EpisodeStatus | str) -> str:
+    """Sim-trace spelling of a status: 'Lap complete' -> 'lap_complete'."""
+    return str(status).strip().lower().replace(" ", "_")
+
+
+@dataclass(frozen=True)
+class SimTraceRow:
+    episode: int
+    steps: int
+    x: float
+    y: float
+    yaw: float  # degrees
+    steer: float  # degrees
+    throttle: float  # m/s
+    action: int  # index for discrete spaces, -1 for continuous
+    reward: float
+    done: bool
+    all_wheels_on_track: bool
+    progress: float
+    closest_waypoint: int
+    track_len: float
+    tstamp: float  # seconds
+    episode_status: str
+    pause_duration: float = 0.0
+
+    def cells(self) -> list[str]:
+        return [
+            str(self.episode),
+            f"{float(self.steps):.1f}",
+            repr(self.x),
+            repr(self.y),
+            repr(self.yaw),
+            repr(self.steer),
+            repr(self.throttle),
+            str(self.action),
+            repr(self.reward),
+            str(self.done),
+            str(self.all_wheels_on_track),
+            repr(self.progress),
+            str(self.closest_waypoint),
+            repr(self.track_len),
+            f"{self.tstamp:.3f}",
+            self.episode_status,
+            repr(self.pause_duration),
+        ]
+
+
+def sim_trace_text(rows: Iterable[SimTraceRow]) -> str:
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(SIM_TRACE_COLUMNS)
+    for row in rows:
+        writer.writerow(row.cells())
+    return out.getvalue()
+
+
+def write_sim_trace(path: Path, rows: Iterable[SimTraceRow]) -> None:
+    write_text_atomic(path, sim_trace_text(rows))
+
+
+def read_sim_trace(path: Path) -> list[SimTraceRow]:
+    text = _read_text(path, MAX_METRICS_BYTES)
+    reader = csv.reader(io.StringIO(text))
+    header = next(reader, None)
+    if header is None or tuple(header[: len(SIM_TRACE_COLUMNS)]) != SIM_TRACE_COLUMNS:
+        raise DeepRacerFileError(f"{path}: not a DeepRacer sim-trace CSV (unexpected header).")
+    rows: list[SimTraceRow] = []
+    for line, cells in enumerate(reader, start=2):
+        try:
+            rows.append(_trace_row(cells))
+        except (ValueError, IndexError):
+            raise DeepRacerFileError(f"{path}: line {line} is not a valid sim-trace row.") from None
+    return rows
+
+
+def _trace_row(cells: list[str]) -> SimTraceRow:
+    def flag(text: str) -> bool:
+        if text not in ("True", "False"):
+            raise ValueError(text)
+        return text == "True"
+
+    def number(text: str) -> float:
+        value = float(text)
+        if not math.isfinite(value):
+            raise ValueError(text)
+        return value
+
+    return SimTraceRow(
+        episode=int(cells[0]),
+        steps=int(number(cells[1])),
+        x=number(cells[2]),
+        y=number(cells[3]),
+        yaw=number(cells[4]),
+        steer=number(cells[5]),
+        throttle=number(cells[6]),
+        action=int(number(cells[7])),
+        reward=number(cells[8]),
+        done=flag(cells[9]),
+        all_wheels_on_track=flag(cells[10]),
+        progress=number(cells[11]),
+        closest_waypoint=int(number(cells[12])),
+        track_len=number(cells[13]),
+        tstamp=number(cells[14]),
+        episode_status=cells[15][:32],
+        pause_duration=number(cells[16]) if len(cells) > 16 else 0.0,
+    )
+
+
+# --- finding the files in folders people download ----------------------------------------
+
+
+@dataclass(frozen=True)
+class DeepRacerFiles:
+    """Where the DeepRacer files are in a folder, whichever tool wrote it."""
+
+    root: Path
+    model_metadata: Path | None = None
+    hyperparameters: Path | None = None
+    training_params: Path | None = None
+    reward_function: Path | None = None
+    training_metrics: tuple[Path, ...] = ()
+    evaluation_metrics: tuple[Path, ...] = ()  # oldest first
+    sim_traces: tuple[Path, ...] = ()
+
+    @property
+    def latest_evaluation(self) -> Path | None:
+        return self.evaluation_metrics[-1] if self.evaluation_metrics else None
+
+
+_TIMESTAMP = re.compile(r"(\d{14})")
+
+
+def _by_timestamp(paths: Iterable[Path]) -> tuple[Path, ...]:
+    def key(path: Path) -> tuple[str, str]:
+        match = _TIMESTAMP.search(path.name)
+        return (match.group(1) if match else "", path.name)
+
+    return tuple(sorted(paths, key=key))
+
+
+def locate_files(root: Path) -> DeepRacerFiles:
+    """Find DeepRacer files in a racer-tui model folder, a DeepRacer-for-Cloud model folder
+    (`model/`, `ip/`, `metrics/`) or an AWS console log download (`metrics/training/`,
+    `metrics/evaluation/`, `sim-trace/`). Symlinks are not followed out of `root`."""
+    root = Path(root)
+
+    def first(*candidates: str) -> Path | None:
+        for candidate in candidates:
+            path = root / candidate
+            if path.is_file() and not path.is_symlink():
+                return path
+        return None
+
+    def every(*patterns: str) -> list[Path]:
+        found: list[Path] = []
+        for pattern in patterns:
+            found.extend(p for p in root.glob(pattern) if p.is_file() and not p.is_symlink())
+        return found
+
+    return DeepRacerFiles(
+        root=root,
+        model_metadata=first(MODEL_METADATA, f"model/{MODEL_METADATA}"),
+        hyperparameters=first(HYPERPARAMETERS, f"ip/{HYPERPARAMETERS}"),
+        training_params=first(TRAINING_PARAMS, f"ip/{TRAINING_PARAMS}"),
+        reward_function=first(REWARD_FUNCTION, f"model/{REWARD_FUNCTION}"),
+        training_metrics=_by_timestamp(
+            every(TRAINING_METRICS, "metrics/TrainingMetrics*.json", "metrics/training/*.json")
+        ),
+        evaluation_metrics=_by_timestamp(
+            every(
+                EVALUATION_GLOB,
+                "metrics/EvaluationMetrics*.json",
+                "metrics/evaluation/*.json",
+            )
+        ),
+        sim_traces=tuple(sorted(every(f"{SIM_TRACE_DIR}/**/*.csv"))),
+    )
+
+
+# --- reading safely ----------------------------------------------------------------------
+
+
+def _read_text(path: Path, limit: int) -> str:
+    try:
+        size = path.stat().st_size
+        if size > limit:
+            raise DeepRacerFileError(
+                f"{path}: the file is {size:,} bytes, more than the {limit:,} allowed."
+            )
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise DeepRacerFileError(f"{path}: the file does not exist.") from None
+    except UnicodeDecodeError:
+        raise DeepRacerFileError(f"{path}: not a UTF-8 text file.") from None
+    except OSError as error:
+        raise DeepRacerFileError(f"{path}: cannot read it ({error.strerror}).") from None
+
+
+def _read_json_object(path: Path, limit: int) -> dict[str, Any]:
+    text = _read_text(path, limit)
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise DeepRacerFileError(
+            f"{path}: not valid JSON (line {error.lineno}, column {error.colno}); fix the syntax."
+        ) from None
+    if not isinstance(data, dict):
+        raise DeepRacerFileError(f"{path}: expected a JSON object at the top level.")
+    return data

@@ -1,0 +1,224 @@
+"""League race rules: one frozen value that every race result and league night carries.
+
+A league night is a series of time trials: each car gets a window (4 minutes by default),
+drives laps continuously, and is ranked by its valid laps. An off-track puts the car back
+on the track and holds it for a penalty while the race clock runs; a lap with too many
+off-tracks does not count. The score of a set of laps is computed here so that every
+caller (race engine, league store, leaderboard) computes it the same way.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+from enum import StrEnum
+from pathlib import Path
+from typing import Any, Protocol
+
+import yaml
+
+
+class RulesError(ValueError):
+    """A rules file or value that cannot be used; the message names the key."""
+
+
+class RankingMethod(StrEnum):
+    BEST_LAP = "best_lap"
+    BEST_AVERAGE = "best_average"  # best average of N consecutive valid laps
+    TOTAL_TIME = "total_time"  # total time of the first N valid laps
+
+
+@dataclass(frozen=True)
+class RaceRules:
+    """Everything that decides how a time trial is run and scored."""
+
+    window_seconds: float = 240.0
+    penalty_seconds: float = 3.0
+    # None = unlimited. A lap with more off-tracks than this does not count.
+    max_offtracks_per_lap: int | None = 3
+    ranking: RankingMethod = RankingMethod.BEST_LAP
+    ranking_laps: int = 3  # N for best_average and total_time
+    collision_penalty_seconds: float = 5.0
+
+    def to_dict(self) -> dict[str, Any]:
+        data = asdict(self)
+        data["ranking"] = self.ranking.value
+        if self.max_offtracks_per_lap is None:
+            data["max_offtracks_per_lap"] = "unlimited"
+        return data
+
+    @property
+    def laps_scored(self) -> int:
+        return 1 if self.ranking is RankingMethod.BEST_LAP else self.ranking_laps
+
+    def describe(self) -> str:
+        limit = (
+            "unlimited off-tracks"
+            if self.max_offtracks_per_lap is None
+            else f"at most {self.max_offtracks_per_lap} off-tracks per lap"
+        )
+        ranking = {
+            RankingMethod.BEST_LAP: "best lap",
+            RankingMethod.BEST_AVERAGE: f"best average of {self.ranking_laps} consecutive laps",
+            RankingMethod.TOTAL_TIME: f"total time of {self.ranking_laps} laps",
+        }[self.ranking]
+        return (
+            f"{_clock(self.window_seconds)} window, {self.penalty_seconds:g} s per off-track, "
+            f"{limit}, ranked by {ranking}"
+        )
+
+
+DEFAULT_RULES = RaceRules()
+
+# Numeric keys and their allowed ranges, in seconds.
+_LIMITS: dict[str, tuple[float, float]] = {
+    "window_seconds": (10.0, 3600.0),
+    "penalty_seconds": (0.0, 60.0),
+    "collision_penalty_seconds": (0.0, 60.0),
+}
+
+
+def rules_from_mapping(data: Mapping[str, Any], base: RaceRules = DEFAULT_RULES) -> RaceRules:
+    """Build rules from a mapping (a YAML file, a database row, JSON); unset keys keep `base`."""
+    if not isinstance(data, Mapping):
+        raise RulesError(
+            "the rules must be a mapping of keys to values, for example `window_seconds: 240`."
+        )
+    known = set(RaceRules.__dataclass_fields__)
+    unknown = sorted(str(key) for key in data if key not in known)
+    if unknown:
+        raise RulesError(
+            f"unknown rules key {unknown[0]!r}; valid keys are {', '.join(sorted(known))}."
+        )
+    values = base.to_dict()
+    values.update(data)
+    for key, (low, high) in _LIMITS.items():
+        values[key] = _number(values[key], key, low, high)
+    return RaceRules(
+        window_seconds=values["window_seconds"],
+        penalty_seconds=values["penalty_seconds"],
+        max_offtracks_per_lap=_offtrack_limit(values["max_offtracks_per_lap"]),
+        ranking=_ranking(values["ranking"]),
+        ranking_laps=_whole(values["ranking_laps"], "ranking_laps", 1, 100),
+        collision_penalty_seconds=values["collision_penalty_seconds"],
+    )
+
+
+def load_rules(path: Path | str) -> RaceRules:
+    """Read a rules YAML file; any problem is one RulesError naming the file and the key."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        reason = error.strerror or str(error)
+        raise RulesError(f"cannot read rules file {path}: {reason}.") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        raise RulesError(f"rules file {path} is not valid YAML{where}; fix the syntax.") from None
+    if data is None:
+        return DEFAULT_RULES
+    try:
+        return rules_from_mapping(data)
+    except RulesError as error:
+        raise RulesError(f"rules file {path}: {error}") from None
+
+
+def _number(value: object, key: str, low: float, high: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise RulesError(f"{key} must be a number of seconds, not {value!r}.")
+    number = float(value)
+    if not math.isfinite(number) or not low <= number <= high:
+        raise RulesError(f"{key} must be between {low:g} and {high:g} seconds, not {value!r}.")
+    return number
+
+
+def _whole(value: object, key: str, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise RulesError(f"{key} must be a whole number from {low} to {high}, not {value!r}.")
+    return value
+
+
+def _offtrack_limit(value: object) -> int | None:
+    if value is None or (isinstance(value, str) and value.strip().lower() == "unlimited"):
+        return None
+    key = "max_offtracks_per_lap"
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 1000:
+        raise RulesError(
+            f"{key} must be a whole number from 0 to 1000 or 'unlimited', not {value!r}."
+        )
+    return value
+
+
+def _ranking(value: object) -> RankingMethod:
+    try:
+        return RankingMethod(str(value))
+    except ValueError:
+        choices = ", ".join(method.value for method in RankingMethod)
+        raise RulesError(f"ranking must be one of {choices}, not {value!r}.") from None
+
+
+def _clock(seconds: float) -> str:
+    minutes, rest = divmod(round(seconds), 60)
+    return f"{minutes}:{rest:02d}"
+
+
+class TimedLap(Protocol):
+    """What scoring needs from a lap: its time with penalties, off-tracks and validity."""
+
+    @property
+    def time_seconds(self) -> float: ...
+    @property
+    def offtracks(self) -> int: ...
+    @property
+    def valid(self) -> bool: ...
+
+
+@dataclass(frozen=True)
+class Score:
+    """A race's ranking score under its rules; `value` is None when it has no score."""
+
+    value: float | None
+    lap_numbers: tuple[int, ...]  # 1-based numbers of the laps that make the score
+    offtracks: int  # off-tracks in those laps: the first tie-break
+    valid_laps: int
+
+
+def lap_counts(lap: TimedLap, rules: RaceRules) -> bool:
+    """Whether a completed lap qualifies under the off-track limit."""
+    limit = rules.max_offtracks_per_lap
+    return lap.valid and (limit is None or lap.offtracks <= limit)
+
+
+def score_laps(laps: Sequence[TimedLap], rules: RaceRules) -> Score:
+    """The ranking score of a race's completed laps (lap number = position + 1)."""
+    valid = [i for i, lap in enumerate(laps) if lap_counts(lap, rules)]
+    n = rules.laps_scored
+    candidates: list[list[int]]
+    if rules.ranking is RankingMethod.BEST_LAP:
+        candidates = [[i] for i in valid]
+    elif rules.ranking is RankingMethod.TOTAL_TIME:
+        candidates = [valid[:n]] if len(valid) >= n else []
+    else:
+        valid_set = set(valid)
+        candidates = [
+            list(range(start, start + n))
+            for start in range(len(laps) - n + 1)
+            if all(i in valid_set for i in range(start, start + n))
+        ]
+    if not candidates:
+        return Score(None, (), 0, len(valid))
+
+    def total(indexes: list[int]) -> float:
+        return sum(laps[i].time_seconds for i in indexes)
+
+    def offtracks(indexes: list[int]) -> int:
+        return sum(laps[i].offtracks for i in indexes)
+
+    # Among equal scores prefer fewer off-tracks, then the earlier laps: a stable choice.
+    best = min(candidates, key=lambda idx: (round(total(idx), 6), offtracks(idx), idx))
+    value = total(best) / n if rules.ranking is RankingMethod.BEST_AVERAGE else total(best)
+    return Score(value, tuple(i + 1 for i in best), offtracks(best), len(valid))
