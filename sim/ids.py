@@ -24,18 +24,29 @@ _last = [0, 0]  # (milliseconds, random part) of the previous id
 def new_id(now_ms: int | None = None) -> str:
     """A 26-character ULID: 48 bits of milliseconds then 80 random bits.
 
-    Ids made in the same millisecond by this process increase monotonically, so sorting
-    by id keeps creation order even in a tight loop.
+    Ids made by this process increase monotonically, even within one millisecond, so
+    sorting by id keeps creation order in a tight loop. An explicit `now_ms` (for tests
+    and imports of dated records) skips that bookkeeping.
     """
+    if now_ms is not None:
+        return _encode(now_ms, _random80())
     with _lock:
-        ms = int(time.time() * 1000) if now_ms is None else now_ms
+        ms = int(time.time() * 1000)
         last_ms, last_random = _last
         if ms <= last_ms:
             ms, random_part = last_ms, last_random + 1
         else:
-            random_part = int.from_bytes(os.urandom(10), "big") >> 1  # room to increment
+            random_part = _random80() >> 1  # leave room to increment
         _last[:] = [ms, random_part]
-    value = (ms << 80) | (random_part & ((1 << 80) - 1))
+    return _encode(ms, random_part)
+
+
+def _random80() -> int:
+    return int.from_bytes(os.urandom(10), "big")
+
+
+def _encode(ms: int, random_part: int) -> str:
+    value = ((ms & ((1 << 48) - 1)) << 80) | (random_part & ((1 << 80) - 1))
     return "".join(_CROCKFORD[(value >> shift) & 31] for shift in range(125, -1, -5))
 
 
