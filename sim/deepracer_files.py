@@ -143,8 +143,12 @@ def check_hyperparameters(
 
 
 def read_hyperparameters(path: Path) -> dict[str, float | int | str]:
-    data = _read_json_object(path, MAX_METADATA_BYTES)
-    return check_hyperparameters(data, where=str(path))
+    return parse_hyperparameters(_read_text(path, MAX_METADATA_BYTES), str(path))
+
+
+def parse_hyperparameters(text: str, where: str) -> dict[str, float | int | str]:
+    """`hyperparameters.json` text (from a file, a zip member...); `where` names it in errors."""
+    return check_hyperparameters(parse_json_object(text, where), where=where)
 
 
 def write_hyperparameters(path: Path, values: Mapping[str, float | int | str]) -> None:
@@ -218,7 +222,11 @@ class ModelMetadata:
 
 
 def read_model_metadata(path: Path) -> ModelMetadata:
-    return ModelMetadata.from_json(_read_json_object(path, MAX_METADATA_BYTES), str(path))
+    return parse_model_metadata(_read_text(path, MAX_METADATA_BYTES), str(path))
+
+
+def parse_model_metadata(text: str, where: str) -> ModelMetadata:
+    return ModelMetadata.from_json(parse_json_object(text, where), where)
 
 
 def write_model_metadata(path: Path, metadata: ModelMetadata) -> None:
@@ -280,14 +288,18 @@ class TrainingParams:
 
 
 def read_training_params(path: Path) -> TrainingParams:
-    text = _read_text(path, MAX_METADATA_BYTES)
+    return parse_training_params(_read_text(path, MAX_METADATA_BYTES), str(path))
+
+
+def parse_training_params(text: str, where: str) -> TrainingParams:
+    """`training_params.yaml` text: safe_load only, a job description is data, never objects."""
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError:
-        raise DeepRacerFileError(f"{path}: not valid YAML; fix the syntax.") from None
+        raise DeepRacerFileError(f"{where}: not valid YAML; fix the syntax.") from None
     if not isinstance(data, Mapping):
-        raise DeepRacerFileError(f"{path}: expected a mapping of KEY: value lines.")
-    return TrainingParams.from_mapping(data, str(path))
+        raise DeepRacerFileError(f"{where}: expected a mapping of KEY: value lines.")
+    return TrainingParams.from_mapping(data, where)
 
 
 def write_training_params(path: Path, params: TrainingParams) -> None:
@@ -362,9 +374,13 @@ def _metric_dict(row: TrainingEpisode | EvaluationTrial) -> dict[str, Any]:
 
 
 def read_training_metrics(path: Path) -> TrainingMetrics:
-    data = _read_json_object(path, MAX_METRICS_BYTES)
-    rows = _metric_rows(data, path)
-    episodes = tuple(_row(TrainingEpisode, row, path, i) for i, row in enumerate(rows))
+    return parse_training_metrics(_read_text(path, MAX_METRICS_BYTES), str(path))
+
+
+def parse_training_metrics(text: str, where: str) -> TrainingMetrics:
+    data = parse_json_object(text, where)
+    rows = _metric_rows(data, where)
+    episodes = tuple(_row(TrainingEpisode, row, where, i) for i, row in enumerate(rows))
     best = data.get("best_model_metric", "progress")
     version = data.get("version", 2.0)
     return TrainingMetrics(
@@ -375,16 +391,28 @@ def read_training_metrics(path: Path) -> TrainingMetrics:
 
 
 def write_training_metrics(path: Path, metrics: TrainingMetrics) -> None:
-    write_text_atomic(path, json.dumps(metrics.to_json()) + "\n")
+    write_text_atomic(path, training_metrics_text(metrics))
+
+
+def training_metrics_text(metrics: TrainingMetrics) -> str:
+    return json.dumps(metrics.to_json()) + "\n"
 
 
 def read_evaluation_metrics(path: Path) -> tuple[EvaluationTrial, ...]:
-    rows = _metric_rows(_read_json_object(path, MAX_METRICS_BYTES), path)
-    return tuple(_row(EvaluationTrial, row, path, i) for i, row in enumerate(rows))
+    return parse_evaluation_metrics(_read_text(path, MAX_METRICS_BYTES), str(path))
+
+
+def parse_evaluation_metrics(text: str, where: str) -> tuple[EvaluationTrial, ...]:
+    rows = _metric_rows(parse_json_object(text, where), where)
+    return tuple(_row(EvaluationTrial, row, where, i) for i, row in enumerate(rows))
 
 
 def write_evaluation_metrics(path: Path, trials: Sequence[EvaluationTrial]) -> None:
-    write_text_atomic(path, json.dumps({"metrics": [_metric_dict(t) for t in trials]}) + "\n")
+    write_text_atomic(path, evaluation_metrics_text(trials))
+
+
+def evaluation_metrics_text(trials: Sequence[EvaluationTrial]) -> str:
+    return json.dumps({"metrics": [_metric_dict(t) for t in trials]}) + "\n"
 
 
 def evaluation_file_name(when: datetime | None = None) -> str:
@@ -393,7 +421,7 @@ def evaluation_file_name(when: datetime | None = None) -> str:
     return f"evaluation-{stamp}.json"
 
 
-def _metric_rows(data: Mapping[str, Any], path: Path) -> list[Any]:
+def _metric_rows(data: Mapping[str, Any], path: Path | str) -> list[Any]:
     rows = data.get("metrics")
     if not isinstance(rows, list):
         raise DeepRacerFileError(f"{path}: expected a 'metrics' list as DeepRacer writes it.")
@@ -404,7 +432,7 @@ _NUMBER_TYPES = (int, float)
 RowT = TypeVar("RowT", TrainingEpisode, EvaluationTrial)
 
 
-def _row(cls: type[RowT], row: object, path: Path, index: int) -> RowT:
+def _row(cls: type[RowT], row: object, path: Path | str, index: int) -> RowT:
     where = f"{path}: metrics row {index + 1}"
     if not isinstance(row, Mapping):
         raise DeepRacerFileError(f"{where} is not an object.")
@@ -660,14 +688,18 @@ def _read_text(path: Path, limit: int) -> str:
         raise DeepRacerFileError(f"{path}: cannot read it ({error.strerror}).") from None
 
 
-def _read_json_object(path: Path, limit: int) -> dict[str, Any]:
-    text = _read_text(path, limit)
+def parse_json_object(text: str, where: str) -> dict[str, Any]:
+    """A JSON object from untrusted text; `where` (a file or member name) leads every error."""
     try:
         data = json.loads(text)
     except json.JSONDecodeError as error:
         raise DeepRacerFileError(
-            f"{path}: not valid JSON (line {error.lineno}, column {error.colno}); fix the syntax."
+            f"{where}: not valid JSON (line {error.lineno}, column {error.colno}); fix the syntax."
+        ) from None
+    except RecursionError:
+        raise DeepRacerFileError(
+            f"{where}: JSON nested too deeply to be a DeepRacer file."
         ) from None
     if not isinstance(data, dict):
-        raise DeepRacerFileError(f"{path}: expected a JSON object at the top level.")
+        raise DeepRacerFileError(f"{where}: expected a JSON object at the top level.")
     return data

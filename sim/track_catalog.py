@@ -10,7 +10,6 @@ between the two writes leaves no half-imported track.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,11 +19,11 @@ import yaml
 import tracks
 from sim.atomic import write_text_atomic
 from sim.home import user_tracks_dir
+from sim.names import NAME_PATTERN, NAME_RULE
 from sim.track import Track, TrackError, load_track
 
 INDEX_FILE = "index.yaml"
-NAME_RULE = "letters, digits, '-' and '_', at most 64 characters"
-_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
+_NAME = NAME_PATTERN
 
 
 @dataclass(frozen=True)

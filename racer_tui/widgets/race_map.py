@@ -9,6 +9,7 @@ changed (a moving car touches two or three rows per frame, not the whole map).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -102,16 +103,14 @@ class RaceMap(Widget):
     RaceMap > .race-map--ghost { color: $secondary; }
     RaceMap > .race-map--offtrack { color: $error; text-style: bold; }
     """
-    COMPONENT_CLASSES = frozenset(
-        {
-            "race-map--border",
-            "race-map--start",
-            "race-map--trail",
-            "race-map--car",
-            "race-map--ghost",
-            "race-map--offtrack",
-        }
-    )
+    COMPONENT_CLASSES: ClassVar[set[str]] = {
+        "race-map--border",
+        "race-map--start",
+        "race-map--trail",
+        "race-map--car",
+        "race-map--ghost",
+        "race-map--offtrack",
+    }
 
     def __init__(
         self, track: Track | None = None, *, name: str | None = None, id: str | None = None
