@@ -4,10 +4,37 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+from rich.segment import Segment
+from rich.style import Style
 
 # Bit of each dot inside a braille cell, indexed [row][column].
 _DOT_BITS = np.array([[0x01, 0x08], [0x02, 0x10], [0x04, 0x20], [0x40, 0x80]], dtype=np.int64)
-_BRAILLE_BASE = 0x2800
+BRAILLE_BASE = 0x2800
+
+
+def set_dots(grid: NDArray[np.int32], dx: NDArray[np.int64], dy: NDArray[np.int64]) -> None:
+    """Set dots (dot column `dx`, dot row `dy`) in a (rows, columns) grid of braille bits."""
+    np.bitwise_or.at(grid, (dy // 4, dx // 2), _DOT_BITS[dy % 4, dx % 2].astype(grid.dtype))
+
+
+def braille_char(bits: int) -> str:
+    return chr(BRAILLE_BASE + bits)
+
+
+def styled_runs(cells: list[tuple[str, Style | None]]) -> list[Segment]:
+    """Segments for a row of (character, style) cells, one segment per run of one style."""
+    segments: list[Segment] = []
+    text: list[str] = []
+    current: Style | None = None
+    for char, style in cells:
+        if style != current and text:
+            segments.append(Segment("".join(text), current))
+            text = []
+        current = style
+        text.append(char)
+    if text:
+        segments.append(Segment("".join(text), current))
+    return segments
 
 
 def braille_lines(
@@ -28,15 +55,15 @@ def braille_lines(
     span = np.maximum(hi - lo, 1e-9)
     dots_w, dots_h = columns * 2, rows * 4
     scale = min((dots_w - 1) / span[0], (dots_h - 1) / span[1])
-    grid = np.zeros((rows, columns), dtype=np.int64)
+    grid = np.zeros((rows, columns), dtype=np.int32)
     for line in dense:
         dx = np.round((line[:, 0] - lo[0]) * scale).astype(np.int64)
         # Screen rows grow downwards, world y grows upwards.
         dy = np.round((hi[1] - line[:, 1]) * scale).astype(np.int64)
         dx = np.clip(dx, 0, dots_w - 1)
         dy = np.clip(dy, 0, dots_h - 1)
-        np.bitwise_or.at(grid, (dy // 4, dx // 2), _DOT_BITS[dy % 4, dx % 2])
-    return ["".join(chr(_BRAILLE_BASE + int(v)) if v else " " for v in row) for row in grid]
+        set_dots(grid, dx, dy)
+    return ["".join(braille_char(int(v)) if v else " " for v in row) for row in grid]
 
 
 def _densify(line: NDArray[np.float64], step: float) -> NDArray[np.float64]:

@@ -19,13 +19,11 @@ from textual.geometry import Region
 from textual.strip import Strip
 from textual.widget import Widget
 
+from racer_tui.widgets.braille import braille_char, set_dots, styled_runs
 from sim.track import Track
 
 FloatArray = NDArray[np.float64]
 
-# Bit of each dot inside a braille cell, indexed [row][column].
-_DOT_BITS = np.array([[0x01, 0x08], [0x02, 0x10], [0x04, 0x20], [0x40, 0x80]], dtype=np.int32)
-_BRAILLE_BASE = 0x2800
 # Car glyph by heading, in 45-degree steps counter-clockwise from +x (east).
 _ARROWS = "→↗↑↖←↙↓↘"
 _GHOST = "◆"
@@ -74,7 +72,7 @@ class MapProjection:
                 continue
             dense = _densify(line, 0.5 / self.scale) if len(line) > 1 else line
             dx, dy = self.dots(dense)
-            np.bitwise_or.at(grid, (dy // 4, dx // 2), _DOT_BITS[dy % 4, dx % 2])
+            set_dots(grid, dx, dy)
         return grid
 
 
@@ -230,30 +228,18 @@ class RaceMap(Widget):
         styles = {name: self.get_component_rich_style(name) for name in self.COMPONENT_CLASSES}
         base = self.rich_style
         border, trail = self._border[y], self._trail[y]
-        segments: list[Segment] = []
-        run_text: list[str] = []
-        run_style: Style | None = None
-
-        def emit(char: str, style: Style) -> None:
-            nonlocal run_style
-            if style != run_style and run_text:
-                segments.append(Segment("".join(run_text), run_style))
-                run_text.clear()
-            run_style = style
-            run_text.append(char)
-
+        cells: list[tuple[str, Style | None]] = []
         for x in range(projection.columns):
             mark = self._marks.get((x, y))
             if mark is not None:
-                emit(mark[0], styles[mark[1]])
+                cells.append((mark[0], styles[mark[1]]))
             elif trail[x]:
-                emit(chr(_BRAILLE_BASE + int(trail[x] | border[x])), styles["race-map--trail"])
+                cells.append((braille_char(int(trail[x] | border[x])), styles["race-map--trail"]))
             elif (x, y) in self._start_cells:
-                emit(_START, styles["race-map--start"])
+                cells.append((_START, styles["race-map--start"]))
             elif border[x]:
-                emit(chr(_BRAILLE_BASE + int(border[x])), styles["race-map--border"])
+                cells.append((braille_char(int(border[x])), styles["race-map--border"]))
             else:
-                emit(" ", base)
-        if run_text:
-            segments.append(Segment("".join(run_text), run_style))
+                cells.append((" ", base))
+        segments = styled_runs(cells)
         return Strip(segments, projection.columns)
