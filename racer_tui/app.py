@@ -12,7 +12,9 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Footer, Header, Static
 
+from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.track_map import TrackMap
+from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
 from sim.track import Track, TrackError
 from sim.track_catalog import TrackInfo, list_tracks, resolve_track
@@ -28,7 +30,10 @@ class RacerTuiApp(App[int]):
     #detail { width: 3fr; padding: 0 1; }
     #facts { height: auto; margin-bottom: 1; }
     """
-    BINDINGS: ClassVar[list[BindingType]] = [Binding("q", "quit", "Quit")]
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("r", "race", "Race the reference driver"),
+        Binding("q", "quit", "Quit"),
+    ]
 
     def __init__(self) -> None:
         super().__init__()
@@ -51,6 +56,14 @@ class RacerTuiApp(App[int]):
             # Track names come from files: Text keeps them plain text, never markup.
             table.add_row(Text(info.name), f"{info.length_m:.1f} m", f"{info.width_m:.2f} m")
         table.focus()
+
+    def action_race(self) -> None:
+        track = self.query_one("#map", TrackMap).track
+        if track is None:
+            self.notify("Choose a track first.", severity="warning")
+            return
+        setup = RaceSetup(track=track, rules=DEFAULT_RULES, racer="reference driver")
+        self.push_screen(RaceScreen(setup))
 
     def on_data_table_row_highlighted(self, event: DataTable.RowHighlighted) -> None:
         if 0 <= event.cursor_row < len(self._infos):

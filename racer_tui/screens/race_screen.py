@@ -1,0 +1,277 @@
+"""The live race view: a time trial drawn as it happens, or a recorded one replayed.
+
+The race itself runs in a thread worker as fast as the simulation allows and appends its
+ticks to a list; the screen plays that list back against a wall clock at 1x, 2x or 4x.
+Drawing is decoupled from simulation: a 30 Hz frame timer picks the tick for the current
+race clock, moves the car on the map (which repaints only the rows that change) and
+refreshes the side panel at a calmer rate.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from rich.text import Text
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, Vertical
+from textual.screen import Screen
+from textual.widgets import DataTable, Digits, Footer, Static
+
+from racer_tui.widgets.race_map import CarMarker, RaceMap
+from sim.race.driver import Driver
+from sim.race.engine import RaceTick, race_ticks
+from sim.race.replay import GhostLap, replay_ticks
+from sim.race.result import RaceResult
+from sim.race.rules import RaceRules
+from sim.track import Track
+
+FRAME_HZ = 30.0
+PANEL_HZ = 10.0
+TRAIL_SECONDS = 3.0
+SPEEDS = (1, 2, 4)
+
+
+@dataclass(frozen=True)
+class RaceSetup:
+    """What to show: a race to run live (`driver`), or a recorded result to replay."""
+
+    track: Track
+    rules: RaceRules
+    racer: str
+    driver: Callable[[], Driver] | None = None  # built in the worker; None = reference driver
+    seed: int = 0
+    replay: RaceResult | None = None
+    ghost: GhostLap | None = None
+    leader_seconds: float | None = None  # the leaderboard leader's score, for the gap
+    title: str = ""
+
+
+def clock_text(seconds: float) -> str:
+    """m:ss.mmm for lap times."""
+    minutes, rest = divmod(max(seconds, 0.0), 60.0)
+    return f"{int(minutes)}:{rest:06.3f}"
+
+
+def countdown_text(seconds: float) -> str:
+    """m:ss for the window countdown (rounded up, so it shows 0:00 only at the end)."""
+    whole = int(np.ceil(max(seconds, 0.0) - 1e-9))
+    return f"{whole // 60}:{whole % 60:02d}"
+
+
+class RaceScreen(Screen[RaceResult | None]):
+    """A time trial, live or replayed, with its laps table and countdown."""
+
+    BINDINGS = [  # noqa: RUF012 - Textual's convention
+        Binding("space", "toggle_pause", "Pause"),
+        Binding("1", "speed(1)", "1x"),
+        Binding("2", "speed(2)", "2x"),
+        Binding("4", "speed(4)", "4x"),
+        Binding("g", "toggle_ghost", "Ghost"),
+        Binding("r", "restart", "Replay"),
+        Binding("e", "skip_to_end", "End", show=False),
+        Binding("escape", "leave", "Back"),
+    ]
+    DEFAULT_CSS = """
+    RaceScreen #race-body { height: 1fr; }
+    RaceScreen #race-map { width: 1fr; }
+    RaceScreen #race-side { width: 34; padding: 0 1; }
+    RaceScreen #race-title { text-style: bold; height: auto; }
+    RaceScreen #countdown { width: auto; }
+    RaceScreen #race-facts { height: auto; }
+    RaceScreen #laps { height: 1fr; }
+    """
+
+    def __init__(self, setup: RaceSetup) -> None:
+        super().__init__()
+        self.setup = setup
+        self.ticks: list[RaceTick] = []
+        self.result: RaceResult | None = None
+        self.failure: str | None = None
+        self.speed = 1
+        self.paused = False
+        self.show_ghost = setup.ghost is not None
+        self.race_clock = 0.0
+        self._wall_mark = time.monotonic()
+        self._clock_mark = 0.0
+        self._index = 0
+        self._offtrack_xy: list[tuple[float, float]] = []
+        self._laps_shown = 0
+        self._last_panel = 0.0
+        self.frames = 0
+
+    def compose(self) -> ComposeResult:
+        setup = self.setup
+        with Horizontal(id="race-body"):
+            yield RaceMap(setup.track, id="race-map")
+            with Vertical(id="race-side"):
+                yield Static(
+                    Text(setup.title or f"{setup.racer} on {setup.track.name}"), id="race-title"
+                )
+                yield Digits(countdown_text(setup.rules.window_seconds), id="countdown")
+                yield Static(id="race-facts")
+                yield DataTable(id="laps", cursor_type="row", zebra_stripes=True)
+        yield Footer()
+
+    def on_mount(self) -> None:
+        table = self.query_one("#laps", DataTable)
+        table.add_columns("Lap", "Time", "Pen", "Off", "OK")
+        if self.setup.replay is not None:
+            self.ticks = replay_ticks(self.setup.replay)
+            self.result = self.setup.replay
+            if not self.ticks:
+                self.failure = "This race was stored without its trace, so it cannot be replayed."
+        else:
+            self._run_race()
+        self.set_interval(1.0 / FRAME_HZ, self._frame)
+        self._update_panel(force=True)
+
+    @work(thread=True, exclusive=True, group="race")
+    def _run_race(self) -> None:
+        setup = self.setup
+        try:
+            driver = setup.driver() if setup.driver is not None else None
+            stream = race_ticks(
+                setup.track, setup.rules, driver, racer=setup.racer, seed=setup.seed
+            )
+            for tick in stream:
+                self.ticks.append(tick)  # list.append is atomic: the frame timer reads it
+                if tick.result is not None:
+                    self.result = tick.result
+        except Exception as error:  # shown to the racer; the app keeps running
+            self.failure = f"The race stopped: {error}"
+
+    # --- playback --------------------------------------------------------------------
+
+    def _frame(self) -> None:
+        if not self.ticks:
+            self._update_panel()
+            return
+        if not self.paused:
+            now = time.monotonic()
+            self.race_clock = self._clock_mark + (now - self._wall_mark) * self.speed
+        index = self._index
+        last = len(self.ticks) - 1
+        while index < last and self.ticks[index + 1].clock <= self.race_clock:
+            index += 1
+            if self.ticks[index].offtrack and not self.ticks[index - 1].offtrack:
+                tick = self.ticks[index]
+                self._offtrack_xy.append((tick.x, tick.y))
+        self._index = index
+        self._draw(self.ticks[index])
+
+    def _draw(self, tick: RaceTick) -> None:
+        first = max(0, self._index - int(TRAIL_SECONDS * 15))
+        trail = np.array([(t.x, t.y) for t in self.ticks[first : self._index + 1]])
+        ghost = self.setup.ghost
+        ghost_xy = ghost.position(tick.lap_time) if ghost is not None and self.show_ghost else None
+        self.query_one(RaceMap).show(
+            CarMarker(tick.x, tick.y, tick.heading),
+            trail=trail,
+            ghost=ghost_xy,
+            offtracks=np.array(self._offtrack_xy).reshape(-1, 2),
+        )
+        self.frames += 1
+        self._update_panel()
+
+    def _update_panel(self, force: bool = False) -> None:
+        now = time.monotonic()
+        if not force and now - self._last_panel < 1.0 / PANEL_HZ:
+            return
+        self._last_panel = now
+        tick = self.ticks[self._index] if self.ticks else None
+        rules = self.setup.rules
+        remaining = rules.window_seconds - (tick.clock if tick else 0.0)
+        self.query_one("#countdown", Digits).update(countdown_text(remaining))
+        self.query_one("#race-facts", Static).update(self._facts(tick))
+        if tick is not None and len(tick.laps) != self._laps_shown:
+            self._add_laps(tick)
+
+    def _facts(self, tick: RaceTick | None) -> Text:
+        rules = self.setup.rules
+        text = Text()
+        if self.failure:
+            return Text(self.failure, style="bold red")
+        if tick is None:
+            return Text("Starting the race…", style="dim")
+        limit = "∞" if rules.max_offtracks_per_lap is None else str(rules.max_offtracks_per_lap)
+        state = "paused" if self.paused else f"{self.speed}x"
+        text.append(f"Lap {tick.lap}  ", style="bold")
+        text.append(clock_text(tick.lap_time) + "\n")
+        text.append(f"Off-tracks this lap {tick.lap_offtracks}/{limit}\n")
+        if tick.penalty_remaining > 0:
+            text.append(f"Penalty hold {tick.penalty_remaining:.1f} s\n", style="bold red")
+        text.append(f"Speed {tick.speed:.1f} m/s   {state}\n")
+        valid = [lap for lap in tick.laps if lap.valid]
+        best = min((lap.time_seconds for lap in valid), default=None)
+        text.append("Best ")
+        text.append(clock_text(best) if best is not None else "-", style="bold")
+        leader = self.setup.leader_seconds
+        if best is not None and leader is not None:
+            gap = best - leader
+            text.append(f"  gap {gap:+.3f}", style="green" if gap <= 0 else "yellow")
+        text.append("\n")
+        if tick.result is not None:
+            text.append("Finished. ", style="bold green")
+            text.append("r replays, Esc goes back.", style="dim")
+        return text
+
+    def _add_laps(self, tick: RaceTick) -> None:
+        table = self.query_one("#laps", DataTable)
+        for lap in tick.laps[self._laps_shown :]:
+            table.add_row(
+                str(lap.number),
+                clock_text(lap.time_seconds),
+                f"{lap.penalty_seconds:g}",
+                str(lap.offtracks),
+                "✓" if lap.valid else "✗",
+            )
+        self._laps_shown = len(tick.laps)
+        table.move_cursor(row=self._laps_shown - 1)
+
+    # --- actions ---------------------------------------------------------------------
+
+    def _rebase(self) -> None:
+        self._wall_mark = time.monotonic()
+        self._clock_mark = self.race_clock
+
+    def action_toggle_pause(self) -> None:
+        self._rebase()
+        self.paused = not self.paused
+        self._update_panel(force=True)
+
+    def action_speed(self, speed: int) -> None:
+        self._rebase()
+        self.speed = speed if speed in SPEEDS else 1
+        self._update_panel(force=True)
+
+    def action_toggle_ghost(self) -> None:
+        if self.setup.ghost is None:
+            self.notify("There is no ghost lap to compare with yet.", severity="warning")
+            return
+        self.show_ghost = not self.show_ghost
+
+    def action_restart(self) -> None:
+        """Play the race again from the start (the simulation is not run again)."""
+        self.race_clock = 0.0
+        self._index = 0
+        self._offtrack_xy = []
+        self._laps_shown = 0
+        self.query_one("#laps", DataTable).clear()
+        self._rebase()
+        self.paused = False
+
+    def action_skip_to_end(self) -> None:
+        """Jump to the end of what has been simulated so far."""
+        if self.ticks:
+            self.race_clock = self.ticks[-1].clock
+            self._rebase()
+            self._frame()
+            self._update_panel(force=True)
+
+    def action_leave(self) -> None:
+        self.dismiss(self.result)

@@ -1,0 +1,66 @@
+"""The race screen runs a time trial in a worker and plays it back with its laps table."""
+
+from __future__ import annotations
+
+from textual.app import App
+from textual.widgets import DataTable, Static
+
+from racer_tui.screens.race_screen import RaceScreen, RaceSetup, clock_text, countdown_text
+from sim.race.engine import run_race
+from sim.race.replay import ghost_lap
+from sim.race.rules import RaceRules
+from sim.track_catalog import resolve_track
+
+SHORT = RaceRules(window_seconds=20.0)
+
+
+def test_clock_formats() -> None:
+    assert clock_text(6.6392) == "0:06.639"
+    assert clock_text(75.5) == "1:15.500"
+    assert countdown_text(240.0) == "4:00"
+    assert countdown_text(0.2) == "0:01"
+    assert countdown_text(0.0) == "0:00"
+
+
+async def test_a_live_race_fills_the_laps_table_and_returns_its_result() -> None:
+    track = resolve_track("beginner-oval")
+    screen = RaceScreen(RaceSetup(track=track, rules=SHORT, racer="[bold]Ada"))
+    app: App[None] = App()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await app.push_screen(screen)
+        await app.workers.wait_for_complete()
+        await pilot.press("e")
+        await pilot.pause()
+        result = screen.result
+        assert result is not None and result.racer == "[bold]Ada"
+        table = screen.query_one("#laps", DataTable)
+        assert table.row_count == len(result.laps) >= 2
+        assert table.get_row_at(0)[1] == clock_text(result.laps[0].time_seconds)
+        facts = str(screen.query_one("#race-facts", Static).render())
+        assert "Finished" in facts
+        title = str(screen.query_one("#race-title", Static).render())
+        assert "[bold]Ada" in title  # a racer's name is plain text, not markup
+        await pilot.press("escape")
+        assert app.screen is not screen
+
+
+async def test_a_recorded_race_replays_with_a_ghost() -> None:
+    track = resolve_track("beginner-oval")
+    recorded = run_race(track, SHORT, racer="Ada")
+    ghost = ghost_lap(recorded)
+    assert ghost is not None
+    screen = RaceScreen(
+        RaceSetup(track=track, rules=SHORT, racer="Ada", replay=recorded, ghost=ghost)
+    )
+    app: App[None] = App()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await app.push_screen(screen)
+        await pilot.press("e")
+        await pilot.pause()
+        table = screen.query_one("#laps", DataTable)
+        assert table.row_count == len(recorded.laps)
+        await pilot.press("r", "space")  # replay from the start, then pause
+        await pilot.pause()
+        assert screen.paused
+        assert screen.race_clock < recorded.laps[0].time_seconds
+        assert table.row_count == 0
