@@ -21,6 +21,7 @@ EXIT_USER_ERROR = 2
 COMMAND_MODULES = (
     "racer_tui.track_commands",
     "racer_tui.reward_commands",
+    "racer_tui.model_commands",
 )
 
 

@@ -1,0 +1,371 @@
+"""`racer-tui model ...`: the garage from the command line.
+
+new, list, show, clone, delete, import (a DeepRacer folder or a bundle) and export (a
+bundle). The library is `sim.garage`; this module parses options and prints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from rich.table import Table
+from rich.text import Text
+
+from racer_tui.output import print_json, print_table
+from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED
+from sim.deepracer_files import DeepRacerFileError
+from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
+from sim.garage.options import (
+    DEFAULT_MAX_SPEED,
+    DEFAULT_MAX_STEERING,
+    DEFAULT_MINUTES,
+    DEFAULT_REWARD,
+    DEFAULT_SENSORS,
+    DEFAULT_SPEED_LEVELS,
+    DEFAULT_STEERING_LEVELS,
+    DEFAULT_TRACK,
+    parse_hp_assignments,
+    parse_range,
+)
+from sim.garage.overview import model_details, model_row
+
+NAMES = ("model",)
+USER_ERRORS: tuple[type[Exception], ...] = (ModelError, DeepRacerFileError)
+
+
+def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    model = commands.add_parser("model", help="create, list, clone, import and export models")
+    actions = model.add_subparsers(dest="model_command", metavar="ACTION", required=True)
+
+    new = actions.add_parser("new", help="create a model, with options like the DeepRacer console")
+    new.add_argument("name", help="model name (letters, digits, '-' and '_')")
+    _add_spec_options(new, for_clone=False)
+    new.add_argument("--json", action="store_true", help="print the new model as JSON")
+
+    listing = actions.add_parser("list", help="your models and their state")
+    listing.add_argument("--json", action="store_true")
+
+    show = actions.add_parser("show", help="everything about one model")
+    show.add_argument("name", help="model name or folder")
+    show.add_argument("--json", action="store_true")
+
+    clone = actions.add_parser("clone", help="a new model that continues from a trained one")
+    clone.add_argument("source", help="model to clone")
+    clone.add_argument("name", help="name of the clone")
+    _add_spec_options(clone, for_clone=True)
+    clone.add_argument("--json", action="store_true")
+
+    delete = actions.add_parser("delete", help="delete a model folder")
+    delete.add_argument("name")
+    delete.add_argument("--yes", action="store_true", help="do not ask")
+
+    importer = actions.add_parser(
+        "import", help="import a DeepRacer model folder or a .racer-bundle file"
+    )
+    importer.add_argument("path", help="DeepRacer model folder or .racer-bundle file")
+    importer.add_argument("--name", help="name in your garage (default: the folder's/bundle's)")
+    importer.add_argument("--track", help=f"track to train on (default: {DEFAULT_TRACK})")
+    importer.add_argument("--json", action="store_true")
+
+    export = actions.add_parser("export", help="write a model as a .racer-bundle file")
+    export.add_argument("name")
+    export.add_argument("-o", "--output", help="bundle file (default: NAME.racer-bundle)")
+
+
+def _add_spec_options(parser: argparse.ArgumentParser, *, for_clone: bool) -> None:
+    def default(text: str) -> str:
+        return "default: the source's" if for_clone else f"default: {text}"
+
+    parser.add_argument("--track", help=f"track name ({default(DEFAULT_TRACK)})")
+    parser.add_argument(
+        "--sensor",
+        action="append",
+        metavar="SENSOR",
+        help="camera, lidar, sector_lidar, vector or DeepRacer's names such as "
+        f"FRONT_FACING_CAMERA; repeat or comma-separate ({default('+'.join(DEFAULT_SENSORS))})",
+    )
+    grid = parser.add_argument_group("discrete action space, as the console builds it")
+    grid.add_argument(
+        "--max-steering",
+        type=float,
+        metavar="DEG",
+        help=f"1-{MAX_STEERING:g} degrees (default {DEFAULT_MAX_STEERING:g})",
+    )
+    grid.add_argument(
+        "--steering-levels",
+        type=int,
+        metavar="N",
+        help=f"3, 5 or 7 (default {DEFAULT_STEERING_LEVELS})",
+    )
+    grid.add_argument(
+        "--max-speed",
+        type=float,
+        metavar="M/S",
+        help=f"{MIN_SPEED:g}-{MAX_SPEED:g} m/s (default {DEFAULT_MAX_SPEED:g})",
+    )
+    grid.add_argument(
+        "--speed-levels", type=int, metavar="N", help=f"1, 2 or 3 (default {DEFAULT_SPEED_LEVELS})"
+    )
+    parser.add_argument(
+        "--actions",
+        type=Path,
+        metavar="FILE.json",
+        help="an explicit action list (or a model_metadata.json)",
+    )
+    continuous = parser.add_argument_group("continuous action space")
+    continuous.add_argument("--continuous", action="store_true")
+    continuous.add_argument(
+        "--steering-range",
+        metavar="LOW,HIGH",
+        help=f"degrees (default {-MAX_STEERING:g},{MAX_STEERING:g})",
+    )
+    continuous.add_argument(
+        "--speed-range", metavar="LOW,HIGH", help=f"m/s (default {MIN_SPEED:g},{MAX_SPEED:g})"
+    )
+    parser.add_argument(
+        "--reward",
+        metavar="TEMPLATE|FILE",
+        help=f"a template name or a reward function file ({default(DEFAULT_REWARD)})",
+    )
+    parser.add_argument(
+        "--hp",
+        action="extend",
+        nargs="+",
+        default=[],
+        metavar="KEY=VALUE",
+        help="hyperparameters with DeepRacer's keys, e.g. --hp lr=0.0001 batch_size=128",
+    )
+    parser.add_argument(
+        "--minutes",
+        type=float,
+        help=f"training time limit ({default(f'{DEFAULT_MINUTES:g}')})",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    action = args.model_command
+    if action == "new":
+        return _new(args)
+    if action == "list":
+        return _list(args.json)
+    if action == "show":
+        return _show(args.name, args.json)
+    if action == "clone":
+        return _clone(args)
+    if action == "delete":
+        return _delete(args.name, args.yes)
+    if action == "import":
+        return _import(args)
+    return _export(args.name, args.output)
+
+
+# --- new and clone ---------------------------------------------------------------------------
+
+
+def _spec_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The `model_spec` keyword options the command line gave (unset ones are left out)."""
+    options: dict[str, Any] = {
+        "track": args.track,
+        "max_steering": args.max_steering,
+        "steering_levels": args.steering_levels,
+        "max_speed": args.max_speed,
+        "speed_levels": args.speed_levels,
+        "actions_file": args.actions,
+        "reward": args.reward,
+        "minutes": args.minutes,
+    }
+    if args.sensor:
+        options["sensors"] = [part.strip() for item in args.sensor for part in item.split(",")]
+    if args.continuous:
+        options["continuous"] = True
+    if args.steering_range is not None:
+        options["steering_range"] = parse_range(
+            args.steering_range, "--steering-range", -MAX_STEERING, MAX_STEERING, "degrees"
+        )
+    if args.speed_range is not None:
+        options["speed_range"] = parse_range(
+            args.speed_range, "--speed-range", MIN_SPEED, MAX_SPEED, "m/s"
+        )
+    if args.hp:
+        options["hyperparameters"] = parse_hp_assignments(args.hp)
+    return {key: value for key, value in options.items() if value is not None}
+
+
+def _new(args: argparse.Namespace) -> int:
+    from sim.garage.options import new_model
+
+    folder = new_model(args.name, **_spec_options(args))
+    return _created(folder, f"Created model {folder.name}", args.json, [])
+
+
+def _clone(args: argparse.Namespace) -> int:
+    from sim.garage.clone import clone_model
+
+    source = open_model(args.source)
+    folder = clone_model(source, args.name, **_spec_options(args))
+    notes = []
+    if folder.has_policy():
+        notes.append(f"training continues from {source.name}'s trained policy.")
+    return _created(folder, f"Cloned {source.name} as {folder.name}", args.json, notes)
+
+
+def _created(folder: ModelFolder, title: str, as_json: bool, notes: list[str]) -> int:
+    row = model_row(folder)
+    if as_json:
+        print_json({**row, "path": str(folder.path), "notes": notes})
+        return 0
+    table = Table(title=Text(title), show_header=False)
+    table.add_column("what")
+    table.add_column("value")
+    for key in ("track", "sensor", "actions"):
+        table.add_row(key, Text(str(row[key])))
+    table.add_row("folder", Text(str(folder.path)))
+    print_table(table)
+    for note in notes:
+        print(f"Note: {note}")
+    print(f"Next: racer-tui train {folder.name}")
+    return 0
+
+
+# --- list and show ---------------------------------------------------------------------------
+
+
+def _list(as_json: bool) -> int:
+    rows = [model_row(folder) for folder in list_models()]
+    if as_json:
+        print_json(rows)
+        return 0
+    if not rows:
+        print("No models yet; create one with `racer-tui model new NAME`.")
+        return 0
+    table = Table(title="Models")
+    for column in ("name", "status", "track", "sensor", "actions"):
+        table.add_column(column, no_wrap=column != "actions")
+    table.add_column("best lap", justify="right", no_wrap=True)
+    for row in rows:
+        table.add_row(
+            Text(row["name"]),
+            Text(row["status"]),
+            Text(row["track"] or "-"),
+            Text(row["sensor"] or "-"),
+            Text(row["actions"] or row.get("problem", "-")),
+            _seconds(row["best_lap_s"]),
+        )
+    print_table(table)
+    return 0
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3f} s"
+
+
+def _show(name: str, as_json: bool) -> int:
+    details = model_details(open_model(name))
+    if as_json:
+        print_json(details)
+        return 0
+    facts = Table(title=Text(f"Model {details['name']}"), show_header=False)
+    facts.add_column("what")
+    facts.add_column("value")
+    metadata = details["metadata"]
+    for label, value in (
+        ("status", details["status"]),
+        ("track", details["track"]),
+        ("sensor", details["sensor"]),
+        ("actions", details["actions_summary"]),
+        ("network", metadata["neural_network"]),
+        ("algorithm", metadata["training_algorithm"]),
+        ("reward function", details["reward_function"]),
+        ("time limit", f"{details['max_minutes']:g} min"),
+        ("content hash", details["content_hash"][:16]),
+        ("folder", details["path"]),
+        *details["notes"].items(),
+    ):
+        facts.add_row(label, Text(str(value)))
+    print_table(facts)
+    if details["actions"]:
+        actions = Table(title="Action space")
+        for column in ("#", "steering (deg)", "speed (m/s)"):
+            actions.add_column(column, justify="right")
+        for action in details["actions"]:
+            actions.add_row(
+                str(action["index"]), f"{action['steering_angle']:g}", f"{action['speed']:g}"
+            )
+        print_table(actions)
+    print_table(_key_values("Hyperparameters", details["hyperparameters"]))
+    print_table(_key_values("Training", details["training"]))
+    for evaluation in details["evaluations"]:
+        print_table(_evaluation_table(evaluation))
+    return 0
+
+
+def _key_values(title: str, values: dict[str, Any]) -> Table:
+    table = Table(title=title, show_header=False)
+    table.add_column("key")
+    table.add_column("value")
+    for key, value in values.items():
+        table.add_row(key, Text("-" if value is None else f"{value}"))
+    return table
+
+
+def _evaluation_table(evaluation: dict[str, Any]) -> Table:
+    """Like the DeepRacer console: trial, time, % track completed, status."""
+    table = Table(title=Text(f"Evaluation {evaluation['file']}"))
+    for column in ("trial", "time", "completed", "status", "off-track"):
+        table.add_column(column, justify="right" if column != "status" else "left")
+    for trial in evaluation["trials"]:
+        table.add_row(
+            str(trial["trial"]),
+            f"{trial['elapsed_time_in_milliseconds'] / 1000:.3f} s",
+            f"{trial['completion_percentage']:g}%",
+            Text(trial["episode_status"]),
+            str(trial["off_track_count"]),
+        )
+    if "problem" in evaluation:
+        table.caption = evaluation["problem"]
+    return table
+
+
+# --- delete, import, export ------------------------------------------------------------------
+
+
+def _delete(name: str, yes: bool) -> int:
+    folder = open_model(name)
+    if not yes:
+        if not sys.stdin.isatty():
+            raise ModelError(
+                f"not deleting {folder.name!r} without asking; add --yes to delete it anyway."
+            )
+        answer = input(f"Delete model {folder.name} ({folder.path})? [y/N] ")
+        if answer.strip().lower() not in ("y", "yes"):
+            print("Kept it.")
+            return 1
+    delete_model(folder)
+    print(f"Deleted model {folder.name}.")
+    return 0
+
+
+def _import(args: argparse.Namespace) -> int:
+    from sim.garage.deepracer_import import import_model
+
+    result = import_model(Path(args.path), name=args.name, track=args.track)
+    if args.json:
+        print_json(
+            {**model_row(result.folder), "path": str(result.folder.path), "notes": result.notes}
+        )
+        return 0
+    return _created(
+        result.folder, f"Imported {args.path} as {result.folder.name}", False, list(result.notes)
+    )
+
+
+def _export(name: str, output: str | None) -> int:
+    from sim.garage.bundle import export_bundle
+
+    folder = open_model(name)
+    written = export_bundle(folder, Path(output) if output else Path(f"{folder.name}"))
+    print(f"Exported {folder.name} to {written}")
+    return 0

@@ -1,0 +1,227 @@
+"""`racer-tui model import PATH`: a DeepRacer model folder (or a bundle) into the garage.
+
+Community tools (DeepRacer for Cloud, deepracer-utils) and the AWS console's downloads
+lay the same files out differently; `sim.deepracer_files.locate_files` finds them. What a
+DeepRacer folder lacks is filled in and said out loud: no reward function -> the
+follow-the-centre-line template; a track racer-tui does not know -> the default track;
+no hyperparameters -> DeepRacer's defaults. DeepRacer's TensorFlow weights cannot drive
+a racer-tui car, so an imported model starts untrained, with its metrics kept (a copied
+racer-tui model folder keeps its `policy.safetensors`, once checked to be plain tensors).
+
+Values outside racer-tui's ranges are never clamped: the error names the key, the file
+and the allowed range, so the racer decides.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import TypeVar
+
+from sim.atomic import write_bytes_atomic
+from sim.deepracer_files import (
+    TRAINING_METRICS,
+    DeepRacerFileError,
+    DeepRacerFiles,
+    EvaluationTrial,
+    TrainingEpisode,
+    TrainingMetrics,
+    TrainingParams,
+    default_hyperparameters,
+    evaluation_file_name,
+    locate_files,
+    read_evaluation_metrics,
+    read_hyperparameters,
+    read_model_metadata,
+    read_training_metrics,
+    read_training_params,
+    write_evaluation_metrics,
+    write_training_metrics,
+)
+from sim.garage.folder import (
+    POLICY_FILE,
+    ModelError,
+    ModelFolder,
+    check_model_name,
+    create_model,
+)
+from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
+
+BUNDLE_SUFFIX = ".racer-bundle"
+_TIMESTAMP = re.compile(r"(\d{14})")
+_T = TypeVar("_T")
+
+
+@dataclass(frozen=True)
+class ImportResult:
+    """The new model and what the racer should know about how it was filled in."""
+
+    folder: ModelFolder
+    notes: tuple[str, ...] = ()
+
+
+def import_model(path: Path, name: str | None = None, track: str | None = None) -> ImportResult:
+    """A DeepRacer model folder, or a `.racer-bundle` file, as a new garage model."""
+    source = Path(path).expanduser()
+    if source.is_file():
+        from sim.garage.bundle import install_bundle_report
+
+        return install_bundle_report(source, name=name, track=track)
+    if source.is_dir():
+        return import_deepracer_folder(source, name=name, track=track)
+    raise ModelError(
+        f"{source} does not exist; give a DeepRacer model folder or a {BUNDLE_SUFFIX} file."
+    )
+
+
+def import_deepracer_folder(
+    path: Path, name: str | None = None, track: str | None = None
+) -> ImportResult:
+    """Import a DeepRacer model folder as community tools write it."""
+    root = Path(path).expanduser()
+    files = locate_files(root)
+    if files.model_metadata is None:
+        raise ModelError(
+            f"{root} has no model_metadata.json (looked in the folder and in model/); "
+            "give the folder of a DeepRacer model."
+        )
+    chosen_name = name if name is not None else root.resolve().name
+    if name is None and not _usable_name(chosen_name):
+        raise ModelError(
+            f"the folder name {chosen_name!r} cannot be a model name; give one with --name."
+        )
+    check_model_name(chosen_name)
+    notes: list[str] = []
+    metadata = _read(read_model_metadata, files.model_metadata)
+    hyperparameters = _hyperparameters(files, notes)
+    params = _read(read_training_params, files.training_params) if files.training_params else None
+    world = _track(track, params, notes)
+    reward_source = _reward_source(files, notes)
+    training = _training_metrics(files)
+    evaluations = [(p, _read(read_evaluation_metrics, p)) for p in files.evaluation_metrics]
+    policy = _racer_tui_policy(root)
+    if policy is None:
+        notes.append(
+            "it starts untrained (DeepRacer's TensorFlow weights cannot drive a racer-tui car): "
+            f"train it with `racer-tui train {chosen_name}`."
+        )
+
+    def populate(folder: ModelFolder) -> None:
+        if policy is not None:
+            write_bytes_atomic(folder.policy_file, policy)
+        if training is not None:
+            write_training_metrics(folder.path / TRAINING_METRICS, training)
+        for name_, trials in _evaluation_names(evaluations):
+            write_evaluation_metrics(folder.path / name_, trials)
+
+    folder = create_model(
+        chosen_name,
+        track=world,
+        metadata=metadata,
+        hyperparameters=hyperparameters,
+        reward_source=reward_source,
+        max_minutes=params.max_minutes if params else DEFAULT_MINUTES,
+        populate=populate,
+        notes={"IMPORTED_FROM": str(root.resolve())},
+    )
+    return ImportResult(folder, tuple(notes))
+
+
+def _racer_tui_policy(root: Path) -> bytes | None:
+    """The trained weights of a copied racer-tui model folder, checked to be plain tensors."""
+    from sim.garage.bundle import MEMBER_LIMITS, check_safetensors
+
+    path = root / POLICY_FILE
+    if not path.is_file() or path.is_symlink():
+        return None
+    if path.stat().st_size > MEMBER_LIMITS[POLICY_FILE]:
+        raise ModelError(f"{path} is too large to be a policy file.")
+    data = path.read_bytes()
+    check_safetensors(data, str(path))
+    return data
+
+
+def _usable_name(name: str) -> bool:
+    try:
+        check_model_name(name)
+    except ModelError:
+        return False
+    return True
+
+
+def _read(reader: Callable[[Path], _T], path: Path) -> _T:
+    """Read a DeepRacer file; out-of-range values are reported, never clamped."""
+    try:
+        return reader(path)
+    except DeepRacerFileError as error:
+        raise ModelError(f"{str(error).rstrip('.')}; edit the file and import again.") from None
+
+
+def _hyperparameters(files: DeepRacerFiles, notes: list[str]) -> dict[str, float | int | str]:
+    if files.hyperparameters is None:
+        notes.append("it has no hyperparameters.json: DeepRacer's defaults are used.")
+        return default_hyperparameters()
+    return _read(read_hyperparameters, files.hyperparameters)
+
+
+def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]) -> str:
+    from sim.track_catalog import list_tracks
+
+    if explicit is not None:
+        return explicit  # create_model checks it before anything is written
+    world = params.world_name if params else None
+    if world is not None and world in {info.name for info in list_tracks()}:
+        return world
+    where = f"it trained on {world!r}, which" if world else "its track"
+    notes.append(
+        f"{where} is not a racer-tui track: it is set up on {DEFAULT_TRACK}; "
+        "choose another with --track (import DeepRacer .npy tracks with `racer-tui tracks import`)."
+    )
+    return DEFAULT_TRACK
+
+
+def _reward_source(files: DeepRacerFiles, notes: list[str]) -> str:
+    from sim.reward_function import load_reward_function, template_source
+
+    if files.reward_function is None:
+        notes.append(
+            f"it has no reward_function.py: the {DEFAULT_REWARD} template is used instead."
+        )
+        return template_source(DEFAULT_REWARD)
+    load_reward_function(files.reward_function)  # RewardFunctionError names file and line
+    return files.reward_function.read_bytes().decode("utf-8-sig")
+
+
+def _training_metrics(files: DeepRacerFiles) -> TrainingMetrics | None:
+    """All training metrics files as one `training.json` (DeepRacer may split a job)."""
+    if not files.training_metrics:
+        return None
+    episodes: list[TrainingEpisode] = []
+    for path in files.training_metrics:
+        episodes.extend(_read(read_training_metrics, path).episodes)
+    return TrainingMetrics(tuple(episodes))
+
+
+def _evaluation_names(
+    evaluations: list[tuple[Path, tuple[EvaluationTrial, ...]]],
+) -> list[tuple[str, tuple[EvaluationTrial, ...]]]:
+    """`evaluation-<stamp>.json` names, keeping DeepRacer's timestamps (file time otherwise)."""
+    named: list[tuple[str, tuple[EvaluationTrial, ...]]] = []
+    used: set[str] = set()
+    for path, trials in evaluations:
+        match = _TIMESTAMP.search(path.name)
+        if match:
+            base = f"evaluation-{match.group(1)}"
+        else:
+            when = datetime.fromtimestamp(path.stat().st_mtime, UTC)
+            base = evaluation_file_name(when).removesuffix(".json")
+        candidate, n = f"{base}.json", 1
+        while candidate in used:
+            n += 1
+            candidate = f"{base}-{n}.json"
+        used.add(candidate)
+        named.append((candidate, trials))
+    return named

@@ -1,0 +1,432 @@
+"""Model folders: the garage, where each of a racer's models is one folder of DeepRacer files.
+
+A model is `data_home()/models/NAME` holding the files AWS DeepRacer users know
+(`model_metadata.json`, `reward_function.py`, `hyperparameters.json`,
+`training_params.yaml`, `training.json`, `evaluation-*.json`, `sim-trace/`) plus the
+trainer's `policy.safetensors`, `checkpoints/` and `training-state.json`. Formats are
+read and written by `sim.deepracer_files`; this module knows where the files are and
+what state the model is in.
+
+Folders are created whole: everything is written into a hidden temporary folder beside
+the final one, which is then renamed into place, so a crash never leaves half a model.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from enum import StrEnum
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeVar
+
+import psutil
+
+from sim.atomic import write_bytes_atomic
+from sim.deepracer_files import (
+    EVALUATION_GLOB,
+    HYPERPARAMETERS,
+    MODEL_METADATA,
+    REWARD_FUNCTION,
+    SIM_TRACE_DIR,
+    TRAINING_METRICS,
+    TRAINING_PARAMS,
+    DeepRacerFileError,
+    EvaluationTrial,
+    ModelMetadata,
+    TrainingMetrics,
+    TrainingParams,
+    check_hyperparameters,
+    read_evaluation_metrics,
+    read_hyperparameters,
+    read_model_metadata,
+    read_training_metrics,
+    read_training_params,
+    write_hyperparameters,
+    write_model_metadata,
+    write_training_params,
+)
+from sim.home import data_home
+from sim.ids import canonical_json
+from sim.names import NAME_RULE, is_valid_name
+from sim.track import Track, TrackError
+
+if TYPE_CHECKING:
+    from sim.env import EnvConfig
+    from sim.reward_function import RewardFunction
+
+MODELS_DIR = "models"
+POLICY_FILE = "policy.safetensors"
+CHECKPOINTS_DIR = "checkpoints"
+TRAINING_STATE_FILE = "training-state.json"
+TRAINING_STATES = ("running", "stopped", "finished", "failed")
+MAX_REWARD_BYTES = 1_000_000
+MAX_TRAINING_STATE_BYTES = 64_000
+MAX_MINUTES = 100_000.0  # training_params.yaml's MAX_MINUTES limit
+
+
+def models_dir() -> Path:
+    """Where the garage keeps model folders (created on first use)."""
+    path = data_home() / MODELS_DIR
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+class ModelError(ValueError):
+    """A model that is missing, misnamed or unusable; one sentence saying what to do."""
+
+
+class ModelStatus(StrEnum):
+    UNTRAINED = "untrained"
+    TRAINING = "training"
+    TRAINED = "trained"
+    EVALUATED = "evaluated"
+
+
+@dataclass(frozen=True)
+class ModelFolder:
+    """One model's folder. Reading methods raise ModelError naming the broken file."""
+
+    path: Path
+
+    @property
+    def name(self) -> str:
+        return self.path.name
+
+    # --- where things are ------------------------------------------------------------
+
+    @property
+    def metadata_file(self) -> Path:
+        return self.path / MODEL_METADATA
+
+    @property
+    def reward_file(self) -> Path:
+        return self.path / REWARD_FUNCTION
+
+    @property
+    def hyperparameters_file(self) -> Path:
+        return self.path / HYPERPARAMETERS
+
+    @property
+    def training_params_file(self) -> Path:
+        return self.path / TRAINING_PARAMS
+
+    @property
+    def training_metrics_file(self) -> Path:
+        return self.path / TRAINING_METRICS
+
+    @property
+    def policy_file(self) -> Path:
+        """The weights races use, written by the trainer (tensors only)."""
+        return self.path / POLICY_FILE
+
+    @property
+    def checkpoints_dir(self) -> Path:
+        """The trainer's resumable state; owned by sim.training."""
+        return self.path / CHECKPOINTS_DIR
+
+    @property
+    def sim_trace_dir(self) -> Path:
+        """`training/<n>-iteration.csv` and `evaluation/<stamp>.csv`."""
+        return self.path / SIM_TRACE_DIR
+
+    @property
+    def training_state_file(self) -> Path:
+        """Written atomically by the trainer: {"state", "pid", "started_at", "updated_at",
+        "elapsed_seconds", "steps", "episodes", "best_progress", "message"}."""
+        return self.path / TRAINING_STATE_FILE
+
+    # --- the DeepRacer files -----------------------------------------------------------
+
+    def metadata(self) -> ModelMetadata:
+        return _checked(read_model_metadata, self.metadata_file)
+
+    def hyperparameters(self) -> dict[str, float | int | str]:
+        return _checked(read_hyperparameters, self.hyperparameters_file)
+
+    def training_params(self) -> TrainingParams:
+        return _checked(read_training_params, self.training_params_file)
+
+    def reward_source(self) -> str:
+        path = self.reward_file
+        try:
+            if path.stat().st_size > MAX_REWARD_BYTES:
+                raise ModelError(f"{path}: the reward function is larger than 1 MB.")
+            return path.read_bytes().decode("utf-8-sig")
+        except FileNotFoundError:
+            raise ModelError(
+                f"{path}: the reward function is missing; copy one in or re-create the model."
+            ) from None
+        except UnicodeDecodeError:
+            raise ModelError(f"{path}: not UTF-8 text; save it as UTF-8.") from None
+        except OSError as error:
+            raise ModelError(f"{path}: cannot read it ({error.strerror}).") from None
+
+    def reward_function(self) -> RewardFunction:
+        """The loaded reward function (RewardFunctionError names the file and line)."""
+        from sim.reward_function import load_reward_function
+
+        self.reward_source()  # the same clear errors for a missing or huge file
+        return load_reward_function(self.reward_file)
+
+    def track(self) -> Track:
+        """The track the model trains on (training_params.yaml's WORLD_NAME)."""
+        from sim.track_catalog import resolve_track
+
+        world = self.training_params().world_name
+        try:
+            return resolve_track(world)
+        except TrackError as error:
+            raise ModelError(f"model {self.name!r} trains on track {world!r}: {error}") from None
+
+    def env_config(self) -> EnvConfig:
+        """Track, action space, sensors and reward function: what training and evaluation run."""
+        from sim.env import EnvConfig
+
+        metadata = self.metadata()
+        return EnvConfig(
+            track=self.track(),
+            action_space=metadata.action_space,
+            sensors=metadata.sensors,
+            reward=self.reward_function(),
+        )
+
+    # --- metrics -------------------------------------------------------------------------
+
+    def training_metrics(self) -> TrainingMetrics | None:
+        """`training.json`, or None before the first training run."""
+        if not self.training_metrics_file.is_file():
+            return None
+        return _checked(read_training_metrics, self.training_metrics_file)
+
+    def evaluation_files(self) -> list[Path]:
+        """`evaluation-*.json`, oldest first (the names carry a sortable timestamp)."""
+        return sorted(
+            path
+            for path in self.path.glob(EVALUATION_GLOB)
+            if path.is_file() and not path.is_symlink()
+        )
+
+    def latest_evaluation(self) -> tuple[EvaluationTrial, ...] | None:
+        files = self.evaluation_files()
+        if not files:
+            return None
+        return _checked(read_evaluation_metrics, files[-1])
+
+    def best_evaluation_lap(self) -> float | None:
+        """The fastest completed lap over all evaluations, in seconds."""
+        best: float | None = None
+        for path in self.evaluation_files():
+            for trial in _checked(read_evaluation_metrics, path):
+                lap = trial.lap_time_seconds
+                if lap is not None and (best is None or lap < best):
+                    best = lap
+        return best
+
+    # --- state ---------------------------------------------------------------------------
+
+    def has_policy(self) -> bool:
+        return self.policy_file.is_file()
+
+    def training_state(self) -> dict[str, Any] | None:
+        """The trainer's last word on this model, or None if it never ran (or left junk)."""
+        try:
+            if self.training_state_file.stat().st_size > MAX_TRAINING_STATE_BYTES:
+                return None
+            data = json.loads(self.training_state_file.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            return None
+        if not isinstance(data, dict) or data.get("state") not in TRAINING_STATES:
+            return None
+        return data
+
+    def is_training(self) -> bool:
+        """A trainer says it is running and its process is alive."""
+        state = self.training_state()
+        if state is None or state["state"] != "running":
+            return False
+        pid = state.get("pid")
+        if isinstance(pid, bool) or not isinstance(pid, int) or pid <= 0:
+            return False
+        return bool(psutil.pid_exists(pid))
+
+    def status(self) -> ModelStatus:
+        if self.is_training():
+            return ModelStatus.TRAINING
+        if not self.has_policy():
+            return ModelStatus.UNTRAINED
+        if self.evaluation_files():
+            return ModelStatus.EVALUATED
+        return ModelStatus.TRAINED
+
+    def content_hash(self) -> str:
+        """Identifies the exact car: metadata plus policy weights (the same as its bundle's)."""
+        policy = self.policy_file.read_bytes() if self.has_policy() else b""
+        return model_content_hash(self.metadata(), policy)
+
+
+def model_content_hash(metadata: ModelMetadata, policy_bytes: bytes) -> str:
+    """SHA-256 over the canonical metadata JSON followed by the policy file's bytes."""
+    digest = hashlib.sha256(canonical_json(metadata.to_json()))
+    digest.update(policy_bytes)
+    return digest.hexdigest()
+
+
+_T = TypeVar("_T")
+
+
+def _checked(reader: Callable[[Path], _T], path: Path) -> _T:
+    try:
+        return reader(path)
+    except DeepRacerFileError as error:
+        raise ModelError(str(error)) from None
+
+
+# --- finding models ----------------------------------------------------------------------
+
+
+def check_model_name(name: str) -> None:
+    if not is_valid_name(name):
+        raise ModelError(f"{name!r} cannot be a model name; use {NAME_RULE}.")
+
+
+def open_model(name_or_path: str) -> ModelFolder:
+    """A model in the garage by name, or the path of a racer-tui model folder."""
+    if is_valid_name(name_or_path):
+        folder = models_dir() / name_or_path
+        if (folder / MODEL_METADATA).is_file():
+            return ModelFolder(folder)
+    path = Path(name_or_path).expanduser()
+    if path.is_dir() and (path / MODEL_METADATA).is_file():
+        return ModelFolder(path)
+    if path.is_dir():
+        raise ModelError(
+            f"{name_or_path} has no {MODEL_METADATA}; to bring in a DeepRacer model folder, "
+            "use `racer-tui model import PATH`."
+        )
+    raise ModelError(
+        f"there is no model named {name_or_path!r}; `racer-tui model list` shows your models "
+        "and `racer-tui model new NAME` creates one."
+    )
+
+
+def list_models() -> list[ModelFolder]:
+    """The garage's models by name (hidden temporary folders are skipped)."""
+    return [
+        ModelFolder(path)
+        for path in sorted(models_dir().iterdir(), key=lambda p: p.name.casefold())
+        if is_valid_name(path.name) and (path / MODEL_METADATA).is_file()
+    ]
+
+
+def check_new_model_name(name: str) -> Path:
+    """The folder a new model `name` will get; ModelError when the name is bad or taken."""
+    check_model_name(name)
+    # Compared without case: on macOS and Windows "Fast" and "fast" are one folder.
+    folded = name.casefold()
+    for existing in models_dir().iterdir():
+        if existing.name.casefold() == folded and not existing.name.startswith("."):
+            raise ModelError(
+                f"a model named {existing.name!r} already exists; choose another name or "
+                f"delete it with `racer-tui model delete {existing.name}`."
+            )
+    return models_dir() / name
+
+
+# --- creating models ---------------------------------------------------------------------
+
+
+def create_model(
+    name: str,
+    *,
+    track: str,
+    metadata: ModelMetadata,
+    hyperparameters: Mapping[str, object],
+    reward_source: str,
+    max_minutes: float = 60.0,
+    populate: Callable[[ModelFolder], None] | None = None,
+    notes: Mapping[str, str] | None = None,
+) -> ModelFolder:
+    """Create model `name` in the garage, all at once (temporary folder, then rename).
+
+    `track` is the name of a known track; `hyperparameters` are checked against DeepRacer's
+    ranges over DeepRacer's defaults; `reward_source` must load as a reward function.
+    `populate` may add more files (a policy, metrics) to the folder before it appears: it is
+    called with the temporary folder. `notes` are kept in training_params.yaml (for
+    example where the model came from).
+    """
+    from sim.reward_function import load_reward_source
+
+    final = check_new_model_name(name)
+    try:
+        checked = check_hyperparameters(hyperparameters, where="hyperparameters")
+    except DeepRacerFileError as error:
+        raise ModelError(str(error)) from None
+    if not 0 < max_minutes <= MAX_MINUTES:
+        raise ModelError(
+            f"the training time limit must be between 0 and {MAX_MINUTES:g} minutes, "
+            f"not {max_minutes:g}."
+        )
+    resolved = _catalog_track(track)
+    load_reward_source(reward_source, REWARD_FUNCTION)  # RewardFunctionError before writing
+    params = TrainingParams(
+        world_name=resolved.name,
+        max_minutes=float(max_minutes),
+        track_hash=resolved.content_hash,
+        extra=dict(notes or {}),
+    )
+    temporary = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=models_dir()))
+    try:
+        write_model_metadata(temporary / MODEL_METADATA, metadata)
+        write_hyperparameters(temporary / HYPERPARAMETERS, checked)
+        write_training_params(temporary / TRAINING_PARAMS, params)
+        write_bytes_atomic(temporary / REWARD_FUNCTION, reward_source.encode("utf-8"))
+        if populate is not None:
+            populate(ModelFolder(temporary))
+        os.chmod(temporary, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
+        # A second creator racing us: rename refuses a non-empty target, and we re-check.
+        if final.exists():
+            raise ModelError(f"a model named {name!r} was just created; choose another name.")
+        os.rename(temporary, final)
+    except BaseException:
+        shutil.rmtree(temporary, ignore_errors=True)
+        raise
+    return ModelFolder(final)
+
+
+def _catalog_track(track: str) -> Track:
+    """A track the catalog knows by name: a model must find its track again later."""
+    from sim.track_catalog import list_tracks, resolve_track
+
+    if track not in {info.name for info in list_tracks()} and Path(track).expanduser().is_file():
+        raise ModelError(
+            f"{track} is a track file, not a track name; import it first with "
+            "`racer-tui tracks import FILE`, then give its name."
+        )
+    try:
+        return resolve_track(track)
+    except TrackError as error:
+        raise ModelError(str(error)) from None
+
+
+def _umask() -> int:
+    current = os.umask(0)
+    os.umask(current)
+    return current
+
+
+def delete_model(folder: ModelFolder) -> None:
+    """Remove a model folder; refuses while it trains. Renamed aside first, so a crash
+    part-way leaves either the whole model or a hidden leftover, never half a model."""
+    if folder.is_training():
+        raise ModelError(
+            f"model {folder.name!r} is training right now; stop the training first, then delete it."
+        )
+    graveyard = folder.path.with_name(f".{folder.name}.deleting")
+    shutil.rmtree(graveyard, ignore_errors=True)
+    os.rename(folder.path, graveyard)
+    shutil.rmtree(graveyard)

@@ -1,0 +1,311 @@
+"""A new model from console-style options, as the AWS DeepRacer console builds one.
+
+The defaults live here, together, as named constants: `racer-tui model new`, the training
+benchmark and the TUI all start from `default_model_spec()`. Every option is validated
+before anything is written, and each error names the option and what it allows.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from sim.action_space import (
+    MAX_SPEED,
+    MAX_STEERING,
+    MIN_SPEED,
+    ActionSpace,
+    ActionSpaceError,
+    discrete_grid,
+    parse_action_space,
+)
+from sim.deepracer_files import (
+    HYPERPARAMETER_SPECS,
+    DeepRacerFileError,
+    ModelMetadata,
+    check_hyperparameters,
+    default_hyperparameters,
+)
+from sim.garage.folder import MAX_MINUTES, ModelError, ModelFolder, create_model
+from sim.observations import SensorError, normalise_sensors
+from sim.track import TrackError
+
+# --- the defaults of `racer-tui model new` (the Training helper benchmarks these) --------
+DEFAULT_TRACK = "hairpin-circuit"  # the ~17.5 m technical circuit
+DEFAULT_SENSORS: tuple[str, ...] = ("vector",)
+DEFAULT_MAX_STEERING = 30.0
+DEFAULT_STEERING_LEVELS = 5
+DEFAULT_MAX_SPEED = 3.0
+DEFAULT_SPEED_LEVELS = 2
+DEFAULT_REWARD = "follow_center_line"
+DEFAULT_MINUTES = 60.0
+
+STEERING_LEVELS = (3, 5, 7)
+SPEED_LEVELS = (1, 2, 3)
+MAX_ACTIONS_FILE_BYTES = 1_000_000
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """Everything a new model folder is made from, validated."""
+
+    track: str
+    metadata: ModelMetadata
+    hyperparameters: dict[str, float | int | str] = field(default_factory=default_hyperparameters)
+    reward_source: str = ""
+    reward_origin: str = DEFAULT_REWARD  # a template name or the file it was read from
+    max_minutes: float = DEFAULT_MINUTES
+
+
+def default_action_space() -> ActionSpace:
+    return discrete_grid(
+        DEFAULT_MAX_STEERING, DEFAULT_STEERING_LEVELS, DEFAULT_MAX_SPEED, DEFAULT_SPEED_LEVELS
+    )
+
+
+def default_model_spec() -> ModelSpec:
+    """The model `racer-tui model new NAME` makes without options."""
+    from sim.reward_function import template_source
+
+    return ModelSpec(
+        track=DEFAULT_TRACK,
+        metadata=ModelMetadata(default_action_space(), DEFAULT_SENSORS),
+        reward_source=template_source(DEFAULT_REWARD),
+    )
+
+
+def model_spec(
+    base: ModelSpec | None = None,
+    *,
+    track: str | None = None,
+    sensors: Sequence[str] | None = None,
+    max_steering: float | None = None,
+    steering_levels: int | None = None,
+    max_speed: float | None = None,
+    speed_levels: int | None = None,
+    actions_file: Path | None = None,
+    continuous: bool = False,
+    steering_range: tuple[float, float] | None = None,
+    speed_range: tuple[float, float] | None = None,
+    reward: str | None = None,
+    hyperparameters: Mapping[str, object] | None = None,
+    minutes: float | None = None,
+) -> ModelSpec:
+    """`base` (default: `default_model_spec()`) with the given console options applied.
+
+    The action space comes from exactly one of: the grid options (max steering, steering
+    levels, max speed, speed levels; unset ones take the defaults), an actions file, or
+    `continuous` with optional ranges. With none of them, `base`'s action space is kept.
+    """
+    spec = base or default_model_spec()
+    if track is not None:
+        spec = replace(spec, track=_checked_track(track))
+    metadata = spec.metadata
+    if sensors is not None:
+        try:
+            metadata = replace(metadata, sensors=normalise_sensors(list(sensors)))
+        except SensorError as error:
+            raise ModelError(f"--sensor: {error}") from None
+    grid = (max_steering, steering_levels, max_speed, speed_levels)
+    space = _action_space(
+        grid, actions_file, continuous=continuous, ranges=(steering_range, speed_range)
+    )
+    if space is not None:
+        metadata = replace(metadata, action_space=space)
+    spec = replace(spec, metadata=metadata)
+    if reward is not None:
+        source, origin = reward_choice(reward)
+        spec = replace(spec, reward_source=source, reward_origin=origin)
+    if hyperparameters:
+        try:
+            checked = check_hyperparameters(
+                hyperparameters, where="--hp", base=spec.hyperparameters
+            )
+        except DeepRacerFileError as error:
+            raise ModelError(str(error)) from None
+        spec = replace(spec, hyperparameters=checked)
+    if minutes is not None:
+        if not (math.isfinite(minutes) and 0 < minutes <= MAX_MINUTES):
+            raise ModelError(
+                f"--minutes must be more than 0 and at most {MAX_MINUTES:g}, not {minutes:g}."
+            )
+        spec = replace(spec, max_minutes=float(minutes))
+    return spec
+
+
+def new_model(name: str, spec: ModelSpec | None = None, **options: Any) -> ModelFolder:
+    """Create model `name` from `spec` (default: the defaults) with `model_spec` options."""
+    chosen = model_spec(spec, **options) if options or spec is None else spec
+    return create_from_spec(name, chosen)
+
+
+def create_from_spec(name: str, spec: ModelSpec, **create_options: Any) -> ModelFolder:
+    return create_model(
+        name,
+        track=spec.track,
+        metadata=spec.metadata,
+        hyperparameters=spec.hyperparameters,
+        reward_source=spec.reward_source,
+        max_minutes=spec.max_minutes,
+        **create_options,
+    )
+
+
+def spec_of(folder: ModelFolder) -> ModelSpec:
+    """An existing model's spec, the base for a clone."""
+    params = folder.training_params()
+    return ModelSpec(
+        track=params.world_name,
+        metadata=folder.metadata(),
+        hyperparameters=folder.hyperparameters(),
+        reward_source=folder.reward_source(),
+        reward_origin=str(folder.reward_file),
+        max_minutes=params.max_minutes,
+    )
+
+
+# --- single options ------------------------------------------------------------------------
+
+
+def _checked_track(track: str) -> str:
+    from sim.track_catalog import resolve_track
+
+    try:
+        resolve_track(track)
+    except TrackError as error:
+        raise ModelError(f"--track: {error}") from None
+    return track
+
+
+def reward_choice(reward: str) -> tuple[str, str]:
+    """(source, origin) for a template name or a reward function file, loaded to check it."""
+    from sim.reward_function import TEMPLATES, load_reward_function, template_source
+
+    if reward in TEMPLATES:
+        return template_source(reward), reward
+    path = Path(reward).expanduser()
+    if not path.exists():
+        raise ModelError(
+            f"--reward: {reward!r} is neither a template ({', '.join(TEMPLATES)}) nor a file."
+        )
+    load_reward_function(path)  # RewardFunctionError names the file and line
+    return path.read_bytes().decode("utf-8-sig"), str(path)
+
+
+def parse_hp_assignments(assignments: Sequence[str]) -> dict[str, object]:
+    """`KEY=VALUE` strings from the command line, typed by each key's spec."""
+    values: dict[str, object] = {}
+    for assignment in assignments:
+        key, sep, text = assignment.partition("=")
+        key, text = key.strip(), text.strip()
+        if not sep or not key:
+            raise ModelError(f"--hp {assignment!r}: write KEY=VALUE, for example --hp lr=0.0003.")
+        spec = HYPERPARAMETER_SPECS.get(key)
+        if spec is None or spec.choices:
+            values[key] = text  # unknown keys are reported by check_hyperparameters
+            continue
+        try:
+            values[key] = float(text)
+        except ValueError:
+            raise ModelError(f"--hp: {key} must be {spec.allowed()}, not {text!r}.") from None
+    return values
+
+
+def parse_range(text: str, option: str, low: float, high: float, unit: str) -> tuple[float, float]:
+    """`LOW,HIGH` for --steering-range and --speed-range."""
+    parts = text.split(",")
+    try:
+        lo, hi = (float(part) for part in parts)
+    except ValueError:
+        lo = hi = math.nan
+    if not (math.isfinite(lo) and math.isfinite(hi) and low <= lo < hi <= high):
+        raise ModelError(
+            f"{option} must be LOW,HIGH in {unit} with {low:g} <= LOW < HIGH <= {high:g}, "
+            f"not {text!r}."
+        )
+    return lo, hi
+
+
+def _action_space(
+    grid: tuple[float | None, int | None, float | None, int | None],
+    actions_file: Path | None,
+    *,
+    continuous: bool,
+    ranges: tuple[tuple[float, float] | None, tuple[float, float] | None],
+) -> ActionSpace | None:
+    uses_grid = any(value is not None for value in grid)
+    uses_ranges = any(value is not None for value in ranges)
+    chosen = [
+        name
+        for name, used in (
+            ("--max-steering/--steering-levels/--max-speed/--speed-levels", uses_grid),
+            ("--actions", actions_file is not None),
+            ("--continuous", continuous),
+        )
+        if used
+    ]
+    if len(chosen) > 1:
+        raise ModelError(f"choose one way to give the action space, not {' and '.join(chosen)}.")
+    if uses_ranges and not continuous:
+        raise ModelError("--steering-range and --speed-range need --continuous.")
+    if uses_grid:
+        return _grid(*grid)
+    if actions_file is not None:
+        return read_actions_file(actions_file)
+    if continuous:
+        steering, speed = ranges
+        return ActionSpace(
+            kind="continuous",
+            steering_range=steering or (-MAX_STEERING, MAX_STEERING),
+            speed_range=speed or (MIN_SPEED, MAX_SPEED),
+        )
+    return None
+
+
+def _grid(
+    max_steering: float | None,
+    steering_levels: int | None,
+    max_speed: float | None,
+    speed_levels: int | None,
+) -> ActionSpace:
+    steer = DEFAULT_MAX_STEERING if max_steering is None else max_steering
+    steer_levels = DEFAULT_STEERING_LEVELS if steering_levels is None else steering_levels
+    speed = DEFAULT_MAX_SPEED if max_speed is None else max_speed
+    levels = DEFAULT_SPEED_LEVELS if speed_levels is None else speed_levels
+    if not (math.isfinite(steer) and 1.0 <= steer <= MAX_STEERING):
+        raise ModelError(
+            f"--max-steering must be from 1 to {MAX_STEERING:g} degrees, not {steer:g}."
+        )
+    if steer_levels not in STEERING_LEVELS:
+        raise ModelError(f"--steering-levels must be 3, 5 or 7, not {steer_levels}.")
+    if not (math.isfinite(speed) and MIN_SPEED <= speed <= MAX_SPEED):
+        raise ModelError(
+            f"--max-speed must be from {MIN_SPEED:g} to {MAX_SPEED:g} m/s, not {speed:g}."
+        )
+    if levels not in SPEED_LEVELS:
+        raise ModelError(f"--speed-levels must be 1, 2 or 3, not {levels}.")
+    return discrete_grid(steer, steer_levels, speed, levels)
+
+
+def read_actions_file(path: Path) -> ActionSpace:
+    """A JSON action list, or any JSON object with an `action_space` (a model_metadata.json)."""
+    try:
+        if path.stat().st_size > MAX_ACTIONS_FILE_BYTES:
+            raise ModelError(f"--actions: {path} is larger than 1 MB; is it an action list?")
+        data: Any = json.loads(path.read_text(encoding="utf-8-sig"))
+    except FileNotFoundError:
+        raise ModelError(f"--actions: {path} does not exist.") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError):
+        raise ModelError(f"--actions: {path} is not a readable JSON file.") from None
+    kind = None
+    if isinstance(data, dict) and "action_space" in data:
+        kind = data.get("action_space_type")
+        data = data["action_space"]
+    try:
+        return parse_action_space(data, kind if isinstance(kind, str) else None)
+    except ActionSpaceError as error:
+        raise ModelError(f"--actions: {path}: {error}") from None

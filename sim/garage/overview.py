@@ -1,0 +1,118 @@
+"""What `model list` and `model show` say about a model, as plain JSON-ready data.
+
+The CLI prints these as tables or JSON, and the TUI can show the same facts, so the
+wording of a model's state lives in one place.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from typing import Any
+
+from sim.action_space import ActionSpace
+from sim.deepracer_files import DeepRacerFileError, EvaluationTrial, read_evaluation_metrics
+from sim.garage.folder import ModelError, ModelFolder
+from sim.garage.summary import training_summary
+
+
+def describe_actions(space: ActionSpace) -> str:
+    """One short phrase: "10 discrete, up to 3 m/s" or "continuous -30..30 deg, 0.5..4 m/s"."""
+    if space.kind == "discrete":
+        return f"{len(space.actions)} discrete, up to {space.max_speed:g} m/s"
+    (steer_low, steer_high), (speed_low, speed_high) = space.steering_range, space.speed_range
+    return f"continuous {steer_low:g}..{steer_high:g} deg, {speed_low:g}..{speed_high:g} m/s"
+
+
+def model_row(folder: ModelFolder) -> dict[str, Any]:
+    """One line of `model list`; a damaged folder still lists, with the problem as its status."""
+    try:
+        metadata = folder.metadata()
+        track = folder.training_params().world_name
+        best = folder.best_evaluation_lap()
+        status = str(folder.status())
+    except ModelError as error:
+        return {
+            "name": folder.name,
+            "status": "damaged",
+            "problem": str(error),
+            "track": None,
+            "sensor": None,
+            "actions": None,
+            "best_lap_s": None,
+        }
+    return {
+        "name": folder.name,
+        "status": status,
+        "track": track,
+        "sensor": "+".join(metadata.sensors),
+        "actions": describe_actions(metadata.action_space),
+        "best_lap_s": best,
+    }
+
+
+def model_details(folder: ModelFolder) -> dict[str, Any]:
+    """Everything `model show` prints: metadata, actions, hyperparameters, training, evaluations."""
+    metadata = folder.metadata()
+    params = folder.training_params()
+    space = metadata.action_space
+    evaluations: list[dict[str, Any]] = []
+    for path in folder.evaluation_files():
+        try:
+            trials = folder_evaluation(folder, path.name)
+        except ModelError as error:
+            evaluations.append({"file": path.name, "problem": str(error), "trials": []})
+            continue
+        laps = [t.lap_time_seconds for t in trials if t.lap_time_seconds is not None]
+        evaluations.append(
+            {
+                "file": path.name,
+                "laps_completed": len(laps),
+                "trials_run": len(trials),
+                "best_lap_s": min(laps) if laps else None,
+                "trials": [asdict(trial) for trial in trials],
+            }
+        )
+    return {
+        "name": folder.name,
+        "path": str(folder.path),
+        "status": str(folder.status()),
+        "content_hash": folder.content_hash(),
+        "track": params.world_name,
+        "track_hash": params.track_hash,
+        "max_minutes": params.max_minutes,
+        "sensor": "+".join(metadata.sensors),
+        "actions_summary": describe_actions(space),
+        "metadata": metadata.to_json(),
+        "actions": _action_rows(space),
+        "hyperparameters": folder.hyperparameters(),
+        "reward_function": reward_origin(folder),
+        "training": training_summary(folder),
+        "evaluations": evaluations,
+        "notes": {key: str(value) for key, value in params.extra.items()},
+    }
+
+
+def folder_evaluation(folder: ModelFolder, file_name: str) -> tuple[EvaluationTrial, ...]:
+    try:
+        return read_evaluation_metrics(folder.path / file_name)
+    except DeepRacerFileError as error:
+        raise ModelError(str(error)) from None
+
+
+def reward_origin(folder: ModelFolder) -> str:
+    """Which template the reward function is, or "custom"."""
+    from sim.reward_function import TEMPLATES, template_source
+
+    source = folder.reward_source()
+    for name in TEMPLATES:
+        if source == template_source(name):
+            return f"template {name}"
+    return "custom"
+
+
+def _action_rows(space: ActionSpace) -> list[dict[str, Any]]:
+    """The discrete action table (empty for a continuous space: its ranges are the metadata)."""
+    return [
+        {"index": i, "steering_angle": a.steering_angle, "speed": a.speed}
+        for i, a in enumerate(space.actions)
+    ]

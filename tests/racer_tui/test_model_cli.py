@@ -1,0 +1,173 @@
+"""`racer-tui model ...`: what a racer types and sees, and one-line errors with exit code 2."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from racer_tui.cli import main
+from sim.garage.folder import models_dir, open_model
+from tests.sim.garage.helpers import add_evaluation, add_policy, write_training_state
+from tests.test_architecture import _import_report
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_new_list_and_show(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(
+        capsys, "model", "new", "speedy", "--max-speed", "4", "--hp", "lr=0.0001"
+    )
+    assert code == 0
+    assert "Created model speedy" in out
+    assert "racer-tui train speedy" in out
+    code, out, _ = run_cli(capsys, "model", "list", "--json")
+    assert json.loads(out) == [
+        {
+            "name": "speedy",
+            "status": "untrained",
+            "track": "hairpin-circuit",
+            "sensor": "vector",
+            "actions": "10 discrete, up to 4 m/s",
+            "best_lap_s": None,
+        }
+    ]
+    code, out, _ = run_cli(capsys, "model", "show", "speedy", "--json")
+    details = json.loads(out)
+    assert details["hyperparameters"]["lr"] == 0.0001
+    assert len(details["actions"]) == 10
+    assert details["reward_function"] == "template follow_center_line"
+    assert details["metadata"]["sensor"] == ["VECTOR"]
+    assert details["training"]["episodes"] == 0
+
+
+def test_list_and_show_as_tables(capsys: pytest.CaptureFixture[str]) -> None:
+    assert run_cli(capsys, "model", "list")[1].startswith("No models yet")
+    run_cli(capsys, "model", "new", "tabled", "--sensor", "LIDAR")
+    folder = open_model("tabled")
+    add_policy(folder)
+    add_evaluation(folder, lap_ms=9250)
+    write_training_state(folder, "finished")
+    out = run_cli(capsys, "model", "list")[1]
+    assert "tabled" in out and "evaluated" in out and "9.250 s" in out and "lidar" in out
+    code, out, _ = run_cli(capsys, "model", "show", "tabled")
+    assert code == 0
+    for text in ("Action space", "Hyperparameters", "batch_size", "Training", "Lap complete"):
+        assert text in out
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--steering-levels", "4"], "--steering-levels must be 3, 5 or 7, not 4."),
+        (["--hp", "lr=0.5"], "--hp: lr must be a number from 1e-08 to 0.001, not 0.5."),
+        (["--hp", "batch_size=1024"], "batch_size must be a whole number from 32 to 512"),
+        (["--sensor", "sonar"], "--sensor: unknown sensor 'sonar'"),
+        (["--continuous", "--speed-range", "3,1"], "--speed-range must be LOW,HIGH in m/s"),
+        (["--track", "moon"], "--track: there is no track named 'moon'"),
+    ],
+)
+def test_bad_options_are_one_line_errors(
+    capsys: pytest.CaptureFixture[str], args: list[str], message: str
+) -> None:
+    code, out, err = run_cli(capsys, "model", "new", "bad", *args)
+    assert code == 2
+    assert out == ""
+    assert err.startswith("racer-tui: ") and message in err
+    assert err.count("\n") == 1
+    assert list(models_dir().iterdir()) == []
+
+
+def test_sensor_lists_and_continuous_spaces(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(
+        capsys,
+        "model", "new", "wide", "--sensor", "FRONT_FACING_CAMERA,LIDAR", "--continuous",
+        "--steering-range=-20,20", "--json",
+    )  # fmt: skip
+    assert code == 0
+    row = json.loads(out)
+    assert row["sensor"] == "camera+lidar"
+    assert row["actions"] == "continuous -20..20 deg, 0.1..4 m/s"
+
+
+def test_clone_and_refused_clone(capsys: pytest.CaptureFixture[str]) -> None:
+    run_cli(capsys, "model", "new", "base")
+    add_policy(open_model("base"))
+    code, out, _ = run_cli(capsys, "model", "clone", "base", "base-2", "--reward", "prevent_zigzag")
+    assert code == 0
+    assert "continues from base's trained policy" in out
+    code, _, err = run_cli(capsys, "model", "clone", "base", "base-3", "--sensor", "camera")
+    assert code == 2
+    assert "the sensor changes from vector to camera" in err
+
+
+def test_delete_asks_or_takes_yes(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    run_cli(capsys, "model", "new", "doomed")
+    monkeypatch.setattr("sys.stdin.isatty", lambda: False)
+    code, _, err = run_cli(capsys, "model", "delete", "doomed")
+    assert code == 2 and "add --yes" in err
+    monkeypatch.setattr("sys.stdin.isatty", lambda: True)
+    monkeypatch.setattr("builtins.input", lambda prompt: "n")
+    assert run_cli(capsys, "model", "delete", "doomed")[0] == 1
+    assert open_model("doomed")
+    monkeypatch.setattr("builtins.input", lambda prompt: "y")
+    assert run_cli(capsys, "model", "delete", "doomed")[0] == 0
+    code, _, err = run_cli(capsys, "model", "show", "doomed")
+    assert code == 2 and "no model named 'doomed'" in err
+
+
+def test_delete_refuses_while_training(capsys: pytest.CaptureFixture[str]) -> None:
+    run_cli(capsys, "model", "new", "busy")
+    write_training_state(open_model("busy"), "running")
+    code, _, err = run_cli(capsys, "model", "delete", "busy", "--yes")
+    assert code == 2 and "training right now" in err
+
+
+def test_import_the_real_drfc_model(
+    capsys: pytest.CaptureFixture[str], deepracer_dir: Path
+) -> None:
+    code, out, _ = run_cli(capsys, "model", "import", str(deepracer_dir / "drfc-model"), "--json")
+    assert code == 0
+    report = json.loads(out)
+    assert report["name"] == "drfc-model"
+    assert report["sensor"] == "camera"
+    assert report["best_lap_s"] == pytest.approx(13.392)
+    assert any("follow_center_line template" in note for note in report["notes"])
+    out = run_cli(capsys, "model", "import", str(deepracer_dir / "drfc-model"), "--name", "again")[
+        1
+    ]
+    assert "Note: it has no reward_function.py" in out
+
+
+def test_export_and_import_a_bundle(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    run_cli(capsys, "model", "new", "shipped")
+    code, _, err = run_cli(capsys, "model", "export", "shipped")
+    assert code == 2 and "no trained policy to export" in err
+    add_policy(open_model("shipped"))
+    monkeypatch.chdir(tmp_path)
+    code, out, _ = run_cli(capsys, "model", "export", "shipped")
+    assert code == 0
+    bundle = tmp_path / "shipped.racer-bundle"
+    assert f"to {bundle.name}" in out and zipfile.is_zipfile(bundle)
+    code, out, _ = run_cli(capsys, "model", "import", str(bundle), "--name", "received", "--json")
+    assert code == 0
+    assert json.loads(out)["status"] == "trained"
+    assert open_model("received").content_hash() == open_model("shipped").content_hash()
+    bundle.write_bytes(bundle.read_bytes()[:100])
+    code, _, err = run_cli(capsys, "model", "import", str(bundle), "--name", "broken")
+    assert code == 2 and "not a racer-tui bundle" in err
+
+
+def test_the_model_commands_stay_headless() -> None:
+    report = _import_report(["racer_tui.model_commands"])
+    assert report["racer_tui.model_commands"] == []

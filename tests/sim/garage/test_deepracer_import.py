@@ -1,0 +1,144 @@
+"""Importing DeepRacer model folders as community tools write them, starting with a real one."""
+
+from __future__ import annotations
+
+import json
+import pickle
+import shutil
+from pathlib import Path
+
+import pytest
+
+from sim.deepracer_files import read_evaluation_metrics, read_training_metrics
+from sim.garage.bundle import BundleError
+from sim.garage.deepracer_import import import_deepracer_folder, import_model
+from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
+from sim.garage.options import DEFAULT_TRACK
+from sim.reward_function import template_source
+
+
+@pytest.fixture
+def drfc_copy(deepracer_dir: Path, tmp_path: Path) -> Path:
+    """A writable copy of the shared DeepRacer-for-Cloud folder, to break on purpose."""
+    copy = tmp_path / "drfc-copy"
+    shutil.copytree(deepracer_dir / "drfc-model", copy)
+    for path in [copy, *copy.rglob("*")]:
+        path.chmod(0o755 if path.is_dir() else 0o644)
+    return copy
+
+
+def test_the_real_drfc_model_imports(deepracer_dir: Path) -> None:
+    result = import_model(deepracer_dir / "drfc-model")
+    folder = result.folder
+    assert folder.name == "drfc-model"
+    metadata = folder.metadata()
+    assert metadata.sensors == ("camera",)
+    assert len(metadata.action_space.actions) == 14
+    assert metadata.version == "4"
+    hyperparameters = folder.hyperparameters()
+    assert hyperparameters["discount_factor"] == 0.95
+    assert hyperparameters["num_epochs"] == 3
+    # It has no reward function and no known track: filled in, and said so.
+    assert folder.reward_source() == template_source("follow_center_line")
+    assert folder.training_params().world_name == DEFAULT_TRACK
+    notes = " ".join(result.notes)
+    assert "no reward_function.py: the follow_center_line template is used" in notes
+    assert f"set up on {DEFAULT_TRACK}; choose another with --track" in notes
+    assert "starts untrained" in notes
+    assert folder.status() is ModelStatus.UNTRAINED
+
+
+def test_its_metrics_come_along_in_our_form(deepracer_dir: Path) -> None:
+    folder = import_model(deepracer_dir / "drfc-model").folder
+    source = read_training_metrics(
+        deepracer_dir / "drfc-model" / "metrics" / "TrainingMetrics.json"
+    )
+    copied = read_training_metrics(folder.training_metrics_file)
+    assert copied == source
+    assert len(copied.episodes) == 600
+    names = [path.name for path in folder.evaluation_files()]
+    assert names == [
+        "evaluation-20220709200242.json",
+        "evaluation-20220709200509.json",
+        "evaluation-20220709200711.json",
+    ]
+    original = read_evaluation_metrics(
+        deepracer_dir / "drfc-model" / "metrics" / "EvaluationMetrics-20220709200242.json"
+    )
+    assert read_evaluation_metrics(folder.evaluation_files()[0]) == original
+    assert folder.best_evaluation_lap() == pytest.approx(13.392)
+
+
+def test_track_and_name_can_be_chosen(deepracer_dir: Path) -> None:
+    result = import_model(deepracer_dir / "drfc-model", name="borrowed", track="speedway")
+    assert result.folder.name == "borrowed"
+    assert result.folder.track().name == "speedway"
+    assert not any("--track" in note for note in result.notes)
+
+
+def test_a_reward_function_in_the_folder_is_used(drfc_copy: Path) -> None:
+    source = (
+        "def reward_function(params):\n    return 1.0 if params['all_wheels_on_track'] else 1e-3\n"
+    )
+    (drfc_copy / "reward_function.py").write_text(source)
+    result = import_deepracer_folder(drfc_copy, name="own-reward")
+    assert result.folder.reward_source() == source
+    assert not any("reward_function.py" in note for note in result.notes)
+
+
+def test_a_known_world_name_picks_the_track(drfc_copy: Path) -> None:
+    (drfc_copy / "ip" / "training_params.yaml").write_text(
+        "WORLD_NAME: bowtie-chicane\nMAX_MINUTES: 30\n"
+    )
+    result = import_deepracer_folder(drfc_copy, name="bowtie")
+    assert result.folder.training_params().world_name == "bowtie-chicane"
+    assert result.folder.training_params().max_minutes == 30
+
+
+def test_out_of_range_hyperparameters_are_reported_not_clamped(drfc_copy: Path) -> None:
+    path = drfc_copy / "ip" / "hyperparameters.json"
+    values = json.loads(path.read_text())
+    values["batch_size"] = 1024
+    path.write_text(json.dumps(values))
+    with pytest.raises(ModelError) as caught:
+        import_deepracer_folder(drfc_copy, name="clamped")
+    message = str(caught.value)
+    assert "hyperparameters.json" in message
+    assert "batch_size must be a whole number from 32 to 512, not 1024" in message
+    assert message.endswith("edit the file and import again.")
+    assert list(models_dir().iterdir()) == []
+
+
+def test_unknown_hyperparameter_keys_are_reported(drfc_copy: Path) -> None:
+    path = drfc_copy / "ip" / "hyperparameters.json"
+    path.write_text(json.dumps({**json.loads(path.read_text()), "gamma": 0.9}))
+    with pytest.raises(ModelError, match="unknown hyperparameter 'gamma'"):
+        import_deepracer_folder(drfc_copy, name="gamma")
+
+
+def test_a_folder_without_metadata_is_not_a_model(deepracer_dir: Path) -> None:
+    with pytest.raises(ModelError, match=r"has no model_metadata\.json"):
+        import_model(deepracer_dir / "console-logs")
+    with pytest.raises(ModelError, match="does not exist"):
+        import_model(deepracer_dir / "no-such-folder")
+
+
+def test_a_folder_name_that_is_not_a_model_name_asks_for_one(drfc_copy: Path) -> None:
+    odd = drfc_copy.rename(drfc_copy.with_name("my model"))
+    with pytest.raises(ModelError, match="give one with --name"):
+        import_deepracer_folder(odd)
+    assert import_deepracer_folder(odd, name="mine").folder.name == "mine"
+
+
+def test_a_copied_racer_tui_folder_keeps_its_policy(
+    trained_model: ModelFolder, tmp_path: Path
+) -> None:
+    copy = shutil.copytree(trained_model.path, tmp_path / "usb-stick" / "veteran")
+    result = import_model(copy, name="moved")
+    assert result.folder.content_hash() == trained_model.content_hash()
+    assert result.folder.status() is ModelStatus.EVALUATED
+    assert not any("starts untrained" in note for note in result.notes)
+    (copy / "policy.safetensors").write_bytes(pickle.dumps({"weights": [1.0]}))
+    with pytest.raises(BundleError, match="not a safetensors file of tensors"):
+        import_model(copy, name="tampered")
+    assert not (models_dir() / "tampered").exists()
