@@ -48,6 +48,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="racer-tui",
         description="Build, train and race AWS-DeepRacer-style car models in the terminal.",
+        epilog="Headless time trials: racer-tui --race MODEL [MODEL ...] --track TRACK "
+        "(see racer-tui --race --help).",
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in _command_modules():
@@ -62,7 +64,13 @@ def _command_modules() -> list[Any]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    arguments = list(sys.argv[1:] if argv is None else argv)
+    if "--race" in arguments:
+        # Headless time trials are a top-level mode with their own parser.
+        from racer_tui.race_commands import main as race_main
+
+        return race_main(arguments)
+    args = build_parser().parse_args(arguments)
     if args.command is None:
         from racer_tui.app import run_app
 

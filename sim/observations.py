@@ -9,6 +9,7 @@ line and look-ahead points of the centre line in the car's frame.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -120,6 +121,8 @@ class Observer:
 
 def vector_state(sim: TrackSimulation) -> np.ndarray:
     """The compact `vector` observation, (N, VECTOR_SIZE) float32."""
+    if sim.n == 1:
+        return _vector_state_one(sim)
     fleet = sim.fleet
     spec = fleet.spec
     centre = sim.track.centerline
@@ -144,5 +147,34 @@ def vector_state(sim: TrackSimulation) -> np.ndarray:
     out[:, 4] = offset
     out[:, 5::2] = forward
     out[:, 6::2] = left
+    np.clip(out, -5.0, 5.0, out=out)
+    return out
+
+
+def _vector_state_one(sim: TrackSimulation) -> np.ndarray:
+    """`vector_state` for a lone car (a race) in plain floats: the same arithmetic, without
+    numpy's per-call overhead on length-1 arrays."""
+    fleet = sim.fleet
+    spec = fleet.spec
+    centre = sim.centre_projector
+    s = float(sim.s[0])
+    x, y, yaw = float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0])
+    tangent_x, tangent_y = centre.direction_at(s)
+    cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
+    half_width = max(float(sim.track_width[0]) / 2.0, 1e-6)
+    side = 1.0 if sim.left_of_center[0] else -1.0
+    values = [
+        float(fleet.speed[0]) / spec.max_speed,
+        float(fleet.steering[0]) / math.radians(spec.max_steering_deg),
+        cos_yaw * tangent_y - sin_yaw * tangent_x,
+        cos_yaw * tangent_x + sin_yaw * tangent_y,
+        side * float(sim.distance_from_center[0]) / half_width,
+    ]
+    for distance in LOOK_AHEAD_DISTANCES:
+        px, py = centre.point_at(s + distance)
+        dx, dy = px - x, py - y
+        values.append((dx * cos_yaw + dy * sin_yaw) / _LOOK_AHEAD_SCALE)
+        values.append((-dx * sin_yaw + dy * cos_yaw) / _LOOK_AHEAD_SCALE)
+    out = np.array([values], dtype=np.float32)
     np.clip(out, -5.0, 5.0, out=out)
     return out

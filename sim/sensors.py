@@ -55,6 +55,10 @@ _EXACT_NEIGHBOURS = 1
 _WINDOW_CELLS = np.float32(2.0)
 # Ray-segment pairs per chunk when testing rays against every segment.
 _EXHAUSTIVE_PAIRS = 200_000
+# Up to this many cars a scan intersects rays with the segments in range directly.
+_FEW_CARS = 2
+# Blocks (cells) of the table of segments in range, for those scans.
+_NEAR_BLOCK_CELLS = 25.0
 
 
 # --- camera -------------------------------------------------------------------------------
@@ -254,10 +258,13 @@ class Lidar:
         window = np.arange(-_EXACT_NEIGHBOURS, _EXACT_NEIGHBOURS + 1)
         within = (np.arange(len(raster.segment_start)) - raster.ring_start)[:, None] + window
         self._candidates = raster.ring_start[:, None] + np.mod(within, raster.ring_size[:, None])
+        self._near: _NearSegments | None = None  # built on the first few-car scan
 
     def scan(self, x: ArrayLike, y: ArrayLike, yaw: ArrayLike) -> Float32Array:
         """(N, rays) float32 distances in metres, clipped to [min_range, max_range]."""
         xs, ys, yaws = _poses(x, y, yaw)
+        if len(xs) <= _FEW_CARS:
+            return self._scan_few(xs, ys, yaws)
         n, count = len(xs), len(self.angles)
         raster = self.raster
         res = raster.resolution
@@ -298,6 +305,51 @@ class Lidar:
         self._cast_exhaustively(batch, np.concatenate(unsettled), hit)
         result = hit.reshape(n, count) * np.float32(res)
         np.clip(result, self.spec.min_range, self.spec.max_range, out=result)
+        return result
+
+    def _scan_few(
+        self, xs: NDArray[np.float64], ys: NDArray[np.float64], yaws: NDArray[np.float64]
+    ) -> Float32Array:
+        """`scan` for a car or two (a race): every ray against the border segments in range.
+
+        Marching pays a round of numpy calls per iteration whatever the batch size; for one
+        car, intersecting all the rays with the few dozen segments that can be within range
+        is one round, and exact by construction (the same float32 arithmetic as
+        `_crossings`, so readings match the marched ones).
+        """
+        if self._near is None:
+            self._near = _NearSegments(
+                self._segment_start, self._segment_vector, self._half_u_range, float(self._limit)
+            )
+        raster = self.raster
+        res = raster.resolution
+        result = np.empty((len(xs), len(self.angles)), dtype=np.float32)
+        for car in range(len(xs)):
+            col = np.float32((xs[car] - raster.origin[0]) / res)
+            row = np.float32((ys[car] - raster.origin[1]) / res)
+            sx, sy, vx, vy, half_u = self._near.around(float(col), float(row))
+            theta = yaws[car] + self.angles
+            dx = np.cos(theta).astype(np.float32)[:, None]
+            dy = np.sin(theta).astype(np.float32)[:, None]
+            wx, wy = sx - col, sy - row
+            along = wx * vy - wy * vx  # per segment; the same for every ray
+            with np.errstate(divide="ignore", invalid="ignore"):
+                denom = dx * vy
+                denom -= dy * vx
+                t = along / denom
+                u = wx * dy
+                u -= wy * dx
+                u /= denom
+            u -= np.float32(0.5)
+            np.abs(u, out=u)
+            valid = u <= half_u
+            valid &= t >= np.float32(-1e-3)
+            # Starting the minimum at the range limit also drops crossings beyond it.
+            result[car] = np.min(t, axis=1, initial=self._limit, where=valid)
+        result *= np.float32(res)
+        # np.maximum/np.minimum in place: np.clip's result without its per-call overhead.
+        np.maximum(result, np.float32(self.spec.min_range), out=result)
+        np.minimum(result, np.float32(self.spec.max_range), out=result)
         return result
 
     def _march(self, rays: _Rays) -> tuple[_Stops, _Stops, NDArray[np.intp]]:
@@ -440,6 +492,55 @@ class Lidar:
         rows *= raster.width
         rows += cols
         return rows
+
+
+class _NearSegments:
+    """For each block of the raster, the border segments within lidar range of any point in
+    it, laid out block by block (start x, start y, vector x, vector y, half u range) so a
+    scan slices them instead of gathering; points off the grid get every segment."""
+
+    def __init__(
+        self, starts: Float32Array, vectors: Float32Array, half_u: Float32Array, limit: float
+    ) -> None:
+        columns = (starts[:, 0], starts[:, 1], vectors[:, 0], vectors[:, 1], half_u)
+        self._all = tuple(np.ascontiguousarray(c) for c in columns)
+        lo = starts.min(axis=0) - limit
+        hi = (starts + vectors).max(axis=0) + limit
+        self._origin = (float(lo[0]), float(lo[1]))
+        self._cols = int(np.ceil((hi[0] - lo[0]) / _NEAR_BLOCK_CELLS)) + 1
+        self._rows = int(np.ceil((hi[1] - lo[1]) / _NEAR_BLOCK_CELLS)) + 1
+        cx = lo[0] + (np.arange(self._cols) + 0.5) * _NEAR_BLOCK_CELLS
+        cy = lo[1] + (np.arange(self._rows) + 0.5) * _NEAR_BLOCK_CELLS
+        centres = np.stack(np.meshgrid(cx, cy, indexing="ij"), axis=-1).reshape(-1, 2)
+        # Any point of a block is within half its diagonal of the centre; a cell of slack
+        # covers float32 rounding.
+        reach = limit + _NEAR_BLOCK_CELLS * math.sqrt(0.5) + 1.0
+        start = starts.astype(np.float64)
+        vector = vectors.astype(np.float64)
+        length_sq = np.maximum(np.sum(vector * vector, axis=1), 1e-12)
+        lists: list[NDArray[np.intp]] = []
+        for first in range(0, len(centres), 256):
+            part = centres[first : first + 256]
+            rel = part[:, None, :] - start[None, :, :]
+            along = np.clip(np.einsum("mkd,kd->mk", rel, vector) / length_sq, 0.0, 1.0)
+            foot = start[None, :, :] + along[..., None] * vector[None, :, :]
+            near = np.hypot(*(part[:, None, :] - foot).transpose(2, 0, 1)) <= reach
+            lists.extend(np.flatnonzero(row_mask) for row_mask in near)
+        self._offsets: list[int] = np.concatenate(
+            [[0], np.cumsum([len(item) for item in lists])]
+        ).tolist()
+        order = np.concatenate(lists) if lists else np.zeros(0, dtype=np.intp)
+        self._blocks = tuple(np.ascontiguousarray(c[order]) for c in columns)
+
+    def around(self, col: float, row: float) -> tuple[Float32Array, ...]:
+        """(start x, start y, vector x, vector y, half u range) of the segments near a point."""
+        i = math.floor((col - self._origin[0]) / _NEAR_BLOCK_CELLS)
+        j = math.floor((row - self._origin[1]) / _NEAR_BLOCK_CELLS)
+        if not (0 <= i < self._cols and 0 <= j < self._rows):
+            return self._all
+        block = i * self._rows + j
+        first, last = self._offsets[block], self._offsets[block + 1]
+        return tuple(column[first:last] for column in self._blocks)
 
 
 @dataclass

@@ -12,17 +12,20 @@ wheel centres are off the road; `all_wheels_on_track` is False as soon as one is
 
 from __future__ import annotations
 
+import bisect
 import math
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
+import shapely
 from numpy.typing import NDArray
 
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
-from sim.geometry import FloatArray
+from sim.geometry import _GRID_CELL, FloatArray, PolylineProjector
 from sim.reward_sample_params import no_objects
 from sim.track import Track
 
@@ -92,6 +95,14 @@ class TrackSimulation:
         self._length = centre.total_length
         self._waypoints = track.waypoints
         self._track_length = float(self._length)
+        #: The centre line for one-point queries (per-step code for one car).
+        self.centre_projector = PointProjector.of(centre)
+        self._point_projectors = (
+            self.centre_projector,
+            PointProjector.of(track.inner_border),
+            PointProjector.of(track.outer_border),
+        )
+        self._wheel_offsets = [(float(f), float(left)) for f, left in car.wheel_offsets]
 
         n = n_cars
         self.episode = np.zeros(n, dtype=np.int64)  # episodes started by each car
@@ -158,9 +169,24 @@ class TrackSimulation:
     def reset_all(self) -> None:
         self.reset_cars(range(self.n))
 
+    def continue_episode(self, car: int, travelled: float) -> None:
+        """Let a car drive on after its episode ended, as races do (past the line, after a reset).
+
+        Clears the outcome and the reversed/immobilized counters; `travelled` re-bases the
+        progress bookkeeping (one lap less after a lap, or where the car was put back).
+        """
+        self.travelled[car] = travelled
+        self.terminal[car] = 0
+        self.status[car] = EpisodeStatus.IN_PROGRESS
+        self._falling[car] = 0
+        self._still[car] = 0
+
     # --- stepping ------------------------------------------------------------------------
     def apply(self, steering_deg: FloatArray, speed: FloatArray) -> None:
         """Drive every car for one 1/15 s step and update measurements and episode status."""
+        if self.n == 1:
+            self._apply_one(steering_deg, speed)
+            return
         self.steering_cmd[:] = steering_deg
         self.speed_cmd[:] = speed
         before_s = self.s.copy()
@@ -177,6 +203,9 @@ class TrackSimulation:
         self._judge()
 
     def _measure(self) -> None:
+        if self.n == 1:
+            self._measure_one()
+            return
         fleet = self.fleet
         track = self.track
         self.ahead = fleet.points_ahead(LOOK_AHEAD)
@@ -213,6 +242,73 @@ class TrackSimulation:
         for car in ended.tolist():
             self.status[car] = _OUTCOMES[outcomes[car]]
         self.terminal[ended] = outcomes[ended]
+
+    # --- one car: the same steps in plain floats ---------------------------------------------
+    # A race drives one car, and numpy's per-call overhead on length-1 arrays costs more
+    # than the arithmetic. These do exactly what `apply`, `_measure` and `_judge` do for
+    # N cars, and leave the same arrays behind.
+
+    def _apply_one(self, steering_deg: FloatArray, speed: FloatArray) -> None:
+        fleet = self.fleet
+        self.steering_cmd[:] = steering_deg
+        self.speed_cmd[:] = speed
+        before_s = float(self.s[0])
+        before_x, before_y = float(fleet.x[0]), float(fleet.y[0])
+        fleet.set_targets(steering_deg, speed)
+        fleet.step()
+        self._measure_one()
+        self.steps += 1
+        length = self._length
+        delta = (float(self.s[0]) - before_s + length / 2.0) % length - length / 2.0
+        self.travelled[0] += delta
+        self._falling[0] = self._falling[0] + 1 if delta < 0.0 else 0
+        moved = math.hypot(float(fleet.x[0]) - before_x, float(fleet.y[0]) - before_y)
+        self._still[0] = self._still[0] + 1 if moved <= self.rules.immobile_distance else 0
+        if self.terminal[0] == 0:
+            self._judge_one()
+
+    def _measure_one(self) -> None:
+        fleet = self.fleet
+        x, y, yaw = float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0])
+        cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
+        ax, ay = x + LOOK_AHEAD * cos_yaw, y + LOOK_AHEAD * sin_yaw
+        centre, inner, outer = self._point_projectors
+        seg, t, fx, fy = centre.project(ax, ay)
+        rel_x, rel_y = ax - fx, ay - fy
+        vec_x, vec_y = centre.vectors[seg]
+        _, _, ix, iy = inner.project(ax, ay)
+        _, _, ox, oy = outer.project(ax, ay)
+        self.ahead = np.array([[ax, ay]])
+        self.segment = np.array([seg], dtype=np.intp)
+        self.foot = np.array([[fx, fy]])
+        self.s = np.array([centre.arc_length(seg, t)])
+        self.distance_from_center = np.array([math.hypot(rel_x, rel_y)])
+        self.left_of_center = np.array([vec_x * rel_y - vec_y * rel_x > 0.0])
+        self.track_width = np.array([math.hypot(ox - ix, oy - iy)])
+        wheel_x = [x + fwd * cos_yaw - left * sin_yaw for fwd, left in self._wheel_offsets]
+        wheel_y = [y + fwd * sin_yaw + left * cos_yaw for fwd, left in self._wheel_offsets]
+        self.wheels_on = np.asarray(
+            shapely.contains_xy(self.track.road, wheel_x, wheel_y), dtype=bool
+        ).reshape(1, 4)
+
+    def _judge_one(self) -> None:
+        rules = self.rules
+        if self.fleet.crashed[0]:
+            outcome = 1
+        elif not self.wheels_on[0].any():
+            outcome = 2
+        elif self.travelled[0] >= self._length:
+            outcome = 3
+        elif self._falling[0] >= rules.reversed_steps:
+            outcome = 4
+        elif self._still[0] >= rules.immobilized_steps:
+            outcome = 5
+        elif self.steps[0] >= rules.max_steps:
+            outcome = 6
+        else:
+            return
+        self.status[0] = _OUTCOMES[outcome]
+        self.terminal[0] = outcome
 
     # --- what the reward function and observers see ----------------------------------------
     @property
@@ -281,3 +377,107 @@ class TrackSimulation:
             }
             for i in range(self.n)
         ]
+
+
+_NEIGHBOURS = (-2, -1, 0, 1, 2)  # segments either side checked, as in sim.geometry
+
+
+class PointProjector:
+    """A `PolylineProjector`'s queries for one point at a time, in plain floats.
+
+    Per-step code for a single car (races) pays more for numpy's per-call overhead than for
+    the arithmetic, so these repeat `project`, `point_at` and `direction_at` with Python
+    floats: the same method and the same arithmetic, so the same answers (to the last bit
+    or so). `project`: the projector's lookup grid names the nearest segment (the exact
+    KD-tree decides in ambiguous cells), then the closest projection onto that segment
+    and two either side wins, the first on a tie, as `np.argmin` picks.
+    """
+
+    _cache: ClassVar[weakref.WeakKeyDictionary[PolylineProjector, PointProjector]] = (
+        weakref.WeakKeyDictionary()
+    )
+
+    @classmethod
+    def of(cls, projector: PolylineProjector) -> PointProjector:
+        """One per projector (tracks cache theirs), so a new race starts without setup."""
+        found = cls._cache.get(projector)
+        if found is None:
+            found = cls._cache[projector] = cls(projector)
+        return found
+
+    def __init__(self, projector: PolylineProjector) -> None:
+        self._projector = projector
+        # Builds the projector's lookup grid if it has not been built yet.
+        projector.project(projector.points[:1])
+        grid = projector._grid
+        assert grid is not None
+        self._grid = grid
+        self._origin_x, self._origin_y = (float(v) for v in projector._grid_origin)
+        self._nx, self._ny = projector._grid_shape
+        self._inv_cell = 1.0 / _GRID_CELL
+        self.starts: list[tuple[float, float]] = [(a, b) for a, b in projector.starts.tolist()]
+        self.vectors: list[tuple[float, float]] = [(a, b) for a, b in projector.vectors.tolist()]
+        self.lengths: list[float] = projector.lengths.tolist()
+        self.cumulative: list[float] = projector.cumulative.tolist()
+        self._inv_len_sq: list[float] = projector._inv_len_sq.tolist()
+        self._segments = len(self.lengths)
+        self._closed = projector.closed
+        self.total_length = projector.total_length
+
+    def _segment_at(self, s: float) -> int:
+        seg = bisect.bisect_right(self.cumulative, s) - 1
+        return 0 if seg < 0 else (self._segments - 1 if seg >= self._segments else seg)
+
+    def point_at(self, s: float) -> tuple[float, float]:
+        """The point at arc length `s` (wrapped on a closed polyline)."""
+        if self._closed:
+            s %= self.total_length
+        s = 0.0 if s < 0.0 else (self.total_length if s > self.total_length else s)
+        seg = self._segment_at(s)
+        t = (s - self.cumulative[seg]) / self.lengths[seg]
+        (sx, sy), (vx, vy) = self.starts[seg], self.vectors[seg]
+        return sx + vx * t, sy + vy * t
+
+    def direction_at(self, s: float) -> tuple[float, float]:
+        """The unit tangent at arc length `s`."""
+        if self._closed:
+            s %= self.total_length
+        seg = self._segment_at(s)
+        vx, vy = self.vectors[seg]
+        length = self.lengths[seg]
+        return vx / length, vy / length
+
+    def arc_length(self, seg: int, t: float) -> float:
+        return self.cumulative[seg] + t * self.lengths[seg]
+
+    def project(self, x: float, y: float) -> tuple[int, float, float, float]:
+        """(segment, fraction along it, foot x, foot y) of the nearest point to (x, y)."""
+        col = int((x - self._origin_x) * self._inv_cell)
+        row = int((y - self._origin_y) * self._inv_cell)
+        col = 0 if col < 0 else (self._nx - 1 if col >= self._nx else col)
+        row = 0 if row < 0 else (self._ny - 1 if row >= self._ny else row)
+        seg = int(self._grid[col * self._ny + row])
+        if seg < 0:
+            seg = int(self._projector._nearest_segments(np.array([[x, y]]))[0])
+        n_seg = self._segments
+        starts, vectors, inv_len_sq = self.starts, self.vectors, self._inv_len_sq
+        best = (0, 0.0, 0.0, 0.0)
+        best_distance = math.inf
+        if self._closed:
+            candidates = [(seg + k) % n_seg for k in _NEIGHBOURS]
+        else:
+            candidates = [min(max(seg + k, 0), n_seg - 1) for k in _NEIGHBOURS]
+        for candidate in candidates:
+            sx, sy = starts[candidate]
+            vx, vy = vectors[candidate]
+            t = ((x - sx) * vx + (y - sy) * vy) * inv_len_sq[candidate]
+            if t < 0.0:
+                t = 0.0
+            elif t > 1.0:
+                t = 1.0
+            fx, fy = sx + vx * t, sy + vy * t
+            distance = (x - fx) ** 2 + (y - fy) ** 2
+            if distance < best_distance:
+                best_distance = distance
+                best = (candidate, t, fx, fy)
+        return best

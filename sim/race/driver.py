@@ -1,0 +1,135 @@
+"""What drives a car in a race or an evaluation: the `Driver` protocol and the reference driver.
+
+A driver sees the whole `TrackSimulation` (so it can build whatever observation its model
+needs) and returns one action per car. Races use one car; evaluations may use several.
+Nothing here imports torch: policy drivers live in `sim.training.policy` and satisfy the
+same protocol.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sim.car import DEEPRACER_CAR, CarSpec
+from sim.reference_driver import ReferenceDriver
+from sim.simulation import PointProjector, TrackSimulation
+from sim.track import Track
+
+REFERENCE_NAME = "reference"
+
+
+@dataclass(frozen=True)
+class DriverAction:
+    """One step's commands for every car of a simulation (arrays of length N)."""
+
+    steering_deg: NDArray[np.float64]  # target steering, degrees, positive = left
+    speed: NDArray[np.float64]  # target speed, m/s
+    action_index: NDArray[np.int64]  # index into a discrete action space; -1 if continuous
+
+
+class Driver(Protocol):
+    """Anything that can drive: the reference driver, or a trained policy.
+
+    `name` is the model name (or "reference"); `content_hash` identifies the exact car
+    (weights and metadata, or "reference:<track hash>"), so results say what raced.
+    """
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def content_hash(self) -> str: ...
+
+    def reset(self, sim: TrackSimulation) -> None:
+        """Called when a race or trial starts on `sim` (clear any frame stacks, caches)."""
+
+    def act(self, sim: TrackSimulation) -> DriverAction:
+        """One action per car in `sim`, for the state it is in now."""
+        ...
+
+
+class ReferenceRaceDriver:
+    """The no-learning reference driver (racing line at the grip limit) as a `Driver`.
+
+    Its actions are continuous (action index -1). It keeps no state between steps, so
+    `reset` has nothing to clear. For a single car (a race) it runs the reference driver's
+    control law in plain floats: numpy's per-call overhead on length-1 arrays would cost
+    more than everything else in a race step.
+    """
+
+    def __init__(self, track: Track, car: CarSpec = DEEPRACER_CAR) -> None:
+        self._driver = ReferenceDriver(track, car)
+        self.name = REFERENCE_NAME
+        self.content_hash = f"{REFERENCE_NAME}:{track.content_hash}"
+        self._car = car
+        # The reference driver's own racing-line projector, queried one point at a time.
+        self._line = PointProjector.of(self._driver._projector)
+        self._line_speeds: list[float] = self._driver.line.speeds.tolist()
+
+    def reset(self, sim: TrackSimulation) -> None:
+        del sim  # stateless
+
+    def act(self, sim: TrackSimulation) -> DriverAction:
+        if sim.n == 1:
+            steering_one, speed_one = self._act_one(sim)
+            steering, speed = np.array([steering_one]), np.array([speed_one])
+        else:
+            steering, speed = self._driver.act(sim)
+        return DriverAction(
+            steering_deg=np.asarray(steering, dtype=np.float64),
+            speed=np.asarray(speed, dtype=np.float64),
+            action_index=np.full(sim.n, -1, dtype=np.int64),
+        )
+
+    def _act_one(self, sim: TrackSimulation) -> tuple[float, float]:
+        """`ReferenceDriver.act` for one car: pure pursuit on the racing line, speed planned
+        for where the car will be once the motor has responded (same formulas)."""
+        fleet = sim.fleet
+        car, line = self._car, self._line
+        x, y, yaw = float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0])
+        cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
+        half_base = car.wheelbase / 2.0
+        rear_x, rear_y = x - half_base * cos_yaw, y - half_base * sin_yaw
+        seg, t, _, _ = line.project(x, y)
+        s_here = line.arc_length(seg, t)
+        speed = max(float(fleet.speed[0]), 0.3)
+        target_x, target_y = line.point_at(s_here + (0.25 + 0.12 * speed))
+        dx, dy = target_x - rear_x, target_y - rear_y
+        local_x = dx * cos_yaw + dy * sin_yaw
+        local_y = -dx * sin_yaw + dy * cos_yaw
+        distance = max(math.hypot(local_x, local_y), 1e-6)
+        alpha = math.atan2(local_y, local_x)
+        steering = math.degrees(math.atan(2.0 * car.wheelbase * math.sin(alpha) / distance))
+        total = line.total_length
+        planned = min(
+            _interp(line.cumulative, self._line_speeds, (s_here + speed * ahead) % total)
+            for ahead in _HORIZON
+        )
+        limit = car.max_steering_deg
+        return min(max(steering, -limit), limit), planned
+
+
+# The reference driver plans speed over these seconds ahead (np.linspace(0, 0.35, 6)).
+_HORIZON: tuple[float, ...] = tuple(np.linspace(0.0, 0.35, 6).tolist())
+
+
+def _interp(xp: list[float], fp: list[float], x: float) -> float:
+    """`np.interp` for one point inside an increasing `xp`, with the same arithmetic."""
+    if x <= xp[0]:
+        return fp[0]
+    if x >= xp[-1]:
+        return fp[-1]
+    j = bisect.bisect_right(xp, x) - 1
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    return slope * (x - xp[j]) + fp[j]
+
+
+def reference_driver(track: Track, car: CarSpec = DEEPRACER_CAR) -> Driver:
+    """The reference driver for `track` (plans its racing line once per track content)."""
+    return ReferenceRaceDriver(track, car)

@@ -1,0 +1,422 @@
+"""The race engine: one car's time trial under league rules, on the simulation clock.
+
+A race is one car on a `TrackSimulation` stepped at 15 Hz. It starts from a standstill on
+the start line (waypoint 0, like `sim.reference_driver.reference_lap`) and drives laps
+continuously until the window closes. The race clock is the simulation clock, plus the
+penalty holds (a hold lasts exactly its penalty, so a 2.5 s penalty costs 2.5 s, not
+38 steps).
+
+What happens when DeepRacer's episode rules trigger (a race never ends on them):
+- Lap complete: the crossing time is interpolated inside the step, so lap times are not
+  quantised to 1/15 s. The next lap starts at that instant; the car drives on.
+- Off track (all four wheels off): the car is put back at its last on-track position (the
+  pose before the step that left the road), pointing along the track, at speed zero, and
+  held still for `penalty_seconds` while the race clock runs. Its distance from the centre
+  line is kept but pulled in so all four wheels are on the road, so a reset never lands
+  the car straight off the track again. The penalty is inside the lap time; the raw time
+  (without it) is kept beside it. If an off-track and a line crossing happen in the same
+  step, the off-track wins (DeepRacer's precedence) and the car crosses again after.
+- Reversed (15 steps of falling progress): the car is turned round where it is, pointing
+  along the track at speed zero, and held for `penalty_seconds` like an off-track: someone
+  has to pick it up. It counts as a reset, not an off-track, so it does not invalidate the
+  lap; the driving the wrong way already cost time.
+- Crashed (objects on the track, once those race types exist): put back like an
+  off-track and held for `collision_penalty_seconds`.
+- Immobilized: switched off. A car that does not move simply loses time until the window
+  closes.
+- A lap still in progress when the window closes does not count; its off-tracks still
+  count towards the race's total.
+
+Races are deterministic: the physics, the reference driver and policy drivers (argmax /
+mean action) have no randomness, so the same driver, track, rules and seed give the same
+laps. The seed is recorded with the result for drivers that do sample.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Generator
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from sim.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
+from sim.ids import new_id
+from sim.race.driver import Driver
+from sim.race.result import LapRecord, RaceResult, now_iso
+from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps
+from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
+from sim.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.track import Track
+
+# DeepRacer's reversed rule stays; immobilized and the step limit are switched off (the
+# window ends a race). 2**62 steps is longer than any window.
+RACE_EPISODE_RULES = EpisodeRules(immobilized_steps=2**62, max_steps=2**62)
+# A car put back on the track keeps its wheel centres this far inside the border.
+_RESET_MARGIN = 0.15
+# Clock comparisons: far below a microsecond, far above float noise on a 1-hour clock.
+_EPS = 1e-9
+
+_PREPARE = STATUS_CODE[TRACE_STATUSES[0]]
+_IN_PROGRESS = STATUS_CODE["in_progress"]
+_OFF_TRACK = STATUS_CODE["off_track"]
+_PAUSE = STATUS_CODE[PAUSE_STATUS]
+_LAP_COMPLETE = STATUS_CODE["lap_complete"]
+_REVERSED = STATUS_CODE["reversed"]
+_CRASHED = STATUS_CODE["crashed"]
+_TIME_UP = STATUS_CODE["time_up"]
+
+
+@dataclass(frozen=True)
+class RaceTick:
+    """One row of a race as a live view draws it; the last tick carries the result."""
+
+    step: int  # row number: 0 is the car on the start line before it moves
+    clock: float  # race clock, seconds
+    window_seconds: float
+    x: float  # car centre, metres
+    y: float
+    heading: float  # degrees, 0 = +x, counter-clockwise positive
+    speed: float  # m/s
+    lap: int  # lap in progress, 1-based
+    lap_time: float  # time so far in the lap in progress, penalties included
+    progress: float  # percent of the lap in progress
+    laps: tuple[LapRecord, ...]  # completed laps so far
+    lap_offtracks: int  # off-tracks in the lap in progress
+    offtrack: bool  # the car left the track on this row
+    status: str  # sim-trace status of this row: in_progress, off_track, pause, lap_complete ...
+    penalty_remaining: float  # seconds of penalty hold still to serve
+    result: RaceResult | None = None
+
+    @property
+    def finished(self) -> bool:
+        return self.result is not None
+
+
+class _Race:
+    """The race's state between ticks; `tick` advances it by one row."""
+
+    def __init__(
+        self,
+        track: Track,
+        rules: RaceRules,
+        driver: Driver,
+        *,
+        racer: str,
+        seed: int,
+        car: CarSpec,
+        keep_trace: bool,
+    ) -> None:
+        self.track = track
+        self.rules = rules
+        self.driver = driver
+        self.racer = racer
+        self.seed = seed
+        self.started_at = now_iso()
+        self.sim = sim = TrackSimulation(track, 1, car=car, rules=RACE_EPISODE_RULES)
+        sim.reset_car(0, start_s=0.0)
+        driver.reset(sim)
+        self.length = track.length
+        self.window = rules.window_seconds
+        self.drive_steps = 0
+        self.held = 0.0  # total seconds of penalty holds served
+        self.hold_left = 0.0
+        self.row = 0
+        self.lap = 1
+        self.lap_start = 0.0
+        self.lap_offtracks = 0
+        self.lap_penalty = 0.0
+        self.laps: list[LapRecord] = []
+        self.laps_view: tuple[LapRecord, ...] = ()
+        self.total_offtracks = 0
+        self.status = _PREPARE
+        self.offtrack = False
+        self.trace = (
+            TraceRecorder(round(self.window / STEP_SECONDS) + 64, self.length)
+            if keep_trace
+            else None
+        )
+        self._record(self.lap)
+
+    @property
+    def clock(self) -> float:
+        # Computed, not accumulated, so a long race does not gather rounding drift.
+        return self.drive_steps * STEP_SECONDS + self.held
+
+    @property
+    def finished(self) -> bool:
+        return self.clock >= self.window - _EPS
+
+    def tick(self) -> None:
+        if self.hold_left > 0.0:
+            self._hold()
+        else:
+            self._drive()
+        self.row += 1
+
+    def _hold(self) -> None:
+        served = min(STEP_SECONDS, self.hold_left, self.window - self.clock)
+        self.held += served
+        self.hold_left -= served
+        if self.hold_left < _EPS:
+            self.hold_left = 0.0
+        self.status = _PAUSE
+        self.offtrack = False
+        self._record(self.lap)
+
+    def _drive(self) -> None:
+        sim = self.sim
+        start = self.clock
+        lap = self.lap
+        before_travelled = float(sim.travelled[0])
+        before_s = float(sim.s[0])
+        before_offset = float(sim.distance_from_center[0]) * (
+            1.0 if sim.left_of_center[0] else -1.0
+        )
+        before_width = float(sim.track_width[0])
+        action = self.driver.act(sim)
+        steering = float(action.steering_deg[0])
+        throttle = float(action.speed[0])
+        index = int(action.action_index[0])
+        sim.apply(action.steering_deg, action.speed)
+        self.drive_steps += 1
+        outcome = sim.terminal[0]
+        self.offtrack = False
+        pause = 0.0
+        if outcome == 0:
+            self.status = _IN_PROGRESS
+        else:
+            status = sim.status[0]
+            if status == EpisodeStatus.LAP_COMPLETE:
+                self._lap_complete(start, before_travelled)
+            elif status == EpisodeStatus.OFF_TRACK:
+                self.offtrack = True
+                self.lap_offtracks += 1
+                self.total_offtracks += 1
+                pause = self.rules.penalty_seconds
+                self.status = _OFF_TRACK
+            elif status == EpisodeStatus.CRASHED:
+                pause = self.rules.collision_penalty_seconds
+                self.status = _CRASHED
+            elif status == EpisodeStatus.REVERSED:
+                pause = self.rules.penalty_seconds
+                self.status = _REVERSED
+            else:  # nothing else is switched on; drive on rather than stall the race
+                sim.continue_episode(0, float(sim.travelled[0]))
+                self.status = _IN_PROGRESS
+        self._record(
+            lap,
+            steering=steering,
+            throttle=throttle,
+            speed=float(sim.fleet.speed[0]),
+            action=index,
+            pause=pause,
+        )
+        if self.status in (_OFF_TRACK, _CRASHED):
+            self._put_back(before_s, before_offset, before_width, before_travelled)
+            self._penalise(pause)
+        elif self.status == _REVERSED:
+            # Turned round where it is now, keeping its progress bookkeeping.
+            self._put_back(
+                float(sim.s[0]),
+                float(sim.distance_from_center[0]) * (1.0 if sim.left_of_center[0] else -1.0),
+                float(sim.track_width[0]),
+                float(sim.travelled[0]),
+            )
+            self._penalise(pause)
+
+    def _penalise(self, seconds: float) -> None:
+        self.lap_penalty += seconds
+        self.hold_left = seconds
+
+    def _lap_complete(self, start: float, before_travelled: float) -> None:
+        sim = self.sim
+        after = float(sim.travelled[0])
+        fraction = (self.length - before_travelled) / max(after - before_travelled, 1e-12)
+        crossing = start + min(max(fraction, 0.0), 1.0) * STEP_SECONDS
+        sim.continue_episode(0, after - self.length)
+        self.status = _LAP_COMPLETE
+        if crossing > self.window + _EPS:
+            return  # the window closed before the line: the lap does not count
+        time = crossing - self.lap_start
+        lap = LapRecord(
+            number=self.lap,
+            time_seconds=time,
+            raw_seconds=time - self.lap_penalty,
+            penalty_seconds=self.lap_penalty,
+            offtracks=self.lap_offtracks,
+            valid=True,
+            started_at=self.lap_start,
+        )
+        if not lap_counts(lap, self.rules):
+            lap = replace(lap, valid=False)
+        self.laps.append(lap)
+        self.laps_view = tuple(self.laps)
+        self.lap += 1
+        self.lap_start = crossing
+        self.lap_offtracks = 0
+        self.lap_penalty = 0.0
+
+    def _put_back(self, s_ahead: float, offset: float, width: float, travelled: float) -> None:
+        """Place the car with its look-ahead point at arc length `s_ahead`, along the track."""
+        sim = self.sim
+        centre = self.track.centerline
+        limit = max(width / 2.0 - _RESET_MARGIN, 0.0)
+        offset = min(max(offset, -limit), limit)
+        s_centre = (s_ahead - LOOK_AHEAD) % self.length
+        where = np.array([s_centre])
+        point = centre.point_at(where)[0]
+        tangent = centre.direction_at(where)[0]
+        x = float(point[0] - offset * tangent[1])
+        y = float(point[1] + offset * tangent[0])
+        sim.put(0, x, y, math.atan2(float(tangent[1]), float(tangent[0])), 0.0)
+        moved = (float(sim.s[0]) - s_ahead + self.length / 2.0) % self.length - self.length / 2.0
+        sim.continue_episode(0, travelled + moved)
+
+    def _record(
+        self,
+        lap: int,
+        *,
+        steering: float = 0.0,
+        throttle: float = 0.0,
+        speed: float = 0.0,
+        action: int = -1,
+        pause: float = 0.0,
+    ) -> None:
+        if self.trace is None:
+            return
+        sim = self.sim
+        fleet = sim.fleet
+        heading = math.degrees(float(fleet.yaw[0]))
+        progress = float(sim.travelled[0]) / self.length * 100.0
+        self.trace.add(
+            t=self.clock,
+            x=float(fleet.x[0]),
+            y=float(fleet.y[0]),
+            heading=180.0 - (180.0 - heading) % 360.0,
+            speed=speed,
+            steering=steering,
+            throttle=throttle,
+            action=action,
+            status=self.status,
+            lap=lap,
+            offtrack=self.offtrack,
+            all_wheels_on=bool(sim.wheels_on[0].all()),
+            progress=min(max(progress, 0.0), 100.0),
+            waypoint=int(sim.segment[0]),
+            pause=pause,
+        )
+
+    def live_tick(self, result: RaceResult | None = None) -> RaceTick:
+        sim = self.sim
+        fleet = sim.fleet
+        heading = math.degrees(float(fleet.yaw[0]))
+        held = self.status == _PAUSE or self.hold_left > 0.0
+        return RaceTick(
+            step=self.row,
+            clock=min(self.clock, self.window),
+            window_seconds=self.window,
+            x=float(fleet.x[0]),
+            y=float(fleet.y[0]),
+            heading=180.0 - (180.0 - heading) % 360.0,
+            speed=0.0 if held else float(fleet.speed[0]),
+            lap=self.lap,
+            lap_time=max(self.clock - self.lap_start, 0.0),
+            progress=min(max(float(sim.travelled[0]) / self.length * 100.0, 0.0), 100.0),
+            laps=self.laps_view,
+            lap_offtracks=self.lap_offtracks,
+            offtrack=self.offtrack,
+            status=TRACE_STATUSES[self.status],
+            penalty_remaining=self.hold_left,
+            result=result,
+        )
+
+    def result(self) -> RaceResult:
+        trace = None
+        if self.trace is not None:
+            trace = self.trace.finish()
+            # The window closed on the last row: DeepRacer's "time up".
+            if len(trace) > 1 and int(trace.status[-1]) in (_IN_PROGRESS, _PAUSE):
+                trace.status[-1] = _TIME_UP
+        laps = tuple(self.laps)
+        return RaceResult(
+            result_id=new_id(),
+            racer=self.racer,
+            model_name=self.driver.name,
+            model_hash=self.driver.content_hash,
+            track_name=self.track.name,
+            track_hash=self.track.content_hash,
+            rules=self.rules,
+            seed=self.seed,
+            laps=laps,
+            scoring=score_laps(laps, self.rules),
+            total_offtracks=self.total_offtracks,
+            started_at=self.started_at,
+            trace=trace,
+        )
+
+
+def race_ticks(
+    track: Track,
+    rules: RaceRules = DEFAULT_RULES,
+    driver: Driver | None = None,
+    *,
+    racer: str | None = None,
+    seed: int = 0,
+    car: CarSpec = DEEPRACER_CAR,
+    keep_trace: bool = True,
+) -> Generator[RaceTick, None, RaceResult]:
+    """The race as a stream of ticks, one per row (1/15 s of race clock; shorter at the end
+    of a penalty hold). The first tick is the car on the start line; the last carries the
+    result (also the generator's return value). A live view paces them at 1x, 2x or 4x."""
+    race = _start(track, rules, driver, racer=racer, seed=seed, car=car, keep_trace=keep_trace)
+    yield race.live_tick()
+    while not race.finished:
+        race.tick()
+        if not race.finished:
+            yield race.live_tick()
+    result = race.result()
+    yield race.live_tick(result)
+    return result
+
+
+def run_race(
+    track: Track,
+    rules: RaceRules = DEFAULT_RULES,
+    driver: Driver | None = None,
+    *,
+    racer: str | None = None,
+    seed: int = 0,
+    car: CarSpec = DEEPRACER_CAR,
+    keep_trace: bool = True,
+) -> RaceResult:
+    """Run a whole race as fast as the machine can; `driver` defaults to the reference driver."""
+    race = _start(track, rules, driver, racer=racer, seed=seed, car=car, keep_trace=keep_trace)
+    while not race.finished:
+        race.tick()
+    return race.result()
+
+
+def _start(
+    track: Track,
+    rules: RaceRules,
+    driver: Driver | None,
+    *,
+    racer: str | None,
+    seed: int,
+    car: CarSpec,
+    keep_trace: bool,
+) -> _Race:
+    if driver is None:
+        from sim.race.driver import reference_driver
+
+        driver = reference_driver(track, car)
+    return _Race(
+        track,
+        rules,
+        driver,
+        racer=racer if racer is not None else driver.name,
+        seed=seed,
+        car=car,
+        keep_trace=keep_trace,
+    )

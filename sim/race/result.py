@@ -1,0 +1,296 @@
+"""A race's result: every lap, the score under the race's rules, and what raced.
+
+Results cross machines (league sync, JSON output), so `RaceResult.from_json` validates
+everything and recomputes the score from the laps rather than trusting it. A result
+satisfies `league.ranking.Rankable`, so standings are `league.ranking.rank(results)`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import unicodedata
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from typing import Any
+
+from sim.ids import is_valid_id
+from sim.race.rules import RaceRules, RulesError, Score, rules_from_mapping, score_laps
+from sim.race.trace import RaceTrace
+
+RESULT_FORMAT = 1
+MAX_NAME_LENGTH = 100
+MAX_LAPS = 10_000
+_HASH = re.compile(r"[\w:.\-]{1,200}")
+_NOT_PLAIN = frozenset({"Cc", "Cs", "Zl", "Zp"})  # control, surrogate, line/paragraph breaks
+
+
+class ResultError(ValueError):
+    """A race result that cannot be trusted or read; the message names the field."""
+
+
+@dataclass(frozen=True)
+class LapRecord:
+    """One completed lap. `time_seconds` includes penalties; `raw_seconds` does not."""
+
+    number: int  # 1-based
+    time_seconds: float
+    raw_seconds: float
+    penalty_seconds: float
+    offtracks: int
+    valid: bool  # counts under the rules' off-track limit
+    started_at: float  # race clock when the lap started, seconds
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "number": self.number,
+            "time_seconds": self.time_seconds,
+            "raw_seconds": self.raw_seconds,
+            "penalty_seconds": self.penalty_seconds,
+            "offtracks": self.offtracks,
+            "valid": self.valid,
+            "started_at": self.started_at,
+        }
+
+    @classmethod
+    def from_json(cls, data: object, where: str) -> LapRecord:
+        if not isinstance(data, Mapping):
+            raise ResultError(f"{where} must be an object.")
+        lap = cls(
+            number=_whole(data, "number", where, 1),
+            time_seconds=_seconds(data, "time_seconds", where),
+            raw_seconds=_seconds(data, "raw_seconds", where),
+            penalty_seconds=_seconds(data, "penalty_seconds", where),
+            offtracks=_whole(data, "offtracks", where, 0),
+            valid=_flag(data, "valid", where),
+            started_at=_seconds(data, "started_at", where),
+        )
+        if abs(lap.raw_seconds + lap.penalty_seconds - lap.time_seconds) > 1e-3:
+            raise ResultError(f"{where}.time_seconds is not raw_seconds plus penalty_seconds.")
+        return lap
+
+
+def now_iso() -> str:
+    """The current UTC time, ISO-8601 with milliseconds: fixed width, so it sorts as text."""
+    return datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-3] + "Z"
+
+
+@dataclass(frozen=True, eq=False)
+class RaceResult:
+    """One entrant's time trial. Compared by identity: two runs are two results."""
+
+    result_id: str  # sim.ids.new_id()
+    racer: str  # the person
+    model_name: str  # the car ("reference" for the reference driver)
+    model_hash: str  # the driver's content hash
+    track_name: str
+    track_hash: str
+    rules: RaceRules
+    seed: int
+    laps: tuple[LapRecord, ...]
+    scoring: Score
+    total_offtracks: int  # including off-tracks in a lap the window cut
+    started_at: str  # ISO-8601 UTC
+    trace: RaceTrace | None = None
+
+    # --- league.ranking.Rankable ---------------------------------------------------------
+    @property
+    def score(self) -> float | None:
+        return self.scoring.value
+
+    @property
+    def scoring_offtracks(self) -> int:
+        return self.scoring.offtracks
+
+    @property
+    def valid_laps(self) -> int:
+        return self.scoring.valid_laps
+
+    @property
+    def recorded_at(self) -> str:
+        return self.started_at
+
+    @property
+    def record_id(self) -> str:
+        return self.result_id
+
+    # --- summaries -----------------------------------------------------------------------
+    @property
+    def best_lap(self) -> LapRecord | None:
+        """The fastest lap that counts (fewer off-tracks, then the earlier lap, on a tie)."""
+        counting = [lap for lap in self.laps if lap.valid]
+        if not counting:
+            return None
+        return min(
+            counting, key=lambda lap: (round(lap.time_seconds, 6), lap.offtracks, lap.number)
+        )
+
+    @property
+    def completed_laps(self) -> int:
+        return len(self.laps)
+
+    def with_trace(self, trace: RaceTrace | None) -> RaceResult:
+        return replace(self, trace=trace)
+
+    def to_json(self) -> dict[str, Any]:
+        """Everything but the trace (traces are sim-trace CSV files)."""
+        best = self.best_lap
+        return {
+            "format": RESULT_FORMAT,
+            "result_id": self.result_id,
+            "racer": self.racer,
+            "model_name": self.model_name,
+            "model_hash": self.model_hash,
+            "track_name": self.track_name,
+            "track_hash": self.track_hash,
+            "rules": self.rules.to_dict(),
+            "seed": self.seed,
+            "started_at": self.started_at,
+            "laps": [lap.to_json() for lap in self.laps],
+            "scoring": {
+                "value": self.scoring.value,
+                "lap_numbers": list(self.scoring.lap_numbers),
+                "offtracks": self.scoring.offtracks,
+                "valid_laps": self.scoring.valid_laps,
+            },
+            "best_lap_seconds": None if best is None else best.time_seconds,
+            "total_offtracks": self.total_offtracks,
+        }
+
+    @classmethod
+    def from_json(cls, data: object) -> RaceResult:
+        """Read a result written by `to_json` (perhaps on another machine), validated.
+
+        The score is recomputed from the laps and the rules; a stored score that disagrees
+        means the record was altered or written by a different scoring, and is rejected.
+        """
+        if not isinstance(data, Mapping):
+            raise ResultError("a race result must be a JSON object.")
+        fmt = data.get("format", RESULT_FORMAT)
+        if fmt != RESULT_FORMAT:
+            raise ResultError(
+                f"race result format {fmt!r} is not supported; update racer-tui to read it."
+            )
+        result_id = data.get("result_id")
+        if not is_valid_id(result_id):
+            raise ResultError("result_id must be a 26-character record id.")
+        assert isinstance(result_id, str)
+        rules_data = data.get("rules")
+        if not isinstance(rules_data, Mapping):
+            raise ResultError("rules must be an object of race rules.")
+        try:
+            rules = rules_from_mapping(rules_data)
+        except RulesError as error:
+            raise ResultError(f"rules: {error}") from None
+        laps_data = data.get("laps")
+        if not isinstance(laps_data, list) or len(laps_data) > MAX_LAPS:
+            raise ResultError(f"laps must be a list of at most {MAX_LAPS} laps.")
+        laps = tuple(LapRecord.from_json(lap, f"laps[{i}]") for i, lap in enumerate(laps_data))
+        for i, lap in enumerate(laps):
+            limit = rules.max_offtracks_per_lap
+            if lap.number != i + 1:
+                raise ResultError(f"laps[{i}].number must be {i + 1}, not {lap.number}.")
+            if lap.valid and limit is not None and lap.offtracks > limit:
+                raise ResultError(
+                    f"laps[{i}] is marked valid with {lap.offtracks} off-tracks; "
+                    f"the rules allow {limit}."
+                )
+        total_offtracks = _whole(data, "total_offtracks", "result", 0)
+        if total_offtracks < sum(lap.offtracks for lap in laps):
+            raise ResultError("total_offtracks is less than the off-tracks of its laps.")
+        scoring = score_laps(laps, rules)
+        stored = data.get("scoring")
+        if isinstance(stored, Mapping) and not _same_score(stored.get("value"), scoring.value):
+            raise ResultError("scoring.value does not match the laps under the rules.")
+        seed = data.get("seed")
+        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+            raise ResultError("seed must be a whole number from 0 to 2^63 - 1.")
+        return cls(
+            result_id=result_id,
+            racer=_name(data, "racer"),
+            model_name=_name(data, "model_name"),
+            model_hash=_hash(data, "model_hash"),
+            track_name=_name(data, "track_name"),
+            track_hash=_hash(data, "track_hash"),
+            rules=rules,
+            seed=seed,
+            laps=laps,
+            scoring=scoring,
+            total_offtracks=total_offtracks,
+            started_at=_timestamp(data, "started_at"),
+            trace=None,
+        )
+
+
+def _same_score(stored: object, computed: float | None) -> bool:
+    if computed is None or stored is None:
+        return stored is None and computed is None
+    if isinstance(stored, bool) or not isinstance(stored, int | float):
+        return False
+    return abs(float(stored) - computed) <= 1e-3
+
+
+def is_plain_name(text: object) -> bool:
+    """Whether `text` can name a racer, model or track in a result: 1 to MAX_NAME_LENGTH
+    printable characters, no line breaks or control characters (the league's rule)."""
+    return (
+        isinstance(text, str)
+        and bool(text.strip())
+        and len(text) <= MAX_NAME_LENGTH
+        and not any(unicodedata.category(ch) in _NOT_PLAIN for ch in text)
+    )
+
+
+def _name(data: Mapping[str, Any], key: str) -> str:
+    value = data.get(key)
+    if not is_plain_name(value):
+        raise ResultError(
+            f"{key} must be 1 to {MAX_NAME_LENGTH} printable characters, without line "
+            "breaks or control characters."
+        )
+    assert isinstance(value, str)
+    return value
+
+
+def _hash(data: Mapping[str, Any], key: str) -> str:
+    value = data.get(key)
+    if not isinstance(value, str) or not _HASH.fullmatch(value):
+        raise ResultError(f"{key} must be a content hash (letters, digits, ':', '.', '-').")
+    return value
+
+
+def _timestamp(data: Mapping[str, Any], key: str) -> str:
+    value = data.get(key)
+    if isinstance(value, str) and len(value) <= 40:
+        try:
+            parsed = datetime.fromisoformat(value)
+        except ValueError:
+            parsed = None
+        if parsed is not None and parsed.utcoffset() is not None:
+            return value
+    raise ResultError(f"{key} must be an ISO-8601 time with a UTC offset, like {now_iso()}.")
+
+
+def _seconds(data: Mapping[str, Any], key: str, where: str) -> float:
+    value = data.get(key)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ResultError(f"{where}.{key} must be a number of seconds.")
+    number = float(value)
+    if not math.isfinite(number) or not 0.0 <= number <= 1e6:
+        raise ResultError(f"{where}.{key} must be a finite, non-negative number of seconds.")
+    return number
+
+
+def _whole(data: Mapping[str, Any], key: str, where: str, low: int) -> int:
+    value = data.get(key)
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= 10**9:
+        raise ResultError(f"{where}.{key} must be a whole number of at least {low}.")
+    return value
+
+
+def _flag(data: Mapping[str, Any], key: str, where: str) -> bool:
+    value = data.get(key)
+    if not isinstance(value, bool):
+        raise ResultError(f"{where}.{key} must be true or false.")
+    return value
