@@ -22,6 +22,7 @@ COMMAND_MODULES = (
     "racer_tui.track_commands",
     "racer_tui.reward_commands",
     "racer_tui.model_commands",
+    "racer_tui.league_commands",
 )
 
 

@@ -1,0 +1,345 @@
+"""The submission assembler: one league submission from a model's DeepRacer files.
+
+The seed project's five files are read through sim.deepracer_files (the one place that
+knows their formats): model metadata, hyperparameters, training params, training metrics
+and evaluation metrics (the latest, unless one is named). Three folder layouts work:
+
+- a racer-tui model folder (garage name or path): all five files beside each other;
+- a DeepRacer-for-Cloud model folder: `model/`, `ip/`, `metrics/`;
+- an AWS console log download: `metrics/training/`, `metrics/evaluation/`, `sim-trace/`.
+
+The racer and the track are the two things a racer says; everything else comes from the
+files. Evaluation metrics are required (they are what ranks); a racer-tui folder must
+have its metadata, hyperparameters and training params, a DeepRacer-for-Cloud folder its
+metadata; any other file is used when present. A file that is present but malformed is an
+error naming it, and `assemble` touches no database: a failure writes nothing.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from league.errors import LeagueError
+from league.racers import check_name
+from sim.deepracer_files import (
+    MODEL_METADATA,
+    DeepRacerFileError,
+    DeepRacerFiles,
+    EvaluationTrial,
+    ModelMetadata,
+    TrainingMetrics,
+    TrainingParams,
+    locate_files,
+    read_evaluation_metrics,
+    read_hyperparameters,
+    read_model_metadata,
+    read_training_metrics,
+    read_training_params,
+)
+from sim.ids import canonical_json, content_hash
+from sim.names import is_valid_name
+from sim.track import Track, TrackError
+from sim.track_catalog import resolve_track
+
+RACER_TUI = "racer-tui"
+DRFC = "deepracer-for-cloud"
+CONSOLE = "console-logs"
+MAX_TRIALS = 1000
+
+
+@dataclass(frozen=True)
+class EvaluationLap:
+    """One evaluation trial as the league keeps it (sim.race.rules.TimedLap for scoring)."""
+
+    number: int
+    time_seconds: float  # elapsed time, penalties included (DeepRacer counts them inside)
+    completion: float
+    status: str
+    offtracks: int
+    crashes: int
+    completed: bool  # a full lap: only these have a lap time
+
+    @property
+    def valid(self) -> bool:
+        return self.completed
+
+    @classmethod
+    def from_trial(cls, number: int, trial: EvaluationTrial) -> EvaluationLap:
+        return cls(
+            number=number,
+            time_seconds=trial.elapsed_time_in_milliseconds / 1000.0,
+            completion=trial.completion_percentage,
+            status=trial.episode_status,
+            offtracks=trial.off_track_count,
+            crashes=trial.crash_count,
+            completed=trial.lap_time_seconds is not None,
+        )
+
+
+@dataclass(frozen=True)
+class Submission:
+    """Everything a submission row and its laps hold, before it is stored."""
+
+    racer: str
+    track_hash: str
+    track_name: str
+    model_name: str
+    model_hash: str
+    source: str  # RACER_TUI, DRFC or CONSOLE
+    action_space: dict[str, Any] | None
+    sensors: list[str] | None
+    neural_network: str | None
+    training_algorithm: str | None
+    hyperparameters: dict[str, float | int | str] | None
+    training: dict[str, Any] | None
+    evaluation_file: str
+    laps: tuple[EvaluationLap, ...]
+
+    @property
+    def completed_laps(self) -> list[EvaluationLap]:
+        return [lap for lap in self.laps if lap.completed]
+
+    @property
+    def best_lap(self) -> float | None:
+        times = [lap.time_seconds for lap in self.completed_laps]
+        return min(times) if times else None
+
+    @property
+    def fingerprint(self) -> str:
+        """Same racer, track, car and laps: the same submission, however often it is sent."""
+        return content_hash(
+            {
+                "racer": self.racer.casefold(),
+                "track_hash": self.track_hash,
+                "model_hash": self.model_hash,
+                "laps": [lap.__dict__ for lap in self.laps],
+            }
+        )
+
+
+def assemble(
+    model: str,
+    racer: str,
+    *,
+    track: str | None = None,
+    evaluation: Path | None = None,
+) -> Submission:
+    """Read a model's files into a Submission; LeagueError names any missing/bad file."""
+    racer_name = check_name(racer)
+    folder, garage_name = _model_folder(model)
+    files = locate_files(folder)
+    source = _layout(files)
+    try:
+        metadata = _optional(read_model_metadata, files.model_metadata)
+        hyperparameters = _optional(read_hyperparameters, files.hyperparameters)
+        params = _optional(read_training_params, files.training_params)
+        training = _optional(
+            read_training_metrics, files.training_metrics[-1] if files.training_metrics else None
+        )
+        evaluation_path = _evaluation_path(folder, files, evaluation)
+        trials = read_evaluation_metrics(evaluation_path)
+    except DeepRacerFileError as error:
+        raise LeagueError(str(error)) from None
+    _require(source, folder, files)
+    if not trials:
+        raise LeagueError(f"{evaluation_path}: the evaluation has no trials; evaluate again.")
+    if len(trials) > MAX_TRIALS:
+        raise LeagueError(
+            f"{evaluation_path}: {len(trials)} trials is more than the {MAX_TRIALS} allowed."
+        )
+    raced_on = _track(track, params, files, folder)
+    return Submission(
+        racer=racer_name,
+        track_hash=raced_on.content_hash,
+        track_name=raced_on.name,
+        model_name=garage_name or folder.resolve().name,
+        model_hash=_model_hash(
+            folder,
+            source=source,
+            metadata=metadata,
+            hyperparameters=hyperparameters,
+            training=training,
+            trials=trials,
+        ),
+        source=source,
+        action_space=None if metadata is None else _action_summary(metadata),
+        sensors=None if metadata is None else list(metadata.sensors),
+        neural_network=None if metadata is None else metadata.neural_network,
+        training_algorithm=None if metadata is None else metadata.training_algorithm,
+        hyperparameters=hyperparameters,
+        training=_training_summary(training, params),
+        evaluation_file=evaluation_path.name,
+        laps=tuple(EvaluationLap.from_trial(i + 1, trial) for i, trial in enumerate(trials)),
+    )
+
+
+def _model_folder(model: str) -> tuple[Path, str | None]:
+    """The folder to read, and the garage name when `model` named a garage model."""
+    from sim.garage.folder import models_dir
+
+    if is_valid_name(model) and (models_dir() / model / MODEL_METADATA).is_file():
+        return models_dir() / model, model
+    path = Path(model).expanduser()
+    if path.is_dir():
+        return path, None
+    raise LeagueError(
+        f"there is no model named {model!r} in the garage and no folder {model}; give a "
+        "garage model name or the path of a model folder or DeepRacer log download."
+    )
+
+
+def _layout(files: DeepRacerFiles) -> str:
+    def inside(path: Path | None) -> str:
+        return "" if path is None else path.relative_to(files.root).parts[0]
+
+    if files.model_metadata is not None and inside(files.model_metadata) == MODEL_METADATA:
+        return RACER_TUI
+    metric_dirs = {
+        path.relative_to(files.root).parts[1]
+        for path in (*files.training_metrics, *files.evaluation_metrics)
+        if len(path.relative_to(files.root).parts) > 2
+    }
+    if metric_dirs & {"training", "evaluation"} and files.model_metadata is None:
+        return CONSOLE
+    return DRFC
+
+
+def _require(source: str, folder: Path, files: DeepRacerFiles) -> None:
+    needed: dict[str, Path | None]
+    if source == RACER_TUI:
+        needed = {
+            "hyperparameters.json": files.hyperparameters,
+            "training_params.yaml": files.training_params,
+        }
+    elif source == DRFC:
+        needed = {"model/model_metadata.json": files.model_metadata}
+    else:
+        needed = {}
+    for name, path in needed.items():
+        if path is None:
+            raise LeagueError(
+                f"{folder / name}: the file does not exist; a {source} model folder needs it."
+            )
+
+
+def _optional(reader: Any, path: Path | None) -> Any:
+    return None if path is None else reader(path)
+
+
+def _evaluation_path(folder: Path, files: DeepRacerFiles, named: Path | None) -> Path:
+    if named is not None:
+        path = Path(named).expanduser()
+        if not path.is_absolute() and not path.exists() and (folder / path).exists():
+            path = folder / path
+        return path
+    latest = files.latest_evaluation
+    if latest is None:
+        raise LeagueError(
+            f"{folder}: there are no evaluation metrics (evaluation-*.json); evaluate the "
+            "model first, or name a file with --evaluation."
+        )
+    return latest
+
+
+def _track(
+    spec: str | None, params: TrainingParams | None, files: DeepRacerFiles, folder: Path
+) -> Track:
+    if spec is not None:
+        try:
+            return resolve_track(spec)
+        except TrackError as error:
+            raise LeagueError(str(error)) from None
+    if params is None:
+        raise LeagueError(
+            f"{folder}: there is no training_params.yaml saying which track this is; "
+            "name it with --track."
+        )
+    where = files.training_params
+    try:
+        found = resolve_track(params.world_name)
+    except TrackError:
+        raise LeagueError(
+            f"{where}: WORLD_NAME {params.world_name!r} is not a track racer-tui knows; "
+            "name the track with --track (a track name or a DeepRacer .npy file)."
+        ) from None
+    if params.track_hash and params.track_hash != found.content_hash:
+        raise LeagueError(
+            f"{where}: the track named {params.world_name!r} is not the one this model was "
+            "set up on (its content differs); name the right track with --track."
+        )
+    return found
+
+
+def _action_summary(metadata: ModelMetadata) -> dict[str, Any]:
+    space = metadata.action_space
+    if space.kind == "discrete":
+        speeds = [action.speed for action in space.actions]
+        angles = [action.steering_angle for action in space.actions]
+        return {
+            "type": "discrete",
+            "actions": len(space.actions),
+            "speed": [min(speeds), max(speeds)],
+            "steering": [min(angles), max(angles)],
+        }
+    return {
+        "type": "continuous",
+        "speed": list(space.speed_range),
+        "steering": list(space.steering_range),
+    }
+
+
+def _training_summary(
+    metrics: TrainingMetrics | None, params: TrainingParams | None
+) -> dict[str, Any] | None:
+    if metrics is None and params is None:
+        return None
+    summary: dict[str, Any] = {}
+    if params is not None:
+        summary["world_name"] = params.world_name
+        summary["max_minutes"] = params.max_minutes
+    if metrics is not None and metrics.episodes:
+        training = [e for e in metrics.episodes if e.phase == "training"]
+        first = min(e.start_time for e in metrics.episodes)
+        last = max(e.metric_time for e in metrics.episodes)
+        summary["episodes"] = len(training)
+        summary["minutes"] = round(max(last - first, 0) / 60_000, 2)
+        summary["best_completion"] = max(e.completion_percentage for e in metrics.episodes)
+        summary["laps_completed"] = sum(
+            1
+            for e in training
+            if e.completion_percentage >= 100 and e.episode_status != "Off track"
+        )
+    return summary
+
+
+def _model_hash(
+    folder: Path,
+    *,
+    source: str,
+    metadata: ModelMetadata | None,
+    hyperparameters: dict[str, float | int | str] | None,
+    training: TrainingMetrics | None,
+    trials: tuple[EvaluationTrial, ...],
+) -> str:
+    """What identifies the car: for our folders the garage's hash (metadata + weights), the
+    same as the model's bundle; for DeepRacer downloads, what the files say about it."""
+    if source == RACER_TUI:
+        from sim.garage.folder import ModelFolder
+
+        return ModelFolder(folder).content_hash()
+    digest = hashlib.sha256(
+        canonical_json(
+            {
+                "metadata": None if metadata is None else metadata.to_json(),
+                "hyperparameters": hyperparameters,
+            }
+        )
+    )
+    if training is not None:
+        digest.update(canonical_json(training.to_json()))
+    else:  # nothing but the evaluation says which run this was
+        digest.update(canonical_json([trial.__dict__ for trial in trials]))
+    return digest.hexdigest()

@@ -1,0 +1,227 @@
+"""The leaderboard: each racer's best entry per track, ranked by league.ranking.rank.
+
+Entries are submissions (evaluations) and races. The cached `entries` table (see
+league.entries) holds every entry's score under every ranking method with corrections
+applied, and `board` each racer's best entry per track and method in ranking order: a
+track's leaderboard is one range scan of `board`, and `rank()` then puts the (already
+nearly sorted) rows in the league's one total order. Filtered boards (a night, a season)
+pick each racer's best straight from `entries`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Any
+
+from league.entries import best_entries_sql, score_column
+from league.errors import LeagueError
+from league.racers import display_names_overrides
+from league.ranking import rank
+from league.store import League
+from league.tracks import track_names
+from sim.race.rules import RankingMethod
+
+BY_CHOICES: dict[str, RankingMethod] = {
+    "best": RankingMethod.BEST_LAP,
+    "average": RankingMethod.BEST_AVERAGE,
+    "total": RankingMethod.TOTAL_TIME,
+}
+
+
+@dataclass(slots=True)
+class LeaderboardRow:
+    """One racer's best entry on one track (satisfies league.ranking.Rankable).
+
+    Not frozen: `rank` is filled in once the rows are ranked (copying thousands of rows
+    to set one field would cost more than the query).
+    """
+
+    record_id: str
+    kind: str  # "submission" or "race"
+    racer: str  # the racer's name (the tie-break uses it: it never changes)
+    display_name: str
+    model: str
+    track_hash: str
+    track_name: str
+    night_id: str | None
+    score: float | None
+    scoring_offtracks: int
+    valid_laps: int
+    recorded_at: str
+    best_lap: float | None
+    average_lap: float | None
+    offtracks: int
+    laps_driven: int
+    rank: int = 0
+
+
+@dataclass(frozen=True)
+class Filters:
+    track_hash: str | None = None
+    racer: str | None = None  # racer name
+    night_ids: Sequence[str] | None = None  # None: every entry; a list: races of these nights
+
+
+def _where(filters: Filters) -> tuple[str, list[Any]]:
+    clauses: list[str] = []
+    params: list[Any] = []
+    if filters.track_hash is not None:
+        clauses.append("track_hash = ?")
+        params.append(filters.track_hash)
+    if filters.racer is not None:
+        clauses.append("racer = ?")
+        params.append(filters.racer)
+    if filters.night_ids is not None:
+        clauses.append(f"night_id IN ({', '.join('?' for _ in filters.night_ids)})")
+        params.extend(filters.night_ids)
+    return (f"WHERE {' AND '.join(clauses)}" if clauses else ""), params
+
+
+NATIVE_SCORE = (
+    "CASE native_method WHEN 'best_average' THEN score_best_average "
+    "WHEN 'total_time' THEN score_total_time ELSE score_best_lap END"
+)
+NATIVE_OFFTRACKS = (
+    "CASE native_method WHEN 'best_average' THEN offtracks_best_average "
+    "WHEN 'total_time' THEN offtracks_total_time ELSE offtracks_best_lap END"
+)
+# LeaderboardRow's fields in order, from a table or subquery aliased `b` with the cached
+# columns; display and track names are filled in afterwards from small lookups (joining
+# them row by row costs more than the rest of the query).
+_ROW_COLUMNS = """
+    b.entry_id, b.kind, b.racer, b.racer, b.model_name, b.track_hash, b.track_hash,
+    b.night_id, {score}, b.scoring_offtracks, b.valid_laps, b.recorded_at, b.best_lap,
+    b.average_lap, b.offtracks, b.laps_driven
+"""
+
+
+def leaderboard(
+    league: League, filters: Filters, method: RankingMethod | None = RankingMethod.BEST_LAP
+) -> list[LeaderboardRow]:
+    """Ranked rows, track by track (tracks by name), `rank` numbered from 1 per track.
+
+    `method=None` scores each entry by its own rules' method (a night's races).
+    """
+    if method is not None and filters.night_ids is None:
+        entries = _board_rows(league, filters, method)
+    else:
+        entries = grouped_rows(league, filters, method, group_by="track_hash, racer")
+    tracks = {entry.track_hash: entry.track_name for entry in entries}
+    order = sorted(tracks, key=lambda h: (tracks[h].casefold(), h))
+    return rank_groups(entries, lambda entry: entry.track_hash, order)
+
+
+def _board_rows(league: League, filters: Filters, method: RankingMethod) -> list[LeaderboardRow]:
+    """From the `board` table: each racer's best, sorted in SQL nearly as rank() will (the
+    order only has to be close: rank() decides, and sorts a nearly sorted list fast)."""
+    clauses = ["b.method = ?"]
+    params: list[Any] = [method.value]
+    if filters.track_hash is not None:
+        clauses.append("b.track_hash = ?")
+        params.append(filters.track_hash)
+    if filters.racer is not None:
+        clauses.append("b.racer = ?")
+        params.append(filters.racer)
+    columns = _ROW_COLUMNS.format(score="CASE WHEN b.unscored THEN NULL ELSE b.score END")
+    sql = f"""
+        SELECT {columns} FROM board b
+        WHERE {" AND ".join(clauses)}
+        ORDER BY b.track_hash, b.unscored, b.score, b.scoring_offtracks, b.valid_laps DESC,
+                 b.recorded_at, b.racer, b.entry_id
+    """
+    return _rows(league, sql, params)
+
+
+def grouped_rows(
+    league: League, filters: Filters, method: RankingMethod | None, *, group_by: str
+) -> list[LeaderboardRow]:
+    """Each group's best entry straight from `entries` (for filtered, smaller sets)."""
+    score, offtracks = (NATIVE_SCORE, NATIVE_OFFTRACKS) if method is None else score_column(method)
+    where, params = _where(filters)
+    inner = best_entries_sql(score, offtracks, where, group_by)
+    sql = f"SELECT {_ROW_COLUMNS.format(score='b.score')} FROM ({inner}) b"
+    return _rows(league, sql, params)
+
+
+def _rows(league: League, sql: str, params: Sequence[Any]) -> list[LeaderboardRow]:
+    cursor = league.conn.cursor()
+    cursor.row_factory = None  # plain tuples: thousands of rows, built positionally
+    rows = [LeaderboardRow(*values) for values in cursor.execute(sql, params)]
+    shown = display_names_overrides(league)
+    tracks = track_names(league)
+    for row in rows:
+        row.display_name = shown.get(row.racer, row.racer)
+        row.track_name = tracks.get(row.track_hash) or row.track_hash[:12]
+    return rows
+
+
+def rank_groups(
+    entries: Sequence[LeaderboardRow],
+    group: Callable[[LeaderboardRow], Any],
+    order: Sequence[Any],
+) -> list[LeaderboardRow]:
+    """Rank each group with league.ranking.rank and number it from 1; groups in `order`."""
+    groups: dict[Any, list[LeaderboardRow]] = {}
+    for entry in entries:
+        groups.setdefault(group(entry), []).append(entry)
+    result: list[LeaderboardRow] = []
+    for key in order:
+        for position, entry in enumerate(rank(groups.get(key, [])), start=1):
+            entry.rank = position
+            result.append(entry)
+    return result
+
+
+# --- columns, sorting and limits ------------------------------------------------------------
+
+
+class Column(StrEnum):
+    RANK = "rank"
+    RACER = "racer"
+    MODEL = "model"
+    TRACK = "track"
+    SCORE = "score"
+    BEST = "best"
+    AVERAGE = "average"
+    LAPS = "laps"
+    OFFTRACKS = "offtracks"
+    SUBMITTED = "submitted"
+
+
+def _missing_last(value: float | None) -> tuple[bool, float]:
+    return (value is None, value if value is not None else 0.0)
+
+
+SORT_KEYS: dict[Column, Callable[[LeaderboardRow], Any]] = {
+    Column.RANK: lambda row: (row.track_name.casefold(), row.rank),
+    Column.RACER: lambda row: (row.display_name.casefold(), row.racer.casefold()),
+    Column.MODEL: lambda row: row.model.casefold(),
+    Column.TRACK: lambda row: (row.track_name.casefold(), row.rank),
+    Column.SCORE: lambda row: _missing_last(row.score),
+    Column.BEST: lambda row: _missing_last(row.best_lap),
+    Column.AVERAGE: lambda row: _missing_last(row.average_lap),
+    Column.LAPS: lambda row: row.valid_laps,
+    Column.OFFTRACKS: lambda row: row.offtracks,
+    Column.SUBMITTED: lambda row: row.recorded_at,
+}
+
+
+def sort_rows(
+    rows: Sequence[LeaderboardRow], column: str, *, reverse: bool = False
+) -> list[LeaderboardRow]:
+    """Rows ordered by a display column (stable: ties keep rank order)."""
+    try:
+        key = SORT_KEYS[Column(column)]
+    except ValueError:
+        choices = ", ".join(c.value for c in Column)
+        raise LeagueError(f"cannot sort by {column!r}; choose one of {choices}.") from None
+    return sorted(rows, key=key, reverse=reverse)
+
+
+def method_for(by: str) -> RankingMethod:
+    try:
+        return BY_CHOICES[by]
+    except KeyError:
+        raise LeagueError(f"--by must be one of {', '.join(BY_CHOICES)}, not {by!r}.") from None

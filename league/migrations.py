@@ -1,0 +1,278 @@
+"""Ordered schema migrations, numbered by `PRAGMA user_version`.
+
+Migration N (1-based) takes a version N-1 database to version N. All pending migrations
+run at open in one transaction: a crash half-way leaves the old version intact. A
+database whose version is newer than this code knows is refused, never modified.
+
+Append new migrations to MIGRATIONS; never edit one that has shipped. A migration that
+changes what the local leaderboard cache holds sets `rebuilds_cache`: the cache is then
+rebuilt once, from the shared rows, after the last migration.
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from league.errors import LeagueError
+
+
+@dataclass(frozen=True)
+class Migration:
+    description: str
+    apply: Callable[[sqlite3.Connection], None]
+    rebuilds_cache: bool = False
+
+
+def _script(sql: str) -> Callable[[sqlite3.Connection], None]:
+    def apply(conn: sqlite3.Connection) -> None:
+        for statement in sql.split(";"):
+            if statement.strip():
+                conn.execute(statement)
+
+    return apply
+
+
+# Version 1: the shared rows. Racers and tracks are referenced by their natural keys (the
+# racer's name, the track's content hash) so records from two machines join without
+# remapping ids. Laps belong to their submission or race: they carry no id of their own
+# and are part of the parent's content hash.
+SHARED_TABLES = """
+CREATE TABLE racers (
+    id TEXT PRIMARY KEY,
+    name TEXT NOT NULL UNIQUE COLLATE NOCASE,
+    display_name TEXT NOT NULL,
+    colour TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE TABLE tracks (
+    id TEXT PRIMARY KEY,
+    track_hash TEXT NOT NULL UNIQUE,
+    name TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE TABLE seasons (
+    id TEXT PRIMARY KEY,
+    name TEXT NOT NULL UNIQUE COLLATE NOCASE,
+    points TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE TABLE nights (
+    id TEXT PRIMARY KEY,
+    name TEXT NOT NULL,
+    track_hash TEXT NOT NULL REFERENCES tracks(track_hash),
+    season_id TEXT REFERENCES seasons(id),
+    rules TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX nights_season ON nights(season_id);
+CREATE TABLE night_entrants (
+    id TEXT PRIMARY KEY,
+    night_id TEXT NOT NULL REFERENCES nights(id),
+    racer TEXT NOT NULL REFERENCES racers(name),
+    model TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX night_entrants_night ON night_entrants(night_id);
+CREATE TABLE heats (
+    id TEXT PRIMARY KEY,
+    night_id TEXT NOT NULL REFERENCES nights(id),
+    draw_id TEXT NOT NULL,
+    draw_seed INTEGER NOT NULL,
+    position INTEGER NOT NULL,
+    entrant_id TEXT NOT NULL REFERENCES night_entrants(id),
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX heats_night ON heats(night_id, draw_id);
+CREATE TABLE night_closures (
+    id TEXT PRIMARY KEY,
+    night_id TEXT NOT NULL UNIQUE REFERENCES nights(id),
+    closed_by TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE TABLE submissions (
+    id TEXT PRIMARY KEY,
+    racer TEXT NOT NULL REFERENCES racers(name),
+    track_hash TEXT NOT NULL REFERENCES tracks(track_hash),
+    model_name TEXT NOT NULL,
+    model_hash TEXT NOT NULL,
+    source TEXT NOT NULL,
+    action_space TEXT,
+    sensors TEXT,
+    neural_network TEXT,
+    training_algorithm TEXT,
+    hyperparameters TEXT,
+    training TEXT,
+    evaluation_file TEXT NOT NULL,
+    fingerprint TEXT NOT NULL,
+    submitted_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX submissions_racer ON submissions(racer);
+CREATE TABLE submission_laps (
+    submission_id TEXT NOT NULL REFERENCES submissions(id),
+    number INTEGER NOT NULL,
+    time_seconds REAL NOT NULL,
+    completion REAL NOT NULL,
+    status TEXT NOT NULL,
+    offtracks INTEGER NOT NULL,
+    crashes INTEGER NOT NULL,
+    completed INTEGER NOT NULL,
+    PRIMARY KEY (submission_id, number)
+) WITHOUT ROWID;
+CREATE TABLE races (
+    id TEXT PRIMARY KEY,
+    racer TEXT NOT NULL REFERENCES racers(name),
+    track_hash TEXT NOT NULL REFERENCES tracks(track_hash),
+    model_name TEXT NOT NULL,
+    model_hash TEXT NOT NULL,
+    night_id TEXT REFERENCES nights(id),
+    heat_id TEXT REFERENCES heats(id),
+    rules TEXT NOT NULL,
+    seed INTEGER NOT NULL,
+    started_at TEXT NOT NULL,
+    total_offtracks INTEGER NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX races_night ON races(night_id);
+CREATE INDEX races_racer ON races(racer);
+CREATE TABLE race_laps (
+    race_id TEXT NOT NULL REFERENCES races(id),
+    number INTEGER NOT NULL,
+    time_seconds REAL NOT NULL,
+    raw_seconds REAL NOT NULL,
+    penalty_seconds REAL NOT NULL,
+    offtracks INTEGER NOT NULL,
+    valid INTEGER NOT NULL,
+    started_at REAL NOT NULL,
+    PRIMARY KEY (race_id, number)
+) WITHOUT ROWID;
+CREATE TABLE corrections (
+    id TEXT PRIMARY KEY,
+    kind TEXT NOT NULL CHECK (kind IN ('disqualify_lap', 'rename_racer')),
+    target TEXT NOT NULL,
+    lap_number INTEGER,
+    new_value TEXT,
+    reason TEXT NOT NULL,
+    made_by TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX corrections_target ON corrections(target)
+"""
+
+# Version 2: local-only tables, never synced, always rebuildable from the shared rows.
+# `entries` caches each submission's and race's scores under every ranking method with
+# corrections applied, clustered by (track, racer). `board` holds each racer's best entry
+# per track and method, clustered by (method, track), so a track's leaderboard is one range
+# scan. `race_traces` keeps the large per-step traces out of the shared rows.
+LOCAL_TABLES = """
+CREATE TABLE entries (
+    entry_id TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    racer TEXT NOT NULL,
+    track_hash TEXT NOT NULL,
+    model_name TEXT NOT NULL,
+    night_id TEXT,
+    recorded_at TEXT NOT NULL,
+    laps_driven INTEGER NOT NULL,
+    valid_laps INTEGER NOT NULL,
+    offtracks INTEGER NOT NULL,
+    best_lap REAL,
+    average_lap REAL,
+    native_method TEXT NOT NULL,
+    score_best_lap REAL,
+    offtracks_best_lap INTEGER NOT NULL,
+    score_best_average REAL,
+    offtracks_best_average INTEGER NOT NULL,
+    score_total_time REAL,
+    offtracks_total_time INTEGER NOT NULL,
+    PRIMARY KEY (track_hash, racer, entry_id)
+) WITHOUT ROWID;
+CREATE UNIQUE INDEX entries_id ON entries(entry_id);
+CREATE INDEX entries_night ON entries(night_id) WHERE night_id IS NOT NULL;
+CREATE TABLE board (
+    method TEXT NOT NULL,
+    track_hash TEXT NOT NULL,
+    unscored INTEGER NOT NULL,
+    score REAL NOT NULL,
+    scoring_offtracks INTEGER NOT NULL,
+    valid_laps INTEGER NOT NULL,
+    recorded_at TEXT NOT NULL,
+    racer TEXT NOT NULL,
+    entry_id TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    model_name TEXT NOT NULL,
+    night_id TEXT,
+    best_lap REAL,
+    average_lap REAL,
+    offtracks INTEGER NOT NULL,
+    laps_driven INTEGER NOT NULL,
+    PRIMARY KEY (method, track_hash, racer)
+) WITHOUT ROWID;
+CREATE TABLE race_traces (
+    race_id TEXT PRIMARY KEY REFERENCES races(id),
+    format TEXT NOT NULL,
+    data BLOB NOT NULL
+)
+"""
+
+MIGRATIONS: tuple[Migration, ...] = (
+    Migration("shared league rows", _script(SHARED_TABLES)),
+    Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
+)
+SCHEMA_VERSION = len(MIGRATIONS)
+
+
+def user_version(conn: sqlite3.Connection) -> int:
+    return int(conn.execute("PRAGMA user_version").fetchone()[0])
+
+
+def check_version(conn: sqlite3.Connection, path: Path) -> None:
+    """Refuse a database from a newer racer-tui, or one that is not a league at all."""
+    version = user_version(conn)
+    if version > SCHEMA_VERSION:
+        raise LeagueError(
+            f"league database {path} has schema version {version}, newer than the "
+            f"{SCHEMA_VERSION} this racer-tui knows; upgrade racer-tui to open it "
+            "(the file was not changed)."
+        )
+    if version == 0:
+        tables = conn.execute("SELECT count(*) FROM sqlite_master WHERE type = 'table'")
+        if tables.fetchone()[0]:
+            raise LeagueError(
+                f"{path} is an SQLite database but not a racer-tui league; "
+                "choose another --db file (the file was not changed)."
+            )
+
+
+def migrate(conn: sqlite3.Connection) -> int:
+    """Bring the database to SCHEMA_VERSION; returns how many migrations ran."""
+    if user_version(conn) == SCHEMA_VERSION:
+        return 0
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        start = user_version(conn)  # again, under the write lock: another process may have won
+        pending = MIGRATIONS[start:]
+        for migration in pending:
+            migration.apply(conn)
+        if any(migration.rebuilds_cache for migration in pending):
+            from league.entries import rebuild_entries
+
+            rebuild_entries(conn)
+        conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+    except BaseException:
+        if conn.in_transaction:
+            conn.execute("ROLLBACK")
+        raise
+    conn.execute("COMMIT")
+    return len(pending)

@@ -1,0 +1,408 @@
+"""League nights: a track, rules frozen when the night opens, entrants, a drawn heat order,
+one race per entrant, and standings with season points when the night closes.
+
+Every step is a new shared row (night, entrant, heats of a draw, closure): nothing is
+edited in place. A redraw adds heats with a newer draw id; the latest draw orders the
+entrants that have not raced yet.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+import re
+import sqlite3
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from league.errors import LeagueError
+from league.leaderboard import Filters, LeaderboardRow, leaderboard
+from league.racers import check_name, display_names, ensure_racer
+from league.races import record_race
+from league.seasons import DEFAULT_POINTS, get_season
+from league.store import League, now_iso
+from league.tracks import ensure_track
+from sim.ids import new_id
+from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
+from sim.track import Track, TrackError
+
+if TYPE_CHECKING:
+    from sim.race.driver import Driver
+    from sim.race.result import RaceResult
+
+MAX_MODEL_SPEC = 500
+_ID_PREFIX = re.compile(r"[0-9A-HJKMNP-TV-Z]{8,26}")  # the start of a record id
+
+
+@dataclass(frozen=True)
+class Night:
+    id: str
+    name: str
+    track_hash: str
+    track_name: str
+    season_id: str | None
+    rules: RaceRules
+    created_at: str
+    closed: bool
+
+
+@dataclass(frozen=True)
+class Entrant:
+    id: str
+    racer: str
+    display_name: str
+    model: str  # `reference`, a garage model name, or an absolute bundle/folder path
+
+
+@dataclass(frozen=True)
+class Heat:
+    id: str
+    position: int
+    entrant: Entrant
+    seed: int
+    race_id: str | None  # the entrant's race in this night, once run
+
+
+@dataclass(frozen=True)
+class Standing:
+    position: int | None  # None: no valid score, so unplaced
+    points: int
+    entry: LeaderboardRow
+
+
+# --- nights ----------------------------------------------------------------------------------
+
+
+def new_night(
+    league: League,
+    track: Track,
+    *,
+    rules: RaceRules = DEFAULT_RULES,
+    name: str | None = None,
+    season: str | None = None,
+) -> Night:
+    """Open a night on `track`; its rules are frozen in the row from now on."""
+    label = check_name(name, "night name") if name else f"{track.name} {now_iso()[:10]}"
+    with league.transaction():
+        season_row = get_season(league, season) if season else None
+        ensure_track(league, track.content_hash, track.name)
+        night_id = league.insert_record(
+            "nights",
+            {
+                "name": label,
+                "track_hash": track.content_hash,
+                "season_id": season_row.id if season_row else None,
+                "rules": json.dumps(rules.to_dict(), sort_keys=True),
+                "created_at": now_iso(),
+            },
+        )
+    return get_night(league, night_id)
+
+
+def _night(league: League, data: sqlite3.Row) -> Night:
+    track = league.query_one("SELECT name FROM tracks WHERE track_hash = ?", (data["track_hash"],))
+    closed = league.query_one("SELECT 1 FROM night_closures WHERE night_id = ?", (data["id"],))
+    return Night(
+        id=data["id"],
+        name=data["name"],
+        track_hash=data["track_hash"],
+        track_name=track["name"] if track else data["track_hash"][:12],
+        season_id=data["season_id"],
+        rules=rules_from_mapping(json.loads(data["rules"])),
+        created_at=data["created_at"],
+        closed=closed is not None,
+    )
+
+
+def get_night(league: League, spec: str) -> Night:
+    """A night by id, by the start of its id (8+ characters), or by exact name."""
+    spec = spec.strip()
+    row = league.query_one("SELECT * FROM nights WHERE id = ?", (spec.upper(),))
+    if row is None and _ID_PREFIX.fullmatch(spec.upper()):
+        rows = league.query(
+            "SELECT * FROM nights WHERE substr(id, 1, ?) = ?", (len(spec), spec.upper())
+        )
+        row = rows[0] if len(rows) == 1 else None
+    if row is None:
+        rows = league.query("SELECT * FROM nights WHERE name = ? COLLATE NOCASE", (spec,))
+        if len(rows) > 1:
+            raise LeagueError(
+                f"{len(rows)} league nights are called {spec!r}; give the night's id "
+                "(see `racer-tui night list`)."
+            )
+        row = rows[0] if rows else None
+    if row is None:
+        raise LeagueError(f"there is no league night {spec!r}; see `racer-tui night list`.")
+    return _night(league, row)
+
+
+def list_nights(league: League) -> list[Night]:
+    return [_night(league, row) for row in league.query("SELECT * FROM nights ORDER BY id")]
+
+
+def _open(league: League, night: Night) -> None:
+    """Refuse changes to a closed night; asks the database, not a possibly stale `night`
+    (another racer-tui may have closed it since), so call it inside the transaction."""
+    if night.closed or league.query_one(
+        "SELECT 1 FROM night_closures WHERE night_id = ?", (night.id,)
+    ):
+        raise LeagueError(
+            f"league night {night.name!r} is closed; its results are final (open a new night)."
+        )
+
+
+# --- entrants and heats ------------------------------------------------------------------------
+
+
+def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant:
+    spec = model_spec(model)
+    with league.transaction():
+        _open(league, night)
+        name = ensure_racer(league, racer)
+        duplicate = league.query_one(
+            "SELECT 1 FROM night_entrants WHERE night_id = ? AND racer = ? AND model = ?",
+            (night.id, name, spec),
+        )
+        if duplicate:
+            raise LeagueError(f"{name!r} is already entered with {spec!r} on this night.")
+        entrant_id = league.insert_record(
+            "night_entrants",
+            {"night_id": night.id, "racer": name, "model": spec, "created_at": now_iso()},
+        )
+    shown = display_names(league, name).get(name, name)
+    return Entrant(entrant_id, name, shown, spec)
+
+
+def model_spec(model: str) -> str:
+    """What an entrant races, checked now rather than when the heat starts: `reference`, a
+    garage model name, or the absolute path of a bundle or model folder (so `night run`
+    finds it from any working directory)."""
+    from sim.garage.deepracer_import import BUNDLE_SUFFIX
+    from sim.garage.folder import ModelError, models_dir, open_model
+    from sim.race.driver import REFERENCE_NAME
+
+    spec = model.strip()
+    if not spec or len(spec) > MAX_MODEL_SPEC:
+        raise LeagueError("--model must name a garage model, a bundle file or `reference`.")
+    if spec == REFERENCE_NAME:
+        return spec
+    if spec.endswith(BUNDLE_SUFFIX):
+        path = Path(spec).expanduser()
+        if not path.is_file():
+            raise LeagueError(f"there is no bundle file {spec}; check the path.")
+        return str(path.resolve())
+    try:
+        folder = open_model(spec)
+    except ModelError as error:
+        raise LeagueError(str(error)) from None
+    if folder.path.parent == models_dir():
+        return folder.name
+    return str(folder.path.resolve())
+
+
+def entrants(league: League, night: Night) -> list[Entrant]:
+    shown = display_names(league)
+    return [
+        Entrant(row["id"], row["racer"], shown.get(row["racer"], row["racer"]), row["model"])
+        for row in league.query(
+            "SELECT * FROM night_entrants WHERE night_id = ? ORDER BY id", (night.id,)
+        )
+    ]
+
+
+def _raced(league: League, night: Night) -> dict[str, str]:
+    """Entrant id -> race id, for entrants whose heat has been run."""
+    rows = league.query(
+        "SELECT h.entrant_id, r.id FROM races r JOIN heats h ON h.id = r.heat_id "
+        "WHERE r.night_id = ? ORDER BY r.id",
+        (night.id,),
+    )
+    return {row[0]: row[1] for row in rows}
+
+
+def draw_heats(league: League, night: Night, seed: int | None = None) -> list[Heat]:
+    """Draw a random order for the entrants that have not raced, and store it."""
+    chosen = random.SystemRandom().randrange(2**31) if seed is None else seed
+    if not 0 <= chosen < 2**62:
+        raise LeagueError("--seed must be a whole number from 0 to 2^62.")
+    with league.transaction():
+        _open(league, night)
+        raced = _raced(league, night)
+        waiting = [entrant for entrant in entrants(league, night) if entrant.id not in raced]
+        if not waiting:
+            raise LeagueError(
+                f"league night {night.name!r} has no entrants waiting to race; add some with "
+                "`racer-tui night add`."
+            )
+        random.Random(chosen).shuffle(waiting)
+        draw_id = new_id()
+        created = now_iso()
+        for position, entrant in enumerate(waiting, start=1):
+            league.insert_record(
+                "heats",
+                {
+                    "night_id": night.id,
+                    "draw_id": draw_id,
+                    "draw_seed": chosen,
+                    "position": position,
+                    "entrant_id": entrant.id,
+                    "created_at": created,
+                },
+            )
+    return heats(league, night)
+
+
+def heats(league: League, night: Night) -> list[Heat]:
+    """The running order: heats already raced (in race order), then the latest draw's."""
+    by_id = {entrant.id: entrant for entrant in entrants(league, night)}
+    raced = _raced(league, night)
+    rows = league.query(
+        "SELECT * FROM heats WHERE night_id = ? ORDER BY draw_id, position", (night.id,)
+    )
+    done: list[Heat] = []
+    race_heats = {
+        row["heat_id"]
+        for row in league.query("SELECT heat_id FROM races WHERE night_id = ?", (night.id,))
+    }
+    latest = rows[-1]["draw_id"] if rows else None
+    pending: list[Heat] = []
+    for row in rows:
+        heat = Heat(
+            row["id"],
+            row["position"],
+            by_id[row["entrant_id"]],
+            _heat_seed(row["draw_seed"], row["position"]),
+            raced.get(row["entrant_id"]),
+        )
+        if row["id"] in race_heats:
+            done.append(heat)
+        elif row["draw_id"] == latest and heat.race_id is None:
+            pending.append(heat)
+    done.sort(key=lambda heat: heat.race_id or "")
+    return done + pending
+
+
+def _heat_seed(draw_seed: int, position: int) -> int:
+    return (draw_seed * 1009 + position) % 2**31
+
+
+def pending_heats(league: League, night: Night) -> list[Heat]:
+    return [heat for heat in heats(league, night) if heat.race_id is None]
+
+
+RunRace = Callable[..., "RaceResult"]
+ResolveDriver = Callable[[str, Track], "Driver"]
+
+
+def run_heats(
+    league: League,
+    night: Night,
+    track: Track,
+    resolve_driver: ResolveDriver,
+    *,
+    run_race: RunRace | None = None,
+    on_result: Callable[[Heat, RaceResult], None] | None = None,
+    limit: int | None = None,
+) -> list[str]:
+    """Race the pending heats in order, headless, recording each result as it finishes.
+
+    `resolve_driver(model spec, track)` turns an entrant's model into a driver (the front
+    end supplies it, so the league never imports policies). A heat that fails stops the
+    run; the heats before it stay recorded.
+    """
+    _open(league, night)  # record_race checks again for each heat, inside its transaction
+    if track.content_hash != night.track_hash:
+        raise LeagueError(f"that is not league night {night.name!r}'s track.")
+    if run_race is None:
+        from sim.race.engine import run_race as engine_run_race
+
+        run_race = engine_run_race
+    todo = pending_heats(league, night)
+    if not todo:
+        raise LeagueError(
+            f"league night {night.name!r} has no drawn heats waiting; draw them with "
+            "`racer-tui night draw`."
+        )
+    recorded: list[str] = []
+    for heat in todo[:limit]:
+        driver = resolve_driver(heat.entrant.model, track)
+        result = run_race(track, night.rules, driver, racer=heat.entrant.racer, seed=heat.seed)
+        recorded.append(record_race(league, result, night.id, heat_id=heat.id))
+        if on_result is not None:
+            on_result(heat, result)
+    return recorded
+
+
+# --- standings ----------------------------------------------------------------------------------
+
+
+def night_points(league: League, night: Night) -> tuple[int, ...]:
+    if night.season_id is None:
+        return DEFAULT_POINTS
+    return get_season(league, night.season_id).points
+
+
+def standings(league: League, night: Night, points: Sequence[int] | None = None) -> list[Standing]:
+    """Each racer's best race of the night, ranked under the night's rules, with points.
+
+    A racer without a valid score is unplaced and scores no points.
+    """
+    table = tuple(points) if points is not None else night_points(league, night)
+    rows = leaderboard(league, Filters(night_ids=[night.id]), method=None)
+    return standings_from(rows, table)
+
+
+def standings_from(rows: Sequence[LeaderboardRow], points: Sequence[int]) -> list[Standing]:
+    result: list[Standing] = []
+    for row in rows:  # already in rank order
+        placed = row.score is not None
+        position = row.rank if placed else None
+        earned = points[row.rank - 1] if placed and row.rank <= len(points) else 0
+        result.append(Standing(position, earned, row))
+    return result
+
+
+def close_night(
+    league: League, night: Night, closed_by: str, *, force: bool = False
+) -> list[Standing]:
+    """Close the night: no more entrants, draws or races; its standings count for the season.
+
+    Heats still waiting are refused unless `force` (a car that cannot run must not hold the
+    night open): those entrants simply have no result.
+    """
+    who = check_name(closed_by, "name")
+    with league.transaction():
+        _open(league, night)
+        waiting = len(pending_heats(league, night))
+        if waiting and not force:
+            raise LeagueError(
+                f"league night {night.name!r} still has {waiting} heat(s) to run; run them "
+                "with `racer-tui night run`, or close anyway with --force."
+            )
+        league.insert_record(
+            "night_closures", {"night_id": night.id, "closed_by": who, "created_at": now_iso()}
+        )
+    return standings(league, get_night(league, night.id))
+
+
+def find_night_track(night: Night) -> Track:
+    """The night's track on this machine, found by content hash."""
+    from sim.track import load_track
+    from sim.track_catalog import list_tracks, resolve_track
+
+    try:
+        track = resolve_track(night.track_name)
+        if track.content_hash == night.track_hash:
+            return track
+    except TrackError:
+        pass
+    for info in list_tracks():
+        track = load_track(info.path, info.name)
+        if track.content_hash == night.track_hash:
+            return track
+    raise LeagueError(
+        f"league night {night.name!r} races on track {night.track_name!r}, which is not on "
+        "this machine; import it with `racer-tui tracks import FILE`."
+    )

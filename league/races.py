@@ -1,0 +1,178 @@
+"""Race results from the race engine, stored with their laps, frozen rules and model hash.
+
+A race row is shared (synced); its per-step trace is large and local, so it goes into the
+local `race_traces` table as compressed numpy columns, never into the shared rows.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import fields
+from typing import Any
+
+import numpy as np
+
+from league.entries import refresh_entries
+from league.errors import LeagueError
+from league.racers import ensure_racer
+from league.store import League, record_body
+from league.tracks import ensure_track
+from sim.ids import content_hash, is_valid_id
+from sim.race.result import RaceResult
+from sim.race.trace import RaceTrace
+
+TRACE_FORMAT = "npz-v1"
+LAP_COLUMNS = (
+    "number",
+    "time_seconds",
+    "raw_seconds",
+    "penalty_seconds",
+    "offtracks",
+    "valid",
+    "started_at",
+)
+
+
+def _lap_rows(result: RaceResult) -> list[dict[str, Any]]:
+    return [
+        {
+            "number": lap.number,
+            "time_seconds": lap.time_seconds,
+            "raw_seconds": lap.raw_seconds,
+            "penalty_seconds": lap.penalty_seconds,
+            "offtracks": lap.offtracks,
+            "valid": int(lap.valid),
+            "started_at": lap.started_at,
+        }
+        for lap in result.laps
+    ]
+
+
+def record_race(
+    league: League,
+    result: RaceResult,
+    night_id: str | None = None,
+    *,
+    heat_id: str | None = None,
+) -> str:
+    """Store `result` (one transaction) and return its race id, which is its result_id.
+
+    Recording the same result twice is a no-op; the same id with other content is an
+    error. With `night_id`, the race must be on the night's track under its frozen rules.
+    """
+    if not is_valid_id(result.result_id):
+        raise LeagueError(f"race result id {result.result_id!r} is not a valid record id.")
+    laps = _lap_rows(result)
+    with league.transaction():
+        racer = ensure_racer(league, result.racer)
+        fields_ = {
+            "racer": racer,
+            "track_hash": result.track_hash,
+            "model_name": result.model_name,
+            "model_hash": result.model_hash,
+            "night_id": night_id,
+            "heat_id": heat_id,
+            "rules": json.dumps(result.rules.to_dict(), sort_keys=True),
+            "seed": result.seed,
+            "started_at": result.started_at,
+            "total_offtracks": result.total_offtracks,
+        }
+        existing = league.query_one(
+            "SELECT content_hash FROM races WHERE id = ?", (result.result_id,)
+        )
+        if existing is not None:
+            if existing["content_hash"] == content_hash(record_body(fields_, {"laps": laps})):
+                return result.result_id
+            raise LeagueError(
+                f"race {result.result_id} is already recorded with different content; "
+                "a recorded race never changes (use `racer-tui correct` for corrections)."
+            )
+        if night_id is not None:
+            _check_night(league, night_id, result)
+        ensure_track(league, result.track_hash, result.track_name)
+        league.insert_record("races", fields_, record_id=result.result_id, children={"laps": laps})
+        league.conn.executemany(
+            f"INSERT INTO race_laps (race_id, {', '.join(LAP_COLUMNS)}) "
+            f"VALUES (?, {', '.join('?' for _ in LAP_COLUMNS)})",
+            [(result.result_id, *(lap[c] for c in LAP_COLUMNS)) for lap in laps],
+        )
+        if result.trace is not None:
+            league.conn.execute(
+                "INSERT INTO race_traces (race_id, format, data) VALUES (?, ?, ?)",
+                (result.result_id, TRACE_FORMAT, _trace_bytes(result.trace)),
+            )
+        refresh_entries(league.conn, [result.result_id])
+    return result.result_id
+
+
+def _check_night(league: League, night_id: str, result: RaceResult) -> None:
+    night = league.query_one("SELECT * FROM nights WHERE id = ?", (night_id,))
+    if night is None:
+        raise LeagueError(f"there is no league night {night_id}; see `racer-tui night list`.")
+    if league.query_one("SELECT 1 FROM night_closures WHERE night_id = ?", (night_id,)):
+        raise LeagueError(f"league night {night['name']!r} is closed; its results are final.")
+    if night["track_hash"] != result.track_hash:
+        raise LeagueError(
+            f"the race was on {result.track_name!r}, not on league night "
+            f"{night['name']!r}'s track; race on the night's track."
+        )
+    if json.loads(night["rules"]) != result.rules.to_dict():
+        raise LeagueError(
+            f"the race's rules differ from league night {night['name']!r}'s frozen rules; "
+            "race under the night's rules (changing rules needs a new night)."
+        )
+
+
+def _trace_bytes(trace: RaceTrace) -> bytes:
+    buffer = io.BytesIO()
+    arrays = {
+        spec.name: getattr(trace, spec.name)
+        for spec in fields(trace)
+        if spec.name != "track_length"
+    }
+    np.savez_compressed(buffer, track_length=np.float64(trace.track_length), **arrays)
+    return buffer.getvalue()
+
+
+def race_trace(league: League, race_id: str) -> RaceTrace | None:
+    """The stored trace of a race, or None when it was recorded without one."""
+    row = league.query_one("SELECT format, data FROM race_traces WHERE race_id = ?", (race_id,))
+    if row is None or row["format"] != TRACE_FORMAT:
+        return None
+    with np.load(io.BytesIO(row["data"]), allow_pickle=False) as data:
+        values: dict[str, Any] = {name: data[name] for name in data.files}
+    values["track_length"] = float(values["track_length"])
+    return RaceTrace(**values)
+
+
+def race_result(league: League, race_id: str) -> RaceResult:
+    """A stored race as a RaceResult (validated like any record that crossed machines)."""
+    row = league.query_one("SELECT * FROM races WHERE id = ?", (race_id,))
+    if row is None:
+        raise LeagueError(f"there is no race {race_id} in this league.")
+    laps = [
+        {column: lap[column] for column in LAP_COLUMNS}
+        for lap in league.query(
+            "SELECT * FROM race_laps WHERE race_id = ? ORDER BY number", (race_id,)
+        )
+    ]
+    for lap in laps:
+        lap["valid"] = bool(lap["valid"])
+    track = league.query_one("SELECT name FROM tracks WHERE track_hash = ?", (row["track_hash"],))
+    result = RaceResult.from_json(
+        {
+            "result_id": row["id"],
+            "racer": row["racer"],
+            "model_name": row["model_name"],
+            "model_hash": row["model_hash"],
+            "track_name": track["name"] if track else row["track_hash"][:12],
+            "track_hash": row["track_hash"],
+            "rules": json.loads(row["rules"]),
+            "seed": row["seed"],
+            "started_at": row["started_at"],
+            "laps": laps,
+            "total_offtracks": row["total_offtracks"],
+        }
+    )
+    return result.with_trace(race_trace(league, race_id))

@@ -1,0 +1,122 @@
+"""Shared rows as records: what sync pushes and pulls.
+
+A record is one row of a shared table: its id, and its body = every column except `id`
+and `content_hash`, plus the child laps of submissions and races (as the row's `laps`
+list, in lap order). `content_hash == sim.ids.content_hash(body)` for every row; the
+league computes it when it inserts a row, and `record_body` rebuilds the body from the
+database so anyone can check it.
+
+`store_record` inserts a record that came from elsewhere (checked by the caller) with its
+laps, and refreshes the local caches it affects. Call it inside `league.transaction()`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from league.entries import refresh_entries
+from league.errors import LeagueError
+from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
+from league.store import League
+from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
+from sim.ids import content_hash
+
+
+@dataclass(frozen=True)
+class Children:
+    table: str
+    parent_column: str
+    columns: tuple[str, ...]
+
+
+# Shared tables, parents before the rows that refer to them (the order to insert in).
+SHARED_TABLES: dict[str, Children | None] = {
+    "racers": None,
+    "tracks": None,
+    "seasons": None,
+    "nights": None,
+    "night_entrants": None,
+    "heats": None,
+    "night_closures": None,
+    "submissions": Children("submission_laps", "submission_id", SUBMISSION_LAP_COLUMNS),
+    "races": Children("race_laps", "race_id", RACE_LAP_COLUMNS),
+    "corrections": None,
+}
+
+
+def _check_table(table: str) -> Children | None:
+    if table not in SHARED_TABLES:
+        raise LeagueError(f"{table!r} is not a shared league table.")
+    return SHARED_TABLES[table]
+
+
+def _columns(league: League, table: str) -> list[str]:
+    return [row[1] for row in league.query(f"PRAGMA table_info({table})")]
+
+
+def record_body(league: League, table: str, record_id: str) -> dict[str, Any]:
+    """The body of one shared row, exactly as its content hash was taken."""
+    children = _check_table(table)
+    row = league.query_one(f"SELECT * FROM {table} WHERE id = ?", (record_id,))
+    if row is None:
+        raise LeagueError(f"there is no {table} row {record_id}.")
+    body = {key: value for key, value in dict(row).items() if key not in ("id", "content_hash")}
+    if children is not None:
+        laps = league.query(
+            f"SELECT {', '.join(children.columns)} FROM {children.table} "
+            f"WHERE {children.parent_column} = ? ORDER BY number",
+            (record_id,),
+        )
+        body["laps"] = [dict(zip(children.columns, lap, strict=True)) for lap in laps]
+    return body
+
+
+def records(league: League, table: str) -> Iterator[tuple[str, str, dict[str, Any]]]:
+    """(id, stored content hash, body) of every row of a shared table, in id order."""
+    _check_table(table)
+    for row in league.query(f"SELECT id, content_hash FROM {table} ORDER BY id"):
+        yield row[0], row[1], record_body(league, table, row[0])
+
+
+def store_record(league: League, table: str, record_id: str, body: Mapping[str, Any]) -> bool:
+    """Insert a record from elsewhere; False if that id is already here with the same hash.
+
+    LeagueError for the same id with other content (a conflict), or a body whose keys are
+    not the table's columns. The content hash is computed here, never taken on trust.
+    """
+    children = _check_table(table)
+    digest = content_hash(dict(body))
+    existing = league.query_one(f"SELECT content_hash FROM {table} WHERE id = ?", (record_id,))
+    if existing is not None:
+        if existing[0] == digest:
+            return False
+        raise LeagueError(f"{table} record {record_id} is here with different content.")
+    fields = {key: value for key, value in body.items() if key != "laps"}
+    columns = [c for c in _columns(league, table) if c not in ("id", "content_hash")]
+    if sorted(fields) != sorted(columns) or (children is not None) != ("laps" in body):
+        raise LeagueError(f"{table} record {record_id} does not have the table's fields.")
+    names = ["id", *columns, "content_hash"]
+    values = [record_id, *(fields[c] for c in columns), digest]
+    with league.transaction():
+        league.conn.execute(
+            f"INSERT INTO {table} ({', '.join(names)}) VALUES ({', '.join('?' for _ in names)})",
+            values,
+        )
+        if children is not None:
+            laps = body["laps"]
+            if not isinstance(laps, list) or not all(
+                isinstance(lap, Mapping) and sorted(lap) == sorted(children.columns) for lap in laps
+            ):
+                raise LeagueError(f"{table} record {record_id} has malformed laps.")
+            league.conn.executemany(
+                f"INSERT INTO {children.table} ({children.parent_column}, "
+                f"{', '.join(children.columns)}) "
+                f"VALUES (?, {', '.join('?' for _ in children.columns)})",
+                [(record_id, *(lap[c] for c in children.columns)) for lap in laps],
+            )
+            refresh_entries(league.conn, [record_id])
+        elif table == "corrections" and fields.get("kind") == "disqualify_lap":
+            refresh_entries(league.conn, [str(fields["target"])])
+    return True

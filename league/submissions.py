@@ -1,0 +1,92 @@
+"""Storing assembled submissions: the submission row, its laps and its cache row, in one
+transaction, so an interrupted submit leaves nothing behind."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any
+
+from league.assembler import EvaluationLap, Submission
+from league.entries import refresh_entries
+from league.racers import ensure_racer
+from league.store import League, now_iso
+from league.tracks import ensure_track
+
+LAP_COLUMNS = (
+    "number",
+    "time_seconds",
+    "completion",
+    "status",
+    "offtracks",
+    "crashes",
+    "completed",
+)
+
+
+@dataclass(frozen=True)
+class Submitted:
+    submission_id: str
+    duplicate: bool  # the very same submission was already in the league
+
+
+def _json(value: Any) -> str | None:
+    return None if value is None else json.dumps(value, sort_keys=True)
+
+
+def lap_row(lap: EvaluationLap) -> dict[str, Any]:
+    return {
+        "number": lap.number,
+        "time_seconds": lap.time_seconds,
+        "completion": lap.completion,
+        "status": lap.status,
+        "offtracks": lap.offtracks,
+        "crashes": lap.crashes,
+        "completed": int(lap.completed),
+    }
+
+
+def submit(league: League, submission: Submission) -> Submitted:
+    """Add `submission` to the league; sending the same one again adds nothing."""
+    fingerprint = submission.fingerprint
+    with league.transaction():
+        racer = ensure_racer(league, submission.racer)  # the stored spelling of the name
+        # Through the racer index: a racer has few submissions, so no index on fingerprints.
+        existing = league.query_one(
+            "SELECT id FROM submissions WHERE racer = ? AND fingerprint = ?", (racer, fingerprint)
+        )
+        if existing is not None:
+            return Submitted(str(existing["id"]), duplicate=True)
+        ensure_track(league, submission.track_hash, submission.track_name)
+        laps = [lap_row(lap) for lap in submission.laps]
+        submission_id = league.insert_record(
+            "submissions",
+            {
+                "racer": racer,
+                "track_hash": submission.track_hash,
+                "model_name": submission.model_name,
+                "model_hash": submission.model_hash,
+                "source": submission.source,
+                "action_space": _json(submission.action_space),
+                "sensors": _json(submission.sensors),
+                "neural_network": submission.neural_network,
+                "training_algorithm": submission.training_algorithm,
+                "hyperparameters": _json(submission.hyperparameters),
+                "training": _json(submission.training),
+                "evaluation_file": submission.evaluation_file,
+                "fingerprint": fingerprint,
+                "submitted_at": now_iso(),
+            },
+            children={"laps": laps},
+        )
+        insert_laps(league, submission_id, laps)
+        refresh_entries(league.conn, [submission_id])
+    return Submitted(submission_id, duplicate=False)
+
+
+def insert_laps(league: League, submission_id: str, laps: list[dict[str, Any]]) -> None:
+    league.conn.executemany(
+        f"INSERT INTO submission_laps (submission_id, {', '.join(LAP_COLUMNS)}) "
+        f"VALUES (?, {', '.join('?' for _ in LAP_COLUMNS)})",
+        [(submission_id, *(lap[column] for column in LAP_COLUMNS)) for lap in laps],
+    )

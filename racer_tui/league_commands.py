@@ -1,0 +1,665 @@
+"""`racer-tui submit | leaderboard | night | season | racer | correct`: the league, headless.
+
+Every command takes `--db FILE` (default: league.db in the data directory). Racer names
+and other user text go into rich tables as `Text` cells, never as markup.
+"""
+
+from __future__ import annotations
+
+import argparse
+import getpass
+import importlib
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rich import box
+from rich.table import Table
+from rich.text import Text
+
+from league.errors import LeagueError
+from racer_tui.output import print_json, print_table
+from sim.deepracer_files import DeepRacerFileError
+from sim.race.rules import DEFAULT_RULES, RankingMethod, RulesError, load_rules
+
+if TYPE_CHECKING:
+    from league.store import League
+
+    Parsers = argparse._SubParsersAction[argparse.ArgumentParser]
+
+NAMES = ("submit", "leaderboard", "night", "season", "racer", "correct")
+USER_ERRORS: tuple[type[Exception], ...] = (LeagueError, RulesError, DeepRacerFileError)
+FORMATS = ("table", "json", "csv", "markdown")
+
+
+def _db_option() -> argparse.ArgumentParser:
+    parent = argparse.ArgumentParser(add_help=False)
+    parent.add_argument(
+        "--db",
+        type=Path,
+        metavar="FILE",
+        help="league database (default: league.db in the data dir)",
+    )
+    return parent
+
+
+def register(commands: Parsers) -> None:
+    db = _db_option()
+    _register_submit(commands, db)
+    _register_leaderboard(commands, db)
+    _register_night(commands, db)
+    _register_season(commands, db)
+    _register_racer(commands, db)
+    _register_correct(commands, db)
+
+
+def _register_submit(commands: Parsers, db: argparse.ArgumentParser) -> None:
+    submit = commands.add_parser(
+        "submit",
+        parents=[db],
+        help="submit a model's evaluation to the league",
+        description="Assemble a submission from a garage model, a racer-tui model folder, a "
+        "DeepRacer-for-Cloud model folder or an AWS console log download.",
+    )
+    submit.add_argument("model", help="garage model name, or a folder path")
+    submit.add_argument("--racer", required=True, help="who is submitting (plain text)")
+    submit.add_argument(
+        "--track", help="track name or .npy file (needed when the files do not say)"
+    )
+    submit.add_argument("--evaluation", type=Path, metavar="FILE", help="evaluation metrics file")
+    submit.add_argument("--model-name", help="name to list the model under (default: the folder)")
+    submit.add_argument("--json", action="store_true")
+
+
+def _register_leaderboard(commands: Parsers, db: argparse.ArgumentParser) -> None:
+    board = commands.add_parser(
+        "leaderboard", parents=[db], help="each racer's best entry per track, ranked"
+    )
+    board.add_argument("--track", help="only this track")
+    board.add_argument("--racer", help="only this racer")
+    board.add_argument("--night", help="only races of this league night")
+    board.add_argument("--season", help="only races of this season's nights")
+    board.add_argument(
+        "--by",
+        choices=("best", "average", "total"),
+        help="rank by best lap (default), "
+        "best average of 3 consecutive laps, or total time of 3 laps",
+    )
+    board.add_argument(
+        "--sort",
+        default="rank",
+        metavar="COLUMN",
+        help="rank, racer, model, track, score, best, average, laps, offtracks, submitted",
+    )
+    board.add_argument("--reverse", action="store_true", help="reverse the sort order")
+    board.add_argument("--limit", type=int, metavar="N", help="show the first N rows")
+    board.add_argument("--format", choices=FORMATS, default="table")
+
+
+def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
+    night = commands.add_parser("night", help="league nights: entrants, heats, standings")
+    actions = night.add_subparsers(dest="night_command", metavar="ACTION", required=True)
+    new = actions.add_parser("new", parents=[db], help="open a night; its rules are frozen")
+    new.add_argument("--track", required=True)
+    new.add_argument(
+        "--rules", type=Path, metavar="FILE", help="rules YAML (default rules if none)"
+    )
+    new.add_argument("--name")
+    new.add_argument("--season", help="season name or id the night counts for")
+    listing = actions.add_parser("list", parents=[db], help="all nights")
+    listing.add_argument("--json", action="store_true")
+    add = actions.add_parser("add", parents=[db], help="enter a racer with a model")
+    add.add_argument("night", help="night id or name")
+    add.add_argument("--racer", required=True)
+    add.add_argument("--model", required=True, help="garage model name or .racer-bundle file")
+    draw = actions.add_parser("draw", parents=[db], help="draw the heat order")
+    draw.add_argument("night")
+    draw.add_argument("--seed", type=int)
+    run = actions.add_parser("run", parents=[db], help="run the waiting heats headless")
+    run.add_argument("night")
+    run.add_argument("--heats", type=int, metavar="N", help="run only the next N heats")
+    show = actions.add_parser("show", parents=[db], help="rules, heats and standings")
+    show.add_argument("night")
+    show.add_argument("--json", action="store_true")
+    close = actions.add_parser("close", parents=[db], help="close the night; print standings")
+    close.add_argument("night")
+    close.add_argument("--by", help="who closes it (default: your user name)")
+    close.add_argument("--force", action="store_true", help="close even with heats waiting")
+    close.add_argument("--json", action="store_true")
+
+
+def _register_season(commands: Parsers, db: argparse.ArgumentParser) -> None:
+    season = commands.add_parser("season", help="seasons and their standings")
+    actions = season.add_subparsers(dest="season_command", metavar="ACTION", required=True)
+    new = actions.add_parser("new", parents=[db], help="start a season")
+    new.add_argument("name")
+    new.add_argument("--points", help="points per place, e.g. 25,18,15,12,10,8,6,4,2,1")
+    show = actions.add_parser("show", parents=[db], help="season standings")
+    show.add_argument("season", help="season name or id")
+    show.add_argument("--json", action="store_true")
+    listing = actions.add_parser("list", parents=[db], help="all seasons")
+    listing.add_argument("--json", action="store_true")
+
+
+def _register_racer(commands: Parsers, db: argparse.ArgumentParser) -> None:
+    racer = commands.add_parser("racer", help="racers: add, list, rename")
+    actions = racer.add_subparsers(dest="racer_command", metavar="ACTION", required=True)
+    add = actions.add_parser("add", parents=[db], help="add a racer")
+    add.add_argument("name")
+    add.add_argument("--display-name")
+    add.add_argument("--colour", help="#rrggbb")
+    listing = actions.add_parser("list", parents=[db], help="all racers")
+    listing.add_argument("--json", action="store_true")
+    rename = actions.add_parser("rename", parents=[db], help="change a racer's display name")
+    rename.add_argument("name")
+    rename.add_argument("new_display_name")
+    rename.add_argument("--by", required=True, help="who makes the change")
+    rename.add_argument("--reason", default="new display name")
+
+
+def _register_correct(commands: Parsers, db: argparse.ArgumentParser) -> None:
+    correct = commands.add_parser("correct", help="corrections: disqualify a lap, list them")
+    actions = correct.add_subparsers(dest="correct_command", metavar="ACTION", required=True)
+    lap = actions.add_parser("lap", parents=[db], help="disqualify one lap")
+    lap.add_argument("entry_id", metavar="RACE_ID", help="race or submission id")
+    lap.add_argument("lap_number", type=int, metavar="LAP_NO")
+    lap.add_argument("--reason", required=True)
+    lap.add_argument("--by", required=True, help="who makes the correction")
+    listing = actions.add_parser("list", parents=[db], help="all corrections")
+    listing.add_argument("--target", help="only corrections of this race, submission or racer")
+    listing.add_argument("--json", action="store_true")
+
+
+# --- dispatch ------------------------------------------------------------------------------------
+
+
+def run(args: argparse.Namespace) -> int:
+    from league.store import open_league
+
+    handlers: dict[str, Callable[[League, argparse.Namespace], int]] = {
+        "submit": _submit,
+        "leaderboard": _leaderboard,
+        "night": _night,
+        "season": _season,
+        "racer": _racer,
+        "correct": _correct,
+    }
+    with open_league(args.db) as league:
+        return handlers[args.command](league, args)
+
+
+def _table(title: str) -> Table:
+    """A table without vertical rules (a leaderboard's eight columns fit 80 characters).
+    Titles carry night and season names, so they are plain Text, never markup."""
+    return Table(
+        title=Text(title, style="table.title"),
+        box=box.SIMPLE_HEAD,
+        pad_edge=False,
+        collapse_padding=True,
+    )
+
+
+def _text(value: str) -> Text:
+    return Text(value)
+
+
+def _submit(league: League, args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from league.assembler import assemble
+    from league.racers import check_name
+    from league.submissions import submit
+
+    submission = assemble(args.model, args.racer, track=args.track, evaluation=args.evaluation)
+    if args.model_name:
+        submission = replace(submission, model_name=check_name(args.model_name, "model name"))
+    outcome = submit(league, submission)
+    best = submission.best_lap
+    if args.json:
+        print_json(
+            {
+                "id": outcome.submission_id,
+                "duplicate": outcome.duplicate,
+                "racer": submission.racer,
+                "model": submission.model_name,
+                "track": submission.track_name,
+                "source": submission.source,
+                "best_lap": best,
+                "laps": len(submission.completed_laps),
+                "trials": len(submission.laps),
+            }
+        )
+        return 0
+    if outcome.duplicate:
+        print(f"Already in the league as {outcome.submission_id}; nothing added.")
+        return 0
+    lap_text = "no completed lap" if best is None else f"best lap {best:.3f} s"
+    print(
+        f"Submitted {submission.model_name} for {submission.racer} on {submission.track_name}: "
+        f"{lap_text}, {len(submission.completed_laps)} of {len(submission.laps)} trials "
+        f"completed (id {outcome.submission_id})."
+    )
+    return 0
+
+
+def _leaderboard(league: League, args: argparse.Namespace) -> int:
+    from league.leaderboard import Filters, leaderboard, method_for, sort_rows
+    from league.nights import get_night, list_nights
+    from league.racers import get_racer
+    from league.report import (
+        SCORE_TITLES,
+        leaderboard_columns,
+        leaderboard_json,
+        to_csv,
+        to_markdown,
+    )
+    from league.seasons import get_season
+    from league.tracks import track_for
+
+    night_ids: list[str] | None = None
+    if args.night:
+        night_ids = [get_night(league, args.night).id]
+    if args.season:
+        season = get_season(league, args.season)
+        season_nights = [night.id for night in list_nights(league) if night.season_id == season.id]
+        night_ids = (
+            season_nights
+            if night_ids is None
+            else [night for night in night_ids if night in season_nights]
+        )
+    filters = Filters(
+        track_hash=track_for(league, args.track).track_hash if args.track else None,
+        racer=get_racer(league, args.racer).name if args.racer else None,
+        night_ids=night_ids,
+    )
+    # A night's races rank by the night's own rules unless --by says otherwise.
+    method = (
+        method_for(args.by) if args.by else (None if night_ids is not None else method_for("best"))
+    )
+    rows = leaderboard(league, filters, method)
+    rows = sort_rows(rows, args.sort, reverse=args.reverse)
+    if args.limit is not None:
+        if args.limit < 1:
+            raise LeagueError("--limit must be at least 1.")
+        rows = rows[: args.limit]
+    shown_method = method if method is not None else _night_method(league, night_ids)
+    show_track = filters.track_hash is None and len({row.track_hash for row in rows}) > 1
+    if args.format == "json":
+        print_json(leaderboard_json(rows, shown_method))
+        return 0
+    columns = leaderboard_columns(
+        shown_method, show_track=show_track, iso_times=args.format == "csv"
+    )
+    if args.format == "csv":
+        sys.stdout.write(to_csv(columns, rows))
+    elif args.format == "markdown":
+        sys.stdout.write(to_markdown(columns, rows))
+    else:
+        tracks = sorted({row.track_name for row in rows})
+        where = f"{tracks[0]}, " if len(tracks) == 1 else ""
+        table = _table(f"Leaderboard: {where}ranked by {SCORE_TITLES[shown_method]}")
+        for column in columns:
+            # Names get room first; on a narrow terminal the headers of numbers wrap.
+            named = column.title in ("racer", "model", "track")
+            table.add_column(
+                column.title,
+                justify="right" if column.numeric else "left",
+                min_width=8 if named else None,
+            )
+        for row in rows:
+            table.add_row(*(_text(column.cell(row)) for column in columns))
+        print_table(table)
+    return 0
+
+
+def _night_method(league: League, night_ids: Sequence[str] | None) -> RankingMethod:
+    from league.nights import get_night
+
+    if night_ids:
+        return get_night(league, night_ids[0]).rules.ranking
+    return DEFAULT_RULES.ranking
+
+
+# --- nights ----------------------------------------------------------------------------------
+
+
+def _night(league: League, args: argparse.Namespace) -> int:
+    from league import nights
+
+    action = args.night_command
+    if action == "new":
+        from sim.track_catalog import resolve_track
+
+        rules = load_rules(args.rules) if args.rules else DEFAULT_RULES
+        night = nights.new_night(
+            league, resolve_track(args.track), rules=rules, name=args.name, season=args.season
+        )
+        print(f"Opened league night {night.name} ({night.id}) on {night.track_name}.")
+        print(f"Rules (frozen): {night.rules.describe()}.")
+        return 0
+    if action == "list":
+        return _night_list(league, args.json)
+    night = nights.get_night(league, args.night)
+    if action == "add":
+        entrant = nights.add_entrant(league, night, args.racer, args.model)
+        print(f"Entered {entrant.racer} with {entrant.model} ({entrant.id}).")
+        return 0
+    if action == "draw":
+        order = nights.draw_heats(league, night, args.seed)
+        for heat in order:
+            if heat.race_id is None:
+                print(f"heat {heat.position}: {heat.entrant.display_name} ({heat.entrant.model})")
+        return 0
+    if action == "run":
+        return _night_run(league, night, args.heats)
+    if action == "close":
+        who = args.by or _user_name()
+        standings = nights.close_night(league, night, who, force=args.force)
+        return _print_standings(night, standings, args.json, title=f"{night.name}: final standings")
+    return _night_show(league, night, args.json)
+
+
+def _user_name() -> str:
+    try:
+        return getpass.getuser()
+    except (OSError, KeyError):
+        return "host"
+
+
+def _night_list(league: League, as_json: bool) -> int:
+    from league.nights import list_nights
+
+    found = list_nights(league)
+    if as_json:
+        print_json(
+            [
+                {
+                    "id": n.id,
+                    "name": n.name,
+                    "track": n.track_name,
+                    "season_id": n.season_id,
+                    "closed": n.closed,
+                    "created_at": n.created_at,
+                    "rules": n.rules.to_dict(),
+                }
+                for n in found
+            ]
+        )
+        return 0
+    table = _table("League nights")
+    for title in ("id", "name", "track", "state", "opened"):
+        table.add_column(title)
+    for n in found:
+        state = "closed" if n.closed else "open"
+        table.add_row(n.id, _text(n.name), _text(n.track_name), state, n.created_at[:16])
+    print_table(table)
+    return 0
+
+
+def _night_run(league: League, night: Any, limit: int | None) -> int:
+    from league.nights import find_night_track, run_heats
+
+    try:
+        race_commands = importlib.import_module("racer_tui.race_commands")
+        load_driver = race_commands.resolve_driver
+    except (ImportError, AttributeError):
+        raise LeagueError(
+            "this racer-tui cannot load drivers for heats (racer_tui.race_commands."
+            "resolve_driver is missing); update racer-tui."
+        ) from None
+    setup_errors: tuple[type[Exception], ...] = getattr(race_commands, "USER_ERRORS", ())
+
+    def resolve_driver(spec: str, track: Any) -> Any:
+        try:
+            return load_driver(spec, track)
+        except setup_errors as error:  # one sentence, with the night's context
+            raise LeagueError(f"cannot run the heat with {spec!r}: {error}") from None
+
+    track = find_night_track(night)
+
+    def report(heat: Any, result: Any) -> None:
+        best = result.best_lap
+        lap = "no valid lap" if best is None else f"best lap {best.time_seconds:.3f} s"
+        print(
+            f"heat {heat.position}: {heat.entrant.display_name} ({heat.entrant.model}) "
+            f"{lap}, {result.valid_laps} valid laps, {result.total_offtracks} off-tracks",
+            flush=True,
+        )
+
+    run_heats(league, night, track, resolve_driver, on_result=report, limit=limit)
+    return 0
+
+
+def _night_show(league: League, night: Any, as_json: bool) -> int:
+    from league import nights
+
+    entrants = nights.entrants(league, night)
+    heats = nights.heats(league, night)
+    standings = nights.standings(league, night)
+    if as_json:
+        print_json(
+            {
+                "id": night.id,
+                "name": night.name,
+                "track": night.track_name,
+                "track_hash": night.track_hash,
+                "season_id": night.season_id,
+                "closed": night.closed,
+                "rules": night.rules.to_dict(),
+                "entrants": [
+                    {"id": e.id, "racer": e.display_name, "racer_name": e.racer, "model": e.model}
+                    for e in entrants
+                ],
+                "heats": [
+                    {
+                        "position": h.position,
+                        "racer": h.entrant.display_name,
+                        "model": h.entrant.model,
+                        "race_id": h.race_id,
+                    }
+                    for h in heats
+                ],
+                "standings": _standings_json(standings),
+            }
+        )
+        return 0
+    state = "closed" if night.closed else "open"
+    print(f"{night.name} ({night.id}) on {night.track_name}, {state}.")
+    print(f"Rules: {night.rules.describe()}.")
+    print(f"Entrants: {len(entrants)}; heats raced: {sum(h.race_id is not None for h in heats)}")
+    if heats:
+        table = _table("Heats")
+        for title in ("heat", "racer", "model", "race"):
+            table.add_column(title)
+        for i, heat in enumerate(heats, start=1):
+            table.add_row(
+                str(i),
+                _text(heat.entrant.display_name),
+                _text(heat.entrant.model),
+                heat.race_id or "waiting",
+            )
+        print_table(table)
+    return _print_standings(night, standings, False, title=f"{night.name}: standings")
+
+
+def _standings_json(standings: Sequence[Any]) -> list[dict[str, Any]]:
+    return [
+        {
+            "position": s.position,
+            "racer": s.entry.display_name,
+            "racer_name": s.entry.racer,
+            "model": s.entry.model,
+            "points": s.points,
+            "score": s.entry.score,
+            "best_lap": s.entry.best_lap,
+            "laps": s.entry.valid_laps,
+            "offtracks": s.entry.offtracks,
+            "race_id": s.entry.record_id,
+        }
+        for s in standings
+    ]
+
+
+def _print_standings(night: Any, standings: Sequence[Any], as_json: bool, title: str) -> int:
+    from league.report import SCORE_TITLES, seconds
+
+    if as_json:
+        print_json(_standings_json(standings))
+        return 0
+    table = _table(title)
+    table.add_column("pos", justify="right")
+    table.add_column("racer")
+    table.add_column("model")
+    table.add_column(SCORE_TITLES[night.rules.ranking], justify="right")
+    table.add_column("laps", justify="right")
+    table.add_column("off-tracks", justify="right")
+    table.add_column("points", justify="right")
+    for s in standings:
+        table.add_row(
+            "-" if s.position is None else str(s.position),
+            _text(s.entry.display_name),
+            _text(s.entry.model),
+            seconds(s.entry.score),
+            str(s.entry.valid_laps),
+            str(s.entry.offtracks),
+            str(s.points),
+        )
+    print_table(table)
+    return 0
+
+
+# --- seasons, racers, corrections ---------------------------------------------------------------
+
+
+def _season(league: League, args: argparse.Namespace) -> int:
+    from league import seasons
+
+    action = args.season_command
+    if action == "new":
+        points = seasons.parse_points(args.points) if args.points else seasons.DEFAULT_POINTS
+        season = seasons.new_season(league, args.name, points)
+        points_text = "-".join(str(p) for p in season.points)
+        print(f"Started season {season.name} ({season.id}); points {points_text}.")
+        return 0
+    if action == "list":
+        found = seasons.list_seasons(league)
+        if args.json:
+            print_json([{"id": f.id, "name": f.name, "points": list(f.points)} for f in found])
+            return 0
+        table = _table("Seasons")
+        for title in ("id", "name", "points"):
+            table.add_column(title)
+        for found_season in found:
+            table.add_row(
+                found_season.id,
+                _text(found_season.name),
+                "-".join(str(p) for p in found_season.points),
+            )
+        print_table(table)
+        return 0
+    season = seasons.get_season(league, args.season)
+    standings = seasons.season_standings(league, season)
+    if args.json:
+        print_json(
+            {
+                "id": season.id,
+                "name": season.name,
+                "points": list(season.points),
+                "nights": len(seasons.closed_nights(league, season)),
+                "standings": [
+                    {
+                        "position": s.position,
+                        "racer": s.display_name,
+                        "racer_name": s.racer,
+                        "points": s.points,
+                        "nights": s.nights,
+                        "wins": s.wins,
+                    }
+                    for s in standings
+                ],
+            }
+        )
+        return 0
+    nights_closed = len(seasons.closed_nights(league, season))
+    table = _table(f"Season {season.name}: {nights_closed} closed night(s)")
+    for title, right in (
+        ("pos", True),
+        ("racer", False),
+        ("points", True),
+        ("nights", True),
+        ("wins", True),
+    ):
+        table.add_column(title, justify="right" if right else "left")
+    for s in standings:
+        table.add_row(
+            str(s.position), _text(s.display_name), str(s.points), str(s.nights), str(s.wins)
+        )
+    print_table(table)
+    return 0
+
+
+def _racer(league: League, args: argparse.Namespace) -> int:
+    from league import racers
+    from league.racers import HEX_COLOUR
+
+    action = args.racer_command
+    if action == "add":
+        racer = racers.add_racer(
+            league, args.name, display_name=args.display_name, colour=args.colour
+        )
+        print(f"Added racer {racer.name}.")
+        return 0
+    if action == "rename":
+        from league.corrections import rename_racer
+
+        rename_racer(league, args.name, args.new_display_name, by=args.by, reason=args.reason)
+        print(f"{args.name} is now shown as {args.new_display_name.strip()}.")
+        return 0
+    found = racers.list_racers(league)
+    if args.json:
+        print_json(
+            [
+                {"name": r.name, "display_name": r.display_name, "colour": r.colour, "id": r.id}
+                for r in found
+            ]
+        )
+        return 0
+    table = _table("Racers")
+    for title in ("name", "shown as", "colour"):
+        table.add_column(title)
+    for r in found:
+        # Colours may come from other racers' machines: only a checked #rrggbb is a style.
+        style = r.colour if HEX_COLOUR.fullmatch(r.colour) else ""
+        table.add_row(_text(r.name), _text(r.display_name), Text(r.colour, style=style))
+    print_table(table)
+    return 0
+
+
+def _correct(league: League, args: argparse.Namespace) -> int:
+    from league.corrections import disqualify_lap, list_corrections
+
+    if args.correct_command == "lap":
+        correction = disqualify_lap(
+            league, args.entry_id, args.lap_number, reason=args.reason, by=args.by
+        )
+        print(f"Lap {args.lap_number} of {args.entry_id.upper()} disqualified ({correction}).")
+        return 0
+    found = list_corrections(league, args.target)
+    if args.json:
+        print_json([c.__dict__ for c in found])
+        return 0
+    table = _table("Corrections")
+    for title in ("id", "what", "target", "by", "why", "when"):
+        table.add_column(title)
+    for c in found:
+        what = (
+            f"lap {c.lap_number} disqualified"
+            if c.kind == "disqualify_lap"
+            else (f"shown as {c.new_value}")
+        )
+        table.add_row(
+            c.id, _text(what), _text(c.target), _text(c.made_by), _text(c.reason), c.created_at[:16]
+        )
+    print_table(table)
+    return 0

@@ -1,0 +1,21 @@
+"""League fixtures: a fresh league database per test."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from league.store import League, open_league
+
+
+@pytest.fixture
+def league_path(tmp_path: Path) -> Path:
+    return tmp_path / "league.db"
+
+
+@pytest.fixture
+def league(league_path: Path) -> Iterator[League]:
+    with open_league(league_path) as opened:
+        yield opened

@@ -1,0 +1,204 @@
+"""A league night from opening to season points: frozen rules, entrants, a drawn order,
+headless heats, standings and points, closing, and the season table."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from league import nights
+from league.errors import LeagueError
+from league.races import record_race
+from league.seasons import get_season, new_season, parse_points, season_standings
+from league.store import League
+from sim.race.driver import reference_driver
+from sim.race.result import RaceResult
+from sim.race.rules import RaceRules, RankingMethod
+from sim.track import Track
+from sim.track_catalog import resolve_track
+from tests.league.helpers import TRACK, model_folder, race_result
+
+LAPS = {  # racer -> lap times of their heat
+    "ana": [11.0, 10.6, 10.9],
+    "bob": [10.8, 10.7],
+    "cy": [12.0, 12.0, 12.0],
+    "dee": [],  # never completes a lap
+}
+
+
+class FakeEngine:
+    """Stands in for sim.race.engine.run_race: the laps above, and what it was asked."""
+
+    def __init__(self, laps: dict[str, list[float]]) -> None:
+        self.laps = laps
+        self.calls: list[dict[str, Any]] = []
+
+    def __call__(
+        self, track: Track, rules: RaceRules, driver: Any, *, racer: str, seed: int
+    ) -> RaceResult:
+        self.calls.append({"racer": racer, "model": driver, "rules": rules, "seed": seed})
+        return race_result(racer, self.laps[racer], track=track, rules=rules, model=driver)
+
+
+def _resolve(spec: str, track: Track) -> Any:
+    return spec  # the fake engine takes the model spec as its "driver"
+
+
+def _night_with_entrants(league: League, rules: RaceRules, season: str | None = None) -> Any:
+    night = nights.new_night(
+        league, resolve_track(TRACK), rules=rules, name="Friday", season=season
+    )
+    for racer in LAPS:
+        nights.add_entrant(league, night, racer, "reference")
+    return night
+
+
+def test_a_full_night_gives_standings_and_points(league: League) -> None:
+    new_season(league, "spring", parse_points("10,6,4"))
+    rules = RaceRules(window_seconds=60.0, ranking=RankingMethod.BEST_LAP)
+    night = _night_with_entrants(league, rules, season="spring")
+    order = nights.draw_heats(league, night, seed=7)
+    expected = list(nights.entrants(league, night))
+    random.Random(7).shuffle(expected)
+    assert [heat.entrant.racer for heat in order] == [entrant.racer for entrant in expected]
+
+    engine = FakeEngine(LAPS)
+    recorded = nights.run_heats(league, night, resolve_track(TRACK), _resolve, run_race=engine)
+    assert len(recorded) == 4
+    assert [call["racer"] for call in engine.calls] == [e.racer for e in expected]
+    assert all(call["rules"] == rules for call in engine.calls)
+    assert len({call["seed"] for call in engine.calls}) == 4
+    assert nights.pending_heats(league, night) == []
+
+    standings = nights.close_night(league, night, "host")
+    assert [(s.position, s.entry.racer, s.points) for s in standings] == [
+        (1, "ana", 10),
+        (2, "bob", 6),
+        (3, "cy", 4),
+        (None, "dee", 0),
+    ]
+    closed = nights.get_night(league, night.id)
+    assert closed.closed
+    with pytest.raises(LeagueError, match="closed"):
+        nights.add_entrant(league, closed, "eve", "reference")
+    with pytest.raises(LeagueError, match="closed"):
+        record_race(league, race_result("eve", [9.0], rules=rules), night.id)
+
+
+def test_rules_are_frozen_and_a_race_under_other_rules_is_refused(league: League) -> None:
+    rules = RaceRules(window_seconds=120.0, penalty_seconds=5.0)
+    night = nights.new_night(league, resolve_track(TRACK), rules=rules)
+    assert nights.get_night(league, night.id).rules == rules
+    with pytest.raises(LeagueError, match="frozen rules"):
+        record_race(league, race_result("ana", [10.0]), night.id)
+    other_track = race_result("ana", [10.0], rules=rules, track=resolve_track("speedway"))
+    with pytest.raises(LeagueError, match="track"):
+        record_race(league, other_track, night.id)
+
+
+def test_ranking_by_the_nights_method(league: League) -> None:
+    rules = RaceRules(ranking=RankingMethod.TOTAL_TIME, ranking_laps=3)
+    night = _night_with_entrants(league, rules)
+    nights.draw_heats(league, night, seed=1)
+    nights.run_heats(league, night, resolve_track(TRACK), _resolve, run_race=FakeEngine(LAPS))
+    standings = nights.standings(league, night)
+    # Only ana and cy drove three laps: bob's two fast laps do not make a total.
+    assert [(s.position, s.entry.racer, s.entry.score) for s in standings] == [
+        (1, "ana", pytest.approx(32.5)),
+        (2, "cy", pytest.approx(36.0)),
+        (None, "bob", None),
+        (None, "dee", None),
+    ]
+
+
+def test_closing_with_heats_waiting_needs_force(league: League) -> None:
+    night = _night_with_entrants(league, RaceRules())
+    nights.draw_heats(league, night, seed=2)
+    with pytest.raises(LeagueError, match="4 heat"):
+        nights.close_night(league, night, "host")
+    assert nights.close_night(league, night, "host", force=True) == []
+
+
+def test_a_redraw_orders_only_who_has_not_raced(league: League) -> None:
+    night = _night_with_entrants(league, RaceRules())
+    nights.draw_heats(league, night, seed=3)
+    nights.run_heats(
+        league, night, resolve_track(TRACK), _resolve, run_race=FakeEngine(LAPS), limit=1
+    )
+    heats = nights.draw_heats(league, night, seed=4)
+    raced = [heat for heat in heats if heat.race_id is not None]
+    waiting = [heat for heat in heats if heat.race_id is None]
+    assert len(raced) == 1 and len(waiting) == 3
+    assert raced[0].entrant.racer not in {heat.entrant.racer for heat in waiting}
+
+
+def test_a_night_needs_entrants_to_draw(league: League) -> None:
+    night = nights.new_night(league, resolve_track(TRACK))
+    with pytest.raises(LeagueError, match="no entrants"):
+        nights.draw_heats(league, night)
+    with pytest.raises(LeagueError, match="no drawn heats"):
+        nights.run_heats(league, night, resolve_track(TRACK), _resolve, run_race=FakeEngine({}))
+
+
+def test_heats_run_on_the_real_engine(league: League) -> None:
+    rules = RaceRules(window_seconds=15.0)
+    night = nights.new_night(league, resolve_track(TRACK), rules=rules)
+    nights.add_entrant(league, night, "ana", "reference")
+    nights.add_entrant(league, night, "bob", "reference")
+    nights.draw_heats(league, night, seed=1)
+    track = nights.find_night_track(night)
+    nights.run_heats(league, night, track, lambda spec, t: reference_driver(t))
+    standings = nights.standings(league, night)
+    assert {s.entry.racer for s in standings} == {"ana", "bob"}
+    assert all(s.entry.best_lap is not None for s in standings)
+    # Same car, same physics: identical laps, so the earlier race wins the tie.
+    assert standings[0].entry.best_lap == standings[1].entry.best_lap
+    assert standings[0].entry.recorded_at <= standings[1].entry.recorded_at
+
+
+def test_season_standings_add_up_points_with_countback(league: League) -> None:
+    season = new_season(league, "summer", parse_points("5,3,1"))
+    first = _night_with_entrants(league, RaceRules(), season="summer")
+    nights.draw_heats(league, first, seed=1)
+    nights.run_heats(league, first, resolve_track(TRACK), _resolve, run_race=FakeEngine(LAPS))
+    nights.close_night(league, first, "host")
+    swapped = {**LAPS, "ana": [11.5], "bob": [10.0]}
+    second = nights.new_night(league, resolve_track(TRACK), season="summer", name="Sat")
+    for racer in swapped:
+        nights.add_entrant(league, second, racer, "reference")
+    nights.draw_heats(league, second, seed=2)
+    nights.run_heats(league, second, resolve_track(TRACK), _resolve, run_race=FakeEngine(swapped))
+    open_night_points = season_standings(league, get_season(league, "summer"))
+    assert [(s.racer, s.points) for s in open_night_points][:2] == [("ana", 5), ("bob", 3)]
+    nights.close_night(league, second, "host")
+    table = season_standings(league, season)
+    # ana 5+3 = bob 3+5 = 8: one win each, one second each; the name decides, as documented.
+    assert [(s.position, s.racer, s.points, s.wins, s.nights) for s in table] == [
+        (1, "ana", 8, 1, 2),
+        (2, "bob", 8, 1, 2),
+        (3, "cy", 2, 0, 2),
+        (4, "dee", 0, 0, 2),
+    ]
+
+
+def test_points_tables_are_validated() -> None:
+    assert parse_points("25, 18, 15") == (25, 18, 15)
+    for bad in ("", "a,b", "10,20", "-1"):
+        with pytest.raises(LeagueError):
+            parse_points(bad)
+
+
+def test_an_entrant_model_is_checked_when_added(league: League, tmp_path: Path) -> None:
+    night = nights.new_night(league, resolve_track(TRACK))
+    with pytest.raises(LeagueError, match="no model named 'ghost'"):
+        nights.add_entrant(league, night, "ana", "ghost")
+    with pytest.raises(LeagueError, match="no bundle file"):
+        nights.add_entrant(league, night, "ana", "missing.racer-bundle")
+    folder = model_folder(tmp_path, "by-path")
+    entrant = nights.add_entrant(league, night, "ana", str(folder))
+    assert entrant.model == str(folder.resolve())
+    with pytest.raises(LeagueError, match="already entered"):
+        nights.add_entrant(league, night, "ANA", str(folder))

@@ -1,0 +1,251 @@
+"""The league from the command line: submit, leaderboard in every format, a league night
+from `night new` to `season show`, corrections, and one-sentence errors with exit 2."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from league.migrations import SCHEMA_VERSION
+from racer_tui.cli import main
+from tests.league.helpers import model_folder
+
+MARKUP_NAME = "[bold red]x[/]"
+
+
+@pytest.fixture(autouse=True)
+def wide_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("COLUMNS", "160")  # rich tables wide enough that no name wraps
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture
+def db(tmp_path: Path) -> str:
+    return str(tmp_path / "league.db")
+
+
+@pytest.fixture
+def submitted(capsys: pytest.CaptureFixture[str], tmp_path: Path, db: str) -> str:
+    """Three racers on one track, one of them with a name that looks like markup."""
+    for racer, laps in ((MARKUP_NAME, (11.0, 11.4)), ("bob", (11.2, 11.3, 11.1)), ("cy", (13.0,))):
+        folder = model_folder(tmp_path / racer.replace("/", "_"), f"car-{len(laps)}", laps=laps)
+        code, out, err = run_cli(capsys, "submit", str(folder), "--racer", racer, "--db", db)
+        assert code == 0, err
+        assert out.startswith("Submitted car-")
+    return db
+
+
+def test_leaderboard_json(capsys: pytest.CaptureFixture[str], submitted: str) -> None:
+    code, out, _ = run_cli(capsys, "leaderboard", "--db", submitted, "--format", "json")
+    assert code == 0
+    rows = json.loads(out)
+    assert [(r["rank"], r["racer"], r["best_lap"], r["laps"]) for r in rows] == [
+        (1, MARKUP_NAME, 11.0, 2),
+        (2, "bob", 11.1, 3),
+        (3, "cy", 13.0, 1),
+    ]
+    assert all(len(r["id"]) == 26 and r["kind"] == "submission" for r in rows)
+
+
+def test_leaderboard_table_prints_names_literally(
+    capsys: pytest.CaptureFixture[str], submitted: str
+) -> None:
+    code, out, _ = run_cli(capsys, "leaderboard", "--db", submitted)
+    assert code == 0
+    assert MARKUP_NAME in out
+    for title in ("rank", "racer", "model", "best lap", "average", "laps", "off-tracks"):
+        assert title in out
+
+
+def test_leaderboard_csv_and_markdown(capsys: pytest.CaptureFixture[str], submitted: str) -> None:
+    _, out, _ = run_cli(capsys, "leaderboard", "--db", submitted, "--format", "csv")
+    table = list(csv.DictReader(io.StringIO(out)))
+    assert [row["racer"] for row in table] == [MARKUP_NAME, "bob", "cy"]
+    assert table[1]["average"] == "11.200" and table[1]["laps"] == "3"
+    assert table[0]["submitted"].endswith("Z")
+    _, out, _ = run_cli(capsys, "leaderboard", "--db", submitted, "--format", "markdown")
+    lines = out.splitlines()
+    assert lines[0].startswith("| rank | racer | model |")
+    assert lines[1].startswith("| ---: | --- |")
+    assert "\\[bold red\\]x\\[/\\]" in lines[2]
+
+
+def test_leaderboard_by_average_sort_filter_and_limit(
+    capsys: pytest.CaptureFixture[str], submitted: str
+) -> None:
+    def ranked(*args: str) -> list[str]:
+        code, out, err = run_cli(
+            capsys, "leaderboard", "--db", submitted, "--format", "json", *args
+        )
+        assert code == 0, err
+        return [row["racer"] for row in json.loads(out)]
+
+    assert ranked("--by", "average") == ["bob", MARKUP_NAME, "cy"]  # only bob drove 3 laps
+    assert ranked("--sort", "laps", "--reverse") == ["bob", MARKUP_NAME, "cy"]
+    assert ranked("--sort", "racer") == [MARKUP_NAME, "bob", "cy"]
+    assert ranked("--racer", "cy") == ["cy"]
+    assert ranked("--limit", "1") == [MARKUP_NAME]
+    assert ranked("--track", "beginner-oval", "--limit", "2") == [MARKUP_NAME, "bob"]
+    assert ranked("--track", "speedway") == []
+
+
+def test_submitting_the_real_deepracer_downloads(
+    capsys: pytest.CaptureFixture[str], deepracer_dir: Path, db: str
+) -> None:
+    track = str(deepracer_dir / "tracks" / "reinvent_base.npy")
+    for folder, racer in (("drfc-model", "drfc fan"), ("console-logs", "console fan")):
+        code, out, err = run_cli(
+            capsys,
+            "submit",
+            str(deepracer_dir / folder),
+            "--racer",
+            racer,
+            "--track",
+            track,
+            "--db",
+            db,
+            "--json",
+        )
+        assert code == 0, err
+        assert json.loads(out)["laps"] == 3
+    _, out, _ = run_cli(capsys, "leaderboard", "--db", db, "--format", "json", "--track", track)
+    assert [row["racer"] for row in json.loads(out)] == ["drfc fan", "console fan"]
+
+
+def test_a_bad_submission_is_one_sentence_and_writes_nothing(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, db: str
+) -> None:
+    folder = model_folder(tmp_path)
+    bad = folder / "evaluation-20240501120000.json"
+    bad.write_text('{"metrics": [{"completion_percentage": "lots"}]}')
+    code, out, err = run_cli(capsys, "submit", str(folder), "--racer", "ana", "--db", db)
+    assert code == 2 and out == ""
+    assert err.startswith("racer-tui: ") and str(bad) in err and err.count("\n") == 1
+    assert sqlite3.connect(db).execute("SELECT count(*) FROM submissions").fetchone()[0] == 0
+
+
+def test_a_newer_database_is_refused(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    path = tmp_path / "future.db"
+    conn = sqlite3.connect(path)
+    conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION + 5}")
+    conn.commit()
+    conn.close()
+    code, _, err = run_cli(capsys, "leaderboard", "--db", str(path))
+    assert code == 2 and "newer" in err and "Traceback" not in err
+
+
+def test_a_league_night_from_the_command_line(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, db: str
+) -> None:
+    rules = tmp_path / "rules.yaml"
+    rules.write_text("window_seconds: 15\nmax_offtracks_per_lap: 3\n")
+    assert run_cli(capsys, "season", "new", "2024", "--points", "10,5", "--db", db)[0] == 0
+    code, out, err = run_cli(
+        capsys,
+        "night",
+        "new",
+        "--track",
+        "beginner-oval",
+        "--rules",
+        str(rules),
+        "--name",
+        "Opening",
+        "--season",
+        "2024",
+        "--db",
+        db,
+    )
+    assert code == 0, err
+    assert "0:15 window" in out
+    for racer in ("ana", MARKUP_NAME):
+        code, _, err = run_cli(
+            capsys, "night", "add", "Opening", "--racer", racer, "--model", "reference", "--db", db
+        )
+        assert code == 0, err
+    code, out, _ = run_cli(capsys, "night", "draw", "Opening", "--seed", "4", "--db", db)
+    assert out.count("heat ") == 2
+    code, out, err = run_cli(capsys, "night", "run", "Opening", "--db", db)
+    assert code == 0, err
+    assert out.count("best lap") == 2 and MARKUP_NAME in out
+
+    code, out, _ = run_cli(capsys, "night", "show", "Opening", "--db", db, "--json")
+    shown = json.loads(out)
+    assert shown["rules"]["window_seconds"] == 15.0
+    assert all(heat["race_id"] for heat in shown["heats"])
+    code, out, _ = run_cli(
+        capsys, "night", "close", "Opening", "--by", "host", "--db", db, "--json"
+    )
+    standings = json.loads(out)
+    assert [s["points"] for s in standings] == [10, 5]
+    winner = standings[0]["racer_name"]
+    code, out, _ = run_cli(capsys, "season", "show", "2024", "--db", db, "--json")
+    season = json.loads(out)
+    assert season["nights"] == 1
+    assert (season["standings"][0]["racer_name"], season["standings"][0]["points"]) == (winner, 10)
+    code, out, _ = run_cli(capsys, "season", "show", "2024", "--db", db)
+    assert MARKUP_NAME in out
+    code, out, _ = run_cli(
+        capsys, "leaderboard", "--night", "Opening", "--db", db, "--format", "json"
+    )
+    assert {row["kind"] for row in json.loads(out)} == {"race"}
+    code, _, err = run_cli(
+        capsys, "night", "add", "Opening", "--racer", "late", "--model", "reference", "--db", db
+    )
+    assert code == 2 and "closed" in err
+
+
+def test_corrections_from_the_command_line(
+    capsys: pytest.CaptureFixture[str], submitted: str
+) -> None:
+    _, out, _ = run_cli(capsys, "leaderboard", "--db", submitted, "--format", "json")
+    leader = json.loads(out)[0]
+    code, out, err = run_cli(
+        capsys,
+        "correct",
+        "lap",
+        leader["id"],
+        "1",
+        "--reason",
+        "off the track",
+        "--by",
+        "steward",
+        "--db",
+        submitted,
+    )
+    assert code == 0, err
+    code, out, err = run_cli(
+        capsys, "racer", "rename", "bob", "Robert", "--by", "bob", "--db", submitted
+    )
+    assert code == 0, err
+    _, out, _ = run_cli(capsys, "leaderboard", "--db", submitted, "--format", "json")
+    assert [(r["racer"], r["best_lap"]) for r in json.loads(out)] == [
+        ("Robert", 11.1),
+        (MARKUP_NAME, 11.4),
+        ("cy", 13.0),
+    ]
+    _, out, _ = run_cli(capsys, "correct", "list", "--db", submitted, "--json")
+    assert [c["kind"] for c in json.loads(out)] == ["disqualify_lap", "rename_racer"]
+    code, _, err = run_cli(
+        capsys,
+        "correct",
+        "lap",
+        leader["id"],
+        "9",
+        "--reason",
+        "x",
+        "--by",
+        "steward",
+        "--db",
+        submitted,
+    )
+    assert code == 2 and "has no lap 9" in err
