@@ -1,108 +1,234 @@
-"""The racer-tui Textual app. For now: the track browser with reference laps."""
+"""The racer-tui Textual app: sections (garage, tracks, races) as Textual modes, a first-run
+welcome with a live demo race, a help screen and a command palette built from BINDINGS.
+
+`create_app()` is the one factory: the CLI (`run_app`), the Pilot tests and the snapshot
+tests all build the app through it. This is the module that imports Textual; the headless
+CLI never imports it (tests/test_architecture.py checks both).
+"""
 
 from __future__ import annotations
 
-import math
-from typing import ClassVar
+from collections.abc import Callable
+from functools import partial
+from typing import Any, ClassVar
 
-from rich.text import Text
-from textual import work
-from textual.app import App, ComposeResult
+from textual.app import App
 from textual.binding import Binding, BindingType
-from textual.containers import Horizontal, Vertical
-from textual.widgets import DataTable, Footer, Header, Static
+from textual.dom import DOMNode
+from textual.screen import Screen
+from textual.widgets import DataTable
 
-from racer_tui.screens.race_screen import RaceScreen, RaceSetup
-from racer_tui.widgets.track_map import TrackMap
-from sim.race.rules import DEFAULT_RULES
-from sim.reference_driver import reference_lap
-from sim.track import Track, TrackError
-from sim.track_catalog import TrackInfo, list_tracks, resolve_track
+from racer_tui.commands import PaletteCommand, RacerCommands
+from racer_tui.screens.base import ModelAdded
+from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
+from racer_tui.screens.garage import GarageScreen
+from racer_tui.screens.help import HelpScreen, HelpTopic, binding_topics, declared_bindings
+from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.screens.race_screen import RaceScreen
+from racer_tui.screens.races import RacesScreen
+from racer_tui.screens.tracks import TracksScreen
+from racer_tui.screens.welcome import WelcomeScreen
+from racer_tui.sections import SECTIONS, WELCOME_MODE, section_for
+from sim.garage.folder import list_models
+from sim.home import data_home
+
+SECTION_SCREENS: dict[str, type[Screen[Any]]] = {
+    "garage": GarageScreen,
+    "tracks": TracksScreen,
+    "races": RacesScreen,
+}
+# Screens that are not sections but have keys of their own, for the help screen.
+OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
+    ("Welcome", WelcomeScreen),
+    ("Model editor", ModelEditorScreen),
+    ("Race view", RaceScreen),
+    ("Confirm dialog", ConfirmDialog),
+    ("Input dialogs", InputDialog),
+    ("Import dialog", ImportDialog),
+    ("Help", HelpScreen),
+    ("Tables", DataTable),
+)
+EVERYWHERE = "Everywhere"
+
+
+def _section_bindings() -> list[BindingType]:
+    return [
+        Binding(
+            section.key,
+            f"switch_section({section.mode!r})",
+            section.title,
+            tooltip=section.summary,
+            show=False,
+        )
+        for section in SECTIONS
+    ]
 
 
 class RacerTuiApp(App[int]):
-    """Browse tracks: facts, a map, and the reference driver's lap time."""
+    """The whole app. Each section is a mode with its own screen stack, so leaving the
+    garage for the tracks and coming back finds the garage as it was left."""
 
     TITLE = "racer-tui"
-    SUB_TITLE = "tracks"
-    CSS = """
-    #tracks { width: 2fr; min-width: 40; }
-    #detail { width: 3fr; padding: 0 1; }
-    #facts { height: auto; margin-bottom: 1; }
-    """
+    CSS_PATH = "app.tcss"
+    COMMANDS: ClassVar[set[type[Any] | Callable[[], type[Any]]]] = {
+        *App.COMMANDS,
+        RacerCommands,
+    }
+    MODES: ClassVar[dict[str, str | Callable[[], Screen[Any]]]] = {
+        WELCOME_MODE: WelcomeScreen,
+        **SECTION_SCREENS,
+    }
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("r", "race", "Race the reference driver"),
+        *_section_bindings(),
+        Binding("question_mark,f1", "help", "Help", tooltip="Every key of every screen"),
         Binding("q", "quit", "Quit"),
     ]
 
-    def __init__(self) -> None:
+    def __init__(self, *, start: str | None = None) -> None:
+        """`start` forces the first mode (tests); by default the garage, or the welcome
+        screen when the garage is empty."""
         super().__init__()
-        self._infos: list[TrackInfo] = []
-
-    def compose(self) -> ComposeResult:
-        yield Header()
-        with Horizontal():
-            yield DataTable(id="tracks", cursor_type="row")
-            with Vertical(id="detail"):
-                yield Static(id="facts")
-                yield TrackMap(id="map")
-        yield Footer()
+        self.start_mode = start
 
     def on_mount(self) -> None:
-        table = self.query_one("#tracks", DataTable)
-        table.add_columns("track", "length", "width")
-        self._infos = list_tracks()
-        for info in self._infos:
-            # Track names come from files: Text keeps them plain text, never markup.
-            table.add_row(Text(info.name), f"{info.length_m:.1f} m", f"{info.width_m:.2f} m")
-        table.focus()
+        self.switch_mode(self.start_mode or self._first_mode())
 
-    def action_race(self) -> None:
-        track = self.query_one("#map", TrackMap).track
-        if track is None:
-            self.notify("Choose a track first.", severity="warning")
-            return
-        setup = RaceSetup(track=track, rules=DEFAULT_RULES, racer="reference driver")
-        self.push_screen(RaceScreen(setup))
-
-    def on_data_table_row_highlighted(self, event: DataTable.RowHighlighted) -> None:
-        if 0 <= event.cursor_row < len(self._infos):
-            self._show(self._infos[event.cursor_row])
-
-    def _show(self, info: TrackInfo) -> None:
+    def _first_mode(self) -> str:
         try:
-            track = resolve_track(info.name)
-        except TrackError as exc:
-            self.query_one("#facts", Static).update(Text(str(exc), style="red"))
-            return
-        self.query_one("#map", TrackMap).track = track
-        self._update_facts(track, lap_text="reference lap: timing...")
-        self._time_reference_lap(track)
+            return "garage" if list_models() else WELCOME_MODE
+        except OSError as error:
+            self.notify(
+                f"Cannot read the garage in {data_home()}: {error.strerror}.",
+                severity="error",
+                markup=False,
+            )
+            return WELCOME_MODE
 
-    def _update_facts(self, track: Track, lap_text: str) -> None:
-        facts = Text()
-        facts.append(track.name, style="bold")
-        facts.append(f"\n{track.description}\n" if track.description else "\n")
-        facts.append(f"{track.length:.2f} m, {track.width:.3f} m wide, {track.direction}\n")
-        facts.append(lap_text)
-        self.query_one("#facts", Static).update(facts)
+    # --- sections ------------------------------------------------------------------------
 
-    @work(thread=True, exclusive=True, group="reference-lap")
-    def _time_reference_lap(self, track: Track) -> None:
-        lap = reference_lap(track)
-        text = (
-            f"reference lap: {lap.lap_time:.3f} s"
-            if not math.isnan(lap.lap_time)
-            else f"reference lap: {lap.status}"
+    @property
+    def section_base(self) -> Screen[Any]:
+        """The current mode's own screen (under any editor or race pushed on it)."""
+        return self.screen_stack[0]
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action in ("switch_section", "quit"):
+            # Only from a section's own screen: in an editor or a race, a stray digit or q
+            # must not leave it (ctrl+q still quits from anywhere).
+            return len(self.screen_stack) <= 1
+        if action == "help":
+            return not isinstance(self.screen, HelpScreen)
+        return True
+
+    async def action_switch_section(self, mode: str) -> None:
+        if mode in self.MODES and mode != self.current_mode:
+            await self.switch_mode(mode)
+
+    async def run_section_action(self, mode: str, action: str) -> None:
+        """A palette command of another section: go there, then run it on its screen."""
+        await self.switch_mode(mode)
+        await self.section_base.run_action(action)
+
+    async def on_model_added(self, message: ModelAdded) -> None:
+        await self.show_model(message.name)
+
+    async def show_model(self, name: str) -> None:
+        """Open the garage with `name` highlighted (after creating or importing it)."""
+        await self.switch_mode("garage")
+        garage = self.section_base
+        if isinstance(garage, GarageScreen):
+            garage.reload(select=name)
+
+    # --- help and palette ------------------------------------------------------------------
+
+    def help_topics(self) -> list[HelpTopic]:
+        classes: list[tuple[str, type[DOMNode]]] = [(EVERYWHERE, type(self))]
+        classes += [(s.title, SECTION_SCREENS[s.mode]) for s in SECTIONS]
+        classes += list(OTHER_SCREENS)
+        palette = Binding(self.COMMAND_PALETTE_BINDING, "command_palette", "Command palette")
+        quit_key = Binding("ctrl+q", "quit", "Quit")
+        return binding_topics(
+            classes,
+            self.get_key_display,
+            extra=[
+                (EVERYWHERE, palette),
+                (EVERYWHERE, quit_key),
+                (EVERYWHERE, Binding("tab", "focus_next", "Next field")),
+                (EVERYWHERE, Binding("shift+tab", "focus_previous", "Previous field")),
+            ],
         )
-        self.call_from_thread(self._lap_timed, track, text)
 
-    def _lap_timed(self, track: Track, text: str) -> None:
-        current = self.query_one("#map", TrackMap).track
-        if current is track:
-            self._update_facts(track, text)
+    def action_help(self) -> None:
+        if isinstance(self.screen, HelpScreen):
+            return
+        notes = (
+            f"Your models, tracks and league live in {data_home()} "
+            "(set RACER_TUI_HOME to use another folder)."
+        )
+        self.push_screen(HelpScreen(self.help_topics(), notes))
+
+    def palette_commands(self, screen: Screen[object]) -> list[PaletteCommand]:
+        """Every section's keys as commands, plus the keys of the screen the palette was
+        opened on when that is not a section (the editor, a race, the welcome screen)."""
+        commands: list[PaletteCommand] = []
+        for section in SECTIONS:
+            commands.append(
+                PaletteCommand(
+                    f"Go to {section.title}",
+                    section.summary,
+                    partial(self.action_switch_section, section.mode),
+                )
+            )
+        for section in SECTIONS:
+            for binding in self._described(SECTION_SCREENS[section.mode]):
+                commands.append(
+                    PaletteCommand(
+                        f"{section.title}: {binding.description}",
+                        binding.tooltip or f"key {self.get_key_display(binding)}",
+                        partial(self.run_section_action, section.mode, binding.action),
+                    )
+                )
+        if section_for(self.current_mode) is None or screen is not self.section_base:
+            name = "Welcome" if isinstance(screen, WelcomeScreen) else "This screen"
+            for binding in self._described(type(screen)):
+                commands.append(
+                    PaletteCommand(
+                        f"{name}: {binding.description}",
+                        binding.tooltip or f"key {self.get_key_display(binding)}",
+                        partial(screen.run_action, binding.action),
+                    )
+                )
+        commands.append(
+            PaletteCommand(
+                "Help: every key", "the key reference, generated from the screens", self.action_help
+            )
+        )
+        if self.current_mode != WELCOME_MODE:
+            commands.append(
+                PaletteCommand(
+                    "Welcome: demo race",
+                    "the first-run screen with the reference driver lapping",
+                    partial(self.switch_mode, WELCOME_MODE),
+                )
+            )
+        return commands
+
+    @staticmethod
+    def _described(screen_class: type[DOMNode]) -> list[Binding]:
+        seen: set[str] = set()
+        described = []
+        for binding in declared_bindings(screen_class):
+            if binding.description and binding.action not in seen:
+                seen.add(binding.action)
+                described.append(binding)
+        return described
+
+
+def create_app(*, start: str | None = None) -> RacerTuiApp:
+    """The app, as the CLI, the tests and the snapshots build it."""
+    return RacerTuiApp(start=start)
 
 
 def run_app() -> int:
-    RacerTuiApp().run()
+    create_app().run()
     return 0

@@ -1,0 +1,369 @@
+"""The model editor's logic, without Textual: form text in, a checked `ModelSpec` out.
+
+The editor screen collects what the racer typed as plain strings (`FormValues`); this module
+turns them into the garage's `ModelSpec`, reporting every problem against the field it
+belongs to (`FieldProblem`), so the screen can mark the field and keep everything the racer
+typed. Saving goes through the garage library: `create_from_spec` for a new model, and
+`save_edit` for an existing one (each file written atomically, after everything has been
+checked, so a bad value never touches the model).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+
+from sim.action_space import (
+    MAX_SPEED,
+    MAX_STEERING,
+    MIN_SPEED,
+    ActionSpace,
+    ActionSpaceError,
+    discrete_grid,
+)
+from sim.atomic import write_bytes_atomic
+from sim.deepracer_files import (
+    HYPERPARAMETER_SPECS,
+    DeepRacerFileError,
+    check_hyperparameters,
+    write_hyperparameters,
+    write_model_metadata,
+    write_training_params,
+)
+from sim.garage.clone import incompatibility
+from sim.garage.folder import MAX_MINUTES, ModelError, ModelFolder, list_models
+from sim.garage.options import (
+    SPEED_LEVELS,
+    STEERING_LEVELS,
+    ModelSpec,
+    create_from_spec,
+    default_model_spec,
+)
+from sim.names import NAME_RULE, is_valid_name
+from sim.observations import SensorError, normalise_sensors
+from sim.reward_function import RewardFunctionError, load_reward_source
+from sim.track import TrackError
+
+REWARD_FILE_NAME = "reward_function.py"
+# The sensor choices the console offers, in racer-tui's names.
+SENSOR_CHOICES: tuple[tuple[str, str], ...] = (
+    ("vector", "vector"),
+    ("lidar", "LIDAR"),
+    ("sector_lidar", "sector LIDAR"),
+    ("camera", "camera"),
+    ("camera+lidar", "camera + LIDAR"),
+)
+DISCRETE, CONTINUOUS, KEPT = "discrete", "continuous", "kept"
+TUNABLE = tuple(spec for spec in HYPERPARAMETER_SPECS.values() if spec.tunable)
+
+
+@dataclass(frozen=True)
+class FieldProblem:
+    field: str  # the form field's id
+    message: str  # one sentence saying what is allowed
+
+
+class FormError(ValueError):
+    """The form cannot be saved yet; `problems` says where and why."""
+
+    def __init__(self, problems: list[FieldProblem]) -> None:
+        self.problems = tuple(problems)
+        super().__init__(problems[0].message if problems else "the form has a problem.")
+
+
+@dataclass(frozen=True)
+class FormValues:
+    """What the editor's fields hold, as typed."""
+
+    name: str
+    track: str
+    sensor: str
+    action_kind: str  # DISCRETE, CONTINUOUS, or KEPT (an imported list left as it is)
+    max_steering: str
+    steering_levels: int
+    max_speed: str
+    speed_levels: int
+    steering_low: str
+    steering_high: str
+    speed_low: str
+    speed_high: str
+    max_minutes: str
+    reward_source: str
+    hyperparameters: Mapping[str, str] = field(default_factory=dict)
+
+
+def sensor_key(sensors: tuple[str, ...]) -> str:
+    return "+".join(sensors)
+
+
+def grid_of(space: ActionSpace) -> tuple[float, int, float, int] | None:
+    """(max steering, steering levels, max speed, speed levels) if the console's generator
+    makes exactly this action space, else None (an imported or hand-written list)."""
+    if space.kind != DISCRETE:
+        return None
+    steers = sorted({action.steering_angle for action in space.actions})
+    speeds = sorted({action.speed for action in space.actions})
+    try:
+        grid = (max(abs(s) for s in steers), len(steers), max(speeds), len(speeds))
+        return grid if discrete_grid(*grid) == space else None
+    except (ActionSpaceError, ValueError):
+        return None
+
+
+def values_of(spec: ModelSpec, name: str = "") -> FormValues:
+    """The form filled in from a spec (the defaults, or a model being edited)."""
+    space = spec.metadata.action_space
+    grid = grid_of(space)
+    kind = DISCRETE if grid is not None else KEPT
+    if space.kind == CONTINUOUS:
+        kind = CONTINUOUS
+    default_grid = grid_of(default_model_spec().metadata.action_space)
+    assert default_grid is not None
+    steer, steer_levels, speed, speed_levels = grid or default_grid
+    (steer_low, steer_high), (speed_low, speed_high) = space.steering_range, space.speed_range
+    return FormValues(
+        name=name,
+        track=spec.track,
+        sensor=sensor_key(spec.metadata.sensors),
+        action_kind=kind,
+        max_steering=f"{steer:g}",
+        steering_levels=steer_levels,
+        max_speed=f"{speed:g}",
+        speed_levels=speed_levels,
+        steering_low=f"{steer_low:g}",
+        steering_high=f"{steer_high:g}",
+        speed_low=f"{speed_low:g}",
+        speed_high=f"{speed_high:g}",
+        max_minutes=f"{spec.max_minutes:g}",
+        reward_source=spec.reward_source,
+        hyperparameters={
+            hp.name: str(spec.hyperparameters.get(hp.name, hp.default)) for hp in TUNABLE
+        },
+    )
+
+
+# --- checking ---------------------------------------------------------------------------
+
+
+def _number(text: str) -> float | None:
+    try:
+        value = float(text.strip())
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
+
+
+def _in_range(
+    problems: list[FieldProblem],
+    field_id: str,
+    text: str,
+    label: str,
+    limits: tuple[float, float],
+) -> float:
+    low, high = limits
+    value = _number(text)
+    if value is None or not low <= value <= high:
+        problems.append(
+            FieldProblem(field_id, f"{label} must be a number from {low:g} to {high:g}.")
+        )
+        return math.nan
+    return value
+
+
+def action_space_of(values: FormValues, kept: ActionSpace | None = None) -> ActionSpace:
+    """The action space the form describes; FormError names the field at fault.
+
+    `kept` is the model's own discrete list, used when the racer leaves it as it is."""
+    problems: list[FieldProblem] = []
+    if values.action_kind == KEPT:
+        if kept is None:
+            raise FormError([FieldProblem("action-kind", "Choose discrete or continuous.")])
+        return kept
+    if values.action_kind == CONTINUOUS:
+        limits = (-MAX_STEERING, MAX_STEERING)
+        lo = _in_range(problems, "steering-low", values.steering_low, "Lowest steering", limits)
+        hi = _in_range(problems, "steering-high", values.steering_high, "Highest steering", limits)
+        slo = _in_range(
+            problems, "speed-low", values.speed_low, "Lowest speed", (MIN_SPEED, MAX_SPEED)
+        )
+        shi = _in_range(
+            problems, "speed-high", values.speed_high, "Highest speed", (MIN_SPEED, MAX_SPEED)
+        )
+        if not problems and lo >= hi:
+            problems.append(
+                FieldProblem("steering-high", "Highest steering must be above lowest steering.")
+            )
+        if not problems and slo >= shi:
+            problems.append(FieldProblem("speed-high", "Highest speed must be above lowest speed."))
+        if problems:
+            raise FormError(problems)
+        return ActionSpace(kind="continuous", steering_range=(lo, hi), speed_range=(slo, shi))
+    steer = _in_range(
+        problems, "max-steering", values.max_steering, "Maximum steering", (1.0, MAX_STEERING)
+    )
+    speed = _in_range(
+        problems, "max-speed", values.max_speed, "Maximum speed", (MIN_SPEED, MAX_SPEED)
+    )
+    if values.steering_levels not in STEERING_LEVELS:
+        problems.append(FieldProblem("steering-levels", "Steering levels must be 3, 5 or 7."))
+    if values.speed_levels not in SPEED_LEVELS:
+        problems.append(FieldProblem("speed-levels", "Speed levels must be 1, 2 or 3."))
+    if problems:
+        raise FormError(problems)
+    return discrete_grid(steer, values.steering_levels, speed, values.speed_levels)
+
+
+def check_name(name: str, taken: set[str]) -> str | None:
+    """A problem with a new model's name (`taken`: existing names, case-folded), or None."""
+    if not name:
+        return "Give the model a name."
+    if not is_valid_name(name):
+        return f"{name!r} cannot be a model name; use {NAME_RULE}."
+    if name.casefold() in taken:
+        return f"A model named {name!r} already exists; choose another name."
+    return None
+
+
+def taken_names() -> set[str]:
+    return {folder.name.casefold() for folder in list_models()}
+
+
+def reward_problem(source: str) -> RewardFunctionError | None:
+    """Why the reward function does not load (with its line), or None."""
+    try:
+        load_reward_source(source, REWARD_FILE_NAME)
+    except RewardFunctionError as error:
+        return error
+    return None
+
+
+def spec_of_form(
+    values: FormValues,
+    *,
+    base: ModelSpec,
+    new_name_taken: set[str] | None = None,
+    kept: ActionSpace | None = None,
+) -> ModelSpec:
+    """The checked spec; FormError lists every field at fault.
+
+    `base` supplies what the form does not show (the non-tunable hyperparameters, the
+    network); `new_name_taken` is given when the name is new and must be free."""
+    from sim.track_catalog import resolve_track
+
+    problems: list[FieldProblem] = []
+    if new_name_taken is not None:
+        name_problem = check_name(values.name.strip(), new_name_taken)
+        if name_problem:
+            problems.append(FieldProblem("name", name_problem))
+    try:
+        resolve_track(values.track)
+    except TrackError as error:
+        problems.append(FieldProblem("track", str(error)))
+    sensors: tuple[str, ...] = base.metadata.sensors
+    try:
+        sensors = normalise_sensors(values.sensor.split("+"))
+    except SensorError as error:
+        problems.append(FieldProblem("sensor", str(error)))
+    space = base.metadata.action_space
+    try:
+        space = action_space_of(values, kept)
+    except FormError as error:
+        problems.extend(error.problems)
+    hyperparameters = _hyperparameters(values.hyperparameters, base, problems)
+    minutes = _number(values.max_minutes)
+    if minutes is None or not 0 < minutes <= MAX_MINUTES:
+        problems.append(
+            FieldProblem(
+                "max-minutes",
+                f"The training time limit must be more than 0 and at most {MAX_MINUTES:g} minutes.",
+            )
+        )
+    reward = reward_problem(values.reward_source)
+    if reward is not None:
+        problems.append(FieldProblem("reward", str(reward)))
+    if problems:
+        raise FormError(problems)
+    metadata = replace(base.metadata, action_space=space, sensors=sensors)
+    return replace(
+        base,
+        track=values.track,
+        metadata=metadata,
+        hyperparameters=hyperparameters,
+        reward_source=values.reward_source,
+        reward_origin="editor",
+        max_minutes=float(values.max_minutes),
+    )
+
+
+def _hyperparameters(
+    texts: Mapping[str, str], base: ModelSpec, problems: list[FieldProblem]
+) -> dict[str, float | int | str]:
+    typed: dict[str, object] = {}
+    for spec in TUNABLE:
+        text = texts.get(spec.name, str(spec.default)).strip()
+        if spec.choices:
+            typed[spec.name] = text
+            continue
+        value = _number(text)
+        if value is None or spec.low is None or spec.high is None:
+            problems.append(
+                FieldProblem(f"hp-{spec.name}", f"{spec.name} must be {spec.allowed()}.")
+            )
+            continue
+        typed[spec.name] = value
+    checked = dict(base.hyperparameters)
+    for name, typed_value in typed.items():
+        try:
+            checked.update(check_hyperparameters({name: typed_value}, where="", base={}))
+        except DeepRacerFileError:
+            spec = HYPERPARAMETER_SPECS[name]
+            problems.append(FieldProblem(f"hp-{name}", f"{name} must be {spec.allowed()}."))
+    return checked
+
+
+# --- saving -----------------------------------------------------------------------------
+
+
+def create_from_form(name: str, spec: ModelSpec) -> ModelFolder:
+    """A new garage model (the garage writes it whole, then renames it into place)."""
+    return create_from_spec(name, spec)
+
+
+def save_edit(folder: ModelFolder, spec: ModelSpec) -> ModelFolder:
+    """Write an edited spec over an existing model, after checking all of it.
+
+    A trained policy is kept, so its network's shape must not change (the same check as a
+    clone); while a trainer runs, the files are left alone. Each file is replaced
+    atomically, so the folder always holds a readable model."""
+    from sim.track_catalog import resolve_track
+
+    if folder.is_training():
+        raise ModelError(
+            f"model {folder.name!r} is training right now; stop the training, then edit it."
+        )
+    metadata = spec.metadata
+    if folder.has_policy():
+        problem = incompatibility(folder.metadata(), metadata)
+        if problem:
+            raise ModelError(
+                f"{folder.name!r} is trained, and its policy cannot drive the edited car because "
+                f"{problem}; clone the model (c in the garage) to change those."
+            )
+    try:
+        hyperparameters = check_hyperparameters(spec.hyperparameters, where="hyperparameters")
+    except DeepRacerFileError as error:
+        raise ModelError(str(error)) from None
+    track = resolve_track(spec.track)
+    load_reward_source(spec.reward_source, REWARD_FILE_NAME)
+    params = replace(
+        folder.training_params(),
+        world_name=track.name,
+        track_hash=track.content_hash,
+        max_minutes=float(spec.max_minutes),
+    )
+    write_bytes_atomic(folder.reward_file, spec.reward_source.encode("utf-8"))
+    write_hyperparameters(folder.hyperparameters_file, hyperparameters)
+    write_training_params(folder.training_params_file, params)
+    write_model_metadata(folder.metadata_file, metadata)
+    return folder

@@ -1,0 +1,224 @@
+"""Small dialogs: confirm a destructive action, type a name, type a path.
+
+Each returns its answer through `dismiss` (None when cancelled), so the caller decides what
+happens next. Checks done here are the cheap ones (empty input, a name's characters); the
+library checks again when the real work runs.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import ClassVar
+
+from rich.text import Text
+from textual import on
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.suggester import Suggester
+from textual.widgets import Button, Input, Label, Static
+
+from racer_tui.screens.base import RacerModal
+from sim.names import NAME_RULE, is_valid_name
+
+MAX_PATH_SUGGESTIONS = 200  # a huge folder is not listed in full while typing
+
+
+def show_problem(line: Static, problem: str) -> None:
+    line.update(Text(problem))
+    line.set_class(bool(problem), "-shown")
+
+
+class PathSuggester(Suggester):
+    """Completes the last part of a file system path, like a shell's Tab."""
+
+    def __init__(self) -> None:
+        super().__init__(use_cache=False, case_sensitive=True)
+
+    async def get_suggestion(self, value: str) -> str | None:
+        if not value:
+            return None
+        expanded = os.path.expanduser(value)
+        folder, _, start = expanded.rpartition(os.sep)
+        directory = Path(folder or (os.sep if expanded.startswith(os.sep) else "."))
+        try:
+            with os.scandir(directory) as entries:
+                names = sorted(
+                    entry.name + (os.sep if entry.is_dir() else "")
+                    for _, entry in zip(range(MAX_PATH_SUGGESTIONS), entries, strict=False)
+                    if entry.name.startswith(start) and not entry.name.startswith(".")
+                )
+        except OSError:
+            return None
+        if not names or names[0] == start:
+            return None
+        return value + names[0][len(start) :]
+
+
+class ConfirmDialog(RacerModal[bool]):
+    """Yes or no, with the consequence spelled out. Enter never confirms by accident:
+    the focus starts on Cancel."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("y", "answer(True)", "Yes"),
+        Binding("n,escape", "answer(False)", "No"),
+    ]
+
+    def __init__(self, title: str, message: str, confirm_label: str = "Delete") -> None:
+        super().__init__()
+        self._title = title
+        self._message = message
+        self._confirm_label = confirm_label
+
+    def compose(self) -> ComposeResult:
+        with Vertical(classes="dialog"):
+            yield Label(Text(self._title), classes="dialog-title")
+            yield Static(Text(self._message), classes="dialog-body")
+            with Horizontal(classes="dialog-buttons"):
+                yield Button("Cancel (n)", id="cancel")
+                yield Button(f"{self._confirm_label} (y)", id="confirm", variant="error")
+
+    def on_mount(self) -> None:
+        self.query_one("#cancel", Button).focus()
+
+    def action_answer(self, answer: bool) -> None:
+        self.dismiss(answer)
+
+    @on(Button.Pressed, "#confirm")
+    def _confirm(self) -> None:
+        self.dismiss(True)
+
+    @on(Button.Pressed, "#cancel")
+    def _cancel(self) -> None:
+        self.dismiss(False)
+
+
+class InputDialog(RacerModal[str | None]):
+    """One line of input. `check` returns a problem to show under the field, or None."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+
+    def __init__(
+        self,
+        title: str,
+        message: str,
+        *,
+        value: str = "",
+        placeholder: str = "",
+        confirm_label: str = "OK",
+        check: Callable[[str], str | None] | None = None,
+        paths: bool = False,
+    ) -> None:
+        super().__init__()
+        self._title = title
+        self._message = message
+        self._value = value
+        self._placeholder = placeholder
+        self._confirm_label = confirm_label
+        self._check = check
+        self._paths = paths
+
+    def compose(self) -> ComposeResult:
+        with Vertical(classes="dialog"):
+            yield Label(Text(self._title), classes="dialog-title")
+            yield Static(Text(self._message), classes="dialog-body")
+            yield Input(
+                self._value,
+                placeholder=self._placeholder,
+                suggester=PathSuggester() if self._paths else None,
+                id="answer",
+            )
+            yield Static("", id="problem", classes="field-problem")
+            with Horizontal(classes="dialog-buttons"):
+                yield Button("Cancel (esc)", id="cancel")
+                yield Button(self._confirm_label, id="confirm", variant="primary")
+
+    def on_mount(self) -> None:
+        self.query_one("#answer", Input).focus()
+
+    def action_cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Button.Pressed, "#cancel")
+    def _cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Input.Submitted)
+    @on(Button.Pressed, "#confirm")
+    def _confirm(self) -> None:
+        answer = self.query_one("#answer", Input).value.strip()
+        problem = "Type something first." if not answer else None
+        if problem is None and self._check is not None:
+            problem = self._check(answer)
+        if problem is not None:
+            show_problem(self.query_one("#problem", Static), problem)
+            self.query_one("#answer", Input).focus()
+            return
+        self.dismiss(answer)
+
+
+@dataclass(frozen=True)
+class ImportRequest:
+    path: str
+    name: str | None  # None: the folder's (or bundle's) own name
+
+
+class ImportDialog(RacerModal[ImportRequest | None]):
+    """A DeepRacer model folder or a .racer-bundle file, and optionally a new name."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+
+    def __init__(self, path: str = "") -> None:
+        super().__init__()
+        self._path = path
+
+    def compose(self) -> ComposeResult:
+        with Vertical(classes="dialog"):
+            yield Label("Import a model", classes="dialog-title")
+            yield Static(
+                "A DeepRacer model folder (as DeepRacer for Cloud or the console's download "
+                "lays it out) or a .racer-bundle file from another racer. "
+                "→ completes a path.",
+                classes="dialog-body",
+            )
+            yield Input(
+                self._path,
+                placeholder="path, e.g. ~/Downloads/my-model",
+                suggester=PathSuggester(),
+                id="path",
+            )
+            yield Input(placeholder="model name (empty: the folder's name)", id="name")
+            yield Static("", id="problem", classes="field-problem")
+            with Horizontal(classes="dialog-buttons"):
+                yield Button("Cancel (esc)", id="cancel")
+                yield Button("Import", id="confirm", variant="primary")
+
+    def on_mount(self) -> None:
+        self.query_one("#path", Input).focus()
+
+    def action_cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Button.Pressed, "#cancel")
+    def _cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Input.Submitted)
+    @on(Button.Pressed, "#confirm")
+    def _confirm(self) -> None:
+        path = self.query_one("#path", Input).value.strip()
+        name = self.query_one("#name", Input).value.strip()
+        problem = None
+        if not path:
+            problem = "Give the path of a DeepRacer model folder or a .racer-bundle file."
+        elif not Path(path).expanduser().exists():
+            problem = f"{path} does not exist; check the path (→ completes it)."
+        elif name and not is_valid_name(name):
+            problem = f"{name!r} cannot be a model name; use {NAME_RULE}."
+        if problem is not None:
+            show_problem(self.query_one("#problem", Static), problem)
+            return
+        self.dismiss(ImportRequest(path, name or None))

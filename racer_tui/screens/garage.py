@@ -1,0 +1,409 @@
+"""The garage: the racer's models in a table, the highlighted one in detail, and what can be
+done with it (new, edit, clone, delete, import, export, race).
+
+Reading model folders, cloning, deleting, importing and exporting all happen in thread
+workers; each posts a past-tense message when it is done, and a failure becomes one error
+notification (see `racer_tui.screens.base`).
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from pathlib import Path
+from typing import Any, ClassVar
+
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Container
+from textual.message import Message
+from textual.screen import Screen
+from textual.widgets import DataTable, Footer
+
+from racer_tui.model_form import check_name, taken_names
+from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, ImportRequest, InputDialog
+from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_text
+from racer_tui.widgets.section_header import SectionHeader
+from racer_tui.widgets.table_fill import fill_table
+from sim.action_space import ActionSpace
+from sim.garage.bundle import bundle_path, export_bundle
+from sim.garage.clone import clone_model
+from sim.garage.deepracer_import import BUNDLE_SUFFIX, import_model
+from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
+from sim.garage.options import spec_of
+from sim.garage.overview import model_details, model_row
+from sim.race.driver import Driver
+from sim.race.rules import DEFAULT_RULES
+
+COLUMNS = ("model", "status", "track", "sensor", "actions", "best lap")
+NARROW = 120  # below this many columns the detail panel goes under the table
+
+
+def short_actions(row: dict[str, Any]) -> str:
+    """The table's compact form of `describe_actions`: "10 × ≤3 m/s", "continuous ≤4 m/s"."""
+    text = str(row["actions"] or "-")
+    if text.startswith("continuous") and ".." in text:
+        return "continuous ≤" + text.rsplit("..", 1)[-1]
+    return text.replace(" discrete, up to ", " × ≤")
+
+
+# --- messages from the workers --------------------------------------------------------------
+
+
+class ModelsLoaded(Message):
+    def __init__(self, rows: list[dict[str, Any]], select: str | None, generation: int) -> None:
+        super().__init__()
+        self.rows = rows
+        self.select = select
+        self.generation = generation  # a cancelled, slower read must not win
+
+
+class ModelDetailsLoaded(Message):
+    def __init__(self, name: str, details: dict[str, Any], space: ActionSpace) -> None:
+        super().__init__()
+        self.name = name
+        self.details = details
+        self.space = space
+
+
+class ModelDetailsFailed(Message):
+    def __init__(self, name: str, problem: str) -> None:
+        super().__init__()
+        self.name = name
+        self.problem = problem
+
+
+class ModelDeleted(Message):
+    def __init__(self, name: str) -> None:
+        super().__init__()
+        self.name = name
+
+
+class ModelCloned(Message):
+    def __init__(self, source: str, name: str) -> None:
+        super().__init__()
+        self.source = source
+        self.name = name
+
+
+class ModelImported(Message):
+    def __init__(self, name: str, notes: tuple[str, ...]) -> None:
+        super().__init__()
+        self.name = name
+        self.notes = notes
+
+
+class BundleExported(Message):
+    def __init__(self, name: str, path: Path) -> None:
+        super().__init__()
+        self.name = name
+        self.path = path
+
+
+def import_into_garage(request: ImportRequest) -> ModelImported:
+    """Run in a worker: the import itself (ModelError says what is wrong with the source)."""
+    result = import_model(Path(request.path).expanduser(), name=request.name)
+    return ModelImported(result.folder.name, result.notes)
+
+
+def notify_imported(screen: Screen[Any], message: ModelImported) -> None:
+    notes = "".join(f"\n• {note}" for note in message.notes)
+    advice = "\nPress e in the garage to change its track or reward function." if notes else ""
+    screen.notify(f"Imported {message.name}.{notes}{advice}", timeout=15, markup=False)
+
+
+def policy_driver(folder: ModelFolder) -> Driver:
+    """Built inside the race worker: loading a policy imports torch, which takes a moment."""
+    from sim.training.policy import driver_for_model
+
+    return driver_for_model(folder)
+
+
+class GarageScreen(RacerScreen[None]):
+    """Model list on the left (or top), details of the highlighted model beside it."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("n", "new_model", "New model", tooltip="Create a model in the editor"),
+        Binding("e", "edit_model", "Edit", tooltip="Change the highlighted model (also Enter)"),
+        Binding("c", "clone_model", "Clone", tooltip="A new model starting from this one"),
+        Binding("d", "delete_model", "Delete", tooltip="Delete the highlighted model (asks)"),
+        Binding("i", "import_model", "Import", tooltip="A DeepRacer folder or a .racer-bundle"),
+        Binding("x", "export_model", "Export", tooltip="Write a .racer-bundle for the league"),
+        Binding("r", "race_model", "Race", tooltip="A 4-minute time trial, live"),
+        Binding("ctrl+r", "reload", "Reload", tooltip="Read the model folders again", show=False),
+    ]
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.rows: list[dict[str, Any]] = []
+        self.loaded = False
+        self._generation = 0
+
+    def compose(self) -> ComposeResult:
+        yield SectionHeader("garage")
+        with Container(id="garage-body"):
+            yield DataTable(id="models", cursor_type="row", zebra_stripes=True)
+            yield ModelDetail(id="model-detail")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.reload()
+
+    def on_resize(self) -> None:
+        self.set_class(self.size.width < NARROW, "-narrow")
+
+    def on_screen_resume(self) -> None:
+        if self.loaded:
+            self.reload(select=self.highlighted_name)
+
+    # --- loading ---------------------------------------------------------------------------
+
+    def reload(self, select: str | None = None) -> None:
+        """Read the garage again (in a worker); `select` moves the cursor to that model."""
+        self._generation += 1
+        self._load_models(select, self._generation)
+
+    @work(thread=True, exclusive=True, group="garage-list", exit_on_error=False)
+    def _load_models(self, select: str | None, generation: int) -> None:
+        rows = [model_row(folder) for folder in list_models()]
+        self.post_message(ModelsLoaded(rows, select, generation))
+
+    def on_models_loaded(self, message: ModelsLoaded) -> None:
+        if message.generation != self._generation:
+            return
+        self.loaded = True
+        self.rows = message.rows
+        cells = [
+            (
+                Text(row["name"]),  # names are plain text, never markup
+                status_text(row["status"]),
+                Text(row["track"] or "-"),
+                Text(row["sensor"] or "-"),
+                Text(short_actions(row)),
+                Text(seconds_text(row["best_lap_s"]) if row["best_lap_s"] is not None else "-"),
+            )
+            for row in message.rows
+        ]
+        table = self.query_one("#models", DataTable)
+        fill_table(table, COLUMNS, cells, keys=[row["name"] for row in message.rows])
+        count = len(message.rows)
+        self.query_one(SectionHeader).set_context(
+            f"{count} model{'s' if count != 1 else ''}" if count else ""
+        )
+        detail = self.query_one(ModelDetail)
+        if not message.rows:
+            detail.show_message(
+                "No models yet. Press n to create one, or i to import a DeepRacer model."
+            )
+            return
+        names = [row["name"] for row in message.rows]
+        index = names.index(message.select) if message.select in names else 0
+        table.move_cursor(row=index)
+        self._load_details(names[index])
+
+    @property
+    def highlighted_name(self) -> str | None:
+        table = self.query_one("#models", DataTable)
+        if not self.rows or not 0 <= table.cursor_row < len(self.rows):
+            return None
+        return str(self.rows[table.cursor_row]["name"])
+
+    @on(DataTable.RowHighlighted, "#models")
+    def _highlighted(self, event: DataTable.RowHighlighted) -> None:
+        if 0 <= event.cursor_row < len(self.rows):
+            self._load_details(self.rows[event.cursor_row]["name"])
+
+    @on(DataTable.RowSelected, "#models")
+    def _selected(self) -> None:
+        self.action_edit_model()
+
+    @work(thread=True, exclusive=True, group="garage-detail", exit_on_error=False)
+    def _load_details(self, name: str) -> None:
+        try:
+            folder = open_model(name)
+            details = model_details(folder)
+            space = folder.metadata().action_space
+        except ModelError as error:
+            self.post_message(ModelDetailsFailed(name, str(error)))
+            return
+        self.post_message(ModelDetailsLoaded(name, details, space))
+
+    def on_model_details_loaded(self, message: ModelDetailsLoaded) -> None:
+        if message.name == self.highlighted_name:
+            self.query_one(ModelDetail).show_details(message.details, message.space)
+
+    def on_model_details_failed(self, message: ModelDetailsFailed) -> None:
+        if message.name == self.highlighted_name:
+            self.query_one(ModelDetail).show_message(message.problem)
+
+    # --- actions -----------------------------------------------------------------------------
+
+    def _highlighted_folder(self, doing: str) -> ModelFolder | None:
+        name = self.highlighted_name
+        if name is None:
+            self.notify(f"There is no model to {doing}; press n to create one.", severity="warning")
+            return None
+        try:
+            return open_model(name)
+        except ModelError as error:
+            self.notify(str(error), severity="error", markup=False)
+            return None
+
+    def action_reload(self) -> None:
+        self.reload(select=self.highlighted_name)
+
+    def action_new_model(self) -> None:
+        self.app.push_screen(ModelEditorScreen(), self._editor_closed)
+
+    def action_edit_model(self) -> None:
+        folder = self._highlighted_folder("edit")
+        if folder is None:
+            return
+        try:
+            spec_of(folder)  # a damaged folder is not opened: saving would overwrite it
+        except ModelError as error:
+            self.notify(
+                f"{error} Fix the file (or delete the model) before editing it.",
+                severity="error",
+                markup=False,
+            )
+            return
+        self.app.push_screen(ModelEditorScreen(folder), self._editor_closed)
+
+    def _editor_closed(self, saved: str | None) -> None:
+        if saved is not None:
+            self.reload(select=saved)
+
+    def action_clone_model(self) -> None:
+        folder = self._highlighted_folder("clone")
+        if folder is None:
+            return
+        taken = taken_names()
+        suggestion = next(
+            f"{folder.name}-{n}" for n in range(2, 10_000) if f"{folder.name}-{n}" not in taken
+        )
+        start = (
+            "The clone starts from this model's trained policy, so training continues from it."
+            if folder.has_policy()
+            else "The clone copies this model's settings (it has no trained policy yet)."
+        )
+        dialog = InputDialog(
+            f"Clone {folder.name}",
+            f"{start} Name the new model:",
+            value=suggestion,
+            confirm_label="Clone",
+            check=lambda name: check_name(name, taken_names()),
+        )
+        self.app.push_screen(dialog, partial(self._clone_named, folder))
+
+    def _clone_named(self, source: ModelFolder, name: str | None) -> None:
+        if name is not None:
+            self._clone(source, name)
+
+    @work(thread=True, group="garage-change", exit_on_error=False)
+    def _clone(self, source: ModelFolder, name: str) -> None:
+        clone_model(source, name)
+        self.post_message(ModelCloned(source.name, name))
+
+    def on_model_cloned(self, message: ModelCloned) -> None:
+        self.notify(f"Cloned {message.source} as {message.name}.")
+        self.reload(select=message.name)
+
+    def action_delete_model(self) -> None:
+        folder = self._highlighted_folder("delete")
+        if folder is None:
+            return
+        dialog = ConfirmDialog(
+            f"Delete {folder.name}?",
+            f"This deletes the folder {folder.path} with its policy, checkpoints, metrics and "
+            "reward function. It cannot be undone; export a bundle first to keep a copy.",
+        )
+        self.app.push_screen(dialog, partial(self._delete_confirmed, folder))
+
+    def _delete_confirmed(self, folder: ModelFolder, yes: bool | None) -> None:
+        if yes:
+            self._delete(folder)
+
+    @work(thread=True, group="garage-change", exit_on_error=False)
+    def _delete(self, folder: ModelFolder) -> None:
+        delete_model(folder)
+        self.post_message(ModelDeleted(folder.name))
+
+    def on_model_deleted(self, message: ModelDeleted) -> None:
+        self.notify(f"Deleted {message.name}.")
+        self.reload()
+
+    def action_import_model(self) -> None:
+        self.app.push_screen(ImportDialog(), self._import_requested)
+
+    def _import_requested(self, request: ImportRequest | None) -> None:
+        if request is not None:
+            self._import(request)
+
+    @work(thread=True, group="garage-change", exit_on_error=False)
+    def _import(self, request: ImportRequest) -> None:
+        self.post_message(import_into_garage(request))
+
+    def on_model_imported(self, message: ModelImported) -> None:
+        notify_imported(self, message)
+        self.reload(select=message.name)
+
+    def action_export_model(self) -> None:
+        folder = self._highlighted_folder("export")
+        if folder is None:
+            return
+        if not folder.has_policy():
+            self.notify(
+                f"{folder.name} has no trained policy to export yet; train it first.",
+                severity="warning",
+            )
+            return
+        dialog = InputDialog(
+            f"Export {folder.name}",
+            "A bundle holds the model's metadata, policy weights (tensors only) and training "
+            "summary: everything a league host needs to race it. Save it as:",
+            value=str(Path.cwd() / f"{folder.name}{BUNDLE_SUFFIX}"),
+            confirm_label="Export",
+            paths=True,
+        )
+        self.app.push_screen(dialog, partial(self._export_to, folder))
+
+    def _export_to(self, folder: ModelFolder, path: str | None) -> None:
+        if path is not None:
+            self._export(folder, bundle_path(Path(path).expanduser()))
+
+    @work(thread=True, group="garage-change", exit_on_error=False)
+    def _export(self, folder: ModelFolder, path: Path) -> None:
+        written = export_bundle(folder, path)
+        self.post_message(BundleExported(folder.name, written))
+
+    def on_bundle_exported(self, message: BundleExported) -> None:
+        self.notify(f"Exported {message.name} to {message.path}.", timeout=10, markup=False)
+
+    def action_race_model(self) -> None:
+        folder = self._highlighted_folder("race")
+        if folder is None:
+            return
+        if not folder.has_policy():
+            self.notify(
+                f"{folder.name} has not been trained yet, so it cannot drive; train it first.",
+                severity="warning",
+            )
+            return
+        try:
+            track = folder.track()
+        except ModelError as error:
+            self.notify(str(error), severity="error", markup=False)
+            return
+        setup = RaceSetup(
+            track=track,
+            rules=DEFAULT_RULES,
+            racer=folder.name,
+            driver=partial(policy_driver, folder),
+            title=f"{folder.name} on {track.name}",
+        )
+        self.app.push_screen(RaceScreen(setup))

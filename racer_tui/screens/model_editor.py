@@ -1,0 +1,635 @@
+"""Create or edit a model, following the AWS DeepRacer console's steps.
+
+Four tabs: the car (name, track with a preview, sensor, training time limit), its action
+space (the console's discrete generator with a per-action table, or continuous ranges, and
+a picture of it), the hyperparameters (each with its allowed range beside it, from
+`sim.deepracer_files.HYPERPARAMETER_SPECS`) and the reward function (a Python editor with
+the four templates and a Check that runs it on sample params).
+
+Problems are shown under the field they belong to and never clear the form; nothing is
+written until every field checks out (see `racer_tui.model_form`). The screen returns the
+saved model's name, or None when cancelled.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.message import Message
+from textual.widget import Widget
+from textual.widgets import (
+    Button,
+    DataTable,
+    Footer,
+    Input,
+    Label,
+    Select,
+    Static,
+    TabbedContent,
+    TabPane,
+    TextArea,
+)
+
+from racer_tui.model_form import (
+    CONTINUOUS,
+    DISCRETE,
+    KEPT,
+    REWARD_FILE_NAME,
+    SENSOR_CHOICES,
+    TUNABLE,
+    FieldProblem,
+    FormError,
+    FormValues,
+    action_space_of,
+    create_from_form,
+    save_edit,
+    spec_of_form,
+    taken_names,
+    values_of,
+)
+from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.dialogs import ConfirmDialog
+from racer_tui.widgets.action_space_plot import ActionSpacePlot
+from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.track_map import TrackMap
+from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
+from sim.garage.folder import MAX_MINUTES, ModelError, ModelFolder
+from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
+from sim.reward_function import TEMPLATES, RewardFunctionError, template_source
+from sim.reward_sample_params import sample_params
+from sim.track import Track, TrackError
+from sim.track_catalog import list_tracks, resolve_track
+
+ACTION_COLUMNS = ("#", "steering °", "speed m/s", "turn")
+TABS = ("tab-car", "tab-actions", "tab-training", "tab-reward")
+FIELD_TABS = {
+    "name": "tab-car",
+    "track": "tab-car",
+    "sensor": "tab-car",
+    "max-minutes": "tab-car",
+    "reward": "tab-reward",
+}
+ACTION_FIELDS = (
+    "action-kind",
+    "max-steering",
+    "steering-levels",
+    "max-speed",
+    "speed-levels",
+    "steering-low",
+    "steering-high",
+    "speed-low",
+    "speed-high",
+)
+
+
+def tab_of(field_id: str) -> str:
+    if field_id in ACTION_FIELDS:
+        return "tab-actions"
+    if field_id.startswith("hp-"):
+        return "tab-training"
+    return FIELD_TABS.get(field_id, "tab-car")
+
+
+# --- messages from the workers -------------------------------------------------------------
+
+
+class ModelSaved(Message):
+    def __init__(self, name: str, created: bool) -> None:
+        super().__init__()
+        self.name = name
+        self.created = created
+
+
+class FormRejected(Message):
+    def __init__(self, problems: tuple[FieldProblem, ...]) -> None:
+        super().__init__()
+        self.problems = problems
+
+
+class RewardChecked(Message):
+    """The reward function ran on sample params: its value, or the error (with its line)."""
+
+    def __init__(self, value: float | None, error: RewardFunctionError | None) -> None:
+        super().__init__()
+        self.value = value
+        self.error = error
+
+
+class TrackPreviewLoaded(Message):
+    def __init__(self, track: Track) -> None:
+        super().__init__()
+        self.track = track
+
+
+def check_reward(source: str) -> RewardChecked:
+    """Load the function and call it once with DeepRacer-complete sample params."""
+    from sim.reward_function import load_reward_source
+
+    try:
+        function = load_reward_source(source, REWARD_FILE_NAME)
+        value = function(sample_params())
+    except RewardFunctionError as error:
+        return RewardChecked(None, error)
+    return RewardChecked(value, None)
+
+
+def field(label: str, widget: Widget, allowed: str = "", field_id: str = "") -> Vertical:
+    """A labelled input with its allowed range beside it and a problem line under it."""
+    key = field_id or str(widget.id)
+    row = [widget, Static(allowed, classes="field-allowed")] if allowed else [widget]
+    return Vertical(
+        Label(label, classes="field-label"),
+        Horizontal(*row, classes="field-row"),
+        Static("", id=f"{key}-problem", classes="field-problem"),
+        classes="field",
+    )
+
+
+class ModelEditorScreen(RacerScreen[str | None]):
+    """`folder` None creates a model (from the defaults, on `track` if given); otherwise it
+    edits that model in place."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("ctrl+s", "save", "Save", tooltip="Check every field, then save", priority=True),
+        Binding("ctrl+r", "check_reward", "Check reward", tooltip="Run it on sample params"),
+        Binding("f2", "tab('tab-car')", "Car tab", show=False),
+        Binding("f3", "tab('tab-actions')", "Action space tab", show=False),
+        Binding("f4", "tab('tab-training')", "Hyperparameters tab", show=False),
+        Binding("f5", "tab('tab-reward')", "Reward function tab", show=False),
+        Binding("escape", "cancel", "Cancel", tooltip="Close the editor (asks if changed)"),
+    ]
+
+    def __init__(self, folder: ModelFolder | None = None, *, track: str | None = None) -> None:
+        super().__init__()
+        self.folder = folder
+        self._preset_track = track
+        self.base: ModelSpec = default_model_spec()
+        self.kept: ActionSpace | None = None  # an imported action list the form cannot build
+        self.trained = False
+        self.initial: FormValues | None = None
+        self.saving = False
+        self.last_check: RewardChecked | None = None
+        self._load_error = ""
+        self._by_id: dict[str, Widget] = {}
+        self._actions_pending = False
+
+    # --- building the form -------------------------------------------------------------------
+
+    def _load_base(self) -> FormValues:
+        folder = self.folder
+        if folder is None:
+            if self._preset_track is not None:
+                self.base = ModelSpec(
+                    track=self._preset_track,
+                    metadata=self.base.metadata,
+                    hyperparameters=self.base.hyperparameters,
+                    reward_source=self.base.reward_source,
+                    reward_origin=self.base.reward_origin,
+                    max_minutes=self.base.max_minutes,
+                )
+            return values_of(self.base)
+        self.base = spec_of(folder)
+        self.trained = folder.has_policy()
+        values = values_of(self.base, folder.name)
+        if values.action_kind == KEPT:
+            self.kept = self.base.metadata.action_space
+        return values
+
+    def compose(self) -> ComposeResult:
+        try:
+            values = self._load_base()
+        except ModelError as error:
+            self._load_error = str(error)
+            values = values_of(default_model_spec())
+        self.initial = values
+        title = "New model" if self.folder is None else f"Edit {self.folder.name}"
+        with Horizontal(id="editor-title"):
+            yield Static(Text(f"Garage › {title}"), id="editor-name")
+            yield Static("F2-F5 switch tabs", id="editor-keys")
+        with TabbedContent(id="editor-tabs"):
+            with TabPane("Car", id="tab-car"):
+                yield from self._car_tab(values)
+            with TabPane("Action space", id="tab-actions"):
+                yield from self._actions_tab(values)
+            with TabPane("Hyperparameters", id="tab-training"):
+                yield from self._training_tab(values)
+            with TabPane("Reward function", id="tab-reward"):
+                yield from self._reward_tab(values)
+        yield Footer()
+
+    def _car_tab(self, values: FormValues) -> ComposeResult:
+        tracks = [(info.name, info.name) for info in list_tracks()]
+        if values.track not in {name for name, _ in tracks}:
+            tracks.append((values.track, values.track))
+        sensors = list(SENSOR_CHOICES)
+        if values.sensor not in {key for key, _ in sensors}:
+            sensors.append((values.sensor, values.sensor))
+        with Horizontal(classes="editor-columns"):
+            with VerticalScroll(classes="editor-form"):
+                name = Input(
+                    values.name,
+                    placeholder="e.g. fast-lap-1",
+                    id="name",
+                    disabled=self.folder is not None,
+                )
+                yield field("Model name", name, "" if self.folder is None else "clone to rename")
+                yield field(
+                    "Track",
+                    Select(tracks, value=values.track, allow_blank=False, id="track"),
+                )
+                yield field(
+                    "Sensor",
+                    Select(
+                        [(label, key) for key, label in sensors],
+                        value=values.sensor,
+                        allow_blank=False,
+                        id="sensor",
+                    ),
+                    "vector trains fastest",
+                )
+                yield field(
+                    "Training time limit (minutes)",
+                    Input(values.max_minutes, id="max-minutes"),
+                    f"0 to {MAX_MINUTES:g}",
+                )
+            yield TrackMap(id="track-preview")
+
+    def _actions_tab(self, values: FormValues) -> ComposeResult:
+        kinds = [("discrete", DISCRETE), ("continuous", CONTINUOUS)]
+        if self.kept is not None:
+            kinds.insert(0, (f"as imported ({len(self.kept.actions)} actions)", KEPT))
+        with Horizontal(classes="editor-columns"):
+            with VerticalScroll(classes="editor-form"):
+                if self.trained:
+                    yield Static(
+                        "This model is trained: keep its sensor, action type and number of "
+                        "actions, or clone it to change them.",
+                        classes="editor-note",
+                    )
+                yield field(
+                    "Action space",
+                    Select(kinds, value=values.action_kind, allow_blank=False, id="action-kind"),
+                )
+                with Vertical(id="discrete-fields"):
+                    yield field(
+                        "Maximum steering angle (degrees)",
+                        Input(values.max_steering, id="max-steering"),
+                        f"1 to {MAX_STEERING:g}",
+                    )
+                    yield field(
+                        "Steering angle granularity",
+                        Select(
+                            [(str(n), n) for n in STEERING_LEVELS],
+                            value=values.steering_levels,
+                            allow_blank=False,
+                            id="steering-levels",
+                        ),
+                    )
+                    yield field(
+                        "Maximum speed (m/s)",
+                        Input(values.max_speed, id="max-speed"),
+                        f"{MIN_SPEED:g} to {MAX_SPEED:g}",
+                    )
+                    yield field(
+                        "Speed granularity",
+                        Select(
+                            [(str(n), n) for n in SPEED_LEVELS],
+                            value=values.speed_levels,
+                            allow_blank=False,
+                            id="speed-levels",
+                        ),
+                    )
+                with Vertical(id="continuous-fields"):
+                    steering = f"-{MAX_STEERING:g} to {MAX_STEERING:g}"
+                    speed = f"{MIN_SPEED:g} to {MAX_SPEED:g}"
+                    yield field(
+                        "Lowest steering angle (degrees, right)",
+                        Input(values.steering_low, id="steering-low"),
+                        steering,
+                    )
+                    yield field(
+                        "Highest steering angle (degrees, left)",
+                        Input(values.steering_high, id="steering-high"),
+                        steering,
+                    )
+                    yield field(
+                        "Lowest speed (m/s)", Input(values.speed_low, id="speed-low"), speed
+                    )
+                    yield field(
+                        "Highest speed (m/s)", Input(values.speed_high, id="speed-high"), speed
+                    )
+            with Vertical(id="action-view"):
+                yield Static("speed (m/s) ↑   steering →", classes="field-label")
+                yield ActionSpacePlot(id="action-plot")
+                yield DataTable(id="action-table", cursor_type="row", zebra_stripes=True)
+
+    def _training_tab(self, values: FormValues) -> ComposeResult:
+        with VerticalScroll(classes="editor-form"):
+            yield Static(
+                "DeepRacer's PPO hyperparameters; the allowed range is beside each one.",
+                classes="editor-note",
+            )
+            for spec in TUNABLE:
+                widget_id = f"hp-{spec.name}"
+                text = values.hyperparameters.get(spec.name, str(spec.default))
+                widget: Widget
+                if spec.choices:
+                    widget = Select(
+                        [(choice, choice) for choice in spec.choices],
+                        value=text,
+                        allow_blank=False,
+                        id=widget_id,
+                    )
+                else:
+                    widget = Input(text, id=widget_id)
+                label = spec.name + (f"  ({spec.help})" if spec.help else "")
+                yield field(label, widget, spec.allowed())
+
+    def _reward_tab(self, values: FormValues) -> ComposeResult:
+        with Horizontal(id="reward-toolbar"):
+            yield Select(
+                [(name.replace("_", " "), name) for name in TEMPLATES],
+                prompt="Load a template…",
+                id="reward-template",
+            )
+            yield Button("Check (ctrl+r)", id="check-reward", variant="primary")
+        yield TextArea.code_editor(
+            values.reward_source, language="python", id="reward", soft_wrap=False
+        )
+        yield Static("", id="reward-problem", classes="field-problem")
+
+    def on_mount(self) -> None:
+        if self._load_error:
+            self.notify(self._load_error, severity="error", markup=False)
+            if self.folder is not None:
+                # Never offer to save defaults over a model that could not be read.
+                self.dismiss(None)
+                return
+        self._show_kind()
+        self._refresh_actions()
+        if self.initial is not None:
+            self._load_preview(self.initial.track)
+        if self.folder is None:
+            self.query_one("#name", Input).focus()
+        else:
+            self.query_one("#track", Select).focus()
+
+    # --- reading the form -----------------------------------------------------------------
+
+    def _input(self, widget_id: str) -> str:
+        widget = self._widget(widget_id)
+        assert isinstance(widget, Input), widget_id
+        return widget.value
+
+    def _select(self, widget_id: str) -> object:
+        widget = self._widget(widget_id)
+        assert isinstance(widget, Select), widget_id
+        return widget.value
+
+    def values(self) -> FormValues:
+        hyperparameters: dict[str, str] = {}
+        for spec in TUNABLE:
+            widget_id = f"hp-{spec.name}"
+            hyperparameters[spec.name] = (
+                str(self._select(widget_id)) if spec.choices else self._input(widget_id)
+            )
+        return FormValues(
+            name=self._input("name").strip(),
+            track=str(self._select("track")),
+            sensor=str(self._select("sensor")),
+            action_kind=str(self._select("action-kind")),
+            max_steering=self._input("max-steering"),
+            steering_levels=int(str(self._select("steering-levels"))),
+            max_speed=self._input("max-speed"),
+            speed_levels=int(str(self._select("speed-levels"))),
+            steering_low=self._input("steering-low"),
+            steering_high=self._input("steering-high"),
+            speed_low=self._input("speed-low"),
+            speed_high=self._input("speed-high"),
+            max_minutes=self._input("max-minutes"),
+            reward_source=self.query_one("#reward", TextArea).text,
+            hyperparameters=hyperparameters,
+        )
+
+    # --- live feedback ------------------------------------------------------------------------
+
+    def _show_kind(self) -> None:
+        kind = self._select("action-kind")
+        self.query_one("#discrete-fields").display = kind == DISCRETE
+        self.query_one("#continuous-fields").display = kind == CONTINUOUS
+
+    def _refresh_actions(self) -> None:
+        """Redraw the action space after the current burst of changes (mounting the form
+        sends a Changed event per field)."""
+        if not self._actions_pending:
+            self._actions_pending = True
+            self.call_after_refresh(self._redraw_actions)
+
+    def _redraw_actions(self) -> None:
+        self._actions_pending = False
+        for field_id in ACTION_FIELDS:
+            self._set_problem(field_id, "")
+        try:
+            space = action_space_of(self.values(), self.kept)
+        except FormError as error:
+            for problem in error.problems:
+                self._set_problem(problem.field, problem.message)
+            return
+        self.query_one("#action-plot", ActionSpacePlot).space = space
+        rows: list[tuple[str, ...]]
+        if space.kind == CONTINUOUS:
+            (steer_low, steer_high), (speed_low, speed_high) = (
+                space.steering_range,
+                space.speed_range,
+            )
+            rows = [("-", f"{steer_low:g}..{steer_high:g}", f"{speed_low:g}..{speed_high:g}", "")]
+        else:
+            rows = []
+            for index, action in enumerate(space.actions):
+                steer = action.steering_angle
+                turn = "left" if steer > 0 else "right" if steer < 0 else "straight"
+                rows.append((str(index), f"{steer:g}", f"{round(action.speed, 2):g}", turn))
+        fill_table(self.query_one("#action-table", DataTable), ACTION_COLUMNS, rows)
+
+    @on(Select.Changed, "#action-kind")
+    def _kind_changed(self) -> None:
+        self._show_kind()
+        self._refresh_actions()
+
+    @on(Select.Changed, "#steering-levels, #speed-levels")
+    def _levels_changed(self) -> None:
+        self._refresh_actions()
+
+    @on(Input.Changed)
+    def _input_changed(self, event: Input.Changed) -> None:
+        field_id = str(event.input.id)
+        if field_id in ACTION_FIELDS:
+            self._refresh_actions()
+        elif field_id.startswith("hp-") or field_id in ("max-minutes", "name"):
+            self._set_problem(field_id, "")
+
+    @on(TextArea.Changed, "#reward")
+    def _reward_changed(self) -> None:
+        self._set_problem("reward", "")
+
+    @on(Select.Changed, "#track")
+    def _track_changed(self, event: Select.Changed) -> None:
+        if isinstance(event.value, str):
+            self._load_preview(event.value)
+
+    @work(thread=True, exclusive=True, group="editor-preview", exit_on_error=False)
+    def _load_preview(self, name: str) -> None:
+        try:
+            self.post_message(TrackPreviewLoaded(resolve_track(name)))
+        except TrackError as error:
+            self.post_message(FormRejected((FieldProblem("track", str(error)),)))
+
+    def on_track_preview_loaded(self, message: TrackPreviewLoaded) -> None:
+        self.query_one("#track-preview", TrackMap).track = message.track
+
+    def _widget(self, widget_id: str) -> Widget | None:
+        """A form widget by id, from a map built once (a DOM query per keystroke is slow)."""
+        if not self._by_id:
+            self._by_id = {str(w.id): w for w in self.query("*") if w.id is not None}
+        return self._by_id.get(widget_id)
+
+    def _set_problem(self, field_id: str, message: str) -> None:
+        problem = self._widget(f"{field_id}-problem")
+        if isinstance(problem, Static):
+            if message or problem.has_class("-shown"):
+                problem.update(Text(message))
+            problem.set_class(bool(message), "-shown")
+        widget = self._widget(field_id)
+        if widget is not None:
+            widget.set_class(bool(message), "-problem")
+
+    # --- reward function -----------------------------------------------------------------------
+
+    @on(Select.Changed, "#reward-template")
+    def _template_chosen(self, event: Select.Changed) -> None:
+        if not isinstance(event.value, str):
+            return  # cleared back to its prompt
+        name = event.value
+        event.select.clear()
+        source = template_source(name)
+        editor = self.query_one("#reward", TextArea)
+        if editor.text == source:
+            return
+        if editor.text.strip() and editor.text not in {template_source(t) for t in TEMPLATES}:
+            dialog = ConfirmDialog(
+                "Replace the reward function?",
+                f"The editor holds your own reward function; loading the {name} template "
+                "replaces it.",
+                confirm_label="Replace",
+            )
+            self.app.push_screen(dialog, lambda yes: self._load_template(source) if yes else None)
+            return
+        self._load_template(source)
+
+    def _load_template(self, source: str) -> None:
+        self.query_one("#reward", TextArea).load_text(source)
+        self._set_problem("reward", "")
+
+    def action_check_reward(self) -> None:
+        self.query_one(TabbedContent).active = "tab-reward"
+        self._show_reward_result(Text("Checking…", style="dim"))
+        self._check_reward(self.query_one("#reward", TextArea).text)
+
+    @on(Button.Pressed, "#check-reward")
+    def _check_pressed(self) -> None:
+        self.action_check_reward()
+
+    @work(thread=True, exclusive=True, group="editor-reward", exit_on_error=False)
+    def _check_reward(self, source: str) -> None:
+        self.post_message(check_reward(source))
+
+    def on_reward_checked(self, message: RewardChecked) -> None:
+        self.last_check = message
+        editor = self.query_one("#reward", TextArea)
+        if message.error is None:
+            text = Text("✓ ", style="bold green")
+            text.append(f"reward {message.value:.4g} on the sample params ")
+            text.append("(a car on a straight at 2 m/s, near the centre line)", style="dim")
+            self._show_reward_result(text)
+            editor.set_class(False, "-problem")
+            return
+        self._show_reward_result(Text(f"✗ {message.error}", style="bold red"))
+        editor.set_class(True, "-problem")
+        if message.error.line is not None:
+            editor.cursor_location = (message.error.line - 1, 0)
+            editor.focus()
+
+    def _show_reward_result(self, text: Text) -> None:
+        result = self.query_one("#reward-problem", Static)
+        result.update(text)
+        result.set_class(bool(text.plain), "-shown")
+
+    # --- saving --------------------------------------------------------------------------------
+
+    def action_tab(self, tab: str) -> None:
+        self.query_one(TabbedContent).active = tab
+
+    def action_save(self) -> None:
+        if self.saving:
+            return
+        self.saving = True
+        for field_id in ("name", "track", "sensor", "max-minutes", "reward", *ACTION_FIELDS):
+            self._set_problem(field_id, "")
+        for spec in TUNABLE:
+            self._set_problem(f"hp-{spec.name}", "")
+        self._save(self.values())
+
+    @work(thread=True, exclusive=True, group="editor-save", exit_on_error=False)
+    def _save(self, values: FormValues) -> None:
+        try:
+            try:
+                taken = taken_names() if self.folder is None else None
+                spec = spec_of_form(values, base=self.base, new_name_taken=taken, kept=self.kept)
+            except FormError as error:
+                self.post_message(FormRejected(error.problems))
+                return
+            if self.folder is None:
+                folder = create_from_form(values.name, spec)
+                self.post_message(ModelSaved(folder.name, created=True))
+            else:
+                save_edit(self.folder, spec)
+                self.post_message(ModelSaved(self.folder.name, created=False))
+        finally:
+            self.saving = False
+
+    def on_form_rejected(self, message: FormRejected) -> None:
+        for problem in message.problems:
+            self._set_problem(problem.field, problem.message)
+        first = message.problems[0]
+        self.query_one(TabbedContent).active = tab_of(first.field)
+        widgets = self.query(f"#{first.field}")
+        if widgets and widgets.first().focusable:
+            widgets.first().focus()
+        count = len(message.problems)
+        more = f" (and {count - 1} more)" if count > 1 else ""
+        self.notify(f"Not saved: {first.message}{more}", severity="error", timeout=8, markup=False)
+
+    def on_model_saved(self, message: ModelSaved) -> None:
+        verb = "Created" if message.created else "Saved"
+        self.notify(f"{verb} {message.name}.")
+        self.dismiss(message.name)
+
+    def action_cancel(self) -> None:
+        if self.initial is not None and self.values() != self.initial:
+            dialog = ConfirmDialog(
+                "Discard your changes?",
+                "The form has changes that are not saved.",
+                confirm_label="Discard",
+            )
+            self.app.push_screen(dialog, self._discard_confirmed)
+            return
+        self.dismiss(None)
+
+    def _discard_confirmed(self, yes: bool | None) -> None:
+        if yes:
+            self.dismiss(None)

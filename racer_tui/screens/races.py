@@ -1,0 +1,227 @@
+"""Races: a time trial of any trained model (or the reference driver) on any track, live.
+
+The races run this session are listed best first (the league's one ranking order), and any
+of them can be replayed. A new race on a track brings the best lap so far on that track as
+a ghost, and the gap to the session's leader there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from typing import ClassVar
+
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.message import Message
+from textual.widgets import Button, DataTable, Footer, Label, Select, Static
+
+from league.ranking import rank
+from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.garage import policy_driver
+from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.widgets.model_detail import seconds_text
+from racer_tui.widgets.section_header import SectionHeader
+from racer_tui.widgets.table_fill import fill_table
+from sim.garage.folder import ModelFolder, list_models
+from sim.race.replay import ghost_lap
+from sim.race.result import RaceResult
+from sim.race.rules import DEFAULT_RULES, RaceRules
+from sim.track_catalog import list_tracks, resolve_track
+
+REFERENCE = "reference driver"
+RESULT_COLUMNS = ("#", "driver", "track", "best lap", "laps", "off")
+WINDOWS = ((240.0, "4:00 (league rules)"), (120.0, "2:00"), (60.0, "1:00"))
+
+
+@dataclass(frozen=True)
+class DriverChoice:
+    label: str
+    folder: ModelFolder | None  # None: the reference driver
+    track: str | None  # the model's own track
+
+
+class DriversLoaded(Message):
+    def __init__(self, drivers: list[DriverChoice], generation: int) -> None:
+        super().__init__()
+        self.drivers = drivers
+        self.generation = generation  # a cancelled, slower read must not win
+
+
+def trained_drivers() -> list[DriverChoice]:
+    """The reference driver, then every model that has a policy to drive with."""
+    drivers = [DriverChoice(REFERENCE, None, None)]
+    for folder in list_models():
+        if folder.has_policy():
+            try:
+                track = folder.training_params().world_name
+            except ValueError:
+                continue  # a damaged folder: the garage shows what is wrong with it
+            drivers.append(DriverChoice(folder.name, folder, track))
+    return drivers
+
+
+class RacesScreen(RacerScreen[None]):
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("s", "start_race", "Start race", tooltip="The chosen driver on the chosen track"),
+        Binding("p", "replay", "Replay", tooltip="Replay the highlighted race"),
+        Binding("ctrl+r", "reload", "Reload drivers", tooltip="Find newly trained models"),
+    ]
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.drivers: list[DriverChoice] = []
+        self.results: list[RaceResult] = []
+        self._generation = 0
+
+    def compose(self) -> ComposeResult:
+        yield SectionHeader("races")
+        with Horizontal(id="races-body"):
+            with Vertical(id="race-setup"):
+                yield Label("Driver (trained models)", classes="field-label")
+                yield DataTable(id="drivers", cursor_type="row", show_header=False)
+                yield Label("Track", classes="field-label")
+                tracks = [(info.name, info.name) for info in list_tracks()]
+                yield Select(tracks, value=tracks[0][1], allow_blank=False, id="race-track")
+                yield Label("Window", classes="field-label")
+                yield Select(
+                    [(label, seconds) for seconds, label in WINDOWS],
+                    value=WINDOWS[0][0],
+                    allow_blank=False,
+                    id="race-window",
+                )
+                yield Button("Start race (s)", id="start-race", variant="primary")
+            with Vertical(id="race-history"):
+                yield Label("Races this session, best first", classes="field-label")
+                yield DataTable(id="race-results", cursor_type="row", zebra_stripes=True)
+                yield Static(
+                    "p replays the highlighted race. Each new race on a track shows the "
+                    "best lap there so far as a ghost (g in the race view).",
+                    id="races-hint",
+                )
+        yield Footer()
+
+    def on_mount(self) -> None:
+        fill_table(self.query_one("#race-results", DataTable), RESULT_COLUMNS, [])
+
+    def on_screen_resume(self) -> None:
+        """Each time the section is shown (the first time too): models may have been
+        trained since."""
+        self.action_reload()
+
+    def action_reload(self) -> None:
+        self._generation += 1
+        self._load_drivers(self._generation)
+
+    @work(thread=True, exclusive=True, group="race-drivers", exit_on_error=False)
+    def _load_drivers(self, generation: int) -> None:
+        self.post_message(DriversLoaded(trained_drivers(), generation))
+
+    def on_drivers_loaded(self, message: DriversLoaded) -> None:
+        if message.generation != self._generation:
+            return
+        table = self.query_one("#drivers", DataTable)
+        chosen = self.chosen_driver
+        self.drivers = message.drivers
+        rows = [
+            [Text(driver.label, style="italic" if driver.folder is None else "")]
+            for driver in message.drivers
+        ]
+        fill_table(table, ["driver"], rows)
+        labels = [driver.label for driver in self.drivers]
+        if chosen is not None and chosen.label in labels:
+            table.move_cursor(row=labels.index(chosen.label))
+
+    @property
+    def chosen_driver(self) -> DriverChoice | None:
+        table = self.query_one("#drivers", DataTable)
+        if 0 <= table.cursor_row < len(self.drivers):
+            return self.drivers[table.cursor_row]
+        return None
+
+    @on(DataTable.RowHighlighted, "#drivers")
+    def _driver_highlighted(self, event: DataTable.RowHighlighted) -> None:
+        if not 0 <= event.cursor_row < len(self.drivers):
+            return
+        track = self.drivers[event.cursor_row].track
+        select = self.query_one("#race-track", Select)
+        if track is not None and track in {value for _, value in self._track_options()}:
+            select.value = track
+
+    def _track_options(self) -> list[tuple[str, str]]:
+        return [(info.name, info.name) for info in list_tracks()]
+
+    @on(DataTable.RowSelected, "#drivers")
+    @on(Button.Pressed, "#start-race")
+    def action_start_race(self) -> None:
+        driver = self.chosen_driver
+        if driver is None:
+            self.notify("Choose a driver first.", severity="warning")
+            return
+        track = resolve_track(str(self.query_one("#race-track", Select).value))
+        window = self.query_one("#race-window", Select).value
+        rules = RaceRules(
+            window_seconds=float(str(window)),
+            penalty_seconds=DEFAULT_RULES.penalty_seconds,
+            max_offtracks_per_lap=DEFAULT_RULES.max_offtracks_per_lap,
+        )
+        same_track = rank(r for r in self.results if r.track_hash == track.content_hash)
+        leader = same_track[0] if same_track else None
+        setup = RaceSetup(
+            track=track,
+            rules=rules,
+            racer=driver.label,
+            driver=partial(policy_driver, driver.folder) if driver.folder is not None else None,
+            ghost=ghost_lap(leader) if leader is not None else None,
+            leader_seconds=leader.score if leader is not None else None,
+            title=f"{driver.label} on {track.name}",
+        )
+        self.app.push_screen(RaceScreen(setup), self._race_finished)
+
+    def _race_finished(self, result: RaceResult | None) -> None:
+        if result is not None:
+            self.results.append(result)
+            self._show_results(select=result)
+
+    def _show_results(self, select: RaceResult | None = None) -> None:
+        table = self.query_one("#race-results", DataTable)
+        self.results = rank(self.results)
+        rows: list[list[str | Text]] = []
+        for place, result in enumerate(self.results, start=1):
+            best = result.best_lap
+            rows.append(
+                [
+                    str(place),
+                    Text(result.racer),
+                    Text(result.track_name),
+                    seconds_text(best.time_seconds) if best is not None else "-",
+                    str(result.valid_laps),
+                    str(result.total_offtracks),
+                ]
+            )
+        fill_table(table, RESULT_COLUMNS, rows)
+        if select is not None:
+            table.move_cursor(row=self.results.index(select))
+
+    def action_replay(self) -> None:
+        table = self.query_one("#race-results", DataTable)
+        if not 0 <= table.cursor_row < len(self.results):
+            self.notify("There is no race to replay yet; press s to start one.", severity="warning")
+            return
+        result = self.results[table.cursor_row]
+        track = resolve_track(result.track_name)
+        setup = RaceSetup(
+            track=track,
+            rules=result.rules,
+            racer=result.racer,
+            replay=result,
+            title=f"Replay: {result.racer} on {track.name}",
+        )
+        self.app.push_screen(RaceScreen(setup))
+
+    @on(DataTable.RowSelected, "#race-results")
+    def _result_selected(self) -> None:
+        self.action_replay()

@@ -1,0 +1,205 @@
+"""The garage screen: list and detail, clone, delete, import, export and race."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from textual.widgets import DataTable, Input
+
+from racer_tui.app import create_app
+from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
+from racer_tui.screens.garage import GarageScreen
+from racer_tui.screens.race_screen import RaceScreen
+from racer_tui.widgets.model_detail import ModelDetail
+from sim.garage.bundle import read_bundle
+from sim.garage.folder import list_models, open_model
+from sim.garage.options import new_model
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
+
+
+def _names() -> list[str]:
+    return [folder.name for folder in list_models()]
+
+
+async def test_the_table_lists_models_and_the_detail_follows_the_cursor() -> None:
+    new_model("ada", max_speed=2.0, speed_levels=1)
+    new_model("bob", sensors=["lidar"])
+    app = create_app()
+    async with app.run_test(size=(140, 40)) as pilot:
+        await settle(pilot)
+        garage = app.screen
+        assert isinstance(garage, GarageScreen)
+        table = garage.query_one("#models", DataTable)
+        assert [table.get_row_at(i)[0].plain for i in range(table.row_count)] == ["ada", "bob"]
+        assert table.get_row_at(0)[1].plain == "untrained"
+        detail = garage.query_one(ModelDetail)
+        assert "5 discrete, up to 2 m/s" in painted(detail)
+        await pilot.press("down")
+        await settle(pilot)
+        text = painted(detail)
+        assert "bob" in text and "lidar" in text
+
+
+async def test_clone_takes_a_name_and_copies_the_model() -> None:
+    trained_model("ada")
+    app = create_app()
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("c")
+        dialog = app.screen
+        assert isinstance(dialog, InputDialog)
+        assert dialog.query_one(Input).value == "ada-2"
+        await pilot.press("enter")
+        await settle(pilot)
+        assert _names() == ["ada", "ada-2"]
+        clone = open_model("ada-2")
+        assert clone.has_policy()  # training continues from the source's weights
+        assert clone.training_params().extra["CLONED_FROM"] == "ada"
+        assert isinstance(app.screen, GarageScreen)
+        assert app.screen.highlighted_name == "ada-2"
+
+
+async def test_clone_refuses_a_taken_name_in_the_dialog() -> None:
+    new_model("ada")
+    new_model("ada-2")
+    app = create_app()
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("c")
+        field = app.screen.query_one(Input)
+        field.value = "ADA-2"
+        await pilot.press("enter")
+        assert isinstance(app.screen, InputDialog)  # still open, with the reason
+        assert "already exists" in painted(app.screen.query_one("#problem"))
+        await pilot.press("escape")
+        assert _names() == ["ada", "ada-2"]
+
+
+async def test_delete_asks_first_and_keeps_the_model_on_no() -> None:
+    new_model("ada")
+    new_model("bob")
+    app = create_app()
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("d")
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("enter")  # the focus starts on Cancel: Enter does not delete
+        await settle(pilot)
+        assert _names() == ["ada", "bob"]
+        await pilot.press("d", "y")
+        await settle(pilot)
+        assert _names() == ["bob"]
+        assert app.screen.query_one("#models", DataTable).row_count == 1
+
+
+async def test_import_the_shared_deepracer_folder(deepracer_dir: Path) -> None:
+    app = create_app(start="garage")
+    notes = Notifications(app)
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("i")
+        assert isinstance(app.screen, ImportDialog)
+        app.screen.query_one("#path", Input).value = str(deepracer_dir / "drfc-model")
+        await pilot.press("enter")
+        await settle(pilot)
+        assert _names() == ["drfc-model"]
+        assert isinstance(app.screen, GarageScreen)
+        assert app.screen.highlighted_name == "drfc-model"
+        told = notes.text()
+        assert "Imported drfc-model" in told
+        assert "template" in told  # it had no reward function: a template, said out loud
+        detail = app.screen.query_one(ModelDetail)
+        detail.scroll_end(animate=False)
+        await pilot.pause()
+        shown = painted(detail)
+        assert "Evaluations" in shown and "Not evaluated yet" not in shown
+        assert "latest trials" in shown
+
+
+async def test_import_of_a_missing_path_is_refused_in_the_dialog(tmp_path: Path) -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("i")
+        app.screen.query_one("#path", Input).value = str(tmp_path / "nope")
+        await pilot.press("enter")
+        assert isinstance(app.screen, ImportDialog)
+        assert "does not exist" in painted(app.screen.query_one("#problem"))
+
+
+async def test_a_bad_import_is_an_error_notification_not_a_crash(tmp_path: Path) -> None:
+    (tmp_path / "empty").mkdir()
+    app = create_app(start="garage")
+    notes = Notifications(app)
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("i")
+        app.screen.query_one("#path", Input).value = str(tmp_path / "empty")
+        await pilot.press("enter")
+        await settle(pilot)
+        assert "has no model_metadata.json" in notes.text("error")
+        assert app.is_running and _names() == []
+
+
+async def test_export_writes_a_bundle(tmp_path: Path) -> None:
+    trained_model("ada")
+    app = create_app()
+    notes = Notifications(app)
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("x")
+        assert isinstance(app.screen, InputDialog)
+        app.screen.query_one(Input).value = str(tmp_path / "for-the-host")
+        await pilot.press("enter")
+        await settle(pilot)
+        written = tmp_path / "for-the-host.racer-bundle"
+        assert read_bundle(written).name == "ada"
+        assert str(written) in notes.text()
+
+
+async def test_an_untrained_model_cannot_race_or_export() -> None:
+    new_model("ada")
+    app = create_app()
+    notes = Notifications(app)
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("r", "x")
+        assert isinstance(app.screen, GarageScreen)
+        told = notes.text("warning")
+        assert "has not been trained yet" in told and "no trained policy to export" in told
+
+
+async def test_a_trained_model_races_with_its_own_policy() -> None:
+    trained_model("ada", track="beginner-oval")
+    app = create_app()
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("r")
+        race = app.screen
+        assert isinstance(race, RaceScreen)
+        assert race.setup.track.name == "beginner-oval"
+        await settle(pilot)
+        assert race.failure is None
+        assert race.result is not None and race.result.racer == "ada"
+        assert race.result.model_hash == open_model("ada").content_hash()
+        await pilot.press("escape")
+        assert isinstance(app.screen, GarageScreen)
+
+
+async def test_a_damaged_model_is_listed_with_its_problem_and_not_edited() -> None:
+    new_model("ada")
+    broken = new_model("bob")
+    broken.metadata_file.write_text('{"sensor": ["VECTOR"]}', encoding="utf-8")
+    app = create_app()
+    notes = Notifications(app)
+    async with app.run_test(size=(140, 40)) as pilot:
+        await settle(pilot)
+        table = app.screen.query_one("#models", DataTable)
+        assert table.get_row_at(1)[1].plain == "damaged"
+        await pilot.press("down")
+        await settle(pilot)
+        assert "action_space" in painted(app.screen.query_one(ModelDetail))  # the problem
+        await pilot.press("e")
+        assert isinstance(app.screen, GarageScreen)
+        assert "before editing it" in notes.text("error")
+    assert broken.metadata_file.read_text(encoding="utf-8") == '{"sensor": ["VECTOR"]}'

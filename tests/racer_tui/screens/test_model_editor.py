@@ -1,0 +1,201 @@
+"""The model editor: create through the form, problems shown per field, reward Check, edit."""
+
+from __future__ import annotations
+
+from textual.widgets import DataTable, Input, Select, TabbedContent, TextArea
+
+from racer_tui.app import create_app
+from racer_tui.screens.dialogs import ConfirmDialog
+from racer_tui.screens.garage import GarageScreen
+from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.widgets.action_space_plot import ActionSpacePlot
+from sim.garage.folder import list_models, open_model
+from sim.garage.options import new_model
+from sim.reward_function import template_source
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
+
+BROKEN_REWARD = """def reward_function(params):
+    speed = params["speed"]
+    return speed / 0
+"""
+
+
+def _editor(app: object) -> ModelEditorScreen:
+    screen = app.screen  # type: ignore[attr-defined]
+    assert isinstance(screen, ModelEditorScreen)
+    return screen
+
+
+async def test_create_a_model_through_the_form() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        editor = _editor(app)
+        await pilot.press(*"quick")
+        editor.query_one("#track", Select).value = "beginner-oval"
+        editor.query_one("#sensor", Select).value = "lidar"
+        await pilot.press("f3")
+        editor.query_one("#max-speed", Input).value = "4"
+        editor.query_one("#steering-levels", Select).value = 3
+        await pilot.pause()
+        await pilot.pause()
+        table = editor.query_one("#action-table", DataTable)
+        assert table.row_count == 6  # 3 steering x 2 speed levels, drawn as it is typed
+        assert "●" in painted(editor.query_one(ActionSpacePlot))
+        await pilot.press("f4")
+        editor.query_one("#hp-lr", Input).value = "0.0001"
+        editor.query_one("#hp-loss_type", Select).value = "mean squared error"
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+        assert app.screen.highlighted_name == "quick"
+    folder = open_model("quick")
+    metadata = folder.metadata()
+    assert metadata.sensors == ("lidar",)
+    assert len(metadata.action_space.actions) == 6
+    assert metadata.action_space.max_speed == 4.0
+    assert folder.training_params().world_name == "beginner-oval"
+    assert folder.hyperparameters()["lr"] == 0.0001
+    assert folder.hyperparameters()["loss_type"] == "mean squared error"
+
+
+async def test_problems_are_shown_by_their_fields_and_nothing_is_written() -> None:
+    new_model("taken")
+    app = create_app()
+    notes = Notifications(app)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        editor = _editor(app)
+        await pilot.press(*"TAKEN")
+        editor.query_one("#hp-batch_size", Input).value = "1000"
+        editor.query_one("#max-speed", Input).value = "9"
+        await pilot.pause()
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert app.screen is editor  # still open, nothing lost
+        assert editor.query_one(TabbedContent).active == "tab-car"  # the first problem's tab
+        assert "already exists" in painted(editor.query_one("#name-problem"))
+        assert "Not saved" in notes.text("error")
+        await pilot.press("f4")
+        await pilot.pause()
+        assert "from 32 to 512" in painted(editor.query_one("#hp-batch_size-problem"))
+        assert editor.query_one("#hp-batch_size", Input).value == "1000"
+        await pilot.press("f3")
+        await pilot.pause()
+        assert "from 0.1 to 4" in painted(editor.query_one("#max-speed-problem"))
+    assert [folder.name for folder in list_models()] == ["taken"]
+
+
+async def test_the_allowed_range_is_shown_beside_each_hyperparameter() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n", "f4")
+        editor = _editor(app)
+        row = editor.query_one("#hp-num_epochs").parent
+        assert row is not None
+        assert "a whole number from 3 to 10" in painted(row)  # type: ignore[arg-type]
+
+
+async def test_reward_check_shows_the_value_then_the_error_with_its_line() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n", "ctrl+r")
+        await settle(pilot)
+        editor = _editor(app)
+        result = editor.query_one("#reward-problem")
+        assert "✓ reward" in painted(result)
+        assert editor.last_check is not None and editor.last_check.value is not None
+        area = editor.query_one("#reward", TextArea)
+        area.load_text(BROKEN_REWARD)
+        await pilot.press("ctrl+r")
+        await settle(pilot)
+        text = painted(result)
+        assert "✗" in text and "line 3" in text and "ZeroDivisionError" in text
+        assert area.cursor_location == (2, 0)  # the cursor goes to the line at fault
+        assert area.text == BROKEN_REWARD  # the racer's code is kept
+
+
+async def test_a_broken_reward_function_blocks_saving() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n", *"broken")
+        editor = _editor(app)
+        editor.query_one("#reward", TextArea).load_text("def reward_function(params):\n  return (")
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert app.screen is editor
+        assert editor.query_one(TabbedContent).active == "tab-reward"
+        assert "line 2" in painted(editor.query_one("#reward-problem"))
+    assert list_models() == []
+
+
+async def test_a_template_replaces_own_code_only_after_asking() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n", "f5")
+        editor = _editor(app)
+        area = editor.query_one("#reward", TextArea)
+        area.load_text("def reward_function(params):\n    return 1.0\n")
+        editor.query_one("#reward-template", Select).value = "prevent_zigzag"
+        await pilot.pause()
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("n")
+        assert "return 1.0" in area.text
+        editor.query_one("#reward-template", Select).value = "prevent_zigzag"
+        await pilot.pause()
+        await pilot.press("y")
+        assert area.text == template_source("prevent_zigzag")
+
+
+async def test_edit_saves_changes_to_the_model_files() -> None:
+    new_model("ada")
+    app = create_app()
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("e")
+        editor = _editor(app)
+        assert editor.query_one("#name", Input).disabled  # renaming is a clone
+        editor.query_one("#hp-lr", Input).value = "0.0005"
+        editor.query_one("#max-minutes", Input).value = "15"
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+    folder = open_model("ada")
+    assert folder.hyperparameters()["lr"] == 0.0005
+    assert folder.training_params().max_minutes == 15.0
+
+
+async def test_a_trained_model_keeps_its_shape_when_edited() -> None:
+    trained_model("ada")
+    before = open_model("ada").metadata_file.read_bytes()
+    app = create_app()
+    notes = Notifications(app)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("e")
+        editor = _editor(app)
+        editor.query_one("#speed-levels", Select).value = 3  # 15 actions instead of 10
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert app.screen is editor
+        assert "clone the model" in notes.text("error")
+    assert open_model("ada").metadata_file.read_bytes() == before
+
+
+async def test_escape_with_changes_asks_before_discarding() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n", *"draft", "escape")
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("n")
+        editor = _editor(app)
+        assert editor.query_one("#name", Input).value == "draft"
+        await pilot.press("escape", "y")
+        assert isinstance(app.screen, GarageScreen)

@@ -1,0 +1,86 @@
+"""The tracks browser and the races section."""
+
+from __future__ import annotations
+
+from textual.widgets import DataTable, Select
+
+from racer_tui.app import create_app
+from racer_tui.screens.garage import GarageScreen
+from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.screens.race_screen import RaceScreen
+from racer_tui.screens.races import RacesScreen
+from racer_tui.screens.tracks import TracksScreen
+from sim.garage.folder import open_model
+from sim.race.rules import DEFAULT_RULES
+from tests.racer_tui.screens.tui_helpers import painted, settle, trained_model
+
+
+async def test_tracks_show_facts_and_the_reference_lap() -> None:
+    app = create_app(start="tracks")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TracksScreen)
+        facts = painted(screen.query_one("#track-facts"))
+        assert "beginner-oval" in facts and "reference lap:" in facts and "timing" not in facts
+        await pilot.press("down")
+        await settle(pilot)
+        assert "hairpin-circuit" in painted(screen.query_one("#track-facts"))
+        await pilot.press("r")
+        assert isinstance(app.screen, RaceScreen)
+        assert app.screen.setup.track.name == "hairpin-circuit"
+        assert app.screen.setup.rules == DEFAULT_RULES
+
+
+async def test_a_new_model_from_the_tracks_screen_uses_that_track() -> None:
+    app = create_app(start="tracks")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("down", "down", "n")
+        editor = app.screen
+        assert isinstance(editor, ModelEditorScreen)
+        assert editor.query_one("#track", Select).value == "bowtie-chicane"
+        await pilot.press(*"bowtie-one", "ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+        assert app.screen.highlighted_name == "bowtie-one"
+    assert open_model("bowtie-one").training_params().world_name == "bowtie-chicane"
+
+
+async def test_races_list_trained_models_and_rank_the_session() -> None:
+    trained_model("ada", track="beginner-oval")
+    app = create_app(start="races")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        races = app.screen
+        assert isinstance(races, RacesScreen)
+        assert [d.label for d in races.drivers] == ["reference driver", "ada"]
+        races.query_one("#race-window", Select).value = 60.0
+        await pilot.pause()
+        await pilot.press("s")  # the reference driver, on the first track
+        race = app.screen
+        assert isinstance(race, RaceScreen)
+        assert race.setup.rules.window_seconds == 60.0
+        await settle(pilot)
+        await pilot.press("escape")
+        assert race.result is not None
+        await pilot.press("down")  # ada, on her own track
+        await pilot.pause()
+        assert races.query_one("#race-track", Select).value == "beginner-oval"
+        await pilot.press("s")
+        second = app.screen
+        assert isinstance(second, RaceScreen)
+        # The reference driver's best lap on this track comes along as the ghost to beat.
+        assert second.setup.ghost is not None
+        assert second.setup.leader_seconds == race.result.score
+        await settle(pilot)
+        await pilot.press("escape")
+        table = races.query_one("#race-results", DataTable)
+        assert table.row_count == 2
+        # Best first, in the league's order: the reference driver laps; an untrained policy
+        # does not.
+        assert table.get_row_at(0)[1].plain == "reference driver"
+        await pilot.press("p")
+        replay = app.screen
+        assert isinstance(replay, RaceScreen)
+        assert replay.setup.replay is not None

@@ -1,0 +1,181 @@
+"""The app shell: first run, sections, help from BINDINGS, and the command palette."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from textual.command import CommandPalette
+from textual.widgets import Input
+
+from racer_tui.app import SECTION_SCREENS, RacerTuiApp, create_app
+from racer_tui.screens.garage import GarageScreen
+from racer_tui.screens.help import HelpScreen, declared_bindings
+from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.screens.race_screen import RaceScreen
+from racer_tui.screens.races import RacesScreen
+from racer_tui.screens.tracks import TracksScreen
+from racer_tui.screens.welcome import WelcomeScreen
+from racer_tui.widgets.demo_race import DemoRace
+from racer_tui.widgets.section_header import HelpHint, SectionTab
+from sim.garage.options import new_model
+from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for
+
+
+async def test_first_run_opens_the_welcome_screen_with_a_moving_car() -> None:
+    app = create_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        assert isinstance(app.screen, WelcomeScreen)
+        demo = app.screen.query_one(DemoRace)
+        await wait_for(pilot, lambda: demo.car is not None, tries=300)
+        first = demo.car
+        await wait_for(pilot, lambda: demo.car != first, tries=300)  # playback moves it
+        assert demo.frames >= 2
+        assert "reference driver" in painted(demo.query_one("#demo-caption"))
+
+
+async def test_with_models_the_app_opens_on_the_garage() -> None:
+    new_model("ada")
+    app = create_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        assert isinstance(app.screen, GarageScreen)
+        await settle(pilot)
+        assert app.screen.highlighted_name == "ada"
+
+
+async def test_first_model_from_the_welcome_screen_lands_in_the_garage() -> None:
+    app = create_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        await pilot.press("n")
+        assert isinstance(app.screen, ModelEditorScreen)
+        await pilot.press(*"first")
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+        assert app.screen.highlighted_name == "first"
+
+
+async def test_number_keys_switch_sections_and_keep_their_state() -> None:
+    new_model("ada")
+    app = create_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        await pilot.press("2")
+        assert isinstance(app.screen, TracksScreen)
+        await pilot.press("down")
+        await pilot.press("3", "2")
+        assert app.screen.query_one("#tracks").cursor_row == 1  # type: ignore[attr-defined]
+        await pilot.press("1")
+        assert isinstance(app.screen, GarageScreen)
+
+
+async def test_the_header_tabs_switch_sections_with_the_mouse() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        tabs = list(app.screen.query(SectionTab))
+        assert [tab.mode for tab in tabs] == ["garage", "tracks", "races"]
+        assert tabs[0].has_class("-current")
+        await pilot.click(tabs[2])
+        await pilot.pause()
+        assert isinstance(app.screen, RacesScreen)
+        assert app.screen.query(SectionTab)[2].has_class("-current")
+        await pilot.click(HelpHint)
+        assert isinstance(app.screen, HelpScreen)
+
+
+async def test_digits_and_q_do_not_leave_the_editor() -> None:
+    new_model("ada")
+    app = create_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        await pilot.press("n")
+        await pilot.press("tab")  # off the name field, onto the track picker
+        await pilot.press("2", "q")
+        assert isinstance(app.screen, ModelEditorScreen)
+        assert app.is_running
+
+
+def _help_text(screen: HelpScreen) -> str:
+    return "\n".join(
+        painted(static)
+        for static in screen.query(".help-topic, .help-topic-title")
+        if static.display
+    )
+
+
+async def test_help_lists_every_binding_of_every_screen() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(140, 150)) as pilot:  # tall: the whole reference shows
+        await pilot.pause()
+        await pilot.press("question_mark")
+        assert isinstance(app.screen, HelpScreen)
+        text = _help_text(app.screen)
+        screens = [*SECTION_SCREENS.values(), RacerTuiApp, ModelEditorScreen, RaceScreen]
+        for screen_class in screens:
+            for binding in declared_bindings(screen_class):
+                if binding.description:
+                    assert binding.description in text, (screen_class, binding)
+        assert "^p" in text and "Command palette" in text
+        # Typing filters the reference.
+        await pilot.press(*"clone")
+        await pilot.pause()
+        filtered = _help_text(app.screen)
+        assert "Clone" in filtered and "Delete" not in filtered
+        await pilot.press("escape")
+        assert isinstance(app.screen, GarageScreen)
+
+
+async def test_f1_opens_help_from_the_editor() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        await pilot.press("n", "f1")
+        assert isinstance(app.screen, HelpScreen)
+        await pilot.press("escape")
+        assert isinstance(app.screen, ModelEditorScreen)
+
+
+async def test_palette_finds_actions_of_other_sections_and_runs_them() -> None:
+    new_model("ada")
+    app = create_app()
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        await pilot.press("2")
+        assert isinstance(app.screen, TracksScreen)
+        await pilot.press("ctrl+p")
+        assert isinstance(app.screen, CommandPalette)
+        await pilot.press(*"garage clone")
+        await pilot.pause(0.3)  # the palette searches asynchronously, then shows hits
+        await pilot.press("enter")
+        await pilot.pause()
+        assert isinstance(app.screen_stack[0], GarageScreen)
+        dialog_input = app.screen.query_one(Input)
+        assert dialog_input.value == "ada-2"
+
+
+async def test_palette_lists_every_section_action() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await pilot.pause()
+        texts = [command.text for command in app.palette_commands(app.screen)]
+        for section, screen_class in SECTION_SCREENS.items():
+            for binding in declared_bindings(screen_class):
+                if binding.description:
+                    assert any(binding.description in text for text in texts), (section, binding)
+        assert "Go to Races" in texts
+
+
+async def test_importing_from_the_welcome_screen_opens_the_garage(deepracer_dir: Path) -> None:
+    app = create_app()
+    async with app.run_test(size=(120, 36)) as pilot:
+        await pilot.pause()
+        assert isinstance(app.screen, WelcomeScreen)
+        await pilot.press("i")
+        app.screen.query_one("#path", Input).value = str(deepracer_dir / "drfc-model")
+        await pilot.press("enter")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+        assert app.screen.highlighted_name == "drfc-model"
