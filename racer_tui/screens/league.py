@@ -1,0 +1,327 @@
+"""League: the leaderboard, sortable by every column, filtered by track, night and season,
+with the highlighted entry's detail beside it, export, the projector and league nights.
+
+Every database read runs in a thread worker that opens its own connection and posts a
+past-tense message; the formatters for the table cells and the exports are the league's
+own (league.report), so the app, the CLI and the exported files agree.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import ClassVar
+
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Container, VerticalScroll
+from textual.message import Message
+from textual.widgets import DataTable, Footer
+
+from league.leaderboard import Column, LeaderboardRow, sort_rows
+from league.report import (
+    SCORE_TITLES,
+    leaderboard_columns,
+    leaderboard_json,
+    to_csv,
+    to_markdown,
+)
+from league.report import Column as ReportColumn
+from league.store import open_league
+from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.dialogs import InputDialog
+from racer_tui.screens.nights import NightsScreen
+from racer_tui.screens.projector import ProjectorScreen
+from racer_tui.widgets.board_filters import BoardFilters, BoardQuery, FilterOptions, board_rows
+from racer_tui.widgets.entry_detail import EntryDetail, describe_entry
+from racer_tui.widgets.section_header import SectionHeader
+from racer_tui.widgets.table_fill import fill_table
+from sim.atomic import write_text_atomic
+
+NARROW = 120  # below this many columns the detail panel goes under the table
+EXPORT_FORMATS = {".csv": "csv", ".json": "json", ".md": "markdown", ".markdown": "markdown"}
+# Table titles (league.report's) -> the sort keys league.leaderboard knows.
+SORT_BY_TITLE: dict[str, Column] = {
+    "rank": Column.RANK,
+    "racer": Column.RACER,
+    "model": Column.MODEL,
+    "track": Column.TRACK,
+    "best lap": Column.BEST,
+    "average": Column.AVERAGE,
+    "laps": Column.LAPS,
+    "off-tracks": Column.OFFTRACKS,
+    "submitted": Column.SUBMITTED,
+    **{title: Column.SCORE for title in SCORE_TITLES.values()},
+}
+
+
+def export_text(rows: list[LeaderboardRow], query: BoardQuery, kind: str) -> str:
+    """The file contents, through the same formatters as `racer-tui leaderboard`."""
+    if kind == "json":
+        return json.dumps(leaderboard_json(rows, query.method), indent=2) + "\n"
+    show_track = query.track_hash is None and len({row.track_hash for row in rows}) > 1
+    columns = leaderboard_columns(query.method, show_track=show_track, iso_times=kind == "csv")
+    return to_csv(columns, rows) if kind == "csv" else to_markdown(columns, rows)
+
+
+def check_export_path(text: str) -> str | None:
+    suffix = Path(text).suffix.lower()
+    if suffix not in EXPORT_FORMATS:
+        return "End the file name with .csv, .json or .md to choose the format."
+    if not Path(text).expanduser().parent.is_dir():
+        return f"The folder {Path(text).expanduser().parent} does not exist; create it first."
+    return None
+
+
+# --- messages from the workers --------------------------------------------------------------
+
+
+class BoardLoaded(Message):
+    def __init__(
+        self, rows: list[LeaderboardRow], options: FilterOptions, query: BoardQuery, generation: int
+    ) -> None:
+        super().__init__()
+        self.rows = rows
+        self.options = options
+        self.query = query
+        self.generation = generation  # a slower, older read must not win
+
+
+class EntryDescribed(Message):
+    def __init__(self, record_id: str, text: Text) -> None:
+        super().__init__()
+        self.record_id = record_id
+        self.text = text
+
+
+class BoardExported(Message):
+    def __init__(self, path: Path, count: int) -> None:
+        super().__init__()
+        self.path = path
+        self.count = count
+
+
+@dataclass(frozen=True)
+class SortOrder:
+    column: Column | None = None  # None: the league's ranking order
+    reverse: bool = False
+
+
+class LeagueScreen(RacerScreen[None]):
+    """The leaderboard section. `db_path` None is the league in the data folder."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("s", "sort_next", "Sort", tooltip="Sort by the next column (or click a header)"),
+        Binding("r", "reverse", "Reverse", tooltip="Reverse the sort order"),
+        Binding("x", "export", "Export", tooltip="Write the table as CSV, JSON or Markdown"),
+        Binding("n", "nights", "Nights", tooltip="Run a league night: entrants, heats, standings"),
+        Binding("p", "projector", "Projector", tooltip="Full-screen leaderboard in large type"),
+        Binding("ctrl+r", "reload", "Reload", tooltip="Read the league again", show=False),
+    ]
+    AUTO_FOCUS = "#board"  # the keys (s, r, arrows) act on the table from the start
+    DEFAULT_CSS = """
+    LeagueScreen #league-body { height: 1fr; layout: horizontal; }
+    LeagueScreen #board { width: 3fr; height: 1fr; }
+    LeagueScreen #entry-scroll { width: 2fr; min-width: 36; border-left: vkey $panel-lighten-2; }
+    LeagueScreen.-narrow #league-body { layout: vertical; }
+    LeagueScreen.-narrow #board { width: 100%; height: 1fr; }
+    LeagueScreen.-narrow #entry-scroll {
+        width: 100%; height: 1fr; max-height: 45%; border-left: none;
+        border-top: hkey $panel-lighten-2;
+    }
+    """
+
+    def __init__(self, *, db_path: Path | None = None) -> None:
+        super().__init__()
+        self.db_path = db_path
+        self.rows: list[LeaderboardRow] = []  # as shown (sorted)
+        self.ranked: list[LeaderboardRow] = []  # in the league's order
+        self.titles: list[str] = []
+        self.order = SortOrder()
+        self.shown_query = BoardQuery()
+        self.loaded = False
+        self._generation = 0
+
+    def compose(self) -> ComposeResult:
+        yield SectionHeader("league")
+        yield BoardFilters(id="board-filters")
+        with Container(id="league-body"):
+            yield DataTable(id="board", cursor_type="row", zebra_stripes=True)
+            with VerticalScroll(id="entry-scroll"):
+                yield EntryDetail(id="entry-detail")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.reload()
+
+    def on_resize(self) -> None:
+        self.set_class(self.size.width < NARROW, "-narrow")
+
+    def on_screen_resume(self) -> None:
+        if self.loaded:  # a night may have run heats since
+            self.reload()
+
+    # --- loading -------------------------------------------------------------------------
+
+    def reload(self) -> None:
+        self._generation += 1
+        self._load(self.query_one(BoardFilters).current, self._generation)
+
+    def action_reload(self) -> None:
+        self.reload()
+
+    @on(BoardFilters.Changed)
+    def _filters_changed(self) -> None:
+        self.reload()
+
+    @work(thread=True, exclusive=True, group="league-board", exit_on_error=False)
+    def _load(self, query: BoardQuery, generation: int) -> None:
+        from racer_tui.widgets.board_filters import filter_options
+
+        with open_league(self.db_path) as league:
+            rows = board_rows(league, query)
+            options = filter_options(league)
+        self.post_message(BoardLoaded(rows, options, query, generation))
+
+    def on_board_loaded(self, message: BoardLoaded) -> None:
+        if message.generation != self._generation:
+            return
+        self.loaded = True
+        self.query_one(BoardFilters).set_options(message.options)
+        self.ranked = message.rows
+        self.shown_query = message.query
+        self._show()
+
+    def _columns(self) -> list[ReportColumn]:
+        query = self.shown_query
+        show_track = query.track_hash is None
+        return leaderboard_columns(query.method, show_track=show_track)
+
+    def _show(self) -> None:
+        table = self.query_one("#board", DataTable)
+        selected = self.highlighted
+        order = self.order
+        columns = self._columns()
+        self.titles = [column.title for column in columns]
+        if order.column is not None and order.column not in {SORT_BY_TITLE[t] for t in self.titles}:
+            self.order = order = SortOrder()  # e.g. the track column left with a track filter
+        if order.column is None:
+            self.rows = list(reversed(self.ranked)) if order.reverse else list(self.ranked)
+        else:
+            self.rows = sort_rows(self.ranked, order.column.value, reverse=order.reverse)
+        labels = []
+        for column in columns:
+            sorted_here = SORT_BY_TITLE[column.title] == (order.column or Column.RANK)
+            arrow = (" ▼" if order.reverse else " ▲") if sorted_here else ""
+            labels.append(column.title + arrow)
+        cells = [
+            [
+                Text(column.cell(row), justify="right" if column.numeric else "left")
+                for column in columns
+            ]
+            for row in self.rows
+        ]
+        fill_table(table, labels, cells)
+        count = len(self.rows)
+        self.query_one(SectionHeader).set_context(
+            f"{count} entr{'ies' if count != 1 else 'y'}" if count else ""
+        )
+        detail = self.query_one(EntryDetail)
+        if not self.rows:
+            detail.show_message(
+                "No results here yet. Racers submit with `racer-tui submit`; a host runs a "
+                "league night with n."
+            )
+            return
+        ids = [row.record_id for row in self.rows]
+        index = ids.index(selected.record_id) if selected and selected.record_id in ids else 0
+        table.move_cursor(row=index)
+        self._describe(self.rows[index])
+
+    @property
+    def highlighted(self) -> LeaderboardRow | None:
+        table = self.query_one("#board", DataTable)
+        if 0 <= table.cursor_row < len(self.rows):
+            return self.rows[table.cursor_row]
+        return None
+
+    @on(DataTable.RowHighlighted, "#board")
+    def _highlighted(self, event: DataTable.RowHighlighted) -> None:
+        if 0 <= event.cursor_row < len(self.rows):
+            self._describe(self.rows[event.cursor_row])
+
+    @work(thread=True, exclusive=True, group="league-detail", exit_on_error=False)
+    def _describe(self, row: LeaderboardRow) -> None:
+        with open_league(self.db_path) as league:
+            text = describe_entry(league, row)
+        self.post_message(EntryDescribed(row.record_id, text))
+
+    def on_entry_described(self, message: EntryDescribed) -> None:
+        row = self.highlighted
+        if row is not None and row.record_id == message.record_id:
+            self.query_one(EntryDetail).update(message.text)
+
+    # --- sorting -------------------------------------------------------------------------
+
+    def sort_by(self, column: Column | None, *, reverse: bool = False) -> None:
+        self.order = SortOrder(column, reverse)
+        self._show()
+
+    def action_sort_next(self) -> None:
+        if not self.titles:
+            return
+        keys = [SORT_BY_TITLE[title] for title in self.titles]
+        current = self.order.column or Column.RANK
+        position = keys.index(current) if current in keys else 0
+        self.sort_by(keys[(position + 1) % len(keys)])
+
+    def action_reverse(self) -> None:
+        self.sort_by(self.order.column, reverse=not self.order.reverse)
+
+    @on(DataTable.HeaderSelected, "#board")
+    def _header_clicked(self, event: DataTable.HeaderSelected) -> None:
+        if not 0 <= event.column_index < len(self.titles):
+            return
+        column = SORT_BY_TITLE[self.titles[event.column_index]]
+        same = column == (self.order.column or Column.RANK)
+        self.sort_by(column, reverse=not self.order.reverse if same else False)
+
+    # --- export, projector, nights -------------------------------------------------------
+
+    def action_export(self) -> None:
+        if not self.rows:
+            self.notify("There is nothing to export: the leaderboard is empty.", severity="warning")
+            return
+        dialog = InputDialog(
+            "Export the leaderboard",
+            "The table as shown (filters and order). The file name's ending chooses the "
+            "format: .csv, .json or .md (Markdown).",
+            value=str(Path.cwd() / "leaderboard.csv"),
+            confirm_label="Export",
+            check=check_export_path,
+            paths=True,
+        )
+        self.app.push_screen(dialog, self._export_to)
+
+    def _export_to(self, path: str | None) -> None:
+        if path is not None:
+            target = Path(path).expanduser()
+            kind = EXPORT_FORMATS[target.suffix.lower()]
+            self._export(list(self.rows), self.shown_query, target, kind)
+
+    @work(thread=True, group="league-export", exit_on_error=False)
+    def _export(self, rows: list[LeaderboardRow], query: BoardQuery, path: Path, kind: str) -> None:
+        write_text_atomic(path, export_text(rows, query, kind))
+        self.post_message(BoardExported(path, len(rows)))
+
+    def on_board_exported(self, message: BoardExported) -> None:
+        self.notify(f"Wrote {message.count} rows to {message.path}.", timeout=10, markup=False)
+
+    def action_projector(self) -> None:
+        self.app.push_screen(ProjectorScreen(self.shown_query, db_path=self.db_path))
+
+    def action_nights(self) -> None:
+        self.app.push_screen(NightsScreen(db_path=self.db_path))

@@ -1,0 +1,577 @@
+"""League nights for the host: open a night, enter racers, draw the order, run each heat live
+in the race view, watch the standings after every heat, close the night and see the season.
+
+The league library does the work (league.nights, league.races, league.seasons); this screen
+calls it in thread workers, each with its own database connection, and shows what changed.
+A heat's race runs in RaceScreen under the night's frozen rules and the heat's seed; the
+result it returns is recorded with `record_race` into the night.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import ClassVar
+
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.message import Message
+from textual.suggester import SuggestFromList
+from textual.widgets import Button, DataTable, Footer, Input, Label, Select, Static
+
+from league.errors import LeagueError
+from league.leaderboard import LeaderboardRow
+from league.nights import (
+    Heat,
+    Night,
+    Standing,
+    add_entrant,
+    close_night,
+    draw_heats,
+    find_night_track,
+    get_night,
+    heats,
+    list_nights,
+    new_night,
+    pending_heats,
+    standings,
+)
+from league.races import race_result, record_race
+from league.report import SCORE_TITLES, seconds
+from league.seasons import SeasonStanding, get_season, list_seasons, season_standings
+from league.store import League, open_league
+from racer_tui.race_commands import resolve_driver
+from racer_tui.screens.base import RacerModal, RacerScreen
+from racer_tui.screens.dialogs import ConfirmDialog, PathSuggester, show_problem
+from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.widgets.section_header import SectionHeader
+from racer_tui.widgets.table_fill import fill_table
+from sim.garage.folder import list_models
+from sim.race.driver import REFERENCE_NAME
+from sim.race.replay import ghost_lap
+from sim.race.result import RaceResult
+from sim.race.rules import DEFAULT_RULES, load_rules
+from sim.track import Track
+from sim.track_catalog import list_tracks, resolve_track
+
+NIGHT_COLUMNS = ("night", "track", "state")
+HEAT_COLUMNS = ("#", "racer", "model", "result")
+
+
+def host_name() -> str:
+    import getpass
+
+    try:
+        return getpass.getuser()
+    except (OSError, KeyError):
+        return "host"
+
+
+# --- dialogs ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class NightRequest:
+    track: str
+    name: str | None
+    rules_file: str | None
+    season_id: str | None
+
+
+class NewNightDialog(RacerModal[NightRequest | None]):
+    """Track, optional name, optional rules file and season. The rules are frozen when
+    the night opens, so they are shown (read-only) on the night afterwards."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+
+    def __init__(self, seasons: list[tuple[str, str]]) -> None:
+        super().__init__()
+        self._seasons = seasons
+
+    def compose(self) -> ComposeResult:
+        tracks = [(info.name, info.name) for info in list_tracks()]
+        with Vertical(classes="dialog"):
+            yield Label("Open a league night", classes="dialog-title")
+            yield Label("Track", classes="field-label")
+            yield Select(tracks, value=tracks[0][1], allow_blank=False, id="night-track")
+            yield Input(placeholder="night name (empty: track and date)", id="night-name")
+            yield Input(
+                placeholder="rules file, YAML (empty: league rules, 4:00 window)",
+                suggester=PathSuggester(),
+                id="night-rules",
+            )
+            yield Select(self._seasons, prompt="no season", id="night-season")
+            yield Static(Text(f"League rules: {DEFAULT_RULES.describe()}."), classes="dialog-body")
+            yield Static("", id="problem", classes="field-problem")
+            with Horizontal(classes="dialog-buttons"):
+                yield Button("Cancel (esc)", id="cancel")
+                yield Button("Open night", id="confirm", variant="primary")
+
+    def on_mount(self) -> None:
+        self.query_one("#night-name", Input).focus()
+
+    def action_cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Button.Pressed, "#cancel")
+    def _cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Input.Submitted)
+    @on(Button.Pressed, "#confirm")
+    def _confirm(self) -> None:
+        rules = self.query_one("#night-rules", Input).value.strip()
+        if rules and not Path(rules).expanduser().is_file():
+            show_problem(
+                self.query_one("#problem", Static),
+                f"There is no rules file {rules}; check the path or leave it empty.",
+            )
+            return
+        season = self.query_one("#night-season", Select).value
+        self.dismiss(
+            NightRequest(
+                track=str(self.query_one("#night-track", Select).value),
+                name=self.query_one("#night-name", Input).value.strip() or None,
+                rules_file=str(Path(rules).expanduser()) if rules else None,
+                season_id=None if season is Select.NULL else str(season),
+            )
+        )
+
+
+@dataclass(frozen=True)
+class EntrantRequest:
+    racer: str
+    model: str
+
+
+class AddEntrantDialog(RacerModal[EntrantRequest | None]):
+    """A racer and what they race: `reference`, a garage model or a bundle file."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+
+    def __init__(self, models: list[str]) -> None:
+        super().__init__()
+        self._models = models
+
+    def compose(self) -> ComposeResult:
+        with Vertical(classes="dialog"):
+            yield Label("Add an entrant", classes="dialog-title")
+            yield Static(
+                "The racer's name, and the car: `reference` (the reference driver), a garage "
+                "model name, or the path of a .racer-bundle file. → completes.",
+                classes="dialog-body",
+            )
+            yield Input(placeholder="racer name", id="entrant-racer")
+            yield Input(
+                placeholder="reference, a model name or a bundle path",
+                suggester=SuggestFromList([REFERENCE_NAME, *self._models]),
+                id="entrant-model",
+            )
+            yield Static("", id="problem", classes="field-problem")
+            with Horizontal(classes="dialog-buttons"):
+                yield Button("Cancel (esc)", id="cancel")
+                yield Button("Add", id="confirm", variant="primary")
+
+    def on_mount(self) -> None:
+        self.query_one("#entrant-racer", Input).focus()
+
+    def action_cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Button.Pressed, "#cancel")
+    def _cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Input.Submitted, "#entrant-racer")
+    def _next_field(self) -> None:
+        self.query_one("#entrant-model", Input).focus()
+
+    @on(Input.Submitted, "#entrant-model")
+    @on(Button.Pressed, "#confirm")
+    def _confirm(self) -> None:
+        racer = self.query_one("#entrant-racer", Input).value.strip()
+        model = self.query_one("#entrant-model", Input).value.strip()
+        if not racer or not model:
+            show_problem(
+                self.query_one("#problem", Static),
+                "Give the racer's name and the car (reference, a model or a bundle).",
+            )
+            return
+        self.dismiss(EntrantRequest(racer, model))
+
+
+# --- messages from the workers --------------------------------------------------------------
+
+
+class NightsLoaded(Message):
+    def __init__(self, nights: list[Night], select: str | None) -> None:
+        super().__init__()
+        self.nights = nights
+        self.select = select
+
+
+@dataclass(frozen=True)
+class NightState:
+    night: Night
+    heats: list[Heat]
+    results: dict[str, LeaderboardRow]  # race id -> its entry
+    standings: list[Standing]
+    season_name: str | None
+    season: list[SeasonStanding] | None  # once the night is closed and in a season
+
+
+class NightLoaded(Message):
+    def __init__(self, state: NightState) -> None:
+        super().__init__()
+        self.state = state
+
+
+class NightChanged(Message):
+    """Something was added to a night: say so, then read it again."""
+
+    def __init__(self, night_id: str, note: str) -> None:
+        super().__init__()
+        self.night_id = night_id
+        self.note = note
+
+
+class SeasonsLoaded(Message):
+    def __init__(self, seasons: list[tuple[str, str]]) -> None:
+        super().__init__()
+        self.seasons = seasons
+
+
+class HeatReady(Message):
+    def __init__(self, night: Night, heat: Heat, setup: RaceSetup) -> None:
+        super().__init__()
+        self.night = night
+        self.heat = heat
+        self.setup = setup
+
+
+def read_night(league: League, night_id: str) -> NightState:
+    night = get_night(league, night_id)
+    table = standings(league, night)
+    results = {row.entry.record_id: row.entry for row in table}
+    season_name = None
+    season = None
+    if night.season_id is not None:
+        found = get_season(league, night.season_id)
+        season_name = found.name
+        if night.closed:
+            season = season_standings(league, found)
+    return NightState(night, heats(league, night), results, table, season_name, season)
+
+
+def heat_setup(league: League, night: Night, heat: Heat, track: Track) -> RaceSetup:
+    """The race view's setup for a heat: the night's rules, the heat's seed, and the
+    night's leader so far as the ghost and the gap."""
+    table = standings(league, night)
+    leader = table[0].entry if table and table[0].entry.score is not None else None
+    ghost = ghost_lap(race_result(league, leader.record_id)) if leader is not None else None
+    return RaceSetup(
+        track=track,
+        rules=night.rules,
+        racer=heat.entrant.racer,
+        driver=partial(resolve_driver, heat.entrant.model, track),
+        seed=heat.seed,
+        ghost=ghost,
+        leader_seconds=leader.score if leader is not None else None,
+        title=f"Heat {heat.position}: {heat.entrant.display_name} ({heat.entrant.model})",
+    )
+
+
+class NightsScreen(RacerScreen[None]):
+    """The nights on the left; the highlighted night's rules, heats and standings."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("o", "open_night", "Open night", tooltip="A new night: track, rules, season"),
+        Binding("a", "add_entrant", "Add entrant", tooltip="A racer and their car"),
+        Binding("d", "draw", "Draw", tooltip="Draw the order of the heats still to race"),
+        Binding("r", "run_heat", "Run heat", tooltip="Race the next heat live"),
+        Binding("c", "close_night", "Close night", tooltip="Final standings and season points"),
+        Binding("escape", "leave", "Back"),
+    ]
+    AUTO_FOCUS = "#nights"
+    DEFAULT_CSS = """
+    NightsScreen #nights-body { height: 1fr; }
+    NightsScreen #nights-list { width: 30; padding: 0 1; }
+    NightsScreen #nights { height: 1fr; }
+    NightsScreen #night-view { width: 1fr; padding: 0 1; }
+    NightsScreen #night-rules { height: auto; }
+    NightsScreen #heats { height: 1fr; min-height: 4; }
+    NightsScreen #standings { height: 1fr; min-height: 4; }
+    """
+
+    def __init__(self, *, db_path: Path | None = None) -> None:
+        super().__init__()
+        self.db_path = db_path
+        self.nights: list[Night] = []
+        self.state: NightState | None = None
+
+    def compose(self) -> ComposeResult:
+        yield SectionHeader("league", "league nights")
+        with Horizontal(id="nights-body"):
+            with Vertical(id="nights-list"):
+                yield Label("League nights", classes="field-label")
+                yield DataTable(id="nights", cursor_type="row", zebra_stripes=True)
+            with Vertical(id="night-view"):
+                yield Static("", id="night-rules")
+                yield Label("Heats, in running order", classes="field-label")
+                yield DataTable(id="heats", cursor_type="row", zebra_stripes=True)
+                yield Label("Standings", id="standings-title", classes="field-label")
+                yield DataTable(id="standings", cursor_type="row", zebra_stripes=True)
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.reload()
+
+    # --- loading -----------------------------------------------------------------------
+
+    def reload(self, select: str | None = None) -> None:
+        self._load_nights(select or (self.state.night.id if self.state else None))
+
+    @work(thread=True, exclusive=True, group="nights-list", exit_on_error=False)
+    def _load_nights(self, select: str | None) -> None:
+        with open_league(self.db_path) as league:
+            found = list(reversed(list_nights(league)))  # newest first
+        self.post_message(NightsLoaded(found, select))
+
+    def on_nights_loaded(self, message: NightsLoaded) -> None:
+        self.nights = message.nights
+        rows = [
+            [Text(n.name), Text(n.track_name), "closed" if n.closed else "open"]
+            for n in message.nights
+        ]
+        table = self.query_one("#nights", DataTable)
+        fill_table(table, NIGHT_COLUMNS, rows)
+        if not self.nights:
+            self.state = None
+            self.query_one("#night-rules", Static).update(
+                Text("No league nights yet. Press o to open one.", style="dim")
+            )
+            return
+        ids = [n.id for n in self.nights]
+        index = ids.index(message.select) if message.select in ids else 0
+        table.move_cursor(row=index)
+        self._load_night(ids[index])
+
+    @on(DataTable.RowHighlighted, "#nights")
+    def _night_highlighted(self, event: DataTable.RowHighlighted) -> None:
+        if 0 <= event.cursor_row < len(self.nights):
+            night = self.nights[event.cursor_row]
+            if self.state is None or self.state.night.id != night.id:
+                self._load_night(night.id)
+
+    @work(thread=True, exclusive=True, group="night-view", exit_on_error=False)
+    def _load_night(self, night_id: str) -> None:
+        with open_league(self.db_path) as league:
+            state = read_night(league, night_id)
+        self.post_message(NightLoaded(state))
+
+    def on_night_loaded(self, message: NightLoaded) -> None:
+        self.state = state = message.state
+        night = state.night
+        text = Text()
+        text.append(night.name, style="bold")
+        text.append(f"  on {night.track_name}  ")
+        text.append("closed" if night.closed else "open", style="dim" if night.closed else "green")
+        if state.season_name:
+            text.append(f"  season {state.season_name}")
+        text.append("\nRules (frozen): ", style="dim")
+        text.append(night.rules.describe())
+        self.query_one("#night-rules", Static).update(text)
+        self._show_heats(state)
+        self._show_standings(state)
+
+    def _show_heats(self, state: NightState) -> None:
+        rows: list[list[str | Text]] = []
+        next_marked = False
+        for number, heat in enumerate(state.heats, start=1):
+            if heat.race_id is not None:
+                entry = state.results.get(heat.race_id)
+                best = entry.best_lap if entry is not None else None
+                result = Text("raced" if best is None else f"best {seconds(best)}")
+            elif not next_marked and not state.night.closed:
+                result = Text("next (r)", style="bold green")
+                next_marked = True
+            else:
+                result = Text("waiting", style="dim")
+            rows.append(
+                [str(number), Text(heat.entrant.display_name), Text(heat.entrant.model), result]
+            )
+        fill_table(self.query_one("#heats", DataTable), HEAT_COLUMNS, rows)
+
+    def _show_standings(self, state: NightState) -> None:
+        table = self.query_one("#standings", DataTable)
+        title = self.query_one("#standings-title", Label)
+        if state.season is not None:
+            title.update(Text(f"Season standings: {state.season_name}"))
+            rows: list[list[str | Text]] = [
+                [str(s.position), Text(s.display_name), str(s.points), str(s.nights), str(s.wins)]
+                for s in state.season
+            ]
+            fill_table(table, ("#", "racer", "points", "nights", "wins"), rows)
+            return
+        closed = "final " if state.night.closed else ""
+        title.update(Text(f"Night standings ({closed}with points)"))
+        score_title = SCORE_TITLES[state.night.rules.ranking]
+        rows = [
+            [
+                str(s.position) if s.position is not None else "-",
+                Text(s.entry.display_name),
+                seconds(s.entry.score),
+                str(s.entry.valid_laps),
+                str(s.entry.offtracks),
+                str(s.points),
+            ]
+            for s in state.standings
+        ]
+        fill_table(table, ("#", "racer", score_title, "laps", "off", "points"), rows)
+
+    def on_night_changed(self, message: NightChanged) -> None:
+        if message.note:
+            self.notify(message.note, markup=False)
+        self.reload(select=message.night_id)
+
+    # --- actions -----------------------------------------------------------------------
+
+    def _current(self, doing: str) -> Night | None:
+        if self.state is None:
+            self.notify(f"Open a night first (o), then {doing}.", severity="warning")
+            return None
+        if self.state.night.closed:
+            self.notify(
+                f"{self.state.night.name} is closed; its results are final. Open a new night (o).",
+                severity="warning",
+                markup=False,
+            )
+            return None
+        return self.state.night
+
+    def action_open_night(self) -> None:
+        self._load_seasons()
+
+    @work(thread=True, exclusive=True, group="nights-dialog", exit_on_error=False)
+    def _load_seasons(self) -> None:
+        with open_league(self.db_path) as league:
+            seasons = [(season.name, season.id) for season in list_seasons(league)]
+        self.post_message(SeasonsLoaded(seasons))
+
+    def on_seasons_loaded(self, message: SeasonsLoaded) -> None:
+        self.app.push_screen(NewNightDialog(message.seasons), self._night_requested)
+
+    def _night_requested(self, request: NightRequest | None) -> None:
+        if request is not None:
+            self._open_night(request)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _open_night(self, request: NightRequest) -> None:
+        rules = load_rules(request.rules_file) if request.rules_file else DEFAULT_RULES
+        track = resolve_track(request.track)
+        with open_league(self.db_path) as league:
+            night = new_night(
+                league, track, rules=rules, name=request.name, season=request.season_id
+            )
+        self.post_message(NightChanged(night.id, f"Opened {night.name} on {night.track_name}."))
+
+    def action_add_entrant(self) -> None:
+        night = self._current("add entrants")
+        if night is not None:
+            models = [folder.name for folder in list_models() if folder.has_policy()]
+            self.app.push_screen(AddEntrantDialog(models), partial(self._entrant_chosen, night))
+
+    def _entrant_chosen(self, night: Night, request: EntrantRequest | None) -> None:
+        if request is not None:
+            self._add_entrant(night, request)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _add_entrant(self, night: Night, request: EntrantRequest) -> None:
+        with open_league(self.db_path) as league:
+            entrant = add_entrant(league, night, request.racer, request.model)
+        self.post_message(NightChanged(night.id, f"Entered {entrant.racer} with {entrant.model}."))
+
+    def action_draw(self) -> None:
+        night = self._current("draw the heats")
+        if night is not None:
+            self._draw(night)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _draw(self, night: Night) -> None:
+        with open_league(self.db_path) as league:
+            drawn = draw_heats(league, night)
+        waiting = sum(1 for heat in drawn if heat.race_id is None)
+        self.post_message(NightChanged(night.id, f"Drew the order of {waiting} heat(s)."))
+
+    def action_run_heat(self) -> None:
+        night = self._current("run its heats")
+        if night is not None:
+            self._prepare_heat(night)
+
+    @work(thread=True, exclusive=True, group="nights-heat", exit_on_error=False)
+    def _prepare_heat(self, night: Night) -> None:
+        with open_league(self.db_path) as league:
+            waiting = pending_heats(league, night)
+            if not waiting:
+                raise LeagueError(
+                    f"{night.name} has no drawn heats waiting; add entrants (a) and draw (d)."
+                )
+            track = find_night_track(night)
+            setup = heat_setup(league, night, waiting[0], track)
+        self.post_message(HeatReady(night, waiting[0], setup))
+
+    def on_heat_ready(self, message: HeatReady) -> None:
+        self.app.push_screen(
+            RaceScreen(message.setup), partial(self._heat_finished, message.night, message.heat)
+        )
+
+    def _heat_finished(self, night: Night, heat: Heat, result: RaceResult | None) -> None:
+        if result is None:
+            self.notify(
+                f"Heat {heat.position} was left before its race finished; press r to run it again.",
+                severity="warning",
+                markup=False,
+            )
+            return
+        self._record(night, heat, result)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _record(self, night: Night, heat: Heat, result: RaceResult) -> None:
+        with open_league(self.db_path) as league:
+            record_race(league, result, night.id, heat_id=heat.id)
+        best = result.best_lap
+        lap = f"best lap {best.time_seconds:.3f} s" if best is not None else "no valid lap"
+        self.post_message(NightChanged(night.id, f"Recorded {heat.entrant.racer}'s heat: {lap}."))
+
+    def action_close_night(self) -> None:
+        night = self._current("close it")
+        if night is None or self.state is None:
+            return
+        waiting = sum(1 for heat in self.state.heats if heat.race_id is None)
+        extra = (
+            f" {waiting} heat(s) have not raced; those entrants get no result." if waiting else ""
+        )
+        dialog = ConfirmDialog(
+            f"Close {night.name}?",
+            "Closing makes the standings final and adds the points to the season; no more "
+            f"entrants, draws or heats.{extra}",
+            confirm_label="Close night",
+        )
+        self.app.push_screen(dialog, partial(self._close_confirmed, night, bool(waiting)))
+
+    def _close_confirmed(self, night: Night, force: bool, yes: bool | None) -> None:
+        if yes:
+            self._close(night, force)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _close(self, night: Night, force: bool) -> None:
+        with open_league(self.db_path) as league:
+            close_night(league, night, host_name(), force=force)
+        self.post_message(NightChanged(night.id, f"Closed {night.name}; the standings are final."))
+
+    def action_leave(self) -> None:
+        self.dismiss(None)

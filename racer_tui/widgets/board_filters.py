@@ -1,0 +1,127 @@
+"""The leaderboard's filter bar (track, night, season, ranking method) and the query it
+describes, shared by the League section and the projector so both rank the same way.
+
+`board_rows` and `filter_options` read the database: call them in a thread worker, with a
+league opened in that thread (SQLite connections belong to the thread that opened them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from textual import on
+from textual.app import ComposeResult
+from textual.containers import Horizontal
+from textual.message import Message
+from textual.widgets import Select
+
+from league.leaderboard import BY_CHOICES, Filters, LeaderboardRow, leaderboard
+from league.nights import list_nights
+from league.seasons import list_seasons
+from league.store import League
+from league.tracks import track_names
+from sim.race.rules import RankingMethod
+
+BY_LABELS = {"best": "best lap", "average": "best average", "total": "total time"}
+
+
+@dataclass(frozen=True)
+class BoardQuery:
+    """What the leaderboard shows: None means "every"."""
+
+    track_hash: str | None = None
+    night_id: str | None = None
+    season_id: str | None = None
+    by: str = "best"
+
+    @property
+    def method(self) -> RankingMethod:
+        return BY_CHOICES.get(self.by, RankingMethod.BEST_LAP)
+
+
+@dataclass(frozen=True)
+class FilterOptions:
+    """(label, value) pairs for each Select, read from the database."""
+
+    tracks: list[tuple[str, str]]
+    nights: list[tuple[str, str]]
+    seasons: list[tuple[str, str]]
+
+
+def filter_options(league: League) -> FilterOptions:
+    tracks = sorted(track_names(league).items(), key=lambda item: item[1].casefold())
+    nights = [
+        (f"{night.name}{' (open)' if not night.closed else ''}", night.id)
+        for night in reversed(list_nights(league))  # newest first
+    ]
+    seasons = [(season.name, season.id) for season in list_seasons(league)]
+    return FilterOptions([(name, key) for key, name in tracks], nights, seasons)
+
+
+def board_rows(league: League, query: BoardQuery) -> list[LeaderboardRow]:
+    """The ranked rows for `query` (a season means the races of its nights)."""
+    night_ids: list[str] | None = [query.night_id] if query.night_id else None
+    if query.season_id is not None:
+        in_season = [n.id for n in list_nights(league) if n.season_id == query.season_id]
+        night_ids = in_season if night_ids is None else [n for n in night_ids if n in in_season]
+    filters = Filters(track_hash=query.track_hash, night_ids=night_ids)
+    return leaderboard(league, filters, query.method)
+
+
+def _value(select: Select[str]) -> str | None:
+    value = select.value
+    return None if value is Select.NULL else str(value)
+
+
+class BoardFilters(Horizontal):
+    """Four Selects; any change posts `BoardFilters.Changed` with the new query."""
+
+    DEFAULT_CSS = """
+    BoardFilters { height: auto; }
+    BoardFilters > Select { width: 1fr; }
+    BoardFilters > #filter-by { max-width: 24; }
+    """
+
+    class Changed(Message):
+        def __init__(self, query: BoardQuery) -> None:
+            super().__init__()
+            self.query = query
+
+    def compose(self) -> ComposeResult:
+        yield Select[str]([], prompt="every track", id="filter-track")
+        yield Select[str]([], prompt="every night", id="filter-night")
+        yield Select[str]([], prompt="every season", id="filter-season")
+        yield Select[str](
+            [(f"by {label}", by) for by, label in BY_LABELS.items()],
+            value="best",
+            allow_blank=False,
+            id="filter-by",
+        )
+
+    @property
+    def current(self) -> BoardQuery:
+        return BoardQuery(
+            track_hash=_value(self.query_one("#filter-track", Select)),
+            night_id=_value(self.query_one("#filter-night", Select)),
+            season_id=_value(self.query_one("#filter-season", Select)),
+            by=_value(self.query_one("#filter-by", Select)) or "best",
+        )
+
+    def set_options(self, options: FilterOptions) -> None:
+        """New choices, keeping each current choice that still exists."""
+        for select_id, choices in (
+            ("#filter-track", options.tracks),
+            ("#filter-night", options.nights),
+            ("#filter-season", options.seasons),
+        ):
+            select: Select[str] = self.query_one(select_id, Select)
+            current = select.value
+            with select.prevent(Select.Changed):
+                select.set_options(choices)
+                if current is not Select.NULL and current in {value for _, value in choices}:
+                    select.value = current
+
+    @on(Select.Changed)
+    def _changed(self, event: Select.Changed) -> None:
+        event.stop()
+        self.post_message(self.Changed(self.current))

@@ -1,0 +1,153 @@
+"""The leaderboard's row detail: what one entry is made of.
+
+A submission is summarised from its five source files as the league stored them (model
+metadata: action space and sensor; hyperparameters; training: time and episodes;
+evaluation: trials and laps); a race by its laps. `describe_entry` reads the database and
+builds the text (run it in a worker); `EntryDetail` only shows it. Every stored value is
+user data, so it goes into `Text` as plain text, never markup.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from rich.text import Text
+from textual.widgets import Static
+
+from league.leaderboard import LeaderboardRow
+from league.store import League
+
+# The hyperparameters a racer tunes most, in the console's order; the rest follow.
+MAIN_HYPERPARAMETERS = (
+    "batch_size",
+    "lr",
+    "discount_factor",
+    "beta_entropy",
+    "num_epochs",
+    "num_episodes_between_training",
+    "loss_type",
+)
+
+
+def _loads(value: str | None) -> Any:
+    if value is None:
+        return None
+    try:
+        return json.loads(value)
+    except ValueError:
+        return None
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3f} s"
+
+
+def _heading(text: Text, title: str) -> None:
+    text.append(f"\n{title}\n", style="bold")
+
+
+def _line(text: Text, label: str, value: str) -> None:
+    text.append(f"  {label}: ", style="dim")
+    text.append(value + "\n")
+
+
+def _action_space(summary: Any) -> str:
+    if not isinstance(summary, dict):
+        return "not in the files"
+    speed = summary.get("speed") or ["?", "?"]
+    steering = summary.get("steering") or ["?", "?"]
+    ranges = f"speed {speed[0]}..{speed[1]} m/s, steering {steering[0]}..{steering[1]}°"
+    if summary.get("type") == "discrete":
+        return f"discrete, {summary.get('actions', '?')} actions, {ranges}"
+    return f"continuous, {ranges}"
+
+
+def _submission(league: League, row: LeaderboardRow, text: Text) -> None:
+    data = league.query_one("SELECT * FROM submissions WHERE id = ?", (row.record_id,))
+    if data is None:
+        text.append("\nThis submission is no longer in the league.\n", style="yellow")
+        return
+    _heading(text, "Model metadata")
+    _line(text, "action space", _action_space(_loads(data["action_space"])))
+    sensors = _loads(data["sensors"])
+    _line(text, "sensor", ", ".join(map(str, sensors)) if sensors else "-")
+    _line(text, "network", data["neural_network"] or "-")
+    _line(text, "algorithm", data["training_algorithm"] or "-")
+
+    _heading(text, "Hyperparameters")
+    hyper = _loads(data["hyperparameters"])
+    if isinstance(hyper, dict) and hyper:
+        keys = [key for key in MAIN_HYPERPARAMETERS if key in hyper]
+        keys += sorted(key for key in hyper if key not in MAIN_HYPERPARAMETERS)
+        text.append("  " + ", ".join(f"{key} {hyper[key]}" for key in keys) + "\n")
+    else:
+        text.append("  not in the files\n", style="dim")
+
+    _heading(text, "Training")
+    training = _loads(data["training"])
+    if isinstance(training, dict) and training:
+        if "minutes" in training:
+            _line(text, "time", f"{training['minutes']} min")
+        if "episodes" in training:
+            _line(text, "episodes", str(training["episodes"]))
+        if "best_completion" in training:
+            _line(text, "best progress", f"{training['best_completion']:g}%")
+        if "world_name" in training:
+            _line(text, "trained on", str(training["world_name"]))
+    else:
+        text.append("  not in the files\n", style="dim")
+
+    laps = league.query(
+        "SELECT * FROM submission_laps WHERE submission_id = ? ORDER BY number", (row.record_id,)
+    )
+    completed = sum(1 for lap in laps if lap["completed"])
+    _heading(text, "Evaluation")
+    _line(text, "file", data["evaluation_file"])
+    _line(text, "trials", f"{len(laps)}, {completed} laps completed")
+    for lap in laps:
+        time = _seconds(lap["time_seconds"]) if lap["completed"] else f"{lap['completion']:g}%"
+        text.append(f"  trial {lap['number']:>2}  {time:>10}  off {lap['offtracks']}  ")
+        text.append(lap["status"] + "\n", style="green" if lap["completed"] else "yellow")
+
+
+def _race(league: League, row: LeaderboardRow, text: Text) -> None:
+    laps = league.query(
+        "SELECT * FROM race_laps WHERE race_id = ? ORDER BY number", (row.record_id,)
+    )
+    _heading(text, f"Laps ({len(laps)})")
+    if not laps:
+        text.append("  no lap completed\n", style="dim")
+    for lap in laps:
+        text.append(f"  lap {lap['number']:>2}  {_seconds(lap['time_seconds']):>10}")
+        text.append(f"  pen {lap['penalty_seconds']:g}  off {lap['offtracks']}  ")
+        text.append("✓\n" if lap["valid"] else "✗ too many off-tracks\n")
+
+
+def describe_entry(league: League, row: LeaderboardRow) -> Text:
+    """The detail of one leaderboard row (reads the database: call it in a worker)."""
+    text = Text()
+    text.append(row.display_name, style="bold")
+    text.append(f"  {row.model}\n")
+    text.append(f"{row.track_name} · {row.kind} · {row.recorded_at[:16].replace('T', ' ')}\n")
+    text.append(
+        f"best {_seconds(row.best_lap)} · average {_seconds(row.average_lap)} · "
+        f"{row.valid_laps} laps · {row.offtracks} off-tracks\n",
+        style="dim",
+    )
+    if row.kind == "submission":
+        _submission(league, row, text)
+    else:
+        _race(league, row, text)
+    return text
+
+
+class EntryDetail(Static):
+    """Shows the text `describe_entry` built, or a message."""
+
+    DEFAULT_CSS = """
+    EntryDetail { padding: 0 1; height: auto; }
+    """
+
+    def show_message(self, message: str) -> None:
+        self.update(Text(message, style="dim"))

@@ -1,0 +1,132 @@
+"""A whole league night from the app: open it with short-window rules, enter two racers
+with the reference driver, draw, run both heats live, close it, see the season points."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from textual.screen import Screen
+from textual.widgets import DataTable, Input, Select
+
+from league.nights import list_nights, standings
+from league.seasons import get_season, new_season, season_standings
+from league.store import open_league
+from racer_tui.app import create_app
+from racer_tui.screens.dialogs import ConfirmDialog
+from racer_tui.screens.league import LeagueScreen
+from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
+from racer_tui.screens.race_screen import RaceScreen
+from sim.home import data_home
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
+
+
+def table_rows(screen: Screen[Any], table_id: str) -> list[list[str]]:
+    table = screen.query_one(table_id, DataTable)
+    return [[str(cell) for cell in table.get_row_at(i)] for i in range(table.row_count)]
+
+
+async def test_a_host_runs_a_whole_night_from_the_app(tmp_path: Path) -> None:
+    rules = tmp_path / "short.yaml"
+    rules.write_text("window_seconds: 12\n")
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        new_season(league, "spring")
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 40)) as pilot:
+        notes = Notifications(app)
+        await settle(pilot)
+        await pilot.press("n")
+        await settle(pilot)
+        nights = app.screen
+        assert isinstance(nights, NightsScreen)
+        assert "No league nights yet" in painted(nights.query_one("#night-rules"))
+
+        await pilot.press("o")
+        await settle(pilot)
+        dialog = app.screen
+        assert isinstance(dialog, NewNightDialog)
+        dialog.query_one("#night-track", Select).value = "beginner-oval"
+        dialog.query_one("#night-rules", Input).value = str(rules)
+        season = dialog.query_one("#night-season", Select)
+        season.value = next(value for _, value in season._options if value != Select.NULL)
+        await pilot.press(*"friday", "enter")
+        await settle(pilot)
+        assert app.screen is nights
+        shown = painted(nights.query_one("#night-rules"))
+        assert "friday" in shown and "0:12 window" in shown and "season spring" in shown
+
+        for racer in ("ada", "[b]bob[/b]"):  # a name that looks like markup stays literal
+            await pilot.press("a")
+            assert isinstance(app.screen, AddEntrantDialog)
+            await pilot.press(*racer, "enter", *"reference", "enter")
+            await settle(pilot)
+        await pilot.press("d")
+        await settle(pilot)
+        heats = table_rows(nights, "#heats")
+        assert sorted(row[1] for row in heats) == ["[b]bob[/b]", "ada"]
+        assert heats[0][3] == "next (r)" and heats[1][3] == "waiting"
+
+        for heat in range(2):
+            await pilot.press("r")
+            await settle(pilot)
+            race = app.screen
+            assert isinstance(race, RaceScreen)
+            assert race.setup.rules.window_seconds == 12.0
+            if heat == 1:  # the first heat's winner is the ghost and the gap to beat
+                assert race.setup.ghost is not None and race.setup.leader_seconds is not None
+            await pilot.press("e", "escape")
+            await settle(pilot)
+            assert app.screen is nights
+            standing_rows = table_rows(nights, "#standings")
+            assert len(standing_rows) == heat + 1  # the standings refresh after each heat
+        assert "Recorded ada's heat" in notes.text()
+        assert [row[5] for row in table_rows(nights, "#standings")] == ["25", "18"]
+
+        await pilot.press("c")
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("y")
+        await settle(pilot)
+        assert "Season standings: spring" in painted(nights.query_one("#standings-title"))
+        season_rows = table_rows(nights, "#standings")
+        assert [row[2] for row in season_rows] == ["25", "18"]
+        assert {row[1] for row in season_rows} == {"ada", "[b]bob[/b]"}
+        assert "[b]bob[/b]" in painted(nights.query_one("#standings"))
+
+        await pilot.press("r")  # a closed night takes no more heats
+        await settle(pilot)
+        assert "is closed" in notes.text("warning")
+        await pilot.press("escape")
+        assert isinstance(app.screen, LeagueScreen)
+        await settle(pilot)
+        assert sorted(row.racer for row in app.screen.rows) == ["[b]bob[/b]", "ada"]
+
+    with open_league() as league:
+        (night,) = list_nights(league)
+        assert night.closed and night.rules.window_seconds == 12.0
+        assert [s.points for s in standings(league, night)] == [25, 18]
+        assert [s.points for s in season_standings(league, get_season(league, "spring"))] == [
+            25,
+            18,
+        ]
+
+
+async def test_running_a_heat_before_the_draw_says_what_to_do() -> None:
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        notes = Notifications(app)
+        await settle(pilot)
+        await pilot.press("n")
+        await settle(pilot)
+        await pilot.press("r")
+        assert "Open a night first" in notes.text("warning")
+        await pilot.press("o")
+        await settle(pilot)
+        await pilot.press("enter")  # the defaults: league rules, first track
+        await settle(pilot)
+        await pilot.press("r")
+        await settle(pilot)
+        assert "no drawn heats waiting" in notes.text("error")
+        await pilot.press("a", *"ada", "enter", *"no-such-model", "enter")
+        await settle(pilot)
+        assert "no-such-model" in notes.text("error")

@@ -1,0 +1,70 @@
+"""SVG snapshots of the League section and the projector at 80x24 and 120x40, with fixed
+race results (fixed times and dates; ids are never shown).
+Update after a deliberate change with
+`pytest tests/racer_tui/snapshots/test_league_snapshots.py --snapshot-update`."""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from textual.pilot import Pilot
+
+from league.races import record_race
+from league.store import open_league
+from racer_tui.app import create_app
+from sim.home import data_home
+from sim.track_catalog import resolve_track
+from tests.league.helpers import race_result
+from tests.racer_tui.screens.tui_helpers import settle
+
+SIZES = pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
+Compare = Callable[..., bool]
+
+
+@pytest.fixture(autouse=True)
+def fixed_home(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
+    name = request.node.name.replace("[", "-").replace("]", "")
+    home = Path(tempfile.gettempdir()) / "racer-tui-snapshots" / name
+    shutil.rmtree(home, ignore_errors=True)
+    monkeypatch.setenv("RACER_TUI_HOME", str(home))
+    yield home
+    shutil.rmtree(home, ignore_errors=True)
+
+
+def fixed_results() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    hairpin = resolve_track("hairpin-circuit")
+    with open_league() as league:
+        record_race(league, race_result("ada", [12.0, 11.5, 11.8], model="ada-car"))
+        record_race(league, race_result("bob", [11.0, 13.0], offtracks=[0, 2], model="bolt"))
+        record_race(league, race_result("[b]cy[/b]", [12.9], model="slow-and-steady"))
+        record_race(league, race_result("dee", [20.0], track=hairpin, model="hairpin-hero"))
+
+
+async def _settled(pilot: Pilot[Any]) -> None:
+    await settle(pilot)
+
+
+@SIZES
+def test_leaderboard(snap_compare: Compare, size: tuple[int, int]) -> None:
+    fixed_results()
+    app = create_app(start="league")
+    assert snap_compare(app, terminal_size=size, run_before=_settled)
+
+
+@SIZES
+def test_projector(snap_compare: Compare, size: tuple[int, int]) -> None:
+    fixed_results()
+
+    async def project(pilot: Pilot[Any]) -> None:
+        await settle(pilot)
+        await pilot.press("p")
+        await settle(pilot)
+
+    app = create_app(start="league")
+    assert snap_compare(app, terminal_size=size, run_before=project)
