@@ -23,6 +23,7 @@ COMMAND_MODULES = (
     "racer_tui.reward_commands",
     "racer_tui.model_commands",
     "racer_tui.league_commands",
+    "racer_tui.train_commands",
 )
 
 

@@ -12,7 +12,13 @@ import league
 import sim
 
 # Modules that train or run a policy may import torch; nothing else may.
-TORCH_ALLOWED = {"sim.training", "sim.policy", "sim.train_worker", "sim.ppo"}
+TORCH_ALLOWED = {
+    "sim.training.checkpoint",
+    "sim.training.policy",
+    "sim.training.ppo",
+    "sim.training.trainer",
+    "sim.training.vec_env",
+}
 
 
 def _modules(package: object) -> list[str]:

@@ -1,0 +1,212 @@
+"""Start the training child and read its JSON event stream (no torch in this process).
+
+The child runs `python -m sim.training.worker` with stdin from /dev/null and in a new
+session, so a Ctrl+C in the terminal reaches only the parent, which then stops the child
+on purpose: `stop()` sends SIGTERM, and the child saves a checkpoint and writes its last
+event before exiting. The child watches this process's pid, so it also stops if the parent
+dies without a word.
+
+`TrainingProcess` is for synchronous callers (the CLI); `AsyncTrainingProcess` is for an
+asyncio event loop (the TUI), as Textual needs: never `multiprocessing` inside the app.
+Lines that are not valid events (a stray print from a library) are skipped, not fatal.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+from collections.abc import AsyncIterator, Iterator, Sequence
+from typing import IO
+
+from sim.training import events
+
+STOP_TIMEOUT = 60.0  # seconds to wait for a checkpoint after SIGTERM before SIGKILL
+STDERR_TAIL = 2000
+
+
+def worker_command(
+    model: str, minutes: float | None = None, extra: Sequence[str] = ()
+) -> list[str]:
+    """The child's command line (the same interpreter as this process)."""
+    command = [sys.executable, "-m", "sim.training.worker", model, "--parent-pid", str(os.getpid())]
+    if minutes is not None:
+        command += ["--minutes", repr(float(minutes))]
+    return command + list(extra)
+
+
+def _child_env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONUNBUFFERED"] = "1"
+    env.setdefault("OMP_NUM_THREADS", "1")  # tiny networks: one BLAS thread is fastest
+    return env
+
+
+def _decode(line: bytes | str) -> events.Event | None:
+    text = line.strip()
+    if not text:
+        return None
+    try:
+        return events.decode(text)
+    except events.EventError:
+        return None
+
+
+def _failure_from_stderr(returncode: int, stderr_tail: str) -> events.Ended:
+    """The ending for a child that died without writing its last event."""
+    last = stderr_tail.strip().splitlines()[-1] if stderr_tail.strip() else ""
+    reason = f"the training process exited with code {returncode}"
+    if returncode < 0:
+        with contextlib.suppress(ValueError):
+            reason = f"the training process was killed by {signal.Signals(-returncode).name}"
+    return events.Ended(
+        elapsed=0.0,
+        kind="failed",
+        message=f"{reason}: {last}" if last else reason,
+        total_steps=0,
+        episodes=0,
+        best_progress=0.0,
+        best_lap=None,
+    )
+
+
+def _tail(handle: IO[bytes]) -> str:
+    handle.seek(0, os.SEEK_END)
+    size = handle.tell()
+    handle.seek(max(0, size - STDERR_TAIL))
+    return handle.read().decode("utf-8", "replace")
+
+
+class TrainingProcess:
+    """A running training child, read synchronously: `for event in process.events()`."""
+
+    def __init__(self, popen: subprocess.Popen[bytes], stderr: IO[bytes]) -> None:
+        self._popen = popen
+        self._stderr = stderr
+        self.ended: events.Ended | None = None
+
+    @classmethod
+    def start(
+        cls, model: str, minutes: float | None = None, extra: Sequence[str] = ()
+    ) -> TrainingProcess:
+        stderr = tempfile.TemporaryFile()  # noqa: SIM115 - lives as long as the child
+        popen = subprocess.Popen(
+            worker_command(model, minutes, extra),
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=stderr,
+            start_new_session=True,
+            env=_child_env(),
+        )
+        return cls(popen, stderr)
+
+    @property
+    def pid(self) -> int:
+        return self._popen.pid
+
+    @property
+    def returncode(self) -> int | None:
+        return self._popen.poll()
+
+    def events(self) -> Iterator[events.Event]:
+        """Every event until the child's last one (synthesised if it died silently)."""
+        assert self._popen.stdout is not None
+        for line in self._popen.stdout:
+            event = _decode(line)
+            if event is None:
+                continue
+            if isinstance(event, events.Ended):
+                self.ended = event
+            yield event
+        code = self._popen.wait()
+        if self.ended is None:
+            self.ended = _failure_from_stderr(code, _tail(self._stderr))
+            yield self.ended
+        self._stderr.close()
+
+    def stop(self) -> None:
+        """Ask the child to stop (SIGTERM): it saves a checkpoint and writes its last event.
+        Keep reading `events()` to receive it; the child exits after."""
+        if self._popen.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                self._popen.send_signal(signal.SIGTERM)
+
+    def kill(self) -> None:
+        """SIGKILL: the folder stays consistent, the work since the last checkpoint is lost."""
+        if self._popen.poll() is None:
+            with contextlib.suppress(ProcessLookupError):
+                self._popen.kill()
+
+    def wait(self, timeout: float = STOP_TIMEOUT) -> int:
+        """Wait for the child to exit; SIGKILL it after `timeout` seconds."""
+        try:
+            return self._popen.wait(timeout)
+        except subprocess.TimeoutExpired:
+            self._popen.kill()
+            return self._popen.wait()
+
+
+class AsyncTrainingProcess:
+    """The same for asyncio: `async for event in process.events()`."""
+
+    def __init__(self, process: asyncio.subprocess.Process, stderr: IO[bytes]) -> None:
+        self._process = process
+        self._stderr = stderr
+        self.ended: events.Ended | None = None
+
+    @classmethod
+    async def start(
+        cls, model: str, minutes: float | None = None, extra: Sequence[str] = ()
+    ) -> AsyncTrainingProcess:
+        stderr = tempfile.TemporaryFile()  # noqa: SIM115 - lives as long as the child
+        process = await asyncio.create_subprocess_exec(
+            *worker_command(model, minutes, extra),
+            stdin=asyncio.subprocess.DEVNULL,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=stderr,
+            start_new_session=True,
+            env=_child_env(),
+        )
+        return cls(process, stderr)
+
+    @property
+    def pid(self) -> int:
+        return self._process.pid
+
+    @property
+    def returncode(self) -> int | None:
+        return self._process.returncode
+
+    async def events(self) -> AsyncIterator[events.Event]:
+        assert self._process.stdout is not None
+        async for line in self._process.stdout:
+            event = _decode(line)
+            if event is None:
+                continue
+            if isinstance(event, events.Ended):
+                self.ended = event
+            yield event
+        code = await self._process.wait()
+        if self.ended is None:
+            self.ended = _failure_from_stderr(code, _tail(self._stderr))
+            yield self.ended
+        self._stderr.close()
+
+    def stop(self) -> None:
+        """Ask the child to stop (SIGTERM); its last event still arrives through `events()`,
+        which should keep being read (a child blocked on a full pipe cannot finish)."""
+        if self._process.returncode is None:
+            with contextlib.suppress(ProcessLookupError):
+                self._process.send_signal(signal.SIGTERM)
+
+    async def wait(self, timeout: float = STOP_TIMEOUT) -> int:
+        """Wait for the child to exit; SIGKILL it after `timeout` seconds."""
+        try:
+            return await asyncio.wait_for(self._process.wait(), timeout)
+        except TimeoutError:
+            self._process.kill()
+            return await self._process.wait()

@@ -1,0 +1,463 @@
+"""DeepRacer's clipped PPO on SB3, with the value loss DeepRacer uses.
+
+SB3's PPO trains the value function with a mean squared error; DeepRacer's `loss_type`
+hyperparameter chooses between "huber" (its console default) and "mean squared error".
+`RacerPPO` keeps SB3's machinery (rollout buffer, GAE, distributions, Adam) and replaces
+two pieces:
+
+- `train`: the clipped PPO update, with `value_loss` picking F.smooth_l1_loss (Huber,
+  delta 1) or F.mse_loss from `loss_type`;
+- `collect`: rollouts gathered until `num_episodes_between_training` episodes have
+  finished across all the cars (DeepRacer's rollout size), within a floor and a cap on the
+  number of samples, while noting the episodes and sim-trace rows a racer watches.
+
+DeepRacer hyperparameters map one to one: batch_size -> minibatch size, num_epochs ->
+n_epochs, lr -> learning rate, beta_entropy -> ent_coef, discount_factor -> gamma; clip
+0.2, GAE lambda 0.95 and Adam epsilon 1e-5 are DeepRacer's fixed internals.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import torch
+from gymnasium import spaces
+from stable_baselines3 import PPO
+from stable_baselines3.common.buffers import DictRolloutBuffer, RolloutBuffer
+from stable_baselines3.common.distributions import Distribution
+from stable_baselines3.common.policies import ActorCriticPolicy
+from torch.nn import functional
+
+from sim.car import STEP_SECONDS
+from sim.deepracer_files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP
+from sim.simulation import EpisodeStatus
+from sim.training.policy import NetworkSpec, PolicyNetwork, init_weights, observation_tensors
+from sim.training.vec_env import BatchedVecEnv
+
+LOSS_TYPES = ("huber", "mean squared error")
+
+
+@dataclass(frozen=True)
+class PPOSettings:
+    """SB3 PPO arguments from DeepRacer hyperparameters (see the module docstring)."""
+
+    learning_rate: float
+    batch_size: int
+    n_epochs: int
+    gamma: float
+    ent_coef: float
+    loss_type: str
+    episodes_per_update: int
+    clip_range: float = PPO_CLIP
+    gae_lambda: float = GAE_LAMBDA
+    adam_epsilon: float = ADAM_EPSILON
+    vf_coef: float = 0.5
+    max_grad_norm: float = 0.5
+
+    @classmethod
+    def from_hyperparameters(cls, values: Mapping[str, float | int | str]) -> PPOSettings:
+        loss_type = str(values.get("loss_type", "huber"))
+        if loss_type not in LOSS_TYPES:
+            raise ValueError(
+                f"loss_type must be 'huber' or 'mean squared error', not {loss_type!r}."
+            )
+        return cls(
+            learning_rate=float(values.get("lr", 3e-4)),
+            batch_size=int(values.get("batch_size", 64)),
+            n_epochs=int(values.get("num_epochs", 10)),
+            gamma=float(values.get("discount_factor", 0.999)),
+            ent_coef=float(values.get("beta_entropy", 0.01)),
+            loss_type=loss_type,
+            episodes_per_update=int(values.get("num_episodes_between_training", 20)),
+        )
+
+
+class RacerPolicy(ActorCriticPolicy):
+    """SB3's actor-critic interface over our `PolicyNetwork` (which races use unchanged)."""
+
+    net: PolicyNetwork
+
+    def __init__(self, *args: Any, spec: NetworkSpec, **kwargs: Any) -> None:
+        self.spec = spec
+        kwargs["ortho_init"] = False  # `build_network`'s own initialisation is used
+        super().__init__(*args, **kwargs)
+
+    def _build(self, lr_schedule: Any) -> None:
+        self.net = PolicyNetwork(self.spec)
+        init_weights(self.net)
+        self.optimizer = torch.optim.Adam(
+            self.net.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs
+        )
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        data: dict[str, Any] = super()._get_constructor_parameters()
+        data["spec"] = self.spec
+        return data
+
+    def _distribution(self, params: torch.Tensor) -> Distribution:
+        if self.spec.action_kind == "discrete":
+            return self.action_dist.proba_distribution(action_logits=params)
+        return self.action_dist.proba_distribution(params, self.net.log_std)
+
+    def forward(
+        self, obs: Any, deterministic: bool = False
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        features = self.net.features(obs)
+        distribution = self._distribution(self.net.action_parameters(features))
+        actions = distribution.get_actions(deterministic=deterministic)
+        log_prob = distribution.log_prob(actions)
+        values = self.net.value(features)
+        return actions.reshape((-1, *(self.action_space.shape or ()))), values, log_prob
+
+    def evaluate_actions(
+        self, obs: Any, actions: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
+        features = self.net.features(obs)
+        distribution = self._distribution(self.net.action_parameters(features))
+        return self.net.value(features), distribution.log_prob(actions), distribution.entropy()
+
+    def get_distribution(self, obs: Any) -> Distribution:
+        return self._distribution(self.net.action_parameters(self.net.features(obs)))
+
+    def predict_values(self, obs: Any) -> torch.Tensor:
+        return self.net.value(self.net.features(obs))
+
+
+@dataclass(frozen=True)
+class UpdateStats:
+    """Means over one `train` call's minibatches."""
+
+    entropy: float
+    policy_loss: float
+    value_loss: float
+    approx_kl: float
+    clip_fraction: float
+
+
+@dataclass(frozen=True)
+class FinishedEpisode:
+    car: int
+    reward: float
+    progress: float
+    status: str
+    steps: int
+
+    @property
+    def lap_time(self) -> float | None:
+        """Training lap time: the episode's steps at 15 Hz (the prepare step included)."""
+        if self.status == EpisodeStatus.LAP_COMPLETE:
+            return self.steps * STEP_SECONDS
+        return None
+
+
+@dataclass
+class TraceSteps:
+    """Sim-trace columns of the traced cars for one rollout, as parallel lists."""
+
+    car: list[int] = field(default_factory=list)
+    episode_steps: list[int] = field(default_factory=list)
+    x: list[float] = field(default_factory=list)
+    y: list[float] = field(default_factory=list)
+    yaw: list[float] = field(default_factory=list)
+    steer: list[float] = field(default_factory=list)
+    throttle: list[float] = field(default_factory=list)
+    action: list[int] = field(default_factory=list)
+    reward: list[float] = field(default_factory=list)
+    done: list[bool] = field(default_factory=list)
+    on_track: list[bool] = field(default_factory=list)
+    progress: list[float] = field(default_factory=list)
+    waypoint: list[int] = field(default_factory=list)
+    status: list[str] = field(default_factory=list)
+    episode_index: list[int] = field(default_factory=list)  # per car: episodes finished before
+
+
+@dataclass
+class Rollout:
+    """What one `collect` gathered besides the samples."""
+
+    steps: int  # env steps, all cars
+    episodes: list[FinishedEpisode]
+    trace: TraceSteps
+
+
+class RacerPPO(PPO):
+    """PPO whose value loss follows DeepRacer's `loss_type` and whose rollouts are sized in
+    episodes. Build it with `make_ppo`."""
+
+    loss_type: str = "huber"
+
+    @staticmethod
+    def _wrap_env(env: Any, verbose: int = 0, monitor_wrapper: bool = True) -> Any:
+        # Our VecEnv is used as it is: no Monitor, no channel-first transpose for images
+        # (the network reads the Observer's channel-last frames directly).
+        return env
+
+    @property
+    def batched_env(self) -> BatchedVecEnv:
+        assert isinstance(self.env, BatchedVecEnv)
+        return self.env
+
+    @property
+    def network(self) -> PolicyNetwork:
+        """The policy network being trained (what `policy.safetensors` holds)."""
+        assert isinstance(self.policy, RacerPolicy)
+        return self.policy.net
+
+    def value_loss(self, values: torch.Tensor, returns: torch.Tensor) -> torch.Tensor:
+        """DeepRacer's value loss: Huber (smooth L1, delta 1) or mean squared error."""
+        if self.loss_type == "huber":
+            return functional.smooth_l1_loss(values, returns)
+        return functional.mse_loss(values, returns)
+
+    # --- learning ------------------------------------------------------------------------
+    def train(self) -> None:
+        """The clipped PPO update over the rollout buffer; stats in `last_update`."""
+        self.policy.set_training_mode(True)
+        for group in self.policy.optimizer.param_groups:  # DeepRacer's lr is constant
+            group["lr"] = float(self.lr_schedule(self._current_progress_remaining))
+        schedule = self.clip_range
+        clip = float(schedule(self._current_progress_remaining) if callable(schedule) else schedule)
+        discrete = isinstance(self.action_space, spaces.Discrete)
+        totals = np.zeros(5)
+        batches = 0
+        for _ in range(self.n_epochs):
+            for batch in self.rollout_buffer.get(self.batch_size):
+                actions = batch.actions.long().flatten() if discrete else batch.actions
+                values, log_prob, entropy = self.policy.evaluate_actions(
+                    batch.observations, actions
+                )
+                values = values.flatten()
+                assert entropy is not None  # both of our distributions have one
+                advantages = batch.advantages
+                if self.normalize_advantage and len(advantages) > 1:
+                    advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
+                log_ratio = log_prob - batch.old_log_prob
+                ratio = torch.exp(log_ratio)
+                clipped = torch.clamp(ratio, 1.0 - clip, 1.0 + clip)
+                policy_loss = -torch.min(advantages * ratio, advantages * clipped).mean()
+                value_loss = self.value_loss(values, batch.returns)
+                entropy_mean = entropy.mean()
+                loss = policy_loss - self.ent_coef * entropy_mean + self.vf_coef * value_loss
+                self.policy.optimizer.zero_grad()
+                loss.backward()  # type: ignore[no-untyped-call]
+                torch.nn.utils.clip_grad_norm_(
+                    self.policy.parameters(), self.max_grad_norm, foreach=True
+                )
+                self.policy.optimizer.step()
+                with torch.no_grad():
+                    approx_kl = ((ratio - 1.0) - log_ratio).mean()
+                    clip_fraction = ((ratio - 1.0).abs() > clip).float().mean()
+                totals += [
+                    float(entropy_mean.detach()),
+                    float(policy_loss.detach()),
+                    float(value_loss.detach()),
+                    float(approx_kl),
+                    float(clip_fraction),
+                ]
+                batches += 1
+        self._n_updates += self.n_epochs
+        means = totals / max(batches, 1)
+        self.last_update = UpdateStats(*(float(value) for value in means))
+
+    # --- gathering experience ----------------------------------------------------------------
+    def start_rollouts(self) -> None:
+        """Reset every car; call once before the first `collect`."""
+        self._obs: Any = self.batched_env.reset()
+        self._starts = np.ones(self.n_envs, dtype=bool)
+        self._episode_rewards = np.zeros(self.n_envs)
+        self._episodes_by_car = np.zeros(self.n_envs, dtype=np.int64)
+
+    def collect(
+        self, episodes_wanted: int, min_samples: int, max_samples: int, traced_cars: int = 1
+    ) -> Rollout:
+        """Fill the rollout buffer until `episodes_wanted` episodes have finished across the
+        cars and at least `min_samples` samples are in, or `max_samples` are reached."""
+        env = self.batched_env
+        buffer = self.rollout_buffer
+        n = self.n_envs
+        max_steps = max(1, max_samples // n)
+        min_steps = min(max_steps, max(1, math.ceil(min_samples / n)))
+        _resize(buffer, max_steps)
+        buffer.reset()
+        self.policy.set_training_mode(False)
+        sim = env.batch.sim
+        space = env.batch.config.action_space
+        discrete = space.kind == "discrete"
+        finished: list[FinishedEpisode] = []
+        trace = TraceSteps()
+        traced = list(range(min(traced_cars, n)))
+        dones = np.zeros(n, dtype=bool)
+        steps = 0
+        while steps < max_steps:
+            with torch.no_grad():
+                actions, values, log_probs = self.policy(observation_tensors(self._obs))
+            actions_np = actions.numpy()
+            env_actions = (
+                actions_np if discrete else np.clip(actions_np, -1.0, 1.0).astype(np.float32)
+            )
+            pose = (sim.fleet.x.copy(), sim.fleet.y.copy(), sim.heading_deg)
+            new_obs, rewards, dones, infos = env.step(env_actions)
+            details = env.last_infos
+            rewards = rewards.astype(np.float32)
+            self._episode_rewards += rewards
+            self._record_trace(
+                trace=trace,
+                cars=traced,
+                pose=pose,
+                env=env,
+                actions=actions_np,
+                rewards=rewards,
+                dones=dones,
+            )
+            for car in np.flatnonzero(dones).tolist():
+                info = details[car]
+                if infos[car].get("TimeLimit.truncated"):
+                    # Cut by the step limit, not ended: bootstrap from the value there.
+                    terminal = observation_tensors(
+                        _batch_of_one(infos[car]["terminal_observation"])
+                    )
+                    with torch.no_grad():
+                        rewards[car] += self.gamma * float(self.policy.predict_values(terminal)[0])
+                finished.append(
+                    FinishedEpisode(
+                        car=car,
+                        reward=float(self._episode_rewards[car]),
+                        progress=info.progress,
+                        status=str(info.status),
+                        steps=info.steps,
+                    )
+                )
+                self._episode_rewards[car] = 0.0
+                self._episodes_by_car[car] += 1
+            buffer.add(
+                self._obs,
+                actions_np.reshape(n, -1) if not discrete else actions_np.reshape(n, 1),
+                rewards,
+                self._starts,
+                values,
+                log_probs,
+            )
+            self._obs = new_obs
+            self._starts = dones
+            steps += 1
+            if len(finished) >= episodes_wanted and steps >= min_steps:
+                break
+        _truncate(buffer, steps)
+        with torch.no_grad():
+            last_values = self.policy.predict_values(observation_tensors(self._obs))
+        buffer.compute_returns_and_advantage(last_values=last_values, dones=dones)
+        self.num_timesteps += steps * n
+        return Rollout(steps=steps * n, episodes=finished, trace=trace)
+
+    def _record_trace(
+        self,
+        *,
+        trace: TraceSteps,
+        cars: list[int],
+        pose: tuple[np.ndarray, np.ndarray, np.ndarray],
+        env: BatchedVecEnv,
+        actions: np.ndarray,
+        rewards: np.ndarray,
+        dones: np.ndarray,
+    ) -> None:
+        if not cars:
+            return
+        sim = env.batch.sim
+        details = env.last_infos
+        discrete = env.batch.config.action_space.kind == "discrete"
+        for car in cars:
+            info = details[car]
+            trace.car.append(car)
+            trace.episode_index.append(int(self._episodes_by_car[car]))
+            trace.episode_steps.append(info.steps)
+            trace.x.append(float(pose[0][car]))
+            trace.y.append(float(pose[1][car]))
+            trace.yaw.append(float(pose[2][car]))
+            trace.steer.append(float(sim.steering_cmd[car]))
+            trace.throttle.append(float(sim.speed_cmd[car]))
+            trace.action.append(int(actions[car]) if discrete else -1)
+            trace.reward.append(float(rewards[car]))
+            trace.done.append(bool(dones[car]))
+            trace.on_track.append(info.status != EpisodeStatus.OFF_TRACK)
+            trace.progress.append(info.progress)
+            trace.waypoint.append(int(sim.segment[car]))
+            trace.status.append(str(info.status))
+
+
+def _batch_of_one(obs: Any) -> Any:
+    if isinstance(obs, dict):
+        return {key: value[None, ...] for key, value in obs.items()}
+    return obs[None, ...]
+
+
+_BUFFER_ARRAYS = (
+    "actions",
+    "rewards",
+    "returns",
+    "episode_starts",
+    "values",
+    "log_probs",
+    "advantages",
+)
+
+
+def _resize(buffer: RolloutBuffer, steps: int) -> None:
+    """Give the buffer room for `steps` steps per car (takes effect at `reset`)."""
+    buffer.buffer_size = steps
+
+
+def _truncate(buffer: RolloutBuffer, steps: int) -> None:
+    """Keep the first `steps` rows: a rollout may end early once enough episodes finished."""
+    for name in _BUFFER_ARRAYS:
+        setattr(buffer, name, getattr(buffer, name)[:steps])
+    if isinstance(buffer, DictRolloutBuffer):
+        buffer.observations = {key: value[:steps] for key, value in buffer.observations.items()}
+    else:
+        buffer.observations = buffer.observations[:steps]
+    buffer.buffer_size = steps
+    buffer.pos = steps
+    buffer.full = True
+
+
+def make_ppo(
+    env: BatchedVecEnv,
+    spec: NetworkSpec,
+    settings: PPOSettings,
+    *,
+    max_samples: int,
+    seed: int | None = None,
+) -> RacerPPO:
+    """A RacerPPO on `env` with the network `spec` and DeepRacer-mapped `settings`."""
+    torch.set_num_threads(1)  # tiny networks: threads cost more than they give
+    with warnings.catch_warnings():
+        # SB3 warns about a minibatch remainder; rollouts here vary in size by design.
+        warnings.simplefilter("ignore", UserWarning)
+        model = RacerPPO(
+            RacerPolicy,
+            env,
+            learning_rate=settings.learning_rate,
+            n_steps=max(2, max_samples // env.num_envs),
+            batch_size=settings.batch_size,
+            n_epochs=settings.n_epochs,
+            gamma=settings.gamma,
+            gae_lambda=settings.gae_lambda,
+            clip_range=settings.clip_range,
+            ent_coef=settings.ent_coef,
+            vf_coef=settings.vf_coef,
+            max_grad_norm=settings.max_grad_norm,
+            policy_kwargs={
+                "spec": spec,
+                # foreach: one kernel per step for all tensors, not one per tensor.
+                "optimizer_kwargs": {"eps": settings.adam_epsilon, "foreach": True},
+            },
+            device="cpu",
+            seed=seed,
+            verbose=0,
+        )
+    model.loss_type = settings.loss_type
+    return model

@@ -1,0 +1,526 @@
+"""One training run of a garage model: the loop the worker process drives.
+
+Each iteration gathers experience (`RacerPPO.collect`), makes one PPO update, and reports:
+an `update` event, `episode` events for the reported car, the iteration's sim-trace CSV,
+`training.json`, and now and then an evaluation (which keeps the best policy in
+`policy.safetensors`), a checkpoint and a `system` event. Files are written atomically
+and in an order that keeps the folder consistent at every instant: a SIGKILL loses at most
+the work since the last checkpoint, and the next run resumes from `checkpoints/`.
+
+Where a run starts: the latest checkpoint if there is one; else the model's
+`policy.safetensors` (a clone of a trained model) with a fresh optimizer; else scratch.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from typing import Any
+
+import numpy as np
+import psutil
+import torch
+
+from sim.atomic import write_text_atomic
+from sim.car import STEP_SECONDS
+from sim.deepracer_files import (
+    SIM_TRACE_DIR,
+    DeepRacerFileError,
+    SimTraceRow,
+    TrainingEpisode,
+    TrainingMetrics,
+    read_training_metrics,
+    trace_status,
+    write_sim_trace,
+    write_training_metrics,
+)
+from sim.garage.folder import ModelError, ModelFolder
+from sim.observations import SensorOptions
+from sim.training import events
+from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
+from sim.training.errors import PolicyError
+from sim.training.evaluation import EvaluationReport, run_trials
+from sim.training.policy import (
+    PolicyDriver,
+    fill_network,
+    network_spec,
+    open_tensors,
+    policy_data,
+    save_policy,
+)
+from sim.training.ppo import PPOSettings, Rollout, make_ppo
+from sim.training.vec_env import BatchedVecEnv
+
+REPORTED_CAR = 0  # the car whose episodes are streamed and logged, as DeepRacer's one car
+EVALUATION_TRIALS = 5
+EVALUATION_SECONDS = 60.0  # an evaluation trial still running after this is "Time Up"
+SYSTEM_SECONDS = 2.0
+KEEP_ALL_TRACES = 50  # the latest iterations keep their sim-trace; older ones every 10th
+TRACE_THINNING = 10
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How a run is driven; the defaults are what `racer-tui train` uses."""
+
+    minutes: float | None = None  # None: training_params.yaml's MAX_MINUTES
+    cars: int | None = None  # None: by sensor (see `default_cars`)
+    seed: int | None = None
+    checkpoint_seconds: float = 10.0
+    evaluation_seconds: float = 5.0  # least time between evaluations
+    min_samples: int | None = None
+    max_samples: int | None = None
+
+
+def default_cars(sensors: tuple[str, ...]) -> int:
+    """Cars per process: many for cheap sensors, fewer when every car renders a camera."""
+    return 32 if "camera" in sensors else 64
+
+
+def sample_limits(sensors: tuple[str, ...], cars: int) -> tuple[int, int]:
+    """(least, most) samples per update around the episode-count rule; camera frames are
+    large, so camera rollouts are capped lower to keep memory small."""
+    most = 4096 if "camera" in sensors else 16384
+    return min(2048, most), max(most, cars * 2)
+
+
+class Trainer:
+    """Trains one model folder until the time limit or `should_stop()`."""
+
+    def __init__(
+        self,
+        folder: ModelFolder,
+        emit: Callable[[events.Event], None],
+        should_stop: Callable[[], bool],
+        options: RunOptions | None = None,
+    ) -> None:
+        self.folder = folder
+        self.emit = emit
+        self.should_stop = should_stop
+        self.options = options or RunOptions()
+        self.metadata = folder.metadata()
+        self.hyperparameters = folder.hyperparameters()
+        params = folder.training_params()
+        minutes = self.options.minutes if self.options.minutes is not None else params.max_minutes
+        if not (math.isfinite(minutes) and minutes > 0):
+            raise ModelError(f"the training time must be more than 0 minutes, not {minutes:g}.")
+        self.limit_seconds = minutes * 60.0
+        self.minutes = minutes
+        try:
+            self.settings = PPOSettings.from_hyperparameters(self.hyperparameters)
+        except ValueError as error:
+            raise ModelError(f"{folder.hyperparameters_file}: {error}") from None
+        self.config = folder.env_config()
+        self.cars = self.options.cars or default_cars(self.metadata.sensors)
+        least, most = sample_limits(self.metadata.sensors, self.cars)
+        self.min_samples = self.options.min_samples or least
+        self.max_samples = self.options.max_samples or most
+        self.progress = Progress()
+        self.started_at = datetime.now(UTC)
+        self._clock0 = time.monotonic()
+        self._process = psutil.Process()
+        self._process.cpu_percent(interval=None)  # the first reading only sets the baseline
+        self._metrics: list[TrainingEpisode] = []
+        self._last_metrics_write = -math.inf
+        self._metrics_write_cost = 0.0
+
+    # --- the run ---------------------------------------------------------------------------
+    def run(self) -> events.Ended:
+        """Train; always ends with a checkpoint, a policy file and the training state."""
+        try:
+            resumed_from = self._setup()
+        except (ModelError, PolicyError, DeepRacerFileError) as error:
+            self._write_state("failed", str(error))
+            return self._ended("failed", str(error))
+        self._clock0 = time.monotonic()  # the time limit counts training, not start-up
+        self._write_state("running", "training")
+        self.emit(
+            events.Started(
+                elapsed=0.0,
+                model=self.folder.name,
+                track=self.config.track.name,
+                sensors=self.metadata.sensors,
+                cars=self.cars,
+                resumed_from=resumed_from,
+                total_steps=self.progress.total_steps,
+                max_minutes=self.minutes,
+                pid=os.getpid(),
+            )
+        )
+        kind, message = "finished", "the time limit was reached"
+        try:
+            self._loop()
+            if self.should_stop():
+                kind, message = "stopped", "training was stopped"
+        except Exception as error:
+            kind, message = "failed", _describe(error)
+        try:
+            self._finish()
+        except Exception as error:  # the folder stays consistent; say what went wrong
+            kind, message = "failed", _describe(error)
+        self._write_state(kind, message)
+        return self._ended(kind, message)
+
+    def _setup(self) -> str:
+        self._remove_leftovers()
+        env = BatchedVecEnv(self.config, self.cars)
+        spec = network_spec(self.metadata, SensorOptions())
+        self.model = make_ppo(
+            env, spec, self.settings, max_samples=self.max_samples, seed=self.options.seed
+        )
+        self.network = self.model.network
+        resumed_from = self._restore()
+        self._load_metrics()
+        self._run_elapsed0 = self.progress.elapsed_seconds
+        self._first_iteration = self.progress.iteration
+        return resumed_from
+
+    def _ended(self, kind: str, message: str) -> events.Ended:
+        return events.Ended(
+            elapsed=self.elapsed,
+            kind=kind,
+            message=message,
+            total_steps=self.progress.total_steps,
+            episodes=self.progress.episodes,
+            best_progress=max(self.progress.best_progress, 0.0),
+            best_lap=self.progress.best_lap,
+        )
+
+    @property
+    def elapsed(self) -> float:
+        return time.monotonic() - self._clock0
+
+    def _loop(self) -> None:
+        model = self.model
+        model.start_rollouts()
+        last_checkpoint = self.elapsed
+        last_system = -math.inf
+        self._last_evaluation = -math.inf
+        self._evaluation_cost = 0.0
+        while self.elapsed < self.limit_seconds:
+            if self.should_stop():
+                return
+            started = time.monotonic()
+            rollout = model.collect(
+                self.settings.episodes_per_update, self.min_samples, self.max_samples
+            )
+            if self.should_stop():
+                return  # a stop during collection: do not spend time on an update
+            model.train()
+            seconds = time.monotonic() - started
+            self.progress = replace(
+                self.progress,
+                iteration=self.progress.iteration + 1,
+                total_steps=self.progress.total_steps + rollout.steps,
+                elapsed_seconds=self._run_elapsed0 + self.elapsed,
+            )
+            self._report_iteration(rollout, seconds)
+            if self._evaluation_due():
+                self._evaluate()
+            self._write_metrics()
+            if self.elapsed - last_checkpoint >= self.options.checkpoint_seconds:
+                self._checkpoint()
+                last_checkpoint = self.elapsed
+            if self.elapsed - last_system >= SYSTEM_SECONDS:
+                self._system()
+                last_system = self.elapsed
+            self._write_state("running", "training")
+
+    def _remove_leftovers(self) -> None:
+        """Temporary files of a run killed mid-write (the real files are intact)."""
+        places = (
+            self.folder.path,
+            self.folder.checkpoints_dir,
+            self.folder.path / SIM_TRACE_DIR / "training",
+        )
+        for place in places:
+            for leftover in place.glob(".*.tmp"):
+                if leftover.is_file() and not leftover.is_symlink():
+                    leftover.unlink(missing_ok=True)
+
+    # --- where the weights come from ---------------------------------------------------------
+    def _restore(self) -> str:
+        latest = self.folder.checkpoints_dir / LATEST
+        if latest.is_file():
+            self.progress = load_checkpoint(latest, self.network, self.model.policy.optimizer)
+            return "checkpoint"
+        if self.folder.has_policy():
+            data, where = policy_data(self.folder.policy_file)
+            facts, tensors = open_tensors(data, where)
+            fill_network(self.network, facts, tensors, where)
+            return "policy"
+        return "scratch"
+
+    # --- reporting -----------------------------------------------------------------------------
+    def _report_iteration(self, rollout: Rollout, seconds: float) -> None:
+        now_ms = self._job_ms()
+        first_episode = self.progress.episodes
+        for offset, episode in enumerate(rollout.episodes):
+            if episode.car != REPORTED_CAR:
+                continue
+            number = first_episode + offset + 1
+            self.emit(
+                events.Episode(
+                    elapsed=self.elapsed,
+                    episode=number,
+                    car=episode.car,
+                    reward=episode.reward,
+                    progress=episode.progress,
+                    lap_time=episode.lap_time,
+                    status=episode.status,
+                    steps=episode.steps,
+                )
+            )
+            sim_ms = round(episode.steps * STEP_SECONDS * 1000)
+            self._metrics.append(
+                TrainingEpisode(
+                    reward_score=round(episode.reward, 4),
+                    metric_time=now_ms,
+                    start_time=max(0, now_ms - sim_ms),
+                    elapsed_time_in_milliseconds=sim_ms,
+                    episode=number,
+                    trial=number,
+                    phase="training",
+                    completion_percentage=round(episode.progress, 2),
+                    episode_status=episode.status,
+                )
+            )
+        self.progress = replace(self.progress, episodes=first_episode + len(rollout.episodes))
+        laps = [e.lap_time for e in rollout.episodes if e.lap_time is not None]
+        stats = self.model.last_update
+        self.emit(
+            events.Update(
+                elapsed=self.elapsed,
+                iteration=self.progress.iteration,
+                total_steps=self.progress.total_steps,
+                episodes=self.progress.episodes,
+                entropy=stats.entropy,
+                policy_loss=stats.policy_loss,
+                value_loss=stats.value_loss,
+                approx_kl=stats.approx_kl,
+                clip_fraction=stats.clip_fraction,
+                steps_per_second=rollout.steps / max(seconds, 1e-9),
+                iteration_episodes=len(rollout.episodes),
+                mean_reward=_mean([e.reward for e in rollout.episodes]),
+                mean_progress=_mean([e.progress for e in rollout.episodes]),
+                laps=len(laps),
+                best_lap=min(laps) if laps else None,
+            )
+        )
+        self._write_trace(rollout)
+
+    def _write_trace(self, rollout: Rollout) -> None:
+        trace = rollout.trace
+        if not trace.car:
+            return
+        track_length = float(self.config.track.length)
+        # The `episode` column counts the traced car's own episodes in this run.
+        rows = [
+            SimTraceRow(
+                episode=trace.episode_index[i],
+                steps=trace.episode_steps[i],
+                x=trace.x[i],
+                y=trace.y[i],
+                yaw=trace.yaw[i],
+                steer=trace.steer[i],
+                throttle=trace.throttle[i],
+                action=trace.action[i],
+                reward=trace.reward[i],
+                done=trace.done[i],
+                all_wheels_on_track=trace.on_track[i],
+                progress=trace.progress[i],
+                closest_waypoint=trace.waypoint[i],
+                track_len=track_length,
+                tstamp=round(self.progress.elapsed_seconds, 3),
+                episode_status=(
+                    "prepare" if trace.episode_steps[i] == 1 else trace_status(trace.status[i])
+                ),
+            )
+            for i in range(len(trace.car))
+        ]
+        folder = self.folder.path / SIM_TRACE_DIR / "training"
+        iteration = self.progress.iteration
+        write_sim_trace(folder / f"{iteration}-iteration.csv", rows)
+        old = iteration - KEEP_ALL_TRACES
+        if old > 0 and old % TRACE_THINNING != 0:
+            (folder / f"{old}-iteration.csv").unlink(missing_ok=True)
+
+    def _job_ms(self) -> int:
+        return round((self._run_elapsed0 + self.elapsed) * 1000)
+
+    def _system(self) -> None:
+        with self._process.oneshot():
+            cpu = self._process.cpu_percent(interval=None)
+            rss = self._process.memory_info().rss / 1e6
+        self.emit(events.System(elapsed=self.elapsed, cpu_percent=cpu, rss_mb=round(rss, 1)))
+
+    # --- evaluation and the best policy ---------------------------------------------------------
+    def _evaluation_due(self) -> bool:
+        since = self.elapsed - self._last_evaluation
+        # At most ~10% of the time goes to evaluation, and never more often than asked.
+        return since >= max(self.options.evaluation_seconds, 9.0 * self._evaluation_cost)
+
+    def evaluate_now(self) -> EvaluationReport:
+        driver = PolicyDriver(
+            self.network, self.metadata, name=self.folder.name, content_hash="", live=True
+        )
+        results = run_trials(
+            driver, self.config.track, EVALUATION_TRIALS, max_seconds=EVALUATION_SECONDS
+        )
+        return EvaluationReport(track=self.config.track.name, trials=tuple(results))
+
+    def _evaluate(self) -> None:
+        started = time.monotonic()
+        self.model.policy.set_training_mode(False)
+        report = self.evaluate_now()
+        self._evaluation_cost = time.monotonic() - started
+        self._last_evaluation = self.elapsed
+        better = self._is_better(report)
+        if better:
+            self.progress = replace(
+                self.progress,
+                best_progress=report.mean_progress,
+                best_lap=report.mean_lap if report.laps == len(report.trials) else None,
+            )
+            # The best policy is what races use; its checkpoint lets a racer go back to it.
+            save_policy(self.folder.policy_file, self.network)
+            save_checkpoint(
+                self.folder.checkpoints_dir / BEST,
+                self.network,
+                self.model.policy.optimizer,
+                self.progress,
+            )
+        now_ms = self._job_ms()
+        for trial in report.trials:
+            sim_ms = round(trial.seconds * 1000)
+            self._metrics.append(
+                TrainingEpisode(
+                    reward_score=0,
+                    metric_time=now_ms,
+                    start_time=max(0, now_ms - sim_ms),
+                    elapsed_time_in_milliseconds=sim_ms,
+                    episode=self.progress.episodes,
+                    trial=trial.trial,
+                    phase="evaluation",
+                    completion_percentage=round(trial.progress, 2),
+                    episode_status=trial.status,
+                )
+            )
+        laps = [t.lap_time for t in report.trials if t.lap_time is not None]
+        self.emit(
+            events.Evaluation(
+                elapsed=self.elapsed,
+                iteration=self.progress.iteration,
+                total_steps=self.progress.total_steps,
+                trials=len(report.trials),
+                laps=report.laps,
+                mean_progress=report.mean_progress,
+                best_lap=report.best_lap,
+                lap_times=tuple(laps),
+                statuses=tuple(t.status for t in report.trials),
+                best=better,
+            )
+        )
+
+    def _is_better(self, report: EvaluationReport) -> bool:
+        """More mean progress wins (DeepRacer's best-model metric); with every trial a
+        lap, a faster mean lap wins."""
+        best = self.progress.best_progress
+        if report.mean_progress > best + 1e-9:
+            return True
+        complete = report.laps == len(report.trials)
+        if complete and best >= 100.0 - 1e-9:
+            lap = report.mean_lap
+            return lap is not None and (
+                self.progress.best_lap is None or lap < self.progress.best_lap
+            )
+        return False
+
+    # --- files -----------------------------------------------------------------------------------
+    def _load_metrics(self) -> None:
+        path = self.folder.training_metrics_file
+        if not path.is_file():
+            return
+        try:
+            self._metrics = list(read_training_metrics(path).episodes)
+        except DeepRacerFileError:
+            self._metrics = []  # unreadable old metrics: start a fresh log rather than fail
+        if self._metrics:
+            last = max(row.episode for row in self._metrics)
+            self.progress = replace(self.progress, episodes=max(self.progress.episodes, last))
+
+    def _write_metrics(self, force: bool = False) -> None:
+        # Rewriting grows with the log: keep it to a small share of the time.
+        if not force and self.elapsed - self._last_metrics_write < 20 * self._metrics_write_cost:
+            return
+        started = time.monotonic()
+        write_training_metrics(
+            self.folder.training_metrics_file, TrainingMetrics(tuple(self._metrics))
+        )
+        self._metrics_write_cost = time.monotonic() - started
+        self._last_metrics_write = self.elapsed
+
+    def _checkpoint(self) -> None:
+        self.progress = replace(self.progress, elapsed_seconds=self._run_elapsed0 + self.elapsed)
+        path = self.folder.checkpoints_dir / LATEST
+        save_checkpoint(path, self.network, self.model.policy.optimizer, self.progress)
+        self.emit(
+            events.Checkpoint(
+                elapsed=self.elapsed,
+                iteration=self.progress.iteration,
+                total_steps=self.progress.total_steps,
+                file=str(path.relative_to(self.folder.path)),
+            )
+        )
+
+    def _finish(self) -> None:
+        if self.progress.iteration == self._first_iteration:
+            return  # stopped before any update: nothing new to keep, the old files stand
+        if self.progress.best_progress < 0:
+            self._evaluate()  # a run too short for an evaluation still leaves a policy
+        self._write_metrics(force=True)
+        self._checkpoint()
+
+    def _write_state(self, state: str, message: str) -> None:
+        document: dict[str, Any] = {
+            "state": state,
+            "pid": os.getpid(),
+            "started_at": self.started_at.isoformat(),
+            "updated_at": datetime.now(UTC).isoformat(),
+            "elapsed_seconds": round(self.progress.elapsed_seconds, 3),
+            "steps": self.progress.total_steps,
+            "episodes": self.progress.episodes,
+            "best_progress": max(self.progress.best_progress, 0.0),
+            "best_lap": self.progress.best_lap,
+            "message": message,
+        }
+        write_text_atomic(self.folder.training_state_file, json.dumps(document, indent=2) + "\n")
+
+
+def _mean(values: list[float]) -> float:
+    return float(np.mean(values)) if values else 0.0
+
+
+def _describe(error: BaseException) -> str:
+    if isinstance(error, ModelError | PolicyError | DeepRacerFileError):
+        return str(error)
+    return f"{type(error).__name__}: {error}"
+
+
+def train_folder(
+    folder: ModelFolder,
+    emit: Callable[[events.Event], None],
+    should_stop: Callable[[], bool] = lambda: False,
+    options: RunOptions | None = None,
+) -> events.Ended:
+    """Run one training of `folder` in this process (the worker and tests use this)."""
+    torch.set_num_threads(1)
+    trainer = Trainer(folder, emit, should_stop, options)
+    ended = trainer.run()
+    emit(ended)
+    return ended

@@ -1,0 +1,162 @@
+"""The training child process: `python -m sim.training.worker MODEL [--minutes M]`.
+
+It trains one garage model and writes one JSON event per line on stdout (see
+`sim.training.events`); the last line is `finished`, `stopped` or `failed`. It stops
+cleanly, saving a checkpoint, on SIGTERM, SIGINT or SIGHUP, when its parent process
+exits (stdin is /dev/null, so the parent's pid is watched instead), or when stdout is
+closed. A user error (unknown model, bad files, another training of the same model
+running) is a `failed` event with one sentence and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import warnings
+from collections.abc import Sequence
+from types import FrameType
+from typing import TextIO
+
+from sim.training import events
+
+EXIT_FAILED = 1
+EXIT_USER_ERROR = 2
+
+
+class StopFlag:
+    """Set by signals, a vanished parent or a closed stdout; read between updates."""
+
+    def __init__(self, parent_pid: int) -> None:
+        self.parent_pid = parent_pid
+        self.reason = ""
+
+    def set(self, reason: str) -> None:
+        self.reason = self.reason or reason
+
+    def __call__(self) -> bool:
+        if not self.reason and self.parent_pid > 1 and os.getppid() != self.parent_pid:
+            self.reason = "the parent process exited"
+        return bool(self.reason)
+
+
+class EventWriter:
+    """One JSON line per event on `stream`; a closed pipe stops the run instead of failing."""
+
+    def __init__(self, stream: TextIO, stop: StopFlag) -> None:
+        self.stream = stream
+        self.stop = stop
+        self.closed = False
+
+    def __call__(self, event: events.Event) -> None:
+        if self.closed:
+            return
+        try:
+            self.stream.write(events.encode(event) + "\n")
+            self.stream.flush()
+        except (BrokenPipeError, ValueError, OSError):
+            self.closed = True
+            self.stop.set("nobody is reading the training output")
+
+
+def _install_signal_handlers(stop: StopFlag) -> None:
+    def handler(signum: int, frame: FrameType | None) -> None:
+        del frame
+        stop.set(f"received {signal.Signals(signum).name}")
+
+    for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+        signal.signal(sig, handler)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m sim.training.worker",
+        description="Train one racer-tui model, streaming JSON events on stdout.",
+    )
+    parser.add_argument("model", help="model name in the garage, or a model folder path")
+    parser.add_argument("--minutes", type=float, default=None, help="training time limit")
+    parser.add_argument("--cars", type=int, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--seed", type=int, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--checkpoint-seconds", type=float, default=10.0, help=argparse.SUPPRESS)
+    parser.add_argument("--evaluation-seconds", type=float, default=5.0, help=argparse.SUPPRESS)
+    parser.add_argument("--min-samples", type=int, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--max-samples", type=int, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--parent-pid", type=int, default=None, help=argparse.SUPPRESS)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    stop = StopFlag(args.parent_pid if args.parent_pid is not None else os.getppid())
+    _install_signal_handlers(stop)
+    emit = EventWriter(sys.stdout, stop)
+    warnings.filterwarnings("ignore")  # library chatter must not reach the racer
+    try:
+        return _train(args, emit, stop)
+    except BaseException as error:  # the last line must say what happened
+        emit(_failed(f"{type(error).__name__}: {error}"))
+        return EXIT_FAILED
+
+
+def _failed(message: str) -> events.Ended:
+    return events.Ended(
+        elapsed=0.0,
+        kind="failed",
+        message=message,
+        total_steps=0,
+        episodes=0,
+        best_progress=0.0,
+        best_lap=None,
+    )
+
+
+def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
+    from sim.deepracer_files import DeepRacerFileError
+    from sim.garage.folder import ModelError, open_model
+    from sim.reward_function import RewardFunctionError
+    from sim.track import TrackError
+    from sim.training.policy import PolicyError
+    from sim.training.trainer import RunOptions, Trainer
+
+    user_errors = (ModelError, PolicyError, DeepRacerFileError, RewardFunctionError, TrackError)
+    try:
+        folder = open_model(args.model)
+        if folder.is_training():
+            raise ModelError(
+                f"model {folder.name!r} is already training in another process; "
+                "stop that one first."
+            )
+        options = RunOptions(
+            minutes=args.minutes,
+            cars=args.cars,
+            seed=args.seed,
+            checkpoint_seconds=args.checkpoint_seconds,
+            evaluation_seconds=args.evaluation_seconds,
+            min_samples=args.min_samples,
+            max_samples=args.max_samples,
+        )
+        import torch
+
+        torch.set_num_threads(1)
+        trainer = Trainer(folder, emit, stop, options)
+    except user_errors as error:
+        emit(_failed(str(error)))
+        return EXIT_USER_ERROR
+    ended = trainer.run()
+    if ended.kind == "stopped" and stop.reason:
+        ended = events.Ended(
+            elapsed=ended.elapsed,
+            kind=ended.kind,
+            message=f"training was stopped ({stop.reason})",
+            total_steps=ended.total_steps,
+            episodes=ended.episodes,
+            best_progress=ended.best_progress,
+            best_lap=ended.best_lap,
+        )
+    emit(ended)
+    return EXIT_FAILED if ended.kind == "failed" else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

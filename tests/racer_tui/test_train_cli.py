@@ -1,0 +1,117 @@
+"""`racer-tui train` and `racer-tui evaluate` as a racer uses them."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+
+import pytest
+
+from racer_tui.cli import main
+from sim.deepracer_files import read_evaluation_metrics
+from sim.garage.folder import ModelFolder
+from sim.garage.options import new_model
+from sim.training import events
+from sim.training.policy import build_network, save_policy
+from tests.test_architecture import _import_report
+
+
+@pytest.fixture
+def model() -> ModelFolder:
+    return new_model("tiny")
+
+
+@pytest.fixture
+def trained(model: ModelFolder) -> ModelFolder:
+    """A model with (untrained) policy weights: enough to evaluate."""
+    save_policy(model.policy_file, build_network(model.metadata()))
+    return model
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.slow
+def test_train_json_streams_valid_events_from_start_to_finish(
+    capsys: pytest.CaptureFixture[str], model: ModelFolder
+) -> None:
+    code, out, err = run_cli(capsys, "train", "tiny", "--minutes", "0.02", "--json")
+    assert code == 0, err
+    stream = [events.decode(line) for line in out.splitlines()]
+    assert events.type_of(stream[0]) == "started"
+    assert events.type_of(stream[-1]) == "finished"
+    assert any(isinstance(e, events.Update) for e in stream)
+    assert model.has_policy()
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_the_training_cleanly(model: ModelFolder) -> None:
+    command = [sys.executable, "-m", "racer_tui.cli", "train", "tiny", "--minutes", "5", "--json"]
+    cli = subprocess.Popen(command, stdout=subprocess.PIPE, text=True, env=dict(os.environ))
+    assert cli.stdout is not None
+    for line in cli.stdout:
+        if isinstance(events.decode(line), events.Update):
+            break
+    cli.send_signal(signal.SIGINT)  # what Ctrl+C does to the foreground command
+    rest = [events.decode(line) for line in cli.stdout]
+    assert cli.wait(timeout=60) == 0
+    ended = rest[-1]
+    assert isinstance(ended, events.Ended) and ended.kind == "stopped"
+    assert (model.checkpoints_dir / "latest.safetensors").is_file()
+    assert not model.is_training()
+
+
+def test_evaluate_prints_the_console_table_and_writes_deepracer_metrics(
+    capsys: pytest.CaptureFixture[str], trained: ModelFolder
+) -> None:
+    code, out, _ = run_cli(capsys, "evaluate", "tiny", "--trials", "3")
+    assert code == 0
+    assert "Trial" in out and "% track completed" in out and "Status" in out
+    assert "hairpin-circuit" in out
+    (metrics,) = trained.evaluation_files()
+    assert [t.trial for t in read_evaluation_metrics(metrics)] == [1, 2, 3]
+
+
+def test_evaluate_json_on_another_track(
+    capsys: pytest.CaptureFixture[str], trained: ModelFolder
+) -> None:
+    code, out, _ = run_cli(capsys, "evaluate", "tiny", "--track", "beginner-oval", "--json")
+    assert code == 0
+    report = json.loads(out)
+    assert report["track"] == "beginner-oval" and len(report["trials"]) == 5
+    assert set(report["trials"][0]) == {
+        "trial",
+        "time_seconds",
+        "completion_percentage",
+        "status",
+    }
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("train", "ghost"), "no model named 'ghost'"),
+        (("evaluate", "ghost"), "no model named 'ghost'"),
+        (("train", "tiny", "--minutes", "0"), "--minutes must be more than 0"),
+        (("evaluate", "tiny", "--trials", "0"), "--trials must be between 1 and 100"),
+        (("evaluate", "tiny"), "has no trained policy yet"),
+    ],
+)
+def test_user_errors_are_one_sentence_and_exit_code_2(
+    capsys: pytest.CaptureFixture[str], model: ModelFolder, args: tuple[str, ...], message: str
+) -> None:
+    code, _out, err = run_cli(capsys, *args)
+    assert code == 2
+    assert err.startswith("racer-tui: ") and message in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_the_commands_do_not_import_torch_in_the_cli_process() -> None:
+    report = _import_report(["racer_tui.train_commands", "sim.training.launcher"])
+    assert all(heavy == [] for heavy in report.values()), report

@@ -1,0 +1,99 @@
+"""Evaluation trials in DeepRacer's form: one lap each from the start line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim.deepracer_files import read_evaluation_metrics, read_sim_trace
+from sim.garage.folder import ModelFolder
+from sim.race.driver import DriverAction, reference_driver
+from sim.reference_driver import reference_lap
+from sim.simulation import TrackSimulation
+from sim.track_catalog import resolve_track
+from sim.training.evaluation import (
+    EvaluationReport,
+    TrialResult,
+    evaluate_model,
+    evaluation_trials,
+    run_trials,
+    start_poses,
+)
+from sim.training.policy import build_network, save_policy
+
+
+class HardLeft:
+    """Full lock left at walking pace: off the track within a few seconds."""
+
+    name = "left"
+    content_hash = "left"
+
+    def reset(self, sim: TrackSimulation) -> None:
+        del sim
+
+    def act(self, sim: TrackSimulation) -> DriverAction:
+        return DriverAction(
+            steering_deg=np.full(sim.n, 30.0),
+            speed=np.full(sim.n, 1.0),
+            action_index=np.full(sim.n, -1, dtype=np.int64),
+        )
+
+
+def test_the_reference_driver_completes_every_trial_near_its_reference_lap() -> None:
+    track = resolve_track("hairpin-circuit")
+    results = run_trials(reference_driver(track), track, 3)
+    assert [r.trial for r in results] == [1, 2, 3]
+    assert all(r.status == "Lap complete" and r.progress == 100.0 for r in results)
+    # Trial 1 starts exactly where the reference lap does.
+    assert results[0].lap_time == pytest.approx(reference_lap(track).lap_time, abs=1e-6)
+    assert all(abs(r.seconds - results[0].seconds) < 1.0 for r in results)
+
+
+def test_only_the_first_trial_starts_exactly_on_the_line() -> None:
+    poses = start_poses(5, seed=0)
+    assert poses[0] == (0.0, 0.0)
+    assert all(abs(offset) <= 0.03 and abs(yaw) <= 3.0 for offset, yaw in poses[1:])
+    assert len(set(poses)) == 5
+    assert start_poses(5, seed=0) == poses
+
+
+def test_a_car_that_leaves_the_road_is_off_track_and_counted() -> None:
+    track = resolve_track("hairpin-circuit")
+    results = run_trials(HardLeft(), track, 2)
+    assert all(r.status == "Off track" and r.lap_time is None for r in results)
+    rows = evaluation_trials(results)
+    assert [row.off_track_count for row in rows] == [1, 1]
+    assert rows[0].completion_percentage < 100
+
+
+def test_rows_follow_deepracer_evaluation_metrics() -> None:
+    results = [
+        TrialResult(1, "Lap complete", 100.0, 10.5),
+        TrialResult(2, "Reversed", 42.123, 4.0),
+        TrialResult(3, "Immobilized", 3.0, 1.0),
+    ]
+    rows = evaluation_trials(results)
+    assert [r.trial for r in rows] == [1, 2, 3]
+    assert [r.elapsed_time_in_milliseconds for r in rows] == [10500, 4000, 1000]
+    assert [r.start_time for r in rows] == [0, 10500, 14500]
+    assert [r.metric_time for r in rows] == [10500, 14500, 15500]
+    assert (rows[1].reversed_count, rows[2].immobilized_count) == (1, 1)
+    assert rows[0].lap_time_seconds == 10.5 and rows[1].lap_time_seconds is None
+    report = EvaluationReport("t", tuple(results))
+    assert (report.laps, report.best_lap) == (1, 10.5)
+
+
+def test_evaluate_model_writes_deepracer_files(model: ModelFolder) -> None:
+    save_policy(model.policy_file, build_network(model.metadata()))
+    report = evaluate_model(model, trials=2)
+    assert report.metrics_file is not None
+    assert model.evaluation_files() == [report.metrics_file]
+    trials = read_evaluation_metrics(report.metrics_file)
+    assert [t.trial for t in trials] == [1, 2]
+    assert [t.episode_status for t in trials] == [r.status for r in report.trials]
+    traces = list((model.sim_trace_dir / "evaluation").glob("*-iteration.csv"))
+    assert len(traces) == 1
+    rows = read_sim_trace(traces[0])
+    assert {row.episode for row in rows} == {0, 1}
+    assert rows[0].episode_status == "prepare"
+    assert rows[-1].done

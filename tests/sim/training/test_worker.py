@@ -1,0 +1,131 @@
+"""The training child process, for real: its JSON stream, stopping, killing and resuming.
+
+Each test starts `python -m sim.training.worker` with a tiny budget (8 cars, small
+rollouts), and waits for events rather than for time.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterator
+
+import pytest
+
+from sim.deepracer_files import read_sim_trace, read_training_metrics
+from sim.garage.folder import ModelFolder, ModelStatus
+from sim.training import events
+from sim.training.checkpoint import LATEST
+from sim.training.launcher import TrainingProcess
+from sim.training.policy import load_policy
+from sim.training.worker import StopFlag
+
+pytestmark = pytest.mark.slow
+
+TINY = [
+    "--cars", "8",
+    "--min-samples", "64",
+    "--max-samples", "256",
+    "--evaluation-seconds", "0",
+    "--checkpoint-seconds", "0",
+    "--seed", "3",
+]  # fmt: skip
+
+
+def _until(stream: Iterator[events.Event], kind: type[events.Event]) -> list[events.Event]:
+    seen: list[events.Event] = []
+    for event in stream:
+        seen.append(event)
+        if isinstance(event, kind):
+            return seen
+    raise AssertionError(f"the stream ended before a {kind.__name__} event: {seen[-1:]}")
+
+
+def test_a_short_run_streams_every_kind_of_event_and_leaves_deepracer_files(
+    model: ModelFolder,
+) -> None:
+    process = TrainingProcess.start(model.name, minutes=0.05, extra=TINY)
+    stream = list(process.events())
+    assert process.wait() == 0
+    kinds = [events.type_of(e) for e in stream]
+    assert kinds[0] == "started" and kinds[-1] == "finished"
+    assert {"update", "evaluation", "checkpoint", "system"} <= set(kinds)
+    started = stream[0]
+    assert isinstance(started, events.Started)
+    assert (started.model, started.cars, started.resumed_from) == ("tiny", 8, "scratch")
+    updates = [e for e in stream if isinstance(e, events.Update)]
+    assert all(u.steps_per_second > 0 and u.total_steps > 0 for u in updates)
+    assert [u.iteration for u in updates] == list(range(1, len(updates) + 1))
+
+    metrics = read_training_metrics(model.training_metrics_file)
+    phases = {row.phase for row in metrics.episodes}
+    assert phases <= {"training", "evaluation"} and "evaluation" in phases
+    traces = sorted((model.sim_trace_dir / "training").glob("*-iteration.csv"))
+    assert traces and read_sim_trace(traces[0])
+    load_policy(model.policy_file, model.metadata())
+    state = json.loads(model.training_state_file.read_text())
+    assert state["state"] == "finished" and state["steps"] == updates[-1].total_steps
+    assert model.status() == ModelStatus.TRAINED
+
+
+def test_sigterm_stops_the_run_with_a_checkpoint(model: ModelFolder) -> None:
+    process = TrainingProcess.start(model.name, minutes=10, extra=TINY)
+    stream = process.events()
+    _until(stream, events.Update)
+    process.stop()
+    rest = list(stream)
+    assert process.wait() == 0
+    ended = rest[-1]
+    assert isinstance(ended, events.Ended) and ended.kind == "stopped"
+    assert "SIGTERM" in ended.message
+    assert (model.checkpoints_dir / LATEST).is_file()
+    assert json.loads(model.training_state_file.read_text())["state"] == "stopped"
+    assert model.has_policy() and not model.is_training()
+
+
+def test_after_sigkill_the_folder_is_consistent_and_training_resumes(
+    model: ModelFolder,
+) -> None:
+    first = TrainingProcess.start(model.name, minutes=10, extra=TINY)
+    stream = first.events()
+    checkpointed = _until(stream, events.Checkpoint)[-1]
+    assert isinstance(checkpointed, events.Checkpoint)
+    first.kill()
+    ended = list(stream)[-1]
+    assert isinstance(ended, events.Ended) and ended.kind == "failed"
+    assert "SIGKILL" in ended.message
+
+    # Every file parses; the state file still says "running", but nobody is.
+    read_training_metrics(model.training_metrics_file)
+    assert json.loads(model.training_state_file.read_text())["state"] == "running"
+    assert not model.is_training() and model.status() != ModelStatus.TRAINING
+
+    second = TrainingProcess.start(model.name, minutes=10, extra=TINY)
+    stream = second.events()
+    started = _until(stream, events.Started)[-1]
+    assert isinstance(started, events.Started)
+    assert started.resumed_from == "checkpoint"
+    assert started.total_steps >= checkpointed.total_steps
+    assert not list(model.path.rglob(".*.tmp"))  # a killed write's temporary file is gone
+    update = _until(stream, events.Update)[-1]
+    assert isinstance(update, events.Update) and update.total_steps > started.total_steps
+    second.stop()
+    assert list(stream)[-1].kind == "stopped"  # type: ignore[union-attr]
+    second.wait()
+
+
+def test_an_unknown_model_fails_with_one_sentence() -> None:
+    process = TrainingProcess.start("no-such-model", minutes=1)
+    stream = list(process.events())
+    assert process.wait() == 2
+    assert len(stream) == 1
+    ended = stream[0]
+    assert isinstance(ended, events.Ended) and ended.kind == "failed"
+    assert "no model named 'no-such-model'" in ended.message
+
+
+def test_the_stop_flag_notices_a_vanished_parent() -> None:
+    assert not StopFlag(os.getppid())()
+    orphan = StopFlag(parent_pid=os.getpid())  # "our parent" is not our parent: it is gone
+    assert orphan()
+    assert orphan.reason == "the parent process exited"
