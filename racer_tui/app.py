@@ -23,10 +23,14 @@ from racer_tui.screens.base import ModelAdded
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
 from racer_tui.screens.garage import GarageScreen
 from racer_tui.screens.help import HelpScreen, HelpTopic, binding_topics, declared_bindings
+from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
+from racer_tui.screens.projector import ProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen
 from racer_tui.screens.races import RacesScreen
 from racer_tui.screens.tracks import TracksScreen
+from racer_tui.screens.training import LeaveWhileTraining, TrainingScreen
 from racer_tui.screens.welcome import WelcomeScreen
 from racer_tui.sections import SECTIONS, WELCOME_MODE, section_for
 from sim.garage.folder import list_models
@@ -36,12 +40,18 @@ SECTION_SCREENS: dict[str, type[Screen[Any]]] = {
     "garage": GarageScreen,
     "tracks": TracksScreen,
     "races": RacesScreen,
+    "training": TrainingScreen,
+    "league": LeagueScreen,
 }
 # Screens that are not sections but have keys of their own, for the help screen.
 OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
     ("Welcome", WelcomeScreen),
     ("Model editor", ModelEditorScreen),
     ("Race view", RaceScreen),
+    ("League nights", NightsScreen),
+    ("Projector", ProjectorScreen),
+    ("League night dialogs", NewNightDialog),
+    ("Add entrant dialog", AddEntrantDialog),
     ("Confirm dialog", ConfirmDialog),
     ("Input dialogs", InputDialog),
     ("Import dialog", ImportDialog),
@@ -128,6 +138,32 @@ class RacerTuiApp(App[int]):
         """A palette command of another section: go there, then run it on its screen."""
         await self.switch_mode(mode)
         await self.section_base.run_action(action)
+
+    # --- leaving while a training runs ---------------------------------------------------------
+
+    def training_screen(self) -> TrainingScreen | None:
+        """The Training section's screen, if it was opened in this session."""
+        try:
+            stack = self.get_screen_stack("training")
+        except KeyError:  # never opened
+            return None
+        return stack[0] if stack and isinstance(stack[0], TrainingScreen) else None
+
+    async def action_quit(self) -> None:
+        """Quit; with a training running, first ask whether to stop it or keep it running."""
+        training = self.training_screen()
+        model = training.training_here if training is not None else None
+        if training is None or model is None:
+            self.exit()
+            return
+
+        def answered(answer: str | None) -> None:
+            if answer == "stop":
+                training.stop_training()
+            if answer in ("stop", "keep"):
+                self.exit()
+
+        self.push_screen(LeaveWhileTraining(model), answered)
 
     async def on_model_added(self, message: ModelAdded) -> None:
         await self.show_model(message.name)

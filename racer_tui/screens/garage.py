@@ -24,8 +24,10 @@ from textual.widgets import DataTable, Footer
 from racer_tui.model_form import check_name, taken_names
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, ImportRequest, InputDialog
+from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.screens.training import TrainingScreen
 from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
@@ -133,6 +135,8 @@ class GarageScreen(RacerScreen[None]):
         Binding("d", "delete_model", "Delete", tooltip="Delete the highlighted model (asks)"),
         Binding("i", "import_model", "Import", tooltip="A DeepRacer folder or a .racer-bundle"),
         Binding("x", "export_model", "Export", tooltip="Write a .racer-bundle for the league"),
+        Binding("t", "train_model", "Train", tooltip="Train in the background, live charts"),
+        Binding("v", "evaluate_model", "Evaluate", tooltip="Time-trial trials, one lap each"),
         Binding("r", "race_model", "Race", tooltip="A 4-minute time trial, live"),
         Binding("ctrl+r", "reload", "Reload", tooltip="Read the model folders again", show=False),
     ]
@@ -383,6 +387,28 @@ class GarageScreen(RacerScreen[None]):
 
     def on_bundle_exported(self, message: BundleExported) -> None:
         self.notify(f"Exported {message.name} to {message.path}.", timeout=10, markup=False)
+
+    async def action_train_model(self) -> None:
+        """Open the Training section on this model and ask for the time budget."""
+        folder = self._highlighted_folder("train")
+        if folder is None:
+            return
+        await self.app.switch_mode("training")
+        training = self.app.screen_stack[0]
+        if isinstance(training, TrainingScreen):
+            training.ask_to_train(folder.name)
+
+    def action_evaluate_model(self) -> None:
+        folder = self._highlighted_folder("evaluate")
+        if folder is None:
+            return
+        if not folder.has_policy():
+            self.notify(
+                f"{folder.name} has not been trained yet, so it cannot drive; train it first.",
+                severity="warning",
+            )
+            return
+        self.app.push_screen(EvaluationScreen(folder.name))
 
     def action_race_model(self) -> None:
         folder = self._highlighted_folder("race")

@@ -76,7 +76,7 @@ async def test_the_header_tabs_switch_sections_with_the_mouse() -> None:
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.pause()
         tabs = list(app.screen.query(SectionTab))
-        assert [tab.mode for tab in tabs] == ["garage", "tracks", "races"]
+        assert [tab.mode for tab in tabs] == ["garage", "tracks", "races", "training", "league"]
         assert tabs[0].has_class("-current")
         await pilot.click(tabs[2])
         await pilot.pause()

@@ -1,0 +1,630 @@
+"""The Training section: train models in the background and watch them learn.
+
+One training runs at a time (the machine has two cores); more requests wait in a queue.
+Each run is the training child (`python -m sim.training.worker`) in its own session, with
+its JSON event lines going to `training-log.jsonl` in the model folder rather than to a
+pipe: the app tails that file, so the child does not depend on the app. Quitting the app
+can therefore leave a training running, and the next app session finds it again
+(`training-state.json` names its pid) and keeps drawing and can stop it. Stop is SIGTERM:
+the child saves a checkpoint and writes its last event; training the model again resumes
+from that checkpoint.
+
+Events are applied to `TrainingFigures` as they arrive; the charts pick them up at 2 Hz.
+Everything that reads files runs in thread workers; the log tail is an async worker that
+reads a few kilobytes at a time, so keys stay responsive while the child trains flat out.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import signal
+import tempfile
+from dataclasses import dataclass
+from functools import partial
+from pathlib import Path
+from typing import Any, ClassVar
+
+import psutil
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.message import Message
+from textual.widgets import Button, DataTable, Footer, Label, Static
+
+from racer_tui.screens.base import RacerModal, RacerScreen
+from racer_tui.screens.dialogs import InputDialog
+from racer_tui.screens.evaluation import EvaluationScreen
+from racer_tui.widgets.agent_view import AgentView, Observation, observe_at
+from racer_tui.widgets.model_detail import status_text
+from racer_tui.widgets.section_header import SectionHeader
+from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.training_charts import TrainingCharts, TrainingFigures, clock
+from sim.deepracer_files import read_sim_trace
+from sim.garage.folder import ModelError, ModelFolder, list_models, open_model
+from sim.training import events
+from sim.training.launcher import worker_command
+
+LOG_FILE = "training-log.jsonl"
+WORKER_MODULE = "sim.training.worker"
+TAIL_SECONDS = 0.25  # how often the log is read while a run is live
+TICK_SECONDS = 2.0  # run status, adopted runs and the agent's-eye view
+READ_CHUNK = 256_000
+HISTORY_SECONDS = 5.0  # how often training.json is re-read for a run without a log
+COLUMNS = ("model", "state")
+NARROW = 110  # below this width the agent's-eye view is hidden
+
+
+@dataclass(frozen=True)
+class TrainingRequest:
+    model: str
+    minutes: float
+
+
+@dataclass
+class LiveRun:
+    """The training on screen. `process` is None when an earlier session started it."""
+
+    model: str
+    pid: int
+    minutes: float | None
+    process: asyncio.subprocess.Process | None = None
+    stopping: bool = False
+
+
+def training_log(folder: ModelFolder) -> Path:
+    return folder.path / LOG_FILE
+
+
+def running_worker_pid(folder: ModelFolder) -> int | None:
+    """The pid of a training of `folder` that is running now (started by any session or
+    the CLI), checked to really be a training worker: a stale pid may have been reused."""
+    if not folder.is_training():
+        return None
+    state = folder.training_state() or {}
+    pid = state.get("pid")
+    if not isinstance(pid, int):
+        return None
+    try:
+        command = psutil.Process(pid).cmdline()
+    except psutil.Error:
+        return None
+    return pid if any(WORKER_MODULE in part for part in command) else None
+
+
+def load_figures(folder: ModelFolder) -> TrainingFigures:
+    """The model's past training from `training.json` (empty before the first run)."""
+    try:
+        return TrainingFigures.from_metrics(folder.training_metrics())
+    except ModelError:
+        return TrainingFigures()  # unreadable metrics: the charts start with the next run
+
+
+def latest_observation(folder: ModelFolder) -> Observation | None:
+    """What the model saw at the last traced step of its latest training iteration."""
+    traces = folder.sim_trace_dir / "training"
+    files = [p for p in traces.glob("*-iteration.csv") if p.stem.split("-")[0].isdigit()]
+    if not files:
+        return None
+    latest = max(files, key=lambda p: int(p.stem.split("-")[0]))
+    rows = read_sim_trace(latest)
+    if not rows:
+        return None
+    row = rows[-1]
+    caption = f"iteration {latest.stem.split('-')[0]}, episode {row.episode} step {row.steps}"
+    sensors = folder.metadata().sensors
+    return observe_at(folder.track(), sensors, (row.x, row.y, row.yaw), caption)
+
+
+def _failure(code: int | None, stderr: str) -> events.Ended:
+    last = stderr.strip().splitlines()[-1] if stderr.strip() else ""
+    reason = f"the training process exited with code {code}"
+    if code is not None and code < 0:
+        with contextlib.suppress(ValueError):
+            reason = f"the training process was killed by {signal.Signals(-code).name}"
+    return events.Ended(
+        elapsed=0.0,
+        kind="failed",
+        message=f"{reason}: {last}" if last else reason,
+        total_steps=0,
+        episodes=0,
+        best_progress=0.0,
+        best_lap=None,
+    )
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.Error:
+        return False
+
+
+# --- messages from the workers --------------------------------------------------------------
+
+
+class TrainingModelsRead(Message):
+    def __init__(self, rows: list[tuple[str, str, int | None]], select: str | None) -> None:
+        super().__init__()
+        self.rows = rows  # (name, status, pid of a training running elsewhere)
+        self.select = select
+
+
+class FiguresLoaded(Message):
+    def __init__(self, name: str, figures: TrainingFigures) -> None:
+        super().__init__()
+        self.name = name
+        self.figures = figures
+
+
+class ObservationMade(Message):
+    def __init__(self, name: str, observation: Observation | None) -> None:
+        super().__init__()
+        self.name = name
+        self.observation = observation
+
+
+class LeaveWhileTraining(RacerModal[str | None]):
+    """Quit with a training running: "stop" it, "keep" it running, or None to stay."""
+
+    DEFAULT_CSS = """
+    LeaveWhileTraining { align: center middle; }
+    """
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("s", "answer('stop')", "Stop it"),
+        Binding("k", "answer('keep')", "Keep running"),
+        Binding("escape", "answer(None)", "Stay"),
+    ]
+
+    def __init__(self, model: str) -> None:
+        super().__init__()
+        self.model = model
+
+    def compose(self) -> ComposeResult:
+        with Vertical(classes="dialog"):
+            yield Label(Text(f"{self.model} is still training"), classes="dialog-title")
+            yield Static(
+                Text(
+                    "Stop it now (it saves a checkpoint, and training again resumes from it), "
+                    "or keep it running in the background: the next time you open racer-tui, "
+                    "the Training section shows it again and can stop it."
+                ),
+                classes="dialog-body",
+            )
+            with Horizontal(classes="dialog-buttons"):
+                yield Button("Stop and quit (s)", id="stop", variant="error")
+                yield Button("Keep running (k)", id="keep", variant="primary")
+                yield Button("Stay (esc)", id="stay")
+
+    def action_answer(self, answer: str | None) -> None:
+        self.dismiss(answer)
+
+    @on(Button.Pressed)
+    def _pressed(self, event: Button.Pressed) -> None:
+        self.dismiss(event.button.id if event.button.id in ("stop", "keep") else None)
+
+
+class TrainingScreen(RacerScreen[None]):
+    """Models on the left with their training state; the highlighted one's charts."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("t", "train", "Train", tooltip="Train the highlighted model (queued if busy)"),
+        Binding("s", "stop", "Stop", tooltip="Stop the training (it saves a checkpoint)"),
+        Binding("e", "evaluate", "Evaluate", tooltip="Time-trial trials of the trained policy"),
+        Binding("ctrl+r", "reload", "Reload", tooltip="Read the model folders again", show=False),
+    ]
+    DEFAULT_CSS = """
+    TrainingScreen #training-body { height: 1fr; }
+    TrainingScreen #training-models { width: 26; height: 1fr; }
+    TrainingScreen #training-side { width: 34; height: 1fr; padding: 0 1; }
+    TrainingScreen #agent-title { text-style: bold; color: $accent; }
+    TrainingScreen.-narrow #training-side { display: none; }
+    """
+    # Extra worker options (tests use a tiny budget); the child's own defaults otherwise.
+    worker_options: ClassVar[tuple[str, ...]] = ()
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.rows: list[tuple[str, str, int | None]] = []
+        self.queue: list[TrainingRequest] = []
+        self.live: LiveRun | None = None
+        self.figures: dict[str, TrainingFigures] = {}
+        self.watched: str | None = None
+        self.handled_keys = 0  # for the responsiveness test
+
+    def compose(self) -> ComposeResult:
+        yield SectionHeader("training")
+        with Horizontal(id="training-body"):
+            yield DataTable(id="training-models", cursor_type="row", zebra_stripes=True)
+            yield TrainingCharts(id="training-charts")
+            with Vertical(id="training-side"):
+                yield Static("Agent's-eye view", id="agent-title")
+                yield AgentView(id="agent-view")
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.reload()
+        self.set_interval(TICK_SECONDS, self._tick)
+
+    def on_resize(self) -> None:
+        self.set_class(self.size.width < NARROW, "-narrow")
+
+    # --- the model list --------------------------------------------------------------------
+
+    def reload(self, select: str | None = None) -> None:
+        self._read_models(select or self.watched)
+
+    @work(thread=True, exclusive=True, group="training-list", exit_on_error=False)
+    def _read_models(self, select: str | None) -> None:
+        rows = [
+            (folder.name, str(folder.status()), running_worker_pid(folder))
+            for folder in list_models()
+        ]
+        self.post_message(TrainingModelsRead(rows, select))
+
+    def on_training_models_read(self, message: TrainingModelsRead) -> None:
+        self.rows = message.rows
+        if self.live is None:
+            elsewhere = next(((n, pid) for n, _, pid in self.rows if pid is not None), None)
+            if elsewhere is not None:
+                self._adopt(*elsewhere)
+        self._fill_table(message.select)
+
+    def _state_of(self, name: str, status: str) -> Text:
+        if self.live is not None and self.live.model == name:
+            return Text("stopping…" if self.live.stopping else "training", style="bold yellow")
+        for place, request in enumerate(self.queue, start=1):
+            if request.model == name:
+                return Text(f"queued {place}", style="yellow")
+        return status_text(status)
+
+    def _fill_table(self, select: str | None = None) -> None:
+        table = self.query_one("#training-models", DataTable)
+        select = select or self.highlighted_name
+        cells = [(Text(name), self._state_of(name, status)) for name, status, _ in self.rows]
+        names = [name for name, _, _ in self.rows]
+        fill_table(table, COLUMNS, cells, keys=names)
+        if not names:
+            self.query_one(AgentView).show_message("No models yet: create one in the garage (1).")
+            return
+        index = names.index(select) if select in names else 0
+        table.move_cursor(row=index)
+        self.watch_model(names[index])
+        self._show_context()
+
+    @property
+    def highlighted_name(self) -> str | None:
+        table = self.query_one("#training-models", DataTable)
+        if not self.rows or not 0 <= table.cursor_row < len(self.rows):
+            return None
+        return self.rows[table.cursor_row][0]
+
+    @on(DataTable.RowHighlighted, "#training-models")
+    def _highlighted(self, event: DataTable.RowHighlighted) -> None:
+        if 0 <= event.cursor_row < len(self.rows):
+            self.watch_model(self.rows[event.cursor_row][0])
+
+    def watch_model(self, name: str) -> None:
+        """Show `name`'s charts: its live figures, or its history read from its files."""
+        if name == self.watched:
+            return
+        self.watched = name
+        known = self.figures.get(name)
+        if known is not None:
+            self.query_one(TrainingCharts).show(known)
+        else:
+            self.query_one(TrainingCharts).show(TrainingFigures())
+            self._load_figures(name)
+        self._observe(name)
+
+    @work(thread=True, group="training-history", exit_on_error=False)
+    def _load_figures(self, name: str) -> None:
+        self.post_message(FiguresLoaded(name, load_figures(open_model(name))))
+
+    def on_figures_loaded(self, message: FiguresLoaded) -> None:
+        # A live run may have started meanwhile: its figures are already the truth.
+        figures = self.figures.setdefault(message.name, message.figures)
+        if message.name == self.watched:
+            self.query_one(TrainingCharts).show(figures)
+
+    @work(thread=True, exclusive=True, group="training-eye", exit_on_error=False)
+    def _observe(self, name: str) -> None:
+        self.post_message(ObservationMade(name, latest_observation(open_model(name))))
+
+    def on_observation_made(self, message: ObservationMade) -> None:
+        if message.name != self.watched:
+            return
+        view = self.query_one(AgentView)
+        if message.observation is None:
+            view.show_message("Train this model to see what it sees.")
+        else:
+            view.show(message.observation)
+
+    def _tick(self) -> None:
+        self._show_context()
+        live = self.live
+        if live is not None and live.model == self.watched and not self.has_class("-narrow"):
+            self._observe(live.model)
+
+    def _show_context(self) -> None:
+        live = self.live
+        header = self.query_one(SectionHeader)
+        if live is None:
+            waiting = f"{len(self.queue)} queued" if self.queue else ""
+            header.set_context(waiting)
+            return
+        figures = self.figures.get(live.model)
+        elapsed = clock(figures.elapsed) if figures else "0:00"
+        limit = f" of {clock(live.minutes * 60)}" if live.minutes else ""
+        queued = f" · {len(self.queue)} queued" if self.queue else ""
+        header.set_context(f"{live.model}: {elapsed}{limit}{queued}")
+
+    # --- training ----------------------------------------------------------------------------
+
+    def action_train(self) -> None:
+        self.handled_keys += 1
+        name = self.highlighted_name
+        if name is None:
+            self.notify("There is no model to train; create one in the garage.", severity="warning")
+            return
+        self.ask_to_train(name)
+
+    def ask_to_train(self, name: str) -> None:
+        """Ask for the time budget, then train `name` (or queue it)."""
+        if self._busy_with(name):
+            self.notify(f"{name} is already training or queued.", severity="warning")
+            return
+        try:
+            minutes = open_model(name).training_params().max_minutes
+        except ModelError as error:
+            self.notify(str(error), severity="error", markup=False)
+            return
+        dialog = InputDialog(
+            f"Train {name}",
+            "Time budget in minutes (DeepRacer's stop condition). Training resumes from the "
+            "model's last checkpoint when it has one.",
+            value=f"{minutes:g}",
+            confirm_label="Train",
+            check=_minutes_problem,
+        )
+        self.app.push_screen(dialog, partial(self._budget_given, name))
+
+    def _budget_given(self, name: str, answer: str | None) -> None:
+        if answer is not None:
+            self.request_training(name, float(answer))
+
+    def _busy_with(self, name: str) -> bool:
+        live = self.live is not None and self.live.model == name
+        return live or any(request.model == name for request in self.queue)
+
+    def request_training(self, name: str, minutes: float) -> None:
+        """Train `name` now, or after the trainings already queued."""
+        if self._busy_with(name):
+            return
+        self.queue.append(TrainingRequest(name, minutes))
+        if self.live is not None:
+            self.notify(f"{name} is queued; it trains when {self.live.model} is done.")
+        self._start_next()
+        self._fill_table(name)
+
+    def _start_next(self) -> None:
+        if self.live is not None or not self.queue:
+            return
+        request = self.queue.pop(0)
+        # Claimed now, before the worker runs, so a second request cannot start a second run.
+        self.live = LiveRun(request.model, pid=0, minutes=request.minutes)
+        self._run(request)
+
+    @work(group="training-run", exit_on_error=False)
+    async def _run(self, request: TrainingRequest) -> None:
+        live = self.live
+        assert live is not None
+        cancelled = False  # the app is closing: leave the child alone, start nothing new
+        try:
+            folder = open_model(request.model)
+            figures = await asyncio.to_thread(load_figures, folder)
+            self.figures[request.model] = figures
+            if request.model == self.watched:
+                self.query_one(TrainingCharts).show(figures)
+            log = training_log(folder)
+            log.write_bytes(b"")  # a new run, a new log
+            stderr = tempfile.TemporaryFile()  # noqa: SIM115 - closed when the run ends
+            command = worker_command(request.model, request.minutes, self._options())
+            with stderr:
+                with log.open("ab") as out:
+                    process = await asyncio.create_subprocess_exec(
+                        *command,
+                        stdin=asyncio.subprocess.DEVNULL,
+                        stdout=out,
+                        stderr=stderr,
+                        start_new_session=True,
+                        env={**os.environ, "PYTHONUNBUFFERED": "1", "OMP_NUM_THREADS": "1"},
+                    )
+                live.process, live.pid = process, process.pid
+                self._fill_table()
+                ended = await self._follow(request.model, log, 0, process.wait)
+                if ended is None:
+                    stderr.seek(0)
+                    tail = stderr.read()[-2000:].decode("utf-8", "replace")
+                    self.apply_event(request.model, _failure(process.returncode, tail))
+                else:
+                    # The last event is written: let the child exit before the next starts.
+                    with contextlib.suppress(TimeoutError):
+                        await asyncio.wait_for(process.wait(), 30.0)
+        except asyncio.CancelledError:
+            cancelled = True
+            raise
+        finally:
+            if not cancelled:
+                self._run_over()
+
+    def _options(self) -> list[str]:
+        # The child must outlive the app when the racer chooses to keep it running, so it
+        # does not watch this process (its stdout is a file, not a pipe, for the same reason).
+        return [*self.worker_options, "--parent-pid", "0"]
+
+    def _adopt(self, name: str, pid: int) -> None:
+        """Follow a training that an earlier session (or the CLI) started."""
+        self.live = LiveRun(name, pid=pid, minutes=None)
+        self._follow_adopted(name, pid)
+
+    @work(group="training-run", exit_on_error=False)
+    async def _follow_adopted(self, name: str, pid: int) -> None:
+        cancelled = False
+        try:
+            folder = open_model(name)
+            figures = await asyncio.to_thread(load_figures, folder)
+            self.figures[name] = figures
+            if name == self.watched:
+                self.query_one(TrainingCharts).show(figures)
+            log = training_log(folder)
+            if not log.is_file():
+                # Started without a log (by `racer-tui train`): follow training.json instead.
+                waited = 0.0
+                while _pid_alive(pid):
+                    await asyncio.sleep(1.0)
+                    waited += 1.0
+                    if waited % HISTORY_SECONDS:
+                        continue
+                    figures = await asyncio.to_thread(load_figures, folder)
+                    self.figures[name] = figures
+                    if name == self.watched:
+                        self.query_one(TrainingCharts).show(figures)
+                return
+            start = log.stat().st_size
+
+            async def exited() -> int | None:
+                while _pid_alive(pid):
+                    await asyncio.sleep(1.0)
+                return None
+
+            await self._follow(name, log, start, exited)
+        except asyncio.CancelledError:
+            cancelled = True
+            raise
+        finally:
+            if not cancelled:
+                self._run_over()
+
+    async def _follow(
+        self, name: str, log: Path, history_end: int, wait: Any
+    ) -> events.Ended | None:
+        """Apply the log's events until the last one, or until the child is gone and the
+        log drained. Lines before `history_end` were written before this session looked:
+        their episodes are already in `training.json`, so only the rest of them is used."""
+        waiter = asyncio.ensure_future(wait())
+        offset, pending = 0, b""
+        try:
+            with log.open("rb") as handle:
+                while True:
+                    chunk = handle.read(READ_CHUNK)
+                    if chunk:
+                        lines = (pending + chunk).split(b"\n")
+                        pending = lines.pop()
+                        for line in lines:
+                            offset += len(line) + 1
+                            ended = self._line(name, line, replay=offset <= history_end)
+                            if ended is not None:
+                                return ended
+                        continue
+                    if waiter.done():
+                        return None
+                    await asyncio.sleep(TAIL_SECONDS)
+        finally:
+            waiter.cancel()
+
+    def _line(self, name: str, line: bytes, *, replay: bool) -> events.Ended | None:
+        try:
+            event = events.decode(line.strip())
+        except events.EventError:
+            return None  # a stray line is skipped, never fatal
+        if replay and isinstance(event, events.Episode):
+            return None
+        self.apply_event(name, event)
+        return event if isinstance(event, events.Ended) else None
+
+    def apply_event(self, name: str, event: events.Event) -> None:
+        """Fold one event into `name`'s figures (the charts redraw on their calm tick).
+        Tests inject events here without a process, as the log tail does."""
+        figures = self.figures.setdefault(name, TrainingFigures())
+        figures.fold(event)
+        live = self.live
+        if isinstance(event, events.Started) and live is not None and live.model == name:
+            live.minutes = event.max_minutes
+        if isinstance(event, events.Ended):
+            self.notify(
+                f"Training of {name} {event.kind}: {event.message}.",
+                severity="error" if event.kind == "failed" else "information",
+                timeout=10,
+                markup=False,
+            )
+
+    def _run_over(self) -> None:
+        finished = self.live.model if self.live is not None else None
+        self.live = None
+        if finished is not None and finished == self.watched:
+            self._observe(finished)
+        self._start_next()
+        self.reload(select=self.watched)
+
+    # --- stop ----------------------------------------------------------------------------------
+
+    def action_stop(self) -> None:
+        self.handled_keys += 1
+        name = self.highlighted_name
+        for request in self.queue:
+            if request.model == name:
+                self.queue.remove(request)
+                self.notify(f"{name} is no longer queued.")
+                self._fill_table()
+                return
+        if self.live is None:
+            self.notify("Nothing is training.", severity="warning")
+            return
+        self.stop_training()
+        self.notify(f"Stopping {self.live.model}: it saves a checkpoint first.")
+
+    def stop_training(self) -> None:
+        """SIGTERM to the running child: it checkpoints and writes its last event."""
+        live = self.live
+        if live is None or live.pid <= 0:
+            return
+        live.stopping = True
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            if live.process is not None:
+                if live.process.returncode is None:
+                    live.process.send_signal(signal.SIGTERM)
+            else:
+                os.kill(live.pid, signal.SIGTERM)
+        self._fill_table()
+
+    @property
+    def training_here(self) -> str | None:
+        """The model of a training that is running now, if any (to ask before quitting)."""
+        return self.live.model if self.live is not None and self.live.pid > 0 else None
+
+    # --- evaluate ------------------------------------------------------------------------------
+
+    def action_evaluate(self) -> None:
+        name = self.highlighted_name
+        if name is None:
+            self.notify("There is no model to evaluate.", severity="warning")
+            return
+        self.app.push_screen(EvaluationScreen(name))
+
+    def action_reload(self) -> None:
+        self.reload()
+
+
+def _minutes_problem(text: str) -> str | None:
+    try:
+        minutes = float(text)
+    except ValueError:
+        return "Give the time budget as a number of minutes, for example 10."
+    if not 0 < minutes <= 100_000:
+        return "The time budget must be more than 0 and at most 100000 minutes."
+    return None

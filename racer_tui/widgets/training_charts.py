@@ -1,0 +1,226 @@
+"""The training dashboard: what a racer watches while a model trains, folded from events.
+
+`TrainingFigures` folds the child's events (or a past run's `training.json`) into plain
+lists and counters; it knows nothing of Textual, so tests can check it directly.
+`TrainingCharts` draws one model's figures: six `LineChart`s (each repaints at its own calm
+rate) and a few lines of counters, refreshed at 2 Hz however fast the events arrive.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+from rich.text import Text
+from textual.app import ComposeResult
+from textual.containers import Grid, Vertical
+from textual.widgets import Static
+
+from racer_tui.widgets.chart import MAX_POINTS, LineChart
+from sim.deepracer_files import TrainingMetrics
+from sim.training import events
+
+MEAN_WINDOW = 20  # episodes in the running means, like the DeepRacer console's
+COMPLETION_WINDOW = 50  # episodes in the lap completion rate
+STATUS_REFRESH_HZ = 2.0
+LAP_COMPLETE = "Lap complete"
+
+
+@dataclass
+class TrainingFigures:
+    """One model's training figures: the history from its files, then the live events."""
+
+    rewards: list[float] = field(default_factory=list)
+    progress: list[float] = field(default_factory=list)
+    lap_times: list[float] = field(default_factory=list)
+    entropy: list[float] = field(default_factory=list)
+    steps_per_second: list[float] = field(default_factory=list)
+    cpu: list[float] = field(default_factory=list)
+    statuses: Counter[str] = field(default_factory=Counter)
+    completed: list[bool] = field(default_factory=list)  # per episode: lap complete?
+    started: events.Started | None = None
+    update: events.Update | None = None
+    evaluation: events.Evaluation | None = None
+    system: events.System | None = None
+    ended: events.Ended | None = None
+    elapsed: float = 0.0
+    version: int = 0  # bumped by every change, so views redraw only when needed
+
+    @classmethod
+    def from_metrics(cls, metrics: TrainingMetrics | None) -> TrainingFigures:
+        """A past run, from `training.json` (episodes only: entropy, steps per second and
+        CPU are not in DeepRacer's file, so those charts start with the next run)."""
+        figures = cls()
+        for row in metrics.episodes if metrics is not None else ():
+            if row.phase != "training":
+                continue
+            lap = (
+                row.elapsed_time_in_milliseconds / 1000.0
+                if row.episode_status == LAP_COMPLETE
+                else None
+            )
+            figures._episode(row.reward_score, row.completion_percentage, lap, row.episode_status)
+        figures.version += 1
+        return figures
+
+    def fold(self, event: events.Event) -> None:
+        self.elapsed = max(self.elapsed, event.elapsed)
+        if isinstance(event, events.Started):
+            self.started, self.ended = event, None
+        elif isinstance(event, events.Episode):
+            self._episode(event.reward, event.progress, event.lap_time, event.status)
+        elif isinstance(event, events.Update):
+            self.update = event
+            _append(self.entropy, event.entropy)
+            _append(self.steps_per_second, event.steps_per_second)
+        elif isinstance(event, events.Evaluation):
+            self.evaluation = event
+        elif isinstance(event, events.System):
+            self.system = event
+            _append(self.cpu, event.cpu_percent)
+        elif isinstance(event, events.Ended):
+            self.ended = event
+        self.version += 1
+
+    def _episode(self, reward: float, progress: float, lap: float | None, status: str) -> None:
+        _append(self.rewards, reward)
+        _append(self.progress, progress)
+        _append(self.completed, lap is not None)
+        if lap is not None:
+            _append(self.lap_times, lap)
+        self.statuses[status] += 1
+
+    @property
+    def episodes(self) -> int:
+        return sum(self.statuses.values())
+
+    @property
+    def completion_rate(self) -> float | None:
+        """Percent of the last COMPLETION_WINDOW episodes that completed the lap."""
+        recent = self.completed[-COMPLETION_WINDOW:]
+        return 100.0 * sum(recent) / len(recent) if recent else None
+
+
+def _append(values: list[float] | list[bool], value: float | bool) -> None:
+    values.append(value)  # type: ignore[arg-type]
+    if len(values) > MAX_POINTS * 2:
+        del values[:-MAX_POINTS]
+
+
+def _number(value: float | None, fmt: str, unit: str = "") -> str:
+    if value is None or not math.isfinite(value):
+        return "-"
+    return format(value, fmt) + unit
+
+
+def clock(seconds: float) -> str:
+    minutes, rest = divmod(int(max(seconds, 0.0)), 60)
+    return f"{minutes}:{rest:02d}"
+
+
+def figures_lines(figures: TrainingFigures) -> Text:
+    """The counters above the charts: run, evaluation, process, and how episodes ended."""
+    update, system, evaluation = figures.update, figures.system, figures.evaluation
+    text = Text()
+    text.append(f"{figures.episodes:,}")
+    text.append(" episodes  ", style="dim")
+    text.append(_number(update.total_steps if update else None, ",.0f"))
+    text.append(" steps  ", style="dim")
+    text.append("laps ", style="dim")
+    text.append(_number(figures.completion_rate, ".0f", "%"))
+    text.append(f" of last {COMPLETION_WINDOW}", style="dim")
+    text.append("\neval ", style="dim")
+    text.append(
+        f"{evaluation.laps}/{evaluation.trials} laps {evaluation.mean_progress:.0f}%"
+        if evaluation
+        else "-"
+    )
+    text.append("  CPU ", style="dim")
+    text.append(_number(system.cpu_percent if system else None, ".0f", "%"))
+    text.append("  mem ", style="dim")
+    text.append(_number(system.rss_mb if system else None, ",.0f", " MB"))
+    text.append("\nended ", style="dim")
+    if figures.statuses:
+        parts = [f"{status} {count:,}" for status, count in figures.statuses.most_common()]
+        text.append(" · ".join(parts))
+    else:
+        text.append("-", style="dim")
+    return text
+
+
+class TrainingCharts(Vertical):
+    """Counters and six charts of one model's `TrainingFigures`."""
+
+    DEFAULT_CSS = """
+    TrainingCharts { height: 1fr; }
+    TrainingCharts > #figures { height: auto; max-height: 5; padding: 0 1; }
+    TrainingCharts > Grid { grid-size: 2 3; grid-gutter: 0 1; height: 1fr; }
+    TrainingCharts LineChart { min-height: 4; }
+    """
+    CHARTS: ClassVar[tuple[tuple[str, str, str, int | None], ...]] = (
+        # (id, title, unit, running-mean window)
+        ("reward", "reward", "", MEAN_WINDOW),
+        ("progress", "progress", " %", MEAN_WINDOW),
+        ("entropy", "entropy", "", None),
+        ("lap-time", "lap time", " s", 10),
+        ("steps", "steps/s", "", None),
+        ("cpu", "CPU", " %", None),
+    )
+
+    def __init__(self, *, id: str | None = None) -> None:
+        super().__init__(id=id)
+        self.figures = TrainingFigures()
+        self._shown_version = -1
+        self._lengths: dict[str, int] = {}
+
+    def compose(self) -> ComposeResult:
+        yield Static(id="figures")
+        with Grid():
+            for chart_id, title, unit, window in self.CHARTS:
+                yield LineChart(title, unit=unit, mean_window=window, id=f"chart-{chart_id}")
+
+    def on_mount(self) -> None:
+        self.set_interval(1.0 / STATUS_REFRESH_HZ, self.sync)
+        self.sync()
+
+    def show(self, figures: TrainingFigures) -> None:
+        """Watch another model's figures (its charts are redrawn from the start)."""
+        self.figures = figures
+        self._shown_version = -1
+        self._lengths.clear()
+        self.sync()
+
+    def _series(self) -> dict[str, list[float]]:
+        figures = self.figures
+        return {
+            "reward": figures.rewards,
+            "progress": figures.progress,
+            "entropy": figures.entropy,
+            "lap-time": figures.lap_times,
+            "steps": figures.steps_per_second,
+            "cpu": figures.cpu,
+        }
+
+    def sync(self) -> None:
+        """Hand new values to the charts (which repaint on their own calm tick) and
+        rewrite the counters, when the figures changed since the last look."""
+        if not self.is_mounted or self.figures.version == self._shown_version:
+            return
+        self._shown_version = self.figures.version
+        for chart_id, values in self._series().items():
+            chart = self.query_one(f"#chart-{chart_id}", LineChart)
+            known = self._lengths.get(chart_id)
+            if known is None or known > len(values):
+                chart.replace(values)  # a new model, or the list was trimmed
+            elif len(values) > known:
+                chart.extend(values[known:])
+            self._lengths[chart_id] = len(values)
+        self.query_one("#figures", Static).update(figures_lines(self.figures))
+
+    def redraw_now(self) -> None:
+        """Sync and repaint at once, off the calm tick (snapshots and tests)."""
+        self.sync()
+        for chart in self.query(LineChart):
+            chart._repaint_if_changed()  # the chart's own calm-tick step

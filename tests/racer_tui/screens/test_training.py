@@ -1,0 +1,197 @@
+"""The Training section without a training process: events injected as the log tail
+applies them (the memray pattern), history from training.json, the queue, the question
+when quitting, and adopting a training an earlier session left running."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+from collections.abc import Iterator
+
+import pytest
+
+from racer_tui.app import create_app
+from racer_tui.screens.training import LeaveWhileTraining, LiveRun, TrainingScreen
+from racer_tui.widgets.chart import LineChart
+from racer_tui.widgets.training_charts import TrainingCharts, TrainingFigures
+from sim.deepracer_files import TrainingEpisode, TrainingMetrics, write_training_metrics
+from sim.garage.options import new_model
+from sim.training import events
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
+
+
+def sample_events() -> list[events.Event]:
+    """A short run: three episodes (one lap), an update, a system reading, the end."""
+    return [
+        events.Started(0.0, "ada", "hairpin", ("vector",), 8, "scratch", 0, 5.0, 4242),
+        events.Episode(0.5, 1, 0, 12.0, 40.0, None, "Off track", 90),
+        events.Episode(0.9, 2, 0, 30.0, 100.0, 11.25, "Lap complete", 170),
+        events.Episode(1.2, 3, 0, 8.0, 25.0, None, "Off track", 60),
+        events.Update(
+            1.5, 1, 2048, 3, 1.61, -0.01, 0.4, 0.002, 0.1, 5100.0, 3, 16.7, 55.0, 1, 11.25
+        ),
+        events.System(2.0, 97.0, 310.0),
+        events.Ended(3.0, "finished", "the time limit was reached", 2048, 3, 55.0, None),
+    ]
+
+
+def test_figures_fold_episodes_updates_and_endings() -> None:
+    figures = TrainingFigures()
+    for event in sample_events():
+        figures.fold(event)
+    assert figures.rewards == [12.0, 30.0, 8.0]
+    assert figures.lap_times == [11.25]
+    assert figures.statuses == {"Off track": 2, "Lap complete": 1}
+    assert figures.completion_rate == pytest.approx(100 / 3)
+    assert figures.entropy == [1.61] and figures.steps_per_second == [5100.0]
+    assert figures.cpu == [97.0]
+    assert figures.ended is not None and figures.ended.kind == "finished"
+
+
+@pytest.fixture
+def sleeper() -> Iterator[subprocess.Popen[bytes]]:
+    """A harmless process that looks like a training worker to the screen."""
+    process = subprocess.Popen(
+        [sys.executable, "-c", "import time; time.sleep(120)", "sim.training.worker"],
+        start_new_session=True,
+    )
+    yield process
+    if process.poll() is None:
+        process.kill()
+    process.wait()
+
+
+async def test_injected_events_reach_the_charts_and_counters() -> None:
+    new_model("ada")
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        notes = Notifications(app)
+        for event in sample_events():
+            screen.apply_event("ada", event)
+        charts = screen.query_one(TrainingCharts)
+        charts.redraw_now()
+        await pilot.pause()
+        assert charts.query_one("#chart-reward", LineChart).values == [12.0, 30.0, 8.0]
+        assert charts.query_one("#chart-lap-time", LineChart).values == [11.25]
+        assert charts.query_one("#chart-entropy", LineChart).values == [1.61]
+        text = painted(charts)
+        assert "Off track 2" in text and "Lap complete 1" in text
+        assert "CPU 97%" in text and "310 MB" in text
+        assert "reward: 8.0" in text
+        assert "finished" in notes.text()
+
+
+async def test_charts_show_the_history_in_training_json() -> None:
+    folder = new_model("ada")
+    rows = [
+        TrainingEpisode(float(i), i * 1000, 0, 5000, i, i, "training", 10.0 * i, "Off track")
+        for i in range(1, 6)
+    ]
+    write_training_metrics(folder.training_metrics_file, TrainingMetrics(tuple(rows)))
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        charts = app.screen.query_one(TrainingCharts)
+        await wait_for(pilot, lambda: charts.figures.episodes == 5)
+        charts.redraw_now()
+        assert charts.query_one("#chart-progress", LineChart).values == [10, 20, 30, 40, 50]
+
+
+async def test_a_second_request_waits_in_the_queue(monkeypatch: pytest.MonkeyPatch) -> None:
+    new_model("ada")
+    new_model("bob")
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        started: list[str] = []
+        monkeypatch.setattr(screen, "_run", lambda request: started.append(request.model))
+        screen.request_training("ada", 1.0)
+        screen.request_training("bob", 1.0)
+        assert started == ["ada"]
+        assert [request.model for request in screen.queue] == ["bob"]
+        screen.live = None
+        screen._start_next()
+        assert started == ["ada", "bob"]
+
+
+async def test_quitting_while_training_can_keep_it_running(
+    sleeper: subprocess.Popen[bytes],
+) -> None:
+    new_model("ada")
+    app = create_app(start="training")
+    async with app.run_test(size=(100, 30)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        screen.live = LiveRun("ada", pid=sleeper.pid, minutes=5)
+        await pilot.press("q")
+        assert isinstance(app.screen, LeaveWhileTraining)
+        await pilot.press("k")
+        await pilot.pause()
+    assert sleeper.poll() is None  # still running after the app has gone
+
+
+async def test_quitting_while_training_can_stop_it(sleeper: subprocess.Popen[bytes]) -> None:
+    new_model("ada")
+    app = create_app(start="training")
+    async with app.run_test(size=(100, 30)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        screen.live = LiveRun("ada", pid=sleeper.pid, minutes=5)
+        await pilot.press("q")
+        await pilot.press("escape")  # stay: nothing happens
+        assert app.is_running and sleeper.poll() is None
+        await pilot.press("q", "s")
+        await pilot.pause()
+    assert sleeper.wait(10) == -signal.SIGTERM
+
+
+async def test_a_training_left_running_is_shown_again_and_can_be_stopped(
+    sleeper: subprocess.Popen[bytes],
+) -> None:
+    folder = new_model("ada")
+    state = {"state": "running", "pid": sleeper.pid, "message": "training"}
+    folder.training_state_file.write_text(json.dumps(state))
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        # Not `settle`: the worker following the adopted run lasts as long as the run.
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        await wait_for(pilot, lambda: screen.live is not None and screen.rows != [])
+        assert screen.live is not None and screen.live.pid == sleeper.pid
+        assert "training" in painted(screen.query_one("#training-models"))
+        await pilot.press("s")
+        assert sleeper.wait(10) == -signal.SIGTERM
+        await wait_for(pilot, lambda: screen.live is None, tries=200)
+    assert not os.path.exists(f"/proc/{sleeper.pid}/status") or sleeper.poll() is not None
+
+
+def test_the_agents_eye_view_draws_camera_and_lidar() -> None:
+    import numpy as np
+
+    from racer_tui.widgets.agent_view import half_block_lines, observe_at, polar_lines
+
+    track = new_model("ada").track()
+    x, y = (float(v) for v in track.points[0, :2])
+    toward = track.points[1, :2] - track.points[0, :2]
+    yaw = float(np.degrees(np.arctan2(toward[1], toward[0])))
+    camera = observe_at(track, ("vector",), (x, y, yaw), "start")
+    assert camera.frame is not None and camera.frame.std() > 0  # road and borders differ
+    lines = half_block_lines(camera.frame, 32, 12)
+    assert 1 <= len(lines) <= 12 and all(line.cell_length <= 32 for line in lines)
+    lidar = observe_at(track, ("lidar",), (x, y, yaw), "start")
+    assert lidar.ranges is not None and lidar.angles_deg is not None
+    from rich.style import Style
+
+    polar = polar_lines(lidar.ranges, lidar.angles_deg, lidar.max_range, (30, 10), Style())
+    text = "".join(line.text for line in polar)
+    assert "▲" in text and any(0x2800 < ord(ch) <= 0x28FF for ch in text)  # hits drawn
