@@ -33,7 +33,7 @@ def test_reward_hyperparameters_and_speeds_may_change(trained_model: ModelFolder
     )
     assert clone.reward_source() == template_source("stay_inside_borders")
     assert clone.hyperparameters()["lr"] == 0.0001
-    assert clone.hyperparameters()["batch_size"] == 64
+    assert clone.hyperparameters()["batch_size"] == trained_model.hyperparameters()["batch_size"]
     assert clone.metadata().action_space.max_speed == 4.0
     assert clone.training_params().max_minutes == 15
     assert clone.track().name == "beginner-oval"

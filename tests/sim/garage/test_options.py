@@ -32,7 +32,12 @@ def test_the_default_model() -> None:
     assert {a.steering_angle for a in space.actions} == {-30.0, -15.0, 0.0, 15.0, 30.0}
     assert {a.speed for a in space.actions} == {1.5, 3.0}
     assert spec.reward_source == template_source("follow_center_line")
-    assert spec.hyperparameters == default_hyperparameters()
+    # DeepRacer's defaults, but a larger batch and fewer epochs: fast on a 2-core CPU.
+    assert spec.hyperparameters == {
+        **default_hyperparameters(),
+        "batch_size": 512,
+        "num_epochs": 4,
+    }
     assert spec.max_minutes == DEFAULT_MINUTES == 60.0
 
 
