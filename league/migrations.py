@@ -226,9 +226,99 @@ CREATE TABLE race_traces (
 )
 """
 
+# Version 3: sync bookkeeping, local-only (league.sync.local explains each table). What a
+# store holds, where the last pull stopped, and what sync set aside (conflicts, quarantined
+# records, records waiting for the records they refer to, identity losers) is this
+# machine's knowledge, never shared.
+SYNC_TABLES = """
+CREATE TABLE sync_settings (
+    name TEXT PRIMARY KEY,
+    value TEXT NOT NULL
+);
+CREATE TABLE sync_in_store (
+    store TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    record_id TEXT NOT NULL,
+    content_hash TEXT NOT NULL,
+    version INTEGER NOT NULL,
+    PRIMARY KEY (store, kind, record_id)
+) WITHOUT ROWID;
+CREATE TABLE sync_cursors (
+    store TEXT PRIMARY KEY,
+    cursor TEXT NOT NULL,
+    updated_at TEXT NOT NULL
+);
+CREATE TABLE sync_runs (
+    store TEXT NOT NULL,
+    direction TEXT NOT NULL,
+    finished_at TEXT NOT NULL,
+    summary TEXT NOT NULL,
+    PRIMARY KEY (store, direction)
+);
+CREATE TABLE sync_conflicts (
+    store TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    record_id TEXT NOT NULL,
+    detail TEXT NOT NULL,
+    local_hash TEXT,
+    local_version INTEGER NOT NULL,
+    local_body TEXT,
+    remote_hash TEXT,
+    remote_version INTEGER NOT NULL,
+    remote_body TEXT,
+    found_at TEXT NOT NULL,
+    PRIMARY KEY (store, kind, record_id)
+);
+CREATE TABLE sync_quarantine (
+    store TEXT NOT NULL,
+    location TEXT NOT NULL,
+    reason TEXT NOT NULL,
+    kind TEXT,
+    record_id TEXT,
+    excerpt TEXT NOT NULL,
+    found_at TEXT NOT NULL,
+    PRIMARY KEY (store, location)
+);
+CREATE TABLE sync_pending (
+    kind TEXT NOT NULL,
+    record_id TEXT NOT NULL,
+    content_hash TEXT NOT NULL,
+    body TEXT NOT NULL,
+    waiting_for TEXT NOT NULL,
+    received_at TEXT NOT NULL,
+    PRIMARY KEY (kind, record_id)
+);
+CREATE TABLE sync_aliases (
+    kind TEXT NOT NULL,
+    record_id TEXT NOT NULL,
+    canonical_id TEXT NOT NULL,
+    content_hash TEXT NOT NULL,
+    body TEXT NOT NULL,
+    PRIMARY KEY (kind, record_id)
+);
+CREATE TABLE sync_profiles (
+    profile_id TEXT PRIMARY KEY,
+    racer TEXT NOT NULL,
+    version INTEGER NOT NULL,
+    content_hash TEXT NOT NULL,
+    body TEXT NOT NULL,
+    received_at TEXT
+);
+CREATE TABLE sync_bundles (
+    record_id TEXT PRIMARY KEY,
+    model_hash TEXT NOT NULL,
+    sha256 TEXT NOT NULL,
+    size INTEGER NOT NULL,
+    name TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX sync_bundles_model ON sync_bundles(model_hash)
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
+    Migration("sync bookkeeping", _script(SYNC_TABLES)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -80,11 +80,20 @@ def records(league: League, table: str) -> Iterator[tuple[str, str, dict[str, An
         yield row[0], row[1], record_body(league, table, row[0])
 
 
-def store_record(league: League, table: str, record_id: str, body: Mapping[str, Any]) -> bool:
+def store_record(
+    league: League,
+    table: str,
+    record_id: str,
+    body: Mapping[str, Any],
+    *,
+    refresh: bool = True,
+) -> bool:
     """Insert a record from elsewhere; False if that id is already here with the same hash.
 
     LeagueError for the same id with other content (a conflict), or a body whose keys are
     not the table's columns. The content hash is computed here, never taken on trust.
+    `refresh=False` leaves the leaderboard cache to the caller, who inserts many records
+    and then calls refresh_entries once for all of them (in the same transaction).
     """
     children = _check_table(table)
     digest = content_hash(dict(body))
@@ -116,7 +125,8 @@ def store_record(league: League, table: str, record_id: str, body: Mapping[str, 
                 f"VALUES (?, {', '.join('?' for _ in children.columns)})",
                 [(record_id, *(lap[c] for c in children.columns)) for lap in laps],
             )
-            refresh_entries(league.conn, [record_id])
-        elif table == "corrections" and fields.get("kind") == "disqualify_lap":
+            if refresh:
+                refresh_entries(league.conn, [record_id])
+        elif refresh and table == "corrections" and fields.get("kind") == "disqualify_lap":
             refresh_entries(league.conn, [str(fields["target"])])
     return True

@@ -24,6 +24,7 @@ COMMAND_MODULES = (
     "racer_tui.model_commands",
     "racer_tui.league_commands",
     "racer_tui.train_commands",
+    "racer_tui.sync_commands",
 )
 
 

@@ -1,16 +1,20 @@
 """Sync: share a league through a store (a shared folder, or DynamoDB + S3 for bundles).
 
-Phase 1 (here): the record format and the stores. Every store has the same contract
-(protocol.py): create-only, idempotent `push`; cursor-paginated `pull` of what is new;
-conflicts reported, never overwritten; bad pulled records quarantined, never fatal.
+The stores (one contract, protocol.py): create-only, idempotent `push`; cursor-paginated
+`pull` of what is new; conflicts reported, never overwritten; bad pulled records
+quarantined, never fatal.
 
     from league.sync import make_record, open_store
     with open_store("dir:/mnt/league") as store:
         store.init()
-        report = store.push([make_record("racer", racer_id, {"name": "Ada"})])
+        report = store.push([make_record("racer", racer_id, {...})])
         page = store.pull(cursor=None)
 
-Model bundles: `open_bundle_store("s3://bucket/prefix")` (league.sync.s3_bundles).
+The league side (engine.py): `sync(league, store, store_key(url))` pushes every shared
+row the store lacks and pulls, validates (validate.py) and inserts what is new, keeping
+its bookkeeping in local-only tables (local.py). identity.py settles racers and tracks
+made on two machines, profiles.py guards renames with versioned profiles, and
+bundle_sync.py moves model bundles through S3 (`open_bundle_store("s3://bucket/prefix")`).
 boto3 is imported only when a DynamoDB or S3 store is opened.
 """
 

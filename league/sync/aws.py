@@ -107,6 +107,9 @@ def client_config(policy: RetryPolicy, pool_size: int) -> Config:
         read_timeout=policy.read_timeout_s,
         max_pool_connections=pool_size,
         user_agent_extra="racer-tui-sync",
+        # Requests are built by this package from validated records; the server checks
+        # them anyway. Skipping botocore's client-side walk saves a fifth of a put's CPU.
+        parameter_validation=False,
     )
 
 

@@ -95,7 +95,7 @@ class _Listed:
     """A record file found by listing: `name` is `<kind>/<file name>`, the cursor's unit."""
 
     name: str
-    path: Path
+    path: str  # a Path only for the files a page reads: listings are large
     sort_key: tuple[str, str, str]
 
 
@@ -371,7 +371,7 @@ class DirStore:
                     listed.append(
                         _Listed(
                             f"{kind}/{entry.name}",
-                            Path(entry.path),
+                            entry.path,
                             (match["id"], kind, match["version"] or ""),
                         )
                     )
@@ -379,7 +379,7 @@ class DirStore:
         return listed
 
     def _read_with_mtime(self, listed: _Listed) -> tuple[SyncRecord | Quarantined | None, float]:
-        return self._read_file(listed.path)
+        return self._read_file(Path(listed.path))
 
     def _read(self, path: Path) -> SyncRecord | Quarantined | None:
         return self._read_file(path)[0]
@@ -472,7 +472,7 @@ def _check_name(record: SyncRecord, listed: _Listed) -> SyncRecord | Quarantined
     if (
         record.kind != kind
         or file_name != expected
-        or listed.path.parent.name != record.record_id[-1]
+        or Path(listed.path).parent.name != record.record_id[-1]
     ):
         return quarantine(
             f"it holds {record.kind} {record.record_id} under another record's name",

@@ -37,7 +37,6 @@ from league.sync.record import (
     quarantine,
     safe_text,
 )
-from sim.ids import canonical_json
 
 TABLE_FORMAT: Final = 1
 INDEX_NAME: Final = "by_push"
@@ -133,7 +132,7 @@ def record_item(record: SyncRecord, pushed_at_ms: int) -> Item:
         PK: {"S": pk},
         "content_hash": {"S": record.content_hash},
         "version": {"N": str(record.version)},
-        "body": {"S": canonical_json(record.body).decode("utf-8")},
+        "body": {"S": record.canonical_body.decode("utf-8")},
         SHARD: {"S": shard_of(pk)},
         PUSHED_KEY: {"S": push_key(pushed_at_ms, record)},
     }

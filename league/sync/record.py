@@ -13,6 +13,7 @@ never stops the rest of a sync.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import re
@@ -21,18 +22,24 @@ from dataclasses import dataclass, field
 from typing import Any, Final
 
 from league.sync.errors import RecordInvalidError
-from sim.ids import canonical_json, content_hash, is_valid_id
+from sim.ids import canonical_json, is_valid_id
 
 # The fixed list of what may be shared. Nothing else is ever accepted from a store.
+# One kind per shared league table (league.sync.kinds maps them), then the sync-level
+# kinds: a racer's versioned profile and the map from a model to its bundle in S3.
 KINDS: Final = (
     "racer",
+    "track",
+    "season",
+    "night",
+    "entrant",
+    "heat",
+    "night_closure",
     "submission",
     "race",
-    "night",
-    "heat",
-    "season",
     "correction",
     "racer_profile",
+    "bundle",
 )
 # Kinds whose records change through numbered versions; every other kind is immutable.
 VERSIONED_KINDS: Final = frozenset({"racer_profile"})
@@ -69,13 +76,17 @@ class SyncRecord:
     content_hash: str
     body: dict[str, Any] = field(repr=False)
     version: int = 0
+    # The body's canonical JSON, which the hash is taken over: computed once here, and
+    # reused by the stores (encoding it again for every write is a push's main CPU cost).
+    canonical_body: bytes = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         _check_kind_id_version(self.kind, self.record_id, self.version)
         if not isinstance(self.content_hash, str) or not HASH_PATTERN.fullmatch(self.content_hash):
             raise RecordInvalidError("the content hash is not 64 lowercase hex digits")
-        validate_body(self.body)
-        actual = content_hash(self.body)
+        canonical = validate_body(self.body)
+        object.__setattr__(self, "canonical_body", canonical)
+        actual = hashlib.sha256(canonical).hexdigest()
         if actual != self.content_hash:
             raise RecordInvalidError(
                 f"the content hash does not match the body (stated {self.content_hash[:12]}…, "
@@ -91,11 +102,7 @@ class SyncRecord:
 def make_record(kind: str, record_id: str, body: Mapping[str, Any], version: int = 0) -> SyncRecord:
     """Build a record from local data, computing its content hash."""
     plain = dict(body)
-    try:
-        digest = content_hash(plain)
-    except (ValueError, TypeError):
-        validate_body(plain)  # raises RecordInvalidError with the precise reason
-        raise
+    digest = hashlib.sha256(validate_body(plain)).hexdigest()
     return SyncRecord(kind, record_id, digest, plain, version)  # validates the rest
 
 
@@ -113,34 +120,37 @@ class Quarantined:
     excerpt: str
 
 
-def validate_body(body: object) -> int:
-    """Check that `body` is a JSON object within the limits; returns its canonical size."""
+def validate_body(body: object) -> bytes:
+    """Check that `body` is a JSON object within the limits; returns its canonical JSON."""
     if not isinstance(body, dict):
         raise RecordInvalidError("the record body is not a JSON object")
     _check_value(body, depth=1)
     try:
-        size = len(canonical_json(body))
+        canonical = canonical_json(body)
     except (ValueError, TypeError) as exc:  # NaN/inf slipped through, or a non-JSON type
         raise RecordInvalidError(f"the record body is not plain JSON ({exc})") from None
+    size = len(canonical)
     if size > MAX_BODY_BYTES:
         raise RecordInvalidError(
             f"the record body is {size} bytes, more than the {MAX_BODY_BYTES}-byte limit"
         )
-    return size
+    return canonical
 
 
 def encode_envelope(record: SyncRecord) -> bytes:
-    """The bytes a file-based store holds for `record` (canonical JSON, so deterministic)."""
-    return canonical_json(
+    """The bytes a file-based store holds for `record`: the canonical JSON of the envelope
+    {body, content_hash, format, id, kind, version} (keys sorted, so deterministic), built
+    around the record's canonical body rather than encoding the body again."""
+    rest = canonical_json(
         {
-            "format": ENVELOPE_FORMAT,
-            "kind": record.kind,
-            "id": record.record_id,
             "content_hash": record.content_hash,
+            "format": ENVELOPE_FORMAT,
+            "id": record.record_id,
+            "kind": record.kind,
             "version": record.version,
-            "body": record.body,
         }
     )
+    return b'{"body":' + record.canonical_body + b"," + rest[1:]
 
 
 _ENVELOPE_KEYS: Final = frozenset({"format", "kind", "id", "content_hash", "version", "body"})

@@ -1,0 +1,404 @@
+"""What each kind of pulled record must look like, checked before it touches the database.
+
+record.py has already checked the envelope (kind, id, JSON-only types, sizes, hash). Here
+each kind's body must have exactly its table's columns, each of the column's exact JSON
+type (an integer where SQLite keeps INTEGER, a float where it keeps REAL: SQLite would
+otherwise convert the value and the row would no longer match its content hash), and
+each value must make sense: names follow the league's name rule, ids are ids, numbers
+are finite and in range, rules load through sim.race.rules, a race passes
+RaceResult.from_json (which recomputes its score), a season's points table passes the
+league's check. A record that fails is quarantined with the reason; nothing pulled is
+ever executed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from datetime import datetime
+from typing import Any, Final
+
+from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
+from league.errors import LeagueError
+from league.racers import HEX_COLOUR, check_name
+from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
+from league.seasons import check_points
+from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
+from league.sync.errors import RecordInvalidError
+from league.sync.kinds import BUNDLE_KIND, PROFILE_KIND, profile_id
+from league.sync.record import HASH_PATTERN, SyncRecord, parse_json
+from sim.ids import is_valid_id
+from sim.names import NAME_RULE, is_valid_name
+from sim.race.result import RaceResult, ResultError
+from sim.race.rules import RulesError, rules_from_mapping
+
+Checker = Callable[[Any, str], None]  # raises RecordInvalidError naming the field
+
+MAX_TEXT: Final = 500
+MAX_JSON_TEXT: Final = 64 * 1024
+MAX_SECONDS: Final = 1e6
+MAX_COUNT: Final = 10**9
+MAX_BUNDLE_BYTES: Final = 256 * 1024 * 1024
+CORRECTION_KINDS: Final = ("disqualify_lap", "rename_racer")
+
+
+def _bad(field: str, what: str) -> RecordInvalidError:
+    return RecordInvalidError(f"its {field} {what}")
+
+
+# --- field checkers ------------------------------------------------------------------------
+
+
+def name(value: Any, field: str) -> None:
+    """A racer-style name: the league's rule (1-100 printable characters, stripped)."""
+    try:
+        ok = isinstance(value, str) and check_name(value) == value
+    except LeagueError:
+        ok = False
+    if not ok:
+        raise _bad(field, "is not a name (1 to 100 printable characters, no line breaks)")
+
+
+def text(limit: int = MAX_TEXT) -> Checker:
+    def check(value: Any, field: str) -> None:
+        if not isinstance(value, str) or not 0 < len(value) <= limit or "\x00" in value:
+            raise _bad(field, f"is not a text of 1 to {limit} characters")
+
+    return check
+
+
+def record_id(value: Any, field: str) -> None:
+    if not is_valid_id(value):
+        raise _bad(field, "is not a record id")
+
+
+def sha256_hex(value: Any, field: str) -> None:
+    if not isinstance(value, str) or not HASH_PATTERN.fullmatch(value):
+        raise _bad(field, "is not a SHA-256 hash (64 lowercase hex digits)")
+
+
+def model_hash(value: Any, field: str) -> None:
+    # The race result's rule for driver hashes (a garage hash, or e.g. "reference:...").
+    if not isinstance(value, str) or not 0 < len(value) <= 200:
+        raise _bad(field, "is not a model hash")
+    if not all(char.isalnum() or char in "_:.-" for char in value) or not value.isascii():
+        raise _bad(field, "is not a model hash")
+
+
+def timestamp(value: Any, field: str) -> None:
+    """An ISO-8601 time with a UTC offset, as the league writes them."""
+    parsed = None
+    if isinstance(value, str) and len(value) <= 40:
+        try:
+            parsed = datetime.fromisoformat(value)
+        except ValueError:
+            parsed = None
+    if parsed is None or parsed.utcoffset() is None:
+        raise _bad(field, "is not an ISO-8601 time with a UTC offset")
+
+
+def integer(low: int, high: int) -> Checker:
+    def check(value: Any, field: str) -> None:
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise _bad(field, f"is not a whole number from {low} to {high}")
+
+    return check
+
+
+def flag(value: Any, field: str) -> None:
+    if isinstance(value, bool) or value not in (0, 1):
+        raise _bad(field, "is not 0 or 1")
+
+
+def real(low: float, high: float) -> Checker:
+    def check(value: Any, field: str) -> None:
+        if not isinstance(value, float) or not math.isfinite(value) or not low <= value <= high:
+            raise _bad(field, f"is not a decimal number from {low:g} to {high:g}")
+
+    return check
+
+
+def json_text(value: Any, field: str) -> None:
+    if not isinstance(value, str) or len(value) > MAX_JSON_TEXT:
+        raise _bad(field, f"is not JSON text of at most {MAX_JSON_TEXT} characters")
+    try:
+        parse_json(value)
+    except RecordInvalidError:
+        raise _bad(field, "is not valid JSON") from None
+
+
+def one_of(*choices: str) -> Checker:
+    def check(value: Any, field: str) -> None:
+        if value not in choices:
+            raise _bad(field, f"is not one of {', '.join(choices)}")
+
+    return check
+
+
+def colour(value: Any, field: str) -> None:
+    if not isinstance(value, str) or not HEX_COLOUR.fullmatch(value):
+        raise _bad(field, "is not a #rrggbb colour")
+
+
+# --- bodies --------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Field:
+    """One column of a shared table: its SQLite type, whether it may be NULL, its check."""
+
+    sql_type: str
+    check: Checker
+    nullable: bool = False
+
+
+def _t(check: Checker, nullable: bool = False) -> Field:
+    return Field("TEXT", check, nullable)
+
+
+def _i(check: Checker, nullable: bool = False) -> Field:
+    return Field("INTEGER", check, nullable)
+
+
+def _r(check: Checker) -> Field:
+    return Field("REAL", check)
+
+
+# Every shared table's columns except id and content_hash (a test holds these to the
+# schema in league.migrations, so the two cannot drift apart).
+FIELDS: Final[dict[str, dict[str, Field]]] = {
+    "racer": {
+        "name": _t(name),
+        "display_name": _t(name),
+        "colour": _t(colour),
+        "created_at": _t(timestamp),
+    },
+    "track": {"track_hash": _t(sha256_hex), "name": _t(name), "created_at": _t(timestamp)},
+    "season": {"name": _t(name), "points": _t(json_text), "created_at": _t(timestamp)},
+    "night": {
+        "name": _t(name),
+        "track_hash": _t(sha256_hex),
+        "season_id": _t(record_id, nullable=True),
+        "rules": _t(json_text),
+        "created_at": _t(timestamp),
+    },
+    "entrant": {
+        "night_id": _t(record_id),
+        "racer": _t(name),
+        "model": _t(text(500)),
+        "created_at": _t(timestamp),
+    },
+    "heat": {
+        "night_id": _t(record_id),
+        "draw_id": _t(record_id),
+        "draw_seed": _i(integer(0, 2**63 - 1)),
+        "position": _i(integer(1, MAX_COUNT)),
+        "entrant_id": _t(record_id),
+        "created_at": _t(timestamp),
+    },
+    "night_closure": {
+        "night_id": _t(record_id),
+        "closed_by": _t(name),
+        "created_at": _t(timestamp),
+    },
+    "submission": {
+        "racer": _t(name),
+        "track_hash": _t(sha256_hex),
+        "model_name": _t(text(255)),
+        "model_hash": _t(model_hash),
+        "source": _t(one_of(RACER_TUI, DRFC, CONSOLE)),
+        "action_space": _t(json_text, nullable=True),
+        "sensors": _t(json_text, nullable=True),
+        "neural_network": _t(text(100), nullable=True),
+        "training_algorithm": _t(text(100), nullable=True),
+        "hyperparameters": _t(json_text, nullable=True),
+        "training": _t(json_text, nullable=True),
+        "evaluation_file": _t(text(255)),
+        "fingerprint": _t(sha256_hex),
+        "submitted_at": _t(timestamp),
+    },
+    "race": {
+        "racer": _t(name),
+        "track_hash": _t(sha256_hex),
+        "model_name": _t(name),
+        "model_hash": _t(model_hash),
+        "night_id": _t(record_id, nullable=True),
+        "heat_id": _t(record_id, nullable=True),
+        "rules": _t(json_text),
+        "seed": _i(integer(0, 2**63 - 1)),
+        "started_at": _t(timestamp),
+        "total_offtracks": _i(integer(0, MAX_COUNT)),
+    },
+    "correction": {
+        "kind": _t(one_of(*CORRECTION_KINDS)),
+        "target": _t(text(100)),
+        "lap_number": _i(integer(1, MAX_COUNT), nullable=True),
+        "new_value": _t(name, nullable=True),
+        "reason": _t(text(500)),
+        "made_by": _t(name),
+        "created_at": _t(timestamp),
+    },
+}
+LAP_FIELDS: Final[dict[str, dict[str, Field]]] = {
+    "submission": {
+        "number": _i(integer(1, MAX_TRIALS)),
+        "time_seconds": _r(real(0.0, MAX_SECONDS)),
+        "completion": _r(real(0.0, 100.0)),
+        "status": _t(text(64)),
+        "offtracks": _i(integer(0, MAX_COUNT)),
+        "crashes": _i(integer(0, MAX_COUNT)),
+        "completed": _i(flag),
+    },
+    "race": {
+        "number": _i(integer(1, MAX_COUNT)),
+        "time_seconds": _r(real(0.0, MAX_SECONDS)),
+        "raw_seconds": _r(real(0.0, MAX_SECONDS)),
+        "penalty_seconds": _r(real(0.0, MAX_SECONDS)),
+        "offtracks": _i(integer(0, MAX_COUNT)),
+        "valid": _i(flag),
+        "started_at": _r(real(0.0, MAX_SECONDS)),
+    },
+}
+assert tuple(LAP_FIELDS["submission"]) == SUBMISSION_LAP_COLUMNS
+assert tuple(LAP_FIELDS["race"]) == RACE_LAP_COLUMNS
+MAX_LAPS: Final = {"submission": MAX_TRIALS, "race": 10_000}
+
+
+def check_record(record: SyncRecord) -> None:
+    """RecordInvalidError (one sentence) unless `record` is a well-formed record of its kind."""
+    if record.kind == PROFILE_KIND:
+        _check_profile(record)
+    elif record.kind == BUNDLE_KIND:
+        _check_bundle(record.body)
+    else:
+        _check_fields(
+            record.body, FIELDS[record.kind], extra=("laps",) * (record.kind in LAP_FIELDS)
+        )
+        if record.kind in LAP_FIELDS:
+            _check_laps(record.body.get("laps"), record.kind)
+        _SEMANTICS.get(record.kind, _nothing)(record)
+
+
+def _check_fields(
+    body: Mapping[str, Any], fields: Mapping[str, Field], extra: tuple[str, ...] = ()
+) -> None:
+    expected = set(fields) | set(extra)
+    if set(body) != expected:
+        missing = sorted(expected - set(body))
+        unknown = sorted(set(body) - expected)
+        detail = f"lacks {', '.join(missing)}" if missing else f"has unknown {', '.join(unknown)}"
+        raise RecordInvalidError(f"its fields are not its table's columns (it {detail})")
+    for column, spec in fields.items():
+        value = body[column]
+        if value is None:
+            if not spec.nullable:
+                raise _bad(column, "is missing")
+            continue
+        spec.check(value, column)
+
+
+def _check_laps(laps: Any, kind: str) -> None:
+    if not isinstance(laps, list) or len(laps) > MAX_LAPS[kind]:
+        raise _bad("laps", f"are not a list of at most {MAX_LAPS[kind]} laps")
+    for index, lap in enumerate(laps):
+        if not isinstance(lap, dict):
+            raise _bad(f"lap {index + 1}", "is not an object")
+        _check_fields(lap, LAP_FIELDS[kind])
+        if lap["number"] != index + 1:
+            raise _bad(f"lap {index + 1}", f"is numbered {lap['number']}")
+
+
+def _nothing(record: SyncRecord) -> None:
+    """No checks beyond the fields'."""
+
+
+def _check_season(record: SyncRecord) -> None:
+    points = json.loads(record.body["points"])
+    try:
+        if not isinstance(points, list):
+            raise LeagueError("not a list")
+        check_points(points)
+    except LeagueError:
+        raise _bad(
+            "points", "are not a points table (whole numbers, never more for a worse place)"
+        ) from None
+
+
+def _rules(text_value: str) -> None:
+    data = json.loads(text_value)
+    try:
+        if not isinstance(data, dict):
+            raise RulesError("not an object")
+        rules_from_mapping(data)
+    except RulesError as error:
+        raise _bad("rules", f"are not race rules ({error})") from None
+
+
+def _check_night(record: SyncRecord) -> None:
+    _rules(record.body["rules"])
+
+
+def _check_race(record: SyncRecord) -> None:
+    body = record.body
+    _rules(body["rules"])
+    laps = [{**lap, "valid": bool(lap["valid"])} for lap in body["laps"]]
+    try:
+        RaceResult.from_json(
+            {
+                "result_id": record.record_id,
+                "racer": body["racer"],
+                "model_name": body["model_name"],
+                "model_hash": body["model_hash"],
+                "track_name": body["track_hash"][:12],
+                "track_hash": body["track_hash"],
+                "rules": json.loads(body["rules"]),
+                "seed": body["seed"],
+                "started_at": body["started_at"],
+                "laps": laps,
+                "total_offtracks": body["total_offtracks"],
+            }
+        )
+    except ResultError as error:
+        raise RecordInvalidError(f"it is not a valid race result ({error})") from None
+
+
+def _check_correction(record: SyncRecord) -> None:
+    body = record.body
+    if body["kind"] == "disqualify_lap":
+        record_id(body["target"], "target")
+        if body["lap_number"] is None or body["new_value"] is not None:
+            raise RecordInvalidError("a lap disqualification needs a lap number and no new value")
+    else:
+        name(body["target"], "target")
+        if body["lap_number"] is not None or body["new_value"] is None:
+            raise RecordInvalidError("a rename needs a new display name and no lap number")
+
+
+_SEMANTICS: Final[dict[str, Callable[[SyncRecord], None]]] = {
+    "season": _check_season,
+    "night": _check_night,
+    "race": _check_race,
+    "correction": _check_correction,
+}
+
+PROFILE_FIELDS: Final = {"racer": _t(name), "display_name": _t(name), "correction": _t(record_id)}
+BUNDLE_FIELDS: Final = {
+    "model_hash": _t(sha256_hex),
+    "sha256": _t(sha256_hex),
+    "size": _i(integer(1, MAX_BUNDLE_BYTES)),
+    "name": _t(text(64)),
+}
+
+
+def _check_profile(record: SyncRecord) -> None:
+    _check_fields(record.body, PROFILE_FIELDS)
+    if record.record_id != profile_id(record.body["racer"]):
+        raise RecordInvalidError("its id is not the profile id of the racer it names")
+
+
+def _check_bundle(body: Mapping[str, Any]) -> None:
+    _check_fields(body, BUNDLE_FIELDS)
+    if not is_valid_name(body["name"]):
+        raise _bad("name", f"is not a model name ({NAME_RULE})")

@@ -1,0 +1,460 @@
+"""`racer-tui sync`: share the league through a store (a shared folder, or DynamoDB + S3).
+
+    racer-tui sync init STORE [--bundles s3://BUCKET/PREFIX]   the organiser, once
+    racer-tui sync set STORE [--bundles s3://BUCKET/PREFIX]    each racer, once per league
+    racer-tui sync [--push | --pull] [--store URL] [--json]    push what is new, pull the rest
+    racer-tui sync status [--json]                             what sync set aside, and why
+    racer-tui sync fetch-bundle HASH [--name NAME]             install a racer's model
+
+Every command takes `--db FILE`. Text from other racers (names, reasons, excerpts) is
+printed as plain text: with print(), or in rich tables as Text cells, never as markup.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rich import box
+from rich.table import Table
+from rich.text import Text
+
+from league.errors import LeagueError
+from league.sync.errors import StoreUrlError, SyncError
+from racer_tui.output import print_json, print_table
+from sim.garage.folder import ModelError
+
+if TYPE_CHECKING:
+    from league.store import League
+    from league.sync.engine import Progress, SyncSummary
+
+    Parsers = argparse._SubParsersAction[argparse.ArgumentParser]
+
+NAMES = ("sync",)
+USER_ERRORS: tuple[type[Exception], ...] = (SyncError, LeagueError, ModelError)
+_EXCERPT = 60
+_RUN_ORDER = (
+    "pushed",
+    "pulled",
+    "skipped",
+    "already_here",
+    "aliased",
+    "waiting",
+    "conflicts",
+    "quarantined",
+    "refused",
+)
+
+
+def register(commands: Parsers) -> None:
+    sync = commands.add_parser(
+        "sync",
+        help="share the league through a shared folder or DynamoDB",
+        description="With no ACTION: push this league's new records to its store, then pull "
+        "everyone else's. Set the store once with `racer-tui sync set STORE`.",
+    )
+    direction = sync.add_mutually_exclusive_group()
+    direction.add_argument("--push", action="store_true", help="only push")
+    direction.add_argument("--pull", action="store_true", help="only pull")
+    sync.add_argument("--store", metavar="URL", help="this store instead of the saved one")
+    _common(sync, top=True, bundles=True, as_json=True)
+    actions = sync.add_subparsers(dest="sync_command", metavar="ACTION")
+    init = actions.add_parser(
+        "init", help="create a store (the organiser, once)", description=_INIT_HELP
+    )
+    init.add_argument("url", metavar="STORE", help="dir:PATH or dynamodb://TABLE?region=R")
+    init.add_argument("--bundles", metavar="S3URL", help="also create this bundle bucket")
+    use = actions.add_parser("set", help="save the store this league syncs with")
+    use.add_argument("url", metavar="STORE", help="dir:PATH or dynamodb://TABLE?region=R")
+    _common(use, bundles=True)
+    status = actions.add_parser("status", help="last syncs, conflicts, quarantined records")
+    _common(status, as_json=True)
+    fetch = actions.add_parser("fetch-bundle", help="install a racer's model from the bundle store")
+    fetch.add_argument("hash", metavar="HASH", help="model hash or bundle hash (8+ characters)")
+    fetch.add_argument("--name", help="garage name to install it under")
+    _common(fetch, bundles=True)
+
+
+_INIT_HELP = (
+    "Create the store: for dir:PATH the folder (its parent must exist) and its marker file; "
+    "for dynamodb:// the table and its index (needs credentials allowed to create tables). "
+    "Safe to run again."
+)
+
+
+def _common(
+    parser: argparse.ArgumentParser,
+    *,
+    top: bool = False,
+    bundles: bool = False,
+    as_json: bool = False,
+) -> None:
+    # On the actions, SUPPRESS keeps a value given before the action (sync --db F status).
+    default: Any = None if top else argparse.SUPPRESS
+    parser.add_argument(
+        "--db",
+        type=Path,
+        metavar="FILE",
+        default=default,
+        help="league database (default: league.db in the data dir)",
+    )
+    if bundles:
+        parser.add_argument(
+            "--bundles",
+            metavar="S3URL",
+            default=default,
+            help="model bundles in s3://BUCKET/PREFIX (default: the saved one)",
+        )
+    if as_json:
+        parser.add_argument(
+            "--json",
+            action="store_true",
+            default=False if top else argparse.SUPPRESS,
+            help="print JSON instead of text",
+        )
+
+
+def run(args: argparse.Namespace) -> int:
+    action = getattr(args, "sync_command", None)
+    if action == "init":
+        return _init(args)
+    from league.store import open_league
+
+    handlers: dict[str | None, Callable[[League, argparse.Namespace], int]] = {
+        None: _sync,
+        "set": _set,
+        "status": _status,
+        "fetch-bundle": _fetch,
+    }
+    with open_league(args.db) as league:
+        return handlers[action](league, args)
+
+
+# --- init and set ------------------------------------------------------------------------------
+
+
+def _init(args: argparse.Namespace) -> int:
+    from league.sync import open_bundle_store, open_store
+
+    with open_store(args.url) as store:
+        store.init()
+        print(f"Store ready: {store.description}.")
+    if args.bundles:
+        with open_bundle_store(args.bundles) as bundles:
+            bundles.init()
+            print(f"Bundle store ready: {bundles.description}.")
+    suffix = f" --bundles {args.bundles}" if args.bundles else ""
+    print(f"Each racer now runs: racer-tui sync set {args.url}{suffix}")
+    return 0
+
+
+def _set(league: League, args: argparse.Namespace) -> int:
+    from league.sync import parse_store_url
+    from league.sync.local import BUNDLES_SETTING, STORE_SETTING, set_setting
+    from league.sync.urls import S3Url
+
+    store = parse_store_url(args.url)
+    if isinstance(store, S3Url):
+        raise StoreUrlError(
+            f"{store} holds model bundles, not league records: give a dir: or dynamodb:// "
+            "store, and the s3:// URL with --bundles"
+        )
+    bundles = parse_store_url(args.bundles) if args.bundles else None
+    if bundles is not None and not isinstance(bundles, S3Url):
+        raise StoreUrlError(f"--bundles must be an s3://BUCKET/PREFIX URL, not {bundles}")
+    with league.transaction():
+        set_setting(league, STORE_SETTING, str(store))
+        if bundles is not None:
+            set_setting(league, BUNDLES_SETTING, str(bundles))
+    print(f"This league syncs with {store}" + (f", bundles in {bundles}" if bundles else "") + ".")
+    print("Run `racer-tui sync` to push and pull.")
+    return 0
+
+
+# --- sync ----------------------------------------------------------------------------------------
+
+
+def _saved_store(league: League, given: str | None) -> str:
+    from league.sync.local import STORE_SETTING, get_setting
+
+    url = given or get_setting(league, STORE_SETTING)
+    if url is None:
+        raise SyncError(
+            "this league has no store yet: run `racer-tui sync set STORE` (for example "
+            "dir:/mnt/league-share) or pass --store STORE"
+        )
+    return url
+
+
+def _sync(league: League, args: argparse.Namespace) -> int:
+    from league.sync import open_bundle_store, open_store
+    from league.sync.bundle_sync import push_bundles
+    from league.sync.engine import store_key, sync
+    from league.sync.local import BUNDLES_SETTING, get_setting
+
+    url = _saved_store(league, args.store)
+    key = store_key(url)
+    bundles_url = args.bundles or get_setting(league, BUNDLES_SETTING)
+    notes: list[str] = []
+    with open_store(url) as store, _progress(not args.json and sys.stderr.isatty()) as progress:
+        if bundles_url and not args.pull:
+            store.push([])  # the record store first: if it is down, nothing changes here
+            with open_bundle_store(bundles_url) as bundles:
+                sent = push_bundles(league, bundles)
+            notes.extend(sent.notes)
+            if sent.uploaded:
+                notes.append(f"uploaded {sent.uploaded} model bundle(s) to {bundles_url}")
+        summary = sync(
+            league,
+            store,
+            key,
+            push_records=not args.pull,
+            pull_records=not args.push,
+            progress=progress,
+        )
+    if args.json:
+        print_json({**summary.to_json(), "notes": notes})
+        return 0
+    _print_summary(summary, notes)
+    return 0
+
+
+@contextmanager
+def _progress(enabled: bool) -> Iterator[Progress | None]:
+    """A progress bar per direction on stderr (a terminal only; scripts get none)."""
+    if not enabled:
+        yield None
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
+    with Progress(*columns, console=Console(stderr=True), transient=True) as bar:
+        tasks: dict[str, Any] = {}
+
+        def update(direction: str, done: int, total: int | None) -> None:
+            if direction not in tasks:
+                tasks[direction] = bar.add_task(f"{direction}ing", total=total)
+            bar.update(tasks[direction], completed=done, total=total)
+
+        yield update
+
+
+def _print_summary(summary: SyncSummary, notes: list[str]) -> None:
+    conflicts = len(summary.conflicts)
+    print(
+        f"Synced with {summary.store}: pushed {summary.pushed}, pulled {summary.pulled}, "
+        f"skipped {summary.skipped}, {conflicts} conflict{'s' * (conflicts != 1)}, "
+        f"{len(summary.quarantined)} quarantined."
+    )
+    lines = [
+        *(f"conflict: {line}" for line in summary.conflicts),
+        *(f"quarantined: {line}" for line in summary.quarantined),
+        *(f"rename not shared: {line}" for line in summary.refused),
+        *(f"not pushed: {line}" for line in summary.damaged),
+        *notes,
+    ]
+    if summary.aliased:
+        lines.append(
+            f"{summary.aliased} record(s) made on two machines for one racer or track: the "
+            "first one made is kept everywhere (see `racer-tui sync status`)"
+        )
+    if summary.waiting:
+        lines.append(
+            f"{summary.waiting} pulled record(s) wait for records they refer to; they are "
+            "added when those arrive"
+        )
+    for line in lines:
+        print(f"  {line}")  # plain print: store text is never markup
+    if summary.conflicts or summary.quarantined:
+        print("Both sides of each conflict are kept: see `racer-tui sync status`.")
+
+
+# --- status ------------------------------------------------------------------------------------
+
+
+def _status(league: League, args: argparse.Namespace) -> int:
+    from league.sync import local
+    from league.sync.bundle_records import bundles
+    from league.sync.outgoing import count_unsent
+
+    store = local.get_setting(league, local.STORE_SETTING)
+    key = _key_or_none(store)
+    document: dict[str, Any] = {
+        "store": key,
+        "bundles": local.get_setting(league, local.BUNDLES_SETTING),
+        "runs": {},
+        "in_store": 0,
+        "to_push": None,
+        "conflicts": [row.__dict__ for row in local.conflicts(league)],
+        "quarantined": [row.__dict__ for row in local.quarantined(league)],
+        "waiting": [row.__dict__ for row in local.pending(league)],
+        "aliases": [
+            dict(zip(("kind", "record_id", "canonical_id"), row, strict=True))
+            for row in league.query(
+                "SELECT kind, record_id, canonical_id FROM sync_aliases ORDER BY kind, record_id"
+            )
+        ],
+        "bundles_known": [info.__dict__ for info in bundles(league)],
+    }
+    if key is not None:
+        document["runs"] = {run.direction: run.__dict__ for run in local.runs(league, key)}
+        document["in_store"] = local.in_store_count(league, key)
+        document["to_push"] = count_unsent(league, key)
+    if getattr(args, "json", False):
+        print_json(document)
+        return 0
+    _print_status(document)
+    return 0
+
+
+def _key_or_none(store: str | None) -> str | None:
+    if store is None:
+        return None
+    from league.sync.engine import store_key
+
+    try:
+        return store_key(store)
+    except StoreUrlError:
+        return store
+
+
+def _print_status(document: dict[str, Any]) -> None:
+    if document["store"] is None:
+        print("No store set: run `racer-tui sync set STORE` (for example dir:/mnt/league-share).")
+    else:
+        print(f"Store: {document['store']}")
+        if document["bundles"]:
+            print(f"Bundles: {document['bundles']}")
+        for direction in ("push", "pull"):
+            run = document["runs"].get(direction)
+            if run is None:
+                print(f"Last {direction}: never")
+            else:
+                figures = run["summary"]
+                counts = ", ".join(
+                    f"{name.replace('_', ' ')} {figures[name]}"
+                    for name in _RUN_ORDER
+                    if name in figures
+                )
+                print(f"Last {direction}: {run['finished_at']} ({counts})")
+        print(
+            f"Records the store holds from or for this league: {document['in_store']}; "
+            f"new here, not pushed yet: {document['to_push']}."
+        )
+    if document["waiting"]:
+        print(f"Waiting for records they refer to: {len(document['waiting'])}")
+        for row in document["waiting"]:
+            print(f"  {row['kind']} {row['record_id']}: needs {row['waiting_for']}")
+    if document["aliases"]:
+        print(f"Made on two machines, kept as aliases: {len(document['aliases'])}")
+        for row in document["aliases"]:
+            print(f"  {row['kind']} {row['record_id']} -> {row['canonical_id']}")
+    print(f"Bundles known: {len(document['bundles_known'])}")
+    _conflict_table(document["conflicts"])
+    _quarantine_table(document["quarantined"])
+
+
+def _conflict_table(rows: list[dict[str, Any]]) -> None:
+    if not rows:
+        print("Conflicts: none.")
+        return
+    table = Table(title=Text(f"Conflicts ({len(rows)}): both sides kept"), box=box.SIMPLE_HEAD)
+    for title in ("record", "what", "here", "in the store"):
+        table.add_column(title, overflow="fold")
+    for row in rows:
+        here, there = _differences(row["local_body"], row["remote_body"])
+        table.add_row(
+            Text(f"{row['kind']} {row['record_id']}"),
+            Text(row["detail"]),
+            Text(_side(row["local_hash"], row["local_version"], here)),
+            Text(_side(row["remote_hash"], row["remote_version"], there)),
+        )
+    print_table(table)
+
+
+def _side(digest: str | None, version: int, content: str) -> str:
+    label = (digest or "unknown")[:12] + (f" v{version}" if version else "")
+    return f"{label}: {content}"
+
+
+def _differences(here: str | None, there: str | None, limit: int = 3) -> tuple[str, str]:
+    """What differs between the two sides' bodies, field by field (a few fields at most)."""
+    if here is None or there is None:
+        missing = "content not pulled yet"
+        return (here or missing)[:_EXCERPT], (there or missing)[:_EXCERPT]
+    ours, theirs = _flat(json.loads(here)), _flat(json.loads(there))
+    fields = [
+        name for name in sorted(ours.keys() | theirs.keys()) if ours.get(name) != theirs.get(name)
+    ]
+    shown = fields[:limit]
+    more = f" (+{len(fields) - limit} more)" if len(fields) > limit else ""
+
+    def side(values: dict[str, Any]) -> str:
+        return (
+            "; ".join(f"{name}={json.dumps(values.get(name))[:_EXCERPT]}" for name in shown) + more
+        )
+
+    return side(ours), side(theirs)
+
+
+def _flat(value: Any, prefix: str = "") -> dict[str, Any]:
+    if isinstance(value, dict):
+        out: dict[str, Any] = {}
+        for key, item in value.items():
+            out.update(_flat(item, f"{prefix}.{key}" if prefix else str(key)))
+        return out
+    if isinstance(value, list):
+        out = {}
+        for index, item in enumerate(value):
+            out.update(_flat(item, f"{prefix}[{index + 1}]"))
+        return out
+    return {prefix: value}
+
+
+def _quarantine_table(rows: list[dict[str, Any]]) -> None:
+    if not rows:
+        print("Quarantined: none.")
+        return
+    table = Table(title=Text(f"Quarantined ({len(rows)}): not added"), box=box.SIMPLE_HEAD)
+    for title in ("where", "kind", "id", "reason", "excerpt"):
+        table.add_column(title, overflow="fold")
+    for row in rows:
+        table.add_row(
+            Text(row["location"]),
+            Text(row["kind"] or "?"),
+            Text(row["record_id"] or "?"),
+            Text(row["reason"]),
+            Text(row["excerpt"][:_EXCERPT]),
+        )
+    print_table(table)
+
+
+# --- bundles -----------------------------------------------------------------------------------
+
+
+def _fetch(league: League, args: argparse.Namespace) -> int:
+    from league.sync import open_bundle_store
+    from league.sync.bundle_sync import fetch_bundle
+    from league.sync.local import BUNDLES_SETTING, get_setting
+
+    url = getattr(args, "bundles", None) or get_setting(league, BUNDLES_SETTING)
+    if url is None:
+        raise SyncError(
+            "no bundle store is set: pass --bundles s3://BUCKET/PREFIX or save one with "
+            "`racer-tui sync set STORE --bundles s3://BUCKET/PREFIX`"
+        )
+    with open_bundle_store(url) as store:
+        installed = fetch_bundle(league, store, args.hash, getattr(args, "name", None))
+    print(
+        f"Installed model {installed.name} (model {installed.bundle.model_hash[:12]}, "
+        f"bundle {installed.bundle.sha256[:12]})."
+    )
+    for note in installed.notes:
+        print(f"  {note}")
+    return 0

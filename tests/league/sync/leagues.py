@@ -1,0 +1,102 @@
+"""Leagues on separate "machines" (separate database files) for the sync engine tests, and
+what a racer would compare: the leaderboard, season and racer listings the CLI prints."""
+
+from __future__ import annotations
+
+import io
+import json
+from collections.abc import Sequence
+from contextlib import redirect_stdout
+from pathlib import Path
+from typing import Any
+
+from league import nights
+from league.assembler import assemble
+from league.corrections import disqualify_lap, rename_racer
+from league.seasons import new_season, parse_points
+from league.store import League
+from league.submissions import submit
+from racer_tui.cli import main
+from sim.ids import new_id
+from sim.race.result import RaceResult
+from sim.race.rules import RaceRules, RankingMethod
+from sim.track import Track
+from sim.track_catalog import resolve_track
+from tests.league.helpers import TRACK, model_folder, race_result
+
+NIGHT_LAPS = {"ana": [11.0, 10.6, 10.9], "bob": [10.8, 10.7], "cy": [12.0, 12.0]}
+RULES = RaceRules(window_seconds=60.0, ranking=RankingMethod.BEST_LAP)
+
+
+def add_submissions(
+    league: League, root: Path, entries: Sequence[tuple[str, Sequence[float]]]
+) -> list[str]:
+    """Submit one model folder per (racer, lap times); returns the submission ids."""
+    ids = []
+    for number, (racer, laps) in enumerate(entries):
+        folder = model_folder(root / new_id(), f"car-{number}", laps=laps)
+        ids.append(submit(league, assemble(str(folder), racer)).submission_id)
+    return ids
+
+
+def _fake_engine(
+    track: Track, rules: RaceRules, driver: Any, *, racer: str, seed: int
+) -> RaceResult:
+    return race_result(racer, NIGHT_LAPS[racer], track=track, rules=rules, model=str(driver))
+
+
+def host_league(league: League, root: Path) -> None:
+    """What a league host's machine holds: a season with a closed night, corrections."""
+    new_season(league, "spring", parse_points("10,6,4"))
+    night = nights.new_night(
+        league, resolve_track(TRACK), rules=RULES, name="Friday", season="spring"
+    )
+    for racer in NIGHT_LAPS:
+        nights.add_entrant(league, night, racer, "reference")
+    nights.draw_heats(league, night, seed=3)
+    races = nights.run_heats(
+        league, night, resolve_track(TRACK), lambda spec, _track: spec, run_race=_fake_engine
+    )
+    nights.close_night(league, night, "host")
+    disqualify_lap(league, races[0], 1, reason="cut the chicane", by="host")
+    submitted = add_submissions(league, root, [("ana", (12.0, 12.5)), ("bob", (11.9,))])
+    disqualify_lap(league, submitted[1], 1, reason="wrong track", by="host")
+    rename_racer(league, "cy", "Cyrus", by="host")
+
+
+def cli(*args: str) -> str:
+    out = io.StringIO()
+    with redirect_stdout(out):
+        code = main(list(args))
+    assert code == 0, out.getvalue()
+    return out.getvalue()
+
+
+def views(league: League) -> dict[str, Any]:
+    """Everything a racer sees of the league, through the CLI's JSON output."""
+    db = str(league.path)
+    seasons = json.loads(cli("season", "list", "--db", db, "--json"))
+    return {
+        "standings": [
+            json.loads(cli("season", "show", season["id"], "--db", db, "--json"))
+            for season in seasons
+        ],
+        "leaderboard": json.loads(cli("leaderboard", "--db", db, "--format", "json")),
+        "average": json.loads(
+            cli("leaderboard", "--db", db, "--format", "json", "--by", "average")
+        ),
+        "racers": json.loads(cli("racer", "list", "--db", db, "--json")),
+        "seasons": json.loads(cli("season", "list", "--db", db, "--json")),
+        "nights": json.loads(cli("night", "list", "--db", db, "--json")),
+        "corrections": json.loads(cli("correct", "list", "--db", db, "--json")),
+    }
+
+
+def shared_rows(league: League) -> dict[str, set[tuple[str, str]]]:
+    """(id, content hash) of every shared row, table by table."""
+    from league.records import SHARED_TABLES
+
+    return {
+        table: {(row[0], row[1]) for row in league.query(f"SELECT id, content_hash FROM {table}")}
+        for table in SHARED_TABLES
+    }
