@@ -8,6 +8,11 @@ O(log n), then the point is projected onto the three segments around it.
 
 from __future__ import annotations
 
+import bisect
+import math
+import weakref
+from typing import ClassVar
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
@@ -163,3 +168,107 @@ def wrap_degrees(angle: FloatArray | float) -> FloatArray:
     """Wrap to (-180, 180]."""
     wrapped = 180.0 - np.mod(180.0 - np.asarray(angle, dtype=np.float64), 360.0)
     return np.asarray(wrapped, dtype=np.float64)
+
+
+_NEIGHBOUR_OFFSETS = tuple(int(k) for k in _NEIGHBOURS)
+
+
+class PointProjector:
+    """A `PolylineProjector`'s queries for one point at a time, in plain floats.
+
+    Per-step code for a single car (races) pays more for numpy's per-call overhead than for
+    the arithmetic, so these repeat `project`, `point_at` and `direction_at` with Python
+    floats: the same method and the same arithmetic, so the same answers (to the last bit
+    or so). `project`: the projector's lookup grid names the nearest segment (the exact
+    KD-tree decides in ambiguous cells), then the closest projection onto that segment
+    and two either side wins, the first on a tie, as `np.argmin` picks.
+    """
+
+    _cache: ClassVar[weakref.WeakKeyDictionary[PolylineProjector, PointProjector]] = (
+        weakref.WeakKeyDictionary()
+    )
+
+    @classmethod
+    def of(cls, projector: PolylineProjector) -> PointProjector:
+        """One per projector (tracks cache theirs), so a new race starts without setup."""
+        found = cls._cache.get(projector)
+        if found is None:
+            found = cls._cache[projector] = cls(projector)
+        return found
+
+    def __init__(self, projector: PolylineProjector) -> None:
+        self._projector = projector
+        # Builds the projector's lookup grid if it has not been built yet.
+        projector.project(projector.points[:1])
+        grid = projector._grid
+        assert grid is not None
+        self._grid = grid
+        self._origin_x, self._origin_y = (float(v) for v in projector._grid_origin)
+        self._nx, self._ny = projector._grid_shape
+        self._inv_cell = 1.0 / _GRID_CELL
+        self.starts: list[tuple[float, float]] = [(a, b) for a, b in projector.starts.tolist()]
+        self.vectors: list[tuple[float, float]] = [(a, b) for a, b in projector.vectors.tolist()]
+        self.lengths: list[float] = projector.lengths.tolist()
+        self.cumulative: list[float] = projector.cumulative.tolist()
+        self._inv_len_sq: list[float] = projector._inv_len_sq.tolist()
+        self._segments = len(self.lengths)
+        self._closed = projector.closed
+        self.total_length = projector.total_length
+
+    def _segment_at(self, s: float) -> int:
+        seg = bisect.bisect_right(self.cumulative, s) - 1
+        return 0 if seg < 0 else (self._segments - 1 if seg >= self._segments else seg)
+
+    def point_at(self, s: float) -> tuple[float, float]:
+        """The point at arc length `s` (wrapped on a closed polyline)."""
+        if self._closed:
+            s %= self.total_length
+        s = 0.0 if s < 0.0 else (self.total_length if s > self.total_length else s)
+        seg = self._segment_at(s)
+        t = (s - self.cumulative[seg]) / self.lengths[seg]
+        (sx, sy), (vx, vy) = self.starts[seg], self.vectors[seg]
+        return sx + vx * t, sy + vy * t
+
+    def direction_at(self, s: float) -> tuple[float, float]:
+        """The unit tangent at arc length `s`."""
+        if self._closed:
+            s %= self.total_length
+        seg = self._segment_at(s)
+        vx, vy = self.vectors[seg]
+        length = self.lengths[seg]
+        return vx / length, vy / length
+
+    def arc_length(self, seg: int, t: float) -> float:
+        return self.cumulative[seg] + t * self.lengths[seg]
+
+    def project(self, x: float, y: float) -> tuple[int, float, float, float]:
+        """(segment, fraction along it, foot x, foot y) of the nearest point to (x, y)."""
+        col = int((x - self._origin_x) * self._inv_cell)
+        row = int((y - self._origin_y) * self._inv_cell)
+        col = 0 if col < 0 else (self._nx - 1 if col >= self._nx else col)
+        row = 0 if row < 0 else (self._ny - 1 if row >= self._ny else row)
+        seg = int(self._grid[col * self._ny + row])
+        if seg < 0:
+            seg = int(self._projector._nearest_segments(np.array([[x, y]]))[0])
+        n_seg = self._segments
+        starts, vectors, inv_len_sq = self.starts, self.vectors, self._inv_len_sq
+        best = (0, 0.0, 0.0, 0.0)
+        best_distance = math.inf
+        if self._closed:
+            candidates = [(seg + k) % n_seg for k in _NEIGHBOUR_OFFSETS]
+        else:
+            candidates = [min(max(seg + k, 0), n_seg - 1) for k in _NEIGHBOUR_OFFSETS]
+        for candidate in candidates:
+            sx, sy = starts[candidate]
+            vx, vy = vectors[candidate]
+            t = ((x - sx) * vx + (y - sy) * vy) * inv_len_sq[candidate]
+            if t < 0.0:
+                t = 0.0
+            elif t > 1.0:
+                t = 1.0
+            fx, fy = sx + vx * t, sy + vy * t
+            distance = (x - fx) ** 2 + (y - fy) ** 2
+            if distance < best_distance:
+                best_distance = distance
+                best = (candidate, t, fx, fy)
+        return best

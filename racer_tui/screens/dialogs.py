@@ -11,7 +11,7 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar
+from typing import ClassVar, TypeVar
 
 from rich.text import Text
 from textual import on
@@ -96,10 +96,31 @@ class ConfirmDialog(RacerModal[bool]):
         self.dismiss(False)
 
 
-class InputDialog(RacerModal[str | None]):
-    """One line of input. `check` returns a problem to show under the field, or None."""
+RequestT = TypeVar("RequestT")
+
+
+class FormDialog(RacerModal[RequestT | None]):
+    """A dialog with fields, a problem line and Cancel/confirm buttons; Esc cancels."""
 
     BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+
+    def form_buttons(self, confirm_label: str) -> ComposeResult:
+        """The problem line and the button row every form ends with."""
+        yield Static("", id="problem", classes="field-problem")
+        with Horizontal(classes="dialog-buttons"):
+            yield Button("Cancel (esc)", id="cancel")
+            yield Button(confirm_label, id="confirm", variant="primary")
+
+    def action_cancel(self) -> None:
+        self.dismiss(None)
+
+    @on(Button.Pressed, "#cancel")
+    def _cancel(self) -> None:
+        self.dismiss(None)
+
+
+class InputDialog(FormDialog[str]):
+    """One line of input. `check` returns a problem to show under the field, or None."""
 
     def __init__(
         self,
@@ -131,20 +152,10 @@ class InputDialog(RacerModal[str | None]):
                 suggester=PathSuggester() if self._paths else None,
                 id="answer",
             )
-            yield Static("", id="problem", classes="field-problem")
-            with Horizontal(classes="dialog-buttons"):
-                yield Button("Cancel (esc)", id="cancel")
-                yield Button(self._confirm_label, id="confirm", variant="primary")
+            yield from self.form_buttons(self._confirm_label)
 
     def on_mount(self) -> None:
         self.query_one("#answer", Input).focus()
-
-    def action_cancel(self) -> None:
-        self.dismiss(None)
-
-    @on(Button.Pressed, "#cancel")
-    def _cancel(self) -> None:
-        self.dismiss(None)
 
     @on(Input.Submitted)
     @on(Button.Pressed, "#confirm")
@@ -166,10 +177,8 @@ class ImportRequest:
     name: str | None  # None: the folder's (or bundle's) own name
 
 
-class ImportDialog(RacerModal[ImportRequest | None]):
+class ImportDialog(FormDialog[ImportRequest]):
     """A DeepRacer model folder or a .racer-bundle file, and optionally a new name."""
-
-    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
 
     def __init__(self, path: str = "") -> None:
         super().__init__()
@@ -191,20 +200,10 @@ class ImportDialog(RacerModal[ImportRequest | None]):
                 id="path",
             )
             yield Input(placeholder="model name (empty: the folder's name)", id="name")
-            yield Static("", id="problem", classes="field-problem")
-            with Horizontal(classes="dialog-buttons"):
-                yield Button("Cancel (esc)", id="cancel")
-                yield Button("Import", id="confirm", variant="primary")
+            yield from self.form_buttons("Import")
 
     def on_mount(self) -> None:
         self.query_one("#path", Input).focus()
-
-    def action_cancel(self) -> None:
-        self.dismiss(None)
-
-    @on(Button.Pressed, "#cancel")
-    def _cancel(self) -> None:
-        self.dismiss(None)
 
     @on(Input.Submitted)
     @on(Button.Pressed, "#confirm")

@@ -45,8 +45,8 @@ from league.report import SCORE_TITLES, seconds
 from league.seasons import SeasonStanding, get_season, list_seasons, season_standings
 from league.store import League, open_league
 from racer_tui.race_commands import resolve_driver
-from racer_tui.screens.base import RacerModal, RacerScreen
-from racer_tui.screens.dialogs import ConfirmDialog, PathSuggester, show_problem
+from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.dialogs import ConfirmDialog, FormDialog, PathSuggester, show_problem
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
@@ -82,11 +82,9 @@ class NightRequest:
     season_id: str | None
 
 
-class NewNightDialog(RacerModal[NightRequest | None]):
+class NewNightDialog(FormDialog[NightRequest]):
     """Track, optional name, optional rules file and season. The rules are frozen when
     the night opens, so they are shown (read-only) on the night afterwards."""
-
-    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
 
     def __init__(self, seasons: list[tuple[str, str]]) -> None:
         super().__init__()
@@ -106,20 +104,10 @@ class NewNightDialog(RacerModal[NightRequest | None]):
             )
             yield Select(self._seasons, prompt="no season", id="night-season")
             yield Static(Text(f"League rules: {DEFAULT_RULES.describe()}."), classes="dialog-body")
-            yield Static("", id="problem", classes="field-problem")
-            with Horizontal(classes="dialog-buttons"):
-                yield Button("Cancel (esc)", id="cancel")
-                yield Button("Open night", id="confirm", variant="primary")
+            yield from self.form_buttons("Open night")
 
     def on_mount(self) -> None:
         self.query_one("#night-name", Input).focus()
-
-    def action_cancel(self) -> None:
-        self.dismiss(None)
-
-    @on(Button.Pressed, "#cancel")
-    def _cancel(self) -> None:
-        self.dismiss(None)
 
     @on(Input.Submitted)
     @on(Button.Pressed, "#confirm")
@@ -148,10 +136,8 @@ class EntrantRequest:
     model: str
 
 
-class AddEntrantDialog(RacerModal[EntrantRequest | None]):
+class AddEntrantDialog(FormDialog[EntrantRequest]):
     """A racer and what they race: `reference`, a garage model or a bundle file."""
-
-    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
 
     def __init__(self, models: list[str]) -> None:
         super().__init__()
@@ -171,20 +157,10 @@ class AddEntrantDialog(RacerModal[EntrantRequest | None]):
                 suggester=SuggestFromList([REFERENCE_NAME, *self._models]),
                 id="entrant-model",
             )
-            yield Static("", id="problem", classes="field-problem")
-            with Horizontal(classes="dialog-buttons"):
-                yield Button("Cancel (esc)", id="cancel")
-                yield Button("Add", id="confirm", variant="primary")
+            yield from self.form_buttons("Add")
 
     def on_mount(self) -> None:
         self.query_one("#entrant-racer", Input).focus()
-
-    def action_cancel(self) -> None:
-        self.dismiss(None)
-
-    @on(Button.Pressed, "#cancel")
-    def _cancel(self) -> None:
-        self.dismiss(None)
 
     @on(Input.Submitted, "#entrant-racer")
     def _next_field(self) -> None:

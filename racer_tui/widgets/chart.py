@@ -98,7 +98,7 @@ class LineChart(Widget):
         self.repaints = 0
 
     def on_mount(self) -> None:
-        self.set_interval(1.0 / self.refresh_hz, self._repaint_if_changed)
+        self.set_interval(1.0 / self.refresh_hz, self.repaint_if_changed)
 
     # --- data ------------------------------------------------------------------------
 
@@ -119,7 +119,8 @@ class LineChart(Widget):
     def values(self) -> list[float]:
         return self.series[0].values
 
-    def _repaint_if_changed(self) -> None:
+    def repaint_if_changed(self) -> None:
+        """Repaint now if data arrived since the last repaint (the calm timer calls this)."""
         if self._changed:
             self._changed = False
             self._lines = None

@@ -223,4 +223,4 @@ class TrainingCharts(Vertical):
         """Sync and repaint at once, off the calm tick (snapshots and tests)."""
         self.sync()
         for chart in self.query(LineChart):
-            chart._repaint_if_changed()  # the chart's own calm-tick step
+            chart.repaint_if_changed()

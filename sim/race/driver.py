@@ -17,8 +17,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.car import DEEPRACER_CAR, CarSpec
+from sim.geometry import PointProjector
 from sim.reference_driver import ReferenceDriver
-from sim.simulation import PointProjector, TrackSimulation
+from sim.simulation import TrackSimulation
 from sim.track import Track
 
 REFERENCE_NAME = "reference"

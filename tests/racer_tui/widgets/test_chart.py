@@ -34,7 +34,7 @@ async def test_a_burst_of_data_repaints_once_per_tick_not_per_value() -> None:
         repaints = chart.repaints
         for value in range(500):
             chart.extend([float(value)])
-        chart._repaint_if_changed()
+        chart.repaint_if_changed()
         await pilot.pause()
         assert chart.repaints - repaints <= 1
         lines = [chart.render_line(y).text for y in range(chart.size.height)]
