@@ -19,6 +19,7 @@ from typing import Literal
 
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 from shapely.geometry import LinearRing, Polygon
 
 from sim.atomic import write_bytes_atomic
@@ -28,6 +29,10 @@ Direction = Literal["counter-clockwise", "clockwise"]
 
 # Thinner than this anywhere and the road is not drivable (the car is 0.196 m wide).
 MIN_WIDTH = 0.2
+# Two separate parts of the road (a hairpin's legs, neighbouring straights) must be further
+# apart than the car's wheels span diagonally (0.23 m), or a car can sit astride the gap with
+# wheels on both parts, never count as off track, and skip the road between them.
+MIN_ROAD_GAP = 0.3
 # An open file whose ends are this close (in median segment lengths) is a loop missing its
 # closing row; DeepRacer exports sometimes drop it.
 _CLOSE_GAP_SEGMENTS = 3.0
@@ -57,6 +62,7 @@ class Track:
         label = source or f"track {name!r}"
         points = _normalise(array, label)
         _check_borders(points, label)
+        _check_road_gaps(points, label)
         return cls(name=name, points=points, description=description, source=source)
 
     # --- the three lines -------------------------------------------------------------
@@ -286,3 +292,35 @@ def _check_borders(points: FloatArray, label: str) -> None:
     road = Polygon(rings["outer border"], holes=[rings["inner border"]])
     if not road.buffer(1e-6).contains(centre):
         raise TrackError(f"{label}: the centre line leaves the road between the borders.")
+
+
+def _check_road_gaps(points: FloatArray, label: str) -> None:
+    """Refuse a road that comes back within `MIN_ROAD_GAP` of itself.
+
+    Two waypoints belong to separate parts of the road when the way round between them is
+    longer than a half circle whose diameter is their two half-widths plus the gap: any
+    bend gentler than that (a hairpin wide enough included) passes, a tighter hairpin or two
+    straights laid side by side do not.
+    """
+    centre, widths = points[:-1, 0:2], np.hypot(*(points[:-1, 4:6] - points[:-1, 2:4]).T)
+    along = np.concatenate([[0.0], np.cumsum(segment_lengths(points[:, 0:2]))])
+    lap = float(along[-1])
+    reach = float(widths.max()) + MIN_ROAD_GAP  # no closer pair can be a gap violation
+    pairs = cKDTree(centre).query_pairs(reach, output_type="ndarray")
+    if not len(pairs):
+        return
+    i, j = pairs[:, 0], pairs[:, 1]
+    round_trip = np.abs(along[i] - along[j])
+    way_round = np.minimum(round_trip, lap - round_trip)
+    half_widths = (widths[i] + widths[j]) / 2.0
+    separate = way_round > np.pi * (half_widths + MIN_ROAD_GAP) / 2.0
+    gaps = np.hypot(*(centre[i] - centre[j]).T) - half_widths
+    close = separate & (gaps < MIN_ROAD_GAP)
+    if close.any():
+        worst = int(np.argmin(np.where(close, gaps, np.inf)))
+        a, b = sorted((int(i[worst]), int(j[worst])))
+        raise TrackError(
+            f"{label}: the road passes within {max(gaps[worst], 0.0):.2f} m of itself between "
+            f"waypoints {a} and {b}; separate parts of the road must be at least "
+            f"{MIN_ROAD_GAP} m apart so a car cannot straddle the gap."
+        )

@@ -19,7 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.spatial import cKDTree
 
 from sim.geometry import FloatArray, signed_area
 from sim.track import MIN_WIDTH, Track, TrackError
@@ -29,9 +28,6 @@ WAYPOINT_SPACING = 0.15
 # A turn must be at least this much wider than half the road, or the inner border shrinks
 # to a point and the car has no line through the corner.
 MIN_RADIUS_MARGIN = 0.05
-# Grass between two separate parts of the road. Twice the radius margin, so that a turn
-# which passes the radius check can never be mistaken for the road meeting itself.
-DEFAULT_CLEARANCE = 2 * MIN_RADIUS_MARGIN
 # Coordinates start this far from the origin, like DeepRacer's own tracks.
 ORIGIN_MARGIN = 0.5
 # Rounding to a micrometre keeps the written files byte-identical across platforms whose
@@ -256,38 +252,12 @@ def check_turn_radius(line: CentreLine, width: float) -> None:
         )
 
 
-def check_clearance(line: CentreLine, width: float, clearance: float) -> None:
-    """Refuse a design where two separate parts of the road come within `clearance` of each other.
-
-    Points closer than width + clearance whose distance along the loop exceeds what a turn
-    of radius (width + clearance) / 2 needs to get that close are different parts of the
-    road. Callers keep turns at least that wide (`check_turn_radius` with the default
-    clearance), or a single tight turn would count as the road meeting itself.
-    """
-    reach = width + clearance
-    step = line.length / len(line.points)
-    pairs = cKDTree(line.points).query_pairs(reach, output_type="ndarray")
-    if len(pairs) == 0:
-        return
-    apart = np.abs(pairs[:, 0] - pairs[:, 1])
-    along = np.minimum(apart, len(line.points) - apart) * step
-    close = pairs[along > math.pi * reach / 2 + step]
-    if len(close):
-        i, j = (int(k) for k in close[0])
-        gap = float(np.hypot(*(line.points[i] - line.points[j]))) - width
-        raise TrackDesignError(
-            f"the road passes {gap:.2f} m from itself near {i * step:.1f} m and {j * step:.1f} m "
-            f"along the centre line; keep at least {clearance:g} m between separate parts."
-        )
-
-
 def track_from_centre_line(
     line: CentreLine,
     name: str,
     *,
     width: float,
     description: str = "",
-    clearance: float = DEFAULT_CLEARANCE,
 ) -> Track:
     """Offset the borders, place the track near the origin, and validate it as a DeepRacer array."""
     if width < MIN_WIDTH:
@@ -297,7 +267,6 @@ def track_from_centre_line(
             f"track {name!r} runs clockwise; built tracks run counter-clockwise."
         )
     check_turn_radius(line, width)
-    check_clearance(line, width, clearance)
     half = width / 2
     inner = line.points + half * line.normals
     outer = line.points - half * line.normals
@@ -317,15 +286,12 @@ def build_from_segments(
     description: str = "",
     heading_deg: float = 0.0,
     start_fraction: float = 0.5,
-    clearance: float = DEFAULT_CLEARANCE,
 ) -> Track:
     """A track from straights and arcs (two free straights close the loop)."""
     line = centre_line_from_segments(
         segments, heading_deg=heading_deg, start_fraction=start_fraction
     )
-    return track_from_centre_line(
-        line, name, width=width, description=description, clearance=clearance
-    )
+    return track_from_centre_line(line, name, width=width, description=description)
 
 
 def build_from_control_points(
@@ -334,10 +300,7 @@ def build_from_control_points(
     *,
     width: float,
     description: str = "",
-    clearance: float = DEFAULT_CLEARANCE,
 ) -> Track:
     """A track whose centre line is the periodic spline through `control_points`."""
     line = centre_line_from_control_points(control_points)
-    return track_from_centre_line(
-        line, name, width=width, description=description, clearance=clearance
-    )
+    return track_from_centre_line(line, name, width=width, description=description)

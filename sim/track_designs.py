@@ -74,21 +74,20 @@ BEGINNER_OVAL = TrackDesign(
 
 HAIRPIN_CIRCUIT = TrackDesign(
     name="hairpin-circuit",
-    description="A compact technical circuit whose two infield pockets end in 0.45 m hairpins.",
+    description="A compact technical circuit whose two infield pockets end in 0.55 m hairpins.",
     width=NARROW,
     segments=(
         Straight(1.9),
         Arc(0.6, 90),
         FREE,
         Arc(0.6, 90),
-        Straight(0.3),
-        *_pocket(0.6, 0.1, 0.45),
+        *_pocket(0.6, 0.0, 0.55),
         Straight(1.9),
         Arc(0.6, 90),
-        Straight(1.2),
+        Straight(1.5),
         Arc(0.6, 90),
         FREE,
-        *_pocket(0.6, 0.1, 0.45),
+        *_pocket(0.6, 0.0, 0.55),
     ),
 )
 
@@ -155,7 +154,7 @@ GRAND_PRIX = TrackDesign(
         Straight(1.0),
         Arc(1.2, 90),
         Straight(2.0),
-        *_pocket(0.7, 1.6, 0.5),
+        *_pocket(0.7, 1.6, 0.55),
     ),
 )
 

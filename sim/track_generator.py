@@ -34,11 +34,9 @@ MAX_WIDTH = 1.5
 # Random lengths stay clear of the extremes: short tracks leave no room for shape, long
 # ones take minutes per lap for a beginner's model.
 _RANDOM_LENGTHS = (14.0, 36.0)
-# Generated tracks keep more grass between road sections and gentler turns than the
-# built-in minimum; half the clearance is the radius margin, which keeps the clearance
-# check free of false alarms inside a single turn.
-_CLEARANCE = 0.3
-_RADIUS_MARGIN = _CLEARANCE / 2
+# Generated tracks keep gentler turns than the built-in minimum, so a beginner's model
+# meets no corner tighter than a wide hairpin.
+_RADIUS_MARGIN = 0.15
 _MAX_ATTEMPTS = 64
 _CONTROL_POINTS = 24
 
@@ -107,7 +105,6 @@ def _random_shape(
         name,
         width=width,
         description=_describe(seed, line.length, width),
-        clearance=_CLEARANCE,
     )
 
 
@@ -120,7 +117,6 @@ def _stadium(name: str, width: float, length: float, seed: int) -> Track:
         segments,
         width=width,
         description=_describe(seed, length, width),
-        clearance=_CLEARANCE,
     )
 
 

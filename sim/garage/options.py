@@ -35,7 +35,7 @@ from sim.observations import SensorError, normalise_sensors
 from sim.track import TrackError
 
 # --- the defaults of `racer-tui model new` (the Training helper benchmarks these) --------
-DEFAULT_TRACK = "hairpin-circuit"  # the ~17.5 m technical circuit
+DEFAULT_TRACK = "hairpin-circuit"  # the ~17.8 m technical circuit
 DEFAULT_SENSORS: tuple[str, ...] = ("vector",)
 DEFAULT_MAX_STEERING = 30.0
 DEFAULT_STEERING_LEVELS = 5

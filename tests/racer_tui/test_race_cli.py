@@ -12,6 +12,8 @@ import pytest
 from racer_tui import race_commands
 from racer_tui.cli import main
 from sim.race.trace import RaceTrace
+from sim.reference_driver import reference_lap
+from sim.track_catalog import resolve_track
 
 SHORT = ("--track", "hairpin-circuit", "--window", "20")
 
@@ -38,7 +40,8 @@ def test_reference_race_prints_a_lap_table(capsys: pytest.CaptureFixture[str]) -
     code, out, err = run_cli(capsys, "--race", "reference", *SHORT, "--racer", "[bold]Ada")
     assert code == 0, err
     assert "[bold]Ada (reference) on hairpin-circuit" in out  # names are never markup
-    assert "8.522" in out  # the standing-start lap
+    standing_start = reference_lap(resolve_track("hairpin-circuit")).lap_time
+    assert f"{standing_start:.3f}" in out
     assert "2 laps, 2 counting, 0 off-tracks" in out
     assert "Standings" not in out  # one entrant: no standings table
 
