@@ -134,7 +134,9 @@ class BatchedDeepRacer:
             for car in finished_cars:
                 self.final_observations[car] = _row(obs, car)
             sim.reset_cars(finished_cars)
-            obs = self.observer.observe()
+            # Only the restarted cars moved: observing just them saves a whole-fleet
+            # camera render or lidar scan on most training steps.
+            _set_rows(obs, finished, self.observer.observe(finished_cars))
         return obs, rewards, terminated, truncated, infos
 
     def _rewards(self) -> np.ndarray:
@@ -145,6 +147,14 @@ class BatchedDeepRacer:
             if steps[i] > 1:  # step 1 is DeepRacer's "prepare" step
                 rewards[i] = reward(params)
         return rewards
+
+
+def _set_rows(obs: Any, cars: np.ndarray, rows: Any) -> None:
+    if isinstance(obs, dict):
+        for key, part in obs.items():
+            part[cars] = rows[key]
+    else:
+        obs[cars] = rows
 
 
 def _row(obs: Any, car: int) -> Any:

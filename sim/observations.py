@@ -10,7 +10,7 @@ line and look-ahead points of the centre line in the car's frame.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -97,15 +97,18 @@ class Observer:
             next(iter(spaces.values())) if len(spaces) == 1 else gym.spaces.Dict(spaces)
         )
 
-    def observe(self) -> Any:
-        """Observations for all N cars: an (N, ...) array, or a dict of them."""
+    def observe(self, cars: Sequence[int] | None = None) -> Any:
+        """Observations for all N cars, or for `cars` only (rows in that order): an
+        (N, ...) array, or a dict of them."""
         parts: dict[str, np.ndarray] = {}
         fleet = self.sim.fleet
+        pick: Any = slice(None) if cars is None else np.asarray(cars, dtype=np.intp)
+        x, y, yaw = fleet.x[pick], fleet.y[pick], fleet.yaw[pick]
         if self._camera is not None:
-            frames = self._camera.render(fleet.x, fleet.y, fleet.yaw)
+            frames = self._camera.render(x, y, yaw)
             parts["camera"] = frames[..., None]
         if self._lidar is not None:
-            scan = self._lidar.scan(fleet.x, fleet.y, fleet.yaw)
+            scan = self._lidar.scan(x, y, yaw)
             if "lidar" in self.spaces:
                 parts["lidar"] = scan
             else:
@@ -113,7 +116,7 @@ class Observer:
 
                 parts["sector_lidar"] = sectors(scan)
         if "vector" in self.spaces:
-            parts["vector"] = vector_state(self.sim)
+            parts["vector"] = vector_state(self.sim)[pick]
         if len(parts) == 1:
             return next(iter(parts.values()))
         return parts

@@ -128,6 +128,26 @@ def test_batched_env_resets_finished_cars_and_keeps_final_observation() -> None:
     assert obs.shape == (4, env.observation_space.shape[0])
 
 
+@pytest.mark.parametrize("sensors", [("vector",), ("lidar",), ("FRONT_FACING_CAMERA", "LIDAR")])
+def test_restarted_cars_observe_what_a_fresh_observation_shows(sensors: tuple[str, ...]) -> None:
+    # Only the cars that restarted are observed again after a reset: their rows must be
+    # exactly what observing the whole fleet from scratch gives.
+    config = EnvConfig.build(ring_track(), sensors=sensors, sensor_options=SMALL_CAMERA)
+    env = BatchedDeepRacer(config, 6)
+    env.reset()
+    actions = np.tile(np.array([[0.0, 1.0]], dtype=np.float32), (6, 1))
+    actions[0] = [-1.0, 1.0]  # one car turns hard off the road and restarts alone
+    restarted_any = False
+    for _ in range(60):
+        obs, _, terminated, truncated, _ = env.step(actions)
+        restarted_any |= bool((terminated | truncated).any())
+        fresh = env.observer.observe()
+        for key in fresh if isinstance(fresh, dict) else [None]:
+            got, want = (obs[key], fresh[key]) if key else (obs, fresh)
+            assert np.array_equal(got, want)
+    assert restarted_any
+
+
 def test_reward_errors_reach_the_caller() -> None:
     from sim.reward_function import RewardFunctionError, load_reward_source
 
