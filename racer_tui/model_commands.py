@@ -73,6 +73,7 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     export = actions.add_parser("export", help="write a model as a .racer-bundle file")
     export.add_argument("name")
     export.add_argument("-o", "--output", help="bundle file (default: NAME.racer-bundle)")
+    export.add_argument("--force", action="store_true", help="replace an existing bundle file")
 
 
 def _add_spec_options(parser: argparse.ArgumentParser, *, for_clone: bool) -> None:
@@ -159,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
         return _delete(args.name, args.yes)
     if action == "import":
         return _import(args)
-    return _export(args.name, args.output)
+    return _export(args.name, args.output, replace=args.force)
 
 
 # --- new and clone ---------------------------------------------------------------------------
@@ -362,10 +363,11 @@ def _import(args: argparse.Namespace) -> int:
     )
 
 
-def _export(name: str, output: str | None) -> int:
+def _export(name: str, output: str | None, *, replace: bool) -> int:
     from sim.garage.bundle import export_bundle
 
     folder = open_model(name)
-    written = export_bundle(folder, Path(output) if output else Path(f"{folder.name}"))
+    out = Path(output) if output else Path(f"{folder.name}")
+    written = export_bundle(folder, out, replace=replace)
     print(f"Exported {folder.name} to {written}")
     return 0

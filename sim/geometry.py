@@ -97,7 +97,7 @@ class PolylineProjector:
         grid[ambiguous] = -1
         return grid.ravel()
 
-    def _nearest_segments(self, query: FloatArray) -> NDArray[np.intp]:
+    def nearest_segments(self, query: FloatArray) -> NDArray[np.intp]:
         if self._grid is None:
             self._grid = self._build_grid()
         nx, ny = self._grid_shape
@@ -113,7 +113,7 @@ class PolylineProjector:
     def project(self, xy: FloatArray) -> tuple[NDArray[np.intp], FloatArray, FloatArray]:
         """For points (M, 2): nearest segment index, fraction along it, and the nearest point."""
         query = np.atleast_2d(np.asarray(xy, dtype=np.float64))
-        seg = self._nearest_segments(query)
+        seg = self.nearest_segments(query)
         n_seg = len(self.lengths)
         # The closest projection among nearby segments wins.
         candidates = seg[:, None] + _NEIGHBOURS[None, :]
@@ -249,7 +249,7 @@ class PointProjector:
         row = 0 if row < 0 else (self._ny - 1 if row >= self._ny else row)
         seg = int(self._grid[col * self._ny + row])
         if seg < 0:
-            seg = int(self._projector._nearest_segments(np.array([[x, y]]))[0])
+            seg = int(self._projector.nearest_segments(np.array([[x, y]]))[0])
         n_seg = self._segments
         starts, vectors, inv_len_sq = self.starts, self.vectors, self._inv_len_sq
         best = (0, 0.0, 0.0, 0.0)

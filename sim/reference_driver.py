@@ -148,7 +148,7 @@ class ReferenceDriver:
         self.track = track
         self.car = car
         self.line = racing_line_for(track, car)
-        self._projector = PolylineProjector(self.line.points)
+        self.line_projector = PolylineProjector(self.line.points)
 
     def act(self, sim: TrackSimulation) -> tuple[FloatArray, FloatArray]:
         """(steering degrees, target speed m/s) for every car of `sim`."""
@@ -157,11 +157,11 @@ class ReferenceDriver:
         half_base = self.car.wheelbase / 2.0
         rear_x, rear_y = fleet.x - half_base * cos_yaw, fleet.y - half_base * sin_yaw
         position = np.stack([fleet.x, fleet.y], axis=1)
-        seg, t, _ = self._projector.project(position)
-        s_here = self._projector.arc_length(seg, t)
+        seg, t, _ = self.line_projector.project(position)
+        s_here = self.line_projector.arc_length(seg, t)
         speed = np.maximum(fleet.speed, 0.3)
         look = 0.25 + 0.12 * speed
-        target = self._projector.point_at(s_here + look)
+        target = self.line_projector.point_at(s_here + look)
         dx, dy = target[:, 0] - rear_x, target[:, 1] - rear_y
         local_x = dx * cos_yaw + dy * sin_yaw
         local_y = -dx * sin_yaw + dy * cos_yaw
@@ -171,8 +171,8 @@ class ReferenceDriver:
         # Plan speed for where the car will be once the motor has responded.
         horizon = s_here[:, None] + speed[:, None] * np.linspace(0.0, 0.35, 6)[None, :]
         planned = np.interp(
-            np.mod(horizon, self._projector.total_length),
-            self._projector.cumulative,
+            np.mod(horizon, self.line_projector.total_length),
+            self.line_projector.cumulative,
             self.line.speeds,
         ).min(axis=1)
         limit = self.car.max_steering_deg

@@ -377,12 +377,27 @@ class GarageScreen(RacerScreen[None]):
         self.app.push_screen(dialog, partial(self._export_to, folder))
 
     def _export_to(self, folder: ModelFolder, path: str | None) -> None:
-        if path is not None:
-            self._export(folder, bundle_path(Path(path).expanduser()))
+        if path is None:
+            return
+        target = bundle_path(Path(path).expanduser())
+        if not target.exists():
+            self._export(folder, target)
+            return
+        dialog = ConfirmDialog(
+            f"Replace {target.name}?",
+            f"{target} already exists. Replacing it loses the model bundle it holds now.",
+            confirm_label="Replace",
+        )
+
+        def answered(replace: bool | None) -> None:
+            if replace:
+                self._export(folder, target, replace=True)
+
+        self.app.push_screen(dialog, answered)
 
     @work(thread=True, group="garage-change", exit_on_error=False)
-    def _export(self, folder: ModelFolder, path: Path) -> None:
-        written = export_bundle(folder, path)
+    def _export(self, folder: ModelFolder, path: Path, *, replace: bool = False) -> None:
+        written = export_bundle(folder, path, replace=replace)
         self.post_message(BundleExported(folder.name, written))
 
     def on_bundle_exported(self, message: BundleExported) -> None:

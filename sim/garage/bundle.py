@@ -120,8 +120,18 @@ def bundle_path(out: Path) -> Path:
     return out if out.name.endswith(BUNDLE_SUFFIX) else out.with_name(out.name + BUNDLE_SUFFIX)
 
 
-def export_bundle(folder: ModelFolder, out: Path) -> Path:
-    """Write `folder` as a bundle at `out` (atomically); returns the path written."""
+def export_bundle(folder: ModelFolder, out: Path, *, replace: bool = False) -> Path:
+    """Write `folder` as a bundle at `out` (atomically); returns the path written.
+
+    An existing file is only replaced when asked: a bundle handed out for a league night
+    may be the only copy of a model someone trained.
+    """
+    target = bundle_path(out)
+    if target.exists() and not replace:
+        raise ModelError(
+            f"{target} already exists; choose another file name, or replace it on purpose "
+            "(`racer-tui model export --force`)."
+        )
     if not folder.has_policy():
         raise ModelError(
             f"model {folder.name!r} has no trained policy to export; train it first with "
@@ -166,7 +176,6 @@ def export_bundle(folder: ModelFolder, out: Path) -> Path:
         archive.writestr(MANIFEST, _json_bytes(manifest))
         for member, data in sorted(members.items()):
             archive.writestr(member, data)
-    target = bundle_path(out)
     write_bytes_atomic(target, buffer.getvalue())
     return target
 

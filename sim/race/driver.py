@@ -70,7 +70,7 @@ class ReferenceRaceDriver:
         self.content_hash = f"{REFERENCE_NAME}:{track.content_hash}"
         self._car = car
         # The reference driver's own racing-line projector, queried one point at a time.
-        self._line = PointProjector.of(self._driver._projector)
+        self._line = PointProjector.of(self._driver.line_projector)
         self._line_speeds: list[float] = self._driver.line.speeds.tolist()
 
     def reset(self, sim: TrackSimulation) -> None:

@@ -163,6 +163,13 @@ def test_export_and_import_a_bundle(
     assert code == 0
     assert json.loads(out)["status"] == "trained"
     assert open_model("received").content_hash() == open_model("shipped").content_hash()
+    # A second export never overwrites the bundle silently.
+    before = bundle.read_bytes()
+    code, _, err = run_cli(capsys, "model", "export", "shipped")
+    assert code == 2 and "already exists" in err and "--force" in err
+    assert bundle.read_bytes() == before
+    code, _, _ = run_cli(capsys, "model", "export", "shipped", "--force")
+    assert code == 0 and zipfile.is_zipfile(bundle)
     bundle.write_bytes(bundle.read_bytes()[:100])
     code, _, err = run_cli(capsys, "model", "import", str(bundle), "--name", "broken")
     assert code == 2 and "not a racer-tui bundle" in err

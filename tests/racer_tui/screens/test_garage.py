@@ -156,6 +156,21 @@ async def test_export_writes_a_bundle(tmp_path: Path) -> None:
         assert read_bundle(written).name == "ada"
         assert str(written) in notes.text()
 
+        # Exporting over it asks first; saying no leaves the bundle as it was.
+        written.write_bytes(b"the host's only copy")
+        for answer, expected in (("n", b"the host's only copy"), ("y", None)):
+            await pilot.press("x")
+            app.screen.query_one(Input).value = str(written)
+            await pilot.press("enter")
+            await settle(pilot)
+            assert isinstance(app.screen, ConfirmDialog)
+            await pilot.press(answer)
+            await settle(pilot)
+            if expected is None:
+                assert read_bundle(written).name == "ada"
+            else:
+                assert written.read_bytes() == expected
+
 
 async def test_an_untrained_model_cannot_race_or_export() -> None:
     new_model("ada")
