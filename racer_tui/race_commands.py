@@ -239,17 +239,12 @@ def resolve_driver(spec: str, track: Track) -> Driver:
 def _policy_driver(spec: str, build: Callable[[ModuleType], Driver]) -> Driver:
     """Load torch and the policy only now: the reference path never pays for them."""
     try:
-        import torch
-
-        from sim.training import policy
+        from sim.training import policy  # imports torch
         from sim.training.errors import PolicyError
     except ImportError as error:
         raise RaceSetupError(
             f"cannot race {spec!r}: running a trained policy needs torch ({error})."
         ) from None
-    # A batch of one observation is too small to share between cores: extra threads only
-    # add synchronisation (several times slower on a busy 2-core machine).
-    torch.set_num_threads(1)
     try:
         return build(policy)
     except PolicyError as error:

@@ -455,6 +455,10 @@ class PolicyDriver:
         sensor_options: SensorOptions | None = None,
         live: bool = False,
     ) -> None:
+        # A batch of one observation is too small to share between cores: extra torch
+        # threads only add synchronisation (several times slower on a busy 2-core machine),
+        # wherever the race runs (the CLI, the app's workers, a league night).
+        torch.set_num_threads(1)
         self.network = network.eval()
         self._fast = None if live or network.camera is not None else NumpyActor(network)
         self.metadata = metadata
