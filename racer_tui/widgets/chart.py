@@ -145,7 +145,7 @@ class LineChart(Widget):
         primary = self.series[0].values
         if self.mean_window and len(self.series) > 1:
             self.series[1].values = running_mean(primary, self.mean_window)
-        title = self._title_text()
+        title = self._title_text(width)
         lines = [Strip([Segment(title[:width], style["chart--title"])], min(len(title), width))]
         plot_rows, plot_cols = height - 1, width - _AXIS_WIDTH
         if plot_rows < 1 or plot_cols < 2:
@@ -188,13 +188,21 @@ class LineChart(Widget):
             lines.append(Strip(segments, width))
         return lines
 
-    def _title_text(self) -> str:
+    def _title_text(self, width: int) -> str:
+        """The title with the latest value, and the running mean in the longest wording
+        that fits: a chart in a quarter of an 80-column terminal has ~30 columns."""
         values = self.series[0].values
         latest = format_value(values[-1]) if values else "-"
         text = f"{self.title}: {latest}{self.unit}"
-        if self.mean_window and len(self.series) > 1 and self.series[1].values:
-            text += f"  (mean of {self.mean_window}: {format_value(self.series[1].values[-1])})"
-        return text
+        if not (self.mean_window and len(self.series) > 1 and self.series[1].values):
+            return text
+        mean = format_value(self.series[1].values[-1])
+        wordings = (
+            f"{text}  (mean of {self.mean_window}: {mean})",
+            f"{text}  (mean {mean})",
+            f"{text} ~{mean}",
+        )
+        return next((wording for wording in wordings if len(wording) <= width), wordings[-1])
 
     @staticmethod
     def _grid(values: Sequence[float], cols: int, rows: int, low: float, high: float) -> np.ndarray:

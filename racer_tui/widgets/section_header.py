@@ -49,7 +49,13 @@ class SectionHeader(Horizontal):
     SectionHeader > #context { width: 1fr; padding: 0 1; content-align: right middle; }
     SectionHeader > HelpHint { width: auto; padding: 0 1; }
     SectionHeader > HelpHint:hover { background: $boost; color: $text; }
+    SectionHeader.-narrow > #context { display: none; }
     """
+    # Below this width the tabs and the full hint do not fit on one line (80 columns is the
+    # classic terminal): the context note goes and the hint keeps just its two keys.
+    NARROW_WIDTH = 100
+    HINT = "? help  ^p commands"
+    SHORT_HINT = "? ^p"
 
     def __init__(self, current: str | None, context: str = "") -> None:
         super().__init__()
@@ -65,7 +71,12 @@ class SectionHeader(Horizontal):
                 current=section.mode == self.current,
             )
         yield Static(self._note_text, id="context")
-        yield HelpHint("? help  ^p commands")
+        yield HelpHint(self.HINT)
+
+    def on_resize(self, event: events.Resize) -> None:
+        narrow = event.size.width < self.NARROW_WIDTH
+        self.set_class(narrow, "-narrow")
+        self.query_one(HelpHint).update(self.SHORT_HINT if narrow else self.HINT)
 
     def set_context(self, text: str) -> None:
         """A short note at the right of the header, for example "3 models"."""

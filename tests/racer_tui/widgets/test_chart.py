@@ -42,3 +42,15 @@ async def test_a_burst_of_data_repaints_once_per_tick_not_per_value() -> None:
         assert "mean of 10: 494" in lines[0]
         assert any("499" in line and "┤" in line for line in lines[1:])
         assert any(any("⠁" <= ch <= "⣿" for ch in line) for line in lines[1:])
+
+
+@pytest.mark.parametrize(("width", "title"), [(28, "(mean 494)"), (16, "reward: 499 ~494")])
+async def test_a_narrow_chart_shortens_its_title_but_keeps_the_mean(width: int, title: str) -> None:
+    app = ChartApp()
+    async with app.run_test(size=(width, 8)) as pilot:
+        chart = app.query_one(LineChart)
+        chart.extend([float(value) for value in range(500)])
+        chart.repaint_if_changed()
+        await pilot.pause()
+        first = chart.render_line(0).text
+        assert title in first and len(first.rstrip()) <= width
