@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 from itertools import groupby
 from typing import Any
 
+from league.store import League
 from sim.race.rules import (
     DEFAULT_RULES,
     RaceRules,
@@ -294,3 +295,106 @@ def rebuild_entries(conn: sqlite3.Connection) -> None:
         ),
     )
     rebuild_board(conn)
+
+
+# --- what one entry is made of (the leaderboard's row detail) --------------------------------
+
+
+@dataclass(frozen=True)
+class EvaluationTrial:
+    """One trial of a submission's evaluation file, as stored."""
+
+    number: int
+    time_seconds: float
+    completion: float
+    status: str
+    offtracks: int
+    completed: bool
+
+
+@dataclass(frozen=True)
+class SubmissionFiles:
+    """A submission's five source files as the league stored them. JSON columns are parsed
+    here; one that cannot be read is None, shown as "not in the files"."""
+
+    action_space: dict[str, Any] | None
+    sensors: list[Any] | None
+    neural_network: str | None
+    training_algorithm: str | None
+    hyperparameters: dict[str, Any] | None
+    training: dict[str, Any] | None
+    evaluation_file: str
+    trials: tuple[EvaluationTrial, ...]
+
+
+@dataclass(frozen=True)
+class RaceLap:
+    number: int
+    time_seconds: float
+    penalty_seconds: float
+    offtracks: int
+    valid: bool
+
+
+@dataclass(frozen=True)
+class EntryBreakdown:
+    """A submission's files, or a race's laps. `found` is False when the record is gone
+    (a leaderboard read a moment ago can outlive it)."""
+
+    kind: str  # "submission" | "race"
+    found: bool
+    submission: SubmissionFiles | None = None
+    race_laps: tuple[RaceLap, ...] = ()
+    has_trace: bool = False  # a race that can be replayed here
+
+
+def _parsed(value: str | None, kind: type[dict[str, Any]] | type[list[Any]]) -> Any:
+    if value is None:
+        return None
+    try:
+        parsed = json.loads(value)
+    except ValueError:
+        return None
+    return parsed if isinstance(parsed, kind) else None
+
+
+def entry_breakdown(league: League, kind: str, record_id: str) -> EntryBreakdown:
+    """What the submission or race `record_id` is made of (reads the database: call it in
+    a worker)."""
+    if kind != "submission":
+        race = league.conn.execute("SELECT 1 FROM races WHERE id = ?", (record_id,)).fetchone()
+        laps = league.conn.execute(
+            "SELECT number, time_seconds, penalty_seconds, offtracks, valid FROM race_laps "
+            "WHERE race_id = ? ORDER BY number",
+            (record_id,),
+        ).fetchall()
+        traced = league.conn.execute(
+            "SELECT 1 FROM race_traces WHERE race_id = ?", (record_id,)
+        ).fetchone()
+        return EntryBreakdown(
+            kind="race",
+            found=race is not None,
+            race_laps=tuple(RaceLap(lap[0], lap[1], lap[2], lap[3], bool(lap[4])) for lap in laps),
+            has_trace=traced is not None,
+        )
+    data = league.conn.execute("SELECT * FROM submissions WHERE id = ?", (record_id,)).fetchone()
+    if data is None:
+        return EntryBreakdown(kind="submission", found=False)
+    trials = league.conn.execute(
+        "SELECT number, time_seconds, completion, status, offtracks, completed "
+        "FROM submission_laps WHERE submission_id = ? ORDER BY number",
+        (record_id,),
+    ).fetchall()
+    files = SubmissionFiles(
+        action_space=_parsed(data["action_space"], dict),
+        sensors=_parsed(data["sensors"], list),
+        neural_network=data["neural_network"],
+        training_algorithm=data["training_algorithm"],
+        hyperparameters=_parsed(data["hyperparameters"], dict),
+        training=_parsed(data["training"], dict),
+        evaluation_file=data["evaluation_file"],
+        trials=tuple(
+            EvaluationTrial(row[0], row[1], row[2], row[3], row[4], bool(row[5])) for row in trials
+        ),
+    )
+    return EntryBreakdown(kind="submission", found=True, submission=files)

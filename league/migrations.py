@@ -315,10 +315,18 @@ CREATE TABLE sync_bundles (
 CREATE INDEX sync_bundles_model ON sync_bundles(model_hash)
 """
 
+# Version 4: the app's "recorded races, newest first" list, all tracks or one, reads an
+# index instead of sorting every race in the league.
+RECENT_RACES = """
+CREATE INDEX races_started ON races(started_at, id);
+CREATE INDEX races_track_started ON races(track_hash, started_at, id)
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
     Migration("sync bookkeeping", _script(SYNC_TABLES)),
+    Migration("recent races index", _script(RECENT_RACES)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

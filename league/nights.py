@@ -20,13 +20,13 @@ from typing import TYPE_CHECKING
 from league.errors import LeagueError
 from league.leaderboard import Filters, LeaderboardRow, leaderboard
 from league.racers import check_name, display_names, ensure_racer
-from league.races import record_race
+from league.races import find_local_track, record_race
 from league.seasons import DEFAULT_POINTS, get_season
 from league.store import League, now_iso
 from league.tracks import ensure_track
 from sim.ids import new_id
 from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
-from sim.track import Track, TrackError
+from sim.track import Track
 
 if TYPE_CHECKING:
     from sim.race.driver import Driver
@@ -389,20 +389,10 @@ def close_night(
 
 def find_night_track(night: Night) -> Track:
     """The night's track on this machine, found by content hash."""
-    from sim.track import load_track
-    from sim.track_catalog import list_tracks, resolve_track
-
-    try:
-        track = resolve_track(night.track_name)
-        if track.content_hash == night.track_hash:
-            return track
-    except TrackError:
-        pass
-    for info in list_tracks():
-        track = load_track(info.path, info.name)
-        if track.content_hash == night.track_hash:
-            return track
-    raise LeagueError(
-        f"league night {night.name!r} races on track {night.track_name!r}, which is not on "
-        "this machine; import it with `racer-tui tracks import FILE`."
-    )
+    track = find_local_track(night.track_hash, night.track_name)
+    if track is None:
+        raise LeagueError(
+            f"league night {night.name!r} races on track {night.track_name!r}, which is not on "
+            "this machine; import it with `racer-tui tracks import FILE`."
+        )
+    return track

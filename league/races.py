@@ -8,19 +8,21 @@ from __future__ import annotations
 
 import io
 import json
-from dataclasses import fields
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from league.entries import refresh_entries
 from league.errors import LeagueError
-from league.racers import ensure_racer
+from league.racers import display_names_overrides, ensure_racer
 from league.store import League, record_body
-from league.tracks import ensure_track
+from league.tracks import ensure_track, track_names
 from sim.ids import content_hash, is_valid_id
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
+from sim.track import Track, TrackError, load_track
+from sim.track_catalog import list_tracks, resolve_track
 
 TRACE_FORMAT = "npz-v1"
 LAP_COLUMNS = (
@@ -176,3 +178,117 @@ def race_result(league: League, race_id: str) -> RaceResult:
         }
     )
     return result.with_trace(race_trace(league, race_id))
+
+
+# --- recorded races, newest first, and replaying one ----------------------------------------
+
+MAX_RECENT_RACES = 1000
+
+
+@dataclass(frozen=True)
+class RecordedRace:
+    """One recorded race as a list of races shows it (laps as the leaderboard counts them,
+    corrections applied)."""
+
+    race_id: str
+    started_at: str
+    track_hash: str
+    track_name: str
+    racer: str
+    display_name: str
+    model_name: str
+    best_lap: float | None
+    valid_laps: int
+    laps_driven: int
+    night_id: str | None
+    night_name: str | None
+    has_trace: bool
+
+
+def recent_races(
+    league: League, limit: int = 100, track_hash: str | None = None
+) -> list[RecordedRace]:
+    """The newest recorded races first (optionally on one track), at most `limit`.
+
+    Newest by start time (then id, a time-sortable ULID, for a stable order). There is no
+    index on it: the inner query is one top-N sort over the races table's own columns, and
+    only the chosen rows are joined to their cached laps, night and trace.
+    """
+    count = max(1, min(int(limit), MAX_RECENT_RACES))
+    where = "WHERE track_hash = ?" if track_hash is not None else ""
+    params: list[Any] = [track_hash] if track_hash is not None else []
+    rows = league.query(
+        "SELECT r.id, r.started_at, r.track_hash, r.racer, r.model_name, r.night_id, "
+        "e.best_lap, e.valid_laps, e.laps_driven, n.name AS night_name, "
+        "EXISTS (SELECT 1 FROM race_traces t WHERE t.race_id = r.id) AS has_trace "
+        "FROM (SELECT id, started_at, track_hash, racer, model_name, night_id FROM races "
+        f"{where} ORDER BY started_at DESC, id DESC LIMIT ?) r "
+        "LEFT JOIN entries e ON e.entry_id = r.id "
+        "LEFT JOIN nights n ON n.id = r.night_id "
+        "ORDER BY r.started_at DESC, r.id DESC",
+        [*params, count],
+    )
+    shown = display_names_overrides(league)
+    tracks = track_names(league)
+    return [
+        RecordedRace(
+            race_id=row["id"],
+            started_at=row["started_at"],
+            track_hash=row["track_hash"],
+            track_name=tracks.get(row["track_hash"]) or row["track_hash"][:12],
+            racer=row["racer"],
+            display_name=shown.get(row["racer"], row["racer"]),
+            model_name=row["model_name"],
+            best_lap=row["best_lap"],
+            valid_laps=row["valid_laps"] or 0,
+            laps_driven=row["laps_driven"] or 0,
+            night_id=row["night_id"],
+            night_name=row["night_name"],
+            has_trace=bool(row["has_trace"]),
+        )
+        for row in rows
+    ]
+
+
+def find_local_track(track_hash: str, name: str) -> Track | None:
+    """This machine's copy of a league track, found by content hash (the name first: a
+    track imported under another name, or changed since, is found by scanning), or None."""
+    try:
+        track = resolve_track(name)
+        if track.content_hash == track_hash:
+            return track
+    except TrackError:
+        pass
+    for info in list_tracks():
+        try:
+            track = load_track(info.path, info.name, description=info.description)
+        except TrackError:
+            continue  # a damaged imported track: the tracks section says what is wrong
+        if track.content_hash == track_hash:
+            return track
+    return None
+
+
+@dataclass(frozen=True)
+class RaceReplay:
+    """What replaying a recorded race needs: the result with its trace, and its track."""
+
+    result: RaceResult
+    track: Track
+
+
+def race_replay(league: League, race_id: str) -> RaceReplay:
+    """A recorded race ready to replay, or LeagueError saying why it cannot be."""
+    result = race_result(league, race_id)
+    if result.trace is None or len(result.trace) == 0:
+        raise LeagueError(
+            f"{result.racer}'s race on {result.track_name} has no trace here (a race's trace "
+            "stays on the machine that ran it), so it cannot be replayed."
+        )
+    track = find_local_track(result.track_hash, result.track_name)
+    if track is None:
+        raise LeagueError(
+            f"{result.racer}'s race was on track {result.track_name!r}, which is not on this "
+            "machine; import that track with `racer-tui tracks import FILE` to replay it."
+        )
+    return RaceReplay(result, track)

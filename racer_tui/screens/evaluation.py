@@ -16,9 +16,10 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.message import Message
-from textual.widgets import Button, DataTable, Footer, Input, Label, Static
+from textual.widgets import Button, DataTable, Input, Label, Static
 
 from racer_tui.screens.base import RacerScreen
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import seconds_text
 from sim.garage.folder import open_model
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
@@ -107,7 +108,7 @@ class EvaluationScreen(RacerScreen[None]):
             id="evaluation-summary",
         )
         yield DataTable(id="evaluation-results", cursor_type="row", zebra_stripes=True)
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self.query_one("#evaluation-results", DataTable).add_columns(*COLUMNS)

@@ -19,7 +19,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Container
 from textual.message import Message
 from textual.screen import Screen
-from textual.widgets import DataTable, Footer
+from textual.widgets import DataTable
 
 from racer_tui.model_form import check_name, taken_names
 from racer_tui.screens.base import RacerScreen
@@ -28,6 +28,7 @@ from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.training import TrainingScreen
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
@@ -152,7 +153,7 @@ class GarageScreen(RacerScreen[None]):
         with Container(id="garage-body"):
             yield DataTable(id="models", cursor_type="row", zebra_stripes=True)
             yield ModelDetail(id="model-detail")
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self.reload()

@@ -18,9 +18,10 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import VerticalScroll
 from textual.dom import DOMNode
-from textual.widgets import Footer, Input, Static
+from textual.widgets import Input, Static
 
 from racer_tui.screens.base import RacerScreen
+from racer_tui.widgets.footer import RacerFooter
 
 
 @dataclass(frozen=True)
@@ -121,7 +122,7 @@ class HelpScreen(RacerScreen[None]):
                 yield Static(Text(topic.title), classes="help-topic-title", id=f"topic-{index}")
                 yield Static(classes="help-topic", id=f"topic-{index}-keys")
             yield Static(Text(self.notes), id="help-notes")
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self._filter("")

@@ -25,7 +25,6 @@ from textual.widget import Widget
 from textual.widgets import (
     Button,
     DataTable,
-    Footer,
     Input,
     Label,
     Select,
@@ -55,6 +54,7 @@ from racer_tui.model_form import (
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.table_fill import fill_table
 from racer_tui.widgets.track_map import TrackMap
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
@@ -220,7 +220,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
                 yield from self._training_tab(values)
             with TabPane("Reward function", id="tab-reward"):
                 yield from self._reward_tab(values)
-        yield Footer()
+        yield RacerFooter()
 
     def _car_tab(self, values: FormValues) -> ComposeResult:
         tracks = [(info.name, info.name) for info in list_tracks()]

@@ -1,5 +1,6 @@
-"""League nights for the host: open a night, enter racers, draw the order, run each heat live
-in the race view, watch the standings after every heat, close the night and see the season.
+"""League nights for the host: create a season, open a night (in a season or not), enter
+racers, draw the order, run each heat live in the race view, watch the standings after every
+heat, close the night and see the season's standings.
 
 The league library does the work (league.nights, league.races, league.seasons); this screen
 calls it in thread workers, each with its own database connection, and shows what changed.
@@ -21,7 +22,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.suggester import SuggestFromList
-from textual.widgets import Button, DataTable, Footer, Input, Label, Select, Static
+from textual.widgets import Button, DataTable, Input, Label, Select, Static
 
 from league.errors import LeagueError
 from league.leaderboard import LeaderboardRow
@@ -40,14 +41,24 @@ from league.nights import (
     pending_heats,
     standings,
 )
+from league.racers import check_name
 from league.races import race_result, record_race
 from league.report import SCORE_TITLES, seconds
-from league.seasons import SeasonStanding, get_season, list_seasons, season_standings
+from league.seasons import (
+    DEFAULT_POINTS,
+    SeasonStanding,
+    get_season,
+    list_seasons,
+    new_season,
+    parse_points,
+    season_standings,
+)
 from league.store import League, open_league
 from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ConfirmDialog, FormDialog, PathSuggester, show_problem
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
 from sim.garage.folder import list_models
@@ -86,9 +97,12 @@ class NewNightDialog(FormDialog[NightRequest]):
     """Track, optional name, optional rules file and season. The rules are frozen when
     the night opens, so they are shown (read-only) on the night afterwards."""
 
-    def __init__(self, seasons: list[tuple[str, str]]) -> None:
+    def __init__(self, seasons: list[tuple[str, str]], season_id: str | None = None) -> None:
+        """`seasons` as (name, id); `season_id` is chosen to start with (None: no season)."""
         super().__init__()
         self._seasons = seasons
+        known = {value for _, value in seasons}
+        self._season_id = season_id if season_id in known else None
 
     def compose(self) -> ComposeResult:
         tracks = [(info.name, info.name) for info in list_tracks()]
@@ -102,7 +116,12 @@ class NewNightDialog(FormDialog[NightRequest]):
                 suggester=PathSuggester(),
                 id="night-rules",
             )
-            yield Select(self._seasons, prompt="no season", id="night-season")
+            yield Select(
+                self._seasons,
+                prompt="no season",
+                value=self._season_id if self._season_id is not None else Select.NULL,
+                id="night-season",
+            )
             yield Static(Text(f"League rules: {DEFAULT_RULES.describe()}."), classes="dialog-body")
             yield from self.form_buttons("Open night")
 
@@ -180,6 +199,70 @@ class AddEntrantDialog(FormDialog[EntrantRequest]):
         self.dismiss(EntrantRequest(racer, model))
 
 
+@dataclass(frozen=True)
+class SeasonRequest:
+    name: str
+    points: tuple[int, ...]
+
+
+def season_problem(name: str, points: str, taken: list[str]) -> str | None:
+    """What is wrong with a new season's name or points table, in one sentence, or None.
+    The league checks again when it creates the season."""
+    if not name.strip():
+        return "Give the season a name, for example Spring 2025."
+    try:
+        clean = check_name(name, "season name")
+        if points.strip():
+            parse_points(points)
+    except LeagueError as error:
+        text = str(error)
+        return text[:1].upper() + text[1:]
+    if clean.casefold() in {other.casefold() for other in taken}:
+        return f"There is already a season called {clean!r}; pick another name."
+    return None
+
+
+class NewSeasonDialog(FormDialog[SeasonRequest]):
+    """A season's name and its points table (empty: the league's default table)."""
+
+    def __init__(self, taken: list[str]) -> None:
+        super().__init__()
+        self._taken = taken
+
+    def compose(self) -> ComposeResult:
+        default = ",".join(map(str, DEFAULT_POINTS))
+        with Vertical(classes="dialog"):
+            yield Label("Create a season", classes="dialog-title")
+            yield Static(
+                "The nights you open in this season add up to its standings when they close. "
+                "Points go to places 1, 2, 3, ... in the order given.",
+                classes="dialog-body",
+            )
+            yield Input(placeholder="season name, e.g. Spring 2025", id="season-name")
+            yield Input(placeholder=f"points by place (empty: {default})", id="season-points")
+            yield from self.form_buttons("Create season")
+
+    def on_mount(self) -> None:
+        self.query_one("#season-name", Input).focus()
+
+    @on(Input.Submitted, "#season-name")
+    def _next_field(self) -> None:
+        self.query_one("#season-points", Input).focus()
+
+    @on(Input.Submitted, "#season-points")
+    @on(Button.Pressed, "#confirm")
+    def _confirm(self) -> None:
+        name = self.query_one("#season-name", Input).value
+        points = self.query_one("#season-points", Input).value
+        problem = season_problem(name, points, self._taken)
+        if problem is not None:
+            show_problem(self.query_one("#problem", Static), problem)
+            self.query_one("#season-name", Input).focus()
+            return
+        table = parse_points(points) if points.strip() else DEFAULT_POINTS
+        self.dismiss(SeasonRequest(name.strip(), table))
+
+
 # --- messages from the workers --------------------------------------------------------------
 
 
@@ -216,9 +299,17 @@ class NightChanged(Message):
 
 
 class SeasonsLoaded(Message):
-    def __init__(self, seasons: list[tuple[str, str]]) -> None:
+    def __init__(self, seasons: list[tuple[str, str]], purpose: str = "night") -> None:
         super().__init__()
-        self.seasons = seasons
+        self.seasons = seasons  # (name, id)
+        self.purpose = purpose  # "night": for the new night dialog; "season": a new season
+
+
+class SeasonCreated(Message):
+    def __init__(self, season_id: str, name: str) -> None:
+        super().__init__()
+        self.season_id = season_id
+        self.name = name
 
 
 class HeatReady(Message):
@@ -270,6 +361,7 @@ class NightsScreen(RacerScreen[None]):
         Binding("d", "draw", "Draw", tooltip="Draw the order of the heats still to race"),
         Binding("r", "run_heat", "Run heat", tooltip="Race the next heat live"),
         Binding("c", "close_night", "Close night", tooltip="Final standings and season points"),
+        Binding("s", "new_season", "New season", tooltip="Its nights add up to standings"),
         Binding("escape", "leave", "Back"),
     ]
     AUTO_FOCUS = "#nights"
@@ -288,6 +380,7 @@ class NightsScreen(RacerScreen[None]):
         self.db_path = db_path
         self.nights: list[Night] = []
         self.state: NightState | None = None
+        self.new_season_id: str | None = None  # created here: new nights start in it
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league", "league nights")
@@ -301,7 +394,7 @@ class NightsScreen(RacerScreen[None]):
                 yield DataTable(id="heats", cursor_type="row", zebra_stripes=True)
                 yield Label("Standings", id="standings-title", classes="field-label")
                 yield DataTable(id="standings", cursor_type="row", zebra_stripes=True)
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self.reload()
@@ -328,7 +421,11 @@ class NightsScreen(RacerScreen[None]):
         if not self.nights:
             self.state = None
             self.query_one("#night-rules", Static).update(
-                Text("No league nights yet. Press o to open one.", style="dim")
+                Text(
+                    "No league nights yet. Press o to open one (s first creates a season "
+                    "for it to count in).",
+                    style="dim",
+                )
             )
             return
         ids = [n.id for n in self.nights]
@@ -433,13 +530,38 @@ class NightsScreen(RacerScreen[None]):
         self._load_seasons()
 
     @work(thread=True, exclusive=True, group="nights-dialog", exit_on_error=False)
-    def _load_seasons(self) -> None:
+    def _load_seasons(self, purpose: str = "night") -> None:
         with open_league(self.db_path) as league:
             seasons = [(season.name, season.id) for season in list_seasons(league)]
-        self.post_message(SeasonsLoaded(seasons))
+        self.post_message(SeasonsLoaded(seasons, purpose))
 
     def on_seasons_loaded(self, message: SeasonsLoaded) -> None:
-        self.app.push_screen(NewNightDialog(message.seasons), self._night_requested)
+        if message.purpose == "season":
+            taken = [name for name, _ in message.seasons]
+            self.app.push_screen(NewSeasonDialog(taken), self._season_requested)
+            return
+        dialog = NewNightDialog(message.seasons, self.new_season_id)
+        self.app.push_screen(dialog, self._night_requested)
+
+    def action_new_season(self) -> None:
+        self._load_seasons("season")
+
+    def _season_requested(self, request: SeasonRequest | None) -> None:
+        if request is not None:
+            self._create_season(request)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _create_season(self, request: SeasonRequest) -> None:
+        with open_league(self.db_path) as league:
+            season = new_season(league, request.name, request.points)
+        self.post_message(SeasonCreated(season.id, season.name))
+
+    def on_season_created(self, message: SeasonCreated) -> None:
+        self.new_season_id = message.season_id
+        self.notify(
+            f"Created season {message.name}; nights you open now (o) count in it.",
+            markup=False,
+        )
 
     def _night_requested(self, request: NightRequest | None) -> None:
         if request is not None:

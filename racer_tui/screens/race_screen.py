@@ -20,8 +20,9 @@ from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.screen import Screen
-from textual.widgets import DataTable, Digits, Footer, Static
+from textual.widgets import DataTable, Digits, Static
 
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.race_map import CarMarker, RaceMap
 from sim.race.driver import Driver
 from sim.race.engine import RaceTick, race_ticks
@@ -115,7 +116,7 @@ class RaceScreen(Screen[RaceResult | None]):
                 yield Digits(countdown_text(setup.rules.window_seconds), id="countdown")
                 yield Static(id="race-facts")
                 yield DataTable(id="laps", cursor_type="row", zebra_stripes=True)
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         table = self.query_one("#laps", DataTable)

@@ -3,13 +3,18 @@
 The races run this session are listed best first (the league's one ranking order), and any
 of them can be replayed. A new race on a track brings the best lap so far on that track as
 a ghost, and the gap to the session's leader there.
+
+Below them, the races recorded in the league (`--record`, league nights, other racers'
+synced races), newest first: any of them with a trace on this machine replays from it
+(`replay_recorded_race`, which the leaderboard uses too).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import partial
-from typing import ClassVar
+from pathlib import Path
+from typing import Any, ClassVar
 
 from rich.text import Text
 from textual import on, work
@@ -17,12 +22,16 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import Button, DataTable, Footer, Label, Select, Static
+from textual.screen import Screen
+from textual.widgets import Button, DataTable, Label, Select, Static
 
+from league.races import RaceReplay, RecordedRace, race_replay, recent_races
 from league.ranking import rank
+from league.store import open_league
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.garage import policy_driver
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import seconds_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
@@ -34,6 +43,9 @@ from sim.track_catalog import list_tracks, resolve_track
 
 REFERENCE = "reference driver"
 RESULT_COLUMNS = ("#", "driver", "track", "best lap", "laps", "off")
+# What tells races apart first, so a narrow terminal still shows it; the rest scrolls.
+RECORDED_COLUMNS = ("when", "racer", "best lap", "laps", "track", "model", "night")
+RECORDED_LIMIT = 200
 WINDOWS = ((240.0, "4:00 (league rules)"), (120.0, "2:00"), (60.0, "1:00"))
 
 
@@ -64,17 +76,79 @@ def trained_drivers() -> list[DriverChoice]:
     return drivers
 
 
+class RecordedRacesLoaded(Message):
+    def __init__(self, races: list[RecordedRace], generation: int) -> None:
+        super().__init__()
+        self.races = races
+        self.generation = generation
+
+
+def recorded_row(race: RecordedRace) -> list[str | Text]:
+    """A recorded race's cells; dim when it has no trace here to replay."""
+    cells: list[str | Text] = [
+        race.started_at[:16].replace("T", " "),
+        Text(race.display_name),
+        seconds_text(race.best_lap),
+        str(race.valid_laps),
+        Text(race.track_name),
+        Text(race.model_name),
+        Text(race.night_name or "-"),
+    ]
+    if race.has_trace:
+        return cells
+    return [Text(cell.plain if isinstance(cell, Text) else cell, style="dim") for cell in cells]
+
+
+def replay_setup(replay: RaceReplay) -> RaceSetup:
+    result = replay.result
+    return RaceSetup(
+        track=replay.track,
+        rules=result.rules,
+        racer=result.racer,
+        replay=result,
+        title=f"Replay: {result.racer} on {replay.track.name}",
+    )
+
+
+def replay_recorded_race(screen: Screen[Any], race_id: str, db_path: Path | None) -> None:
+    """Open the race view replaying a race recorded in the league, from its stored trace.
+
+    The race and its track are read in a thread worker of `screen`: a race without a trace
+    here, or on a track this machine does not have, fails there with one sentence, which a
+    RacerScreen shows as a notification."""
+    app = screen.app
+
+    def load() -> None:
+        with open_league(db_path) as league:
+            setup = replay_setup(race_replay(league, race_id))
+
+        def show() -> None:  # on the app's thread: screens are made and pushed there
+            app.push_screen(RaceScreen(setup))
+
+        app.call_from_thread(show)
+
+    screen.run_worker(load, thread=True, group="race-replay", exclusive=True, exit_on_error=False)
+
+
 class RacesScreen(RacerScreen[None]):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("s", "start_race", "Start race", tooltip="The chosen driver on the chosen track"),
-        Binding("p", "replay", "Replay", tooltip="Replay the highlighted race"),
-        Binding("ctrl+r", "reload", "Reload drivers", tooltip="Find newly trained models"),
+        Binding(
+            "p",
+            "replay",
+            "Replay",
+            tooltip="Replay the highlighted race (this session's or the league's)",
+        ),
+        Binding("ctrl+r", "reload", "Reload", tooltip="Find newly trained models and races"),
     ]
 
-    def __init__(self) -> None:
+    def __init__(self, *, db_path: Path | None = None) -> None:
+        """`db_path` None is the league in the data folder."""
         super().__init__()
+        self.db_path = db_path
         self.drivers: list[DriverChoice] = []
         self.results: list[RaceResult] = []
+        self.recorded: list[RecordedRace] = []
         self._generation = 0
 
     def compose(self) -> ComposeResult:
@@ -97,15 +171,18 @@ class RacesScreen(RacerScreen[None]):
             with Vertical(id="race-history"):
                 yield Label("Races this session, best first", classes="field-label")
                 yield DataTable(id="race-results", cursor_type="row", zebra_stripes=True)
+                yield Label("Recorded races in the league, newest first", classes="field-label")
+                yield DataTable(id="recorded-races", cursor_type="row", zebra_stripes=True)
                 yield Static(
-                    "p replays the highlighted race. Each new race on a track shows the "
-                    "best lap there so far as a ghost (g in the race view).",
+                    "p or Enter replays the highlighted race (dim: no trace here). New races "
+                    "race the track's best lap so far as a ghost (g).",
                     id="races-hint",
                 )
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         fill_table(self.query_one("#race-results", DataTable), RESULT_COLUMNS, [])
+        fill_table(self.query_one("#recorded-races", DataTable), RECORDED_COLUMNS, [])
 
     def on_screen_resume(self) -> None:
         """Each time the section is shown (the first time too): models may have been
@@ -115,10 +192,35 @@ class RacesScreen(RacerScreen[None]):
     def action_reload(self) -> None:
         self._generation += 1
         self._load_drivers(self._generation)
+        self._load_recorded(self._generation)
 
     @work(thread=True, exclusive=True, group="race-drivers", exit_on_error=False)
     def _load_drivers(self, generation: int) -> None:
         self.post_message(DriversLoaded(trained_drivers(), generation))
+
+    @work(thread=True, exclusive=True, group="recorded-races", exit_on_error=False)
+    def _load_recorded(self, generation: int) -> None:
+        with open_league(self.db_path) as league:
+            races = recent_races(league, RECORDED_LIMIT)
+        self.post_message(RecordedRacesLoaded(races, generation))
+
+    def on_recorded_races_loaded(self, message: RecordedRacesLoaded) -> None:
+        if message.generation != self._generation:
+            return
+        table = self.query_one("#recorded-races", DataTable)
+        chosen = self.highlighted_recorded
+        self.recorded = message.races
+        fill_table(table, RECORDED_COLUMNS, [recorded_row(race) for race in message.races])
+        ids = [race.race_id for race in message.races]
+        if chosen is not None and chosen.race_id in ids:
+            table.move_cursor(row=ids.index(chosen.race_id))
+
+    @property
+    def highlighted_recorded(self) -> RecordedRace | None:
+        table = self.query_one("#recorded-races", DataTable)
+        if 0 <= table.cursor_row < len(self.recorded):
+            return self.recorded[table.cursor_row]
+        return None
 
     def on_drivers_loaded(self, message: DriversLoaded) -> None:
         if message.generation != self._generation:
@@ -207,6 +309,12 @@ class RacesScreen(RacerScreen[None]):
             table.move_cursor(row=self.results.index(select))
 
     def action_replay(self) -> None:
+        """Replay from the focused table; the league's when it has focus, or when no race
+        has run this session."""
+        recorded = self.query_one("#recorded-races", DataTable)
+        if recorded.has_focus or not self.results:
+            self.replay_recorded()
+            return
         table = self.query_one("#race-results", DataTable)
         if not 0 <= table.cursor_row < len(self.results):
             self.notify("There is no race to replay yet; press s to start one.", severity="warning")
@@ -225,3 +333,15 @@ class RacesScreen(RacerScreen[None]):
     @on(DataTable.RowSelected, "#race-results")
     def _result_selected(self) -> None:
         self.action_replay()
+
+    @on(DataTable.RowSelected, "#recorded-races")
+    def replay_recorded(self) -> None:
+        race = self.highlighted_recorded
+        if race is None:
+            self.notify(
+                "There is no recorded race to replay yet; record one with `racer-tui --race "
+                "... --record` or run a league night.",
+                severity="warning",
+            )
+            return
+        replay_recorded_race(self, race.race_id, self.db_path)

@@ -15,11 +15,12 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import DataTable, Footer, Static
+from textual.widgets import DataTable, Static
 
 from racer_tui.screens.base import ModelAdded, RacerScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
 from racer_tui.widgets.track_map import TrackMap
@@ -56,7 +57,7 @@ class TracksScreen(RacerScreen[None]):
             with Vertical(id="track-detail"):
                 yield Static(id="track-facts")
                 yield TrackMap(id="track-map")
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self._infos = list_tracks()

@@ -33,12 +33,13 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import Button, DataTable, Footer, Label, Static
+from textual.widgets import Button, DataTable, Label, Static
 
 from racer_tui.screens.base import RacerModal, RacerScreen
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.widgets.agent_view import AgentView, Observation, observe_at
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import status_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
@@ -244,7 +245,7 @@ class TrainingScreen(RacerScreen[None]):
             with Vertical(id="training-side"):
                 yield Static("Agent's-eye view", id="agent-title")
                 yield AgentView(id="agent-view")
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self.reload()

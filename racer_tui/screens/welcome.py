@@ -13,13 +13,14 @@ from textual import on, work
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
-from textual.widgets import Button, Footer, Static
+from textual.widgets import Button, Static
 
 from racer_tui.screens.base import ModelAdded, RacerScreen
 from racer_tui.screens.dialogs import ImportDialog, ImportRequest
 from racer_tui.screens.garage import ModelImported, import_into_garage, notify_imported
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.widgets.demo_race import DemoRace
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from sim.garage.options import DEFAULT_TRACK
 from sim.track_catalog import resolve_track
@@ -62,7 +63,7 @@ class WelcomeScreen(RacerScreen[None]):
                 yield Button("Import a DeepRacer model (i)", id="welcome-import")
             with Vertical(id="welcome-demo"):
                 yield DemoRace(resolve_track(DEFAULT_TRACK), id="demo")
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self.query_one("#welcome-new", Button).focus()

@@ -2,19 +2,20 @@
 
 A submission is summarised from its five source files as the league stored them (model
 metadata: action space and sensor; hyperparameters; training: time and episodes;
-evaluation: trials and laps); a race by its laps. `describe_entry` reads the database and
-builds the text (run it in a worker); `EntryDetail` only shows it. Every stored value is
-user data, so it goes into `Text` as plain text, never markup.
+evaluation: trials and laps); a race by its laps. The league reads them
+(league.entries.entry_breakdown, in a worker); `render_entry` turns them into text and
+`EntryDetail` only shows it. Every stored value is user data, so it goes into `Text` as
+plain text, never markup.
 """
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 from rich.text import Text
 from textual.widgets import Static
 
+from league.entries import EntryBreakdown, SubmissionFiles, entry_breakdown
 from league.leaderboard import LeaderboardRow
 from league.store import League
 
@@ -28,15 +29,6 @@ MAIN_HYPERPARAMETERS = (
     "num_episodes_between_training",
     "loss_type",
 )
-
-
-def _loads(value: str | None) -> Any:
-    if value is None:
-        return None
-    try:
-        return json.loads(value)
-    except ValueError:
-        return None
 
 
 def _seconds(value: float | None) -> str:
@@ -63,21 +55,16 @@ def _action_space(summary: Any) -> str:
     return f"continuous, {ranges}"
 
 
-def _submission(league: League, row: LeaderboardRow, text: Text) -> None:
-    data = league.query_one("SELECT * FROM submissions WHERE id = ?", (row.record_id,))
-    if data is None:
-        text.append("\nThis submission is no longer in the league.\n", style="yellow")
-        return
+def _submission(files: SubmissionFiles, text: Text) -> None:
     _heading(text, "Model metadata")
-    _line(text, "action space", _action_space(_loads(data["action_space"])))
-    sensors = _loads(data["sensors"])
-    _line(text, "sensor", ", ".join(map(str, sensors)) if sensors else "-")
-    _line(text, "network", data["neural_network"] or "-")
-    _line(text, "algorithm", data["training_algorithm"] or "-")
+    _line(text, "action space", _action_space(files.action_space))
+    _line(text, "sensor", ", ".join(map(str, files.sensors)) if files.sensors else "-")
+    _line(text, "network", files.neural_network or "-")
+    _line(text, "algorithm", files.training_algorithm or "-")
 
     _heading(text, "Hyperparameters")
-    hyper = _loads(data["hyperparameters"])
-    if isinstance(hyper, dict) and hyper:
+    hyper = files.hyperparameters
+    if hyper:
         keys = [key for key in MAIN_HYPERPARAMETERS if key in hyper]
         keys += sorted(key for key in hyper if key not in MAIN_HYPERPARAMETERS)
         text.append("  " + ", ".join(f"{key} {hyper[key]}" for key in keys) + "\n")
@@ -85,8 +72,8 @@ def _submission(league: League, row: LeaderboardRow, text: Text) -> None:
         text.append("  not in the files\n", style="dim")
 
     _heading(text, "Training")
-    training = _loads(data["training"])
-    if isinstance(training, dict) and training:
+    training = files.training
+    if training:
         if "minutes" in training:
             _line(text, "time", f"{training['minutes']} min")
         if "episodes" in training:
@@ -98,34 +85,30 @@ def _submission(league: League, row: LeaderboardRow, text: Text) -> None:
     else:
         text.append("  not in the files\n", style="dim")
 
-    laps = league.query(
-        "SELECT * FROM submission_laps WHERE submission_id = ? ORDER BY number", (row.record_id,)
-    )
-    completed = sum(1 for lap in laps if lap["completed"])
+    trials = files.trials
+    completed = sum(1 for trial in trials if trial.completed)
     _heading(text, "Evaluation")
-    _line(text, "file", data["evaluation_file"])
-    _line(text, "trials", f"{len(laps)}, {completed} laps completed")
-    for lap in laps:
-        time = _seconds(lap["time_seconds"]) if lap["completed"] else f"{lap['completion']:g}%"
-        text.append(f"  trial {lap['number']:>2}  {time:>10}  off {lap['offtracks']}  ")
-        text.append(lap["status"] + "\n", style="green" if lap["completed"] else "yellow")
+    _line(text, "file", files.evaluation_file)
+    _line(text, "trials", f"{len(trials)}, {completed} laps completed")
+    for trial in trials:
+        time = _seconds(trial.time_seconds) if trial.completed else f"{trial.completion:g}%"
+        text.append(f"  trial {trial.number:>2}  {time:>10}  off {trial.offtracks}  ")
+        text.append(trial.status + "\n", style="green" if trial.completed else "yellow")
 
 
-def _race(league: League, row: LeaderboardRow, text: Text) -> None:
-    laps = league.query(
-        "SELECT * FROM race_laps WHERE race_id = ? ORDER BY number", (row.record_id,)
-    )
+def _race(breakdown: EntryBreakdown, text: Text) -> None:
+    laps = breakdown.race_laps
     _heading(text, f"Laps ({len(laps)})")
     if not laps:
         text.append("  no lap completed\n", style="dim")
     for lap in laps:
-        text.append(f"  lap {lap['number']:>2}  {_seconds(lap['time_seconds']):>10}")
-        text.append(f"  pen {lap['penalty_seconds']:g}  off {lap['offtracks']}  ")
-        text.append("✓\n" if lap["valid"] else "✗ too many off-tracks\n")
+        text.append(f"  lap {lap.number:>2}  {_seconds(lap.time_seconds):>10}")
+        text.append(f"  pen {lap.penalty_seconds:g}  off {lap.offtracks}  ")
+        text.append("✓\n" if lap.valid else "✗ too many off-tracks\n")
 
 
-def describe_entry(league: League, row: LeaderboardRow) -> Text:
-    """The detail of one leaderboard row (reads the database: call it in a worker)."""
+def render_entry(row: LeaderboardRow, breakdown: EntryBreakdown) -> Text:
+    """The detail text of one leaderboard row from what the league says it is made of."""
     text = Text()
     text.append(row.display_name, style="bold")
     text.append(f"  {row.model}\n")
@@ -135,11 +118,20 @@ def describe_entry(league: League, row: LeaderboardRow) -> Text:
         f"{row.valid_laps} laps · {row.offtracks} off-tracks\n",
         style="dim",
     )
-    if row.kind == "submission":
-        _submission(league, row, text)
+    if breakdown.has_trace:
+        text.append("v replays this race\n", style="italic")
+    if not breakdown.found:
+        text.append(f"\nThis {row.kind} is no longer in the league.\n", style="yellow")
+    elif breakdown.submission is not None:
+        _submission(breakdown.submission, text)
     else:
-        _race(league, row, text)
+        _race(breakdown, text)
     return text
+
+
+def describe_entry(league: League, row: LeaderboardRow) -> Text:
+    """The detail of one leaderboard row (reads the database: call it in a worker)."""
+    return render_entry(row, entry_breakdown(league, row.kind, row.record_id))
 
 
 class EntryDetail(Static):
