@@ -29,6 +29,7 @@ from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScr
 from racer_tui.screens.projector import ProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen
 from racer_tui.screens.races import RacesScreen
+from racer_tui.screens.sync import SyncScreen
 from racer_tui.screens.tracks import TracksScreen
 from racer_tui.screens.training import LeaveWhileTraining, TrainingScreen
 from racer_tui.screens.welcome import WelcomeScreen
@@ -50,6 +51,7 @@ OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
     ("Race view", RaceScreen),
     ("League nights", NightsScreen),
     ("Projector", ProjectorScreen),
+    ("Shared store (sync)", SyncScreen),
     ("League night dialogs", NewNightDialog),
     ("Add entrant dialog", AddEntrantDialog),
     ("Confirm dialog", ConfirmDialog),

@@ -13,7 +13,6 @@ printed as plain text: with print(), or in rich tables as Text cells, never as m
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -25,7 +24,7 @@ from rich.table import Table
 from rich.text import Text
 
 from league.errors import LeagueError
-from league.sync.errors import StoreUrlError, SyncError
+from league.sync.errors import SyncError
 from racer_tui.output import print_json, print_table
 from sim.garage.folder import ModelError
 
@@ -154,23 +153,9 @@ def _init(args: argparse.Namespace) -> int:
 
 
 def _set(league: League, args: argparse.Namespace) -> int:
-    from league.sync import parse_store_url
-    from league.sync.local import BUNDLES_SETTING, STORE_SETTING, set_setting
-    from league.sync.urls import S3Url
+    from league.sync.session import save_store
 
-    store = parse_store_url(args.url)
-    if isinstance(store, S3Url):
-        raise StoreUrlError(
-            f"{store} holds model bundles, not league records: give a dir: or dynamodb:// "
-            "store, and the s3:// URL with --bundles"
-        )
-    bundles = parse_store_url(args.bundles) if args.bundles else None
-    if bundles is not None and not isinstance(bundles, S3Url):
-        raise StoreUrlError(f"--bundles must be an s3://BUCKET/PREFIX URL, not {bundles}")
-    with league.transaction():
-        set_setting(league, STORE_SETTING, str(store))
-        if bundles is not None:
-            set_setting(league, BUNDLES_SETTING, str(bundles))
+    store, bundles = save_store(league, args.url, args.bundles)
     print(f"This league syncs with {store}" + (f", bundles in {bundles}" if bundles else "") + ".")
     print("Run `racer-tui sync` to push and pull.")
     return 0
@@ -179,40 +164,15 @@ def _set(league: League, args: argparse.Namespace) -> int:
 # --- sync ----------------------------------------------------------------------------------------
 
 
-def _saved_store(league: League, given: str | None) -> str:
-    from league.sync.local import STORE_SETTING, get_setting
-
-    url = given or get_setting(league, STORE_SETTING)
-    if url is None:
-        raise SyncError(
-            "this league has no store yet: run `racer-tui sync set STORE` (for example "
-            "dir:/mnt/league-share) or pass --store STORE"
-        )
-    return url
-
-
 def _sync(league: League, args: argparse.Namespace) -> int:
-    from league.sync import open_bundle_store, open_store
-    from league.sync.bundle_sync import push_bundles
-    from league.sync.engine import store_key, sync
-    from league.sync.local import BUNDLES_SETTING, get_setting
+    from league.sync.session import saved_store, sync_league
 
-    url = _saved_store(league, args.store)
-    key = store_key(url)
-    bundles_url = args.bundles or get_setting(league, BUNDLES_SETTING)
-    notes: list[str] = []
-    with open_store(url) as store, _progress(not args.json and sys.stderr.isatty()) as progress:
-        if bundles_url and not args.pull:
-            store.push([])  # the record store first: if it is down, nothing changes here
-            with open_bundle_store(bundles_url) as bundles:
-                sent = push_bundles(league, bundles)
-            notes.extend(sent.notes)
-            if sent.uploaded:
-                notes.append(f"uploaded {sent.uploaded} model bundle(s) to {bundles_url}")
-        summary = sync(
+    url = saved_store(league, args.store)
+    with _progress(not args.json and sys.stderr.isatty()) as progress:
+        summary, notes = sync_league(
             league,
-            store,
-            key,
+            url,
+            bundles_url=args.bundles,
             push_records=not args.pull,
             pull_records=not args.push,
             progress=progress,
@@ -246,30 +206,10 @@ def _progress(enabled: bool) -> Iterator[Progress | None]:
 
 
 def _print_summary(summary: SyncSummary, notes: list[str]) -> None:
-    conflicts = len(summary.conflicts)
-    print(
-        f"Synced with {summary.store}: pushed {summary.pushed}, pulled {summary.pulled}, "
-        f"skipped {summary.skipped}, {conflicts} conflict{'s' * (conflicts != 1)}, "
-        f"{len(summary.quarantined)} quarantined."
-    )
-    lines = [
-        *(f"conflict: {line}" for line in summary.conflicts),
-        *(f"quarantined: {line}" for line in summary.quarantined),
-        *(f"rename not shared: {line}" for line in summary.refused),
-        *(f"not pushed: {line}" for line in summary.damaged),
-        *notes,
-    ]
-    if summary.aliased:
-        lines.append(
-            f"{summary.aliased} record(s) made on two machines for one racer or track: the "
-            "first one made is kept everywhere (see `racer-tui sync status`)"
-        )
-    if summary.waiting:
-        lines.append(
-            f"{summary.waiting} pulled record(s) wait for records they refer to; they are "
-            "added when those arrive"
-        )
-    for line in lines:
+    from league.sync.status import summary_details, summary_headline
+
+    print(summary_headline(summary))
+    for line in summary_details(summary, notes):
         print(f"  {line}")  # plain print: store text is never markup
     if summary.conflicts or summary.quarantined:
         print("Both sides of each conflict are kept: see `racer-tui sync status`.")
@@ -279,49 +219,14 @@ def _print_summary(summary: SyncSummary, notes: list[str]) -> None:
 
 
 def _status(league: League, args: argparse.Namespace) -> int:
-    from league.sync import local
-    from league.sync.bundle_records import bundles
-    from league.sync.outgoing import count_unsent
+    from league.sync.status import sync_status
 
-    store = local.get_setting(league, local.STORE_SETTING)
-    key = _key_or_none(store)
-    document: dict[str, Any] = {
-        "store": key,
-        "bundles": local.get_setting(league, local.BUNDLES_SETTING),
-        "runs": {},
-        "in_store": 0,
-        "to_push": None,
-        "conflicts": [row.__dict__ for row in local.conflicts(league)],
-        "quarantined": [row.__dict__ for row in local.quarantined(league)],
-        "waiting": [row.__dict__ for row in local.pending(league)],
-        "aliases": [
-            dict(zip(("kind", "record_id", "canonical_id"), row, strict=True))
-            for row in league.query(
-                "SELECT kind, record_id, canonical_id FROM sync_aliases ORDER BY kind, record_id"
-            )
-        ],
-        "bundles_known": [info.__dict__ for info in bundles(league)],
-    }
-    if key is not None:
-        document["runs"] = {run.direction: run.__dict__ for run in local.runs(league, key)}
-        document["in_store"] = local.in_store_count(league, key)
-        document["to_push"] = count_unsent(league, key)
+    document = sync_status(league).to_json()
     if getattr(args, "json", False):
         print_json(document)
         return 0
     _print_status(document)
     return 0
-
-
-def _key_or_none(store: str | None) -> str | None:
-    if store is None:
-        return None
-    from league.sync.engine import store_key
-
-    try:
-        return store_key(store)
-    except StoreUrlError:
-        return store
 
 
 def _print_status(document: dict[str, Any]) -> None:
@@ -361,6 +266,8 @@ def _print_status(document: dict[str, Any]) -> None:
 
 
 def _conflict_table(rows: list[dict[str, Any]]) -> None:
+    from league.sync.status import differences, side_label
+
     if not rows:
         print("Conflicts: none.")
         return
@@ -368,53 +275,14 @@ def _conflict_table(rows: list[dict[str, Any]]) -> None:
     for title in ("record", "what", "here", "in the store"):
         table.add_column(title, overflow="fold")
     for row in rows:
-        here, there = _differences(row["local_body"], row["remote_body"])
+        here, there = differences(row["local_body"], row["remote_body"])
         table.add_row(
             Text(f"{row['kind']} {row['record_id']}"),
             Text(row["detail"]),
-            Text(_side(row["local_hash"], row["local_version"], here)),
-            Text(_side(row["remote_hash"], row["remote_version"], there)),
+            Text(side_label(row["local_hash"], row["local_version"], here)),
+            Text(side_label(row["remote_hash"], row["remote_version"], there)),
         )
     print_table(table)
-
-
-def _side(digest: str | None, version: int, content: str) -> str:
-    label = (digest or "unknown")[:12] + (f" v{version}" if version else "")
-    return f"{label}: {content}"
-
-
-def _differences(here: str | None, there: str | None, limit: int = 3) -> tuple[str, str]:
-    """What differs between the two sides' bodies, field by field (a few fields at most)."""
-    if here is None or there is None:
-        missing = "content not pulled yet"
-        return (here or missing)[:_EXCERPT], (there or missing)[:_EXCERPT]
-    ours, theirs = _flat(json.loads(here)), _flat(json.loads(there))
-    fields = [
-        name for name in sorted(ours.keys() | theirs.keys()) if ours.get(name) != theirs.get(name)
-    ]
-    shown = fields[:limit]
-    more = f" (+{len(fields) - limit} more)" if len(fields) > limit else ""
-
-    def side(values: dict[str, Any]) -> str:
-        return (
-            "; ".join(f"{name}={json.dumps(values.get(name))[:_EXCERPT]}" for name in shown) + more
-        )
-
-    return side(ours), side(theirs)
-
-
-def _flat(value: Any, prefix: str = "") -> dict[str, Any]:
-    if isinstance(value, dict):
-        out: dict[str, Any] = {}
-        for key, item in value.items():
-            out.update(_flat(item, f"{prefix}.{key}" if prefix else str(key)))
-        return out
-    if isinstance(value, list):
-        out = {}
-        for index, item in enumerate(value):
-            out.update(_flat(item, f"{prefix}[{index + 1}]"))
-        return out
-    return {prefix: value}
 
 
 def _quarantine_table(rows: list[dict[str, Any]]) -> None:

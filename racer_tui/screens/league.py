@@ -35,9 +35,12 @@ from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.nights import NightsScreen
 from racer_tui.screens.projector import ProjectorScreen
+from racer_tui.screens.races import replay_recorded_race
+from racer_tui.screens.sync import SyncScreen
 from racer_tui.widgets.board_filters import BoardFilters, BoardQuery, FilterOptions, board_rows
 from racer_tui.widgets.entry_detail import EntryDetail, describe_entry
 from racer_tui.widgets.section_header import SectionHeader
+from racer_tui.widgets.sync_status import SyncStatusLine
 from racer_tui.widgets.table_fill import fill_table
 from sim.atomic import write_text_atomic
 
@@ -119,7 +122,9 @@ class LeagueScreen(RacerScreen[None]):
         Binding("x", "export", "Export", tooltip="Write the table as CSV, JSON or Markdown"),
         Binding("n", "nights", "Nights", tooltip="Run a league night: entrants, heats, standings"),
         Binding("p", "projector", "Projector", tooltip="Full-screen leaderboard in large type"),
+        Binding("y", "sync", "Sync", tooltip="The shared store: sync, conflicts, quarantine"),
         Binding("ctrl+r", "reload", "Reload", tooltip="Read the league again", show=False),
+        Binding("v", "replay_entry", "Replay", tooltip="Replay the entry's race", show=False),
     ]
     AUTO_FOCUS = "#board"  # the keys (s, r, arrows) act on the table from the start
     DEFAULT_CSS = """
@@ -152,17 +157,20 @@ class LeagueScreen(RacerScreen[None]):
             yield DataTable(id="board", cursor_type="row", zebra_stripes=True)
             with VerticalScroll(id="entry-scroll"):
                 yield EntryDetail(id="entry-detail")
+        yield SyncStatusLine(id="sync-status")
         yield Footer()
 
     def on_mount(self) -> None:
         self.reload()
+        self.query_one(SyncStatusLine).read(self.db_path)
 
     def on_resize(self) -> None:
         self.set_class(self.size.width < NARROW, "-narrow")
 
     def on_screen_resume(self) -> None:
-        if self.loaded:  # a night may have run heats since
+        if self.loaded:  # a night may have run heats since, or a sync pulled results
             self.reload()
+            self.query_one(SyncStatusLine).read(self.db_path)
 
     # --- loading -------------------------------------------------------------------------
 
@@ -172,6 +180,7 @@ class LeagueScreen(RacerScreen[None]):
 
     def action_reload(self) -> None:
         self.reload()
+        self.query_one(SyncStatusLine).read(self.db_path)
 
     @on(BoardFilters.Changed)
     def _filters_changed(self) -> None:
@@ -325,3 +334,17 @@ class LeagueScreen(RacerScreen[None]):
 
     def action_nights(self) -> None:
         self.app.push_screen(NightsScreen(db_path=self.db_path))
+
+    def action_sync(self) -> None:
+        self.app.push_screen(SyncScreen(db_path=self.db_path))
+
+    def action_replay_entry(self) -> None:
+        row = self.highlighted
+        if row is None or row.kind != "race":
+            self.notify(
+                "Only a race can be replayed; this entry is a submission (its evaluation has "
+                "no trace).",
+                severity="warning",
+            )
+            return
+        replay_recorded_race(self, row.record_id, self.db_path)

@@ -1,0 +1,98 @@
+"""A league's store setting and one sync run, as every front end starts them: the CLI
+(`racer-tui sync set`, `racer-tui sync`) and the app's Sync screen call these, so both
+accept the same URLs, say the same sentences and push the same things.
+
+    url = saved_store(league)                 # or SyncError: how to set one
+    summary, notes = sync_league(league, url, progress=...)
+"""
+
+from __future__ import annotations
+
+from league.store import League
+from league.sync.engine import Progress, SyncSummary, store_key, sync
+from league.sync.errors import StoreUrlError, SyncError
+from league.sync.local import BUNDLES_SETTING, STORE_SETTING, get_setting, set_setting
+from league.sync.urls import DirUrl, DynamoDbUrl, S3Url, parse_store_url
+
+NO_STORE = (
+    "this league has no store yet: run `racer-tui sync set STORE` (for example "
+    "dir:/mnt/league-share) or pass --store STORE"
+)
+
+
+def check_record_store_url(url: str) -> DirUrl | DynamoDbUrl:
+    """A URL a league can sync its records with; StoreUrlError (one sentence) otherwise."""
+    store = parse_store_url(url)
+    if isinstance(store, S3Url):
+        raise StoreUrlError(
+            f"{store} holds model bundles, not league records: give a dir: or dynamodb:// "
+            "store, and the s3:// URL with --bundles"
+        )
+    return store
+
+
+def check_bundle_store_url(url: str) -> S3Url:
+    bundles = parse_store_url(url)
+    if not isinstance(bundles, S3Url):
+        raise StoreUrlError(f"--bundles must be an s3://BUCKET/PREFIX URL, not {bundles}")
+    return bundles
+
+
+def save_store(
+    league: League, url: str, bundles_url: str | None = None
+) -> tuple[DirUrl | DynamoDbUrl, S3Url | None]:
+    """Check and save the league's store (and bundle store) in one transaction."""
+    store = check_record_store_url(url)
+    bundles = check_bundle_store_url(bundles_url) if bundles_url else None
+    with league.transaction():
+        set_setting(league, STORE_SETTING, str(store))
+        if bundles is not None:
+            set_setting(league, BUNDLES_SETTING, str(bundles))
+    return store, bundles
+
+
+def saved_store(league: League, given: str | None = None) -> str:
+    """`given`, or the league's saved store; SyncError saying how to set one otherwise."""
+    url = given or get_setting(league, STORE_SETTING)
+    if url is None:
+        raise SyncError(NO_STORE)
+    return url
+
+
+def sync_league(
+    league: League,
+    url: str,
+    *,
+    bundles_url: str | None = None,
+    push_records: bool = True,
+    pull_records: bool = True,
+    progress: Progress | None = None,
+) -> tuple[SyncSummary, list[str]]:
+    """Push the league's model bundles (when a bundle store is set) and records, then pull.
+
+    Returns the summary and notes (one sentence each) about bundles. A store that is down
+    raises its SyncError before anything here changes."""
+    from league.sync.stores import open_bundle_store, open_store
+
+    key = store_key(url)
+    bundles_url = bundles_url or get_setting(league, BUNDLES_SETTING)
+    notes: list[str] = []
+    with open_store(url) as store:
+        if bundles_url and push_records:
+            store.push([])  # the record store first: if it is down, nothing changes here
+            from league.sync.bundle_sync import push_bundles
+
+            with open_bundle_store(bundles_url) as bundle_store:
+                sent = push_bundles(league, bundle_store)
+            notes.extend(sent.notes)
+            if sent.uploaded:
+                notes.append(f"uploaded {sent.uploaded} model bundle(s) to {bundles_url}")
+        summary = sync(
+            league,
+            store,
+            key,
+            push_records=push_records,
+            pull_records=pull_records,
+            progress=progress,
+        )
+    return summary, notes

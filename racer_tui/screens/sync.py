@@ -1,0 +1,374 @@
+"""Sync: the league's shared store from the app. Its URL (checked by the sync library's
+parser and saved as the league's setting), a Sync action that pushes this league's new
+records and pulls everyone else's with a progress bar, what the last sync did, and what
+sync set aside: conflicts (both sides kept) and quarantined records (not added).
+
+The work is league.sync's (session.py runs a sync exactly as `racer-tui sync` does,
+status.py reads what it set aside); this screen calls it in thread workers, each with its
+own database connection. Everything from the store is shown as plain text. A store that
+is down is one notification with the library's sentence, and nothing local changes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import ClassVar
+
+from rich.text import Text
+from textual import on, work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.message import Message
+from textual.widgets import Button, DataTable, Footer, Input, Label, ProgressBar, Static
+from textual.worker import Worker, WorkerState
+
+from league.errors import LeagueError
+from league.store import open_league
+from league.sync.engine import SyncSummary
+from league.sync.errors import StoreUrlError, SyncError
+from league.sync.session import check_record_store_url, save_store, sync_league
+from league.sync.status import (
+    SyncStatus,
+    conflict_view,
+    summary_details,
+    summary_headline,
+    sync_status,
+)
+from racer_tui.screens.base import RacerScreen, notify_worker_failure
+from racer_tui.screens.dialogs import show_problem
+from racer_tui.widgets.section_header import SectionHeader
+from racer_tui.widgets.sync_status import local_time
+from racer_tui.widgets.table_fill import fill_table
+
+CONFLICT_COLUMNS = ("kind", "id", "what differs", "here", "in the store")
+QUARANTINE_COLUMNS = ("kind", "id", "reason", "where")
+CELL = 48  # characters of one side of a conflict or a reason in a cell; the rest is cut
+URL_HINT = "dir:PATH (a shared folder) or dynamodb://TABLE?region=R"
+
+
+def sentence(text: str) -> str:
+    """A library message as a sentence: capital first, full stop last."""
+    text = text[:1].upper() + text[1:]
+    return text if text.endswith((".", "!", "?")) else text + "."
+
+
+def cut(text: str, limit: int = CELL) -> Text:
+    """A cell of untrusted text: plain, one line, at most `limit` characters."""
+    line = " ".join(text.split())
+    return Text(line if len(line) <= limit else line[: limit - 1] + "…")
+
+
+# --- messages from the workers --------------------------------------------------------------
+
+
+class SyncStatusRead(Message):
+    def __init__(self, status: SyncStatus) -> None:
+        super().__init__()
+        self.status = status
+
+
+class StoreSaved(Message):
+    def __init__(self, url: str) -> None:
+        super().__init__()
+        self.url = url
+
+
+class SyncFinished(Message):
+    def __init__(self, summary: SyncSummary, notes: list[str]) -> None:
+        super().__init__()
+        self.summary = summary
+        self.notes = notes
+
+
+class SyncScreen(RacerScreen[bool]):
+    """The shared store of the league at `db_path` (None: the data folder's league).
+    Dismissed with True when a sync pulled records, so the leaderboard reads them."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("s", "sync", "Sync now", tooltip="Push this league's new records, then pull"),
+        Binding("e", "edit_store", "Edit store", tooltip="Change the shared store's URL"),
+        Binding("escape", "leave", "Back", tooltip="Leave the field, then back to the league"),
+        Binding("ctrl+r", "reload", "Reload", tooltip="Read the sync status again", show=False),
+    ]
+    AUTO_FOCUS = "#sync-now"
+
+    def __init__(self, *, db_path: Path | None = None) -> None:
+        super().__init__()
+        self.db_path = db_path
+        self.status: SyncStatus | None = None
+        self.syncing = False
+        self.pulled = 0  # records pulled while this screen was open
+        self._shown_progress: tuple[str, int] | None = None
+        self.last_summary: Text | None = None  # what the sync run here did
+
+    def compose(self) -> ComposeResult:
+        yield SectionHeader("league", "shared store")
+        with Vertical(id="sync-body"):
+            with Horizontal(id="sync-store-row"):
+                yield Label("Store", id="sync-store-label")
+                yield Input(placeholder=URL_HINT, id="sync-url")
+                yield Button("Save", id="sync-save")
+                yield Button("Sync now (s)", id="sync-now", variant="primary")
+            yield Static("", id="problem", classes="field-problem")
+            with Horizontal(id="sync-run-row"):
+                yield ProgressBar(id="sync-progress", show_eta=False)
+                yield Static("", id="sync-stage")
+            yield Static("", id="sync-summary")
+            yield Label("Conflicts", id="sync-conflicts-title", classes="field-label")
+            yield DataTable(id="sync-conflicts", cursor_type="row", zebra_stripes=True)
+            yield Label("Quarantined", id="sync-quarantine-title", classes="field-label")
+            yield DataTable(id="sync-quarantine", cursor_type="row", zebra_stripes=True)
+        yield Footer()
+
+    def on_mount(self) -> None:
+        self.action_reload()
+
+    # --- reading the status ------------------------------------------------------------
+
+    def action_reload(self) -> None:
+        self._read_status()
+
+    @work(thread=True, exclusive=True, group="sync-status", exit_on_error=False)
+    def _read_status(self) -> None:
+        with open_league(self.db_path) as league:
+            status = sync_status(league)
+        self.post_message(SyncStatusRead(status))
+
+    def on_sync_status_read(self, message: SyncStatusRead) -> None:
+        first = self.status is None
+        self.status = message.status
+        overview = message.status.overview
+        url = self.query_one("#sync-url", Input)
+        if first:
+            url.value = overview.store or ""
+            if overview.store is None:
+                url.focus()
+        if not self.syncing:
+            self.query_one("#sync-summary", Static).update(
+                self.last_summary or self._last_runs_text()
+            )
+        self._fill_tables(message.status)
+
+    def _last_runs_text(self) -> Text:
+        if self.status is None or self.status.overview.store is None:
+            return Text(
+                "No shared store yet. Type the folder or table your league shares (ask the "
+                "league host), for example dir:/mnt/league-share, and press Enter."
+            )
+        overview = self.status.overview
+        lines = []
+        for direction in ("push", "pull"):
+            run = overview.runs.get(direction)
+            if run is None:
+                lines.append(f"Last {direction}: never")
+            else:
+                when = local_time(run.finished_at)
+                lines.append(
+                    f"Last {direction}: {when} ({overview.moved(direction)} {direction}ed)"
+                )
+        lines.append(
+            f"{overview.to_push} new here, not pushed yet; the store holds {overview.in_store} "
+            "of this league's records."
+        )
+        return Text("\n".join(lines))
+
+    def _fill_tables(self, status: SyncStatus) -> None:
+        views = [conflict_view(row) for row in status.conflicts]
+        fill_table(
+            self.query_one("#sync-conflicts", DataTable),
+            CONFLICT_COLUMNS,
+            [
+                [
+                    Text(view.kind),
+                    Text(view.record_id),
+                    cut(view.what),
+                    cut(view.here),
+                    cut(view.there),
+                ]
+                for view in views
+            ],
+        )
+        fill_table(
+            self.query_one("#sync-quarantine", DataTable),
+            QUARANTINE_COLUMNS,
+            [
+                [
+                    Text(row.kind or "?"),
+                    Text(row.record_id or "?"),
+                    cut(row.reason, 60),
+                    cut(row.location, 60),
+                ]
+                for row in status.quarantined
+            ],
+        )
+        conflicts, quarantined = len(status.conflicts), len(status.quarantined)
+        self.query_one("#sync-conflicts-title", Label).update(
+            Text(
+                f"Conflicts ({conflicts}): both sides kept, this league shows its own"
+                if conflicts
+                else "Conflicts: none"
+            )
+        )
+        self.query_one("#sync-quarantine-title", Label).update(
+            Text(
+                f"Quarantined ({quarantined}): failed the checks, not added"
+                if quarantined
+                else "Quarantined: none"
+            )
+        )
+        self.set_class(not conflicts, "-no-conflicts")
+        self.set_class(not quarantined, "-no-quarantine")
+
+    # --- the store's URL ---------------------------------------------------------------
+
+    def action_edit_store(self) -> None:
+        self.query_one("#sync-url", Input).focus()
+
+    def _checked_url(self) -> str | None:
+        """The typed URL in its canonical form, or None (the problem is shown)."""
+        field = self.query_one("#sync-url", Input)
+        text = field.value.strip()
+        problem = ""
+        url = None
+        if not text:
+            problem = f"Type the shared store's URL first: {URL_HINT}."
+        else:
+            try:
+                url = str(check_record_store_url(text))
+            except StoreUrlError as error:
+                problem = sentence(str(error))
+        show_problem(self.query_one("#problem", Static), problem)
+        field.set_class(bool(problem), "-problem")
+        return url
+
+    @on(Input.Submitted, "#sync-url")
+    @on(Button.Pressed, "#sync-save")
+    def _save_url(self) -> None:
+        url = self._checked_url()
+        if url is not None:
+            self._save(url)
+
+    @work(thread=True, exclusive=True, group="sync-save", exit_on_error=False)
+    def _save(self, url: str) -> None:
+        with open_league(self.db_path) as league:
+            save_store(league, url)
+        self.post_message(StoreSaved(url))
+
+    def on_store_saved(self, message: StoreSaved) -> None:
+        self.query_one("#sync-url", Input).value = message.url
+        self.query_one("#sync-now", Button).focus()
+        self.notify(
+            f"This league syncs with {message.url}. Press s to sync now.",
+            markup=False,
+        )
+        self.action_reload()
+
+    # --- syncing -----------------------------------------------------------------------
+
+    @on(Button.Pressed, "#sync-now")
+    def _sync_pressed(self) -> None:
+        self.action_sync()
+
+    def action_sync(self) -> None:
+        if self.syncing:
+            self.notify("A sync is already running.", severity="warning")
+            return
+        url = self._checked_url()
+        if url is None:
+            self.query_one("#sync-url", Input).focus()
+            return
+        self.syncing = True
+        self._shown_progress = None
+        self.query_one("#sync-now", Button).disabled = True
+        self.query_one("#sync-progress", ProgressBar).update(total=None, progress=0)
+        self.set_class(True, "-syncing")
+        self._stage(Text(f"Reaching {url}…"))
+        saved = self.status.overview.store if self.status is not None else None
+        self._sync(url, save=url != saved)
+
+    @work(thread=True, exclusive=True, group="sync-run", exit_on_error=False)
+    def _sync(self, url: str, save: bool) -> None:
+        with open_league(self.db_path) as league:
+            if save:
+                save_store(league, url)
+            summary, notes = sync_league(league, url, progress=self._progress_from_thread)
+        self.post_message(SyncFinished(summary, notes))
+
+    def _progress_from_thread(self, direction: str, done: int, total: int | None) -> None:
+        # One screen update per percent (or per pulled page): a big push reports every
+        # record, and each call waits for the UI thread.
+        step = done * 100 // total if total else done
+        if (direction, step) == self._shown_progress:
+            return
+        self._shown_progress = (direction, step)
+        self.app.call_from_thread(self._show_progress, direction, done, total)
+
+    def _show_progress(self, direction: str, done: int, total: int | None) -> None:
+        if not self.is_attached:
+            return
+        self.query_one("#sync-progress", ProgressBar).update(total=total, progress=done)
+        of = f"/{total}" if total is not None else ""
+        self._stage(Text(f"{direction}ing {done}{of} records"))
+
+    def _stage(self, text: Text) -> None:
+        self.query_one("#sync-stage", Static).update(text)
+
+    def on_sync_finished(self, message: SyncFinished) -> None:
+        summary = message.summary
+        self._sync_ended()
+        self.pulled += summary.pulled
+        bar = self.query_one("#sync-progress", ProgressBar)
+        bar.update(total=1, progress=1)
+        self._stage(Text("done"))
+        # Conflicts and quarantined records are in the tables below, with their reasons.
+        lines = [summary_headline(summary), *summary_details(summary, message.notes, items=False)]
+        self.last_summary = Text("\n".join(lines))  # text from the store: plain
+        self.query_one("#sync-summary", Static).update(self.last_summary)
+        problems = bool(summary.conflicts or summary.quarantined)
+        self.notify(
+            summary_headline(summary),
+            severity="warning" if problems else "information",
+            markup=False,
+        )
+        self.action_reload()
+
+    def _sync_ended(self) -> None:
+        self.syncing = False
+        self.set_class(False, "-syncing")
+        self.add_class("-synced")  # the progress row stays, saying how it ended
+        button = self.query_one("#sync-now", Button)
+        button.disabled = False
+        if self.focused is None or isinstance(self.focused, Input):
+            button.focus()  # disabling it moved the focus; Esc and s act on the screen again
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        event.prevent_default()  # the base screen's handler would report the error again
+        worker = event.worker
+        if worker.group == "sync-run" and worker.state in (
+            WorkerState.ERROR,
+            WorkerState.CANCELLED,
+        ):
+            self._sync_ended()
+            self._stage(Text("not synced", style="bold"))
+        error = worker.error
+        if worker.state is WorkerState.ERROR and isinstance(error, SyncError | LeagueError):
+            # The library's sentence says what is wrong and what to do: shown as it is.
+            self.notify(sentence(str(error)), severity="error", timeout=15, markup=False)
+            return
+        notify_worker_failure(self, worker)
+
+    # --- leaving -----------------------------------------------------------------------
+
+    def action_leave(self) -> None:
+        if isinstance(self.focused, Input):
+            self.query_one("#sync-now", Button).focus()
+            return
+        if self.syncing:
+            self.notify(
+                "A sync is running: wait for its summary, then leave (stopping halfway is "
+                "safe but would need another sync).",
+                severity="warning",
+            )
+            return
+        self.dismiss(self.pulled > 0)

@@ -1,0 +1,222 @@
+"""The Sync screen, end to end through a real shared folder (`dir:` store) in tmp_path:
+two racers on separate "machines" (separate data folders) sync from the app until one sees
+the other's result, a store that is down, a malformed record in the store, a bad URL, and
+a conflict with both sides shown."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+from textual.pilot import Pilot
+from textual.widgets import DataTable, Input
+
+from league.races import record_race
+from league.store import open_league
+from league.sync import local, open_store
+from league.sync.session import save_store
+from racer_tui.app import RacerTuiApp, create_app
+from racer_tui.screens.league import LeagueScreen
+from racer_tui.screens.sync import SyncScreen
+from racer_tui.widgets.sync_status import NO_STORE, SyncStatusLine
+from sim.home import data_home
+from tests.league.helpers import race_result
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
+
+MARKUP_NAME = "[bold red]x"
+BAD_ID = "01M7YFZPX152TMAJ036HERQMZZ"
+
+
+@pytest.fixture
+def store_url(tmp_path: Path) -> str:
+    url = f"dir:{tmp_path / 'league-share'}"
+    with open_store(url) as store:
+        store.init()
+    return url
+
+
+def on_machine(monkeypatch: pytest.MonkeyPatch, home: Path) -> None:
+    """Switch the data folder: each racer's machine has its own league."""
+    monkeypatch.setenv("RACER_TUI_HOME", str(home))
+    data_home().mkdir(parents=True, exist_ok=True)
+
+
+def record(racer: str, laps: list[float]) -> None:
+    with open_league() as league:
+        record_race(league, race_result(racer, laps, model="the-car"))
+
+
+def database_dump() -> list[str]:
+    with open_league() as league:
+        return list(league.conn.iterdump())
+
+
+async def open_sync(pilot: Pilot[int]) -> SyncScreen:
+    await settle(pilot)
+    await pilot.press("y")
+    await settle(pilot)
+    screen = pilot.app.screen
+    assert isinstance(screen, SyncScreen)
+    return screen
+
+
+async def set_store(pilot: Pilot[int], screen: SyncScreen, url: str) -> None:
+    """Type the URL (set directly: typing a long path key by key is slow) and press Enter."""
+    field = screen.query_one("#sync-url", Input)
+    field.focus()
+    field.value = url
+    await pilot.press("enter")
+    await settle(pilot)
+
+
+def summary(screen: SyncScreen) -> str:
+    """What the last sync did, as shown under the store (unwrapped)."""
+    return screen.last_summary.plain if screen.last_summary is not None else ""
+
+
+def status_line(app: RacerTuiApp) -> str:
+    return painted(app.screen.query_one(SyncStatusLine))
+
+
+def board_racers(app: RacerTuiApp) -> list[str]:
+    screen = app.screen
+    assert isinstance(screen, LeagueScreen)
+    return [row.racer for row in screen.rows]
+
+
+async def test_two_racers_sync_from_the_app_and_see_each_others_results(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, store_url: str
+) -> None:
+    # Racer A: records a race, sets the store from the Sync screen and syncs.
+    on_machine(monkeypatch, tmp_path / "ada-laptop")
+    record(MARKUP_NAME, [11.0, 10.5])
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        notes = Notifications(app)
+        await settle(pilot)
+        assert NO_STORE in status_line(app)
+        screen = await open_sync(pilot)
+        await set_store(pilot, screen, store_url)
+        assert f"This league syncs with {store_url}" in notes.text()
+        await pilot.press("s")
+        await settle(pilot)
+        assert f"Synced with {store_url}: pushed 3, pulled 0" in summary(screen)
+        assert "0 conflicts, 0 quarantined" in summary(screen)
+        await pilot.press("escape")
+        await settle(pilot)
+        line = status_line(app)
+        assert "⇅ dir:/" in line and "0 to push" in line and "(↑3 ↓0)" in line
+
+    # Racer B: an empty league on another machine syncs and sees A's result.
+    on_machine(monkeypatch, tmp_path / "bob-desktop")
+    record("bob", [12.0])
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        await settle(pilot)
+        assert board_racers(app) == ["bob"]
+        screen = await open_sync(pilot)
+        assert screen.focused is screen.query_one("#sync-url")  # no store yet: type one
+        await set_store(pilot, screen, store_url)
+        await pilot.press("s")
+        await settle(pilot)
+        assert "pulled 3" in summary(screen)
+        await pilot.press("escape")
+        await settle(pilot)
+        assert sorted(board_racers(app)) == sorted([MARKUP_NAME, "bob"])
+        assert MARKUP_NAME in painted(app.screen.query_one("#board"))  # literally, not markup
+        assert "0 to push" in status_line(app)  # bob's race went to the store too
+
+
+async def test_a_store_that_is_down_is_one_notification_and_changes_nothing(
+    tmp_path: Path,
+) -> None:
+    data_home()
+    record("ana", [11.0])
+    with open_league() as league:
+        save_store(league, f"dir:{tmp_path / 'usb-stick-not-plugged-in' / 'league'}")
+    before = database_dump()
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        notes = Notifications(app)
+        screen = await open_sync(pilot)
+        await pilot.press("s")
+        await settle(pilot)
+        errors = notes.text("error")
+        assert "is not there" in errors and "Traceback" not in errors
+        assert errors.count("\n") == 0  # one sentence
+        assert "not synced" in painted(screen.query_one("#sync-stage"))
+        assert not screen.syncing  # the action can be tried again
+    assert database_dump() == before
+
+
+async def test_a_malformed_record_in_the_store_is_listed_as_quarantined(
+    store_url: str,
+) -> None:
+    folder = Path(store_url.removeprefix("dir:")) / "records" / "racer" / "Z"
+    folder.mkdir(parents=True)
+    junk = folder / f"{BAD_ID}.json"
+    junk.write_text(f'{{"name": "{MARKUP_NAME}", "oops"')
+    os.utime(junk, (1_700_000_000, 1_700_000_000))  # old enough not to be a write in flight
+    data_home()
+    record("ana", [11.0])
+    with open_league() as league:
+        save_store(league, store_url)
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 36)) as pilot:
+        screen = await open_sync(pilot)
+        await pilot.press("s")
+        await settle(pilot)
+        assert "1 quarantined" in summary(screen)
+        table = screen.query_one("#sync-quarantine", DataTable)
+        assert table.row_count == 1
+        shown = painted(table)
+        assert BAD_ID in shown and "racer" in shown
+        assert "Quarantined (1)" in painted(screen.query_one("#sync-quarantine-title"))
+        await pilot.press("escape")
+        await settle(pilot)
+        assert "1 quarantined" in status_line(app)
+
+
+async def test_a_bad_url_is_refused_with_a_sentence_and_not_saved() -> None:
+    data_home()
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        screen = await open_sync(pilot)
+        await set_store(pilot, screen, "ftp://league-share")
+        problem = painted(screen.query_one("#problem"))
+        assert "is not a store URL" in problem and "dir:PATH" in problem
+        await set_store(pilot, screen, "s3://bucket/bundles")
+        assert "holds model bundles" in painted(screen.query_one("#problem"))
+        await pilot.press("escape", "s")  # leave the field; Sync checks the URL again
+        await settle(pilot)
+        assert "holds model bundles" in painted(screen.query_one("#problem"))
+    with open_league() as league:
+        assert local.get_setting(league, local.STORE_SETTING) is None
+
+
+async def test_conflicts_show_what_differs_and_both_sides() -> None:
+    data_home()
+    with open_league() as league:
+        save_store(league, "dir:/media/league-share")
+        with league.transaction():
+            local.add_conflict(
+                league,
+                "dir:/media/league-share",
+                "racer",
+                BAD_ID,
+                "racer differs",
+                local=("a" * 64, 0, '{"name":"ada"}'),
+                remote=("b" * 64, 0, f'{{"name":"{MARKUP_NAME}"}}'),
+            )
+    app = create_app(start="league")
+    async with app.run_test(size=(140, 36)) as pilot:
+        await settle(pilot)
+        assert "1 conflict" in status_line(app)
+        screen = await open_sync(pilot)
+        shown = painted(screen.query_one("#sync-conflicts", DataTable))
+        assert BAD_ID in shown and "name" in shown
+        assert 'name="ada"' in shown and f'name="{MARKUP_NAME}"' in shown
+        # The action is in the command palette, with the other League keys.
+        titles = [command.text for command in app.palette_commands(app.screen)]
+        assert "League: Sync" in titles and "This screen: Sync now" in titles
