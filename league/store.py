@@ -25,17 +25,16 @@ from typing import Any
 import sqlite_utils
 
 from league.errors import LeagueError
-from sim.home import data_home
+from sim.home import league_db_file
 from sim.ids import content_hash, new_id
 
-DB_FILE = "league.db"
 BUSY_TIMEOUT_MS = 10_000
 
 __all__ = ["League", "LeagueError", "default_db_path", "now_iso", "open_league", "record_body"]
 
 
 def default_db_path() -> Path:
-    return data_home() / DB_FILE
+    return league_db_file()
 
 
 def now_iso() -> str:
@@ -129,8 +128,9 @@ def record_body(
 def open_league(db_path: Path | None = None) -> League:
     """Open (creating and migrating as needed) the league database at `db_path`.
 
-    The default is `data_home()/league.db`. Raises LeagueError for a file that is not a
-    league database or was written by a newer racer-tui; such files are left untouched.
+    The default is `default_db_path()`: league.db in the data folder, or RACER_TUI_LEAGUE.
+    Raises LeagueError for a file that is not a league database or was written by a newer
+    racer-tui; such files are left untouched.
     """
     from league.migrations import check_version, migrate
 

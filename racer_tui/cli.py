@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 from typing import Any
 
 from sim.action_space import ActionSpaceError
+from sim.home import LEAGUE_ENV
 from sim.observations import SensorError
 from sim.track import TrackError
 
@@ -54,6 +56,13 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Headless time trials: racer-tui --race MODEL [MODEL ...] --track TRACK "
         "(see racer-tui --race --help).",
     )
+    parser.add_argument(
+        "--db",
+        dest="league_db",
+        metavar="FILE",
+        help="the league database for the app and every command (default: league.db in the "
+        f"data folder, or ${LEAGUE_ENV}); a command's own --db still wins",
+    )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in _command_modules():
         module.register(commands)
@@ -74,6 +83,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         return race_main(arguments)
     args = build_parser().parse_args(arguments)
+    if args.league_db:
+        # Through the environment, so the app's screens, the league commands and any child
+        # process all open the same file without passing it along.
+        os.environ[LEAGUE_ENV] = args.league_db
     if args.command is None:
         from racer_tui.app import run_app
 

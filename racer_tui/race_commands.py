@@ -85,6 +85,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=int, default=0, help="recorded with each result")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
     parser.add_argument("--record", action="store_true", help="store results in the league")
+    parser.add_argument("--db", type=Path, metavar="FILE", help="the league database for --record")
     parser.add_argument(
         "--trace-dir", type=Path, help="write each race's sim-trace CSV into this folder"
     )
@@ -144,7 +145,7 @@ def _run(args: argparse.Namespace) -> int:
         if not args.json:
             console.print(race_table(result, track))
             console.print(Text(race_summary(result)))
-    recorded = _record(results) if args.record else []
+    recorded = _record(results, args.db) if args.record else []
     from league.ranking import rank
 
     standings = rank(results)
@@ -269,7 +270,7 @@ def _write_trace(result: RaceResult, folder: Path) -> Path:
     return path
 
 
-def _record(results: Sequence[RaceResult]) -> list[str]:
+def _record(results: Sequence[RaceResult], db_path: Path | None) -> list[str]:
     try:
         from league.errors import LeagueError
         from league.races import record_race
@@ -279,7 +280,7 @@ def _record(results: Sequence[RaceResult]) -> list[str]:
             "--record is not available: this racer-tui has no league database yet."
         ) from None
     try:
-        with open_league() as league:
+        with open_league(db_path) as league:
             return [record_race(league, result) for result in results]
     except LeagueError as error:
         raise RaceSetupError(f"cannot record the races: {error}") from None

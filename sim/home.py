@@ -12,6 +12,10 @@ from pathlib import Path
 import platformdirs
 
 HOME_ENV = "RACER_TUI_HOME"
+# The league database file, when it is not `league.db` in the data directory (a host
+# keeping one league per season, or a league file on a shared drive).
+LEAGUE_ENV = "RACER_TUI_LEAGUE"
+LEAGUE_FILE = "league.db"
 
 
 def data_home() -> Path:
@@ -27,3 +31,9 @@ def user_tracks_dir() -> Path:
     path = data_home() / "tracks"
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+def league_db_file() -> Path:
+    """The league database: `RACER_TUI_LEAGUE` if set, else league.db in the data directory."""
+    override = os.environ.get(LEAGUE_ENV)
+    return Path(override).expanduser() if override else data_home() / LEAGUE_FILE

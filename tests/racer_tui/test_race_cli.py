@@ -243,3 +243,24 @@ def test_the_race_path_imports_neither_textual_nor_torch() -> None:
     )
     assert done.stderr.strip() == "0 []"
     assert json.loads(done.stdout)["races"][0]["model_name"] == "reference"
+
+
+def test_one_league_file_for_every_command_with_db(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from league.store import default_db_path
+
+    season = tmp_path / "season-2.db"
+    code, out, err = run_cli(
+        capsys, "--race", "reference", *SHORT, "--record", "--db", str(season), "--json"
+    )
+    assert code == 0, err
+    race_id = json.loads(out)["recorded"][0]
+    assert season.is_file() and not default_db_path().exists()
+
+    # The top-level --db (the app's) reaches every command through RACER_TUI_LEAGUE.
+    monkeypatch.setenv("RACER_TUI_LEAGUE", "")  # unset, and restored after the test
+    code, out, err = run_cli(capsys, "--db", str(season), "leaderboard", "--format", "json")
+    assert code == 0, err
+    assert [row["id"] for row in json.loads(out)] == [race_id]
+    assert default_db_path() == season
