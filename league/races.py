@@ -8,14 +8,14 @@ from __future__ import annotations
 
 import io
 import json
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
 
 from league.entries import refresh_entries
 from league.errors import LeagueError
-from league.racers import display_names_overrides, ensure_racer
+from league.racers import check_name, display_names_overrides, ensure_racer
 from league.store import League, record_body
 from league.tracks import ensure_track, track_names
 from sim.ids import content_hash, is_valid_id
@@ -106,6 +106,16 @@ def record_race(
             )
         refresh_entries(league.conn, [result.result_id])
     return result.result_id
+
+
+def record_race_as(league: League, result: RaceResult, racer: str) -> str:
+    """Record `result` as `racer`'s race (a checked racer name) and return its race id.
+
+    A race run in the app is labelled with its model until someone claims it; the league
+    entry belongs to the person. Recording it again under the same racer is a no-op; under
+    another racer it is refused (a recorded race never changes hands).
+    """
+    return record_race(league, replace(result, racer=check_name(racer)))
 
 
 def _check_night(league: League, night_id: str, result: RaceResult) -> None:
@@ -210,9 +220,9 @@ def recent_races(
 ) -> list[RecordedRace]:
     """The newest recorded races first (optionally on one track), at most `limit`.
 
-    Newest by start time (then id, a time-sortable ULID, for a stable order). There is no
-    index on it: the inner query is one top-N sort over the races table's own columns, and
-    only the chosen rows are joined to their cached laps, night and trace.
+    Newest by start time (then id, a time-sortable ULID, for a stable order). The inner
+    query walks the newest-first indexes of migration 4; only the chosen rows are joined to
+    their cached laps, night and trace.
     """
     count = max(1, min(int(limit), MAX_RECENT_RACES))
     where = "WHERE track_hash = ?" if track_hash is not None else ""

@@ -4,12 +4,13 @@ transaction, so an interrupted submit leaves nothing behind."""
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
-from league.assembler import EvaluationLap, Submission
+from league.assembler import EvaluationLap, Submission, assemble
 from league.entries import refresh_entries
-from league.racers import ensure_racer
+from league.racers import check_name, ensure_racer
 from league.store import League, now_iso
 from league.tracks import ensure_track
 
@@ -90,3 +91,22 @@ def insert_laps(league: League, submission_id: str, laps: list[dict[str, Any]]) 
         f"VALUES (?, {', '.join('?' for _ in LAP_COLUMNS)})",
         [(submission_id, *(lap[column] for column in LAP_COLUMNS)) for lap in laps],
     )
+
+
+def submit_model(
+    league: League,
+    model: str,
+    racer: str,
+    *,
+    track: str | None = None,
+    evaluation: Path | None = None,
+    model_name: str | None = None,
+) -> tuple[Submission, Submitted]:
+    """What `racer-tui submit MODEL --racer NAME` does (the app's garage too): assemble the
+    model folder's files (its latest evaluation unless one is named) and store them.
+
+    LeagueError names a missing or malformed file; nothing is written then."""
+    submission = assemble(model, racer, track=track, evaluation=evaluation)
+    if model_name:
+        submission = replace(submission, model_name=check_name(model_name, "model name"))
+    return submission, submit(league, submission)

@@ -7,7 +7,6 @@ and other user text go into rich tables as `Text` cells, never as markup.
 from __future__ import annotations
 
 import argparse
-import getpass
 import importlib
 import sys
 from collections.abc import Callable, Sequence
@@ -124,7 +123,7 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
     show.add_argument("--json", action="store_true")
     close = actions.add_parser("close", parents=[db], help="close the night; print standings")
     close.add_argument("night")
-    close.add_argument("--by", help="who closes it (default: your user name)")
+    close.add_argument("--by", help="who closes it (default: this machine's racer name)")
     close.add_argument("--force", action="store_true", help="close even with heats waiting")
     close.add_argument("--json", action="store_true")
 
@@ -205,16 +204,16 @@ def _text(value: str) -> Text:
 
 
 def _submit(league: League, args: argparse.Namespace) -> int:
-    from dataclasses import replace
+    from league.submissions import submit_model
 
-    from league.assembler import assemble
-    from league.racers import check_name
-    from league.submissions import submit
-
-    submission = assemble(args.model, args.racer, track=args.track, evaluation=args.evaluation)
-    if args.model_name:
-        submission = replace(submission, model_name=check_name(args.model_name, "model name"))
-    outcome = submit(league, submission)
+    submission, outcome = submit_model(
+        league,
+        args.model,
+        args.racer,
+        track=args.track,
+        evaluation=args.evaluation,
+        model_name=args.model_name,
+    )
     best = submission.best_lap
     if args.json:
         print_json(
@@ -326,6 +325,7 @@ def _night_method(league: League, night_ids: Sequence[str] | None) -> RankingMet
 
 def _night(league: League, args: argparse.Namespace) -> int:
     from league import nights
+    from league.local_racer import local_racer_name
 
     action = args.night_command
     if action == "new":
@@ -354,17 +354,10 @@ def _night(league: League, args: argparse.Namespace) -> int:
     if action == "run":
         return _night_run(league, night, args.heats)
     if action == "close":
-        who = args.by or _user_name()
+        who = args.by or local_racer_name(league)
         standings = nights.close_night(league, night, who, force=args.force)
         return _print_standings(night, standings, args.json, title=f"{night.name}: final standings")
     return _night_show(league, night, args.json)
-
-
-def _user_name() -> str:
-    try:
-        return getpass.getuser()
-    except (OSError, KeyError):
-        return "host"
 
 
 def _night_list(league: League, as_json: bool) -> int:

@@ -25,6 +25,7 @@ from racer_tui.model_form import check_name, taken_names
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, ImportRequest, InputDialog
 from racer_tui.screens.evaluation import EvaluationScreen
+from racer_tui.screens.league_submit import RacerPrompt, submit_model_from
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.training import TrainingScreen
@@ -139,6 +140,13 @@ class GarageScreen(RacerScreen[None]):
         Binding("t", "train_model", "Train", tooltip="Train in the background, live charts"),
         Binding("v", "evaluate_model", "Evaluate", tooltip="Time-trial trials, one lap each"),
         Binding("r", "race_model", "Race", tooltip="A 4-minute time trial, live"),
+        Binding(
+            "u",
+            "submit_model",
+            "Submit to league",
+            tooltip="Submit the model's latest evaluation, as `racer-tui submit` does",
+            show=False,  # the footer is full at 80 columns; help and the palette list it
+        ),
         Binding("ctrl+r", "reload", "Reload", tooltip="Read the model folders again", show=False),
     ]
 
@@ -147,6 +155,7 @@ class GarageScreen(RacerScreen[None]):
         self.rows: list[dict[str, Any]] = []
         self.loaded = False
         self._generation = 0
+        self.racer_prompt = RacerPrompt(self)
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("garage")
@@ -449,3 +458,17 @@ class GarageScreen(RacerScreen[None]):
             title=f"{folder.name} on {track.name}",
         )
         self.app.push_screen(RaceScreen(setup))
+
+    def action_submit_model(self) -> None:
+        """What `racer-tui submit MODEL --racer NAME` does, for the highlighted model."""
+        folder = self._highlighted_folder("submit")
+        if folder is None:
+            return
+        if not folder.evaluation_files():
+            self.notify(
+                f"{folder.name} has no evaluation to submit yet; press v to evaluate it first.",
+                severity="warning",
+                markup=False,
+            )
+            return
+        submit_model_from(self, self.racer_prompt, folder.name)

@@ -241,8 +241,9 @@ class LeagueScreen(RacerScreen[None]):
         detail = self.query_one(EntryDetail)
         if not self.rows:
             detail.show_message(
-                "No results here yet. Racers submit with `racer-tui submit`; a host runs a "
-                "league night with n."
+                "No results here yet. Race a model in Races (3) and press u to submit it, "
+                "or u in the Garage for a model's evaluation; a host runs a league night "
+                "with n."
             )
             return
         ids = [row.record_id for row in self.rows]

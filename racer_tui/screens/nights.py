@@ -26,6 +26,7 @@ from textual.widgets import Button, DataTable, Input, Label, Select, Static
 
 from league.errors import LeagueError
 from league.leaderboard import LeaderboardRow
+from league.local_racer import local_racer_name
 from league.nights import (
     Heat,
     Night,
@@ -71,15 +72,6 @@ from sim.track_catalog import list_tracks, resolve_track
 
 NIGHT_COLUMNS = ("night", "track", "state")
 HEAT_COLUMNS = ("#", "racer", "model", "result")
-
-
-def host_name() -> str:
-    import getpass
-
-    try:
-        return getpass.getuser()
-    except (OSError, KeyError):
-        return "host"
 
 
 # --- dialogs ---------------------------------------------------------------------------------
@@ -668,7 +660,7 @@ class NightsScreen(RacerScreen[None]):
     @work(thread=True, group="nights-change", exit_on_error=False)
     def _close(self, night: Night, force: bool) -> None:
         with open_league(self.db_path) as league:
-            close_night(league, night, host_name(), force=force)
+            close_night(league, night, local_racer_name(league), force=force)
         self.post_message(NightChanged(night.id, f"Closed {night.name}; the standings are final."))
 
     def action_leave(self) -> None:

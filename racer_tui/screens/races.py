@@ -1,8 +1,10 @@
 """Races: a time trial of any trained model (or the reference driver) on any track, live.
 
 The races run this session are listed best first (the league's one ranking order), and any
-of them can be replayed. A new race on a track brings the best lap so far on that track as
-a ghost, and the gap to the session's leader there.
+of them can be replayed, and a trained model's race can be submitted to the league (u):
+it is recorded with its trace under the racer's name, asked once (see league_submit), and
+marked so it is not submitted twice. A new race on a track brings the best lap so far on
+that track as a ghost, and the gap to the session's leader there.
 
 Below them, the races recorded in the league (`--record`, league nights, other racers'
 synced races), newest first: any of them with a trace on this machine replays from it
@@ -30,12 +32,14 @@ from league.ranking import rank
 from league.store import open_league
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.garage import policy_driver
+from racer_tui.screens.league_submit import RacerPrompt, RaceSubmitted, submit_race
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import seconds_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
 from sim.garage.folder import ModelFolder, list_models
+from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules
@@ -139,6 +143,12 @@ class RacesScreen(RacerScreen[None]):
             "Replay",
             tooltip="Replay the highlighted race (this session's or the league's)",
         ),
+        Binding(
+            "u",
+            "submit_race",
+            "Submit to league",
+            tooltip="Record the highlighted race of this session in the league, under your name",
+        ),
         Binding("ctrl+r", "reload", "Reload", tooltip="Find newly trained models and races"),
     ]
 
@@ -149,6 +159,9 @@ class RacesScreen(RacerScreen[None]):
         self.drivers: list[DriverChoice] = []
         self.results: list[RaceResult] = []
         self.recorded: list[RecordedRace] = []
+        self.submitted: dict[str, str] = {}  # result id -> the racer it was submitted as
+        self.submitting: set[str] = set()
+        self.racer_prompt = RacerPrompt(self, db_path)
         self._generation = 0
 
     def compose(self) -> ComposeResult:
@@ -174,8 +187,9 @@ class RacesScreen(RacerScreen[None]):
                 yield Label("Recorded races in the league, newest first", classes="field-label")
                 yield DataTable(id="recorded-races", cursor_type="row", zebra_stripes=True)
                 yield Static(
-                    "p or Enter replays the highlighted race (dim: no trace here). New races "
-                    "race the track's best lap so far as a ghost (g).",
+                    "p or Enter replays the highlighted race (dim: no trace here); u submits "
+                    "it to the league (✓: submitted). New races race the track's best lap so "
+                    "far as a ghost (g).",
                     id="races-hint",
                 )
         yield RacerFooter()
@@ -294,10 +308,13 @@ class RacesScreen(RacerScreen[None]):
         rows: list[list[str | Text]] = []
         for place, result in enumerate(self.results, start=1):
             best = result.best_lap
+            driver = Text(result.racer)
+            if result.result_id in self.submitted:
+                driver = Text.assemble(("✓ ", "bold green"), driver)
             rows.append(
                 [
                     str(place),
-                    Text(result.racer),
+                    driver,
                     Text(result.track_name),
                     seconds_text(best.time_seconds) if best is not None else "-",
                     str(result.valid_laps),
@@ -307,6 +324,70 @@ class RacesScreen(RacerScreen[None]):
         fill_table(table, RESULT_COLUMNS, rows)
         if select is not None:
             table.move_cursor(row=self.results.index(select))
+
+    @property
+    def highlighted_result(self) -> RaceResult | None:
+        table = self.query_one("#race-results", DataTable)
+        if 0 <= table.cursor_row < len(self.results):
+            return self.results[table.cursor_row]
+        return None
+
+    def action_submit_race(self) -> None:
+        """Submit the highlighted race of this session to the league (asks who is racing
+        the first time)."""
+        if self.query_one("#recorded-races", DataTable).has_focus:
+            self.notify(
+                "The recorded races are in the league already; u submits a race from "
+                '"Races this session".',
+                severity="warning",
+            )
+            return
+        result = self.highlighted_result
+        if result is None:
+            self.notify(
+                "There is no race to submit yet; choose a trained model and press s to race it.",
+                severity="warning",
+            )
+            return
+        if result.model_name == REFERENCE_NAME:
+            self.notify(
+                "The reference driver's races are not league entries; race a trained model "
+                "and submit that.",
+                severity="warning",
+            )
+            return
+        if result.result_id in self.submitted:
+            self.notify(
+                f"This race is already in the league as {self.submitted[result.result_id]}'s; "
+                "a race is submitted once.",
+                severity="warning",
+                markup=False,
+            )
+            return
+        if result.result_id in self.submitting:
+            return  # the first press is still being recorded
+        self.racer_prompt.then(
+            f"{result.racer}'s race on {result.track_name} goes to the league.",
+            partial(self._submit, result),
+        )
+
+    def _submit(self, result: RaceResult, racer: str) -> None:
+        self.submitting.add(result.result_id)
+        self._record_submission(result, racer)
+
+    @work(thread=True, group="race-submit", exit_on_error=False)
+    def _record_submission(self, result: RaceResult, racer: str) -> None:
+        try:
+            self.post_message(submit_race(result, racer, self.db_path))
+        finally:
+            self.submitting.discard(result.result_id)
+
+    def on_race_submitted(self, message: RaceSubmitted) -> None:
+        self.submitted[message.result_id] = message.racer
+        chosen = self.highlighted_result
+        self._show_results(select=chosen)
+        self.notify(message.sentence, title="League", timeout=12, markup=False)
+        self.action_reload()  # the race is in the recorded list now
 
     def action_replay(self) -> None:
         """Replay from the focused table; the league's when it has focus, or when no race

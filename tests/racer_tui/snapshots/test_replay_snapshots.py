@@ -5,14 +5,10 @@ Update after a deliberate change with
 
 from __future__ import annotations
 
-import shutil
-import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import replace
-from pathlib import Path
 from typing import Any
 
-import pytest
 from textual.pilot import Pilot
 
 from league.nights import new_night
@@ -27,15 +23,6 @@ from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
 
 Compare = Callable[..., bool]
-
-
-@pytest.fixture(autouse=True)
-def fixed_home(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
-    home = Path(tempfile.gettempdir()) / "racer-tui-snapshots" / request.node.name
-    shutil.rmtree(home, ignore_errors=True)
-    monkeypatch.setenv("RACER_TUI_HOME", str(home))
-    yield home
-    shutil.rmtree(home, ignore_errors=True)
 
 
 def recorded_races() -> None:

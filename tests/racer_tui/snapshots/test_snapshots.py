@@ -9,10 +9,7 @@ and look at the SVGs before committing.
 
 from __future__ import annotations
 
-import shutil
-import tempfile
-from collections.abc import Awaitable, Callable, Iterator
-from pathlib import Path
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import pytest
@@ -28,17 +25,6 @@ SMALL = (80, 24)
 LARGE = (120, 40)
 SIZES = pytest.mark.parametrize("size", [SMALL, LARGE], ids=["80x24", "120x40"])
 Compare = Callable[..., bool]
-
-
-@pytest.fixture(autouse=True)
-def fixed_home(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
-    """The same data folder path on every run, so the screens show the same paths."""
-    name = request.node.name.replace("[", "-").replace("]", "")
-    home = Path(tempfile.gettempdir()) / "racer-tui-snapshots" / name
-    shutil.rmtree(home, ignore_errors=True)
-    monkeypatch.setenv("RACER_TUI_HOME", str(home))
-    yield home
-    shutil.rmtree(home, ignore_errors=True)
 
 
 def two_models() -> None:

@@ -5,13 +5,9 @@ Update after a deliberate change with
 
 from __future__ import annotations
 
-import shutil
-import tempfile
-from collections.abc import Callable, Iterator
-from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
-import pytest
 from textual.pilot import Pilot
 
 from league.races import record_race
@@ -26,15 +22,6 @@ from tests.racer_tui.screens.tui_helpers import settle
 
 Compare = Callable[..., bool]
 STORE = "dir:/media/league-share"
-
-
-@pytest.fixture(autouse=True)
-def fixed_home(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
-    home = Path(tempfile.gettempdir()) / "racer-tui-snapshots" / request.node.name
-    shutil.rmtree(home, ignore_errors=True)
-    monkeypatch.setenv("RACER_TUI_HOME", str(home))
-    yield home
-    shutil.rmtree(home, ignore_errors=True)
 
 
 def league_with_problems() -> None:

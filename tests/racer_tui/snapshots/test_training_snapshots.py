@@ -4,10 +4,7 @@ deliberate change, and look at the SVGs before committing."""
 
 from __future__ import annotations
 
-import shutil
-import tempfile
-from collections.abc import Callable, Iterator
-from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
 import pytest
@@ -23,16 +20,6 @@ from tests.racer_tui.screens.tui_helpers import settle
 
 SIZES = pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 Compare = Callable[..., bool]
-
-
-@pytest.fixture(autouse=True)
-def fixed_home(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
-    name = request.node.name.replace("[", "-").replace("]", "")
-    home = Path(tempfile.gettempdir()) / "racer-tui-snapshots" / name
-    shutil.rmtree(home, ignore_errors=True)
-    monkeypatch.setenv("RACER_TUI_HOME", str(home))
-    yield home
-    shutil.rmtree(home, ignore_errors=True)
 
 
 def a_run() -> list[events.Event]:

@@ -1,0 +1,97 @@
+"""This machine's racer name, where an entry lands on the board, and submitting a model
+folder or a race the way the app does."""
+
+from __future__ import annotations
+
+import getpass
+from pathlib import Path
+
+import pytest
+
+from league.board_place import board_place, ordinal, place_sentence
+from league.errors import LeagueError
+from league.local_racer import local_racer_name, machine_user, save_local_racer_name
+from league.races import race_result as stored_race
+from league.races import record_race_as
+from league.store import League
+from league.submissions import submit_model
+from sim.track_catalog import resolve_track
+from tests.league.helpers import TRACK, model_folder, race_result
+
+
+def test_the_racer_name_is_the_user_name_until_one_is_saved(league: League) -> None:
+    assert local_racer_name(league) == getpass.getuser() == machine_user()
+    assert save_local_racer_name(league, "  Ada [b]L[/b]  ") == "Ada [b]L[/b]"
+    assert local_racer_name(league) == "Ada [b]L[/b]"  # plain text, kept literally
+
+
+def test_a_racer_name_with_a_line_break_is_refused(league: League) -> None:
+    with pytest.raises(LeagueError, match="cannot be a racer name"):
+        save_local_racer_name(league, "Ada\nLovelace")
+    assert local_racer_name(league) == machine_user()
+
+
+def test_without_a_user_name_the_machine_racer_is_a_plain_default(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    def no_user() -> str:
+        raise KeyError("uid 1234 has no passwd entry")
+
+    monkeypatch.setattr(getpass, "getuser", no_user)
+    assert machine_user() == "racer"
+
+
+@pytest.mark.parametrize(
+    ("number", "text"),
+    [(1, "1st"), (2, "2nd"), (3, "3rd"), (4, "4th"), (11, "11th"), (13, "13th"), (22, "22nd")],
+)
+def test_ordinals(number: int, text: str) -> None:
+    assert ordinal(number) == text
+
+
+def test_a_submitted_model_is_placed_on_its_tracks_board(league: League, tmp_path: Path) -> None:
+    fast = model_folder(tmp_path, "fast", laps=(10.0, 10.5))
+    slow = model_folder(tmp_path, "slow", laps=(12.0,))
+    submit_model(league, str(fast), "Ada")
+    submission, outcome = submit_model(league, str(slow), "Bo", model_name="slowpoke")
+    assert submission.model_name == "slowpoke" and not outcome.duplicate
+    place = board_place(league, "bo", submission.track_hash)  # names match any case
+    assert place is not None
+    assert (place.rank, place.entries, place.display_name) == (2, 2, "Bo")
+    assert place_sentence(place, outcome.submission_id) == (
+        f"Bo is 2nd of 2 on {TRACK}'s leaderboard."
+    )
+    _, again = submit_model(league, str(slow), "Bo", model_name="slowpoke")
+    assert again.duplicate and again.submission_id == outcome.submission_id
+
+
+def test_a_worse_entry_is_told_that_the_earlier_one_counts(league: League, tmp_path: Path) -> None:
+    track = resolve_track(TRACK)
+    best = race_result("app-label", [9.0], model="car")
+    worse = race_result("app-label", [11.0], model="car")
+    record_race_as(league, best, "Ada")
+    record_race_as(league, worse, "Ada")
+    place = board_place(league, "Ada", track.content_hash)
+    assert place is not None and place.entry_id == best.result_id
+    sentence = place_sentence(place, worse.result_id)
+    assert sentence.endswith("with an earlier entry, which this one does not beat.")
+    assert board_place(league, "nobody", track.content_hash) is None
+    assert "not on that track's leaderboard" in place_sentence(None, worse.result_id)
+
+
+def test_a_race_is_recorded_as_the_racer_and_never_changes_hands(league: League) -> None:
+    result = race_result("my-model", [10.0, 10.2])
+    race_id = record_race_as(league, result, "Ada")
+    assert stored_race(league, race_id).racer == "Ada"
+    assert record_race_as(league, result, "Ada") == race_id  # the same again: a no-op
+    with pytest.raises(LeagueError, match="already recorded with different content"):
+        record_race_as(league, result, "Bo")
+
+
+def test_a_model_without_an_evaluation_says_to_evaluate_it(league: League, tmp_path: Path) -> None:
+    folder = model_folder(tmp_path, "fresh")
+    for evaluation in folder.glob("evaluation-*.json"):
+        evaluation.unlink()
+    with pytest.raises(LeagueError, match="evaluate the model first"):
+        submit_model(league, str(folder), "Ada")
+    assert league.conn.execute("SELECT count(*) FROM submissions").fetchone()[0] == 0
