@@ -7,6 +7,7 @@ import json
 import pkgutil
 import subprocess
 import sys
+from pathlib import Path
 
 import league
 import sim
@@ -60,3 +61,14 @@ def test_headless_cli_does_not_import_textual_or_torch() -> None:
 def test_the_app_module_is_the_one_that_imports_textual() -> None:
     report = _import_report(["racer_tui.app"])
     assert "textual" in report["racer_tui.app"]
+
+
+def test_every_screen_uses_the_compact_aware_footer() -> None:
+    # Textual's own Footer cuts a section's keys off at 80 columns; RacerFooter does not.
+    import racer_tui.screens
+
+    screens = Path(racer_tui.screens.__file__).parent
+    plain = [
+        path.name for path in sorted(screens.glob("*.py")) if "yield Footer(" in path.read_text()
+    ]
+    assert plain == []

@@ -19,7 +19,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Container, VerticalScroll
 from textual.message import Message
-from textual.widgets import DataTable, Footer
+from textual.widgets import DataTable
 
 from league.leaderboard import Column, LeaderboardRow, sort_rows
 from league.report import (
@@ -39,6 +39,7 @@ from racer_tui.screens.races import replay_recorded_race
 from racer_tui.screens.sync import SyncScreen
 from racer_tui.widgets.board_filters import BoardFilters, BoardQuery, FilterOptions, board_rows
 from racer_tui.widgets.entry_detail import EntryDetail, describe_entry
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.sync_status import SyncStatusLine
 from racer_tui.widgets.table_fill import fill_table
@@ -158,7 +159,7 @@ class LeagueScreen(RacerScreen[None]):
             with VerticalScroll(id="entry-scroll"):
                 yield EntryDetail(id="entry-detail")
         yield SyncStatusLine(id="sync-status")
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self.reload()

@@ -20,7 +20,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import Button, DataTable, Footer, Input, Label, ProgressBar, Static
+from textual.widgets import Button, DataTable, Input, Label, ProgressBar, Static
 from textual.worker import Worker, WorkerState
 
 from league.errors import LeagueError
@@ -37,6 +37,7 @@ from league.sync.status import (
 )
 from racer_tui.screens.base import RacerScreen, notify_worker_failure
 from racer_tui.screens.dialogs import show_problem
+from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.sync_status import local_time
 from racer_tui.widgets.table_fill import fill_table
@@ -119,7 +120,7 @@ class SyncScreen(RacerScreen[bool]):
             yield DataTable(id="sync-conflicts", cursor_type="row", zebra_stripes=True)
             yield Label("Quarantined", id="sync-quarantine-title", classes="field-label")
             yield DataTable(id="sync-quarantine", cursor_type="row", zebra_stripes=True)
-        yield Footer()
+        yield RacerFooter()
 
     def on_mount(self) -> None:
         self.action_reload()
