@@ -47,7 +47,7 @@ from racer_tui.widgets.training_charts import TrainingCharts, TrainingFigures, c
 from sim.deepracer_files import read_sim_trace
 from sim.garage.folder import ModelError, ModelFolder, list_models, open_model
 from sim.training import events
-from sim.training.launcher import worker_command
+from sim.training.launcher import failure_from_stderr, worker_command
 
 LOG_FILE = "training-log.jsonl"
 WORKER_MODULE = "sim.training.worker"
@@ -118,23 +118,6 @@ def latest_observation(folder: ModelFolder) -> Observation | None:
     caption = f"iteration {latest.stem.split('-')[0]}, episode {row.episode} step {row.steps}"
     sensors = folder.metadata().sensors
     return observe_at(folder.track(), sensors, (row.x, row.y, row.yaw), caption)
-
-
-def _failure(code: int | None, stderr: str) -> events.Ended:
-    last = stderr.strip().splitlines()[-1] if stderr.strip() else ""
-    reason = f"the training process exited with code {code}"
-    if code is not None and code < 0:
-        with contextlib.suppress(ValueError):
-            reason = f"the training process was killed by {signal.Signals(-code).name}"
-    return events.Ended(
-        elapsed=0.0,
-        kind="failed",
-        message=f"{reason}: {last}" if last else reason,
-        total_steps=0,
-        episodes=0,
-        best_progress=0.0,
-        best_lap=None,
-    )
 
 
 def _pid_alive(pid: int) -> bool:
@@ -451,7 +434,7 @@ class TrainingScreen(RacerScreen[None]):
                 if ended is None:
                     stderr.seek(0)
                     tail = stderr.read()[-2000:].decode("utf-8", "replace")
-                    self.apply_event(request.model, _failure(process.returncode, tail))
+                    self.apply_event(request.model, failure_from_stderr(process.returncode, tail))
                 else:
                     # The last event is written: let the child exit before the next starts.
                     with contextlib.suppress(TimeoutError):

@@ -56,11 +56,12 @@ def _decode(line: bytes | str) -> events.Event | None:
         return None
 
 
-def _failure_from_stderr(returncode: int, stderr_tail: str) -> events.Ended:
-    """The ending for a child that died without writing its last event."""
+def failure_from_stderr(returncode: int | None, stderr_tail: str) -> events.Ended:
+    """The ending for a child that died without writing its last event (the app uses it
+    too, for a child it adopted after a restart)."""
     last = stderr_tail.strip().splitlines()[-1] if stderr_tail.strip() else ""
     reason = f"the training process exited with code {returncode}"
-    if returncode < 0:
+    if returncode is not None and returncode < 0:
         with contextlib.suppress(ValueError):
             reason = f"the training process was killed by {signal.Signals(-returncode).name}"
     return events.Ended(
@@ -124,7 +125,7 @@ class TrainingProcess:
             yield event
         code = self._popen.wait()
         if self.ended is None:
-            self.ended = _failure_from_stderr(code, _tail(self._stderr))
+            self.ended = failure_from_stderr(code, _tail(self._stderr))
             yield self.ended
         self._stderr.close()
 
@@ -192,7 +193,7 @@ class AsyncTrainingProcess:
             yield event
         code = await self._process.wait()
         if self.ended is None:
-            self.ended = _failure_from_stderr(code, _tail(self._stderr))
+            self.ended = failure_from_stderr(code, _tail(self._stderr))
             yield self.ended
         self._stderr.close()
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from sim.training import events
-from sim.training.launcher import AsyncTrainingProcess, _failure_from_stderr, worker_command
+from sim.training.launcher import AsyncTrainingProcess, failure_from_stderr, worker_command
 
 
 def test_the_worker_command_uses_this_interpreter_and_names_the_parent() -> None:
@@ -26,7 +26,7 @@ async def test_the_async_launcher_streams_the_childs_last_word() -> None:
 
 
 def test_a_child_that_died_silently_gets_a_failed_ending() -> None:
-    ended = _failure_from_stderr(-9, "")
+    ended = failure_from_stderr(-9, "")
     assert ended.kind == "failed" and "SIGKILL" in ended.message
-    ended = _failure_from_stderr(1, "Traceback...\nMemoryError: out of memory\n")
+    ended = failure_from_stderr(1, "Traceback...\nMemoryError: out of memory\n")
     assert ended.message.endswith("MemoryError: out of memory")
