@@ -47,8 +47,12 @@ def format_value(value: float) -> str:
     if not math.isfinite(value):
         return "-"
     magnitude = abs(value)
-    if magnitude >= 10_000:
-        return f"{value:.3g}"
+    # Thousands and millions as 21.8k / 1.2M: an axis label has about 6 columns, and
+    # "2.18e+04" is both wider and harder to read at a glance.
+    for scale, suffix in ((1e6, "M"), (1e3, "k")):
+        if magnitude >= 10 * scale:
+            scaled = value / scale
+            return f"{scaled:.0f}{suffix}" if abs(scaled) >= 100 else f"{scaled:.1f}{suffix}"
     if magnitude >= 100:
         return f"{value:.0f}"
     if magnitude >= 1:
