@@ -29,6 +29,7 @@ from racer_tui.screens.league_submit import RacerPrompt, submit_model_from
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.training import TrainingScreen
+from racer_tui.session import keep_race
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_text
 from racer_tui.widgets.section_header import SectionHeader
@@ -457,7 +458,8 @@ class GarageScreen(RacerScreen[None]):
             driver=partial(policy_driver, folder),
             title=f"{folder.name} on {track.name}",
         )
-        self.app.push_screen(RaceScreen(setup))
+        # Kept with the app's races, so the Races section can replay or submit it.
+        self.app.push_screen(RaceScreen(setup), partial(keep_race, self.app))
 
     def action_submit_model(self) -> None:
         """What `racer-tui submit MODEL --racer NAME` does, for the highlighted model."""

@@ -34,6 +34,7 @@ from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.garage import policy_driver
 from racer_tui.screens.league_submit import RacerPrompt, RaceSubmitted, submit_race
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.session import keep_race, session_races
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import seconds_text
 from racer_tui.widgets.section_header import SectionHeader
@@ -157,7 +158,6 @@ class RacesScreen(RacerScreen[None]):
         super().__init__()
         self.db_path = db_path
         self.drivers: list[DriverChoice] = []
-        self.results: list[RaceResult] = []
         self.recorded: list[RecordedRace] = []
         self.submitted: dict[str, str] = {}  # result id -> the racer it was submitted as
         self.submitting: set[str] = set()
@@ -198,10 +198,16 @@ class RacesScreen(RacerScreen[None]):
         fill_table(self.query_one("#race-results", DataTable), RESULT_COLUMNS, [])
         fill_table(self.query_one("#recorded-races", DataTable), RECORDED_COLUMNS, [])
 
+    @property
+    def results(self) -> list[RaceResult]:
+        """This app run's races, best first (the Garage's too: see racer_tui.session)."""
+        return rank(session_races(self.app))
+
     def on_screen_resume(self) -> None:
         """Each time the section is shown (the first time too): models may have been
-        trained since."""
+        trained, and races run from the Garage, since."""
         self.action_reload()
+        self._show_results(select=self.highlighted_result)  # back from a dialog: keep it
 
     def action_reload(self) -> None:
         self._generation += 1
@@ -298,15 +304,15 @@ class RacesScreen(RacerScreen[None]):
         self.app.push_screen(RaceScreen(setup), self._race_finished)
 
     def _race_finished(self, result: RaceResult | None) -> None:
+        keep_race(self.app, result)
         if result is not None:
-            self.results.append(result)
             self._show_results(select=result)
 
     def _show_results(self, select: RaceResult | None = None) -> None:
         table = self.query_one("#race-results", DataTable)
-        self.results = rank(self.results)
+        results = self.results
         rows: list[list[str | Text]] = []
-        for place, result in enumerate(self.results, start=1):
+        for place, result in enumerate(results, start=1):
             best = result.best_lap
             driver = Text(result.racer)
             if result.result_id in self.submitted:
@@ -323,7 +329,7 @@ class RacesScreen(RacerScreen[None]):
             )
         fill_table(table, RESULT_COLUMNS, rows)
         if select is not None:
-            table.move_cursor(row=self.results.index(select))
+            table.move_cursor(row=results.index(select))
 
     @property
     def highlighted_result(self) -> RaceResult | None:

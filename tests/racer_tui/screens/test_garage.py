@@ -200,6 +200,13 @@ async def test_a_trained_model_races_with_its_own_policy() -> None:
         await pilot.press("escape")
         assert isinstance(app.screen, GarageScreen)
 
+        # The race is one of this session's races in the Races section, ready to submit.
+        await pilot.press("3")
+        await settle(pilot)
+        session = app.screen.query_one("#race-results", DataTable)
+        assert session.row_count == 1
+        assert "ada" in str(session.get_row_at(0)[1])
+
 
 async def test_a_damaged_model_is_listed_with_its_problem_and_not_edited() -> None:
     new_model("ada")
