@@ -1,4 +1,5 @@
-"""What one run of the app remembers between its sections: the races run in it.
+"""What one run of the app remembers between its sections: the races run in it, and who
+is racing (asked the first time something is submitted).
 
 A race can start from the Races section or from a model in the Garage; either way it
 belongs in "Races this session", where it can be replayed, raced as a ghost or submitted
@@ -16,6 +17,7 @@ from textual.app import App
 from sim.race.result import RaceResult
 
 _RACES: WeakKeyDictionary[App[Any], list[RaceResult]] = WeakKeyDictionary()
+_RACER: WeakKeyDictionary[App[Any], str] = WeakKeyDictionary()
 
 
 def session_races(app: App[Any]) -> list[RaceResult]:
@@ -27,3 +29,12 @@ def keep_race(app: App[Any], result: RaceResult | None) -> None:
     """The RaceScreen callback for a race run anywhere in the app (None: it was left early)."""
     if result is not None:
         session_races(app).append(result)
+
+
+def session_racer(app: App[Any]) -> str | None:
+    """The racer confirmed in this app run, if anyone has said yet."""
+    return _RACER.get(app)
+
+
+def remember_racer(app: App[Any], racer: str) -> None:
+    _RACER[app] = racer

@@ -14,9 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
-from weakref import WeakKeyDictionary
 
-from textual.app import App
 from textual.message import Message
 from textual.screen import Screen
 
@@ -28,6 +26,7 @@ from league.races import record_race_as
 from league.store import open_league
 from league.submissions import submit_model
 from racer_tui.screens.dialogs import InputDialog
+from racer_tui.session import remember_racer, session_racer
 from racer_tui.widgets.model_detail import seconds_text
 from sim.race.result import RaceResult
 
@@ -42,10 +41,6 @@ def racer_name_problem(text: str) -> str | None:
     return None
 
 
-# The racer confirmed in each running app (weak: a finished app, as in tests, lets go).
-_CONFIRMED: WeakKeyDictionary[App[Any], str] = WeakKeyDictionary()
-
-
 class RacerPrompt:
     """Who is submitting from a screen: asked the first time in the app, then remembered."""
 
@@ -56,7 +51,7 @@ class RacerPrompt:
     @property
     def racer(self) -> str | None:
         """The racer confirmed in this app session, if any yet."""
-        return _CONFIRMED.get(self.screen.app)
+        return session_racer(self.screen.app)
 
     def then(self, what: str, action: Callable[[str], None]) -> None:
         """Call `action(racer)`, asking for the racer first if nobody has said yet in this
@@ -86,7 +81,7 @@ class RacerPrompt:
 
         def answered(racer: str | None) -> None:
             if racer is not None:
-                _CONFIRMED[self.screen.app] = racer
+                remember_racer(self.screen.app, racer)
                 action(racer)
 
         self.screen.app.push_screen(dialog, answered)

@@ -290,7 +290,7 @@ class RacesScreen(RacerScreen[None]):
             penalty_seconds=DEFAULT_RULES.penalty_seconds,
             max_offtracks_per_lap=DEFAULT_RULES.max_offtracks_per_lap,
         )
-        same_track = rank(r for r in self.results if r.track_hash == track.content_hash)
+        same_track = [r for r in self.results if r.track_hash == track.content_hash]
         leader = same_track[0] if same_track else None
         setup = RaceSetup(
             track=track,
@@ -334,9 +334,8 @@ class RacesScreen(RacerScreen[None]):
     @property
     def highlighted_result(self) -> RaceResult | None:
         table = self.query_one("#race-results", DataTable)
-        if 0 <= table.cursor_row < len(self.results):
-            return self.results[table.cursor_row]
-        return None
+        results = self.results
+        return results[table.cursor_row] if 0 <= table.cursor_row < len(results) else None
 
     def action_submit_race(self) -> None:
         """Submit the highlighted race of this session to the league (asks who is racing
@@ -399,14 +398,13 @@ class RacesScreen(RacerScreen[None]):
         """Replay from the focused table; the league's when it has focus, or when no race
         has run this session."""
         recorded = self.query_one("#recorded-races", DataTable)
-        if recorded.has_focus or not self.results:
+        if recorded.has_focus or not session_races(self.app):
             self.replay_recorded()
             return
-        table = self.query_one("#race-results", DataTable)
-        if not 0 <= table.cursor_row < len(self.results):
+        result = self.highlighted_result
+        if result is None:
             self.notify("There is no race to replay yet; press s to start one.", severity="warning")
             return
-        result = self.results[table.cursor_row]
         track = resolve_track(result.track_name)
         setup = RaceSetup(
             track=track,
