@@ -130,13 +130,17 @@ def vector_state(sim: TrackSimulation) -> np.ndarray:
     spec = fleet.spec
     centre = sim.track.centerline
     tangent = centre.direction_at(sim.s)
+    ahead_s = sim.s[:, None] + np.asarray(LOOK_AHEAD_DISTANCES)[None, :]
+    if sim.any_reversed:  # cars driving the other way round look the other way
+        sign = sim.direction_sign[:, None]
+        tangent = tangent * sign
+        ahead_s = sim.s[:, None] + sign * np.asarray(LOOK_AHEAD_DISTANCES)[None, :]
     cos_yaw, sin_yaw = np.cos(fleet.yaw), np.sin(fleet.yaw)
     # Heading error as sine and cosine: continuous across +-180 degrees.
     sin_err = cos_yaw * tangent[:, 1] - sin_yaw * tangent[:, 0]
     cos_err = cos_yaw * tangent[:, 0] + sin_yaw * tangent[:, 1]
     half_width = np.maximum(sim.track_width / 2.0, 1e-6)
     offset = np.where(sim.left_of_center, 1.0, -1.0) * sim.distance_from_center / half_width
-    ahead_s = sim.s[:, None] + np.asarray(LOOK_AHEAD_DISTANCES)[None, :]
     points: FloatArray = centre.point_at(ahead_s)
     dx = points[..., 0] - fleet.x[:, None]
     dy = points[..., 1] - fleet.y[:, None]
@@ -163,6 +167,8 @@ def _vector_state_one(sim: TrackSimulation) -> np.ndarray:
     s = float(sim.s[0])
     x, y, yaw = float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0])
     tangent_x, tangent_y = centre.direction_at(s)
+    way = float(sim.direction_sign[0])
+    tangent_x, tangent_y = way * tangent_x, way * tangent_y
     cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
     half_width = max(float(sim.track_width[0]) / 2.0, 1e-6)
     side = 1.0 if sim.left_of_center[0] else -1.0
@@ -174,7 +180,7 @@ def _vector_state_one(sim: TrackSimulation) -> np.ndarray:
         side * float(sim.distance_from_center[0]) / half_width,
     ]
     for distance in LOOK_AHEAD_DISTANCES:
-        px, py = centre.point_at(s + distance)
+        px, py = centre.point_at(s + way * distance)
         dx, dy = px - x, py - y
         values.append((dx * cos_yaw + dy * sin_yaw) / _LOOK_AHEAD_SCALE)
         values.append((-dx * sin_yaw + dy * cos_yaw) / _LOOK_AHEAD_SCALE)

@@ -5,14 +5,27 @@ reference driver and races: it steps the physics, measures where every car is re
 to the track (all at once, in numpy), keeps DeepRacer's episode bookkeeping (progress from
 the episode's start, reversed and immobilized counters), and builds the reward `params`.
 
-Measurements follow DeepRacer: `x`, `y`, `progress`, `distance_from_center` and
-`closest_waypoints` use the point 0.14 m ahead of the car centre; off-track means all four
-wheel centres are off the road; `all_wheels_on_track` is False as soon as one is.
+Measurements follow DeepRacer's simulator (simapp `bundle/markov/agent_ctrl/utils.py`,
+`set_reward_and_metrics`): `x`, `y`, `progress`, `distance_from_center`,
+`projection_distance` and `closest_waypoints` use the point 0.14 m ahead of the car centre;
+`track_width` is measured across the road at the centre-line point nearest to it; off-track
+means all four wheel centres are off the road; `all_wheels_on_track` is False as soon as one
+is. Progress counts from the episode's start position, which is where the car *centre* was
+placed, so it starts at 0.14 m worth of progress (0.79 % on re:Invent 2018, as DeepRacer's own
+sim-trace shows) and a lap completes when the look-ahead point reaches the start again.
+
+Directions: `is_reversed` drives the whole track against its row order (DeepRacer's
+REVERSE_DIR); with `EpisodeRules.alternate_direction` each car also turns round every other
+episode (ALTERNATE_DRIVING_DIRECTION). `s`, `segment` and `foot` stay positions on the
+simulated track's own row order; `reverse` says which cars drive against it this episode,
+and what a car's reward function sees (progress, waypoints, left of centre) follows the way
+it drives.
 """
 
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -43,6 +56,18 @@ class EpisodeStatus(StrEnum):
     TIME_UP = "Time Up"
 
 
+# One reversed copy per track: its projectors and lookup grids take a moment to build.
+_REVERSED: weakref.WeakKeyDictionary[Track, Track] = weakref.WeakKeyDictionary()
+
+
+def reversed_track(track: Track) -> Track:
+    """`track` driven the other way round (built once per track, then shared)."""
+    found = _REVERSED.get(track)
+    if found is None:
+        found = _REVERSED[track] = track.reversed()
+    return found
+
+
 # Outcome codes used by `TrackSimulation.terminal` (0 = still running).
 _OUTCOMES = (
     EpisodeStatus.IN_PROGRESS,
@@ -65,6 +90,11 @@ class EpisodeRules:
     immobile_distance: float = 0.0003
     start_advance: float = 0.05  # round-robin: each episode starts this fraction further on
     max_steps: int = STEP_HZ * 180  # a 3-minute safety net; a lap ends episodes long before
+    # training_params.yaml's CHANGE_START_POSITION (simapp's default: True): each episode
+    # starts `start_advance` further round; False starts every episode on the start line.
+    change_start: bool = True
+    # ALTERNATE_DRIVING_DIRECTION (default False): every other episode drives the other way.
+    alternate_direction: bool = False
 
 
 class TrackSimulation:
@@ -85,13 +115,19 @@ class TrackSimulation:
         self.car = car
         self.rules = rules or EpisodeRules()
         self.fleet = Fleet(n_cars, car, cars_collide=cars_collide)
-        # The episode-direction flag DeepRacer passes (True when a model trains the
-        # track the other way round); it does not change the geometry here.
+        # DeepRacer's REVERSE_DIR: the track's rows are driven in reverse order, so the
+        # centre line, its waypoints and the start line all run the other way (simapp
+        # `bundle/markov/track_geom/track_data.py` swaps in reversed lines).
         self.is_reversed = is_reversed
+        if is_reversed:
+            track = reversed_track(track)
+            self.track = track
         centre = track.centerline
         self._centre = centre
         self._length = centre.total_length
         self._waypoints = track.waypoints
+        self._waypoints_back = self._waypoints[::-1]
+        self._segments = len(centre.lengths)
         self._track_length = float(self._length)
         #: The centre line for one-point queries (per-step code for one car).
         self.centre_projector = PointProjector.of(centre)
@@ -122,26 +158,62 @@ class TrackSimulation:
         self.left_of_center = np.zeros(n, dtype=bool)
         self.track_width = np.zeros(n)
         self.wheels_on = np.ones((n, 4), dtype=bool)
+        self._t = np.zeros(n)  # fraction along `segment` of the centre-line foot
+        # Cars driving against the track's row order this episode (alternate direction).
+        self.reverse = np.zeros(n, dtype=bool)
+        self._sign = np.ones(n)
+        self._any_reverse = False
 
     # --- episodes ------------------------------------------------------------------------
     def start_position(self, car: int, episode: int) -> float:
-        """Arc length where `car` starts `episode`: round-robin round the track, cars spread."""
+        """Arc length where `car` starts `episode`, along the way it drives that episode.
+
+        DeepRacer advances the start by `start_advance` of a lap after every training
+        episode when CHANGE_START_POSITION is on (simapp `rollout_agent_ctrl.py`,
+        `finish_episode`); here the cars are also spread round the track so that the whole
+        fleet sees all of it from the first episode. Off, every episode starts on the line.
+        """
+        if not self.rules.change_start:
+            return 0.0
         fraction = episode * self.rules.start_advance + car / self.n
         return (fraction % 1.0) * self._length
+
+    def drives_reversed(self, car: int, episode: int) -> bool:
+        """Whether `car` drives against the track's row order in `episode`.
+
+        With ALTERNATE_DRIVING_DIRECTION DeepRacer turns the track round after every
+        training episode (simapp `finish_episode`); odd cars start the other way so that the
+        fleet trains both directions evenly from the start.
+        """
+        return self.rules.alternate_direction and (episode + car) % 2 == 1
 
     def reset_car(self, car: int, start_s: float | None = None) -> None:
         """Put a car on the centre line, pointing along the track, for a new episode."""
         self.reset_cars([car], None if start_s is None else [start_s])
 
     def reset_cars(self, cars: Sequence[int], start_s: Sequence[float] | None = None) -> None:
-        """Start new episodes for several cars with one measurement pass."""
+        """Start new episodes for several cars with one measurement pass.
+
+        `start_s` (arc lengths along the track's row order) places the cars forwards; without
+        it each car starts where `start_position` and `drives_reversed` say.
+        """
+        centre_s = np.zeros(len(cars))
         for k, car in enumerate(cars):
-            s = self.start_position(car, int(self.episode[car])) if start_s is None else start_s[k]
+            episode = int(self.episode[car])
+            backwards = start_s is None and self.drives_reversed(car, episode)
+            if start_s is None:
+                s = self.start_position(car, episode)
+                if backwards:  # the start line and its round robin run the other way too
+                    s = -s
+            else:
+                s = start_s[k]
+            s %= self._length
             self.episode[car] += 1
-            self.place(car, s)
+            self._set_reverse(car, backwards)
+            self._place_along(car, s, backwards)
+            centre_s[k] = s
         index = np.asarray(cars, dtype=np.intp)
         self.steps[index] = 0
-        self.travelled[index] = 0.0
         self._falling[index] = 0
         self._still[index] = 0
         self.status[index] = EpisodeStatus.IN_PROGRESS
@@ -149,7 +221,30 @@ class TrackSimulation:
         self.steering_cmd[index] = 0.0
         self.speed_cmd[index] = 0.0
         self._measure()
-        self.start_s[index] = self.s[index]
+        # Progress counts from where the car centre was placed (simapp's `start_ndist`), but
+        # is measured at the look-ahead point: an episode starts 0.14 m into its lap.
+        self.start_s[index] = centre_s
+        half = self._length / 2.0
+        ahead = np.mod(self.s[index] - centre_s + half, self._length) - half
+        self.travelled[index] = ahead * self._sign[index]
+
+    def _set_reverse(self, car: int, backwards: bool) -> None:
+        self.reverse[car] = backwards
+        self._sign[car] = -1.0 if backwards else 1.0
+        self._any_reverse = bool(self.reverse.any())
+
+    def _place_along(self, car: int, s: float, backwards: bool) -> None:
+        """Start pose at arc length `s`, pointing the way the car drives (towards the next
+        waypoint ahead, simapp's forward difference)."""
+        if not backwards:
+            self.place(car, s)
+            return
+        point = self._centre.point_at(np.array([s]))[0]
+        # The segment that ends at `s` (at a waypoint, the one driven next going backwards).
+        seg = int(np.searchsorted(self._centre.cumulative, s, side="left")) - 1
+        seg %= self._segments
+        vx, vy = self._centre.vectors[seg]
+        self.fleet.place(car, float(point[0]), float(point[1]), math.atan2(-vy, -vx), 0.0)
 
     def place(self, car: int, s: float, offset: float = 0.0, speed: float = 0.0) -> None:
         """Teleport a car to arc length `s` (and `offset` metres left of the centre line)."""
@@ -194,6 +289,8 @@ class TrackSimulation:
         self._measure()
         self.steps += 1
         delta = np.mod(self.s - before_s + self._length / 2.0, self._length) - self._length / 2.0
+        if self._any_reverse:
+            delta *= self._sign
         self.travelled += delta
         self._falling = np.where(delta < 0.0, self._falling + 1, 0)
         moved = np.hypot(self.fleet.x - before_x, self.fleet.y - before_y)
@@ -208,14 +305,16 @@ class TrackSimulation:
         track = self.track
         self.ahead = fleet.points_ahead(LOOK_AHEAD)
         seg, t, foot = self._centre.project(self.ahead)
-        self.segment, self.foot = seg, foot
+        self.segment, self.foot, self._t = seg, foot, t
         self.s = self._centre.arc_length(seg, t)
         rel = self.ahead - foot
         self.distance_from_center = np.hypot(rel[:, 0], rel[:, 1])
         vec = self._centre.vectors[seg]
-        self.left_of_center = vec[:, 0] * rel[:, 1] - vec[:, 1] * rel[:, 0] > 0.0
-        _, _, inner_foot = track.inner_border.project(self.ahead)
-        _, _, outer_foot = track.outer_border.project(self.ahead)
+        left = vec[:, 0] * rel[:, 1] - vec[:, 1] * rel[:, 0] > 0.0
+        self.left_of_center = left ^ self.reverse if self._any_reverse else left
+        # Across the road at the centre-line point, as simapp's get_nearest_points does.
+        _, _, inner_foot = track.inner_border.project(foot)
+        _, _, outer_foot = track.outer_border.project(foot)
         self.track_width = np.hypot(*(outer_foot - inner_foot).T)
         wheels = fleet.wheel_positions().reshape(-1, 2)
         self.wheels_on = track.on_road(wheels).reshape(self.n, 4)
@@ -223,17 +322,20 @@ class TrackSimulation:
     def _judge(self) -> None:
         rules = self.rules
         running = self.terminal == 0
-        # DeepRacer's precedence when several things happen in one step.
+        # DeepRacer's precedence when several things happen in one step: a completed lap
+        # first ("the agent might crash at the finish line"), then a crash, then the other
+        # rules in the order of simapp's EpisodeStatus (`rollout_agent_ctrl.py`,
+        # `_check_for_episode_termination`; `metrics/constants.py`).
         outcomes = np.select(
             [
+                self.travelled >= self._length,
                 self.fleet.crashed,
                 ~self.wheels_on.any(axis=1),
-                self.travelled >= self._length,
-                self._falling >= rules.reversed_steps,
                 self._still >= rules.immobilized_steps,
+                self._falling >= rules.reversed_steps,
                 self.steps >= rules.max_steps,
             ],
-            [1, 2, 3, 4, 5, 6],
+            [3, 1, 2, 5, 4, 6],
             default=0,
         )
         ended = np.flatnonzero(running & (outcomes > 0))
@@ -258,6 +360,8 @@ class TrackSimulation:
         self.steps += 1
         length = self._length
         delta = (float(self.s[0]) - before_s + length / 2.0) % length - length / 2.0
+        if self._any_reverse:
+            delta = -delta
         self.travelled[0] += delta
         self._falling[0] = self._falling[0] + 1 if delta < 0.0 else 0
         moved = math.hypot(float(fleet.x[0]) - before_x, float(fleet.y[0]) - before_y)
@@ -274,14 +378,16 @@ class TrackSimulation:
         seg, t, fx, fy = centre.project(ax, ay)
         rel_x, rel_y = ax - fx, ay - fy
         vec_x, vec_y = centre.vectors[seg]
-        _, _, ix, iy = inner.project(ax, ay)
-        _, _, ox, oy = outer.project(ax, ay)
+        _, _, ix, iy = inner.project(fx, fy)
+        _, _, ox, oy = outer.project(fx, fy)
         self.ahead = np.array([[ax, ay]])
         self.segment = np.array([seg], dtype=np.intp)
+        self._t = np.array([t])
         self.foot = np.array([[fx, fy]])
         self.s = np.array([centre.arc_length(seg, t)])
         self.distance_from_center = np.array([math.hypot(rel_x, rel_y)])
-        self.left_of_center = np.array([vec_x * rel_y - vec_y * rel_x > 0.0])
+        left = vec_x * rel_y - vec_y * rel_x > 0.0
+        self.left_of_center = np.array([left != self._any_reverse])
         self.track_width = np.array([math.hypot(ox - ix, oy - iy)])
         wheel_x = [x + fwd * cos_yaw - left * sin_yaw for fwd, left in self._wheel_offsets]
         wheel_y = [y + fwd * sin_yaw + left * cos_yaw for fwd, left in self._wheel_offsets]
@@ -291,16 +397,16 @@ class TrackSimulation:
 
     def _judge_one(self) -> None:
         rules = self.rules
-        if self.fleet.crashed[0]:
+        if self.travelled[0] >= self._length:
+            outcome = 3
+        elif self.fleet.crashed[0]:
             outcome = 1
         elif not self.wheels_on[0].any():
             outcome = 2
-        elif self.travelled[0] >= self._length:
-            outcome = 3
-        elif self._falling[0] >= rules.reversed_steps:
-            outcome = 4
         elif self._still[0] >= rules.immobilized_steps:
             outcome = 5
+        elif self._falling[0] >= rules.reversed_steps:
+            outcome = 4
         elif self.steps[0] >= rules.max_steps:
             outcome = 6
         else:
@@ -311,8 +417,42 @@ class TrackSimulation:
     # --- what the reward function and observers see ----------------------------------------
     @property
     def progress(self) -> FloatArray:
-        """Percent of a lap covered since the episode started, 0..100."""
+        """Percent of a lap covered since the episode started, 0..100 (for display)."""
         return np.clip(self.travelled / self._length * 100.0, 0.0, 100.0)
+
+    @property
+    def reward_progress(self) -> FloatArray:
+        """`progress` as simapp hands it to the reward function: capped at 100, but below 0
+        when the car has backed over its start position (`compute_current_prog`)."""
+        return np.minimum(self.travelled * (100.0 / self._length), 100.0)
+
+    @property
+    def closest_waypoints(self) -> NDArray[np.intp]:
+        """(N, 2) [previous, next] waypoint indexes along the way each car drives.
+
+        simapp finds them by bisecting the waypoints' distances along the centre line
+        (`track_geom/utils.py`, `find_prev_next`), so a point exactly on waypoint k gets
+        [k, k + 1]: a projection that lands on the end of segment k - 1 counts as k.
+        """
+        n_seg = self._segments
+        seg, t = self.segment, self._t
+        if self._any_reverse:
+            back = self.reverse
+            seg = np.where(back, n_seg - 1 - seg, seg)
+            t = np.where(back, 1.0 - t, t)
+        previous = seg + (t >= 1.0)
+        previous[previous >= n_seg] = 0  # the closing waypoint is the first one again
+        return np.stack([previous, previous + 1], axis=1)
+
+    @property
+    def any_reversed(self) -> bool:
+        """Whether some car drives against the track's row order this episode."""
+        return self._any_reverse
+
+    @property
+    def direction_sign(self) -> FloatArray:
+        """+1 per car driving along the track's row order, -1 per car driving against it."""
+        return self._sign
 
     @property
     def heading_deg(self) -> FloatArray:
@@ -340,15 +480,23 @@ class TrackSimulation:
         dfc = self.distance_from_center.tolist()
         left = self.left_of_center.tolist()
         width = self.track_width.tolist()
-        progress = self.progress.tolist()
+        progress = self.reward_progress.tolist()
         steps = self.steps.tolist()
         speed = self.speed_cmd.tolist()
         steer = self.steering_cmd.tolist()
         all_on: list[bool] = np.all(self.wheels_on, axis=1).tolist()
         offtrack = self.offtrack.tolist()
         crashed = self.fleet.crashed.tolist()
-        proj = self.s.tolist()
-        seg = self.segment.tolist()
+        waypoints = [self._waypoints] * self.n
+        reversed_flags = [self.is_reversed] * self.n
+        projection = self.s
+        if self._any_reverse:
+            for car in np.flatnonzero(self.reverse).tolist():
+                waypoints[car] = self._waypoints_back
+                reversed_flags[car] = not self.is_reversed
+            projection = np.where(self.reverse, np.mod(-projection, self._length), projection)
+        proj = projection.tolist()
+        closest = self.closest_waypoints.tolist()
         sim_time = (self.steps * STEP_SECONDS).tolist()
         return [
             {
@@ -360,13 +508,13 @@ class TrackSimulation:
                 "is_left_of_center": left[i],
                 "track_width": width[i],
                 "track_length": self._track_length,
-                "waypoints": self._waypoints,
-                "closest_waypoints": [seg[i], seg[i] + 1],
+                "waypoints": waypoints[i],
+                "closest_waypoints": closest[i],
                 "progress": progress[i],
                 "steps": steps[i],
                 "speed": speed[i],
                 "steering_angle": steer[i],
-                "is_reversed": self.is_reversed,
+                "is_reversed": reversed_flags[i],
                 "is_offtrack": offtrack[i],
                 "is_crashed": crashed[i],
                 "projection_distance": proj[i],

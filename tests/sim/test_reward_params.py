@@ -87,8 +87,9 @@ def test_progress_counts_from_the_episode_start_and_steps_from_one() -> None:
     for _ in range(15):
         sim.apply(np.array([0.0]), np.array([1.0]))
     params = sim.all_params()[0]
-    travelled = params["x"] - (1.0 + LOOK_AHEAD)
-    assert travelled > 0.3
+    # As in DeepRacer, from where the car centre started to where the look-ahead point is.
+    travelled = params["x"] - 1.0
+    assert travelled > 0.3 + LOOK_AHEAD
     assert params["progress"] == pytest.approx(travelled / 20.0 * 100.0)
     assert params["steps"] == 15
     assert params["sim_time"] == pytest.approx(1.0)
