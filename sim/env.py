@@ -3,8 +3,12 @@
 Configuration is what a DeepRacer model is made of: a track, an action space in
 `model_metadata.json` form, a sensor list and a reward function. Episodes follow
 DeepRacer training: off-track, reversed, immobilized and crashed end an episode, a lap
-completes it, and starts move round the track from one episode to the next. The first
-step of each episode is DeepRacer's "prepare" step: reward 0, the function is not called.
+completes it, and starts move round the track from one episode to the next (or not, with
+CHANGE_START_POSITION off). The first step of each episode is DeepRacer's "prepare" step:
+reward 0, the function is not called.
+
+Every car has a reward module of its own: in DeepRacer one simulation worker drives one car,
+so a reward function's module-level state belongs to one car (see `RewardFunction.fresh`).
 
 `DeepRacerEnv` is the standard single-car env (registered as `RacerTui/DeepRacer-v0`);
 `BatchedDeepRacer` steps many cars in one process with automatic resets, which is how
@@ -41,6 +45,7 @@ class EnvConfig:
     rules: EpisodeRules = field(default_factory=EpisodeRules)
     sensor_options: SensorOptions = field(default_factory=SensorOptions)
     car: CarSpec = DEEPRACER_CAR
+    is_reversed: bool = False  # DeepRacer's REVERSE_DIR: drive the track the other way round
 
     @classmethod
     def build(
@@ -81,6 +86,23 @@ class EnvConfig:
 
         return load_template("follow_center_line")
 
+    def reward_functions(self, n_cars: int) -> list[RewardCallable]:
+        """One reward function per car, each in a module of its own when it was loaded from
+        a file (a plain callable given in code is shared: it is the caller's to make)."""
+        function = self.reward_function()
+        fresh = getattr(function, "fresh", None)
+        if not callable(fresh):
+            return [function] * n_cars
+        # Fresh copies for every car, so that the config's own module is never stepped and
+        # two envs built from one config never share a car's state either.
+        return [fresh() for _ in range(n_cars)]
+
+    def simulation(self, n_cars: int) -> TrackSimulation:
+        """The cars' simulation, on the track driven the way this config drives it."""
+        return TrackSimulation(
+            self.track, n_cars, car=self.car, rules=self.rules, is_reversed=self.is_reversed
+        )
+
 
 @dataclass
 class StepInfo:
@@ -101,12 +123,15 @@ class BatchedDeepRacer:
     def __init__(self, config: EnvConfig, n_cars: int) -> None:
         self.config = config
         self.n = n_cars
-        self.sim = TrackSimulation(config.track, n_cars, car=config.car, rules=config.rules)
+        self.sim = config.simulation(n_cars)
         self.observer = Observer(self.sim, config.sensors, config.sensor_options)
         self.observation_space = self.observer.space
         self.action_space = config.action_space.gym_space()
-        self._reward = config.reward_function()
+        self._rewards_by_car = config.reward_functions(n_cars)
         self.final_observations: list[Any] = [None] * n_cars
+        # Told of every step (sim, actions, rewards) before finished cars restart, so a
+        # training log sees each step as it happened (sim.training.logbook).
+        self.on_step: Callable[[TrackSimulation, np.ndarray, np.ndarray], None] | None = None
 
     def reset(self) -> Any:
         self.sim.reset_all()
@@ -119,6 +144,8 @@ class BatchedDeepRacer:
         steering, speed = self.config.action_space.targets(actions)
         sim.apply(steering, speed)
         rewards = self._rewards()
+        if self.on_step is not None:
+            self.on_step(sim, actions, rewards)
         status = sim.status.copy()
         progress = sim.progress
         infos = [
@@ -141,11 +168,11 @@ class BatchedDeepRacer:
 
     def _rewards(self) -> np.ndarray:
         rewards = np.zeros(self.n, dtype=np.float64)
-        reward = self._reward
+        functions = self._rewards_by_car
         steps = self.sim.steps
         for i, params in enumerate(self.sim.all_params()):
             if steps[i] > 1:  # step 1 is DeepRacer's "prepare" step
-                rewards[i] = reward(params)
+                rewards[i] = functions[i](params)
         return rewards
 
 
@@ -171,13 +198,11 @@ class DeepRacerEnv(gym.Env[Any, Any]):
     def __init__(self, config: EnvConfig | None = None, **build_kwargs: Any) -> None:
         super().__init__()
         self.config = config if config is not None else EnvConfig.build(**build_kwargs)
-        self.sim = TrackSimulation(
-            self.config.track, 1, car=self.config.car, rules=self.config.rules
-        )
+        self.sim = self.config.simulation(1)
         self.observer = Observer(self.sim, self.config.sensors, self.config.sensor_options)
         self.observation_space = self.observer.space
         self.action_space = self.config.action_space.gym_space()
-        self._reward = self.config.reward_function()
+        self._reward = self.config.reward_functions(1)[0]
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None

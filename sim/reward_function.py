@@ -109,6 +109,17 @@ class RewardFunction:
     def __repr__(self) -> str:
         return f"RewardFunction({self.name!r})"
 
+    def fresh(self) -> RewardFunction:
+        """The same file loaded again into a module of its own.
+
+        In DeepRacer a simulation worker drives one car and imports the reward module once,
+        so module-level state (the previous step, a `Reward` object created at import)
+        belongs to that car for the whole training (simapp `bundle/markov/rollout_worker.py`
+        loads it once per worker). Training here drives many cars in one process: each car
+        gets its own fresh module, or the cars would share that state.
+        """
+        return _load(self.source, self.name, self._filename)
+
     def __reduce__(self) -> tuple[Any, ...]:
         # Vector envs may pickle the env into worker processes; the function travels as source.
         return (_rebuild, (self.source, self.name, self._filename))
