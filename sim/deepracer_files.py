@@ -245,6 +245,7 @@ class TrainingParams:
     max_minutes: float = 60.0  # the console's stop condition
     alternate_driving_direction: bool = False
     change_start_position: bool = True
+    reverse_direction: bool = False  # REVERSE_DIR: train the track the other way round
     track_hash: str = ""  # content hash of the track the model was set up on
     extra: Mapping[str, Any] = field(default_factory=dict)  # keys we keep but do not use
 
@@ -254,6 +255,7 @@ class TrainingParams:
         "MAX_MINUTES": "max_minutes",
         "ALTERNATE_DRIVING_DIRECTION": "alternate_driving_direction",
         "CHANGE_START_POSITION": "change_start_position",
+        "REVERSE_DIR": "reverse_direction",
         "TRACK_HASH": "track_hash",
     }
 
@@ -280,11 +282,23 @@ class TrainingParams:
             world_name=world,
             race_type=str(data.get("RACE_TYPE", "TIME_TRIAL")),
             max_minutes=float(minutes),
-            alternate_driving_direction=bool(data.get("ALTERNATE_DRIVING_DIRECTION", False)),
-            change_start_position=bool(data.get("CHANGE_START_POSITION", True)),
+            alternate_driving_direction=_flag(data, "ALTERNATE_DRIVING_DIRECTION", False, where),
+            change_start_position=_flag(data, "CHANGE_START_POSITION", True, where),
+            reverse_direction=_flag(data, "REVERSE_DIR", False, where),
             track_hash=str(data.get("TRACK_HASH", "")),
             extra=extra,
         )
+
+
+def _flag(data: Mapping[str, Any], key: str, default: bool, where: str) -> bool:
+    """A yes/no setting; DeepRacer's tools write them as YAML booleans or as the strings
+    "true"/"false" (simapp reads both, `markov/utils.py` str2bool)."""
+    value = data.get(key, default)
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, str) and value.strip().lower() in ("true", "false"):
+        return value.strip().lower() == "true"
+    raise DeepRacerFileError(f"{where}: {key} must be true or false, not {value!r}.")
 
 
 def read_training_params(path: Path) -> TrainingParams:

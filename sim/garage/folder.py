@@ -184,15 +184,23 @@ class ModelFolder:
             raise ModelError(f"model {self.name!r} trains on track {world!r}: {error}") from None
 
     def env_config(self) -> EnvConfig:
-        """Track, action space, sensors and reward function: what training and evaluation run."""
+        """Track, action space, sensors and reward function: what training and evaluation run,
+        with training_params.yaml's start position and driving direction settings."""
         from sim.env import EnvConfig
+        from sim.simulation import EpisodeRules
 
         metadata = self.metadata()
+        params = self.training_params()
         return EnvConfig(
             track=self.track(),
             action_space=metadata.action_space,
             sensors=metadata.sensors,
             reward=self.reward_function(),
+            rules=EpisodeRules(
+                change_start=params.change_start_position,
+                alternate_direction=params.alternate_driving_direction,
+            ),
+            is_reversed=params.reverse_direction,
         )
 
     # --- metrics -------------------------------------------------------------------------

@@ -41,6 +41,8 @@ from sim.deepracer_files import (
 )
 from sim.garage.folder import ModelError, ModelFolder
 from sim.observations import SensorOptions
+from sim.simulation import reversed_track
+from sim.track import Track
 from sim.training import events
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
 from sim.training.errors import PolicyError
@@ -370,9 +372,16 @@ class Trainer:
             self.network, self.metadata, name=self.folder.name, content_hash="", live=True
         )
         results = run_trials(
-            driver, self.config.track, EVALUATION_TRIALS, max_seconds=EVALUATION_SECONDS
+            driver, self.evaluation_track, EVALUATION_TRIALS, max_seconds=EVALUATION_SECONDS
         )
         return EvaluationReport(track=self.config.track.name, trials=tuple(results))
+
+    @property
+    def evaluation_track(self) -> Track:
+        """The track as this model trains on it: reversed with REVERSE_DIR, as DeepRacer's
+        evaluation episodes during training run on the same reversed lines."""
+        track = self.config.track
+        return reversed_track(track) if self.config.is_reversed else track
 
     def _evaluate(self) -> None:
         started = time.monotonic()
