@@ -9,17 +9,17 @@ penalty holds (a hold lasts exactly its penalty, so a 2.5 s penalty costs 2.5 s,
 What happens when DeepRacer's episode rules trigger (a race never ends on them):
 - Lap complete: the crossing time is interpolated inside the step, so lap times are not
   quantised to 1/15 s. The next lap starts at that instant; the car drives on.
-- Off track (all four wheels off): the car is put back at its last on-track position (the
-  pose before the step that left the road), pointing along the track, at speed zero, and
-  held still for `penalty_seconds` while the race clock runs. Its distance from the centre
-  line is kept but pulled in so all four wheels are on the road, so a reset never lands
-  the car straight off the track again. The penalty is inside the lap time; the raw time
-  (without it) is kept beside it. If an off-track and a line crossing happen in the same
-  step, the off-track wins (DeepRacer's precedence) and the car crosses again after.
-- Reversed (15 steps of falling progress): the car is turned round where it is, pointing
-  along the track at speed zero, and held for `penalty_seconds` like an off-track: someone
-  has to pick it up. It counts as a reset, not an off-track, so it does not invalidate the
-  lap; the driving the wrong way already cost time.
+- Off track (all four wheels off): the car is put back where DeepRacer puts it
+  (`sim.resets.reset_pose`: as far along the track as it had got one step before it left,
+  on the lane nearer to where it was, pointing along the track, at speed zero) and held
+  still for `penalty_seconds` while the race clock runs. The penalty is inside the lap
+  time; the raw time (without it) is kept beside it. If a line crossing and an off-track
+  happen in the same step, the lap completes (DeepRacer's precedence) and the off-track
+  counts in the next lap.
+- Reversed (15 steps of falling progress): the car is put back the same way, pointing
+  along the track, and held for `penalty_seconds` like an off-track: someone has to pick it
+  up. It counts as a reset, not an off-track, so it does not invalidate the lap; the
+  driving the wrong way already cost time.
 - Crashed (objects on the track, once those race types exist): put back like an
   off-track and held for `collision_penalty_seconds`.
 - Immobilized: switched off. A car that does not move simply loses time until the window
@@ -38,22 +38,19 @@ import math
 from collections.abc import Generator
 from dataclasses import dataclass, replace
 
-import numpy as np
-
 from sim.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
 from sim.ids import new_id
 from sim.race.driver import Driver
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps
 from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
-from sim.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.resets import reset_pose
+from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
 
 # DeepRacer's reversed rule stays; immobilized and the step limit are switched off (the
 # window ends a race). 2**62 steps is longer than any window.
 RACE_EPISODE_RULES = EpisodeRules(immobilized_steps=2**62, max_steps=2**62)
-# A car put back on the track keeps its wheel centres this far inside the border.
-_RESET_MARGIN = 0.15
 # Clock comparisons: far below a microsecond, far above float noise on a 1-hour clock.
 _EPS = 1e-9
 
@@ -170,10 +167,7 @@ class _Race:
         lap = self.lap
         before_travelled = float(sim.travelled[0])
         before_s = float(sim.s[0])
-        before_offset = float(sim.distance_from_center[0]) * (
-            1.0 if sim.left_of_center[0] else -1.0
-        )
-        before_width = float(sim.track_width[0])
+        before_x, before_y = float(sim.fleet.x[0]), float(sim.fleet.y[0])
         action = self.driver.act(sim)
         steering = float(action.steering_deg[0])
         throttle = float(action.speed[0])
@@ -212,17 +206,8 @@ class _Race:
             action=index,
             pause=pause,
         )
-        if self.status in (_OFF_TRACK, _CRASHED):
-            self._put_back(before_s, before_offset, before_width, before_travelled)
-            self._penalise(pause)
-        elif self.status == _REVERSED:
-            # Turned round where it is now, keeping its progress bookkeeping.
-            self._put_back(
-                float(sim.s[0]),
-                float(sim.distance_from_center[0]) * (1.0 if sim.left_of_center[0] else -1.0),
-                float(sim.track_width[0]),
-                float(sim.travelled[0]),
-            )
+        if self.status in (_OFF_TRACK, _CRASHED, _REVERSED):
+            self._put_back(before_s, before_x, before_y, before_travelled)
             self._penalise(pause)
 
     def _penalise(self, seconds: float) -> None:
@@ -257,19 +242,12 @@ class _Race:
         self.lap_offtracks = 0
         self.lap_penalty = 0.0
 
-    def _put_back(self, s_ahead: float, offset: float, width: float, travelled: float) -> None:
-        """Place the car with its look-ahead point at arc length `s_ahead`, along the track."""
+    def _put_back(self, s_ahead: float, car_x: float, car_y: float, travelled: float) -> None:
+        """Put the car back where DeepRacer would, given where its look-ahead point
+        (`s_ahead`) and its centre were a step before it left; progress follows it."""
         sim = self.sim
-        centre = self.track.centerline
-        limit = max(width / 2.0 - _RESET_MARGIN, 0.0)
-        offset = min(max(offset, -limit), limit)
-        s_centre = (s_ahead - LOOK_AHEAD) % self.length
-        where = np.array([s_centre])
-        point = centre.point_at(where)[0]
-        tangent = centre.direction_at(where)[0]
-        x = float(point[0] - offset * tangent[1])
-        y = float(point[1] + offset * tangent[0])
-        sim.put(0, x, y, math.atan2(float(tangent[1]), float(tangent[0])), 0.0)
+        x, y, yaw = reset_pose(self.track, s_ahead, car_x, car_y)
+        sim.put(0, x, y, yaw, 0.0)
         moved = (float(sim.s[0]) - s_ahead + self.length / 2.0) % self.length - self.length / 2.0
         sim.continue_episode(0, travelled + moved)
 
