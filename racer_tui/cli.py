@@ -1,7 +1,8 @@
 """The `racer-tui` command: the Textual app by default, headless subcommands for scripts.
 
-This module never imports textual at module level, so headless commands start fast.
-A user error is one sentence on stderr and exit code 2; never a traceback.
+This module never imports textual at module level, and a subcommand imports only its own
+command module, so headless commands start fast (`racer-tui tracks list` loads no
+simulator). A user error is one sentence on stderr and exit code 2; never a traceback.
 """
 
 from __future__ import annotations
@@ -13,21 +14,19 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from sim.action_space import ActionSpaceError
 from sim.home import LEAGUE_ENV
-from sim.observations import SensorError
-from sim.track import TrackError
 
 EXIT_USER_ERROR = 2
-# One module per command group; add a new group here.
-COMMAND_MODULES = (
-    "racer_tui.track_commands",
-    "racer_tui.reward_commands",
-    "racer_tui.model_commands",
-    "racer_tui.league_commands",
-    "racer_tui.train_commands",
-    "racer_tui.sync_commands",
-)
+# One module per command group, with the subcommands it registers (its NAMES; a test keeps
+# the two in step), so a command is dispatched without importing the other groups.
+COMMAND_MODULES: dict[str, tuple[str, ...]] = {
+    "racer_tui.track_commands": ("tracks",),
+    "racer_tui.reward_commands": ("reward",),
+    "racer_tui.model_commands": ("model",),
+    "racer_tui.league_commands": ("submit", "leaderboard", "night", "season", "racer", "correct"),
+    "racer_tui.train_commands": ("train", "evaluate"),
+    "racer_tui.sync_commands": ("sync",),
+}
 
 
 class UsageError(Exception):
@@ -35,7 +34,11 @@ class UsageError(Exception):
 
 
 def _user_errors() -> tuple[type[Exception], ...]:
+    # Imported only when an error is being handled: importing them costs a simulator.
+    from sim.action_space import ActionSpaceError
+    from sim.observations import SensorError
     from sim.reward_function import RewardFunctionError
+    from sim.track_errors import TrackError
 
     errors: list[type[Exception]] = [
         TrackError,
@@ -49,7 +52,8 @@ def _user_errors() -> tuple[type[Exception], ...]:
     return tuple(errors)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The whole parser, or (given a known subcommand) one holding only that group's."""
     parser = argparse.ArgumentParser(
         prog="racer-tui",
         description="Build, train and race AWS-DeepRacer-style car models in the terminal.",
@@ -64,15 +68,30 @@ def build_parser() -> argparse.ArgumentParser:
         f"data folder, or ${LEAGUE_ENV}); a command's own --db still wins",
     )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for module in _command_modules():
+    for module in _command_modules(command):
         module.register(commands)
     return parser
 
 
-def _command_modules() -> list[Any]:
+def _command_modules(command: str | None = None) -> list[Any]:
     """Each command module has `NAMES` (its subcommands), `register(commands)` and `run(args)`,
-    and may list its own user-error types in `USER_ERRORS`."""
-    return [importlib.import_module(name) for name in COMMAND_MODULES]
+    and may list its own user-error types in `USER_ERRORS`. Given a subcommand, only its
+    module; otherwise (help, the app, an unknown word) all of them."""
+    names = [name for name, owns in COMMAND_MODULES.items() if command in owns]
+    return [importlib.import_module(name) for name in names or COMMAND_MODULES]
+
+
+def _subcommand(arguments: Sequence[str]) -> str | None:
+    """The first word that is not an option or an option's value: the subcommand, if any."""
+    skip_value = False
+    for argument in arguments:
+        if skip_value:
+            skip_value = False
+        elif argument == "--db":
+            skip_value = True
+        elif not argument.startswith("-"):
+            return argument
+    return None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -82,7 +101,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         from racer_tui.race_commands import main as race_main
 
         return race_main(arguments)
-    args = build_parser().parse_args(arguments)
+    args = build_parser(_subcommand(arguments)).parse_args(arguments)
     if args.league_db:
         # Through the environment, so the app's screens, the league commands and any child
         # process all open the same file without passing it along.
@@ -102,7 +121,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _dispatch(args: argparse.Namespace) -> int:
-    for module in _command_modules():
+    for module in _command_modules(args.command):
         if args.command in module.NAMES:
             return int(module.run(args))
     raise UsageError(f"unknown command {args.command!r}; see racer-tui --help.")

@@ -1,4 +1,8 @@
-"""`racer-tui tracks ...`: list, show, import and generate tracks."""
+"""`racer-tui tracks ...`: list, show, import and generate tracks.
+
+Listing reads catalogs only; the simulator (reference laps, the generator) is imported by
+the actions that use it, so `racer-tui tracks list` answers at once.
+"""
 
 from __future__ import annotations
 
@@ -10,9 +14,14 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json, print_table
-from sim.reference_driver import reference_lap
-from sim.track_catalog import import_track, list_tracks, resolve_track, save_user_track
-from sim.track_generator import generate_track
+from sim.track_catalog import (
+    TrackInfo,
+    find_track_info,
+    import_track,
+    list_tracks,
+    resolve_track,
+    save_user_track,
+)
 
 NAMES = ("tracks",)
 
@@ -20,10 +29,19 @@ NAMES = ("tracks",)
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     tracks = commands.add_parser("tracks", help="list, show, import and generate tracks")
     track_commands = tracks.add_subparsers(dest="tracks_command", metavar="ACTION", required=True)
-    listing = track_commands.add_parser("list", help="built-in and imported tracks")
+    listing = track_commands.add_parser(
+        "list", help="built-in, official (AWS DeepRacer) and imported tracks"
+    )
+    listing.add_argument(
+        "--search", metavar="TEXT", help="only tracks whose name or console name holds TEXT"
+    )
+    kinds = listing.add_argument_group("kinds (any combination; all when none is given)")
+    kinds.add_argument("--builtin", action="store_true", help="racer-tui's own designs")
+    kinds.add_argument("--official", action="store_true", help="AWS DeepRacer's tracks")
+    kinds.add_argument("--imported", action="store_true", help="tracks you imported")
     listing.add_argument("--json", action="store_true", help="print JSON instead of a table")
     show = track_commands.add_parser("show", help="one track's facts and its reference lap")
-    show.add_argument("track", help="track name or .npy file")
+    show.add_argument("track", help="track name (world or console name) or .npy file")
     show.add_argument("--json", action="store_true")
     importer = track_commands.add_parser("import", help="import a DeepRacer .npy track file")
     importer.add_argument("file", help="DeepRacer track file (.npy, shape N x 6)")
@@ -40,7 +58,16 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
 def run(args: argparse.Namespace) -> int:
     action = args.tracks_command
     if action == "list":
-        return _list(args.json)
+        kinds = {
+            kind
+            for kind, wanted in (
+                ("built-in", args.builtin),
+                ("official", args.official),
+                ("imported", args.imported),
+            )
+            if wanted
+        }
+        return _list(_filtered(list_tracks(), args.search, kinds), args.json)
     if action == "show":
         return _show(args.track, args.json)
     if action == "import":
@@ -48,48 +75,99 @@ def run(args: argparse.Namespace) -> int:
     return _generate(args.seed, args.width, args.save, args.json)
 
 
-def _list(as_json: bool) -> int:
-    infos = list_tracks()
+def _filtered(infos: list[TrackInfo], search: str | None, kinds: set[str]) -> list[TrackInfo]:
+    needle = (search or "").casefold()
+    return [
+        info
+        for info in infos
+        if (not kinds or info.kind in kinds)
+        and (needle in info.name.casefold() or needle in info.console_name.casefold())
+    ]
+
+
+def _list(infos: list[TrackInfo], as_json: bool) -> int:
     if as_json:
         print_json(
             [
                 {
                     "name": info.name,
-                    "description": info.description,
+                    "console_name": info.console_name,
+                    "kind": info.kind,
+                    "builtin": info.builtin,
                     "length_m": info.length_m,
                     "width_m": info.width_m,
                     "direction": info.direction,
-                    "builtin": info.builtin,
+                    "release_date": info.release_date,
+                    "lappable": info.lappable,
+                    "description": info.description,
                 }
                 for info in infos
             ]
         )
         return 0
-    table = Table(title="Tracks")
-    table.add_column("name", no_wrap=True)
-    table.add_column("length", justify="right", no_wrap=True)
-    table.add_column("width", justify="right", no_wrap=True)
+    if not infos:
+        print("No track matches; `racer-tui tracks list` shows them all.")
+        return 0
+    # One table per kind, one line per track, so 132 tracks read well at 80 columns.
+    for kind, heading in _GROUPS:
+        group = [info for info in infos if info.kind == kind]
+        if group:
+            print_table(_kind_table(f"{heading} ({len(group)})", group))
+    print("Give a track by its name or console name, e.g. --track reinvent_base.")
+    return 0
+
+
+def _kind_table(title: str, infos: list[TrackInfo]) -> Table:
+    table = Table(
+        title=title, title_justify="left", box=None, pad_edge=False, header_style="bold underline"
+    )
+    table.add_column("name", no_wrap=True, min_width=max(len(info.name) for info in infos))
+    # What the console calls it; for racer-tui's and your own tracks, their description.
+    table.add_column("console name", no_wrap=True, overflow="ellipsis", max_width=22)
+    table.add_column("len m", justify="right", no_wrap=True)
+    table.add_column("wide", justify="right", no_wrap=True)
     table.add_column("dir", no_wrap=True)
-    table.add_column("kind", no_wrap=True)
-    table.add_column("description", ratio=1, min_width=20)
+    table.add_column("released", no_wrap=True)  # the month: the day is in --json
     for info in infos:
         # Names and descriptions are user data: Text() keeps them plain, never markup.
         table.add_row(
             Text(info.name),
-            f"{info.length_m:.2f} m",
-            f"{info.width_m:.3f} m",
-            "ccw" if info.direction == "counter-clockwise" else "cw",
-            "built-in" if info.builtin else "imported",
-            Text(info.description),
+            Text(_console_or_description(info)),
+            f"{info.length_m:.2f}",
+            f"{info.width_m:.2f}",
+            _DIRECTIONS.get(info.direction, info.direction),
+            info.release_date[:7] or "-",
         )
-    print_table(table)
-    return 0
+    return table
+
+
+_GROUPS = (
+    ("built-in", "Built-in: racer-tui's designs"),
+    ("official", "Official: AWS DeepRacer's tracks"),
+    ("imported", "Imported: your tracks"),
+)
+
+
+def _console_or_description(info: TrackInfo) -> str:
+    if info.kind == "official":
+        return info.console_name or "(not in the console)"
+    return info.description or "-"
+
+
+_DIRECTIONS = {"counter-clockwise": "ccw", "clockwise": "cw", "straight": "-"}
 
 
 def _facts(track_name: str) -> dict[str, object]:
+    from sim.reference_driver import reference_lap
+
     track = resolve_track(track_name)
     lap = reference_lap(track)
     facts = dict(track.summary())
+    if not Path(track_name).suffix:
+        info = find_track_info(track_name)
+        facts["kind"] = info.kind
+        facts["console_name"] = info.console_name
+        facts["release_date"] = info.release_date
     facts["reference_lap_s"] = None if math.isnan(lap.lap_time) else round(lap.lap_time, 3)
     facts["reference_status"] = lap.status
     facts["content_hash"] = track.content_hash
@@ -112,13 +190,22 @@ def _show(track_name: str, as_json: bool) -> int:
 
 def _import(file: Path, name: str | None, reverse: bool, description: str) -> int:
     info = import_track(file, name, reverse=reverse, description=description)
-    print_table(
-        _one_track_table(f"Imported {info.name}", info.length_m, info.width_m, info.direction)
+    title = (
+        f"Imported {info.name}"
+        if info.kind == "imported"
+        else f"{info.title} is already here as {_a(info.kind)} track; nothing was copied"
     )
+    print_table(_one_track_table(title, info.length_m, info.width_m, info.direction))
     return 0
 
 
+def _a(kind: str) -> str:
+    return f"an {kind}" if kind[0] in "aeiou" else f"a {kind}"
+
+
 def _generate(seed: int, width: float, save: bool, as_json: bool) -> int:
+    from sim.track_generator import generate_track
+
     track = generate_track(seed, width=width)
     saved_as = save_user_track(track).name if save else None
     if as_json:

@@ -29,6 +29,10 @@ _SAMPLE_STEP = 0.01
 # are marked ambiguous and fall back to the exact tree search.
 _GRID_CELL = 0.03
 _GRID_MARGIN = 1.5
+# Only cells this close to the polyline get a precomputed answer: cars never stray further
+# from a track's lines than this, and the rest of the bounding box (most of it on a long
+# track) falls back to the exact tree search. Building a big track's grid costs a third.
+_GRID_BAND = 1.0
 _NEIGHBOURS = np.arange(-2, 3)
 
 
@@ -75,27 +79,53 @@ class PolylineProjector:
     def _build_grid(self) -> NDArray[np.intp]:
         """Nearest segment per cell, or -1 where the exact tree search must decide."""
         nx, ny = self._grid_shape
-        ix, iy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+        band = self._band_cells()
+        cells = np.flatnonzero(band.ravel())
         centres = (
-            self._grid_origin + (np.stack([ix.ravel(), iy.ravel()], axis=1) + 0.5) * _GRID_CELL
+            self._grid_origin + (np.stack([cells // ny, cells % ny], axis=1) + 0.5) * _GRID_CELL
         )
         _, nearest = self._tree.query(centres)
-        grid = np.asarray(self._owners[nearest].reshape(nx, ny), dtype=np.intp)
+        flat = np.full(nx * ny, -1, dtype=np.intp)
+        flat[cells] = self._owners[nearest]
+        grid = flat.reshape(nx, ny)
         n_seg = len(self.lengths)
         padded = np.pad(grid, 1, mode="edge")
-        ambiguous = np.zeros((nx, ny), dtype=bool)
+        ambiguous = ~band
         for dx in (-1, 0, 1):
             for dy in (-1, 0, 1):
                 other = padded[1 + dx : 1 + dx + nx, 1 + dy : 1 + dy + ny]
                 gap = np.abs(grid - other)
                 if self.closed:
                     gap = np.minimum(gap, n_seg - gap)
-                ambiguous |= gap > 1
+                # A neighbour outside the band is unknown: decide this cell exactly too.
+                ambiguous |= (gap > 1) | (other < 0)
         # The outermost ring also catches every point beyond the grid (indices are clipped).
         ambiguous[[0, -1], :] = True
         ambiguous[:, [0, -1]] = True
         grid[ambiguous] = -1
-        return grid.ravel()
+        return np.asarray(grid.ravel(), dtype=np.intp)
+
+    def _band_cells(self) -> NDArray[np.bool_]:
+        """Cells within about `_GRID_BAND` of the polyline (a square dilation of its cells)."""
+        nx, ny = self._grid_shape
+        samples = self._tree.data
+        cell = ((samples - self._grid_origin) / _GRID_CELL).astype(np.intp)
+        np.clip(cell, 0, (nx - 1, ny - 1), out=cell)
+        mask = np.zeros((nx, ny), dtype=np.int32)
+        mask[cell[:, 0], cell[:, 1]] = 1
+        reach = int(np.ceil(_GRID_BAND / _GRID_CELL))
+        for axis in (0, 1):
+            # Sliding-window sum of width 2*reach+1 along one axis, by cumulative sums.
+            pad = [(0, 0), (0, 0)]
+            pad[axis] = (reach + 1, reach)
+            total = np.cumsum(np.pad(mask, pad), axis=axis)
+            width = 2 * reach + 1
+            upper = [slice(None), slice(None)]
+            lower = [slice(None), slice(None)]
+            upper[axis] = slice(width, None)
+            lower[axis] = slice(None, -width)
+            mask = np.minimum(total[tuple(upper)] - total[tuple(lower)], 1)
+        return np.asarray(mask > 0)
 
     def nearest_segments(self, query: FloatArray) -> NDArray[np.intp]:
         if self._grid is None:

@@ -1,18 +1,26 @@
 """The one place that turns a track name into a track.
 
-Built-in tracks ship in the `tracks` package with an `index.yaml`; a racer's own tracks
-live in `sim.home.user_tracks_dir()` as `<name>.npy` with an optional `<name>.yaml` sidecar
-(description and the facts `list_tracks` shows, so listing never loads every array).
-The .npy file is what makes a track exist: the sidecar is written first, so a crash
-between the two writes leaves no half-imported track.
+Three kinds of track, listed in this order:
+- built-in: racer-tui's own designs, in the `tracks` package with an `index.yaml`;
+- official: AWS DeepRacer's 127 track files in `tracks/official/` with their catalog
+  (`sim.official_tracks`), found by the simulator's world name (`reinvent_base`) or by the
+  console's name (`re:Invent 2018`, any case);
+- imported: a racer's own tracks in `sim.home.user_tracks_dir()` as `<name>.npy` with an
+  optional `<name>.yaml` sidecar (description and the facts `list_tracks` shows).
+Listing never loads an array, and importing this module loads no geometry library, so
+`racer-tui tracks list` starts fast. The .npy file is what makes an imported track exist:
+the sidecar is written first, so a crash between the two writes leaves no half-imported
+track. A track's identity in the league is its content hash, so an official track and the
+same file imported by hand are one track.
 """
 
 from __future__ import annotations
 
+import difflib
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import yaml
 
@@ -20,10 +28,19 @@ import tracks
 from sim.atomic import write_text_atomic
 from sim.home import user_tracks_dir
 from sim.names import NAME_PATTERN, NAME_RULE
-from sim.track import Track, TrackError, load_track
+from sim.official_tracks import OfficialTrack, official_tracks
+from sim.track_errors import TrackError
+
+if TYPE_CHECKING:
+    from sim.track import Track
 
 INDEX_FILE = "index.yaml"
+# The track of the league rule every DeepRacer racer knows ("4 minutes for your best lap on
+# the re:Invent track"): new models, races and league nights start here.
+DEFAULT_TRACK = "reinvent_base"
 _NAME = NAME_PATTERN
+
+TrackKind = Literal["built-in", "official", "imported"]
 
 
 @dataclass(frozen=True)
@@ -35,8 +52,22 @@ class TrackInfo:
     length_m: float
     width_m: float
     direction: str
-    builtin: bool
+    kind: TrackKind
     path: Path
+    console_name: str = ""  # official tracks: the name the DeepRacer console shows
+    release_date: str = ""  # official tracks: YYYY-MM-DD when the console released it
+    content_hash: str = ""  # Track.content_hash when known without loading the array
+    lappable: bool = True  # False for a straight piece of road (it has no laps)
+
+    @property
+    def builtin(self) -> bool:
+        """One of racer-tui's own designs."""
+        return self.kind == "built-in"
+
+    @property
+    def title(self) -> str:
+        """How a chooser names it: "re:Invent 2018 (reinvent_base)", or just the name."""
+        return f"{self.console_name} ({self.name})" if self.console_name else self.name
 
 
 def builtin_dir() -> Path:
@@ -44,8 +75,9 @@ def builtin_dir() -> Path:
 
 
 def list_tracks() -> list[TrackInfo]:
-    """Built-in tracks in index order, then the racer's imported tracks by name."""
-    return builtin_tracks() + user_tracks()
+    """Built-in tracks in index order, official tracks by release date (the newest last, the
+    console never listed last) then world name, then the racer's imported tracks by name."""
+    return builtin_tracks() + official_track_infos() + user_tracks()
 
 
 def builtin_tracks() -> list[TrackInfo]:
@@ -53,49 +85,146 @@ def builtin_tracks() -> list[TrackInfo]:
     entries = _read_yaml(directory / INDEX_FILE)
     if not isinstance(entries, list):
         raise TrackError(f"{directory / INDEX_FILE}: is not a list of tracks; reinstall racer-tui.")
-    return [_info(entry, directory / str(entry["file"]), builtin=True) for entry in entries]
+    return [_info(entry, directory / str(entry["file"]), kind="built-in") for entry in entries]
+
+
+def official_track_infos() -> list[TrackInfo]:
+    ordered = sorted(official_tracks(), key=lambda t: (t.release_date or "9999", t.world_name))
+    return [_official_info(track) for track in ordered]
 
 
 def user_tracks() -> list[TrackInfo]:
     return [_user_info(npy) for npy in sorted(user_tracks_dir().glob("*.npy"))]
 
 
+def find_track_info(name: str) -> TrackInfo:
+    """The listed track a name means, or TrackError with the closest names.
+
+    An exact name first (built-in, then official, then imported: an imported copy never
+    hides an official track), then the same name in any case, then an official track's
+    console name in any case.
+    """
+    infos = list_tracks()
+    for info in infos:
+        if info.name == name:
+            return info
+    folded = name.casefold().strip()
+    for info in infos:
+        if info.name.casefold() == folded:
+            return info
+    by_console = _console_matches(folded)
+    if len(by_console) == 1:
+        return _official_info(by_console[0])
+    if by_console:
+        choices = " or ".join(f"{track.world_name} ({track.direction})" for track in by_console)
+        raise TrackError(f"{name!r} is {len(by_console)} tracks; give one of: {choices}.")
+    raise TrackError(_unknown_name(name, infos))
+
+
 def resolve_track(name_or_path: str) -> Track:
-    """A built-in track name, an imported track name, or the path of a DeepRacer .npy file."""
-    known = list_tracks()
-    for info in known:
-        if info.name == name_or_path:
-            return load_track(info.path, info.name, description=info.description)
+    """A track by name (see `find_track_info`), or the path of a DeepRacer .npy file."""
+    from sim.track import load_track
+
     path = Path(name_or_path).expanduser()
-    if not _NAME.fullmatch(name_or_path) or path.is_file():
+    if not _NAME.fullmatch(name_or_path) and (path.suffix == ".npy" or path.is_file()):
         return load_track(path)
-    names = ", ".join(info.name for info in known)
-    raise TrackError(
-        f"there is no track named {name_or_path!r} (the tracks are: {names}); give one of "
-        "these names, the path of a DeepRacer .npy file, or import a file with "
-        "`racer-tui tracks import FILE`."
-    )
+    try:
+        info = find_track_info(name_or_path)
+    except TrackError:
+        if path.is_file():
+            return load_track(path)
+        raise
+    if not info.lappable:
+        raise TrackError(
+            f"{info.name} is a straight piece of road, not a loop; racer-tui races laps, "
+            f"so choose a loop such as {DEFAULT_TRACK} (re:Invent 2018)."
+        )
+    return load_track(info.path, info.name, description=info.description)
+
+
+def find_track_by_hash(content_hash: str) -> TrackInfo | None:
+    """The listed track with this content hash (the league's track identity), or None.
+
+    Official and sidecar'd tracks know their hash without loading; only imported files
+    copied in by hand (no sidecar hash) are loaded to compare.
+    """
+    from sim.track import load_track
+
+    unknown: list[TrackInfo] = []
+    for info in list_tracks():
+        if info.content_hash == content_hash:
+            return info
+        if not info.content_hash and info.lappable:
+            unknown.append(info)
+    for info in unknown:
+        try:
+            if load_track(info.path, info.name).content_hash == content_hash:
+                return info
+        except TrackError:
+            continue  # a damaged imported track: the tracks section says what is wrong
+    return None
 
 
 def import_track(
     path: Path, name: str | None = None, *, reverse: bool = False, description: str = ""
 ) -> TrackInfo:
-    """Validate a DeepRacer .npy file and keep a copy under `name` (default: the file's stem)."""
+    """Validate a DeepRacer .npy file and keep a copy under `name` (default: the file's stem).
+
+    A file that is already shipped under that name (an official track's own file, imported
+    by habit) is not copied again: the shipped track is returned, and `kind` says so.
+    """
+    from sim.track import load_track
+
     source = Path(path).expanduser()
     chosen = name if name is not None else source.stem
-    _check_new_name(chosen)
+    _check_name(chosen)
     track = load_track(source, chosen, description=description, reverse=reverse)
+    shipped = _shipped_named(chosen)
+    if shipped is not None and shipped.content_hash == track.content_hash:
+        return shipped
+    _check_new_name(chosen)
     return _save(track, extra={"source": str(source.resolve()), "reversed": reverse})
 
 
 def save_user_track(track: Track) -> TrackInfo:
     """Keep a built or generated track; saving the very same track again is a no-op."""
+    from sim.track import load_track
+
     _check_name(track.name)
     existing = _user_path(track.name)
     if existing.exists() and load_track(existing).content_hash == track.content_hash:
         return _user_info(existing)
     _check_new_name(track.name)
     return _save(track, extra={})
+
+
+def _console_matches(folded: str) -> list[OfficialTrack]:
+    """Official tracks a console name or console track id means: the console's own variant
+    when there is one, else every direction variant (the caller asks which)."""
+    named = [
+        track
+        for track in official_tracks()
+        if folded in (track.console_name.casefold(), track.console_track.casefold())
+        and track.closed
+    ]
+    main = [track for track in named if track.world_name == track.console_track]
+    return main or named
+
+
+def _unknown_name(name: str, infos: list[TrackInfo]) -> str:
+    by_fold: dict[str, str] = {}
+    for info in infos:
+        by_fold.setdefault(info.name.casefold(), info.name)
+        if info.console_name:
+            by_fold.setdefault(info.console_name.casefold(), info.console_name)
+    close = difflib.get_close_matches(name.casefold(), list(by_fold), n=4, cutoff=0.6)
+    near = ", ".join(repr(by_fold[key]) for key in close)
+    return (
+        f"there is no track named {name!r}"
+        + (f" (close names: {near})" if close else "")
+        + "; give a name that `racer-tui tracks list` shows, or the path of a DeepRacer .npy "
+        "file (`racer-tui tracks import FILE` keeps one)."
+    )
 
 
 # --- names ----------------------------------------------------------------------------
@@ -112,9 +241,10 @@ def _check_new_name(name: str) -> None:
     _check_name(name)
     # Compared without case: on macOS and Windows "Oval.npy" and "oval.npy" are one file.
     folded = name.casefold()
-    if any(info.name.casefold() == folded for info in builtin_tracks()):
+    shipped = _shipped_named(name)
+    if shipped is not None:
         raise TrackError(
-            f"{name!r} is the name of a built-in track; choose another name with --name."
+            f"{name!r} is the name of {_a(shipped.kind)} track; choose another name with --name."
         )
     for npy in user_tracks_dir().glob("*.npy"):
         if npy.stem.casefold() == folded:
@@ -135,7 +265,7 @@ def _save(track: Track, extra: dict[str, object]) -> TrackInfo:
     sidecar: dict[str, object] = {**track.summary(), **extra, "sha256": track.content_hash}
     write_text_atomic(npy.with_suffix(".yaml"), yaml.safe_dump(sidecar, sort_keys=False))
     track.save(npy)
-    return _info(sidecar, npy, builtin=False)
+    return _info(sidecar, npy, kind="imported")
 
 
 def _user_info(npy: Path) -> TrackInfo:
@@ -143,7 +273,26 @@ def _user_info(npy: Path) -> TrackInfo:
     facts = meta if isinstance(meta, dict) else {}
     if not _has_facts(facts):
         facts = _facts_from_file(npy, facts)
-    return _info({**facts, "name": npy.stem}, npy, builtin=False)
+    info = _info({**facts, "name": npy.stem}, npy, kind="imported")
+    if _shadowed(npy.stem):
+        note = "hidden by the track of the same name; re-import the file with --name"
+        return TrackInfo(**{**info.__dict__, "description": note})
+    return info
+
+
+def _shadowed(name: str) -> bool:
+    """An imported track named like a built-in or official one (imported before racer-tui
+    shipped it): names find the shipped track, so this copy needs another name."""
+    return _shipped_named(name) is not None
+
+
+def _shipped_named(name: str) -> TrackInfo | None:
+    """The built-in or official track with this name in any case (one file on macOS)."""
+    folded = name.casefold()
+    for info in builtin_tracks() + official_track_infos():
+        if info.name.casefold() == folded:
+            return info
+    return None
 
 
 def _has_facts(meta: dict[str, Any]) -> bool:
@@ -155,6 +304,8 @@ def _has_facts(meta: dict[str, Any]) -> bool:
 
 def _facts_from_file(npy: Path, meta: dict[str, Any]) -> dict[str, Any]:
     """Facts for a track copied in by hand, without a sidecar; unreadable files still list."""
+    from sim.track import load_track
+
     description = str(meta.get("description", ""))
     try:
         summary = load_track(npy, npy.stem, description=description).summary()
@@ -163,16 +314,39 @@ def _facts_from_file(npy: Path, meta: dict[str, Any]) -> dict[str, Any]:
     return summary
 
 
-def _info(entry: dict[str, Any], path: Path, *, builtin: bool) -> TrackInfo:
+def _info(entry: dict[str, Any], path: Path, *, kind: TrackKind) -> TrackInfo:
     return TrackInfo(
         name=str(entry["name"]),
         description=str(entry.get("description") or ""),
         length_m=float(entry.get("length_m", 0.0)),
         width_m=float(entry.get("width_m", 0.0)),
         direction=str(entry.get("direction", "unknown")),
-        builtin=builtin,
+        kind=kind,
         path=path,
+        content_hash=str(entry.get("sha256") or ""),
     )
+
+
+def _official_info(track: OfficialTrack) -> TrackInfo:
+    released = f"released {track.release_date}" if track.release_date else "never in the console"
+    what = "AWS DeepRacer track" if track.closed else "AWS DeepRacer's straight test road"
+    return TrackInfo(
+        name=track.world_name,
+        description=f"{what}, {released}",
+        length_m=track.length_m,
+        width_m=track.width_m,
+        direction=track.direction,
+        kind="official",
+        path=track.path,
+        console_name=track.console_name,
+        release_date=track.release_date,
+        content_hash=track.sha256,
+        lappable=track.closed,
+    )
+
+
+def _a(kind: str) -> str:
+    return f"an {kind}" if kind[0] in "aeiou" else f"a {kind}"
 
 
 def _read_yaml(path: Path) -> Any:

@@ -176,6 +176,8 @@ def index_entry(track: Track, file_name: str) -> dict[str, object]:
         "width_m": round(track.width, 3),
         "direction": track.direction,
         "waypoints": len(track.points),
+        # The league's identity of the track, so finding a track by hash loads no array.
+        "sha256": track.content_hash,
     }
 
 

@@ -72,3 +72,13 @@ def test_every_screen_uses_the_compact_aware_footer() -> None:
         path.name for path in sorted(screens.glob("*.py")) if "yield Footer(" in path.read_text()
     ]
     assert plain == []
+
+
+def test_the_cli_knows_which_module_owns_each_subcommand() -> None:
+    """`racer-tui CMD` imports only CMD's module, found in cli.COMMAND_MODULES."""
+    import importlib
+
+    from racer_tui.cli import COMMAND_MODULES
+
+    for name, owned in COMMAND_MODULES.items():
+        assert tuple(importlib.import_module(name).NAMES) == owned, name

@@ -90,10 +90,100 @@ def test_bad_track_files_give_one_sentence_and_exit_2(
     assert "Traceback" not in err
 
 
-def test_unknown_track_name_lists_the_choices(capsys: pytest.CaptureFixture[str]) -> None:
-    code, _, err = run_cli(capsys, "tracks", "show", "no-such-track")
+def test_unknown_track_name_suggests_close_names(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run_cli(capsys, "tracks", "show", "reinvent-base")
     assert code == 2
-    assert "beginner-oval" in err
+    assert "'reinvent_base'" in err
+    assert "Traceback" not in err
+
+
+def test_a_fresh_install_lists_the_official_tracks(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "tracks", "list", "--json")
+
+    assert code == 0
+    tracks = {t["name"]: t for t in json.loads(out)}
+    assert len(tracks) == 5 + 127
+    reinvent = tracks["reinvent_base"]
+    assert reinvent["console_name"] == "re:Invent 2018"
+    assert reinvent["kind"] == "official"
+    assert (reinvent["length_m"], reinvent["direction"]) == (17.71, "counter-clockwise")
+    assert reinvent["release_date"] == "2020-03-01"
+
+
+def test_tracks_list_filters_by_kind_and_search(
+    capsys: pytest.CaptureFixture[str], deepracer_dir: Path
+) -> None:
+    run_cli(
+        capsys,
+        "tracks",
+        "import",
+        str(deepracer_dir / "tracks" / "Oval_track.npy"),
+        "--name",
+        "club",
+    )
+
+    def names(*flags: str) -> list[str]:
+        return [
+            t["name"] for t in json.loads(run_cli(capsys, "tracks", "list", "--json", *flags)[1])
+        ]
+
+    assert names("--imported") == ["club"]
+    assert len(names("--builtin")) == 5
+    assert len(names("--official")) == 127
+    assert len(names("--builtin", "--imported")) == 6
+    assert names("--search", "expedition") == [
+        "red_star_open",
+        "red_star_pro",
+        "red_star_pro_ccw",
+        "red_star_pro_cw",
+    ]
+    assert names("--search", "RE:INVENT 2018") == ["reinvent_base"]
+    code, out, _ = run_cli(capsys, "tracks", "list", "--search", "no such track")
+    assert code == 0 and "No track matches" in out
+
+
+def test_tracks_list_table_fits_80_columns(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "tracks", "list")
+
+    assert code == 0
+    assert "re:Invent 2018" in out and "Expedition Loop" in out
+    assert max(len(line.rstrip()) for line in out.splitlines()) <= 80
+
+
+def test_an_official_track_is_shown_by_its_console_name(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    code, out, _ = run_cli(capsys, "tracks", "show", "Expedition Loop", "--json")
+
+    assert code == 0
+    facts = json.loads(out)
+    assert facts["name"] == "red_star_open"
+    assert facts["kind"] == "official"
+    assert facts["reference_status"] == "Lap complete"
+
+
+def test_importing_an_official_file_says_it_is_already_here(
+    capsys: pytest.CaptureFixture[str], deepracer_dir: Path
+) -> None:
+    code, out, _ = run_cli(
+        capsys, "tracks", "import", str(deepracer_dir / "tracks" / "reinvent_base.npy")
+    )
+
+    assert code == 0
+    assert "already here" in " ".join(out.split())
+
+
+def test_tracks_list_loads_no_simulator_and_no_array() -> None:
+    script = (
+        "import contextlib, io, sys\n"
+        "from racer_tui.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main(['tracks', 'list'])\n"
+        "print(sorted(m for m in ('numpy', 'scipy', 'shapely', 'sim.track', 'torch') "
+        "if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
 
 
 def test_reward_check_reports_sample_and_lap_rewards(

@@ -149,6 +149,7 @@ def test_index_yaml_matches_the_arrays(builtin: dict[str, Track]) -> None:
         assert entry["width_m"] == round(track.width, 3)
         assert entry["direction"] == track.direction
         assert entry["waypoints"] == len(track.points)
+        assert entry["sha256"] == track.content_hash
 
 
 def test_rerunning_the_designs_rewrites_identical_files(tmp_path: Path) -> None:

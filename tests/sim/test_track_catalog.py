@@ -1,4 +1,5 @@
-"""Resolving track names: built-in tracks, a racer's imported tracks, and plain file paths."""
+"""Resolving track names: built-in tracks, AWS DeepRacer's official tracks by world or console
+name, a racer's imported tracks, and plain file paths."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ from sim.home import user_tracks_dir
 from sim.track import TrackError, load_track
 from sim.track_catalog import (
     TrackInfo,
+    find_track_by_hash,
+    find_track_info,
     import_track,
     list_tracks,
     resolve_track,
@@ -21,10 +24,11 @@ from sim.track_generator import generate_track
 
 BUILTIN = ["beginner-oval", "hairpin-circuit", "bowtie-chicane", "speedway", "grand-prix"]
 REAL = ["Bowtie_track", "Oval_track", "reInvent2019_wide", "reinvent_base"]
+OFFICIAL_COUNT = 127
 
 
 def test_builtin_tracks_are_listed_first_with_their_facts() -> None:
-    infos = list_tracks()
+    infos = list_tracks()[: len(BUILTIN)]
 
     assert [info.name for info in infos] == BUILTIN
     for info in infos:
@@ -43,15 +47,113 @@ def test_resolve_builtin_by_name_carries_the_description() -> None:
     assert track.description == list_tracks()[3].description
 
 
-def test_unknown_name_lists_the_tracks_and_says_how_to_import() -> None:
+def test_every_official_track_is_listed_after_the_builtin_ones() -> None:
+    infos = list_tracks()
+    official = [info for info in infos if info.kind == "official"]
+
+    assert len(infos) == len(BUILTIN) + OFFICIAL_COUNT
+    assert len(official) == OFFICIAL_COUNT
+    assert infos[len(BUILTIN)].kind == "official"
+    reinvent = next(info for info in official if info.name == "reinvent_base")
+    assert reinvent.console_name == "re:Invent 2018"
+    assert reinvent.title == "re:Invent 2018 (reinvent_base)"
+    assert (reinvent.length_m, reinvent.width_m) == (17.71, 0.762)
+    assert reinvent.direction == "counter-clockwise"
+    dated = [info.release_date for info in official if info.release_date]
+    assert dated == sorted(dated)  # oldest first, the console's never-listed files last
+
+
+@pytest.mark.parametrize(
+    ("name", "world"),
+    [
+        ("reinvent_base", "reinvent_base"),
+        ("re:Invent 2018", "reinvent_base"),
+        ("RE:INVENT 2018", "reinvent_base"),
+        ("Reinvent_Base", "reinvent_base"),
+        ("Expedition Loop", "red_star_open"),
+        ("ace speedway", "2022_april_open"),  # the console's own variant of three
+        ("A to Z Speedway", "reInvent2019_wide"),
+        ("2022_april_open_cw", "2022_april_open_cw"),
+    ],
+)
+def test_official_tracks_resolve_by_world_or_console_name(name: str, world: str) -> None:
+    track = resolve_track(name)
+
+    assert track.name == world
+    assert track.content_hash == find_track_info(world).content_hash
+
+
+def test_a_console_name_shared_by_two_directions_asks_which() -> None:
     with pytest.raises(TrackError) as caught:
-        resolve_track("monaco")
+        resolve_track("2022 re:Invent Championship")
 
     message = str(caught.value)
-    assert "'monaco'" in message
-    assert all(name in message for name in BUILTIN)
+    assert "2022_reinvent_champ_ccw (counter-clockwise)" in message
+    assert "2022_reinvent_champ_cw (clockwise)" in message
+
+
+def test_the_straight_test_road_is_listed_but_cannot_be_raced() -> None:
+    info = find_track_info("Straight_track")
+
+    assert not info.lappable
+    with pytest.raises(TrackError, match=r"not a loop.*reinvent_base"):
+        resolve_track("Straight_track")
+
+
+def test_unknown_name_suggests_close_names_in_one_sentence() -> None:
+    with pytest.raises(TrackError) as caught:
+        resolve_track("reinvent")
+
+    message = str(caught.value)
+    assert "'reinvent'" in message
+    assert "'reinvent_base'" in message
+    assert "tracks list" in message
     assert "tracks import" in message
-    assert message.count(".") <= 2  # one sentence ("file." and the end)
+    assert message.count(". ") == 0 and message.endswith(".")
+
+
+def test_official_identity_equals_the_same_file_imported_by_hand(deepracer_dir: Path) -> None:
+    source = deepracer_dir / "tracks" / "reinvent_base.npy"
+
+    imported = import_track(source, "my-reinvent")
+
+    assert resolve_track("my-reinvent").content_hash == resolve_track("reinvent_base").content_hash
+    assert find_track_by_hash(imported.content_hash) == find_track_info("reinvent_base")
+
+
+def test_importing_an_official_file_under_its_own_name_copies_nothing(
+    deepracer_dir: Path,
+) -> None:
+    info = import_track(deepracer_dir / "tracks" / "reinvent_base.npy")
+
+    assert info.kind == "official"
+    assert list(user_tracks_dir().iterdir()) == []
+
+
+def test_an_older_import_named_like_an_official_track_is_shown_as_hidden(
+    deepracer_dir: Path,
+) -> None:
+    # Imported by hand before racer-tui shipped the official tracks, with other content.
+    target = user_tracks_dir() / "reinvent_base.npy"
+    target.write_bytes((deepracer_dir / "tracks" / "Oval_track.npy").read_bytes())
+
+    hidden = list_tracks()[-1]
+
+    assert (hidden.name, hidden.kind) == ("reinvent_base", "imported")
+    assert "--name" in hidden.description
+    assert resolve_track("reinvent_base").length == pytest.approx(17.71, abs=0.01)
+
+
+def test_a_track_is_found_by_content_hash_without_its_name(deepracer_dir: Path) -> None:
+    copied = user_tracks_dir() / "hand-copied.npy"
+    copied.write_bytes((deepracer_dir / "tracks" / "Bowtie_track.npy").read_bytes())
+    generated = save_user_track(generate_track(3))
+
+    assert find_track_by_hash(resolve_track("speedway").content_hash) == find_track_info("speedway")
+    assert find_track_by_hash(generated.content_hash) == generated
+    found = find_track_by_hash(resolve_track("Bowtie_track").content_hash)
+    assert found is not None and found.name == "Bowtie_track"  # the official one first
+    assert find_track_by_hash("0" * 64) is None
 
 
 def test_resolve_a_path_to_an_npy_file(deepracer_dir: Path) -> None:
@@ -69,32 +171,34 @@ def test_resolve_a_missing_path_says_so(tmp_path: Path) -> None:
 @pytest.mark.parametrize("stem", REAL)
 def test_import_real_track_then_resolve_it_by_name(deepracer_dir: Path, stem: str) -> None:
     source = deepracer_dir / "tracks" / f"{stem}.npy"
+    name = f"club-{stem}"
 
-    info = import_track(source, description="From the AWS console.")
+    info = import_track(source, name, description="From the AWS console.")
 
     assert info == TrackInfo(
-        name=stem,
+        name=name,
         description="From the AWS console.",
         length_m=round(load_track(source).length, 2),
         width_m=round(load_track(source).width, 3),
         direction="counter-clockwise",
-        builtin=False,
-        path=user_tracks_dir() / f"{stem}.npy",
+        kind="imported",
+        path=user_tracks_dir() / f"{name}.npy",
+        content_hash=load_track(source).content_hash,
     )
-    resolved = resolve_track(stem)
+    resolved = resolve_track(name)
     assert np.array_equal(resolved.points, load_track(source).points)
     assert resolved.description == "From the AWS console."
-    assert [i.name for i in list_tracks()] == [*BUILTIN, stem]
+    assert list_tracks()[-1].name == name
 
 
 def test_importing_twice_is_refused(deepracer_dir: Path) -> None:
     source = deepracer_dir / "tracks" / "reinvent_base.npy"
-    import_track(source)
+    import_track(source, "club")
 
     with pytest.raises(TrackError, match=r"already imported.*--name"):
-        import_track(source)
+        import_track(source, "club")
     with pytest.raises(TrackError, match="already imported"):
-        import_track(source, "REINVENT_BASE")  # one file on case-insensitive disks
+        import_track(source, "CLUB")  # one file on case-insensitive disks
 
     again = import_track(source, "reinvent-copy")
     assert again.name == "reinvent-copy"
@@ -107,9 +211,11 @@ def test_import_reversed_runs_clockwise(deepracer_dir: Path) -> None:
     assert resolve_track("oval-backwards").direction == "clockwise"
 
 
-def test_a_builtin_name_cannot_be_taken(deepracer_dir: Path) -> None:
+def test_a_builtin_or_official_name_cannot_be_taken(deepracer_dir: Path) -> None:
     with pytest.raises(TrackError, match=r"built-in track.*--name"):
         import_track(deepracer_dir / "tracks" / "Oval_track.npy", "speedway")
+    with pytest.raises(TrackError, match=r"an official track.*--name"):
+        import_track(deepracer_dir / "tracks" / "Oval_track.npy", "REINVENT_BASE")
 
 
 @pytest.mark.parametrize("name", ["has space", "dots.npy", "../escape", "", "x" * 65, "ünï"])
