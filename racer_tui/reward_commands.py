@@ -20,7 +20,7 @@ from sim.reward_function import load_reward_function
 from sim.reward_sample_params import sample_params
 from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.track import Track
-from sim.track_catalog import list_tracks, resolve_track
+from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 _MAX_LAP_STEPS = 15 * 120
 
@@ -33,14 +33,16 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     reward_commands = reward.add_subparsers(dest="reward_command", metavar="ACTION", required=True)
     check = reward_commands.add_parser("check", help="run a reward function on sample params")
     check.add_argument("file", help="Python file defining reward_function(params)")
-    check.add_argument("--track", default=None, help="also score a reference lap on this track")
+    check.add_argument(
+        "--track", default=None, help=f"score a reference lap on this track ({DEFAULT_TRACK})"
+    )
     check.add_argument("--json", action="store_true")
 
 
 def run(args: argparse.Namespace) -> int:
     reward = load_reward_function(Path(args.file))
     sample_value = reward(sample_params())
-    track_name = args.track or list_tracks()[0].name
+    track_name = args.track or DEFAULT_TRACK
     track = resolve_track(track_name)
     lap_rewards = _score_reference_lap(reward, track)
     report: dict[str, Any] = {

@@ -63,7 +63,7 @@ from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default
 from sim.reward_function import TEMPLATES, RewardFunctionError, template_source
 from sim.reward_sample_params import sample_params
 from sim.track import Track, TrackError
-from sim.track_catalog import list_tracks, resolve_track
+from sim.track_catalog import resolve_track, track_choices
 
 ACTION_COLUMNS = ("#", "steering °", "speed m/s", "turn")
 TABS = ("tab-car", "tab-actions", "tab-training", "tab-reward")
@@ -223,8 +223,8 @@ class ModelEditorScreen(RacerScreen[str | None]):
         yield RacerFooter()
 
     def _car_tab(self, values: FormValues) -> ComposeResult:
-        tracks = [(info.name, info.name) for info in list_tracks()]
-        if values.track not in {name for name, _ in tracks}:
+        tracks = track_choices()
+        if values.track not in {name for _, name in tracks}:
             tracks.append((values.track, values.track))
         sensors = list(SENSOR_CHOICES)
         if values.sensor not in {key for key, _ in sensors}:

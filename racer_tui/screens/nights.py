@@ -68,7 +68,7 @@ from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, load_rules
 from sim.track import Track
-from sim.track_catalog import list_tracks, resolve_track
+from sim.track_catalog import DEFAULT_TRACK, resolve_track, track_choices
 
 NIGHT_COLUMNS = ("night", "track", "state")
 HEAT_COLUMNS = ("#", "racer", "model", "result")
@@ -97,11 +97,10 @@ class NewNightDialog(FormDialog[NightRequest]):
         self._season_id = season_id if season_id in known else None
 
     def compose(self) -> ComposeResult:
-        tracks = [(info.name, info.name) for info in list_tracks()]
         with Vertical(classes="dialog"):
             yield Label("Open a league night", classes="dialog-title")
             yield Label("Track", classes="field-label")
-            yield Select(tracks, value=tracks[0][1], allow_blank=False, id="night-track")
+            yield Select(track_choices(), value=DEFAULT_TRACK, allow_blank=False, id="night-track")
             yield Input(placeholder="night name (empty: track and date)", id="night-name")
             yield Input(
                 placeholder="rules file, YAML (empty: league rules, 4:00 window)",

@@ -44,7 +44,7 @@ from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules
-from sim.track_catalog import list_tracks, resolve_track
+from sim.track_catalog import DEFAULT_TRACK, resolve_track, track_choices
 
 REFERENCE = "reference driver"
 RESULT_COLUMNS = ("#", "driver", "track", "best lap", "laps", "off")
@@ -171,8 +171,9 @@ class RacesScreen(RacerScreen[None]):
                 yield Label("Driver (trained models)", classes="field-label")
                 yield DataTable(id="drivers", cursor_type="row", show_header=False)
                 yield Label("Track", classes="field-label")
-                tracks = [(info.name, info.name) for info in list_tracks()]
-                yield Select(tracks, value=tracks[0][1], allow_blank=False, id="race-track")
+                yield Select(
+                    self._track_options(), value=DEFAULT_TRACK, allow_blank=False, id="race-track"
+                )
                 yield Label("Window", classes="field-label")
                 yield Select(
                     [(label, seconds) for seconds, label in WINDOWS],
@@ -274,7 +275,7 @@ class RacesScreen(RacerScreen[None]):
             select.value = track
 
     def _track_options(self) -> list[tuple[str, str]]:
-        return [(info.name, info.name) for info in list_tracks()]
+        return track_choices()
 
     @on(DataTable.RowSelected, "#drivers")
     @on(Button.Pressed, "#start-race")

@@ -33,9 +33,11 @@ from sim.deepracer_files import (
 from sim.garage.folder import MAX_MINUTES, ModelError, ModelFolder, create_model
 from sim.observations import SensorError, normalise_sensors
 from sim.track import TrackError
+from sim.track_catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
 
 # --- the defaults of `racer-tui model new` (the Training helper benchmarks these) --------
-DEFAULT_TRACK = "hairpin-circuit"  # the ~17.8 m technical circuit
+# re:Invent 2018, the track of the league rule (sim.track_catalog says why).
+DEFAULT_TRACK = CATALOG_DEFAULT_TRACK
 DEFAULT_SENSORS: tuple[str, ...] = ("vector",)
 DEFAULT_MAX_STEERING = 30.0
 DEFAULT_STEERING_LEVELS = 5

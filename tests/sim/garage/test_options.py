@@ -24,7 +24,7 @@ from sim.reward_function import RewardFunctionError, template_source
 
 def test_the_default_model() -> None:
     spec = default_model_spec()
-    assert spec.track == DEFAULT_TRACK == "hairpin-circuit"
+    assert spec.track == DEFAULT_TRACK == "reinvent_base"  # re:Invent 2018, the league track
     assert spec.metadata.sensors == ("vector",)
     space = spec.metadata.action_space
     assert space.kind == "discrete"
