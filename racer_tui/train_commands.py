@@ -197,11 +197,13 @@ class _Interrupts:
 
 
 def _train(args: argparse.Namespace) -> int:
+    from sim.training.algorithms import check_trainable
     from sim.training.launcher import TrainingProcess
 
     if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
         raise ModelError(f"--minutes must be more than 0, not {args.minutes:g}.")
     folder = open_model(args.name)
+    check_trainable(folder.metadata())  # before a child process starts
     if folder.is_training():
         raise ModelError(
             f"model {folder.name!r} is already training in another process; stop that one first."

@@ -44,6 +44,7 @@ from sim.observations import SensorOptions
 from sim.simulation import reversed_track
 from sim.track import Track
 from sim.training import events
+from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
 from sim.training.errors import PolicyError
 from sim.training.evaluation import EvaluationReport, run_trials
@@ -106,6 +107,7 @@ class Trainer:
         self.should_stop = should_stop
         self.options = options or RunOptions()
         self.metadata = folder.metadata()
+        check_trainable(self.metadata)  # a sac model is refused, never trained as PPO
         self.hyperparameters = folder.hyperparameters()
         params = folder.training_params()
         minutes = self.options.minutes if self.options.minutes is not None else params.max_minutes
