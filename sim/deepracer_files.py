@@ -146,9 +146,18 @@ def read_hyperparameters(path: Path) -> dict[str, float | int | str]:
     return parse_hyperparameters(_read_text(path, MAX_METADATA_BYTES), str(path))
 
 
+# What DeepRacer's simulator trains with when hyperparameters.json has no loss_type
+# (simapp `bundle/markov/sagemaker_graph_manager.py`, `get_updated_hyper_parameters`); the
+# console's form writes huber into every file it makes, and so do new models here.
+SIMAPP_LOSS_TYPE = "mean squared error"
+
+
 def parse_hyperparameters(text: str, where: str) -> dict[str, float | int | str]:
-    """`hyperparameters.json` text (from a file, a zip member...); `where` names it in errors."""
-    return check_hyperparameters(parse_json_object(text, where), where=where)
+    """`hyperparameters.json` text (from a file, a zip member...); `where` names it in errors.
+
+    A key the file leaves out takes the value DeepRacer's simulator would use."""
+    base = {**default_hyperparameters(), "loss_type": SIMAPP_LOSS_TYPE}
+    return check_hyperparameters(parse_json_object(text, where), where=where, base=base)
 
 
 def write_hyperparameters(path: Path, values: Mapping[str, float | int | str]) -> None:

@@ -34,7 +34,7 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 from torch.nn import functional
 
 from sim.car import STEP_SECONDS
-from sim.deepracer_files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP
+from sim.deepracer_files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_TYPE
 from sim.simulation import EpisodeStatus
 from sim.training.policy import NetworkSpec, PolicyNetwork, init_weights, observation_tensors
 from sim.training.vec_env import BatchedVecEnv
@@ -61,7 +61,7 @@ class PPOSettings:
 
     @classmethod
     def from_hyperparameters(cls, values: Mapping[str, float | int | str]) -> PPOSettings:
-        loss_type = str(values.get("loss_type", "huber"))
+        loss_type = str(values.get("loss_type", SIMAPP_LOSS_TYPE))
         if loss_type not in LOSS_TYPES:
             raise ValueError(
                 f"loss_type must be 'huber' or 'mean squared error', not {loss_type!r}."

@@ -7,8 +7,13 @@ from dataclasses import replace
 import pytest
 
 from sim.action_space import FULL_RANGE_CONTINUOUS, parse_action_space
-from sim.deepracer_files import write_model_metadata
+from sim.deepracer_files import (
+    default_hyperparameters,
+    parse_hyperparameters,
+    write_model_metadata,
+)
 from sim.garage.folder import ModelError, ModelFolder
+from sim.training.ppo import PPOSettings
 from sim.training.trainer import Trainer
 
 DISCRETE = parse_action_space([{"steering_angle": 0.0, "speed": 1.0}])
@@ -41,3 +46,14 @@ def test_a_sac_model_is_refused_before_training(
 def test_a_clipped_ppo_model_is_accepted(model: ModelFolder) -> None:
     assert model.metadata().training_algorithm == "clipped_ppo"
     Trainer(model, lambda event: None, lambda: False)
+
+
+def test_loss_type_defaults_as_deepracer() -> None:
+    # The console writes huber into every hyperparameters.json (new models here too); a
+    # file without loss_type trains as simapp trains it: mean squared error.
+    assert default_hyperparameters()["loss_type"] == "huber"
+    read = parse_hyperparameters('{"lr": 0.001}', "hyperparameters.json")
+    assert read["loss_type"] == "mean squared error"
+    assert PPOSettings.from_hyperparameters(read).loss_type == "mean squared error"
+    huber = parse_hyperparameters('{"loss_type": "huber"}', "hyperparameters.json")
+    assert PPOSettings.from_hyperparameters(huber).loss_type == "huber"
