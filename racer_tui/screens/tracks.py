@@ -1,4 +1,5 @@
-"""The tracks: built-in and imported, each with its facts, a map and the reference lap time.
+"""The tracks: built-in, AWS DeepRacer's official ones by release year, and imported ones,
+each with its facts, a map and the reference lap time; a search box narrows the list.
 
 The reference lap (the no-learning driver at the grip limit) is timed in a worker, so moving
 through the list stays instant.
@@ -15,7 +16,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import DataTable, Static
+from textual.widgets import DataTable, Input, Static
 
 from racer_tui.screens.base import ModelAdded, RacerScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
@@ -28,6 +29,10 @@ from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
 from sim.track import Track, TrackError
 from sim.track_catalog import TrackInfo, list_tracks, resolve_track
+
+# Room for a console name in the list at 80 columns; the facts pane shows it whole.
+_LABEL_CELLS = 23
+_HEADING = "group:"  # row keys of the group headings, which are not tracks
 
 
 class ReferenceLapTimed(Message):
@@ -43,32 +48,77 @@ class TracksScreen(RacerScreen[None]):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("r", "race", "Race the reference driver", tooltip="A 4-minute time trial"),
         Binding("n", "new_model", "New model here", tooltip="The model editor, on this track"),
+        Binding("slash", "search", "Search", tooltip="Narrow the list by name or console name"),
     ]
 
     def __init__(self) -> None:
         super().__init__()
-        self._infos: list[TrackInfo] = []
+        self._infos: list[TrackInfo] = []  # every track the app can race
+        self._rows: list[TrackInfo | None] = []  # the table's rows: None for a heading
         self._lap_texts: dict[str, str] = {}  # track content hash -> reference lap line
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("tracks")
         with Horizontal(id="tracks-body"):
-            yield DataTable(id="tracks", cursor_type="row", zebra_stripes=True)
+            with Vertical(id="tracks-list"):
+                yield Input(placeholder="/ search name or console name", id="track-search")
+                yield DataTable(id="tracks", cursor_type="row")
             with Vertical(id="track-detail"):
                 yield Static(id="track-facts")
                 yield TrackMap(id="track-map")
         yield RacerFooter()
 
     def on_mount(self) -> None:
-        self._infos = list_tracks()
-        rows: list[list[str | Text]] = [
-            # Track names come from files: Text keeps them plain text, never markup.
-            [Text(info.name), f"{info.length_m:.1f} m", f"{info.width_m:.2f} m"]
+        # The straight test road cannot be raced or lapped; `racer-tui tracks list` shows it.
+        self._infos = [info for info in list_tracks() if info.lappable]
+        self._fill("")
+        self.query_one("#tracks", DataTable).focus()
+
+    def _fill(self, search: str) -> None:
+        needle = search.casefold().strip()
+        shown = [
+            info
             for info in self._infos
+            if needle in info.name.casefold() or needle in info.console_name.casefold()
         ]
-        fill_table(self.query_one("#tracks", DataTable), ["track", "length", "width"], rows)
-        count = len(self._infos)
-        self.query_one(SectionHeader).set_context(f"{count} tracks")
+        self._rows = []
+        cells: list[list[str | Text]] = []
+        for heading, group in _groups(shown):
+            self._rows.append(None)
+            cells.append([Text(f"{heading} ({len(group)})", style="bold"), ""])
+            for info in group:
+                self._rows.append(info)
+                cells.append([_label(info), f"{info.length_m:.1f}"])
+        table = self.query_one("#tracks", DataTable)
+        fill_table(table, ["track", "m"], cells)
+        total = len(self._infos)
+        context = f"{total} tracks" if not needle else f"{len(shown)} of {total} tracks"
+        self.query_one(SectionHeader).set_context(context)
+        if not shown:
+            self.query_one("#track-map", TrackMap).track = None  # nothing chosen: r races nothing
+            self.query_one("#track-facts", Static).update(
+                Text(f"No track matches {search.strip()!r}; Esc clears the search.")
+            )
+            return
+        # Start on the first track, not on its group's heading.
+        table.move_cursor(row=1)
+
+    def action_search(self) -> None:
+        self.query_one("#track-search", Input).focus()
+
+    @on(Input.Changed, "#track-search")
+    def _search_changed(self, event: Input.Changed) -> None:
+        self._fill(event.value)
+
+    @on(Input.Submitted, "#track-search")
+    def _search_done(self) -> None:
+        self.query_one("#tracks", DataTable).focus()
+
+    def key_escape(self) -> None:
+        search = self.query_one("#track-search", Input)
+        if search.has_focus or search.value:
+            search.value = ""
+            self.query_one("#tracks", DataTable).focus()
 
     @property
     def track(self) -> Track | None:
@@ -95,8 +145,10 @@ class TracksScreen(RacerScreen[None]):
 
     @on(DataTable.RowHighlighted, "#tracks")
     def _highlighted(self, event: DataTable.RowHighlighted) -> None:
-        if 0 <= event.cursor_row < len(self._infos):
-            self._show(self._infos[event.cursor_row])
+        if 0 <= event.cursor_row < len(self._rows):
+            info = self._rows[event.cursor_row]
+            if info is not None:  # a heading keeps the track shown
+                self._show(info)
 
     def _show(self, info: TrackInfo) -> None:
         try:
@@ -111,9 +163,15 @@ class TracksScreen(RacerScreen[None]):
             self._time_reference_lap(track)
 
     def _update_facts(self, track: Track, lap_text: str) -> None:
+        info = next((i for i in self._infos if i.name == track.name), None)
         facts = Text()
-        facts.append(track.name, style="bold")
-        facts.append(f"\n{track.description}\n" if track.description else "\n")
+        if info is not None and info.console_name:
+            facts.append(info.console_name, style="bold")
+            facts.append(f"\n{track.name}, AWS DeepRacer")
+            facts.append(f", released {info.release_date}\n" if info.release_date else "\n")
+        else:
+            facts.append(track.name, style="bold")
+            facts.append(f"\n{track.description}\n" if track.description else "\n")
         facts.append(f"{track.length:.2f} m, {track.width:.3f} m wide, {track.direction}\n")
         facts.append(lap_text)
         self.query_one("#track-facts", Static).update(facts)
@@ -132,3 +190,36 @@ class TracksScreen(RacerScreen[None]):
         self._lap_texts[message.track.content_hash] = message.text
         if self.track is message.track:
             self._update_facts(message.track, message.text)
+
+
+def _groups(infos: list[TrackInfo]) -> list[tuple[str, list[TrackInfo]]]:
+    """Built-in, then official by release year (the console's never-listed last), then
+    imported: the list's order, with a heading for each run of one group."""
+    groups: list[tuple[str, list[TrackInfo]]] = []
+    for info in infos:
+        heading = _heading(info)
+        if not groups or groups[-1][0] != heading:
+            groups.append((heading, []))
+        groups[-1][1].append(info)
+    return groups
+
+
+def _label(info: TrackInfo) -> Text:
+    """The console's name, with the direction of the variants the console lists under one
+    name (Ace Speedway, its _ccw and its _cw), else the track's own name; shortened to fit,
+    the direction kept."""
+    # Track names come from files: Text keeps them plain text, never markup.
+    name = Text(info.console_name or info.name)
+    suffix = ""
+    if info.console_name:
+        suffix = next(
+            (mark for end, mark in (("_ccw", " ↺"), ("_cw", " ↻")) if info.name.endswith(end)), ""
+        )
+    name.truncate(_LABEL_CELLS - len(suffix), overflow="ellipsis")
+    return name + suffix
+
+
+def _heading(info: TrackInfo) -> str:
+    if info.kind == "official":
+        return f"Official {info.release_date[:4]}" if info.release_date else "Official, unlisted"
+    return "Built-in" if info.kind == "built-in" else "Imported"

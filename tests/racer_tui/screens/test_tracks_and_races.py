@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from textual.widgets import DataTable, Select
+from textual.widgets import DataTable, Input, Select
 
 from racer_tui.app import create_app
 from racer_tui.screens.garage import GarageScreen
@@ -12,6 +12,7 @@ from racer_tui.screens.races import RacesScreen
 from racer_tui.screens.tracks import TracksScreen
 from sim.garage.folder import open_model
 from sim.race.rules import DEFAULT_RULES
+from sim.track_catalog import list_tracks
 from tests.racer_tui.screens.tui_helpers import painted, settle, trained_model
 
 
@@ -30,6 +31,44 @@ async def test_tracks_show_facts_and_the_reference_lap() -> None:
         assert isinstance(app.screen, RaceScreen)
         assert app.screen.setup.track.name == "hairpin-circuit"
         assert app.screen.setup.rules == DEFAULT_RULES
+
+
+async def test_official_tracks_are_grouped_and_found_by_searching() -> None:
+    app = create_app(start="tracks")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TracksScreen)
+        table = screen.query_one("#tracks", DataTable)
+        headings = [str(table.get_row_at(row)[0]) for row in range(table.row_count)]
+        assert "Built-in (5)" in headings and "Official 2019 (12)" in headings
+        assert "re:Invent 2018" in headings
+        await pilot.press("slash", *"expedition")
+        await settle(pilot)
+        assert [str(table.get_row_at(row)[0]) for row in range(table.row_count)] == [
+            "Official 2021 (4)",
+            "Expedition Loop",
+            "Expedition Super Loop",
+            "Expedition Super Loop ↺",
+            "Expedition Super Loop ↻",
+        ]
+        facts = painted(screen.query_one("#track-facts"))
+        assert "Expedition Loop" in facts and "red_star_open" in facts
+        await pilot.press("enter", "r")
+        assert isinstance(app.screen, RaceScreen)
+        assert app.screen.setup.track.name == "red_star_open"
+        await pilot.press("escape")
+        await settle(pilot)
+        await pilot.press("slash", *"no such road")
+        await settle(pilot)
+        assert "No track matches" in painted(screen.query_one("#track-facts"))
+        await pilot.press("enter", "r")
+        assert app.screen is screen  # nothing chosen, nothing raced
+        await pilot.press("escape")
+        await settle(pilot)
+        assert screen.query_one("#track-search", Input).value == ""
+        lappable = [info for info in list_tracks() if info.lappable]
+        assert table.row_count > len(lappable)  # every track is back, under its heading
 
 
 async def test_a_new_model_from_the_tracks_screen_uses_that_track() -> None:
@@ -56,8 +95,9 @@ async def test_races_list_trained_models_and_rank_the_session() -> None:
         assert isinstance(races, RacesScreen)
         assert [d.label for d in races.drivers] == ["reference driver", "ada"]
         races.query_one("#race-window", Select).value = 60.0
+        races.query_one("#race-track", Select).value = "beginner-oval"
         await pilot.pause()
-        await pilot.press("s")  # the reference driver, on the first track
+        await pilot.press("s")  # the reference driver, on ada's track
         race = app.screen
         assert isinstance(race, RaceScreen)
         assert race.setup.rules.window_seconds == 60.0
