@@ -365,9 +365,12 @@ def _import(args: argparse.Namespace) -> int:
 
 def _export(name: str, output: str | None, *, replace: bool) -> int:
     from sim.garage.bundle import export_bundle
+    from sim.garage.deepracer_notes import export_notes
 
     folder = open_model(name)
     out = Path(output) if output else Path(f"{folder.name}")
     written = export_bundle(folder, out, replace=replace)
     print(f"Exported {folder.name} to {written}")
+    for note in export_notes(folder.metadata()):
+        print(f"Note: {note}")
     return 0

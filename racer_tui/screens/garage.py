@@ -38,6 +38,7 @@ from sim.action_space import ActionSpace
 from sim.garage.bundle import bundle_path, export_bundle
 from sim.garage.clone import clone_model
 from sim.garage.deepracer_import import BUNDLE_SUFFIX, import_model
+from sim.garage.deepracer_notes import export_notes
 from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
 from sim.garage.options import spec_of
 from sim.garage.overview import model_details, model_row
@@ -103,10 +104,11 @@ class ModelImported(Message):
 
 
 class BundleExported(Message):
-    def __init__(self, name: str, path: Path) -> None:
+    def __init__(self, name: str, path: Path, notes: tuple[str, ...] = ()) -> None:
         super().__init__()
         self.name = name
         self.path = path
+        self.notes = notes
 
 
 def import_into_garage(request: ImportRequest) -> ModelImported:
@@ -409,10 +411,15 @@ class GarageScreen(RacerScreen[None]):
     @work(thread=True, group="garage-change", exit_on_error=False)
     def _export(self, folder: ModelFolder, path: Path, *, replace: bool = False) -> None:
         written = export_bundle(folder, path, replace=replace)
-        self.post_message(BundleExported(folder.name, written))
+        self.post_message(BundleExported(folder.name, written, export_notes(folder.metadata())))
 
     def on_bundle_exported(self, message: BundleExported) -> None:
-        self.notify(f"Exported {message.name} to {message.path}.", timeout=10, markup=False)
+        notes = "".join(f"\n• {note}" for note in message.notes)
+        self.notify(
+            f"Exported {message.name} to {message.path}.{notes}",
+            timeout=15 if notes else 10,
+            markup=False,
+        )
 
     async def action_train_model(self) -> None:
         """Open the Training section on this model and ask for the time budget."""
