@@ -21,8 +21,8 @@ from league.tracks import ensure_track, track_names
 from sim.ids import content_hash, is_valid_id
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
-from sim.track import Track, TrackError, load_track
-from sim.track_catalog import list_tracks, resolve_track
+from sim.track import Track, TrackError
+from sim.track_catalog import find_track_by_hash, resolve_track
 
 TRACE_FORMAT = "npz-v1"
 LAP_COLUMNS = (
@@ -261,22 +261,21 @@ def recent_races(
 
 
 def find_local_track(track_hash: str, name: str) -> Track | None:
-    """This machine's copy of a league track, found by content hash (the name first: a
-    track imported under another name, or changed since, is found by scanning), or None."""
+    """This machine's copy of a league track, found by content hash (the name first; a track
+    imported under another name, or an official one, is found by its hash), or None."""
     try:
         track = resolve_track(name)
         if track.content_hash == track_hash:
             return track
     except TrackError:
         pass
-    for info in list_tracks():
-        try:
-            track = load_track(info.path, info.name, description=info.description)
-        except TrackError:
-            continue  # a damaged imported track: the tracks section says what is wrong
-        if track.content_hash == track_hash:
-            return track
-    return None
+    info = find_track_by_hash(track_hash)
+    if info is None:
+        return None
+    try:
+        return resolve_track(info.name)
+    except TrackError:
+        return None  # damaged since it was listed: the tracks section says what is wrong
 
 
 @dataclass(frozen=True)

@@ -66,8 +66,7 @@ def test_a_model_folder_by_path_uses_the_latest_evaluation_unless_one_is_named(
 
 
 def test_the_drfc_model_folder_submits_with_a_track(deepracer_dir: Path, league: League) -> None:
-    track = str(deepracer_dir / "tracks" / "reinvent_base.npy")
-    submission = assemble(str(deepracer_dir / "drfc-model"), "ana", track=track)
+    submission = assemble(str(deepracer_dir / "drfc-model"), "ana", track="reinvent_base")
     assert submission.source == DRFC
     assert submission.evaluation_file == "EvaluationMetrics-20220709200711.json"
     # Three continuous laps, statuses "In progress"/"Lap complete" at 100 %: all count.
@@ -87,8 +86,8 @@ def test_the_drfc_model_folder_submits_with_a_track(deepracer_dir: Path, league:
 
 
 def test_the_console_log_download_submits_with_a_track(deepracer_dir: Path) -> None:
-    track = str(deepracer_dir / "tracks" / "reinvent_base.npy")
-    submission = assemble(str(deepracer_dir / "console-logs"), "ana", track=track)
+    submission = assemble(str(deepracer_dir / "console-logs"), "ana", track="re:Invent 2018")
+    assert submission.track_name == "reinvent_base"
     assert submission.source == CONSOLE
     assert submission.best_lap == pytest.approx(16.267)
     assert [lap.time_seconds for lap in submission.laps] == pytest.approx([16.468, 16.267, 16.402])
@@ -103,8 +102,8 @@ def test_a_download_without_a_track_asks_for_one(deepracer_dir: Path) -> None:
 def test_an_unknown_world_name_asks_for_a_track(tmp_path: Path) -> None:
     folder = model_folder(tmp_path)
     params = folder / "training_params.yaml"
-    params.write_text(params.read_text().replace("beginner-oval", "reInvent2019_track"))
-    with pytest.raises(LeagueError, match=r"reInvent2019_track.*--track"):
+    params.write_text(params.read_text().replace("beginner-oval", "no_such_world"))
+    with pytest.raises(LeagueError, match=r"no_such_world.*--track"):
         assemble(str(folder), "ana")
     assert assemble(str(folder), "ana", track=TRACK).track_name == TRACK
 

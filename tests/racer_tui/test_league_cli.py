@@ -102,8 +102,11 @@ def test_leaderboard_by_average_sort_filter_and_limit(
 def test_submitting_the_real_deepracer_downloads(
     capsys: pytest.CaptureFixture[str], deepracer_dir: Path, db: str
 ) -> None:
-    track = str(deepracer_dir / "tracks" / "reinvent_base.npy")
-    for folder, racer in (("drfc-model", "drfc fan"), ("console-logs", "console fan")):
+    """On a fresh install: no track imported, the official track named as racers know it."""
+    for folder, racer, track in (
+        ("drfc-model", "drfc fan", "reinvent_base"),
+        ("console-logs", "console fan", "re:Invent 2018"),
+    ):
         code, out, err = run_cli(
             capsys,
             "submit",
@@ -118,7 +121,9 @@ def test_submitting_the_real_deepracer_downloads(
         )
         assert code == 0, err
         assert json.loads(out)["laps"] == 3
-    _, out, _ = run_cli(capsys, "leaderboard", "--db", db, "--format", "json", "--track", track)
+    _, out, _ = run_cli(
+        capsys, "leaderboard", "--db", db, "--format", "json", "--track", "RE:INVENT 2018"
+    )
     assert [row["racer"] for row in json.loads(out)] == ["drfc fan", "console fan"]
 
 
