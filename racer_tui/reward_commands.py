@@ -16,7 +16,7 @@ from rich.text import Text
 
 from racer_tui.output import print_json, print_table
 from sim.reference_driver import ReferenceDriver
-from sim.reward_function import load_reward_function
+from sim.reward_function import RewardFunction, load_reward_function
 from sim.reward_sample_params import sample_params
 from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.track import Track
@@ -44,7 +44,9 @@ def run(args: argparse.Namespace) -> int:
     sample_value = reward(sample_params())
     track_name = args.track or DEFAULT_TRACK
     track = resolve_track(track_name)
-    lap_rewards = _score_reference_lap(reward, track)
+    # The lap runs on the file loaded afresh, as a DeepRacer worker starts with it: state the
+    # sample call left in the module does not leak into the lap.
+    lap_rewards = _score_reference_lap(reward.fresh(), track)
     report: dict[str, Any] = {
         "file": str(args.file),
         "sample_params_reward": sample_value,
@@ -70,14 +72,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _score_reference_lap(reward: Any, track: Track) -> list[float]:
+def _score_reference_lap(reward: RewardFunction, track: Track) -> list[float]:
     sim = TrackSimulation(track, 1)
     driver = ReferenceDriver(track)
     sim.reset_car(0, start_s=0.0)
     rewards: list[float] = []
     for _ in range(_MAX_LAP_STEPS):
         sim.apply(*driver.act(sim))
-        rewards.append(float(reward(sim.all_params()[0])))
+        if sim.steps[0] > 1:  # step 1 is DeepRacer's prepare step: the function is not called
+            rewards.append(float(reward(sim.all_params()[0])))
         if sim.status[0] != EpisodeStatus.IN_PROGRESS:
             break
     return rewards
