@@ -21,6 +21,7 @@ from league.errors import LeagueError
 from racer_tui.output import print_json, print_table
 from sim.deepracer_files import DeepRacerFileError
 from sim.race.rules import DEFAULT_RULES, RankingMethod, RulesError, load_rules
+from sim.track_catalog import DEFAULT_TRACK
 
 if TYPE_CHECKING:
     from league.store import League
@@ -100,7 +101,11 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
     night = commands.add_parser("night", help="league nights: entrants, heats, standings")
     actions = night.add_subparsers(dest="night_command", metavar="ACTION", required=True)
     new = actions.add_parser("new", parents=[db], help="open a night; its rules are frozen")
-    new.add_argument("--track", required=True)
+    new.add_argument(
+        "--track",
+        default=DEFAULT_TRACK,
+        help=f"the night's track (default: {DEFAULT_TRACK}, re:Invent 2018)",
+    )
     new.add_argument(
         "--rules", type=Path, metavar="FILE", help="rules YAML (default rules if none)"
     )

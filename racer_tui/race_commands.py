@@ -32,7 +32,7 @@ from sim.race.engine import run_race
 from sim.race.result import MAX_NAME_LENGTH, RaceResult, is_plain_name
 from sim.race.rules import RaceRules, RankingMethod, RulesError, load_rules, rules_from_mapping
 from sim.track import Track, TrackError
-from sim.track_catalog import resolve_track
+from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
@@ -64,7 +64,12 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     parser.add_argument("--race", nargs="+", required=True, metavar="MODEL", dest="models")
-    parser.add_argument("--track", required=True, help="track name or .npy file")
+    parser.add_argument(
+        "--track",
+        default=DEFAULT_TRACK,
+        help=f"track name (world or console name) or .npy file (default: {DEFAULT_TRACK}, "
+        "re:Invent 2018)",
+    )
     parser.add_argument(
         "--racer", help="the racer's name in the results (default: each model's name)"
     )

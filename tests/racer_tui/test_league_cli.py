@@ -131,7 +131,7 @@ def test_a_bad_submission_is_one_sentence_and_writes_nothing(
     capsys: pytest.CaptureFixture[str], tmp_path: Path, db: str
 ) -> None:
     folder = model_folder(tmp_path)
-    bad = folder / "evaluation-20240501120000.json"
+    bad = folder / "metrics" / "EvaluationMetrics-20240501120000.json"
     bad.write_text('{"metrics": [{"completion_percentage": "lots"}]}')
     code, out, err = run_cli(capsys, "submit", str(folder), "--racer", "ana", "--db", db)
     assert code == 2 and out == ""
@@ -254,3 +254,12 @@ def test_corrections_from_the_command_line(
         submitted,
     )
     assert code == 2 and "has no lap 9" in err
+
+
+def test_a_new_night_defaults_to_the_reinvent_2018_track(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    code, _, err = run_cli(capsys, "night", "new", "--name", "Default", "--db", db)
+    assert code == 0, err
+    _, out, _ = run_cli(capsys, "night", "show", "Default", "--db", db, "--json")
+    assert json.loads(out)["track"] == "reinvent_base"

@@ -204,9 +204,15 @@ def test_an_untrained_model_is_a_user_error(capsys: pytest.CaptureFixture[str]) 
 
 
 def test_missing_arguments_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
-    code, _, err = run_cli(capsys, "--race", "reference")
+    code, _, err = run_cli(capsys, "--race")
     assert code == 2
-    assert "--track" in err
+    assert "--race" in err
+
+
+def test_races_default_to_the_reinvent_2018_track(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = run_cli(capsys, "--race", "reference", "--window", "20", "--json")
+    assert code == 0, err
+    assert json.loads(out)["track"]["name"] == "reinvent_base"
 
 
 def test_help_lists_the_options(capsys: pytest.CaptureFixture[str]) -> None:
