@@ -97,12 +97,6 @@ def user_tracks() -> list[TrackInfo]:
     return [_user_info(npy) for npy in sorted(user_tracks_dir().glob("*.npy"))]
 
 
-def track_choices() -> list[tuple[str, str]]:
-    """(label, name) of every track that can be raced, for choosers: listing order, the
-    official ones labelled with their console name."""
-    return [(info.title, info.name) for info in list_tracks() if info.lappable]
-
-
 def find_track_info(name: str) -> TrackInfo:
     """The listed track a name means, or TrackError with the closest names.
 

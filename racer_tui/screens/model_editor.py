@@ -56,6 +56,7 @@ from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.track_label import track_options
 from racer_tui.widgets.track_map import TrackMap
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
 from sim.garage.folder import MAX_MINUTES, ModelError, ModelFolder
@@ -63,7 +64,7 @@ from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default
 from sim.reward_function import TEMPLATES, RewardFunctionError, template_source
 from sim.reward_sample_params import sample_params
 from sim.track import Track, TrackError
-from sim.track_catalog import resolve_track, track_choices
+from sim.track_catalog import resolve_track
 
 ACTION_COLUMNS = ("#", "steering °", "speed m/s", "turn")
 TABS = ("tab-car", "tab-actions", "tab-training", "tab-reward")
@@ -223,9 +224,9 @@ class ModelEditorScreen(RacerScreen[str | None]):
         yield RacerFooter()
 
     def _car_tab(self, values: FormValues) -> ComposeResult:
-        tracks = track_choices()
+        tracks = track_options()
         if values.track not in {name for _, name in tracks}:
-            tracks.append((values.track, values.track))
+            tracks.append((Text(values.track), values.track))
         sensors = list(SENSOR_CHOICES)
         if values.sensor not in {key for key, _ in sensors}:
             sensors.append((values.sensor, values.sensor))

@@ -62,13 +62,14 @@ from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.track_label import track_options
 from sim.garage.folder import list_models
 from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, load_rules
 from sim.track import Track
-from sim.track_catalog import DEFAULT_TRACK, resolve_track, track_choices
+from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 NIGHT_COLUMNS = ("night", "track", "state")
 HEAT_COLUMNS = ("#", "racer", "model", "result")
@@ -100,7 +101,7 @@ class NewNightDialog(FormDialog[NightRequest]):
         with Vertical(classes="dialog"):
             yield Label("Open a league night", classes="dialog-title")
             yield Label("Track", classes="field-label")
-            yield Select(track_choices(), value=DEFAULT_TRACK, allow_blank=False, id="night-track")
+            yield Select(track_options(), value=DEFAULT_TRACK, allow_blank=False, id="night-track")
             yield Input(placeholder="night name (empty: track and date)", id="night-name")
             yield Input(
                 placeholder="rules file, YAML (empty: league rules, 4:00 window)",

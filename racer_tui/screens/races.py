@@ -39,12 +39,13 @@ from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import seconds_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.track_label import track_options
 from sim.garage.folder import ModelFolder, list_models
 from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules
-from sim.track_catalog import DEFAULT_TRACK, resolve_track, track_choices
+from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 REFERENCE = "reference driver"
 RESULT_COLUMNS = ("#", "driver", "track", "best lap", "laps", "off")
@@ -274,8 +275,8 @@ class RacesScreen(RacerScreen[None]):
         if track is not None and track in {value for _, value in self._track_options()}:
             select.value = track
 
-    def _track_options(self) -> list[tuple[str, str]]:
-        return track_choices()
+    def _track_options(self) -> list[tuple[Text, str]]:
+        return track_options()
 
     @on(DataTable.RowSelected, "#drivers")
     @on(Button.Pressed, "#start-race")

@@ -24,6 +24,7 @@ from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.track_label import track_label
 from racer_tui.widgets.track_map import TrackMap
 from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
@@ -88,7 +89,7 @@ class TracksScreen(RacerScreen[None]):
             cells.append([Text(f"{heading} ({len(group)})", style="bold"), ""])
             for info in group:
                 self._rows.append(info)
-                cells.append([_label(info), f"{info.length_m:.1f}"])
+                cells.append([track_label(info, _LABEL_CELLS), f"{info.length_m:.1f}"])
         table = self.query_one("#tracks", DataTable)
         fill_table(table, ["track", "m"], cells)
         total = len(self._infos)
@@ -202,21 +203,6 @@ def _groups(infos: list[TrackInfo]) -> list[tuple[str, list[TrackInfo]]]:
             groups.append((heading, []))
         groups[-1][1].append(info)
     return groups
-
-
-def _label(info: TrackInfo) -> Text:
-    """The console's name, with the direction of the variants the console lists under one
-    name (Ace Speedway, its _ccw and its _cw), else the track's own name; shortened to fit,
-    the direction kept."""
-    # Track names come from files: Text keeps them plain text, never markup.
-    name = Text(info.console_name or info.name)
-    suffix = ""
-    if info.console_name:
-        suffix = next(
-            (mark for end, mark in (("_ccw", " ↺"), ("_cw", " ↻")) if info.name.endswith(end)), ""
-        )
-    name.truncate(_LABEL_CELLS - len(suffix), overflow="ellipsis")
-    return name + suffix
 
 
 def _heading(info: TrackInfo) -> str:
