@@ -2,9 +2,10 @@
 
 The seed project's five files are read through sim.deepracer_files (the one place that
 knows their formats): model metadata, hyperparameters, training params, training metrics
-and evaluation metrics (the latest, unless one is named). Three folder layouts work:
+and evaluation metrics (the latest, unless one is named). Three kinds of folder work:
 
-- a racer-tui model folder (garage name or path): all five files beside each other;
+- a racer-tui model folder (garage name or path): a DeepRacer-for-Cloud model folder with
+  racer-tui's own files beside (an old flat one is migrated when opened);
 - a DeepRacer-for-Cloud model folder: `model/`, `ip/`, `metrics/`;
 - an AWS console log download: `metrics/training/`, `metrics/evaluation/`, `sim-trace/`.
 
@@ -25,7 +26,9 @@ from typing import Any
 from league.errors import LeagueError
 from league.racers import check_name
 from sim.deepracer_files import (
-    MODEL_METADATA,
+    HYPERPARAMETERS_PATH,
+    MODEL_METADATA_PATH,
+    TRAINING_PARAMS,
     DeepRacerFileError,
     DeepRacerFiles,
     EvaluationTrial,
@@ -131,7 +134,7 @@ def assemble(
     racer_name = check_name(racer)
     folder, garage_name = _model_folder(model)
     files = locate_files(folder)
-    source = _layout(files)
+    source = _layout(files, folder, garage_name)
     try:
         metadata = _optional(read_model_metadata, files.model_metadata)
         hyperparameters = _optional(read_hyperparameters, files.hyperparameters)
@@ -170,7 +173,7 @@ def assemble(
         neural_network=None if metadata is None else metadata.neural_network,
         training_algorithm=None if metadata is None else metadata.training_algorithm,
         hyperparameters=hyperparameters,
-        training=_training_summary(training, params),
+        training=_training_summary(training, params, folder if source == RACER_TUI else None),
         evaluation_file=evaluation_path.name,
         laps=tuple(EvaluationLap.from_trial(i + 1, trial) for i, trial in enumerate(trials)),
     )
@@ -178,11 +181,22 @@ def assemble(
 
 def _model_folder(model: str) -> tuple[Path, str | None]:
     """The folder to read, and the garage name when `model` named a garage model."""
-    from sim.garage.folder import models_dir
+    from sim.garage.folder import (
+        ModelError,
+        is_model_folder,
+        is_racer_tui_folder,
+        models_dir,
+        open_model,
+    )
 
-    if is_valid_name(model) and (models_dir() / model / MODEL_METADATA).is_file():
-        return models_dir() / model, model
     path = Path(model).expanduser()
+    try:
+        if is_valid_name(model) and is_model_folder(models_dir() / model):
+            return open_model(model).path, model
+        if path.is_dir() and is_racer_tui_folder(path):
+            return open_model(str(path)).path, None  # an old flat folder moves on open
+    except ModelError as error:
+        raise LeagueError(str(error)) from None
     if path.is_dir():
         return path, None
     raise LeagueError(
@@ -191,11 +205,10 @@ def _model_folder(model: str) -> tuple[Path, str | None]:
     )
 
 
-def _layout(files: DeepRacerFiles) -> str:
-    def inside(path: Path | None) -> str:
-        return "" if path is None else path.relative_to(files.root).parts[0]
+def _layout(files: DeepRacerFiles, folder: Path, garage_name: str | None) -> str:
+    from sim.garage.folder import is_racer_tui_folder
 
-    if files.model_metadata is not None and inside(files.model_metadata) == MODEL_METADATA:
+    if garage_name is not None or is_racer_tui_folder(folder):
         return RACER_TUI
     metric_dirs = {
         path.relative_to(files.root).parts[1]
@@ -211,11 +224,11 @@ def _require(source: str, folder: Path, files: DeepRacerFiles) -> None:
     needed: dict[str, Path | None]
     if source == RACER_TUI:
         needed = {
-            "hyperparameters.json": files.hyperparameters,
-            "training_params.yaml": files.training_params,
+            HYPERPARAMETERS_PATH: files.hyperparameters,
+            TRAINING_PARAMS: files.training_params,
         }
     elif source == DRFC:
-        needed = {"model/model_metadata.json": files.model_metadata}
+        needed = {MODEL_METADATA_PATH: files.model_metadata}
     else:
         needed = {}
     for name, path in needed.items():
@@ -238,8 +251,8 @@ def _evaluation_path(folder: Path, files: DeepRacerFiles, named: Path | None) ->
     latest = files.latest_evaluation
     if latest is None:
         raise LeagueError(
-            f"{folder}: there are no evaluation metrics (evaluation-*.json); evaluate the "
-            "model first, or name a file with --evaluation."
+            f"{folder}: there are no evaluation metrics (metrics/EvaluationMetrics-*.json); "
+            "evaluate the model first, or name a file with --evaluation."
         )
     return latest
 
@@ -292,7 +305,7 @@ def _action_summary(metadata: ModelMetadata) -> dict[str, Any]:
 
 
 def _training_summary(
-    metrics: TrainingMetrics | None, params: TrainingParams | None
+    metrics: TrainingMetrics | None, params: TrainingParams | None, ours: Path | None = None
 ) -> dict[str, Any] | None:
     if metrics is None and params is None:
         return None
@@ -306,6 +319,10 @@ def _training_summary(
         last = max(e.metric_time for e in metrics.episodes)
         summary["episodes"] = len(training)
         summary["minutes"] = round(max(last - first, 0) / 60_000, 2)
+        if ours is not None:
+            # Our metrics run on the simulated clock of many cars at once: the trainer's
+            # state says how long the training took.
+            summary["minutes"] = _trained_minutes(ours, summary["minutes"])
         summary["best_completion"] = max(e.completion_percentage for e in metrics.episodes)
         summary["laps_completed"] = sum(
             1
@@ -313,6 +330,16 @@ def _training_summary(
             if e.completion_percentage >= 100 and e.episode_status != "Off track"
         )
     return summary
+
+
+def _trained_minutes(folder: Path, fallback: float) -> float:
+    from sim.garage.folder import ModelFolder
+
+    state = ModelFolder(folder).training_state() or {}
+    seconds = state.get("elapsed_seconds")
+    if isinstance(seconds, int | float) and not isinstance(seconds, bool) and seconds >= 0:
+        return round(seconds / 60.0, 2)
+    return fallback
 
 
 def _model_hash(

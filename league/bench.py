@@ -40,13 +40,17 @@ from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.submissions import submit
 from sim.action_space import discrete_grid
 from sim.deepracer_files import (
+    HYPERPARAMETERS_PATH,
+    MODEL_METADATA_PATH,
+    TRAINING_METRICS_PATH,
     EvaluationTrial,
     ModelMetadata,
     TrainingEpisode,
     TrainingMetrics,
     TrainingParams,
     default_hyperparameters,
-    evaluation_file_name,
+    evaluation_metrics_path,
+    evaluation_stamp,
     write_evaluation_metrics,
     write_hyperparameters,
     write_model_metadata,
@@ -312,10 +316,10 @@ def _model_folder(root: Path) -> Path:
     folder = root / "bench-model"
     folder.mkdir()
     write_model_metadata(
-        folder / "model_metadata.json",
+        folder / MODEL_METADATA_PATH,
         ModelMetadata(discrete_grid(), ("camera",)),
     )
-    write_hyperparameters(folder / "hyperparameters.json", default_hyperparameters())
+    write_hyperparameters(folder / HYPERPARAMETERS_PATH, default_hyperparameters())
     write_training_params(folder / "training_params.yaml", TrainingParams(world_name=BENCH_TRACK))
     episodes = tuple(
         TrainingEpisode(
@@ -323,14 +327,14 @@ def _model_folder(root: Path) -> Path:
         )
         for i in range(500)
     )
-    write_training_metrics(folder / "training.json", TrainingMetrics(episodes))
+    write_training_metrics(folder / TRAINING_METRICS_PATH, TrainingMetrics(episodes))
     trials = [
         EvaluationTrial(
             100.0, 15_000 * (i + 1), 15_000 * i, 15_000 - 100 * i, "Lap complete", trial=i + 1
         )
         for i in range(3)
     ]
-    write_evaluation_metrics(folder / evaluation_file_name(), trials)
+    write_evaluation_metrics(folder / evaluation_metrics_path(evaluation_stamp()), trials)
     return folder
 
 

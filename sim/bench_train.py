@@ -88,12 +88,11 @@ def largest_step_gain(name: str) -> float:
     folder = open_model(name)
     report = evaluate_model(folder)
     assert report.metrics_file is not None
-    stamp = report.metrics_file.stem.removeprefix("evaluation-")
-    rows = read_sim_trace(folder.sim_trace_dir / "evaluation" / f"{stamp}-iteration.csv")
+    stamp = report.metrics_file.stem.removeprefix("EvaluationMetrics-")
+    rows = read_sim_trace(folder.evaluation_trace_file(stamp))
     gain = 0.0
-    # Trials are interleaved step by step in the trace: compare each trial's own steps.
-    ordered = sorted(rows, key=lambda row: (row.episode, row.steps))
-    for before, after in itertools.pairwise(ordered):
+    # Trials follow each other in the trace: compare each trial's own steps.
+    for before, after in itertools.pairwise(rows):
         if before.episode == after.episode:
             gain = max(gain, (after.progress - before.progress) / 100.0 * after.track_len)
     return gain

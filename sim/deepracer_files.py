@@ -7,9 +7,13 @@ own folders are the same thing:
 - `model_metadata.json`: action space, sensors, network, algorithm, version;
 - `hyperparameters.json`: DeepRacer's keys, defaults and allowed ranges;
 - `training_params.yaml`: the training job (track, race type, stop condition);
-- training metrics (`training.json`, DeepRacer's TrainingMetrics form);
-- evaluation metrics (`evaluation-*.json`, DeepRacer's EvaluationMetrics form);
-- sim-trace CSV files with DeepRacer's column names.
+- training metrics (DeepRacer's TrainingMetrics form);
+- evaluation metrics (DeepRacer's EvaluationMetrics form);
+- sim-trace CSV files with DeepRacer's column names;
+- where they sit in a model folder: deepracer-for-cloud's single-worker layout, the one
+  deepracer-utils' `DeepRacerLog(folder)` detects (`model/`, `ip/`, `metrics/`,
+  `training-simtrace/`, `evaluation-<stamp>/evaluation-simtrace/`), and where the AWS
+  console's log downloads put them.
 
 Files read here may come from anyone: every value is type- and range-checked, and every
 problem is one `DeepRacerFileError` sentence that names the file.
@@ -23,28 +27,45 @@ import json
 import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import MISSING, asdict, dataclass, field, fields
+from dataclasses import MISSING, asdict, dataclass, field, fields, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, TypeVar
 
+import numpy as np
 import yaml
+from numpy.typing import NDArray
 
 from sim.action_space import ActionSpace, ActionSpaceError, parse_action_space
-from sim.atomic import write_text_atomic
+from sim.atomic import append_after_atomic, write_text_atomic
 from sim.observations import SensorError, normalise_sensors
 from sim.simulation import EpisodeStatus
 
 MODEL_METADATA = "model_metadata.json"
 HYPERPARAMETERS = "hyperparameters.json"
 TRAINING_PARAMS = "training_params.yaml"
-TRAINING_METRICS = "training.json"
 REWARD_FUNCTION = "reward_function.py"
-EVALUATION_GLOB = "evaluation-*.json"
-SIM_TRACE_DIR = "sim-trace"
+
+# A model folder in deepracer-for-cloud's single-worker layout (paths inside the folder).
+# DRfC keeps reward_function.py and training_params.yaml at the top of the model prefix.
+MODEL_METADATA_PATH = f"model/{MODEL_METADATA}"
+HYPERPARAMETERS_PATH = f"ip/{HYPERPARAMETERS}"
+TRAINING_METRICS_PATH = "metrics/TrainingMetrics.json"
+EVALUATION_METRICS_GLOB = "metrics/EvaluationMetrics-*.json"
+TRAINING_SIMTRACE_DIR = "training-simtrace"
+TRAINING_SIMTRACE_GLOB = f"{TRAINING_SIMTRACE_DIR}/*-iteration.csv"
+EVALUATION_SIMTRACE_GLOB = "evaluation-*/evaluation-simtrace/0-iteration.csv"
+
+# racer-tui's own layout before it followed DRfC's; `sim.garage.migrate` moves them.
+LEGACY_TRAINING_METRICS = "training.json"
+LEGACY_EVALUATION_GLOB = "evaluation-*.json"
+LEGACY_SIM_TRACE_DIR = "sim-trace"
 
 MAX_METADATA_BYTES = 1_000_000
 MAX_METRICS_BYTES = 64_000_000
+# Training metrics hold one row per episode of every car: far more than DeepRacer's one car
+# writes in the same time (about 60 MB per hour of training with the vector sensor).
+MAX_TRAINING_METRICS_BYTES = 512_000_000
 
 
 class DeepRacerFileError(ValueError):
@@ -374,17 +395,36 @@ class EvaluationTrial:
 
 
 @dataclass(frozen=True)
+class SimTraceSample:
+    """How much of a training the sim-trace files hold. Kept in TrainingMetrics.json beside
+    DeepRacer's keys (DeepRacer's readers ignore keys they do not know), so a sampled trace
+    says so where the episodes are counted."""
+
+    episodes: int  # training episodes that finished
+    traced_episodes: int  # of those, the episodes whose every step is in training-simtrace/
+    traced_steps: int
+    rule: str = ""  # which episodes are traced, in words
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
 class TrainingMetrics:
     episodes: tuple[TrainingEpisode, ...]
     best_model_metric: str = "progress"
     version: float = 2.0
+    sim_trace: SimTraceSample | None = None
 
     def to_json(self) -> dict[str, Any]:
-        return {
+        data: dict[str, Any] = {
             "metrics": [_metric_dict(e) for e in self.episodes],
             "version": self.version,
             "best_model_metric": self.best_model_metric,
         }
+        if self.sim_trace is not None:
+            data["sim_trace"] = self.sim_trace.to_json()
+        return data
 
 
 def _metric_dict(row: TrainingEpisode | EvaluationTrial) -> dict[str, Any]:
@@ -397,7 +437,7 @@ def _metric_dict(row: TrainingEpisode | EvaluationTrial) -> dict[str, Any]:
 
 
 def read_training_metrics(path: Path) -> TrainingMetrics:
-    return parse_training_metrics(_read_text(path, MAX_METRICS_BYTES), str(path))
+    return parse_training_metrics(_read_text(path, MAX_TRAINING_METRICS_BYTES), str(path))
 
 
 def parse_training_metrics(text: str, where: str) -> TrainingMetrics:
@@ -410,6 +450,24 @@ def parse_training_metrics(text: str, where: str) -> TrainingMetrics:
         episodes,
         best if isinstance(best, str) else "progress",
         float(version) if isinstance(version, int | float) else 2.0,
+        _sim_trace_sample(data.get("sim_trace")),
+    )
+
+
+def _sim_trace_sample(data: object) -> SimTraceSample | None:
+    """Our own extra key: informative only, so a malformed one is dropped, never an error."""
+    if not isinstance(data, Mapping):
+        return None
+    counts: list[int] = []
+    for name in ("episodes", "traced_episodes", "traced_steps"):
+        count = data.get(name)
+        if not isinstance(count, int) or isinstance(count, bool) or count < 0:
+            return None
+        counts.append(count)
+    rule = data.get("rule", "")
+    episodes, traced_episodes, traced_steps = counts
+    return SimTraceSample(
+        episodes, traced_episodes, traced_steps, rule[:200] if isinstance(rule, str) else ""
     )
 
 
@@ -417,8 +475,98 @@ def write_training_metrics(path: Path, metrics: TrainingMetrics) -> None:
     write_text_atomic(path, training_metrics_text(metrics))
 
 
+# One row per line between a fixed first line and a closing line: rows can then be added
+# by copying the file up to its closing line (see `append_training_metrics`), and the file
+# is still the single JSON object DeepRacer's tools read.
+_METRICS_HEAD = '{"metrics":['
+_METRICS_CLOSE = "\n]"
+
+
 def training_metrics_text(metrics: TrainingMetrics) -> str:
-    return json.dumps(metrics.to_json()) + "\n"
+    return _METRICS_HEAD + _metric_lines(metrics.episodes) + _metrics_tail(metrics)
+
+
+def _metric_lines(rows: Sequence[TrainingEpisode]) -> str:
+    return ",".join("\n" + json.dumps(_metric_dict(row), separators=(",", ":")) for row in rows)
+
+
+def _metrics_tail(metrics: TrainingMetrics) -> str:
+    data = metrics.to_json()
+    del data["metrics"]
+    return _METRICS_CLOSE + "," + json.dumps(data, separators=(",", ":"))[1:] + "\n"
+
+
+def append_training_metrics(
+    path: Path, rows: Sequence[TrainingEpisode], template: TrainingMetrics
+) -> None:
+    """Add `rows` to the TrainingMetrics file at `path` (made if missing), atomically.
+
+    The cost grows with the new rows, not with the whole log, which holds every episode of
+    every car. `template` gives the closing keys (version, best-model metric, sim-trace
+    counts); its episodes are ignored. A file written elsewhere is rewritten once in this
+    layout.
+    """
+    tail = _metrics_tail(template)
+    lines = _metric_lines(rows)
+    try:
+        size = path.stat().st_size
+    except FileNotFoundError:
+        write_text_atomic(path, _METRICS_HEAD + lines + tail)
+        return
+    keep, empty = _rows_end(path, size)
+    if keep is None:
+        old = read_training_metrics(path)
+        merged = replace(template, episodes=old.episodes + tuple(rows))
+        write_text_atomic(path, training_metrics_text(merged))
+        return
+    joiner = "" if empty or not lines else ","
+    append_after_atomic(path, keep, (joiner + lines + tail).encode("utf-8"))
+
+
+def _rows_end(path: Path, size: int) -> tuple[int | None, bool]:
+    """Where the rows of a file in our line layout end, and whether there are none."""
+    head = _METRICS_HEAD.encode("utf-8")
+    with path.open("rb") as handle:
+        if handle.read(len(head)) != head:
+            return None, False
+        start = max(len(head), size - 65_536)  # the closing line is short; rows are < 1 kB
+        handle.seek(start)
+        chunk = handle.read()
+    close = chunk.rfind(_METRICS_CLOSE.encode("utf-8"))
+    if close < 0:
+        return None, False
+    end = start + close
+    return end, end == len(head)
+
+
+def training_metrics_end(path: Path) -> tuple[TrainingEpisode | None, SimTraceSample | None]:
+    """The last row of a TrainingMetrics file and its sim-trace counts, reading only the
+    file's end when it is in our line layout (a resumed training needs just these from a
+    log of every episode). (None, None) when there is no file."""
+    try:
+        size = path.stat().st_size
+        end, empty = _rows_end(path, size)
+        if end is None:
+            metrics = read_training_metrics(path)
+            return (metrics.episodes[-1] if metrics.episodes else None), metrics.sim_trace
+        with path.open("rb") as handle:
+            start = max(0, end - 65_536)
+            handle.seek(start)
+            chunk = handle.read(size - start)
+    except FileNotFoundError:
+        return None, None
+    except OSError as error:
+        raise DeepRacerFileError(f"{path}: cannot read it ({error.strerror}).") from None
+    rows, close = chunk[: end - start], chunk[end - start + len(_METRICS_CLOSE) + 1 :]
+    try:
+        closing = json.loads(b"{" + close)
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        closing = {}
+    sample = _sim_trace_sample(closing.get("sim_trace") if isinstance(closing, dict) else None)
+    if empty:
+        return None, sample
+    line = rows[rows.rfind(b"\n") + 1 :].decode("utf-8", errors="replace")
+    return _row(TrainingEpisode, parse_json_object(line, str(path)), path, 0), sample
 
 
 def read_evaluation_metrics(path: Path) -> tuple[EvaluationTrial, ...]:
@@ -438,10 +586,31 @@ def evaluation_metrics_text(trials: Sequence[EvaluationTrial]) -> str:
     return json.dumps({"metrics": [_metric_dict(t) for t in trials]}) + "\n"
 
 
-def evaluation_file_name(when: datetime | None = None) -> str:
-    """`evaluation-YYYYmmddHHMMSS.json`, which sorts by time like DeepRacer's files."""
-    stamp = (when or datetime.now(UTC)).strftime("%Y%m%d%H%M%S")
-    return f"evaluation-{stamp}.json"
+def evaluation_stamp(when: datetime | None = None) -> str:
+    """`YYYYmmddHHMMSS`: DRfC names an evaluation by it, and the names sort by time."""
+    return (when or datetime.now(UTC)).strftime("%Y%m%d%H%M%S")
+
+
+def evaluation_metrics_path(stamp: str) -> str:
+    """Where a DRfC model folder keeps the evaluation's EvaluationMetrics."""
+    return f"metrics/EvaluationMetrics-{stamp}.json"
+
+
+def evaluation_trace_path(stamp: str) -> str:
+    """Where a DRfC model folder keeps the evaluation's sim-trace (deepracer-utils reads
+    exactly 14 digits here)."""
+    return f"evaluation-{stamp}/evaluation-simtrace/0-iteration.csv"
+
+
+def training_trace_path(iteration: int) -> str:
+    """DRfC's training sim-trace of one iteration, numbered from 0."""
+    return f"{TRAINING_SIMTRACE_DIR}/{iteration}-iteration.csv"
+
+
+def stamp_in(name: str) -> str | None:
+    """The 14-digit evaluation timestamp in a file or folder name, if there is one."""
+    match = _TIMESTAMP.search(name)
+    return match.group(1) if match else None
 
 
 def _metric_rows(data: Mapping[str, Any], path: Path | str) -> list[Any]:
@@ -573,6 +742,87 @@ def write_sim_trace(path: Path, rows: Iterable[SimTraceRow]) -> None:
     write_text_atomic(path, sim_trace_text(rows))
 
 
+@dataclass(frozen=True)
+class SimTraceColumns:
+    """Many sim-trace rows as numpy columns (one entry per row; `track_len` is one value):
+    how training and evaluation write thousands of rows without a Python object per row."""
+
+    episode: NDArray[np.int64]
+    steps: NDArray[np.int64]
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    yaw: NDArray[np.float64]
+    steer: NDArray[np.float64]
+    throttle: NDArray[np.float64]
+    action: NDArray[np.int64]
+    reward: NDArray[np.float64]
+    done: NDArray[np.bool_]
+    all_wheels_on_track: NDArray[np.bool_]
+    progress: NDArray[np.float64]
+    closest_waypoint: NDArray[np.int64]
+    track_len: float
+    tstamp: NDArray[np.float64]
+    episode_status: Sequence[str]
+
+    def __len__(self) -> int:
+        return len(self.steps)
+
+
+def sim_trace_lines(columns: SimTraceColumns) -> str:
+    """CSV rows (no header), each ending in a newline, in SIM_TRACE_COLUMNS order."""
+    n = len(columns)
+    if n == 0:
+        return ""
+
+    def whole(values: NDArray[Any]) -> list[str]:
+        return np.asarray(values, dtype=np.int64).astype(str).tolist()  # type: ignore[no-any-return]
+
+    def number(values: NDArray[Any], digits: int) -> list[str]:
+        rounded = np.round(np.asarray(values, dtype=np.float64), digits)
+        return rounded.astype(str).tolist()  # type: ignore[no-any-return]
+
+    def flag(values: NDArray[Any]) -> list[str]:
+        return np.where(np.asarray(values, dtype=bool), "True", "False").tolist()  # type: ignore[no-any-return]
+
+    cells = zip(
+        whole(columns.episode),
+        # simapp writes steps as a float ("1.0"); deepracer-utils takes either.
+        np.asarray(columns.steps, dtype=np.float64).astype(str).tolist(),
+        number(columns.x, 4),
+        number(columns.y, 4),
+        number(columns.yaw, 4),
+        number(columns.steer, 4),
+        number(columns.throttle, 4),
+        whole(columns.action),
+        number(columns.reward, 4),
+        flag(columns.done),
+        flag(columns.all_wheels_on_track),
+        number(columns.progress, 4),
+        whole(columns.closest_waypoint),
+        [repr(float(columns.track_len))] * n,
+        number(columns.tstamp, 3),
+        list(columns.episode_status),
+        ["0.0"] * n,  # pause_duration: training and evaluation trials never hold a car
+        strict=True,
+    )
+    return "".join(",".join(row) + "\n" for row in cells)
+
+
+def append_sim_trace(path: Path, lines: str) -> None:
+    """Add rows to a sim-trace CSV (with its header when the file is new) in one write.
+
+    Appending keeps a long training's trace cheap; a killed process can at worst leave a
+    last line cut short, which `sim.training` trims when the next run starts.
+    """
+    if not lines:
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("a", encoding="utf-8", newline="") as handle:
+        if handle.tell() == 0:
+            lines = ",".join(SIM_TRACE_COLUMNS) + "\n" + lines
+        handle.write(lines)
+
+
 def read_sim_trace(path: Path) -> list[SimTraceRow]:
     text = _read_text(path, MAX_METRICS_BYTES)
     reader = csv.reader(io.StringIO(text))
@@ -586,6 +836,28 @@ def read_sim_trace(path: Path) -> list[SimTraceRow]:
         except (ValueError, IndexError):
             raise DeepRacerFileError(f"{path}: line {line} is not a valid sim-trace row.") from None
     return rows
+
+
+def last_sim_trace_row(path: Path) -> SimTraceRow | None:
+    """The last row of a sim-trace CSV, reading only the file's end (a training's trace
+    can be megabytes; a live view needs the newest step)."""
+    try:
+        with path.open("rb") as handle:
+            header = handle.readline(4096).decode("utf-8", errors="replace").strip()
+            size = handle.seek(0, io.SEEK_END)
+            handle.seek(max(0, size - 4096))
+            tail = handle.read().decode("utf-8", errors="replace")
+    except OSError as error:
+        raise DeepRacerFileError(f"{path}: cannot read it ({error.strerror}).") from None
+    if tuple(header.split(",")[: len(SIM_TRACE_COLUMNS)]) != SIM_TRACE_COLUMNS:
+        raise DeepRacerFileError(f"{path}: not a DeepRacer sim-trace CSV (unexpected header).")
+    lines = [line for line in tail.split("\n") if line.strip()]
+    if not lines or lines[-1].startswith("episode,"):
+        return None
+    try:
+        return _trace_row(next(csv.reader([lines[-1]])))
+    except (ValueError, IndexError):
+        raise DeepRacerFileError(f"{path}: its last line is not a valid sim-trace row.") from None
 
 
 def _trace_row(cells: list[str]) -> SimTraceRow:
@@ -635,7 +907,11 @@ class DeepRacerFiles:
     reward_function: Path | None = None
     training_metrics: tuple[Path, ...] = ()
     evaluation_metrics: tuple[Path, ...] = ()  # oldest first
-    sim_traces: tuple[Path, ...] = ()
+    sim_traces: tuple[Path, ...] = ()  # every sim-trace CSV, training and evaluation
+    training_traces: tuple[Path, ...] = ()  # `<N>-iteration.csv` files, by N
+    # (stamp, file): an evaluation's sim-trace and the 14-digit stamp its folder names, or
+    # None where the download kept no stamp (the console flattens a single evaluation).
+    evaluation_traces: tuple[tuple[str | None, Path], ...] = ()
 
     @property
     def latest_evaluation(self) -> Path | None:
@@ -654,9 +930,11 @@ def _by_timestamp(paths: Iterable[Path]) -> tuple[Path, ...]:
 
 
 def locate_files(root: Path) -> DeepRacerFiles:
-    """Find DeepRacer files in a racer-tui model folder, a DeepRacer-for-Cloud model folder
-    (`model/`, `ip/`, `metrics/`) or an AWS console log download (`metrics/training/`,
-    `metrics/evaluation/`, `sim-trace/`). Symlinks are not followed out of `root`."""
+    """Find DeepRacer files in a DeepRacer-for-Cloud model folder (`model/`, `ip/`,
+    `metrics/`, `training-simtrace/`, `evaluation-<stamp>/`; racer-tui's model folders are
+    these), an AWS console log download (`metrics/training/`, `metrics/evaluation/`,
+    `sim-trace/`) or a racer-tui folder of the old flat layout. Symlinks are not followed
+    out of `root`."""
     root = Path(root)
 
     def first(*candidates: str) -> Path | None:
@@ -669,27 +947,67 @@ def locate_files(root: Path) -> DeepRacerFiles:
     def every(*patterns: str) -> list[Path]:
         found: list[Path] = []
         for pattern in patterns:
-            found.extend(p for p in root.glob(pattern) if p.is_file() and not p.is_symlink())
+            found.extend(
+                p
+                for p in root.glob(pattern)
+                if p.is_file() and not any(part.is_symlink() for part in _parts(root, p))
+            )
         return found
 
+    training_traces = every(
+        TRAINING_SIMTRACE_GLOB,
+        f"{LEGACY_SIM_TRACE_DIR}/training/training-simtrace/*-iteration.csv",
+        f"{LEGACY_SIM_TRACE_DIR}/training/*/training-simtrace/*-iteration.csv",
+    )
+    evaluation_traces = [
+        (stamp_in(path.parent.parent.name), path)
+        for path in every(
+            EVALUATION_SIMTRACE_GLOB,
+            f"{LEGACY_SIM_TRACE_DIR}/evaluation/*/evaluation-simtrace/*-iteration.csv",
+        )
+    ]
+    evaluation_traces += [
+        (None, path) for path in every(f"{LEGACY_SIM_TRACE_DIR}/evaluation/*-iteration.csv")
+    ]
     return DeepRacerFiles(
         root=root,
-        model_metadata=first(MODEL_METADATA, f"model/{MODEL_METADATA}"),
-        hyperparameters=first(HYPERPARAMETERS, f"ip/{HYPERPARAMETERS}"),
+        model_metadata=first(MODEL_METADATA_PATH, MODEL_METADATA),
+        hyperparameters=first(HYPERPARAMETERS_PATH, HYPERPARAMETERS),
         training_params=first(TRAINING_PARAMS, f"ip/{TRAINING_PARAMS}"),
         reward_function=first(REWARD_FUNCTION, f"model/{REWARD_FUNCTION}"),
         training_metrics=_by_timestamp(
-            every(TRAINING_METRICS, "metrics/TrainingMetrics*.json", "metrics/training/*.json")
+            every(
+                LEGACY_TRAINING_METRICS, "metrics/TrainingMetrics*.json", "metrics/training/*.json"
+            )
         ),
         evaluation_metrics=_by_timestamp(
             every(
-                EVALUATION_GLOB,
+                LEGACY_EVALUATION_GLOB,
                 "metrics/EvaluationMetrics*.json",
                 "metrics/evaluation/*.json",
             )
         ),
-        sim_traces=tuple(sorted(every(f"{SIM_TRACE_DIR}/**/*.csv"))),
+        sim_traces=tuple(sorted({*training_traces, *(path for _, path in evaluation_traces)})),
+        training_traces=tuple(sorted(training_traces, key=_iteration_number)),
+        evaluation_traces=tuple(
+            sorted(evaluation_traces, key=lambda pair: (pair[0] or "", pair[1]))
+        ),
     )
+
+
+def _parts(root: Path, path: Path) -> list[Path]:
+    """`path` and each folder between it and `root`: none may be a symlink."""
+    chain = [path]
+    for parent in path.parents:
+        if parent == root:
+            break
+        chain.append(parent)
+    return chain
+
+
+def _iteration_number(path: Path) -> tuple[int, str]:
+    number = path.name.split("-", 1)[0]
+    return (int(number) if number.isdigit() else -1, str(path))
 
 
 # --- reading safely ----------------------------------------------------------------------

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import math
 import os
 import signal
 import tempfile
@@ -44,8 +45,9 @@ from racer_tui.widgets.model_detail import status_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
 from racer_tui.widgets.training_charts import TrainingCharts, TrainingFigures, clock
-from sim.deepracer_files import read_sim_trace
+from sim.deepracer_files import last_sim_trace_row
 from sim.garage.folder import ModelError, ModelFolder, list_models, open_model
+from sim.simulation import LOOK_AHEAD
 from sim.training import events
 from sim.training.launcher import failure_from_stderr, worker_command
 
@@ -97,7 +99,7 @@ def running_worker_pid(folder: ModelFolder) -> int | None:
 
 
 def load_figures(folder: ModelFolder) -> TrainingFigures:
-    """The model's past training from `training.json` (empty before the first run)."""
+    """The model's past training from its TrainingMetrics (empty before the first run)."""
     try:
         return TrainingFigures.from_metrics(folder.training_metrics())
     except ModelError:
@@ -105,19 +107,24 @@ def load_figures(folder: ModelFolder) -> TrainingFigures:
 
 
 def latest_observation(folder: ModelFolder) -> Observation | None:
-    """What the model saw at the last traced step of its latest training iteration."""
-    traces = folder.sim_trace_dir / "training"
-    files = [p for p in traces.glob("*-iteration.csv") if p.stem.split("-")[0].isdigit()]
+    """What the model saw at the last traced step of its latest traced training iteration."""
+    files = [
+        path
+        for path in folder.training_trace_dir.glob("*-iteration.csv")
+        if path.name.split("-")[0].isdigit()
+    ]
     if not files:
         return None
-    latest = max(files, key=lambda p: int(p.stem.split("-")[0]))
-    rows = read_sim_trace(latest)
-    if not rows:
+    latest = max(files, key=lambda p: int(p.name.split("-")[0]))
+    row = last_sim_trace_row(latest)
+    if row is None:
         return None
-    row = rows[-1]
-    caption = f"iteration {latest.stem.split('-')[0]}, episode {row.episode} step {row.steps}"
+    caption = f"iteration {latest.name.split('-')[0]}, episode {row.episode} step {row.steps}"
     sensors = folder.metadata().sensors
-    return observe_at(folder.track(), sensors, (row.x, row.y, row.yaw), caption)
+    # The trace's X, Y is DeepRacer's point ahead of the car; the view is from the car.
+    yaw = math.radians(row.yaw)
+    x, y = row.x - LOOK_AHEAD * math.cos(yaw), row.y - LOOK_AHEAD * math.sin(yaw)
+    return observe_at(folder.track(), sensors, (x, y, row.yaw), caption)
 
 
 def _pid_alive(pid: int) -> bool:

@@ -39,12 +39,14 @@ from sim.deepracer_files import (
     ModelMetadata,
     TrainingParams,
     evaluation_metrics_text,
+    evaluation_stamp,
     parse_evaluation_metrics,
     parse_hyperparameters,
     parse_json_object,
     parse_model_metadata,
     parse_training_params,
     read_evaluation_metrics,
+    stamp_in,
 )
 from sim.garage.deepracer_import import BUNDLE_SUFFIX, ImportResult
 from sim.garage.folder import (
@@ -149,7 +151,12 @@ def export_bundle(folder: ModelFolder, out: Path, *, replace: bool = False) -> P
         POLICY_FILE: policy,
     }
     evaluations = folder.evaluation_files()
-    evaluation_file = evaluations[-1].name if evaluations else None
+    # Bundles name the evaluation `evaluation-<stamp>.json`, as they always have.
+    evaluation_file = (
+        f"evaluation-{stamp_in(evaluations[-1].name) or evaluation_stamp()}.json"
+        if evaluations
+        else None
+    )
     if evaluations:
         trials = _from_deepracer(read_evaluation_metrics, evaluations[-1])
         members[EVALUATION] = evaluation_metrics_text(trials).encode("utf-8")
@@ -485,8 +492,9 @@ def install_bundle_report(
         )
         write_bytes_atomic(folder.path / BUNDLE_REWARD_FILE, bundle.reward_source.encode("utf-8"))
         if bundle.evaluation is not None and bundle.evaluation_file is not None:
+            stamp = stamp_in(bundle.evaluation_file) or evaluation_stamp()
             write_bytes_atomic(
-                folder.path / bundle.evaluation_file,
+                folder.evaluation_metrics_file(stamp),
                 evaluation_metrics_text(bundle.evaluation).encode("utf-8"),
             )
 

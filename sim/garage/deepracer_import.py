@@ -5,8 +5,10 @@ lay the same files out differently; `sim.deepracer_files.locate_files` finds the
 DeepRacer folder lacks is filled in and said out loud: no reward function -> the
 follow-the-centre-line template; a track racer-tui does not know -> the default track;
 no hyperparameters -> DeepRacer's defaults. DeepRacer's TensorFlow weights cannot drive
-a racer-tui car, so an imported model starts untrained, with its metrics kept (a copied
-racer-tui model folder keeps its `policy.safetensors`, once checked to be plain tensors).
+a racer-tui car, so an imported model starts untrained, with its logs kept in the DRfC
+layout: training and evaluation metrics and their sim-traces, so the Garage shows the
+training history and deepracer-utils reads the new folder (a copied racer-tui model folder
+keeps its `policy.safetensors` too, once checked to be plain tensors).
 
 Values outside racer-tui's ranges are never clamped: the error names the key, the file
 and the allowed range, so the racer decides.
@@ -14,16 +16,17 @@ and the allowed range, so the racer decides.
 
 from __future__ import annotations
 
-import re
+import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import TypeVar
 
 from sim.atomic import write_bytes_atomic
 from sim.deepracer_files import (
-    TRAINING_METRICS,
+    MAX_METRICS_BYTES,
+    SIM_TRACE_COLUMNS,
     DeepRacerFileError,
     DeepRacerFiles,
     EvaluationTrial,
@@ -31,13 +34,15 @@ from sim.deepracer_files import (
     TrainingMetrics,
     TrainingParams,
     default_hyperparameters,
-    evaluation_file_name,
+    evaluation_stamp,
     locate_files,
     read_evaluation_metrics,
     read_hyperparameters,
     read_model_metadata,
     read_training_metrics,
     read_training_params,
+    stamp_in,
+    training_trace_path,
     write_evaluation_metrics,
     write_training_metrics,
 )
@@ -51,7 +56,6 @@ from sim.garage.folder import (
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
 
 BUNDLE_SUFFIX = ".racer-bundle"
-_TIMESTAMP = re.compile(r"(\d{14})")
 _T = TypeVar("_T")
 
 
@@ -101,7 +105,8 @@ def import_deepracer_folder(
     world = _track(track, params, notes)
     reward_source = _reward_source(files, notes)
     training = _training_metrics(files)
-    evaluations = [(p, _read(read_evaluation_metrics, p)) for p in files.evaluation_metrics]
+    evaluations = _evaluations(files)
+    training_traces = _checked_traces(files.training_traces)
     policy = _racer_tui_policy(root)
     if policy is None:
         notes.append(
@@ -113,9 +118,17 @@ def import_deepracer_folder(
         if policy is not None:
             write_bytes_atomic(folder.policy_file, policy)
         if training is not None:
-            write_training_metrics(folder.path / TRAINING_METRICS, training)
-        for name_, trials in _evaluation_names(evaluations):
-            write_evaluation_metrics(folder.path / name_, trials)
+            write_training_metrics(folder.training_metrics_file, training)
+        for trace in training_traces:
+            shutil.copyfile(trace, folder.path / training_trace_path(_iteration(trace)))
+        for evaluation in evaluations:
+            write_evaluation_metrics(
+                folder.evaluation_metrics_file(evaluation.stamp), evaluation.trials
+            )
+            if evaluation.trace is not None:
+                target = folder.evaluation_trace_file(evaluation.stamp)
+                target.parent.mkdir(parents=True, exist_ok=True)
+                shutil.copyfile(evaluation.trace, target)
 
     folder = create_model(
         chosen_name,
@@ -205,23 +218,59 @@ def _training_metrics(files: DeepRacerFiles) -> TrainingMetrics | None:
     return TrainingMetrics(tuple(episodes))
 
 
-def _evaluation_names(
-    evaluations: list[tuple[Path, tuple[EvaluationTrial, ...]]],
-) -> list[tuple[str, tuple[EvaluationTrial, ...]]]:
-    """`evaluation-<stamp>.json` names, keeping DeepRacer's timestamps (file time otherwise)."""
-    named: list[tuple[str, tuple[EvaluationTrial, ...]]] = []
+@dataclass(frozen=True)
+class _Evaluation:
+    stamp: str  # DRfC's 14-digit name for it in the new folder
+    trials: tuple[EvaluationTrial, ...]
+    trace: Path | None  # its sim-trace, when the download has one
+
+
+def _evaluations(files: DeepRacerFiles) -> list[_Evaluation]:
+    """Each evaluation with its DeepRacer timestamp (the file's time otherwise, moved on a
+    second when taken: DRfC names hold 14 digits) and the sim-trace of the same stamp. A
+    console download of one evaluation keeps its sim-trace without a stamp."""
+    traces = dict(files.evaluation_traces)
+    unstamped = [path for stamp, path in files.evaluation_traces if stamp is None]
+    found: list[_Evaluation] = []
     used: set[str] = set()
-    for path, trials in evaluations:
-        match = _TIMESTAMP.search(path.name)
-        if match:
-            base = f"evaluation-{match.group(1)}"
-        else:
-            when = datetime.fromtimestamp(path.stat().st_mtime, UTC)
-            base = evaluation_file_name(when).removesuffix(".json")
-        candidate, n = f"{base}.json", 1
-        while candidate in used:
-            n += 1
-            candidate = f"{base}-{n}.json"
-        used.add(candidate)
-        named.append((candidate, trials))
-    return named
+    for path in files.evaluation_metrics:
+        trials = _read(read_evaluation_metrics, path)
+        original = stamp_in(path.name)
+        when = datetime.fromtimestamp(path.stat().st_mtime, UTC)
+        stamp = original or evaluation_stamp(when)
+        while stamp in used:
+            when = datetime.strptime(stamp, "%Y%m%d%H%M%S").replace(tzinfo=UTC)
+            stamp = evaluation_stamp(when + timedelta(seconds=1))
+        used.add(stamp)
+        trace = traces.get(original) if original else None
+        if trace is None and len(files.evaluation_metrics) == 1 and len(unstamped) == 1:
+            trace = unstamped[0]
+        found.append(_Evaluation(stamp, trials, trace))
+    for evaluation in found:
+        if evaluation.trace is not None:
+            _checked_traces([evaluation.trace])
+    return found
+
+
+def _checked_traces(paths: tuple[Path, ...] | list[Path]) -> list[Path]:
+    """Sim-trace files worth copying: DeepRacer's columns in the header (newer simapps add
+    some after them), of a size a trace can have; anything else stops the import, naming
+    the file. Training traces must be numbered, as deepracer-utils reads the number."""
+    known = list(SIM_TRACE_COLUMNS[:16])  # the last, pause_duration, is missing in old ones
+    for path in paths:
+        if path.stat().st_size > MAX_METRICS_BYTES:
+            raise ModelError(
+                f"{path} is larger than a sim-trace can be; remove it and import again."
+            )
+        with path.open("rb") as handle:
+            header = handle.readline(4096).decode("utf-8", errors="replace").strip()
+        if header.split(",")[:16] != known:
+            raise ModelError(
+                f"{path} is not a DeepRacer sim-trace CSV (unexpected header); remove it "
+                "and import again."
+            )
+    return [path for path in paths if path.name.split("-", 1)[0].isdigit()]
+
+
+def _iteration(path: Path) -> int:
+    return int(path.name.split("-", 1)[0])

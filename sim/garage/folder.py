@@ -1,11 +1,19 @@
 """Model folders: the garage, where each of a racer's models is one folder of DeepRacer files.
 
-A model is `data_home()/models/NAME` holding the files AWS DeepRacer users know
-(`model_metadata.json`, `reward_function.py`, `hyperparameters.json`,
-`training_params.yaml`, `training.json`, `evaluation-*.json`, `sim-trace/`) plus the
-trainer's `policy.safetensors`, `checkpoints/` and `training-state.json`. Formats are
-read and written by `sim.deepracer_files`; this module knows where the files are and
-what state the model is in.
+A model is `data_home()/models/NAME` laid out as a deepracer-for-cloud model folder, so
+deepracer-utils' `DeepRacerLog(folder)` reads it unchanged:
+
+    model/model_metadata.json        ip/hyperparameters.json
+    reward_function.py               training_params.yaml
+    metrics/TrainingMetrics.json     metrics/EvaluationMetrics-<stamp>.json
+    training-simtrace/<N>-iteration.csv
+    evaluation-<stamp>/evaluation-simtrace/0-iteration.csv
+
+with racer-tui's own files beside them: the trainer's `policy.safetensors`,
+`checkpoints/` and `training-state.json`. Formats and DeepRacer's names are in
+`sim.deepracer_files`; this module knows the folder and what state the model is in.
+Folders of racer-tui's older flat layout are moved into this one when first opened
+(`sim.garage.migrate`).
 
 Folders are created whole: everything is written into a hidden temporary folder beside
 the final one, which is then renamed into place, so a crash never leaves half a model.
@@ -13,6 +21,7 @@ the final one, which is then renamed into place, so a crash never leaves half a 
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -28,19 +37,22 @@ import psutil
 
 from sim.atomic import write_bytes_atomic
 from sim.deepracer_files import (
-    EVALUATION_GLOB,
-    HYPERPARAMETERS,
+    EVALUATION_METRICS_GLOB,
+    HYPERPARAMETERS_PATH,
     MODEL_METADATA,
+    MODEL_METADATA_PATH,
     REWARD_FUNCTION,
-    SIM_TRACE_DIR,
-    TRAINING_METRICS,
+    TRAINING_METRICS_PATH,
     TRAINING_PARAMS,
+    TRAINING_SIMTRACE_DIR,
     DeepRacerFileError,
     EvaluationTrial,
     ModelMetadata,
     TrainingMetrics,
     TrainingParams,
     check_hyperparameters,
+    evaluation_metrics_path,
+    evaluation_trace_path,
     read_evaluation_metrics,
     read_hyperparameters,
     read_model_metadata,
@@ -50,6 +62,7 @@ from sim.deepracer_files import (
     write_model_metadata,
     write_training_params,
 )
+from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
 from sim.home import data_home
 from sim.ids import canonical_json
 from sim.names import NAME_RULE, is_valid_name
@@ -101,7 +114,7 @@ class ModelFolder:
 
     @property
     def metadata_file(self) -> Path:
-        return self.path / MODEL_METADATA
+        return self.path / MODEL_METADATA_PATH
 
     @property
     def reward_file(self) -> Path:
@@ -109,7 +122,7 @@ class ModelFolder:
 
     @property
     def hyperparameters_file(self) -> Path:
-        return self.path / HYPERPARAMETERS
+        return self.path / HYPERPARAMETERS_PATH
 
     @property
     def training_params_file(self) -> Path:
@@ -117,7 +130,8 @@ class ModelFolder:
 
     @property
     def training_metrics_file(self) -> Path:
-        return self.path / TRAINING_METRICS
+        """DeepRacer's TrainingMetrics: one row per episode of every car that trained."""
+        return self.path / TRAINING_METRICS_PATH
 
     @property
     def policy_file(self) -> Path:
@@ -130,9 +144,20 @@ class ModelFolder:
         return self.path / CHECKPOINTS_DIR
 
     @property
-    def sim_trace_dir(self) -> Path:
-        """`training/<n>-iteration.csv` and `evaluation/<stamp>.csv`."""
-        return self.path / SIM_TRACE_DIR
+    def metrics_dir(self) -> Path:
+        return self.training_metrics_file.parent
+
+    @property
+    def training_trace_dir(self) -> Path:
+        """`<N>-iteration.csv`: the sim-trace of training iteration N (see sim.training.logbook)."""
+        return self.path / TRAINING_SIMTRACE_DIR
+
+    def evaluation_metrics_file(self, stamp: str) -> Path:
+        return self.path / evaluation_metrics_path(stamp)
+
+    def evaluation_trace_file(self, stamp: str) -> Path:
+        """The sim-trace of the evaluation whose metrics are EvaluationMetrics-<stamp>.json."""
+        return self.path / evaluation_trace_path(stamp)
 
     @property
     def training_state_file(self) -> Path:
@@ -206,16 +231,17 @@ class ModelFolder:
     # --- metrics -------------------------------------------------------------------------
 
     def training_metrics(self) -> TrainingMetrics | None:
-        """`training.json`, or None before the first training run."""
+        """The training metrics, or None before the first training run."""
         if not self.training_metrics_file.is_file():
             return None
         return _checked(read_training_metrics, self.training_metrics_file)
 
     def evaluation_files(self) -> list[Path]:
-        """`evaluation-*.json`, oldest first (the names carry a sortable timestamp)."""
+        """`metrics/EvaluationMetrics-*.json`, oldest first (the names carry a sortable
+        timestamp)."""
         return sorted(
             path
-            for path in self.path.glob(EVALUATION_GLOB)
+            for path in self.path.glob(EVALUATION_METRICS_GLOB)
             if path.is_file() and not path.is_symlink()
         )
 
@@ -302,19 +328,38 @@ def check_model_name(name: str) -> None:
         raise ModelError(f"{name!r} cannot be a model name; use {NAME_RULE}.")
 
 
+def is_model_folder(path: Path) -> bool:
+    """A model folder of the DRfC layout, or one of racer-tui's old layout to migrate."""
+    return (path / MODEL_METADATA_PATH).is_file() or (
+        path.is_dir() and (path / MODEL_METADATA).is_file()
+    )
+
+
+def is_racer_tui_folder(path: Path) -> bool:
+    """A model folder racer-tui made: the old flat layout, or the DRfC layout with racer-tui's
+    own files beside (a DRfC download has the same DeepRacer files, but none of these)."""
+    if not is_model_folder(path):
+        return False
+    if (path / MODEL_METADATA).is_file():
+        return True
+    return any((path / own).exists() for own in (POLICY_FILE, TRAINING_STATE_FILE, CHECKPOINTS_DIR))
+
+
 def open_model(name_or_path: str) -> ModelFolder:
-    """A model in the garage by name, or the path of a racer-tui model folder."""
+    """A model in the garage by name, or the path of a model folder; a folder of racer-tui's
+    old flat layout is moved into the DRfC layout on the way (see sim.garage.migrate)."""
     if is_valid_name(name_or_path):
         folder = models_dir() / name_or_path
-        if (folder / MODEL_METADATA).is_file():
-            return ModelFolder(folder)
+        if is_model_folder(folder) or needs_migration(folder):
+            return _opened(folder)
     path = Path(name_or_path).expanduser()
-    if path.is_dir() and (path / MODEL_METADATA).is_file():
-        return ModelFolder(path)
+    if path.is_dir() and (is_model_folder(path) or needs_migration(path)):
+        return _opened(path)
     if path.is_dir():
         raise ModelError(
-            f"{name_or_path} has no {MODEL_METADATA}; to bring in a DeepRacer model folder, "
-            "use `racer-tui model import PATH`."
+            f"{path / MODEL_METADATA_PATH} does not exist, so {name_or_path} is not a model "
+            "folder; give a garage model name, or bring in a DeepRacer download with "
+            "`racer-tui model import PATH`."
         )
     raise ModelError(
         f"there is no model named {name_or_path!r}; `racer-tui model list` shows your models "
@@ -322,13 +367,31 @@ def open_model(name_or_path: str) -> ModelFolder:
     )
 
 
+def _opened(path: Path) -> ModelFolder:
+    try:
+        migrate_folder(path)
+    except MigrationError as error:
+        raise ModelError(str(error)) from None
+    if not (path / MODEL_METADATA_PATH).is_file():
+        # A folder cut short (by a crash or a copy) before its metadata was in place.
+        raise ModelError(
+            f"{path / MODEL_METADATA_PATH} does not exist, so the model folder is incomplete; "
+            "copy the model in again or re-create it."
+        )
+    return ModelFolder(path)
+
+
 def list_models() -> list[ModelFolder]:
-    """The garage's models by name (hidden temporary folders are skipped)."""
-    return [
-        ModelFolder(path)
-        for path in sorted(models_dir().iterdir(), key=lambda p: p.name.casefold())
-        if is_valid_name(path.name) and (path / MODEL_METADATA).is_file()
-    ]
+    """The garage's models by name (hidden temporary folders are skipped). Folders of the
+    old layout are migrated; one that cannot be still lists, and says why when opened."""
+    found: list[ModelFolder] = []
+    for path in sorted(models_dir().iterdir(), key=lambda p: p.name.casefold()):
+        if not is_valid_name(path.name) or not is_model_folder(path):
+            continue
+        with contextlib.suppress(MigrationError):
+            migrate_folder(path)
+        found.append(ModelFolder(path))
+    return found
 
 
 def check_new_model_name(name: str) -> Path:
@@ -389,12 +452,13 @@ def create_model(
     )
     temporary = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=models_dir()))
     try:
-        write_model_metadata(temporary / MODEL_METADATA, metadata)
-        write_hyperparameters(temporary / HYPERPARAMETERS, checked)
-        write_training_params(temporary / TRAINING_PARAMS, params)
-        write_bytes_atomic(temporary / REWARD_FUNCTION, reward_source.encode("utf-8"))
+        folder = ModelFolder(temporary)
+        write_model_metadata(folder.metadata_file, metadata)
+        write_hyperparameters(folder.hyperparameters_file, checked)
+        write_training_params(folder.training_params_file, params)
+        write_bytes_atomic(folder.reward_file, reward_source.encode("utf-8"))
         if populate is not None:
-            populate(ModelFolder(temporary))
+            populate(folder)
         os.chmod(temporary, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
         # A second creator racing us: rename refuses a non-empty target, and we re-check.
         if final.exists():

@@ -93,8 +93,9 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
 
 
 def folder_evaluation(folder: ModelFolder, file_name: str) -> tuple[EvaluationTrial, ...]:
+    """The trials of `metrics/<file_name>`, one of `folder.evaluation_files()`."""
     try:
-        return read_evaluation_metrics(folder.path / file_name)
+        return read_evaluation_metrics(folder.metrics_dir / file_name)
     except DeepRacerFileError as error:
         raise ModelError(str(error)) from None
 

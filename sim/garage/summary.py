@@ -1,6 +1,6 @@
 """A model's training in a few figures: what `model show` prints and a bundle carries.
 
-Built from `training.json` (DeepRacer's TrainingMetrics) and the trainer's
+Built from `metrics/TrainingMetrics.json` (one row per episode) and the trainer's
 `training-state.json`. A model installed from a bundle has neither; it keeps the bundle's
 summary in `training-summary.json` instead.
 """

@@ -18,23 +18,28 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import NDArray
 
+from sim.atomic import write_text_atomic
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
 from sim.deepracer_files import (
+    PREPARE_STATUS,
+    SIM_TRACE_COLUMNS,
     EvaluationTrial,
-    SimTraceRow,
-    evaluation_file_name,
+    SimTraceColumns,
+    evaluation_stamp,
+    sim_trace_lines,
     trace_status,
     write_evaluation_metrics,
-    write_sim_trace,
 )
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
+from sim.training.logbook import closest_waypoint
 
 if TYPE_CHECKING:
     from sim.garage.folder import ModelFolder
@@ -98,6 +103,67 @@ def start_poses(trials: int, seed: int = 0) -> list[tuple[float, float]]:
     return poses
 
 
+class TrialTrace:
+    """Every step of every trial, as the simulator left it after the step: DeepRacer's
+    point 0.14 m ahead of the car, heading, the step's action, all four wheels on the road,
+    progress and status. `columns` lays the trials end to end as DeepRacer runs them."""
+
+    def __init__(self) -> None:
+        self._steps: list[tuple[NDArray[np.intp], NDArray[np.float64], list[str]]] = []
+
+    def record(self, sim: TrackSimulation, cars: NDArray[np.intp], action: NDArray[Any]) -> None:
+        waypoints = np.asarray(sim.track.center, dtype=np.float64)
+        values = np.column_stack(
+            (
+                sim.steps,
+                sim.ahead[:, 0],
+                sim.ahead[:, 1],
+                sim.heading_deg,
+                sim.steering_cmd,
+                sim.speed_cmd,
+                action,
+                sim.wheels_on.all(axis=1),
+                sim.progress,
+                closest_waypoint(sim, waypoints),
+            )
+        )[cars]
+        self._steps.append((cars.copy(), values, [str(sim.status[car]) for car in cars]))
+
+    def columns(self, trials: Sequence[EvaluationTrial], track_length: float) -> SimTraceColumns:
+        """Trial k's rows as episode k - 1, its clock starting at the trial's start_time."""
+        cars = np.concatenate([cars for cars, _, _ in self._steps])
+        values = np.concatenate([values for _, values, _ in self._steps])
+        states = [state for _, _, statuses in self._steps for state in statuses]
+        order = np.lexsort((values[:, 0], cars))  # trial by trial, step by step
+        cars, values = cars[order], values[order]
+        steps = values[:, 0].astype(np.int64)
+        starts = np.array([trial.start_time / 1000.0 for trial in trials])
+        done = np.append(cars[1:] != cars[:-1], True)
+        statuses = [
+            trace_status(states[i]) if last else PREPARE_STATUS if step == 1 else "in_progress"
+            for i, last, step in zip(order.tolist(), done.tolist(), steps.tolist(), strict=True)
+        ]
+        return SimTraceColumns(
+            episode=cars.astype(np.int64),
+            steps=steps,
+            x=values[:, 1],
+            y=values[:, 2],
+            yaw=values[:, 3],
+            steer=values[:, 4],
+            throttle=values[:, 5],
+            action=values[:, 6].astype(np.int64),
+            reward=np.zeros(len(cars)),
+            done=done,
+            all_wheels_on_track=values[:, 7] > 0.5,
+            progress=values[:, 8],
+            closest_waypoint=values[:, 9].astype(np.int64),
+            track_len=track_length,
+            # A trial's clock runs from its start: its step k ends k/15 s after it.
+            tstamp=starts[cars] + steps * STEP_SECONDS,
+            episode_status=statuses,
+        )
+
+
 def run_trials(
     driver: Driver,
     track: Track,
@@ -106,13 +172,10 @@ def run_trials(
     car: CarSpec = DEEPRACER_CAR,
     max_seconds: float = TRIAL_SECONDS,
     seed: int = 0,
-    trace: list[SimTraceRow] | None = None,
+    trace: TrialTrace | None = None,
 ) -> list[TrialResult]:
-    """Drive `trials` one-lap trials from the start line with `driver`.
-
-    When `trace` is given, every step of every trial is appended to it as a sim-trace row
-    (the trial number in the `episode` column, from 0 as DeepRacer writes it).
-    """
+    """Drive `trials` one-lap trials from the start line with `driver`, recording every
+    step of every trial into `trace` when one is given."""
     if not 1 <= trials <= MAX_TRIALS:
         raise ValueError(f"the number of trials must be between 1 and {MAX_TRIALS}.")
     max_steps = max(1, int(max_seconds * STEP_HZ))
@@ -134,26 +197,14 @@ def run_trials(
         running = np.isnan(seconds)
         if not running.any():
             break
-        x, y, heading = sim.fleet.x.copy(), sim.fleet.y.copy(), sim.heading_deg
         action = driver.act(sim)
         sim.apply(action.steering_deg, action.speed)
+        if trace is not None:
+            trace.record(sim, np.flatnonzero(running), action.action_index)
         travelled = sim.travelled / length * 100.0
         for index in np.flatnonzero(running).tolist():
             state = sim.status[index]
             steps = int(sim.steps[index])
-            if trace is not None:
-                trace.append(
-                    _trace_row(
-                        sim,
-                        index,
-                        x=x,
-                        y=y,
-                        heading=heading,
-                        action_index=action.action_index,
-                        steps=steps,
-                        state=state,
-                    )
-                )
             if state == EpisodeStatus.IN_PROGRESS:
                 previous[index] = travelled[index]
                 continue
@@ -173,38 +224,6 @@ def run_trials(
         TrialResult(trial=i + 1, status=status[i], progress=float(progress[i]), seconds=seconds[i])
         for i in range(trials)
     ]
-
-
-def _trace_row(
-    sim: TrackSimulation,
-    car: int,
-    *,
-    x: np.ndarray,
-    y: np.ndarray,
-    heading: np.ndarray,
-    action_index: np.ndarray,
-    steps: int,
-    state: str,
-) -> SimTraceRow:
-    done = state != EpisodeStatus.IN_PROGRESS
-    return SimTraceRow(
-        episode=car,
-        steps=steps,
-        x=float(x[car]),
-        y=float(y[car]),
-        yaw=float(heading[car]),
-        steer=float(sim.steering_cmd[car]),
-        throttle=float(sim.speed_cmd[car]),
-        action=int(action_index[car]),
-        reward=0.0,
-        done=done,
-        all_wheels_on_track=bool(sim.wheels_on[car].all()),
-        progress=float(sim.progress[car]),
-        closest_waypoint=int(sim.segment[car]),
-        track_len=float(sim.track.length),
-        tstamp=steps * STEP_SECONDS,
-        episode_status="prepare" if steps == 1 else trace_status(state),
-    )
 
 
 _COUNTS = {
@@ -249,24 +268,33 @@ def evaluate_model(
     track: Track | None = None,
     trials: int = DEFAULT_TRIALS,
     seed: int = 0,
+    driver: Driver | None = None,
 ) -> EvaluationReport:
-    """Evaluate a garage model's policy and write `evaluation-<stamp>.json` (DeepRacer's
-    EvaluationMetrics) and `sim-trace/evaluation/<stamp>-iteration.csv` into its folder."""
+    """Evaluate a garage model's policy (or `driver`) and write DRfC's evaluation files:
+    `metrics/EvaluationMetrics-<stamp>.json` and its sim-trace,
+    `evaluation-<stamp>/evaluation-simtrace/0-iteration.csv`."""
     from sim.training.policy import driver_for_model
 
-    driver = driver_for_model(folder)
     chosen = track if track is not None else folder.track()
-    rows: list[SimTraceRow] = []
-    results = run_trials(driver, chosen, trials, seed=seed, trace=rows)
-    now = datetime.now(UTC)
-    name = evaluation_file_name(now)
-    path = folder.path / name
-    # Two evaluations within one second must not overwrite each other.
-    suffix = 1
-    while path.exists():
-        path = folder.path / name.replace(".json", f"{suffix:02d}.json")
-        suffix += 1
-    write_evaluation_metrics(path, evaluation_trials(results))
-    stamp = path.stem.removeprefix("evaluation-")
-    write_sim_trace(folder.sim_trace_dir / "evaluation" / f"{stamp}-iteration.csv", rows)
+    trace = TrialTrace()
+    results = run_trials(driver or driver_for_model(folder), chosen, trials, seed=seed, trace=trace)
+    rows = evaluation_trials(results)
+    stamp = _free_stamp(folder, datetime.now(UTC))
+    # The trace first: the metrics file is what says the model was evaluated.
+    header = ",".join(SIM_TRACE_COLUMNS) + "\n"
+    trace_text = header + sim_trace_lines(trace.columns(rows, chosen.length))
+    write_text_atomic(folder.evaluation_trace_file(stamp), trace_text)
+    path = folder.evaluation_metrics_file(stamp)
+    write_evaluation_metrics(path, rows)
     return EvaluationReport(track=chosen.name, trials=tuple(results), metrics_file=path)
+
+
+def _free_stamp(folder: ModelFolder, when: datetime) -> str:
+    """The evaluation's 14-digit stamp: two evaluations within one second take the next
+    free second, since DRfC's names (and deepracer-utils) have room for 14 digits only."""
+    while True:
+        stamp = evaluation_stamp(when)
+        taken = folder.evaluation_metrics_file(stamp).exists()
+        if not taken and not folder.evaluation_trace_file(stamp).parent.parent.exists():
+            return stamp
+        when += timedelta(seconds=1)

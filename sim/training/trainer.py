@@ -1,11 +1,12 @@
 """One training run of a garage model: the loop the worker process drives.
 
 Each iteration gathers experience (`RacerPPO.collect`), makes one PPO update, and reports:
-an `update` event, `episode` events for the reported car, the iteration's sim-trace CSV,
-`training.json`, and now and then an evaluation (which keeps the best policy in
-`policy.safetensors`), a checkpoint and a `system` event. Files are written atomically
-and in an order that keeps the folder consistent at every instant: a SIGKILL loses at most
-the work since the last checkpoint, and the next run resumes from `checkpoints/`.
+an `update` event, `episode` events for the reported car, and now and then an evaluation
+(which keeps the best policy in `policy.safetensors`), a checkpoint and a `system` event.
+The `Logbook` writes DeepRacer's TrainingMetrics and sim-trace of every car as the cars
+step. Files are written atomically or appended in an order that keeps the folder
+consistent at every instant: a SIGKILL loses at most the work since the last checkpoint,
+and the next run resumes from `checkpoints/`.
 
 Where a run starts: the latest checkpoint if there is one; else the model's
 `policy.safetensors` (a clone of a trained model) with a fresh optimizer; else scratch.
@@ -27,18 +28,7 @@ import psutil
 import torch
 
 from sim.atomic import write_text_atomic
-from sim.car import STEP_SECONDS
-from sim.deepracer_files import (
-    SIM_TRACE_DIR,
-    DeepRacerFileError,
-    SimTraceRow,
-    TrainingEpisode,
-    TrainingMetrics,
-    read_training_metrics,
-    trace_status,
-    write_sim_trace,
-    write_training_metrics,
-)
+from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, ModelFolder
 from sim.observations import SensorOptions
 from sim.simulation import reversed_track
@@ -48,6 +38,7 @@ from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
 from sim.training.errors import PolicyError
 from sim.training.evaluation import EvaluationReport, run_trials
+from sim.training.logbook import Logbook
 from sim.training.policy import (
     PolicyDriver,
     fill_network,
@@ -63,8 +54,6 @@ REPORTED_CAR = 0  # the car whose episodes are streamed and logged, as DeepRacer
 EVALUATION_TRIALS = 5
 EVALUATION_SECONDS = 60.0  # an evaluation trial still running after this is "Time Up"
 SYSTEM_SECONDS = 2.0
-KEEP_ALL_TRACES = 50  # the latest iterations keep their sim-trace; older ones every 10th
-TRACE_THINNING = 10
 
 
 @dataclass(frozen=True)
@@ -129,7 +118,6 @@ class Trainer:
         self._clock0 = time.monotonic()
         self._process = psutil.Process()
         self._process.cpu_percent(interval=None)  # the first reading only sets the baseline
-        self._metrics: list[TrainingEpisode] = []
         self._last_metrics_write = -math.inf
         self._metrics_write_cost = 0.0
 
@@ -173,13 +161,25 @@ class Trainer:
     def _setup(self) -> str:
         self._remove_leftovers()
         env = BatchedVecEnv(self.config, self.cars)
+        self.logbook = Logbook(
+            self.folder.path,
+            cars=self.cars,
+            episodes_per_iteration=self.settings.episodes_per_update,
+            track_length=self.config.track.length,
+            waypoints=env.batch.sim.track.center,
+            discrete=self.metadata.action_space.kind == "discrete",
+        )
+        env.batch.on_step = self.logbook.on_step
         spec = network_spec(self.metadata, SensorOptions())
         self.model = make_ppo(
             env, spec, self.settings, max_samples=self.max_samples, seed=self.options.seed
         )
         self.network = self.model.network
         resumed_from = self._restore()
-        self._load_metrics()
+        # The metrics may be ahead of the last checkpoint: they number the episodes.
+        self.progress = replace(
+            self.progress, episodes=max(self.progress.episodes, self.logbook.episodes)
+        )
         self._run_elapsed0 = self.progress.elapsed_seconds
         self._first_iteration = self.progress.iteration
         return resumed_from
@@ -211,7 +211,10 @@ class Trainer:
                 return
             started = time.monotonic()
             rollout = model.collect(
-                self.settings.episodes_per_update, self.min_samples, self.max_samples
+                self.settings.episodes_per_update,
+                self.min_samples,
+                self.max_samples,
+                traced_cars=0,  # the logbook traces every car
             )
             if self.should_stop():
                 return  # a stop during collection: do not spend time on an update
@@ -240,7 +243,7 @@ class Trainer:
         places = (
             self.folder.path,
             self.folder.checkpoints_dir,
-            self.folder.path / SIM_TRACE_DIR / "training",
+            self.folder.training_metrics_file.parent,
         )
         for place in places:
             for leftover in place.glob(".*.tmp"):
@@ -262,16 +265,14 @@ class Trainer:
 
     # --- reporting -----------------------------------------------------------------------------
     def _report_iteration(self, rollout: Rollout, seconds: float) -> None:
-        now_ms = self._job_ms()
-        first_episode = self.progress.episodes
-        for offset, episode in enumerate(rollout.episodes):
+        # The logbook numbered the episodes as they finished, as the metrics have them.
+        for episode in self.logbook.take_finished():
             if episode.car != REPORTED_CAR:
                 continue
-            number = first_episode + offset + 1
             self.emit(
                 events.Episode(
                     elapsed=self.elapsed,
-                    episode=number,
+                    episode=episode.number,
                     car=episode.car,
                     reward=episode.reward,
                     progress=episode.progress,
@@ -280,21 +281,7 @@ class Trainer:
                     steps=episode.steps,
                 )
             )
-            sim_ms = round(episode.steps * STEP_SECONDS * 1000)
-            self._metrics.append(
-                TrainingEpisode(
-                    reward_score=round(episode.reward, 4),
-                    metric_time=now_ms,
-                    start_time=max(0, now_ms - sim_ms),
-                    elapsed_time_in_milliseconds=sim_ms,
-                    episode=number,
-                    trial=number,
-                    phase="training",
-                    completion_percentage=round(episode.progress, 2),
-                    episode_status=episode.status,
-                )
-            )
-        self.progress = replace(self.progress, episodes=first_episode + len(rollout.episodes))
+        self.progress = replace(self.progress, episodes=self.logbook.episodes)
         laps = [e.lap_time for e in rollout.episodes if e.lap_time is not None]
         stats = self.model.last_update
         self.emit(
@@ -316,46 +303,6 @@ class Trainer:
                 best_lap=min(laps) if laps else None,
             )
         )
-        self._write_trace(rollout)
-
-    def _write_trace(self, rollout: Rollout) -> None:
-        trace = rollout.trace
-        if not trace.car:
-            return
-        track_length = float(self.config.track.length)
-        # The `episode` column counts the traced car's own episodes in this run.
-        rows = [
-            SimTraceRow(
-                episode=trace.episode_index[i],
-                steps=trace.episode_steps[i],
-                x=trace.x[i],
-                y=trace.y[i],
-                yaw=trace.yaw[i],
-                steer=trace.steer[i],
-                throttle=trace.throttle[i],
-                action=trace.action[i],
-                reward=trace.reward[i],
-                done=trace.done[i],
-                all_wheels_on_track=trace.on_track[i],
-                progress=trace.progress[i],
-                closest_waypoint=trace.waypoint[i],
-                track_len=track_length,
-                tstamp=round(self.progress.elapsed_seconds, 3),
-                episode_status=(
-                    "prepare" if trace.episode_steps[i] == 1 else trace_status(trace.status[i])
-                ),
-            )
-            for i in range(len(trace.car))
-        ]
-        folder = self.folder.path / SIM_TRACE_DIR / "training"
-        iteration = self.progress.iteration
-        write_sim_trace(folder / f"{iteration}-iteration.csv", rows)
-        old = iteration - KEEP_ALL_TRACES
-        if old > 0 and old % TRACE_THINNING != 0:
-            (folder / f"{old}-iteration.csv").unlink(missing_ok=True)
-
-    def _job_ms(self) -> int:
-        return round((self._run_elapsed0 + self.elapsed) * 1000)
 
     def _system(self) -> None:
         with self._process.oneshot():
@@ -406,22 +353,7 @@ class Trainer:
                 self.model.policy.optimizer,
                 self.progress,
             )
-        now_ms = self._job_ms()
-        for trial in report.trials:
-            sim_ms = round(trial.seconds * 1000)
-            self._metrics.append(
-                TrainingEpisode(
-                    reward_score=0,
-                    metric_time=now_ms,
-                    start_time=max(0, now_ms - sim_ms),
-                    elapsed_time_in_milliseconds=sim_ms,
-                    episode=self.progress.episodes,
-                    trial=trial.trial,
-                    phase="evaluation",
-                    completion_percentage=round(trial.progress, 2),
-                    episode_status=trial.status,
-                )
-            )
+        self.logbook.add_evaluation([(t.seconds, t.progress, t.status) for t in report.trials])
         laps = [t.lap_time for t in report.trials if t.lap_time is not None]
         self.emit(
             events.Evaluation(
@@ -453,26 +385,13 @@ class Trainer:
         return False
 
     # --- files -----------------------------------------------------------------------------------
-    def _load_metrics(self) -> None:
-        path = self.folder.training_metrics_file
-        if not path.is_file():
-            return
-        try:
-            self._metrics = list(read_training_metrics(path).episodes)
-        except DeepRacerFileError:
-            self._metrics = []  # unreadable old metrics: start a fresh log rather than fail
-        if self._metrics:
-            last = max(row.episode for row in self._metrics)
-            self.progress = replace(self.progress, episodes=max(self.progress.episodes, last))
-
     def _write_metrics(self, force: bool = False) -> None:
-        # Rewriting grows with the log: keep it to a small share of the time.
+        # Appending copies the metrics file, which grows with the log: keep it to a small
+        # share of the time.
         if not force and self.elapsed - self._last_metrics_write < 20 * self._metrics_write_cost:
             return
         started = time.monotonic()
-        write_training_metrics(
-            self.folder.training_metrics_file, TrainingMetrics(tuple(self._metrics))
-        )
+        self.logbook.flush()
         self._metrics_write_cost = time.monotonic() - started
         self._last_metrics_write = self.elapsed
 

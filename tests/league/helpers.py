@@ -7,12 +7,17 @@ from pathlib import Path
 
 from sim.action_space import discrete_grid
 from sim.deepracer_files import (
+    HYPERPARAMETERS_PATH,
+    MODEL_METADATA_PATH,
+    TRAINING_METRICS_PATH,
+    TRAINING_PARAMS,
     EvaluationTrial,
     ModelMetadata,
     TrainingEpisode,
     TrainingMetrics,
     TrainingParams,
     default_hyperparameters,
+    evaluation_metrics_path,
     write_evaluation_metrics,
     write_hyperparameters,
     write_model_metadata,
@@ -75,22 +80,22 @@ def model_folder(
     *,
     laps: Sequence[float] = (12.5, 12.1, 12.9),
     track: str = TRACK,
-    evaluation_name: str = "evaluation-20240501120000.json",
+    stamp: str = "20240501120000",
 ) -> Path:
-    """A racer-tui model folder (the five files side by side), written with our writers."""
+    """A racer-tui model folder as the garage writes it (DRfC's layout, the trainer's state
+    beside), written with our writers; its evaluation is EvaluationMetrics-<stamp>.json."""
     folder = root / name
     folder.mkdir(parents=True)
-    write_model_metadata(
-        folder / "model_metadata.json", ModelMetadata(discrete_grid(), ("vector",))
-    )
-    write_hyperparameters(folder / "hyperparameters.json", default_hyperparameters())
+    write_model_metadata(folder / MODEL_METADATA_PATH, ModelMetadata(discrete_grid(), ("vector",)))
+    write_hyperparameters(folder / HYPERPARAMETERS_PATH, default_hyperparameters())
     world = resolve_track(track)
     write_training_params(
-        folder / "training_params.yaml",
+        folder / TRAINING_PARAMS,
         TrainingParams(world_name=world.name, track_hash=world.content_hash),
     )
-    write_training_metrics(folder / "training.json", training_metrics())
-    write_evaluation_metrics(folder / evaluation_name, trials(laps))
+    write_training_metrics(folder / TRAINING_METRICS_PATH, training_metrics())
+    write_evaluation_metrics(folder / evaluation_metrics_path(stamp), trials(laps))
+    (folder / "training-state.json").write_text('{"state": "finished", "elapsed_seconds": 60}')
     return folder
 
 

@@ -22,9 +22,9 @@ from tests.league.helpers import REWARD, TRACK, model_folder, training_metrics, 
 
 def test_a_garage_model_by_name(tmp_path: Path) -> None:
     def add_metrics(folder: ModelFolder) -> None:
-        write_training_metrics(folder.path / "training.json", training_metrics(30))
+        write_training_metrics(folder.training_metrics_file, training_metrics(30))
         write_evaluation_metrics(
-            folder.path / "evaluation-20240501120000.json", trials([11.5, 11.25])
+            folder.evaluation_metrics_file("20240501120000"), trials([11.5, 11.25])
         )
 
     model = create_model(
@@ -58,11 +58,13 @@ def test_a_model_folder_by_path_uses_the_latest_evaluation_unless_one_is_named(
     tmp_path: Path,
 ) -> None:
     folder = model_folder(tmp_path, laps=(13.0, 12.0))
-    write_evaluation_metrics(folder / "evaluation-20240601120000.json", trials([10.5]))
+    later = folder / "metrics" / "EvaluationMetrics-20240601120000.json"
+    write_evaluation_metrics(later, trials([10.5]))
     assert assemble(str(folder), "ana").best_lap == 10.5
-    named = assemble(str(folder), "ana", evaluation=Path("evaluation-20240501120000.json"))
+    earlier = Path("metrics/EvaluationMetrics-20240501120000.json")
+    named = assemble(str(folder), "ana", evaluation=earlier)
     assert named.best_lap == 12.0
-    assert named.evaluation_file == "evaluation-20240501120000.json"
+    assert named.evaluation_file == "EvaluationMetrics-20240501120000.json"
 
 
 def test_the_drfc_model_folder_submits_with_a_track(deepracer_dir: Path, league: League) -> None:
@@ -111,11 +113,11 @@ def test_an_unknown_world_name_asks_for_a_track(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("file_name", "content", "problem"),
     [
-        ("evaluation-20240501120000.json", "{not json", "not valid JSON"),
-        ("evaluation-20240501120000.json", '{"metrics": [{"trial": 1}]}', "has no"),
-        ("model_metadata.json", '{"sensor": ["CAMERA"]}', "action_space"),
-        ("hyperparameters.json", '{"lr": 5}', "lr must be"),
-        ("training.json", '{"metrics": 3}', "metrics"),
+        ("metrics/EvaluationMetrics-20240501120000.json", "{not json", "not valid JSON"),
+        ("metrics/EvaluationMetrics-20240501120000.json", '{"metrics": [{"trial": 1}]}', "has no"),
+        ("model/model_metadata.json", '{"sensor": ["CAMERA"]}', "action_space"),
+        ("ip/hyperparameters.json", '{"lr": 5}', "lr must be"),
+        ("metrics/TrainingMetrics.json", '{"metrics": 3}', "metrics"),
         ("training_params.yaml", "WORLD_NAME: [", "not valid YAML"),
     ],
 )
@@ -133,7 +135,7 @@ def test_a_malformed_file_is_named_and_nothing_is_written(
     assert league.query("SELECT count(*) FROM racers")[0][0] == 0
 
 
-@pytest.mark.parametrize("missing", ["hyperparameters.json", "training_params.yaml"])
+@pytest.mark.parametrize("missing", ["ip/hyperparameters.json", "training_params.yaml"])
 def test_a_missing_file_of_our_own_folder_is_named(tmp_path: Path, missing: str) -> None:
     folder = model_folder(tmp_path)
     (folder / missing).unlink()
@@ -143,7 +145,7 @@ def test_a_missing_file_of_our_own_folder_is_named(tmp_path: Path, missing: str)
 
 def test_no_evaluation_says_to_evaluate_first(tmp_path: Path) -> None:
     folder = model_folder(tmp_path)
-    for path in folder.glob("evaluation-*.json"):
+    for path in folder.glob("metrics/EvaluationMetrics-*.json"):
         path.unlink()
     with pytest.raises(LeagueError, match="no evaluation metrics"):
         assemble(str(folder), "ana")
@@ -167,6 +169,7 @@ def test_an_unknown_model_or_a_bad_racer_name_is_refused(tmp_path: Path) -> None
 
 def test_the_evaluation_file_must_have_trials(tmp_path: Path) -> None:
     folder = model_folder(tmp_path)
-    (folder / "evaluation-20240501120000.json").write_text(json.dumps({"metrics": []}))
+    evaluation = folder / "metrics" / "EvaluationMetrics-20240501120000.json"
+    evaluation.write_text(json.dumps({"metrics": []}))
     with pytest.raises(LeagueError, match="no trials"):
         assemble(str(folder), "ana")

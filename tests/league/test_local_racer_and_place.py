@@ -90,7 +90,7 @@ def test_a_race_is_recorded_as_the_racer_and_never_changes_hands(league: League)
 
 def test_a_model_without_an_evaluation_says_to_evaluate_it(league: League, tmp_path: Path) -> None:
     folder = model_folder(tmp_path, "fresh")
-    for evaluation in folder.glob("evaluation-*.json"):
+    for evaluation in folder.glob("metrics/EvaluationMetrics-*.json"):
         evaluation.unlink()
     with pytest.raises(LeagueError, match="evaluate the model first"):
         submit_model(league, str(folder), "Ada")

@@ -90,7 +90,7 @@ def test_a_submission_breaks_down_into_its_files(league: League, tmp_path: Path)
     assert files.sensors == ["vector"]
     assert files.hyperparameters is not None and files.hyperparameters["batch_size"] == 64
     assert files.training is not None and files.training["episodes"] == 20
-    assert files.evaluation_file.startswith("evaluation-")
+    assert files.evaluation_file == "EvaluationMetrics-20240501120000.json"
     assert [trial.time_seconds for trial in files.trials] == [12.5, 12.1, 12.9]
     assert all(trial.completed for trial in files.trials)
     assert not entry_breakdown(league, "submission", "0" * 26).found

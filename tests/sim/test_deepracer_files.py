@@ -2,25 +2,37 @@
 
 from __future__ import annotations
 
+import csv
+import io
 import json
+import shutil
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from sim.action_space import discrete_grid
 from sim.deepracer_files import (
     HYPERPARAMETER_SPECS,
+    SIM_TRACE_COLUMNS,
     DeepRacerFileError,
     EvaluationTrial,
     ModelMetadata,
+    SimTraceColumns,
     SimTraceRow,
+    SimTraceSample,
     TrainingEpisode,
     TrainingMetrics,
     TrainingParams,
+    append_sim_trace,
+    append_training_metrics,
     check_hyperparameters,
     default_hyperparameters,
-    evaluation_file_name,
+    evaluation_metrics_path,
+    evaluation_stamp,
+    evaluation_trace_path,
+    last_sim_trace_row,
     locate_files,
     parse_evaluation_metrics,
     parse_hyperparameters,
@@ -32,7 +44,12 @@ from sim.deepracer_files import (
     read_sim_trace,
     read_training_metrics,
     read_training_params,
+    sim_trace_lines,
+    sim_trace_text,
+    stamp_in,
     trace_status,
+    training_metrics_end,
+    training_trace_path,
     write_evaluation_metrics,
     write_hyperparameters,
     write_model_metadata,
@@ -117,13 +134,93 @@ def test_sim_trace_round_trips(tmp_path: Path) -> None:
     assert trace_status(EpisodeStatus.LAP_COMPLETE) == "lap_complete"
 
 
-def test_evaluation_file_names_sort_by_time() -> None:
+def test_evaluations_are_named_as_drfc_names_them() -> None:
     from datetime import UTC, datetime
 
-    early = evaluation_file_name(datetime(2025, 1, 2, 3, 4, 5, tzinfo=UTC))
-    late = evaluation_file_name(datetime(2025, 11, 1, 0, 0, 0, tzinfo=UTC))
-    assert early == "evaluation-20250102030405.json"
+    early = evaluation_stamp(datetime(2025, 1, 2, 3, 4, 5, tzinfo=UTC))
+    late = evaluation_stamp(datetime(2025, 11, 1, 0, 0, 0, tzinfo=UTC))
+    assert early == "20250102030405"
     assert sorted([late, early]) == [early, late]
+    assert evaluation_metrics_path(early) == "metrics/EvaluationMetrics-20250102030405.json"
+    assert evaluation_trace_path(early) == (
+        "evaluation-20250102030405/evaluation-simtrace/0-iteration.csv"
+    )
+    assert training_trace_path(0) == "training-simtrace/0-iteration.csv"
+    assert stamp_in("evaluation-20250102030405-2.json") == early
+    assert stamp_in("0-iteration.csv") is None
+
+
+def _episode(n: int, phase: str = "training") -> TrainingEpisode:
+    return TrainingEpisode(n + 0.5, 1000 * n, 1000 * n - 400, 400, n, n, phase, 12.5, "Off track")
+
+
+def test_training_metrics_grow_by_appending(tmp_path: Path) -> None:
+    path = tmp_path / "metrics" / "TrainingMetrics.json"
+    path.parent.mkdir()
+    sample = SimTraceSample(3, 2, 40, "a rule")
+    append_training_metrics(path, [_episode(1), _episode(2)], TrainingMetrics(()))
+    append_training_metrics(path, [], TrainingMetrics(()))
+    append_training_metrics(path, [_episode(3)], TrainingMetrics((), sim_trace=sample))
+    whole = TrainingMetrics((_episode(1), _episode(2), _episode(3)), sim_trace=sample)
+    assert read_training_metrics(path) == whole
+    # One JSON object as DeepRacer writes it, one row per line.
+    data = json.loads(path.read_text())
+    assert data["version"] == 2.0 and data["best_model_metric"] == "progress"
+    assert len(path.read_text().splitlines()) == 5
+    assert training_metrics_end(path) == (_episode(3), sample)
+    assert not list(tmp_path.rglob(".*.tmp"))
+
+
+def test_a_metrics_file_from_elsewhere_is_appended_to_once_rewritten(
+    deepracer_dir: Path, tmp_path: Path
+) -> None:
+    path = tmp_path / "TrainingMetrics.json"
+    shutil.copyfile(deepracer_dir / "drfc-model" / "metrics" / "TrainingMetrics.json", path)
+    last, sample = training_metrics_end(path)
+    assert last is not None and last.episode == 541 and sample is None
+    original = read_training_metrics(path).episodes
+    append_training_metrics(path, [_episode(542)], TrainingMetrics(()))
+    assert read_training_metrics(path).episodes == (*original, _episode(542))
+    assert training_metrics_end(path)[0] == _episode(542)
+
+
+def test_sim_trace_columns_write_rows_deepracer_reads() -> None:
+    columns = SimTraceColumns(
+        episode=np.array([4, 4]),
+        steps=np.array([1, 2]),
+        x=np.array([1.234567, 1.3]),
+        y=np.array([0.5, 0.25]),
+        yaw=np.array([-179.99, 10.0]),
+        steer=np.array([-30.0, 15.0]),
+        throttle=np.array([1.0, 4.0]),
+        action=np.array([0, 7]),
+        reward=np.array([0.0, 0.75]),
+        done=np.array([False, True]),
+        all_wheels_on_track=np.array([True, False]),
+        progress=np.array([0.5, 1.25]),
+        closest_waypoint=np.array([3, 4]),
+        track_len=17.5,
+        tstamp=np.array([0.0666667, 0.1333333]),
+        episode_status=["prepare", "off_track"],
+    )
+    text = ",".join(SIM_TRACE_COLUMNS) + "\n" + sim_trace_lines(columns)
+    assert text.splitlines()[1] == (
+        "4,1.0,1.2346,0.5,-179.99,-30.0,1.0,0,0.0,False,True,0.5,3,17.5,0.067,prepare,0.0"
+    )
+    rows = list(csv.DictReader(io.StringIO(text)))
+    assert rows[1]["done"] == "True" and rows[1]["all_wheels_on_track"] == "False"
+    assert rows[1]["episode_status"] == "off_track" and rows[1]["tstamp"] == "0.133"
+
+
+def test_sim_trace_rows_are_appended_under_one_header(tmp_path: Path) -> None:
+    path = tmp_path / "training-simtrace" / "0-iteration.csv"
+    row = SimTraceRow(0, 1, 0, 0, 0, 0, 1, 0, 0, False, True, 0, 0, 17, 0, "prepare")
+    line = sim_trace_text([row]).split("\n", 1)[1]
+    append_sim_trace(path, line)
+    append_sim_trace(path, line.replace("prepare", "in_progress"))
+    assert [r.episode_status for r in read_sim_trace(path)] == ["prepare", "in_progress"]
+    last = last_sim_trace_row(path)
+    assert last is not None and last.episode_status == "in_progress"
 
 
 # --- the real DeepRacer files ----------------------------------------------------------------

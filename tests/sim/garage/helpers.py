@@ -36,7 +36,8 @@ def add_evaluation(folder: ModelFolder, stamp: str = "20250101120000", lap_ms: i
             42.0, lap_ms * 2, lap_ms + 100, 4000, "Off track", off_track_count=1, trial=2
         ),
     ]
-    path = folder.path / f"evaluation-{stamp}.json"
+    path = folder.evaluation_metrics_file(stamp)
+    path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(evaluation_metrics_text(trials))
     return path
 

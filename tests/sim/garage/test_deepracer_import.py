@@ -58,9 +58,9 @@ def test_its_metrics_come_along_in_our_form(deepracer_dir: Path) -> None:
     assert len(copied.episodes) == 600
     names = [path.name for path in folder.evaluation_files()]
     assert names == [
-        "evaluation-20220709200242.json",
-        "evaluation-20220709200509.json",
-        "evaluation-20220709200711.json",
+        "EvaluationMetrics-20220709200242.json",
+        "EvaluationMetrics-20220709200509.json",
+        "EvaluationMetrics-20220709200711.json",
     ]
     original = read_evaluation_metrics(
         deepracer_dir / "drfc-model" / "metrics" / "EvaluationMetrics-20220709200242.json"

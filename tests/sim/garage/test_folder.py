@@ -34,10 +34,11 @@ from tests.sim.garage.helpers import add_evaluation, add_policy, write_training_
 def test_a_new_model_is_a_folder_of_deepracer_files(model: ModelFolder, racer_home: Path) -> None:
     assert model.path == racer_home / "models" / "rookie"
     assert model.name == "rookie"
-    names = {path.name for path in model.path.iterdir()}
-    assert names == {
-        "model_metadata.json",
-        "hyperparameters.json",
+    files = {path.relative_to(model.path).as_posix() for path in model.path.rglob("*.*")}
+    # deepracer-for-cloud's model folder, reward function and training params at the top.
+    assert files == {
+        "model/model_metadata.json",
+        "ip/hyperparameters.json",
         "training_params.yaml",
         "reward_function.py",
     }
@@ -56,9 +57,17 @@ def test_a_new_model_is_a_folder_of_deepracer_files(model: ModelFolder, racer_ho
 def test_the_folder_knows_where_the_trainer_writes(model: ModelFolder) -> None:
     assert model.policy_file.name == "policy.safetensors"
     assert model.checkpoints_dir.name == "checkpoints"
-    assert model.sim_trace_dir.name == "sim-trace"
     assert model.training_state_file.name == "training-state.json"
-    assert model.training_metrics_file.name == "training.json"
+    # DeepRacer's logs where deepracer-for-cloud writes them.
+    assert model.training_trace_dir == model.path / "training-simtrace"
+    assert model.training_metrics_file == model.path / "metrics" / "TrainingMetrics.json"
+    stamp = "20250101120000"
+    assert model.evaluation_metrics_file(stamp) == (
+        model.path / "metrics" / "EvaluationMetrics-20250101120000.json"
+    )
+    assert model.evaluation_trace_file(stamp) == (
+        model.path / "evaluation-20250101120000" / "evaluation-simtrace" / "0-iteration.csv"
+    )
 
 
 def test_env_config_is_what_training_runs(model: ModelFolder) -> None:
@@ -114,8 +123,8 @@ def test_evaluations_are_listed_oldest_first(model: ModelFolder) -> None:
     add_evaluation(model, "20250102000000", lap_ms=9000)
     add_evaluation(model, "20250101000000", lap_ms=9900)
     assert [p.name for p in model.evaluation_files()] == [
-        "evaluation-20250101000000.json",
-        "evaluation-20250102000000.json",
+        "EvaluationMetrics-20250101000000.json",
+        "EvaluationMetrics-20250102000000.json",
     ]
     assert model.best_evaluation_lap() == 9.0
     latest = model.latest_evaluation()

@@ -91,9 +91,15 @@ def test_evaluate_model_writes_deepracer_files(model: ModelFolder) -> None:
     trials = read_evaluation_metrics(report.metrics_file)
     assert [t.trial for t in trials] == [1, 2]
     assert [t.episode_status for t in trials] == [r.status for r in report.trials]
-    traces = list((model.sim_trace_dir / "evaluation").glob("*-iteration.csv"))
-    assert len(traces) == 1
-    rows = read_sim_trace(traces[0])
+    # DRfC's evaluation folder, named by the metrics' 14-digit stamp.
+    stamp = report.metrics_file.name.removeprefix("EvaluationMetrics-").removesuffix(".json")
+    assert len(stamp) == 14 and stamp.isdigit()
+    rows = read_sim_trace(model.evaluation_trace_file(stamp))
+    assert [row.episode for row in rows] == sorted(row.episode for row in rows) != []
     assert {row.episode for row in rows} == {0, 1}
     assert rows[0].episode_status == "prepare"
     assert rows[-1].done
+    # Two evaluations within one second still get a name each.
+    again = evaluate_model(model, trials=1)
+    assert again.metrics_file is not None and again.metrics_file != report.metrics_file
+    assert len(model.evaluation_files()) == 2

@@ -60,7 +60,7 @@ def test_a_short_run_streams_every_kind_of_event_and_leaves_deepracer_files(
     metrics = read_training_metrics(model.training_metrics_file)
     phases = {row.phase for row in metrics.episodes}
     assert phases <= {"training", "evaluation"} and "evaluation" in phases
-    traces = sorted((model.sim_trace_dir / "training").glob("*-iteration.csv"))
+    traces = sorted(model.training_trace_dir.glob("*-iteration.csv"))
     assert traces and read_sim_trace(traces[0])
     load_policy(model.policy_file, model.metadata())
     state = json.loads(model.training_state_file.read_text())
