@@ -32,7 +32,7 @@ def test_new_list_and_show(capsys: pytest.CaptureFixture[str]) -> None:
         {
             "name": "speedy",
             "status": "untrained",
-            "track": "hairpin-circuit",
+            "track": "reinvent_base",
             "sensor": "vector",
             "actions": "10 discrete, up to 4 m/s",
             "best_lap_s": None,
@@ -45,6 +45,17 @@ def test_new_list_and_show(capsys: pytest.CaptureFixture[str]) -> None:
     assert details["reward_function"] == "template follow_center_line"
     assert details["metadata"]["sensor"] == ["VECTOR"]
     assert details["training"]["episodes"] == 0
+
+
+@pytest.mark.parametrize("track", ["reinvent_base", "re:Invent 2018", "Expedition Loop"])
+def test_a_new_model_on_an_official_track_by_either_name(
+    capsys: pytest.CaptureFixture[str], track: str
+) -> None:
+    code, out, err = run_cli(capsys, "model", "new", "official", "--track", track)
+    assert code == 0, err
+    world = "red_star_open" if track == "Expedition Loop" else "reinvent_base"
+    params = open_model("official").training_params()
+    assert params.world_name == world  # the simulator's WORLD_NAME, as DeepRacer writes it
 
 
 def test_list_and_show_as_tables(capsys: pytest.CaptureFixture[str]) -> None:
