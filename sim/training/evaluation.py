@@ -10,6 +10,11 @@ The simulator is deterministic, so trial 1 starts exactly on the start line and 
 others start a few centimetres and degrees off it (seeded): five identical trials would
 say nothing about how robust a policy is, and a real car is never placed exactly.
 
+Off-tracks: a racer's evaluation (`evaluate_model`) puts the car back and adds DeepRacer's
+penalty (2 s for an off-track, `sim.resets`) to the trial's time, as many times as the trial
+needs; training's own evaluations end a trial at its first off-track, as DeepRacer training
+does (`sim.training.trial_resets`).
+
 No torch at module level: `evaluate_model` loads the policy driver only when it runs.
 """
 
@@ -37,9 +42,11 @@ from sim.deepracer_files import (
     trace_status,
     write_evaluation_metrics,
 )
+from sim.resets import ResetRules
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
 from sim.training.logbook import closest_waypoint
+from sim.training.trial_resets import EVALUATION_RESETS, TRAINING_RESETS, TrialResets
 
 if TYPE_CHECKING:
     from sim.garage.folder import ModelFolder
@@ -57,7 +64,9 @@ class TrialResult:
     trial: int  # from 1
     status: str  # DeepRacer's status label
     progress: float  # percent of the lap, 0..100
-    seconds: float  # time the trial ran (the lap time when it completed)
+    seconds: float  # time the trial ran (the lap time when it completed), penalties included
+    resets: tuple[str, ...] = ()  # statuses the car was put back after, in order
+    penalty_seconds: float = 0.0  # of `seconds`, the penalty holds of those resets
 
     @property
     def lap_time(self) -> float | None:
@@ -173,6 +182,7 @@ def run_trials(
     max_seconds: float = TRIAL_SECONDS,
     seed: int = 0,
     trace: TrialTrace | None = None,
+    resets: ResetRules = TRAINING_RESETS,
 ) -> list[TrialResult]:
     """Drive `trials` one-lap trials from the start line with `driver`, recording every
     step of every trial into `trace` when one is given."""
@@ -188,15 +198,22 @@ def run_trials(
         yaw = float(sim.fleet.yaw[index]) + math.radians(yaw_error)
         sim.put(index, float(sim.fleet.x[index]), float(sim.fleet.y[index]), yaw)
     driver.reset(sim)
+    resetter = TrialResets(track, trials, resets)
     length = track.length
     previous = np.zeros(trials)
     seconds = np.full(trials, math.nan)
     status: list[str] = [str(EpisodeStatus.IN_PROGRESS)] * trials
     progress = np.zeros(trials)
     for _ in range(max_steps):
+        clock = resetter.clock(sim)
+        for index in np.flatnonzero(np.isnan(seconds) & (clock >= max_seconds - 1e-9)).tolist():
+            status[index] = str(EpisodeStatus.TIME_UP)  # its penalties used up its time
+            progress[index] = float(sim.progress[index])
+            seconds[index] = float(clock[index])
         running = np.isnan(seconds)
         if not running.any():
             break
+        resetter.before_step(sim)
         action = driver.act(sim)
         sim.apply(action.steering_deg, action.speed)
         if trace is not None:
@@ -208,20 +225,30 @@ def run_trials(
             if state == EpisodeStatus.IN_PROGRESS:
                 previous[index] = travelled[index]
                 continue
+            if resetter.put_back(sim, index, state):  # put back and held: the trial goes on
+                previous[index] = float(sim.travelled[index]) / length * 100.0
+                continue
             status[index] = str(state)
             progress[index] = float(sim.progress[index])
             if state == EpisodeStatus.LAP_COMPLETE:
                 step_gain = max(travelled[index] - previous[index], 1e-9)
                 fraction = min(max((100.0 - previous[index]) / step_gain, 0.0), 1.0)
-                seconds[index] = (steps - 1 + fraction) * STEP_SECONDS
+                seconds[index] = (steps - 1 + fraction) * STEP_SECONDS + resetter.penalty[index]
             else:
-                seconds[index] = steps * STEP_SECONDS
+                seconds[index] = steps * STEP_SECONDS + resetter.penalty[index]
     for index in np.flatnonzero(np.isnan(seconds)).tolist():
         status[index] = str(EpisodeStatus.TIME_UP)
         progress[index] = float(sim.progress[index])
-        seconds[index] = float(sim.steps[index]) * STEP_SECONDS
+        seconds[index] = float(sim.steps[index]) * STEP_SECONDS + resetter.penalty[index]
     return [
-        TrialResult(trial=i + 1, status=status[i], progress=float(progress[i]), seconds=seconds[i])
+        TrialResult(
+            trial=i + 1,
+            status=status[i],
+            progress=float(progress[i]),
+            seconds=seconds[i],
+            resets=resetter.resets(i),
+            penalty_seconds=float(resetter.penalty[i]),
+        )
         for i in range(trials)
     ]
 
@@ -241,9 +268,13 @@ def evaluation_trials(results: Sequence[TrialResult]) -> list[EvaluationTrial]:
     for result in results:
         elapsed = round(result.seconds * 1000)
         counts = {name: 0 for name in _COUNTS.values()}
-        key = _COUNTS.get(EpisodeStatus(result.status)) if result.status in _STATUS_SET else None
-        if key is not None:
-            counts[key] = 1
+        # simapp counts every step with one of these statuses: each reset, and the one that
+        # ended the trial; reset_count is their sum (`bundle/markov/metrics/s3_metrics.py`).
+        for event in (*result.resets, result.status):
+            key = _COUNTS.get(EpisodeStatus(event)) if event in _STATUS_SET else None
+            if key is not None:
+                counts[key] += 1
+        counts["reset_count"] = sum(counts.values())
         rows.append(
             EvaluationTrial(
                 completion_percentage=round(result.progress, 2),
@@ -269,6 +300,7 @@ def evaluate_model(
     trials: int = DEFAULT_TRIALS,
     seed: int = 0,
     driver: Driver | None = None,
+    resets: ResetRules = EVALUATION_RESETS,
 ) -> EvaluationReport:
     """Evaluate a garage model's policy (or `driver`) and write DRfC's evaluation files:
     `metrics/EvaluationMetrics-<stamp>.json` and its sim-trace,
@@ -277,7 +309,9 @@ def evaluate_model(
 
     chosen = track if track is not None else folder.track()
     trace = TrialTrace()
-    results = run_trials(driver or driver_for_model(folder), chosen, trials, seed=seed, trace=trace)
+    results = run_trials(
+        driver or driver_for_model(folder), chosen, trials, seed=seed, resets=resets, trace=trace
+    )
     rows = evaluation_trials(results)
     stamp = _free_stamp(folder, datetime.now(UTC))
     # The trace first: the metrics file is what says the model was evaluated.
