@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import re
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -17,6 +18,7 @@ from typing import Any
 from sim.home import LEAGUE_ENV
 
 EXIT_USER_ERROR = 2
+_NEGATIVE_VALUE = re.compile(r"-\d[\d.]*(,\s*-?\d[\d.]*)+")  # "-30,30", "-1.5,-0.5"
 # One module per command group, with the subcommands it registers (its NAMES; a test keeps
 # the two in step), so a command is dispatched without importing the other groups.
 COMMAND_MODULES: dict[str, tuple[str, ...]] = {
@@ -81,6 +83,24 @@ def _command_modules(command: str | None = None) -> list[Any]:
     return [importlib.import_module(name) for name in names or COMMAND_MODULES]
 
 
+def _attach_negative_values(arguments: list[str]) -> list[str]:
+    """`--steering-range -30,30` as written: argparse takes "-30,30" for an option (it only
+    knows plain negative numbers), so a value that starts with a minus and a digit is joined
+    to the long option before it (`--steering-range=-30,30`)."""
+    joined: list[str] = []
+    for argument in arguments:
+        previous = joined[-1] if joined else ""
+        if (
+            _NEGATIVE_VALUE.fullmatch(argument)
+            and previous.startswith("--")
+            and "=" not in previous
+        ):
+            joined[-1] = f"{previous}={argument}"
+        else:
+            joined.append(argument)
+    return joined
+
+
 def _subcommand(arguments: Sequence[str]) -> str | None:
     """The first word that is not an option or an option's value: the subcommand, if any."""
     skip_value = False
@@ -101,6 +121,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         from racer_tui.race_commands import main as race_main
 
         return race_main(arguments)
+    arguments = _attach_negative_values(arguments)
     args = build_parser(_subcommand(arguments)).parse_args(arguments)
     if args.league_db:
         # Through the environment, so the app's screens, the league commands and any child

@@ -58,6 +58,27 @@ def test_a_new_model_on_an_official_track_by_either_name(
     assert params.world_name == world  # the simulator's WORLD_NAME, as DeepRacer writes it
 
 
+def test_a_range_starting_with_a_minus_is_taken_as_written(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The README's own example: `--steering-range -30,30`, not `--steering-range=-30,30`."""
+    code, _, err = run_cli(
+        capsys,
+        "model",
+        "new",
+        "cont",
+        "--continuous",
+        "--steering-range",
+        "-30,30",
+        "--speed-range",
+        "0.1,4",
+    )
+    assert code == 0, err
+    space = open_model("cont").metadata().action_space
+    assert space.kind == "continuous"
+    assert space.steering_range == (-30.0, 30.0)
+
+
 def test_list_and_show_as_tables(capsys: pytest.CaptureFixture[str]) -> None:
     assert run_cli(capsys, "model", "list")[1].startswith("No models yet")
     run_cli(capsys, "model", "new", "tabled", "--sensor", "LIDAR")
