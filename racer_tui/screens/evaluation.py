@@ -18,6 +18,7 @@ from textual.containers import Horizontal
 from textual.message import Message
 from textual.widgets import Button, DataTable, Input, Label, Static
 
+from racer_tui.plural import counted
 from racer_tui.screens.base import RacerScreen
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import seconds_text
@@ -54,7 +55,7 @@ def report_cells(report: EvaluationReport) -> list[tuple[Text, ...]]:
 
 def summary_text(report: EvaluationReport) -> Text:
     text = Text()
-    text.append(f"{report.laps} of {len(report.trials)} trials completed the lap on ")
+    text.append(f"{report.laps} of {counted(len(report.trials), 'trial')} completed the lap on ")
     text.append(report.track)
     text.append(f" · mean progress {report.mean_progress:.1f} %")
     if report.best_lap is not None:
@@ -130,7 +131,7 @@ class EvaluationScreen(RacerScreen[None]):
             return
         self.trials = int(text)
         self.running = True
-        summary = f"Running {self.trials} trials of {self.model}…"
+        summary = f"Running {counted(self.trials, 'trial')} of {self.model}…"
         self.query_one("#evaluation-summary", Static).update(Text(summary))
         self._evaluate(self.trials)
 

@@ -31,6 +31,7 @@ from league.report import (
 )
 from league.report import Column as ReportColumn
 from league.store import open_league
+from racer_tui.plural import counted
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.nights import NightsScreen
@@ -329,7 +330,9 @@ class LeagueScreen(RacerScreen[None]):
         self.post_message(BoardExported(path, len(rows)))
 
     def on_board_exported(self, message: BoardExported) -> None:
-        self.notify(f"Wrote {message.count} rows to {message.path}.", timeout=10, markup=False)
+        self.notify(
+            f"Wrote {counted(message.count, 'row')} to {message.path}.", timeout=10, markup=False
+        )
 
     def action_projector(self) -> None:
         self.app.push_screen(ProjectorScreen(self.shown_query, db_path=self.db_path))

@@ -25,6 +25,7 @@ from league.racers import check_name
 from league.races import record_race_as
 from league.store import open_league
 from league.submissions import submit_model
+from racer_tui.plural import counted
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.session import remember_racer, session_racer
 from racer_tui.widgets.model_detail import seconds_text
@@ -136,7 +137,7 @@ def submit_evaluation(model: str, racer: str, db_path: Path | None) -> str:
     completed = len(submission.completed_laps)
     return (
         f"Submitted {model} for {name} on {submission.track_name}: {lap}, {completed} of "
-        f"{len(submission.laps)} trials completed. {where}"
+        f"{counted(len(submission.laps), 'trial')} completed. {where}"
     )
 
 

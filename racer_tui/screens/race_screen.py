@@ -203,7 +203,18 @@ class RaceScreen(Screen[RaceResult | None]):
         state = "paused" if self.paused else f"{self.speed}x"
         text.append(f"Lap {tick.lap}  ", style="bold")
         text.append(clock_text(tick.lap_time) + "\n")
-        text.append(f"Off-tracks this lap {tick.lap_offtracks}/{limit}\n")
+        over = (
+            rules.max_offtracks_per_lap is not None
+            and tick.lap_offtracks > rules.max_offtracks_per_lap
+        )
+        if over:
+            # Past the limit the lap is already lost: say so instead of "4/3".
+            text.append(
+                f"Off-tracks this lap {tick.lap_offtracks}, over {limit}: the lap won't count\n",
+                style="red",
+            )
+        else:
+            text.append(f"Off-tracks this lap {tick.lap_offtracks}/{limit}\n")
         if tick.penalty_remaining > 0:
             text.append(f"Penalty hold {tick.penalty_remaining:.1f} s\n", style="bold red")
         text.append(f"Speed {tick.speed:.1f} m/s   {state}\n")

@@ -18,6 +18,7 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import DataTable, Input, Static
 
+from racer_tui.plural import counted
 from racer_tui.screens.base import ModelAdded, RacerScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
@@ -93,7 +94,9 @@ class TracksScreen(RacerScreen[None]):
         table = self.query_one("#tracks", DataTable)
         fill_table(table, ["track", "m"], cells)
         total = len(self._infos)
-        context = f"{total} tracks" if not needle else f"{len(shown)} of {total} tracks"
+        context = (
+            counted(total, "track") if not needle else f"{len(shown)} of {counted(total, 'track')}"
+        )
         self.query_one(SectionHeader).set_context(context)
         if not shown:
             self.query_one("#track-map", TrackMap).track = None  # nothing chosen: r races nothing

@@ -18,6 +18,7 @@ from textual.widgets import Static
 from league.entries import EntryBreakdown, SubmissionFiles, entry_breakdown
 from league.leaderboard import LeaderboardRow
 from league.store import League
+from racer_tui.plural import counted
 
 # The hyperparameters a racer tunes most, in the console's order; the rest follow.
 MAIN_HYPERPARAMETERS = (
@@ -89,7 +90,7 @@ def _submission(files: SubmissionFiles, text: Text) -> None:
     completed = sum(1 for trial in trials if trial.completed)
     _heading(text, "Evaluation")
     _line(text, "file", files.evaluation_file)
-    _line(text, "trials", f"{len(trials)}, {completed} laps completed")
+    _line(text, "trials", f"{len(trials)}, {counted(completed, 'lap')} completed")
     for trial in trials:
         time = _seconds(trial.time_seconds) if trial.completed else f"{trial.completion:g}%"
         text.append(f"  trial {trial.number:>2}  {time:>10}  off {trial.offtracks}  ")
@@ -115,7 +116,7 @@ def render_entry(row: LeaderboardRow, breakdown: EntryBreakdown) -> Text:
     text.append(f"{row.track_name} · {row.kind} · {row.recorded_at[:16].replace('T', ' ')}\n")
     text.append(
         f"best {_seconds(row.best_lap)} · average {_seconds(row.average_lap)} · "
-        f"{row.valid_laps} laps · {row.offtracks} off-tracks\n",
+        f"{counted(row.valid_laps, 'lap')} · {counted(row.offtracks, 'off-track')}\n",
         style="dim",
     )
     if breakdown.has_trace:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from textual.app import App
 from textual.widgets import DataTable, Static
 
@@ -64,3 +66,21 @@ async def test_a_recorded_race_replays_with_a_ghost() -> None:
         assert screen.paused
         assert screen.race_clock < recorded.laps[0].time_seconds
         assert table.row_count == 0
+
+
+def test_off_tracks_past_the_limit_say_the_lap_is_lost() -> None:
+    from sim.race.engine import RaceTick
+
+    screen = RaceScreen(RaceSetup(track=resolve_track("beginner-oval"), rules=SHORT, racer="A"))
+    tick = RaceTick(
+        step=40, clock=2.7, window_seconds=20.0, x=0.0, y=0.0, heading=0.0, speed=1.0, lap=1,
+        lap_time=2.7, progress=30.0, laps=(), lap_offtracks=4, offtrack=False,
+        status="in_progress", penalty_remaining=0.0,
+    )  # fmt: skip
+
+    facts = str(screen._facts(tick))
+
+    assert "4/3" not in facts
+    assert "over 3" in facts and "won't count" in facts
+    within = str(screen._facts(dataclasses.replace(tick, lap_offtracks=3)))
+    assert "Off-tracks this lap 3/3" in within
