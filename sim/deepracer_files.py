@@ -763,6 +763,7 @@ class SimTraceColumns:
     track_len: float
     tstamp: NDArray[np.float64]
     episode_status: Sequence[str]
+    pause_duration: NDArray[np.float64] | None = None  # None: no car was ever held
 
     def __len__(self) -> int:
         return len(self.steps)
@@ -802,7 +803,7 @@ def sim_trace_lines(columns: SimTraceColumns) -> str:
         [repr(float(columns.track_len))] * n,
         number(columns.tstamp, 3),
         list(columns.episode_status),
-        ["0.0"] * n,  # pause_duration: training and evaluation trials never hold a car
+        ["0.0"] * n if columns.pause_duration is None else number(columns.pause_duration, 3),
         strict=True,
     )
     return "".join(",".join(row) + "\n" for row in cells)

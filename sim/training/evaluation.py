@@ -115,12 +115,21 @@ def start_poses(trials: int, seed: int = 0) -> list[tuple[float, float]]:
 class TrialTrace:
     """Every step of every trial, as the simulator left it after the step: DeepRacer's
     point 0.14 m ahead of the car, heading, the step's action, all four wheels on the road,
-    progress and status. `columns` lays the trials end to end as DeepRacer runs them."""
+    progress and status. `columns` lays the trials end to end as DeepRacer runs them, each
+    trial's clock holding still for the penalty after a reset (the row that went off says
+    how long in `pause_duration`, as simapp's does), so the trace's time is the trial's."""
 
     def __init__(self) -> None:
         self._steps: list[tuple[NDArray[np.intp], NDArray[np.float64], list[str]]] = []
 
-    def record(self, sim: TrackSimulation, cars: NDArray[np.intp], action: NDArray[Any]) -> None:
+    def record(
+        self,
+        sim: TrackSimulation,
+        cars: NDArray[np.intp],
+        action: NDArray[Any],
+        penalty: NDArray[np.float64],
+    ) -> None:
+        """The step just taken by `cars`; `penalty` is each trial's hold time before it."""
         waypoints = np.asarray(sim.track.center, dtype=np.float64)
         values = np.column_stack(
             (
@@ -134,6 +143,7 @@ class TrialTrace:
                 sim.wheels_on.all(axis=1),
                 sim.progress,
                 closest_waypoint(sim, waypoints),
+                penalty,
             )
         )[cars]
         self._steps.append((cars.copy(), values, [str(sim.status[car]) for car in cars]))
@@ -149,9 +159,11 @@ class TrialTrace:
         starts = np.array([trial.start_time / 1000.0 for trial in trials])
         done = np.append(cars[1:] != cars[:-1], True)
         statuses = [
-            trace_status(states[i]) if last else PREPARE_STATUS if step == 1 else "in_progress"
+            PREPARE_STATUS if step == 1 and not last else trace_status(states[i])
             for i, last, step in zip(order.tolist(), done.tolist(), steps.tolist(), strict=True)
         ]
+        held = values[:, 10]
+        pause = np.where(done, 0.0, np.append(np.diff(held), 0.0))
         return SimTraceColumns(
             episode=cars.astype(np.int64),
             steps=steps,
@@ -167,9 +179,11 @@ class TrialTrace:
             progress=values[:, 8],
             closest_waypoint=values[:, 9].astype(np.int64),
             track_len=track_length,
-            # A trial's clock runs from its start: its step k ends k/15 s after it.
-            tstamp=starts[cars] + steps * STEP_SECONDS,
+            # A trial's clock runs from its start: its step k ends k/15 s after it, plus
+            # the holds it served before.
+            tstamp=starts[cars] + steps * STEP_SECONDS + held,
             episode_status=statuses,
+            pause_duration=pause,
         )
 
 
@@ -217,7 +231,7 @@ def run_trials(
         action = driver.act(sim)
         sim.apply(action.steering_deg, action.speed)
         if trace is not None:
-            trace.record(sim, np.flatnonzero(running), action.action_index)
+            trace.record(sim, np.flatnonzero(running), action.action_index, resetter.penalty)
         travelled = sim.travelled / length * 100.0
         for index in np.flatnonzero(running).tolist():
             state = sim.status[index]

@@ -205,13 +205,13 @@ class Logbook:
         rows = self._buffer[car, :steps]
         reward = float(rows[:, _REWARD].sum())
         progress = float(rows[-1, _PROGRESS])
-        seconds = steps * STEP_SECONDS
+        end, elapsed = round(self.clock * 1000), round(steps * STEP_SECONDS * 1000)
         self._pending_metrics.append(
             TrainingEpisode(
                 reward_score=round(reward, 4),
-                metric_time=round(self.clock * 1000),
-                start_time=round((self.clock - seconds) * 1000),
-                elapsed_time_in_milliseconds=round(seconds * 1000),
+                metric_time=end,
+                start_time=end - elapsed,
+                elapsed_time_in_milliseconds=elapsed,
                 episode=number,
                 trial=self.trial(number),
                 phase="training",
@@ -255,14 +255,15 @@ class Logbook:
         """Evaluation episodes (seconds, progress, status), back to back from the clock, as
         simapp logs the evaluations between iterations: `episode` and `trial` stay those of
         the last training episode."""
-        start = self.clock
+        start = round(self.clock * 1000)
         for seconds, progress, status in trials:
+            elapsed = round(seconds * 1000)
             self._pending_metrics.append(
                 TrainingEpisode(
                     reward_score=0,
-                    metric_time=round((start + seconds) * 1000),
-                    start_time=round(start * 1000),
-                    elapsed_time_in_milliseconds=round(seconds * 1000),
+                    metric_time=start + elapsed,
+                    start_time=start,
+                    elapsed_time_in_milliseconds=elapsed,
                     episode=self.episodes,
                     trial=self.trial(self.episodes),
                     phase="evaluation",
@@ -270,7 +271,7 @@ class Logbook:
                     episode_status=status,
                 )
             )
-            start += seconds
+            start += elapsed
 
     # --- writing --------------------------------------------------------------------------------
     @property

@@ -8,12 +8,15 @@ import shutil
 from pathlib import Path
 
 import pytest
+from deepracer.logs import AnalysisUtils, DeepRacerLog
+from deepracer.logs.metrics import TrainingMetrics
 
 from sim.deepracer_files import read_evaluation_metrics, read_training_metrics
 from sim.garage.bundle import BundleError
 from sim.garage.deepracer_import import import_deepracer_folder, import_model
 from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
 from sim.garage.options import DEFAULT_TRACK
+from sim.garage.summary import training_summary
 from sim.reward_function import template_source
 
 
@@ -142,3 +145,41 @@ def test_a_copied_racer_tui_folder_keeps_its_policy(
     with pytest.raises(BundleError, match="not a safetensors file of tensors"):
         import_model(copy, name="tampered")
     assert not (models_dir() / "tampered").exists()
+
+
+def test_the_drfc_training_history_comes_along(deepracer_dir: Path) -> None:
+    folder = import_model(deepracer_dir / "drfc-model").folder
+    summary = training_summary(folder)
+    assert summary["episodes"] == 541  # what the Garage shows as its training
+    assert summary["laps_completed"] > 0
+    source = deepracer_dir / "drfc-model" / "metrics" / "TrainingMetrics.json"
+    ours = TrainingMetrics(None, fname=str(folder.training_metrics_file)).metrics
+    theirs = TrainingMetrics(None, fname=str(source)).metrics
+    assert ours.equals(theirs)  # deepracer-utils sees the same iterations in our copy
+
+
+def test_a_console_download_keeps_its_logs_and_sim_trace(
+    deepracer_dir: Path, tmp_path: Path
+) -> None:
+    # The console's log download beside the model's metadata (its model download).
+    download = tmp_path / "console"
+    shutil.copytree(deepracer_dir / "console-logs", download)
+    (download / "model").mkdir()
+    shutil.copyfile(
+        deepracer_dir / "drfc-model" / "model" / "model_metadata.json",
+        download / "model" / "model_metadata.json",
+    )
+    folder = import_model(download, name="from-console").folder
+    assert training_summary(folder)["episodes"] == 568
+    stamp = "20220612082523"
+    assert [path.name for path in folder.evaluation_files()] == [f"EvaluationMetrics-{stamp}.json"]
+    assert folder.best_evaluation_lap() == 16.267
+    trace = download / "sim-trace" / "evaluation" / "0-iteration.csv"
+    assert folder.evaluation_trace_file(stamp).read_bytes() == trace.read_bytes()
+    log = DeepRacerLog(str(folder.path))
+    log.load_evaluation_trace()
+    laps = AnalysisUtils.simulation_agg(log.dataframe(), "stream", "episode", is_eval=True)
+    trials = read_evaluation_metrics(folder.evaluation_files()[0])
+    for time, trial in zip(laps["time"], trials, strict=True):
+        assert trial.lap_time_seconds is not None
+        assert time == pytest.approx(trial.lap_time_seconds, rel=0.01)  # DeepRacer's own data
