@@ -434,15 +434,19 @@ class TrackSimulation:
         (`track_geom/utils.py`, `find_prev_next`), so a point exactly on waypoint k gets
         [k, k + 1]: a projection that lands on the end of segment k - 1 counts as k.
         """
+        previous = self._previous_waypoints()
+        return np.stack([previous, previous + 1], axis=1)
+
+    def _previous_waypoints(self) -> NDArray[np.intp]:
         n_seg = self._segments
         seg, t = self.segment, self._t
         if self._any_reverse:
             back = self.reverse
             seg = np.where(back, n_seg - 1 - seg, seg)
             t = np.where(back, 1.0 - t, t)
-        previous = seg + (t >= 1.0)
-        previous[previous >= n_seg] = 0  # the closing waypoint is the first one again
-        return np.stack([previous, previous + 1], axis=1)
+        previous: NDArray[np.intp] = seg + (t >= 1.0)
+        # The closing waypoint is the first one again.
+        return np.remainder(previous, n_seg, out=previous)
 
     @property
     def any_reversed(self) -> bool:
@@ -496,7 +500,7 @@ class TrackSimulation:
                 reversed_flags[car] = not self.is_reversed
             projection = np.where(self.reverse, np.mod(-projection, self._length), projection)
         proj = projection.tolist()
-        closest = self.closest_waypoints.tolist()
+        previous = self._previous_waypoints().tolist()
         sim_time = (self.steps * STEP_SECONDS).tolist()
         return [
             {
@@ -509,7 +513,7 @@ class TrackSimulation:
                 "track_width": width[i],
                 "track_length": self._track_length,
                 "waypoints": waypoints[i],
-                "closest_waypoints": closest[i],
+                "closest_waypoints": [previous[i], previous[i] + 1],
                 "progress": progress[i],
                 "steps": steps[i],
                 "speed": speed[i],
