@@ -315,7 +315,11 @@ def _report_table(name: str, report: EvaluationReport) -> Table:
         )
     best = "-" if report.best_lap is None else lap_clock(report.best_lap)
     where = "" if report.metrics_file is None else f"; written to {report.metrics_file.name}"
-    table.caption = f"{report.laps}/{len(report.trials)} laps, best lap {best}{where}"
+    off_tracks = sum(trial.off_tracks for trial in report.trials)
+    penalty = sum(trial.penalty_seconds for trial in report.trials)
+    # The console's off-track columns, in a line: the table already fills 80 columns.
+    offs = f", {off_tracks} off-tracks (+{penalty:g} s)" if off_tracks else ""
+    table.caption = f"{report.laps}/{len(report.trials)} laps{offs}, best lap {best}{where}"
     return table
 
 
@@ -333,6 +337,8 @@ def _report_json(name: str, report: EvaluationReport) -> dict[str, Any]:
                 "time_seconds": round(trial.seconds, 3),
                 "completion_percentage": round(trial.progress, 2),
                 "status": trial.status,
+                "off_tracks": trial.off_tracks,
+                "penalty_seconds": round(trial.penalty_seconds, 3),
             }
             for trial in report.trials
         ],

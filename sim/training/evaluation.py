@@ -72,6 +72,12 @@ class TrialResult:
     def lap_time(self) -> float | None:
         return self.seconds if self.status == EpisodeStatus.LAP_COMPLETE else None
 
+    @property
+    def off_tracks(self) -> int:
+        """Times the car left the track: each reset after one, and an off-track ending."""
+        events = (*self.resets, self.status)
+        return sum(1 for event in events if event == EpisodeStatus.OFF_TRACK)
+
 
 @dataclass(frozen=True)
 class EvaluationReport:

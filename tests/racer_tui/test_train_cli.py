@@ -90,6 +90,8 @@ def test_evaluate_json_on_another_track(
         "time_seconds",
         "completion_percentage",
         "status",
+        "off_tracks",
+        "penalty_seconds",
     }
 
 

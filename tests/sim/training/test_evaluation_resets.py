@@ -11,7 +11,7 @@ from sim.race.driver import DriverAction, reference_driver
 from sim.resets import ResetRules
 from sim.simulation import TrackSimulation
 from sim.track_catalog import resolve_track
-from sim.training.evaluation import evaluate_model, evaluation_trials, run_trials
+from sim.training.evaluation import TrialResult, evaluate_model, evaluation_trials, run_trials
 from sim.training.trial_resets import EVALUATION_RESETS, TRAINING_RESETS
 from tests.sim.race.drivers import ScriptedDriver
 
@@ -79,3 +79,9 @@ def test_penalties_count_against_the_trial_time() -> None:
     assert trial.seconds == pytest.approx(20.0, abs=5.0 + 1e-6)
     assert trial.seconds >= 20.0 - 1e-9
     assert trial.penalty_seconds == 5.0 * len(trial.resets) and len(trial.resets) >= 2
+
+
+def test_a_trial_counts_its_off_tracks_as_the_console_shows_them() -> None:
+    reset_then_lap = TrialResult(1, "Lap complete", 100.0, 14.0, ("Off track",) * 2, 4.0)
+    ended_off = TrialResult(2, "Off track", 40.0, 9.0, ("Off track", "Reversed"), 4.0)
+    assert (reset_then_lap.off_tracks, ended_off.off_tracks) == (2, 2)
