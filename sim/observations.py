@@ -129,11 +129,10 @@ def vector_state(sim: TrackSimulation) -> np.ndarray:
     fleet = sim.fleet
     spec = fleet.spec
     centre = sim.track.centerline
-    tangent = centre.direction_at(sim.s)
+    tangent = sim.driving_tangents()
     ahead_s = sim.s[:, None] + np.asarray(LOOK_AHEAD_DISTANCES)[None, :]
     if sim.any_reversed:  # cars driving the other way round look the other way
         sign = sim.direction_sign[:, None]
-        tangent = tangent * sign
         ahead_s = sim.s[:, None] + sign * np.asarray(LOOK_AHEAD_DISTANCES)[None, :]
     cos_yaw, sin_yaw = np.cos(fleet.yaw), np.sin(fleet.yaw)
     # Heading error as sine and cosine: continuous across +-180 degrees.
@@ -166,9 +165,11 @@ def _vector_state_one(sim: TrackSimulation) -> np.ndarray:
     centre = sim.centre_projector
     s = float(sim.s[0])
     x, y, yaw = float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0])
-    tangent_x, tangent_y = centre.direction_at(s)
     way = float(sim.direction_sign[0])
-    tangent_x, tangent_y = way * tangent_x, way * tangent_y
+    if way > 0.0:
+        tangent_x, tangent_y = centre.direction_at(s)
+    else:  # turned round (alternate direction): rare enough for the numpy path
+        tangent_x, tangent_y = (float(v) for v in sim.driving_tangents()[0])
     cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
     half_width = max(float(sim.track_width[0]) / 2.0, 1e-6)
     side = 1.0 if sim.left_of_center[0] else -1.0

@@ -310,8 +310,9 @@ class TrackSimulation:
         rel = self.ahead - foot
         self.distance_from_center = np.hypot(rel[:, 0], rel[:, 1])
         vec = self._centre.vectors[seg]
-        left = vec[:, 0] * rel[:, 1] - vec[:, 1] * rel[:, 0] > 0.0
-        self.left_of_center = left ^ self.reverse if self._any_reverse else left
+        cross = vec[:, 0] * rel[:, 1] - vec[:, 1] * rel[:, 0]
+        # Left of the way the car drives; exactly on the line is not left either way round.
+        self.left_of_center = (cross * self._sign if self._any_reverse else cross) > 0.0
         # Across the road at the centre-line point, as simapp's get_nearest_points does.
         _, _, inner_foot = track.inner_border.project(foot)
         _, _, outer_foot = track.outer_border.project(foot)
@@ -386,8 +387,8 @@ class TrackSimulation:
         self.foot = np.array([[fx, fy]])
         self.s = np.array([centre.arc_length(seg, t)])
         self.distance_from_center = np.array([math.hypot(rel_x, rel_y)])
-        left = vec_x * rel_y - vec_y * rel_x > 0.0
-        self.left_of_center = np.array([left != self._any_reverse])
+        cross = vec_x * rel_y - vec_y * rel_x
+        self.left_of_center = np.array([(-cross if self._any_reverse else cross) > 0.0])
         self.track_width = np.array([math.hypot(ox - ix, oy - iy)])
         wheel_x = [x + fwd * cos_yaw - left * sin_yaw for fwd, left in self._wheel_offsets]
         wheel_y = [y + fwd * sin_yaw + left * cos_yaw for fwd, left in self._wheel_offsets]
@@ -457,6 +458,20 @@ class TrackSimulation:
     def direction_sign(self) -> FloatArray:
         """+1 per car driving along the track's row order, -1 per car driving against it."""
         return self._sign
+
+    def driving_tangents(self) -> FloatArray:
+        """(N, 2) unit tangents of the centre line at `s`, pointing the way each car drives.
+
+        On a waypoint the tangent is the next segment's, as the car will drive it: for a car
+        going against the row order, the segment that ends there."""
+        centre = self._centre
+        tangent = centre.direction_at(self.s)
+        if self._any_reverse:
+            back = np.flatnonzero(self.reverse)
+            ends = np.searchsorted(centre.cumulative, self.s[back], side="left") - 1
+            seg = np.remainder(ends, self._segments)
+            tangent[back] = -centre.vectors[seg] / centre.lengths[seg][:, None]
+        return tangent
 
     @property
     def heading_deg(self) -> FloatArray:

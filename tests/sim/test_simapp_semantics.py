@@ -213,3 +213,33 @@ def test_a_reversed_track_is_driven_against_its_row_order() -> None:
     assert params["waypoints"] == track.waypoints[::-1]
     assert params["y"] > 0.5  # went up the left side: clockwise round the rectangle
     assert params["progress"] > 4.0
+
+
+@pytest.mark.parametrize("cars", [1, 2])
+def test_a_car_turned_round_sees_what_a_car_on_the_reversed_track_sees(cars: int) -> None:
+    from sim.observations import vector_state
+
+    track = resolve_track("hairpin-circuit")
+    rules = EpisodeRules(alternate_direction=True, change_start=False)
+    turned = TrackSimulation(track, cars, rules=rules)
+    turned.reset_all()
+    if cars == 1:
+        turned.reset_car(0)  # its second episode, turned round
+    car = cars - 1  # with two cars, car 1 starts turned round
+    reversed_track = TrackSimulation(track, 1, is_reversed=True)
+    reversed_track.reset_car(0, start_s=0.0)
+    turn = float(turned.fleet.yaw[car] - reversed_track.fleet.yaw[0])
+    assert math.remainder(turn, 2 * math.pi) == pytest.approx(0.0, abs=1e-12)
+    for step in range(40):
+        steering = 10.0 * math.sin(step / 6.0)
+        turned.apply(np.full(cars, steering), np.full(cars, 1.5))
+        reversed_track.apply(np.array([steering]), np.array([1.5]))
+        mine, theirs = turned.all_params()[car], reversed_track.all_params()[0]
+        measured = ("x", "y", "heading", "progress", "distance_from_center", "projection_distance")
+        for key in measured:
+            assert mine[key] == pytest.approx(theirs[key], abs=1e-6), key
+        for key in ("closest_waypoints", "is_left_of_center", "is_reversed", "waypoints"):
+            assert mine[key] == theirs[key], key
+        np.testing.assert_allclose(
+            vector_state(turned)[car], vector_state(reversed_track)[0], atol=1e-4
+        )
