@@ -33,28 +33,3 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
 def write_text_atomic(path: Path, text: str) -> None:
     write_bytes_atomic(path, text.encode("utf-8"))
 
-
-def append_after_atomic(path: Path, keep: int, data: bytes) -> None:
-    """Replace `path` with its first `keep` bytes followed by `data`, atomically.
-
-    The kept bytes are copied file to file (no parsing, no holding them in memory), so
-    adding to the end of a large file costs a copy, never a rewrite from memory.
-    """
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        os.chmod(tmp_name, 0o666 & ~_umask())
-        with os.fdopen(fd, "wb") as handle, path.open("rb") as source:
-            left = keep
-            while left > 0:
-                chunk = source.read(min(left, 1 << 20))
-                if not chunk:
-                    raise OSError(f"{path} is shorter than {keep} bytes")
-                handle.write(chunk)
-                left -= len(chunk)
-            handle.write(data)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp_name, path)
-    except BaseException:
-        Path(tmp_name).unlink(missing_ok=True)
-        raise

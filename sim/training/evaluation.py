@@ -148,7 +148,7 @@ class TrialTrace:
                 action,
                 sim.wheels_on.all(axis=1),
                 sim.progress,
-                closest_waypoint(sim, waypoints),
+                closest_waypoint(sim.ahead, sim.segment, waypoints),
                 penalty,
             )
         )[cars]

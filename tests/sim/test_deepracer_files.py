@@ -205,7 +205,8 @@ def test_sim_trace_columns_write_rows_deepracer_reads() -> None:
     )
     text = ",".join(SIM_TRACE_COLUMNS) + "\n" + sim_trace_lines(columns)
     assert text.splitlines()[1] == (
-        "4,1.0,1.2346,0.5,-179.99,-30.0,1.0,0,0.0,False,True,0.5,3,17.5,0.067,prepare,0.0"
+        "4,1.0,1.2346,0.5000,-179.9900,-30.0000,1.0000,0,0.0000,False,True,0.5000,3,17.5,"
+        "0.067,prepare,0.000"
     )
     rows = list(csv.DictReader(io.StringIO(text)))
     assert rows[1]["done"] == "True" and rows[1]["all_wheels_on_track"] == "False"
