@@ -56,7 +56,7 @@ WORKER_MODULE = "sim.training.worker"
 TAIL_SECONDS = 0.25  # how often the log is read while a run is live
 TICK_SECONDS = 2.0  # run status, adopted runs and the agent's-eye view
 READ_CHUNK = 256_000
-HISTORY_SECONDS = 5.0  # how often training.json is re-read for a run without a log
+HISTORY_SECONDS = 5.0  # how often TrainingMetrics.json is re-read for a run without a log
 COLUMNS = ("model", "state")
 NARROW = 110  # below this width the agent's-eye view is hidden
 
@@ -474,7 +474,7 @@ class TrainingScreen(RacerScreen[None]):
                 self.query_one(TrainingCharts).show(figures)
             log = training_log(folder)
             if not log.is_file():
-                # Started without a log (by `racer-tui train`): follow training.json instead.
+                # Started without a log (by `racer-tui train`): follow TrainingMetrics.json instead.
                 waited = 0.0
                 while _pid_alive(pid):
                     await asyncio.sleep(1.0)
@@ -506,7 +506,7 @@ class TrainingScreen(RacerScreen[None]):
     ) -> events.Ended | None:
         """Apply the log's events until the last one, or until the child is gone and the
         log drained. Lines before `history_end` were written before this session looked:
-        their episodes are already in `training.json`, so only the rest of them is used."""
+        their episodes are already in the TrainingMetrics, so only the rest of them is used."""
         waiter = asyncio.ensure_future(wait())
         offset, pending = 0, b""
         try:

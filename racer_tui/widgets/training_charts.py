@@ -1,6 +1,6 @@
 """The training dashboard: what a racer watches while a model trains, folded from events.
 
-`TrainingFigures` folds the child's events (or a past run's `training.json`) into plain
+`TrainingFigures` folds the child's events (or a past run's TrainingMetrics.json) into plain
 lists and counters; it knows nothing of Textual, so tests can check it directly.
 `TrainingCharts` draws one model's figures: six `LineChart`s (each repaints at its own calm
 rate) and a few lines of counters, refreshed at 2 Hz however fast the events arrive.
@@ -50,7 +50,7 @@ class TrainingFigures:
 
     @classmethod
     def from_metrics(cls, metrics: TrainingMetrics | None) -> TrainingFigures:
-        """A past run, from `training.json` (episodes only: entropy, steps per second and
+        """A past run, from its TrainingMetrics (episodes only: entropy, steps per second and
         CPU are not in DeepRacer's file, so those charts start with the next run)."""
         figures = cls()
         for row in metrics.episodes if metrics is not None else ():

@@ -1,5 +1,5 @@
 """The Training section without a training process: events injected as the log tail
-applies them (the memray pattern), history from training.json, the queue, the question
+applies them (the memray pattern), history from TrainingMetrics.json, the queue, the question
 when quitting, and adopting a training an earlier session left running."""
 
 from __future__ import annotations
@@ -195,3 +195,34 @@ def test_the_agents_eye_view_draws_camera_and_lidar() -> None:
     polar = polar_lines(lidar.ranges, lidar.angles_deg, lidar.max_range, (30, 10), Style())
     text = "".join(line.text for line in polar)
     assert "▲" in text and any(0x2800 < ord(ch) <= 0x28FF for ch in text)  # hits drawn
+
+
+def test_the_agents_eye_view_comes_from_the_newest_traced_step(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from dataclasses import replace
+
+    from racer_tui.screens import training
+    from sim.deepracer_files import SimTraceRow, sim_trace_text
+    from sim.simulation import LOOK_AHEAD
+
+    folder = new_model("ada")
+    folder.training_trace_dir.mkdir()
+    # The trace's X, Y is DeepRacer's point ahead of the car, as simapp writes it.
+    car_x, car_y, yaw = 3.0, 0.7, 90.0
+    row = SimTraceRow(
+        41, 7, car_x, car_y + LOOK_AHEAD, yaw, 0, 1, 0, 0, False, True, 3, 1, 17.7, 5.0, "prepare"
+    )
+    (folder.training_trace_dir / "3-iteration.csv").write_text(sim_trace_text([row]))
+    newest = sim_trace_text([row, replace(row, steps=8, episode_status="in_progress")])
+    (folder.training_trace_dir / "12-iteration.csv").write_text(newest)
+    poses: list[tuple[float, float, float]] = []
+
+    def observe(track: object, sensors: object, pose: tuple[float, float, float], caption: str):
+        poses.append(pose)
+        return caption
+
+    monkeypatch.setattr(training, "observe_at", observe)
+    assert training.latest_observation(folder) == "iteration 12, episode 41 step 8"
+    ((x, y, heading),) = poses  # seen from the car itself, not from the point ahead
+    assert (x, y, heading) == (pytest.approx(car_x), pytest.approx(car_y), yaw)
