@@ -352,6 +352,11 @@ def open_model(name_or_path: str) -> ModelFolder:
         folder = models_dir() / name_or_path
         if is_model_folder(folder) or needs_migration(folder):
             return _opened(folder)
+        if folder.is_dir():
+            raise ModelError(
+                f"{folder / MODEL_METADATA_PATH} does not exist, so the model folder is "
+                "incomplete; copy the model in again, or delete the folder."
+            )
     path = Path(name_or_path).expanduser()
     if path.is_dir() and (is_model_folder(path) or needs_migration(path)):
         return _opened(path)

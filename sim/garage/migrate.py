@@ -56,13 +56,12 @@ class MigrationError(Exception):
 
 
 def needs_migration(folder: Path) -> bool:
-    """Whether `folder` still has files (or an unfinished plan) of the old flat layout."""
-    if (folder / JOURNAL).is_file() or (folder / LEGACY_SIM_TRACE_DIR).is_dir():
-        return True
-    for name in (MODEL_METADATA, HYPERPARAMETERS, LEGACY_TRAINING_METRICS):
-        if (folder / name).is_file():
-            return True
-    return any(path.is_file() for path in folder.glob(LEGACY_EVALUATION_GLOB))
+    """Whether `folder` is an old flat racer-tui folder, or one whose move was cut short.
+
+    Its `model_metadata.json` at the top says so (it moves last); a folder without it is
+    left alone, since `sim-trace/` or `hyperparameters.json` alone may be anyone's files
+    (the AWS console's log download has a `sim-trace/` of its own)."""
+    return (folder / JOURNAL).is_file() or (folder / MODEL_METADATA).is_file()
 
 
 def migrate_folder(folder: Path) -> bool:

@@ -229,13 +229,21 @@ def test_a_folder_of_unknown_layout_is_one_sentence_and_left_alone(
     assert [p.name for p in stranger.iterdir()] == ["weights.h5"]
 
 
-def test_a_half_written_old_folder_says_what_is_missing_and_keeps_its_files() -> None:
+def test_a_folder_without_metadata_is_not_moved_and_says_what_is_missing(
+    deepracer_dir: Path, tmp_path: Path
+) -> None:
     half = models_dir() / "half"
     (half / "sim-trace" / "training").mkdir(parents=True)
     (half / "hyperparameters.json").write_text(json.dumps({"lr": 0.0001}))
     (half / "sim-trace" / "training" / "3-iteration.csv").write_text(_old_trace(2))
-    with pytest.raises(ModelError, match=r"model/model_metadata\.json does not exist, so the"):
+    before = _contents(half)
+    with pytest.raises(ModelError, match=r"half/model/model_metadata\.json does not exist, so"):
         open_model("half")
-    assert json.loads((half / "ip" / "hyperparameters.json").read_text()) == {"lr": 0.0001}
-    assert (half / "old-layout" / "sim-trace" / "training" / "3-iteration.csv").is_file()
+    assert _contents(half) == before
     assert list_models() == []  # not a model: nothing to list
+    # The AWS console's log download has a sim-trace/ too: opening it moves nothing.
+    download = shutil.copytree(deepracer_dir / "console-logs", tmp_path / "console")
+    before = _contents(download)
+    with pytest.raises(ModelError, match="racer-tui model import PATH"):
+        open_model(str(download))
+    assert _contents(download) == before
