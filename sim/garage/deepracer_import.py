@@ -120,6 +120,7 @@ def import_deepracer_folder(
         if training is not None:
             write_training_metrics(folder.training_metrics_file, training)
         for trace in training_traces:
+            folder.training_trace_dir.mkdir(exist_ok=True)
             shutil.copyfile(trace, folder.path / training_trace_path(_iteration(trace)))
         for evaluation in evaluations:
             write_evaluation_metrics(

@@ -183,3 +183,35 @@ def test_a_console_download_keeps_its_logs_and_sim_trace(
     for time, trial in zip(laps["time"], trials, strict=True):
         assert trial.lap_time_seconds is not None
         assert time == pytest.approx(trial.lap_time_seconds, rel=0.01)  # DeepRacer's own data
+
+
+def test_a_sim_trace_that_is_not_one_stops_the_import_by_name(drfc_copy: Path) -> None:
+    (drfc_copy / "training-simtrace").mkdir()
+    bad = drfc_copy / "training-simtrace" / "0-iteration.csv"
+    bad.write_text("this,is,not,a,trace\n1,2,3,4,5\n")
+    with pytest.raises(ModelError) as caught:
+        import_deepracer_folder(drfc_copy, name="broken-trace")
+    assert str(bad) in str(caught.value) and "not a DeepRacer sim-trace CSV" in str(caught.value)
+    assert "\n" not in str(caught.value)
+    assert list(models_dir().iterdir()) == []
+
+
+def test_a_drfc_training_trace_comes_along_for_deepracer_utils(drfc_copy: Path) -> None:
+    header = (
+        "episode,steps,X,Y,yaw,steer,throttle,action,reward,done,all_wheels_on_track,progress,"
+        "closest_waypoint,track_len,tstamp,episode_status,pause_duration\n"
+    )
+    (drfc_copy / "training-simtrace").mkdir()
+    for iteration in (0, 1):
+        rows = "".join(
+            f"{iteration * 2 + episode},{step}.0,1.0,2.0,0.0,0.0,1.0,6,1.0,{step == 3},True,"
+            f"{step * 3.0},1,17.7,{100 * iteration + 10 * episode + step / 15:.3f},"
+            f"{'prepare' if step == 1 else 'in_progress'},0.0\n"
+            for episode in (0, 1)
+            for step in (1, 2, 3)
+        )
+        (drfc_copy / "training-simtrace" / f"{iteration}-iteration.csv").write_text(header + rows)
+    folder = import_deepracer_folder(drfc_copy, name="with-trace").folder
+    log = DeepRacerLog(str(folder.path))
+    log.load()
+    assert sorted(set(log.dataframe()["unique_episode"])) == [0, 1, 2, 3]
