@@ -91,9 +91,11 @@ def largest_step_gain(name: str) -> float:
     stamp = report.metrics_file.stem.removeprefix("EvaluationMetrics-")
     rows = read_sim_trace(folder.evaluation_trace_file(stamp))
     gain = 0.0
-    # Trials follow each other in the trace: compare each trial's own steps.
+    # Trials follow each other in the trace: compare each trial's own driven steps (a row
+    # that left the road is followed by the car put back, which is no step at all).
+    resets = {"off_track", "crashed", "reversed", "immobilized"}
     for before, after in itertools.pairwise(rows):
-        if before.episode == after.episode:
+        if before.episode == after.episode and before.episode_status not in resets:
             gain = max(gain, (after.progress - before.progress) / 100.0 * after.track_len)
     return gain
 
