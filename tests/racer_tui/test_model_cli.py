@@ -51,7 +51,7 @@ def test_new_list_and_show(capsys: pytest.CaptureFixture[str]) -> None:
 def test_a_new_model_on_an_official_track_by_either_name(
     capsys: pytest.CaptureFixture[str], track: str
 ) -> None:
-    code, out, err = run_cli(capsys, "model", "new", "official", "--track", track)
+    code, _, err = run_cli(capsys, "model", "new", "official", "--track", track)
     assert code == 0, err
     world = "red_star_open" if track == "Expedition Loop" else "reinvent_base"
     params = open_model("official").training_params()
