@@ -73,7 +73,7 @@ def test_evaluate_prints_the_console_table_and_writes_deepracer_metrics(
     code, out, _ = run_cli(capsys, "evaluate", "tiny", "--trials", "3")
     assert code == 0
     assert "Trial" in out and "% track completed" in out and "Status" in out
-    assert "hairpin-circuit" in out
+    assert "reinvent_base" in out
     (metrics,) = trained.evaluation_files()
     assert [t.trial for t in read_evaluation_metrics(metrics)] == [1, 2, 3]
 

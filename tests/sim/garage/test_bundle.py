@@ -46,7 +46,7 @@ def test_export_then_read_gives_back_the_model(trained_model: ModelFolder, expor
     assert bundle.policy_bytes == trained_model.policy_file.read_bytes()
     assert bundle.content_hash == trained_model.content_hash()
     assert bundle.reward_source == CUSTOM_REWARD
-    assert bundle.training_params.world_name == "hairpin-circuit"
+    assert bundle.training_params.world_name == "reinvent_base"
     assert bundle.training_summary["state"] == "finished"
     assert bundle.training_summary["steps"] == 123456
     assert bundle.evaluation is not None and bundle.evaluation[0].lap_time_seconds == 9.5
@@ -99,7 +99,7 @@ def test_an_unknown_track_falls_back_and_says_so(exported: Path, tmp_path: Path)
         replace={"training_params.yaml": b"WORLD_NAME: far-away\nMAX_MINUTES: 20\n"},
     )
     report = install_bundle_report(doctored, name="far")
-    assert report.folder.training_params().world_name == "hairpin-circuit"
+    assert report.folder.training_params().world_name == "reinvent_base"
     assert any("'far-away', which is not here" in note for note in report.notes)
 
 

@@ -48,9 +48,9 @@ def test_a_new_model_is_a_folder_of_deepracer_files(model: ModelFolder, racer_ho
     assert json.loads(model.metadata_file.read_text())["action_space_type"] == "discrete"
     assert read_hyperparameters(model.hyperparameters_file)["loss_type"] == "huber"
     params = read_training_params(model.training_params_file)
-    assert params.world_name == "hairpin-circuit"
+    assert params.world_name == "reinvent_base"
     assert params.max_minutes == 60.0
-    assert params.track_hash == resolve_track("hairpin-circuit").content_hash
+    assert params.track_hash == resolve_track("re:Invent 2018").content_hash
     assert "def reward_function(params)" in model.reward_source()
 
 
@@ -72,7 +72,7 @@ def test_the_folder_knows_where_the_trainer_writes(model: ModelFolder) -> None:
 
 def test_env_config_is_what_training_runs(model: ModelFolder) -> None:
     config = model.env_config()
-    assert config.track.name == "hairpin-circuit"
+    assert config.track.name == "reinvent_base"
     assert config.sensors == ("vector",)
     assert config.action_space == model.metadata().action_space
     assert config.reward is not None
@@ -208,7 +208,7 @@ def test_a_track_file_must_be_imported_first(deepracer_dir: Path) -> None:
 
 def test_a_missing_track_is_reported_with_the_model(model: ModelFolder) -> None:
     params = model.training_params_file
-    params.write_text(params.read_text().replace("hairpin-circuit", "gone-track"))
+    params.write_text(params.read_text().replace("reinvent_base", "gone-track"))
     with pytest.raises(ModelError, match="model 'rookie' trains on track 'gone-track'"):
         model.track()
 
