@@ -9,7 +9,8 @@ two pieces:
   delta 1) or F.mse_loss from `loss_type`;
 - `collect`: rollouts gathered until `num_episodes_between_training` episodes have
   finished across all the cars (DeepRacer's rollout size), within a floor and a cap on the
-  number of samples, while noting the episodes and sim-trace rows a racer watches.
+  number of samples, while noting the episodes a racer watches (sim-trace rows are the
+  trainer's logbook's, which sees every car).
 
 DeepRacer hyperparameters map one to one: batch_size -> minibatch size, num_epochs ->
 n_epochs, lr -> learning rate, beta_entropy -> ent_coef, discount_factor -> gamma; clip
@@ -21,7 +22,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -156,33 +157,11 @@ class FinishedEpisode:
 
 
 @dataclass
-class TraceSteps:
-    """Sim-trace columns of the traced cars for one rollout, as parallel lists."""
-
-    car: list[int] = field(default_factory=list)
-    episode_steps: list[int] = field(default_factory=list)
-    x: list[float] = field(default_factory=list)
-    y: list[float] = field(default_factory=list)
-    yaw: list[float] = field(default_factory=list)
-    steer: list[float] = field(default_factory=list)
-    throttle: list[float] = field(default_factory=list)
-    action: list[int] = field(default_factory=list)
-    reward: list[float] = field(default_factory=list)
-    done: list[bool] = field(default_factory=list)
-    on_track: list[bool] = field(default_factory=list)
-    progress: list[float] = field(default_factory=list)
-    waypoint: list[int] = field(default_factory=list)
-    status: list[str] = field(default_factory=list)
-    episode_index: list[int] = field(default_factory=list)  # per car: episodes finished before
-
-
-@dataclass
 class Rollout:
     """What one `collect` gathered besides the samples."""
 
     steps: int  # env steps, all cars
     episodes: list[FinishedEpisode]
-    trace: TraceSteps
 
 
 class RacerPPO(PPO):
@@ -272,9 +251,7 @@ class RacerPPO(PPO):
         self._episode_rewards = np.zeros(self.n_envs)
         self._episodes_by_car = np.zeros(self.n_envs, dtype=np.int64)
 
-    def collect(
-        self, episodes_wanted: int, min_samples: int, max_samples: int, traced_cars: int = 1
-    ) -> Rollout:
+    def collect(self, episodes_wanted: int, min_samples: int, max_samples: int) -> Rollout:
         """Fill the rollout buffer until `episodes_wanted` episodes have finished across the
         cars and at least `min_samples` samples are in, or `max_samples` are reached."""
         env = self.batched_env
@@ -285,12 +262,9 @@ class RacerPPO(PPO):
         _resize(buffer, max_steps)
         buffer.reset()
         self.policy.set_training_mode(False)
-        sim = env.batch.sim
         space = env.batch.config.action_space
         discrete = space.kind == "discrete"
         finished: list[FinishedEpisode] = []
-        trace = TraceSteps()
-        traced = list(range(min(traced_cars, n)))
         dones = np.zeros(n, dtype=bool)
         steps = 0
         while steps < max_steps:
@@ -300,20 +274,10 @@ class RacerPPO(PPO):
             env_actions = (
                 actions_np if discrete else np.clip(actions_np, -1.0, 1.0).astype(np.float32)
             )
-            pose = (sim.fleet.x.copy(), sim.fleet.y.copy(), sim.heading_deg)
             new_obs, rewards, dones, infos = env.step(env_actions)
             details = env.last_infos
             rewards = rewards.astype(np.float32)
             self._episode_rewards += rewards
-            self._record_trace(
-                trace=trace,
-                cars=traced,
-                pose=pose,
-                env=env,
-                actions=actions_np,
-                rewards=rewards,
-                dones=dones,
-            )
             for car in np.flatnonzero(dones).tolist():
                 info = details[car]
                 if infos[car].get("TimeLimit.truncated"):
@@ -352,41 +316,7 @@ class RacerPPO(PPO):
             last_values = self.policy.predict_values(observation_tensors(self._obs))
         buffer.compute_returns_and_advantage(last_values=last_values, dones=dones)
         self.num_timesteps += steps * n
-        return Rollout(steps=steps * n, episodes=finished, trace=trace)
-
-    def _record_trace(
-        self,
-        *,
-        trace: TraceSteps,
-        cars: list[int],
-        pose: tuple[np.ndarray, np.ndarray, np.ndarray],
-        env: BatchedVecEnv,
-        actions: np.ndarray,
-        rewards: np.ndarray,
-        dones: np.ndarray,
-    ) -> None:
-        if not cars:
-            return
-        sim = env.batch.sim
-        details = env.last_infos
-        discrete = env.batch.config.action_space.kind == "discrete"
-        for car in cars:
-            info = details[car]
-            trace.car.append(car)
-            trace.episode_index.append(int(self._episodes_by_car[car]))
-            trace.episode_steps.append(info.steps)
-            trace.x.append(float(pose[0][car]))
-            trace.y.append(float(pose[1][car]))
-            trace.yaw.append(float(pose[2][car]))
-            trace.steer.append(float(sim.steering_cmd[car]))
-            trace.throttle.append(float(sim.speed_cmd[car]))
-            trace.action.append(int(actions[car]) if discrete else -1)
-            trace.reward.append(float(rewards[car]))
-            trace.done.append(bool(dones[car]))
-            trace.on_track.append(info.status != EpisodeStatus.OFF_TRACK)
-            trace.progress.append(info.progress)
-            trace.waypoint.append(int(sim.segment[car]))
-            trace.status.append(str(info.status))
+        return Rollout(steps=steps * n, episodes=finished)
 
 
 def _batch_of_one(obs: Any) -> Any:

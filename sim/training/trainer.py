@@ -210,11 +210,9 @@ class Trainer:
             if self.should_stop():
                 return
             started = time.monotonic()
+            # Sim-trace rows come from the logbook, which sees every car's steps.
             rollout = model.collect(
-                self.settings.episodes_per_update,
-                self.min_samples,
-                self.max_samples,
-                traced_cars=0,  # the logbook traces every car
+                self.settings.episodes_per_update, self.min_samples, self.max_samples
             )
             if self.should_stop():
                 return  # a stop during collection: do not spend time on an update
