@@ -36,7 +36,7 @@ from sim.track import Track
 from sim.training import events
 from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
-from sim.training.errors import PolicyError
+from sim.training.errors import PolicyError, describe_failure
 from sim.training.evaluation import EvaluationReport, run_trials
 from sim.training.logbook import Logbook
 from sim.training.policy import (
@@ -150,11 +150,11 @@ class Trainer:
             if self.should_stop():
                 kind, message = "stopped", "training was stopped"
         except Exception as error:
-            kind, message = "failed", _describe(error)
+            kind, message = "failed", describe_failure(error)
         try:
             self._finish()
         except Exception as error:  # the folder stays consistent; say what went wrong
-            kind, message = "failed", _describe(error)
+            kind, message = "failed", describe_failure(error)
         self._write_state(kind, message)
         return self._ended(kind, message)
 
@@ -432,12 +432,6 @@ class Trainer:
 
 def _mean(values: list[float]) -> float:
     return float(np.mean(values)) if values else 0.0
-
-
-def _describe(error: BaseException) -> str:
-    if isinstance(error, ModelError | PolicyError | DeepRacerFileError):
-        return str(error)
-    return f"{type(error).__name__}: {error}"
 
 
 def train_folder(

@@ -20,6 +20,7 @@ from types import FrameType
 from typing import TextIO
 
 from sim.training import events
+from sim.training.errors import describe_failure
 
 EXIT_FAILED = 1
 EXIT_USER_ERROR = 2
@@ -60,10 +61,18 @@ class EventWriter:
             self.stop.set("nobody is reading the training output")
 
 
+# Why a training stopped, in the racer's words: the signals mean what the racer did.
+STOP_REASONS = {
+    signal.SIGTERM: "on request",
+    signal.SIGINT: "with Ctrl+C",
+    signal.SIGHUP: "because its terminal closed",
+}
+
+
 def _install_signal_handlers(stop: StopFlag) -> None:
     def handler(signum: int, frame: FrameType | None) -> None:
         del frame
-        stop.set(f"received {signal.Signals(signum).name}")
+        stop.set(STOP_REASONS.get(signal.Signals(signum), signal.Signals(signum).name))
 
     for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
         signal.signal(sig, handler)
@@ -95,7 +104,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return _train(args, emit, stop)
     except BaseException as error:  # the last line must say what happened
-        emit(_failed(f"{type(error).__name__}: {error}"))
+        emit(_failed(describe_failure(error)))
         return EXIT_FAILED
 
 
@@ -148,7 +157,7 @@ def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
         ended = events.Ended(
             elapsed=ended.elapsed,
             kind=ended.kind,
-            message=f"training was stopped ({stop.reason})",
+            message=f"training was stopped {stop.reason}",
             total_steps=ended.total_steps,
             episodes=ended.episodes,
             best_progress=ended.best_progress,

@@ -10,5 +10,5 @@ from sim.garage.options import new_model
 
 @pytest.fixture
 def model() -> ModelFolder:
-    """The default model (`racer-tui model new`): hairpin circuit, vector sensor."""
+    """The default model (`racer-tui model new`): re:Invent 2018, vector sensor."""
     return new_model("tiny")

@@ -77,7 +77,7 @@ def test_sigterm_stops_the_run_with_a_checkpoint(model: ModelFolder) -> None:
     assert process.wait() == 0
     ended = rest[-1]
     assert isinstance(ended, events.Ended) and ended.kind == "stopped"
-    assert "SIGTERM" in ended.message
+    assert ended.message == "training was stopped on request"  # the racer's words, not a signal name
     assert (model.checkpoints_dir / LATEST).is_file()
     assert json.loads(model.training_state_file.read_text())["state"] == "stopped"
     assert model.has_policy() and not model.is_training()
@@ -129,3 +129,22 @@ def test_the_stop_flag_notices_a_vanished_parent() -> None:
     orphan = StopFlag(parent_pid=os.getpid())  # "our parent" is not our parent: it is gone
     assert orphan()
     assert orphan.reason == "the parent process exited"
+
+
+def test_a_reward_function_that_fails_is_reported_in_the_racers_words(
+    model: ModelFolder,
+) -> None:
+    model.reward_file.write_text(
+        "def reward_function(params):\n"
+        "    if params['steps'] > 5:\n"
+        "        raise ValueError('too far')\n"
+        "    return 1.0\n",
+        encoding="utf-8",
+    )
+    process = TrainingProcess.start(model.name, minutes=1, extra=TINY)
+    ended = list(process.events())[-1]
+    process.wait()
+
+    assert isinstance(ended, events.Ended) and ended.kind == "failed"
+    assert "too far" in ended.message and "reward_function" in ended.message
+    assert "RewardFunctionError" not in ended.message  # no internal class names
