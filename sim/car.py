@@ -30,6 +30,10 @@ from sim.geometry import FloatArray
 STEP_HZ = 15  # DeepRacer's camera and control rate
 STEP_SECONDS = 1.0 / STEP_HZ
 PHYSICS_SUBSTEPS = 4
+# The version of the car's handling. Lap times of different versions are not comparable:
+# league records carry it and leaderboards keep versions apart. Bump it with any change
+# to the car that changes lap times.
+PHYSICS_VERSION = 1
 
 # Collision categories: cars never collide with each other unless a race asks for it
 # (training runs many independent cars in one space).
