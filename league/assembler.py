@@ -37,6 +37,7 @@ from sim.deepracer_files import (
     TrainingParams,
     locate_files,
     read_evaluation_metrics,
+    read_evaluation_physics,
     read_hyperparameters,
     read_model_metadata,
     read_training_metrics,
@@ -44,6 +45,8 @@ from sim.deepracer_files import (
 )
 from sim.ids import canonical_json, content_hash
 from sim.names import is_valid_name
+from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
+from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.track import Track, TrackError
 from sim.track_catalog import resolve_track
 
@@ -100,6 +103,7 @@ class Submission:
     training: dict[str, Any] | None
     evaluation_file: str
     laps: tuple[EvaluationLap, ...]
+    physics: str = CURRENT_PHYSICS  # which simulator timed the laps (sim.race.physics)
 
     @property
     def completed_laps(self) -> list[EvaluationLap]:
@@ -144,6 +148,11 @@ def assemble(
         )
         evaluation_path = _evaluation_path(folder, files, evaluation)
         trials = read_evaluation_metrics(evaluation_path)
+        physics = (
+            (read_evaluation_physics(evaluation_path) or BEFORE_VERSIONING)
+            if source == RACER_TUI
+            else DEEPRACER
+        )
     except DeepRacerFileError as error:
         raise LeagueError(str(error)) from None
     _require(source, folder, files)
@@ -176,6 +185,7 @@ def assemble(
         training=_training_summary(training, params, folder if source == RACER_TUI else None),
         evaluation_file=evaluation_path.name,
         laps=tuple(EvaluationLap.from_trial(i + 1, trial) for i, trial in enumerate(trials)),
+        physics=physics,
     )
 
 

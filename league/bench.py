@@ -58,6 +58,7 @@ from sim.deepracer_files import (
     write_training_params,
 )
 from sim.ids import content_hash, new_id
+from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.race.rules import DEFAULT_RULES
 from sim.track_catalog import resolve_track
 
@@ -198,6 +199,7 @@ def fill(
                     "submission",
                     racer,
                     fields["track_hash"],
+                    CURRENT_PHYSICS,
                     fields["model_name"],
                     None,
                     fields["submitted_at"],
@@ -273,6 +275,7 @@ def fill(
                             "race",
                             racer,
                             track_hash,
+                            CURRENT_PHYSICS,
                             "model-0",
                             night["id"],
                             race_fields["started_at"],

@@ -6,8 +6,9 @@ applied. Scores come from sim.race.rules.score_laps, the same function races use
 stored rounded to the millisecond exactly as league.ranking.ranking_key rounds them, so an
 SQL `ORDER BY` on the cached columns agrees with `rank()` within one racer.
 
-The `board` table keeps each racer's best entry per track under every method, clustered by
-(method, track), so the leaderboard of a track is one range scan.
+The `board` table keeps each racer's best entry per track and physics under every method,
+clustered by (method, track), so the leaderboard of a track is one range scan. Laps of
+different physics (sim.race.physics) are never ranked together: each has its own board.
 
 Both are derived data: `refresh_entries` recomputes the rows a change touched (call it in
 the same transaction as the change, e.g. after sync inserts pulled rows) and
@@ -23,7 +24,9 @@ from dataclasses import dataclass, replace
 from itertools import groupby
 from typing import Any
 
+from league.assembler import CONSOLE, DRFC
 from league.store import League
+from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
 from sim.race.rules import (
     DEFAULT_RULES,
     RaceRules,
@@ -56,6 +59,7 @@ class EntrySource:
     kind: str  # "submission" | "race"
     racer: str
     track_hash: str
+    physics: str
     model_name: str
     night_id: str | None
     recorded_at: str
@@ -68,6 +72,7 @@ ENTRY_COLUMNS = (
     "kind",
     "racer",
     "track_hash",
+    "physics",
     "model_name",
     "night_id",
     "recorded_at",
@@ -112,7 +117,7 @@ def best_entries_sql(score: str, offtracks: str, where: str, group_by: str) -> s
     return f"""
         SELECT entry_id, kind, racer, model_name, track_hash, night_id, recorded_at,
                laps_driven, valid_laps, offtracks, best_lap, average_lap,
-               {score} AS score, {offtracks} AS scoring_offtracks,
+               {score} AS score, {offtracks} AS scoring_offtracks, physics,
                min({entry_key_sql(score, offtracks)}) AS pick
         FROM entries {where}
         GROUP BY {group_by}
@@ -123,14 +128,14 @@ def _board_insert(method: RankingMethod, where: str) -> str:
     score, offtracks = score_column(method)
     return f"""
         INSERT INTO board (
-            method, track_hash, unscored, score, scoring_offtracks, valid_laps, recorded_at,
-            racer, entry_id, kind, model_name, night_id, best_lap, average_lap, offtracks,
-            laps_driven
+            method, track_hash, physics, unscored, score, scoring_offtracks, valid_laps,
+            recorded_at, racer, entry_id, kind, model_name, night_id, best_lap, average_lap,
+            offtracks, laps_driven
         )
-        SELECT '{method.value}', track_hash, score IS NULL, coalesce(score, 0),
+        SELECT '{method.value}', track_hash, physics, score IS NULL, coalesce(score, 0),
                scoring_offtracks, valid_laps, recorded_at, racer, entry_id, kind, model_name,
                night_id, best_lap, average_lap, offtracks, laps_driven
-        FROM ({best_entries_sql(score, offtracks, where, "track_hash, racer")})
+        FROM ({best_entries_sql(score, offtracks, where, "track_hash, physics, racer")})
     """
 
 
@@ -176,6 +181,7 @@ def entry_values(source: EntrySource, disqualified: Iterable[int] = ()) -> tuple
         source.kind,
         source.racer,
         source.track_hash,
+        source.physics,
         source.model_name,
         source.night_id,
         source.recorded_at,
@@ -219,7 +225,9 @@ def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[En
     where, params = _in_clause(ids, "s.id")
     submissions = conn.execute(
         "SELECT s.id, s.racer, s.track_hash, s.model_name, s.submitted_at, "
-        "l.number, l.time_seconds, l.offtracks, l.completed FROM submissions s "
+        "l.number, l.time_seconds, l.offtracks, l.completed, "
+        f"coalesce(s.physics, CASE WHEN s.source IN ('{DRFC}', '{CONSOLE}') "
+        f"THEN '{DEEPRACER}' ELSE '{BEFORE_VERSIONING}' END) FROM submissions s "
         f"LEFT JOIN submission_laps l ON l.submission_id = s.id {where} "
         "ORDER BY s.id, l.number",
         params,
@@ -235,6 +243,7 @@ def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[En
             kind="submission",
             racer=first[1],
             track_hash=first[2],
+            physics=first[9],
             model_name=first[3],
             night_id=None,
             recorded_at=first[4],
@@ -244,7 +253,8 @@ def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[En
     where, params = _in_clause(ids, "r.id")
     races = conn.execute(
         "SELECT r.id, r.racer, r.track_hash, r.model_name, r.night_id, r.started_at, r.rules, "
-        "l.number, l.time_seconds, l.offtracks, l.valid FROM races r "
+        f"l.number, l.time_seconds, l.offtracks, l.valid, coalesce(r.physics, "
+        f"'{BEFORE_VERSIONING}') FROM races r "
         f"LEFT JOIN race_laps l ON l.race_id = r.id {where} ORDER BY r.id, l.number",
         params,
     )
@@ -260,6 +270,7 @@ def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[En
             kind="race",
             racer=first[1],
             track_hash=first[2],
+            physics=first[11],
             model_name=first[3],
             night_id=first[4],
             recorded_at=first[5],

@@ -21,6 +21,7 @@ from league.racers import display_names_overrides
 from league.ranking import rank
 from league.store import League
 from league.tracks import track_names
+from sim.race.physics import board_suffix
 from sim.race.rules import RankingMethod
 
 BY_CHOICES: dict[str, RankingMethod] = {
@@ -54,6 +55,7 @@ class LeaderboardRow:
     average_lap: float | None
     offtracks: int
     laps_driven: int
+    physics: str  # which simulator timed the laps (sim.race.physics): each its own board
     rank: int = 0
 
 
@@ -93,24 +95,27 @@ NATIVE_OFFTRACKS = (
 _ROW_COLUMNS = """
     b.entry_id, b.kind, b.racer, b.racer, b.model_name, b.track_hash, b.track_hash,
     b.night_id, {score}, b.scoring_offtracks, b.valid_laps, b.recorded_at, b.best_lap,
-    b.average_lap, b.offtracks, b.laps_driven
+    b.average_lap, b.offtracks, b.laps_driven, b.physics
 """
 
 
 def leaderboard(
     league: League, filters: Filters, method: RankingMethod | None = RankingMethod.BEST_LAP
 ) -> list[LeaderboardRow]:
-    """Ranked rows, track by track (tracks by name), `rank` numbered from 1 per track.
+    """Ranked rows, board by board, `rank` numbered from 1 per board.
 
+    A board is one track under one physics (sim.race.physics): laps timed by another
+    version of the car, or by DeepRacer's own simulator, are ranked on a board of their
+    own, whose track name says which. Boards in the order of their names.
     `method=None` scores each entry by its own rules' method (a night's races).
     """
     if method is not None and filters.night_ids is None:
         entries = _board_rows(league, filters, method)
     else:
-        entries = grouped_rows(league, filters, method, group_by="track_hash, racer")
-    tracks = {entry.track_hash: entry.track_name for entry in entries}
-    order = sorted(tracks, key=lambda h: (tracks[h].casefold(), h))
-    return rank_groups(entries, lambda entry: entry.track_hash, order)
+        entries = grouped_rows(league, filters, method, group_by="track_hash, physics, racer")
+    boards = {(entry.track_hash, entry.physics): entry.track_name for entry in entries}
+    order = sorted(boards, key=lambda key: (boards[key].casefold(), key))
+    return rank_groups(entries, lambda entry: (entry.track_hash, entry.physics), order)
 
 
 def _board_rows(league: League, filters: Filters, method: RankingMethod) -> list[LeaderboardRow]:
@@ -128,8 +133,8 @@ def _board_rows(league: League, filters: Filters, method: RankingMethod) -> list
     sql = f"""
         SELECT {columns} FROM board b
         WHERE {" AND ".join(clauses)}
-        ORDER BY b.track_hash, b.unscored, b.score, b.scoring_offtracks, b.valid_laps DESC,
-                 b.recorded_at, b.racer, b.entry_id
+        ORDER BY b.track_hash, b.physics, b.unscored, b.score, b.scoring_offtracks,
+                 b.valid_laps DESC, b.recorded_at, b.racer, b.entry_id
     """
     return _rows(league, sql, params)
 
@@ -153,7 +158,9 @@ def _rows(league: League, sql: str, params: Sequence[Any]) -> list[LeaderboardRo
     tracks = track_names(league)
     for row in rows:
         row.display_name = shown.get(row.racer, row.racer)
-        row.track_name = tracks.get(row.track_hash) or row.track_hash[:12]
+        row.track_name = (tracks.get(row.track_hash) or row.track_hash[:12]) + board_suffix(
+            row.physics
+        )
     return rows
 
 

@@ -322,11 +322,68 @@ CREATE INDEX races_started ON races(started_at, id);
 CREATE INDEX races_track_started ON races(track_hash, started_at, id)
 """
 
+# Version 5: which simulator's physics produced a submission's or race's laps (see
+# sim.race.physics). NULL in rows recorded before: racer-tui's physics 1, or DeepRacer's
+# for its own evaluation files. The leaderboard cache is keyed by physics too, so it is
+# made again (it is rebuilt from the shared rows).
+PHYSICS = """
+ALTER TABLE submissions ADD COLUMN physics TEXT;
+ALTER TABLE races ADD COLUMN physics TEXT;
+DROP TABLE board;
+DROP TABLE entries;
+CREATE TABLE entries (
+    entry_id TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    racer TEXT NOT NULL,
+    track_hash TEXT NOT NULL,
+    physics TEXT NOT NULL,
+    model_name TEXT NOT NULL,
+    night_id TEXT,
+    recorded_at TEXT NOT NULL,
+    laps_driven INTEGER NOT NULL,
+    valid_laps INTEGER NOT NULL,
+    offtracks INTEGER NOT NULL,
+    best_lap REAL,
+    average_lap REAL,
+    native_method TEXT NOT NULL,
+    score_best_lap REAL,
+    offtracks_best_lap INTEGER NOT NULL,
+    score_best_average REAL,
+    offtracks_best_average INTEGER NOT NULL,
+    score_total_time REAL,
+    offtracks_total_time INTEGER NOT NULL,
+    PRIMARY KEY (track_hash, racer, entry_id)
+) WITHOUT ROWID;
+CREATE UNIQUE INDEX entries_id ON entries(entry_id);
+CREATE INDEX entries_night ON entries(night_id) WHERE night_id IS NOT NULL;
+CREATE TABLE board (
+    method TEXT NOT NULL,
+    track_hash TEXT NOT NULL,
+    physics TEXT NOT NULL,
+    unscored INTEGER NOT NULL,
+    score REAL NOT NULL,
+    scoring_offtracks INTEGER NOT NULL,
+    valid_laps INTEGER NOT NULL,
+    recorded_at TEXT NOT NULL,
+    racer TEXT NOT NULL,
+    entry_id TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    model_name TEXT NOT NULL,
+    night_id TEXT,
+    best_lap REAL,
+    average_lap REAL,
+    offtracks INTEGER NOT NULL,
+    laps_driven INTEGER NOT NULL,
+    PRIMARY KEY (method, track_hash, physics, racer)
+) WITHOUT ROWID
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
     Migration("sync bookkeeping", _script(SYNC_TABLES)),
     Migration("recent races index", _script(RECENT_RACES)),
+    Migration("physics of results", _script(PHYSICS), True),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -79,6 +79,7 @@ def record_race(
             "seed": result.seed,
             "started_at": result.started_at,
             "total_offtracks": result.total_offtracks,
+            "physics": result.physics,
         }
         existing = league.query_one(
             "SELECT content_hash FROM races WHERE id = ?", (result.result_id,)

@@ -2,9 +2,11 @@
 
 A record is one row of a shared table: its id, and its body = every column except `id`
 and `content_hash`, plus the child laps of submissions and races (as the row's `laps`
-list, in lap order). `content_hash == sim.ids.content_hash(body)` for every row; the
-league computes it when it inserts a row, and `record_body` rebuilds the body from the
-database so anyone can check it.
+list, in lap order). A column added after records were first shared (OPTIONAL_COLUMNS)
+is in the body only when it holds a value, so older records keep their content hash.
+`content_hash == sim.ids.content_hash(body)` for every row; the league computes it when
+it inserts a row, and `record_body` rebuilds the body from the database so anyone can
+check it.
 
 `store_record` inserts a record that came from elsewhere (checked by the caller) with its
 laps, and refreshes the local caches it affects. Call it inside `league.transaction()`.
@@ -46,6 +48,13 @@ SHARED_TABLES: dict[str, Children | None] = {
 }
 
 
+# Columns later versions added to shared tables; a record without them is still whole.
+OPTIONAL_COLUMNS: dict[str, frozenset[str]] = {
+    "submissions": frozenset({"physics"}),
+    "races": frozenset({"physics"}),
+}
+
+
 def _check_table(table: str) -> Children | None:
     if table not in SHARED_TABLES:
         raise LeagueError(f"{table!r} is not a shared league table.")
@@ -62,7 +71,7 @@ def record_body(league: League, table: str, record_id: str) -> dict[str, Any]:
     row = league.query_one(f"SELECT * FROM {table} WHERE id = ?", (record_id,))
     if row is None:
         raise LeagueError(f"there is no {table} row {record_id}.")
-    body = {key: value for key, value in dict(row).items() if key not in ("id", "content_hash")}
+    body = row_body(table, dict(row))
     if children is not None:
         laps = league.query(
             f"SELECT {', '.join(children.columns)} FROM {children.table} "
@@ -71,6 +80,16 @@ def record_body(league: League, table: str, record_id: str) -> dict[str, Any]:
         )
         body["laps"] = [dict(zip(children.columns, lap, strict=True)) for lap in laps]
     return body
+
+
+def row_body(table: str, row: Mapping[str, Any]) -> dict[str, Any]:
+    """A shared row's own fields as its record body holds them (without its laps)."""
+    optional = OPTIONAL_COLUMNS.get(table, frozenset())
+    return {
+        key: value
+        for key, value in row.items()
+        if key not in ("id", "content_hash") and not (key in optional and value is None)
+    }
 
 
 def records(league: League, table: str) -> Iterator[tuple[str, str, dict[str, Any]]]:
@@ -104,10 +123,11 @@ def store_record(
         raise LeagueError(f"{table} record {record_id} is here with different content.")
     fields = {key: value for key, value in body.items() if key != "laps"}
     columns = [c for c in _columns(league, table) if c not in ("id", "content_hash")]
-    if sorted(fields) != sorted(columns) or (children is not None) != ("laps" in body):
+    required = set(columns) - OPTIONAL_COLUMNS.get(table, frozenset())
+    if not required <= set(fields) <= set(columns) or (children is not None) != ("laps" in body):
         raise LeagueError(f"{table} record {record_id} does not have the table's fields.")
     names = ["id", *columns, "content_hash"]
-    values = [record_id, *(fields[c] for c in columns), digest]
+    values = [record_id, *(fields.get(c) for c in columns), digest]
     with league.transaction():
         league.conn.execute(
             f"INSERT INTO {table} ({', '.join(names)}) VALUES ({', '.join('?' for _ in names)})",

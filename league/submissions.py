@@ -77,6 +77,7 @@ def submit(league: League, submission: Submission) -> Submitted:
                 "evaluation_file": submission.evaluation_file,
                 "fingerprint": fingerprint,
                 "submitted_at": now_iso(),
+                "physics": submission.physics,
             },
             children={"laps": laps},
         )

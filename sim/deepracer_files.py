@@ -588,12 +588,35 @@ def parse_evaluation_metrics(text: str, where: str) -> tuple[EvaluationTrial, ..
     return tuple(_row(EvaluationTrial, row, where, i) for i, row in enumerate(rows))
 
 
-def write_evaluation_metrics(path: Path, trials: Sequence[EvaluationTrial]) -> None:
-    write_text_atomic(path, evaluation_metrics_text(trials))
+def write_evaluation_metrics(
+    path: Path, trials: Sequence[EvaluationTrial], physics: str | None = None
+) -> None:
+    write_text_atomic(path, evaluation_metrics_text(trials, physics))
 
 
-def evaluation_metrics_text(trials: Sequence[EvaluationTrial]) -> str:
-    return json.dumps({"metrics": [_metric_dict(t) for t in trials]}) + "\n"
+def evaluation_metrics_text(trials: Sequence[EvaluationTrial], physics: str | None = None) -> str:
+    """DeepRacer's EvaluationMetrics; with `physics`, racer-tui's own top-level key saying
+    which simulator timed the laps (sim.race.physics; DeepRacer's readers ignore it)."""
+    document: dict[str, Any] = {"metrics": [_metric_dict(t) for t in trials]}
+    if physics is not None:
+        document["physics"] = physics
+    return json.dumps(document) + "\n"
+
+
+def read_evaluation_physics(path: Path) -> str | None:
+    """The `physics` an evaluation file names (see evaluation_metrics_text), or None when it
+    names none (DeepRacer's own files, and racer-tui's before physics was recorded)."""
+    from sim.race.physics import is_physics
+
+    document = parse_json_object(_read_text(path, MAX_METRICS_BYTES), str(path))
+    physics = document.get("physics")
+    if physics is None:
+        return None
+    if not is_physics(physics):
+        raise DeepRacerFileError(
+            f"{path}: physics {physics!r} is not 'racer-tui/<version>' or 'deepracer'."
+        )
+    return str(physics)
 
 
 def evaluation_stamp(when: datetime | None = None) -> str:

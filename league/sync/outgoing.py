@@ -16,7 +16,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Final
 
-from league.records import SHARED_TABLES, Children
+from league.records import SHARED_TABLES, Children, row_body
 from league.store import League
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import BUNDLE_KIND, KIND_OF_TABLE
@@ -125,9 +125,7 @@ def _bodies(
     bodies: dict[str, dict[str, Any]] = {}
     for values in cursor:
         row = dict(zip(names, values, strict=True))
-        bodies[row["id"]] = {
-            key: value for key, value in row.items() if key not in ("id", "content_hash")
-        }
+        bodies[row["id"]] = row_body(table, row)
     if children is not None:
         for body in bodies.values():
             body["laps"] = []

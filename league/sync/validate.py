@@ -31,6 +31,7 @@ from league.sync.kinds import BUNDLE_KIND, PROFILE_KIND, profile_id
 from league.sync.record import HASH_PATTERN, SyncRecord, parse_json
 from sim.ids import is_valid_id
 from sim.names import NAME_RULE, is_valid_name
+from sim.race.physics import is_physics
 from sim.race.result import RaceResult, ResultError
 from sim.race.rules import RulesError, rules_from_mapping
 
@@ -147,11 +148,14 @@ def colour(value: Any, field: str) -> None:
 
 @dataclass(frozen=True)
 class Field:
-    """One column of a shared table: its SQLite type, whether it may be NULL, its check."""
+    """One column of a shared table: its SQLite type, whether it may be NULL, its check.
+    An `optional` column was added after records were first shared: a record may lack it
+    (league.records.OPTIONAL_COLUMNS), and it is NULL then."""
 
     sql_type: str
     check: Checker
     nullable: bool = False
+    optional: bool = False
 
 
 def _t(check: Checker, nullable: bool = False) -> Field:
@@ -164,6 +168,15 @@ def _i(check: Checker, nullable: bool = False) -> Field:
 
 def _r(check: Checker) -> Field:
     return Field("REAL", check)
+
+
+def physics(value: Any, field: str) -> None:
+    if not is_physics(value):
+        raise _bad(field, "is not 'racer-tui/<version>' or 'deepracer'")
+
+
+# Which simulator timed the laps (sim.race.physics); absent in records made before.
+_PHYSICS = Field("TEXT", physics, nullable=True, optional=True)
 
 
 # Every shared table's columns except id and content_hash (a test holds these to the
@@ -218,6 +231,7 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "evaluation_file": _t(text(255)),
         "fingerprint": _t(sha256_hex),
         "submitted_at": _t(timestamp),
+        "physics": _PHYSICS,
     },
     "race": {
         "racer": _t(name),
@@ -230,6 +244,7 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "seed": _i(integer(0, 2**63 - 1)),
         "started_at": _t(timestamp),
         "total_offtracks": _i(integer(0, MAX_COUNT)),
+        "physics": _PHYSICS,
     },
     "correction": {
         "kind": _t(one_of(*CORRECTION_KINDS)),
@@ -285,13 +300,14 @@ def _check_fields(
     body: Mapping[str, Any], fields: Mapping[str, Field], extra: tuple[str, ...] = ()
 ) -> None:
     expected = set(fields) | set(extra)
-    if set(body) != expected:
-        missing = sorted(expected - set(body))
+    required = expected - {column for column, spec in fields.items() if spec.optional}
+    if not required <= set(body) <= expected:
+        missing = sorted(required - set(body))
         unknown = sorted(set(body) - expected)
         detail = f"lacks {', '.join(missing)}" if missing else f"has unknown {', '.join(unknown)}"
         raise RecordInvalidError(f"its fields are not its table's columns (it {detail})")
     for column, spec in fields.items():
-        value = body[column]
+        value = body.get(column)
         if value is None:
             if not spec.nullable:
                 raise _bad(column, "is missing")
@@ -358,6 +374,7 @@ def _check_race(record: SyncRecord) -> None:
                 "started_at": body["started_at"],
                 "laps": laps,
                 "total_offtracks": body["total_offtracks"],
+                **({"physics": body["physics"]} if body.get("physics") else {}),
             }
         )
     except ResultError as error:

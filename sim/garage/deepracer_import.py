@@ -54,6 +54,7 @@ from sim.garage.folder import (
     create_model,
 )
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
+from sim.race.physics import DEEPRACER as DEEPRACER_PHYSICS
 
 BUNDLE_SUFFIX = ".racer-bundle"
 _T = TypeVar("_T")
@@ -123,8 +124,11 @@ def import_deepracer_folder(
             folder.training_trace_dir.mkdir(exist_ok=True)
             shutil.copyfile(trace, folder.path / training_trace_path(_iteration(trace)))
         for evaluation in evaluations:
+            # Timed by DeepRacer's simulator: say so, so a submission of it is ranked apart.
             write_evaluation_metrics(
-                folder.evaluation_metrics_file(evaluation.stamp), evaluation.trials
+                folder.evaluation_metrics_file(evaluation.stamp),
+                evaluation.trials,
+                physics=DEEPRACER_PHYSICS,
             )
             if evaluation.trace is not None:
                 target = folder.evaluation_trace_file(evaluation.stamp)

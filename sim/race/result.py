@@ -16,6 +16,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 from sim.ids import is_valid_id
+from sim.race.physics import BEFORE_VERSIONING, CURRENT, is_physics
 from sim.race.rules import RaceRules, RulesError, Score, rules_from_mapping, score_laps
 from sim.race.trace import RaceTrace
 
@@ -93,6 +94,8 @@ class RaceResult:
     total_offtracks: int  # including off-tracks in a lap the window cut
     started_at: str  # ISO-8601 UTC
     trace: RaceTrace | None = None
+    physics: str = CURRENT  # the simulator's physics (sim.race.physics): lap times of
+    # different physics are never ranked together
 
     # --- league.ranking.Rankable ---------------------------------------------------------
     @property
@@ -156,6 +159,7 @@ class RaceResult:
             },
             "best_lap_seconds": None if best is None else best.time_seconds,
             "total_offtracks": self.total_offtracks,
+            "physics": self.physics,
         }
 
     @classmethod
@@ -206,6 +210,11 @@ class RaceResult:
         seed = data.get("seed")
         if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
             raise ResultError("seed must be a whole number from 0 to 2^63 - 1.")
+        # Results written before physics was recorded ran on racer-tui's first physics.
+        physics = data.get("physics", BEFORE_VERSIONING)
+        if not is_physics(physics):
+            raise ResultError("physics must be 'racer-tui/<version>' or 'deepracer'.")
+        assert isinstance(physics, str)
         return cls(
             result_id=result_id,
             racer=_name(data, "racer"),
@@ -220,6 +229,7 @@ class RaceResult:
             total_offtracks=total_offtracks,
             started_at=_timestamp(data, "started_at"),
             trace=None,
+            physics=physics,
         )
 
 

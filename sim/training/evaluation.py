@@ -42,6 +42,7 @@ from sim.deepracer_files import (
     trace_status,
     write_evaluation_metrics,
 )
+from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.resets import ResetRules
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
@@ -339,7 +340,7 @@ def evaluate_model(
     trace_text = header + sim_trace_lines(trace.columns(rows, chosen.length))
     write_text_atomic(folder.evaluation_trace_file(stamp), trace_text)
     path = folder.evaluation_metrics_file(stamp)
-    write_evaluation_metrics(path, rows)
+    write_evaluation_metrics(path, rows, physics=CURRENT_PHYSICS)
     return EvaluationReport(track=chosen.name, trials=tuple(results), metrics_file=path)
 
 

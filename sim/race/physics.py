@@ -1,0 +1,37 @@
+"""Which simulator's physics produced a lap: lap times of different physics never meet on
+one leaderboard.
+
+racer-tui's own physics is versioned by `sim.car.PHYSICS_VERSION` ("racer-tui/2"); laps
+timed by AWS DeepRacer's own simulator (console and DeepRacer-for-Cloud evaluations) are
+"deepracer". Results recorded before physics was recorded are racer-tui's version 1, or
+DeepRacer's when they came from its files.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Final
+
+from sim.car import PHYSICS_VERSION
+
+CURRENT: Final = f"racer-tui/{PHYSICS_VERSION}"
+BEFORE_VERSIONING: Final = "racer-tui/1"
+DEEPRACER: Final = "deepracer"
+PATTERN: Final = re.compile(r"racer-tui/[1-9][0-9]{0,5}|deepracer")
+
+
+def is_physics(value: object) -> bool:
+    return isinstance(value, str) and PATTERN.fullmatch(value) is not None
+
+
+def describe(physics: str) -> str:
+    """ "DeepRacer's simulator", "racer-tui physics 2"."""
+    if physics == DEEPRACER:
+        return "DeepRacer's simulator"
+    return f"racer-tui physics {physics.removeprefix('racer-tui/')}"
+
+
+def board_suffix(physics: str) -> str:
+    """What a leaderboard adds to a track's name for laps of other physics than today's:
+    they are ranked on a board of their own, and the name says which."""
+    return "" if physics == CURRENT else f" ({describe(physics)})"
