@@ -1,0 +1,241 @@
+"""Reading a DeepRacer car archive: the `.tar.gz` a physical car loads.
+
+It holds `model_metadata.json` at its root and one frozen TensorFlow graph,
+`agent/model.pb`, and nothing else (the car's loader rejects an archive unless it finds
+exactly one model file). Archives come from anyone, so this reader:
+
+- never extracts to disk and never executes anything: members are read into memory;
+- caps the archive's size, each member's size and the bytes decompressed in all, so a
+  small file cannot expand into gigabytes;
+- refuses absolute paths, `..`, links and devices, and any member but the two expected
+  (directory entries for `agent/` and `./`, which `tar` writes, are allowed);
+- reads the metadata with `sim.deepracer_files` (the one home of DeepRacer's formats) and
+  the graph with `sim.car_export.graph_def` (known ops only);
+- checks the graph has the input and output names the car uses for the metadata's sensor.
+
+No torch here: running the graph is `sim.car_export.graph_runner`'s job.
+"""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+import io
+import tarfile
+import zlib
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+
+from sim.car_export.errors import CarModelError
+from sim.car_export.graph_def import FrozenGraph, read_graph
+from sim.deepracer_files import (
+    MAX_METADATA_BYTES,
+    MODEL_METADATA,
+    SENSOR_FILE_NAMES,
+    DeepRacerFileError,
+    ModelMetadata,
+    parse_model_metadata,
+)
+
+GRAPH_MEMBER = "agent/model.pb"
+MEMBERS = (MODEL_METADATA, GRAPH_MEMBER)
+# DeepRacer's deepest camera network is about 30 MB of float32 weights; leave ample room.
+MAX_GRAPH_BYTES = 256 * 1024 * 1024
+MAX_ARCHIVE_BYTES = MAX_GRAPH_BYTES + MAX_METADATA_BYTES
+# Headers and padding on top of the two members, for everything decompressed.
+MAX_UNPACKED_BYTES = MAX_ARCHIVE_BYTES + 1024 * 1024
+MAX_ENTRIES = 16
+_DIRECTORIES = {"", ".", "agent"}
+
+# The car's tensor names (simapp's and the car's model loader's): network_0 holds the
+# sensor's input, network_1 the policy head. SAC names its agent "policy", not "main".
+OUTPUT_NODE = "main_level/agent/{agent}/online/network_1/ppo_head_0/policy"
+INPUT_NODE = "main_level/agent/{agent}/online/network_0/{sensor}/{sensor}"
+CAMERA_SENSORS = ("FRONT_FACING_CAMERA", "STEREO_CAMERAS")
+
+
+@dataclass(frozen=True)
+class CarArchive:
+    """A checked car archive: its metadata, its graph, and the names to feed and read."""
+
+    path: Path
+    metadata: ModelMetadata
+    graph: FrozenGraph
+    sensor: str  # DeepRacer's name, e.g. FRONT_FACING_CAMERA
+    input_node: str
+    output_node: str
+    content_hash: str  # sha256 of the two members
+
+    @property
+    def name(self) -> str:
+        """The archive's file name without `.tar.gz`: what races and results call it."""
+        name = self.path.name
+        for suffix in (".tar.gz", ".tgz"):
+            if name.endswith(suffix):
+                return name[: -len(suffix)]
+        return self.path.stem
+
+
+def read_car_archive(path: Path) -> CarArchive:
+    """Read and check a car archive; every problem is one `CarModelError` naming the file."""
+    where = path.name
+    try:
+        size = path.stat().st_size
+    except FileNotFoundError:
+        raise CarModelError(f"{path}: the file does not exist.") from None
+    except OSError as error:
+        raise CarModelError(f"{path}: cannot read it ({error.strerror}).") from None
+    if not path.is_file():
+        raise CarModelError(f"{path}: not a file; give the car archive (.tar.gz).")
+    if size > MAX_ARCHIVE_BYTES:
+        raise CarModelError(
+            f"{where}: the file is {size:,} bytes, more than the {MAX_ARCHIVE_BYTES:,} a car "
+            "archive may have."
+        )
+    members = _members(path, where)
+    for name in MEMBERS:
+        if name not in members:
+            raise CarModelError(
+                f"{where}: there is no {name}; a car archive holds model_metadata.json and "
+                f"{GRAPH_MEMBER}."
+            )
+    metadata = _metadata(members[MODEL_METADATA], f"{where}: {MODEL_METADATA}")
+    graph = read_graph(members[GRAPH_MEMBER], f"{where}: {GRAPH_MEMBER}")
+    sensor, input_node, output_node = _tensor_names(metadata, graph, where)
+    digest = hashlib.sha256()
+    for name in MEMBERS:
+        digest.update(hashlib.sha256(members[name]).digest())
+    return CarArchive(path, metadata, graph, sensor, input_node, output_node, digest.hexdigest())
+
+
+def _members(path: Path, where: str) -> dict[str, bytes]:
+    """The archive's two files by normalised name, read under every limit."""
+    found: dict[str, bytes] = {}
+    try:
+        with path.open("rb") as raw, gzip.GzipFile(fileobj=raw) as unzipped:
+            limited = _Limited(unzipped, MAX_UNPACKED_BYTES, where)
+            # Stream mode: tarfile reads forwards only, so nothing is seeked or cached.
+            with tarfile.open(fileobj=limited, mode="r|") as tar:
+                for count, member in enumerate(tar, start=1):
+                    if count > MAX_ENTRIES:
+                        raise CarModelError(
+                            f"{where}: the archive has more than {MAX_ENTRIES} entries; a car "
+                            "archive holds only model_metadata.json and agent/model.pb."
+                        )
+                    name = _checked_name(member, where)
+                    if name is None:
+                        continue  # a directory entry
+                    if name in found:
+                        raise CarModelError(f"{where}: {name} appears twice in the archive.")
+                    found[name] = _read_member(tar, member, name, where)
+    except CarModelError:
+        raise
+    except (tarfile.TarError, EOFError, zlib.error, OSError):  # BadGzipFile is an OSError
+        raise CarModelError(
+            f"{where}: not a complete gzip-compressed tar archive (truncated or corrupt); "
+            "give the car archive (.tar.gz) as downloaded."
+        ) from None
+    return found
+
+
+def _checked_name(member: tarfile.TarInfo, where: str) -> str | None:
+    """The member's name without a leading './', or None for an allowed directory entry."""
+    raw = member.name
+    pure = PurePosixPath(raw)
+    if raw.startswith("/") or "\\" in raw or "\x00" in raw or ".." in pure.parts:
+        raise CarModelError(
+            f"{where}: the member {raw!r} points outside the archive; a car archive holds "
+            "only model_metadata.json and agent/model.pb."
+        )
+    name = "/".join(part for part in pure.parts if part != ".")
+    if member.isdir():
+        if name in _DIRECTORIES:
+            return None
+        raise CarModelError(
+            f"{where}: the archive holds an unexpected folder {raw!r}; a car archive holds "
+            "only model_metadata.json and agent/model.pb."
+        )
+    if not member.isreg():
+        raise CarModelError(
+            f"{where}: the member {raw!r} is a link or special file; a car archive holds "
+            "only the two plain files model_metadata.json and agent/model.pb."
+        )
+    if name not in MEMBERS:
+        raise CarModelError(
+            f"{where}: the archive holds an unexpected member {raw!r}; a car archive holds "
+            "only model_metadata.json and agent/model.pb."
+        )
+    return name
+
+
+def _read_member(tar: tarfile.TarFile, member: tarfile.TarInfo, name: str, where: str) -> bytes:
+    limit = MAX_METADATA_BYTES if name == MODEL_METADATA else MAX_GRAPH_BYTES
+    if member.size > limit:
+        raise CarModelError(
+            f"{where}: {name} is {member.size:,} bytes, more than the {limit:,} allowed."
+        )
+    handle = tar.extractfile(member)
+    if handle is None:  # only for non-files, which _checked_name has refused
+        raise CarModelError(f"{where}: {name} cannot be read as a file.")
+    data = handle.read(limit + 1)
+    if len(data) != member.size:
+        raise CarModelError(f"{where}: {name} is cut short (truncated archive).")
+    return data
+
+
+def _metadata(data: bytes, where: str) -> ModelMetadata:
+    try:
+        return parse_model_metadata(data.decode("utf-8"), where)
+    except UnicodeDecodeError:
+        raise CarModelError(f"{where}: not UTF-8 text; it must be JSON.") from None
+    except DeepRacerFileError as error:
+        raise CarModelError(str(error)) from None
+
+
+def _tensor_names(metadata: ModelMetadata, graph: FrozenGraph, where: str) -> tuple[str, str, str]:
+    """(DeepRacer sensor name, input node, output node) the car would use."""
+    if metadata.sensors != ("camera",):
+        sensed = " and ".join(SENSOR_FILE_NAMES[name] for name in metadata.sensors)
+        raise CarModelError(
+            f"{where}: the model senses {sensed}; racer-tui runs car archives whose only "
+            "sensor is a camera."
+        )
+    agent = "policy" if metadata.training_algorithm == "sac" else "main"
+    output_node = OUTPUT_NODE.format(agent=agent)
+    if output_node not in graph.nodes:
+        raise CarModelError(
+            f"{where}: the graph has no output named {output_node!r}; it is not a DeepRacer policy."
+        )
+    # The metadata says "camera" for both of DeepRacer's cameras: the graph says which.
+    for sensor in CAMERA_SENSORS:
+        input_node = INPUT_NODE.format(agent=agent, sensor=sensor)
+        if input_node in graph.nodes:
+            return sensor, input_node, output_node
+    expected = INPUT_NODE.format(agent=agent, sensor=CAMERA_SENSORS[0])
+    raise CarModelError(
+        f"{where}: the graph has no camera input named {expected!r}; it is not a DeepRacer "
+        "camera model."
+    )
+
+
+class _Limited(io.RawIOBase):
+    """A read-only stream that fails once more than `limit` bytes have been read from it."""
+
+    def __init__(self, stream: gzip.GzipFile, limit: int, where: str) -> None:
+        super().__init__()
+        self._stream = stream
+        self._left = limit
+        self._where = where
+
+    def readable(self) -> bool:
+        return True
+
+    def read(self, size: int = -1) -> bytes:
+        chunk = self._stream.read(self._left + 1 if size < 0 else min(size, self._left + 1))
+        self._left -= len(chunk)
+        if self._left < 0:
+            raise CarModelError(
+                f"{self._where}: the archive unpacks to more than {MAX_UNPACKED_BYTES:,} bytes; "
+                "a car archive holds one model of at most that size."
+            )
+        return chunk
