@@ -14,6 +14,10 @@ import sim
 
 # Modules that train or run a policy may import torch; nothing else may.
 TORCH_ALLOWED = {
+    # A DeepRacer car archive's frozen graph, run with torch (the readers stay torch-free).
+    "sim.car_export.driver",
+    "sim.car_export.graph_runner",
+    "sim.car_export.policy",
     "sim.training.checkpoint",
     "sim.training.policy",
     "sim.training.ppo",
