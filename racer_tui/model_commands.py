@@ -284,6 +284,7 @@ def _show(name: str, as_json: bool) -> int:
         ("content hash", details["content_hash"][:16]),
         ("folder", details["path"]),
         *details["notes"].items(),
+        *([("physics", details["physics_note"])] if details["physics_note"] else []),
     ):
         facts.add_row(label, Text(str(value)))
     print_table(facts)

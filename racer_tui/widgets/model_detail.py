@@ -126,6 +126,8 @@ class ModelDetail(VerticalScroll):
         table.add_row("folder", _plain(details["path"]))
         for key, value in details["notes"].items():
             table.add_row(Text(key.lower().replace("_", " ")), _plain(value))
+        if details.get("physics_note"):
+            table.add_row(Text("physics", style="bold yellow"), _plain(details["physics_note"]))
         return table
 
     @staticmethod

@@ -162,7 +162,7 @@ class ModelFolder:
     @property
     def training_state_file(self) -> Path:
         """Written atomically by the trainer: {"state", "pid", "started_at", "updated_at",
-        "elapsed_seconds", "steps", "episodes", "best_progress", "message"}."""
+        "elapsed_seconds", "steps", "episodes", "best_progress", "message", "physics"}."""
         return self.path / TRAINING_STATE_FILE
 
     # --- the DeepRacer files -----------------------------------------------------------
@@ -277,6 +277,17 @@ class ModelFolder:
         if not isinstance(data, dict) or data.get("state") not in TRAINING_STATES:
             return None
         return data
+
+    def trained_physics(self) -> str | None:
+        """The physics (sim.race.physics) the policy learnt to drive, or None untrained. A
+        policy whose trainer did not say was trained before physics was recorded."""
+        from sim.race.physics import BEFORE_VERSIONING, is_physics
+
+        if not self.has_policy():
+            return None
+        state = self.training_state()
+        physics = None if state is None else state.get("physics")
+        return physics if is_physics(physics) else BEFORE_VERSIONING
 
     def is_training(self) -> bool:
         """A trainer says it is running and its process is alive."""

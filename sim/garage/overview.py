@@ -89,7 +89,20 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         "training": training_summary(folder),
         "evaluations": evaluations,
         "notes": {key: str(value) for key, value in params.extra.items()},
+        "physics_note": physics_note(folder.trained_physics()),
     }
+
+
+def physics_note(trained: str | None) -> str | None:
+    """One sentence when the policy learnt another car than today's, else None."""
+    from sim.race.physics import CURRENT, describe
+
+    if trained is None or trained == CURRENT:
+        return None
+    return (
+        f"trained on {describe(trained)}; today's car is {describe(CURRENT)} and handles "
+        "differently: train it again before racing (its old laps keep their own board)."
+    )
 
 
 def folder_evaluation(folder: ModelFolder, file_name: str) -> tuple[EvaluationTrial, ...]:

@@ -31,6 +31,7 @@ from sim.atomic import write_text_atomic
 from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, ModelFolder
 from sim.observations import SensorOptions
+from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.simulation import reversed_track
 from sim.track import Track
 from sim.training import events
@@ -426,6 +427,8 @@ class Trainer:
             "best_progress": max(self.progress.best_progress, 0.0),
             "best_lap": self.progress.best_lap,
             "message": message,
+            # The car the policy learnt to drive: the Garage says when today's differs.
+            "physics": CURRENT_PHYSICS,
         }
         write_text_atomic(self.folder.training_state_file, json.dumps(document, indent=2) + "\n")
 

@@ -1,0 +1,53 @@
+"""A model says when its policy learnt to drive another car than today's."""
+
+from __future__ import annotations
+
+import json
+
+from sim.garage.options import new_model
+from sim.garage.overview import model_details
+from sim.race.physics import BEFORE_VERSIONING, CURRENT
+from tests.sim.garage.helpers import add_policy, write_training_state
+
+OTHER = "racer-tui/7" if CURRENT != "racer-tui/7" else "racer-tui/8"
+
+
+def _trained_on(physics: str | None) -> dict[str, object]:
+    folder = new_model("old-timer")
+    add_policy(folder)
+    write_training_state(folder, "finished")
+    state = json.loads(folder.training_state_file.read_text())
+    if physics is None:
+        state.pop("physics", None)  # written before physics was recorded
+    else:
+        state["physics"] = physics
+    folder.training_state_file.write_text(json.dumps(state))
+    return model_details(folder)
+
+
+def test_an_untrained_model_has_no_physics() -> None:
+    folder = new_model("rookie")
+
+    assert folder.trained_physics() is None
+    assert model_details(folder)["physics_note"] is None
+
+
+def test_a_policy_of_todays_physics_needs_no_note() -> None:
+    assert _trained_on(CURRENT)["physics_note"] is None
+
+
+def test_a_policy_of_another_physics_says_to_train_again() -> None:
+    note = str(_trained_on(OTHER)["physics_note"])
+
+    assert f"racer-tui physics {OTHER.split('/')[1]}" in note
+    assert "train it again" in note
+
+
+def test_a_policy_from_before_physics_was_recorded_counts_as_the_first() -> None:
+    details = _trained_on(None)
+
+    expected = None if CURRENT == BEFORE_VERSIONING else "racer-tui physics 1"
+    if expected is None:
+        assert details["physics_note"] is None
+    else:
+        assert expected in str(details["physics_note"])
