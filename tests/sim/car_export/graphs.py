@@ -30,6 +30,12 @@ CAMERA_INPUT = "main_level/agent/main/online/network_0/FRONT_FACING_CAMERA/FRONT
 POLICY_OUTPUT = "main_level/agent/main/online/network_1/ppo_head_0/policy"
 
 
+def one_sentence(message: str) -> bool:
+    """A user error as the design wants it: one sentence, ending with a full stop."""
+    body = message.rstrip(".")
+    return message.endswith(".") and ". " not in body and "\n" not in message
+
+
 def varint(value: int) -> bytes:
     value &= (1 << 64) - 1  # negatives as 64-bit two's complement, as protobuf writes int64
     out = bytearray()

@@ -13,8 +13,13 @@ import pytest
 import sim.car_export.archive as archive_module
 from sim.car_export.archive import CarArchive, read_car_archive
 from sim.car_export.errors import CarModelError
-from tests.sim.car_export.graphs import METADATA, GraphWriter, camera_policy_graph, write_archive
-from tests.sim.car_export.test_graph_def import one_sentence
+from tests.sim.car_export.graphs import (
+    METADATA,
+    GraphWriter,
+    camera_policy_graph,
+    one_sentence,
+    write_archive,
+)
 
 
 def refusal(path: Path) -> str:

@@ -17,13 +17,9 @@ from tests.sim.car_export.graphs import (
     bytes_field,
     camera_policy_graph,
     node_proto,
+    one_sentence,
     varint,
 )
-
-
-def one_sentence(message: str) -> bool:
-    body = message.rstrip(".")
-    return message.endswith(".") and ". " not in body and "\n" not in message
 
 
 def test_varints_round_trip_including_negative_int64() -> None:
