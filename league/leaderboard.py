@@ -113,9 +113,9 @@ def leaderboard(
         entries = _board_rows(league, filters, method)
     else:
         entries = grouped_rows(league, filters, method, group_by="track_hash, physics, racer")
-    boards = {(entry.track_hash, entry.physics): entry.track_name for entry in entries}
+    boards = {board_of(entry): entry.track_name for entry in entries}
     order = sorted(boards, key=lambda key: (boards[key].casefold(), key))
-    return rank_groups(entries, lambda entry: (entry.track_hash, entry.physics), order)
+    return rank_groups(entries, board_of, order)
 
 
 def _board_rows(league: League, filters: Filters, method: RankingMethod) -> list[LeaderboardRow]:
@@ -162,6 +162,16 @@ def _rows(league: League, sql: str, params: Sequence[Any]) -> list[LeaderboardRo
             row.physics
         )
     return rows
+
+
+def board_of(row: LeaderboardRow) -> tuple[str, str]:
+    """The board a row is ranked on: its track under its physics."""
+    return row.track_hash, row.physics
+
+
+def several_boards(rows: Sequence[LeaderboardRow]) -> bool:
+    """Whether rows come from more than one board (then each row names its board)."""
+    return len({board_of(row) for row in rows}) > 1
 
 
 def rank_groups(

@@ -74,6 +74,7 @@ def leaderboard_json(rows: Sequence[LeaderboardRow], method: RankingMethod) -> l
             "model": row.model,
             "track": row.track_name,
             "track_hash": row.track_hash,
+            "physics": row.physics,
             "ranking": method.value,
             "score": row.score,
             "best_lap": row.best_lap,

@@ -24,6 +24,8 @@ from sim.race.rules import DEFAULT_RULES, RankingMethod, RulesError, load_rules
 from sim.track_catalog import DEFAULT_TRACK
 
 if TYPE_CHECKING:
+    from league.leaderboard import LeaderboardRow
+    from league.report import Column as ReportColumn
     from league.store import League
 
     Parsers = argparse._SubParsersAction[argparse.ArgumentParser]
@@ -248,11 +250,17 @@ def _submit(league: League, args: argparse.Namespace) -> int:
 
 
 def _leaderboard(league: League, args: argparse.Namespace) -> int:
-    from league.leaderboard import Filters, leaderboard, method_for, sort_rows
+    from league.leaderboard import (
+        Filters,
+        board_of,
+        leaderboard,
+        method_for,
+        several_boards,
+        sort_rows,
+    )
     from league.nights import get_night, list_nights
     from league.racers import get_racer
     from league.report import (
-        SCORE_TITLES,
         leaderboard_columns,
         leaderboard_json,
         to_csv,
@@ -288,7 +296,7 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
             raise LeagueError("--limit must be at least 1.")
         rows = rows[: args.limit]
     shown_method = method if method is not None else _night_method(league, night_ids)
-    show_track = filters.track_hash is None and len({row.track_hash for row in rows}) > 1
+    show_track = several_boards(rows)
     if args.format == "json":
         print_json(leaderboard_json(rows, shown_method))
         return 0
@@ -300,21 +308,40 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
     elif args.format == "markdown":
         sys.stdout.write(to_markdown(columns, rows))
     else:
-        tracks = sorted({row.track_name for row in rows})
-        where = f"{tracks[0]}, " if len(tracks) == 1 else ""
-        table = _table(f"Leaderboard: {where}ranked by {SCORE_TITLES[shown_method]}")
-        for column in columns:
-            # Names get room first; on a narrow terminal the headers of numbers wrap.
-            named = column.title in ("racer", "model", "track")
-            table.add_column(
-                column.title,
-                justify="right" if column.numeric else "left",
-                min_width=8 if named else None,
-            )
+        # One table per board: a track under one physics (sim.race.physics), ranked alone.
+        boards: dict[tuple[str, str], list[LeaderboardRow]] = {}
         for row in rows:
-            table.add_row(*(_text(column.cell(row)) for column in columns))
-        print_table(table)
+            boards.setdefault(board_of(row), []).append(row)
+        single = len(boards) == 1 or args.sort != "rank"
+        groups = [rows] if single else list(boards.values())
+        for group in groups:
+            _print_board(group, columns if single else _without_track(columns), shown_method)
     return 0
+
+
+def _print_board(
+    rows: Sequence[LeaderboardRow], columns: Sequence[ReportColumn], method: RankingMethod
+) -> None:
+    from league.report import SCORE_TITLES
+
+    tracks = sorted({row.track_name for row in rows})
+    where = f"{tracks[0]}, " if len(tracks) == 1 else ""
+    table = _table(f"Leaderboard: {where}ranked by {SCORE_TITLES[method]}")
+    for column in columns:
+        # Names get room first; on a narrow terminal the headers of numbers wrap.
+        named = column.title in ("racer", "model", "track")
+        table.add_column(
+            column.title,
+            justify="right" if column.numeric else "left",
+            min_width=8 if named else None,
+        )
+    for row in rows:
+        table.add_row(*(_text(column.cell(row)) for column in columns))
+    print_table(table)
+
+
+def _without_track(columns: Sequence[ReportColumn]) -> list[ReportColumn]:
+    return [column for column in columns if column.title != "track"]
 
 
 def _night_method(league: League, night_ids: Sequence[str] | None) -> RankingMethod:

@@ -21,7 +21,7 @@ from textual.containers import Container, VerticalScroll
 from textual.message import Message
 from textual.widgets import DataTable
 
-from league.leaderboard import Column, LeaderboardRow, sort_rows
+from league.leaderboard import Column, LeaderboardRow, several_boards, sort_rows
 from league.report import (
     SCORE_TITLES,
     leaderboard_columns,
@@ -67,8 +67,9 @@ def export_text(rows: list[LeaderboardRow], query: BoardQuery, kind: str) -> str
     """The file contents, through the same formatters as `racer-tui leaderboard`."""
     if kind == "json":
         return json.dumps(leaderboard_json(rows, query.method), indent=2) + "\n"
-    show_track = query.track_hash is None and len({row.track_hash for row in rows}) > 1
-    columns = leaderboard_columns(query.method, show_track=show_track, iso_times=kind == "csv")
+    columns = leaderboard_columns(
+        query.method, show_track=several_boards(rows), iso_times=kind == "csv"
+    )
     return to_csv(columns, rows) if kind == "csv" else to_markdown(columns, rows)
 
 
@@ -208,7 +209,9 @@ class LeagueScreen(RacerScreen[None]):
 
     def _columns(self) -> list[ReportColumn]:
         query = self.shown_query
-        show_track = query.track_hash is None
+        # With a track chosen, still a track column when its laps of other physics than
+        # today's are on boards of their own (the column names each board).
+        show_track = query.track_hash is None or several_boards(self.ranked)
         return leaderboard_columns(query.method, show_track=show_track)
 
     def _show(self) -> None:

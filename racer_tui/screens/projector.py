@@ -21,7 +21,7 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import Digits, Static
 
-from league.leaderboard import LeaderboardRow
+from league.leaderboard import LeaderboardRow, board_of, several_boards
 from league.report import SCORE_TITLES
 from league.store import open_league
 from racer_tui.screens.base import RacerScreen
@@ -49,11 +49,11 @@ def projector_table(rows: Sequence[LeaderboardRow], show_track: bool) -> Table:
     table.add_column("time", justify="right", width=9)
     table.add_column("gap", justify="right", width=8)
     table.add_column("laps", justify="right", width=4)
-    leaders: dict[str, float | None] = {}
-    for row in rows:  # ranked track by track: the first row of a track leads it
-        leaders.setdefault(row.track_hash, row.score)
+    leaders: dict[tuple[str, str], float | None] = {}
+    for row in rows:  # ranked board by board: the first row of a board leads it
+        leaders.setdefault(board_of(row), row.score)
     for index, row in enumerate(rows):
-        leader = leaders[row.track_hash]
+        leader = leaders[board_of(row)]
         gap = (
             ""
             if row.score is None or leader is None or row.rank == 1
@@ -140,7 +140,7 @@ class ProjectorScreen(RacerScreen[None]):
         else:
             digits.update("-:--.---")
             name.update(Text("No results yet" if not message.rows else "No valid lap yet"))
-        show_track = len({row.track_hash for row in message.rows}) > 1
+        show_track = several_boards(message.rows)
         self.query_one("#projector-rows", Static).update(projector_table(message.rows, show_track))
 
     def action_leave(self) -> None:

@@ -32,6 +32,11 @@ def describe(physics: str) -> str:
 
 
 def board_suffix(physics: str) -> str:
-    """What a leaderboard adds to a track's name for laps of other physics than today's:
-    they are ranked on a board of their own, and the name says which."""
-    return "" if physics == CURRENT else f" ({describe(physics)})"
+    """What a leaderboard adds to a track's name for laps of other physics than today's
+    (" (DeepRacer)", " (physics 1)"): they are ranked on a board of their own, and the
+    name says which, briefly enough for a table column."""
+    if physics == CURRENT:
+        return ""
+    if physics == DEEPRACER:
+        return " (DeepRacer)"
+    return f" (physics {physics.removeprefix('racer-tui/')})"

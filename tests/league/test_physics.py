@@ -58,7 +58,7 @@ def test_laps_of_other_physics_are_ranked_on_a_board_of_their_own(league: League
         (TRACK, 2, "bo"),
         (TRACK + board_suffix(OTHER), 1, "cy"),
     ]
-    assert board_suffix(OTHER).startswith(" (racer-tui physics ")
+    assert board_suffix(OTHER).startswith(" (physics ")
 
 
 def test_deepracer_evaluations_are_ranked_apart_from_racer_tui_laps(
@@ -72,7 +72,7 @@ def test_deepracer_evaluations_are_ranked_apart_from_racer_tui_laps(
     board = _board(league)
 
     assert (TRACK, 1, "ana") in board
-    assert (TRACK + " (DeepRacer's simulator)", 1, "dee") in board
+    assert (TRACK + " (DeepRacer)", 1, "dee") in board
 
 
 def test_an_evaluation_says_which_physics_timed_it(tmp_path: Path, league: League) -> None:
@@ -113,3 +113,21 @@ def test_a_record_naming_an_unknown_physics_is_refused(league: League, bad: str)
 
     with pytest.raises(RecordInvalidError, match="physics"):
         check_record(make_record("race", new_id(), body))
+
+
+def test_the_command_line_prints_each_board_on_its_own(
+    league: League, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from racer_tui.cli import main
+
+    record_race(league, race_result("ana", [10.0]))
+    record_race(league, dataclasses.replace(race_result("cy", [8.0]), physics=OTHER))
+    league.close()
+
+    code = main(["leaderboard", "--db", str(league.path), "--track", TRACK])
+
+    out = capsys.readouterr().out
+    assert code == 0
+    assert f"Leaderboard: {TRACK}, ranked" in out
+    assert f"Leaderboard: {TRACK}{board_suffix(OTHER)}, ranked" in out
+    assert out.index("ana") < out.index(board_suffix(OTHER)) < out.index("cy")
