@@ -19,7 +19,7 @@ from rich.text import Text
 from textual import on, work
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
-from textual.containers import Horizontal, Vertical, VerticalScroll
+from textual.containers import Horizontal, ScrollableContainer, Vertical, VerticalScroll
 from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import (
@@ -574,6 +574,22 @@ class ModelEditorScreen(RacerScreen[str | None]):
 
     def action_tab(self, tab: str) -> None:
         self.query_one(TabbedContent).active = tab
+        # At once, before the hidden pane's focus moves on inside that pane (which would
+        # switch the tabs back): keys then go to the pane the racer asked for.
+        self._focus_first_in(self.query_one(f"#{tab}", TabPane))
+
+    def _focus_first_in(self, pane: TabPane) -> None:
+        focused = self.app.focused
+        if focused is not None and pane in focused.ancestors:
+            return
+        # A form field, not the scrolling container around the fields.
+        fields = [
+            widget
+            for widget in pane.query("*")
+            if widget.focusable and not isinstance(widget, ScrollableContainer)
+        ]
+        if fields:
+            fields[0].focus()
 
     def action_save(self) -> None:
         if self.saving:

@@ -199,3 +199,18 @@ async def test_escape_with_changes_asks_before_discarding() -> None:
         assert editor.query_one("#name", Input).value == "draft"
         await pilot.press("escape", "y")
         assert isinstance(app.screen, GarageScreen)
+
+
+async def test_switching_tabs_with_function_keys_keeps_a_focused_field() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        editor = _editor(app)
+        for key, tab in (("f4", "tab-training"), ("f5", "tab-reward"), ("f3", "tab-actions")):
+            await pilot.press(key)
+            await pilot.pause()
+            await pilot.pause()
+            focused = app.focused
+            pane = editor.query_one(f"#{tab}")
+            assert focused is not None and pane in focused.ancestors, (key, focused)
