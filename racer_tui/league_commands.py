@@ -357,7 +357,7 @@ def _night_method(league: League, night_ids: Sequence[str] | None) -> RankingMet
 
 def _night(league: League, args: argparse.Namespace) -> int:
     from league import nights
-    from league.local_racer import local_racer_name
+    from league.local_racer import HOST_NAME, local_racer_name
 
     action = args.night_command
     if action == "new":
@@ -386,7 +386,7 @@ def _night(league: League, args: argparse.Namespace) -> int:
     if action == "run":
         return _night_run(league, night, args.heats)
     if action == "close":
-        who = args.by or local_racer_name(league)
+        who = args.by or local_racer_name(league) or HOST_NAME
         standings = nights.close_night(league, night, who, force=args.force)
         return _print_standings(night, standings, args.json, title=f"{night.name}: final standings")
     return _night_show(league, night, args.json)

@@ -55,16 +55,18 @@ class RacerPrompt:
         return session_racer(self.screen.app)
 
     def then(self, what: str, action: Callable[[str], None]) -> None:
-        """Call `action(racer)`, asking for the racer first if nobody has said yet in this
-        app. `what` says what is being submitted, at the top of the dialog."""
-        if self.racer is not None:
-            action(self.racer)
-            return
+        """Call `action(racer)` once the racer's name is confirmed in a dialog, prefilled
+        with the name confirmed last in this app (or the league's saved or last racer), so a
+        host submitting for several racers changes it there. `what` says what is being
+        submitted, at the top of the dialog."""
         app = self.screen.app
+        confirmed = self.racer
 
         def read_saved_name() -> None:  # a database read: off the UI thread
-            with open_league(self.db_path) as league:
-                name = local_racer_name(league)
+            name = confirmed
+            if name is None:
+                with open_league(self.db_path) as league:
+                    name = local_racer_name(league)
             app.call_from_thread(self._ask, what, name, action)
 
         self.screen.run_worker(

@@ -26,7 +26,7 @@ from textual.widgets import Button, DataTable, Input, Label, Select, Static
 
 from league.errors import LeagueError
 from league.leaderboard import LeaderboardRow
-from league.local_racer import local_racer_name
+from league.local_racer import HOST_NAME, local_racer_name
 from league.nights import (
     Heat,
     Night,
@@ -660,7 +660,8 @@ class NightsScreen(RacerScreen[None]):
     @work(thread=True, group="nights-change", exit_on_error=False)
     def _close(self, night: Night, force: bool) -> None:
         with open_league(self.db_path) as league:
-            close_night(league, night, local_racer_name(league), force=force)
+            closer = local_racer_name(league) or HOST_NAME
+            close_night(league, night, closer, force=force)
         self.post_message(NightChanged(night.id, f"Closed {night.name}; the standings are final."))
 
     def action_leave(self) -> None:

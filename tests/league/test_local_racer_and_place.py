@@ -3,14 +3,13 @@ folder or a race the way the app does."""
 
 from __future__ import annotations
 
-import getpass
 from pathlib import Path
 
 import pytest
 
 from league.board_place import board_place, ordinal, place_sentence
 from league.errors import LeagueError
-from league.local_racer import local_racer_name, machine_user, save_local_racer_name
+from league.local_racer import local_racer_name, save_local_racer_name
 from league.races import race_result as stored_race
 from league.races import record_race_as
 from league.store import League
@@ -19,26 +18,28 @@ from sim.track_catalog import resolve_track
 from tests.league.helpers import TRACK, model_folder, race_result
 
 
-def test_the_racer_name_is_the_user_name_until_one_is_saved(league: League) -> None:
-    assert local_racer_name(league) == getpass.getuser() == machine_user()
+def test_the_racer_name_is_nobody_in_an_empty_league_until_one_is_saved(
+    league: League,
+) -> None:
+    assert local_racer_name(league) == ""  # never the machine's user name ("root")
     assert save_local_racer_name(league, "  Ada [b]L[/b]  ") == "Ada [b]L[/b]"
     assert local_racer_name(league) == "Ada [b]L[/b]"  # plain text, kept literally
+
+
+def test_without_a_saved_name_the_leagues_last_racer_is_offered(league: League) -> None:
+    record_race_as(league, race_result("x", [10.0], started_at="2024-05-01T19:00:00.000Z"), "Bo")
+    record_race_as(league, race_result("y", [10.0], started_at="2024-05-02T19:00:00.000Z"), "Cy")
+    record_race_as(league, race_result("z", [10.0], started_at="2024-04-01T19:00:00.000Z"), "Di")
+
+    assert local_racer_name(league) == "Cy"
+    save_local_racer_name(league, "Ada")
+    assert local_racer_name(league) == "Ada"
 
 
 def test_a_racer_name_with_a_line_break_is_refused(league: League) -> None:
     with pytest.raises(LeagueError, match="cannot be a racer name"):
         save_local_racer_name(league, "Ada\nLovelace")
-    assert local_racer_name(league) == machine_user()
-
-
-def test_without_a_user_name_the_machine_racer_is_a_plain_default(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    def no_user() -> str:
-        raise KeyError("uid 1234 has no passwd entry")
-
-    monkeypatch.setattr(getpass, "getuser", no_user)
-    assert machine_user() == "racer"
+    assert local_racer_name(league) == ""
 
 
 @pytest.mark.parametrize(
