@@ -43,6 +43,7 @@ from sim.deepracer_files import (
     read_training_metrics,
     read_training_params,
 )
+from sim.garage.folder import ModelFolder
 from sim.ids import canonical_json, content_hash
 from sim.names import is_valid_name
 from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
@@ -104,6 +105,7 @@ class Submission:
     evaluation_file: str
     laps: tuple[EvaluationLap, ...]
     physics: str = CURRENT_PHYSICS  # which simulator timed the laps (sim.race.physics)
+    stale: str | None = None  # why the evaluation is older than the policy, if it is
 
     @property
     def completed_laps(self) -> list[EvaluationLap]:
@@ -186,6 +188,9 @@ def assemble(
         evaluation_file=evaluation_path.name,
         laps=tuple(EvaluationLap.from_trial(i + 1, trial) for i, trial in enumerate(trials)),
         physics=physics,
+        stale=ModelFolder(folder).stale_evaluation(evaluation_path)
+        if source == RACER_TUI
+        else None,
     )
 
 

@@ -10,6 +10,7 @@ from typing import Any
 
 from league.assembler import EvaluationLap, Submission, assemble
 from league.entries import refresh_entries
+from league.errors import LeagueError
 from league.racers import check_name, ensure_racer
 from league.store import League, now_iso
 from league.tracks import ensure_track
@@ -102,12 +103,19 @@ def submit_model(
     track: str | None = None,
     evaluation: Path | None = None,
     model_name: str | None = None,
+    allow_stale: bool = False,
 ) -> tuple[Submission, Submitted]:
     """What `racer-tui submit MODEL --racer NAME` does (the app's garage too): assemble the
     model folder's files (its latest evaluation unless one is named) and store them.
 
-    LeagueError names a missing or malformed file; nothing is written then."""
+    LeagueError names a missing or malformed file, or an evaluation made before the model
+    last trained (unless `allow_stale`: the racer confirmed); nothing is written then."""
     submission = assemble(model, racer, track=track, evaluation=evaluation)
+    if submission.stale and not allow_stale:
+        raise LeagueError(
+            f"{submission.stale}; evaluate it again (`racer-tui evaluate {model}`), or "
+            "submit this evaluation anyway with --stale-ok."
+        )
     if model_name:
         submission = replace(submission, model_name=check_name(model_name, "model name"))
     return submission, submit(league, submission)

@@ -71,6 +71,11 @@ def _register_submit(commands: Parsers, db: argparse.ArgumentParser) -> None:
     )
     submit.add_argument("--evaluation", type=Path, metavar="FILE", help="evaluation metrics file")
     submit.add_argument("--model-name", help="name to list the model under (default: the folder)")
+    submit.add_argument(
+        "--stale-ok",
+        action="store_true",
+        help="submit an evaluation made before the model last trained",
+    )
     submit.add_argument("--json", action="store_true")
 
 
@@ -220,6 +225,7 @@ def _submit(league: League, args: argparse.Namespace) -> int:
         track=args.track,
         evaluation=args.evaluation,
         model_name=args.model_name,
+        allow_stale=args.stale_ok,
     )
     best = submission.best_lap
     if args.json:

@@ -480,4 +480,20 @@ class GarageScreen(RacerScreen[None]):
                 markup=False,
             )
             return
-        submit_model_from(self, self.racer_prompt, folder.name)
+        stale = folder.stale_evaluation(folder.evaluation_files()[-1])
+        if stale is None:
+            submit_model_from(self, self.racer_prompt, folder.name)
+            return
+
+        def confirmed(answer: bool | None) -> None:
+            if answer:
+                submit_model_from(self, self.racer_prompt, folder.name, allow_stale=True)
+
+        self.app.push_screen(
+            ConfirmDialog(
+                "Submit an old evaluation?",
+                f"{stale}. Press v to evaluate it again, or submit this evaluation anyway.",
+                confirm_label="Submit anyway",
+            ),
+            confirmed,
+        )

@@ -121,12 +121,15 @@ def submit_race(result: RaceResult, racer: str, db_path: Path | None) -> RaceSub
 # --- a garage model's latest evaluation ------------------------------------------------------
 
 
-def submit_evaluation(model: str, racer: str, db_path: Path | None) -> str:
+def submit_evaluation(
+    model: str, racer: str, db_path: Path | None, *, allow_stale: bool = False
+) -> str:
     """Run in a worker: what `racer-tui submit MODEL --racer NAME` does; returns the
-    sentence to show."""
+    sentence to show. `allow_stale`: the racer confirmed an evaluation older than the
+    model's last training."""
     with open_league(db_path) as league:
         name = save_local_racer_name(league, racer)
-        submission, outcome = submit_model(league, model, name)
+        submission, outcome = submit_model(league, model, name, allow_stale=allow_stale)
         place = board_place(league, submission.racer, submission.track_hash)
     where = place_sentence(place, outcome.submission_id)
     if outcome.duplicate:
@@ -143,13 +146,15 @@ def submit_evaluation(model: str, racer: str, db_path: Path | None) -> str:
     )
 
 
-def submit_model_from(screen: Screen[Any], prompt: RacerPrompt, model: str) -> None:
-    """Ask who is racing (once), then submit `model`'s latest evaluation in a worker; the
-    outcome is a notification (a failure too: the screen shows failed workers)."""
+def submit_model_from(
+    screen: Screen[Any], prompt: RacerPrompt, model: str, *, allow_stale: bool = False
+) -> None:
+    """Ask who is racing, then submit `model`'s latest evaluation in a worker; the outcome
+    is a notification (a failure too: the screen shows failed workers)."""
 
     def submit(racer: str) -> None:
         def work() -> None:
-            sentence = submit_evaluation(model, racer, prompt.db_path)
+            sentence = submit_evaluation(model, racer, prompt.db_path, allow_stale=allow_stale)
             screen.app.notify(sentence, title="League", timeout=12, markup=False)
 
         screen.run_worker(work, thread=True, group="league-submit", exit_on_error=False)

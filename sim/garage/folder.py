@@ -29,6 +29,7 @@ import shutil
 import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -58,6 +59,7 @@ from sim.deepracer_files import (
     read_model_metadata,
     read_training_metrics,
     read_training_params,
+    stamp_in,
     write_hyperparameters,
     write_model_metadata,
     write_training_params,
@@ -243,6 +245,27 @@ class ModelFolder:
             path
             for path in self.path.glob(EVALUATION_METRICS_GLOB)
             if path.is_file() and not path.is_symlink()
+        )
+
+    def stale_evaluation(self, path: Path) -> str | None:
+        """A sentence when the evaluation `path` was made before the model last trained
+        (its laps are not the policy's any more), else None."""
+        stamp = stamp_in(path.name)
+        state = self.training_state()
+        trained = None if state is None else state.get("updated_at")
+        if stamp is None or not isinstance(trained, str):
+            return None
+        try:
+            evaluated = datetime.strptime(stamp, "%Y%m%d%H%M%S").replace(tzinfo=UTC)
+            last_trained = datetime.fromisoformat(trained)
+        except ValueError:
+            return None
+        if last_trained.tzinfo is None or last_trained <= evaluated:
+            return None
+        return (
+            f"{self.name}'s latest evaluation ({evaluated:%Y-%m-%d %H:%M} UTC) was made before "
+            f"it last trained ({last_trained.astimezone(UTC):%Y-%m-%d %H:%M} UTC), so its laps "
+            "are not the policy's any more"
         )
 
     def latest_evaluation(self) -> tuple[EvaluationTrial, ...] | None:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from league.assembler import assemble
 from league.board_place import board_place, ordinal, place_sentence
 from league.errors import LeagueError
 from league.local_racer import local_racer_name, save_local_racer_name
@@ -96,3 +97,25 @@ def test_a_model_without_an_evaluation_says_to_evaluate_it(league: League, tmp_p
     with pytest.raises(LeagueError, match="evaluate the model first"):
         submit_model(league, str(folder), "Ada")
     assert league.conn.execute("SELECT count(*) FROM submissions").fetchone()[0] == 0
+
+
+def test_an_evaluation_older_than_the_last_training_needs_a_confirmation(
+    league: League, tmp_path: Path
+) -> None:
+    folder = model_folder(tmp_path, "retrained", stamp="20240501120000")
+    state = folder / "training-state.json"
+    state.write_text(
+        '{"state": "finished", "elapsed_seconds": 60, "updated_at": "2024-05-02T08:00:00+00:00"}'
+    )
+
+    with pytest.raises(LeagueError, match=r"made before it last trained.*--stale-ok"):
+        submit_model(league, str(folder), "Ada")
+    assert league.conn.execute("SELECT count(*) FROM submissions").fetchone()[0] == 0
+
+    submission, outcome = submit_model(league, str(folder), "Ada", allow_stale=True)
+    assert submission.stale is not None and not outcome.duplicate
+
+    state.write_text(
+        '{"state": "finished", "elapsed_seconds": 60, "updated_at": "2024-05-01T08:00:00+00:00"}'
+    )
+    assert assemble(str(folder), "Ada").stale is None  # trained, then evaluated: fresh

@@ -3,12 +3,14 @@ model's latest evaluation (u, as `racer-tui submit` does); the racer is asked on
 
 from __future__ import annotations
 
+import json
+
 from textual.widgets import DataTable, Input, Select
 
 from league.races import race_replay, recent_races
 from league.store import open_league
 from racer_tui.app import create_app
-from racer_tui.screens.dialogs import InputDialog
+from racer_tui.screens.dialogs import ConfirmDialog, InputDialog
 from racer_tui.screens.garage import GarageScreen
 from racer_tui.screens.race_screen import RaceScreen
 from racer_tui.screens.races import RacesScreen
@@ -155,3 +157,30 @@ async def test_submitting_is_in_the_palette_and_the_races_footer() -> None:
         assert "Races: Submit to league" in texts
         assert "Garage: Submit to league" in texts  # hidden from its crowded footer
         assert "u Submit to league" in painted(app.screen.query_one(RacerFooter))
+
+
+async def test_an_evaluation_older_than_the_last_training_asks_first() -> None:
+    folder = trained_model("eva", track="beginner-oval")
+    evaluate_model(folder, trials=1)
+    # The trainer's last word, dated after the evaluation: it trained again since.
+    state = {"state": "finished", "updated_at": "2999-01-01T00:00:00+00:00"}
+    folder.training_state_file.write_text(json.dumps(state), encoding="utf-8")
+    app = create_app(start="garage")
+    notes = Notifications(app)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        await pilot.press("u")
+        await settle(pilot)
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("n")  # not now: nothing is submitted
+        await settle(pilot)
+        await pilot.press("u")
+        await settle(pilot)
+        await pilot.press("y")
+        await settle(pilot)
+        assert isinstance(app.screen, InputDialog)
+        await pilot.press(*"Eve", "enter")
+        await settle(pilot)
+        assert "Submitted eva for Eve" in notes.text()
+    with open_league() as league:
+        assert league.conn.execute("SELECT count(*) FROM submissions").fetchone()[0] == 1
