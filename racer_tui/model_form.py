@@ -32,7 +32,7 @@ from sim.deepracer_files import (
     write_training_params,
 )
 from sim.garage.clone import incompatibility
-from sim.garage.folder import MAX_MINUTES, ModelError, ModelFolder, list_models
+from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, list_models
 from sim.garage.options import (
     SPEED_LEVELS,
     STEERING_LEVELS,
@@ -272,11 +272,11 @@ def spec_of_form(
         problems.extend(error.problems)
     hyperparameters = _hyperparameters(values.hyperparameters, base, problems)
     minutes = _number(values.max_minutes)
-    if minutes is None or not 0 < minutes <= MAX_MINUTES:
+    if minutes is None or not MIN_MINUTES <= minutes <= MAX_MINUTES:
         problems.append(
             FieldProblem(
                 "max-minutes",
-                f"The training time limit must be more than 0 and at most {MAX_MINUTES:g} minutes.",
+                f"The training time limit must be from {MIN_MINUTES:g} to {MAX_MINUTES:g} minutes.",
             )
         )
     reward = reward_problem(values.reward_source)

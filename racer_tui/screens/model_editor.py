@@ -59,7 +59,7 @@ from racer_tui.widgets.table_fill import fill_table
 from racer_tui.widgets.track_label import track_options
 from racer_tui.widgets.track_map import TrackMap
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
-from sim.garage.folder import MAX_MINUTES, ModelError, ModelFolder
+from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder
 from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
 from sim.reward_function import TEMPLATES, RewardFunctionError, template_source
 from sim.reward_sample_params import sample_params
@@ -256,7 +256,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
                 yield field(
                     "Training time limit (minutes)",
                     Input(values.max_minutes, id="max-minutes"),
-                    f"0 to {MAX_MINUTES:g}",
+                    f"{MIN_MINUTES:g} to {MAX_MINUTES:g}",
                 )
             yield TrackMap(id="track-preview")
 

@@ -46,7 +46,14 @@ from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import fill_table
 from racer_tui.widgets.training_charts import TrainingCharts, TrainingFigures, clock
 from sim.deepracer_files import last_sim_trace_row
-from sim.garage.folder import ModelError, ModelFolder, list_models, open_model
+from sim.garage.folder import (
+    MAX_MINUTES,
+    MIN_MINUTES,
+    ModelError,
+    ModelFolder,
+    list_models,
+    open_model,
+)
 from sim.simulation import LOOK_AHEAD
 from sim.training import events
 from sim.training.launcher import failure_from_stderr, worker_command
@@ -370,7 +377,8 @@ class TrainingScreen(RacerScreen[None]):
             self.notify(f"{name} is already training or queued.", severity="warning")
             return
         try:
-            minutes = open_model(name).training_params().max_minutes
+            folder = open_model(name)
+            minutes = folder.last_budget_minutes() or folder.training_params().max_minutes
         except ModelError as error:
             self.notify(str(error), severity="error", markup=False)
             return
@@ -616,6 +624,6 @@ def _minutes_problem(text: str) -> str | None:
         minutes = float(text)
     except ValueError:
         return "Give the time budget as a number of minutes, for example 10."
-    if not 0 < minutes <= 100_000:
-        return "The time budget must be more than 0 and at most 100000 minutes."
+    if not MIN_MINUTES <= minutes <= MAX_MINUTES:
+        return f"The time budget must be from {MIN_MINUTES:g} to {MAX_MINUTES:g} minutes."
     return None

@@ -82,6 +82,9 @@ TRAINING_STATES = ("running", "stopped", "finished", "failed")
 MAX_REWARD_BYTES = 1_000_000
 MAX_TRAINING_STATE_BYTES = 64_000
 MAX_MINUTES = 100_000.0  # training_params.yaml's MAX_MINUTES limit
+# A model's time limit is at least a minute (less learns nothing); a single training run
+# from the command line may still be shorter, for scripts and tests.
+MIN_MINUTES = 1.0
 
 
 def models_dir() -> Path:
@@ -164,7 +167,8 @@ class ModelFolder:
     @property
     def training_state_file(self) -> Path:
         """Written atomically by the trainer: {"state", "pid", "started_at", "updated_at",
-        "elapsed_seconds", "steps", "episodes", "best_progress", "message", "physics"}."""
+        "elapsed_seconds", "steps", "episodes", "best_progress", "message", "physics",
+        "budget_minutes"}."""
         return self.path / TRAINING_STATE_FILE
 
     # --- the DeepRacer files -----------------------------------------------------------
@@ -300,6 +304,14 @@ class ModelFolder:
         if not isinstance(data, dict) or data.get("state") not in TRAINING_STATES:
             return None
         return data
+
+    def last_budget_minutes(self) -> float | None:
+        """The time budget the last training run was given (the app offers it again)."""
+        state = self.training_state()
+        budget = None if state is None else state.get("budget_minutes")
+        if isinstance(budget, int | float) and not isinstance(budget, bool) and budget > 0:
+            return float(budget)
+        return None
 
     def trained_physics(self) -> str | None:
         """The physics (sim.race.physics) the policy learnt to drive, or None untrained. A
@@ -476,9 +488,9 @@ def create_model(
         checked = check_hyperparameters(hyperparameters, where="hyperparameters")
     except DeepRacerFileError as error:
         raise ModelError(str(error)) from None
-    if not 0 < max_minutes <= MAX_MINUTES:
+    if not MIN_MINUTES <= max_minutes <= MAX_MINUTES:
         raise ModelError(
-            f"the training time limit must be between 0 and {MAX_MINUTES:g} minutes, "
+            f"the training time limit must be from {MIN_MINUTES:g} to {MAX_MINUTES:g} minutes, "
             f"not {max_minutes:g}."
         )
     resolved = _catalog_track(track)

@@ -30,7 +30,7 @@ from sim.deepracer_files import (
     check_hyperparameters,
     default_hyperparameters,
 )
-from sim.garage.folder import MAX_MINUTES, ModelError, ModelFolder, create_model
+from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, create_model
 from sim.observations import SensorError, normalise_sensors
 from sim.track import TrackError
 from sim.track_catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
@@ -142,9 +142,9 @@ def model_spec(
             raise ModelError(str(error)) from None
         spec = replace(spec, hyperparameters=checked)
     if minutes is not None:
-        if not (math.isfinite(minutes) and 0 < minutes <= MAX_MINUTES):
+        if not (math.isfinite(minutes) and MIN_MINUTES <= minutes <= MAX_MINUTES):
             raise ModelError(
-                f"--minutes must be more than 0 and at most {MAX_MINUTES:g}, not {minutes:g}."
+                f"--minutes must be from {MIN_MINUTES:g} to {MAX_MINUTES:g}, not {minutes:g}."
             )
         spec = replace(spec, max_minutes=float(minutes))
     return spec

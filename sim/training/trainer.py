@@ -429,6 +429,7 @@ class Trainer:
             "message": message,
             # The car the policy learnt to drive: the Garage says when today's differs.
             "physics": CURRENT_PHYSICS,
+            "budget_minutes": self.minutes,  # offered again for the next run
         }
         write_text_atomic(self.folder.training_state_file, json.dumps(document, indent=2) + "\n")
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from textual.widgets import DataTable, Input
@@ -225,3 +226,22 @@ async def test_a_damaged_model_is_listed_with_its_problem_and_not_edited() -> No
         assert isinstance(app.screen, GarageScreen)
         assert "before editing it" in notes.text("error")
     assert broken.metadata_file.read_text(encoding="utf-8") == '{"sensor": ["VECTOR"]}'
+
+
+async def test_the_train_dialog_offers_the_last_budget_and_refuses_less_than_a_minute() -> None:
+    folder = trained_model("ada")
+    state = {"state": "finished", "budget_minutes": 7.5}  # the last run's budget
+    folder.training_state_file.write_text(json.dumps(state), encoding="utf-8")
+    app = create_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        await pilot.press("t")
+        await settle(pilot)
+        dialog = app.screen
+        assert isinstance(dialog, InputDialog)
+        assert dialog.query_one(Input).value == "7.5"  # not the model's 60 again
+        dialog.query_one(Input).value = "0"
+        await pilot.press("enter")
+        assert app.screen is dialog  # refused in the dialog
+        assert "from 1 to 100000 minutes" in str(dialog.query_one("#problem").render())
+        await pilot.press("escape")

@@ -97,7 +97,8 @@ def test_actions_file_as_a_list_or_a_metadata_file(tmp_path: Path) -> None:
         ({"sensors": ["LIDAR", "SECTOR_LIDAR"]}, "--sensor: choose either LIDAR or SECTOR_LIDAR"),
         ({"track": "atlantis"}, "--track: there is no track named 'atlantis'"),
         ({"reward": "best_reward"}, "--reward: 'best_reward' is neither a template"),
-        ({"minutes": 0.0}, "--minutes must be more than 0"),
+        ({"minutes": 0.0}, "--minutes must be from 1 to 100000"),
+        ({"minutes": 0.5}, "--minutes must be from 1 to 100000"),
         (
             {"hyperparameters": {"lr": 0.5}},
             "--hp: lr must be a number from 1e-08 to 0.001, not 0.5",
