@@ -606,15 +606,18 @@ def evaluation_metrics_text(trials: Sequence[EvaluationTrial], physics: str | No
 def read_evaluation_physics(path: Path) -> str | None:
     """The `physics` an evaluation file names (see evaluation_metrics_text), or None when it
     names none (DeepRacer's own files, and racer-tui's before physics was recorded)."""
+    return parse_evaluation_physics(_read_text(path, MAX_METRICS_BYTES), str(path))
+
+
+def parse_evaluation_physics(text: str, where: str) -> str | None:
     from sim.race.physics import is_physics
 
-    document = parse_json_object(_read_text(path, MAX_METRICS_BYTES), str(path))
-    physics = document.get("physics")
+    physics = parse_json_object(text, where).get("physics")
     if physics is None:
         return None
     if not is_physics(physics):
         raise DeepRacerFileError(
-            f"{path}: physics {physics!r} is not 'racer-tui/<version>' or 'deepracer'."
+            f"{where}: physics {physics!r} is not 'racer-tui/<version>' or 'deepracer'."
         )
     return str(physics)
 

@@ -41,11 +41,13 @@ from sim.deepracer_files import (
     evaluation_metrics_text,
     evaluation_stamp,
     parse_evaluation_metrics,
+    parse_evaluation_physics,
     parse_hyperparameters,
     parse_json_object,
     parse_model_metadata,
     parse_training_params,
     read_evaluation_metrics,
+    read_evaluation_physics,
     stamp_in,
 )
 from sim.garage.deepracer_import import BUNDLE_SUFFIX, ImportResult
@@ -111,6 +113,7 @@ class Bundle:
     policy_bytes: bytes
     evaluation: tuple[EvaluationTrial, ...] | None = None
     evaluation_file: str | None = None  # the evaluation's file name in the exporting garage
+    evaluation_physics: str | None = None  # the physics that timed its laps, when it says
 
 
 # --- export ------------------------------------------------------------------------------
@@ -159,7 +162,9 @@ def export_bundle(folder: ModelFolder, out: Path, *, replace: bool = False) -> P
     )
     if evaluations:
         trials = _from_deepracer(read_evaluation_metrics, evaluations[-1])
-        members[EVALUATION] = evaluation_metrics_text(trials).encode("utf-8")
+        # The physics that timed the laps travels with them (sim.race.physics).
+        timed_by = _from_deepracer(read_evaluation_physics, evaluations[-1])
+        members[EVALUATION] = evaluation_metrics_text(trials, timed_by).encode("utf-8")
     for member, data in members.items():
         if len(data) > MEMBER_LIMITS[member]:
             raise ModelError(
@@ -220,8 +225,10 @@ def read_bundle(path: Path) -> Bundle:
             "the bundle was changed after export, so ask for a fresh export."
         )
     evaluation = None
+    evaluation_physics = None
     if EVALUATION in members:
         evaluation = _parsed(parse_evaluation_metrics, text(EVALUATION), label(EVALUATION))
+        evaluation_physics = _parsed(parse_evaluation_physics, text(EVALUATION), label(EVALUATION))
     return Bundle(
         name=manifest["name"],
         created=manifest["created"],
@@ -240,6 +247,7 @@ def read_bundle(path: Path) -> Bundle:
         policy_bytes=policy,
         evaluation=evaluation,
         evaluation_file=manifest["evaluation_file"] if evaluation is not None else None,
+        evaluation_physics=evaluation_physics,
     )
 
 
@@ -495,7 +503,9 @@ def install_bundle_report(
             stamp = stamp_in(bundle.evaluation_file) or evaluation_stamp()
             write_bytes_atomic(
                 folder.evaluation_metrics_file(stamp),
-                evaluation_metrics_text(bundle.evaluation).encode("utf-8"),
+                evaluation_metrics_text(bundle.evaluation, bundle.evaluation_physics).encode(
+                    "utf-8"
+                ),
             )
 
     folder = create_model(

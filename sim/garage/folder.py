@@ -322,7 +322,21 @@ class ModelFolder:
             return None
         state = self.training_state()
         physics = None if state is None else state.get("physics")
-        return physics if is_physics(physics) else BEFORE_VERSIONING
+        if physics is None:
+            physics = self._kept_summary_physics()  # a model installed from a bundle
+        return str(physics) if is_physics(physics) else BEFORE_VERSIONING
+
+    def _kept_summary_physics(self) -> object:
+        from sim.garage.summary import TRAINING_SUMMARY_FILE
+
+        kept = self.path / TRAINING_SUMMARY_FILE
+        try:
+            if kept.stat().st_size > MAX_TRAINING_STATE_BYTES:
+                return None
+            data = json.loads(kept.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            return None
+        return data.get("physics") if isinstance(data, dict) else None
 
     def is_training(self) -> bool:
         """A trainer says it is running and its process is alive."""

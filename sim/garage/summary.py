@@ -45,6 +45,8 @@ def training_summary(folder: ModelFolder) -> dict[str, Any]:
         "state": None,
         "updated_at": None,
         "message": None,
+        # The car the policy learnt (sim.race.physics); travels with a bundle's summary.
+        "physics": folder.trained_physics(),
     }
     if state is not None:
         for key in ("state", "updated_at", "message"):

@@ -3,7 +3,14 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
+from sim.deepracer_files import (
+    EvaluationTrial,
+    read_evaluation_physics,
+    write_evaluation_metrics,
+)
+from sim.garage.bundle import export_bundle, install_bundle_report
 from sim.garage.options import new_model
 from sim.garage.overview import model_details
 from sim.race.physics import BEFORE_VERSIONING, CURRENT
@@ -51,3 +58,23 @@ def test_a_policy_from_before_physics_was_recorded_counts_as_the_first() -> None
         assert details["physics_note"] is None
     else:
         assert expected in str(details["physics_note"])
+
+
+def test_a_bundle_carries_the_physics_of_its_policy_and_of_its_laps(tmp_path: Path) -> None:
+    folder = new_model("traveller")
+    add_policy(folder)
+    write_training_state(folder, "finished")
+    state = json.loads(folder.training_state_file.read_text())
+    folder.training_state_file.write_text(json.dumps({**state, "physics": OTHER}))
+    write_evaluation_metrics(
+        folder.evaluation_metrics_file("20250101120000"),
+        [EvaluationTrial(100.0, 9600, 100, 9500, "Lap complete", trial=1)],
+        physics=OTHER,
+    )
+    exported = export_bundle(folder, tmp_path / "traveller.racer-bundle")
+
+    installed = install_bundle_report(exported, name="arrived").folder
+
+    assert installed.trained_physics() == OTHER
+    (evaluation,) = installed.evaluation_files()
+    assert read_evaluation_physics(evaluation) == OTHER
