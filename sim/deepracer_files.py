@@ -896,6 +896,19 @@ def last_sim_trace_row(path: Path) -> SimTraceRow | None:
         raise DeepRacerFileError(f"{path}: its last line is not a valid sim-trace row.") from None
 
 
+def _trace_action(text: str) -> int:
+    """The action index of a discrete space; a continuous space's row holds its action as
+    "[steering speed]" (simapp writes the pair), which is -1 here as racer-tui writes it."""
+    if text.startswith("[") and text.endswith("]"):
+        for value in text[1:-1].split():
+            float(value)  # a malformed pair is a bad row (ValueError)
+        return -1
+    number = float(text)
+    if not math.isfinite(number):
+        raise ValueError(text)
+    return int(number)
+
+
 def _trace_row(cells: list[str]) -> SimTraceRow:
     def flag(text: str) -> bool:
         if text not in ("True", "False"):
@@ -916,7 +929,7 @@ def _trace_row(cells: list[str]) -> SimTraceRow:
         yaw=number(cells[4]),
         steer=number(cells[5]),
         throttle=number(cells[6]),
-        action=int(number(cells[7])),
+        action=_trace_action(cells[7]),
         reward=number(cells[8]),
         done=flag(cells[9]),
         all_wheels_on_track=flag(cells[10]),

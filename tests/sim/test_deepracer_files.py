@@ -429,3 +429,23 @@ def test_parsers_take_text_and_name_its_source() -> None:
     assert metadata.sensors == ("camera",)  # DeepRacer's default sensor
     assert parse_training_params("WORLD_NAME: oval\n", "p").world_name == "oval"
     assert parse_evaluation_metrics('{"metrics": []}', "e") == ()
+
+
+def test_a_continuous_action_trace_reads_with_its_action_pair(tmp_path: Path) -> None:
+    """DeepRacer writes a continuous space's action as "[steering speed]" (and may add
+    columns after simapp's own): such a trace reads, its action as -1 like racer-tui's."""
+    header = ",".join(SIM_TRACE_COLUMNS) + ",obstacle_crash_counter,wall_clock\n"
+    row = (
+        "100,2.0,-1.53,-1.70,177.3,-25.0,1.86,[-25.0 1.863806813054166],0.01,False,True,"
+        "1.39,2,16.59,214.776,in_progress,0.0,0,1773216295.49\n"
+    )
+    path = tmp_path / "0-iteration.csv"
+    path.write_text(header + row, encoding="utf-8")
+
+    (read,) = read_sim_trace(path)
+
+    assert read.action == -1
+    assert read.steer == -25.0
+    path.write_text(header + row.replace("[-25.0 1.86", "[-25.0 x1.86"), encoding="utf-8")
+    with pytest.raises(DeepRacerFileError, match="line 2"):
+        read_sim_trace(path)
