@@ -1,8 +1,15 @@
 """DeepRacer's simulated car as pymunk bodies, stepped for many cars at once.
 
-The car is a 0.324 m x 0.196 m box with a 0.164 m wheelbase and bicycle steering.
-Actions are targets: the steering servo turns towards its target at a limited rate and
-the motor approaches the target speed with a lag, as on the real car.
+The car is a 0.324 m x 0.196 m box whose wheel centres span 0.164 m (wheelbase) by 0.160 m,
+as in deepracer-simapp's URDF; those wheel centres decide on-track and off-track. How the
+car *turns* is calibrated separately, on DeepRacer's own sim-traces: its simulated front
+tyres slip, so a steering angle gives the curvature of a 0.27 m wheelbase, answering with a
+first-order lag (see `CarSpec` for each number and where it came from, and
+`python -m sim.bench_calibration` for the replay that checks them). The rear axle does not
+slip sideways, so the body turns about it.
+
+Actions are targets: the steering approaches its target with a lag and the motor the
+target speed with a lag and acceleration limits, as in DeepRacer's simulator.
 
 A grip limit makes racing non-trivial: the tyres can give at most `grip` m/s^2 of lateral
 acceleration. Ask for a tighter turn than that at speed and the car understeers - the
@@ -32,8 +39,9 @@ STEP_SECONDS = 1.0 / STEP_HZ
 PHYSICS_SUBSTEPS = 4
 # The version of the car's handling. Lap times of different versions are not comparable:
 # league records carry it and leaderboards keep versions apart. Bump it with any change
-# to the car that changes lap times.
-PHYSICS_VERSION = 1
+# to the car that changes lap times. 2: steering gain, steering lag and motor response
+# calibrated on DeepRacer's sim-traces (issue 25).
+PHYSICS_VERSION = 2
 
 # Collision categories: cars never collide with each other unless a race asks for it
 # (training runs many independent cars in one space).
@@ -46,20 +54,55 @@ _BODY_FIELDS_MOTION = pmb.BodyFields.VELOCITY | pmb.BodyFields.ANGULAR_VELOCITY
 
 @dataclass(frozen=True)
 class CarSpec:
-    """Dimensions and limits of DeepRacer's car (1/18 scale)."""
+    """Dimensions, limits and handling of DeepRacer's car (1/18 scale).
+
+    The defaults are the car DeepRacer's simulator drives today: deepracer-simapp picks its
+    "deepracer_kinematics" car (steering hinges and wheels set by position and velocity
+    controllers, `config/racecar_control_kinematics.yaml`) for models whose
+    `model_metadata.json` version is 5 or more (`launch/racetrack_with_racecar.launch.py`),
+    which is what racer-tui writes (`sim.deepracer_files.METADATA_VERSION`). Facts about
+    simapp are from aws-deepracer-community/deepracer-simapp at 01f5f015 (`bundle/`). The
+    handling constants were fitted by
+    replaying the commands of DeepRacer sim-traces open-loop through this car (see
+    `sim.bench_calibration`): a DeepRacer-on-AWS continuous-action training run (simapp 6.0,
+    15 iterations, 10,700 rows) and a DRoA training run, both from the public test data of
+    aws-deepracer-community/deepracer-utils (`tests/deepracer/logs/`); checked on a DRoA
+    evaluation (3 laps, simapp 6.0) that was not fitted.
+    """
 
     length: float = 0.324
     width: float = 0.196
+    # Wheel centres (simapp URDF `deepracer_single_cam.urdf`: rear axle 0.0817 m behind the
+    # body origin, steering hinges 0.0823 m ahead, 0.081 m to each side). They decide
+    # `all_wheels_on_track` and off-track, and the rear axle is the point that does not slip
+    # sideways (in the traces the body centre's side-slip is 0.08 m x curvature).
     wheelbase: float = 0.164
     wheel_track: float = 0.160  # distance between left and right wheel centres
     mass: float = 1.5
     max_steering_deg: float = 30.0
     min_speed: float = 0.1
     max_speed: float = 4.0
-    steering_rate_deg: float = 300.0  # servo: full lock in 0.1 s
-    speed_time_constant: float = 0.15  # motor lag towards the target speed
-    max_acceleration: float = 4.0
-    max_braking: float = 6.0
+    # Curvature = tan(steering) / (effective_wheelbase * (1 + understeer * v^2)). simapp sends
+    # one angle to both steering hinges (no Ackermann: `send_action` in
+    # `markov/agent_ctrl/utils.py`) and drives all four wheels at one speed, and its tyres
+    # slip (mu 0.5 in `urdf/deepracer/racecar.gazebo`), so the
+    # car turns as if its wheelbase were 0.27 m, not 0.164 m: fitted 0.273 m (path curvature
+    # 0.65 /m at 10 degrees and 1.7 /m at 25 degrees, 1 m/s). The traces show the curvature
+    # falling a little with speed: 3 % from 1 to 2 m/s (understeer 0.010 s^2/m^2). Fitted
+    # at 1-2.5 m/s; faster than that it is extrapolated.
+    effective_wheelbase: float = 0.273
+    understeer: float = 0.010
+    # First-order lag of the steering: 63 % of a steering step after 0.132 s (fitted).
+    steering_time_constant: float = 0.132
+    # The motor: the car settles at 1.02 x the commanded speed (simapp turns m/s into wheel
+    # spin with a 0.035 m radius, `get_wheel_radius`; the traces' speed over the commanded
+    # one: 1.01-1.02), reached within a few steps: from standing, 2.5 m/s in about 4 steps
+    # (fitted: 0.03 s lag, 10 m/s^2 up, 15 m/s^2 down; the traces hold nothing faster).
+    speed_gain: float = 1.02
+    speed_time_constant: float = 0.03
+    max_acceleration: float = 10.0
+    max_braking: float = 15.0
+    # Not calibrated: DeepRacer's traces stay under about 7 m/s^2 sideways.
     grip: float = 7.0  # lateral acceleration limit, m/s^2
     scrub: float = 3.0  # speed lost per second per unit of asked-for-but-missing grip
 
@@ -67,10 +110,15 @@ class CarSpec:
         """The fastest steady speed on a circle of `radius` metres at the grip limit."""
         return min(self.max_speed, math.sqrt(self.grip * max(radius, 1e-9)))
 
+    def steering_for(self, curvature: FloatArray | float, speed: FloatArray | float) -> FloatArray:
+        """The steering angle (radians) whose steady curvature at `speed` is `curvature`."""
+        scale = self.effective_wheelbase * (1.0 + self.understeer * speed * speed)
+        return np.asarray(np.arctan(curvature * scale))
+
     @property
     def min_turn_radius(self) -> float:
-        """Radius of the rear axle's path at full lock."""
-        return self.wheelbase / math.tan(math.radians(self.max_steering_deg))
+        """Radius of the rear axle's path at full lock, slowly."""
+        return self.effective_wheelbase / math.tan(math.radians(self.max_steering_deg))
 
     @property
     def wheel_offsets(self) -> FloatArray:
@@ -87,6 +135,38 @@ class CarSpec:
 
 
 DEEPRACER_CAR = CarSpec()
+
+# The car of simapp 3 and 4 (models of metadata version 3 or 4, e.g. what the console trained
+# until 2022): its "deepracer" URDF drives the steering hinges with effort PD controllers
+# (p 1.0, d 0.5 in `racecar_control.yaml`: a lag near d/p = 0.5 s) and the wheels with
+# effort P controllers, so it steers and accelerates far more slowly. Same wheel geometry.
+# Fitted on 2022 console and DeepRacer-for-Cloud training traces (simapp 4.0, 126 files of
+# deepracer-utils' test data); the shared console evaluation trace
+# (`../shared/deepracer/console-logs/`, simapp 4.0, not fitted) checks it. Its hinges are
+# not quite a first-order lag (a quick first answer, a slow tail, and after full lock 20
+# degrees still turns like 30), so after a lock-to-20-degree command this car turns about
+# 25 % less than DeepRacer's did. For reading old traces and models trained on that car;
+# not racer-tui's own physics.
+SIMAPP4_CAR = CarSpec(
+    effective_wheelbase=0.267,
+    understeer=0.010,
+    steering_time_constant=0.340,
+    speed_gain=1.02,
+    speed_time_constant=0.19,
+    max_acceleration=4.4,
+    max_braking=18.0,
+)
+
+
+def car_for_simapp_version(version: float) -> CarSpec:
+    """The car DeepRacer's simulator drives for a model of this metadata version: simapp's
+    `racetrack_with_racecar` launch picks the kinematics car from version 5 on."""
+    return DEEPRACER_CAR if version >= 5.0 else SIMAPP4_CAR
+
+
+def _blend(dt: float, time_constant: float) -> float:
+    """The fraction of a first-order lag's error closed in `dt` (explicit Euler, as fitted)."""
+    return 1.0 if time_constant <= 0.0 else min(dt / time_constant, 1.0)
 
 
 class Fleet:
@@ -142,7 +222,9 @@ class Fleet:
         self._bind_motion_buffer(extra_bodies=0)
         self._state_buffer = pmb.Buffer()
         self._max_steer = math.radians(spec.max_steering_deg)
-        self._steer_step = math.radians(spec.steering_rate_deg) * self.dt
+        # Both lags as the fraction of the remaining error closed per physics sub-step.
+        self._steer_blend = _blend(self.dt, spec.steering_time_constant)
+        self._speed_blend = _blend(self.dt, spec.speed_time_constant)
 
     def _bind_motion_buffer(self, extra_bodies: int) -> None:
         # pymunk.batch walks every body in the space - cars first (they are dynamic), then
@@ -153,8 +235,14 @@ class Fleet:
         self._motion_buffer.set_float_buf(self._motion_rows.reshape(-1))
 
     # --- placing cars and obstacles ------------------------------------------------------
-    def place(self, car: int, x: float, y: float, yaw: float, speed: float = 0.0) -> None:
-        """Teleport one car (start of an episode, or put back on the track after an off-track)."""
+    def place(
+        self, car: int, x: float, y: float, yaw: float, speed: float = 0.0, *, steering: float = 0.0
+    ) -> None:
+        """Teleport one car (start of an episode, or put back on the track after an off-track).
+
+        `steering` (radians) is where the wheels already point, and stay pointed until the
+        next `set_targets`: a replay starting mid-trace needs it, a new episode does not.
+        """
         body = self.bodies[car]
         body.position = (x, y)
         body.angle = yaw
@@ -163,10 +251,10 @@ class Fleet:
         self.space.reindex_shapes_for_body(body)
         self.x[car], self.y[car], self.yaw[car] = x, y, yaw
         self.speed[car] = speed
-        self.steering[car] = 0.0
+        self.steering[car] = steering
         self.yaw_rate[car] = 0.0
         self.target_speed[car] = speed
-        self.target_steering[car] = 0.0
+        self.target_steering[car] = steering
         self.sliding[car] = False
         self.crashed[car] = False
 
@@ -189,8 +277,10 @@ class Fleet:
         self.target_steering[:] = np.minimum(
             np.maximum(np.radians(steering_deg), -self._max_steer), self._max_steer
         )
-        self.target_speed[:] = np.minimum(
-            np.maximum(speed, self.spec.min_speed), self.spec.max_speed
+        # DeepRacer's car settles a little above the commanded speed (`speed_gain`).
+        self.target_speed[:] = (
+            np.minimum(np.maximum(speed, self.spec.min_speed), self.spec.max_speed)
+            * self.spec.speed_gain
         )
 
     # --- physics -------------------------------------------------------------------------
@@ -231,11 +321,11 @@ class Fleet:
         without the per-call overhead of numpy on length-1 arrays.
         """
         spec, dt = self.spec, self.dt
-        steer_step = self._steer_step
+        steer_blend, speed_blend = self._steer_blend, self._speed_blend
         max_down, max_up = -spec.max_braking * dt, spec.max_acceleration * dt
-        lag = dt / spec.speed_time_constant
-        grip, scrub, wheelbase = spec.grip, spec.scrub, spec.wheelbase
-        half_base = wheelbase / 2.0
+        grip, scrub = spec.grip, spec.scrub
+        turning_base, understeer = spec.effective_wheelbase, spec.understeer
+        half_base = spec.wheelbase / 2.0
         target_steering = float(self.target_steering[0])
         target_speed = float(self.target_speed[0])
         steering = float(self.steering[0])
@@ -244,9 +334,9 @@ class Fleet:
         yaw_rate = 0.0
         sliding = False
         for _ in range(self.substeps):
-            steering += min(max(target_steering - steering, -steer_step), steer_step)
-            speed += min(max((target_speed - speed) * lag, max_down), max_up)
-            asked = math.tan(steering) / wheelbase
+            steering += (target_steering - steering) * steer_blend
+            speed += min(max((target_speed - speed) * speed_blend, max_down), max_up)
+            asked = math.tan(steering) / (turning_base * (1.0 + understeer * speed * speed))
             grip_curvature = grip / max(speed * speed, 1e-6)
             curvature = min(max(asked, -grip_curvature), grip_curvature)
             overload = abs(asked) / grip_curvature - 1.0
@@ -278,9 +368,8 @@ class Fleet:
         spec, dt = self.spec, self.dt
         # np.minimum/np.maximum rather than np.clip: same result, a fraction of the overhead
         # on small arrays, and this runs four times per step.
-        steer_error = self.target_steering - self.steering
-        self.steering += np.minimum(np.maximum(steer_error, -self._steer_step), self._steer_step)
-        wanted = (self.target_speed - self.speed) * (dt / spec.speed_time_constant)
+        self.steering += (self.target_steering - self.steering) * self._steer_blend
+        wanted = (self.target_speed - self.speed) * self._speed_blend
         self.speed += np.minimum(
             np.maximum(wanted, -spec.max_braking * dt), spec.max_acceleration * dt
         )
@@ -288,7 +377,9 @@ class Fleet:
     def _apply_tyre_model(self) -> None:
         spec = self.spec
         speed = self.speed
-        asked_curvature = np.tan(self.steering) / spec.wheelbase
+        asked_curvature = np.tan(self.steering) / (
+            spec.effective_wheelbase * (1.0 + spec.understeer * speed * speed)
+        )
         grip_curvature = spec.grip / np.maximum(speed * speed, 1e-6)
         curvature = np.minimum(np.maximum(asked_curvature, -grip_curvature), grip_curvature)
         overload = np.abs(asked_curvature) / grip_curvature - 1.0
@@ -298,8 +389,8 @@ class Fleet:
         self.speed = np.maximum(speed - scrub, 0.0)
         self.yaw_rate = self.speed * curvature
         cos_yaw, sin_yaw = np.cos(self.yaw), np.sin(self.yaw)
-        # Bicycle model about the rear axle: the body centre (half a wheelbase ahead)
-        # also moves sideways with the yaw rate.
+        # Bicycle model about the rear axle, which does not slip: the body centre (half the
+        # wheel centres' wheelbase ahead) also moves sideways with the yaw rate.
         lateral = self.yaw_rate * (spec.wheelbase / 2.0)
         motion = self._motion
         motion[:, 0] = self.speed * cos_yaw - lateral * sin_yaw

@@ -7,8 +7,10 @@ it lets a new racer watch a race before training anything.
    iterating the bi-Laplacian smoothing step on lateral offsets from the centre line.
 2. Speed profile: v = sqrt(grip * margin / curvature), then a forward pass limits
    acceleration and a backward pass limits braking.
-3. Control: pure pursuit on the racing line, speed target read a little ahead so the
-   motor's lag is covered.
+3. Control: pure pursuit on the racing line from where the car will be once its steering
+   has answered (one steering time constant ahead), turned into a steering angle by the
+   car's calibrated steering response; speed target read a little ahead so the motor's
+   lag is covered.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from sim.track import Track
 
 _SPACING = 0.05  # racing-line resolution, metres
 _EDGE_MARGIN = 0.13  # keep the car centre this far inside the border lines
-_GRIP_USE = 0.92  # fraction of the grip limit the speed profile plans for
+GRIP_USE = 0.92  # fraction of the grip limit the speed profile plans for
 _SMOOTHING_ITERATIONS = 4000
 
 
@@ -111,7 +113,7 @@ def plan_racing_line(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
 
 
 def speed_profile(points: FloatArray, curvature: FloatArray, car: CarSpec) -> FloatArray:
-    grip = car.grip * _GRIP_USE
+    grip = car.grip * GRIP_USE
     limit = np.minimum(car.max_speed, np.sqrt(grip / np.maximum(np.abs(curvature), 1e-6)))
     step = np.hypot(*(np.roll(points, -1, axis=0) - points).T)
     speeds = limit.copy()
@@ -153,10 +155,17 @@ class ReferenceDriver:
     def act(self, sim: TrackSimulation) -> tuple[FloatArray, FloatArray]:
         """(steering degrees, target speed m/s) for every car of `sim`."""
         fleet = sim.fleet
-        cos_yaw, sin_yaw = np.cos(fleet.yaw), np.sin(fleet.yaw)
+        # The steering answers with a lag: steer from where the car will be by then, on
+        # its present arc (without this the car weaves and runs wide on tight tracks).
+        lead = self.car.steering_time_constant
+        yaw = fleet.yaw + fleet.yaw_rate * lead
+        travel = fleet.speed * lead
+        middle = fleet.yaw + fleet.yaw_rate * (0.5 * lead)
+        x, y = fleet.x + travel * np.cos(middle), fleet.y + travel * np.sin(middle)
+        cos_yaw, sin_yaw = np.cos(yaw), np.sin(yaw)
         half_base = self.car.wheelbase / 2.0
-        rear_x, rear_y = fleet.x - half_base * cos_yaw, fleet.y - half_base * sin_yaw
-        position = np.stack([fleet.x, fleet.y], axis=1)
+        rear_x, rear_y = x - half_base * cos_yaw, y - half_base * sin_yaw
+        position = np.stack([x, y], axis=1)
         seg, t, _ = self.line_projector.project(position)
         s_here = self.line_projector.arc_length(seg, t)
         speed = np.maximum(fleet.speed, 0.3)
@@ -167,7 +176,10 @@ class ReferenceDriver:
         local_y = -dx * sin_yaw + dy * cos_yaw
         distance = np.maximum(np.hypot(local_x, local_y), 1e-6)
         alpha = np.arctan2(local_y, local_x)
-        steering = np.degrees(np.arctan(2.0 * self.car.wheelbase * np.sin(alpha) / distance))
+        # Pure pursuit gives the curvature that reaches the target; the car's calibrated
+        # steering response (not its wheel geometry) turns that into an angle.
+        wanted = 2.0 * np.sin(alpha) / distance
+        steering = np.degrees(self.car.steering_for(wanted, speed))
         # Plan speed for where the car will be once the motor has responded.
         horizon = s_here[:, None] + speed[:, None] * np.linspace(0.0, 0.35, 6)[None, :]
         planned = np.interp(
@@ -175,6 +187,11 @@ class ReferenceDriver:
             self.line_projector.cumulative,
             self.line.speeds,
         ).min(axis=1)
+        # Off the line, the turn back may be tighter than the plan's: no faster than the
+        # grip allows for it.
+        planned = np.minimum(
+            planned, np.sqrt(self.car.grip * GRIP_USE / np.maximum(np.abs(wanted), 1e-6))
+        )
         limit = self.car.max_steering_deg
         return np.clip(steering, -limit, limit), planned
 

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from sim.car import DEEPRACER_CAR, CarSpec
 from sim.geometry import PointProjector
-from sim.reference_driver import ReferenceDriver
+from sim.reference_driver import GRIP_USE, ReferenceDriver
 from sim.simulation import TrackSimulation
 from sim.track import Track
 
@@ -89,11 +89,18 @@ class ReferenceRaceDriver:
         )
 
     def _act_one(self, sim: TrackSimulation) -> tuple[float, float]:
-        """`ReferenceDriver.act` for one car: pure pursuit on the racing line, speed planned
-        for where the car will be once the motor has responded (same formulas)."""
+        """`ReferenceDriver.act` for one car: pure pursuit on the racing line from where the
+        steering's lag will have taken the car, speed planned for where the car will be once
+        the motor has responded (same formulas)."""
         fleet = sim.fleet
         car, line = self._car, self._line
-        x, y, yaw = float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0])
+        lead = car.steering_time_constant
+        speed_now, yaw_rate = float(fleet.speed[0]), float(fleet.yaw_rate[0])
+        yaw_now = float(fleet.yaw[0])
+        middle = yaw_now + yaw_rate * (0.5 * lead)
+        x = float(fleet.x[0]) + speed_now * lead * math.cos(middle)
+        y = float(fleet.y[0]) + speed_now * lead * math.sin(middle)
+        yaw = yaw_now + yaw_rate * lead
         cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
         half_base = car.wheelbase / 2.0
         rear_x, rear_y = x - half_base * cos_yaw, y - half_base * sin_yaw
@@ -106,12 +113,15 @@ class ReferenceRaceDriver:
         local_y = -dx * sin_yaw + dy * cos_yaw
         distance = max(math.hypot(local_x, local_y), 1e-6)
         alpha = math.atan2(local_y, local_x)
-        steering = math.degrees(math.atan(2.0 * car.wheelbase * math.sin(alpha) / distance))
+        wanted = 2.0 * math.sin(alpha) / distance
+        turning = car.effective_wheelbase * (1.0 + car.understeer * speed * speed)
+        steering = math.degrees(math.atan(wanted * turning))  # car.steering_for, in floats
         total = line.total_length
         planned = min(
             _interp(line.cumulative, self._line_speeds, (s_here + speed * ahead) % total)
             for ahead in _HORIZON
         )
+        planned = min(planned, math.sqrt(car.grip * GRIP_USE / max(abs(wanted), 1e-6)))
         limit = car.max_steering_deg
         return min(max(steering, -limit), limit), planned
 

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from sim.car import DEEPRACER_CAR
 from sim.race.driver import DriverAction, reference_driver
 from sim.simulation import TrackSimulation
 from sim.track import Track
@@ -51,7 +52,7 @@ class ReversingDriver:
     def __init__(self, radius: float = 2.0, speed: float = 1.0) -> None:
         self.name = "reversing"
         self.content_hash = "reversing"
-        self._steer = math.degrees(math.atan(0.164 / radius))
+        self._steer = math.degrees(float(DEEPRACER_CAR.steering_for(1.0 / radius, speed)))
         self._speed = speed
         self.turned_round = False
 

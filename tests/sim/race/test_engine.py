@@ -235,11 +235,11 @@ def test_progress_and_lap_number_follow_the_car() -> None:
 def test_a_full_four_minute_reference_race() -> None:
     track = hairpin()
     result = run_race(track, RaceRules(), reference_driver(track))
-    flying = result.laps[1:]
-    assert (
-        len(result.laps)
-        == math.floor((240.0 - result.laps[0].time_seconds) / flying[0].time_seconds) + 1
-    )
+    flying = [lap.time_seconds for lap in result.laps[1:]]
+    # The driver settles into the same lap within a lap of its flying start.
+    settled = flying[1:]
+    assert max(settled) - min(settled) < 0.01
+    assert max(flying) - min(flying) < 0.05
+    assert len(result.laps) == math.floor((240.0 - result.laps[0].time_seconds) / settled[-1]) + 1
     assert result.total_offtracks == 0
-    assert max(lap.time_seconds for lap in flying) - min(lap.time_seconds for lap in flying) < 0.01
     assert result.trace is not None and len(result.trace) == 3601

@@ -28,8 +28,8 @@ def test_one_car_steps_like_a_car_in_a_batch(name: str) -> None:
     outcomes = set()
     for step in range(600):
         steering, speed = driver.act(alone)
-        if step % 200 > 185:
-            steering = steering + 25.0  # run wide now and then: off-tracks
+        if step % 200 > 175:
+            steering = np.full_like(steering, 30.0)  # full lock now and then: off-tracks
         alone.apply(steering, speed)
         batch.apply(np.repeat(steering, 2), np.repeat(speed, 2))
         for name_ in ("s", "distance_from_center", "track_width", "travelled"):

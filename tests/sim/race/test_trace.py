@@ -30,7 +30,10 @@ def test_the_trace_has_a_row_per_tick_and_starts_on_the_line(trace: RaceTrace) -
     assert statuses[-1] == "time_up"
     assert {"in_progress", "lap_complete", "off_track", "pause"} <= set(statuses)
     assert np.all(np.diff(trace.t) > 0)
-    assert trace.lap[0] == 1 and trace.lap[-1] == 2  # lap 2 (with its penalty) is cut
+    # The window cuts the lap after the last one completed (the one with the penalty).
+    completed = statuses.count("lap_complete")
+    assert completed >= 1
+    assert trace.lap[0] == 1 and trace.lap[-1] == completed + 1
     assert trace.offtrack.sum() == 1
 
 
@@ -45,7 +48,8 @@ def test_sim_trace_csv_round_trip(trace: RaceTrace, tmp_path: Path) -> None:
     assert rows[0].episode_status == "prepare"
     assert sum(row.pause_duration for row in rows) == pytest.approx(3.0)
     # DeepRacer numbers episodes from 0: here, the lap in progress.
-    assert [rows[0].episode, rows[-1].episode] == [0, 1]
+    completed = trace.statuses().count("lap_complete")
+    assert [rows[0].episode, rows[-1].episode] == [0, completed]
 
     back = RaceTrace.read_csv(path)
     assert back.statuses() == trace.statuses()
@@ -56,8 +60,8 @@ def test_sim_trace_csv_round_trip(trace: RaceTrace, tmp_path: Path) -> None:
     assert np.array_equal(back.action, trace.action)
     assert np.allclose(back.t, trace.t, atol=5e-4)
     # Speed is not a sim-trace column: derived from the path, close to the real one.
-    moving = trace.statuses().index("lap_complete")
-    assert back.speed[moving] == pytest.approx(trace.speed[moving], rel=0.1)
+    moving = (np.array(trace.statuses()) == "in_progress") & (trace.speed > 0.5)
+    assert np.median(back.speed[moving] / trace.speed[moving]) == pytest.approx(1.0, abs=0.05)
     assert back.track_length == pytest.approx(trace.track_length)
 
 
