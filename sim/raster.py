@@ -1,7 +1,8 @@
 """A top-down picture of a track, rasterised once and shared by every sensor.
 
-The camera gathers pixels from `texture` (DeepRacer's look in greyscale: dark asphalt,
-white border lines, a dashed yellow centre line, grass around). The lidar sphere-traces
+The camera gathers pixels from `texture` (DeepRacer's scene in greyscale, see
+`sim.camera_scene`: a grainy dark road, white bands along its edges, an orange dashed
+centre line, a green field and, past the field's edge, the walls). The lidar sphere-traces
 through `signed_distance` (the distance to the nearest border line, negative off the
 road) and finishes on exact geometry with the border segment `border_segment` names for
 each cell. All are plain grids, so a sensor reading for many cars is a few vectorised
@@ -20,21 +21,14 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
 
+from sim import camera_scene as scene
 from sim.geometry import FloatArray
 from sim.track import Track
 
-# Greyscale levels (ITU-R 601 luma of DeepRacer's colours): the camera sees these.
-ASPHALT = 50  # dark grey road
-GRASS = 100  # green grass; also everything beyond the raster
-BORDER = 235  # white border lines
-CENTRE = 185  # yellow dashes
-SKY = 215  # light sky above the horizon
-
 RESOLUTION = 0.01  # metres per cell: the camera's near rows sample the ground at ~2 mm
-MARGIN = 1.0  # metres of grass around the borders' bounding box
-BORDER_LINE_WIDTH = 0.05
-CENTRE_LINE_WIDTH = 0.025
-DASH_LENGTH = 0.3  # painted dash, then a gap of the same length
+# Metres around the borders' bounding box: the field up to the walls, and a ring beyond.
+MARGIN = 1.0
+assert MARGIN > scene.FIELD_MARGIN
 
 # A league night or a training run uses one or two tracks; a handful covers every case
 # without keeping stale rasters (tens of MB each for the biggest tracks) alive forever.
@@ -53,6 +47,10 @@ class TrackRaster:
         self.resolution = float(resolution)
         min_x, min_y, max_x, max_y = track.bounds
         self.origin = (min_x - margin, min_y - margin)
+        grow = scene.FIELD_MARGIN
+        # (min x, min y, max x, max y) of the field: the walls stand on its edge.
+        self.field = (min_x - grow, min_y - grow, max_x + grow, max_y + grow)
+        self._center = track.center
         self.width = int(np.ceil((max_x - min_x + 2 * margin) / resolution)) + 1
         self.height = int(np.ceil((max_y - min_y + 2 * margin) / resolution)) + 1
         shape = (self.height, self.width)
@@ -83,16 +81,6 @@ class TrackRaster:
         self.border_distance: NDArray[np.float32] = np.asarray(distance, dtype=np.float32)
         self.border_segment: NDArray[np.int32] = owner_grid[nearest[0], nearest[1]]
 
-        texture = np.full(shape, GRASS, dtype=np.uint8)
-        texture[self.road] = ASPHALT
-        texture[self.border_distance <= BORDER_LINE_WIDTH / 2] = BORDER
-        rows, cols = self._dash_cells(track.center)
-        texture[rows, cols] = CENTRE
-        # Gathers clamp to the outermost cells, so those must read as "nothing here".
-        texture[[0, -1], :] = GRASS
-        texture[:, [0, -1]] = GRASS
-        self.texture: NDArray[np.uint8] = texture
-
     @classmethod
     def for_track(
         cls, track: Track, resolution: float = RESOLUTION, margin: float = MARGIN
@@ -114,6 +102,31 @@ class TrackRaster:
         return self.height, self.width
 
     @cached_property
+    def texture(self) -> NDArray[np.uint8]:
+        """The ground in DeepRacer's greyscale tones, one per cell (`sim.camera_scene`);
+        cells past the walls, and the outermost ring, hold `BEYOND_WALLS`."""
+        shape = self.shape
+        texture = _grainy_tiles(scene.GRASS, scene.GRASS_GRAIN, 1, shape)
+        road = self.road
+        texture[road] = _grainy_tiles(scene.ROAD, scene.ROAD_GRAIN, 2, shape)[road]
+        # The bands lie on the road, their outer edge on the border (`border_distance` is
+        # good to about 0.7 cell).
+        band = road & (self.border_distance <= scene.BORDER_BAND_WIDTH)
+        texture[band] = _grainy_tiles(scene.BORDER, scene.BORDER_GRAIN, 3, shape)[band]
+        rows, cols = self._dash_cells(self._center)
+        texture[rows, cols] = scene.CENTRE
+        res = self.resolution
+        x0, y0, x1, y1 = self.field
+        xs = self.origin[0] + (np.arange(self.width) + 0.5) * res
+        ys = self.origin[1] + (np.arange(self.height) + 0.5) * res
+        texture[:, (xs < x0) | (xs > x1)] = scene.BEYOND_WALLS
+        texture[(ys < y0) | (ys > y1), :] = scene.BEYOND_WALLS
+        # Gathers clamp to the outermost cells, so those must read as "past the walls".
+        texture[[0, -1], :] = scene.BEYOND_WALLS
+        texture[:, [0, -1]] = scene.BEYOND_WALLS
+        return texture
+
+    @cached_property
     def signed_distance(self) -> NDArray[np.float32]:
         """Border distance, positive on the road and negative off it (metres).
 
@@ -133,10 +146,13 @@ class TrackRaster:
 
     def _dash_cells(self, center: FloatArray) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
         res = self.resolution
+        radius = scene.DASH_WIDTH / 2
         points, arc = _densify_with_arc(center, 0.5 * res)
-        points = points[np.mod(arc, 2 * DASH_LENGTH) < DASH_LENGTH]
-        # Stamp a disc around each sample: the union of discs is the painted capsule.
-        reach = int(np.ceil(CENTRE_LINE_WIDTH / 2 / res)) + 1
+        # Stamp a disc around each sample: the union of discs is a capsule, as long as a
+        # dash when the samples stop half a width short of either end.
+        phase = np.mod(arc, scene.DASH_LENGTH + scene.DASH_GAP)
+        points = points[(phase >= radius) & (phase <= scene.DASH_LENGTH - radius)]
+        reach = int(np.ceil(radius / res)) + 1
         offsets = np.arange(-reach, reach + 1)
         local = (points - np.asarray(self.origin)) / res
         base = np.floor(local).astype(np.intp)
@@ -144,12 +160,19 @@ class TrackRaster:
         rows = base[:, 1, None, None] + offsets[None, :, None]
         dx = cols + 0.5 - local[:, 0, None, None]
         dy = rows + 0.5 - local[:, 1, None, None]
-        inside = dx * dx + dy * dy <= (CENTRE_LINE_WIDTH / 2 / res) ** 2
+        inside = dx * dx + dy * dy <= (radius / res) ** 2
         rows, cols = np.broadcast_arrays(rows, cols)
         return (
             np.clip(rows[inside], 0, self.height - 1),
             np.clip(cols[inside], 0, self.width - 1),
         )
+
+
+def _grainy_tiles(tone: int, spread: float, seed: int, shape: tuple[int, int]) -> NDArray[np.uint8]:
+    """A grid of `shape` in `tone` with the scene's fixed grain repeated across it."""
+    tile = scene.grainy_tile(tone, spread, seed)
+    reps = (-(-shape[0] // tile.shape[0]), -(-shape[1] // tile.shape[1]))
+    return np.ascontiguousarray(np.tile(tile, reps)[: shape[0], : shape[1]])
 
 
 def _densify(

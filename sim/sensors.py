@@ -3,11 +3,8 @@
 Both sensors read a `TrackRaster` (built once per track) instead of the track geometry,
 so one call for a whole batch of cars is a handful of vectorised NumPy passes:
 
-* the camera is a pinhole looking at a flat ground plane. For a pitched camera without
-  roll every image row sees one line across the ground at a fixed distance ahead, so the
-  ground point of pixel (row r, column c) in the car's frame is (forward[r], left[r] *
-  u[c]); per call only the car's rotation and translation are applied before gathering
-  texture cells.
+* the camera (`sim.camera`, re-exported here) is a pinhole looking at a flat ground
+  plane, with DeepRacer's walls around the field.
 * the lidar sphere-traces the signed border distance: it steps along each ray by the
   distance to the nearest border until it crosses one (the sign changes) or comes close,
   then intersects the ray exactly with the few border segments there, so readings match
@@ -26,17 +23,35 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sim.raster import GRASS, SKY, TrackRaster
+from sim.camera import (
+    DEEPRACER_CAMERA,
+    PHYSICAL_CAR_CAMERA,
+    Camera,
+    CameraSpec,
+    camera_space,
+    channels_last,
+    poses,
+)
+from sim.raster import TrackRaster
 from sim.track import Track
 
-UInt8Array = NDArray[np.uint8]
-Float32Array = NDArray[np.float32]
+__all__ = [
+    "DEEPRACER_CAMERA",
+    "PHYSICAL_CAR_CAMERA",
+    "Camera",
+    "CameraSpec",
+    "Lidar",
+    "LidarSpec",
+    "SectorLidar",
+    "SectorLidarSpec",
+    "camera_space",
+    "channels_last",
+    "lidar_space",
+    "sector_lidar_space",
+    "sectors",
+]
 
-# Ground farther than this ahead is drawn as plain grass: those rows sit within a pixel of
-# the horizon, and capping them keeps every gathered index small enough for int32.
-MAX_VIEW_DISTANCE = 30.0
-# Pixels gathered per chunk: the working arrays (~16 bytes a pixel) then stay in L2 cache.
-_CHUNK_PIXELS = 40_000
+Float32Array = NDArray[np.float32]
 
 # Lidar marching: over-relaxed steps (checked, see `Lidar._march`) reach grazing hits in
 # fewer iterations; the iteration cap bounds the cost of a scan.
@@ -59,139 +74,6 @@ _EXHAUSTIVE_PAIRS = 200_000
 _FEW_CARS = 2
 # Blocks (cells) of the table of segments in range, for those scans.
 _NEAR_BLOCK_CELLS = 25.0
-
-
-# --- camera -------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class CameraSpec:
-    """DeepRacer's front-facing camera: 160x120 greyscale, 120 degrees wide, pitched down."""
-
-    width: int = 160
-    height: int = 120
-    fov_deg: float = 120.0  # horizontal
-    mount_forward: float = 0.12  # metres ahead of the body centre
-    mount_height: float = 0.10
-    pitch_deg: float = 15.0  # down
-
-    def __post_init__(self) -> None:
-        if self.width < 1 or self.height < 1:
-            raise ValueError(f"camera size {self.width}x{self.height} must be at least 1x1")
-        if not 0.0 < self.fov_deg < 180.0:
-            raise ValueError(
-                f"camera field of view {self.fov_deg} must be between 0 and 180 degrees"
-            )
-        if self.mount_height <= 0.0:
-            raise ValueError("the camera must be mounted above the ground (mount_height > 0)")
-
-
-class Camera:
-    """Renders what each car's front camera sees, (N, H, W) uint8, from the track raster."""
-
-    def __init__(self, track: Track, spec: CameraSpec | None = None) -> None:
-        self.spec = spec or CameraSpec()
-        self.raster = TrackRaster.for_track(track)
-        width, height = self.spec.width, self.spec.height
-        focal = (width / 2) / math.tan(math.radians(self.spec.fov_deg) / 2)
-        pitch = math.radians(self.spec.pitch_deg)
-        # Pixel centres relative to the principal point, in units of the focal length.
-        down = (np.arange(height) + 0.5 - height / 2) / focal
-        right = (np.arange(width) + 0.5 - width / 2) / focal
-        # A ray through image row `down` descends at this rate per unit along it.
-        descent = math.sin(pitch) + down * math.cos(pitch)
-        with np.errstate(divide="ignore"):
-            scale = np.where(descent > 0, self.spec.mount_height / descent, np.inf)
-        forward = scale * (math.cos(pitch) - down * math.sin(pitch))
-        ground = (descent > 0) & (forward <= MAX_VIEW_DISTANCE)
-        self.horizon_row = int(np.count_nonzero(descent <= 0))  # first row below the horizon
-        self.ground_row = height - int(np.count_nonzero(ground))  # first rendered ground row
-        rows = slice(self.ground_row, height)
-        res = self.raster.resolution
-        # Everything pre-divided by the cell size: per call only a rotation remains.
-        self._forward_cells = ((forward[rows] + self.spec.mount_forward) / res).astype(np.float32)
-        self._lateral_cells = (scale[rows] / res).astype(np.float32)
-        self._left_unit = (-right).astype(np.float32)  # left of the car is positive
-        self._texture = self.raster.texture.ravel()
-        ground_pixels = max(1, (height - self.ground_row) * width)
-        self._chunk = max(1, _CHUNK_PIXELS // ground_pixels)
-        shape = (self._chunk, height - self.ground_row, width)
-        self._gx = np.empty(shape, dtype=np.float32)
-        self._gy = np.empty(shape, dtype=np.float32)
-        self._ix = np.empty(shape, dtype=np.int32)
-        self._iy = np.empty(shape, dtype=np.int32)
-        self._pixels = np.empty(shape, dtype=np.uint8)
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        """(height, width) of one frame."""
-        return self.spec.height, self.spec.width
-
-    def render(
-        self, x: ArrayLike, y: ArrayLike, yaw: ArrayLike, out: UInt8Array | None = None
-    ) -> UInt8Array:
-        """Frames for N poses, (N, H, W) uint8; pass `out` to reuse an output array."""
-        xs, ys, yaws = _poses(x, y, yaw)
-        n = len(xs)
-        height, width = self.shape
-        if out is None:
-            out = np.empty((n, height, width), dtype=np.uint8)
-        elif out.shape != (n, height, width) or out.dtype != np.uint8:
-            raise ValueError(f"out must be a uint8 array of shape {(n, height, width)}")
-        out[:, : self.horizon_row] = SKY
-        out[:, self.horizon_row : self.ground_row] = GRASS
-        if self.ground_row == height or n == 0:
-            return out
-
-        res = self.raster.resolution
-        cos = np.cos(yaws)[:, None]
-        sin = np.sin(yaws)[:, None]
-        col0 = ((xs - self.raster.origin[0]) / res)[:, None]
-        row0 = ((ys - self.raster.origin[1]) / res)[:, None]
-        forward, lateral = self._forward_cells[None, :], self._lateral_cells[None, :]
-        # Per car and image row, the ground line is (base + slope * left_unit[column]).
-        base_x = (col0 + cos * forward).astype(np.float32)[:, :, None]
-        slope_x = (-sin * lateral).astype(np.float32)[:, :, None]
-        base_y = (row0 + sin * forward).astype(np.float32)[:, :, None]
-        slope_y = (cos * lateral).astype(np.float32)[:, :, None]
-        grid_w = self.raster.width
-        for start in range(0, n, self._chunk):
-            stop = min(n, start + self._chunk)
-            k = stop - start
-            gx, gy, ix, iy, pixels = (
-                self._gx[:k],
-                self._gy[:k],
-                self._ix[:k],
-                self._iy[:k],
-                self._pixels[:k],
-            )
-            np.multiply(slope_x[start:stop], self._left_unit, out=gx)
-            gx += base_x[start:stop]
-            # Clamping x keeps an index from wrapping into the next grid row; rows need no
-            # clamp because take(mode="clip") maps any flat index past either end of the
-            # grid onto its grass margin.
-            np.clip(gx, 0, grid_w - 1, out=gx)
-            ix[...] = gx
-            np.multiply(slope_y[start:stop], self._left_unit, out=gy)
-            gy += base_y[start:stop]
-            # Truncation is floor here except on (-1, 0), which lands on the margin anyway.
-            iy[...] = gy
-            iy *= grid_w
-            iy += ix
-            np.take(self._texture, iy, out=pixels, mode="clip")
-            out[start:stop, self.ground_row :] = pixels
-        return out
-
-
-def camera_space(spec: CameraSpec | None = None) -> gym.spaces.Box:
-    """Observation space of one frame, channel-last (H, W, 1) as SB3's CnnPolicy expects."""
-    spec = spec or CameraSpec()
-    return gym.spaces.Box(0, 255, shape=(spec.height, spec.width, 1), dtype=np.uint8)
-
-
-def channels_last(frames: UInt8Array) -> UInt8Array:
-    """(N, H, W) frames from `Camera.render` as an (N, H, W, 1) view for `camera_space`."""
-    return frames[..., np.newaxis]
 
 
 # --- lidar --------------------------------------------------------------------------------
@@ -262,7 +144,7 @@ class Lidar:
 
     def scan(self, x: ArrayLike, y: ArrayLike, yaw: ArrayLike) -> Float32Array:
         """(N, rays) float32 distances in metres, clipped to [min_range, max_range]."""
-        xs, ys, yaws = _poses(x, y, yaw)
+        xs, ys, yaws = poses(x, y, yaw)
         if len(xs) <= _FEW_CARS:
             return self._scan_few(xs, ys, yaws)
         n, count = len(xs), len(self.angles)
@@ -650,16 +532,3 @@ class SectorLidar:
 def sector_lidar_space(spec: SectorLidarSpec | None = None) -> gym.spaces.Box:
     spec = spec or SectorLidarSpec()
     return gym.spaces.Box(0.0, 1.0, shape=(spec.sectors,), dtype=np.float32)
-
-
-def _poses(
-    x: ArrayLike, y: ArrayLike, yaw: ArrayLike
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    xs = np.atleast_1d(np.asarray(x, dtype=np.float64))
-    ys = np.atleast_1d(np.asarray(y, dtype=np.float64))
-    yaws = np.atleast_1d(np.asarray(yaw, dtype=np.float64))
-    if not xs.shape == ys.shape == yaws.shape or xs.ndim != 1:
-        raise ValueError("x, y and yaw must be 1-D arrays of the same length (one per car)")
-    if not (np.isfinite(xs).all() and np.isfinite(ys).all() and np.isfinite(yaws).all()):
-        raise ValueError("a car pose holds NaN or infinity; sensors need finite x, y and yaw")
-    return xs, ys, yaws

@@ -1,4 +1,5 @@
-"""The camera and lidar: what a car sees, checked against geometry worked out by hand."""
+"""The camera and lidar: what a car sees, checked against geometry worked out by hand and
+against DeepRacer's own camera."""
 
 from __future__ import annotations
 
@@ -10,8 +11,11 @@ import pytest
 import shapely
 from shapely.geometry import LineString, MultiLineString
 
-from sim.raster import ASPHALT, BORDER, CENTRE, GRASS, SKY, TrackRaster
+from sim import camera_scene as scene
+from sim.raster import TrackRaster
 from sim.sensors import (
+    DEEPRACER_CAMERA,
+    PHYSICAL_CAR_CAMERA,
     Camera,
     CameraSpec,
     Lidar,
@@ -250,45 +254,89 @@ def test_lidar_space_holds_its_scans(lidar: Lidar) -> None:
 
 # --- camera ---------------------------------------------------------------------------------
 
+DARK_ROAD = scene.ROAD + 4 * scene.ROAD_GRAIN  # road grain stays below this
+BRIGHT_BAND = scene.BORDER - 4 * scene.BORDER_GRAIN  # and band grain above this
+WALL_TONES = {scene.WALL_LOW_X, scene.WALL_HIGH_X, scene.WALL_LOW_Y, scene.WALL_HIGH_Y}
+DR_DEMO = "car-model/dr-demo-1.png"
+# Where dr-demo-1.png was taken, judged by eye and refined by correlation: re:Invent 2018's
+# top straight, driving -x towards the left-hand hairpin, a little right of the centre
+# line; the wall ahead is the one the sun lights, the darker one on the right the high-y.
+DR_DEMO_POSE = (2.54, 4.556, math.radians(176.9))
+
+
+def grassy(pixels: np.ndarray) -> np.ndarray:
+    return np.asarray(np.abs(pixels.astype(int) - scene.GRASS) <= 4 * scene.GRASS_GRAIN)
+
+
+def start_pose(track: Track) -> tuple[float, float, float]:
+    """The first waypoint, heading for the second: where DeepRacer starts a car."""
+    (x0, y0), (x1, y1) = track.center[0], track.center[1]
+    return float(x0), float(y0), math.atan2(y1 - y0, x1 - x0)
+
+
+@pytest.fixture
+def reinvent(deepracer_dir: Path) -> Track:
+    return load_track(deepracer_dir / "tracks" / "reinvent_base.npy")
+
+
+def test_the_default_camera_is_deepracers_simulated_camera() -> None:
+    spec = CameraSpec()
+    assert spec == DEEPRACER_CAMERA
+    assert (spec.width, spec.height) == (160, 120)
+    assert math.radians(spec.fov_deg) == pytest.approx(1.13)  # about 65 degrees
+    assert math.radians(spec.pitch_deg) == pytest.approx(0.2618)  # 15 degrees down
+    assert spec.mount_height == pytest.approx(0.13, abs=0.005)
+    assert spec.mount_forward == pytest.approx(0.145, abs=0.005)
+    # The physical car's wide lens stays available by name, never by default.
+    assert PHYSICAL_CAR_CAMERA.fov_deg == pytest.approx(120.0)
+    assert spec != PHYSICAL_CAR_CAMERA
+
 
 def test_camera_frames_are_greyscale_images_of_the_spec_size(ring: Track) -> None:
-    for width, height in ((160, 120), (80, 60), (40, 30)):
+    for width, height in ((160, 120), (80, 60), (40, 30), (41, 31)):
         frames = Camera(ring, CameraSpec(width=width, height=height)).render(*ON_CENTRE)
         assert frames.shape == (1, height, width)
         assert frames.dtype == np.uint8
 
 
-def test_camera_sees_sky_above_the_horizon_and_ground_below(camera: Camera) -> None:
+def test_camera_horizon_sits_where_the_pitch_puts_it(camera: Camera) -> None:
+    # Focal length 80 / tan(1.13 / 2) = 126.1 px; 15 degrees up from the image centre is
+    # 33.8 px above row 60: rows 0-25 look above the horizon, row 26 is the first below.
+    assert camera.horizon_row == 26
     frame = camera.render(*ON_CENTRE)[0]
-    # 15 degrees of pitch puts the horizon 12.4 pixels above the centre row (focal 46.2 px).
-    assert camera.horizon_row == 48
-    assert np.all(frame[: camera.horizon_row] == SKY)
-    assert not np.any(frame[camera.horizon_row :] == SKY)
+    # Above the horizon only walls and the background over them; never ground.
+    above = frame[: camera.horizon_row]
+    assert set(np.unique(above).tolist()) <= {*WALL_TONES, scene.BACKGROUND}
 
 
 def test_camera_sees_road_in_the_lower_middle(camera: Camera) -> None:
     frame = camera.render(*ON_CENTRE)[0]
     lower_middle = frame[100:, 50:110]
-    assert np.isin(lower_middle, [ASPHALT, CENTRE]).all()
-    assert np.mean(lower_middle == ASPHALT) > 0.7
+    dashes = lower_middle == scene.CENTRE
+    assert np.all(lower_middle[~dashes] <= DARK_ROAD)
+    assert np.mean(~dashes) > 0.7
 
 
-def test_camera_sees_border_lines_on_both_sides(stadium: Track, camera: Camera) -> None:
+def test_camera_sees_border_bands_on_both_sides(stadium: Track, camera: Camera) -> None:
     for cam, pose in ((camera, ON_CENTRE), (Camera(stadium), (0.0, -1.5, 0.0))):
         frame = cam.render(*pose)[0]
         ground = frame[cam.horizon_row :]
         width = frame.shape[1]
-        assert np.any(ground[:, : width // 2] == BORDER)
-        assert np.any(ground[:, width // 2 :] == BORDER)
-        # Past the white lines lies grass.
-        assert np.any(ground == GRASS)
+        assert np.any(ground[:, : width // 2] >= BRIGHT_BAND)
+        assert np.any(ground[:, width // 2 :] >= BRIGHT_BAND)
+        # Past the white bands lies the green field.
+        assert np.any(grassy(ground))
 
 
-def test_camera_view_is_symmetric_on_a_straight(stadium: Track) -> None:
+def test_camera_view_of_the_road_is_symmetric_on_a_straight(stadium: Track) -> None:
     camera = Camera(stadium)
     frame = camera.render(0.0, -1.5, 0.0)[0]  # middle of the bottom straight, on the line
-    mirrored = frame[:, ::-1]
-    assert np.mean(frame == mirrored) > 0.97
+    # The road and its bands, up to 1.2 m ahead (the walls and the field beyond are not
+    # symmetric about this straight); the grain is not symmetric either, so compare what
+    # each pixel shows: road, band, dash or field.
+    near = frame[camera.horizon_row + 14 :].astype(int)
+    kind = np.digitize(near, [DARK_ROAD + 1, scene.CENTRE - 1, scene.CENTRE + 1, BRIGHT_BAND])
+    assert np.mean(kind == kind[:, ::-1]) > 0.97
 
 
 def test_camera_image_changes_when_the_car_moves_or_turns(camera: Camera) -> None:
@@ -302,38 +350,67 @@ def test_camera_image_changes_when_the_car_moves_or_turns(camera: Camera) -> Non
 
 def test_camera_scene_slides_right_when_the_car_turns_left(stadium: Track) -> None:
     camera = Camera(stadium)
-    row = camera.horizon_row + 5  # a row where both border lines are in view on a straight
+    row = camera.horizon_row + 14  # a row where both bands are in view on a straight
 
-    def border_columns(turn_deg: float) -> tuple[int, int]:
+    def band_columns(turn_deg: float) -> tuple[int, int]:
         frame = camera.render(0.0, -1.5, math.radians(turn_deg))[0]
-        columns = np.flatnonzero(frame[row] == BORDER)
+        columns = np.flatnonzero(frame[row] >= BRIGHT_BAND)
         return int(columns.min()), int(columns.max())
 
-    left_line, right_line = border_columns(0.0)
-    turned_left, turned_right = border_columns(10.0), border_columns(-10.0)
-    assert turned_left[0] > left_line and turned_left[1] > right_line
-    assert turned_right[0] < left_line and turned_right[1] < right_line
+    left_band, right_band = band_columns(0.0)
+    turned_left, turned_right = band_columns(5.0), band_columns(-5.0)
+    assert turned_left[0] > left_band and turned_left[1] > right_band
+    assert turned_right[0] < left_band and turned_right[1] < right_band
 
 
 def test_camera_batch_equals_one_car_at_a_time_and_is_deterministic(
     ring: Track, camera: Camera
 ) -> None:
     rng = np.random.default_rng(5)
-    angle = rng.uniform(0.0, 2.0 * math.pi, 7)
-    radius = rng.uniform(INNER_RADIUS, OUTER_RADIUS, 7)
-    x, y, yaw = radius * np.cos(angle), radius * np.sin(angle), rng.uniform(-3, 3, 7)
+    angle = rng.uniform(0.0, 2.0 * math.pi, 9)
+    radius = rng.uniform(INNER_RADIUS, OUTER_RADIUS, 9)
+    x, y, yaw = radius * np.cos(angle), radius * np.sin(angle), rng.uniform(-3, 3, 9)
+    x[0], y[0] = 40.0, -3.0  # a car outside the walls too
     batch = camera.render(x, y, yaw)
-    singles = np.concatenate([camera.render(x[i], y[i], yaw[i]) for i in range(7)])
+    # One car, three cars and nine are rendered by different paths: all agree exactly.
+    singles = np.concatenate([camera.render(x[i], y[i], yaw[i]) for i in range(9)])
+    threes = np.concatenate(
+        [camera.render(x[i : i + 3], y[i : i + 3], yaw[i : i + 3]) for i in (0, 3, 6)]
+    )
     np.testing.assert_array_equal(batch, singles)
+    np.testing.assert_array_equal(batch, threes)
     np.testing.assert_array_equal(Camera(ring).render(x, y, yaw), batch)
     out = np.zeros_like(batch)
     assert camera.render(x, y, yaw, out=out) is out
     np.testing.assert_array_equal(out, batch)
 
 
-def test_camera_far_from_the_track_sees_only_grass_and_sky(camera: Camera) -> None:
+def test_camera_outside_the_walls_sees_only_wall(camera: Camera) -> None:
     frame = camera.render(500.0, -300.0, 1.0)[0]
-    assert set(np.unique(frame).tolist()) == {GRASS, SKY}
+    assert set(np.unique(frame).tolist()) <= WALL_TONES
+
+
+def test_a_far_wall_shows_the_background_over_its_top_and_a_near_one_fills_the_view(
+    stadium: Track,
+) -> None:
+    camera = Camera(stadium)
+    # The stadium's field ends 5.8 m ahead: the wall's top is below the image's top edge.
+    far = camera.render(0.0, -1.5, 0.0)[0]
+    assert np.all(far[0, 60:100] == scene.BACKGROUND)
+    assert np.all(np.isin(far[camera.horizon_row - 5 : camera.horizon_row], list(WALL_TONES)))
+    # 1.3 m from the wall beside the straight: wall from the horizon up to the top edge.
+    near = camera.render(0.0, -1.5, -math.pi / 2)[0]
+    assert set(np.unique(near[: camera.horizon_row]).tolist()) <= WALL_TONES
+
+
+def test_the_wall_in_the_sun_is_brighter_than_the_one_in_shade(stadium: Track) -> None:
+    camera = Camera(stadium)
+    towards_low_x = camera.render(0.0, -1.5, math.pi)[0]
+    towards_high_x = camera.render(0.0, -1.5, 0.0)[0]
+    middle = slice(camera.horizon_row - 3, camera.horizon_row), slice(70, 90)
+    assert np.all(towards_low_x[middle] == scene.WALL_LOW_X)
+    assert np.all(towards_high_x[middle] == scene.WALL_HIGH_X)
+    assert scene.WALL_LOW_X > scene.WALL_HIGH_X
 
 
 def test_camera_space_accepts_rendered_frames(camera: Camera) -> None:
@@ -350,6 +427,80 @@ def test_sensors_refuse_poses_that_are_not_numbers(camera: Camera, lidar: Lidar)
         camera.render([0.0], [float("nan")], [0.0])
     with pytest.raises(ValueError, match="same length"):
         lidar.scan([0.0, 1.0], [0.0], [0.0])
+    with pytest.raises(ValueError, match="same length"):
+        camera.render([[0.0]], [[0.0]], [[0.0]])
+
+
+# --- DeepRacer's look on re:Invent 2018 -------------------------------------------------------
+
+
+def test_at_the_start_of_reinvent_the_frame_looks_like_deepracers(reinvent: Track) -> None:
+    camera = Camera(reinvent)
+    frame = camera.render(*start_pose(reinvent))[0].astype(int)
+    horizon = camera.horizon_row
+    # Dark walls right above the horizon, at the row the pitch predicts.
+    assert horizon == 26
+    assert np.all(frame[horizon - 10 : horizon] <= max(WALL_TONES))
+    # The road is darker than the white bands either side of it, 1-3 m ahead.
+    rows = frame[35:50]
+    middle = rows[:, 40:120]
+    road = middle[middle != scene.CENTRE]
+    assert np.median(road) <= DARK_ROAD
+    for side in (rows[:, :80], rows[:, 80:]):
+        assert side.max() >= BRIGHT_BAND > np.median(road) + 100
+    # Green beside the road: the infield on the left, the field to the wall on the right.
+    assert np.mean(grassy(frame[33:37, :30])) > 0.9
+    assert np.mean(grassy(frame[33:37, 135:])) > 0.9
+    # The centre line's dashes in the lower middle: orange runs with road between them.
+    centre_column = frame[60:, 78:82].min(axis=1) == scene.CENTRE
+    runs = np.count_nonzero(np.diff(centre_column.astype(int)) == 1)
+    assert runs >= 3
+    assert 0.2 < np.mean(centre_column) < 0.8
+
+
+def test_raster_paints_deepracers_bands_and_dashes(stadium: Track) -> None:
+    raster = TrackRaster.for_track(stadium)
+    texture = raster.texture.astype(int)
+    res = raster.resolution
+    col = int((0.0 - raster.origin[0]) / res)  # across the bottom straight at x = 0
+    rows = ((np.array([-1.5 - HALF_WIDTH, -1.5 + HALF_WIDTH]) - raster.origin[1]) / res).astype(int)
+    across = texture[rows[0] : rows[1] + 1, col]
+    bands = np.flatnonzero(across >= BRIGHT_BAND)
+    # 0.0762 m bands inside each border: about 8 cells on either edge of the road.
+    assert 14 <= len(bands) <= 18
+    assert bands.min() <= 1 and bands.max() >= len(across) - 2
+    # Dashes 0.0508 m long with gaps as long, along the centre line (y = -1.5).
+    line = texture[int((-1.5 - raster.origin[1]) / res), :]
+    on = line == scene.CENTRE
+    start, stop = (int((x - raster.origin[0]) / res) for x in (-2.5, 2.5))
+    painted = on[start:stop]
+    edges = np.flatnonzero(np.diff(painted.astype(int)))
+    lengths = np.diff(edges)
+    assert np.median(lengths) == pytest.approx(scene.DASH_LENGTH / res, abs=1)
+    # 0.0254 m wide: two or three cells across.
+    dash = start + int(np.flatnonzero(painted)[0]) + 2
+    width = np.count_nonzero(texture[rows[0] : rows[1] + 1, dash] == scene.CENTRE)
+    assert 2 <= width <= 3
+
+
+def test_a_frame_like_dr_demo_correlates_with_it_better_than_the_wide_lens(
+    reinvent: Track, deepracer_dir: Path
+) -> None:
+    image_module = pytest.importorskip("PIL.Image")
+    # DeepRacer's pipeline: the 640x480 frame resized to 160x120 (PIL bilinear,
+    # deepracer-simapp sensors_rollout.py) and greyed with 0.2989 R + 0.5870 G + 0.1140 B.
+    with image_module.open(deepracer_dir / DR_DEMO) as image:
+        small = image.convert("RGB").resize((160, 120), resample=image_module.BILINEAR)
+    rgb = np.asarray(small, dtype=np.float64)
+    grey = 0.2989 * rgb[..., 0] + 0.5870 * rgb[..., 1] + 0.1140 * rgb[..., 2]
+
+    def likeness(spec: CameraSpec) -> float:
+        frame = Camera(reinvent, spec).render(*DR_DEMO_POSE)[0]
+        return float(np.corrcoef(grey.ravel(), frame.ravel().astype(np.float64))[0, 1])
+
+    deepracer, wide = likeness(DEEPRACER_CAMERA), likeness(PHYSICAL_CAR_CAMERA)
+    assert deepracer > 0.7
+    assert deepracer > wide + 0.5
 
 
 # --- raster ---------------------------------------------------------------------------------
