@@ -77,7 +77,7 @@ def test_sigterm_stops_the_run_with_a_checkpoint(model: ModelFolder) -> None:
     assert process.wait() == 0
     ended = rest[-1]
     assert isinstance(ended, events.Ended) and ended.kind == "stopped"
-    assert ended.message == "training was stopped on request"  # the racer's words, not a signal name
+    assert ended.message == "training was stopped on request"  # words, not a signal name
     assert (model.checkpoints_dir / LATEST).is_file()
     assert json.loads(model.training_state_file.read_text())["state"] == "stopped"
     assert model.has_policy() and not model.is_training()
