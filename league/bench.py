@@ -188,6 +188,7 @@ def fill(
                     "evaluation_file": "evaluation-bench.json",
                     "fingerprint": content_hash(rng.random()),
                     "submitted_at": now_iso(),
+                    "physics": CURRENT_PHYSICS,
                 }
                 row = _record(fields, {"laps": lap_rows})
                 rows.append(row)
@@ -264,6 +265,7 @@ def fill(
                     "seed": night_no,
                     "started_at": now_iso(),
                     "total_offtracks": sum(lap["offtracks"] for lap in laps),
+                    "physics": CURRENT_PHYSICS,
                 }
                 race = _record(race_fields, {"laps": laps})
                 race_rows.append(race)

@@ -186,6 +186,8 @@ def race_result(league: League, race_id: str) -> RaceResult:
             "started_at": row["started_at"],
             "laps": laps,
             "total_offtracks": row["total_offtracks"],
+            # NULL: recorded before physics was, which RaceResult reads as physics 1.
+            **({"physics": row["physics"]} if row["physics"] is not None else {}),
         }
     )
     return result.with_trace(race_trace(league, race_id))

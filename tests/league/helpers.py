@@ -25,6 +25,7 @@ from sim.deepracer_files import (
     write_training_params,
 )
 from sim.ids import new_id
+from sim.race.physics import CURRENT
 from sim.race.result import LapRecord, RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps
 from sim.track import Track
@@ -94,7 +95,8 @@ def model_folder(
         TrainingParams(world_name=world.name, track_hash=world.content_hash),
     )
     write_training_metrics(folder / TRAINING_METRICS_PATH, training_metrics())
-    write_evaluation_metrics(folder / evaluation_metrics_path(stamp), trials(laps))
+    # As today's racer-tui writes it: the laps were timed by today's physics.
+    write_evaluation_metrics(folder / evaluation_metrics_path(stamp), trials(laps), CURRENT)
     (folder / "training-state.json").write_text('{"state": "finished", "elapsed_seconds": 60}')
     return folder
 

@@ -76,9 +76,10 @@ def test_deepracer_evaluations_are_ranked_apart_from_racer_tui_laps(
 
 
 def test_an_evaluation_says_which_physics_timed_it(tmp_path: Path, league: League) -> None:
-    folder = model_folder(tmp_path)  # written without a physics key, as before versioning
-    old = assemble(str(folder), "ana")
-    assert old.physics == BEFORE_VERSIONING
+    folder = model_folder(tmp_path)
+    old_stamp = "20240601120000"  # written without a physics key, as before versioning
+    write_evaluation_metrics(folder / evaluation_metrics_path(old_stamp), trials([9.5]))
+    assert assemble(str(folder), "ana").physics == BEFORE_VERSIONING
     stamp = "20250101120000"
 
     write_evaluation_metrics(folder / evaluation_metrics_path(stamp), trials([9.0]), CURRENT)
