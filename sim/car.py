@@ -37,10 +37,11 @@ from sim.geometry import FloatArray
 STEP_HZ = 15  # DeepRacer's camera and control rate
 STEP_SECONDS = 1.0 / STEP_HZ
 PHYSICS_SUBSTEPS = 4
-# The version of the car's handling. Lap times of different versions are not comparable:
-# league records carry it and leaderboards keep versions apart. Bump it with any change
-# to the car that changes lap times. 2: steering gain, steering lag and motor response
-# calibrated on DeepRacer's sim-traces (issue 25).
+# The version of the simulated car: its handling and what its camera sees. Lap times of
+# different versions are not comparable: league records carry it and leaderboards keep
+# versions apart. Bump it with any change to the car or its sensors that changes lap
+# times. 2: steering gain, steering lag and motor response calibrated on DeepRacer's
+# sim-traces, and DeepRacer's own camera and scene (issue 25).
 PHYSICS_VERSION = 2
 
 # Collision categories: cars never collide with each other unless a race asks for it
