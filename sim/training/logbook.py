@@ -73,14 +73,15 @@ _TracedEpisode = tuple[int, float, str, NDArray[np.float64]]
 
 @dataclass(frozen=True)
 class FinishedEpisode:
-    """One finished training episode, as numbered in the metrics."""
+    """One finished training episode: the logbook numbers it as the metrics do; a PPO
+    rollout, which only counts and averages its episodes, leaves `number` at 0."""
 
-    number: int  # from 1, in the order episodes finish
     car: int
     reward: float
     progress: float
     status: str
     steps: int
+    number: int = 0  # from 1, in the order episodes finish (0: not numbered)
 
     @property
     def lap_time(self) -> float | None:
@@ -216,7 +217,7 @@ class Logbook:
                 episode_status=status,
             )
         )
-        self.finished.append(FinishedEpisode(number, car, reward, progress, status, steps))
+        self.finished.append(FinishedEpisode(car, reward, progress, status, steps, number))
         iteration = (number - 1) // self.per_iteration
         if self._traced(iteration):
             self._pending_trace.setdefault(iteration, []).append(

@@ -34,9 +34,8 @@ from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import ActorCriticPolicy
 from torch.nn import functional
 
-from sim.car import STEP_SECONDS
 from sim.deepracer_files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_TYPE
-from sim.simulation import EpisodeStatus
+from sim.training.logbook import FinishedEpisode
 from sim.training.policy import NetworkSpec, PolicyNetwork, init_weights, observation_tensors
 from sim.training.vec_env import BatchedVecEnv
 
@@ -138,22 +137,6 @@ class UpdateStats:
     value_loss: float
     approx_kl: float
     clip_fraction: float
-
-
-@dataclass(frozen=True)
-class FinishedEpisode:
-    car: int
-    reward: float
-    progress: float
-    status: str
-    steps: int
-
-    @property
-    def lap_time(self) -> float | None:
-        """Training lap time: the episode's steps at 15 Hz (the prepare step included)."""
-        if self.status == EpisodeStatus.LAP_COMPLETE:
-            return self.steps * STEP_SECONDS
-        return None
 
 
 @dataclass

@@ -12,6 +12,23 @@ from sim.simulation import TrackSimulation
 from sim.track import Track
 
 
+class HardLeft:
+    """Full lock left at walking pace: off the track within a few seconds, every time."""
+
+    name = "left"
+    content_hash = "left"
+
+    def reset(self, sim: TrackSimulation) -> None:
+        del sim
+
+    def act(self, sim: TrackSimulation) -> DriverAction:
+        return DriverAction(
+            steering_deg=np.full(sim.n, 30.0),
+            speed=np.full(sim.n, 1.0),
+            action_index=np.full(sim.n, -1, dtype=np.int64),
+        )
+
+
 class ScriptedDriver:
     """The reference driver, except that from each driving step in `swerve_at` (counting
     the driver's own calls from 0) it turns hard right at full speed until it has been put

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from sim.deepracer_files import read_evaluation_metrics, read_sim_trace
 from sim.garage.folder import ModelFolder
-from sim.race.driver import DriverAction, reference_driver
+from sim.race.driver import reference_driver
 from sim.reference_driver import reference_lap
-from sim.simulation import TrackSimulation
 from sim.track_catalog import resolve_track
 from sim.training.evaluation import (
     EvaluationReport,
@@ -20,23 +18,7 @@ from sim.training.evaluation import (
     start_poses,
 )
 from sim.training.policy import build_network, save_policy
-
-
-class HardLeft:
-    """Full lock left at walking pace: off the track within a few seconds."""
-
-    name = "left"
-    content_hash = "left"
-
-    def reset(self, sim: TrackSimulation) -> None:
-        del sim
-
-    def act(self, sim: TrackSimulation) -> DriverAction:
-        return DriverAction(
-            steering_deg=np.full(sim.n, 30.0),
-            speed=np.full(sim.n, 1.0),
-            action_index=np.full(sim.n, -1, dtype=np.int64),
-        )
+from tests.sim.race.drivers import HardLeft
 
 
 def test_the_reference_driver_completes_every_trial_near_its_reference_lap() -> None:

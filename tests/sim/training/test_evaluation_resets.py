@@ -4,33 +4,14 @@ from __future__ import annotations
 
 import inspect
 
-import numpy as np
 import pytest
 
-from sim.race.driver import DriverAction, reference_driver
+from sim.race.driver import reference_driver
 from sim.resets import ResetRules
-from sim.simulation import TrackSimulation
 from sim.track_catalog import resolve_track
 from sim.training.evaluation import TrialResult, evaluate_model, evaluation_trials, run_trials
 from sim.training.trial_resets import EVALUATION_RESETS, TRAINING_RESETS
-from tests.sim.race.drivers import ScriptedDriver
-
-
-class HardLeft:
-    """Full lock left at walking pace: off the track within a few seconds, every time."""
-
-    name = "left"
-    content_hash = "left"
-
-    def reset(self, sim: TrackSimulation) -> None:
-        del sim
-
-    def act(self, sim: TrackSimulation) -> DriverAction:
-        return DriverAction(
-            steering_deg=np.full(sim.n, 30.0),
-            speed=np.full(sim.n, 1.0),
-            action_index=np.full(sim.n, -1, dtype=np.int64),
-        )
+from tests.sim.race.drivers import HardLeft, ScriptedDriver
 
 
 def test_an_evaluation_off_track_costs_two_seconds_by_default() -> None:
