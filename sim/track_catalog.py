@@ -17,6 +17,7 @@ same file imported by hand are one track.
 from __future__ import annotations
 
 import difflib
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -288,11 +289,13 @@ def _shadowed(name: str) -> bool:
 
 def _shipped_named(name: str) -> TrackInfo | None:
     """The built-in or official track with this name in any case (one file on macOS)."""
-    folded = name.casefold()
-    for info in builtin_tracks() + official_track_infos():
-        if info.name.casefold() == folded:
-            return info
-    return None
+    return _shipped_by_folded_name().get(name.casefold())
+
+
+@functools.cache
+def _shipped_by_folded_name() -> dict[str, TrackInfo]:
+    # Package data: read once, however many imported tracks a listing checks against it.
+    return {info.name.casefold(): info for info in builtin_tracks() + official_track_infos()}
 
 
 def _has_facts(meta: dict[str, Any]) -> bool:
