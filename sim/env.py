@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import gymnasium as gym
 import numpy as np
@@ -104,6 +104,16 @@ class EnvConfig:
         )
 
 
+class StepWatcher(Protocol):
+    """Sees every step of a batch: the simulation just before it and just after it."""
+
+    def before_step(self, sim: TrackSimulation) -> None: ...
+
+    def after_step(
+        self, sim: TrackSimulation, actions: np.ndarray, rewards: np.ndarray
+    ) -> None: ...
+
+
 @dataclass
 class StepInfo:
     """Per-car outcome of one batched step."""
@@ -129,9 +139,9 @@ class BatchedDeepRacer:
         self.action_space = config.action_space.gym_space()
         self._rewards_by_car = config.reward_functions(n_cars)
         self.final_observations: list[Any] = [None] * n_cars
-        # Told of every step (sim, actions, rewards) before finished cars restart, so a
-        # training log sees each step as it happened (sim.training.logbook).
-        self.on_step: Callable[[TrackSimulation, np.ndarray, np.ndarray], None] | None = None
+        # Told of every step before it is taken and after it, before finished cars restart,
+        # so a training log sees each step as it happened (sim.training.logbook).
+        self.watcher: StepWatcher | None = None
 
     def reset(self) -> Any:
         self.sim.reset_all()
@@ -142,10 +152,13 @@ class BatchedDeepRacer:
     ) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, list[StepInfo]]:
         sim = self.sim
         steering, speed = self.config.action_space.targets(actions)
+        watcher = self.watcher
+        if watcher is not None:
+            watcher.before_step(sim)
         sim.apply(steering, speed)
         rewards = self._rewards()
-        if self.on_step is not None:
-            self.on_step(sim, actions, rewards)
+        if watcher is not None:
+            watcher.after_step(sim, actions, rewards)
         status = sim.status.copy()
         progress = sim.progress
         infos = [

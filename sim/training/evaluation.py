@@ -47,6 +47,7 @@ from sim.resets import ResetRules
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
 from sim.training.logbook import closest_waypoint
+from sim.training.trace_pose import TracePose
 from sim.training.trial_resets import EVALUATION_RESETS, TRAINING_RESETS, TrialResets
 
 if TYPE_CHECKING:
@@ -120,14 +121,20 @@ def start_poses(trials: int, seed: int = 0) -> list[tuple[float, float]]:
 
 
 class TrialTrace:
-    """Every step of every trial, as the simulator left it after the step: DeepRacer's
-    point 0.14 m ahead of the car, heading, the step's action, all four wheels on the road,
-    progress and status. `columns` lays the trials end to end as DeepRacer runs them, each
-    trial's clock holding still for the penalty after a reset (the row that went off says
-    how long in `pause_duration`, as simapp's does), so the trace's time is the trial's."""
+    """Every step of every trial: DeepRacer's point 0.14 m ahead of the car, heading, the
+    step's action, all four wheels on the road, progress and status, the pose as
+    DeepRacer's row timing shows it (`sim.training.trace_pose`). `columns` lays the trials
+    end to end as DeepRacer runs them, each trial's clock holding still for the penalty
+    after a reset (the row that went off says how long in `pause_duration`, as simapp's
+    does), so the trace's time is the trial's."""
 
     def __init__(self) -> None:
         self._steps: list[tuple[NDArray[np.intp], NDArray[np.float64], list[str]]] = []
+        self._before: TracePose | None = None
+
+    def before_step(self, sim: TrackSimulation) -> None:
+        """Note where every car is as the step begins (a row's pose is one row late)."""
+        self._before = TracePose.of(sim)
 
     def record(
         self,
@@ -138,18 +145,21 @@ class TrialTrace:
     ) -> None:
         """The step just taken by `cars`; `penalty` is each trial's hold time before it."""
         waypoints = np.asarray(sim.track.center, dtype=np.float64)
+        after = TracePose.of(sim)
+        before = self._before if self._before is not None else after
+        pose = before.row_pose(after, sim)
         values = np.column_stack(
             (
                 sim.steps,
-                sim.ahead[:, 0],
-                sim.ahead[:, 1],
-                sim.heading_deg,
+                pose.ahead[:, 0],
+                pose.ahead[:, 1],
+                pose.heading_deg,
                 sim.steering_cmd,
                 sim.speed_cmd,
                 action,
-                sim.wheels_on.all(axis=1),
-                sim.progress,
-                closest_waypoint(sim.ahead, sim.segment, waypoints),
+                pose.wheels_on,
+                pose.progress,
+                closest_waypoint(pose.ahead, pose.segment, waypoints),
                 penalty,
             )
         )[cars]
@@ -235,6 +245,8 @@ def run_trials(
         if not running.any():
             break
         resetter.before_step(sim)
+        if trace is not None:
+            trace.before_step(sim)
         action = driver.act(sim)
         sim.apply(action.steering_deg, action.speed)
         if trace is not None:

@@ -13,8 +13,10 @@ cars at once, each a DeepRacer car of its own, so the logbook follows each of th
   1/15 s per row. A resumed training continues the clock from its last metrics row.
 - Every step of every car goes into a small per-car buffer (numpy, a few assignments per
   step of the whole fleet), taken before a finished car restarts: the step's own action,
-  position (DeepRacer's point 0.14 m ahead of the car's centre), all four wheels on the
-  road, progress and the simulator's episode status.
+  reward and status, and the pose as DeepRacer's row timing shows it (`sim.training.
+  trace_pose`: where the car was when the step began, or where the step left it if it
+  ended the episode): DeepRacer's point 0.14 m ahead of the car's centre, heading, all
+  four wheels on the road and progress.
 
 The sim-trace is a sample, because the fleet runs hundreds of times faster than
 DeepRacer's one car: whole iterations are traced, every step of every car in them, while
@@ -55,6 +57,7 @@ from sim.deepracer_files import (
     training_trace_path,
 )
 from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.training.trace_pose import TracePose
 
 TRACE_BASE_BYTES = 10_000_000
 TRACE_BYTES_PER_MINUTE = 1_000_000
@@ -122,6 +125,7 @@ class Logbook:
         self._step = np.zeros((cars, _COLUMNS))  # one step of the fleet, before it is stored
         self._step[:, _ACTION] = -1.0  # continuous actions have no index
         self._rows = np.arange(cars)
+        self._before: TracePose | None = None  # the fleet before the step being taken
         self._pending_metrics: list[TrainingEpisode] = []
         self._pending_trace: dict[int, list[_TracedEpisode]] = {}
         self._traced_iterations: dict[int, bool] = {}
@@ -165,24 +169,31 @@ class Logbook:
                     handle.truncate(data.rfind(b"\n") + 1)
 
     # --- every step ----------------------------------------------------------------------------
-    def on_step(self, sim: TrackSimulation, actions: np.ndarray, rewards: np.ndarray) -> None:
+    def before_step(self, sim: TrackSimulation) -> None:
+        """Note where every car is before the fleet's step (a row's pose is one row late)."""
+        self._before = TracePose.of(sim)
+
+    def after_step(self, sim: TrackSimulation, actions: np.ndarray, rewards: np.ndarray) -> None:
         """Record the fleet's step; called by the env before finished cars restart."""
         self.clock += STEP_SECONDS
         row = sim.steps - 1
         if int(row.max()) >= self._buffer.shape[1]:
             self._grow(int(row.max()) + 1)
+        after = TracePose.of(sim)
+        before = self._before if self._before is not None else after
+        pose = before.row_pose(after, sim)
         # Column by column into one block, then one store: a few microseconds per step.
         step = self._step
-        step[:, _X : _Y + 1] = sim.ahead
-        step[:, _YAW] = sim.heading_deg
+        step[:, _X : _Y + 1] = pose.ahead
+        step[:, _YAW] = pose.heading_deg
         step[:, _STEER] = sim.steering_cmd
         step[:, _THROTTLE] = sim.speed_cmd
         if self._discrete:
             step[:, _ACTION] = np.reshape(actions, self.cars)
         step[:, _REWARD] = rewards
-        step[:, _WHEELS] = sim.wheels_on.all(axis=1)
-        step[:, _PROGRESS] = sim.progress
-        step[:, _SEGMENT] = sim.segment
+        step[:, _WHEELS] = pose.wheels_on
+        step[:, _PROGRESS] = pose.progress
+        step[:, _SEGMENT] = pose.segment
         self._buffer[self._rows, row] = step
         done = sim.done
         if done.any():

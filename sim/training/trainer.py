@@ -170,7 +170,7 @@ class Trainer:
             waypoints=env.batch.sim.track.center,
             discrete=self.metadata.action_space.kind == "discrete",
         )
-        env.batch.on_step = self.logbook.on_step
+        env.batch.watcher = self.logbook
         spec = network_spec(self.metadata, SensorOptions())
         self.model = make_ppo(
             env, spec, self.settings, max_samples=self.max_samples, seed=self.options.seed

@@ -2,22 +2,27 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
+from sim.car import STEP_HZ, STEP_SECONDS
 from sim.deepracer_files import read_evaluation_metrics, read_sim_trace
 from sim.garage.folder import ModelFolder
 from sim.race.driver import reference_driver
 from sim.reference_driver import reference_lap
+from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.track_catalog import resolve_track
 from sim.training.evaluation import (
     EvaluationReport,
     TrialResult,
+    TrialTrace,
     evaluate_model,
     evaluation_trials,
     run_trials,
     start_poses,
 )
 from sim.training.policy import build_network, save_policy
+from sim.training.trial_resets import EVALUATION_RESETS
 from tests.sim.race.drivers import HardLeft
 
 
@@ -85,3 +90,46 @@ def test_evaluate_model_writes_deepracer_files(model: ModelFolder) -> None:
     again = evaluate_model(model, trials=1)
     assert again.metrics_file is not None and again.metrics_file != report.metrics_file
     assert len(model.evaluation_files()) == 2
+
+
+def test_the_trace_follows_deepracers_row_timing() -> None:
+    # DeepRacer's sim-trace shows a row's pose one row late: row i+1's pose is the car's
+    # state at row i's tstamp, so a row shows where its command was sent from, and the
+    # row that ends a trial shows where it ended. Replayed here step by step to compare.
+    track = resolve_track("hairpin-circuit")
+    trace = TrialTrace()
+    results = run_trials(reference_driver(track), track, 1, trace=trace)
+    columns = trace.columns(evaluation_trials(results), track.length)
+    driver = reference_driver(track)
+    sim = TrackSimulation(track, 1)
+    sim.reset_cars([0], [0.0])
+    driver.reset(sim)
+    poses = [tuple(sim.ahead[0])]  # where the car is as each step begins, then the end
+    while sim.status[0] == EpisodeStatus.IN_PROGRESS:
+        action = driver.act(sim)
+        sim.apply(action.steering_deg, action.speed)
+        poses.append(tuple(sim.ahead[0]))
+    rows = list(zip(columns.x.tolist(), columns.y.tolist(), strict=True))
+    assert len(rows) == len(poses) - 1 == round(results[0].seconds * STEP_HZ + 0.5)
+    assert rows[:-1] == pytest.approx(poses[:-2])  # each row where its step began
+    assert rows[-1] == pytest.approx(poses[-1])  # the last where the lap ended
+    assert rows[0] == pytest.approx(poses[0])  # the first at the start, as DeepRacer's
+    assert columns.progress[-1] == 100.0 and columns.episode_status[-1] == "lap_complete"
+    stamps = columns.tstamp
+    assert np.allclose(np.diff(stamps), STEP_SECONDS)
+
+
+def test_a_reset_row_shows_the_car_off_the_road_and_the_next_one_put_back() -> None:
+    track = resolve_track("hairpin-circuit")
+    trace = TrialTrace()
+    results = run_trials(HardLeft(), track, 1, resets=EVALUATION_RESETS, trace=trace)
+    assert results[0].resets  # it left the road and was put back at least once
+    columns = trace.columns(evaluation_trials(results), track.length)
+    off = [i for i, s in enumerate(columns.episode_status) if s == "off_track"]
+    first = off[0]
+    assert not columns.all_wheels_on_track[first]
+    assert columns.pause_duration[first] > 0  # the clock holds for the penalty
+    # The next row begins where the car was put back: on the road, by the centre line.
+    assert columns.all_wheels_on_track[first + 1]
+    gap = np.hypot(columns.x[first + 1] - columns.x[first], columns.y[first + 1] - columns.y[first])
+    assert gap > 0.05

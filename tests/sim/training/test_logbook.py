@@ -17,6 +17,7 @@ from sim.action_space import discrete_grid
 from sim.car import STEP_SECONDS
 from sim.deepracer_files import read_training_metrics
 from sim.env import BatchedDeepRacer, EnvConfig, StepInfo
+from sim.simulation import TrackSimulation
 from sim.track_catalog import resolve_track
 from sim.training.logbook import TRACE_RULE, Logbook
 
@@ -43,7 +44,7 @@ class Drive:
             discrete=True,
             **budget,
         )
-        self.env.on_step = self.logbook.on_step  # as the trainer hooks it
+        self.env.watcher = self.logbook  # as the trainer hooks it
         self.env.reset()
         self.rng = np.random.default_rng(3)
 
@@ -119,6 +120,47 @@ def test_the_trace_has_every_step_of_every_car_as_simapp_writes_it(tmp_path: Pat
     assert any(row["episode_status"] == "in_progress" for row in partly_off)
     off_track = [row for row in rows if row["episode_status"] == "off_track"]
     assert off_track and all(row["all_wheels_on_track"] == "False" for row in off_track)
+
+
+class PoseWatcher:
+    """Notes where each car is before and after every step, then tells the logbook."""
+
+    def __init__(self, logbook: Logbook) -> None:
+        self.logbook = logbook
+        self.steps: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # before, after, done
+
+    def before_step(self, sim: TrackSimulation) -> None:
+        self._before = sim.ahead.copy()
+        self.logbook.before_step(sim)
+
+    def after_step(self, sim: TrackSimulation, actions: np.ndarray, rewards: np.ndarray) -> None:
+        self.steps.append((self._before, sim.ahead.copy(), sim.done.copy()))
+        self.logbook.after_step(sim, actions, rewards)
+
+
+def test_the_trace_follows_deepracers_row_timing(tmp_path: Path) -> None:
+    # DeepRacer's rows show the pose one row late (row i+1 at the state of row i's tstamp):
+    # each row where its command was sent from, the episode's last row where it ended.
+    drive = Drive(tmp_path, cars=3)
+    watcher = PoseWatcher(drive.logbook)
+    drive.env.watcher = watcher
+    drive.until(6)
+    expected: dict[int, list[tuple[float, float]]] = {0: [], 1: [], 2: []}
+    episodes: list[list[tuple[float, float]]] = []
+    for before, after, done in watcher.steps:
+        for car in range(3):
+            if done[car]:
+                episodes.append([*expected[car], tuple(after[car])])
+                expected[car] = []
+            else:
+                expected[car].append(tuple(before[car]))
+    metrics = read_training_metrics(tmp_path / "metrics" / "TrainingMetrics.json").episodes
+    by_episode: dict[int, list[tuple[float, float]]] = {}
+    for row in _trace(tmp_path, 0) + _trace(tmp_path, 1):
+        by_episode.setdefault(int(row["episode"]), []).append((float(row["X"]), float(row["Y"])))
+    assert len(by_episode) == len(metrics) == len(episodes)
+    for number, poses in by_episode.items():
+        assert np.allclose(poses, episodes[number], atol=1e-3)  # the trace has 4 decimals
 
 
 def test_a_sample_is_whole_iterations_and_counted_in_the_metrics(tmp_path: Path) -> None:
