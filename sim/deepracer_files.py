@@ -213,6 +213,16 @@ class ModelMetadata:
     training_algorithm: str = "clipped_ppo"
     version: str = METADATA_VERSION
 
+    @property
+    def simapp_version(self) -> float:
+        """The simulator version DeepRacer runs this model in: simapp reads `version` as a
+        number, and a file without one as 1.0 or 2.0 (both older than any version racer-tui
+        tells apart: `sim.car.car_for_simapp_version`)."""
+        try:
+            return float(self.version)
+        except ValueError:
+            return 2.0
+
     def to_json(self) -> dict[str, Any]:
         return {
             "action_space": self.action_space.to_metadata(),

@@ -13,6 +13,7 @@ from dataclasses import replace
 import numpy as np
 import torch
 
+from sim.car import car_for_simapp_version
 from sim.car_export.archive import CarArchive
 from sim.car_export.policy import CarPolicy
 from sim.race.driver import DriverAction
@@ -22,7 +23,12 @@ from sim.track import Track
 
 
 class CarArchiveDriver:
-    """Drives with a DeepRacer car archive's policy; deterministic (the car's argmax)."""
+    """Drives with a DeepRacer car archive's policy; deterministic (the car's argmax).
+
+    `car` is the car DeepRacer's simulator would drive this model in, by the version in its
+    `model_metadata.json` (older models run on simapp's slower-steering car): pass it to
+    `run_trials` or the simulation for a like-for-like drive.
+    """
 
     def __init__(self, archive: CarArchive, camera: CameraSpec | None = None) -> None:
         # One frame per car is too small a batch to share between cores (as PolicyDriver).
@@ -31,6 +37,7 @@ class CarArchiveDriver:
         self.name = archive.name
         self.content_hash = f"car-archive:{archive.content_hash}"
         self._space = archive.metadata.action_space
+        self.car = car_for_simapp_version(archive.metadata.simapp_version)
         # The camera's own defaults (DeepRacer's), at the frame size the graph takes.
         self.camera_spec = replace(
             camera or CameraSpec(), width=self.policy.width, height=self.policy.height

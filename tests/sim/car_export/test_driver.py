@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sim.car import SIMAPP4_CAR
 from sim.car_export.archive import CarArchive, read_car_archive
 from sim.car_export.driver import CarArchiveDriver
 from sim.car_export.errors import CarModelError
@@ -56,14 +57,22 @@ def test_a_policy_whose_outputs_do_not_match_the_action_space_is_refused(tmp_pat
         CarPolicy(archive)
 
 
-def test_the_deepracer_trained_model_evaluates_on_reinvent_base(
+def test_the_deepracer_trained_model_drives_on_the_car_of_its_simapp_version(
     sample_archive: CarArchive,
 ) -> None:
-    # Asserts only that it runs: how far it drives depends on the camera and the handling,
-    # which other work is calibrating against DeepRacer's.
+    # The sample model's metadata says version 3: DeepRacer drives it on simapp's older,
+    # slower-steering car, and so does racer-tui.
     driver = CarArchiveDriver(sample_archive)
+    assert sample_archive.metadata.simapp_version == 3.0
+    assert driver.car is SIMAPP4_CAR
     results = run_trials(
-        driver, resolve_track("reinvent_base"), 2, max_seconds=3.0, resets=EVALUATION_RESETS
+        driver,
+        resolve_track("reinvent_base"),
+        2,
+        car=driver.car,
+        max_seconds=3.0,
+        resets=EVALUATION_RESETS,
     )
     assert [result.trial for result in results] == [1, 2]
-    assert all(0.0 <= result.progress <= 100.0 for result in results)
+    # Three seconds from the line on re:Invent 2018's straight: it drives down the road.
+    assert all(result.progress > 10.0 for result in results)
