@@ -1,7 +1,8 @@
 """`racer-tui train` and `racer-tui evaluate`.
 
 `train` starts the training child process and draws its JSON event stream as a rich
-progress bar with live figures (or passes the events through with `--json`). Ctrl+C asks
+progress bar with live figures (or passes the events through with `--json`), keeping the
+events in the model's training log as the app does, so an open app follows the run. Ctrl+C asks
 the child to stop: it saves a checkpoint and the command prints how the run ended; a
 second Ctrl+C kills it (the folder stays consistent; the work since the last checkpoint
 is lost). `evaluate` runs DeepRacer-style trials and prints the console's table.
@@ -15,7 +16,9 @@ import argparse
 import math
 import signal
 import sys
+from collections.abc import Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import FrameType
 from typing import Any
 
@@ -208,19 +211,33 @@ def _train(args: argparse.Namespace) -> int:
         raise ModelError(
             f"model {folder.name!r} is already training in another process; stop that one first."
         )
+    log = folder.training_log
+    log.write_bytes(b"")  # a new run, a new log, as the app starts one
     process = TrainingProcess.start(str(folder.path), args.minutes)
     with _Interrupts(process) as interrupts:
         show = _stream_json if args.json else _show_live
-        ended = show(process, folder.name, interrupts)
+        ended = show(_logged(process.events(), log), folder.name, interrupts)
     if ended.kind == "failed":
         raise TrainingFailedError(ended.message)
     return 0
 
 
-def _stream_json(process: Any, name: str, interrupts: _Interrupts) -> events.Ended:
+def _logged(stream: Iterator[events.Event], log: Path) -> Iterator[events.Event]:
+    """The run's events, each also appended to the model's training log as it comes: the
+    app follows a run started here from that log, with all its figures."""
+    with log.open("ab") as out:
+        for event in stream:
+            out.write((events.encode(event) + "\n").encode("utf-8"))
+            out.flush()
+            yield event
+
+
+def _stream_json(
+    stream: Iterator[events.Event], name: str, interrupts: _Interrupts
+) -> events.Ended:
     del name, interrupts
     ended: events.Ended | None = None
-    for event in process.events():
+    for event in stream:
         sys.stdout.write(events.encode(event) + "\n")
         sys.stdout.flush()
         if isinstance(event, events.Ended):
@@ -229,7 +246,7 @@ def _stream_json(process: Any, name: str, interrupts: _Interrupts) -> events.End
     return ended
 
 
-def _show_live(process: Any, name: str, interrupts: _Interrupts) -> events.Ended:
+def _show_live(stream: Iterator[events.Event], name: str, interrupts: _Interrupts) -> events.Ended:
     console = Console(stderr=False)
     figures = Figures(model=name)
     progress = Progress(
@@ -244,7 +261,7 @@ def _show_live(process: Any, name: str, interrupts: _Interrupts) -> events.Ended
     with Live(
         Group(progress, _figures_table(figures)), console=console, refresh_per_second=4
     ) as live:
-        for event in process.events():
+        for event in stream:
             figures.fold(event)
             if isinstance(event, events.Ended):
                 ended = event

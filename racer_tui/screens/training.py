@@ -58,7 +58,6 @@ from sim.simulation import LOOK_AHEAD
 from sim.training import events
 from sim.training.launcher import failure_from_stderr, worker_command
 
-LOG_FILE = "training-log.jsonl"
 WORKER_MODULE = "sim.training.worker"
 TAIL_SECONDS = 0.25  # how often the log is read while a run is live
 TICK_SECONDS = 2.0  # run status, adopted runs and the agent's-eye view
@@ -83,10 +82,6 @@ class LiveRun:
     minutes: float | None
     process: asyncio.subprocess.Process | None = None
     stopping: bool = False
-
-
-def training_log(folder: ModelFolder) -> Path:
-    return folder.path / LOG_FILE
 
 
 def running_worker_pid(folder: ModelFolder) -> int | None:
@@ -345,6 +340,10 @@ class TrainingScreen(RacerScreen[None]):
     def _tick(self) -> None:
         self._show_context()
         live = self.live
+        if live is None:
+            # A training started outside the app (`racer-tui train`, the host's usual case
+            # on a league night) is picked up within a tick, without a key press.
+            self._read_models(None)
         if live is not None and live.model == self.watched and not self.has_class("-narrow"):
             self._observe(live.model)
 
@@ -429,7 +428,7 @@ class TrainingScreen(RacerScreen[None]):
             self.figures[request.model] = figures
             if request.model == self.watched:
                 self.query_one(TrainingCharts).show(figures)
-            log = training_log(folder)
+            log = folder.training_log
             log.write_bytes(b"")  # a new run, a new log
             stderr = tempfile.TemporaryFile()  # noqa: SIM115 - closed when the run ends
             command = worker_command(request.model, request.minutes, self._options())
@@ -480,7 +479,7 @@ class TrainingScreen(RacerScreen[None]):
             self.figures[name] = figures
             if name == self.watched:
                 self.query_one(TrainingCharts).show(figures)
-            log = training_log(folder)
+            log = folder.training_log
             if not log.is_file():
                 # Started without a log (by `racer-tui train`): follow TrainingMetrics.json instead.
                 waited = 0.0

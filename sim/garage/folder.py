@@ -78,6 +78,7 @@ MODELS_DIR = "models"
 POLICY_FILE = "policy.safetensors"
 CHECKPOINTS_DIR = "checkpoints"
 TRAINING_STATE_FILE = "training-state.json"
+TRAINING_LOG_FILE = "training-log.jsonl"
 TRAINING_STATES = ("running", "stopped", "finished", "failed")
 MAX_REWARD_BYTES = 1_000_000
 MAX_TRAINING_STATE_BYTES = 64_000
@@ -163,6 +164,13 @@ class ModelFolder:
     def evaluation_trace_file(self, stamp: str) -> Path:
         """The sim-trace of the evaluation whose metrics are EvaluationMetrics-<stamp>.json."""
         return self.path / evaluation_trace_path(stamp)
+
+    @property
+    def training_log(self) -> Path:
+        """The latest training run's events, one JSON line each (`sim.training.events`), as
+        the run goes: written by whoever started it (the app or `racer-tui train`), so the
+        app can follow a run that any of them started."""
+        return self.path / TRAINING_LOG_FILE
 
     @property
     def training_state_file(self) -> Path:

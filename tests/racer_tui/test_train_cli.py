@@ -48,6 +48,9 @@ def test_train_json_streams_valid_events_from_start_to_finish(
     assert events.type_of(stream[-1]) == "finished"
     assert any(isinstance(e, events.Update) for e in stream)
     assert model.has_policy()
+    # The same events are in the model's training log, which the app follows.
+    logged = model.training_log.read_text().splitlines()
+    assert [events.decode(line) for line in logged] == stream
 
 
 @pytest.mark.slow

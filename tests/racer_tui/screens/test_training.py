@@ -226,3 +226,28 @@ def test_the_agents_eye_view_comes_from_the_newest_traced_step(
     assert training.latest_observation(folder) == "iteration 12, episode 41 step 8"
     ((x, y, heading),) = poses  # seen from the car itself, not from the point ahead
     assert (x, y, heading) == (pytest.approx(car_x), pytest.approx(car_y), yaw)
+
+
+async def test_a_training_started_from_the_command_line_appears_without_a_key(
+    sleeper: subprocess.Popen[bytes],
+) -> None:
+    folder = new_model("ada")
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        assert screen.live is None
+        # What `racer-tui train ada` leaves while it runs: its state and its event log.
+        log = b"".join((events.encode(event) + "\n").encode() for event in sample_events()[:-1])
+        folder.training_log.write_bytes(log)
+        state = {"state": "running", "pid": sleeper.pid, "message": "training"}
+        folder.training_state_file.write_text(json.dumps(state))
+        await wait_for(pilot, lambda: screen.live is not None, tries=400)
+        assert screen.live is not None and screen.live.pid == sleeper.pid
+        await wait_for(pilot, lambda: "training" in painted(screen.query_one("#training-models")))
+        # Its figures come from the log: entropy, steps/s and CPU, not only episodes.
+        await wait_for(pilot, lambda: screen.figures["ada"].cpu == [97.0], tries=200)
+        figures = screen.figures["ada"]
+        assert figures.entropy == [1.61] and figures.steps_per_second == [5100.0]
+        sleeper.terminate()
