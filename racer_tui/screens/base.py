@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from typing import Any, TypeVar
 
+from textual import events
 from textual.message import Message
 from textual.screen import ModalScreen, Screen
 from textual.worker import Worker, WorkerState
@@ -52,10 +53,33 @@ class ModelAdded(Message):
 
 
 class RacerScreen(Screen[ResultT]):
-    """A full screen whose failed workers become error notifications."""
+    """A full screen whose failed workers become error notifications, and which comes back
+    from a section switch without restyling itself when nothing its styles depend on
+    changed meanwhile."""
+
+    _style_context: tuple[object, ...] | None = None
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         notify_worker_failure(self, event.worker)
+
+    def _app_style_context(self) -> tuple[object, ...]:
+        """What the app's styling of this screen rests on: the stylesheet's version (bumped
+        by a theme or CSS change), whether the terminal has focus, the app's classes."""
+        app = self.app
+        return (app._css_update_count, app.app_focus, tuple(sorted(app.classes)))
+
+    def _on_screen_suspend(self) -> None:
+        self._style_context = self._app_style_context()
+
+    def _on_screen_resume(self, event: events.ScreenResume) -> None:
+        # Textual restyles every node of a screen each time it is shown again: a third of
+        # a section switch's work. A switch already restyles after a theme or CSS change
+        # (App.switch_mode compares the CSS version), and the screen's own nodes restyle
+        # as their classes change, hidden or not; so when the app's styling context is
+        # what it was when the screen was left, the resumed screen skips the restyle.
+        if event.refresh_styles and self._style_context == self._app_style_context():
+            event.prevent_default()  # Screen's own handler, with the restyle, is not run
+            Screen._on_screen_resume(self, events.ScreenResume(refresh_styles=False))
 
 
 class RacerModal(ModalScreen[ResultT]):
