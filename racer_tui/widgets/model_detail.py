@@ -81,8 +81,11 @@ class ModelDetail(VerticalScroll):
     def on_mount(self) -> None:
         self.show_message("No model highlighted.")
 
+    _shown: tuple[dict[str, Any], ActionSpace] | None = None  # the details on screen
+
     def show_message(self, message: str) -> None:
         """A sentence instead of details (no models yet, a damaged folder...)."""
+        self._shown = None
         self._set_sections_visible(False)
         self.query_one("#detail-title", Static).update(Text(message))
         self.query_one("#detail-facts", Static).update("")
@@ -93,6 +96,12 @@ class ModelDetail(VerticalScroll):
                 widget.display = visible
 
     def show_details(self, details: Mapping[str, Any], space: ActionSpace) -> None:
+        """A model's details; the Garage reloads them each time it is shown, and details
+        that are already on screen are not drawn again."""
+        shown = (dict(details), space)
+        if shown == self._shown:
+            return
+        self._shown = shown
         self._set_sections_visible(True)
         title = Text(str(details["name"]), style="bold")
         title.append("  ")
