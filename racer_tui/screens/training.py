@@ -57,6 +57,7 @@ from sim.garage.folder import (
 from sim.simulation import LOOK_AHEAD
 from sim.training import events
 from sim.training.launcher import failure_from_stderr, worker_command
+from sim.training.run_history import read_history
 
 WORKER_MODULE = "sim.training.worker"
 TAIL_SECONDS = 0.25  # how often the log is read while a run is live
@@ -101,11 +102,13 @@ def running_worker_pid(folder: ModelFolder) -> int | None:
 
 
 def load_figures(folder: ModelFolder) -> TrainingFigures:
-    """The model's past training from its TrainingMetrics (empty before the first run)."""
+    """The model's training so far, every run: its TrainingMetrics and its run history
+    (empty before the first run)."""
+    history = read_history(folder.training_history)
     try:
-        return TrainingFigures.from_metrics(folder.training_metrics())
-    except ModelError:
-        return TrainingFigures()  # unreadable metrics: the charts start with the next run
+        return TrainingFigures.from_metrics(folder.training_metrics(), history)
+    except ModelError:  # unreadable metrics: the episode charts start with the next run
+        return TrainingFigures.from_metrics(None, history)
 
 
 def latest_observation(folder: ModelFolder) -> Observation | None:
@@ -513,7 +516,8 @@ class TrainingScreen(RacerScreen[None]):
     ) -> events.Ended | None:
         """Apply the log's events until the last one, or until the child is gone and the
         log drained. Lines before `history_end` were written before this session looked:
-        their episodes are already in the TrainingMetrics, so only the rest of them is used."""
+        their episodes, updates and system readings are already in the TrainingMetrics and
+        the run history, so only the rest of them is used."""
         waiter = asyncio.ensure_future(wait())
         offset, pending = 0, b""
         try:
@@ -540,8 +544,8 @@ class TrainingScreen(RacerScreen[None]):
             event = events.decode(line.strip())
         except events.EventError:
             return None  # a stray line is skipped, never fatal
-        if replay and isinstance(event, events.Episode):
-            return None
+        if replay and isinstance(event, events.Episode | events.Update | events.System):
+            return None  # already read from the model's metrics and run history
         self.apply_event(name, event)
         return event if isinstance(event, events.Ended) else None
 

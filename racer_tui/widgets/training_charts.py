@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -49,10 +50,17 @@ class TrainingFigures:
     version: int = 0  # bumped by every change, so views redraw only when needed
 
     @classmethod
-    def from_metrics(cls, metrics: TrainingMetrics | None) -> TrainingFigures:
-        """A past run, from its TrainingMetrics (episodes only: entropy, steps per second and
-        CPU are not in DeepRacer's file, so those charts start with the next run)."""
+    def from_metrics(
+        cls,
+        metrics: TrainingMetrics | None,
+        history: Sequence[events.Update | events.System] = (),
+    ) -> TrainingFigures:
+        """A model's training so far, every run of it: episodes from its TrainingMetrics,
+        entropy, steps per second and CPU from its run history (`sim.training.run_history`;
+        DeepRacer's file does not keep those)."""
         figures = cls()
+        for event in history:
+            figures.fold(event)
         for row in metrics.episodes if metrics is not None else ():
             if row.phase != "training":
                 continue

@@ -79,6 +79,7 @@ POLICY_FILE = "policy.safetensors"
 CHECKPOINTS_DIR = "checkpoints"
 TRAINING_STATE_FILE = "training-state.json"
 TRAINING_LOG_FILE = "training-log.jsonl"
+TRAINING_HISTORY_FILE = "training-history.jsonl"
 TRAINING_STATES = ("running", "stopped", "finished", "failed")
 MAX_REWARD_BYTES = 1_000_000
 MAX_TRAINING_STATE_BYTES = 64_000
@@ -171,6 +172,12 @@ class ModelFolder:
         the run goes: written by whoever started it (the app or `racer-tui train`), so the
         app can follow a run that any of them started."""
         return self.path / TRAINING_LOG_FILE
+
+    @property
+    def training_history(self) -> Path:
+        """Every run's PPO updates and system readings, one event per line (see
+        `sim.training.run_history`): the curves TrainingMetrics.json does not keep."""
+        return self.path / TRAINING_HISTORY_FILE
 
     @property
     def training_state_file(self) -> Path:

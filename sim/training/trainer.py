@@ -49,6 +49,7 @@ from sim.training.policy import (
     save_policy,
 )
 from sim.training.ppo import PPOSettings, Rollout, make_ppo
+from sim.training.run_history import RunHistory
 from sim.training.vec_env import BatchedVecEnv
 
 REPORTED_CAR = 0  # the car whose episodes are streamed and logged, as DeepRacer's one car
@@ -85,6 +86,10 @@ def sample_limits(sensors: tuple[str, ...], cars: int) -> tuple[int, int]:
 class Trainer:
     """Trains one model folder until the time limit or `should_stop()`."""
 
+    def emit(self, event: events.Event) -> None:
+        self._emit_out(event)
+        self._history.record(event)
+
     def __init__(
         self,
         folder: ModelFolder,
@@ -93,7 +98,10 @@ class Trainer:
         options: RunOptions | None = None,
     ) -> None:
         self.folder = folder
-        self.emit = emit
+        self._emit_out = emit
+        # Updates and system readings also go to the model's history, so its charts show
+        # every run (sim.training.run_history).
+        self._history = RunHistory(folder.training_history)
         self.should_stop = should_stop
         self.options = options or RunOptions()
         self.metadata = folder.metadata()

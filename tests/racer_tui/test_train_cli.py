@@ -16,6 +16,7 @@ from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
 from sim.training import events
 from sim.training.policy import build_network, save_policy
+from sim.training.run_history import read_history
 from tests.test_architecture import _import_report
 
 
@@ -51,6 +52,9 @@ def test_train_json_streams_valid_events_from_start_to_finish(
     # The same events are in the model's training log, which the app follows.
     logged = model.training_log.read_text().splitlines()
     assert [events.decode(line) for line in logged] == stream
+    # Its updates and system readings are in the model's run history, for later charts.
+    kept = [e for e in stream if isinstance(e, events.Update | events.System)]
+    assert kept and read_history(model.training_history) == kept
 
 
 @pytest.mark.slow

@@ -103,6 +103,29 @@ async def test_charts_show_the_history_in_training_json() -> None:
         assert charts.query_one("#chart-progress", LineChart).values == [10, 20, 30, 40, 50]
 
 
+async def test_entropy_steps_and_cpu_charts_show_every_run_after_a_restart() -> None:
+    # Two earlier runs left their updates and system readings in the model's run history:
+    # the charts continue across runs instead of starting again from nothing.
+    folder = new_model("ada")
+    runs = [
+        events.Update(10.0, 1, 2048, 3, 1.7, 0.0, 0.4, 0.0, 0.1, 4000.0, 3, 10.0, 30.0, 0, None),
+        events.System(11.0, 90.0, 300.0),
+        events.Update(20.0, 2, 4096, 6, 1.6, 0.0, 0.4, 0.0, 0.1, 4100.0, 3, 11.0, 35.0, 0, None),
+        events.Update(8.0, 3, 6144, 9, 1.5, 0.0, 0.4, 0.0, 0.1, 4200.0, 3, 12.0, 40.0, 0, None),
+        events.System(9.0, 95.0, 310.0),
+    ]
+    folder.training_history.write_text("".join(events.encode(e) + "\n" for e in runs))
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        charts = app.screen.query_one(TrainingCharts)
+        await wait_for(pilot, lambda: len(charts.figures.entropy) == 3)
+        charts.redraw_now()
+        assert charts.query_one("#chart-entropy", LineChart).values == [1.7, 1.6, 1.5]
+        assert charts.query_one("#chart-steps", LineChart).values == [4000, 4100, 4200]
+        assert charts.query_one("#chart-cpu", LineChart).values == [90, 95]
+
+
 async def test_a_second_request_waits_in_the_queue(monkeypatch: pytest.MonkeyPatch) -> None:
     new_model("ada")
     new_model("bob")
@@ -238,9 +261,12 @@ async def test_a_training_started_from_the_command_line_appears_without_a_key(
         screen = app.screen
         assert isinstance(screen, TrainingScreen)
         assert screen.live is None
-        # What `racer-tui train ada` leaves while it runs: its state and its event log.
-        log = b"".join((events.encode(event) + "\n").encode() for event in sample_events()[:-1])
-        folder.training_log.write_bytes(log)
+        # What `racer-tui train ada` leaves while it runs: its state, its event log and
+        # the model's run history (the trainer's updates and system readings).
+        so_far = sample_events()[:-1]
+        folder.training_log.write_text("".join(events.encode(e) + "\n" for e in so_far))
+        kept = [e for e in so_far if isinstance(e, events.Update | events.System)]
+        folder.training_history.write_text("".join(events.encode(e) + "\n" for e in kept))
         state = {"state": "running", "pid": sleeper.pid, "message": "training"}
         folder.training_state_file.write_text(json.dumps(state))
         await wait_for(pilot, lambda: screen.live is not None, tries=400)
