@@ -236,6 +236,9 @@ def _print_status(document: dict[str, Any]) -> None:
         print(f"Store: {document['store']}")
         if document["bundles"]:
             print(f"Bundles: {document['bundles']}")
+        failure = document.get("last_failure")
+        if failure:
+            print(f"The last sync failed at {failure['at']}: {failure['message']}")
         for direction in ("push", "pull"):
             run = document["runs"].get(direction)
             if run is None:

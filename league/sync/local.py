@@ -2,7 +2,8 @@
 
 Tables (migration 3 in league.migrations):
 
-- `sync_settings`: the league's store URL and bundle URL (`racer-tui sync set`).
+- `sync_settings`: the league's store URL and bundle URL (`racer-tui sync set`), and the
+  last sync that failed, until one succeeds (`last_failure`: store, when, the sentence).
 - `sync_in_store`: which records each store is known to hold (pushed from here, or pulled
   from it), by store URL, so a push sends only what is new and a second push sends nothing.
 - `sync_cursors`: where the last pull from each store stopped (saved in the page's
@@ -33,6 +34,7 @@ from sim.ids import canonical_json
 
 STORE_SETTING: Final = "store"
 BUNDLES_SETTING: Final = "bundles"
+FAILURE_SETTING: Final = "last_failure"
 
 
 def get_setting(league: League, name: str) -> str | None:
@@ -93,6 +95,36 @@ def record_run(league: League, store: str, direction: str, summary: dict[str, An
         "summary = excluded.summary",
         (store, direction, now_iso(), json.dumps(summary, sort_keys=True)),
     )
+
+
+@dataclass(frozen=True)
+class Failure:
+    """A sync that failed: the store, when (ISO, UTC) and the sentence saying why."""
+
+    store: str
+    at: str
+    message: str
+
+
+def record_failure(league: League, store: str, message: str) -> None:
+    body = {"store": store, "at": now_iso(), "message": message}
+    set_setting(league, FAILURE_SETTING, json.dumps(body, sort_keys=True))
+
+
+def clear_failure(league: League) -> None:
+    league.conn.execute("DELETE FROM sync_settings WHERE name = ?", (FAILURE_SETTING,))
+
+
+def last_failure(league: League) -> Failure | None:
+    """The last failed sync, until a sync succeeds (None for an unreadable entry)."""
+    raw = get_setting(league, FAILURE_SETTING)
+    if raw is None:
+        return None
+    try:
+        body = json.loads(raw)
+        return Failure(str(body["store"]), str(body["at"]), str(body["message"]))
+    except (ValueError, TypeError, KeyError):
+        return None
 
 
 @dataclass(frozen=True)

@@ -8,10 +8,18 @@ accept the same URLs, say the same sentences and push the same things.
 
 from __future__ import annotations
 
+from league.errors import LeagueError
 from league.store import League
 from league.sync.engine import Progress, SyncSummary, store_key, sync
 from league.sync.errors import StoreUrlError, SyncError
-from league.sync.local import BUNDLES_SETTING, STORE_SETTING, get_setting, set_setting
+from league.sync.local import (
+    BUNDLES_SETTING,
+    STORE_SETTING,
+    clear_failure,
+    get_setting,
+    record_failure,
+    set_setting,
+)
 from league.sync.urls import DirUrl, DynamoDbUrl, S3Url, parse_store_url
 
 NO_STORE = (
@@ -71,10 +79,42 @@ def sync_league(
     """Push the league's model bundles (when a bundle store is set) and records, then pull.
 
     Returns the summary and notes (one sentence each) about bundles. A store that is down
-    raises its SyncError before anything here changes."""
+    raises its SyncError before anything here changes; a failed sync is recorded
+    (`league.sync.local.last_failure`) until one succeeds."""
+    key = store_key(url)
+    try:
+        summary, notes = _sync_with(
+            league,
+            url,
+            key=key,
+            bundles_url=bundles_url,
+            push_records=push_records,
+            pull_records=pull_records,
+            progress=progress,
+        )
+    except (SyncError, LeagueError, OSError) as error:
+        # Kept until a sync succeeds, so every status line can say the last one failed
+        # rather than show the last success as if nothing had happened since.
+        with league.transaction():
+            record_failure(league, key, str(error))
+        raise
+    with league.transaction():
+        clear_failure(league)
+    return summary, notes
+
+
+def _sync_with(
+    league: League,
+    url: str,
+    *,
+    key: str,
+    bundles_url: str | None,
+    push_records: bool,
+    pull_records: bool,
+    progress: Progress | None,
+) -> tuple[SyncSummary, list[str]]:
     from league.sync.stores import open_bundle_store, open_store
 
-    key = store_key(url)
     bundles_url = bundles_url or get_setting(league, BUNDLES_SETTING)
     notes: list[str] = []
     with open_store(url) as store:

@@ -47,6 +47,7 @@ class SyncOverview:
     conflicts: int
     quarantined: int
     waiting: int
+    failure: local.Failure | None = None  # the last sync with this store failed
 
     @property
     def last_run(self) -> local.Run | None:
@@ -77,6 +78,7 @@ class SyncStatus:
             "store": overview.store,
             "bundles": overview.bundles,
             "runs": {direction: asdict(run) for direction, run in overview.runs.items()},
+            "last_failure": asdict(overview.failure) if overview.failure else None,
             "in_store": overview.in_store,
             "to_push": overview.to_push,
             "conflicts": [asdict(row) for row in self.conflicts],
@@ -111,6 +113,7 @@ def sync_overview(league: League) -> SyncOverview:
         runs = {run.direction: run for run in local.runs(league, key)}
         in_store = local.in_store_count(league, key)
         to_push = count_unsent(league, key)
+    failure = local.last_failure(league)
     return SyncOverview(
         store=key,
         bundles=local.get_setting(league, local.BUNDLES_SETTING),
@@ -120,6 +123,7 @@ def sync_overview(league: League) -> SyncOverview:
         conflicts=_count(league, "sync_conflicts"),
         quarantined=_count(league, "sync_quarantine"),
         waiting=_count(league, "sync_pending"),
+        failure=failure if failure is not None and failure.store == key else None,
     )
 
 

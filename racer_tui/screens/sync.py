@@ -159,6 +159,11 @@ class SyncScreen(RacerScreen[bool]):
             )
         overview = self.status.overview
         lines = []
+        if overview.failure is not None:
+            lines.append(
+                f"The last sync failed at {local_time(overview.failure.at)}: "
+                f"{sentence(overview.failure.message)} Fix that and press s to try again."
+            )
         for direction in ("push", "pull"):
             run = overview.runs.get(direction)
             if run is None:
@@ -351,7 +356,12 @@ class SyncScreen(RacerScreen[bool]):
             WorkerState.CANCELLED,
         ):
             self._sync_ended()
+            # Nothing may still look like it is syncing, nor the last success like news:
+            # the bar stops, and the summary is read again (it leads with the failure).
+            self.query_one("#sync-progress", ProgressBar).update(total=1, progress=0)
             self._stage(Text("not synced", style="bold"))
+            self.last_summary = None
+            self.action_reload()
         error = worker.error
         if worker.state is WorkerState.ERROR and isinstance(error, SyncError | LeagueError):
             # The library's sentence says what is wrong and what to do: shown as it is.

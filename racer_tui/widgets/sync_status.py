@@ -45,6 +45,14 @@ def _figure(count: int, label: str, warn: bool) -> Text:
     return Text(f"{count} {label}", style="bold yellow" if warn and count else "")
 
 
+def failed_text(overview: SyncOverview) -> list[Text]:
+    """ "sync failed 14:10" when the last sync with the store failed (the Sync screen says
+    why); nothing otherwise."""
+    if overview.failure is None:
+        return []
+    return [Text(f"sync failed {local_time(overview.failure.at)}", style="bold yellow")]
+
+
 def counts_text(overview: SyncOverview) -> Text:
     """When it last synced and what moved, then what waits; "" without a store."""
     if overview.store is None:
@@ -60,6 +68,7 @@ def counts_text(overview: SyncOverview) -> Text:
         ]
         when = Text(f"synced {local_time(last.finished_at)} ({' '.join(arrows)})", style="dim")
     parts = [
+        *failed_text(overview),
         when,
         _figure(overview.to_push or 0, "to push", warn=False),
         _figure(overview.conflicts, "conflict" + "s" * (overview.conflicts != 1), warn=True),

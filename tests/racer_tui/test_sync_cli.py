@@ -136,7 +136,11 @@ def test_a_store_that_is_down_is_one_sentence_and_changes_nothing(
     assert err.startswith("racer-tui: ") and err.count("\n") == 1
     assert ("not there" in err) if kind == "dir" else ("cannot reach" in err)
     with open_league(Path(db)) as league:
-        assert list(league.conn.iterdump()) == before
+        after = list(league.conn.iterdump())
+    # No record changed; only the failure is noted, and `sync status` says so.
+    assert [line for line in after if "last_failure" not in line] == before
+    code, out, _ = run_cli(capsys, "sync", "status", "--db", db)
+    assert code == 0 and "The last sync failed at" in out
 
 
 def test_the_progress_bars_take_both_directions(capsys: pytest.CaptureFixture[str]) -> None:

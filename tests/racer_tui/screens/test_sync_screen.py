@@ -6,11 +6,12 @@ a conflict with both sides shown."""
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 
 import pytest
 from textual.pilot import Pilot
-from textual.widgets import DataTable, Input
+from textual.widgets import DataTable, Input, ProgressBar
 
 from league.races import record_race
 from league.store import open_league
@@ -147,7 +148,44 @@ async def test_a_store_that_is_down_is_one_notification_and_changes_nothing(
         assert errors.count("\n") == 0  # one sentence
         assert "not synced" in painted(screen.query_one("#sync-stage"))
         assert not screen.syncing  # the action can be tried again
-    assert database_dump() == before
+    # No record changed; only the failure is noted, for the status lines.
+    after = [line for line in database_dump() if "last_failure" not in line]
+    assert after == before
+
+
+async def test_a_failed_sync_never_shows_the_last_success_as_news(
+    tmp_path: Path, store_url: str
+) -> None:
+    data_home()
+    record("ana", [11.0])
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        screen = await open_sync(pilot)
+        await set_store(pilot, screen, store_url)
+        await pilot.press("s")
+        await settle(pilot)
+        assert "Synced with" in summary(screen)
+        # The shared folder goes away (the USB stick is pulled) and the racer syncs again.
+        shutil.rmtree(store_url.removeprefix("dir:"))
+        await pilot.press("s")
+        await settle(pilot)
+        shown = painted(screen.query_one("#sync-summary"))
+        assert "Synced with" not in shown
+        assert "The last sync failed at" in shown and "press s to try again" in shown
+        bar = screen.query_one("#sync-progress", ProgressBar)
+        assert bar.total == 1 and bar.progress == 0  # stopped, not spinning
+        await pilot.press("escape")
+        await settle(pilot)
+        assert "sync failed" in status_line(app)
+        # A sync that works again clears it.
+        with open_store(store_url) as store:
+            store.init()
+        screen = await open_sync(pilot)
+        await pilot.press("s")
+        await settle(pilot)
+        await pilot.press("escape")
+        await settle(pilot)
+        assert "sync failed" not in status_line(app)
 
 
 async def test_a_malformed_record_in_the_store_is_listed_as_quarantined(
