@@ -133,23 +133,24 @@ def policy_driver(folder: ModelFolder) -> Driver:
 class GarageScreen(RacerScreen[None]):
     """Model list on the left (or top), details of the highlighted model beside it."""
 
+    # In the order the footer keeps them when it is narrow (80 columns fit the first nine
+    # and help); every key is in the help screen and the palette.
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("n", "new_model", "New model", tooltip="Create a model in the editor"),
+        Binding("n", "new_model", "New", tooltip="Create a model in the editor"),
         Binding("e", "edit_model", "Edit", tooltip="Change the highlighted model (also Enter)"),
-        Binding("c", "clone_model", "Clone", tooltip="A new model starting from this one"),
-        Binding("d", "delete_model", "Delete", tooltip="Delete the highlighted model (asks)"),
-        Binding("i", "import_model", "Import", tooltip="A DeepRacer folder or a .racer-bundle"),
-        Binding("x", "export_model", "Export", tooltip="Write a .racer-bundle for the league"),
         Binding("t", "train_model", "Train", tooltip="Train in the background, live charts"),
-        Binding("v", "evaluate_model", "Evaluate", tooltip="Time-trial trials, one lap each"),
+        Binding("v", "evaluate_model", "Eval", tooltip="Time-trial trials, one lap each"),
         Binding("r", "race_model", "Race", tooltip="A 4-minute time trial, live"),
         Binding(
             "u",
             "submit_model",
-            "Submit to league",
-            tooltip="Submit the model's latest evaluation, as `racer-tui submit` does",
-            show=False,  # the footer is full at 80 columns; help and the palette list it
+            "Submit",
+            tooltip="Submit the model's latest evaluation to the league, as `racer-tui submit`",
         ),
+        Binding("c", "clone_model", "Clone", tooltip="A new model starting from this one"),
+        Binding("d", "delete_model", "Delete", tooltip="Delete the highlighted model (asks)"),
+        Binding("i", "import_model", "Import", tooltip="A DeepRacer folder or a .racer-bundle"),
+        Binding("x", "export_model", "Export", tooltip="Write a .racer-bundle for the league"),
         Binding("ctrl+r", "reload", "Reload", tooltip="Read the model folders again", show=False),
     ]
 

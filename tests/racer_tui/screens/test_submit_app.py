@@ -149,14 +149,17 @@ async def test_a_racer_name_that_cannot_be_one_is_explained_in_the_dialog() -> N
         assert league.conn.execute("SELECT count(*) FROM submissions").fetchone()[0] == 0
 
 
-async def test_submitting_is_in_the_palette_and_the_races_footer() -> None:
+async def test_submitting_is_in_the_palette_and_both_footers() -> None:
     app = create_app(start="races")
     async with app.run_test(size=(80, 24)) as pilot:
         await settle(pilot)
         texts = [command.text for command in app.palette_commands(app.screen)]
         assert "Races: Submit to league" in texts
-        assert "Garage: Submit to league" in texts  # hidden from its crowded footer
+        assert "Garage: Submit" in texts
         assert "u Submit to league" in painted(app.screen.query_one(RacerFooter))
+        await pilot.press("1")
+        await settle(pilot)
+        assert "u Submit" in painted(app.screen.query_one(RacerFooter))  # at 80 columns too
 
 
 async def test_an_evaluation_older_than_the_last_training_asks_first() -> None:
