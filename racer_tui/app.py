@@ -62,6 +62,9 @@ OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
     ("Tables", DataTable),
 )
 EVERYWHERE = "Everywhere"
+# Seconds after a section's first visit before what it built is frozen out of garbage
+# collection (its data loads in workers first).
+FREEZE_AFTER_SECONDS = 1.0
 
 
 def _section_bindings() -> list[BindingType]:
@@ -105,20 +108,25 @@ class RacerTuiApp(App[int]):
         super().__init__()
         self.start_mode = start
         self.long_running = long_running
+        self._frozen_modes: set[str] = set()
 
     def on_mount(self) -> None:
-        self.switch_mode(self.start_mode or self._first_mode())
-        if self.long_running:
-            self.call_after_refresh(self._freeze_start_up)
+        first = self.start_mode or self._first_mode()
+        self.switch_mode(first)
+        self._freeze_after_first_visit(first)
 
-    @staticmethod
-    def _freeze_start_up() -> None:
-        """Keep what start-up built (modules, Textual, the first screen) out of every later
-        garbage collection. Each full collection walked those ~220,000 objects and paused
-        the app for 160-225 ms, a key press in three or four; frozen, the pauses measured
-        26-66 ms (`python -m racer_tui.bench_soak`). They live as long as the app anyway."""
-        gc.collect()
-        gc.freeze()
+    def _freeze_after_first_visit(self, mode: str) -> None:
+        """In the long-running app, once a section has been shown the first time (and its
+        data read), keep what that built out of later garbage collections: modules, Textual
+        and the sections live as long as the app, and every full collection walked them
+        all (about 220,000 objects once every section has been seen). Measured on a short
+        run right after start-up, full-collection pauses went from 160-225 ms to 26-66 ms;
+        over a long soak (`python -m racer_tui.bench_soak`) Textual's own caches refill the
+        unfrozen heap and pauses of 150-300 ms come back (see issue 23's notes)."""
+        if not self.long_running or mode in self._frozen_modes:
+            return
+        self._frozen_modes.add(mode)
+        self.set_timer(FREEZE_AFTER_SECONDS, _freeze_long_lived)
 
     def _first_mode(self) -> str:
         try:
@@ -150,6 +158,7 @@ class RacerTuiApp(App[int]):
     async def action_switch_section(self, mode: str) -> None:
         if mode in self.MODES and mode != self.current_mode:
             await self.switch_mode(mode)
+            self._freeze_after_first_visit(mode)
 
     async def run_section_action(self, mode: str, action: str) -> None:
         """A palette command of another section: go there, then run it on its screen."""
@@ -275,6 +284,11 @@ class RacerTuiApp(App[int]):
                 seen.add(binding.action)
                 described.append(binding)
         return described
+
+
+def _freeze_long_lived() -> None:
+    gc.collect()
+    gc.freeze()
 
 
 def create_app(*, start: str | None = None, long_running: bool = False) -> RacerTuiApp:
