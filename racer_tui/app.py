@@ -103,7 +103,7 @@ class RacerTuiApp(App[int]):
     def __init__(self, *, start: str | None = None, long_running: bool = False) -> None:
         """`start` forces the first mode (tests); by default the garage, or the welcome
         screen when the garage is empty. `long_running` is the app a racer or host keeps
-        open for hours (see `_freeze_start_up`); tests build many apps in one process and
+        open for hours (see `_freeze_after_first_visit`); tests build many apps in one process and
         leave it off."""
         super().__init__()
         self.start_mode = start
