@@ -193,6 +193,19 @@ def race_result(league: League, race_id: str) -> RaceResult:
     return result.with_trace(race_trace(league, race_id))
 
 
+def best_lap_race(league: League, track_hash: str, physics: str) -> str | None:
+    """The recorded race with the league's best lap on a track, among races of `physics`
+    that kept their trace (a ghost needs one); None when there is none."""
+    row = league.query_one(
+        "SELECT e.entry_id FROM entries e WHERE e.track_hash = ? AND e.physics = ? "
+        "AND e.best_lap IS NOT NULL "
+        "AND EXISTS (SELECT 1 FROM race_traces t WHERE t.race_id = e.entry_id) "
+        "ORDER BY e.best_lap, e.entry_id LIMIT 1",
+        (track_hash, physics),
+    )
+    return None if row is None else str(row[0])
+
+
 # --- recorded races, newest first, and replaying one ----------------------------------------
 
 MAX_RECENT_RACES = 1000

@@ -13,6 +13,7 @@ synced races), newest first: any of them with a trace on this machine replays fr
 
 from __future__ import annotations
 
+import sqlite3
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -27,7 +28,15 @@ from textual.message import Message
 from textual.screen import Screen
 from textual.widgets import Button, DataTable, Label, Select, Static
 
-from league.races import RaceReplay, RecordedRace, race_replay, recent_races
+from league.errors import LeagueError
+from league.races import (
+    RaceReplay,
+    RecordedRace,
+    best_lap_race,
+    race_replay,
+    race_result,
+    recent_races,
+)
 from league.ranking import rank
 from league.store import open_league
 from racer_tui.screens.base import RacerScreen
@@ -42,9 +51,11 @@ from racer_tui.widgets.table_fill import fill_table
 from racer_tui.widgets.track_label import track_options
 from sim.garage.folder import ModelFolder, list_models
 from sim.race.driver import REFERENCE_NAME
+from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules
+from sim.track import Track
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 REFERENCE = "reference driver"
@@ -293,7 +304,9 @@ class RacesScreen(RacerScreen[None]):
             max_offtracks_per_lap=DEFAULT_RULES.max_offtracks_per_lap,
         )
         same_track = [r for r in self.results if r.track_hash == track.content_hash]
-        leader = same_track[0] if same_track else None
+        # The session's leader on this track, or else the league's best lap there: the
+        # first race of a track has a ghost too when the league has a lap on it.
+        leader = same_track[0] if same_track else self._league_leader(track)
         setup = RaceSetup(
             track=track,
             rules=rules,
@@ -304,6 +317,16 @@ class RacesScreen(RacerScreen[None]):
             title=f"{driver.label} on {track.name}",
         )
         self.app.push_screen(RaceScreen(setup), self._race_finished)
+
+    def _league_leader(self, track: Track) -> RaceResult | None:
+        """The league's recorded race with the best lap on `track` (of this physics, with
+        its trace), or None; a league that cannot be read gives no ghost, never an error."""
+        try:
+            with open_league(self.db_path) as league:
+                race_id = best_lap_race(league, track.content_hash, CURRENT_PHYSICS)
+                return race_result(league, race_id) if race_id is not None else None
+        except (OSError, sqlite3.Error, LeagueError, ValueError):
+            return None
 
     def _race_finished(self, result: RaceResult | None) -> None:
         keep_race(self.app, result)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from textual.widgets import DataTable
+from textual.widgets import DataTable, Select
 
 from league.races import record_race
 from league.store import open_league
@@ -106,3 +106,23 @@ async def test_a_leaderboard_race_entry_replays_with_v() -> None:
         assert replay.setup.replay is not None
         assert replay.setup.replay.result_id == result.result_id
         assert not notes.messages
+
+
+async def test_the_first_race_of_a_track_races_the_leagues_best_lap_as_its_ghost() -> None:
+    best = recorded_reference_race("bob")  # the league has a lap on this track
+    app = create_app(start="races")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        races = app.screen
+        assert isinstance(races, RacesScreen)
+        races.query_one("#race-track", Select).value = "beginner-oval"
+        await pilot.pause()
+        await pilot.press("s")  # no race this session yet
+        race = app.screen
+        assert isinstance(race, RaceScreen)
+        assert race.setup.ghost is not None
+        assert best.best_lap is not None
+        assert race.setup.ghost.lap_seconds == best.best_lap.time_seconds
+        assert race.setup.leader_seconds == best.score
+        await pilot.press("escape")
+        await settle(pilot)
