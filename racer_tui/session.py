@@ -5,6 +5,11 @@ A race can start from the Races section or from a model in the Garage; either wa
 belongs in "Races this session", where it can be replayed, raced as a ghost or submitted
 to the league. The list lives with the app (weakly: a finished app, as in tests, lets go),
 not with a screen, because the Races screen may not exist yet when the Garage races.
+
+A race's trace (every car's pose at every step, what a replay and a ghost need) is a few
+megabytes for a 4-minute race, and a league night's app stays open for hours: only the
+newest `TRACES_KEPT` races of the session keep theirs in memory. Older ones keep their laps
+and scores; a race that was submitted or recorded in the league still replays from there.
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ from textual.app import App
 
 from sim.race.result import RaceResult
 
+TRACES_KEPT = 12
 _RACES: WeakKeyDictionary[App[Any], list[RaceResult]] = WeakKeyDictionary()
 _RACER: WeakKeyDictionary[App[Any], str] = WeakKeyDictionary()
 
@@ -27,8 +33,13 @@ def session_races(app: App[Any]) -> list[RaceResult]:
 
 def keep_race(app: App[Any], result: RaceResult | None) -> None:
     """The RaceScreen callback for a race run anywhere in the app (None: it was left early)."""
-    if result is not None:
-        session_races(app).append(result)
+    if result is None:
+        return
+    races = session_races(app)
+    races.append(result)
+    traced = [index for index, race in enumerate(races) if race.trace is not None]
+    for index in traced[:-TRACES_KEPT]:
+        races[index] = races[index].with_trace(None)
 
 
 def session_racer(app: App[Any]) -> str | None:

@@ -125,7 +125,11 @@ class RaceScreen(Screen[RaceResult | None]):
             self.ticks = replay_ticks(self.setup.replay)
             self.result = self.setup.replay
             if not self.ticks:
-                self.failure = "This race was stored without its trace, so it cannot be replayed."
+                self.failure = (
+                    "This race has no trace here to replay: it was stored without one, or "
+                    "it is older than the races this session keeps (replay it from the "
+                    "league's recorded races if it was submitted)."
+                )
         else:
             self._run_race()
         self.set_interval(1.0 / FRAME_HZ, self._frame)
