@@ -34,6 +34,7 @@ from league.nights import (
     add_entrant,
     close_night,
     draw_heats,
+    entrants,
     find_night_track,
     get_night,
     heats,
@@ -593,6 +594,12 @@ class NightsScreen(RacerScreen[None]):
     @work(thread=True, group="nights-change", exit_on_error=False)
     def _draw(self, night: Night) -> None:
         with open_league(self.db_path) as league:
+            raced = {heat.entrant.id for heat in heats(league, night) if heat.race_id}
+            if all(entrant.id in raced for entrant in entrants(league, night)):
+                # The library's sentence names the CLI command; here the key does it.
+                raise LeagueError(
+                    f"{night.name} has no entrants waiting to race; add one (a), then draw (d)."
+                )
             drawn = draw_heats(league, night)
         waiting = sum(1 for heat in drawn if heat.race_id is None)
         self.post_message(NightChanged(night.id, f"Drew the order of {waiting} heat(s)."))

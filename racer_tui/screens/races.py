@@ -449,8 +449,8 @@ class RacesScreen(RacerScreen[None]):
         race = self.highlighted_recorded
         if race is None:
             self.notify(
-                "There is no recorded race to replay yet; record one with `racer-tui --race "
-                "... --record` or run a league night.",
+                "There is no recorded race to replay yet: submit a race from this session "
+                "(u), or run a league night (5, then n).",
                 severity="warning",
             )
             return

@@ -9,7 +9,7 @@ from typing import Any
 from textual.screen import Screen
 from textual.widgets import DataTable, Input, Select
 
-from league.nights import list_nights, standings
+from league.nights import list_nights, new_night, standings
 from league.seasons import get_season, new_season, season_standings
 from league.store import open_league
 from racer_tui.app import create_app
@@ -18,6 +18,7 @@ from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
 from racer_tui.screens.race_screen import RaceScreen
 from sim.home import data_home
+from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 
 
@@ -130,3 +131,23 @@ async def test_running_a_heat_before_the_draw_says_what_to_do() -> None:
         await pilot.press("a", *"ada", "enter", *"no-such-model", "enter")
         await settle(pilot)
         assert "no-such-model" in notes.text("error")
+
+
+async def test_drawing_with_nobody_waiting_names_the_key_not_a_command() -> None:
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 40)) as pilot:
+        notes = Notifications(app)
+        await settle(pilot)
+        await pilot.press("n")
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, NightsScreen)
+        with open_league() as league:
+            new_night(league, resolve_track("beginner-oval"), name="friday")
+        screen.reload()
+        await settle(pilot)
+        await pilot.press("d")  # nobody has been added yet
+        await settle(pilot)
+        errors = notes.text("error")
+        assert "no entrants waiting to race; add one (a), then draw (d)" in errors
+        assert "racer-tui" not in errors
