@@ -47,7 +47,7 @@ from sim.resets import ResetRules
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
 from sim.training.logbook import closest_waypoint
-from sim.training.trace_pose import TracePose
+from sim.training.trace_pose import RowPoses
 from sim.training.trial_resets import EVALUATION_RESETS, TRAINING_RESETS, TrialResets
 
 if TYPE_CHECKING:
@@ -130,11 +130,11 @@ class TrialTrace:
 
     def __init__(self) -> None:
         self._steps: list[tuple[NDArray[np.intp], NDArray[np.float64], list[str]]] = []
-        self._before: TracePose | None = None
+        self._poses = RowPoses()
 
     def before_step(self, sim: TrackSimulation) -> None:
         """Note where every car is as the step begins (a row's pose is one row late)."""
-        self._before = TracePose.of(sim)
+        self._poses.before_step(sim)
 
     def record(
         self,
@@ -145,9 +145,7 @@ class TrialTrace:
     ) -> None:
         """The step just taken by `cars`; `penalty` is each trial's hold time before it."""
         waypoints = np.asarray(sim.track.center, dtype=np.float64)
-        after = TracePose.of(sim)
-        before = self._before if self._before is not None else after
-        pose = before.row_pose(after, sim)
+        pose = self._poses.after_step(sim)
         values = np.column_stack(
             (
                 sim.steps,

@@ -57,7 +57,7 @@ from sim.deepracer_files import (
     training_trace_path,
 )
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.training.trace_pose import TracePose
+from sim.training.trace_pose import RowPoses
 
 TRACE_BASE_BYTES = 10_000_000
 TRACE_BYTES_PER_MINUTE = 1_000_000
@@ -125,7 +125,7 @@ class Logbook:
         self._step = np.zeros((cars, _COLUMNS))  # one step of the fleet, before it is stored
         self._step[:, _ACTION] = -1.0  # continuous actions have no index
         self._rows = np.arange(cars)
-        self._before: TracePose | None = None  # the fleet before the step being taken
+        self._poses = RowPoses()
         self._pending_metrics: list[TrainingEpisode] = []
         self._pending_trace: dict[int, list[_TracedEpisode]] = {}
         self._traced_iterations: dict[int, bool] = {}
@@ -171,7 +171,7 @@ class Logbook:
     # --- every step ----------------------------------------------------------------------------
     def before_step(self, sim: TrackSimulation) -> None:
         """Note where every car is before the fleet's step (a row's pose is one row late)."""
-        self._before = TracePose.of(sim)
+        self._poses.before_step(sim)
 
     def after_step(self, sim: TrackSimulation, actions: np.ndarray, rewards: np.ndarray) -> None:
         """Record the fleet's step; called by the env before finished cars restart."""
@@ -179,9 +179,7 @@ class Logbook:
         row = sim.steps - 1
         if int(row.max()) >= self._buffer.shape[1]:
             self._grow(int(row.max()) + 1)
-        after = TracePose.of(sim)
-        before = self._before if self._before is not None else after
-        pose = before.row_pose(after, sim)
+        pose = self._poses.after_step(sim)
         # Column by column into one block, then one store: a few microseconds per step.
         step = self._step
         step[:, _X : _Y + 1] = pose.ahead

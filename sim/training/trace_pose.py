@@ -9,9 +9,9 @@ sent from, and the row that ends an episode or puts a car back shows the pose th
 row of an episode shows the start.
 
 racer-tui's writers (`sim.training.logbook` for training, `sim.training.evaluation` for
-trials) take a `TracePose` before each step and one after it, and keep for each row the one
-`TracePose.row_pose` picks. Only what describes the pose moves: the point ahead, the heading,
-all four wheels on the road, progress and the segment the point is on. The command, the
+trials) tell a `RowPoses` before each step and ask it after the step for each row's
+pose. Only what describes the pose moves: the point ahead, the heading, all four wheels on
+the road, progress and the segment the point is on. The command, the
 reward and the status stay with the step they belong to, so an episode's rewards still sum
 to its metrics row and its last row still says how it ended.
 """
@@ -60,3 +60,19 @@ class TracePose:
             progress=np.where(event, after.progress, self.progress),
             segment=np.where(event, after.segment, self.segment),
         )
+
+
+class RowPoses:
+    """The poses of a step's rows: told the simulation before the step, asked after it."""
+
+    def __init__(self) -> None:
+        self._before: TracePose | None = None
+
+    def before_step(self, sim: TrackSimulation) -> None:
+        self._before = TracePose.of(sim)
+
+    def after_step(self, sim: TrackSimulation) -> TracePose:
+        """Each car's row pose for the step just taken (see `TracePose.row_pose`)."""
+        after = TracePose.of(sim)
+        before = self._before if self._before is not None else after
+        return before.row_pose(after, sim)
