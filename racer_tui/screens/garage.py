@@ -33,7 +33,7 @@ from racer_tui.session import keep_race
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_text
 from racer_tui.widgets.section_header import SectionHeader
-from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from sim.action_space import ActionSpace
 from sim.garage.bundle import bundle_path, export_bundle
 from sim.garage.clone import clone_model
@@ -45,7 +45,16 @@ from sim.garage.overview import model_details, model_row
 from sim.race.driver import Driver
 from sim.race.rules import DEFAULT_RULES
 
-COLUMNS = ("model", "status", "track", "sensor", "actions", "best lap")
+# In a narrow terminal the sensor gives way first, then the action space (the detail panel
+# shows both), then a long model name loses its end, and only then does the track go.
+COLUMNS = (
+    Col("model", keep=3, shrink_to=16, collapses=False),
+    Col("status"),
+    Col("track", keep=4),
+    Col("sensor", keep=1),
+    Col("actions", keep=2),
+    Col("best lap"),
+)
 NARROW = 120  # below this many columns the detail panel goes under the table
 
 
@@ -164,7 +173,7 @@ class GarageScreen(RacerScreen[None]):
     def compose(self) -> ComposeResult:
         yield SectionHeader("garage")
         with Container(id="garage-body"):
-            yield DataTable(id="models", cursor_type="row", zebra_stripes=True)
+            yield FittedTable(id="models", cursor_type="row", zebra_stripes=True)
             yield ModelDetail(id="model-detail")
         yield RacerFooter()
 

@@ -9,7 +9,7 @@ own (league.report), so the app, the CLI and the exported files agree.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import ClassVar
 
@@ -43,7 +43,7 @@ from racer_tui.widgets.entry_detail import EntryDetail, describe_entry
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.sync_status import SyncStatusLine
-from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.table_fill import Col, FittedTable, column_index, fill_table, shown_columns
 from sim.atomic import write_text_atomic
 
 NARROW = 120  # below this many columns the detail panel goes under the table
@@ -60,6 +60,18 @@ SORT_BY_TITLE: dict[str, Column] = {
     "off-tracks": Column.OFFTRACKS,
     "submitted": Column.SUBMITTED,
     **{title: Column.SCORE for title in SCORE_TITLES.values()},
+}
+# How each column gives way in a narrow terminal (see table_fill.Col): the submission date
+# first, then the average, the model and the track (the entry's detail shows them); a long
+# racer name loses its end only after those; rank, score and best lap always stay.
+GIVE_WAY: dict[str, Col] = {
+    "submitted": Col("", keep=1),
+    "average": Col("", keep=2),
+    "model": Col("", keep=3, shrink_to=10),
+    "track": Col("", keep=4, shrink_to=10),
+    "racer": Col("", keep=5, shrink_to=16, collapses=False),
+    "laps": Col("", keep=6),
+    "off-tracks": Col("", keep=7),
 }
 
 
@@ -157,7 +169,7 @@ class LeagueScreen(RacerScreen[None]):
         yield SectionHeader("league")
         yield BoardFilters(id="board-filters")
         with Container(id="league-body"):
-            yield DataTable(id="board", cursor_type="row", zebra_stripes=True)
+            yield FittedTable(id="board", cursor_type="row", zebra_stripes=True)
             with VerticalScroll(id="entry-scroll"):
                 yield EntryDetail(id="entry-detail")
         yield SyncStatusLine(id="sync-status")
@@ -230,7 +242,7 @@ class LeagueScreen(RacerScreen[None]):
         for column in columns:
             sorted_here = SORT_BY_TITLE[column.title] == (order.column or Column.RANK)
             arrow = (" ▼" if order.reverse else " ▲") if sorted_here else ""
-            labels.append(column.title + arrow)
+            labels.append(replace(GIVE_WAY.get(column.title, Col("")), label=column.title + arrow))
         cells = [
             [
                 Text(column.cell(row), justify="right" if column.numeric else "left")
@@ -288,7 +300,9 @@ class LeagueScreen(RacerScreen[None]):
     def action_sort_next(self) -> None:
         if not self.titles:
             return
-        keys = [SORT_BY_TITLE[title] for title in self.titles]
+        # Only the columns the racer can see: a collapsed one would sort out of sight.
+        shown = shown_columns(self.query_one("#board", DataTable))
+        keys = [SORT_BY_TITLE[title] for i, title in enumerate(self.titles) if i in shown]
         current = self.order.column or Column.RANK
         position = keys.index(current) if current in keys else 0
         self.sort_by(keys[(position + 1) % len(keys)])
@@ -298,9 +312,10 @@ class LeagueScreen(RacerScreen[None]):
 
     @on(DataTable.HeaderSelected, "#board")
     def _header_clicked(self, event: DataTable.HeaderSelected) -> None:
-        if not 0 <= event.column_index < len(self.titles):
+        index = column_index(event)
+        if not 0 <= index < len(self.titles):
             return
-        column = SORT_BY_TITLE[self.titles[event.column_index]]
+        column = SORT_BY_TITLE[self.titles[index]]
         same = column == (self.order.column or Column.RANK)
         self.sort_by(column, reverse=not self.order.reverse if same else False)
 

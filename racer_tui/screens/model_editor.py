@@ -55,7 +55,7 @@ from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from racer_tui.widgets.footer import RacerFooter
-from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.table_fill import FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
 from racer_tui.widgets.track_map import TrackMap
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
@@ -327,7 +327,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
             with Vertical(id="action-view"):
                 yield Static("speed (m/s) ↑   steering →", classes="field-label")
                 yield ActionSpacePlot(id="action-plot")
-                yield DataTable(id="action-table", cursor_type="row", zebra_stripes=True)
+                yield FittedTable(id="action-table", cursor_type="row", zebra_stripes=True)
 
     def _training_tab(self, values: FormValues) -> ComposeResult:
         with VerticalScroll(classes="editor-form"):

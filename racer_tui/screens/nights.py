@@ -10,7 +10,7 @@ result it returns is recorded with `record_race` into the night.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 from typing import ClassVar
@@ -62,7 +62,7 @@ from racer_tui.screens.dialogs import ConfirmDialog, FormDialog, PathSuggester, 
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
-from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
 from sim.garage.folder import list_models
 from sim.race.driver import REFERENCE_NAME
@@ -72,8 +72,11 @@ from sim.race.rules import DEFAULT_RULES, load_rules
 from sim.track import Track
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
-NIGHT_COLUMNS = ("night", "track", "state")
-HEAT_COLUMNS = ("#", "racer", "model", "result")
+# In the narrow panes the optional columns (keep 1 and 2) give way before a name loses its end.
+NAME = Col("", keep=3, shrink_to=10, collapses=False)
+NIGHT_COLUMNS = (replace(NAME, label="night"), Col("track", keep=1, shrink_to=8), Col("state"))
+HEAT_COLUMNS = ("#", replace(NAME, label="racer"), Col("model", keep=1, shrink_to=8), "result")
+RACER = replace(NAME, label="racer")
 
 
 # --- dialogs ---------------------------------------------------------------------------------
@@ -380,13 +383,13 @@ class NightsScreen(RacerScreen[None]):
         with Horizontal(id="nights-body"):
             with Vertical(id="nights-list"):
                 yield Label("League nights", classes="field-label")
-                yield DataTable(id="nights", cursor_type="row", zebra_stripes=True)
+                yield FittedTable(id="nights", cursor_type="row", zebra_stripes=True)
             with Vertical(id="night-view"):
                 yield Static("", id="night-rules")
                 yield Label("Heats, in running order", classes="field-label")
-                yield DataTable(id="heats", cursor_type="row", zebra_stripes=True)
+                yield FittedTable(id="heats", cursor_type="row", zebra_stripes=True)
                 yield Label("Standings", id="standings-title", classes="field-label")
-                yield DataTable(id="standings", cursor_type="row", zebra_stripes=True)
+                yield FittedTable(id="standings", cursor_type="row", zebra_stripes=True)
         yield RacerFooter()
 
     def on_mount(self) -> None:
@@ -481,7 +484,9 @@ class NightsScreen(RacerScreen[None]):
                 [str(s.position), Text(s.display_name), str(s.points), str(s.nights), str(s.wins)]
                 for s in state.season
             ]
-            fill_table(table, ("#", "racer", "points", "nights", "wins"), rows)
+            fill_table(
+                table, ("#", RACER, "points", Col("nights", keep=2), Col("wins", keep=1)), rows
+            )
             return
         closed = "final " if state.night.closed else ""
         title.update(Text(f"Night standings ({closed}with points)"))
@@ -497,7 +502,8 @@ class NightsScreen(RacerScreen[None]):
             ]
             for s in state.standings
         ]
-        fill_table(table, ("#", "racer", score_title, "laps", "off", "points"), rows)
+        columns = ("#", RACER, score_title, Col("laps", keep=2), Col("off", keep=1), "points")
+        fill_table(table, columns, rows)
 
     def on_night_changed(self, message: NightChanged) -> None:
         if message.note:

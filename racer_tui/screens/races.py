@@ -47,7 +47,7 @@ from racer_tui.session import keep_race, session_races
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import seconds_text
 from racer_tui.widgets.section_header import SectionHeader
-from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
 from sim.garage.folder import ModelFolder, list_models
 from sim.race.driver import REFERENCE_NAME
@@ -59,9 +59,24 @@ from sim.track import Track
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 REFERENCE = "reference driver"
-RESULT_COLUMNS = ("#", "driver", "track", "best lap", "laps", "off")
-# What tells races apart first, so a narrow terminal still shows it; the rest scrolls.
-RECORDED_COLUMNS = ("when", "racer", "best lap", "laps", "track", "model", "night")
+RESULT_COLUMNS = (
+    "#",
+    Col("driver", keep=4, shrink_to=10, collapses=False),
+    Col("track", keep=1, shrink_to=8),
+    "best lap",
+    Col("laps", keep=2),
+    Col("off", keep=3),
+)
+# What tells races apart first, so a narrow terminal still shows it; the rest gives way.
+RECORDED_COLUMNS = (
+    "when",
+    Col("racer", keep=5, shrink_to=10, collapses=False),
+    "best lap",
+    Col("laps", keep=4),
+    Col("track", keep=3, shrink_to=8),
+    Col("model", keep=2, shrink_to=8),
+    Col("night", keep=1, shrink_to=8),
+)
 RECORDED_LIMIT = 200
 WINDOWS = ((240.0, "4:00 (league rules)"), (120.0, "2:00"), (60.0, "1:00"))
 
@@ -181,7 +196,7 @@ class RacesScreen(RacerScreen[None]):
         with Horizontal(id="races-body"):
             with Vertical(id="race-setup"):
                 yield Label("Driver (trained models)", classes="field-label")
-                yield DataTable(id="drivers", cursor_type="row", show_header=False)
+                yield FittedTable(id="drivers", cursor_type="row", show_header=False)
                 yield Label("Track", classes="field-label")
                 yield Select(
                     self._track_options(), value=DEFAULT_TRACK, allow_blank=False, id="race-track"
@@ -196,9 +211,9 @@ class RacesScreen(RacerScreen[None]):
                 yield Button("Start race (s)", id="start-race", variant="primary")
             with Vertical(id="race-history"):
                 yield Label("Races this session, best first", classes="field-label")
-                yield DataTable(id="race-results", cursor_type="row", zebra_stripes=True)
+                yield FittedTable(id="race-results", cursor_type="row", zebra_stripes=True)
                 yield Label("Recorded races in the league, newest first", classes="field-label")
-                yield DataTable(id="recorded-races", cursor_type="row", zebra_stripes=True)
+                yield FittedTable(id="recorded-races", cursor_type="row", zebra_stripes=True)
                 yield Static(
                     "p or Enter replays the highlighted race (dim: no trace here); u submits "
                     "it to the league (✓: submitted). New races race the track's best lap so "
@@ -265,7 +280,7 @@ class RacesScreen(RacerScreen[None]):
             [Text(driver.label, style="italic" if driver.folder is None else "")]
             for driver in message.drivers
         ]
-        fill_table(table, ["driver"], rows)
+        fill_table(table, [Col("driver", keep=0, shrink_to=12, collapses=False)], rows)
         labels = [driver.label for driver in self.drivers]
         if chosen is not None and chosen.label in labels:
             table.move_cursor(row=labels.index(chosen.label))

@@ -40,10 +40,21 @@ from racer_tui.screens.dialogs import show_problem
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.sync_status import local_time
-from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 
-CONFLICT_COLUMNS = ("kind", "id", "what differs", "here", "in the store")
-QUARANTINE_COLUMNS = ("kind", "id", "reason", "where")
+CONFLICT_COLUMNS = (
+    "kind",
+    Col("id", keep=1, shrink_to=8),
+    Col("what differs", keep=0, shrink_to=12, collapses=False),
+    Col("here", keep=0, shrink_to=10, collapses=False),
+    Col("in the store", keep=0, shrink_to=12, collapses=False),
+)
+QUARANTINE_COLUMNS = (
+    "kind",
+    Col("id", keep=1, shrink_to=8),
+    Col("reason", keep=0, shrink_to=20, collapses=False),
+    Col("where", keep=2, shrink_to=10),
+)
 CELL = 48  # characters of one side of a conflict or a reason in a cell; the rest is cut
 URL_HINT = "dir:PATH (a shared folder) or dynamodb://TABLE?region=R"
 
@@ -117,9 +128,9 @@ class SyncScreen(RacerScreen[bool]):
                 yield Static("", id="sync-stage")
             yield Static("", id="sync-summary")
             yield Label("Conflicts", id="sync-conflicts-title", classes="field-label")
-            yield DataTable(id="sync-conflicts", cursor_type="row", zebra_stripes=True)
+            yield FittedTable(id="sync-conflicts", cursor_type="row", zebra_stripes=True)
             yield Label("Quarantined", id="sync-quarantine-title", classes="field-label")
-            yield DataTable(id="sync-quarantine", cursor_type="row", zebra_stripes=True)
+            yield FittedTable(id="sync-quarantine", cursor_type="row", zebra_stripes=True)
         yield RacerFooter()
 
     def on_mount(self) -> None:

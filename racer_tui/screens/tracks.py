@@ -24,7 +24,7 @@ from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
-from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_label
 from racer_tui.widgets.track_map import TrackMap
 from sim.race.rules import DEFAULT_RULES
@@ -64,7 +64,7 @@ class TracksScreen(RacerScreen[None]):
         with Horizontal(id="tracks-body"):
             with Vertical(id="tracks-list"):
                 yield Input(placeholder="/ search name or console name", id="track-search")
-                yield DataTable(id="tracks", cursor_type="row")
+                yield FittedTable(id="tracks", cursor_type="row")
             with Vertical(id="track-detail"):
                 yield Static(id="track-facts")
                 yield TrackMap(id="track-map")
@@ -92,7 +92,7 @@ class TracksScreen(RacerScreen[None]):
                 self._rows.append(info)
                 cells.append([track_label(info, _LABEL_CELLS), f"{info.length_m:.1f}"])
         table = self.query_one("#tracks", DataTable)
-        fill_table(table, ["track", "m"], cells)
+        fill_table(table, [Col("track", keep=0, shrink_to=12, collapses=False), "m"], cells)
         total = len(self._infos)
         context = (
             counted(total, "track") if not needle else f"{len(shown)} of {counted(total, 'track')}"

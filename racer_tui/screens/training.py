@@ -43,7 +43,7 @@ from racer_tui.widgets.agent_view import AgentView, Observation, observe_at
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import status_text
 from racer_tui.widgets.section_header import SectionHeader
-from racer_tui.widgets.table_fill import fill_table
+from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.training_charts import TrainingCharts, TrainingFigures, clock
 from sim.deepracer_files import last_sim_trace_row
 from sim.garage.folder import (
@@ -64,7 +64,7 @@ TAIL_SECONDS = 0.25  # how often the log is read while a run is live
 TICK_SECONDS = 2.0  # run status, adopted runs and the agent's-eye view
 READ_CHUNK = 256_000
 HISTORY_SECONDS = 5.0  # how often TrainingMetrics.json is re-read for a run without a log
-COLUMNS = ("model", "state")
+COLUMNS = (Col("model", keep=1, shrink_to=10, collapses=False), Col("state"))
 NARROW = 110  # below this width the agent's-eye view is hidden
 
 
@@ -235,7 +235,7 @@ class TrainingScreen(RacerScreen[None]):
     def compose(self) -> ComposeResult:
         yield SectionHeader("training")
         with Horizontal(id="training-body"):
-            yield DataTable(id="training-models", cursor_type="row", zebra_stripes=True)
+            yield FittedTable(id="training-models", cursor_type="row", zebra_stripes=True)
             yield TrainingCharts(id="training-charts")
             with Vertical(id="training-side"):
                 yield Static("Agent's-eye view", id="agent-title")

@@ -1,33 +1,104 @@
-"""Fill a DataTable with widths measured up front.
+"""Fill a DataTable with widths measured up front, fitted to the table's width.
 
 Textual's DataTable measures new rows on its next idle moment; a table filled and painted
 in the same moment paints them at the header's width first ("refere" for "reference
 driver"), and the cached rows can stay that way. Setting every column's width from the
 content before adding the rows avoids that, and the widths are exact.
 
+A table wider than its room would scroll sideways, and at 80x24 the racer would never see
+its right-hand columns. So each column says how it gives way (`Col`): a name column loses
+its end ("Alexandra Montgo…") down to a readable width, and the least important columns
+collapse, in the order the screen chose, until the rest fits. A `FittedTable` fits itself
+again whenever its size changes.
+
 Sections refill their tables each time they are shown (models may have trained since);
-filling a table with what it already shows is skipped, so a section switch costs no
-table rebuild and the cursor stays where the racer left it.
+filling a table with what it already shows, at the same width, is skipped, so a section
+switch costs no table rebuild and the cursor stays where the racer left it.
 """
 
 from __future__ import annotations
 
 import weakref
 from collections.abc import Hashable, Sequence
+from dataclasses import dataclass
 
 from rich.text import Text
+from textual import events
 from textual.widgets import DataTable
 
 Cell = str | Text
+
+
+@dataclass(frozen=True)
+class Col:
+    """A column and how it gives way when the table is too narrow.
+
+    Columns give way in rising `keep` order (of equals, the rightmost first); None never
+    gives way. Giving way means losing the end of the text ("Alexandra Montgo…") down to
+    `shrink_to` characters when that is set, and then, if the table is still too wide and
+    `collapses`, disappearing."""
+
+    label: str
+    keep: int | None = None
+    shrink_to: int | None = None
+    collapses: bool = True
+
+
+ColumnSpec = str | Col
 
 
 def _width(cell: Cell) -> int:
     return cell.cell_len if isinstance(cell, Text) else Text(cell).cell_len
 
 
-# What each table was last filled with (tables are never equal to each other, so they key
-# a weak dictionary by identity; a table that goes away takes its entry with it).
-_FILLED: weakref.WeakKeyDictionary[DataTable[object], Hashable] = weakref.WeakKeyDictionary()
+def fit_widths(
+    natural: Sequence[int], columns: Sequence[Col], room: int, padding: int
+) -> list[int | None]:
+    """Each column's width in the table (None: collapsed) so the whole fits in `room`
+    cells, each column also taking `padding` cells on either side. When even the
+    essential columns at their narrowest do not fit, they are left as wide as they can be
+    (the table then scrolls: better than losing the racer's time)."""
+    widths: list[int | None] = list(natural)
+    floors = [
+        max(_width(col.label), min(col.shrink_to, width)) if col.shrink_to else width
+        for col, width in zip(columns, natural, strict=True)
+    ]
+
+    def total() -> int:
+        return sum(width + 2 * padding for width in widths if width is not None)
+
+    # The least important first; of equals, the rightmost.
+    order = sorted(
+        (i for i, col in enumerate(columns) if col.keep is not None),
+        key=lambda i: (columns[i].keep or 0, -i),
+    )
+    for index in order:
+        width = widths[index]
+        assert width is not None
+        excess = total() - room
+        if excess <= 0:
+            break
+        if floors[index] < width:
+            widths[index] = width = max(floors[index], width - excess)
+        if total() > room and columns[index].collapses:
+            widths[index] = None
+    # A name shrunk before a later collapse made room gets that room back.
+    for index in reversed(order):
+        width = widths[index]
+        spare = room - total()
+        if spare <= 0:
+            break
+        if width is not None and width < natural[index]:
+            widths[index] = min(natural[index], width + spare)
+    return widths
+
+
+def _shortened(cell: Cell, width: int) -> Cell:
+    if _width(cell) <= width:
+        return cell
+    text = cell.copy() if isinstance(cell, Text) else Text(cell)
+    text.truncate(width, overflow="ellipsis")
+    return text
 
 
 def _cell_content(cell: Cell) -> Hashable:
@@ -40,25 +111,104 @@ def _cell_content(cell: Cell) -> Hashable:
     return cell
 
 
+def _room(table: DataTable[object], row_count: int) -> int | None:
+    """Cells across the table for its columns, or None before its first layout."""
+    region = table.content_region
+    if not region.width:
+        return None
+    rows_high = row_count + (table.header_height if table.show_header else 0)
+    styles = table.styles
+    scrolls = styles.scrollbar_gutter == "stable" or (
+        styles.overflow_y != "hidden" and rows_high > region.height
+    )
+    return region.width - (styles.scrollbar_size_vertical if scrolls else 0)
+
+
+@dataclass(frozen=True)
+class _Filling:
+    columns: tuple[Col, ...]
+    rows: tuple[tuple[Cell, ...], ...]
+    keys: tuple[str, ...] | None
+
+
+# What each table was last filled with and at which widths (tables are never equal to each
+# other, so they key a weak dictionary by identity; a table that goes away takes its entry
+# with it).
+_FILLED: weakref.WeakKeyDictionary[DataTable[object], Hashable] = weakref.WeakKeyDictionary()
+_ASKED: weakref.WeakKeyDictionary[DataTable[object], _Filling] = weakref.WeakKeyDictionary()
+
+
 def fill_table(
     table: DataTable[object],
-    columns: Sequence[str],
+    columns: Sequence[ColumnSpec],
     rows: Sequence[Sequence[Cell]],
     keys: Sequence[str] | None = None,
 ) -> None:
-    """Replace the table's columns and rows; `keys` names the rows (optional). Nothing
-    happens when the table already shows exactly these."""
-    content = (
-        tuple(columns),
-        tuple(tuple(_cell_content(cell) for cell in row) for row in rows),
+    """Replace the table's columns and rows; `keys` names the rows (optional). Each
+    column's key is its position in `columns`, so a header click names the column even
+    when some collapsed. Nothing happens when the table already shows exactly these."""
+    filling = _Filling(
+        tuple(Col(spec) if isinstance(spec, str) else spec for spec in columns),
+        tuple(tuple(row) for row in rows),
         None if keys is None else tuple(keys),
     )
-    if _FILLED.get(table) == content and table.row_count == len(rows):
+    _ASKED[table] = filling
+    _lay_out(table, filling)
+
+
+def _lay_out(table: DataTable[object], filling: _Filling) -> None:
+    natural = [
+        max([_width(col.label), *(_width(row[index]) for row in filling.rows)])
+        for index, col in enumerate(filling.columns)
+    ]
+    room = _room(table, len(filling.rows))
+    widths: list[int | None] = (
+        list(natural)
+        if room is None
+        else fit_widths(natural, filling.columns, room, table.cell_padding)
+    )
+    content = (
+        tuple(widths),
+        tuple(col.label for col in filling.columns),
+        tuple(tuple(_cell_content(cell) for cell in row) for row in filling.rows),
+        filling.keys,
+    )
+    if _FILLED.get(table) == content and table.row_count == len(filling.rows):
         return
     _FILLED[table] = content
     table.clear(columns=True)
-    for index, label in enumerate(columns):
-        width = max([_width(label), *(_width(row[index]) for row in rows)])
-        table.add_column(label, width=width)
-    for number, row in enumerate(rows):
-        table.add_row(*row, key=keys[number] if keys is not None else None)
+    shown = [index for index, width in enumerate(widths) if width is not None]
+    for index in shown:
+        width = widths[index]
+        table.add_column(filling.columns[index].label, width=width, key=str(index))
+    for number, row in enumerate(filling.rows):
+        table.add_row(
+            *(_shortened(row[index], widths[index] or 0) for index in shown),
+            key=filling.keys[number] if filling.keys is not None else None,
+        )
+
+
+def column_index(event: DataTable.HeaderSelected) -> int:
+    """The position in `fill_table`'s `columns` of the header the racer clicked."""
+    return int(event.column_key.value or 0)
+
+
+class FittedTable(DataTable[object]):
+    """A DataTable that fits its columns again (see `fill_table`) when its size changes,
+    keeping the racer's cursor and scroll where they were."""
+
+    def on_resize(self, event: events.Resize) -> None:
+        filling = _ASKED.get(self)
+        if filling is None:
+            return
+        row, column, scroll = self.cursor_row, self.cursor_column, self.scroll_y
+        before = _FILLED.get(self)
+        _lay_out(self, filling)
+        if _FILLED.get(self) is not before:
+            self.move_cursor(row=row, column=column, scroll=False)
+            self.scroll_to(y=scroll, animate=False)
+
+
+def shown_columns(table: DataTable[object]) -> set[int]:
+    """The positions in `fill_table`'s `columns` of the columns the table shows."""
+    return {int(key.value or 0) for key in table.columns}

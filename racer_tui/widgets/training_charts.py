@@ -14,6 +14,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+from rich.console import Group, RenderableType
+from rich.progress_bar import ProgressBar
+from rich.table import Table
 from rich.text import Text
 from textual.app import ComposeResult
 from textual.containers import Grid, Vertical
@@ -76,7 +79,8 @@ class TrainingFigures:
     def fold(self, event: events.Event) -> None:
         self.elapsed = max(self.elapsed, event.elapsed)
         if isinstance(event, events.Started):
-            self.started, self.ended = event, None
+            # A new run's clock starts again (the history holds the earlier runs' times).
+            self.started, self.ended, self.elapsed = event, None, event.elapsed
         elif isinstance(event, events.Episode):
             self._episode(event.reward, event.progress, event.lap_time, event.status)
         elif isinstance(event, events.Update):
@@ -128,8 +132,37 @@ def clock(seconds: float) -> str:
     return f"{minutes}:{rest:02d}"
 
 
-def figures_lines(figures: TrainingFigures) -> Text:
-    """The counters above the charts: run, evaluation, process, and how episodes ended."""
+def run_line(figures: TrainingFigures) -> RenderableType:
+    """Where the run is: its clock against the time budget (DeepRacer's stop condition, so
+    the time left is exact), or how it ended."""
+    started, ended = figures.started, figures.ended
+    if started is None:
+        return Text("not training now", style="dim")
+    if ended is not None:
+        return Text(f"{ended.kind} after {clock(ended.elapsed)}", style="dim")
+    elapsed = figures.elapsed
+    budget = started.max_minutes * 60.0
+    if budget <= 0:
+        return Text(f"training {clock(elapsed)}")
+    line = Table.grid(expand=True)
+    line.add_column(no_wrap=True)
+    line.add_column(ratio=1)
+    line.add_column(no_wrap=True)
+    line.add_row(
+        Text(f"training {clock(elapsed)} of {clock(budget)} "),
+        ProgressBar(total=budget, completed=min(elapsed, budget)),
+        Text(f" {clock(budget - elapsed)} left"),
+    )
+    return line
+
+
+def figures_lines(figures: TrainingFigures) -> Group:
+    """The run's clock, then the counters above the charts: run, evaluation, process, and
+    how episodes ended."""
+    return Group(run_line(figures), counters(figures))
+
+
+def counters(figures: TrainingFigures) -> Text:
     update, system, evaluation = figures.update, figures.system, figures.evaluation
     text = Text()
     text.append(f"{figures.episodes:,}")
@@ -163,7 +196,7 @@ class TrainingCharts(Vertical):
 
     DEFAULT_CSS = """
     TrainingCharts { height: 1fr; }
-    TrainingCharts > #figures { height: auto; max-height: 5; padding: 0 1; }
+    TrainingCharts > #figures { height: auto; max-height: 6; padding: 0 1; }
     TrainingCharts > Grid { grid-size: 2 3; grid-gutter: 0 1; height: 1fr; }
     TrainingCharts LineChart { min-height: 4; }
     """

@@ -87,6 +87,34 @@ async def test_injected_events_reach_the_charts_and_counters() -> None:
         assert "finished" in notes.text()
 
 
+async def test_the_run_clock_and_time_left_show_at_80x24() -> None:
+    # The section header has no room for the run's clock at 80 columns: the dashboard
+    # itself says how long the run has gone and how long it has left, then how it ended.
+    folder = new_model("ada")
+    # An earlier run's updates reach 600 s on its own clock; the new run starts again at 0.
+    old = events.System(600.0, 90.0, 300.0)
+    folder.training_history.write_text(events.encode(old) + "\n")
+    app = create_app(start="training")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        charts = screen.query_one(TrainingCharts)
+        await wait_for(pilot, lambda: charts.figures.cpu == [90.0])
+        assert "not training now" in painted(charts)
+        screen.apply_event("ada", sample_events()[0])  # a 5-minute budget
+        screen.apply_event("ada", events.Episode(83.0, 1, 0, 12.0, 40.0, None, "Off track", 90))
+        charts.redraw_now()
+        await pilot.pause()
+        text = painted(charts)
+        assert "training 1:23 of 5:00" in text and "3:37 left" in text
+        screen.apply_event("ada", events.Ended(250.0, "stopped", "stopped by you", 9, 1, 40, None))
+        charts.redraw_now()
+        await pilot.pause()
+        text = painted(charts)
+        assert "stopped after 4:10" in text and "left" not in text
+
+
 async def test_charts_show_the_history_in_training_json() -> None:
     folder = new_model("ada")
     rows = [

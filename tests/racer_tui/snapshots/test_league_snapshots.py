@@ -8,7 +8,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-import pytest
 from textual.pilot import Pilot
 
 from league.races import record_race
@@ -18,8 +17,8 @@ from sim.home import data_home
 from sim.track_catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
+from tests.racer_tui.snapshots.sizes import SIZES
 
-SIZES = pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 Compare = Callable[..., bool]
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-import pytest
 from textual.app import App
 from textual.pilot import Pilot
 
@@ -24,8 +23,8 @@ from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import settle
+from tests.racer_tui.snapshots.sizes import SIZES
 
-SIZES = pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 Compare = Callable[..., bool]
 SHORT = RaceRules(window_seconds=30.0)
 

@@ -21,6 +21,7 @@ from sim.race.rules import DEFAULT_RULES, RaceRules
 from sim.track_catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
+from tests.racer_tui.snapshots.sizes import SIZES
 
 Compare = Callable[..., bool]
 
@@ -44,7 +45,8 @@ async def _settled(pilot: Pilot[Any]) -> None:
     await settle(pilot)
 
 
-def test_recorded_races(snap_compare: Compare) -> None:
+@SIZES
+def test_recorded_races(snap_compare: Compare, size: tuple[int, int]) -> None:
     recorded_races()
     app = create_app(start="races")
-    assert snap_compare(app, terminal_size=(80, 24), run_before=_settled)
+    assert snap_compare(app, terminal_size=size, run_before=_settled)

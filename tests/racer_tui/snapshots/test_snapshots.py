@@ -12,7 +12,6 @@ from __future__ import annotations
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-import pytest
 from textual.pilot import Pilot
 from textual.widgets import Input, Select, TextArea
 
@@ -20,10 +19,8 @@ from racer_tui.app import create_app
 from racer_tui.widgets.demo_race import DemoRace
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import settle
+from tests.racer_tui.snapshots.sizes import SIZES
 
-SMALL = (80, 24)
-LARGE = (120, 40)
-SIZES = pytest.mark.parametrize("size", [SMALL, LARGE], ids=["80x24", "120x40"])
 Compare = Callable[..., bool]
 
 
@@ -71,16 +68,20 @@ def test_editor_car_tab(snap_compare: Compare, size: tuple[int, int]) -> None:
     assert snap_compare(app, terminal_size=size, run_before=prepared(open_editor))
 
 
-def test_editor_action_space_tab(snap_compare: Compare) -> None:
+@SIZES
+def test_editor_action_space_tab(snap_compare: Compare, size: tuple[int, int]) -> None:
     async def open_actions(pilot: Pilot[Any]) -> None:
         await pilot.press("n", "f3")
         pilot.app.screen.query_one("#steering-levels", Select).value = 7
 
     app = create_app(start="garage")
-    assert snap_compare(app, terminal_size=LARGE, run_before=prepared(open_actions))
+    assert snap_compare(app, terminal_size=size, run_before=prepared(open_actions))
 
 
-def test_editor_hyperparameters_with_a_problem(snap_compare: Compare) -> None:
+@SIZES
+def test_editor_hyperparameters_with_a_problem(
+    snap_compare: Compare, size: tuple[int, int]
+) -> None:
     async def bad_batch(pilot: Pilot[Any]) -> None:
         await pilot.press("n", *"ok-name", "f4")
         pilot.app.screen.query_one("#hp-batch_size", Input).value = "7"
@@ -88,15 +89,16 @@ def test_editor_hyperparameters_with_a_problem(snap_compare: Compare) -> None:
         await pilot.press("ctrl+s")
 
     app = create_app(start="garage")
-    assert snap_compare(app, terminal_size=SMALL, run_before=prepared(bad_batch))
+    assert snap_compare(app, terminal_size=size, run_before=prepared(bad_batch))
 
 
-def test_editor_reward_checked(snap_compare: Compare) -> None:
+@SIZES
+def test_editor_reward_checked(snap_compare: Compare, size: tuple[int, int]) -> None:
     async def check(pilot: Pilot[Any]) -> None:
         await pilot.press("n", "ctrl+r")
 
     app = create_app(start="garage")
-    assert snap_compare(app, terminal_size=LARGE, run_before=prepared(check))
+    assert snap_compare(app, terminal_size=size, run_before=prepared(check))
 
 
 @SIZES
@@ -118,18 +120,20 @@ def test_help(snap_compare: Compare, size: tuple[int, int]) -> None:
     assert snap_compare(app, terminal_size=size, run_before=prepared(open_help))
 
 
-def test_delete_confirmation(snap_compare: Compare) -> None:
+@SIZES
+def test_delete_confirmation(snap_compare: Compare, size: tuple[int, int]) -> None:
     two_models()
 
     async def ask(pilot: Pilot[Any]) -> None:
         await pilot.press("d")
 
-    assert snap_compare(create_app(), terminal_size=SMALL, run_before=prepared(ask))
+    assert snap_compare(create_app(), terminal_size=size, run_before=prepared(ask))
 
 
-def test_import_dialog(snap_compare: Compare) -> None:
+@SIZES
+def test_import_dialog(snap_compare: Compare, size: tuple[int, int]) -> None:
     async def ask(pilot: Pilot[Any]) -> None:
         await pilot.press("i")
 
     app = create_app(start="garage")
-    assert snap_compare(app, terminal_size=SMALL, run_before=prepared(ask))
+    assert snap_compare(app, terminal_size=size, run_before=prepared(ask))

@@ -19,6 +19,7 @@ from racer_tui.app import create_app
 from sim.home import data_home
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
+from tests.racer_tui.snapshots.sizes import SIZES
 
 Compare = Callable[..., bool]
 STORE = "dir:/media/league-share"
@@ -52,7 +53,8 @@ def league_with_problems() -> None:
             )
 
 
-def test_sync_screen(snap_compare: Compare) -> None:
+@SIZES
+def test_sync_screen(snap_compare: Compare, size: tuple[int, int]) -> None:
     league_with_problems()
 
     async def open_sync(pilot: Pilot[Any]) -> None:
@@ -61,4 +63,4 @@ def test_sync_screen(snap_compare: Compare) -> None:
         await settle(pilot)
 
     app = create_app(start="league")
-    assert snap_compare(app, terminal_size=(80, 24), run_before=open_sync)
+    assert snap_compare(app, terminal_size=size, run_before=open_sync)

@@ -7,7 +7,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-import pytest
 from textual.pilot import Pilot
 from textual.widgets import Input
 
@@ -17,8 +16,8 @@ from racer_tui.widgets.training_charts import TrainingCharts
 from sim.garage.options import new_model
 from sim.training import events
 from tests.racer_tui.screens.tui_helpers import settle
+from tests.racer_tui.snapshots.sizes import SIZES
 
-SIZES = pytest.mark.parametrize("size", [(80, 24), (120, 40)], ids=["80x24", "120x40"])
 Compare = Callable[..., bool]
 
 
@@ -61,7 +60,8 @@ def test_training_with_a_run(snap_compare: Compare, size: tuple[int, int]) -> No
     assert snap_compare(app, terminal_size=size, run_before=inject)
 
 
-def test_evaluation_screen(snap_compare: Compare) -> None:
+@SIZES
+def test_evaluation_screen(snap_compare: Compare, size: tuple[int, int]) -> None:
     new_model("hairpin-hero")
 
     async def open_it(pilot: Pilot[Any]) -> None:
@@ -71,4 +71,4 @@ def test_evaluation_screen(snap_compare: Compare) -> None:
         pilot.app.screen.query_one(Input).cursor_blink = False
 
     app = create_app(start="training")
-    assert snap_compare(app, terminal_size=(80, 24), run_before=open_it)
+    assert snap_compare(app, terminal_size=size, run_before=open_it)
