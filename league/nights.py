@@ -25,6 +25,7 @@ from league.seasons import DEFAULT_POINTS, get_season
 from league.store import League, now_iso
 from league.tracks import ensure_track
 from sim.ids import new_id
+from sim.plural import counted
 from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
 from sim.track import Track
 
@@ -378,8 +379,8 @@ def close_night(
         waiting = len(pending_heats(league, night))
         if waiting and not force:
             raise LeagueError(
-                f"league night {night.name!r} still has {waiting} heat(s) to run; run them "
-                "with `racer-tui night run`, or close anyway with --force."
+                f"league night {night.name!r} still has {counted(waiting, 'heat')} to run; "
+                "run them with `racer-tui night run`, or close anyway with --force."
             )
         league.insert_record(
             "night_closures", {"night_id": night.id, "closed_by": who, "created_at": now_iso()}

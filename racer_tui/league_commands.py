@@ -20,6 +20,7 @@ from rich.text import Text
 from league.errors import LeagueError
 from racer_tui.output import print_json, print_table
 from sim.deepracer_files import DeepRacerFileError
+from sim.plural import counted
 from sim.race.rules import DEFAULT_RULES, RankingMethod, RulesError, load_rules
 from sim.track_catalog import DEFAULT_TRACK
 
@@ -613,7 +614,7 @@ def _season(league: League, args: argparse.Namespace) -> int:
         )
         return 0
     nights_closed = len(seasons.closed_nights(league, season))
-    table = _table(f"Season {season.name}: {nights_closed} closed night(s)")
+    table = _table(f"Season {season.name}: {counted(nights_closed, 'closed night')}")
     for title, right in (
         ("pos", True),
         ("racer", False),

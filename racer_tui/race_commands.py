@@ -27,6 +27,7 @@ from rich.text import Text
 
 from racer_tui.output import print_json
 from sim.deepracer_files import DeepRacerFileError
+from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.race.engine import run_race
 from sim.race.result import MAX_NAME_LENGTH, RaceResult, is_plain_name
@@ -171,7 +172,7 @@ def _run(args: argparse.Namespace) -> int:
     for path in trace_files.values():
         console.print(Text(f"trace: {path}"))
     if recorded:
-        console.print(Text(f"recorded {len(recorded)} race(s) in the league."))
+        console.print(Text(f"recorded {counted(len(recorded), 'race')} in the league."))
     return EXIT_OK
 
 

@@ -31,6 +31,7 @@ from typing import Any
 from sim.calibration import CURVATURE_TOLERANCE, GAP_TARGETS, Calibration, calibrate
 from sim.car import DEEPRACER_CAR, SIMAPP4_CAR, CarSpec
 from sim.deepracer_files import DeepRacerFileError, SimTraceRow, read_sim_trace
+from sim.plural import counted
 
 SHARED_TRACE = (
     Path(__file__).resolve().parents[2]
@@ -169,7 +170,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         }
         print(json.dumps(report, indent=2))
     else:
-        print(f"DeepRacer sim-traces: {len(files)} file(s), {sum(map(len, traces))} rows")
+        print(f"DeepRacer sim-traces: {counted(len(files), 'file')}, {sum(map(len, traces))} rows")
         for name, result in results.items():
             print()
             print(table(name, CARS[name][1], result))

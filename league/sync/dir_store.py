@@ -45,6 +45,7 @@ from league.sync.cursor import pack_cursor, unpack_cursor
 from league.sync.errors import (
     CursorInvalidError,
     RecordInvalidError,
+    StoreFolderMissingError,
     StoreIncompatibleError,
     StoreNotInitialisedError,
     StoreUnavailable,
@@ -159,7 +160,8 @@ class DirStore:
 
     def _check_ready(self) -> None:
         if not self.root.is_dir():
-            raise StoreUnavailable(
+            missing = StoreFolderMissingError if self.root.parent.is_dir() else StoreUnavailable
+            raise missing(
                 f"the shared folder {self.root} is not there: check that the drive or synced "
                 "folder is connected, or create the store with `racer-tui sync init`"
             )

@@ -25,6 +25,11 @@ class StoreNotInitialisedError(SyncError):
     """The store is reachable but was never set up with `racer-tui sync init`."""
 
 
+class StoreFolderMissingError(StoreUnavailable):
+    """A shared folder store whose folder is not there, in a folder that is: a new store
+    not set up yet, or a shared drive that is not connected (its empty mount point)."""
+
+
 class StoreAccessDeniedError(SyncError):
     """The store refused us: missing or wrong credentials, or no permission."""
 

@@ -21,6 +21,7 @@ from league.sync.local import (
     set_setting,
 )
 from league.sync.urls import DirUrl, DynamoDbUrl, S3Url, parse_store_url
+from sim.plural import counted
 
 NO_STORE = (
     "this league has no store yet: run `racer-tui sync set STORE` (for example "
@@ -126,7 +127,7 @@ def _sync_with(
                 sent = push_bundles(league, bundle_store)
             notes.extend(sent.notes)
             if sent.uploaded:
-                notes.append(f"uploaded {sent.uploaded} model bundle(s) to {bundles_url}")
+                notes.append(f"uploaded {counted(sent.uploaded, 'model bundle')} to {bundles_url}")
         summary = sync(
             league,
             store,

@@ -21,6 +21,7 @@ from league.sync.bundle_records import BundleInfo, bundles
 from league.sync.engine import SyncSummary, store_key
 from league.sync.errors import StoreUrlError
 from league.sync.outgoing import count_unsent
+from sim.plural import counted
 
 EXCERPT: Final = 60  # characters of a value shown for one side of a conflict
 
@@ -248,12 +249,14 @@ def summary_details(summary: SyncSummary, notes: list[str], *, items: bool = Tru
     ]
     if summary.aliased:
         lines.append(
-            f"{summary.aliased} record(s) made on two machines for one racer or track: the "
-            "first one made is kept everywhere (see `racer-tui sync status`)"
+            f"{counted(summary.aliased, 'record')} made on two machines for one racer or track: "
+            "the first one made is kept everywhere"
         )
     if summary.waiting:
         lines.append(
-            f"{summary.waiting} pulled record(s) wait for records they refer to; they are "
-            "added when those arrive"
+            f"{counted(summary.waiting, 'pulled record')} "
+            f"{'waits' if summary.waiting == 1 else 'wait'} for records "
+            f"{'it refers' if summary.waiting == 1 else 'they refer'} to; "
+            f"{'it is' if summary.waiting == 1 else 'they are'} added when those arrive"
         )
     return lines

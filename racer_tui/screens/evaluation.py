@@ -18,11 +18,11 @@ from textual.containers import Horizontal
 from textual.message import Message
 from textual.widgets import Button, DataTable, Input, Label, Static
 
-from racer_tui.plural import counted
 from racer_tui.screens.base import RacerScreen
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import seconds_text
 from sim.garage.folder import open_model
+from sim.plural import counted
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
 
 COLUMNS = ("trial", "time", "% completed", "status")

@@ -31,7 +31,6 @@ from league.report import (
 )
 from league.report import Column as ReportColumn
 from league.store import open_league
-from racer_tui.plural import counted
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.nights import NightsScreen
@@ -45,6 +44,7 @@ from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.sync_status import SyncStatusLine
 from racer_tui.widgets.table_fill import Col, FittedTable, column_index, fill_table, shown_columns
 from sim.atomic import write_text_atomic
+from sim.plural import counted
 
 NARROW = 120  # below this many columns the detail panel goes under the table
 EXPORT_FORMATS = {".csv": "csv", ".json": "json", ".md": "markdown", ".markdown": "markdown"}

@@ -25,10 +25,10 @@ from league.racers import check_name
 from league.races import record_race_as
 from league.store import open_league
 from league.submissions import submit_model
-from racer_tui.plural import counted
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.session import remember_racer, session_racer
 from racer_tui.widgets.model_detail import seconds_text
+from sim.plural import counted
 from sim.race.result import RaceResult
 
 

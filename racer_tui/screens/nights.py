@@ -65,6 +65,7 @@ from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
 from sim.garage.folder import list_models
+from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
@@ -608,7 +609,7 @@ class NightsScreen(RacerScreen[None]):
                 )
             drawn = draw_heats(league, night)
         waiting = sum(1 for heat in drawn if heat.race_id is None)
-        self.post_message(NightChanged(night.id, f"Drew the order of {waiting} heat(s)."))
+        self.post_message(NightChanged(night.id, f"Drew the order of {counted(waiting, 'heat')}."))
 
     def action_run_heat(self) -> None:
         night = self._current("run its heats")
@@ -656,7 +657,10 @@ class NightsScreen(RacerScreen[None]):
             return
         waiting = sum(1 for heat in self.state.heats if heat.race_id is None)
         extra = (
-            f" {waiting} heat(s) have not raced; those entrants get no result." if waiting else ""
+            f" {counted(waiting, 'heat')} {'has' if waiting == 1 else 'have'} not raced; those "
+            "entrants get no result."
+            if waiting
+            else ""
         )
         dialog = ConfirmDialog(
             f"Close {night.name}?",

@@ -6,11 +6,14 @@ sync set aside: conflicts (both sides kept) and quarantined records (not added).
 The work is league.sync's (session.py runs a sync exactly as `racer-tui sync` does,
 status.py reads what it set aside); this screen calls it in thread workers, each with its
 own database connection. Everything from the store is shown as plain text. A store that
-is down is one notification with the library's sentence, and nothing local changes.
+is down is one notification with the library's sentence, and nothing local changes. A store
+that is reachable but not set up yet is offered to be set up here (`racer-tui sync init` on
+the command line), then synced.
 """
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 from typing import ClassVar
 
@@ -25,8 +28,14 @@ from textual.worker import Worker, WorkerState
 
 from league.errors import LeagueError
 from league.store import open_league
+from league.sync import open_store
 from league.sync.engine import SyncSummary
-from league.sync.errors import StoreUrlError, SyncError
+from league.sync.errors import (
+    StoreFolderMissingError,
+    StoreNotInitialisedError,
+    StoreUrlError,
+    SyncError,
+)
 from league.sync.session import check_record_store_url, save_store, sync_league
 from league.sync.status import (
     SyncStatus,
@@ -36,7 +45,7 @@ from league.sync.status import (
     sync_status,
 )
 from racer_tui.screens.base import RacerScreen, notify_worker_failure
-from racer_tui.screens.dialogs import show_problem
+from racer_tui.screens.dialogs import ConfirmDialog, show_problem
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.sync_status import local_time
@@ -111,6 +120,7 @@ class SyncScreen(RacerScreen[bool]):
         self.status: SyncStatus | None = None
         self.syncing = False
         self.pulled = 0  # records pulled while this screen was open
+        self._syncing_url = ""
         self._shown_progress: tuple[str, int] | None = None
         self.last_summary: Text | None = None  # what the sync run here did
 
@@ -295,22 +305,56 @@ class SyncScreen(RacerScreen[bool]):
         if url is None:
             self.query_one("#sync-url", Input).focus()
             return
+        saved = self.status.overview.store if self.status is not None else None
+        self._begin(url, f"Reaching {url}…")
+        self._sync(url, save=url != saved)
+
+    def _begin(self, url: str, stage: str) -> None:
         self.syncing = True
+        self._syncing_url = url
         self._shown_progress = None
         self.query_one("#sync-now", Button).disabled = True
         self.query_one("#sync-progress", ProgressBar).update(total=None, progress=0)
         self.set_class(True, "-syncing")
-        self._stage(Text(f"Reaching {url}…"))
-        saved = self.status.overview.store if self.status is not None else None
-        self._sync(url, save=url != saved)
+        self._stage(Text(stage))
 
     @work(thread=True, exclusive=True, group="sync-run", exit_on_error=False)
-    def _sync(self, url: str, save: bool) -> None:
+    def _sync(self, url: str, save: bool, set_up: bool = False) -> None:
+        if set_up:
+            with open_store(url) as store:
+                store.init()
         with open_league(self.db_path) as league:
             if save:
                 save_store(league, url)
             summary, notes = sync_league(league, url, progress=self._progress_from_thread)
         self.post_message(SyncFinished(summary, notes))
+
+    def _synced_before(self, url: str) -> bool:
+        overview = self.status.overview if self.status is not None else None
+        return overview is not None and overview.store == url and bool(overview.runs)
+
+    def _offer_set_up(self, url: str, folder_missing: bool) -> None:
+        where = (
+            "That folder does not exist. If the shared drive is not connected, cancel, "
+            "connect it and press s again. "
+            if folder_missing
+            else "There is no racer-tui store there yet. "
+        )
+        dialog = ConfirmDialog(
+            f"Set up a store at {url}?",
+            f"{where}Setting one up makes it ready for the whole league (as `racer-tui sync "
+            "init` does), then this league syncs with it; every other racer then sets the "
+            "same URL here and presses s.",
+            confirm_label="Set up and sync",
+        )
+        self.app.push_screen(dialog, partial(self._set_up_answered, url))
+
+    def _set_up_answered(self, url: str, yes: bool | None) -> None:
+        if not yes:
+            self.notify("The store was not set up; nothing was synced.", severity="warning")
+            return
+        self._begin(url, f"Setting up {url}…")
+        self._sync(url, save=True, set_up=True)
 
     def _progress_from_thread(self, direction: str, done: int, total: int | None) -> None:
         # One screen update per percent (or per pulled page): a big push reports every
@@ -374,6 +418,16 @@ class SyncScreen(RacerScreen[bool]):
             self.last_summary = None
             self.action_reload()
         error = worker.error
+        if (
+            worker.state is WorkerState.ERROR
+            and isinstance(error, StoreNotInitialisedError | StoreFolderMissingError)
+            and not self._synced_before(self._syncing_url)
+        ):
+            # A new store: the library's sentence names the command line's `sync init`;
+            # here it is a key. (A store this league synced with before that is gone now is
+            # a drive not connected, reported as it is: a new store there would be wrong.)
+            self._offer_set_up(self._syncing_url, isinstance(error, StoreFolderMissingError))
+            return
         if worker.state is WorkerState.ERROR and isinstance(error, SyncError | LeagueError):
             # The library's sentence says what is wrong and what to do: shown as it is.
             self.notify(sentence(str(error)), severity="error", timeout=15, markup=False)

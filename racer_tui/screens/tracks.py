@@ -18,7 +18,6 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import DataTable, Input, Static
 
-from racer_tui.plural import counted
 from racer_tui.screens.base import ModelAdded, RacerScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
@@ -27,6 +26,7 @@ from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_label
 from racer_tui.widgets.track_map import TrackMap
+from sim.plural import counted
 from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
 from sim.track import Track, TrackError

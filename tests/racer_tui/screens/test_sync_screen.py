@@ -16,8 +16,10 @@ from textual.widgets import DataTable, Input, ProgressBar
 from league.races import record_race
 from league.store import open_league
 from league.sync import local, open_store
+from league.sync.dir_store import MARKER_NAME
 from league.sync.session import save_store
 from racer_tui.app import RacerTuiApp, create_app
+from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.sync import SyncScreen
 from racer_tui.widgets.sync_status import NO_STORE, SyncStatusLine
@@ -151,6 +153,42 @@ async def test_a_store_that_is_down_is_one_notification_and_changes_nothing(
     # No record changed; only the failure is noted, for the status lines.
     after = [line for line in database_dump() if "last_failure" not in line]
     assert after == before
+
+
+@pytest.mark.parametrize("made", [False, True], ids=["no folder yet", "empty folder"])
+async def test_a_new_store_is_set_up_from_the_app_when_the_racer_says_so(
+    tmp_path: Path, made: bool
+) -> None:
+    share = tmp_path / "league-share"
+    if made:
+        share.mkdir()
+    url = f"dir:{share}"
+    data_home()
+    record("ana", [11.0])
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        screen = await open_sync(pilot)
+        await set_store(pilot, screen, url)
+        await pilot.press("s")
+        await settle(pilot)
+        dialog = app.screen
+        assert isinstance(dialog, ConfirmDialog)
+        text = painted(dialog)
+        assert "Set up a store at" in text
+        assert ("does not exist" in text) is not made  # a missing folder may be a drive
+        await pilot.press("n")
+        await settle(pilot)
+        assert "not set up" in notes.text("warning")
+        assert not (share / MARKER_NAME).exists()
+        await pilot.press("s")
+        await settle(pilot)
+        await pilot.press("y")
+        await settle(pilot)
+        assert app.screen is screen
+        assert (share / MARKER_NAME).is_file()
+        assert f"Synced with {url}: pushed 3" in summary(screen)
+        assert "racer-tui sync init" not in notes.text()  # no command line needed
 
 
 async def test_a_failed_sync_never_shows_the_last_success_as_news(
