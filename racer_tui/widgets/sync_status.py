@@ -1,8 +1,10 @@
 """One line about the shared store, under the leaderboard: where the league syncs, when it
 last did and what moved, and what waits (to push, conflicts, quarantined).
 
-The figures sit at the right and never shrink; a long store URL is cut with an ellipsis
-instead (the Sync screen shows it whole). The figures come from league.sync.status.
+The figures sit at the right; a long store URL is cut with an ellipsis instead (the Sync
+screen shows it whole). Below COMPACT_BELOW columns the figures say only what matters (no
+zero conflicts or quarantined, no arrows), so the URL keeps room to be recognised. The
+figures come from league.sync.status.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from league.store import open_league
 from league.sync.status import SyncOverview, sync_overview
 
 NO_STORE = "No shared store: press y to set one up"
+COMPACT_BELOW = 100  # columns
 
 
 def local_time(iso: str, *, now: datetime | None = None) -> str:
@@ -53,13 +56,16 @@ def failed_text(overview: SyncOverview) -> list[Text]:
     return [Text(f"sync failed {local_time(overview.failure.at)}", style="bold yellow")]
 
 
-def counts_text(overview: SyncOverview) -> Text:
-    """When it last synced and what moved, then what waits; "" without a store."""
+def counts_text(overview: SyncOverview, *, compact: bool = False) -> Text:
+    """When it last synced and what moved, then what waits; "" without a store. `compact`
+    leaves out what moved and the warnings that are zero."""
     if overview.store is None:
         return Text("")
     last = overview.last_run
     if last is None:
         when = Text("never synced", style="dim")
+    elif compact:
+        when = Text(f"synced {local_time(last.finished_at)}", style="dim")
     else:
         arrows = [
             f"{arrow}{count}"
@@ -67,13 +73,13 @@ def counts_text(overview: SyncOverview) -> Text:
             if count is not None
         ]
         when = Text(f"synced {local_time(last.finished_at)} ({' '.join(arrows)})", style="dim")
-    parts = [
-        *failed_text(overview),
-        when,
-        _figure(overview.to_push or 0, "to push", warn=False),
-        _figure(overview.conflicts, "conflict" + "s" * (overview.conflicts != 1), warn=True),
-        _figure(overview.quarantined, "quarantined", warn=True),
-    ]
+    parts = [*failed_text(overview), when, _figure(overview.to_push or 0, "to push", warn=False)]
+    if overview.conflicts or not compact:
+        parts.append(
+            _figure(overview.conflicts, "conflict" + "s" * (overview.conflicts != 1), warn=True)
+        )
+    if overview.quarantined or not compact:
+        parts.append(_figure(overview.quarantined, "quarantined", warn=True))
     return Text(" · ").join(parts)
 
 
@@ -127,7 +133,12 @@ class SyncStatusLine(Horizontal):
     def show(self, overview: SyncOverview) -> None:
         self.overview = overview
         self.query_one("#sync-store", Static).update(store_text(overview))
-        self.query_one("#sync-counts", Static).update(counts_text(overview))
+        compact = self.size.width < COMPACT_BELOW
+        self.query_one("#sync-counts", Static).update(counts_text(overview, compact=compact))
+
+    def on_resize(self) -> None:
+        if self.overview is not None:
+            self.show(self.overview)
 
     async def on_click(self) -> None:
         await self.run_action("screen.sync")

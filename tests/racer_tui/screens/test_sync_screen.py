@@ -131,6 +131,30 @@ async def test_two_racers_sync_from_the_app_and_see_each_others_results(
         assert "0 to push" in status_line(app)  # bob's race went to the store too
 
 
+async def test_at_80_columns_the_status_line_keeps_room_for_the_store(
+    tmp_path: Path, store_url: str
+) -> None:
+    data_home()
+    record("ana", [11.0])
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        screen = await open_sync(pilot)
+        await set_store(pilot, screen, store_url)
+        await pilot.press("s")
+        await settle(pilot)
+        await pilot.press("escape")
+        await settle(pilot)
+        line = status_line(app)
+        # What matters stays (when, what waits); zero warnings and the arrows go, so the
+        # store's URL is more than an ellipsis.
+        assert "synced" in line and "0 to push" in line
+        assert "conflicts" not in line and "↑" not in line
+        assert "⇅ dir:/" in line
+        await pilot.resize_terminal(120, 30)
+        await settle(pilot)
+        assert "0 conflicts" in status_line(app) and "(↑3 ↓0)" in status_line(app)
+
+
 async def test_a_store_that_is_down_is_one_notification_and_changes_nothing(
     tmp_path: Path,
 ) -> None:
