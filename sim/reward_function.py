@@ -6,8 +6,9 @@ number) becomes a `RewardFunctionError`: one sentence naming the file and, where
 the line in *their* file to look at. Training calls the function ~30,000 times a second, so the
 happy path of `RewardFunction.__call__` is one dict copy, one call and one type check.
 
-The four AWS DeepRacer sample functions ship as plain files in `sim/reward_templates/` and
-load through the same path as a racer's file.
+The reward templates (racer-tui's own code, paying what the DeepRacer console's templates
+of the same names pay) ship as plain files in `sim/reward_templates/` and load through the
+same path as a racer's file.
 """
 
 from __future__ import annotations
@@ -215,7 +216,7 @@ def load_reward_source(source: str, name: str) -> RewardFunction:
 
 
 def template_source(name: str) -> str:
-    """The text of one of AWS DeepRacer's sample reward functions (see `TEMPLATES`)."""
+    """The text of one of the reward templates (see `TEMPLATES`)."""
     try:
         file_name = TEMPLATES[name]
     except KeyError:

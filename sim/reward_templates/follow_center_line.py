@@ -1,29 +1,29 @@
-# AWS DeepRacer sample reward function, Example 1: follow the center line in time trials.
-# From the AWS DeepRacer developer guide, "Examples of reward functions" (sample code, MIT-0).
-# fmt: off
+"""Follow the centre line: the nearer the car drives to
+it, the more each step pays.
+
+What it teaches: keep to the middle of the road. Each
+side of the centre line is cut into three bands, ending
+at 10%, 25% and 50% of the track's width (the last one
+is the edge of the road); the inner band pays 1.0, the
+next 0.5, the outer one 0.1, and past the edge a step
+pays almost nothing.
+
+Where it stops helping: it pays a slow car as much as a
+fast one, and it pays the middle of the road in corners
+too, where a faster line cuts across. Once the car
+finishes laps, pay for speed or progress as well.
+"""
+
+# Where each band ends (a fraction of the track's width,
+# from the centre line) and what a step in it pays.
+BANDS = ((0.10, 1.0), (0.25, 0.5), (0.50, 0.1))
+PAST_THE_EDGE = 0.001
+
 
 def reward_function(params):
-    '''
-    Example of rewarding the agent to follow center line
-    '''
-
-    # Read input parameters
-    track_width = params['track_width']
-    distance_from_center = params['distance_from_center']
-
-    # Calculate 3 markers that are increasingly further away from the center line
-    marker_1 = 0.1 * track_width
-    marker_2 = 0.25 * track_width
-    marker_3 = 0.5 * track_width
-
-    # Give higher reward if the car is closer to center line and vice versa
-    if distance_from_center <= marker_1:
-        reward = 1.0
-    elif distance_from_center <= marker_2:
-        reward = 0.5
-    elif distance_from_center <= marker_3:
-        reward = 0.1
-    else:
-        reward = 1e-3  # likely crashed/ close to off track
-
-    return float(reward)
+    from_centre = params["distance_from_center"]
+    width = params["track_width"]
+    for band_end, pay in BANDS:
+        if from_centre <= band_end * width:
+            return float(pay)
+    return PAST_THE_EDGE

@@ -1,58 +1,66 @@
-# AWS DeepRacer sample reward function, Example 4: stay in one lane without crashing into
-# stationary obstacles or moving vehicles (object avoidance and head-to-head races).
-# From the AWS DeepRacer developer guide, "Examples of reward functions" (sample code, MIT-0).
-# Shipped unchanged, so like AWS's original it needs objects on the track (object-avoidance
-# and head-to-head races); in a time trial objects_location is empty and it fails.
-# fmt: off
+"""Stay on the road and keep clear of the next object in
+your lane (object avoidance and head-to-bot races).
+
+Each step pays for two things, the second weighted four
+times the first:
+- the road: 1.0 with all four wheels on the track and
+  the car's centre at least 5 cm inside the edge, almost
+  nothing otherwise;
+- clearance: the next object ahead, when it is in the
+  car's lane, costs pay as the car closes in (full pay
+  from 0.8 m away, half from 0.5 m, a fifth from 0.3 m,
+  and almost nothing nearer, where the car is about to
+  hit it). An object in the other lane costs nothing.
+
+What it teaches: change lanes before an object rather
+than brake into it.
+
+Where it stops helping: it measures the gap in a
+straight line, not along the road, and only to the next
+object. With no objects on the track (a time trial) it
+pays the road part and full clearance on every step, so
+it teaches no more than stay_inside_borders.
+"""
 
 import math
 
+EDGE_MARGIN = 0.05  # metres, car centre to road edge
+# At least this many metres from the next object in the
+# car's lane, and the clearance pay there.
+CLEARANCE = ((0.8, 1.0), (0.5, 0.5), (0.3, 0.2))
+ALMOST_NOTHING = 0.001
+ROAD_WEIGHT = 1.0
+CLEARANCE_WEIGHT = 4.0
+
+
+def road_pay(params):
+    half_width = params["track_width"] / 2
+    room = half_width - params["distance_from_center"]
+    wheels_on = params["all_wheels_on_track"]
+    if wheels_on and room >= EDGE_MARGIN:
+        return 1.0
+    return ALMOST_NOTHING
+
+
+def clearance_pay(params):
+    objects = params["objects_location"]
+    if not objects:
+        return 1.0
+    ahead = params["closest_objects"][1]
+    lane = params["objects_left_of_center"][ahead]
+    if lane != params["is_left_of_center"]:
+        return 1.0  # the other lane
+    object_x, object_y = objects[ahead]
+    gap_x = params["x"] - object_x
+    gap_y = params["y"] - object_y
+    gap = math.hypot(gap_x, gap_y)
+    for at_least, pay in CLEARANCE:
+        if gap >= at_least:
+            return pay
+    return ALMOST_NOTHING
+
+
 def reward_function(params):
-    '''
-    Example of rewarding the agent to stay inside two borders
-    and penalizing getting too close to the objects in front
-    '''
-
-    all_wheels_on_track = params['all_wheels_on_track']
-    distance_from_center = params['distance_from_center']
-    track_width = params['track_width']
-    objects_location = params['objects_location']
-    agent_x = params['x']
-    agent_y = params['y']
-    _, next_object_index = params['closest_objects']
-    objects_left_of_center = params['objects_left_of_center']
-    is_left_of_center = params['is_left_of_center']
-
-    # Initialize reward with a small number but not zero
-    # because zero means off-track or crashed
-    reward = 1e-3
-
-    # Reward if the agent stays inside the two borders of the track
-    if all_wheels_on_track and (0.5 * track_width - distance_from_center) >= 0.05:
-        reward_lane = 1.0
-    else:
-        reward_lane = 1e-3
-
-    # Penalize if the agent is too close to the next object
-    reward_avoid = 1.0
-
-    # Distance to the next object
-    next_object_loc = objects_location[next_object_index]
-    distance_closest_object = math.sqrt((agent_x - next_object_loc[0])**2 + (agent_y - next_object_loc[1])**2)
-
-    # Decide if the agent and the next object is on the same lane
-    is_same_lane = objects_left_of_center[next_object_index] == is_left_of_center
-
-    if is_same_lane:
-        if 0.5 <= distance_closest_object < 0.8:
-            reward_avoid *= 0.5
-        elif 0.3 <= distance_closest_object < 0.5:
-            reward_avoid *= 0.2
-        elif distance_closest_object < 0.3:
-            reward_avoid = 1e-3  # Likely crashed
-
-    # Calculate reward by putting different weights on
-    # the two aspects above
-    reward += 1.0 * reward_lane + 4.0 * reward_avoid
-
-    return reward
+    road = ROAD_WEIGHT * road_pay(params)
+    clearance = CLEARANCE_WEIGHT * clearance_pay(params)
+    return float(ALMOST_NOTHING + road + clearance)

@@ -1,4 +1,5 @@
-"""Reward functions: the AWS templates run, and every way a racer's file can fail says where."""
+"""Reward functions: the templates pay what the console's templates of the same names pay, and
+every way a racer's file can fail says where."""
 
 from __future__ import annotations
 
@@ -146,17 +147,79 @@ def test_each_template_returns_a_float_in_range(name: str) -> None:
     assert "def reward_function(params):" in reward.source
 
 
-@pytest.mark.parametrize("name", sorted(set(TEMPLATES) - {"object_avoidance"}))
-def test_each_time_trial_template_runs_without_objects(name: str) -> None:
+@pytest.mark.parametrize("name", sorted(TEMPLATES))
+def test_each_template_runs_in_a_time_trial_without_objects(name: str) -> None:
     value = load_template(name)(sample_params(objects=()))
     assert type(value) is float
     assert 0.0 < value <= 1e5
 
 
-def test_object_avoidance_template_is_unchanged_so_it_needs_objects() -> None:
-    # AWS's sample indexes objects_location: in a time trial it fails, as it does on AWS.
-    with pytest.raises(RewardFunctionError, match=r"object_avoidance\.py line \d+.*IndexError"):
-        load_template("object_avoidance")(sample_params(objects=()))
+def road(**changes: object) -> dict[str, object]:
+    """Sample params on a 1 m wide road (easy band edges), with `changes`."""
+    return {**sample_params(objects=()), "track_width": 1.0, **changes}
+
+
+@pytest.mark.parametrize(
+    ("from_centre", "pays"),
+    [(0.0, 1.0), (0.10, 1.0), (0.11, 0.5), (0.25, 0.5), (0.26, 0.1), (0.50, 0.1), (0.51, 0.001)],
+)
+def test_follow_center_line_pays_by_band(from_centre: float, pays: float) -> None:
+    # The console's template: bands end at 10%, 25% and 50% of the width, edges included.
+    assert load_template("follow_center_line")(road(distance_from_center=from_centre)) == pays
+
+
+@pytest.mark.parametrize(
+    ("from_centre", "wheels_on", "pays"),
+    [(0.0, True, 1.0), (0.44, True, 1.0), (0.46, True, 0.001), (0.1, False, 0.001)],
+)
+def test_stay_inside_borders_pays_the_road_but_not_its_last_5_cm(
+    from_centre: float, wheels_on: bool, pays: float
+) -> None:
+    params = road(distance_from_center=from_centre, all_wheels_on_track=wheels_on)
+    assert load_template("stay_inside_borders")(params) == pays
+
+
+@pytest.mark.parametrize(
+    ("from_centre", "steering", "pays"),
+    [(0.0, 15.0, 1.0), (0.0, -15.0, 1.0), (0.0, 15.5, 0.8), (0.0, -30.0, 0.8), (0.2, 20.0, 0.4)],
+)
+def test_prevent_zigzag_cuts_a_fifth_for_steering_past_15_degrees(
+    from_centre: float, steering: float, pays: float
+) -> None:
+    params = road(distance_from_center=from_centre, steering_angle=steering)
+    assert load_template("prevent_zigzag")(params) == pytest.approx(pays)
+
+
+@pytest.mark.parametrize(
+    ("gap", "same_lane", "pays"),
+    [
+        (0.9, True, 5.001),  # 0.001 + the road (1.0) + 4 x full clearance
+        (0.8, True, 5.001),
+        (0.6, True, 3.001),  # half clearance
+        (0.4, True, 1.801),  # a fifth
+        (0.2, True, 1.005),  # about to hit it
+        (0.2, False, 5.001),  # the other lane costs nothing
+    ],
+)
+def test_object_avoidance_pays_for_clearance_in_the_cars_lane(
+    gap: float, same_lane: bool, pays: float
+) -> None:
+    params = road(
+        x=1.0,
+        y=2.0,
+        objects_location=[(9.0, 9.0), (1.0 + gap, 2.0)],
+        closest_objects=[0, 1],
+        objects_left_of_center=[True, same_lane],
+        is_left_of_center=True,
+        distance_from_center=0.1,
+    )
+    assert load_template("object_avoidance")(params) == pytest.approx(pays)
+    off_the_road = {**params, "all_wheels_on_track": False}
+    assert load_template("object_avoidance")(off_the_road) == pytest.approx(pays - 0.999)
+
+
+def test_object_avoidance_without_objects_pays_the_road_and_full_clearance() -> None:
+    assert load_template("object_avoidance")(road()) == pytest.approx(5.001)
 
 
 @pytest.mark.parametrize("name", sorted(TEMPLATES))
@@ -174,7 +237,7 @@ def test_templates_read_only_standard_params_keys(name: str) -> None:
     assert keys <= set(PARAM_KEYS)
 
 
-def test_templates_pay_what_aws_documents_on_the_sample() -> None:
+def test_templates_pay_what_the_console_templates_pay_on_the_sample() -> None:
     params = sample_params()  # 5 cm from the centre of a 0.76 m road, steering straight
     assert load_template("follow_center_line")(params) == 1.0
     assert load_template("stay_inside_borders")(params) == 1.0
