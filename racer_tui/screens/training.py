@@ -311,9 +311,9 @@ class TrainingScreen(RacerScreen[None]):
         self.watched = name
         known = self.figures.get(name)
         if known is not None:
-            self.query_one(TrainingCharts).show(known)
+            self.query_one(TrainingCharts).show(known, name)
         else:
-            self.query_one(TrainingCharts).show(TrainingFigures())
+            self.query_one(TrainingCharts).show(TrainingFigures(), name)
             self._load_figures(name)
         self._observe(name)
 
@@ -325,7 +325,7 @@ class TrainingScreen(RacerScreen[None]):
         # A live run may have started meanwhile: its figures are already the truth.
         figures = self.figures.setdefault(message.name, message.figures)
         if message.name == self.watched:
-            self.query_one(TrainingCharts).show(figures)
+            self.query_one(TrainingCharts).show(figures, message.name)
 
     @work(thread=True, exclusive=True, group="training-eye", exit_on_error=False)
     def _observe(self, name: str) -> None:
@@ -430,7 +430,7 @@ class TrainingScreen(RacerScreen[None]):
             figures = await asyncio.to_thread(load_figures, folder)
             self.figures[request.model] = figures
             if request.model == self.watched:
-                self.query_one(TrainingCharts).show(figures)
+                self.query_one(TrainingCharts).show(figures, request.model)
             log = folder.training_log
             log.write_bytes(b"")  # a new run, a new log
             stderr = tempfile.TemporaryFile()  # noqa: SIM115 - closed when the run ends
@@ -481,7 +481,7 @@ class TrainingScreen(RacerScreen[None]):
             figures = await asyncio.to_thread(load_figures, folder)
             self.figures[name] = figures
             if name == self.watched:
-                self.query_one(TrainingCharts).show(figures)
+                self.query_one(TrainingCharts).show(figures, name)
             log = folder.training_log
             if not log.is_file():
                 # Started without a log (by `racer-tui train`): follow TrainingMetrics.json instead.
@@ -494,7 +494,7 @@ class TrainingScreen(RacerScreen[None]):
                     figures = await asyncio.to_thread(load_figures, folder)
                     self.figures[name] = figures
                     if name == self.watched:
-                        self.query_one(TrainingCharts).show(figures)
+                        self.query_one(TrainingCharts).show(figures, name)
                 return
             start = log.stat().st_size
 

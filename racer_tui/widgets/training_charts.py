@@ -132,34 +132,35 @@ def clock(seconds: float) -> str:
     return f"{minutes}:{rest:02d}"
 
 
-def run_line(figures: TrainingFigures) -> RenderableType:
-    """Where the run is: its clock against the time budget (DeepRacer's stop condition, so
-    the time left is exact), or how it ended."""
+def run_line(figures: TrainingFigures, model: str = "") -> RenderableType:
+    """Whose figures these are, and where the run is: its clock against the time budget
+    (DeepRacer's stop condition, so the time left is exact), or how it ended."""
     started, ended = figures.started, figures.ended
+    name = Text.assemble((model, "bold"), ": ") if model else Text()
     if started is None:
-        return Text("not training now", style="dim")
+        return name + Text("not training now", style="dim")
     if ended is not None:
-        return Text(f"{ended.kind} after {clock(ended.elapsed)}", style="dim")
+        return name + Text(f"{ended.kind} after {clock(ended.elapsed)}", style="dim")
     elapsed = figures.elapsed
     budget = started.max_minutes * 60.0
     if budget <= 0:
-        return Text(f"training {clock(elapsed)}")
+        return name + Text(f"training {clock(elapsed)}")
     line = Table.grid(expand=True)
     line.add_column(no_wrap=True)
     line.add_column(ratio=1)
     line.add_column(no_wrap=True)
     line.add_row(
-        Text(f"training {clock(elapsed)} of {clock(budget)} "),
+        name + Text(f"training {clock(elapsed)} of {clock(budget)} "),
         ProgressBar(total=budget, completed=min(elapsed, budget)),
         Text(f" {clock(budget - elapsed)} left"),
     )
     return line
 
 
-def figures_lines(figures: TrainingFigures) -> Group:
-    """The run's clock, then the counters above the charts: run, evaluation, process, and
-    how episodes ended."""
-    return Group(run_line(figures), counters(figures))
+def figures_lines(figures: TrainingFigures, model: str = "") -> Group:
+    """The model and its run's clock, then the counters above the charts: run,
+    evaluation, process, and how episodes ended."""
+    return Group(run_line(figures, model), counters(figures))
 
 
 def counters(figures: TrainingFigures) -> Text:
@@ -213,6 +214,7 @@ class TrainingCharts(Vertical):
     def __init__(self, *, id: str | None = None) -> None:
         super().__init__(id=id)
         self.figures = TrainingFigures()
+        self.model = ""  # whose figures: the counters name it
         self._shown_version = -1
         self._lengths: dict[str, int] = {}
 
@@ -226,9 +228,10 @@ class TrainingCharts(Vertical):
         self.set_interval(1.0 / STATUS_REFRESH_HZ, self.sync)
         self.sync()
 
-    def show(self, figures: TrainingFigures) -> None:
-        """Watch another model's figures (its charts are redrawn from the start)."""
+    def show(self, figures: TrainingFigures, model: str) -> None:
+        """Watch `model`'s figures (its charts are redrawn from the start)."""
         self.figures = figures
+        self.model = model
         self._shown_version = -1
         self._lengths.clear()
         self.sync()
@@ -258,7 +261,7 @@ class TrainingCharts(Vertical):
             elif len(values) > known:
                 chart.extend(values[known:])
             self._lengths[chart_id] = len(values)
-        self.query_one("#figures", Static).update(figures_lines(self.figures))
+        self.query_one("#figures", Static).update(figures_lines(self.figures, self.model))
 
     def redraw_now(self) -> None:
         """Sync and repaint at once, off the calm tick (snapshots and tests)."""

@@ -101,13 +101,13 @@ async def test_the_run_clock_and_time_left_show_at_80x24() -> None:
         assert isinstance(screen, TrainingScreen)
         charts = screen.query_one(TrainingCharts)
         await wait_for(pilot, lambda: charts.figures.cpu == [90.0])
-        assert "not training now" in painted(charts)
+        assert "ada: not training now" in painted(charts)  # whose charts these are
         screen.apply_event("ada", sample_events()[0])  # a 5-minute budget
         screen.apply_event("ada", events.Episode(83.0, 1, 0, 12.0, 40.0, None, "Off track", 90))
         charts.redraw_now()
         await pilot.pause()
         text = painted(charts)
-        assert "training 1:23 of 5:00" in text and "3:37 left" in text
+        assert "ada: training 1:23 of 5:00" in text and "3:37 left" in text
         screen.apply_event("ada", events.Ended(250.0, "stopped", "stopped by you", 9, 1, 40, None))
         charts.redraw_now()
         await pilot.pause()

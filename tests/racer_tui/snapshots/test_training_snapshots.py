@@ -52,7 +52,7 @@ def test_training_with_a_run(snap_compare: Compare, size: tuple[int, int]) -> No
         for event in a_run():
             screen.apply_event("hairpin-hero", event)
         charts = screen.query_one(TrainingCharts)
-        charts.show(screen.figures["hairpin-hero"])
+        charts.show(screen.figures["hairpin-hero"], "hairpin-hero")
         charts.redraw_now()
         await pilot.pause()
 
