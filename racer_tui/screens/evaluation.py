@@ -2,12 +2,15 @@
 
 The racer picks the number of trials; the evaluation runs in a thread worker (it loads the
 policy, which imports torch, and drives the trials: a second or two for vector and lidar
-models) and fills a table like the DeepRacer console's: trial, time, % track completed,
-status. The library writes `evaluation-<stamp>.json` into the model folder, as the CLI does.
+models, longer for camera ones) with a progress bar and its ETA, and fills a table like the
+DeepRacer console's: trial, time, % track completed, status. The library writes DRfC's
+evaluation files into the model folder, as the CLI does. The job's status (running, done,
+failed with what to do) is one `Job`, drawn by a `JobLine`.
 """
 
 from __future__ import annotations
 
+import time
 from typing import ClassVar
 
 from rich.text import Text
@@ -17,9 +20,12 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal
 from textual.message import Message
 from textual.widgets import Button, DataTable, Input, Label, Static
+from textual.worker import Worker, WorkerState
 
-from racer_tui.screens.base import RacerScreen
+from racer_tui.jobs import Job, JobState
+from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.widgets.footer import RacerFooter
+from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.model_detail import seconds_text
 from sim.garage.folder import open_model
 from sim.plural import counted
@@ -71,12 +77,20 @@ class EvaluationDone(Message):
         self.report = report
 
 
+class EvaluationProgress(Message):
+    def __init__(self, fraction: float) -> None:
+        super().__init__()
+        self.fraction = fraction
+
+
 class EvaluationScreen(RacerScreen[None]):
     """Trials count, an Evaluate button, and the results table."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("escape", "leave", "Back"),
-        Binding("ctrl+e", "evaluate", "Evaluate", tooltip="Run the trials"),
+        # Above the trials field's own ctrl+e (end of line): in a 3-digit field the racer
+        # means Evaluate, and the footer shows it.
+        Binding("ctrl+e", "evaluate", "Evaluate", tooltip="Run the trials", priority=True),
     ]
     DEFAULT_CSS = """
     EvaluationScreen { padding: 0 1; }
@@ -85,6 +99,7 @@ class EvaluationScreen(RacerScreen[None]):
     EvaluationScreen #evaluation-form > Label { padding: 1 1 0 0; }
     EvaluationScreen #trials { width: 12; }
     EvaluationScreen #evaluation-summary { height: auto; margin: 1 0; }
+    EvaluationScreen JobLine { margin: 0 0 1 0; }
     EvaluationScreen #evaluation-results { height: 1fr; }
     """
 
@@ -93,7 +108,8 @@ class EvaluationScreen(RacerScreen[None]):
         self.model = model
         self.trials = trials
         self.report: EvaluationReport | None = None
-        self.running = False
+        self.job = Job()
+        self._shown_percent = -1
 
     def compose(self) -> ComposeResult:
         yield Static(Text(f"Evaluate {self.model}"), id="evaluation-title")
@@ -108,6 +124,7 @@ class EvaluationScreen(RacerScreen[None]):
             ),
             id="evaluation-summary",
         )
+        yield JobLine(id="evaluation-job")
         yield DataTable(id="evaluation-results", cursor_type="row", zebra_stripes=True)
         yield RacerFooter()
 
@@ -117,6 +134,14 @@ class EvaluationScreen(RacerScreen[None]):
 
     def action_leave(self) -> None:
         self.dismiss(None)
+
+    @property
+    def running(self) -> bool:
+        return self.job.state is JobState.RUNNING
+
+    def _show_job(self, job: Job) -> None:
+        self.job = job
+        self.query_one(JobLine).show(job)
 
     @on(Input.Submitted, "#trials")
     @on(Button.Pressed, "#run")
@@ -130,20 +155,28 @@ class EvaluationScreen(RacerScreen[None]):
             self.notify(problem, severity="error", markup=False)
             return
         self.trials = int(text)
-        self.running = True
-        summary = f"Running {counted(self.trials, 'trial')} of {self.model}…"
-        self.query_one("#evaluation-summary", Static).update(Text(summary))
+        what = f"Running {counted(self.trials, 'trial')} of {self.model}"
+        self._shown_percent = -1
+        self._show_job(self.job.running(what, total=100, now=time.monotonic(), wall=time.time()))
         self._evaluate(self.trials)
 
     @work(thread=True, exclusive=True, group="evaluation", exit_on_error=False)
     def _evaluate(self, trials: int) -> None:
         from sim.training.evaluation import evaluate_model  # imports torch when it runs
 
-        try:
-            report = evaluate_model(open_model(self.model), trials=trials)
-        finally:
-            self.running = False
+        report = evaluate_model(open_model(self.model), trials=trials, on_progress=self._progress)
         self.post_message(EvaluationDone(report))
+
+    def _progress(self, fraction: float) -> None:
+        # From the worker thread, about once per simulated second: one message per percent.
+        percent = int(fraction * 100)
+        if percent != self._shown_percent:
+            self._shown_percent = percent
+            self.post_message(EvaluationProgress(fraction))
+
+    def on_evaluation_progress(self, message: EvaluationProgress) -> None:
+        if self.running:
+            self._show_job(self.job.advanced(message.fraction * 100))
 
     def on_evaluation_done(self, message: EvaluationDone) -> None:
         self.report = message.report
@@ -152,3 +185,15 @@ class EvaluationScreen(RacerScreen[None]):
         for cells in report_cells(message.report):
             table.add_row(*cells)
         self.query_one("#evaluation-summary", Static).update(summary_text(message.report))
+        report = message.report
+        laps = f"{report.laps} of {counted(len(report.trials), 'trial')} completed the lap"
+        self._show_job(self.job.finished(laps, wall=time.time()))
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        worker = event.worker
+        if worker.group != "evaluation" or worker.state is not WorkerState.ERROR:
+            return
+        event.prevent_default()  # shown on the job line, not as a passing notification
+        assert worker.error is not None
+        fix = "Press ctrl+e to try again, or Esc to go back."  # works from any field
+        self._show_job(self.job.failed(error_message(worker.error), fix, wall=time.time()))

@@ -21,7 +21,7 @@ No torch at module level: `evaluate_model` loads the policy driver only when it 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -57,6 +57,7 @@ if TYPE_CHECKING:
 DEFAULT_TRIALS = 5
 MAX_TRIALS = 100
 TRIAL_SECONDS = 120.0  # a trial still running after this is "Time Up"
+PROGRESS_EVERY_STEPS = STEP_HZ  # steps between progress reports: one simulated second
 START_OFFSET_M = 0.03  # largest lateral start offset of trials after the first
 START_YAW_DEG = 3.0  # largest heading error at the start of trials after the first
 
@@ -212,9 +213,11 @@ def run_trials(
     seed: int = 0,
     trace: TrialTrace | None = None,
     resets: ResetRules = TRAINING_RESETS,
+    on_progress: Callable[[float], None] | None = None,
 ) -> list[TrialResult]:
     """Drive `trials` one-lap trials from the start line with `driver`, recording every
-    step of every trial into `trace` when one is given."""
+    step of every trial into `trace` when one is given. `on_progress` hears how far the
+    trials have got (0..1) about once per simulated second."""
     if not 1 <= trials <= MAX_TRIALS:
         raise ValueError(f"the number of trials must be between 1 and {MAX_TRIALS}.")
     max_steps = max(1, int(max_seconds * STEP_HZ))
@@ -233,8 +236,10 @@ def run_trials(
     seconds = np.full(trials, math.nan)
     status: list[str] = [str(EpisodeStatus.IN_PROGRESS)] * trials
     progress = np.zeros(trials)
-    for _ in range(max_steps):
+    for step in range(max_steps):
         clock = resetter.clock(sim)
+        if on_progress is not None and step % PROGRESS_EVERY_STEPS == 0:
+            on_progress(_trials_done(seconds, sim.progress, clock, max_seconds))
         for index in np.flatnonzero(np.isnan(seconds) & (clock >= max_seconds - 1e-9)).tolist():
             status[index] = str(EpisodeStatus.TIME_UP)  # its penalties used up its time
             progress[index] = float(sim.progress[index])
@@ -282,6 +287,20 @@ def run_trials(
         )
         for i in range(trials)
     ]
+
+
+def _trials_done(
+    seconds: NDArray[np.float64],
+    progress: NDArray[np.float64],
+    clock: NDArray[np.float64],
+    max_seconds: float,
+) -> float:
+    """How far a set of trials has got, 0..1: a finished trial counts whole; a running one
+    ends at a full lap or at its time limit, whichever comes first, so it counts as the
+    larger of the two fractions."""
+    running = np.maximum(np.asarray(progress) / 100.0, np.asarray(clock) / max_seconds)
+    each = np.where(np.isnan(seconds), np.clip(running, 0.0, 1.0), 1.0)
+    return float(each.mean())
 
 
 _COUNTS = {
@@ -332,6 +351,7 @@ def evaluate_model(
     seed: int = 0,
     driver: Driver | None = None,
     resets: ResetRules = EVALUATION_RESETS,
+    on_progress: Callable[[float], None] | None = None,
 ) -> EvaluationReport:
     """Evaluate a garage model's policy (or `driver`) and write DRfC's evaluation files:
     `metrics/EvaluationMetrics-<stamp>.json` and its sim-trace,
@@ -341,7 +361,13 @@ def evaluate_model(
     chosen = track if track is not None else folder.track()
     trace = TrialTrace()
     results = run_trials(
-        driver or driver_for_model(folder), chosen, trials, seed=seed, resets=resets, trace=trace
+        driver or driver_for_model(folder),
+        chosen,
+        trials,
+        seed=seed,
+        resets=resets,
+        trace=trace,
+        on_progress=on_progress,
     )
     rows = evaluation_trials(results)
     stamp = _free_stamp(folder, datetime.now(UTC))

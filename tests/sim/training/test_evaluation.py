@@ -36,6 +36,18 @@ def test_the_reference_driver_completes_every_trial_near_its_reference_lap() -> 
     assert all(abs(r.seconds - results[0].seconds) < 1.0 for r in results)
 
 
+def test_trials_report_their_progress_about_once_a_simulated_second() -> None:
+    track = resolve_track("hairpin-circuit")
+    heard: list[float] = []
+    results = run_trials(reference_driver(track), track, 2, on_progress=heard.append)
+    seconds = max(r.seconds for r in results)
+    assert len(heard) == pytest.approx(seconds, abs=2)  # one per simulated second
+    assert heard[0] < 0.02 and heard == sorted(heard)
+    assert 0.8 < heard[-1] <= 1.0  # the last report comes within a second of the end
+    # The same trials, heard or not.
+    assert run_trials(reference_driver(track), track, 2) == results
+
+
 def test_only_the_first_trial_starts_exactly_on_the_line() -> None:
     poses = start_poses(5, seed=0)
     assert poses[0] == (0.0, 0.0)
