@@ -39,6 +39,10 @@ class Job:
     def running(self, what: str, *, total: float | None, now: float, wall: float) -> Job:
         return Job(what, JobState.RUNNING, wall, now, 0.0, total)
 
+    def doing(self, what: str) -> Job:
+        """The same run at another stage ("Pushing 3/10 records")."""
+        return replace(self, what=what)
+
     def advanced(self, done: float, total: float | None = None) -> Job:
         return replace(self, done=done, total=self.total if total is None else total)
 

@@ -13,6 +13,7 @@ the command line), then synced.
 
 from __future__ import annotations
 
+import time
 from functools import partial
 from pathlib import Path
 from typing import ClassVar
@@ -23,7 +24,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import Button, DataTable, Input, Label, ProgressBar, Static
+from textual.widgets import Button, DataTable, Input, Label, Static
 from textual.worker import Worker, WorkerState
 
 from league.errors import LeagueError
@@ -44,9 +45,11 @@ from league.sync.status import (
     summary_headline,
     sync_status,
 )
-from racer_tui.screens.base import RacerScreen, notify_worker_failure
+from racer_tui.jobs import Job
+from racer_tui.screens.base import RacerScreen, error_message, notify_worker_failure
 from racer_tui.screens.dialogs import ConfirmDialog, show_problem
 from racer_tui.widgets.footer import RacerFooter
+from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.sync_status import local_time
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
@@ -121,6 +124,7 @@ class SyncScreen(RacerScreen[bool]):
         self.syncing = False
         self.pulled = 0  # records pulled while this screen was open
         self._syncing_url = ""
+        self.job = Job()
         self._shown_progress: tuple[str, int] | None = None
         self.last_summary: Text | None = None  # what the sync run here did
 
@@ -133,9 +137,7 @@ class SyncScreen(RacerScreen[bool]):
                 yield Button("Save", id="sync-save")
                 yield Button("Sync now (s)", id="sync-now", variant="primary")
             yield Static("", id="problem", classes="field-problem")
-            with Horizontal(id="sync-run-row"):
-                yield ProgressBar(id="sync-progress", show_eta=False)
-                yield Static("", id="sync-stage")
+            yield JobLine(id="sync-job")
             yield Static("", id="sync-summary")
             yield Label("Conflicts", id="sync-conflicts-title", classes="field-label")
             yield FittedTable(id="sync-conflicts", cursor_type="row", zebra_stripes=True)
@@ -314,9 +316,11 @@ class SyncScreen(RacerScreen[bool]):
         self._syncing_url = url
         self._shown_progress = None
         self.query_one("#sync-now", Button).disabled = True
-        self.query_one("#sync-progress", ProgressBar).update(total=None, progress=0)
-        self.set_class(True, "-syncing")
-        self._stage(Text(stage))
+        self._show_job(self.job.running(stage, total=None, now=time.monotonic(), wall=time.time()))
+
+    def _show_job(self, job: Job) -> None:
+        self.job = job
+        self.query_one(JobLine).show(job)
 
     @work(thread=True, exclusive=True, group="sync-run", exit_on_error=False)
     def _sync(self, url: str, save: bool, set_up: bool = False) -> None:
@@ -328,6 +332,21 @@ class SyncScreen(RacerScreen[bool]):
                 save_store(league, url)
             summary, notes = sync_league(league, url, progress=self._progress_from_thread)
         self.post_message(SyncFinished(summary, notes))
+
+    def _failed(self, error: BaseException | None) -> Job:
+        wall = time.time()
+        if error is None:
+            return self.job.stopped(wall=wall)
+        if isinstance(error, StoreNotInitialisedError | StoreFolderMissingError):
+            return self.job.failed(
+                f"There is no racer-tui store at {self._syncing_url} yet.",
+                "Press s to set one up.",
+                wall=wall,
+            )
+        text = sentence(str(error)) if isinstance(error, SyncError | LeagueError) else None
+        return self.job.failed(
+            text or error_message(error), "Fix that and press s to try again.", wall=wall
+        )
 
     def _synced_before(self, url: str) -> bool:
         overview = self.status.overview if self.status is not None else None
@@ -351,7 +370,13 @@ class SyncScreen(RacerScreen[bool]):
 
     def _set_up_answered(self, url: str, yes: bool | None) -> None:
         if not yes:
-            self.notify("The store was not set up; nothing was synced.", severity="warning")
+            self._show_job(
+                self.job.failed(
+                    "The store was not set up; nothing was synced.",
+                    "Press s to be asked again.",
+                    wall=time.time(),
+                )
+            )
             return
         self._begin(url, f"Setting up {url}…")
         self._sync(url, save=True, set_up=True)
@@ -366,22 +391,17 @@ class SyncScreen(RacerScreen[bool]):
         self.app.call_from_thread(self._show_progress, direction, done, total)
 
     def _show_progress(self, direction: str, done: int, total: int | None) -> None:
-        if not self.is_attached:
+        if not self.is_attached or not self.syncing:
             return
-        self.query_one("#sync-progress", ProgressBar).update(total=total, progress=done)
         of = f"/{total}" if total is not None else ""
-        self._stage(Text(f"{direction}ing {done}{of} records"))
-
-    def _stage(self, text: Text) -> None:
-        self.query_one("#sync-stage", Static).update(text)
+        doing = f"{direction.capitalize()}ing {done}{of} records"
+        self._show_job(self.job.doing(doing).advanced(done, total))
 
     def on_sync_finished(self, message: SyncFinished) -> None:
         summary = message.summary
         self._sync_ended()
         self.pulled += summary.pulled
-        bar = self.query_one("#sync-progress", ProgressBar)
-        bar.update(total=1, progress=1)
-        self._stage(Text("done"))
+        self._show_job(self.job.finished(summary_headline(summary), wall=time.time()))
         # Conflicts and quarantined records are in the tables below, with their reasons.
         lines = [summary_headline(summary), *summary_details(summary, message.notes, items=False)]
         self.last_summary = Text("\n".join(lines))  # text from the store: plain
@@ -396,8 +416,6 @@ class SyncScreen(RacerScreen[bool]):
 
     def _sync_ended(self) -> None:
         self.syncing = False
-        self.set_class(False, "-syncing")
-        self.add_class("-synced")  # the progress row stays, saying how it ended
         button = self.query_one("#sync-now", Button)
         button.disabled = False
         if self.focused is None or isinstance(self.focused, Input):
@@ -412,9 +430,9 @@ class SyncScreen(RacerScreen[bool]):
         ):
             self._sync_ended()
             # Nothing may still look like it is syncing, nor the last success like news:
-            # the bar stops, and the summary is read again (it leads with the failure).
-            self.query_one("#sync-progress", ProgressBar).update(total=1, progress=0)
-            self._stage(Text("not synced", style="bold"))
+            # the job line says it failed, and the summary is read again (it leads with
+            # the failure).
+            self._show_job(self._failed(worker.error))
             self.last_summary = None
             self.action_reload()
         error = worker.error

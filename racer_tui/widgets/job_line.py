@@ -34,12 +34,14 @@ def job_text(job: Job) -> Text:
 
 
 class JobLine(Vertical):
-    """`show(job)` after every change; the bar runs only while the job does."""
+    """`show(job)` after every change; the bar shows only while the job runs (after it, a
+stopped bar would say nothing the line does not)."""
 
     DEFAULT_CSS = """
     JobLine { height: auto; }
     JobLine > #job-text { height: auto; }
-    JobLine > Horizontal { height: 1; }
+    JobLine > Horizontal { height: 1; display: none; }
+    JobLine.-running > Horizontal { display: block; }
     JobLine.-idle { display: none; }
     """
 
@@ -58,6 +60,7 @@ class JobLine(Vertical):
     def show(self, job: Job) -> None:
         self.job = job
         self.set_class(job.state is JobState.IDLE, "-idle")
+        self.set_class(job.state is JobState.RUNNING, "-running")  # the bar shows only then
         self.query_one("#job-text", Static).update(job_text(job))
         bar = self.query_one("#job-bar", ProgressBar)
         if job.state is JobState.RUNNING:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 from textual.pilot import Pilot
-from textual.widgets import DataTable, Input, ProgressBar
+from textual.widgets import DataTable, Input
 
 from league.races import record_race
 from league.store import open_league
@@ -22,6 +22,7 @@ from racer_tui.app import RacerTuiApp, create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.sync import SyncScreen
+from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.sync_status import NO_STORE, SyncStatusLine
 from sim.home import data_home
 from tests.league.helpers import race_result
@@ -172,7 +173,9 @@ async def test_a_store_that_is_down_is_one_notification_and_changes_nothing(
         errors = notes.text("error")
         assert "is not there" in errors and "Traceback" not in errors
         assert errors.count("\n") == 0  # one sentence
-        assert "not synced" in painted(screen.query_one("#sync-stage"))
+        job = " ".join(painted(screen.query_one(JobLine)).split())
+        assert "Failed at" in job and "is not there" in job and "press s to try again" in job
+        assert "%" not in job  # no bar left standing
         assert not screen.syncing  # the action can be tried again
     # No record changed; only the failure is noted, for the status lines.
     after = [line for line in database_dump() if "last_failure" not in line]
@@ -203,7 +206,8 @@ async def test_a_new_store_is_set_up_from_the_app_when_the_racer_says_so(
         assert ("does not exist" in text) is not made  # a missing folder may be a drive
         await pilot.press("n")
         await settle(pilot)
-        assert "not set up" in notes.text("warning")
+        job = " ".join(painted(screen.query_one(JobLine)).split())
+        assert "not set up" in job and "Press s to be asked again" in job
         assert not (share / MARKER_NAME).exists()
         await pilot.press("s")
         await settle(pilot)
@@ -234,8 +238,8 @@ async def test_a_failed_sync_never_shows_the_last_success_as_news(
         shown = painted(screen.query_one("#sync-summary"))
         assert "Synced with" not in shown
         assert "The last sync failed at" in shown and "press s to try again" in shown
-        bar = screen.query_one("#sync-progress", ProgressBar)
-        assert bar.total == 1 and bar.progress == 0  # stopped, not spinning
+        job = painted(screen.query_one(JobLine))
+        assert "Failed at" in job and "%" not in job  # stopped, not spinning
         await pilot.press("escape")
         await settle(pilot)
         assert "sync failed" in status_line(app)
