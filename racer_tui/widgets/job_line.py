@@ -35,7 +35,7 @@ def job_text(job: Job) -> Text:
 
 class JobLine(Vertical):
     """`show(job)` after every change; the bar shows only while the job runs (after it, a
-stopped bar would say nothing the line does not)."""
+    stopped bar would say nothing the line does not)."""
 
     DEFAULT_CSS = """
     JobLine { height: auto; }
