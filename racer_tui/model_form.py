@@ -42,7 +42,7 @@ from sim.garage.options import (
 )
 from sim.names import NAME_RULE, is_valid_name
 from sim.observations import SensorError, normalise_sensors
-from sim.reward_function import RewardFunctionError, load_reward_source
+from sim.reward_function import RewardFunctionError, check_reward_code
 from sim.track import TrackError
 
 REWARD_FILE_NAME = "reward_function.py"
@@ -230,9 +230,11 @@ def taken_names() -> set[str]:
 
 
 def reward_problem(source: str) -> RewardFunctionError | None:
-    """Why the reward function does not load (with its line), or None."""
+    """Why the reward function code is not a reward function (with its line), or None:
+    checked without running it, in the app's own process (Check, ctrl+r, runs it in a
+    child process with a time limit)."""
     try:
-        load_reward_source(source, REWARD_FILE_NAME)
+        check_reward_code(source, REWARD_FILE_NAME)
     except RewardFunctionError as error:
         return error
     return None
@@ -355,7 +357,7 @@ def save_edit(folder: ModelFolder, spec: ModelSpec) -> ModelFolder:
     except DeepRacerFileError as error:
         raise ModelError(str(error)) from None
     track = resolve_track(spec.track)
-    load_reward_source(spec.reward_source, REWARD_FILE_NAME)
+    check_reward_code(spec.reward_source, REWARD_FILE_NAME)
     params = replace(
         folder.training_params(),
         world_name=track.name,

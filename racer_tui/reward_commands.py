@@ -1,7 +1,8 @@
 """`racer-tui reward check FILE`: does this reward function work, and what does it pay?
 
 It runs the function on DeepRacer-complete sample params, then scores every step of the
-reference driver's lap on a track, so a racer sees real values before training.
+reference driver's lap on a track, so a racer sees real values before training. The
+function runs in a child process with a time limit (sim.reward_probe).
 """
 
 from __future__ import annotations
@@ -15,15 +16,9 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json, print_table
-from sim.reference_driver import ReferenceDriver
-from sim.reward_function import RewardFunction, load_reward_function
-from sim.reward_sample_params import sample_params
-from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.track import Track
+from sim.reward_function import read_reward_file
+from sim.reward_probe import check_reward_source
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
-
-_MAX_LAP_STEPS = 15 * 120
-
 
 NAMES = ("reward",)
 
@@ -40,22 +35,22 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
 
 
 def run(args: argparse.Namespace) -> int:
-    reward = load_reward_function(Path(args.file))
-    sample_value = reward(sample_params())
+    source = read_reward_file(Path(args.file))
     track_name = args.track or DEFAULT_TRACK
-    track = resolve_track(track_name)
-    # The lap runs on the file loaded afresh, as a DeepRacer worker starts with it: state the
-    # sample call left in the module does not leak into the lap.
-    lap_rewards = _score_reference_lap(reward.fresh(), track)
+    resolve_track(track_name)  # an unknown track is the racer's typo, said before any run
+    # In a child process with a time limit on every call: a function that loops, sleeps or
+    # exits its process is reported in one sentence, and never hangs this command.
+    probe = check_reward_source(source, str(args.file), track=track_name)
+    lap_rewards = probe.lap_rewards or (0.0,)
     report: dict[str, Any] = {
         "file": str(args.file),
-        "sample_params_reward": sample_value,
-        "track": track.name,
-        "lap_steps": len(lap_rewards),
+        "sample_params_reward": probe.sample_reward,
+        "track": probe.track,
+        "lap_steps": len(probe.lap_rewards),
         "lap_reward_min": float(np.min(lap_rewards)),
         "lap_reward_mean": float(np.mean(lap_rewards)),
         "lap_reward_max": float(np.max(lap_rewards)),
-        "lap_reward_total": float(np.sum(lap_rewards)),
+        "lap_reward_total": float(np.sum(probe.lap_rewards)),
     }
     if args.json:
         print_json(report)
@@ -63,24 +58,10 @@ def run(args: argparse.Namespace) -> int:
     table = Table(title=Text(f"Reward check: {args.file}"), show_header=False)
     table.add_column("what")
     table.add_column("value", justify="right")
-    table.add_row("sample params", f"{sample_value:.4f}")
-    table.add_row(Text(f"reference lap on {track.name}"), f"{len(lap_rewards)} steps")
+    table.add_row("sample params", f"{probe.sample_reward:.4f}")
+    table.add_row(Text(f"reference lap on {probe.track}"), f"{len(probe.lap_rewards)} steps")
     for key in ("min", "mean", "max", "total"):
         table.add_row(f"  reward {key}", f"{report['lap_reward_' + key]:.4f}")
     print_table(table)
     print("OK: the function ran on every step without an error.")
     return 0
-
-
-def _score_reference_lap(reward: RewardFunction, track: Track) -> list[float]:
-    sim = TrackSimulation(track, 1)
-    driver = ReferenceDriver(track)
-    sim.reset_car(0, start_s=0.0)
-    rewards: list[float] = []
-    for _ in range(_MAX_LAP_STEPS):
-        sim.apply(*driver.act(sim))
-        if sim.steps[0] > 1:  # step 1 is DeepRacer's prepare step: the function is not called
-            rewards.append(float(reward(sim.all_params()[0])))
-        if sim.status[0] != EpisodeStatus.IN_PROGRESS:
-            break
-    return rewards

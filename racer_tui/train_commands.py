@@ -31,6 +31,7 @@ from rich.text import Text
 from racer_tui.output import print_json, print_table
 from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, open_model
+from sim.reward_limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.training import events
 from sim.training.errors import PolicyError
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
@@ -55,6 +56,13 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     train.add_argument("name", help="model name or folder")
     train.add_argument(
         "--minutes", type=float, help="time limit (default: the model's training_params.yaml)"
+    )
+    train.add_argument(
+        "--reward-seconds",
+        type=float,
+        default=DEFAULT_REWARD_SECONDS,
+        help="time limit on each call of the reward function "
+        f"(default {DEFAULT_REWARD_SECONDS:g} s)",
     )
     train.add_argument("--json", action="store_true", help="stream the JSON events instead")
 
@@ -205,6 +213,9 @@ def _train(args: argparse.Namespace) -> int:
 
     if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
         raise ModelError(f"--minutes must be more than 0, not {args.minutes:g}.")
+    seconds = args.reward_seconds
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise ModelError(f"--reward-seconds must be more than 0, not {seconds:g}.")
     folder = open_model(args.name)
     check_trainable(folder.metadata())  # before a child process starts
     if folder.is_training():
@@ -213,7 +224,15 @@ def _train(args: argparse.Namespace) -> int:
         )
     log = folder.training_log
     log.write_bytes(b"")  # a new run, a new log, as the app starts one
-    process = TrainingProcess.start(str(folder.path), args.minutes)
+    minutes = args.minutes if args.minutes is not None else folder.training_params().max_minutes
+    # The child dies with this command (a killed command leaves no training running at
+    # full CPU), and this command stops it if it ever runs well past its budget.
+    process = TrainingProcess.start(
+        str(folder.path),
+        args.minutes,
+        ["--die-with-parent", "--reward-seconds", repr(float(seconds))],
+        budget_seconds=minutes * 60.0,
+    )
     with _Interrupts(process) as interrupts:
         show = _stream_json if args.json else _show_live
         ended = show(_logged(process.events(), log), folder.name, interrupts)

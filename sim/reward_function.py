@@ -13,12 +13,14 @@ same path as a racer's file.
 
 from __future__ import annotations
 
+import ast
 import inspect
 import linecache
 import math
 import numbers
 import os
 import sys
+import time
 import types
 from collections.abc import Callable, Mapping
 from importlib import resources
@@ -26,6 +28,9 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
+
+from sim import reward_limit
+from sim.reward_limit import RewardTimeout
 
 # DeepRacer rejects rewards outside this range (and NaN or inf).
 MAX_ABS_REWARD = 1e5
@@ -97,11 +102,19 @@ class RewardFunction:
         self.path = Path(name)
 
     def __call__(self, params: RewardParams) -> float:
+        limit = reward_limit._ACTIVE  # a process running racer code times every call
+        if limit is not None:
+            limit.started = time.monotonic()
         try:
             # A shallow copy: the racer's function may add, change or delete keys freely.
             value = self._function(dict(params))
-        except (Exception, SystemExit) as error:
+        except RewardTimeout as error:
+            raise self._timed_out(error) from None
+        except (Exception, SystemExit, KeyboardInterrupt) as error:
             raise self._raised_error(error) from error
+        finally:
+            if limit is not None:
+                limit.started = 0.0
         # NaN and inf fail this comparison too, so only unusual values take the slow path.
         if type(value) is float and -MAX_ABS_REWARD <= value <= MAX_ABS_REWARD:
             return value
@@ -126,6 +139,14 @@ class RewardFunction:
         return (_rebuild, (self.source, self.name, self._filename))
 
     # --- error paths (never on the hot path) -------------------------------------------
+    def _timed_out(self, error: RewardTimeout) -> RewardFunctionError:
+        return RewardFunctionError(
+            self.name,
+            f"reward_function did not return within {error.seconds:g} s (stopped here)",
+            _user_line(error, self._filename),
+            advice="make it return faster (no loops that wait or never end)",
+        )
+
     def _raised_error(self, error: BaseException) -> RewardFunctionError:
         problem = f"reward_function raised {_describe_exception(error)}"
         return RewardFunctionError(self.name, problem, _user_line(error, self._filename))
@@ -157,11 +178,16 @@ class RewardFunction:
 
         previous = sys.getprofile()
         sys.setprofile(profiler)
+        limit = reward_limit._ACTIVE
+        if limit is not None:
+            limit.begin()
         try:
             value = self._function(dict(params))
-        except (Exception, SystemExit):
+        except (Exception, SystemExit, RewardTimeout):
             return code.co_firstlineno
         finally:
+            if limit is not None:
+                limit.end()
             sys.setprofile(previous)
         if isinstance(_as_reward(value), float) or not returned_from:
             return code.co_firstlineno
@@ -170,11 +196,19 @@ class RewardFunction:
 
 
 def load_reward_function(path: Path | str) -> RewardFunction:
-    """Load a racer's reward function file.
+    """Load a racer's reward function file (this runs its code: only where the racer
+    trains or checks it, under `sim.reward_limit`).
 
     Raises `RewardFunctionError` when the file is missing, unreadable, not UTF-8, not valid
     Python, fails while importing, or does not define `reward_function(params)`.
     """
+    # Absolute, so the traceback frames still match after a change of working directory.
+    return _load(read_reward_file(path), str(path), os.path.abspath(path))
+
+
+def read_reward_file(path: Path | str) -> str:
+    """A reward function file's text, without running it; `RewardFunctionError` when it is
+    missing, unreadable or not UTF-8."""
     display = str(path)
     file_path = Path(path)
     try:
@@ -206,8 +240,69 @@ def load_reward_function(path: Path | str) -> RewardFunction:
             line,
             advice="save it as UTF-8 and try again",
         ) from None
-    # Absolute, so the traceback frames still match after a change of working directory.
-    return _load(source, display, os.path.abspath(file_path))
+    return source
+
+
+def check_reward_code(source: str, name: str) -> None:
+    """Check reward function code without running a line of it: it must be Python and
+    define `reward_function(params)` at the top level. Importing a model, saving one in
+    the editor and creating one from a file check this much; the code itself runs only
+    when the racer trains or checks it."""
+    tree = _compiled_tree(source, name)
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and node.name == (
+            "reward_function"
+        ):
+            if isinstance(node, ast.AsyncFunctionDef) or not _binds_one_argument(node.args):
+                raise RewardFunctionError(
+                    name,
+                    "reward_function must take exactly one argument, params",
+                    node.lineno,
+                    advice=f"define it as {DEFINE_HINT} and try again",
+                )
+            return
+        targets = (
+            node.targets
+            if isinstance(node, ast.Assign)
+            else [node.target]
+            if isinstance(node, ast.AnnAssign)
+            else []
+        )
+        if any(isinstance(t, ast.Name) and t.id == "reward_function" for t in targets):
+            return  # made at load time (a factory, a lambda): the first check will tell
+    raise RewardFunctionError(
+        name, "no reward_function found", advice=f"the file must define {DEFINE_HINT}"
+    )
+
+
+def _compiled_tree(source: str, display: str) -> ast.Module:
+    try:
+        return ast.parse(source, display)
+    except (SyntaxError, ValueError) as error:
+        raise _not_python(error, display) from None
+
+
+def _not_python(error: SyntaxError | ValueError, display: str) -> RewardFunctionError:
+    if isinstance(error, SyntaxError):
+        detail = error.msg or "invalid syntax"
+        kind = type(error).__name__
+        problem = "syntax error" if kind == "SyntaxError" else kind
+        return RewardFunctionError(display, f"{problem}: {detail}", error.lineno)
+    # Older Pythons report NUL bytes in source as ValueError rather than SyntaxError.
+    return RewardFunctionError(
+        display, f"is not valid Python source ({error})", advice="save it as plain text"
+    )
+
+
+def _binds_one_argument(arguments: ast.arguments) -> bool:
+    """Whether `f(params)` binds: one positional parameter without a default (or *args),
+    every other parameter optional."""
+    positional = [*arguments.posonlyargs, *arguments.args]
+    required = len(positional) - len(arguments.defaults)
+    keyword_required = sum(default is None for default in arguments.kw_defaults)
+    if keyword_required:
+        return False
+    return required == 1 or (required == 0 and (bool(positional) or arguments.vararg is not None))
 
 
 def load_reward_source(source: str, name: str) -> RewardFunction:
@@ -241,28 +336,30 @@ def _rebuild(source: str, name: str, filename: str) -> RewardFunction:
 def _load(source: str, display: str, filename: str) -> RewardFunction:
     try:
         code = compile(source, filename, "exec", dont_inherit=True)
-    except SyntaxError as error:
-        detail = error.msg or "invalid syntax"
-        kind = type(error).__name__
-        problem = "syntax error" if kind == "SyntaxError" else kind
-        raise RewardFunctionError(display, f"{problem}: {detail}", error.lineno) from None
-    except ValueError as error:
-        # Older Pythons report NUL bytes in source as ValueError rather than SyntaxError.
-        raise RewardFunctionError(
-            display, f"is not valid Python source ({error})", advice="save it as plain text"
-        ) from None
+    except (SyntaxError, ValueError) as error:
+        raise _not_python(error, display) from None
     # Tracebacks then show the racer's lines as they were loaded, even from memory and even
     # if the file changes later; a None mtime keeps linecache.checkcache from dropping them.
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
 
     module = types.ModuleType(_MODULE_NAME)
     module.__file__ = filename
+    limit = reward_limit._ACTIVE  # module-level code is the racer's too
+    if limit is not None:
+        limit.begin()
     try:
         exec(code, module.__dict__)
-    except (Exception, SystemExit) as error:
+    except RewardTimeout as error:
+        problem = f"loading the file did not finish within {error.seconds:g} s (stopped here)"
+        line = _user_line(error, filename)
+        raise RewardFunctionError(display, problem, line, "fix the file and try again") from None
+    except (Exception, SystemExit, KeyboardInterrupt) as error:
         problem = f"loading the file raised {_describe_exception(error)}"
         line = _user_line(error, filename)
         raise RewardFunctionError(display, problem, line, "fix the file and try again") from error
+    finally:
+        if limit is not None:
+            limit.end()
 
     function = module.__dict__.get("reward_function")
     if function is None:
@@ -299,6 +396,9 @@ def _check_takes_params(function: Callable[..., object], display: str, filename:
 
 
 # --- checking results and describing failures --------------------------------------------
+_TOO_LARGE = "reward_function returned a number too large to be a reward"
+
+
 class _BadReward(NamedTuple):
     problem: str
     advice: str
@@ -310,14 +410,20 @@ def _as_reward(value: object) -> float | _BadReward:
     # int and numpy float64 are common returns (`reward = 1`, `np.clip(...)`): test them by
     # exact type first, since the ABC checks below cost about a microsecond each call.
     if kind is int or kind is np.float64 or kind is float:
-        reward = float(value)  # type: ignore[arg-type]
+        try:
+            reward = float(value)  # type: ignore[arg-type]
+        except OverflowError:  # an int beyond any float, 10**400
+            return _BadReward(_TOO_LARGE, "keep rewards within +-1e5")
     # bool is an int to Python, but a True/False reward is always a bug in the function.
     elif isinstance(value, bool | np.bool_):
         return _BadReward(
             f"reward_function returned {value!r} (a bool) instead of a number", RETURN_ADVICE
         )
     elif isinstance(value, numbers.Real) or _is_real_scalar_array(value):
-        reward = float(value)  # type: ignore[arg-type]
+        try:
+            reward = float(value)  # type: ignore[arg-type]
+        except OverflowError:
+            return _BadReward(_TOO_LARGE, "keep rewards within +-1e5")
     elif value is None:
         return _BadReward("reward_function returned None instead of a number", RETURN_ADVICE)
     else:

@@ -62,7 +62,6 @@ from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder
 from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
 from sim.reward_function import TEMPLATES, RewardFunctionError, template_source
-from sim.reward_sample_params import sample_params
 from sim.track import Track, TrackError
 from sim.track_catalog import resolve_track
 
@@ -128,15 +127,15 @@ class TrackPreviewLoaded(Message):
 
 
 def check_reward(source: str) -> RewardChecked:
-    """Load the function and call it once with DeepRacer-complete sample params."""
-    from sim.reward_function import load_reward_source
+    """Call the function once with DeepRacer-complete sample params, in a child process
+    with a time limit (the racer's code never runs in the app's process)."""
+    from sim.reward_probe import check_reward_source
 
     try:
-        function = load_reward_source(source, REWARD_FILE_NAME)
-        value = function(sample_params())
+        report = check_reward_source(source, REWARD_FILE_NAME)
     except RewardFunctionError as error:
         return RewardChecked(None, error)
-    return RewardChecked(value, None)
+    return RewardChecked(report.sample_reward, None)
 
 
 def field(label: str, widget: Widget, allowed: str = "", field_id: str = "") -> Vertical:

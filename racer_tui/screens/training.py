@@ -22,7 +22,8 @@ import math
 import os
 import signal
 import tempfile
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
@@ -56,7 +57,12 @@ from sim.garage.folder import (
 )
 from sim.simulation import LOOK_AHEAD
 from sim.training import events
-from sim.training.launcher import failure_from_stderr, worker_command
+from sim.training.launcher import (
+    STOP_TIMEOUT,
+    budget_grace,
+    failure_from_stderr,
+    worker_command,
+)
 from sim.training.run_history import read_history
 
 WORKER_MODULE = "sim.training.worker"
@@ -83,6 +89,8 @@ class LiveRun:
     minutes: float | None
     process: asyncio.subprocess.Process | None = None
     stopping: bool = False
+    started: float = field(default_factory=time.monotonic)
+    stop_asked: float | None = None  # when the app stopped it for running past its budget
 
 
 def running_worker_pid(folder: ModelFolder) -> int | None:
@@ -342,6 +350,7 @@ class TrainingScreen(RacerScreen[None]):
 
     def _tick(self) -> None:
         self._show_context()
+        self._enforce_budget()
         live = self.live
         if live is None:
             # A training started outside the app (`racer-tui train`, the host's usual case
@@ -349,6 +358,27 @@ class TrainingScreen(RacerScreen[None]):
             self._read_models(None)
         if live is not None and live.model == self.watched and not self.has_class("-narrow"):
             self._observe(live.model)
+
+    def _enforce_budget(self) -> None:
+        """A child that runs well past its time budget (hung where its own clock cannot
+        stop it) is stopped by the app, and killed if it does not stop."""
+        live = self.live
+        if live is None or live.pid <= 0 or not live.minutes:
+            return
+        now = time.monotonic()
+        budget = live.minutes * 60.0
+        if live.stop_asked is None and now - live.started > budget + budget_grace(budget):
+            live.stop_asked = now
+            self.stop_training()
+            self.notify(
+                f"{live.model} ran well past its {live.minutes:g}-minute budget; stopping it "
+                "(its last checkpoint is kept).",
+                severity="warning",
+                markup=False,
+            )
+        elif live.stop_asked is not None and now - live.stop_asked > STOP_TIMEOUT:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.kill(live.pid, signal.SIGKILL)
 
     def _show_context(self) -> None:
         live = self.live

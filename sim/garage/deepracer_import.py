@@ -202,15 +202,21 @@ def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]
 
 
 def _reward_source(files: DeepRacerFiles, notes: list[str]) -> str:
-    from sim.reward_function import load_reward_function, template_source
+    from sim.reward_function import check_reward_code, read_reward_file, template_source
 
     if files.reward_function is None:
         notes.append(
             f"it has no reward_function.py: the {DEFAULT_REWARD} template is used instead."
         )
         return template_source(DEFAULT_REWARD)
-    load_reward_function(files.reward_function)  # RewardFunctionError names file and line
-    return files.reward_function.read_bytes().decode("utf-8-sig")
+    # Someone else's code: checked, never run here; it runs when the racer trains.
+    source = read_reward_file(files.reward_function)
+    check_reward_code(source, str(files.reward_function))  # names the file and line
+    notes.append(
+        "its reward_function.py was checked but not run: it runs with your rights when you "
+        "train this model (or check it), so read it first if it is not yours."
+    )
+    return source
 
 
 def _training_metrics(files: DeepRacerFiles) -> TrainingMetrics | None:

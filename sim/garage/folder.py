@@ -505,12 +505,13 @@ def create_model(
     """Create model `name` in the garage, all at once (temporary folder, then rename).
 
     `track` is the name of a known track; `hyperparameters` are checked against DeepRacer's
-    ranges over DeepRacer's defaults; `reward_source` must load as a reward function.
+    ranges over DeepRacer's defaults; `reward_source` must be Python defining
+    `reward_function(params)` (checked without running it).
     `populate` may add more files (a policy, metrics) to the folder before it appears: it is
     called with the temporary folder. `notes` are kept in training_params.yaml (for
     example where the model came from).
     """
-    from sim.reward_function import load_reward_source
+    from sim.reward_function import check_reward_code
 
     final = check_new_model_name(name)
     try:
@@ -523,7 +524,7 @@ def create_model(
             f"not {max_minutes:g}."
         )
     resolved = _catalog_track(track)
-    load_reward_source(reward_source, REWARD_FUNCTION)  # RewardFunctionError before writing
+    check_reward_code(reward_source, REWARD_FUNCTION)  # RewardFunctionError before writing
     params = TrainingParams(
         world_name=resolved.name,
         max_minutes=float(max_minutes),

@@ -195,8 +195,14 @@ def _checked_track(track: str) -> str:
 
 
 def reward_choice(reward: str) -> tuple[str, str]:
-    """(source, origin) for a template name or a reward function file, loaded to check it."""
-    from sim.reward_function import TEMPLATES, load_reward_function, template_source
+    """(source, origin) for a template name or a reward function file, checked without
+    running it (it runs when the racer trains or checks it)."""
+    from sim.reward_function import (
+        TEMPLATES,
+        check_reward_code,
+        read_reward_file,
+        template_source,
+    )
 
     if reward in TEMPLATES:
         return template_source(reward), reward
@@ -205,8 +211,9 @@ def reward_choice(reward: str) -> tuple[str, str]:
         raise ModelError(
             f"--reward: {reward!r} is neither a template ({', '.join(TEMPLATES)}) nor a file."
         )
-    load_reward_function(path)  # RewardFunctionError names the file and line
-    return path.read_bytes().decode("utf-8-sig"), str(path)
+    source = read_reward_file(path)
+    check_reward_code(source, str(path))  # RewardFunctionError names the file and line
+    return source, str(path)
 
 
 def parse_hp_assignments(assignments: Sequence[str]) -> dict[str, object]:

@@ -15,17 +15,27 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import os
 import signal
 import subprocess
 import sys
 import tempfile
+import threading
 from collections.abc import AsyncIterator, Iterator, Sequence
 from typing import IO
 
 from sim.training import events
 
 STOP_TIMEOUT = 60.0  # seconds to wait for a checkpoint after SIGTERM before SIGKILL
+
+
+def budget_grace(budget_seconds: float) -> float:
+    """How long past its time budget a child may run before its parent stops it: start-up
+    (importing torch), the last update and the final checkpoint fit in this."""
+    return 60.0 + 0.1 * budget_seconds
+
+
 STDERR_TAIL = 2000
 
 
@@ -75,6 +85,18 @@ def failure_from_stderr(returncode: int | None, stderr_tail: str) -> events.Ende
     )
 
 
+def overran(ended: events.Ended, budget_seconds: float) -> events.Ended:
+    """The end of a run its parent had to stop, said as it happened."""
+    return dataclasses.replace(
+        ended,
+        kind="stopped",
+        message=(
+            f"training ran well past its {budget_seconds / 60:g}-minute budget without "
+            "stopping, so it was stopped; its last checkpoint is kept"
+        ),
+    )
+
+
 def _tail(handle: IO[bytes]) -> str:
     handle.seek(0, os.SEEK_END)
     size = handle.tell()
@@ -89,11 +111,21 @@ class TrainingProcess:
         self._popen = popen
         self._stderr = stderr
         self.ended: events.Ended | None = None
+        self.overran: float | None = None  # the budget it ran past, when it was stopped
+        self._timers: list[threading.Timer] = []
 
     @classmethod
     def start(
-        cls, model: str, minutes: float | None = None, extra: Sequence[str] = ()
+        cls,
+        model: str,
+        minutes: float | None = None,
+        extra: Sequence[str] = (),
+        *,
+        budget_seconds: float | None = None,
     ) -> TrainingProcess:
+        """Start the child; with `budget_seconds`, this process stops it (and kills it if
+        it does not stop) once it runs `budget_grace` past its budget, whatever the child
+        is doing: its own clock cannot be trusted to run while it hangs."""
         stderr = tempfile.TemporaryFile()  # noqa: SIM115 - lives as long as the child
         popen = subprocess.Popen(
             worker_command(model, minutes, extra),
@@ -103,7 +135,34 @@ class TrainingProcess:
             start_new_session=True,
             env=_child_env(),
         )
-        return cls(popen, stderr)
+        process = cls(popen, stderr)
+        if budget_seconds is not None:
+            process.enforce_budget(budget_seconds)
+        return process
+
+    def enforce_budget(
+        self,
+        budget_seconds: float,
+        grace_seconds: float | None = None,
+        kill_after: float = STOP_TIMEOUT,
+    ) -> None:
+        """Stop the child `grace_seconds` (default `budget_grace`) after its budget, and
+        kill it `kill_after` seconds later if it has not stopped."""
+
+        def over_budget() -> None:
+            if self._popen.poll() is None:
+                self.overran = budget_seconds
+                self.stop()
+                kill = threading.Timer(kill_after, self.kill)
+                kill.daemon = True
+                self._timers.append(kill)
+                kill.start()
+
+        grace = budget_grace(budget_seconds) if grace_seconds is None else grace_seconds
+        timer = threading.Timer(budget_seconds + grace, over_budget)
+        timer.daemon = True
+        self._timers.append(timer)
+        timer.start()
 
     @property
     def pid(self) -> int:
@@ -121,11 +180,17 @@ class TrainingProcess:
             if event is None:
                 continue
             if isinstance(event, events.Ended):
+                if self.overran is not None:
+                    event = overran(event, self.overran)
                 self.ended = event
             yield event
         code = self._popen.wait()
+        for timer in self._timers:
+            timer.cancel()
         if self.ended is None:
             self.ended = failure_from_stderr(code, _tail(self._stderr))
+            if self.overran is not None:
+                self.ended = overran(self.ended, self.overran)
             yield self.ended
         self._stderr.close()
 

@@ -19,6 +19,8 @@ from collections.abc import Sequence
 from types import FrameType
 from typing import TextIO
 
+from sim import reward_limit
+from sim.reward_limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.training import events
 from sim.training.errors import describe_failure
 
@@ -92,13 +94,43 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--min-samples", type=int, default=None, help=argparse.SUPPRESS)
     parser.add_argument("--max-samples", type=int, default=None, help=argparse.SUPPRESS)
     parser.add_argument("--parent-pid", type=int, default=None, help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--reward-seconds",
+        type=float,
+        default=None,
+        help=f"time limit on each reward function call (default {DEFAULT_REWARD_SECONDS:g} s)",
+    )
+    parser.add_argument("--die-with-parent", action="store_true", help=argparse.SUPPRESS)
     return parser
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    """Be killed when the parent dies (Linux), so a killed command leaves no orphan
+    training at full CPU; checkpoints are written atomically, so the last one is kept."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        pr_set_pdeathsig = 1
+        ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, int(signal.SIGKILL))
+    if os.getppid() != parent_pid:  # it died before the line above took effect
+        os._exit(EXIT_FAILED)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    stop = StopFlag(args.parent_pid if args.parent_pid is not None else os.getppid())
+    parent = args.parent_pid if args.parent_pid is not None else os.getppid()
+    if args.die_with_parent:
+        _die_with_parent(parent)
+    stop = StopFlag(parent)
     _install_signal_handlers(stop)
+    seconds = DEFAULT_REWARD_SECONDS if args.reward_seconds is None else args.reward_seconds
+    if not (seconds > 0 and seconds < float("inf")):
+        emit = EventWriter(sys.stdout, stop)
+        emit(_failed(f"--reward-seconds must be a positive number, not {seconds:g}"))
+        return EXIT_USER_ERROR
+    # Every call of the racer's reward function (and loading its file) is timed: one that
+    # hangs fails the training in a sentence naming its line, instead of hanging it.
+    reward_limit.install(seconds)
     emit = EventWriter(sys.stdout, stop)
     warnings.filterwarnings("ignore")  # library chatter must not reach the racer
     try:

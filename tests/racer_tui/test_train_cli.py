@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -72,6 +73,43 @@ def test_ctrl_c_stops_the_training_cleanly(model: ModelFolder) -> None:
     assert isinstance(ended, events.Ended) and ended.kind == "stopped"
     assert (model.checkpoints_dir / "latest.safetensors").is_file()
     assert not model.is_training()
+
+
+@pytest.mark.slow
+def test_a_killed_train_command_leaves_no_training_behind(model: ModelFolder) -> None:
+    # A slow reward (under its time limit): the child is deep in a rollout, far from the
+    # moments it looks for its parent, so only dying with its parent can end it in time.
+    model.reward_file.write_text(
+        "import time\ndef reward_function(params):\n    time.sleep(0.2)\n    return 1.0\n",
+        encoding="utf-8",
+    )
+    command = [sys.executable, "-m", "racer_tui.cli", "train", "tiny", "--minutes", "5", "--json"]
+    cli = subprocess.Popen(command, stdout=subprocess.PIPE, text=True, env=dict(os.environ))
+    assert cli.stdout is not None
+    child = 0
+    for line in cli.stdout:
+        event = events.decode(line)
+        if isinstance(event, events.Started):
+            child = event.pid
+            break
+    assert child
+    cli.kill()  # SIGKILL: the command gets no chance to stop its child itself
+    cli.wait(timeout=30)
+    for _ in range(100):
+        if not _alive(child):
+            break
+        time.sleep(0.1)
+    assert not _alive(child), "the training child outlived its command"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    # A zombie (dead, not yet reaped by init) counts as gone.
+    with open(f"/proc/{pid}/stat", encoding="ascii") as stat:
+        return stat.read().split(") ")[-1][:1] != "Z"
 
 
 def test_evaluate_prints_the_console_table_and_writes_deepracer_metrics(

@@ -4,14 +4,18 @@ when quitting, and adopting a training an earlier session left running."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
 import subprocess
 import sys
-from collections.abc import Iterator
+import time
+from collections.abc import AsyncIterator, Iterator
+from typing import Any
 
 import pytest
+from textual.pilot import Pilot
 
 from racer_tui.app import create_app
 from racer_tui.screens.training import LeaveWhileTraining, LiveRun, TrainingScreen
@@ -49,6 +53,17 @@ def test_figures_fold_episodes_updates_and_endings() -> None:
     assert figures.entropy == [1.61] and figures.steps_per_second == [5100.0]
     assert figures.cpu == [97.0]
     assert figures.ended is not None and figures.ended.kind == "finished"
+
+
+@contextlib.asynccontextmanager
+async def training_section() -> AsyncIterator[tuple[Pilot[Any], TrainingScreen]]:
+    """The app on its Training section at 100x30, settled."""
+    app = create_app(start="training")
+    async with app.run_test(size=(100, 30)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        yield pilot, screen
 
 
 @pytest.fixture
@@ -177,11 +192,8 @@ async def test_quitting_while_training_can_keep_it_running(
     sleeper: subprocess.Popen[bytes],
 ) -> None:
     new_model("ada")
-    app = create_app(start="training")
-    async with app.run_test(size=(100, 30)) as pilot:
-        await settle(pilot)
-        screen = app.screen
-        assert isinstance(screen, TrainingScreen)
+    async with training_section() as (pilot, screen):
+        app = pilot.app
         screen.live = LiveRun("ada", pid=sleeper.pid, minutes=5)
         await pilot.press("q")
         assert isinstance(app.screen, LeaveWhileTraining)
@@ -192,11 +204,8 @@ async def test_quitting_while_training_can_keep_it_running(
 
 async def test_quitting_while_training_can_stop_it(sleeper: subprocess.Popen[bytes]) -> None:
     new_model("ada")
-    app = create_app(start="training")
-    async with app.run_test(size=(100, 30)) as pilot:
-        await settle(pilot)
-        screen = app.screen
-        assert isinstance(screen, TrainingScreen)
+    async with training_section() as (pilot, screen):
+        app = pilot.app
         screen.live = LiveRun("ada", pid=sleeper.pid, minutes=5)
         await pilot.press("q")
         await pilot.press("escape")  # stay: nothing happens
@@ -305,3 +314,20 @@ async def test_a_training_started_from_the_command_line_appears_without_a_key(
         figures = screen.figures["ada"]
         assert figures.entropy == [1.61] and figures.steps_per_second == [5100.0]
         sleeper.terminate()
+
+
+async def test_a_training_far_past_its_budget_is_stopped_by_the_app(
+    sleeper: subprocess.Popen[bytes],
+) -> None:
+    # A child hung where its own clock cannot stop it: the app does, and says so.
+    new_model("ada")
+    async with training_section() as (pilot, screen):
+        app = pilot.app
+        notes = Notifications(app)
+        screen.live = LiveRun("ada", pid=sleeper.pid, minutes=1, started=time.monotonic() - 60)
+        screen._tick()
+        assert sleeper.poll() is None  # within its budget and grace: left alone
+        screen.live.started = time.monotonic() - 60 - 60 - 6 - 1  # budget, grace, a second
+        screen._tick()
+        assert sleeper.wait(timeout=10) == -signal.SIGTERM
+        assert "ran well past its 1-minute budget; stopping it" in notes.text("warning")

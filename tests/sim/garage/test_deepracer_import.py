@@ -17,7 +17,7 @@ from sim.garage.deepracer_import import import_deepracer_folder, import_model
 from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
 from sim.garage.options import DEFAULT_TRACK
 from sim.garage.summary import training_summary
-from sim.reward_function import template_source
+from sim.reward_function import RewardFunctionError, template_source
 
 
 @pytest.fixture
@@ -86,7 +86,29 @@ def test_a_reward_function_in_the_folder_is_used(drfc_copy: Path) -> None:
     (drfc_copy / "reward_function.py").write_text(source)
     result = import_deepracer_folder(drfc_copy, name="own-reward")
     assert result.folder.reward_source() == source
-    assert not any("reward_function.py" in note for note in result.notes)
+    notes = " ".join(result.notes)
+    assert "template" not in notes
+    assert "reward_function.py was checked but not run: it runs with your rights" in notes
+
+
+def test_importing_never_runs_the_folders_reward_code(drfc_copy: Path, tmp_path: Path) -> None:
+    ran = tmp_path / "it-ran"
+    (drfc_copy / "reward_function.py").write_text(
+        f"open({str(ran)!r}, 'w').write('module-level code ran')\n"
+        "def reward_function(params):\n"
+        "    raise RuntimeError('only when training')\n"
+    )
+    result = import_deepracer_folder(drfc_copy, name="untrusted")
+    assert not ran.exists()  # checked by reading it, not by running it
+    assert "only when training" in result.folder.reward_source()
+
+
+def test_a_folder_whose_reward_file_is_not_a_reward_function_is_refused(
+    drfc_copy: Path,
+) -> None:
+    (drfc_copy / "reward_function.py").write_text("def reward(params):\n    return 1.0\n")
+    with pytest.raises(RewardFunctionError, match="no reward_function found"):
+        import_deepracer_folder(drfc_copy, name="no-function")
 
 
 def test_a_known_world_name_picks_the_track(drfc_copy: Path) -> None:

@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
+import sys
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -148,3 +151,39 @@ def test_a_reward_function_that_fails_is_reported_in_the_racers_words(
     assert isinstance(ended, events.Ended) and ended.kind == "failed"
     assert "too far" in ended.message and "reward_function" in ended.message
     assert "RewardFunctionError" not in ended.message  # no internal class names
+
+
+def test_a_reward_function_that_hangs_fails_the_training_at_its_line(
+    model: ModelFolder,
+) -> None:
+    model.reward_file.write_text(
+        "def reward_function(params):\n"
+        "    while params['steps'] > 5:\n"
+        "        pass\n"
+        "    return 1.0\n",
+        encoding="utf-8",
+    )
+    process = TrainingProcess.start(model.name, minutes=1, extra=[*TINY, "--reward-seconds", "0.5"])
+    ended = list(process.events())[-1]
+    process.wait()
+    assert isinstance(ended, events.Ended) and ended.kind == "failed"
+    assert "line 2" in ended.message and "did not return within 0.5 s" in ended.message
+    assert not model.is_training()
+
+
+def test_a_child_that_runs_past_its_budget_is_stopped_by_its_parent(tmp_path: Path) -> None:
+    # A child that ignores SIGTERM and never ends: its parent stops, then kills it.
+    stubborn = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import signal, time; signal.signal(signal.SIGTERM, signal.SIG_IGN); time.sleep(600)",
+        ],
+        stdout=subprocess.PIPE,
+    )
+    process = TrainingProcess(stubborn, (tmp_path / "stderr").open("w+b"))
+    process.enforce_budget(0.2, grace_seconds=0.2, kill_after=0.5)
+    ended = list(process.events())[-1]
+    assert isinstance(ended, events.Ended) and ended.kind == "stopped"
+    assert "ran well past its 0.00333333-minute budget" in ended.message
+    assert stubborn.poll() is not None

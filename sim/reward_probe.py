@@ -1,0 +1,172 @@
+"""Run a racer's reward function where it cannot hurt: in a child process, with a time
+limit on every call and a deadline on the whole check.
+
+`racer-tui reward check` and the model editor's Check ask `check_reward_source`: the
+child (`python -m sim.reward_probe`) loads the code, calls it on DeepRacer-complete sample
+params and, when a track is given, on every step of the reference driver's lap, and
+answers with one JSON line. Whatever the code does (loops forever, sleeps, prints, exits
+its process, raises KeyboardInterrupt), the caller gets a `ProbeReport` or a
+`RewardFunctionError` in one sentence, and its own process never ran a line of it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from sim.reward_function import RewardFunctionError
+from sim.reward_limit import DEFAULT_SECONDS
+
+# The whole check (interpreter start, imports, the reference lap) must end within this;
+# a function slow enough to miss it would make training crawl anyway.
+CHECK_DEADLINE_SECONDS = 60.0
+MAX_LAP_STEPS = 15 * 120  # two minutes at DeepRacer's 15 steps a second
+
+
+@dataclass(frozen=True)
+class ProbeReport:
+    sample_reward: float
+    track: str | None  # the track the reference lap was scored on, if any
+    lap_rewards: tuple[float, ...]
+
+
+def check_reward_source(
+    source: str,
+    name: str,
+    *,
+    track: str | None = None,
+    seconds: float = DEFAULT_SECONDS,
+    deadline: float = CHECK_DEADLINE_SECONDS,
+) -> ProbeReport:
+    """Run the code named `name` (a file path or a template's file name) in a child
+    process; raise `RewardFunctionError` for anything wrong with it."""
+    request = {"source": source, "name": name, "track": track, "seconds": seconds}
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "sim.reward_probe"],
+            input=json.dumps(request).encode("utf-8"),
+            capture_output=True,
+            timeout=deadline,
+            check=False,
+            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        )
+    except subprocess.TimeoutExpired:
+        raise RewardFunctionError(
+            name,
+            f"the check did not finish within {deadline:g} s, so it was stopped",
+            advice="make the function return faster (each call should take well under "
+            f"{seconds:g} s)",
+        ) from None
+    answer = _answer(done.stdout)
+    if answer is None:
+        raise RewardFunctionError(
+            name,
+            f"the function ended its own process (exit code {done.returncode}) instead of "
+            "returning a reward",
+            advice="remove the exit() or os._exit() call",
+        )
+    if "error" in answer:
+        error = answer["error"]
+        raise RewardFunctionError(
+            error["display"], error["problem"], error["line"], error["advice"]
+        )
+    ok = answer["ok"]
+    return ProbeReport(float(ok["sample_reward"]), ok["track"], tuple(ok["lap_rewards"]))
+
+
+def _answer(stdout: bytes) -> dict[str, Any] | None:
+    """The child's one JSON line, or None when it never wrote one."""
+    for line in reversed(stdout.splitlines()):
+        try:
+            answer = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(answer, dict) and ("ok" in answer or "error" in answer):
+            return answer
+    return None
+
+
+# --- the child ---------------------------------------------------------------------------
+
+
+def _probe(request: dict[str, Any]) -> dict[str, Any]:
+    from sim.reward_function import load_reward_source
+    from sim.reward_sample_params import sample_params
+
+    name = str(request["name"])
+    reward = load_reward_source(str(request["source"]), name)
+    sample = reward(sample_params())
+    track_name = request.get("track")
+    lap: Sequence[float] = ()
+    shown_track = None
+    if track_name:
+        from sim.track_catalog import resolve_track
+
+        track = resolve_track(str(track_name))
+        shown_track = track.name
+        # The lap runs on the file loaded afresh, as a DeepRacer worker starts with it:
+        # state the sample call left in the module does not leak into the lap.
+        lap = _reference_lap_rewards(reward.fresh(), track)
+    return {"ok": {"sample_reward": sample, "track": shown_track, "lap_rewards": list(lap)}}
+
+
+def _reference_lap_rewards(reward: Any, track: Any) -> list[float]:
+    from sim.reference_driver import ReferenceDriver
+    from sim.simulation import EpisodeStatus, TrackSimulation
+
+    sim = TrackSimulation(track, 1)
+    driver = ReferenceDriver(track)
+    sim.reset_car(0, start_s=0.0)
+    rewards: list[float] = []
+    for _ in range(MAX_LAP_STEPS):
+        sim.apply(*driver.act(sim))
+        if sim.steps[0] > 1:  # step 1 is DeepRacer's prepare step: the function is not called
+            rewards.append(float(reward(sim.all_params()[0])))
+        if sim.status[0] != EpisodeStatus.IN_PROGRESS:
+            break
+    return rewards
+
+
+def main() -> int:
+    # The answer goes to the real stdout; anything the racer's code prints goes to stderr,
+    # so a print() in the function cannot be taken for the answer.
+    answer_stream = os.fdopen(os.dup(1), "w", encoding="utf-8")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    request = json.loads(sys.stdin.buffer.read().decode("utf-8"))
+
+    from sim import reward_limit
+
+    reward_limit.install(float(request.get("seconds", DEFAULT_SECONDS)))
+    try:
+        answer = _probe(request)
+    except RewardFunctionError as error:
+        answer = {
+            "error": {
+                "display": error.display,
+                "problem": error.problem,
+                "line": error.line,
+                "advice": error.advice,
+            }
+        }
+    except (Exception, KeyboardInterrupt) as error:  # the track, or an interrupt
+        answer = {
+            "error": {
+                "display": str(request.get("name")),
+                "problem": f"the check could not run ({type(error).__name__}: {error})",
+                "line": None,
+                "advice": "fix that and try again",
+            }
+        }
+    answer_stream.write(json.dumps(answer) + "\n")
+    answer_stream.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
