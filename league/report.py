@@ -95,11 +95,28 @@ def cells(columns: Sequence[Column], rows: Sequence[Any]) -> list[list[str]]:
     return [[column.cell(row) for column in columns] for row in rows]
 
 
+# What a spreadsheet reads as the start of a formula in a cell: `=HYPERLINK(...)` in a
+# racer's name must stay text when a host opens the export.
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def spreadsheet_safe(text: str) -> str:
+    """A text cell a spreadsheet shows as text, never runs: a leading apostrophe (which
+    spreadsheets hide) before anything that would start a formula."""
+    return "'" + text if text.startswith(_FORMULA_START) else text
+
+
 def to_csv(columns: Sequence[Column], rows: Sequence[Any]) -> str:
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow([column.title for column in columns])
-    writer.writerows(cells(columns, rows))
+    for row in cells(columns, rows):
+        writer.writerow(
+            [
+                cell if column.numeric else spreadsheet_safe(cell)
+                for column, cell in zip(columns, row, strict=True)
+            ]
+        )
     return out.getvalue()
 
 

@@ -18,6 +18,8 @@ from typing import Any, Protocol
 
 import yaml
 
+from sim.strict_yaml import DuplicateKeyError, load_data
+
 
 class RulesError(ValueError):
     """A rules file or value that cannot be used; the message names the key."""
@@ -113,8 +115,17 @@ def load_rules(path: Path | str) -> RaceRules:
     except OSError as error:
         reason = error.strerror or str(error)
         raise RulesError(f"cannot read rules file {path}: {reason}.") from None
+    except UnicodeDecodeError:
+        raise RulesError(
+            f"rules file {path} is not UTF-8 text; give a YAML file saved as UTF-8."
+        ) from None
     try:
-        data = yaml.safe_load(text)
+        data = load_data(text)
+    except DuplicateKeyError as error:
+        line = error.problem_mark.line + 1 if error.problem_mark is not None else "?"
+        raise RulesError(
+            f"rules file {path}: {error.problem} (line {line}); keep one of them."
+        ) from None
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""

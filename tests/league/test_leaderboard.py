@@ -3,6 +3,8 @@ every ranking method, filtered and sorted; the cached board agrees with rank()."
 
 from __future__ import annotations
 
+import csv
+import io
 import random
 from dataclasses import replace
 
@@ -145,3 +147,14 @@ def test_text_formats_keep_names_literal(league: League) -> None:
     markdown = to_markdown(columns, rows)
     assert markdown_escape("[bold red]x | *y*") in markdown
     assert "\\|" in markdown and "\\*y\\*" in markdown
+
+
+def test_a_csv_export_never_hands_a_spreadsheet_a_formula(league: League) -> None:
+    payload = '=HYPERLINK("http://evil.example","click")'
+    record_race(league, race_result(payload, [12.0], model="@SUM(A1)"))
+    rows = leaderboard(league, Filters())
+    columns = leaderboard_columns(RankingMethod.BEST_LAP, show_track=False, iso_times=True)
+    (record,) = csv.DictReader(io.StringIO(to_csv(columns, rows)))
+    assert record["racer"] == "'" + payload  # shown as the text it is
+    assert record["model"] == "'@SUM(A1)"
+    assert record["best lap"] == "12.000"  # numbers stay numbers

@@ -261,3 +261,14 @@ def test_a_rules_file_that_is_not_yaml_or_not_a_mapping(tmp_path: Path) -> None:
         load_rules(listed)
     with pytest.raises(RulesError, match="cannot read"):
         load_rules(tmp_path / "missing.yaml")
+
+
+def test_a_rules_file_of_random_bytes_or_with_a_key_twice_is_refused(tmp_path: Path) -> None:
+    noise = tmp_path / "noise.yaml"
+    noise.write_bytes(bytes(range(128, 256)) * 4)
+    with pytest.raises(RulesError, match="is not UTF-8 text; give a YAML file saved as UTF-8"):
+        load_rules(noise)
+    twice = tmp_path / "twice.yaml"
+    twice.write_text("penalty_seconds: 2\nwindow_seconds: 240\npenalty_seconds: 0\n")
+    with pytest.raises(RulesError, match=r"'penalty_seconds' is given twice \(line 3\)"):
+        load_rules(twice)
