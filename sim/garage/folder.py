@@ -10,7 +10,8 @@ deepracer-utils' `DeepRacerLog(folder)` reads it unchanged:
     evaluation-<stamp>/evaluation-simtrace/0-iteration.csv
 
 with racer-tui's own files beside them: the trainer's `policy.safetensors`,
-`checkpoints/` and `training-state.json`. Formats and DeepRacer's names are in
+`checkpoints/`, `training-state.json` and the `.training.lock` a training holds. Formats and
+DeepRacer's names are in
 `sim.deepracer_files`; this module knows the folder and what state the model is in.
 Folders of racer-tui's older flat layout are moved into this one when first opened
 (`sim.garage.migrate`).
@@ -78,6 +79,7 @@ MODELS_DIR = "models"
 POLICY_FILE = "policy.safetensors"
 CHECKPOINTS_DIR = "checkpoints"
 TRAINING_STATE_FILE = "training-state.json"
+TRAINING_LOCK_FILE = ".training.lock"
 TRAINING_LOG_FILE = "training-log.jsonl"
 TRAINING_HISTORY_FILE = "training-history.jsonl"
 TRAINING_STATES = ("running", "stopped", "finished", "failed")
@@ -178,6 +180,11 @@ class ModelFolder:
         """Every run's PPO updates and system readings, one event per line (see
         `sim.training.run_history`): the curves TrainingMetrics.json does not keep."""
         return self.path / TRAINING_HISTORY_FILE
+
+    @property
+    def training_lock_file(self) -> Path:
+        """Locked (flock) by the process training this model, for as long as it lives."""
+        return self.path / TRAINING_LOCK_FILE
 
     @property
     def training_state_file(self) -> Path:

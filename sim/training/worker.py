@@ -16,6 +16,7 @@ import signal
 import sys
 import warnings
 from collections.abc import Sequence
+from pathlib import Path
 from types import FrameType
 from typing import TextIO
 
@@ -152,6 +153,26 @@ def _failed(message: str) -> events.Ended:
     )
 
 
+# Held for the life of the process: the kernel lets go of it however the process ends.
+_HELD_LOCKS: list[object] = []
+
+
+def _lock_for_training(path: Path) -> bool:
+    """Take the model's training lock, or False when another process holds it. Two
+    trainings started at the same moment both find no running state; only one gets the
+    lock, so they never write over each other's checkpoints."""
+    import fcntl
+
+    handle = path.open("a+b")
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        handle.close()
+        return False
+    _HELD_LOCKS.append(handle)
+    return True
+
+
 def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
     from sim.deepracer_files import DeepRacerFileError
     from sim.garage.folder import ModelError, open_model
@@ -163,7 +184,7 @@ def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
     user_errors = (ModelError, PolicyError, DeepRacerFileError, RewardFunctionError, TrackError)
     try:
         folder = open_model(args.model)
-        if folder.is_training():
+        if folder.is_training() or not _lock_for_training(folder.training_lock_file):
             raise ModelError(
                 f"model {folder.name!r} is already training in another process; "
                 "stop that one first."

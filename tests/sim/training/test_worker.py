@@ -187,3 +187,20 @@ def test_a_child_that_runs_past_its_budget_is_stopped_by_its_parent(tmp_path: Pa
     assert isinstance(ended, events.Ended) and ended.kind == "stopped"
     assert "ran well past its 0.00333333-minute budget" in ended.message
     assert stubborn.poll() is not None
+
+
+def test_two_trainings_of_one_model_started_together_never_both_run(
+    model: ModelFolder,
+) -> None:
+    first = TrainingProcess.start(model.name, minutes=0.05, extra=TINY)
+    second = TrainingProcess.start(model.name, minutes=0.05, extra=TINY)
+    endings = []
+    for process in (first, second):
+        ended = list(process.events())[-1]
+        process.wait()
+        assert isinstance(ended, events.Ended)
+        endings.append(ended)
+    kinds = sorted(ended.kind for ended in endings)
+    assert kinds == ["failed", "finished"], endings
+    (refused,) = [ended for ended in endings if ended.kind == "failed"]
+    assert "is already training in another process" in refused.message
