@@ -10,9 +10,9 @@ deepracer-utils' `DeepRacerLog(folder)` reads it unchanged:
     evaluation-<stamp>/evaluation-simtrace/0-iteration.csv
 
 with racer-tui's own files beside them: the trainer's `policy.safetensors`,
-`checkpoints/`, `training-state.json` and the `.training.lock` a training holds. Formats and
-DeepRacer's names are in
-`sim.deepracer_files`; this module knows the folder and what state the model is in.
+`checkpoints/`, `training-state.json` and the `.training.lock` a training holds. Formats
+and DeepRacer's names are in `sim.deepracer_files`; this module knows the folder and what
+state the model is in.
 Folders of racer-tui's older flat layout are moved into this one when first opened
 (`sim.garage.migrate`).
 
