@@ -39,6 +39,13 @@ MIN_ROAD_GAP = 0.25
 # An open file whose ends are this close (in median segment lengths) is a loop missing its
 # closing row; DeepRacer exports sometimes drop it.
 _CLOSE_GAP_SEGMENTS = 3.0
+# DeepRacer's own tracks have 22 to 401 waypoints; a dozen times that is plenty for any
+# drawn or resampled track, and keeps loading one a matter of milliseconds.
+MAX_WAYPOINTS = 5_000
+MAX_TRACK_FILE_BYTES = 2_000_000  # 5,000 rows of six float64 is 240 kB
+# The road-gap check looks at centre points at least this far apart: finer sampling adds
+# nothing to a 0.25 m rule, and would make the pairs it compares grow with its square.
+_GAP_CHECK_SPACING = 0.02
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,6 +190,12 @@ def load_track(
     label = str(file)
     if not file.exists():
         raise TrackError(f"{label}: no such file; give the path of a DeepRacer .npy track file.")
+    size = file.stat().st_size
+    if size > MAX_TRACK_FILE_BYTES:
+        raise TrackError(
+            f"{label}: is {size:,} bytes; a track file is at most "
+            f"{MAX_TRACK_FILE_BYTES:,} (up to {MAX_WAYPOINTS:,} waypoints); resample it."
+        )
     try:
         with file.open("rb") as handle:
             magic = handle.read(6)
@@ -213,6 +226,11 @@ def _normalise(array: object, label: str) -> FloatArray:
         raise TrackError(
             f"{label}: has shape {raw.shape}; a DeepRacer track is (N, 6): "
             "centre x,y, inner border x,y, outer border x,y."
+        )
+    if len(raw) > MAX_WAYPOINTS + 1:  # the closing row repeats the first
+        raise TrackError(
+            f"{label}: has {len(raw):,} waypoints; a track may have at most "
+            f"{MAX_WAYPOINTS:,} (DeepRacer's have at most 401), so resample it more coarsely."
         )
     points = raw.astype(np.float64)
     bad = ~np.isfinite(points)
@@ -293,6 +311,12 @@ def _check_borders(points: FloatArray, label: str) -> None:
         raise TrackError(f"{label}: the centre line leaves the road between the borders.")
 
 
+def _spaced(along: FloatArray, spacing: float) -> np.ndarray:
+    """Indices of points at least `spacing` apart along the line (the first always)."""
+    buckets = np.floor(along / spacing)
+    return np.flatnonzero(np.concatenate([[True], np.diff(buckets) > 0]))
+
+
 def _check_road_gaps(points: FloatArray, label: str) -> None:
     """Refuse a road that comes back within `MIN_ROAD_GAP` of itself.
 
@@ -301,8 +325,11 @@ def _check_road_gaps(points: FloatArray, label: str) -> None:
     bend gentler than that (a hairpin wide enough included) passes, a tighter hairpin or two
     straights laid side by side do not.
     """
-    centre, widths = points[:-1, 0:2], np.hypot(*(points[:-1, 4:6] - points[:-1, 2:4]).T)
     along = np.concatenate([[0.0], np.cumsum(segment_lengths(points[:, 0:2]))])
+    kept = _spaced(along[:-1], _GAP_CHECK_SPACING)
+    centre = points[:-1, 0:2][kept]
+    widths = np.hypot(*(points[:-1, 4:6] - points[:-1, 2:4]).T)[kept]
+    along = np.append(along[:-1][kept], along[-1])
     lap = float(along[-1])
     reach = float(widths.max()) + MIN_ROAD_GAP  # no closer pair can be a gap violation
     pairs = cKDTree(centre).query_pairs(reach, output_type="ndarray")
@@ -317,7 +344,7 @@ def _check_road_gaps(points: FloatArray, label: str) -> None:
     close = separate & (gaps < MIN_ROAD_GAP)
     if close.any():
         worst = int(np.argmin(np.where(close, gaps, np.inf)))
-        a, b = sorted((int(i[worst]), int(j[worst])))
+        a, b = sorted((int(kept[i[worst]]), int(kept[j[worst]])))  # the file's rows
         raise TrackError(
             f"{label}: the road passes within {max(gaps[worst], 0.0):.2f} m of itself between "
             f"waypoints {a} and {b}; separate parts of the road must be at least "

@@ -192,3 +192,41 @@ def test_missing_file(tmp_path: Path) -> None:
     message = load_error(tmp_path / "absent.npy")
 
     assert "no such file" in message
+
+
+def resampled(track: Track, count: int) -> np.ndarray:
+    """The track's six lines resampled to `count` waypoints (closing row included)."""
+    points = track.points
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points[:, 0:2], axis=0).T))])
+    at = np.linspace(0.0, along[-1], count)
+    rows = np.stack([np.interp(at, along, points[:, k]) for k in range(6)], axis=1)
+    rows[-1] = rows[0]
+    return rows
+
+
+def test_a_track_resampled_finely_loads_and_its_road_check_stays_exact(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from sim import track as track_module
+    from sim.track_builder import build_from_segments
+    from tests.sim.test_builtin_tracks import pocketed_box
+
+    roomy = build_from_segments("roomy", pocketed_box(1.7), width=0.76)
+    fine = load_track(save(tmp_path / "fine.npy", resampled(roomy, 4_900)))
+    assert fine.length == pytest.approx(roomy.length, rel=1e-3)
+    # The design whose hairpin comes back too close, built with the check switched off,
+    # then resampled finely: the check still finds the close approach.
+    with monkeypatch.context() as patch:
+        patch.setattr(track_module, "_check_road_gaps", lambda points, label: None)
+        crowded = build_from_segments("crowded", pocketed_box(2.04), width=0.76)
+    with pytest.raises(TrackError, match=r"within 0\.0\d m of itself"):
+        Track.from_array(resampled(crowded, 4_900), "dense")
+
+
+def test_too_many_waypoints_or_too_big_a_file_is_one_sentence(tmp_path: Path) -> None:
+    many = resampled(Track.from_array(ring(), "ring"), 60_000)
+    message = load_error(save(tmp_path / "many.npy", many.astype(np.float32)))
+    assert "has 60,000 waypoints; a track may have at most 5,000" in message
+    huge = np.zeros((2_000_000, 6))
+    message = load_error(save(tmp_path / "huge.npy", huge))
+    assert "bytes; a track file is at most 2,000,000" in message
