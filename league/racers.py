@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import hashlib
 import re
-import unicodedata
 from dataclasses import dataclass
 
 from league.errors import LeagueError
 from league.store import League, now_iso
+from sim.plain_names import MAX_NAME_LENGTH, is_plain_name, look_alike_key, normalised
 
-MAX_NAME_LENGTH = 100  # the same limit sim.race.result puts on a race result's racer
 # Distinct, readable on dark and light terminals; a racer's default is picked by name.
 PALETTE = (
     "#e6194b",
@@ -44,15 +43,25 @@ class Racer:
 
 
 def check_name(text: str, what: str = "racer name") -> str:
-    """`text` stripped, or LeagueError saying what a name may contain."""
-    name = text.strip()
-    bad = [ch for ch in name if unicodedata.category(ch) in ("Cc", "Cs", "Zl", "Zp")]
-    if not name or len(name) > MAX_NAME_LENGTH or bad:
+    """`text` as kept (NFKC, stripped: see sim.plain_names), or LeagueError saying what a
+    name may contain."""
+    name = normalised(text)
+    if not is_plain_name(name):
         raise LeagueError(
             f"{text!r} cannot be a {what}: use 1 to {MAX_NAME_LENGTH} printable characters "
-            "(no line breaks or control characters)."
+            "(no line breaks, control characters or invisible characters)."
         )
     return name
+
+
+def look_alike(league: League, name: str) -> str | None:
+    """An existing racer whose name a reader could not tell from `name`, if any."""
+    key = look_alike_key(name)
+    for row in league.query("SELECT name, display_name FROM racers"):
+        for existing in (str(row["name"]), str(row["display_name"])):
+            if existing != name and look_alike_key(existing) == key:
+                return existing
+    return None
 
 
 def check_colour(text: str) -> str:
@@ -115,6 +124,12 @@ def ensure_racer(
     row = league.query_one("SELECT name FROM racers WHERE name = ?", (clean,))
     if row is not None:
         return str(row["name"])
+    similar = look_alike(league, clean)
+    if similar is not None:
+        raise LeagueError(
+            f"{clean!r} looks like the racer {similar!r}; if that is you, use exactly that "
+            "name, otherwise choose a name that looks different."
+        )
     shown = check_name(display_name, "display name") if display_name else clean
     league.insert_record(
         "racers",

@@ -27,10 +27,11 @@ from rich.text import Text
 
 from racer_tui.output import print_json
 from sim.deepracer_files import DeepRacerFileError
+from sim.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.race.engine import run_race
-from sim.race.result import MAX_NAME_LENGTH, RaceResult, is_plain_name
+from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, load_rules, rules_from_mapping
 from sim.track import Track, TrackError
 from sim.track_catalog import DEFAULT_TRACK, resolve_track

@@ -9,22 +9,20 @@ from __future__ import annotations
 
 import math
 import re
-import unicodedata
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from typing import Any
 
 from sim.ids import is_valid_id
+from sim.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.race.physics import BEFORE_VERSIONING, CURRENT, is_physics
 from sim.race.rules import RaceRules, RulesError, Score, rules_from_mapping, score_laps
 from sim.race.trace import RaceTrace
 
 RESULT_FORMAT = 1
-MAX_NAME_LENGTH = 100
 MAX_LAPS = 10_000
 _HASH = re.compile(r"[\w:.\-]{1,200}")
-_NOT_PLAIN = frozenset({"Cc", "Cs", "Zl", "Zp"})  # control, surrogate, line/paragraph breaks
 
 
 class ResultError(ValueError):
@@ -241,23 +239,12 @@ def _same_score(stored: object, computed: float | None) -> bool:
     return abs(float(stored) - computed) <= 1e-3
 
 
-def is_plain_name(text: object) -> bool:
-    """Whether `text` can name a racer, model or track in a result: 1 to MAX_NAME_LENGTH
-    printable characters, no line breaks or control characters (the league's rule)."""
-    return (
-        isinstance(text, str)
-        and bool(text.strip())
-        and len(text) <= MAX_NAME_LENGTH
-        and not any(unicodedata.category(ch) in _NOT_PLAIN for ch in text)
-    )
-
-
 def _name(data: Mapping[str, Any], key: str) -> str:
     value = data.get(key)
     if not is_plain_name(value):
         raise ResultError(
             f"{key} must be 1 to {MAX_NAME_LENGTH} printable characters, without line "
-            "breaks or control characters."
+            "breaks, control or invisible characters."
         )
     assert isinstance(value, str)
     return value
