@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import Any, Final
 
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
@@ -29,7 +30,7 @@ from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import BUNDLE_KIND, PROFILE_KIND, profile_id
 from league.sync.record import HASH_PATTERN, SyncRecord, parse_json
-from sim.ids import is_valid_id
+from sim.ids import id_time_ms, is_valid_id
 from sim.names import NAME_RULE, is_valid_name
 from sim.race.physics import is_physics
 from sim.race.result import RaceResult, ResultError
@@ -281,8 +282,28 @@ assert tuple(LAP_FIELDS["race"]) == RACE_LAP_COLUMNS
 MAX_LAPS: Final = {"submission": MAX_TRIALS, "race": 10_000}
 
 
+# Kinds whose rows are one per name or hash, where the first one made wins on every
+# machine (league.sync.identity): their ids carry the time they were made, so a record
+# dated before any league existed, or days ahead, would win by a forged date.
+IDENTITY_KINDS: Final = frozenset({"racer", "track", "season"})
+EARLIEST_ID_MS: Final = int(datetime(2024, 1, 1, tzinfo=UTC).timestamp() * 1000)
+FUTURE_ID_SLACK_MS: Final = 24 * 3600 * 1000
+
+
+def _check_id_date(record: SyncRecord) -> None:
+    made = id_time_ms(record.record_id)
+    if not EARLIEST_ID_MS <= made <= time.time() * 1000 + FUTURE_ID_SLACK_MS:
+        when = datetime.fromtimestamp(made / 1000, UTC).strftime("%Y-%m-%d")
+        raise RecordInvalidError(
+            f"its id claims it was made on {when}, which cannot be true; the first {record.kind} "
+            "made wins its name everywhere, so a forged date is not believed"
+        )
+
+
 def check_record(record: SyncRecord) -> None:
     """RecordInvalidError (one sentence) unless `record` is a well-formed record of its kind."""
+    if record.kind in IDENTITY_KINDS:
+        _check_id_date(record)
     if record.kind == PROFILE_KIND:
         _check_profile(record)
     elif record.kind == BUNDLE_KIND:

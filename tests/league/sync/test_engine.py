@@ -263,6 +263,30 @@ def test_malformed_records_in_the_store_are_quarantined_and_the_rest_syncs(
         assert "not a valid race result" in reasons and "is not a name" in reasons
 
 
+def test_a_racer_dated_before_any_league_cannot_take_over_a_name(
+    url: str, open_racer_store: StoreFactory, tmp_path: Path
+) -> None:
+    # The identity rule lets the first racer made keep a name everywhere; an id dated
+    # 1 ms after 1970 would always be first, and rename the real "ana" on every machine.
+    with open_league(tmp_path / "a.db") as mine:
+        add_submissions(mine, tmp_path, [("ana", (11.0,))])
+        assert clean(sync_with(mine, url))
+        forged = {
+            "name": "ana",
+            "display_name": "ana (impostor)",
+            "colour": "#000000",
+            "created_at": "1970-01-01T00:00:00.001Z",
+        }
+        open_racer_store().push([make_record("racer", new_id(now_ms=1), forged)])
+        pulled = sync_with(mine, url)
+        assert len(pulled.quarantined) == 1
+        (row,) = mine.query("SELECT kind, reason FROM sync_quarantine")
+        assert row["kind"] == "racer"
+        assert row["reason"].startswith("its id claims it was made on 1970-01-01, which cannot")
+        racer = mine.query_one("SELECT display_name, colour FROM racers WHERE name = 'ana'")
+        assert racer["display_name"] == "ana" and racer["colour"] != "#000000"
+
+
 def test_a_record_that_arrives_before_what_it_refers_to_waits_for_it(
     open_racer_store: StoreFactory, url: str, tmp_path: Path
 ) -> None:
