@@ -16,8 +16,10 @@ folder (fsynced), then `os.link(temp, final)` publishes it; link fails if the fi
 exists, so two racers writing at once never overwrite each other, and a reader never sees
 a partial file (temporary names do not match the record pattern). Where the filesystem has
 no hard links (FAT32/exFAT), the record is written with O_CREAT|O_EXCL to its final name
-instead; readers then treat an unreadable file younger than `pending_grace_s` as still
-being written and retry it on the next pull rather than quarantining it.
+instead; readers then treat an incomplete file (not yet a whole JSON document) younger than
+`pending_grace_s` as still being written and retry it on the next pull rather than
+quarantining it. A whole record that fails its checks (an edited body, a recomputed hash
+that does not match) is no write in flight: it is quarantined at once.
 
 Pull cursor: the set of record names already seen (compressed). Ids sort by *creation*
 time, but a racer who was offline pushes old ids late, so a "newest id seen" watermark
@@ -346,7 +348,11 @@ class DirStore:
         ):
             if outcome is None:
                 continue  # removed since the listing; nothing to pull
-            if isinstance(outcome, Quarantined) and now - mtime < self.pending_grace_s:
+            if (
+                isinstance(outcome, Quarantined)
+                and outcome.partial
+                and now - mtime < self.pending_grace_s
+            ):
                 deferred.add(listed.name)  # probably still being written (no hard links)
                 continue
             checked = _check_name(outcome, listed) if isinstance(outcome, SyncRecord) else outcome

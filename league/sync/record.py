@@ -18,7 +18,7 @@ import json
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Final
 
 from league.sync.errors import RecordInvalidError
@@ -118,6 +118,8 @@ class Quarantined:
     reason: str
     where: str
     excerpt: str
+    # Not even a whole JSON document: what a file still being written looks like.
+    partial: bool = False
 
 
 def validate_body(body: object) -> bytes:
@@ -165,7 +167,7 @@ def decode_envelope(raw: bytes, where: str) -> SyncRecord | Quarantined:
     try:
         data = parse_json(raw)
     except RecordInvalidError as exc:
-        return quarantine(str(exc), where, raw)
+        return replace(quarantine(str(exc), where, raw), partial=True)
     if not isinstance(data, dict):
         return quarantine("it is not a JSON object", where, raw)
     if data.get("format") != ENVELOPE_FORMAT:

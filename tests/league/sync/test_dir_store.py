@@ -4,6 +4,7 @@ folder contents, a missing drive, and filesystems without hard links."""
 from __future__ import annotations
 
 import errno
+import json
 import os
 from pathlib import Path
 
@@ -119,6 +120,24 @@ def test_an_unreadable_fresh_file_is_retried_not_quarantined(tmp_path: Path) -> 
 
     path.write_bytes(full)
     assert keys(pull_all(DirStore(store.root), first.cursor).records) == keys([record])
+
+
+def test_a_fresh_but_whole_record_that_was_tampered_with_is_quarantined_at_once(
+    tmp_path: Path,
+) -> None:
+    """A whole JSON record that fails its checks is no write in flight: an edited lap
+    time with the old hash is reported on the first pull, not after a minute's silence."""
+    store = _store(tmp_path)
+    record = submission(7)
+    store.push([record])
+    path = store.root / "records" / "submission" / record.record_id[-1] / f"{record.record_id}.json"
+    tampered = json.loads(path.read_bytes())
+    tampered["body"]["racer"] = "mallory"  # the stated hash no longer matches
+    path.write_text(json.dumps(tampered))
+    first = pull_all(DirStore(store.root))
+    assert first.records == []
+    (item,) = first.quarantined
+    assert "content hash does not match" in item.reason
 
 
 def test_special_files_and_symlinks_are_never_followed(tmp_path: Path) -> None:
