@@ -33,6 +33,7 @@ from league.sync.record import HASH_PATTERN, SyncRecord, parse_json
 from sim.ids import id_time_ms, is_valid_id
 from sim.names import NAME_RULE, is_valid_name
 from sim.race.physics import is_physics
+from sim.race.plausible import fastest_possible_lap_by_hash
 from sim.race.result import RaceResult, ResultError
 from sim.race.rules import RulesError, rules_from_mapping
 
@@ -314,6 +315,7 @@ def check_record(record: SyncRecord) -> None:
         )
         if record.kind in LAP_FIELDS:
             _check_laps(record.body.get("laps"), record.kind)
+            _check_possible_laps(record)
         _SEMANTICS.get(record.kind, _nothing)(record)
 
 
@@ -345,6 +347,22 @@ def _check_laps(laps: Any, kind: str) -> None:
         _check_fields(lap, LAP_FIELDS[kind])
         if lap["number"] != index + 1:
             raise _bad(f"lap {index + 1}", f"is numbered {lap['number']}")
+
+
+def _check_possible_laps(record: SyncRecord) -> None:
+    """No lap quicker than any car could drive the track (when this machine knows it)."""
+    floor = fastest_possible_lap_by_hash(str(record.body["track_hash"]))
+    if floor is None:
+        return
+    for lap in record.body["laps"]:
+        if record.kind == "submission" and not lap["completed"]:
+            continue  # a trial that stopped part-way is not a lap
+        seconds = lap.get("raw_seconds", lap["time_seconds"])
+        if seconds < floor:
+            raise RecordInvalidError(
+                f"its lap {lap['number']} of {seconds:.3f} s is faster than any car can go "
+                f"round that track (at least {floor:.2f} s at 4 m/s on its shortest line)"
+            )
 
 
 def _nothing(record: SyncRecord) -> None:

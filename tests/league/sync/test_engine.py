@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+from league.races import record_race
 from league.records import record_body, store_record
 from league.store import League, open_league
 from league.sync.engine import SyncSummary, push, store_key, sync
@@ -21,7 +22,9 @@ from league.sync.outgoing import count_unsent, unsent_batches
 from league.sync.record import SyncRecord, make_record
 from league.sync.stores import open_store
 from sim.ids import new_id
+from sim.track_catalog import resolve_track
 from tests.conftest import REPO_ROOT
+from tests.league.helpers import race_result
 from tests.league.sync.conftest import QUICK_RETRY, StoreFactory
 from tests.league.sync.leagues import add_submissions, host_league, shared_rows, views
 from tests.league.sync.test_store_contract import pull_all
@@ -285,6 +288,31 @@ def test_a_racer_dated_before_any_league_cannot_take_over_a_name(
         assert row["reason"].startswith("its id claims it was made on 1970-01-01, which cannot")
         racer = mine.query_one("SELECT display_name, colour FROM racers WHERE name = 'ana'")
         assert racer["display_name"] == "ana" and racer["colour"] != "#000000"
+
+
+def test_a_race_faster_than_any_car_could_drive_never_reaches_a_leaderboard(
+    url: str, open_racer_store: StoreFactory, tmp_path: Path
+) -> None:
+    # Every lap edited to 3.000 s on a 17.8 m track whose shortest loop is 12.8 m (at
+    # 4 m/s at least 3.19 s), the content hash recomputed so the record looks whole.
+    hairpin = resolve_track("hairpin-circuit")
+    with open_league(tmp_path / "a.db") as mine, open_league(tmp_path / "b.db") as theirs:
+        record_race(mine, race_result("mallory", [12.0, 11.8], track=hairpin))
+        honest = next(r for r in all_records(mine) if r.kind == "race")
+        forged = dict(honest.body)
+        forged["laps"] = [
+            {**lap, "time_seconds": 3.0, "raw_seconds": 3.0, "penalty_seconds": 0.0}
+            for lap in honest.body["laps"]
+        ]
+        racer = next(r for r in all_records(mine) if r.kind == "racer")
+        track = next(r for r in all_records(mine) if r.kind == "track")
+        open_racer_store().push([racer, track, make_record("race", new_id(), forged)])
+        pulled = sync_with(theirs, url)
+        assert len(pulled.quarantined) == 1
+        (row,) = theirs.query("SELECT kind, reason FROM sync_quarantine")
+        assert row["kind"] == "race"
+        assert "lap 1 of 3.000 s is faster than any car can go round that track" in row["reason"]
+        assert theirs.query("SELECT * FROM races") == []
 
 
 def test_a_record_that_arrives_before_what_it_refers_to_waits_for_it(
