@@ -8,19 +8,42 @@ function runs in a child process with a time limit (sim.reward_probe).
 from __future__ import annotations
 
 import argparse
+import math
+import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json, print_table
-from sim.reward_function import read_reward_file
-from sim.reward_probe import check_reward_source
+from sim.action_space import MAX_SPEED
+from sim.atomic import write_bytes_atomic
+from sim.reward_function import TEMPLATES, read_reward_file, template_source
+from sim.reward_map import (
+    DEFAULT_SPACING,
+    DEFAULT_SPEED,
+    FAILED_COLOUR,
+    MapOptions,
+    RewardMap,
+    colour,
+    pixel_rows,
+    png_bytes,
+)
+from sim.reward_probe import check_reward_source, map_reward_source
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 NAMES = ("reward",)
+
+
+class MapOptionError(ValueError):
+    """A `reward map` option out of range; the message is one sentence."""
+
+
+USER_ERRORS: tuple[type[Exception], ...] = (MapOptionError,)
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -32,9 +55,26 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         "--track", default=None, help=f"score a reference lap on this track ({DEFAULT_TRACK})"
     )
     check.add_argument("--json", action="store_true")
+    drawn = reward_commands.add_parser(
+        "map", help="draw what a reward function pays everywhere on a track"
+    )
+    drawn.add_argument("function", help="a reward function file, or a template's name")
+    drawn.add_argument("--track", default=DEFAULT_TRACK, help=f"default {DEFAULT_TRACK}")
+    drawn.add_argument("--speed", type=float, default=DEFAULT_SPEED, help="m/s (default 2)")
+    drawn.add_argument(
+        "--heading",
+        default="track",
+        help="'track' (along the road where the car stands) or fixed:DEGREES",
+    )
+    drawn.add_argument("--spacing", type=float, default=DEFAULT_SPACING, help="metres per cell")
+    out = drawn.add_mutually_exclusive_group()
+    out.add_argument("--json", action="store_true", help="print the grid as JSON")
+    out.add_argument("--png", metavar="FILE", help="write the map as a PNG image")
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.reward_command == "map":
+        return _map(args)
     source = read_reward_file(Path(args.file))
     track_name = args.track or DEFAULT_TRACK
     resolve_track(track_name)  # an unknown track is the racer's typo, said before any run
@@ -65,3 +105,81 @@ def run(args: argparse.Namespace) -> int:
     print_table(table)
     print("OK: the function ran on every step without an error.")
     return 0
+
+
+# --- map -----------------------------------------------------------------------------------
+
+# Terminal cells are about twice as tall as wide: one character shows two map rows.
+_HALF_BLOCK = "▀"
+
+
+def _map(args: argparse.Namespace) -> int:
+    options = MapOptions(args.spacing, args.speed, _heading(args.heading))
+    if not (0.02 <= options.spacing <= 1.0):
+        raise MapOptionError(f"--spacing must be from 0.02 to 1 m, not {options.spacing:g}.")
+    if not (0.0 < options.speed <= MAX_SPEED):
+        raise MapOptionError(f"--speed must be above 0 and at most {MAX_SPEED:g} m/s.")
+    track = resolve_track(args.track)
+    if args.function in TEMPLATES:
+        source, name = template_source(args.function), TEMPLATES[args.function]
+    else:
+        source, name = read_reward_file(Path(args.function)), str(args.function)
+    reward_map = map_reward_source(source, name, track.name, options)
+    if args.json:
+        print_json(reward_map.to_json())
+    elif args.png:
+        write_bytes_atomic(Path(args.png), png_bytes(reward_map))
+        print(f"Wrote {args.png}.")
+    else:
+        Console().print(_terminal_map(reward_map, shutil.get_terminal_size().columns))
+    if reward_map.first_failure:
+        print(
+            f"The function failed on {len(reward_map.failed)} cells (red): "
+            f"{reward_map.first_failure}",
+            file=sys.stderr,
+        )
+    return 0
+
+
+def _heading(text: str) -> float | None:
+    if text == "track":
+        return None
+    degrees = text.removeprefix("fixed:")
+    try:
+        value = float(degrees)
+    except ValueError:
+        raise MapOptionError(
+            f"--heading must be 'track' or fixed:DEGREES (for example fixed:90), not {text!r}."
+        ) from None
+    if not math.isfinite(value):
+        raise MapOptionError(f"--heading must be a number of degrees, not {text!r}.")
+    return value
+
+
+def _terminal_map(reward_map: RewardMap, width: int) -> Text:
+    """Two map rows per line, a cell per character, thinned to fit `width` columns."""
+    rows = pixel_rows(reward_map)
+    columns = len(rows[0]) if rows else 0
+    step = max(1, math.ceil(columns / max(20, width - 1)))
+    thinned = [row[::step] for row in rows[::step]]
+    text = Text()
+    for upper, lower in zip(thinned[::2], [*thinned[1::2], []], strict=False):
+        for index, top in enumerate(upper):
+            bottom = lower[index] if index < len(lower) else (0, 0, 0)
+            text.append(_HALF_BLOCK, style=f"rgb{top} on rgb{bottom}")
+        text.append("\n")
+    shown = reward_map.shown
+    low, high = (min(shown), max(shown)) if shown else (0.0, 0.0)
+    text.append("low ")
+    for fraction in (0.0, 0.25, 0.5, 0.75, 1.0):
+        text.append("██", style=f"rgb{colour(fraction)}")
+    text.append(f" high: {low:.4g} to {high:.4g} on {reward_map.track}")
+    heading = reward_map.options.heading
+    facing = "along the track" if heading is None else f"facing {heading:g}°"
+    text.append(f", at {reward_map.options.speed:g} m/s {facing}")
+    text.append(f", {reward_map.options.spacing * step:g} m per cell")
+    if reward_map.failed:
+        text.append(" · ")
+        text.append("██", style=f"rgb{FAILED_COLOUR}")
+        text.append(" failed")
+    return text

@@ -4,7 +4,8 @@ limit on every call and a deadline on the whole check.
 `racer-tui reward check` and the model editor's Check ask `check_reward_source`: the
 child (`python -m sim.reward_probe`) loads the code, calls it on DeepRacer-complete sample
 params and, when a track is given, on every step of the reference driver's lap, and
-answers with one JSON line. Whatever the code does (loops forever, sleeps, prints, exits
+answers with one JSON line. `map_reward_source` asks the child for a reward map instead
+(`sim.reward_map`). Whatever the code does (loops forever, sleeps, prints, exits
 its process, raises KeyboardInterrupt), the caller gets a `ProbeReport` or a
 `RewardFunctionError` in one sentence, and its own process never ran a line of it.
 """
@@ -21,6 +22,7 @@ from typing import Any
 
 from sim.reward_function import RewardFunctionError
 from sim.reward_limit import DEFAULT_SECONDS
+from sim.reward_map import MapOptions, RewardMap
 
 # The whole check (interpreter start, imports, the reference lap) must end within this;
 # a function slow enough to miss it would make training crawl anyway.
@@ -46,6 +48,36 @@ def check_reward_source(
     """Run the code named `name` (a file path or a template's file name) in a child
     process; raise `RewardFunctionError` for anything wrong with it."""
     request = {"source": source, "name": name, "track": track, "seconds": seconds}
+    ok = _ask_child(request, name, seconds, deadline)
+    return ProbeReport(float(ok["sample_reward"]), ok["track"], tuple(ok["lap_rewards"]))
+
+
+def map_reward_source(
+    source: str,
+    name: str,
+    track: str,
+    options: MapOptions,
+    *,
+    seconds: float = DEFAULT_SECONDS,
+    deadline: float = CHECK_DEADLINE_SECONDS,
+) -> RewardMap:
+    """What the code pays over `track` (see sim.reward_map), computed in a child process."""
+    request = {
+        "mode": "map",
+        "source": source,
+        "name": name,
+        "track": track,
+        "seconds": seconds,
+        "spacing": options.spacing,
+        "speed": options.speed,
+        "heading": options.heading,
+    }
+    return RewardMap.from_json(_ask_child(request, name, seconds, deadline)["map"])
+
+
+def _ask_child(
+    request: dict[str, Any], name: str, seconds: float, deadline: float
+) -> dict[str, Any]:
     try:
         done = subprocess.run(
             [sys.executable, "-m", "sim.reward_probe"],
@@ -75,8 +107,7 @@ def check_reward_source(
         raise RewardFunctionError(
             error["display"], error["problem"], error["line"], error["advice"]
         )
-    ok = answer["ok"]
-    return ProbeReport(float(ok["sample_reward"]), ok["track"], tuple(ok["lap_rewards"]))
+    return dict(answer["ok"])
 
 
 def _answer(stdout: bytes) -> dict[str, Any] | None:
@@ -100,6 +131,18 @@ def _probe(request: dict[str, Any]) -> dict[str, Any]:
 
     name = str(request["name"])
     reward = load_reward_source(str(request["source"]), name)
+    if request.get("mode") == "map":
+        from sim.reward_map import MapOptions, compute_map
+        from sim.track_catalog import resolve_track
+
+        heading = request.get("heading")
+        options = MapOptions(
+            float(request["spacing"]),
+            float(request["speed"]),
+            None if heading is None else float(heading),
+        )
+        reward_map = compute_map(reward, resolve_track(str(request["track"])), options)
+        return {"ok": {"map": reward_map.to_json()}}
     sample = reward(sample_params())
     track_name = request.get("track")
     lap: Sequence[float] = ()

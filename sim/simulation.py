@@ -262,6 +262,22 @@ class TrackSimulation:
     def reset_all(self) -> None:
         self.reset_cars(range(self.n))
 
+    def pose_all(
+        self, x: FloatArray, y: FloatArray, yaw: FloatArray, speed: float, steering_deg: float
+    ) -> None:
+        """Stand every car at a pose at once, as if it had driven there from the start line
+        at `speed` with that command (the reward map's cars): one measurement pass for the
+        whole fleet, and progress and steps consistent with where each car stands."""
+        fleet = self.fleet
+        fleet.x[:], fleet.y[:], fleet.yaw[:] = x, y, yaw
+        fleet.speed[:] = speed
+        self.steering_cmd[:] = steering_deg
+        self.speed_cmd[:] = speed
+        self._measure()
+        start = self.start_position(0, 0)
+        self.travelled = np.mod(self.s - start, self._length)
+        self.steps = 1 + np.round(self.travelled / max(speed, 0.1) * STEP_HZ).astype(np.int64)
+
     def continue_episode(self, car: int, travelled: float) -> None:
         """Let a car drive on after its episode ended, as races do (past the line, after a reset).
 

@@ -1,0 +1,105 @@
+"""The reward map: what a reward function pays in every cell of a track, before training."""
+
+from __future__ import annotations
+
+import json
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from racer_tui.cli import main
+from sim.reward_function import load_reward_source, load_template
+from sim.reward_map import MapOptions, RewardMap, compute_map, png_bytes
+from sim.track_catalog import resolve_track
+
+HAIRPIN = resolve_track("hairpin-circuit")
+COARSE = MapOptions(spacing=0.2)
+
+
+def values_of(reward_map: RewardMap) -> np.ndarray:
+    return np.array(
+        [[np.nan if v is None else v for v in row] for row in reward_map.values], dtype=float
+    )
+
+
+def test_follow_center_line_pays_its_bands_across_the_road() -> None:
+    reward_map = compute_map(load_template("follow_center_line"), HAIRPIN, COARSE)
+    values = values_of(reward_map)
+    assert set(np.unique(values[~np.isnan(values)])) == {0.001, 0.1, 0.5, 1.0}
+    # Every band is there, the road's middle pays most, off the road almost nothing.
+    assert np.nanmax(values) == 1.0 and np.nanmin(values) == 0.001
+    assert reward_map.failed == [] and reward_map.first_failure is None
+
+
+def test_each_cell_faces_along_the_track_or_a_fixed_heading() -> None:
+    heading = load_reward_source(
+        "def reward_function(params):\n    return params['heading']\n", "h"
+    )
+    fixed = values_of(compute_map(heading, HAIRPIN, MapOptions(spacing=0.2, heading=90.0)))
+    assert np.allclose(fixed[~np.isnan(fixed)], 90.0)
+    along = values_of(compute_map(heading, HAIRPIN, COARSE))
+    assert len(np.unique(np.round(along[~np.isnan(along)]))) > 20  # the road turns
+
+
+def test_progress_and_steps_are_those_of_a_car_that_drove_there() -> None:
+    source = (
+        "def reward_function(params):\n"
+        "    assert params['steps'] >= 1 and params['speed'] == 3.0\n"
+        "    return params['progress']\n"
+    )
+    reward = load_reward_source(source, "progress.py")
+    values = values_of(compute_map(reward, HAIRPIN, MapOptions(spacing=0.2, speed=3.0)))
+    shown = values[~np.isnan(values)]
+    assert shown.min() >= 0.0 and shown.max() <= 100.0
+    assert shown.max() - shown.min() > 90.0  # all the way round
+
+
+def test_cells_where_the_function_fails_are_marked_and_the_first_is_said() -> None:
+    source = (
+        "def reward_function(params):\n"
+        "    if params['x'] > 4.0:\n"
+        "        raise ValueError('east of x=4')\n"
+        "    return 1.0\n"
+    )
+    reward_map = compute_map(load_reward_source(source, "half.py"), HAIRPIN, COARSE)
+    assert reward_map.failed and len(reward_map.shown) > 0
+    assert reward_map.first_failure is not None
+    assert (
+        "half.py line 3" in reward_map.first_failure and "first at x=" in reward_map.first_failure
+    )
+
+
+def test_the_png_is_the_grid_at_four_pixels_a_cell() -> None:
+    reward_map = compute_map(load_template("stay_inside_borders"), HAIRPIN, COARSE)
+    data = png_bytes(reward_map, scale=4)
+    assert data.startswith(b"\x89PNG\r\n\x1a\n")
+    width, height = struct.unpack(">II", data[16:24])
+    assert (width, height) == (4 * len(reward_map.values[0]), 4 * len(reward_map.values))
+
+
+def test_the_command_draws_writes_json_and_png_and_refuses_bad_input(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert (
+        main(["reward", "map", "follow_center_line", "--track", "hairpin-circuit", "--json"]) == 0
+    )
+    grid = json.loads(capsys.readouterr().out)
+    assert grid["track"] == "hairpin-circuit" and grid["max"] == 1.0 and grid["heading"] == "track"
+    assert len(grid["values"]) == grid["rows"] and len(grid["values"][0]) == grid["columns"]
+    image = tmp_path / "map.png"
+    assert (
+        main(["reward", "map", "prevent_zigzag", "--track", "hairpin-circuit", "--png", str(image)])
+        == 0
+    )
+    assert image.read_bytes().startswith(b"\x89PNG")
+    assert main(["reward", "map", "follow_center_line", "--track", "hairpin-circuit"]) == 0
+    drawn = capsys.readouterr().out
+    assert "▀" in drawn and "high: 0.001 to 1 on hairpin-circuit" in drawn
+    assert main(["reward", "map", "follow_center_line", "--heading", "north"]) == 2
+    assert "--heading must be 'track' or fixed:DEGREES" in capsys.readouterr().err
+    hangs = tmp_path / "hangs.py"
+    hangs.write_text("def reward_function(params):\n    while True:\n        pass\n")
+    assert main(["reward", "map", str(hangs), "--track", "hairpin-circuit"]) == 2
+    assert "line 2: reward_function did not return within 1 s" in capsys.readouterr().err
