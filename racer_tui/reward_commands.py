@@ -23,6 +23,7 @@ from racer_tui.output import print_json, print_table
 from sim.action_space import MAX_SPEED
 from sim.atomic import write_bytes_atomic
 from sim.reward_function import TEMPLATES, read_reward_file, template_source
+from sim.reward_lap import DEFAULT_SPEEDS, verdict
 from sim.reward_map import (
     DEFAULT_SPACING,
     DEFAULT_SPEED,
@@ -33,7 +34,7 @@ from sim.reward_map import (
     pixel_rows,
     png_bytes,
 )
-from sim.reward_probe import check_reward_source, map_reward_source
+from sim.reward_probe import check_reward_source, lap_pay_of_source, map_reward_source
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 NAMES = ("reward",)
@@ -67,6 +68,17 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         help="'track' (along the road where the car stands) or fixed:DEGREES",
     )
     drawn.add_argument("--spacing", type=float, default=DEFAULT_SPACING, help="metres per cell")
+    lap = reward_commands.add_parser(
+        "lap", help="what a reward function pays for a lap at each speed: does it pay for speed?"
+    )
+    lap.add_argument("function", help="a reward function file, or a template's name")
+    lap.add_argument("--track", default=DEFAULT_TRACK, help=f"default {DEFAULT_TRACK}")
+    lap.add_argument(
+        "--speeds",
+        default=",".join(f"{speed:g}" for speed in DEFAULT_SPEEDS),
+        help="m/s, comma-separated (default 1,2,3,4)",
+    )
+    lap.add_argument("--json", action="store_true")
     out = drawn.add_mutually_exclusive_group()
     out.add_argument("--json", action="store_true", help="print the grid as JSON")
     out.add_argument("--png", metavar="FILE", help="write the map as a PNG image")
@@ -75,6 +87,8 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
 def run(args: argparse.Namespace) -> int:
     if args.reward_command == "map":
         return _map(args)
+    if args.reward_command == "lap":
+        return _lap(args)
     source = read_reward_file(Path(args.file))
     track_name = args.track or DEFAULT_TRACK
     resolve_track(track_name)  # an unknown track is the racer's typo, said before any run
@@ -120,10 +134,7 @@ def _map(args: argparse.Namespace) -> int:
     if not (0.0 < options.speed <= MAX_SPEED):
         raise MapOptionError(f"--speed must be above 0 and at most {MAX_SPEED:g} m/s.")
     track = resolve_track(args.track)
-    if args.function in TEMPLATES:
-        source, name = template_source(args.function), TEMPLATES[args.function]
-    else:
-        source, name = read_reward_file(Path(args.function)), str(args.function)
+    source, name = _function(args.function)
     reward_map = map_reward_source(source, name, track.name, options)
     if args.json:
         print_json(reward_map.to_json())
@@ -183,3 +194,37 @@ def _terminal_map(reward_map: RewardMap, width: int) -> Text:
         text.append("██", style=f"rgb{FAILED_COLOUR}")
         text.append(" failed")
     return text
+
+
+def _function(given: str) -> tuple[str, str]:
+    """(source, name) of a template's name or a reward function file (read, not run)."""
+    if given in TEMPLATES:
+        return template_source(given), TEMPLATES[given]
+    return read_reward_file(Path(given)), given
+
+
+def _lap(args: argparse.Namespace) -> int:
+    try:
+        speeds = tuple(float(part) for part in args.speeds.split(","))
+    except ValueError:
+        raise MapOptionError(
+            f"--speeds must be m/s separated by commas, for example 1,2,3,4, not {args.speeds!r}."
+        ) from None
+    if not speeds or not all(0.1 <= speed <= MAX_SPEED for speed in speeds):
+        raise MapOptionError(f"--speeds must each be from 0.1 to {MAX_SPEED:g} m/s.")
+    track = resolve_track(args.track)
+    source, name = _function(args.function)
+    pays = lap_pay_of_source(source, name, track.name, tuple(sorted(set(speeds))))
+    if args.json:
+        print_json({"track": track.name, "laps": [pay.to_json() for pay in pays]})
+        return 0
+    table = Table(title=Text(f"One lap of {track.name}'s centre line: {name}"))
+    for title in ("m/s", "steps", "reward per lap", "per second"):
+        table.add_column(title, justify="right")
+    for pay in pays:
+        table.add_row(
+            f"{pay.speed:g}", f"{pay.steps:,}", f"{pay.total:.4g}", f"{pay.per_second:.4g}"
+        )
+    print_table(table)
+    print(verdict(pays))
+    return 0

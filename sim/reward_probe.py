@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from sim.reward_function import RewardFunctionError
+from sim.reward_lap import LapPay
 from sim.reward_limit import DEFAULT_SECONDS
 from sim.reward_map import MapOptions, RewardMap
 
@@ -73,6 +74,29 @@ def map_reward_source(
         "heading": options.heading,
     }
     return RewardMap.from_json(_ask_child(request, name, seconds, deadline)["map"])
+
+
+def lap_pay_of_source(
+    source: str,
+    name: str,
+    track: str,
+    speeds: tuple[float, ...],
+    *,
+    seconds: float = DEFAULT_SECONDS,
+    deadline: float = CHECK_DEADLINE_SECONDS,
+) -> list[LapPay]:
+    """What the code pays for one lap of the centre line at each speed (sim.reward_lap),
+    computed in a child process."""
+    request = {
+        "mode": "lap",
+        "source": source,
+        "name": name,
+        "track": track,
+        "seconds": seconds,
+        "speeds": list(speeds),
+    }
+    laps = _ask_child(request, name, seconds, deadline)["laps"]
+    return [LapPay(float(lap["speed"]), int(lap["steps"]), float(lap["total"])) for lap in laps]
 
 
 def _ask_child(
@@ -131,6 +155,13 @@ def _probe(request: dict[str, Any]) -> dict[str, Any]:
 
     name = str(request["name"])
     reward = load_reward_source(str(request["source"]), name)
+    if request.get("mode") == "lap":
+        from sim.reward_lap import lap_rewards
+        from sim.track_catalog import resolve_track
+
+        speeds = tuple(float(speed) for speed in request["speeds"])
+        pays = lap_rewards(reward, resolve_track(str(request["track"])), speeds)
+        return {"ok": {"laps": [pay.to_json() for pay in pays]}}
     if request.get("mode") == "map":
         from sim.reward_map import MapOptions, compute_map
         from sim.track_catalog import resolve_track
