@@ -20,6 +20,7 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json, print_table
+from racer_tui.reward_map_text import map_text
 from sim.action_space import MAX_SPEED
 from sim.atomic import write_bytes_atomic
 from sim.reward_function import TEMPLATES, read_reward_file, template_source
@@ -27,11 +28,7 @@ from sim.reward_lap import DEFAULT_SPEEDS, verdict
 from sim.reward_map import (
     DEFAULT_SPACING,
     DEFAULT_SPEED,
-    FAILED_COLOUR,
     MapOptions,
-    RewardMap,
-    colour,
-    pixel_rows,
     png_bytes,
 )
 from sim.reward_probe import check_reward_source, lap_pay_of_source, map_reward_source
@@ -123,9 +120,6 @@ def run(args: argparse.Namespace) -> int:
 
 # --- map -----------------------------------------------------------------------------------
 
-# Terminal cells are about twice as tall as wide: one character shows two map rows.
-_HALF_BLOCK = "▀"
-
 
 def _map(args: argparse.Namespace) -> int:
     options = MapOptions(args.spacing, args.speed, _heading(args.heading))
@@ -142,7 +136,7 @@ def _map(args: argparse.Namespace) -> int:
         write_bytes_atomic(Path(args.png), png_bytes(reward_map))
         print(f"Wrote {args.png}.")
     else:
-        Console().print(_terminal_map(reward_map, shutil.get_terminal_size().columns))
+        Console().print(map_text(reward_map, shutil.get_terminal_size().columns))
     if reward_map.first_failure:
         print(
             f"The function failed on {len(reward_map.failed)} cells (red): "
@@ -165,35 +159,6 @@ def _heading(text: str) -> float | None:
     if not math.isfinite(value):
         raise MapOptionError(f"--heading must be a number of degrees, not {text!r}.")
     return value
-
-
-def _terminal_map(reward_map: RewardMap, width: int) -> Text:
-    """Two map rows per line, a cell per character, thinned to fit `width` columns."""
-    rows = pixel_rows(reward_map)
-    columns = len(rows[0]) if rows else 0
-    step = max(1, math.ceil(columns / max(20, width - 1)))
-    thinned = [row[::step] for row in rows[::step]]
-    text = Text()
-    for upper, lower in zip(thinned[::2], [*thinned[1::2], []], strict=False):
-        for index, top in enumerate(upper):
-            bottom = lower[index] if index < len(lower) else (0, 0, 0)
-            text.append(_HALF_BLOCK, style=f"rgb{top} on rgb{bottom}")
-        text.append("\n")
-    shown = reward_map.shown
-    low, high = (min(shown), max(shown)) if shown else (0.0, 0.0)
-    text.append("low ")
-    for fraction in (0.0, 0.25, 0.5, 0.75, 1.0):
-        text.append("██", style=f"rgb{colour(fraction)}")
-    text.append(f" high: {low:.4g} to {high:.4g} on {reward_map.track}")
-    heading = reward_map.options.heading
-    facing = "along the track" if heading is None else f"facing {heading:g}°"
-    text.append(f", at {reward_map.options.speed:g} m/s {facing}")
-    text.append(f", {reward_map.options.spacing * step:g} m per cell")
-    if reward_map.failed:
-        text.append(" · ")
-        text.append("██", style=f"rgb{FAILED_COLOUR}")
-        text.append(" failed")
-    return text
 
 
 def _function(given: str) -> tuple[str, str]:

@@ -53,6 +53,54 @@ def check_reward_source(
     return ProbeReport(float(ok["sample_reward"]), ok["track"], tuple(ok["lap_rewards"]))
 
 
+@dataclass(frozen=True)
+class EditorCheck:
+    """The editor's Check in one child process: the sample, the map, the laps."""
+
+    sample_reward: float
+    reward_map: RewardMap
+    laps: tuple[LapPay, ...]
+
+
+def editor_check(
+    source: str,
+    name: str,
+    track: str,
+    options: MapOptions,
+    speeds: tuple[float, ...],
+    *,
+    seconds: float = DEFAULT_SECONDS,
+    deadline: float = CHECK_DEADLINE_SECONDS,
+) -> EditorCheck:
+    request = {
+        "mode": "editor",
+        **_map_request(track, options),
+        "speeds": list(speeds),
+        "source": source,
+        "name": name,
+        "seconds": seconds,
+    }
+    ok = _ask_child(request, name, seconds, deadline)
+    return EditorCheck(
+        float(ok["sample_reward"]), RewardMap.from_json(ok["map"]), _laps(ok["laps"])
+    )
+
+
+def _map_request(track: str, options: MapOptions) -> dict[str, Any]:
+    return {
+        "track": track,
+        "spacing": options.spacing,
+        "speed": options.speed,
+        "heading": options.heading,
+    }
+
+
+def _laps(rows: list[dict[str, Any]]) -> tuple[LapPay, ...]:
+    return tuple(
+        LapPay(float(row["speed"]), int(row["steps"]), float(row["total"])) for row in rows
+    )
+
+
 def map_reward_source(
     source: str,
     name: str,
@@ -67,11 +115,8 @@ def map_reward_source(
         "mode": "map",
         "source": source,
         "name": name,
-        "track": track,
         "seconds": seconds,
-        "spacing": options.spacing,
-        "speed": options.speed,
-        "heading": options.heading,
+        **_map_request(track, options),
     }
     return RewardMap.from_json(_ask_child(request, name, seconds, deadline)["map"])
 
@@ -95,8 +140,7 @@ def lap_pay_of_source(
         "seconds": seconds,
         "speeds": list(speeds),
     }
-    laps = _ask_child(request, name, seconds, deadline)["laps"]
-    return [LapPay(float(lap["speed"]), int(lap["steps"]), float(lap["total"])) for lap in laps]
+    return list(_laps(_ask_child(request, name, seconds, deadline)["laps"]))
 
 
 def _ask_child(
@@ -155,25 +199,16 @@ def _probe(request: dict[str, Any]) -> dict[str, Any]:
 
     name = str(request["name"])
     reward = load_reward_source(str(request["source"]), name)
-    if request.get("mode") == "lap":
-        from sim.reward_lap import lap_rewards
-        from sim.track_catalog import resolve_track
-
-        speeds = tuple(float(speed) for speed in request["speeds"])
-        pays = lap_rewards(reward, resolve_track(str(request["track"])), speeds)
-        return {"ok": {"laps": [pay.to_json() for pay in pays]}}
-    if request.get("mode") == "map":
-        from sim.reward_map import MapOptions, compute_map
-        from sim.track_catalog import resolve_track
-
-        heading = request.get("heading")
-        options = MapOptions(
-            float(request["spacing"]),
-            float(request["speed"]),
-            None if heading is None else float(heading),
-        )
-        reward_map = compute_map(reward, resolve_track(str(request["track"])), options)
-        return {"ok": {"map": reward_map.to_json()}}
+    mode = request.get("mode")
+    if mode in ("lap", "map", "editor"):
+        answer: dict[str, Any] = {}
+        if mode == "editor":
+            answer["sample_reward"] = reward(sample_params())
+        if mode in ("lap", "editor"):
+            answer["laps"] = _lap_answer(reward.fresh(), request)
+        if mode in ("map", "editor"):
+            answer["map"] = _map_answer(reward.fresh(), request)
+        return {"ok": answer}
     sample = reward(sample_params())
     track_name = request.get("track")
     lap: Sequence[float] = ()
@@ -187,6 +222,28 @@ def _probe(request: dict[str, Any]) -> dict[str, Any]:
         # state the sample call left in the module does not leak into the lap.
         lap = _reference_lap_rewards(reward.fresh(), track)
     return {"ok": {"sample_reward": sample, "track": shown_track, "lap_rewards": list(lap)}}
+
+
+def _lap_answer(reward: Any, request: dict[str, Any]) -> list[dict[str, Any]]:
+    from sim.reward_lap import lap_rewards
+    from sim.track_catalog import resolve_track
+
+    speeds = tuple(float(speed) for speed in request["speeds"])
+    pays = lap_rewards(reward, resolve_track(str(request["track"])), speeds)
+    return [pay.to_json() for pay in pays]
+
+
+def _map_answer(reward: Any, request: dict[str, Any]) -> dict[str, Any]:
+    from sim.reward_map import compute_map
+    from sim.track_catalog import resolve_track
+
+    heading = request.get("heading")
+    options = MapOptions(
+        float(request["spacing"]),
+        float(request["speed"]),
+        None if heading is None else float(heading),
+    )
+    return compute_map(reward, resolve_track(str(request["track"])), options).to_json()
 
 
 def _reference_lap_rewards(reward: Any, track: Any) -> list[float]:

@@ -4,7 +4,9 @@ Four tabs: the car (name, track with a preview, sensor, training time limit), it
 space (the console's discrete generator with a per-action table, or continuous ranges, and
 a picture of it), the hyperparameters (each with its allowed range beside it, from
 `sim.deepracer_files.HYPERPARAMETER_SPECS`) and the reward function (a Python editor with
-the four templates and a Check that runs it on sample params).
+the four templates and a Check that runs it on sample params, maps what it pays on the
+model's track beside the code, and says whether it pays for speed; all in a child process
+with time limits, `sim.reward_probe`).
 
 Problems are shown under the field they belong to and never clear the form; nothing is
 written until every field checks out (see `racer_tui.model_form`). The screen returns the
@@ -13,6 +15,7 @@ saved model's name, or None when cancelled.
 
 from __future__ import annotations
 
+import math
 from typing import ClassVar
 
 from rich.text import Text
@@ -51,6 +54,7 @@ from racer_tui.model_form import (
     taken_names,
     values_of,
 )
+from racer_tui.reward_map_text import map_text
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
@@ -62,10 +66,14 @@ from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder
 from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
 from sim.reward_function import TEMPLATES, RewardFunctionError, template_source
+from sim.reward_lap import LapPay, verdict
+from sim.reward_map import MapOptions, RewardMap
 from sim.track import Track, TrackError
 from sim.track_catalog import resolve_track
 
 ACTION_COLUMNS = ("#", "steering °", "speed m/s", "turn")
+EDITOR_MAP_SPACING = 0.15  # metres: fine enough for a map 40 characters wide
+MAP_BESIDE_CODE_COLUMNS = 110  # narrower, and the code keeps the whole width
 TABS = ("tab-car", "tab-actions", "tab-training", "tab-reward")
 FIELD_TABS = {
     "name": "tab-car",
@@ -112,12 +120,21 @@ class FormRejected(Message):
 
 
 class RewardChecked(Message):
-    """The reward function ran on sample params: its value, or the error (with its line)."""
+    """The reward function ran on sample params: its value, or the error (with its line);
+    with the map of what it pays on the model's track and its laps at two speeds."""
 
-    def __init__(self, value: float | None, error: RewardFunctionError | None) -> None:
+    def __init__(
+        self,
+        value: float | None,
+        error: RewardFunctionError | None,
+        reward_map: RewardMap | None = None,
+        laps: tuple[LapPay, ...] = (),
+    ) -> None:
         super().__init__()
         self.value = value
         self.error = error
+        self.reward_map = reward_map
+        self.laps = laps
 
 
 class TrackPreviewLoaded(Message):
@@ -126,16 +143,26 @@ class TrackPreviewLoaded(Message):
         self.track = track
 
 
-def check_reward(source: str) -> RewardChecked:
-    """Call the function once with DeepRacer-complete sample params, in a child process
-    with a time limit (the racer's code never runs in the app's process)."""
-    from sim.reward_probe import check_reward_source
+def check_reward(source: str, track: str | None = None, top_speed: float = 2.0) -> RewardChecked:
+    """Call the function with DeepRacer-complete sample params and, given the model's
+    track, map what it pays there at its top speed and compare a slow and a fast lap: in
+    a child process with a time limit (the racer's code never runs in the app's process)."""
+    from sim.reward_probe import check_reward_source, editor_check
 
     try:
-        report = check_reward_source(source, REWARD_FILE_NAME)
+        if track is None:
+            report = check_reward_source(source, REWARD_FILE_NAME)
+            return RewardChecked(report.sample_reward, None)
+        checked = editor_check(
+            source,
+            REWARD_FILE_NAME,
+            track,
+            MapOptions(spacing=EDITOR_MAP_SPACING, speed=top_speed),
+            (1.0, top_speed) if top_speed > 1.0 else (top_speed, 4.0),
+        )
     except RewardFunctionError as error:
         return RewardChecked(None, error)
-    return RewardChecked(report.sample_reward, None)
+    return RewardChecked(checked.sample_reward, None, checked.reward_map, checked.laps)
 
 
 def field(label: str, widget: Widget, allowed: str = "", field_id: str = "") -> Vertical:
@@ -358,10 +385,18 @@ class ModelEditorScreen(RacerScreen[str | None]):
                 id="reward-template",
             )
             yield Button("Check (ctrl+r)", id="check-reward", variant="primary")
-        yield TextArea.code_editor(
-            values.reward_source, language="python", id="reward", soft_wrap=False
-        )
+        with Horizontal(id="reward-body"):
+            yield TextArea.code_editor(
+                values.reward_source, language="python", id="reward", soft_wrap=False
+            )
+            yield Static(
+                Text("ctrl+r maps what it pays on the model's track", style="dim"),
+                id="reward-map",
+            )
         yield Static("", id="reward-problem", classes="field-problem")
+
+    def on_resize(self) -> None:
+        self.set_class(self.size.width < MAP_BESIDE_CODE_COLUMNS, "-narrow")
 
     def on_mount(self) -> None:
         if self._load_error:
@@ -538,26 +573,46 @@ class ModelEditorScreen(RacerScreen[str | None]):
     def action_check_reward(self) -> None:
         self.query_one(TabbedContent).active = "tab-reward"
         self._show_reward_result(Text("Checking…", style="dim"))
-        self._check_reward(self.query_one("#reward", TextArea).text)
+        track, speed = self._map_setting()
+        self._check_reward(self.query_one("#reward", TextArea).text, track, speed)
 
     @on(Button.Pressed, "#check-reward")
     def _check_pressed(self) -> None:
         self.action_check_reward()
 
     @work(thread=True, exclusive=True, group="editor-reward", exit_on_error=False)
-    def _check_reward(self, source: str) -> None:
-        self.post_message(check_reward(source))
+    def _check_reward(self, source: str, track: str | None, top_speed: float) -> None:
+        self.post_message(check_reward(source, track, top_speed))
+
+    def _map_setting(self) -> tuple[str | None, float]:
+        """The model's track and top speed as the form holds them (2 m/s if unreadable)."""
+        values = self.values()
+        try:
+            speed = float(
+                values.max_speed if values.action_kind != "CONTINUOUS" else values.speed_high
+            )
+        except ValueError:
+            speed = 2.0
+        speed = min(max(speed, 0.1), 4.0) if math.isfinite(speed) else 2.0
+        return (values.track or None), speed
 
     def on_reward_checked(self, message: RewardChecked) -> None:
         self.last_check = message
         editor = self.query_one("#reward", TextArea)
+        shown_map = self.query_one("#reward-map", Static)
         if message.error is None:
             text = Text("✓ ", style="bold green")
             text.append(f"reward {message.value:.4g} on the sample params ")
             text.append("(a car on a straight at 2 m/s, near the centre line)", style="dim")
+            if message.laps:
+                text.append(f"\n{verdict(list(message.laps))}")
             self._show_reward_result(text)
             editor.set_class(False, "-problem")
+            if message.reward_map is not None:
+                width = max(20, shown_map.size.width or 40)
+                shown_map.update(map_text(message.reward_map, width))
             return
+        shown_map.update(Text("no map: the function failed", style="dim"))
         self._show_reward_result(Text(f"✗ {message.error}", style="bold red"))
         editor.set_class(True, "-problem")
         if message.error.line is not None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 from textual.widgets import DataTable, Input, Select, TabbedContent, TextArea
 
 from racer_tui.app import create_app
@@ -117,6 +118,28 @@ async def test_reward_check_shows_the_value_then_the_error_with_its_line() -> No
         assert "✗" in text and "line 3" in text and "ZeroDivisionError" in text
         assert area.cursor_location == (2, 0)  # the cursor goes to the line at fault
         assert area.text == BROKEN_REWARD  # the racer's code is kept
+
+
+@pytest.mark.parametrize("size", [(120, 40), (80, 24)], ids=["wide", "80x24"])
+async def test_the_check_maps_what_the_function_pays_and_says_if_it_pays_for_speed(
+    size: tuple[int, int],
+) -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=size) as pilot:
+        await settle(pilot)
+        await pilot.press("n", "ctrl+r")
+        await settle(pilot)
+        editor = _editor(app)
+        result = " ".join(painted(editor.query_one("#reward-problem")).split())
+        # The default template pays 1 a step near the centre line: a slow lap earns more.
+        assert "It pays more for a slower lap" in result
+        shown_map = painted(editor.query_one("#reward-map"))
+        if size[0] >= 110:
+            assert "▀" in shown_map and "high: 0.001 to 1 on reinvent_base" in " ".join(
+                shown_map.split()
+            )
+        else:
+            assert shown_map == ""  # the code keeps the width; the line above still says it
 
 
 async def test_a_broken_reward_function_blocks_saving() -> None:
