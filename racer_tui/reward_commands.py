@@ -133,7 +133,7 @@ def _map(args: argparse.Namespace) -> int:
     if args.json:
         print_json(reward_map.to_json())
     elif args.png:
-        write_bytes_atomic(Path(args.png), png_bytes(reward_map))
+        write_bytes_atomic(Path(args.png), png_bytes(reward_map, track=track))
         print(f"Wrote {args.png}.")
     else:
         Console().print(map_text(reward_map, shutil.get_terminal_size().columns))

@@ -192,15 +192,28 @@ def pixel_rows(reward_map: RewardMap) -> list[list[tuple[int, int, int]]]:
     return rows
 
 
-def png_bytes(reward_map: RewardMap, scale: int = 4) -> bytes:
-    """The map as a PNG image, `scale` pixels per cell."""
+BORDER_COLOUR = (170, 170, 170)
+CENTRE_COLOUR = (255, 255, 255)
+START_COLOUR = (230, 30, 30)
+
+
+def png_bytes(reward_map: RewardMap, scale: int = 4, track: Track | None = None) -> bytes:
+    """The map as a PNG image, `scale` pixels per cell; with `track`, its borders, centre
+    line and start line drawn over the colours, one pixel wide."""
     rows = pixel_rows(reward_map)
     height, width = len(rows) * scale, (len(rows[0]) if rows else 0) * scale
-    raw = bytearray()
-    for row in rows:
-        line = b"".join(bytes(pixel) * scale for pixel in row)
-        for _ in range(scale):
-            raw += b"\x00" + line  # filter type 0 per scanline
+    image = np.zeros((height, width, 3), dtype=np.uint8)
+    for r, row in enumerate(rows):
+        image[r * scale : (r + 1) * scale] = np.repeat(np.array(row, dtype=np.uint8), scale, axis=0)
+    if track is not None:
+        for line, rgb in (
+            (track.inner, BORDER_COLOUR),
+            (track.outer, BORDER_COLOUR),
+            (track.center, CENTRE_COLOUR),
+            (track.points[0, 2:6].reshape(2, 2), START_COLOUR),  # across the road at row 0
+        ):
+            _draw(image, reward_map, scale, line, rgb)
+    raw = b"".join(b"\x00" + image[y].tobytes() for y in range(height))  # filter 0 per line
 
     def chunk(kind: bytes, data: bytes) -> bytes:
         body = kind + data
@@ -210,6 +223,31 @@ def png_bytes(reward_map: RewardMap, scale: int = 4) -> bytes:
     return (
         b"\x89PNG\r\n\x1a\n"
         + chunk(b"IHDR", header)
-        + chunk(b"IDAT", zlib.compress(bytes(raw), 9))
+        + chunk(b"IDAT", zlib.compress(raw, 9))
         + chunk(b"IEND", b"")
     )
+
+
+def _draw(
+    image: np.ndarray,
+    reward_map: RewardMap,
+    scale: int,
+    line: np.ndarray,
+    rgb: tuple[int, int, int],
+) -> None:
+    """A polyline in metres onto the image, sampled finer than a pixel."""
+    spacing = reward_map.options.spacing
+    origin_x, origin_y = reward_map.origin
+    rows = len(reward_map.values)
+    points = np.asarray(line, dtype=float)
+    lengths = np.hypot(*np.diff(points, axis=0).T)
+    pixel = spacing / scale
+    samples = [
+        np.linspace(start, end, max(2, int(np.ceil(length / pixel)) + 1))
+        for start, end, length in zip(points[:-1], points[1:], lengths, strict=True)
+    ]
+    xy = np.vstack(samples)
+    column = np.floor(((xy[:, 0] - origin_x) / spacing + 0.5) * scale).astype(int)
+    row = np.floor((rows - 0.5 - (xy[:, 1] - origin_y) / spacing) * scale).astype(int)
+    inside = (row >= 0) & (row < image.shape[0]) & (column >= 0) & (column < image.shape[1])
+    image[row[inside], column[inside]] = rgb

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import struct
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +12,15 @@ import pytest
 
 from racer_tui.cli import main
 from sim.reward_function import load_reward_source, load_template
-from sim.reward_map import MapOptions, RewardMap, compute_map, png_bytes
+from sim.reward_map import (
+    BORDER_COLOUR,
+    CENTRE_COLOUR,
+    START_COLOUR,
+    MapOptions,
+    RewardMap,
+    compute_map,
+    png_bytes,
+)
 from sim.track_catalog import resolve_track
 
 HAIRPIN = resolve_track("hairpin-circuit")
@@ -77,6 +86,32 @@ def test_the_png_is_the_grid_at_four_pixels_a_cell() -> None:
     assert data.startswith(b"\x89PNG\r\n\x1a\n")
     width, height = struct.unpack(">II", data[16:24])
     assert (width, height) == (4 * len(reward_map.values[0]), 4 * len(reward_map.values))
+
+
+def decoded(png: bytes) -> np.ndarray:
+    """The RGB pixels of one of png_bytes's images (one IDAT, filter 0 on every line)."""
+    width, height = struct.unpack(">II", png[16:24])
+    start = png.index(b"IDAT") + 4
+    length = struct.unpack(">I", png[start - 8 : start - 4])[0]
+    raw = zlib.decompress(png[start : start + length])
+    lines = np.frombuffer(raw, dtype=np.uint8).reshape(height, 1 + 3 * width)
+    assert not lines[:, 0].any()
+    return lines[:, 1:].reshape(height, width, 3)
+
+
+def test_the_png_draws_the_road_its_centre_line_and_its_start_line() -> None:
+    reward_map = compute_map(load_template("follow_center_line"), HAIRPIN, COARSE)
+    plain = decoded(png_bytes(reward_map))
+    drawn = decoded(png_bytes(reward_map, track=HAIRPIN))
+    for rgb in (CENTRE_COLOUR, BORDER_COLOUR, START_COLOUR):
+        assert not np.all(plain == rgb, axis=2).any()
+        assert np.all(drawn == rgb, axis=2).sum() > 3
+    # The start line crosses the road at the track's first row.
+    row, column = np.argwhere(np.all(drawn == START_COLOUR, axis=2)).mean(axis=0)
+    x0, y0 = HAIRPIN.center[0]
+    spacing, (ox, oy) = COARSE.spacing, reward_map.origin
+    assert abs(column / 4 - ((x0 - ox) / spacing + 0.5)) < 2
+    assert abs(row / 4 - (len(reward_map.values) - 0.5 - (y0 - oy) / spacing)) < 2
 
 
 def test_the_command_draws_writes_json_and_png_and_refuses_bad_input(
