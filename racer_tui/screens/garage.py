@@ -8,6 +8,7 @@ notification (see `racer_tui.screens.base`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
@@ -35,6 +36,7 @@ from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_tex
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from sim.action_space import ActionSpace
+from sim.deepracer_files import locate_files
 from sim.garage.bundle import bundle_path, export_bundle
 from sim.garage.clone import clone_model
 from sim.garage.deepracer_import import BUNDLE_SUFFIX, import_model
@@ -124,6 +126,30 @@ def import_into_garage(request: ImportRequest) -> ModelImported:
     """Run in a worker: the import itself (ModelError says what is wrong with the source)."""
     result = import_model(Path(request.path).expanduser(), name=request.name)
     return ModelImported(result.folder.name, result.notes)
+
+
+def confirm_someone_elses_code(
+    screen: Screen[Any], request: ImportRequest, then: Callable[[ImportRequest], object]
+) -> None:
+    """A DeepRacer folder brings its author's reward_function.py: importing never runs it,
+    but training will, with the racer's rights, so the racer says yes to that first."""
+    source = Path(request.path).expanduser()
+    if not source.is_dir() or locate_files(source).reward_function is None:
+        then(request)
+        return
+    dialog = ConfirmDialog(
+        f"Import {source.name} with its reward function?",
+        "The folder's reward_function.py is code someone wrote. Importing only reads it; "
+        "training this model runs it, with your rights. If it is not yours, read it first "
+        "(e, Reward function tab) before you train.",
+        confirm_label="Import",
+    )
+
+    def answered(yes: bool | None) -> None:
+        if yes:
+            then(request)
+
+    screen.app.push_screen(dialog, answered)
 
 
 def notify_imported(screen: Screen[Any], message: ModelImported) -> None:
@@ -369,7 +395,7 @@ class GarageScreen(RacerScreen[None]):
 
     def _import_requested(self, request: ImportRequest | None) -> None:
         if request is not None:
-            self._import(request)
+            confirm_someone_elses_code(self, request, self._import)
 
     @work(thread=True, group="garage-change", exit_on_error=False)
     def _import(self, request: ImportRequest) -> None:

@@ -17,7 +17,12 @@ from textual.widgets import Button, Static
 
 from racer_tui.screens.base import ModelAdded, RacerScreen
 from racer_tui.screens.dialogs import ImportDialog, ImportRequest
-from racer_tui.screens.garage import ModelImported, import_into_garage, notify_imported
+from racer_tui.screens.garage import (
+    ModelImported,
+    confirm_someone_elses_code,
+    import_into_garage,
+    notify_imported,
+)
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.widgets.demo_race import DemoRace
 from racer_tui.widgets.footer import RacerFooter
@@ -78,7 +83,7 @@ class WelcomeScreen(RacerScreen[None]):
 
     def _import_requested(self, request: ImportRequest | None) -> None:
         if request is not None:
-            self._import(request)
+            confirm_someone_elses_code(self, request, self._import)
 
     @work(thread=True, group="welcome-import", exit_on_error=False)
     def _import(self, request: ImportRequest) -> None:

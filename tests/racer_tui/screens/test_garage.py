@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 from textual.widgets import DataTable, Input
@@ -115,6 +116,29 @@ async def test_import_the_shared_deepracer_folder(deepracer_dir: Path) -> None:
         shown = painted(detail)
         assert "Evaluations" in shown and "Not evaluated yet" not in shown
         assert "latest trials" in shown
+
+
+async def test_a_folder_with_someone_elses_reward_code_is_imported_only_when_confirmed(
+    deepracer_dir: Path, tmp_path: Path
+) -> None:
+    folder = tmp_path / "from-a-friend"
+    shutil.copytree(deepracer_dir / "drfc-model", folder)
+    (folder / "reward_function.py").write_text(
+        "def reward_function(params):\n    return 1.0\n", encoding="utf-8"
+    )
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        for answer in ("n", "y"):
+            await pilot.press("i")
+            app.screen.query_one("#path", Input).value = str(folder)
+            await pilot.press("enter")
+            await settle(pilot)
+            assert isinstance(app.screen, ConfirmDialog)
+            assert "code someone wrote" in painted(app.screen)
+            await pilot.press(answer)
+            await settle(pilot)
+            assert _names() == ([] if answer == "n" else ["from-a-friend"])
 
 
 async def test_import_of_a_missing_path_is_refused_in_the_dialog(tmp_path: Path) -> None:
