@@ -43,6 +43,10 @@ class Job:
         """The same run at another stage ("Pushing 3/10 records")."""
         return replace(self, what=what)
 
+    def progressed(self, done: float, total: float | None) -> Job:
+        """Progress with its own total (None: not known), as a new stage reports it."""
+        return replace(self, done=done, total=total)
+
     def advanced(self, done: float, total: float | None = None) -> Job:
         return replace(self, done=done, total=self.total if total is None else total)
 

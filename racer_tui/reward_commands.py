@@ -129,7 +129,8 @@ def _map(args: argparse.Namespace) -> int:
         raise MapOptionError(f"--speed must be above 0 and at most {MAX_SPEED:g} m/s.")
     track = resolve_track(args.track)
     source, name = _function(args.function)
-    reward_map = map_reward_source(source, name, track.name, options)
+    # The argument as given: a .npy path is read again by the child, not looked up by name.
+    reward_map = map_reward_source(source, name, args.track, options)
     if args.json:
         print_json(reward_map.to_json())
     elif args.png:
@@ -179,7 +180,7 @@ def _lap(args: argparse.Namespace) -> int:
         raise MapOptionError(f"--speeds must each be from 0.1 to {MAX_SPEED:g} m/s.")
     track = resolve_track(args.track)
     source, name = _function(args.function)
-    pays = lap_pay_of_source(source, name, track.name, tuple(sorted(set(speeds))))
+    pays = lap_pay_of_source(source, name, args.track, tuple(sorted(set(speeds))))
     if args.json:
         print_json({"track": track.name, "laps": [pay.to_json() for pay in pays]})
         return 0

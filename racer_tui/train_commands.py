@@ -218,7 +218,7 @@ def _train(args: argparse.Namespace) -> int:
         raise ModelError(f"--reward-seconds must be more than 0, not {seconds:g}.")
     folder = open_model(args.name)
     check_trainable(folder.metadata())  # before a child process starts
-    if folder.is_training():
+    if folder.is_training() or folder.training_locked():
         raise ModelError(
             f"model {folder.name!r} is already training in another process; stop that one first."
         )

@@ -19,14 +19,23 @@ MAX_NAME_LENGTH = 100
 # code points, and format characters (bidirectional controls, zero-width spaces and joins).
 _NOT_PLAIN = frozenset({"Cc", "Cs", "Zl", "Zp", "Co", "Cn", "Cf"})
 _ZERO_WIDTH_JOINER = "\u200d"
+# Characters that draw nothing though Unicode calls them marks or letters: the combining
+# grapheme joiner, Hangul fillers and the blank braille pattern.
+_BLANK = frozenset("\u034f\u115f\u1160\u3164\uffa0\u2800")
+
+
+def _is_variation_selector(char: str) -> bool:
+    return "\ufe00" <= char <= "\ufe0f"
+
 
 # Letters that look like Latin ones (Cyrillic and Greek), and digits that look like letters.
 _LOOK_ALIKES = str.maketrans(
     {
         **dict(zip("аеорсухіјѕԁһԛԝӏвмнтк", "aeopcyxijsdhqwlbmhtk", strict=True)),
-        **dict(zip("АВЕЗІЈКМНОРСТУХ", "ABE3IJKMHOPCTYX", strict=True)),
+        # Capital I of every script looks like l, as Latin "I" does (mapped below).
+        **dict(zip("АВЕЗІЈКМНОРСТУХ", "ABE3lJKMHOPCTYX", strict=True)),
         **dict(zip("οανρτικυχ", "oavptikux", strict=True)),
-        **dict(zip("ΑΒΕΖΗΙΚΜΝΟΡΤΥΧ", "ABEZHIKMNOPTYX", strict=True)),
+        **dict(zip("ΑΒΕΖΗΙΚΜΝΟΡΤΥΧ", "ABEZHlKMNOPTYX", strict=True)),
         "0": "o",
         "1": "l",
         "I": "l",
@@ -46,6 +55,13 @@ def is_plain_name(text: object) -> bool:
     if not isinstance(text, str) or not text.strip() or len(text) > MAX_NAME_LENGTH:
         return False
     for index, char in enumerate(text):
+        if char in _BLANK:
+            return False
+        if _is_variation_selector(char):
+            # An emoji's presentation selector; after a letter it only hides there.
+            if not (index and unicodedata.category(text[index - 1]) == "So"):
+                return False
+            continue
         if unicodedata.category(char) not in _NOT_PLAIN:
             continue
         if char == _ZERO_WIDTH_JOINER and _joins_symbols(text, index):
@@ -56,6 +72,8 @@ def is_plain_name(text: object) -> bool:
 
 def _joins_symbols(text: str, index: int) -> bool:
     before, after = text[index - 1 : index], text[index + 1 : index + 2]
+    if _is_variation_selector(before) and index >= 2:
+        before = text[index - 2]  # 👁️‍🗨️: the selector belongs to the emoji before it
     return bool(before and after) and all(
         unicodedata.category(char) == "So" for char in before + after
     )

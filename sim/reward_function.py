@@ -103,18 +103,22 @@ class RewardFunction:
 
     def __call__(self, params: RewardParams) -> float:
         limit = reward_limit._ACTIVE  # a process running racer code times every call
+        started = 0.0
         if limit is not None:
-            limit.started = time.monotonic()
+            limit.started = started = time.monotonic()
         try:
             # A shallow copy: the racer's function may add, change or delete keys freely.
             value = self._function(dict(params))
-        except RewardTimeout as error:
-            raise self._timed_out(error) from None
-        except (Exception, SystemExit, KeyboardInterrupt) as error:
-            raise self._raised_error(error) from error
-        finally:
+        except BaseException as error:  # the racer's code may raise anything at all
             if limit is not None:
-                limit.started = 0.0
+                limit.started = 0.0  # first: no interruption may land in this handler
+            if isinstance(error, RewardTimeout):
+                raise self._timed_out(error) from None
+            raise self._raised_error(error) from error
+        if limit is not None:
+            limit.started = 0.0
+            if limit.overran(started):  # it swallowed the interruption and returned later
+                raise self._timed_out(RewardTimeout(limit.seconds))
         # NaN and inf fail this comparison too, so only unusual values take the slow path.
         if type(value) is float and -MAX_ABS_REWARD <= value <= MAX_ABS_REWARD:
             return value
@@ -140,10 +144,12 @@ class RewardFunction:
 
     # --- error paths (never on the hot path) -------------------------------------------
     def _timed_out(self, error: RewardTimeout) -> RewardFunctionError:
+        line = _user_line(error, self._filename)
+        where = " (stopped here)" if line is not None else ""
         return RewardFunctionError(
             self.name,
-            f"reward_function did not return within {error.seconds:g} s (stopped here)",
-            _user_line(error, self._filename),
+            f"reward_function did not return within {error.seconds:g} s{where}",
+            line,
             advice="make it return faster (no loops that wait or never end)",
         )
 
@@ -345,21 +351,33 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
     module = types.ModuleType(_MODULE_NAME)
     module.__file__ = filename
     limit = reward_limit._ACTIVE  # module-level code is the racer's too
+    began = 0.0
     if limit is not None:
         limit.begin()
+        began = limit.started
     try:
         exec(code, module.__dict__)
     except RewardTimeout as error:
+        if limit is not None:
+            limit.end()
         problem = f"loading the file did not finish within {error.seconds:g} s (stopped here)"
         line = _user_line(error, filename)
         raise RewardFunctionError(display, problem, line, "fix the file and try again") from None
-    except (Exception, SystemExit, KeyboardInterrupt) as error:
+    except BaseException as error:  # the racer's module-level code may raise anything
+        if limit is not None:
+            limit.end()
         problem = f"loading the file raised {_describe_exception(error)}"
         line = _user_line(error, filename)
         raise RewardFunctionError(display, problem, line, "fix the file and try again") from error
     finally:
         if limit is not None:
             limit.end()
+    if limit is not None and limit.overran(began):  # it swallowed the interruption
+        raise RewardFunctionError(
+            display,
+            f"loading the file did not finish within {limit.seconds:g} s",
+            advice="fix the file and try again",
+        )
 
     function = module.__dict__.get("reward_function")
     if function is None:

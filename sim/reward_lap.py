@@ -62,12 +62,13 @@ def lap_rewards(reward: RewardFunction, track: Track, speeds: tuple[float, ...])
 def verdict(pays: list[LapPay]) -> str:
     """One sentence: does the function pay more for a faster lap?"""
     slow, fast = pays[0], pays[-1]
-    if fast.total > slow.total * 1.01:
+    tolerance = 0.01 * max(abs(slow.total), abs(fast.total))
+    if fast.total > slow.total + tolerance:
         return (
             f"It pays more for a faster lap ({fast.total:.4g} at {fast.speed:g} m/s against "
             f"{slow.total:.4g} at {slow.speed:g} m/s): speed is rewarded."
         )
-    if fast.total < slow.total * 0.99:
+    if fast.total < slow.total - tolerance:
         return (
             f"It pays more for a slower lap ({slow.total:.4g} at {slow.speed:g} m/s against "
             f"{fast.total:.4g} at {fast.speed:g} m/s): a car trained on it learns to drive "

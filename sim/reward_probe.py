@@ -1,5 +1,7 @@
-"""Run a racer's reward function where it cannot hurt: in a child process, with a time
-limit on every call and a deadline on the whole check.
+"""Run a racer's reward function away from the caller: in a child process, with a time
+limit on every call and a deadline on the whole check. The child is no sandbox (it runs
+with the racer's rights, as training does); it keeps the caller's process from running,
+hanging on or crashing with the code.
 
 `racer-tui reward check` and the model editor's Check ask `check_reward_source`: the
 child (`python -m sim.reward_probe`) loads the code, calls it on DeepRacer-complete sample
@@ -7,7 +9,8 @@ params and, when a track is given, on every step of the reference driver's lap, 
 answers with one JSON line. `map_reward_source` asks the child for a reward map instead
 (`sim.reward_map`). Whatever the code does (loops forever, sleeps, prints, exits
 its process, raises KeyboardInterrupt), the caller gets a `ProbeReport` or a
-`RewardFunctionError` in one sentence, and its own process never ran a line of it.
+`RewardFunctionError` in one sentence, and its own process never ran a line of it. (Code
+that means to can still write a false answer: the check is for the racer's own use.)
 """
 
 from __future__ import annotations
@@ -148,9 +151,11 @@ def _ask_child(
 ) -> dict[str, Any]:
     try:
         done = subprocess.run(
-            [sys.executable, "-m", "sim.reward_probe"],
+            # -P: a `sim` folder in the working directory must not stand in for ours.
+            [sys.executable, "-P", "-m", "sim.reward_probe"],
             input=json.dumps(request).encode("utf-8"),
-            capture_output=True,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,  # the function's prints: unbounded, and not ours
             timeout=deadline,
             check=False,
             env={**os.environ, "PYTHONUNBUFFERED": "1"},
@@ -164,18 +169,35 @@ def _ask_child(
         ) from None
     answer = _answer(done.stdout)
     if answer is None:
+        if done.returncode < 0:
+            raise RewardFunctionError(
+                name,
+                f"the check's process was killed (signal {-done.returncode}) before it answered",
+                advice="if it ran out of memory, make the function use less; then try again",
+            )
         raise RewardFunctionError(
             name,
             f"the function ended its own process (exit code {done.returncode}) instead of "
             "returning a reward",
             advice="remove the exit() or os._exit() call",
         )
-    if "error" in answer:
-        error = answer["error"]
+    try:
+        if "error" in answer:
+            error = answer["error"]
+            raise RewardFunctionError(
+                str(error["display"]),
+                str(error["problem"]),
+                error["line"] if isinstance(error["line"], int) else None,
+                str(error["advice"]),
+            )
+        return dict(answer["ok"])
+    except (KeyError, TypeError, ValueError):
         raise RewardFunctionError(
-            error["display"], error["problem"], error["line"], error["advice"]
-        )
-    return dict(answer["ok"])
+            name,
+            "the check's answer was not in the form racer-tui writes (did the function write "
+            "to the process's outputs?)",
+            advice="remove the code that writes there and try again",
+        ) from None
 
 
 def _answer(stdout: bytes) -> dict[str, Any] | None:
@@ -263,6 +285,12 @@ def _reference_lap_rewards(reward: Any, track: Any) -> list[float]:
     return rewards
 
 
+def _error_answer(
+    display: str, problem: str, advice: str, line: int | None = None
+) -> dict[str, Any]:
+    return {"error": {"display": display, "problem": problem, "line": line, "advice": advice}}
+
+
 def main() -> int:
     # The answer goes to the real stdout; anything the racer's code prints goes to stderr,
     # so a print() in the function cannot be taken for the answer.
@@ -273,27 +301,34 @@ def main() -> int:
 
     from sim import reward_limit
 
-    reward_limit.install(float(request.get("seconds", DEFAULT_SECONDS)))
+    limit = reward_limit.install(float(request.get("seconds", DEFAULT_SECONDS)))
+
+    def stuck(limit_seconds: float) -> None:
+        answer_stream.write(
+            json.dumps(
+                _error_answer(
+                    str(request.get("name")),
+                    f"reward_function did not return within {limit_seconds:g} s and would not "
+                    "be stopped (does it catch every exception?)",
+                    "make it return faster",
+                )
+            )
+            + "\n"
+        )
+        answer_stream.flush()
+        os._exit(0)
+
+    limit.on_stuck = stuck
     try:
         answer = _probe(request)
     except RewardFunctionError as error:
-        answer = {
-            "error": {
-                "display": error.display,
-                "problem": error.problem,
-                "line": error.line,
-                "advice": error.advice,
-            }
-        }
-    except (Exception, KeyboardInterrupt) as error:  # the track, or an interrupt
-        answer = {
-            "error": {
-                "display": str(request.get("name")),
-                "problem": f"the check could not run ({type(error).__name__}: {error})",
-                "line": None,
-                "advice": "fix that and try again",
-            }
-        }
+        answer = _error_answer(error.display, error.problem, error.advice, error.line)
+    except BaseException as error:  # the track, or an interrupt
+        answer = _error_answer(
+            str(request.get("name")),
+            f"the check could not run ({type(error).__name__}: {error})",
+            "fix that and try again",
+        )
     answer_stream.write(json.dumps(answer) + "\n")
     answer_stream.flush()
     return 0

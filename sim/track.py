@@ -344,7 +344,8 @@ def _check_road_gaps(points: FloatArray, label: str) -> None:
     close = separate & (gaps < MIN_ROAD_GAP)
     if close.any():
         worst = int(np.argmin(np.where(close, gaps, np.inf)))
-        a, b = sorted((int(kept[i[worst]]), int(kept[j[worst]])))  # the file's rows
+        # Waypoints as numbered after repeated centre points are dropped.
+        a, b = sorted((int(kept[i[worst]]), int(kept[j[worst]])))
         raise TrackError(
             f"{label}: the road passes within {max(gaps[worst], 0.0):.2f} m of itself between "
             f"waypoints {a} and {b}; separate parts of the road must be at least "

@@ -140,8 +140,8 @@ def confirm_someone_elses_code(
     dialog = ConfirmDialog(
         f"Import {source.name} with its reward function?",
         "The folder's reward_function.py is code someone wrote. Importing only reads it; "
-        "training this model runs it, with your rights. If it is not yours, read it first "
-        "(e, Reward function tab) before you train.",
+        "training this model, or Check (ctrl+r) in the editor, runs it with your rights. If "
+        "it is not yours, read it first (e, Reward function tab) before you run it.",
         confirm_label="Import",
     )
 

@@ -135,6 +135,7 @@ class RewardChecked(Message):
         self.error = error
         self.reward_map = reward_map
         self.laps = laps
+        self.number = 0  # which Check this answers (a thread worker cannot be cancelled)
 
 
 class TrackPreviewLoaded(Message):
@@ -201,6 +202,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
         self.initial: FormValues | None = None
         self.saving = False
         self.last_check: RewardChecked | None = None
+        self._checks = 0  # Checks asked for; only the newest one's answer is shown
         self._load_error = ""
         self._by_id: dict[str, Widget] = {}
         self._actions_pending = False
@@ -574,15 +576,18 @@ class ModelEditorScreen(RacerScreen[str | None]):
         self.query_one(TabbedContent).active = "tab-reward"
         self._show_reward_result(Text("Checking…", style="dim"))
         track, speed = self._map_setting()
-        self._check_reward(self.query_one("#reward", TextArea).text, track, speed)
+        self._checks += 1
+        self._check_reward(self.query_one("#reward", TextArea).text, track, speed, self._checks)
 
     @on(Button.Pressed, "#check-reward")
     def _check_pressed(self) -> None:
         self.action_check_reward()
 
     @work(thread=True, exclusive=True, group="editor-reward", exit_on_error=False)
-    def _check_reward(self, source: str, track: str | None, top_speed: float) -> None:
-        self.post_message(check_reward(source, track, top_speed))
+    def _check_reward(self, source: str, track: str | None, top_speed: float, number: int) -> None:
+        checked = check_reward(source, track, top_speed)
+        checked.number = number
+        self.post_message(checked)
 
     def _map_setting(self) -> tuple[str | None, float]:
         """The model's track and top speed as the form holds them (2 m/s if unreadable)."""
@@ -597,6 +602,8 @@ class ModelEditorScreen(RacerScreen[str | None]):
         return (values.track or None), speed
 
     def on_reward_checked(self, message: RewardChecked) -> None:
+        if message.number != self._checks:
+            return  # an earlier Check that finished late: the newer one's answer stands
         self.last_check = message
         editor = self.query_one("#reward", TextArea)
         shown_map = self.query_one("#reward-map", Static)
@@ -611,6 +618,8 @@ class ModelEditorScreen(RacerScreen[str | None]):
             if message.reward_map is not None:
                 width = max(20, shown_map.size.width or 40)
                 shown_map.update(map_text(message.reward_map, width))
+            else:
+                shown_map.update(Text("no map: choose a track on the Car tab", style="dim"))
             return
         shown_map.update(Text("no map: the function failed", style="dim"))
         self._show_reward_result(Text(f"✗ {message.error}", style="bold red"))

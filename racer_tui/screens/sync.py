@@ -395,7 +395,7 @@ class SyncScreen(RacerScreen[bool]):
             return
         of = f"/{total}" if total is not None else ""
         doing = f"{direction.capitalize()}ing {done}{of} records"
-        self._show_job(self.job.doing(doing).advanced(done, total))
+        self._show_job(self.job.doing(doing).progressed(done, total))  # a pull: its own total
 
     def on_sync_finished(self, message: SyncFinished) -> None:
         summary = message.summary

@@ -461,6 +461,16 @@ class TrainingScreen(RacerScreen[None]):
             self.figures[request.model] = figures
             if request.model == self.watched:
                 self.query_one(TrainingCharts).show(figures, request.model)
+            if folder.is_training() or folder.training_locked():
+                # Started elsewhere a moment ago (the command line): its log is not ours to
+                # empty; the next tick follows that run here instead.
+                self.notify(
+                    f"{request.model} is already training in another process; it is shown "
+                    "here as it runs.",
+                    severity="warning",
+                    markup=False,
+                )
+                return
             log = folder.training_log
             log.write_bytes(b"")  # a new run, a new log
             stderr = tempfile.TemporaryFile()  # noqa: SIM115 - closed when the run ends

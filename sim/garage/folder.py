@@ -186,6 +186,21 @@ class ModelFolder:
         """Locked (flock) by the process training this model, for as long as it lives."""
         return self.path / TRAINING_LOCK_FILE
 
+    def training_locked(self) -> bool:
+        """Whether a process holds the training lock now (the state file may lag behind:
+        a training that has just started has the lock before it writes its state)."""
+        import fcntl
+
+        try:
+            with self.training_lock_file.open("a+b") as handle:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                fcntl.flock(handle, fcntl.LOCK_UN)
+        except BlockingIOError:
+            return True
+        except OSError:
+            return False
+        return False
+
     @property
     def training_state_file(self) -> Path:
         """Written atomically by the trainer: {"state", "pid", "started_at", "updated_at",

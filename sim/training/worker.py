@@ -131,8 +131,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USER_ERROR
     # Every call of the racer's reward function (and loading its file) is timed: one that
     # hangs fails the training in a sentence naming its line, instead of hanging it.
-    reward_limit.install(seconds)
+    limit = reward_limit.install(seconds)
     emit = EventWriter(sys.stdout, stop)
+
+    def stuck(limit_seconds: float) -> None:
+        # From the watchdog thread: the call swallowed every interruption, so the run
+        # cannot go on; its last checkpoint stays on disk.
+        emit(
+            _failed(
+                f"the reward function did not return within {limit_seconds:g} s and would "
+                "not be stopped (does it catch every exception?); make it return faster"
+            )
+        )
+        os._exit(EXIT_FAILED)
+
+    limit.on_stuck = stuck
     warnings.filterwarnings("ignore")  # library chatter must not reach the racer
     try:
         return _train(args, emit, stop)

@@ -59,3 +59,10 @@ def test_a_pulled_result_whose_racer_hides_characters_is_not_read() -> None:
     data["racer"] = f"bob{RIGHT_TO_LEFT_OVERRIDE}"
     with pytest.raises(ResultError, match="invisible characters"):
         RaceResult.from_json(data)
+
+
+def test_capital_i_of_any_script_and_blank_letters_are_caught() -> None:
+    assert look_alike_key("Іan") == look_alike_key("Ian") == look_alike_key("lan")
+    for hidden in ("ada\u034f", "ada\ufe0f", "\u3164ada", "ada\u2800"):
+        assert not is_plain_name(hidden), repr(hidden)
+    assert is_plain_name("❤️ ada")  # an emoji's own presentation selector stays

@@ -159,6 +159,21 @@ def test_user_errors_are_one_sentence_and_exit_code_2(
     assert len(err.strip().splitlines()) == 1
 
 
+def test_a_model_training_elsewhere_keeps_its_log(
+    capsys: pytest.CaptureFixture[str], model: ModelFolder
+) -> None:
+    # Another process holds the training lock but has not written its state yet: a second
+    # `train` must not empty the log the first one (and the app) are writing.
+    import fcntl
+
+    model.training_log.write_text('{"type": "started"}\n')
+    with model.training_lock_file.open("a+b") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        code, _out, err = run_cli(capsys, "train", "tiny", "--minutes", "0.02")
+    assert code == 2 and "already training in another process" in err
+    assert model.training_log.read_text() == '{"type": "started"}\n'
+
+
 def test_the_commands_do_not_import_torch_in_the_cli_process() -> None:
     report = _import_report(["racer_tui.train_commands", "sim.training.launcher"])
     assert all(heavy == [] for heavy in report.values()), report

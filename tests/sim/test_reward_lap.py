@@ -56,3 +56,12 @@ def test_the_command_prints_the_laps_and_refuses_bad_speeds(
     assert "learns to drive slowly" in capsys.readouterr().out
     assert main([*args, "--speeds", "fast"]) == 2
     assert "--speeds must be m/s separated by commas" in capsys.readouterr().err
+
+
+def test_a_function_that_only_costs_is_judged_by_its_totals_sign_and_all() -> None:
+    from sim.reward_lap import LapPay
+
+    costlier_fast = [LapPay(1.0, 100, -10.0), LapPay(4.0, 25, -10.5)]
+    assert "pays more for a slower lap" in verdict(costlier_fast)
+    cheaper_fast = [LapPay(1.0, 100, -10.0), LapPay(4.0, 25, -2.0)]
+    assert "pays more for a faster lap" in verdict(cheaper_fast)

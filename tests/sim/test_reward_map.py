@@ -134,6 +134,11 @@ def test_the_command_draws_writes_json_and_png_and_refuses_bad_input(
     assert "▀" in drawn and "high: 0.001 to 1 on hairpin-circuit" in drawn
     assert main(["reward", "map", "follow_center_line", "--heading", "north"]) == 2
     assert "--heading must be 'track' or fixed:DEGREES" in capsys.readouterr().err
+    # A track file of one's own is mapped from that file, not from the catalogue's name.
+    mine = tmp_path / "my-hairpin.npy"
+    np.save(mine, HAIRPIN.points)
+    assert main(["reward", "map", "follow_center_line", "--track", str(mine), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["track"] == "my-hairpin"
     hangs = tmp_path / "hangs.py"
     hangs.write_text("def reward_function(params):\n    while True:\n        pass\n")
     assert main(["reward", "map", str(hangs), "--track", "hairpin-circuit"]) == 2

@@ -47,14 +47,25 @@ def test_a_file_that_hangs_while_loading_is_stopped() -> None:
     assert "line 1: loading the file did not finish within 0.5 s" in failure(source)
 
 
-def test_code_that_cannot_be_interrupted_meets_the_checks_deadline() -> None:
-    # Signals blocked: only the parent's deadline can end it.
+def test_code_that_blocks_the_interruption_is_ended_by_the_watchdog() -> None:
     source = (
         "import signal\n"
         "signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGALRM})\n"
         "def reward_function(params):\n"
         "    while True:\n"
         "        pass\n"
+    )
+    assert "did not return within 0.5 s and would not be stopped" in failure(source)
+
+
+def test_code_that_holds_the_interpreter_meets_the_checks_deadline() -> None:
+    # A catastrophic regular expression runs in C holding the interpreter: neither the
+    # signal nor the watchdog thread gets a turn, so only the parent's deadline ends it.
+    source = (
+        "import re\n"
+        "def reward_function(params):\n"
+        "    re.match(r'(a+)+$', 'a' * 60 + 'b')\n"
+        "    return 1.0\n"
     )
     message = failure(source, deadline=5.0)
     assert "the check did not finish within 5 s, so it was stopped" in message
@@ -92,3 +103,45 @@ def test_the_static_check_reads_the_code_without_running_it(tmp_path: Path) -> N
         check_reward_code("def reward_function(params, extra):\n    return 1.0\n", "reward.py")
     check_reward_code("def reward_function(params, scale=2):\n    return 1.0\n", "reward.py")
     check_reward_code("reward_function = lambda params: 1.0\n", "reward.py")
+
+
+def test_a_function_that_swallows_its_interruption_is_still_stopped() -> None:
+    # A bare `except:` catches the interruption; the call is failed when it returns...
+    once = (
+        "import time\n"
+        "def reward_function(params):\n"
+        "    try:\n"
+        "        time.sleep(30)\n"
+        "    except BaseException:\n"
+        "        pass\n"
+        "    return 1.0\n"
+    )
+    assert "reward_function did not return within 0.5 s" in failure(once)
+    # ...and one that never returns is ended after four limits, in one sentence.
+    forever = (
+        "import time\n"
+        "def reward_function(params):\n"
+        "    while True:\n"
+        "        try:\n"
+        "            time.sleep(0.05)\n"
+        "        except BaseException:\n"
+        "            pass\n"
+    )
+    assert "would not be stopped (does it catch every exception?)" in failure(forever)
+
+
+def test_any_exception_the_function_raises_is_its_error() -> None:
+    source = "def reward_function(params):\n    raise GeneratorExit('odd')\n"
+    assert "line 2: reward_function raised GeneratorExit: odd" in failure(source)
+
+
+def test_a_forged_or_killed_answer_is_said_for_what_it_is() -> None:
+    forged = (
+        "import os\n"
+        "def reward_function(params):\n"
+        "    os.write(3, b'{\"ok\": 5}\\n')\n"
+        "    os._exit(0)\n"
+    )
+    assert "the check's answer was not in the form racer-tui writes" in failure(forged)
+    killed = "import os\ndef reward_function(params):\n    os.kill(os.getpid(), 9)\n"
+    assert "the check's process was killed (signal 9)" in failure(killed)

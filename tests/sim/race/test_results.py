@@ -285,3 +285,11 @@ def test_no_lap_can_beat_the_shortest_loop_at_top_speed() -> None:
         floor = fastest_possible_lap(track)
         assert floor == pytest.approx(shortest_loop_metres(track) / 4.0)
         assert reference_lap(track).lap_time > floor  # honest laps are never refused
+
+
+def test_a_rules_file_may_merge_an_anchor(tmp_path: Path) -> None:
+    merged = tmp_path / "merged.yaml"
+    merged.write_text("base: &base\n  penalty_seconds: 3\nrules:\n  <<: *base\n")
+    from sim.strict_yaml import load_data
+
+    assert load_data(merged.read_text())["rules"] == {"penalty_seconds": 3}
