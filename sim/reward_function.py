@@ -103,26 +103,37 @@ class RewardFunction:
 
     def __call__(self, params: RewardParams) -> float:
         limit = reward_limit._ACTIVE  # a process running racer code times every call
-        started = 0.0
         if limit is not None:
-            limit.started = started = time.monotonic()
-        try:
-            # A shallow copy: the racer's function may add, change or delete keys freely.
-            value = self._function(dict(params))
-        except BaseException as error:  # the racer's code may raise anything at all
-            if limit is not None:
-                limit.started = 0.0  # first: no interruption may land in this handler
-            if isinstance(error, RewardTimeout):
-                raise self._timed_out(error) from None
-            raise self._raised_error(error) from error
-        if limit is not None:
-            limit.started = 0.0
-            if limit.overran(started):  # it swallowed the interruption and returned later
-                raise self._timed_out(RewardTimeout(limit.seconds))
+            value = self._timed_call(limit, params)
+        else:
+            try:
+                # A shallow copy: the racer's function may add, change or delete keys.
+                value = self._function(dict(params))
+            except BaseException as error:  # the racer's code may raise anything at all
+                raise self._raised_error(error) from error
         # NaN and inf fail this comparison too, so only unusual values take the slow path.
         if type(value) is float and -MAX_ABS_REWARD <= value <= MAX_ABS_REWARD:
             return value
         return self._checked(value, params)
+
+    def _timed_call(self, limit: reward_limit.CallLimit, params: RewardParams) -> object:
+        started = limit.started = time.monotonic()
+        try:
+            try:
+                value = self._function(dict(params))
+                limit.started = 0.0  # from here no interruption can land
+            except RewardTimeout as error:
+                limit.started = 0.0
+                raise self._timed_out(error) from None
+            except BaseException as error:  # the racer's code may raise anything at all
+                limit.started = 0.0
+                raise self._raised_error(error) from error
+        except RewardTimeout as late:  # landed in a handler above before it cleared the timer
+            limit.started = 0.0
+            raise self._timed_out(late) from None
+        if limit.fired == started:  # it swallowed the interruption and returned later
+            raise self._timed_out(RewardTimeout(limit.seconds))
+        return value
 
     def __repr__(self) -> str:
         return f"RewardFunction({self.name!r})"

@@ -8,7 +8,7 @@ thread with a signal when a call runs longer than the limit. The interrupted cal
 `RewardTimeout` from inside the racer's code, so the error names the line it was running.
 
 The cost on the hot path (about 30,000 calls a second in training) is one clock read and
-a few attribute reads and writes per call (under 200 ns); the watchdog wakes a few times
+a few attribute reads and writes per call (about 300 ns); the watchdog wakes a few times
 per limit. A call that swallows the interruption (`except:`) is interrupted again at every
 look and failed when it returns; one still running STUCK_AFTER_LIMITS limits on, or that
 blocks signals or spins inside C code, ends its process through `on_stuck`; and the
