@@ -95,10 +95,9 @@ def map_grid(track: Track, spacing: float) -> tuple[np.ndarray, np.ndarray, np.n
     """Cell centres (x, y arrays of the grid's shape) and which cells the map covers: the
     road and MARGIN metres off it."""
     points = track.points
-    low_x = min(points[:, 0].min(), points[:, 2].min(), points[:, 4].min()) - MARGIN
-    low_y = min(points[:, 1].min(), points[:, 3].min(), points[:, 5].min()) - MARGIN
-    high_x = max(points[:, 0].max(), points[:, 2].max(), points[:, 4].max()) + MARGIN
-    high_y = max(points[:, 1].max(), points[:, 3].max(), points[:, 5].max()) + MARGIN
+    xs_all, ys_all = points[:, 0::2], points[:, 1::2]  # centre, inner and outer lines
+    low_x, high_x = xs_all.min() - MARGIN, xs_all.max() + MARGIN
+    low_y, high_y = ys_all.min() - MARGIN, ys_all.max() + MARGIN
     columns = max(1, math.ceil((high_x - low_x) / spacing))
     rows = max(1, math.ceil((high_y - low_y) / spacing))
     if rows * columns > MAX_CELLS:

@@ -51,8 +51,7 @@ def check_reward_source(
 ) -> ProbeReport:
     """Run the code named `name` (a file path or a template's file name) in a child
     process; raise `RewardFunctionError` for anything wrong with it."""
-    request = {"source": source, "name": name, "track": track, "seconds": seconds}
-    ok = _ask_child(request, name, seconds, deadline)
+    ok = _ask_child("check", source, name, seconds, deadline, track=track)
     return ProbeReport(float(ok["sample_reward"]), ok["track"], tuple(ok["lap_rewards"]))
 
 
@@ -75,15 +74,8 @@ def editor_check(
     seconds: float = DEFAULT_SECONDS,
     deadline: float = CHECK_DEADLINE_SECONDS,
 ) -> EditorCheck:
-    request = {
-        "mode": "editor",
-        **_map_request(track, options),
-        "speeds": list(speeds),
-        "source": source,
-        "name": name,
-        "seconds": seconds,
-    }
-    ok = _ask_child(request, name, seconds, deadline)
+    extra = {**_map_request(track, options), "speeds": list(speeds)}
+    ok = _ask_child("editor", source, name, seconds, deadline, **extra)
     return EditorCheck(
         float(ok["sample_reward"]), RewardMap.from_json(ok["map"]), _laps(ok["laps"])
     )
@@ -114,14 +106,8 @@ def map_reward_source(
     deadline: float = CHECK_DEADLINE_SECONDS,
 ) -> RewardMap:
     """What the code pays over `track` (see sim.reward_map), computed in a child process."""
-    request = {
-        "mode": "map",
-        "source": source,
-        "name": name,
-        "seconds": seconds,
-        **_map_request(track, options),
-    }
-    return RewardMap.from_json(_ask_child(request, name, seconds, deadline)["map"])
+    ok = _ask_child("map", source, name, seconds, deadline, **_map_request(track, options))
+    return RewardMap.from_json(ok["map"])
 
 
 def lap_pay_of_source(
@@ -135,20 +121,15 @@ def lap_pay_of_source(
 ) -> list[LapPay]:
     """What the code pays for one lap of the centre line at each speed (sim.reward_lap),
     computed in a child process."""
-    request = {
-        "mode": "lap",
-        "source": source,
-        "name": name,
-        "track": track,
-        "seconds": seconds,
-        "speeds": list(speeds),
-    }
-    return list(_laps(_ask_child(request, name, seconds, deadline)["laps"]))
+    ok = _ask_child("lap", source, name, seconds, deadline, track=track, speeds=list(speeds))
+    return list(_laps(ok["laps"]))
 
 
 def _ask_child(
-    request: dict[str, Any], name: str, seconds: float, deadline: float
+    mode: str, source: str, name: str, seconds: float, deadline: float, **extra: Any
 ) -> dict[str, Any]:
+    """The child's answer to one request (its "ok" part), or RewardFunctionError."""
+    request = {"mode": mode, "source": source, "name": name, "seconds": seconds, **extra}
     try:
         done = subprocess.run(
             # -P: a `sim` folder in the working directory must not stand in for ours.
