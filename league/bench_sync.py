@@ -34,10 +34,13 @@ import psutil
 
 from league.bench import fill
 from league.leaderboard import Filters, leaderboard
+from league.records import SHARED_TABLES
 from league.store import League, open_league
 from league.sync.engine import pull, push, store_key
 from league.sync.outgoing import count_unsent
 from league.sync.stores import open_store
+from league.trust.keys import SigningKey
+from league.trust.membership import found_league
 
 TARGETS_S = {"dir": 10.0, "dynamodb": 30.0}
 
@@ -87,9 +90,8 @@ def _board(league: League) -> list[tuple[Any, ...]]:
 
 
 def _shared_records(league: League) -> int:
-    tables = ("racers", "tracks", "seasons", "nights", "night_closures", "submissions", "races")
     total = 0
-    for table in tables:
+    for table in SHARED_TABLES:
         row = league.query_one(f"SELECT count(*) FROM {table}")
         total += int(row[0]) if row else 0
     return total
@@ -124,16 +126,21 @@ def bench_store(
             nights=2,
             racers_per_night=10,
         )
+        # The source league is the organiser's: its key founds the league, so the copy
+        # accepts every record it signs. A key of its own: the bench never touches the
+        # racer's data directory.
+        signing = SigningKey.generate()
+        found_league(source, signing)
         records = _shared_records(source)
         clock = _Clock(server or Server(""))
         timed: dict[str, dict[str, float]] = {"push": {}, "again": {}, "pull": {}}
         with open_store(url) as store:
             store.init()
             with clock.measure(timed["push"]):
-                pushed = push(source, store, key)
+                pushed = push(source, store, key, signing_key=signing)
             considered = count_unsent(source, key)
             with clock.measure(timed["again"]):
-                again = push(source, store, key)
+                again = push(source, store, key, signing_key=signing)
         # A fresh connection, as another racer would have.
         with open_store(url) as store, clock.measure(timed["pull"]):
             pulled = pull(copy, store, key)

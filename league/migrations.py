@@ -378,12 +378,41 @@ CREATE TABLE board (
 ) WITHOUT ROWID
 """
 
+# Version 6: signed results (league.trust). The roster is a shared table: one row per act
+# (found, propose, admit, retire, revoke), whose signer is named in `signed_by`. Every
+# record's seal (made here at push, or pulled) is kept in sync_seals so it travels with
+# the record to any other store. A pulled record the roster does not allow is quarantined
+# with the whole record in `held`, and tried again when the roster changes.
+SIGNED_RESULTS = """
+CREATE TABLE roster (
+    id TEXT PRIMARY KEY,
+    action TEXT NOT NULL,
+    public_key TEXT NOT NULL,
+    racer TEXT COLLATE NOCASE,
+    role TEXT,
+    signed_by TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE TABLE sync_seals (
+    kind TEXT NOT NULL,
+    record_id TEXT NOT NULL,
+    version INTEGER NOT NULL,
+    content_hash TEXT NOT NULL,
+    signer TEXT NOT NULL,
+    signature TEXT NOT NULL,
+    PRIMARY KEY (kind, record_id, version, content_hash)
+) WITHOUT ROWID;
+ALTER TABLE sync_quarantine ADD COLUMN held TEXT
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
     Migration("sync bookkeeping", _script(SYNC_TABLES)),
     Migration("recent races index", _script(RECENT_RACES)),
     Migration("physics of results", _script(PHYSICS), True),
+    Migration("signed results", _script(SIGNED_RESULTS)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

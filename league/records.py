@@ -35,6 +35,7 @@ class Children:
 
 # Shared tables, parents before the rows that refer to them (the order to insert in).
 SHARED_TABLES: dict[str, Children | None] = {
+    "roster": None,  # first: whether a pulled record is allowed depends on it
     "racers": None,
     "tracks": None,
     "seasons": None,

@@ -18,6 +18,7 @@ from rich.table import Table
 from rich.text import Text
 
 from league.errors import LeagueError
+from racer_tui import key_commands
 from racer_tui.output import print_json, print_table
 from sim.deepracer_files import DeepRacerFileError
 from sim.plural import counted
@@ -155,7 +156,7 @@ def _register_season(commands: Parsers, db: argparse.ArgumentParser) -> None:
 
 
 def _register_racer(commands: Parsers, db: argparse.ArgumentParser) -> None:
-    racer = commands.add_parser("racer", help="racers: add, list, rename")
+    racer = commands.add_parser("racer", help="racers: add, list, rename; signing keys")
     actions = racer.add_subparsers(dest="racer_command", metavar="ACTION", required=True)
     add = actions.add_parser("add", parents=[db], help="add a racer")
     add.add_argument("name")
@@ -168,6 +169,7 @@ def _register_racer(commands: Parsers, db: argparse.ArgumentParser) -> None:
     rename.add_argument("new_display_name")
     rename.add_argument("--by", required=True, help="who makes the change")
     rename.add_argument("--reason", default="new display name")
+    key_commands.register(actions, db)
 
 
 def _register_correct(commands: Parsers, db: argparse.ArgumentParser) -> None:
@@ -636,6 +638,8 @@ def _racer(league: League, args: argparse.Namespace) -> int:
     from league.racers import HEX_COLOUR
 
     action = args.racer_command
+    if action in key_commands.ACTIONS:
+        return key_commands.run(league, args)
     if action == "add":
         racer = racers.add_racer(
             league, args.name, display_name=args.display_name, colour=args.colour

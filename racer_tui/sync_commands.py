@@ -68,6 +68,7 @@ def register(commands: Parsers) -> None:
     )
     init.add_argument("url", metavar="STORE", help="dir:PATH or dynamodb://TABLE?region=R")
     init.add_argument("--bundles", metavar="S3URL", help="also create this bundle bucket")
+    _common(init)
     use = actions.add_parser("set", help="save the store this league syncs with")
     use.add_argument("url", metavar="STORE", help="dir:PATH or dynamodb://TABLE?region=R")
     _common(use, bundles=True)
@@ -82,6 +83,8 @@ def register(commands: Parsers) -> None:
 _INIT_HELP = (
     "Create the store: for dir:PATH the folder (its parent must exist) and its marker file; "
     "for dynamodb:// the table and its index (needs credentials allowed to create tables). "
+    "This machine's signing key becomes the league's organiser key: only results signed by "
+    "keys it admits (`racer-tui racer admit NAME`) reach anyone's leaderboard. "
     "Safe to run again."
 )
 
@@ -120,12 +123,11 @@ def _common(
 
 def run(args: argparse.Namespace) -> int:
     action = getattr(args, "sync_command", None)
-    if action == "init":
-        return _init(args)
     from league.store import open_league
 
     handlers: dict[str | None, Callable[[League, argparse.Namespace], int]] = {
         None: _sync,
+        "init": _init,
         "set": _set,
         "status": _status,
         "fetch-bundle": _fetch,
@@ -137,18 +139,22 @@ def run(args: argparse.Namespace) -> int:
 # --- init and set ------------------------------------------------------------------------------
 
 
-def _init(args: argparse.Namespace) -> int:
+def _init(league: League, args: argparse.Namespace) -> int:
     from league.sync import open_bundle_store, open_store
+    from league.sync.session import found_store
 
     with open_store(args.url) as store:
         store.init()
         print(f"Store ready: {store.description}.")
+        founding = found_store(league, store, args.url)
+    print(founding)
     if args.bundles:
         with open_bundle_store(args.bundles) as bundles:
             bundles.init()
             print(f"Bundle store ready: {bundles.description}.")
     suffix = f" --bundles {args.bundles}" if args.bundles else ""
     print(f"Each racer now runs: racer-tui sync set {args.url}{suffix}")
+    print("When they have synced once, admit each one: racer-tui racer admit NAME")
     return 0
 
 

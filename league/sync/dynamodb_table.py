@@ -7,7 +7,8 @@ Table (on-demand billing)::
     attributes     content_hash (S), version (N),
                    body (S: the canonical JSON the hash is taken over, so checking a pulled
                    record is exact and floats never pass through DynamoDB's Decimal numbers),
-                   shard (S), pushed_key (S; starts with the push time in ms, server clock)
+                   shard (S), pushed_key (S; starts with the push time in ms, server clock),
+                   signer, signature (S: the record's seal, absent on an unsealed record)
     GSI by_push    partition key shard (S, "0".."7" from a hash of pk),
                    sort key pushed_key (S, "<pushed_at 13 digits>#<kind>#<id>#<version>"),
                    projection ALL
@@ -128,7 +129,7 @@ def watermark_key(ms: int) -> str:
 
 def record_item(record: SyncRecord, pushed_at_ms: int) -> Item:
     pk = record_pk(record.kind, record.record_id)
-    return {
+    item: Item = {
         PK: {"S": pk},
         "content_hash": {"S": record.content_hash},
         "version": {"N": str(record.version)},
@@ -136,6 +137,10 @@ def record_item(record: SyncRecord, pushed_at_ms: int) -> Item:
         SHARD: {"S": shard_of(pk)},
         PUSHED_KEY: {"S": push_key(pushed_at_ms, record)},
     }
+    if record.seal is not None:
+        item["signer"] = {"S": record.seal.signer}
+        item["signature"] = {"S": record.seal.signature}
+    return item
 
 
 def held_hash_and_version(item: Mapping[str, Any]) -> tuple[str | None, int]:
@@ -167,8 +172,24 @@ def decode_item(item: Mapping[str, Any]) -> SyncRecord | Quarantined:
     except RecordInvalidError as exc:
         return quarantine(str(exc), where, raw)
     return build_record(
-        kind, record_id, _string(item, "content_hash"), body, version, where=where, raw=raw
+        kind,
+        record_id,
+        _string(item, "content_hash"),
+        body,
+        version,
+        where=where,
+        raw=raw,
+        signer=_optional_string(item, "signer"),
+        signature=_optional_string(item, "signature"),
     )
+
+
+def _optional_string(item: Mapping[str, Any], name: str) -> str | None:
+    """None when absent; a present attribute that is not a string reads as "" (so the
+    seal check refuses it instead of the record passing as unsealed)."""
+    if name not in item:
+        return None
+    return _string(item, name) or ""
 
 
 def _string(item: Mapping[str, Any], name: str) -> str | None:

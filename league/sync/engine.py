@@ -5,17 +5,22 @@
     with open_league(path) as league, open_store(url) as store:
         summary = sync(league, store, store_key(url))
 
-Push: racer profiles first (one conditional write per rename, profiles.py), then every
-shared record the store is not known to hold, in batches, parents first. The store writes
+Push: this machine's signing key is proposed to the league's organiser if nobody has
+admitted it yet (league.trust), then racer profiles (one conditional write per rename,
+profiles.py), then every shared record the store is not known to hold, in batches,
+parents first, each sealed (league.sync.sealing: signed here, or the maker's seal kept
+from the pull it came in). The store writes
 each record create-only; after each batch, one transaction records what the store now
 holds (and any conflicts with both sides). A push killed at any point loses at most one
 batch of bookkeeping: pushing again finds those records already in the store (skipped),
 so nothing is duplicated.
 
-Pull: page by page from the saved cursor. Each page is validated before anything touches
-the database, then inserted in one transaction together with the new cursor, so a pull
-killed at any point resumes exactly where the last committed page ended. Records pulled
-are recorded as held by the store, so they are never pushed back to it.
+Pull: page by page from the saved cursor. Each page is validated (seals included) before
+anything touches the database, then inserted in one transaction together with the new
+cursor, so a pull killed at any point resumes exactly where the last committed page ended.
+Records whose signer the roster does not allow are held in quarantine and tried again as
+the roster changes; results whose key was revoked are withdrawn. Records pulled are
+recorded as held by the store, so they are never pushed back to it.
 
 An unreachable store raises a SyncError (one sentence) before anything local changes.
 """
@@ -32,7 +37,10 @@ from league.sync import incoming, local, outgoing, profiles
 from league.sync.errors import CursorInvalidError
 from league.sync.protocol import ContentConflict, PullPage, RecordStore, VersionConflict
 from league.sync.record import KINDS, SyncRecord
+from league.sync.sealing import seal_all
 from league.sync.urls import parse_store_url
+from league.trust.keys import SigningKey, load_or_create_key
+from league.trust.membership import propose_key
 from sim.ids import ID_PATTERN
 
 # Called as progress(direction, done, total) with direction "push" or "pull"; a pull's
@@ -65,6 +73,9 @@ class SyncSummary:
     quarantined: list[str] = field(default_factory=list)
     refused: list[str] = field(default_factory=list)  # stale renames
     damaged: list[str] = field(default_factory=list)  # local rows that could not be sent
+    released: int = 0  # held records the roster now allows (an admission arrived)
+    withdrawn: list[str] = field(default_factory=list)  # results of revoked keys taken out
+    notes: list[str] = field(default_factory=list)  # e.g. why this machine's key is unproposed
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
@@ -82,6 +93,9 @@ class SyncSummary:
             self.quarantined + other.quarantined,
             self.refused + other.refused,
             self.damaged + other.damaged,
+            self.released + other.released,
+            self.withdrawn + other.withdrawn,
+            self.notes + other.notes,
         )
 
 
@@ -93,11 +107,15 @@ def sync(
     push_records: bool = True,
     pull_records: bool = True,
     progress: Progress | None = None,
+    signing_key: SigningKey | None = None,
 ) -> SyncSummary:
-    """Push, then pull (so a conflict found by the push gets the store's side at once)."""
+    """Push, then pull (so a conflict found by the push gets the store's side at once).
+    `signing_key` seals what this machine sends (default: the data directory's key)."""
     summary = SyncSummary(key)
     if push_records:
-        summary = summary.merged(push(league, store, key, progress=progress))
+        summary = summary.merged(
+            push(league, store, key, progress=progress, signing_key=signing_key)
+        )
     if pull_records:
         summary = summary.merged(pull(league, store, key, progress=progress))
     return summary
@@ -113,10 +131,15 @@ def push(
     *,
     progress: Progress | None = None,
     batch: int = outgoing.BATCH,
+    signing_key: SigningKey | None = None,
 ) -> SyncSummary:
     summary = SyncSummary(key)
+    signing = signing_key or load_or_create_key()
     store.push([])  # reach the store (or fail with one sentence) before doing anything
-    renames = profiles.push_profiles(league, store, key)
+    unproposed = propose_key(league, signing)
+    if unproposed is not None:
+        summary.notes.append(unproposed)
+    renames = profiles.push_profiles(league, store, key, signing)
     summary.pushed += renames.pushed
     summary.skipped += renames.skipped
     summary.refused.extend(renames.refused)
@@ -134,7 +157,8 @@ def push(
             if progress is not None:
                 progress("push", min(before + sent, total), total)
 
-        report = store.push(chunk.records, progress=report_progress)
+        sealed = seal_all(league, chunk.records, signing)
+        report = store.push(sealed, progress=report_progress)
         by_key = {record.key: record for record in chunk.records}
         with league.transaction():
             local.mark_in_store(league, key, report.accepted)
@@ -211,20 +235,23 @@ def pull(
             f"{item.where}: {item.reason}"
             for item in (*page.quarantined, *(bad.item for bad in refused))
         )
+        summary.quarantined.extend(result.held)
+        summary.released += result.released
         seen += len(page.records) + len(page.quarantined)
         if progress is not None:
             progress("pull", seen, None if page.more else seen)
         if not page.more:
             break
         page = store.pull(page.next_cursor, limit=page_size)
-    if local.pending(league):
-        with league.transaction():
-            late = incoming.retry_waiting(league, key)
-        summary.pulled += late.inserted
-        summary.aliased += late.aliased
-        summary.conflicts.extend(
-            f"{what}: differs here and in the store (both kept)" for what in late.conflicts
-        )
+    with league.transaction():
+        late = incoming.retry_waiting(league, key)
+        summary.withdrawn.extend(incoming.withdraw_refused(league, key))
+    summary.pulled += late.inserted
+    summary.aliased += late.aliased
+    summary.released += late.released
+    summary.conflicts.extend(
+        f"{what}: differs here and in the store (both kept)" for what in late.conflicts
+    )
     summary.waiting = len(local.pending(league))
     with league.transaction():
         local.record_run(league, key, "pull", _counts(summary))

@@ -1,9 +1,13 @@
 """What a pull does with a page of records: validate, then insert into the league.
 
-`check_page` runs first and touches nothing: every record is checked against its kind's
-schema (validate.py) and a bad one becomes a quarantine entry. `apply_page` then runs
-inside the page's transaction and decides, record by record (parents first):
+`check_page` runs first and touches nothing: every record must carry a genuine seal (a
+signature that matches its content) and pass its kind's schema (validate.py); a bad one
+becomes a quarantine entry. `apply_page` then runs inside the page's transaction and
+decides, record by record (roster acts first, then parents before children):
 
+- already here with the same content and seal: nothing to do;
+- its signer may not make it (league.trust.roster): quarantined and held whole, tried
+  again whenever the roster changes;
 - already here with the same content (or kept as an alias): nothing to do;
 - here with other content: a conflict, both sides kept;
 - refers to something not here yet: waits in sync_pending;
@@ -16,11 +20,12 @@ leaderboard cache is refreshed once for the page's submissions and races.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Final, Literal
 
-from league.entries import refresh_entries
+from league.entries import rebuild_entries, refresh_entries
 from league.records import record_body, store_record
 from league.store import League
 from league.sync import bundle_records, identity, profiles
@@ -31,15 +36,23 @@ from league.sync.local import (
     add_conflict,
     add_pending,
     body_text,
+    held_records,
+    hold,
     pending_records,
+    release_held,
     remove_pending,
 )
 from league.sync.protocol import RecordRef
-from league.sync.record import Quarantined, SyncRecord, quarantine
+from league.sync.record import Quarantined, Seal, SyncRecord, quarantine
+from league.sync.sealing import SealKey, keep_seals, known_seals
 from league.sync.validate import check_record
+from league.trust.roster import FOUNDER_ID, ROSTER_KIND, Roster
+from league.trust.seals import is_genuine
 
 # "known": a conflict already reported (by this sync's push, or an earlier sync).
-Outcome = Literal["inserted", "already", "aliased", "replaced", "conflict", "known", "waiting"]
+Outcome = Literal[
+    "inserted", "already", "aliased", "replaced", "conflict", "known", "waiting", "held"
+]
 
 
 @dataclass(frozen=True)
@@ -57,6 +70,16 @@ def check_page(records: Sequence[SyncRecord]) -> tuple[list[SyncRecord], list[Re
     refused: list[Refused] = []
     for record in records:
         try:
+            if record.seal is None:
+                raise RecordInvalidError(
+                    "it is not signed, so nobody can tell who made it (a racer-tui from before "
+                    "signed results, or a file written by hand)"
+                )
+            if not is_genuine(record):
+                raise RecordInvalidError(
+                    "its signature does not match its content: it was changed after it was "
+                    "signed, or signed by another key than it names"
+                )
             check_record(record)
         except RecordInvalidError as exc:
             where = f"{record.kind} {record.record_id}"
@@ -73,18 +96,38 @@ class PageResult:
     already: int = 0
     aliased: int = 0
     conflicts: list[str] = field(default_factory=list)
+    held: list[str] = field(default_factory=list)  # "<where>: <why>" per record held back
+    released: int = 0  # held records the roster now allows
     in_store: list[RecordRef] = field(default_factory=list)  # held by the store as pulled
+
+
+@dataclass
+class _Trust:
+    """The roster as this page changes it, and which records are already accepted."""
+
+    roster: Roster
+    accepted: set[SealKey]
+    changed: bool = False
+
+
+def _sort_key(record: SyncRecord) -> tuple[int, int, str]:
+    # The founding act first: every other act is checked against the organiser it names.
+    founding = record.kind == ROSTER_KIND and record.record_id == FOUNDER_ID
+    return (INSERT_ORDER[record.kind], 0 if founding else 1, record.record_id)
 
 
 def apply_page(league: League, store: str, records: Sequence[SyncRecord]) -> PageResult:
     """Insert a checked page (call inside the page's transaction)."""
     result = PageResult()
     touched: list[str] = []
-    for record in sorted(records, key=lambda r: (INSERT_ORDER[r.kind], r.record_id)):
-        outcome = _apply(league, store, record, touched)
+    trust = _Trust(Roster.load(league), set(known_seals(league, records)))
+    for record in sorted(records, key=_sort_key):
+        outcome = _apply_trusted(league, store, record, touched=touched, trust=trust, result=result)
         _count(result, record, outcome)
         if outcome not in ("conflict", "known"):
             result.in_store.append(RecordRef.of(record))
+    if trust.changed:
+        _retry_held(league, result, touched, trust)
     if result.inserted or result.aliased:
         _retry_pending(league, store, result, touched)
     if touched:
@@ -93,14 +136,112 @@ def apply_page(league: League, store: str, records: Sequence[SyncRecord]) -> Pag
 
 
 def retry_waiting(league: League, store: str) -> PageResult:
-    """Retry every waiting record once more (call inside a transaction): what it refers
-    to may have been made here since (a racer added locally, say)."""
+    """Retry every held and waiting record once more (call inside a transaction): the
+    roster may have changed here since (an admission made on this machine), and what a
+    record refers to may have been made here (a racer added locally, say)."""
     result = PageResult()
     touched: list[str] = []
+    _retry_held(league, result, touched, _Trust(Roster.load(league), set(), changed=True))
     _retry_pending(league, store, result, touched)
     if touched:
         refresh_entries(league.conn, touched)
     return result
+
+
+def retry_held(league: League) -> PageResult:
+    """Try every held record against the roster as it is now (call inside a transaction
+    after the roster changed here: an organiser admitted a key on this machine)."""
+    result = PageResult()
+    touched: list[str] = []
+    _retry_held(league, result, touched, _Trust(Roster.load(league), set(), changed=True))
+    if touched:
+        refresh_entries(league.conn, touched)
+    return result
+
+
+# Results are what a revoked key must lose: rows nothing else refers to by id except
+# their own laps and trace, so taking them out leaves the league whole.
+_WITHDRAWN_KINDS: Final = {"submission": "submissions", "race": "races"}
+
+
+def withdraw_refused(league: League, store: str) -> list[str]:
+    """Take out of the league every result whose seal the roster no longer accepts (its
+    key was revoked, or retired before it signed), holding each in quarantine; returns
+    one sentence per result withdrawn. Call inside a transaction."""
+    roster = Roster.load(league)
+    suspects = roster.revoked | set(roster.retired_at)
+    if not suspects:
+        return []
+    withdrawn: list[str] = []
+    rows = league.query(
+        "SELECT kind, record_id, version, content_hash, signer, signature FROM sync_seals "
+        "WHERE kind IN ('submission', 'race') AND signer IN (SELECT value FROM json_each(?))",
+        (json.dumps(sorted(suspects)),),
+    )
+    for kind, record_id, version, digest, signer, signature in rows:
+        table = _WITHDRAWN_KINDS[kind]
+        here = league.query_one(f"SELECT content_hash FROM {table} WHERE id = ?", (record_id,))
+        if here is None or here[0] != digest:
+            continue
+        record = SyncRecord(
+            kind, record_id, digest, record_body(league, table, record_id), version
+        ).sealed(Seal(signer, signature))
+        reason = roster.refusal(record)
+        if reason is None:
+            continue
+        hold(league, store, record, reason)
+        if kind == "race":
+            league.conn.execute("DELETE FROM race_traces WHERE race_id = ?", (record_id,))
+            league.conn.execute("DELETE FROM race_laps WHERE race_id = ?", (record_id,))
+        else:
+            league.conn.execute("DELETE FROM submission_laps WHERE submission_id = ?", (record_id,))
+        league.conn.execute(f"DELETE FROM {table} WHERE id = ?", (record_id,))
+        withdrawn.append(f"{kind} {record_id}: {reason}")
+    if withdrawn:
+        rebuild_entries(league.conn)
+    return withdrawn
+
+
+def _apply_trusted(
+    league: League,
+    store: str,
+    record: SyncRecord,
+    *,
+    touched: list[str],
+    trust: _Trust,
+    result: PageResult,
+) -> Outcome:
+    """The roster's rule, then `_apply`; a record the roster refuses is held."""
+    key = (record.kind, record.record_id, record.version, record.content_hash)
+    if key not in trust.accepted:
+        reason = trust.roster.refusal(record)
+        if reason is not None:
+            hold(league, store, record, reason)
+            result.held.append(f"{record.kind} {record.record_id}: {reason}")
+            return "held"
+        keep_seals(league, [record])
+        trust.accepted.add(key)
+    outcome = _apply(league, store, record, touched)
+    if record.kind == ROSTER_KIND and outcome in ("inserted", "replaced"):
+        trust.roster = Roster.load(league)
+        trust.changed = True
+    return outcome
+
+
+def _retry_held(league: League, result: PageResult, touched: list[str], trust: _Trust) -> None:
+    """Try held records again while the roster keeps changing (an admission can let in
+    an organiser whose own admissions then count)."""
+    while trust.changed:
+        trust.changed = False
+        for held in sorted(held_records(league), key=lambda held: _sort_key(held.record)):
+            if trust.roster.refusal(held.record) is not None:
+                continue
+            release_held(league, held)
+            outcome = _apply_trusted(
+                league, held.store, held.record, touched=touched, trust=trust, result=result
+            )
+            _count(result, held.record, outcome)
+            result.released += 1
 
 
 def _count(result: PageResult, record: SyncRecord, outcome: Outcome) -> None:
@@ -122,7 +263,7 @@ def _retry_pending(league: League, store: str, result: PageResult, touched: list
         waiting = sorted(pending_records(league), key=lambda r: (INSERT_ORDER[r.kind], r.record_id))
         done: list[tuple[str, str]] = []
         for record in waiting:
-            outcome = _apply(league, store, record, touched, retry=True)
+            outcome = _apply(league, store, record, touched, retry=True)  # trusted when pulled
             if outcome != "waiting":
                 done.append((record.kind, record.record_id))
                 _count(result, record, outcome)

@@ -14,6 +14,7 @@ from typing import Final
 from league.records import SHARED_TABLES
 
 TABLE_OF_KIND: Final[dict[str, str]] = {
+    "roster": "roster",
     "racer": "racers",
     "track": "tracks",
     "season": "seasons",

@@ -11,7 +11,9 @@ Tables (migration 3 in league.migrations):
 - `sync_runs`: the last push and pull summary per store, for `sync status`.
 - `sync_conflicts`: a record whose id this league holds with other content than the
   store, with both sides (nothing is overwritten; `sync status` shows them).
-- `sync_quarantine`: pulled records that failed validation: where, why, an excerpt.
+- `sync_quarantine`: pulled records that failed validation: where, why, an excerpt; and
+  valid records the roster does not allow (league.trust), kept whole in `held` so they
+  are tried again when the roster changes (an admission arrives).
 - `sync_pending`: valid pulled records waiting for a record they refer to (a submission
   that arrived before its racer); retried after every page.
 - `sync_aliases`: shared records that lost the identity rule (see identity.py).
@@ -29,7 +31,7 @@ from typing import Any, Final
 
 from league.store import League, now_iso
 from league.sync.protocol import RecordRef
-from league.sync.record import Quarantined, SyncRecord
+from league.sync.record import Quarantined, Seal, SyncRecord, quarantine
 from sim.ids import canonical_json
 
 STORE_SETTING: Final = "store"
@@ -242,6 +244,54 @@ def add_quarantined(
         "reason = excluded.reason, kind = excluded.kind, record_id = excluded.record_id, "
         "excerpt = excluded.excerpt, found_at = excluded.found_at",
         (store, item.where, item.reason, kind, record_id, item.excerpt, now_iso()),
+    )
+
+
+def hold(league: League, store: str, record: SyncRecord, reason: str) -> None:
+    """Quarantine a valid record its signer may not make, keeping it whole to try again."""
+    seal = record.seal
+    held = {
+        "kind": record.kind,
+        "id": record.record_id,
+        "content_hash": record.content_hash,
+        "version": record.version,
+        "body": record.body,
+        "signer": None if seal is None else seal.signer,
+        "signature": None if seal is None else seal.signature,
+    }
+    item = quarantine(reason, f"{record.kind} {record.record_id}", record.canonical_body)
+    add_quarantined(league, store, item, record.kind, record.record_id)
+    league.conn.execute(
+        "UPDATE sync_quarantine SET held = ? WHERE store = ? AND location = ?",
+        (body_text(held), store, item.where),
+    )
+
+
+@dataclass(frozen=True)
+class Held:
+    store: str
+    location: str
+    record: SyncRecord
+
+
+def held_records(league: League) -> list[Held]:
+    """Every held record, re-validated by SyncRecord (they were checked when pulled)."""
+    out = []
+    for store, location, text in league.query(
+        "SELECT store, location, held FROM sync_quarantine WHERE held IS NOT NULL ORDER BY location"
+    ):
+        data = json.loads(text)
+        seal = None if data["signer"] is None else Seal(data["signer"], data["signature"])
+        record = SyncRecord(
+            data["kind"], data["id"], data["content_hash"], data["body"], data["version"], seal
+        )
+        out.append(Held(str(store), str(location), record))
+    return out
+
+
+def release_held(league: League, held: Held) -> None:
+    league.conn.execute(
+        "DELETE FROM sync_quarantine WHERE store = ? AND location = ?", (held.store, held.location)
     )
 
 

@@ -26,6 +26,8 @@ from league.sync.kinds import PROFILE_KIND, profile_id
 from league.sync.local import add_conflict, body_text, mark_in_store
 from league.sync.protocol import RecordRef, RecordStore, VersionConflict
 from league.sync.record import SyncRecord, make_record
+from league.sync.sealing import seal_all
+from league.trust.keys import SigningKey
 
 Applied = Literal["inserted", "already", "conflict", "known"]
 
@@ -117,7 +119,9 @@ class _Newer:
     display_name: object  # None when only the store's hash is known
 
 
-def push_profiles(league: League, store: RecordStore, store_key: str) -> ProfilePush:
+def push_profiles(
+    league: League, store: RecordStore, store_key: str, signing_key: SigningKey
+) -> ProfilePush:
     """Send a profile version for every rename not yet in this store, oldest first.
 
     Each profile goes alone: the store checks it against the version before it, so two
@@ -154,6 +158,7 @@ def push_profiles(league: League, store: RecordStore, store_key: str) -> Profile
             }
             version = (known.version if known else 0) + 1
             record = make_record(PROFILE_KIND, profile_id(rename.racer), body, version)
+        record = seal_all(league, [record], signing_key)[0]
         report = store.push([record])
         if report.accepted:
             with league.transaction():

@@ -1,18 +1,22 @@
 """The shared record: what every store holds, and the rules every record must pass.
 
 A record is immutable once shared: `(kind, record_id)` names it, `content_hash` says
-what it holds. Only `racer_profile` records (a racer's editable display fields) change,
-and each change is a new `version` written with a conditional write.
+what it holds, and its `seal` says who made it (an Ed25519 signature over kind, id,
+version and hash: league.trust.seals). Only `racer_profile` records (a racer's editable
+display fields) change, and each change is a new `version` written with a conditional write.
 
 Everything pulled from a store is untrusted. `decode_envelope` checks the kind against a
 fixed list, the id's form (ids later become file names and keys), JSON-only types,
-nesting depth, string and total sizes, and that the hash matches the body, and turns
-anything wrong into a `Quarantined` outcome instead of an exception, so one bad record
-never stops the rest of a sync.
+nesting depth, string and total sizes, that the hash matches the body, and that a seal
+has the form of one, and turns anything wrong into a `Quarantined` outcome instead of an
+exception, so one bad record never stops the rest of a sync. Whether the seal's signature
+is genuine, and whether its signer may make the record, is the pull's business (stores
+carry seals without judging them).
 """
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import math
@@ -40,6 +44,7 @@ KINDS: Final = (
     "correction",
     "racer_profile",
     "bundle",
+    "roster",
 )
 # Kinds whose records change through numbered versions; every other kind is immutable.
 VERSIONED_KINDS: Final = frozenset({"racer_profile"})
@@ -53,7 +58,10 @@ MAX_STRING_CHARS: Final = 32 * 1024
 MAX_KEY_CHARS: Final = 128
 MAX_VERSION: Final = 1_000_000_000
 _INT_RANGE: Final = (-(2**63), 2**63 - 1)  # what SQLite can store
-ENVELOPE_FORMAT: Final = 1
+# Format 2 added the seal; format 1 files (written before records were signed) still read,
+# as records without a seal.
+ENVELOPE_FORMAT: Final = 2
+_UNSEALED_FORMAT: Final = 1
 
 HASH_PATTERN: Final = re.compile(r"[0-9a-f]{64}")
 # C0/C1 control characters (except tab, newline, carriage return) can drive a terminal;
@@ -62,6 +70,23 @@ _FORBIDDEN_CHARS: Final = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f\ud80
 _EXCERPT_CHARS: Final = 120
 
 JsonValue = None | bool | int | float | str | list["JsonValue"] | dict[str, "JsonValue"]
+_HEX_PUBLIC: Final = re.compile(r"[0-9a-f]{64}")
+_HEX_SIGNATURE: Final = re.compile(r"[0-9a-f]{128}")
+
+
+@dataclass(frozen=True)
+class Seal:
+    """Who signed a record: their public key and the signature, both lowercase hex.
+    Construction checks the form only; league.trust.seals checks the signature."""
+
+    signer: str
+    signature: str
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.signer, str) or not _HEX_PUBLIC.fullmatch(self.signer):
+            raise RecordInvalidError("its signer is not a public key (64 lowercase hex digits)")
+        if not isinstance(self.signature, str) or not _HEX_SIGNATURE.fullmatch(self.signature):
+            raise RecordInvalidError("its signature is not 128 lowercase hex digits")
 
 
 @dataclass(frozen=True)
@@ -76,6 +101,9 @@ class SyncRecord:
     content_hash: str
     body: dict[str, Any] = field(repr=False)
     version: int = 0
+    # Who signed it; None for a record made here and not yet pushed, or an unsigned one
+    # pulled (which the pull refuses). Not part of what the record is, so not compared.
+    seal: Seal | None = field(default=None, compare=False, repr=False)
     # The body's canonical JSON, which the hash is taken over: computed once here, and
     # reused by the stores (encoding it again for every write is a push's main CPU cost).
     canonical_body: bytes = field(init=False, repr=False, compare=False)
@@ -97,6 +125,12 @@ class SyncRecord:
     def key(self) -> tuple[str, str]:
         """What names the record in every store: the same key never holds two contents."""
         return (self.kind, self.record_id)
+
+    def sealed(self, seal: Seal | None) -> SyncRecord:
+        """The same record carrying `seal` (the body is shared, not copied or re-checked)."""
+        twin = copy.copy(self)  # no __init__: the body was checked when self was made
+        object.__setattr__(twin, "seal", seal)
+        return twin
 
 
 def make_record(kind: str, record_id: str, body: Mapping[str, Any], version: int = 0) -> SyncRecord:
@@ -141,21 +175,26 @@ def validate_body(body: object) -> bytes:
 
 def encode_envelope(record: SyncRecord) -> bytes:
     """The bytes a file-based store holds for `record`: the canonical JSON of the envelope
-    {body, content_hash, format, id, kind, version} (keys sorted, so deterministic), built
-    around the record's canonical body rather than encoding the body again."""
+    {body, content_hash, format, id, kind, signature, signer, version} (keys sorted, so
+    deterministic; signer and signature null when unsealed), built around the record's
+    canonical body rather than encoding the body again."""
+    seal = record.seal
     rest = canonical_json(
         {
             "content_hash": record.content_hash,
             "format": ENVELOPE_FORMAT,
             "id": record.record_id,
             "kind": record.kind,
+            "signature": None if seal is None else seal.signature,
+            "signer": None if seal is None else seal.signer,
             "version": record.version,
         }
     )
     return b'{"body":' + record.canonical_body + b"," + rest[1:]
 
 
-_ENVELOPE_KEYS: Final = frozenset({"format", "kind", "id", "content_hash", "version", "body"})
+_UNSEALED_KEYS: Final = frozenset({"format", "kind", "id", "content_hash", "version", "body"})
+_ENVELOPE_KEYS: Final = _UNSEALED_KEYS | {"signer", "signature"}
 
 
 def decode_envelope(raw: bytes, where: str) -> SyncRecord | Quarantined:
@@ -170,14 +209,19 @@ def decode_envelope(raw: bytes, where: str) -> SyncRecord | Quarantined:
         return replace(quarantine(str(exc), where, raw), partial=True)
     if not isinstance(data, dict):
         return quarantine("it is not a JSON object", where, raw)
-    if data.get("format") != ENVELOPE_FORMAT:
+    expected = {ENVELOPE_FORMAT: _ENVELOPE_KEYS, _UNSEALED_FORMAT: _UNSEALED_KEYS}
+    stated_format = data.get("format")
+    fields = None
+    if isinstance(stated_format, int) and not isinstance(stated_format, bool):
+        fields = expected.get(stated_format)
+    if fields is None:
         return quarantine(
-            f"its format {data.get('format')!r} is not {ENVELOPE_FORMAT} "
+            f"its format {safe_text(str(data.get('format')), 20)} is not {ENVELOPE_FORMAT} "
             "(written by another program or a newer racer-tui)",
             where,
             raw,
         )
-    if set(data) != _ENVELOPE_KEYS:
+    if set(data) != fields:
         return quarantine("its fields are not the record fields", where, raw)
     return build_record(
         data["kind"],
@@ -187,6 +231,8 @@ def decode_envelope(raw: bytes, where: str) -> SyncRecord | Quarantined:
         data["version"],
         where=where,
         raw=raw,
+        signer=data.get("signer"),
+        signature=data.get("signature"),
     )
 
 
@@ -199,9 +245,15 @@ def build_record(
     *,
     where: str,
     raw: bytes | str,
+    signer: object = None,
+    signature: object = None,
 ) -> SyncRecord | Quarantined:
-    """A validated record from untrusted parts, or the reason it was refused."""
+    """A validated record from untrusted parts, or the reason it was refused. A record
+    with neither signer nor signature is unsealed; one with only one of them is refused."""
     try:
+        seal = None
+        if signer is not None or signature is not None:
+            seal = Seal(signer, signature)  # type: ignore[arg-type]  # checked inside
         if not isinstance(kind, str) or not isinstance(record_id, str):
             raise RecordInvalidError("its kind or id is not a string")
         if not isinstance(stated_hash, str):
@@ -210,7 +262,7 @@ def build_record(
             raise RecordInvalidError("its version is not an integer")
         if not isinstance(body, dict):
             raise RecordInvalidError("its body is not a JSON object")
-        return SyncRecord(kind, record_id, stated_hash, body, version)
+        return SyncRecord(kind, record_id, stated_hash, body, version, seal)
     except RecordInvalidError as exc:
         return quarantine(str(exc), where, raw)
 

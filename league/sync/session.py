@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from league.errors import LeagueError
 from league.store import League
-from league.sync.engine import Progress, SyncSummary, store_key, sync
+from league.sync.engine import Progress, SyncSummary, push, store_key, sync
 from league.sync.errors import StoreUrlError, SyncError
 from league.sync.local import (
     BUNDLES_SETTING,
@@ -20,7 +20,11 @@ from league.sync.local import (
     record_failure,
     set_setting,
 )
+from league.sync.protocol import RecordStore
 from league.sync.urls import DirUrl, DynamoDbUrl, S3Url, parse_store_url
+from league.trust.keys import fingerprint, load_or_create_key
+from league.trust.membership import found_league
+from league.trust.roster import Roster
 from sim.plural import counted
 
 NO_STORE = (
@@ -58,6 +62,29 @@ def save_store(
         if bundles is not None:
             set_setting(league, BUNDLES_SETTING, str(bundles))
     return store, bundles
+
+
+def found_store(league: League, store: RecordStore, url: str, *, push_now: bool = True) -> str:
+    """What the organiser's set-up does after creating `store`: this machine's key founds
+    the league (unless it has an organiser already), and (with `push_now`) the league goes
+    to the store at once, so the store names its organiser before any racer syncs. The
+    league syncs with this store from now on if it had none. Returns one sentence to show."""
+    key = load_or_create_key()
+    founded = found_league(league, key)
+    if get_setting(league, STORE_SETTING) is None:
+        save_store(league, url)
+    if push_now:
+        push(league, store, store_key(url), signing_key=key)
+    roster = Roster.load(league)
+    if founded:
+        return f"This machine's key {key.fingerprint} is the league's organiser key."
+    if key.public_hex in roster.organisers:
+        return f"This league's organiser key is this machine's ({key.fingerprint})."
+    founder = fingerprint(roster.founder) if roster.founder else "unknown"
+    return (
+        f"This league already has an organiser (key {founder}); this machine's key "
+        f"{key.fingerprint} is not one of its organiser keys."
+    )
 
 
 def saved_store(league: League, given: str | None = None) -> str:

@@ -30,6 +30,8 @@ from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import BUNDLE_KIND, PROFILE_KIND, profile_id
 from league.sync.record import HASH_PATTERN, SyncRecord, parse_json
+from league.trust.keys import is_public_hex
+from league.trust.roster import ACTIONS, FOUNDER_ID, ROLES
 from sim.ids import id_time_ms, is_valid_id
 from sim.names import NAME_RULE, is_valid_name
 from sim.race.physics import is_physics
@@ -140,6 +142,11 @@ def one_of(*choices: str) -> Checker:
     return check
 
 
+def public_key(value: Any, field: str) -> None:
+    if not is_public_hex(value):
+        raise _bad(field, "is not a public key (64 lowercase hex digits)")
+
+
 def colour(value: Any, field: str) -> None:
     if not isinstance(value, str) or not HEX_COLOUR.fullmatch(value):
         raise _bad(field, "is not a #rrggbb colour")
@@ -184,6 +191,14 @@ _PHYSICS = Field("TEXT", physics, nullable=True, optional=True)
 # Every shared table's columns except id and content_hash (a test holds these to the
 # schema in league.migrations, so the two cannot drift apart).
 FIELDS: Final[dict[str, dict[str, Field]]] = {
+    "roster": {
+        "action": _t(one_of(*ACTIONS)),
+        "public_key": _t(public_key),
+        "racer": _t(name, nullable=True),
+        "role": _t(one_of(*ROLES), nullable=True),
+        "signed_by": _t(public_key),
+        "created_at": _t(timestamp),
+    },
     "racer": {
         "name": _t(name),
         "display_name": _t(name),
@@ -432,7 +447,29 @@ def _check_correction(record: SyncRecord) -> None:
             raise RecordInvalidError("a rename needs a new display name and no lap number")
 
 
+def _check_roster(record: SyncRecord) -> None:
+    """Each act has its own shape: who signs it, which id it has, what it names."""
+    body = record.body
+    action, role, racer = body["action"], body["role"], body["racer"]
+    self_signed = body["signed_by"] == body["public_key"]
+    if action == "found":
+        ok = record.record_id == FOUNDER_ID and self_signed and role == "organiser"
+        rule = "a founding act has the founder id, the organiser role, and its own key's seal"
+    elif action == "propose":
+        ok = self_signed and role == "racer" and racer is not None
+        rule = "a proposal has the racer role, a racer name, and its own key's seal"
+    elif action == "admit":
+        ok = role is not None and (role == "organiser" or racer is not None)
+        rule = "an admission names a role, and a racer for the racer role"
+    else:
+        ok = role is None and record.record_id != FOUNDER_ID
+        rule = f"a {action} names no role"
+    if not ok:
+        raise RecordInvalidError(f"it is not a well-formed roster act ({rule})")
+
+
 _SEMANTICS: Final[dict[str, Callable[[SyncRecord], None]]] = {
+    "roster": _check_roster,
     "season": _check_season,
     "night": _check_night,
     "race": _check_race,

@@ -37,7 +37,7 @@ from league.sync.errors import (
     StoreUrlError,
     SyncError,
 )
-from league.sync.session import check_record_store_url, save_store, sync_league
+from league.sync.session import check_record_store_url, found_store, save_store, sync_league
 from league.sync.status import (
     SyncStatus,
     conflict_view,
@@ -324,13 +324,17 @@ class SyncScreen(RacerScreen[bool]):
 
     @work(thread=True, exclusive=True, group="sync-run", exit_on_error=False)
     def _sync(self, url: str, save: bool, set_up: bool = False) -> None:
-        if set_up:
-            with open_store(url) as store:
-                store.init()
         with open_league(self.db_path) as league:
+            notes_first: list[str] = []
+            if set_up:  # the host sets the store up: their key founds the league
+                with open_store(url) as store:
+                    store.init()
+                    # The sync below pushes the founding record first (the roster leads).
+                    notes_first.append(found_store(league, store, url, push_now=False))
             if save:
                 save_store(league, url)
             summary, notes = sync_league(league, url, progress=self._progress_from_thread)
+            notes = notes_first + notes
         self.post_message(SyncFinished(summary, notes))
 
     def _failed(self, error: BaseException | None) -> Job:

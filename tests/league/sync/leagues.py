@@ -16,6 +16,7 @@ from league.corrections import disqualify_lap, rename_racer
 from league.seasons import new_season, parse_points
 from league.store import League
 from league.submissions import submit
+from league.sync.record import SyncRecord
 from racer_tui.cli import main
 from sim.ids import new_id
 from sim.race.result import RaceResult
@@ -62,6 +63,30 @@ def host_league(league: League, root: Path) -> None:
     submitted = add_submissions(league, root, [("ana", (12.0, 12.5)), ("bob", (11.9,))])
     disqualify_lap(league, submitted[1], 1, reason="wrong track", by="host")
     rename_racer(league, "cy", "Cyrus", by="host")
+
+
+def found_store(url: str, root: Path) -> None:
+    """What the organiser's `racer-tui sync init` does: found the league on this machine's
+    key and push the founding record. Every league in a test shares one data directory,
+    so one key: the organiser's, whose records every league accepts."""
+    from league.store import open_league
+    from league.sync.engine import push, store_key
+    from league.sync.stores import open_store
+    from league.trust.keys import load_or_create_key
+    from league.trust.membership import found_league
+
+    with open_league(root / "organiser.db") as league, open_store(url) as store:
+        found_league(league, load_or_create_key())
+        push(league, store, store_key(url))
+
+
+def sealed(*records: SyncRecord) -> list[SyncRecord]:
+    """Records signed with this test's key (the organiser's), as a push would send them."""
+    from league.trust.keys import load_or_create_key
+    from league.trust.seals import make_seal
+
+    key = load_or_create_key()
+    return [record.sealed(make_seal(record, key)) for record in records]
 
 
 def cli(*args: str) -> str:

@@ -26,13 +26,21 @@ from sim.track_catalog import resolve_track
 from tests.conftest import REPO_ROOT
 from tests.league.helpers import race_result
 from tests.league.sync.conftest import QUICK_RETRY, StoreFactory
-from tests.league.sync.leagues import add_submissions, host_league, shared_rows, views
+from tests.league.sync.leagues import (
+    add_submissions,
+    found_store,
+    host_league,
+    sealed,
+    shared_rows,
+    views,
+)
 from tests.league.sync.test_store_contract import pull_all
 
 
 @pytest.fixture
-def url(store_url: str, open_racer_store: StoreFactory) -> str:
-    """The URL of one shared store, initialised (by the organiser, as it were)."""
+def url(store_url: str, open_racer_store: StoreFactory, tmp_path: Path) -> str:
+    """The URL of one shared store, initialised and founded by the organiser."""
+    found_store(store_url, tmp_path)
     return store_url
 
 
@@ -44,6 +52,12 @@ def sync_with(league: League, url: str, **options: bool) -> SyncSummary:
 def all_records(league: League) -> list[SyncRecord]:
     """Every shared record of a league, as a push would send it."""
     return [record for batch in unsent_batches(league, "nowhere") for record in batch.records]
+
+
+def result_keys(records: list[SyncRecord]) -> list[tuple[str, str]]:
+    """The keys of the league's own records, without the roster acts every league adds
+    (the founding record, each league's proposal of its key)."""
+    return sorted(record.key for record in records if record.kind != "roster")
 
 
 def clean(summary: SyncSummary) -> bool:
@@ -114,7 +128,7 @@ def test_a_push_killed_halfway_then_repeated_stores_every_record_once(
     db = tmp_path / "a.db"
     with open_league(db) as league:
         add_submissions(league, tmp_path, [(f"racer-{n}", (10.0 + n,)) for n in range(8)])
-        expected = {record.key for record in all_records(league)}
+        expected = result_keys(all_records(league))
     worker = _worker(db, url, 4, "6")
     _go(worker)
     assert worker.stdout is not None
@@ -129,8 +143,7 @@ def test_a_push_killed_halfway_then_repeated_stores_every_record_once(
             repeated = push(league, store, store_key(url))
         assert repeated.skipped > 0 and clean(repeated)
         pulled = pull_all(open_racer_store())
-        keys = [record.key for record in pulled.records]
-        assert sorted(keys) == sorted(expected)  # each record once
+        assert result_keys(list(pulled.records)) == expected  # each record once
         assert pulled.quarantined == []
         with open_league(tmp_path / "b.db") as other:
             assert clean(sync_with(other, url))
@@ -160,9 +173,9 @@ def test_concurrent_pushes_from_two_processes_through_the_engine(
     assert all(summary["conflicts"] == [] for summary in summaries)
 
     with open_league(first) as one, open_league(second) as two:
-        expected = {record.key for league in (one, two) for record in all_records(league)}
+        expected = {key for league in (one, two) for key in result_keys(all_records(league))}
         pulled = pull_all(open_racer_store())
-        assert sorted(record.key for record in pulled.records) == sorted(expected)
+        assert result_keys(list(pulled.records)) == sorted(expected)
         with open_league(tmp_path / "third.db") as three:
             for league in (one, two, three, one):
                 assert clean(sync_with(league, url))
@@ -249,7 +262,7 @@ def test_malformed_records_in_the_store_are_quarantined_and_the_rest_syncs(
             "created_at": "2026-01-01T00:00:00.000Z",
         }
         bad = [make_record("race", new_id(), bad_race), make_record("racer", new_id(), padded)]
-        open_racer_store().push(bad)
+        open_racer_store().push(sealed(*bad))
         _put_raw(url, tmp_path, store_kind, new_id())
 
         pulled = sync_with(theirs, url)
@@ -280,7 +293,7 @@ def test_a_racer_dated_before_any_league_cannot_take_over_a_name(
             "colour": "#000000",
             "created_at": "1970-01-01T00:00:00.001Z",
         }
-        open_racer_store().push([make_record("racer", new_id(now_ms=1), forged)])
+        open_racer_store().push(sealed(make_record("racer", new_id(now_ms=1), forged)))
         pulled = sync_with(mine, url)
         assert len(pulled.quarantined) == 1
         (row,) = mine.query("SELECT kind, reason FROM sync_quarantine")
@@ -306,7 +319,7 @@ def test_a_race_faster_than_any_car_could_drive_never_reaches_a_leaderboard(
         ]
         racer = next(r for r in all_records(mine) if r.kind == "racer")
         track = next(r for r in all_records(mine) if r.kind == "track")
-        open_racer_store().push([racer, track, make_record("race", new_id(), forged)])
+        open_racer_store().push(sealed(racer, track, make_record("race", new_id(), forged)))
         pulled = sync_with(theirs, url)
         assert len(pulled.quarantined) == 1
         (row,) = theirs.query("SELECT kind, reason FROM sync_quarantine")
@@ -321,12 +334,13 @@ def test_a_record_that_arrives_before_what_it_refers_to_waits_for_it(
     with open_league(tmp_path / "a.db") as mine, open_league(tmp_path / "b.db") as theirs:
         add_submissions(mine, tmp_path, [("ana", (11.0,))])
         records = all_records(mine)
-        open_racer_store().push([r for r in records if r.kind == "submission"])
+        open_racer_store().push(sealed(*(r for r in records if r.kind == "submission")))
         early = sync_with(theirs, url, push_records=False)
-        assert (early.pulled, early.waiting) == (0, 1)
+        assert (early.pulled, early.waiting) == (1, 1)  # the founding record; the submission
         assert views(theirs)["leaderboard"] == []
 
-        open_racer_store().push([r for r in records if r.kind != "submission"])
+        rest = (r for r in records if r.kind not in {"submission", "roster"})
+        open_racer_store().push(sealed(*rest))
         later = sync_with(theirs, url, push_records=False)
         assert (later.pulled, later.waiting) == (3, 0)
         assert views(theirs) == views(mine)
@@ -435,10 +449,11 @@ def test_a_waiting_record_is_added_once_what_it_needs_is_made_here(tmp_path: Pat
     url = f"dir:{tmp_path / 'shared'}"
     with open_store(url) as store:
         store.init()
+    found_store(url, tmp_path)
     with open_league(tmp_path / "a.db") as mine, open_league(tmp_path / "b.db") as theirs:
         add_submissions(mine, tmp_path, [("ana", (11.0,))])
         with open_store(url) as store:
-            store.push([r for r in all_records(mine) if r.kind == "submission"])
+            store.push(sealed(*(r for r in all_records(mine) if r.kind == "submission")))
         assert sync_with(theirs, url).waiting == 1
         add_racer(theirs, "ana")
         with theirs.transaction():

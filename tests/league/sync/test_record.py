@@ -89,7 +89,9 @@ def _envelope(**changes: Any) -> bytes:
         (b"[" * 100_000, "nested too deeply"),
         (b'{"lap": NaN}', "not valid JSON"),
         (b"[]", "not a JSON object"),
-        (_envelope(format=2), "newer racer-tui"),
+        (_envelope(format=3), "newer racer-tui"),
+        (_envelope(format=2), "fields"),  # format 2 has a seal's fields
+        (_envelope(signer="ab" * 32), "fields"),  # a seal in a format 1 envelope
         (_envelope(extra=1), "fields"),
         (_envelope(content_hash="a" * 64), "does not match"),
         (_envelope(kind="script"), "not a shared kind"),

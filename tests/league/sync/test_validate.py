@@ -18,6 +18,8 @@ from league.sync.kinds import KIND_OF_TABLE, LEAGUE_KINDS, TABLE_OF_KIND, profil
 from league.sync.outgoing import unsent_batches
 from league.sync.record import SyncRecord, make_record
 from league.sync.validate import FIELDS, LAP_FIELDS, check_record
+from league.trust.keys import load_or_create_key
+from league.trust.membership import found_league
 from sim.ids import is_valid_id
 from tests.league.sync.leagues import add_submissions, host_league
 
@@ -29,6 +31,7 @@ def made(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, SyncRec
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("RACER_TUI_HOME", str(root / "home"))
         with open_league(root / "league.db") as league:
+            found_league(league, load_or_create_key())
             host_league(league, root)
             add_submissions(league, root, [("[bold red]x", (11.0,))])
             records = [r for batch in unsent_batches(league, "nowhere") for r in batch.records]

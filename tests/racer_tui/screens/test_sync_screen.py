@@ -18,6 +18,8 @@ from league.store import open_league
 from league.sync import local, open_store
 from league.sync.dir_store import MARKER_NAME
 from league.sync.session import save_store
+from league.trust.keys import load_or_create_key
+from league.trust.membership import found_league
 from racer_tui.app import RacerTuiApp, create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.league import LeagueScreen
@@ -38,6 +40,14 @@ def store_url(tmp_path: Path) -> str:
     with open_store(url) as store:
         store.init()
     return url
+
+
+def found_here(url: str) -> None:
+    """What the organiser's `racer-tui sync init` does on this machine: the store is set up
+    and this machine's key founds the league (so everyone accepts what it signs)."""
+    with open_league() as league, open_store(url) as store:
+        store.init()
+        found_league(league, load_or_create_key())
 
 
 def on_machine(monkeypatch: pytest.MonkeyPatch, home: Path) -> None:
@@ -92,8 +102,9 @@ def board_racers(app: RacerTuiApp) -> list[str]:
 async def test_two_racers_sync_from_the_app_and_see_each_others_results(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, store_url: str
 ) -> None:
-    # Racer A: records a race, sets the store from the Sync screen and syncs.
+    # Racer A, the organiser: records a race, sets the store from the Sync screen, syncs.
     on_machine(monkeypatch, tmp_path / "ada-laptop")
+    found_here(store_url)
     record(MARKUP_NAME, [11.0, 10.5])
     app = create_app(start="league")
     async with app.run_test(size=(100, 30)) as pilot:
@@ -105,12 +116,13 @@ async def test_two_racers_sync_from_the_app_and_see_each_others_results(
         assert f"This league syncs with {store_url}" in notes.text()
         await pilot.press("s")
         await settle(pilot)
-        assert f"Synced with {store_url}: pushed 3, pulled 0" in summary(screen)
+        # The racer, track and race, and the league's founding record.
+        assert f"Synced with {store_url}: pushed 4, pulled 0" in summary(screen)
         assert "0 conflicts, 0 quarantined" in summary(screen)
         await pilot.press("escape")
         await settle(pilot)
         line = status_line(app)
-        assert "⇅ dir:/" in line and "0 to push" in line and "(↑3 ↓0)" in line
+        assert "⇅ dir:/" in line and "0 to push" in line and "(↑4 ↓0)" in line
 
     # Racer B: an empty league on another machine syncs and sees A's result.
     on_machine(monkeypatch, tmp_path / "bob-desktop")
@@ -124,7 +136,7 @@ async def test_two_racers_sync_from_the_app_and_see_each_others_results(
         await set_store(pilot, screen, store_url)
         await pilot.press("s")
         await settle(pilot)
-        assert "pulled 3" in summary(screen)
+        assert "pulled 4" in summary(screen)
         await pilot.press("escape")
         await settle(pilot)
         assert sorted(board_racers(app)) == sorted([MARKUP_NAME, "bob"])
@@ -136,6 +148,7 @@ async def test_at_80_columns_the_status_line_keeps_room_for_the_store(
     tmp_path: Path, store_url: str
 ) -> None:
     data_home()
+    found_here(store_url)
     record("ana", [11.0])
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:
@@ -153,7 +166,7 @@ async def test_at_80_columns_the_status_line_keeps_room_for_the_store(
         assert "⇅ dir:/" in line
         await pilot.resize_terminal(120, 30)
         await settle(pilot)
-        assert "0 conflicts" in status_line(app) and "(↑3 ↓0)" in status_line(app)
+        assert "0 conflicts" in status_line(app) and "(↑4 ↓0)" in status_line(app)
 
 
 async def test_a_store_that_is_down_is_one_notification_and_changes_nothing(
@@ -215,7 +228,9 @@ async def test_a_new_store_is_set_up_from_the_app_when_the_racer_says_so(
         await settle(pilot)
         assert app.screen is screen
         assert (share / MARKER_NAME).is_file()
-        assert f"Synced with {url}: pushed 3" in summary(screen)
+        # The racer, track and race, and the founding record: the host set the store up.
+        assert f"Synced with {url}: pushed 4" in summary(screen)
+        assert "is the league's organiser key" in summary(screen)
         assert "racer-tui sync init" not in notes.text()  # no command line needed
 
 
