@@ -382,7 +382,8 @@ CREATE TABLE board (
 # (found, propose, admit, retire, revoke), whose signer is named in `signed_by`. Every
 # record's seal (made here at push, or pulled) is kept in sync_seals so it travels with
 # the record to any other store. A pulled record the roster does not allow is quarantined
-# with the whole record in `held`, and tried again when the roster changes.
+# with the whole record in `held`, and tried again when the roster changes. sync_replays
+# remembers which races were re-run here (league.trust.replay) and what came out.
 SIGNED_RESULTS = """
 CREATE TABLE roster (
     id TEXT PRIMARY KEY,
@@ -403,6 +404,13 @@ CREATE TABLE sync_seals (
     signature TEXT NOT NULL,
     PRIMARY KEY (kind, record_id, version, content_hash)
 ) WITHOUT ROWID;
+CREATE TABLE sync_replays (
+    race_id TEXT PRIMARY KEY,
+    content_hash TEXT NOT NULL,
+    outcome TEXT NOT NULL,
+    detail TEXT NOT NULL,
+    checked_at TEXT NOT NULL
+);
 ALTER TABLE sync_quarantine ADD COLUMN held TEXT
 """
 

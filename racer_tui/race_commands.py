@@ -244,6 +244,30 @@ def resolve_driver(spec: str, track: Track) -> Driver:
         raise RaceSetupError(str(error)) from None
 
 
+class DriversByHash:
+    """Drivers found by the hash of the exact car (what race records name): the reference
+    driver of a track, or the garage model whose content hash it is. The garage is hashed
+    once, on the first trained model asked for."""
+
+    def __init__(self) -> None:
+        self._garage: dict[str, str] | None = None
+
+    def __call__(self, model_hash: str, track: Track) -> Driver | None:
+        if model_hash == f"{REFERENCE_NAME}:{track.content_hash}":
+            return reference_driver(track)
+        if self._garage is None:
+            from sim.garage.folder import ModelError, list_models
+
+            self._garage = {}
+            for folder in list_models():
+                try:
+                    self._garage.setdefault(folder.content_hash(), str(folder.path))
+                except (ModelError, OSError):
+                    continue  # a damaged model is no one's race
+        path = self._garage.get(model_hash)
+        return None if path is None else resolve_driver(path, track)
+
+
 def _policy_driver(spec: str, build: Callable[[ModuleType], Driver]) -> Driver:
     """Load torch and the policy only now: the reference path never pays for them."""
     try:

@@ -5,6 +5,7 @@
     racer-tui sync [--push | --pull] [--store URL] [--json]    push what is new, pull the rest
     racer-tui sync status [--json]                             what sync set aside, and why
     racer-tui sync fetch-bundle HASH [--name NAME]             install a racer's model
+    racer-tui sync verify [--again] [--json]                   re-run races, compare laps
 
 Every command takes `--db FILE`. Text from other racers (names, reasons, excerpts) is
 printed as plain text: with print(), or in rich tables as Text cells, never as markup.
@@ -16,6 +17,7 @@ import argparse
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -27,16 +29,19 @@ from league.errors import LeagueError
 from league.sync.errors import SyncError
 from racer_tui.output import print_json, print_table
 from sim.garage.folder import ModelError
+from sim.plural import counted
 
 if TYPE_CHECKING:
     from league.store import League
     from league.sync.engine import Progress, SyncSummary
+    from league.trust.replay import Verdict
 
     Parsers = argparse._SubParsersAction[argparse.ArgumentParser]
 
 NAMES = ("sync",)
 USER_ERRORS: tuple[type[Exception], ...] = (SyncError, LeagueError, ModelError)
 _EXCERPT = 60
+_OUTCOMES = ("same", "differs", "skipped")
 _RUN_ORDER = (
     "pushed",
     "pulled",
@@ -60,6 +65,12 @@ def register(commands: Parsers) -> None:
     direction = sync.add_mutually_exclusive_group()
     direction.add_argument("--push", action="store_true", help="only push")
     direction.add_argument("--pull", action="store_true", help="only pull")
+    sync.add_argument(
+        "--verify",
+        action="store_true",
+        help="then re-run the races not verified yet and withdraw any whose laps differ "
+        "(as `racer-tui sync verify`)",
+    )
     sync.add_argument("--store", metavar="URL", help="this store instead of the saved one")
     _common(sync, top=True, bundles=True, as_json=True)
     actions = sync.add_subparsers(dest="sync_command", metavar="ACTION")
@@ -74,6 +85,17 @@ def register(commands: Parsers) -> None:
     _common(use, bundles=True)
     status = actions.add_parser("status", help="last syncs, conflicts, quarantined records")
     _common(status, as_json=True)
+    verify = actions.add_parser(
+        "verify",
+        help="re-run the league's races and withdraw any whose laps differ",
+        description="Run each race again from the model, track, rules and seed it names "
+        "(races are deterministic) and compare its laps. A race that comes out differently "
+        "leaves the leaderboard and is listed in quarantine; one whose model is not in this "
+        "garage is skipped (fetch it with `racer-tui sync fetch-bundle`). Races verified "
+        "before are not run again unless --again.",
+    )
+    verify.add_argument("--again", action="store_true", help="re-run races verified before")
+    _common(verify, as_json=True)
     fetch = actions.add_parser("fetch-bundle", help="install a racer's model from the bundle store")
     fetch.add_argument("hash", metavar="HASH", help="model hash or bundle hash (8+ characters)")
     fetch.add_argument("--name", help="garage name to install it under")
@@ -131,6 +153,7 @@ def run(args: argparse.Namespace) -> int:
         "set": _set,
         "status": _status,
         "fetch-bundle": _fetch,
+        "verify": _verify,
     }
     with open_league(args.db) as league:
         return handlers[action](league, args)
@@ -183,10 +206,14 @@ def _sync(league: League, args: argparse.Namespace) -> int:
             pull_records=not args.push,
             progress=progress,
         )
+    verdicts = _verdicts(league, again=False) if args.verify else None
     if args.json:
-        print_json({**summary.to_json(), "notes": notes})
+        replays = {} if verdicts is None else {"verified": [asdict(v) for v in verdicts]}
+        print_json({**summary.to_json(), "notes": notes, **replays})
         return 0
     _print_summary(summary, notes)
+    if verdicts is not None:
+        _print_verdicts(verdicts)
     return 0
 
 
@@ -217,8 +244,10 @@ def _print_summary(summary: SyncSummary, notes: list[str]) -> None:
     print(summary_headline(summary))
     for line in summary_details(summary, notes):
         print(f"  {line}")  # plain print: store text is never markup
-    if summary.conflicts or summary.quarantined:
+    if summary.conflicts:
         print("Both sides of each conflict are kept: see `racer-tui sync status`.")
+    elif summary.quarantined:
+        print("Quarantined records reach no leaderboard: see `racer-tui sync status`.")
 
 
 # --- status ------------------------------------------------------------------------------------
@@ -335,3 +364,34 @@ def _fetch(league: League, args: argparse.Namespace) -> int:
     for note in installed.notes:
         print(f"  {note}")
     return 0
+
+
+def _verify(league: League, args: argparse.Namespace) -> int:
+    verdicts = _verdicts(league, again=args.again)
+    if args.json:
+        print_json([asdict(verdict) for verdict in verdicts])
+    else:
+        _print_verdicts(verdicts)
+    return 0
+
+
+def _verdicts(league: League, *, again: bool) -> list[Verdict]:
+    from league.trust.replay import verify_races
+    from racer_tui.race_commands import DriversByHash
+
+    return verify_races(league, DriversByHash(), again=again)
+
+
+def _print_verdicts(verdicts: list[Verdict]) -> None:
+    counts = {outcome: sum(v.outcome == outcome for v in verdicts) for outcome in _OUTCOMES}
+    print(
+        f"Re-ran {counted(len(verdicts) - counts['skipped'], 'race')}: {counts['same']} the "
+        f"same, {counts['differs']} different (withdrawn, see `racer-tui sync status`); "
+        f"{counts['skipped']} skipped."
+    )
+    for verdict in verdicts:
+        if verdict.outcome != "same":
+            # Racer names come from other machines: printed, never rendered as markup.
+            print(
+                f"  {verdict.outcome}: race {verdict.race_id} ({verdict.racer}): {verdict.detail}"
+            )

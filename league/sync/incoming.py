@@ -189,17 +189,30 @@ def withdraw_refused(league: League, store: str) -> list[str]:
         reason = roster.refusal(record)
         if reason is None:
             continue
-        hold(league, store, record, reason)
-        if kind == "race":
-            league.conn.execute("DELETE FROM race_traces WHERE race_id = ?", (record_id,))
-            league.conn.execute("DELETE FROM race_laps WHERE race_id = ?", (record_id,))
-        else:
-            league.conn.execute("DELETE FROM submission_laps WHERE submission_id = ?", (record_id,))
-        league.conn.execute(f"DELETE FROM {table} WHERE id = ?", (record_id,))
+        withdraw(league, store, record, reason, rebuild=False)
         withdrawn.append(f"{kind} {record_id}: {reason}")
     if withdrawn:
         rebuild_entries(league.conn)
     return withdrawn
+
+
+def withdraw(
+    league: League, store: str, record: SyncRecord, reason: str, *, rebuild: bool = True
+) -> None:
+    """Take a result (a submission or race) out of the league and hold it in quarantine
+    with `reason` (call inside a transaction)."""
+    table = _WITHDRAWN_KINDS[record.kind]
+    hold(league, store, record, reason)
+    if record.kind == "race":
+        league.conn.execute("DELETE FROM race_traces WHERE race_id = ?", (record.record_id,))
+        league.conn.execute("DELETE FROM race_laps WHERE race_id = ?", (record.record_id,))
+    else:
+        league.conn.execute(
+            "DELETE FROM submission_laps WHERE submission_id = ?", (record.record_id,)
+        )
+    league.conn.execute(f"DELETE FROM {table} WHERE id = ?", (record.record_id,))
+    if rebuild:
+        rebuild_entries(league.conn)
 
 
 def _apply_trusted(

@@ -245,8 +245,15 @@ def summary_details(summary: SyncSummary, notes: list[str], *, items: bool = Tru
         *(f"quarantined: {line}" for line in summary.quarantined if items),
         *(f"rename not shared: {line}" for line in summary.refused),
         *(f"not pushed: {line}" for line in summary.damaged),
+        *(f"withdrawn: {line}" for line in summary.withdrawn),
+        *summary.notes,
         *notes,
     ]
+    if summary.released:
+        lines.append(
+            f"{counted(summary.released, 'held record')} let in: the organiser admitted "
+            "the key that signed them"
+        )
     if summary.aliased:
         lines.append(
             f"{counted(summary.aliased, 'record')} made on two machines for one racer or track: "

@@ -1,7 +1,9 @@
 """Sync: the league's shared store from the app. Its URL (checked by the sync library's
 parser and saved as the league's setting), a Sync action that pushes this league's new
 records and pulls everyone else's with a progress bar, what the last sync did, and what
-sync set aside: conflicts (both sides kept) and quarantined records (not added).
+sync set aside: conflicts (both sides kept) and quarantined records (not added). And the
+league's signing keys: this machine's and what it may sign, and for the organiser the
+racers' keys waiting for admission, admitted here with `a` (`racer-tui racer admit`).
 
 The work is league.sync's (session.py runs a sync exactly as `racer-tui sync` does,
 status.py reads what it set aside); this screen calls it in thread workers, each with its
@@ -14,6 +16,7 @@ the command line), then synced.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import ClassVar
@@ -28,7 +31,7 @@ from textual.widgets import Button, DataTable, Input, Label, Static
 from textual.worker import Worker, WorkerState
 
 from league.errors import LeagueError
-from league.store import open_league
+from league.store import League, open_league
 from league.sync import open_store
 from league.sync.engine import SyncSummary
 from league.sync.errors import (
@@ -45,6 +48,9 @@ from league.sync.status import (
     summary_headline,
     sync_status,
 )
+from league.trust import membership
+from league.trust.keys import KeyFileError, load_or_create_key
+from league.trust.membership import KeyRow
 from racer_tui.jobs import Job
 from racer_tui.screens.base import RacerScreen, error_message, notify_worker_failure
 from racer_tui.screens.dialogs import ConfirmDialog, show_problem
@@ -60,6 +66,11 @@ CONFLICT_COLUMNS = (
     Col("what differs", keep=0, shrink_to=12, collapses=False),
     Col("here", keep=0, shrink_to=10, collapses=False),
     Col("in the store", keep=0, shrink_to=12, collapses=False),
+)
+KEY_COLUMNS = (
+    Col("racer", keep=0, shrink_to=10, collapses=False),
+    Col("fingerprint", keep=0, collapses=False),
+    Col("status", keep=1, shrink_to=8),
 )
 QUARANTINE_COLUMNS = (
     "kind",
@@ -86,10 +97,32 @@ def cut(text: str, limit: int = CELL) -> Text:
 # --- messages from the workers --------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class Keys:
+    """This machine's key and the keys waiting for admission, as the screen shows them."""
+
+    mine: KeyRow | None
+    waiting: tuple[KeyRow, ...] = ()
+    organiser: bool = False
+    problem: str = ""  # the key file cannot be used: the sentence saying what to do
+
+
+def read_keys(league: League) -> Keys:
+    try:
+        key = load_or_create_key()
+    except KeyFileError as error:
+        return Keys(None, problem=str(error))
+    rows = membership.key_rows(league, key)
+    mine = next(row for row in rows if row.this_machine)
+    waiting = tuple(row for row in rows if row.status == "proposed")
+    return Keys(mine, waiting, mine.status in ("founder", "organiser"))
+
+
 class SyncStatusRead(Message):
-    def __init__(self, status: SyncStatus) -> None:
+    def __init__(self, status: SyncStatus, keys: Keys) -> None:
         super().__init__()
         self.status = status
+        self.keys = keys
 
 
 class StoreSaved(Message):
@@ -112,6 +145,7 @@ class SyncScreen(RacerScreen[bool]):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("s", "sync", "Sync now", tooltip="Push this league's new records, then pull"),
         Binding("e", "edit_store", "Edit store", tooltip="Change the shared store's URL"),
+        Binding("a", "admit", "Admit key", tooltip="Admit the selected racer's signing key"),
         Binding("escape", "leave", "Back", tooltip="Leave the field, then back to the league"),
         Binding("ctrl+r", "reload", "Reload", tooltip="Read the sync status again", show=False),
     ]
@@ -127,6 +161,7 @@ class SyncScreen(RacerScreen[bool]):
         self.job = Job()
         self._shown_progress: tuple[str, int] | None = None
         self.last_summary: Text | None = None  # what the sync run here did
+        self.keys = Keys(None)
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league", "shared store")
@@ -143,6 +178,8 @@ class SyncScreen(RacerScreen[bool]):
             yield FittedTable(id="sync-conflicts", cursor_type="row", zebra_stripes=True)
             yield Label("Quarantined", id="sync-quarantine-title", classes="field-label")
             yield FittedTable(id="sync-quarantine", cursor_type="row", zebra_stripes=True)
+            yield Static("Signing key", id="sync-keys-title", classes="field-label")
+            yield FittedTable(id="sync-keys", cursor_type="row", zebra_stripes=True)
         yield RacerFooter()
 
     def on_mount(self) -> None:
@@ -157,11 +194,13 @@ class SyncScreen(RacerScreen[bool]):
     def _read_status(self) -> None:
         with open_league(self.db_path) as league:
             status = sync_status(league)
-        self.post_message(SyncStatusRead(status))
+            keys = read_keys(league)
+        self.post_message(SyncStatusRead(status, keys))
 
     def on_sync_status_read(self, message: SyncStatusRead) -> None:
         first = self.status is None
         self.status = message.status
+        self._show_keys(message.keys)
         overview = message.status.overview
         url = self.query_one("#sync-url", Input)
         if first:
@@ -248,6 +287,65 @@ class SyncScreen(RacerScreen[bool]):
         )
         self.set_class(not conflicts, "-no-conflicts")
         self.set_class(not quarantined, "-no-quarantine")
+
+    # --- signing keys ------------------------------------------------------------------
+
+    def _show_keys(self, keys: Keys) -> None:
+        self.keys = keys
+        title = self.query_one("#sync-keys-title", Static)
+        waiting = keys.waiting if keys.organiser else ()
+        if keys.mine is None:
+            title.update(Text(f"Signing key: {keys.problem}"))
+        elif waiting:
+            title.update(
+                Text(
+                    f"Keys waiting for admission ({len(waiting)}): check the fingerprint with "
+                    "the racer, then press a"
+                )
+            )
+        else:
+            title.update(Text(f"Your signing key {_key_line(keys.mine)}"))
+        fill_table(
+            self.query_one("#sync-keys", DataTable),
+            KEY_COLUMNS,
+            [[Text(row.racer), Text(row.fingerprint), Text("waiting")] for row in waiting],
+        )
+        self.set_class(not waiting, "-no-waiting-keys")
+        self.refresh_bindings()
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "admit":
+            return bool(self.keys.organiser and self.keys.waiting)
+        return True
+
+    def action_admit(self) -> None:
+        table = self.query_one("#sync-keys", DataTable)
+        if not self.keys.waiting or not 0 <= table.cursor_row < len(self.keys.waiting):
+            return
+        row = self.keys.waiting[table.cursor_row]
+        dialog = ConfirmDialog(
+            f"Admit {row.racer}'s key {row.fingerprint}?",
+            f"Ask {row.racer} to read out the fingerprint on their own Sync screen first: an "
+            f"admitted key's results reach every leaderboard as {row.racer}'s. What it "
+            "signed so far is let in now, and the admission goes out with the next sync.",
+            confirm_label="Admit",
+        )
+        self.app.push_screen(dialog, partial(self._admit_answered, row))
+
+    def _admit_answered(self, row: KeyRow, yes: bool | None) -> None:
+        if yes:
+            self._admit(row)
+
+    @work(thread=True, exclusive=True, group="sync-admit", exit_on_error=False)
+    def _admit(self, row: KeyRow) -> None:
+        with open_league(self.db_path) as league:
+            membership.admit(league, load_or_create_key(), row.public_key)
+        self.app.call_from_thread(
+            self.notify,
+            f"Admitted {row.racer}'s key {row.fingerprint}. Press s to share it with the league.",
+            markup=False,
+        )
+        self.app.call_from_thread(self.action_reload)
 
     # --- the store's URL ---------------------------------------------------------------
 
@@ -470,3 +568,19 @@ class SyncScreen(RacerScreen[bool]):
             )
             return
         self.dismiss(self.pulled > 0)
+
+
+_KEY_STATUS = {
+    "founder": "the organiser's (it founded the league)",
+    "organiser": "an organiser's",
+    "racer": "admitted",
+    "proposed": "waiting for the organiser to admit it",
+    "retired": "retired: what it signs now does not count",
+    "revoked": "revoked: nothing it signed counts",
+    "unknown": "not proposed yet (the next sync proposes it)",
+}
+
+
+def _key_line(row: KeyRow) -> str:
+    whose = f"{row.racer}'s, " if row.racer else ""
+    return f"{row.fingerprint}: {whose}{_KEY_STATUS[row.status]}"

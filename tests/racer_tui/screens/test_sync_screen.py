@@ -17,7 +17,7 @@ from league.races import record_race
 from league.store import open_league
 from league.sync import local, open_store
 from league.sync.dir_store import MARKER_NAME
-from league.sync.session import save_store
+from league.sync.session import save_store, sync_league
 from league.trust.keys import load_or_create_key
 from league.trust.membership import found_league
 from racer_tui.app import RacerTuiApp, create_app
@@ -167,6 +167,44 @@ async def test_at_80_columns_the_status_line_keeps_room_for_the_store(
         await pilot.resize_terminal(120, 30)
         await settle(pilot)
         assert "0 conflicts" in status_line(app) and "(↑4 ↓0)" in status_line(app)
+
+
+async def test_the_organiser_admits_a_racers_key_from_the_sync_screen(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, store_url: str
+) -> None:
+    # bob races on his own machine and syncs: his key is proposed, his race held back.
+    on_machine(monkeypatch, tmp_path / "host")
+    found_here(store_url)
+    on_machine(monkeypatch, tmp_path / "bob-laptop")
+    record("bob", [12.0])
+    with open_league() as league:
+        sync_league(league, store_url)
+        bob_key = load_or_create_key().fingerprint
+
+    on_machine(monkeypatch, tmp_path / "host")
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        screen = await open_sync(pilot)
+        await set_store(pilot, screen, store_url)
+        await pilot.press("s")
+        await settle(pilot)
+        title = painted(screen.query_one("#sync-keys-title"))
+        assert "Keys waiting for admission (1)" in title
+        keys = painted(screen.query_one("#sync-keys"))
+        assert "bob" in keys and bob_key in keys
+        assert "Admit key" in painted(screen.query_one("RacerFooter"))
+        await pilot.press("a")
+        await settle(pilot)
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("y")
+        await settle(pilot)
+        assert f"Admitted bob's key {bob_key}" in notes.text()
+        assert "Your signing key" in painted(screen.query_one("#sync-keys-title"))
+        assert "Admit key" not in painted(screen.query_one("RacerFooter"))
+        await pilot.press("escape")
+        await settle(pilot)
+        assert board_racers(app) == ["bob"]  # his held race, let in by the admission
 
 
 async def test_a_store_that_is_down_is_one_notification_and_changes_nothing(

@@ -1,0 +1,151 @@
+"""Verification by replay: a race record names everything that made it (the model's
+hash, the track's hash, the rules, the seed and the simulator's physics), and races are
+deterministic, so any machine holding the model can run the race again and compare.
+
+A race whose laps come out differently was not driven as it claims: it is taken out of
+the league and held in quarantine with the first lap that differs. A race that cannot
+be re-run here (its model or track is not on this machine, or it was timed by another
+version of the simulator) is skipped and says why. Each verdict is remembered per race
+and content (`sync_replays`), so a second run re-races only what is new.
+
+The driver comes from the caller (`DriverFor`): running a trained model needs torch,
+which the league package never imports.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Final, Literal
+
+from league.records import record_body
+from league.store import League, now_iso
+from league.sync import incoming
+from league.sync.local import STORE_SETTING, get_setting
+from league.sync.record import Seal, SyncRecord
+from sim.race.driver import Driver
+from sim.race.engine import run_race
+from sim.race.physics import CURRENT
+from sim.race.rules import RulesError, rules_from_mapping
+from sim.track import Track
+from sim.track_catalog import find_track_by_hash, resolve_track
+
+# The model hash -> a driver of that exact model on `track`, or None when it is not here;
+# ValueError (one sentence) when it is here but cannot drive.
+DriverFor = Callable[[str, Track], Driver | None]
+Outcome = Literal["same", "differs", "skipped"]
+# Recorded laps are the engine's own floats; anything past this is not rounding.
+_TOLERANCE_S: Final = 1e-6
+
+
+@dataclass(frozen=True)
+class Verdict:
+    race_id: str
+    racer: str
+    outcome: Outcome
+    detail: str  # one sentence: what differed, or why it was skipped ("" when the same)
+
+
+def verify_races(
+    league: League,
+    driver_for: DriverFor,
+    *,
+    again: bool = False,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[Verdict]:
+    """Re-run every race not verified before (`again`: every race) and judge it."""
+    rows = league.query(
+        "SELECT r.id, r.racer, r.content_hash FROM races r LEFT JOIN sync_replays v "
+        "ON v.race_id = r.id AND v.content_hash = r.content_hash "
+        "WHERE ? OR v.race_id IS NULL OR v.outcome = 'skipped' ORDER BY r.id",
+        (again,),
+    )
+    verdicts = []
+    for done, row in enumerate(rows, start=1):
+        verdict = _verify(league, str(row[0]), str(row[1]), driver_for)
+        with league.transaction():
+            league.conn.execute(
+                "INSERT INTO sync_replays (race_id, content_hash, outcome, detail, checked_at) "
+                "VALUES (?, ?, ?, ?, ?) ON CONFLICT (race_id) DO UPDATE SET "
+                "content_hash = excluded.content_hash, outcome = excluded.outcome, "
+                "detail = excluded.detail, checked_at = excluded.checked_at",
+                (verdict.race_id, row[2], verdict.outcome, verdict.detail, now_iso()),
+            )
+            if verdict.outcome == "differs":
+                _withdraw(league, verdict, str(row[2]))
+        verdicts.append(verdict)
+        if progress is not None:
+            progress(done, len(rows))
+    return verdicts
+
+
+def _verify(league: League, race_id: str, racer: str, driver_for: DriverFor) -> Verdict:
+    body = record_body(league, "races", race_id)
+    physics = body.get("physics") or "racer-tui/1"
+    if physics != CURRENT:
+        return Verdict(
+            race_id,
+            racer,
+            "skipped",
+            f"it was timed with {physics}; this racer-tui drives {CURRENT}",
+        )
+    info = find_track_by_hash(str(body["track_hash"]))
+    if info is None:
+        return Verdict(race_id, racer, "skipped", "its track is not on this machine")
+    try:
+        rules = rules_from_mapping(json.loads(body["rules"]))
+    except RulesError as error:
+        return Verdict(race_id, racer, "skipped", f"its rules do not load here ({error})")
+    track = resolve_track(info.name)
+    try:
+        driver = driver_for(str(body["model_hash"]), track)
+    except ValueError as error:  # the model is here but cannot drive (its one sentence)
+        return Verdict(race_id, racer, "skipped", str(error))
+    if driver is None:
+        return Verdict(
+            race_id,
+            racer,
+            "skipped",
+            f"its model {str(body['model_hash'])[:12]} is not in this garage "
+            "(racer-tui sync fetch-bundle installs it)",
+        )
+    result = run_race(track, rules, driver, racer=racer, seed=int(body["seed"]), keep_trace=False)
+    claimed = body["laps"]
+    return Verdict(race_id, racer, *_compare(claimed, [lap.to_json() for lap in result.laps]))
+
+
+def _compare(
+    claimed: Sequence[dict[str, object]], driven: Sequence[dict[str, object]]
+) -> tuple[Outcome, str]:
+    for number, (said, did) in enumerate(zip(claimed, driven, strict=False), start=1):
+        for field in ("raw_seconds", "time_seconds", "offtracks", "valid"):
+            expected, actual = float(said[field]), float(did[field])  # type: ignore[arg-type]
+            if abs(expected - actual) > _TOLERANCE_S:
+                what = "off-tracks" if field == "offtracks" else field.replace("_", " ")
+                return (
+                    "differs",
+                    f"re-run here, its lap {number} has {what} {actual:g}, not the "
+                    f"{expected:g} it claims",
+                )
+    if len(claimed) != len(driven):
+        return (
+            "differs",
+            f"re-run here, it drives {len(driven)} laps in the time, not the {len(claimed)} "
+            "it claims",
+        )
+    return "same", ""
+
+
+def _withdraw(league: League, verdict: Verdict, digest: str) -> None:
+    row = league.query_one(
+        "SELECT signer, signature FROM sync_seals WHERE kind = 'race' AND record_id = ? "
+        "AND content_hash = ?",
+        (verdict.race_id, digest),
+    )
+    body = record_body(league, "races", verdict.race_id)
+    record = SyncRecord("race", verdict.race_id, digest, body)
+    if row is not None:
+        record = record.sealed(Seal(str(row[0]), str(row[1])))
+    store = get_setting(league, STORE_SETTING) or ""
+    incoming.withdraw(league, store, record, f"it is racer {verdict.racer}'s, but {verdict.detail}")

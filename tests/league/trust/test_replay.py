@@ -1,0 +1,86 @@
+"""Verification by replay: races are deterministic, so re-running one from the model,
+track, rules and seed it names must give its laps; a race that does not is withdrawn and
+listed in quarantine, and one whose model is not here is skipped with the reason."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from league.races import record_race
+from league.store import League, open_league
+from league.trust.replay import verify_races
+from racer_tui.cli import main
+from racer_tui.race_commands import DriversByHash
+from sim.race.driver import reference_driver
+from sim.race.engine import run_race
+from sim.race.rules import RaceRules
+from sim.track_catalog import resolve_track
+
+RULES = RaceRules(window_seconds=40.0)
+
+
+def _reference_race(league: League, racer: str, seed: int) -> str:
+    track = resolve_track("hairpin-circuit")
+    result = run_race(track, RULES, reference_driver(track), racer=racer, seed=seed)
+    return record_race(league, result)
+
+
+def _forged_race(league: League) -> str:
+    """A race that claims a lap 0.8 s faster than the car drove it."""
+    track = resolve_track("hairpin-circuit")
+    result = run_race(track, RULES, reference_driver(track), racer="mallory", seed=9)
+    first = result.laps[0]
+    quicker = replace(
+        first, time_seconds=first.time_seconds - 0.8, raw_seconds=first.raw_seconds - 0.8
+    )
+    return record_race(league, replace(result, laps=(quicker, *result.laps[1:])))
+
+
+def test_a_true_race_verifies_and_a_forged_one_is_withdrawn(tmp_path: Path) -> None:
+    with open_league(tmp_path / "league.db") as league:
+        honest = _reference_race(league, "ana", seed=4)
+        forged = _forged_race(league)
+        verdicts = {v.race_id: v for v in verify_races(league, DriversByHash())}
+
+        assert verdicts[honest].outcome == "same"
+        assert verdicts[forged].outcome == "differs"
+        assert "lap 1 has raw seconds" in verdicts[forged].detail
+        assert [row[0] for row in league.query("SELECT id FROM races")] == [honest]
+        assert "mallory" not in {row["racer"] for row in league.query("SELECT racer FROM board")}
+        (row,) = league.query("SELECT location, reason FROM sync_quarantine")
+        assert row["location"] == f"race {forged}"
+        assert row["reason"].startswith("it is racer mallory's, but re-run here, its lap 1")
+
+        assert verify_races(league, DriversByHash()) == []  # verified races are not re-run
+        assert [v.outcome for v in verify_races(league, DriversByHash(), again=True)] == ["same"]
+
+
+def test_a_race_whose_model_is_not_here_is_skipped_with_how_to_fetch_it(tmp_path: Path) -> None:
+    with open_league(tmp_path / "league.db") as league:
+        track = resolve_track("hairpin-circuit")
+        result = run_race(track, RULES, reference_driver(track), racer="bob", seed=2)
+        record_race(league, replace(result, model_hash="ab" * 32, model_name="bobs-car"))
+        (verdict,) = verify_races(league, DriversByHash())
+        assert verdict.outcome == "skipped"
+        assert "not in this garage" in verdict.detail and "fetch-bundle" in verdict.detail
+        assert league.query_one("SELECT count(*) FROM races")[0] == 1  # skipped, not withdrawn
+
+
+def test_sync_verify_reports_in_text_and_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "league.db"
+    with open_league(db) as league:
+        _reference_race(league, "ana", seed=1)
+        forged = _forged_race(league)
+    assert main(["sync", "verify", "--db", str(db)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("Re-ran 2 races: 1 the same, 1 different (withdrawn")
+    assert f"differs: race {forged} (mallory)" in out
+    assert main(["sync", "verify", "--again", "--db", str(db), "--json"]) == 0
+    (again,) = json.loads(capsys.readouterr().out)
+    assert again["outcome"] == "same"
