@@ -30,6 +30,11 @@ Direction = Literal["counter-clockwise", "clockwise"]
 
 # Thinner than this anywhere and the road is not drivable (the car is 0.196 m wide).
 MIN_WIDTH = 0.2
+# DeepRacer's own tracks are 0.6-1.5 m wide and fit in 30 m; beyond these bounds a file
+# is not a track for a 1/18th-scale car (a file in millimetres or kilometres, say), and
+# its races would never finish a lap.
+MAX_WIDTH = 5.0
+MAX_EXTENT_M = 500.0
 # Two separate parts of the road (a hairpin's legs, neighbouring straights) must be further
 # apart than the car's wheels span diagonally (0.23 m), or a car can sit astride the gap with
 # wheels on both parts, never count as off track, and skip the road between them. 0.25 m
@@ -278,6 +283,18 @@ def _check_borders(points: FloatArray, label: str) -> None:
         raise TrackError(
             f"{label}: the road is {widths[row]:.3f} m wide at waypoint {row}; "
             f"it must be at least {MIN_WIDTH} m wide everywhere."
+        )
+    if float(widths.max()) > MAX_WIDTH:
+        row = int(np.argmax(widths))
+        raise TrackError(
+            f"{label}: the road is {widths[row]:,.1f} m wide at waypoint {row}; a track for a "
+            f"DeepRacer car is at most {MAX_WIDTH:g} m wide (are its units metres?)."
+        )
+    extent = float(np.ptp(points[:, :6].reshape(-1, 2), axis=0).max())
+    if extent > MAX_EXTENT_M:
+        raise TrackError(
+            f"{label}: the track spans {extent:,.0f} m; a track for a DeepRacer car fits in "
+            f"{MAX_EXTENT_M:g} m (are its units metres?)."
         )
     rings = {}
     for name, cols in (

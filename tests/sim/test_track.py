@@ -148,6 +148,21 @@ def test_zero_width(tmp_path: Path) -> None:
     assert "0.000 m wide" in message
 
 
+@pytest.mark.parametrize(
+    ("array", "says"),
+    [
+        (ring() * 1000.0, "m wide"),  # a file in millimetres: the road is 760 m wide
+        (ring(rx=300.0, ry=200.0), "the track spans"),  # a plausible road, 600 m across
+    ],
+)
+def test_a_track_in_the_wrong_units_is_refused(
+    tmp_path: Path, array: np.ndarray, says: str
+) -> None:
+    message = load_error(save(tmp_path / "units.npy", array))
+
+    assert says in message and "are its units metres?" in message
+
+
 def test_not_a_closed_loop(tmp_path: Path) -> None:
     message = load_error(save(tmp_path / "open.npy", ring()[:50]))
 
