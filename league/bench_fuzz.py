@@ -46,13 +46,8 @@ import numpy as np
 from league.errors import LeagueError
 from league.store import League, open_league
 from league.sync.errors import RecordInvalidError
-from league.sync.record import (
-    Quarantined,
-    canonical_json,
-    decode_envelope,
-    encode_envelope,
-    make_record,
-)
+from league.sync.record import Quarantined, decode_envelope, encode_envelope, make_record
+from sim.ids import canonical_json
 
 FAMILIES: Final = ("record", "rules", "track", "reward", "bundle")
 MARKER_NAME: Final = "fuzz-executed"
@@ -346,7 +341,7 @@ def _reward_case(scratch: Scratch) -> bool:
         ]
     )
     try:
-        function({"value": value})  # type: ignore[arg-type, typeddict-unknown-key]
+        function({"value": value})
     except RewardFunctionError:
         return False
     return True
@@ -363,10 +358,10 @@ def _bundle_case(scratch: Scratch) -> bool:
     if kind == 0:
         path.write_bytes(base[: rng.randrange(len(base))])
     elif kind == 1:
-        data = bytearray(base)
+        flipped = bytearray(base)
         for _ in range(rng.randrange(1, 8)):
-            data[rng.randrange(len(data))] = rng.randrange(256)
-        path.write_bytes(bytes(data))
+            flipped[rng.randrange(len(flipped))] = rng.randrange(256)
+        path.write_bytes(bytes(flipped))
     else:
         with zipfile.ZipFile(io.BytesIO(base)) as source:
             members = {info.filename: source.read(info) for info in source.infolist()}
@@ -455,7 +450,7 @@ def _integrity(league: League) -> dict[str, Any]:
         "rows_not_matching_their_hash": len(damaged),
         "quarantined": len(quarantined),
         "quarantine_texts_with_control_characters": unprintable,
-        "accepted_rows": league.query_one("SELECT count(*) FROM sync_seals")[0],
+        "accepted_rows": len(league.query("SELECT 1 FROM sync_seals")),
     }
 
 
