@@ -383,7 +383,8 @@ CREATE TABLE board (
 # record's seal (made here at push, or pulled) is kept in sync_seals so it travels with
 # the record to any other store. A pulled record the roster does not allow is quarantined
 # with the whole record in `held`, and tried again when the roster changes. sync_replays
-# remembers which races were re-run here (league.trust.replay) and what came out.
+# remembers which races were re-run here (league.trust.replay) and what came out. Records
+# that were waiting (sync_pending) were pulled unsigned: they are quarantined, never let in.
 SIGNED_RESULTS = """
 CREATE TABLE roster (
     id TEXT PRIMARY KEY,
@@ -392,6 +393,7 @@ CREATE TABLE roster (
     racer TEXT COLLATE NOCASE,
     role TEXT,
     signed_by TEXT NOT NULL,
+    kept TEXT,
     created_at TEXT NOT NULL,
     content_hash TEXT NOT NULL
 );
@@ -411,7 +413,13 @@ CREATE TABLE sync_replays (
     detail TEXT NOT NULL,
     checked_at TEXT NOT NULL
 );
-ALTER TABLE sync_quarantine ADD COLUMN held TEXT
+ALTER TABLE sync_quarantine ADD COLUMN held TEXT;
+INSERT OR REPLACE INTO sync_quarantine (store, location, reason, kind, record_id, excerpt,
+    found_at)
+SELECT '', kind || ' ' || record_id, 'it was pulled before results were signed and is not '
+    || 'signed, so nobody can tell who made it', kind, record_id, substr(body, 1, 120),
+    received_at FROM sync_pending;
+DELETE FROM sync_pending
 """
 
 MIGRATIONS: tuple[Migration, ...] = (

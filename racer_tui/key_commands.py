@@ -1,5 +1,6 @@
 """`racer-tui racer keys | admit | retire | revoke`: who signs for whom in the league.
 
+    racer-tui racer me [NAME]                            who races on this machine
     racer-tui racer keys [--json]                        every key the league knows
     racer-tui racer admit NAME [--key FP] [--organiser]  the organiser accepts a racer's key
     racer-tui racer retire NAME|FP                       an old key: its past results stay
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
 
     Actions = argparse._SubParsersAction[argparse.ArgumentParser]
 
-ACTIONS: Final = ("keys", "admit", "retire", "revoke")
+ACTIONS: Final = ("me", "keys", "admit", "retire", "revoke")
 _STATUS_WORDS: Final = {
     "founder": "organiser (founder)",
     "organiser": "organiser",
@@ -39,6 +40,12 @@ _STATUS_WORDS: Final = {
 
 
 def register(actions: Actions, db: argparse.ArgumentParser) -> None:
+    me = actions.add_parser(
+        "me",
+        parents=[db],
+        help="this machine's racer name (the name its signing key is proposed under)",
+    )
+    me.add_argument("name", nargs="?", help="save this name (default: show the saved one)")
     keys = actions.add_parser(
         "keys", parents=[db], help="signing keys: whose they are, which are admitted"
     )
@@ -69,8 +76,10 @@ def run(league: League, args: argparse.Namespace) -> int:
     from league.trust import membership
     from league.trust.keys import load_or_create_key
 
-    key = load_or_create_key()
     action = args.racer_command
+    if action == "me":
+        return _me(league, args.name)
+    key = load_or_create_key()
     if action == "keys":
         rows = membership.key_rows(league, key)
         if args.json:
@@ -89,6 +98,19 @@ def run(league: League, args: argparse.Namespace) -> int:
         row = end(league, key, args.target)
         print(f"Key {row.fingerprint} ({row.racer or 'no racer'}) is {row.status} now.")
     print("Run `racer-tui sync` to share it with the league.")
+    return 0
+
+
+def _me(league: League, name: str | None) -> int:
+    from league.local_racer import RACER_SETTING, save_local_racer_name
+    from league.sync.local import get_setting
+
+    if name is None:
+        saved = get_setting(league, RACER_SETTING)
+        print(f"This machine races as {saved}." if saved else "No racer name is saved here.")
+        return 0
+    saved = save_local_racer_name(league, name)
+    print(f"This machine races as {saved}; the next sync proposes its key under that name.")
     return 0
 
 

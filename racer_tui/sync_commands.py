@@ -82,6 +82,12 @@ def register(commands: Parsers) -> None:
     _common(init)
     use = actions.add_parser("set", help="save the store this league syncs with")
     use.add_argument("url", metavar="STORE", help="dir:PATH or dynamodb://TABLE?region=R")
+    use.add_argument(
+        "--organiser",
+        metavar="FP",
+        help="the organiser's key fingerprint, as they read it out: a store founded by "
+        "any other key is refused",
+    )
     _common(use, bundles=True)
     status = actions.add_parser("status", help="last syncs, conflicts, quarantined records")
     _common(status, as_json=True)
@@ -184,7 +190,7 @@ def _init(league: League, args: argparse.Namespace) -> int:
 def _set(league: League, args: argparse.Namespace) -> int:
     from league.sync.session import save_store
 
-    store, bundles = save_store(league, args.url, args.bundles)
+    store, bundles = save_store(league, args.url, args.bundles, organiser=args.organiser)
     print(f"This league syncs with {store}" + (f", bundles in {bundles}" if bundles else "") + ".")
     print("Run `racer-tui sync` to push and pull.")
     return 0

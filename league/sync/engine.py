@@ -5,8 +5,7 @@
     with open_league(path) as league, open_store(url) as store:
         summary = sync(league, store, store_key(url))
 
-Push: this machine's signing key is proposed to the league's organiser if nobody has
-admitted it yet (league.trust), then racer profiles (one conditional write per rename,
+Push: racer profiles (one conditional write per rename,
 profiles.py), then every shared record the store is not known to hold, in batches,
 parents first, each sealed (league.sync.sealing: signed here, or the maker's seal kept
 from the pull it came in). The store writes
@@ -110,14 +109,23 @@ def sync(
     signing_key: SigningKey | None = None,
 ) -> SyncSummary:
     """Push, then pull (so a conflict found by the push gets the store's side at once).
-    `signing_key` seals what this machine sends (default: the data directory's key)."""
+    `signing_key` seals what this machine sends (default: the data directory's key).
+
+    Then, if the league (as just pulled) does not know this machine's key, the key is
+    proposed to the organiser under the racer's saved name and the proposal pushed: after
+    the pull, so the organiser's own machines never propose themselves."""
     summary = SyncSummary(key)
+    signing = signing_key or load_or_create_key()
     if push_records:
-        summary = summary.merged(
-            push(league, store, key, progress=progress, signing_key=signing_key)
-        )
+        summary = summary.merged(push(league, store, key, progress=progress, signing_key=signing))
     if pull_records:
         summary = summary.merged(pull(league, store, key, progress=progress))
+    if push_records:
+        proposed, note = propose_key(league, signing)
+        if note is not None:
+            summary.notes.append(note)
+        if proposed:
+            summary = summary.merged(push(league, store, key, signing_key=signing))
     return summary
 
 
@@ -136,9 +144,6 @@ def push(
     summary = SyncSummary(key)
     signing = signing_key or load_or_create_key()
     store.push([])  # reach the store (or fail with one sentence) before doing anything
-    unproposed = propose_key(league, signing)
-    if unproposed is not None:
-        summary.notes.append(unproposed)
     renames = profiles.push_profiles(league, store, key, signing)
     summary.pushed += renames.pushed
     summary.skipped += renames.skipped

@@ -35,6 +35,7 @@ from league.sync.links import missing_references
 from league.sync.local import (
     add_conflict,
     add_pending,
+    add_quarantined,
     body_text,
     held_records,
     hold,
@@ -44,7 +45,7 @@ from league.sync.local import (
 )
 from league.sync.protocol import RecordRef
 from league.sync.record import Quarantined, Seal, SyncRecord, quarantine
-from league.sync.sealing import SealKey, keep_seals, known_seals
+from league.sync.sealing import keep_seals
 from league.sync.validate import check_record
 from league.trust.roster import FOUNDER_ID, ROSTER_KIND, Roster
 from league.trust.seals import is_genuine
@@ -103,10 +104,9 @@ class PageResult:
 
 @dataclass
 class _Trust:
-    """The roster as this page changes it, and which records are already accepted."""
+    """The roster as this page changes it."""
 
     roster: Roster
-    accepted: set[SealKey]
     changed: bool = False
 
 
@@ -120,7 +120,7 @@ def apply_page(league: League, store: str, records: Sequence[SyncRecord]) -> Pag
     """Insert a checked page (call inside the page's transaction)."""
     result = PageResult()
     touched: list[str] = []
-    trust = _Trust(Roster.load(league), set(known_seals(league, records)))
+    trust = _Trust(Roster.load(league))
     for record in sorted(records, key=_sort_key):
         outcome = _apply_trusted(league, store, record, touched=touched, trust=trust, result=result)
         _count(result, record, outcome)
@@ -141,7 +141,7 @@ def retry_waiting(league: League, store: str) -> PageResult:
     record refers to may have been made here (a racer added locally, say)."""
     result = PageResult()
     touched: list[str] = []
-    _retry_held(league, result, touched, _Trust(Roster.load(league), set(), changed=True))
+    _retry_held(league, result, touched, _Trust(Roster.load(league), changed=True))
     _retry_pending(league, store, result, touched)
     if touched:
         refresh_entries(league.conn, touched)
@@ -153,7 +153,7 @@ def retry_held(league: League) -> PageResult:
     after the roster changed here: an organiser admitted a key on this machine)."""
     result = PageResult()
     touched: list[str] = []
-    _retry_held(league, result, touched, _Trust(Roster.load(league), set(), changed=True))
+    _retry_held(league, result, touched, _Trust(Roster.load(league), changed=True))
     if touched:
         refresh_entries(league.conn, touched)
     return result
@@ -169,7 +169,7 @@ def withdraw_refused(league: League, store: str) -> list[str]:
     key was revoked, or retired before it signed), holding each in quarantine; returns
     one sentence per result withdrawn. Call inside a transaction."""
     roster = Roster.load(league)
-    suspects = roster.revoked | set(roster.retired_at)
+    suspects = roster.revoked | set(roster.kept)
     if not suspects:
         return []
     withdrawn: list[str] = []
@@ -197,12 +197,26 @@ def withdraw_refused(league: League, store: str) -> list[str]:
 
 
 def withdraw(
-    league: League, store: str, record: SyncRecord, reason: str, *, rebuild: bool = True
+    league: League,
+    store: str,
+    record: SyncRecord,
+    reason: str,
+    *,
+    rebuild: bool = True,
+    final: bool = False,
 ) -> None:
     """Take a result (a submission or race) out of the league and hold it in quarantine
-    with `reason` (call inside a transaction)."""
+    with `reason` (call inside a transaction); `final`: never let it in again (a replay
+    disproved it), else it is tried again when the roster changes."""
     table = _WITHDRAWN_KINDS[record.kind]
-    hold(league, store, record, reason)
+    if final:
+        item = quarantine(reason, f"{record.kind} {record.record_id}", record.canonical_body)
+        add_quarantined(league, store, item, record.kind, record.record_id)
+    else:
+        hold(league, store, record, reason)
+    league.conn.execute(
+        "DELETE FROM sync_seals WHERE kind = ? AND record_id = ?", (record.kind, record.record_id)
+    )
     if record.kind == "race":
         league.conn.execute("DELETE FROM race_traces WHERE race_id = ?", (record.record_id,))
         league.conn.execute("DELETE FROM race_laps WHERE race_id = ?", (record.record_id,))
@@ -224,21 +238,57 @@ def _apply_trusted(
     trust: _Trust,
     result: PageResult,
 ) -> Outcome:
-    """The roster's rule, then `_apply`; a record the roster refuses is held."""
-    key = (record.kind, record.record_id, record.version, record.content_hash)
-    if key not in trust.accepted:
+    """The roster's rule, then `_apply`; a record the roster refuses is held. A record
+    this league holds already (its own, coming back) needs no judging; a race that a
+    replay here disproved is refused for good."""
+    if not _already_here(league, record):
+        if _disproved(league, record):
+            disproof = "re-run here from its model, track, rules and seed, its laps differ"
+            add_quarantined(
+                league,
+                store,
+                quarantine(disproof, f"{record.kind} {record.record_id}", record.canonical_body),
+                record.kind,
+                record.record_id,
+            )
+            result.held.append(f"{record.kind} {record.record_id}: {disproof}")
+            return "held"
         reason = trust.roster.refusal(record)
         if reason is not None:
             hold(league, store, record, reason)
             result.held.append(f"{record.kind} {record.record_id}: {reason}")
             return "held"
         keep_seals(league, [record])
-        trust.accepted.add(key)
     outcome = _apply(league, store, record, touched)
     if record.kind == ROSTER_KIND and outcome in ("inserted", "replaced"):
         trust.roster = Roster.load(league)
         trust.changed = True
     return outcome
+
+
+def _already_here(league: League, record: SyncRecord) -> bool:
+    """Whether this league holds exactly this content under this key already."""
+    if record.kind == PROFILE_KIND:
+        sql = "SELECT 1 FROM sync_profiles WHERE profile_id = ? AND content_hash = ?"
+    elif record.kind == BUNDLE_KIND:
+        sql = "SELECT 1 FROM sync_bundles WHERE record_id = ? AND content_hash = ?"
+    else:
+        table = TABLE_OF_KIND[record.kind]
+        sql = (
+            f"SELECT 1 FROM {table} WHERE id = ?1 AND content_hash = ?2 UNION ALL SELECT 1 "
+            "FROM sync_aliases WHERE record_id = ?1 AND content_hash = ?2"
+        )
+    return league.query_one(sql, (record.record_id, record.content_hash)) is not None
+
+
+def _disproved(league: League, record: SyncRecord) -> bool:
+    if record.kind != "race":
+        return False
+    row = league.query_one(
+        "SELECT 1 FROM sync_replays WHERE race_id = ? AND content_hash = ? AND outcome = 'differs'",
+        (record.record_id, record.content_hash),
+    )
+    return row is not None
 
 
 def _retry_held(league: League, result: PageResult, touched: list[str], trust: _Trust) -> None:

@@ -23,8 +23,8 @@ from league.sync.local import (
 from league.sync.protocol import RecordStore
 from league.sync.urls import DirUrl, DynamoDbUrl, S3Url, parse_store_url
 from league.trust.keys import fingerprint, load_or_create_key
-from league.trust.membership import found_league
-from league.trust.roster import Roster
+from league.trust.membership import MIN_FINGERPRINT_DIGITS, found_league
+from league.trust.roster import FOUNDER_ID, PIN_SETTING, Roster
 from sim.plural import counted
 
 NO_STORE = (
@@ -52,15 +52,27 @@ def check_bundle_store_url(url: str) -> S3Url:
 
 
 def save_store(
-    league: League, url: str, bundles_url: str | None = None
+    league: League, url: str, bundles_url: str | None = None, *, organiser: str | None = None
 ) -> tuple[DirUrl | DynamoDbUrl, S3Url | None]:
-    """Check and save the league's store (and bundle store) in one transaction."""
+    """Check and save the league's store (and bundle store, and the organiser's key
+    fingerprint as the racer was told it) in one transaction."""
     store = check_record_store_url(url)
     bundles = check_bundle_store_url(bundles_url) if bundles_url else None
+    pin = None
+    if organiser is not None:
+        pin = organiser.replace(" ", "").lower()
+        if len(pin) < MIN_FINGERPRINT_DIGITS or not all(c in "0123456789abcdef" for c in pin):
+            raise StoreUrlError(
+                f"--organiser {organiser!r} is not a key fingerprint: give at least "
+                f"{MIN_FINGERPRINT_DIGITS} of the hex digits the organiser reads out from "
+                "`racer-tui racer keys`"
+            )
     with league.transaction():
         set_setting(league, STORE_SETTING, str(store))
         if bundles is not None:
             set_setting(league, BUNDLES_SETTING, str(bundles))
+        if pin is not None:
+            set_setting(league, PIN_SETTING, pin)
     return store, bundles
 
 
@@ -74,7 +86,13 @@ def found_store(league: League, store: RecordStore, url: str, *, push_now: bool 
     if get_setting(league, STORE_SETTING) is None:
         save_store(league, url)
     if push_now:
-        push(league, store, store_key(url), signing_key=key)
+        pushed = push(league, store, store_key(url), signing_key=key)
+        if any(FOUNDER_ID in line for line in pushed.conflicts):
+            return (
+                "This store was already set up by another organiser (its founding record "
+                f"names another key than this machine's {key.fingerprint}); use their "
+                "machine for the league's admissions, or set up a new store."
+            )
     roster = Roster.load(league)
     if founded:
         return f"This machine's key {key.fingerprint} is the league's organiser key."

@@ -147,6 +147,28 @@ def public_key(value: Any, field: str) -> None:
         raise _bad(field, "is not a public key (64 lowercase hex digits)")
 
 
+MAX_KEPT: Final = 10_000
+_DIGEST_CHARS: Final = 16
+
+
+def digest_list(value: Any, field: str) -> None:
+    """A retire act's JSON list of record digests (league.trust.roster.record_digest)."""
+    limit = MAX_KEPT * (_DIGEST_CHARS + 3) + 2
+    if not isinstance(value, str) or len(value) > limit:
+        raise _bad(field, f"is not a list of at most {MAX_KEPT} record digests")
+    try:
+        items = parse_json(value)
+    except RecordInvalidError:
+        items = None
+    if not isinstance(items, list) or not all(
+        isinstance(item, str)
+        and len(item) == _DIGEST_CHARS
+        and all(char in "0123456789abcdef" for char in item)
+        for item in items
+    ):
+        raise _bad(field, f"is not a list of at most {MAX_KEPT} record digests")
+
+
 def colour(value: Any, field: str) -> None:
     if not isinstance(value, str) or not HEX_COLOUR.fullmatch(value):
         raise _bad(field, "is not a #rrggbb colour")
@@ -197,6 +219,7 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "racer": _t(name, nullable=True),
         "role": _t(one_of(*ROLES), nullable=True),
         "signed_by": _t(public_key),
+        "kept": _t(digest_list, nullable=True),
         "created_at": _t(timestamp),
     },
     "racer": {
@@ -464,6 +487,8 @@ def _check_roster(record: SyncRecord) -> None:
     else:
         ok = role is None and record.record_id != FOUNDER_ID
         rule = f"a {action} names no role"
+    if body["kept"] is not None and action != "retire":
+        ok, rule = False, "only a retirement lists the records it keeps"
     if not ok:
         raise RecordInvalidError(f"it is not a well-formed roster act ({rule})")
 

@@ -1,24 +1,27 @@
 """What people do to the roster: found a league, propose their key, admit, retire, revoke.
 
 Each act is a row of the shared `roster` table made here and signed with this machine's
-key when it is pushed (roster.py says what each act means). Acts that need an organiser
-are refused here, with one sentence, when this machine's key is not one: the league would
-refuse them anyway, but only after a sync, and silently for the person who made them.
+key when it is pushed (roster.py says what each act means). Acts only the organiser makes
+are refused here, with one sentence, when this machine's key did not found the league:
+the league would refuse them anyway, but only after a sync, and silently for the person
+who made them.
 """
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from typing import Final
 
 from league.errors import LeagueError
-from league.local_racer import local_racer_name
+from league.local_racer import RACER_SETTING
 from league.records import store_record
 from league.store import League, now_iso
 from league.sync import incoming
 from league.sync.local import STORE_SETTING, get_setting
+from league.sync.validate import MAX_KEPT
 from league.trust.keys import SigningKey, fingerprint
-from league.trust.roster import FOUNDER_ID, Roster
+from league.trust.roster import FOUNDER_ID, Roster, record_digest
 from sim.ids import new_id
 
 MIN_FINGERPRINT_DIGITS: Final = 8
@@ -44,6 +47,7 @@ def _act(
     racer: str | None,
     role: str | None,
     signed_by: str,
+    kept: str | None = None,
 ) -> None:
     body = {
         "action": action,
@@ -51,6 +55,7 @@ def _act(
         "racer": racer,
         "role": role,
         "signed_by": signed_by,
+        "kept": kept,
         "created_at": now_iso(),
     }
     store_record(league, "roster", record_id, body)
@@ -62,7 +67,7 @@ def found_league(league: League, key: SigningKey) -> bool:
     with league.transaction():
         if league.query_one("SELECT 1 FROM roster WHERE id = ?", (FOUNDER_ID,)) is not None:
             return False
-        racer = local_racer_name(league) or None
+        racer = get_setting(league, RACER_SETTING)
         _act(
             league,
             FOUNDER_ID,
@@ -75,17 +80,20 @@ def found_league(league: League, key: SigningKey) -> bool:
     return True
 
 
-def propose_key(league: League, key: SigningKey) -> str | None:
-    """Propose this machine's key for its racer, once; returns why it could not be
-    proposed (no racer name yet), or None when it is proposed or needs no proposal."""
+def propose_key(league: League, key: SigningKey) -> tuple[bool, str | None]:
+    """Propose this machine's key for its racer, once. Returns whether a proposal was made
+    now, and why it could not be (no racer name saved yet) or None."""
     roster = Roster.load(league)
     if roster.status(key.public_hex) != "unknown":
-        return None
-    racer = local_racer_name(league)
+        return False, None
+    # Only the name this machine's racer gave (never the league's latest racer, who may
+    # be anybody): the organiser admits the key under it.
+    racer = get_setting(league, RACER_SETTING)
     if not racer:
-        return (
-            "this machine's signing key was not proposed to the organiser because it has no "
-            "racer name yet; submit a result under your name, then sync again"
+        return False, (
+            "this machine's signing key was not proposed to the organiser because no racer "
+            "name is saved here yet; run `racer-tui racer me NAME` (or submit from the app "
+            "under your name), then sync again"
         )
     with league.transaction():
         _act(
@@ -97,14 +105,15 @@ def propose_key(league: League, key: SigningKey) -> str | None:
             role="racer",
             signed_by=key.public_hex,
         )
-    return None
+    return True, None
 
 
-def _require_organiser(roster: Roster, key: SigningKey, what: str) -> None:
-    if key.public_hex not in roster.organisers:
+def _require_founder(roster: Roster, key: SigningKey, what: str) -> None:
+    if key.public_hex != roster.founder:
         raise LeagueError(
             f"only the league's organiser can {what}, and this machine's key "
-            f"({key.fingerprint}) is not an organiser's; ask the organiser to run it."
+            f"({key.fingerprint}) is not the one that founded the league; ask the organiser "
+            "to run it."
         )
 
 
@@ -114,10 +123,10 @@ def find_key(league: League, target: str) -> tuple[str, str | None]:
     roster = Roster.load(league)
     digits = target.replace(" ", "").lower()
     known = {**roster.proposed, **roster.racer_of}
-    if len(digits) >= MIN_FINGERPRINT_DIGITS and all(c in "0123456789abcdef" for c in digits):
+    # A racer's name first: a name may look like hex ("20240501").
+    keys = {k for k, racer in known.items() if racer.casefold() == target.casefold()}
+    if not keys and len(digits) >= MIN_FINGERPRINT_DIGITS:
         keys = {k for k in (*known, *roster.organisers) if k.startswith(digits)}
-    else:
-        keys = {k for k, racer in known.items() if racer.casefold() == target.casefold()}
     if not keys:
         raise LeagueError(
             f"no key proposed for {target!r}; the racer syncs once to propose theirs "
@@ -142,13 +151,19 @@ def admit(
 ) -> KeyRow:
     """Admit the key `target` names, as its racer's (or as an organiser's)."""
     roster = Roster.load(league)
-    _require_organiser(roster, key, "admit keys")
+    _require_founder(roster, key, "admit keys")
     public, proposed = find_key(league, target)
     name = racer or proposed
     if not organiser and not name:
         raise LeagueError("say which racer this key belongs to with --racer NAME.")
-    if public in roster.revoked:
-        raise LeagueError(f"key {fingerprint(public)} was revoked and cannot be admitted again.")
+    status = roster.status(public)
+    if status in ("revoked", "retired"):
+        raise LeagueError(
+            f"key {fingerprint(public)} was {status} and cannot be admitted again; the racer's "
+            "machine makes a new key when its key file is moved aside."
+        )
+    if status in ("racer", "organiser", "founder"):
+        raise LeagueError(f"key {fingerprint(public)} is admitted already.")
     with league.transaction():
         role = "organiser" if organiser else "racer"
         _act(
@@ -176,10 +191,13 @@ def revoke(league: League, key: SigningKey, target: str) -> KeyRow:
 
 def _end(league: League, key: SigningKey, target: str, action: str) -> KeyRow:
     roster = Roster.load(league)
-    _require_organiser(roster, key, f"{action} keys")
+    _require_founder(roster, key, f"{action} keys")
     public, racer = find_key(league, target)
     if public == roster.founder:
         raise LeagueError(f"the founding organiser's key cannot be {action}d.")
+    if roster.status(public) in ("revoked", "retired"):
+        raise LeagueError(f"key {fingerprint(public)} is {roster.status(public)} already.")
+    kept = _kept(league, public) if action == "retire" else None
     with league.transaction():
         _act(
             league,
@@ -189,6 +207,7 @@ def _end(league: League, key: SigningKey, target: str, action: str) -> KeyRow:
             racer=racer,
             role=None,
             signed_by=key.public_hex,
+            kept=kept,
         )
         # Results the key may no longer vouch for leave this league's boards now, not at
         # the next pull (the quarantine row names the league's store, when it has one).
@@ -196,11 +215,27 @@ def _end(league: League, key: SigningKey, target: str, action: str) -> KeyRow:
     return _row(Roster.load(league), public, key)
 
 
+def _kept(league: League, public: str) -> str:
+    """The digests of every record `public` signed that this league accepted: what a
+    retirement keeps (ids are the signer's to choose, so a date cannot say what came
+    before; the list can)."""
+    rows = league.query(
+        "SELECT kind, record_id, version, content_hash FROM sync_seals WHERE signer = ?",
+        (public,),
+    )
+    if len(rows) > MAX_KEPT:
+        raise LeagueError(
+            f"that key signed {len(rows)} records, more than a retirement can list "
+            f"({MAX_KEPT}); revoke it instead, or ask its racer to keep using it."
+        )
+    return json.dumps(sorted(record_digest(*row) for row in rows))
+
+
 def key_rows(league: League, key: SigningKey) -> list[KeyRow]:
     """Every key the league knows, this machine's own included."""
     roster = Roster.load(league)
     keys = {roster.founder, *roster.organisers, *roster.proposed, *roster.racer_of, key.public_hex}
-    keys |= set(roster.revoked) | set(roster.retired_at)
+    keys |= set(roster.revoked) | set(roster.kept)
     rows = [_row(roster, public, key) for public in keys if public]
     return sorted(rows, key=lambda row: (row.racer.casefold(), row.public_key))
 

@@ -148,4 +148,5 @@ def _withdraw(league: League, verdict: Verdict, digest: str) -> None:
     if row is not None:
         record = record.sealed(Seal(str(row[0]), str(row[1])))
     store = get_setting(league, STORE_SETTING) or ""
-    incoming.withdraw(league, store, record, f"it is racer {verdict.racer}'s, but {verdict.detail}")
+    reason = f"it is racer {verdict.racer}'s, but {verdict.detail}"
+    incoming.withdraw(league, store, record, reason, final=True)

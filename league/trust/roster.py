@@ -9,17 +9,19 @@ that holds the same records reads the same roster:
     propose  a racer's key and their racer name, signed by that key (proof that the
              racer holds it); made by the racer's first push. Proposing grants nothing;
              a key proposed twice (from two leagues on one machine) counts its first.
-    admit    an organiser's word that a key belongs to a racer (role "racer"), or to
-             another organiser (role "organiser": a co-host who runs nights).
-    retire   an organiser's word that a key is no longer used (a racer's old laptop):
-             what it signed before stays, nothing it signs later counts.
-    revoke   an organiser's word that a key was lost or misused: nothing it signed
-             counts, before or after. The founder's key cannot be revoked.
+    admit    the organiser's word that a key belongs to a racer (role "racer"), or to a
+             co-host (role "organiser": may run nights and sign any result, but never
+             changes the roster).
+    retire   the organiser's word that a key is no longer used (a racer's old laptop).
+             The act lists what the key had signed (`kept`: a short digest per record,
+             as the organiser's league held them); those still count, nothing else does,
+             whatever date its ids claim.
+    revoke   the organiser's word that a key was lost or misused: nothing it signed
+             counts, before or after.
 
-Every act is a signed record: `signed_by` names the key that must have signed it, and
-the pull checks the seal against it. Organisers are the founder plus every key admitted
-as organiser by an organiser, revoked keys excluded (computed to a fixed point, so the
-order records arrive in never matters).
+Only the founding key changes the roster, and it can be neither retired nor revoked: a
+single owner, so every machine computes the same roster from the same acts whatever
+order they arrived in, and no co-host (or a stolen co-host key) can admit anyone.
 
 `refusal` is the one rule for every pulled record: None when its signer may have made
 it, else the sentence that says why not (shown in quarantine).
@@ -28,6 +30,7 @@ it, else the sentence that says why not (shown in quarantine).
 from __future__ import annotations
 
 import hashlib
+import json
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Final
@@ -37,6 +40,7 @@ from league.sync.record import SyncRecord
 from league.trust.keys import fingerprint
 
 ROSTER_KIND: Final = "roster"
+PIN_SETTING: Final = "organiser"  # sync_settings: the organiser's fingerprint, hex digits
 ACTIONS: Final = ("found", "propose", "admit", "retire", "revoke")
 ROLES: Final = ("organiser", "racer")
 # Kinds only an organiser signs: the running of nights and seasons, and corrections.
@@ -77,6 +81,7 @@ class Act:
     racer: str | None
     role: str | None
     signed_by: str
+    kept: str | None = None  # a retire act's JSON list of record digests
 
     @classmethod
     def from_body(cls, record_id: str, body: Mapping[str, Any]) -> Act:
@@ -87,7 +92,15 @@ class Act:
             body.get("racer"),
             body.get("role"),
             str(body["signed_by"]),
+            body.get("kept"),
         )
+
+
+def record_digest(kind: str, record_id: str, version: int, content_hash: str) -> str:
+    """What a retire act lists per record the retired key may still have signed: 16 hex
+    digits of a hash over the record's identity and content (short, so thousands fit)."""
+    text = f"{kind} {record_id} {version} {content_hash}"
+    return hashlib.sha256(text.encode("ascii")).hexdigest()[:16]
 
 
 @dataclass
@@ -99,8 +112,11 @@ class Roster:
     organisers: set[str] = field(default_factory=set)
     racer_of: dict[str, str] = field(default_factory=dict)  # admitted key -> racer name
     proposed: dict[str, str] = field(default_factory=dict)  # key -> the name it proposed
-    retired_at: dict[str, str] = field(default_factory=dict)  # key -> the retire act's id
+    kept: dict[str, frozenset[str]] = field(default_factory=dict)  # retired key -> digests
     revoked: set[str] = field(default_factory=set)
+    # The organiser's fingerprint as the racer was told it (`sync set --organiser`): a
+    # founding record with another key is refused, whoever wrote it to the store first.
+    pinned: str | None = None
 
     @classmethod
     def from_acts(cls, acts: Iterable[Act]) -> Roster:
@@ -111,38 +127,38 @@ class Roster:
                 roster.founder, roster.founder_racer = act.public_key, act.racer
             elif act.action == "propose" and act.racer is not None:
                 roster.proposed.setdefault(act.public_key, act.racer)
-        if roster.founder is None:
+        founder = roster.founder
+        if founder is None:
             return roster
-        # Revocations count if an organiser signed them, revoked or not (an organiser
-        # cannot escape a revocation by revoking its revoker); the founder stays.
-        ever = _organisers(roster.founder, ordered, revoked=set())
-        roster.revoked = {
-            act.public_key
-            for act in ordered
-            if act.action == "revoke" and act.signed_by in ever and act.public_key != roster.founder
-        }
-        roster.organisers = _organisers(roster.founder, ordered, roster.revoked)
-        for act in ordered:
-            if act.signed_by not in roster.organisers or act.public_key in roster.revoked:
+        # Only the founder's acts count (the pull holds any other), and never against it.
+        own = [a for a in ordered if a.signed_by == founder and a.public_key != founder]
+        roster.revoked = {act.public_key for act in own if act.action == "revoke"}
+        for act in own:
+            if act.public_key in roster.revoked:
                 continue
-            if act.action == "admit" and act.role == "racer" and act.racer is not None:
+            if act.action == "retire" and act.public_key not in roster.kept:
+                roster.kept[act.public_key] = frozenset(_digests(act.kept))
+            elif act.action == "admit" and act.role == "racer" and act.racer is not None:
                 roster.racer_of.setdefault(act.public_key, act.racer)
-            elif act.action == "retire" and act.public_key != roster.founder:
-                roster.retired_at.setdefault(act.public_key, act.record_id)
+        admitted = {a.public_key for a in own if a.action == "admit" and a.role == "organiser"}
+        roster.organisers = {founder} | (admitted - roster.revoked - set(roster.kept))
         return roster
 
     @classmethod
     def load(cls, league: League) -> Roster:
         rows = league.query(
-            "SELECT id, action, public_key, racer, role, signed_by FROM roster ORDER BY id"
+            "SELECT id, action, public_key, racer, role, signed_by, kept FROM roster ORDER BY id"
         )
-        return cls.from_acts(Act(*(str(v) if v is not None else None for v in row)) for row in rows)  # type: ignore[arg-type]
+        roster = cls.from_acts(Act(*row) for row in rows)
+        pin = league.query_one("SELECT value FROM sync_settings WHERE name = ?", (PIN_SETTING,))
+        roster.pinned = None if pin is None else str(pin[0])
+        return roster
 
     def status(self, key: str) -> str:
         """One word for `key`: founder, organiser, racer, retired, revoked, proposed, unknown."""
         if key in self.revoked:
             return "revoked"
-        if key in self.retired_at:
+        if key in self.kept:
             return "retired"
         if key == self.founder:
             return "founder"
@@ -172,17 +188,25 @@ class Roster:
         key = f"key {fingerprint(signer)}"
         if signer in self.revoked:
             return f"{theirs}signed with {key}, which the organiser revoked"
-        retired = self.retired_at.get(signer)
-        if retired is not None and (record.version > 0 or record.record_id > retired):
-            return f"{theirs}signed with {key} after the organiser retired that key"
+        kept = self.kept.get(signer)
+        if kept is not None:
+            digest = record_digest(
+                record.kind, record.record_id, record.version, record.content_hash
+            )
+            if digest in kept:
+                return None  # signed before the key was retired, while it counted
+            return (
+                f"{theirs}signed with {key}, which the organiser retired; only what it had "
+                "signed before then counts"
+            )
         if signer in self.organisers:
             return None
         racer = self.racer_of.get(signer)
         if racer is None:
             proposed = self.proposed.get(signer)
             offer = (
-                f"proposed for racer {proposed}: the organiser runs "
-                f"`racer-tui racer admit {proposed}`"
+                f"proposed for racer {proposed}: the organiser compares the fingerprint "
+                f"with {proposed}, then runs `racer-tui racer admit {proposed}`"
                 if proposed
                 else "nobody has proposed it"
             )
@@ -204,31 +228,29 @@ class Roster:
                 f"{what} names its signer as {fingerprint(act.signed_by)} but is signed "
                 f"by {fingerprint(signer)}"
             )
+        if act.action == "found" and self.pinned and not act.public_key.startswith(self.pinned):
+            return (
+                f"{what} names another organiser than the one this league was told "
+                f"({fingerprint(self.pinned)}): check the store with your organiser"
+            )
         if act.action in ("found", "propose"):
             return None  # self-signed (validate.py checks signed_by == public_key)
         if self.founder is None:
             return f"{what} is unchecked: this league has no organiser yet"
-        if signer not in self.organisers:
-            return f"{what} is signed by key {fingerprint(signer)}, which is not an organiser's"
+        if signer != self.founder:
+            return (
+                f"{what} is signed by key {fingerprint(signer)}, but only the organiser's "
+                "own key changes the roster"
+            )
         return None
 
 
-def _organisers(founder: str, acts: list[Act], revoked: set[str]) -> set[str]:
-    organisers = {founder}
-    grown = True
-    while grown:
-        grown = False
-        for act in acts:
-            if (
-                act.action == "admit"
-                and act.role == "organiser"
-                and act.signed_by in organisers
-                and act.public_key not in organisers
-                and act.public_key not in revoked
-            ):
-                organisers.add(act.public_key)
-                grown = True
-    return organisers
+def _digests(text: str | None) -> list[str]:
+    """A retire act's list (validate.py checked its form when it was pulled)."""
+    if not text:
+        return []
+    values = json.loads(text)
+    return [value for value in values if isinstance(value, str)]
 
 
 def _owner(record: SyncRecord) -> str | None:

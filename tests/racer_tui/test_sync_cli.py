@@ -57,12 +57,13 @@ def test_two_racers_sync_through_a_shared_folder_and_see_names_literally(
 
     code, out, _ = run_cli(capsys, "sync", "--db", first)
     assert code == 0
-    # Racer, track, submission, and the proposal of this machine's key (which the league
-    # knows only after its first pull: it is the organiser's); pulled: the founding record.
-    assert out.startswith(f"Synced with {store}: pushed 4, pulled 1, skipped 0, 0 conflicts")
+    # Racer, track and submission; pulled: the founding record (this machine's key is the
+    # organiser's, so it proposes nothing).
+    assert out.startswith(f"Synced with {store}: pushed 3, pulled 1, skipped 0, 0 conflicts")
     code, out, _ = run_cli(capsys, "sync", "--db", second, "--json")
     summary = json.loads(out)
-    assert (summary["pushed"], summary["pulled"], summary["aliased"]) == (4, 5, 1)
+    assert (summary["pushed"], summary["pulled"], summary["aliased"]) == (3, 4, 1)
+    assert summary["notes"] == []
     assert run_cli(capsys, "sync", "--pull", "--db", first)[0] == 0
 
     boards = [run_cli(capsys, "leaderboard", "--db", db)[1] for db in (first, second)]
@@ -75,7 +76,7 @@ def test_two_racers_sync_through_a_shared_folder_and_see_names_literally(
     assert code == 0
     assert f"Store: {store}" in out and "Conflicts: none." in out
     status = json.loads(run_cli(capsys, "sync", "status", "--db", second, "--json")[1])
-    assert status["to_push"] == 0 and status["runs"]["pull"]["summary"]["pulled"] == 5
+    assert status["to_push"] == 0 and status["runs"]["pull"]["summary"]["pulled"] == 4
 
 
 def test_status_shows_quarantined_records_literally(

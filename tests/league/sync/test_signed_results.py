@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from league.local_racer import save_local_racer_name
 from league.races import record_race
 from league.store import League, open_league
 from league.sync.engine import SyncSummary, store_key, sync
@@ -37,6 +38,8 @@ class Machine:
         self.key = SigningKey.generate()
         self.league: League = open_league(root / f"{name}.db")
         self.url = url
+        if name != "viewer":
+            save_local_racer_name(self.league, name)  # `racer-tui racer me NAME`
 
     def sync(self) -> SyncSummary:
         with open_store(self.url, retry=QUICK_RETRY) as store:
@@ -229,7 +232,7 @@ def test_a_revoked_key_loses_every_result_and_a_retired_one_keeps_its_past(
     assert "bob" not in viewer.board()
     assert any("bob" in line for line in summary.withdrawn)
     assert viewer.board()["ana"] == pytest.approx(11.8)  # the race from before stays
-    assert "after the organiser retired that key" in viewer.quarantine()[f"race {later}"]
+    assert "which the organiser retired" in viewer.quarantine()[f"race {later}"]
     assert "which the organiser revoked" in " ".join(viewer.quarantine().values())
 
 
@@ -265,6 +268,7 @@ def test_a_forged_admission_counts_for_nothing(machines: dict[str, Machine]) -> 
         "racer": "mallory",
         "role": "organiser",
         "signed_by": mallory.key.public_hex,
+        "kept": None,
         "created_at": "2026-11-24T00:00:00.000Z",
     }
     act_id = new_id()
@@ -273,7 +277,7 @@ def test_a_forged_admission_counts_for_nothing(machines: dict[str, Machine]) -> 
     viewer.sync()
     assert "mallory" not in viewer.board()
     reason = viewer.quarantine()[f"roster {act_id}"]
-    assert "which is not an organiser's" in reason
+    assert "only the organiser's own key changes the roster" in reason
 
 
 def test_the_signing_key_is_private_and_one_per_data_directory(tmp_path: Path) -> None:
@@ -293,3 +297,94 @@ def test_the_signing_key_is_private_and_one_per_data_directory(tmp_path: Path) -
     path.write_bytes(b"not a key")
     with pytest.raises(KeyFileError, match="is not an Ed25519 signing key"):
         load_or_create_key(tmp_path)
+
+
+def test_a_co_host_runs_nights_but_changes_nobodys_key(machines: dict[str, Machine]) -> None:
+    organiser, bob, viewer = machines["organiser"], machines["bob"], machines["viewer"]
+    membership.admit(organiser.league, organiser.key, "mallory", organiser=True)
+    organiser.sync()
+    bob.sync()
+    from league.errors import LeagueError
+
+    with pytest.raises(LeagueError, match="only the league's organiser can admit keys"):
+        membership.admit(bob.league, bob.key, "mallory")
+    from league.seasons import new_season
+
+    mallory = machines["mallory"]
+    mallory.sync()
+    season = new_season(mallory.league, "co-host season")
+    mallory.sync()
+    viewer.sync()
+    assert viewer.league.query_one("SELECT id FROM seasons")[0] == season.id  # a co-host's
+
+
+def test_a_retired_key_cannot_backdate_a_new_result(machines: dict[str, Machine]) -> None:
+    from dataclasses import replace
+
+    from sim.ids import new_id
+
+    organiser, ana, viewer = machines["organiser"], machines["ana"], machines["viewer"]
+    membership.retire(organiser.league, organiser.key, "ana")
+    organiser.sync()
+    ana.sync()
+    # A "new" race whose id claims it was made a year before the retirement.
+    early = race_result("ana", [4.9, 4.9], track=resolve_track(HAIRPIN))
+    backdated = record_race(ana.league, replace(early, result_id=new_id(now_ms=1_760_000_000_000)))
+    ana.sync()
+    viewer.sync()
+    assert viewer.board()["ana"] == pytest.approx(11.8)  # the race from before counts
+    reason = viewer.quarantine()[f"race {backdated}"]
+    assert "which the organiser retired; only what it had signed before then counts" in reason
+
+
+def test_a_store_founded_by_someone_else_is_refused_when_the_organiser_is_pinned(
+    store_url: str, open_racer_store: StoreFactory, tmp_path: Path
+) -> None:
+    from league.sync.session import save_store
+
+    impostor = Machine(tmp_path, "impostor", store_url)
+    membership.found_league(impostor.league, impostor.key)
+    impostor.race("impostor", [5.0, 5.0])
+    impostor.sync()
+    racer = Machine(tmp_path, "ana", store_url)
+    real_organiser = SigningKey.generate()
+    save_store(racer.league, store_url, organiser=real_organiser.fingerprint)
+    racer.sync()
+    assert racer.board() == {}
+    founding = [r for where, r in racer.quarantine().items() if where.startswith("roster ")]
+    assert founding and "names another organiser than the one this league was told" in founding[0]
+    for machine in (impostor, racer):
+        machine.league.close()
+
+
+def test_a_race_disproved_by_replay_never_comes_back(machines: dict[str, Machine]) -> None:
+    from dataclasses import replace
+
+    from league.sync.local import save_cursor
+    from league.trust.replay import verify_races
+    from racer_tui.race_commands import DriversByHash
+    from sim.race.driver import reference_driver
+    from sim.race.engine import run_race
+    from sim.race.rules import RaceRules
+
+    organiser, viewer = machines["organiser"], machines["viewer"]
+    track = resolve_track(HAIRPIN)
+    honest = run_race(track, RaceRules(window_seconds=30.0), reference_driver(track), seed=5)
+    lap = honest.laps[0]
+    quicker = replace(lap, time_seconds=lap.time_seconds - 1.0, raw_seconds=lap.raw_seconds - 1.0)
+    forged = record_race(
+        organiser.league, replace(honest, racer="bob", laps=(quicker, *honest.laps[1:]))
+    )
+    organiser.sync()
+    viewer.sync()
+    (verdict,) = [v for v in verify_races(viewer.league, DriversByHash()) if v.race_id == forged]
+    assert verdict.outcome == "differs"
+
+    membership.admit(organiser.league, organiser.key, "mallory")  # the roster changes
+    organiser.sync()
+    viewer.sync()
+    with viewer.league.transaction():
+        save_cursor(viewer.league, store_key(viewer.url), "")  # pull everything again
+    viewer.sync()
+    assert viewer.league.query_one("SELECT count(*) FROM races WHERE id = ?", (forged,))[0] == 0
+    assert "its laps differ" in viewer.quarantine()[f"race {forged}"]

@@ -13,6 +13,7 @@ import pytest
 from textual.pilot import Pilot
 from textual.widgets import DataTable, Input
 
+from league.local_racer import save_local_racer_name
 from league.races import record_race
 from league.store import open_league
 from league.sync import local, open_store
@@ -178,6 +179,7 @@ async def test_the_organiser_admits_a_racers_key_from_the_sync_screen(
     on_machine(monkeypatch, tmp_path / "bob-laptop")
     record("bob", [12.0])
     with open_league() as league:
+        save_local_racer_name(league, "bob")  # `racer-tui racer me bob`
         sync_league(league, store_url)
         bob_key = load_or_create_key().fingerprint
 
