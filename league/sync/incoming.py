@@ -159,9 +159,15 @@ def retry_held(league: League) -> PageResult:
     return result
 
 
-# Results are what a revoked key must lose: rows nothing else refers to by id except
-# their own laps and trace, so taking them out leaves the league whole.
-_WITHDRAWN_KINDS: Final = {"submission": "submissions", "race": "races"}
+# What a revoked key must lose from the boards: its results, and a co-host's lap
+# disqualifications. Nothing else refers to these rows by id (laps and traces go with
+# them), so taking them out leaves the league whole. A revoked key's nights, heats and
+# racers stay where they are: they rank nobody, and heats' races are results.
+_WITHDRAWN_KINDS: Final = {
+    "submission": "submissions",
+    "race": "races",
+    "correction": "corrections",
+}
 
 
 def withdraw_refused(league: League, store: str) -> list[str]:
@@ -175,7 +181,8 @@ def withdraw_refused(league: League, store: str) -> list[str]:
     withdrawn: list[str] = []
     rows = league.query(
         "SELECT kind, record_id, version, content_hash, signer, signature FROM sync_seals "
-        "WHERE kind IN ('submission', 'race') AND signer IN (SELECT value FROM json_each(?))",
+        "WHERE kind IN ('submission', 'race', 'correction') "
+        "AND signer IN (SELECT value FROM json_each(?))",
         (json.dumps(sorted(suspects)),),
     )
     for kind, record_id, version, digest, signer, signature in rows:
@@ -183,9 +190,10 @@ def withdraw_refused(league: League, store: str) -> list[str]:
         here = league.query_one(f"SELECT content_hash FROM {table} WHERE id = ?", (record_id,))
         if here is None or here[0] != digest:
             continue
-        record = SyncRecord(
-            kind, record_id, digest, record_body(league, table, record_id), version
-        ).sealed(Seal(signer, signature))
+        body = record_body(league, table, record_id)
+        if kind == "correction" and body["kind"] != "disqualify_lap":
+            continue  # a rename's display name lives on in profiles: not undone here
+        record = SyncRecord(kind, record_id, digest, body, version).sealed(Seal(signer, signature))
         reason = roster.refusal(record)
         if reason is None:
             continue
@@ -205,9 +213,9 @@ def withdraw(
     rebuild: bool = True,
     final: bool = False,
 ) -> None:
-    """Take a result (a submission or race) out of the league and hold it in quarantine
-    with `reason` (call inside a transaction); `final`: never let it in again (a replay
-    disproved it), else it is tried again when the roster changes."""
+    """Take a result (a submission, race or lap disqualification) out of the league and
+    hold it in quarantine with `reason` (call inside a transaction); `final`: never let it
+    in again (a replay disproved it), else it is tried again when the roster changes."""
     table = _WITHDRAWN_KINDS[record.kind]
     if final:
         item = quarantine(reason, f"{record.kind} {record.record_id}", record.canonical_body)
@@ -220,7 +228,7 @@ def withdraw(
     if record.kind == "race":
         league.conn.execute("DELETE FROM race_traces WHERE race_id = ?", (record.record_id,))
         league.conn.execute("DELETE FROM race_laps WHERE race_id = ?", (record.record_id,))
-    else:
+    elif record.kind == "submission":
         league.conn.execute(
             "DELETE FROM submission_laps WHERE submission_id = ?", (record.record_id,)
         )

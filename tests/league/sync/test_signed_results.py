@@ -388,3 +388,27 @@ def test_a_race_disproved_by_replay_never_comes_back(machines: dict[str, Machine
     viewer.sync()
     assert viewer.league.query_one("SELECT count(*) FROM races WHERE id = ?", (forged,))[0] == 0
     assert "its laps differ" in viewer.quarantine()[f"race {forged}"]
+
+
+def test_revoking_a_co_host_takes_their_lap_disqualifications_off_the_boards(
+    machines: dict[str, Machine],
+) -> None:
+    from league.corrections import disqualify_lap
+
+    organiser, ana, viewer = machines["organiser"], machines["ana"], machines["viewer"]
+    race_id = ana.race("ana", [11.0, 11.5])
+    ana.sync()
+    membership.admit(organiser.league, organiser.key, "mallory", organiser=True)
+    organiser.sync()
+    mallory = machines["mallory"]
+    mallory.sync()
+    disqualify_lap(mallory.league, race_id, 1, reason="made up", by="mallory")
+    mallory.sync()
+    viewer.sync()
+    assert viewer.board()["ana"] == pytest.approx(11.5)  # lap 1 disqualified
+
+    membership.revoke(organiser.league, organiser.key, "mallory")
+    organiser.sync()
+    summary = viewer.sync()
+    assert viewer.board()["ana"] == pytest.approx(11.0)  # the disqualification is gone
+    assert any(line.startswith("correction ") for line in summary.withdrawn)
