@@ -115,12 +115,12 @@ def sync(
     proposed to the organiser under the racer's saved name and the proposal pushed: after
     the pull, so the organiser's own machines never propose themselves."""
     summary = SyncSummary(key)
+    if not push_records:  # a pull signs nothing: it needs no key
+        return summary.merged(pull(league, store, key, progress=progress))
     signing = signing_key or load_or_create_key()
-    if push_records:
-        summary = summary.merged(push(league, store, key, progress=progress, signing_key=signing))
+    summary = summary.merged(push(league, store, key, progress=progress, signing_key=signing))
     if pull_records:
         summary = summary.merged(pull(league, store, key, progress=progress))
-    if push_records:
         proposed, note = propose_key(league, signing)
         if note is not None:
             summary.notes.append(note)
