@@ -15,6 +15,7 @@ from typing import Final
 
 from league.errors import LeagueError
 from league.local_racer import RACER_SETTING
+from league.racers import look_alike
 from league.records import store_record
 from league.store import League, now_iso
 from league.sync import incoming
@@ -23,6 +24,7 @@ from league.sync.validate import MAX_KEPT
 from league.trust.keys import SigningKey, fingerprint
 from league.trust.roster import FOUNDER_ID, Roster, record_digest
 from sim.ids import new_id
+from sim.plain_names import look_alike_key
 
 MIN_FINGERPRINT_DIGITS: Final = 8
 
@@ -156,6 +158,8 @@ def admit(
     name = racer or proposed
     if not organiser and not name:
         raise LeagueError("say which racer this key belongs to with --racer NAME.")
+    if name:
+        _refuse_look_alike(league, roster, name)
     status = roster.status(public)
     if status in ("revoked", "retired"):
         raise LeagueError(
@@ -177,6 +181,23 @@ def admit(
         )
         incoming.retry_held(league)
     return _row(Roster.load(league), public, key)
+
+
+def _refuse_look_alike(league: League, roster: Roster, name: str) -> None:
+    """A key admitted under a name a reader cannot tell from another racer's would let its
+    racer pose as them on every leaderboard (Cyrillic а for a, a zero-width space...)."""
+    wanted = look_alike_key(name)
+    others = {*roster.racer_of.values(), roster.founder_racer or ""}
+    found = look_alike(league, name)
+    if found:
+        others.add(found)
+    for other in sorted(others):
+        if other and other.casefold() != name.casefold() and look_alike_key(other) == wanted:
+            raise LeagueError(
+                f"{name!r} cannot be told apart from racer {other!r} on a leaderboard; ask the "
+                "racer to choose another name (`racer-tui racer me NAME`, then sync), or admit "
+                "the key under another name with --racer."
+            )
 
 
 def retire(league: League, key: SigningKey, target: str) -> KeyRow:

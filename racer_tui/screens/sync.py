@@ -72,11 +72,12 @@ KEY_COLUMNS = (
     Col("fingerprint", keep=0, collapses=False),
     Col("status", keep=1, shrink_to=8),
 )
+# The reason matters most (who, and what to do); where it was in the store gives way first.
 QUARANTINE_COLUMNS = (
     "kind",
     Col("id", keep=1, shrink_to=8),
-    Col("reason", keep=0, shrink_to=20, collapses=False),
-    Col("where", keep=2, shrink_to=10),
+    Col("reason", keep=2, shrink_to=30, collapses=False),
+    Col("where", keep=0, shrink_to=10),
 )
 CELL = 48  # characters of one side of a conflict or a reason in a cell; the rest is cut
 URL_HINT = "dir:PATH (a shared folder) or dynamodb://TABLE?region=R"
@@ -264,7 +265,7 @@ class SyncScreen(RacerScreen[bool]):
                 [
                     Text(row.kind or "?"),
                     Text(row.record_id or "?"),
-                    cut(row.reason, 60),
+                    cut(row.reason, 160),
                     cut(row.location, 60),
                 ]
                 for row in status.quarantined
@@ -280,7 +281,7 @@ class SyncScreen(RacerScreen[bool]):
         )
         self.query_one("#sync-quarantine-title", Label).update(
             Text(
-                f"Quarantined ({quarantined}): failed the checks, not added"
+                f"Quarantined ({quarantined}): on no leaderboard, each with its reason"
                 if quarantined
                 else "Quarantined: none"
             )

@@ -412,3 +412,19 @@ def test_revoking_a_co_host_takes_their_lap_disqualifications_off_the_boards(
     summary = viewer.sync()
     assert viewer.board()["ana"] == pytest.approx(11.0)  # the disqualification is gone
     assert any(line.startswith("correction ") for line in summary.withdrawn)
+
+
+def test_a_key_proposed_under_a_look_alike_name_is_not_admitted(
+    machines: dict[str, Machine], store_url: str, tmp_path: Path
+) -> None:
+    from league.errors import LeagueError
+
+    organiser = machines["organiser"]
+    poser = Machine(tmp_path, "\u0430na", store_url)  # Cyrillic а, then "na"
+    poser.race("\u0430na", [4.0, 4.0])
+    poser.sync()
+    organiser.sync()
+    with pytest.raises(LeagueError, match="cannot be told apart from racer 'ana'"):
+        membership.admit(organiser.league, organiser.key, "\u0430na")
+    assert "\u0430na" not in organiser.board()
+    poser.league.close()
