@@ -15,8 +15,8 @@ Each part runs the real commands as child processes, in a temporary data directo
   be there, and the database must pass SQLite's integrity check.
 - train: `racer-tui train` runs, and its training child (the process that writes the
   checkpoints) is killed at a random moment after it starts; the model folder must open,
-  every JSON, YAML and weights file in it must read, and at the end one more training must
-  resume from the last checkpoint and finish.
+  every JSON, YAML and weights file in it must read, every next training must start from
+  the last checkpoint once there is one, and at the end one more must resume and finish.
 
 Figures are printed, never judged here; tests/racer_tui/test_bench_kill.py runs a small
 scale and checks them.
@@ -49,6 +49,7 @@ class Part:
     lost: int = 0
     duplicated: int = 0
     corrupt: int = 0
+    resumed: int = 0  # trainings that started from the last checkpoint
     problems: list[str] = field(default_factory=list)
 
 
@@ -264,10 +265,14 @@ def train_kills(home: Path, kills: int, rng: random.Random) -> Part:
         )
         assert cli.stdout is not None
         child = 0
+        had_checkpoint = (folder.checkpoints_dir / "latest.safetensors").is_file()
         for line in cli.stdout:
             event = events.decode(line)
             if isinstance(event, events.Started):
                 child = event.pid
+                if had_checkpoint and event.resumed_from != "checkpoint":
+                    part.problems.append(f"a training started from {event.resumed_from}")
+                part.resumed += event.resumed_from == "checkpoint"
                 break
         if child:
             time.sleep(rng.uniform(*_TRAIN_WINDOW_S))
@@ -385,11 +390,14 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(report, indent=2))
         return 0
     print(f"kill figures in {report['seconds']} s")
-    print(f"{'part':<8} {'runs':>5} {'killed mid-way':>15} {'lost':>5} {'twice':>6} {'corrupt':>8}")
+    print(
+        f"{'part':<8} {'runs':>5} {'killed mid-way':>15} {'lost':>5} {'twice':>6} "
+        f"{'corrupt':>8} {'resumed':>8}"
+    )
     for name, part in report["parts"].items():
         print(
             f"{name:<8} {part['runs']:>5} {part['killed_mid_way']:>15} {part['lost']:>5} "
-            f"{part['duplicated']:>6} {part['corrupt']:>8}"
+            f"{part['duplicated']:>6} {part['corrupt']:>8} {part['resumed']:>8}"
         )
     for problem in report["problems"]:
         print(f"  {problem}")
