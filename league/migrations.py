@@ -394,6 +394,7 @@ CREATE TABLE roster (
     role TEXT,
     signed_by TEXT NOT NULL,
     kept TEXT,
+    league TEXT,
     created_at TEXT NOT NULL,
     content_hash TEXT NOT NULL
 );

@@ -276,9 +276,13 @@ def _apply_trusted(
 
 def _already_here(league: League, record: SyncRecord) -> bool:
     """Whether this league holds exactly this content under this key already."""
-    if record.kind == PROFILE_KIND:
-        sql = "SELECT 1 FROM sync_profiles WHERE profile_id = ? AND content_hash = ?"
-    elif record.kind == BUNDLE_KIND:
+    if record.kind == PROFILE_KIND:  # the hash covers the body, not the version
+        row = league.query_one(
+            "SELECT 1 FROM sync_profiles WHERE profile_id = ? AND content_hash = ? AND version = ?",
+            (record.record_id, record.content_hash, record.version),
+        )
+        return row is not None
+    if record.kind == BUNDLE_KIND:
         sql = "SELECT 1 FROM sync_bundles WHERE record_id = ? AND content_hash = ?"
     else:
         table = TABLE_OF_KIND[record.kind]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from league.errors import LeagueError
 from league.store import League
-from league.sync.engine import Progress, SyncSummary, push, store_key, sync
+from league.sync.engine import Progress, SyncSummary, pull, push, store_key, sync
 from league.sync.errors import StoreUrlError, SyncError
 from league.sync.local import (
     BUNDLES_SETTING,
@@ -23,9 +23,11 @@ from league.sync.local import (
 from league.sync.protocol import RecordStore
 from league.sync.urls import DirUrl, DynamoDbUrl, S3Url, parse_store_url
 from league.trust.keys import fingerprint, load_or_create_key
-from league.trust.membership import MIN_FINGERPRINT_DIGITS, found_league
+from league.trust.membership import found_league
 from league.trust.roster import FOUNDER_ID, PIN_SETTING, Roster
 from sim.plural import counted
+
+PIN_DIGITS = 16  # the whole fingerprint: 8 digits are 32 bits, which a forger can grind
 
 NO_STORE = (
     "this league has no store yet: run `racer-tui sync set STORE` (for example "
@@ -61,11 +63,16 @@ def save_store(
     pin = None
     if organiser is not None:
         pin = organiser.replace(" ", "").lower()
-        if len(pin) < MIN_FINGERPRINT_DIGITS or not all(c in "0123456789abcdef" for c in pin):
+        if len(pin) != PIN_DIGITS or not all(c in "0123456789abcdef" for c in pin):
             raise StoreUrlError(
-                f"--organiser {organiser!r} is not a key fingerprint: give at least "
-                f"{MIN_FINGERPRINT_DIGITS} of the hex digits the organiser reads out from "
-                "`racer-tui racer keys`"
+                f"--organiser {organiser!r} is not a key fingerprint: give all "
+                f"{PIN_DIGITS} hex digits the organiser reads out from `racer-tui racer keys`"
+            )
+        founder = Roster.load(league).founder
+        if founder is not None and not founder.startswith(pin):
+            raise StoreUrlError(
+                f"this league's organiser key is {fingerprint(founder)}, not "
+                f"{organiser}: check the fingerprint with your organiser"
             )
     with league.transaction():
         set_setting(league, STORE_SETTING, str(store))
@@ -82,6 +89,10 @@ def found_store(league: League, store: RecordStore, url: str, *, push_now: bool 
     to the store at once, so the store names its organiser before any racer syncs. The
     league syncs with this store from now on if it had none. Returns one sentence to show."""
     key = load_or_create_key()
+    if push_now:
+        # The store may have an organiser already (set up from another machine, or from
+        # before signed results): learn it before claiming the league.
+        pull(league, store, store_key(url))
     founded = found_league(league, key)
     if get_setting(league, STORE_SETTING) is None:
         save_store(league, url)

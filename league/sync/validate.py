@@ -220,6 +220,7 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "role": _t(one_of(*ROLES), nullable=True),
         "signed_by": _t(public_key),
         "kept": _t(digest_list, nullable=True),
+        "league": _t(record_id, nullable=True),
         "created_at": _t(timestamp),
     },
     "racer": {
@@ -489,6 +490,8 @@ def _check_roster(record: SyncRecord) -> None:
         rule = f"a {action} names no role"
     if body["kept"] is not None and action != "retire":
         ok, rule = False, "only a retirement lists the records it keeps"
+    if (body["league"] is None) != (action == "propose"):
+        ok, rule = False, "every act but a proposal names its league"
     if not ok:
         raise RecordInvalidError(f"it is not a well-formed roster act ({rule})")
 

@@ -22,7 +22,7 @@ from league.sync import incoming
 from league.sync.local import STORE_SETTING, get_setting
 from league.sync.validate import MAX_KEPT
 from league.trust.keys import SigningKey, fingerprint
-from league.trust.roster import FOUNDER_ID, Roster, record_digest
+from league.trust.roster import FOUNDER_ID, Roster, record_digest, same_racer
 from sim.ids import new_id
 from sim.plain_names import look_alike_key
 
@@ -50,6 +50,7 @@ def _act(
     role: str | None,
     signed_by: str,
     kept: str | None = None,
+    league_id: str | None = None,
 ) -> None:
     body = {
         "action": action,
@@ -58,6 +59,7 @@ def _act(
         "role": role,
         "signed_by": signed_by,
         "kept": kept,
+        "league": league_id,
         "created_at": now_iso(),
     }
     store_record(league, "roster", record_id, body)
@@ -78,6 +80,7 @@ def found_league(league: League, key: SigningKey) -> bool:
             racer=racer,
             role="organiser",
             signed_by=key.public_hex,
+            league_id=new_id(),
         )
     return True
 
@@ -126,7 +129,7 @@ def find_key(league: League, target: str) -> tuple[str, str | None]:
     digits = target.replace(" ", "").lower()
     known = {**roster.proposed, **roster.racer_of}
     # A racer's name first: a name may look like hex ("20240501").
-    keys = {k for k, racer in known.items() if racer.casefold() == target.casefold()}
+    keys = {k for k, racer in known.items() if same_racer(racer, target)}
     if not keys and len(digits) >= MIN_FINGERPRINT_DIGITS:
         keys = {k for k in (*known, *roster.organisers) if k.startswith(digits)}
     if not keys:
@@ -178,6 +181,7 @@ def admit(
             racer=name,
             role=role,
             signed_by=key.public_hex,
+            league_id=roster.league,
         )
         incoming.retry_held(league)
     return _row(Roster.load(league), public, key)
@@ -192,7 +196,7 @@ def _refuse_look_alike(league: League, roster: Roster, name: str) -> None:
     if found:
         others.add(found)
     for other in sorted(others):
-        if other and other.casefold() != name.casefold() and look_alike_key(other) == wanted:
+        if other and not same_racer(other, name) and look_alike_key(other) == wanted:
             raise LeagueError(
                 f"{name!r} cannot be told apart from racer {other!r} on a leaderboard; ask the "
                 "racer to choose another name (`racer-tui racer me NAME`, then sync), or admit "
@@ -229,6 +233,7 @@ def _end(league: League, key: SigningKey, target: str, action: str) -> KeyRow:
             role=None,
             signed_by=key.public_hex,
             kept=kept,
+            league_id=roster.league,
         )
         # Results the key may no longer vouch for leave this league's boards now, not at
         # the next pull (the quarantine row names the league's store, when it has one).

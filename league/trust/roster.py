@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import string
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Final
@@ -59,6 +60,7 @@ OWNER_FIELD: Final = {
 }
 
 _CROCKFORD: Final = "0123456789ABCDEFGHJKMNPQRSTVWXYZ"
+_ASCII_FOLD: Final = str.maketrans(string.ascii_uppercase, string.ascii_lowercase)
 
 
 def _derived_id(label: bytes, value: str) -> str:
@@ -82,6 +84,9 @@ class Act:
     role: str | None
     signed_by: str
     kept: str | None = None  # a retire act's JSON list of record digests
+    # The league the act belongs to (the founding act's own random id): one organiser key
+    # may found several leagues, and an admission in one must mean nothing in another.
+    league: str | None = None
 
     @classmethod
     def from_body(cls, record_id: str, body: Mapping[str, Any]) -> Act:
@@ -93,7 +98,14 @@ class Act:
             body.get("role"),
             str(body["signed_by"]),
             body.get("kept"),
+            body.get("league"),
         )
+
+
+def same_racer(one: str, other: str) -> bool:
+    """Whether two names are one racer, as the league's tables compare them (SQLite's
+    NOCASE: ASCII letters only, so "Jeß" and "Jess" are two racers)."""
+    return one.translate(_ASCII_FOLD) == other.translate(_ASCII_FOLD)
 
 
 def record_digest(kind: str, record_id: str, version: int, content_hash: str) -> str:
@@ -114,9 +126,11 @@ class Roster:
     proposed: dict[str, str] = field(default_factory=dict)  # key -> the name it proposed
     kept: dict[str, frozenset[str]] = field(default_factory=dict)  # retired key -> digests
     revoked: set[str] = field(default_factory=set)
+    league: str | None = None  # the founding act's league id
     # The organiser's fingerprint as the racer was told it (`sync set --organiser`): a
     # founding record with another key is refused, whoever wrote it to the store first.
     pinned: str | None = None
+    impostor: str | None = None  # a founder this league holds that is not the pinned one
 
     @classmethod
     def from_acts(cls, acts: Iterable[Act]) -> Roster:
@@ -125,13 +139,19 @@ class Roster:
         for act in ordered:
             if act.action == "found" and act.record_id == FOUNDER_ID:
                 roster.founder, roster.founder_racer = act.public_key, act.racer
+                roster.league = act.league
             elif act.action == "propose" and act.racer is not None:
                 roster.proposed.setdefault(act.public_key, act.racer)
         founder = roster.founder
         if founder is None:
             return roster
-        # Only the founder's acts count (the pull holds any other), and never against it.
-        own = [a for a in ordered if a.signed_by == founder and a.public_key != founder]
+        # Only the founder's acts for this league count (the pull holds any other), and
+        # never against the founder itself.
+        own = [
+            a
+            for a in ordered
+            if a.signed_by == founder and a.public_key != founder and a.league == roster.league
+        ]
         roster.revoked = {act.public_key for act in own if act.action == "revoke"}
         for act in own:
             if act.public_key in roster.revoked:
@@ -147,12 +167,20 @@ class Roster:
     @classmethod
     def load(cls, league: League) -> Roster:
         rows = league.query(
-            "SELECT id, action, public_key, racer, role, signed_by, kept FROM roster ORDER BY id"
+            "SELECT id, action, public_key, racer, role, signed_by, kept, league FROM roster "
+            "ORDER BY id"
         )
         roster = cls.from_acts(Act(*row) for row in rows)
         pin = league.query_one("SELECT value FROM sync_settings WHERE name = ?", (PIN_SETTING,))
-        roster.pinned = None if pin is None else str(pin[0])
-        return roster
+        if pin is None:
+            return roster
+        pinned = str(pin[0])
+        if roster.founder is None or roster.founder.startswith(pinned):
+            roster.pinned = pinned
+            return roster
+        # Not the organiser the racer was told: as if the league had none (nothing counts).
+        impostor = cls(proposed=roster.proposed, pinned=pinned, impostor=roster.founder)
+        return impostor
 
     def status(self, key: str) -> str:
         """One word for `key`: founder, organiser, racer, retired, revoked, proposed, unknown."""
@@ -180,6 +208,11 @@ class Roster:
         signer = record.seal.signer
         if record.kind == ROSTER_KIND:
             return self._roster_refusal(record, signer)
+        if self.impostor is not None and self.pinned is not None:
+            return (
+                f"{theirs}unchecked: the store's organiser key {fingerprint(self.impostor)} is "
+                f"not the one you were told ({fingerprint(self.pinned)}); check with your organiser"
+            )
         if self.founder is None:
             return (
                 f"{theirs}unchecked: this league has no organiser yet (its organiser runs "
@@ -216,8 +249,15 @@ class Roster:
         ):
             made = "a league night's race" if record.kind == "race" else f"a {record.kind}"
             return f"it is signed by racer {racer}, but only an organiser makes {made}"
-        if owner is not None and owner.casefold() != racer.casefold():
+        if owner is not None and not same_racer(owner, racer):
             return f"it claims to be racer {owner}'s, but it is signed with racer {racer}'s key"
+        shown = record.body.get("display_name")
+        if record.kind == "racer" and isinstance(shown, str) and not same_racer(shown, racer):
+            # Else an admitted "eve" could appear as "Ana" on every board.
+            return (
+                f"it is signed by racer {racer} but shows them as {shown}; only the organiser "
+                "renames racers"
+            )
         return None
 
     def _roster_refusal(self, record: SyncRecord, signer: str) -> str | None:

@@ -269,6 +269,7 @@ def test_a_forged_admission_counts_for_nothing(machines: dict[str, Machine]) -> 
         "role": "organiser",
         "signed_by": mallory.key.public_hex,
         "kept": None,
+        "league": new_id(),
         "created_at": "2026-11-24T00:00:00.000Z",
     }
     act_id = new_id()
@@ -428,3 +429,119 @@ def test_a_key_proposed_under_a_look_alike_name_is_not_admitted(
         membership.admit(organiser.league, organiser.key, "\u0430na")
     assert "\u0430na" not in organiser.board()
     poser.league.close()
+
+
+def test_names_are_one_racer_only_as_the_league_compares_them(
+    machines: dict[str, Machine], store_url: str, tmp_path: Path
+) -> None:
+    # SQLite's NOCASE folds ASCII only: "Jeß" and "Jess" are two racers, so a key
+    # admitted as Jeß must not sign Jess's results (Python's casefold says they are one).
+    organiser, viewer = machines["organiser"], machines["viewer"]
+    jess = Machine(tmp_path, "Jess", store_url)
+    jess.race("Jess", [12.0, 12.2])
+    jess.sync()
+    eve = Machine(tmp_path, "Jeß", store_url)
+    posing = eve.race("Jess", [5.0, 5.0])
+    eve.sync()
+    organiser.sync()
+    membership.admit(organiser.league, organiser.key, "Jess")
+    with pytest.raises(Exception, match="cannot be told apart from racer 'Jess'"):
+        membership.admit(organiser.league, organiser.key, "Jeß")
+    membership.admit(organiser.league, organiser.key, eve.key.public_hex, racer="Jeß Ex")
+    organiser.sync()
+    viewer.sync()
+    assert viewer.league.query_one("SELECT count(*) FROM races WHERE id = ?", (posing,))[0] == 0
+    assert "claims to be racer Jess's" in viewer.quarantine()[f"race {posing}"]
+    for machine in (jess, eve):
+        machine.league.close()
+
+
+def test_an_admission_in_one_league_means_nothing_in_another(
+    machines: dict[str, Machine], tmp_path: Path
+) -> None:
+    from league.sync.outgoing import unsent_batches
+    from league.sync.record import encode_envelope
+    from league.trust.seals import make_seal
+
+    organiser, mallory, viewer = machines["organiser"], machines["mallory"], machines["viewer"]
+    # The same organiser key founds a second league (next season) and admits mallory there.
+    with open_league(tmp_path / "season-2.db") as other:
+        membership.found_league(other, organiser.key)
+        with other.transaction():
+            from league.records import store_record
+            from sim.ids import new_id
+
+            act = {
+                "action": "propose",
+                "public_key": mallory.key.public_hex,
+                "racer": "mallory",
+                "role": "racer",
+                "signed_by": mallory.key.public_hex,
+                "kept": None,
+                "league": None,
+                "created_at": "2026-11-24T00:00:00.000Z",
+            }
+            store_record(other, "roster", new_id(), act)
+        admitted = membership.admit(other, organiser.key, "mallory")
+        assert admitted.status == "racer"
+        copied = [
+            record
+            for batch in unsent_batches(other, "nowhere")
+            for record in batch.records
+            if record.kind == "roster" and record.body["action"] == "admit"
+        ]
+    # Someone copies that admission, genuinely signed by the organiser, into this store.
+    (admission,) = copied
+    shard = Path(viewer.url.removeprefix("dir:")) / "records" / "roster" / admission.record_id[-1]
+    shard.mkdir(parents=True, exist_ok=True)
+    sealed = admission.sealed(make_seal(admission, organiser.key))
+    (shard / f"{admission.record_id}.json").write_bytes(encode_envelope(sealed))
+    viewer.sync()
+    assert "mallory" not in viewer.board()
+    keys = {row.racer: row.status for row in membership.key_rows(viewer.league, viewer.key)}
+    assert keys["mallory"] == "proposed"
+
+
+def test_an_admitted_racer_cannot_show_as_someone_else(
+    machines: dict[str, Machine], store_url: str, tmp_path: Path
+) -> None:
+    from league.records import store_record
+    from sim.ids import new_id
+
+    organiser, viewer = machines["organiser"], machines["viewer"]
+    carl = Machine(tmp_path, "carl", store_url)
+    body = {
+        "name": "carl",
+        "display_name": "ana",
+        "colour": "#112233",
+        "created_at": "2026-11-24T00:00:00.000Z",
+    }
+    posing = new_id()
+    store_record(carl.league, "racers", posing, body)
+    carl.sync()
+    organiser.sync()
+    membership.admit(organiser.league, organiser.key, "carl")
+    organiser.sync()
+    viewer.sync()
+    reason = viewer.quarantine()[f"racer {posing}"]
+    assert (
+        reason
+        == "it is signed by racer carl but shows them as ana; only the organiser renames racers"
+    )
+    assert viewer.league.query_one("SELECT count(*) FROM racers WHERE id = ?", (posing,))[0] == 0
+    carl.league.close()
+
+
+def test_a_pin_that_contradicts_the_leagues_organiser_is_refused(
+    machines: dict[str, Machine],
+) -> None:
+    from league.sync.errors import StoreUrlError
+    from league.sync.session import save_store
+
+    viewer = machines["viewer"]
+    viewer.sync()
+    with pytest.raises(StoreUrlError, match="this league's organiser key is"):
+        save_store(viewer.league, viewer.url, organiser=SigningKey.generate().fingerprint)
+    with pytest.raises(StoreUrlError, match="give all 16 hex digits"):
+        save_store(viewer.league, viewer.url, organiser="2628 95d5")
+    save_store(viewer.league, viewer.url, organiser=machines["organiser"].key.fingerprint)
