@@ -39,7 +39,9 @@ from pathlib import Path
 from typing import Any, Final
 
 _KILL_WINDOW_S: Final = 4.0  # a push or pull of the default league takes about this long
-_TRAIN_WINDOW_S: Final = (0.5, 8.0)  # after the training child starts
+# After the training child starts: it writes a checkpoint every 10 s of training, so kills
+# land before the first, around the first and second writes, and between them.
+_TRAIN_WINDOW_S: Final = (0.5, 25.0)
 
 
 @dataclass
@@ -246,7 +248,9 @@ def concurrent_writers(root: Path, home: Path, writers: int, races_each: int) ->
 # --- training -------------------------------------------------------------------------------
 
 
-def train_kills(home: Path, kills: int, rng: random.Random) -> Part:
+def train_kills(
+    home: Path, kills: int, rng: random.Random, window: tuple[float, float] = _TRAIN_WINDOW_S
+) -> Part:
     os.environ["RACER_TUI_HOME"] = str(home)
     from sim.garage.options import new_model
     from sim.training import events
@@ -275,7 +279,7 @@ def train_kills(home: Path, kills: int, rng: random.Random) -> Part:
                 part.resumed += event.resumed_from == "checkpoint"
                 break
         if child:
-            time.sleep(rng.uniform(*_TRAIN_WINDOW_S))
+            time.sleep(rng.uniform(*window))
             try:
                 os.kill(child, signal.SIGKILL)
                 part.killed_mid_way += 1
@@ -357,7 +361,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         if args.writers:
             parts["writers"] = concurrent_writers(root, home, args.writers, args.races_each)
         if args.train_kills:
-            parts["train"] = train_kills(home, args.train_kills, rng)
+            parts["train"] = train_kills(
+                home, args.train_kills, rng, (_TRAIN_WINDOW_S[0], args.train_window)
+            )
     return {
         "seconds": round(time.perf_counter() - started, 1),
         "parts": {name: asdict(part) for name, part in parts.items()},
@@ -372,6 +378,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m racer_tui.bench_kill", description=__doc__)
     parser.add_argument("--sync-kills", type=int, default=50, help="kills of push, and of pull")
     parser.add_argument("--train-kills", type=int, default=50)
+    parser.add_argument(
+        "--train-window",
+        type=float,
+        default=_TRAIN_WINDOW_S[1],
+        help="kill a training at most this many seconds after it starts",
+    )
     parser.add_argument("--writers", type=int, default=8, help="processes recording at once")
     parser.add_argument("--races-each", type=int, default=25)
     parser.add_argument("--records", type=int, default=2000, help="submissions in the league")

@@ -14,7 +14,8 @@ from racer_tui.bench_kill import main
 def test_killed_pushes_pulls_and_trainings_lose_nothing(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    args = ["--sync-kills", "2", "--records", "300", "--train-kills", "1", "--writers", "3"]
+    args = ["--sync-kills", "2", "--records", "300", "--writers", "3"]
+    args += ["--train-kills", "1", "--train-window", "6"]
     assert main([*args, "--races-each", "4", "--seed", "3", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["problems"] == []
