@@ -460,7 +460,6 @@ def test_an_admission_in_one_league_means_nothing_in_another(
     machines: dict[str, Machine], tmp_path: Path
 ) -> None:
     from league.sync.outgoing import unsent_batches
-    from league.sync.record import encode_envelope
     from league.trust.seals import make_seal
 
     organiser, mallory, viewer = machines["organiser"], machines["mallory"], machines["viewer"]
@@ -492,10 +491,9 @@ def test_an_admission_in_one_league_means_nothing_in_another(
         ]
     # Someone copies that admission, genuinely signed by the organiser, into this store.
     (admission,) = copied
-    shard = Path(viewer.url.removeprefix("dir:")) / "records" / "roster" / admission.record_id[-1]
-    shard.mkdir(parents=True, exist_ok=True)
     sealed = admission.sealed(make_seal(admission, organiser.key))
-    (shard / f"{admission.record_id}.json").write_bytes(encode_envelope(sealed))
+    with open_store(viewer.url, retry=QUICK_RETRY) as store:
+        assert store.push([sealed]).pushed
     viewer.sync()
     assert "mallory" not in viewer.board()
     keys = {row.racer: row.status for row in membership.key_rows(viewer.league, viewer.key)}
