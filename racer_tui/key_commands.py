@@ -110,7 +110,18 @@ def _me(league: League, name: str | None) -> int:
         print(f"This machine races as {saved}." if saved else "No racer name is saved here.")
         return 0
     saved = save_local_racer_name(league, name)
-    print(f"This machine races as {saved}; the next sync proposes its key under that name.")
+    from league.trust.keys import load_or_create_key
+    from league.trust.roster import Roster
+
+    status = Roster.load(league).status(load_or_create_key().public_hex)
+    if status == "unknown":
+        print(f"This machine races as {saved}; the next sync proposes its key under that name.")
+    else:
+        # The roster already names this key: a new local name does not change what it says.
+        print(
+            f"This machine races as {saved}. Its signing key is already known to the league "
+            f"({status}); only the organiser changes whose key it is."
+        )
     return 0
 
 
