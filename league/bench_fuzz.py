@@ -47,6 +47,7 @@ from league.errors import LeagueError
 from league.store import League, open_league
 from league.sync.errors import RecordInvalidError
 from league.sync.record import Quarantined, decode_envelope, encode_envelope, make_record
+from sim.home import home_at
 from sim.ids import canonical_json
 
 FAMILIES: Final = ("record", "rules", "track", "reward", "bundle")
@@ -462,15 +463,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="racer-tui-fuzz-") as tmp:
         root = Path(tmp)
-        saved = os.environ.get("RACER_TUI_HOME")
-        os.environ["RACER_TUI_HOME"] = str(root / "home")  # never the racer's own garage
-        try:
+        with home_at(root / "home"):
             report = run(args.cases, args.seed, root)
-        finally:
-            if saved is None:
-                os.environ.pop("RACER_TUI_HOME", None)
-            else:
-                os.environ["RACER_TUI_HOME"] = saved
     if args.json:
         print(json.dumps(report, indent=2))
         return 0

@@ -38,6 +38,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
+from sim.home import home_at
+
 _KILL_WINDOW_S: Final = 4.0  # a push or pull of the default league takes about this long
 # After the training child starts: it writes a checkpoint every 10 s of training, so kills
 # land before the first, around the first and second writes, and between them.
@@ -55,11 +57,10 @@ class Part:
     problems: list[str] = field(default_factory=list)
 
 
-def _cli(*args: str, home: Path) -> subprocess.Popen[bytes]:
-    env = {**os.environ, "RACER_TUI_HOME": str(home)}
+def _cli(*args: str) -> subprocess.Popen[bytes]:
+    """A racer-tui command in the scratch data directory (inherited from `run`)."""
     return subprocess.Popen(
         [sys.executable, "-m", "racer_tui.cli", *args],
-        env=env,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
@@ -76,8 +77,8 @@ def _kill_after(process: subprocess.Popen[bytes], seconds: float) -> bool:
     return False
 
 
-def _run(*args: str, home: Path) -> None:
-    process = _cli(*args, home=home)
+def _run(*args: str) -> None:
+    process = _cli(*args)
     if process.wait(timeout=600) != 0:
         raise RuntimeError(f"racer-tui {' '.join(args)} failed (exit {process.returncode})")
 
@@ -124,7 +125,7 @@ def _compare(
     part.corrupt += sum(1 for key in set(expected) & set(got) if expected[key] != got[key])
 
 
-def push_kills(root: Path, home: Path, kills: int, records: int, rng: random.Random) -> Part:
+def push_kills(root: Path, kills: int, records: int, rng: random.Random) -> Part:
     from league.bench import fill
     from league.store import open_league
     from league.sync.engine import store_key
@@ -144,15 +145,15 @@ def push_kills(root: Path, home: Path, kills: int, records: int, rng: random.Ran
             nights=1,
             racers_per_night=5,
         )
-        found_league(league, load_or_create_key(home))  # the organiser's league
+        found_league(league, load_or_create_key())  # the organiser's league
     part = Part()
     for run in range(kills):
         url = f"dir:{root / f'push-store-{run}'}"
         with open_store(url) as store:
             store.init()  # `sync init` would push the whole league itself: set up only
-        pusher = _cli("sync", "--push", "--store", url, "--db", str(source), home=home)
+        pusher = _cli("sync", "--push", "--store", url, "--db", str(source))
         part.killed_mid_way += _kill_after(pusher, rng.uniform(0.0, _KILL_WINDOW_S))
-        _run("sync", "--push", "--store", url, "--db", str(source), home=home)
+        _run("sync", "--push", "--store", url, "--db", str(source))
         expected = _league_records(source)
         held, files = _store_records(url)
         _compare(part, expected, held)
@@ -166,16 +167,16 @@ def push_kills(root: Path, home: Path, kills: int, records: int, rng: random.Ran
     return part
 
 
-def pull_kills(root: Path, home: Path, kills: int, rng: random.Random) -> Part:
+def pull_kills(root: Path, kills: int, rng: random.Random) -> Part:
     stores = sorted(root.glob("push-store-*"))
     url = f"dir:{stores[-1]}"
     expected, _ = _store_records(url)
     part = Part()
     for run in range(kills):
         db = root / f"puller-{run}.db"
-        puller = _cli("sync", "--pull", "--store", url, "--db", str(db), home=home)
+        puller = _cli("sync", "--pull", "--store", url, "--db", str(db))
         part.killed_mid_way += _kill_after(puller, rng.uniform(0.0, _KILL_WINDOW_S))
-        _run("sync", "--pull", "--store", url, "--db", str(db), home=home)
+        _run("sync", "--pull", "--store", url, "--db", str(db))
         got = _league_records(db)
         _compare(part, expected, got)
         part.duplicated += max(0, len(got) - len(expected))
@@ -209,17 +210,15 @@ with open_league(db) as league:
 """
 
 
-def concurrent_writers(root: Path, home: Path, writers: int, races_each: int) -> Part:
+def concurrent_writers(root: Path, writers: int, races_each: int) -> Part:
     from league.store import open_league
 
     db = root / "writers.db"
     with open_league(db):
         pass  # created and migrated once, before the writers race each other
-    env = {**os.environ, "RACER_TUI_HOME": str(home)}
     processes = [
         subprocess.Popen(
             [sys.executable, "-c", _WRITER, str(db), f"writer-{n}", str(races_each)],
-            env=env,
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
@@ -249,9 +248,8 @@ def concurrent_writers(root: Path, home: Path, writers: int, races_each: int) ->
 
 
 def train_kills(
-    home: Path, kills: int, rng: random.Random, window: tuple[float, float] = _TRAIN_WINDOW_S
+    kills: int, rng: random.Random, window: tuple[float, float] = _TRAIN_WINDOW_S
 ) -> Part:
-    os.environ["RACER_TUI_HOME"] = str(home)
     from sim.garage.options import new_model
     from sim.training import events
 
@@ -262,7 +260,6 @@ def train_kills(
         command += ["--minutes", "1"]
         cli = subprocess.Popen(
             command,
-            env={**os.environ, "RACER_TUI_HOME": str(home)},
             stdout=subprocess.PIPE,
             stderr=subprocess.DEVNULL,
             text=True,
@@ -291,7 +288,6 @@ def train_kills(
     before = _steps(folder.name)
     last = subprocess.run(
         [sys.executable, "-m", "racer_tui.cli", "train", folder.name, "--minutes", "0.1", "--json"],
-        env={**os.environ, "RACER_TUI_HOME": str(home)},
         capture_output=True,
         text=True,
         timeout=600,
@@ -353,17 +349,16 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="racer-tui-kill-") as tmp:
         root = Path(tmp)
-        home = root / "home"
         parts: dict[str, Part] = {}
-        if args.sync_kills:
-            parts["push"] = push_kills(root, home, args.sync_kills, args.records, rng)
-            parts["pull"] = pull_kills(root, home, args.sync_kills, rng)
-        if args.writers:
-            parts["writers"] = concurrent_writers(root, home, args.writers, args.races_each)
-        if args.train_kills:
-            parts["train"] = train_kills(
-                home, args.train_kills, rng, (_TRAIN_WINDOW_S[0], args.train_window)
-            )
+        with home_at(root / "home"):  # every command below runs in this scratch home
+            if args.sync_kills:
+                parts["push"] = push_kills(root, args.sync_kills, args.records, rng)
+                parts["pull"] = pull_kills(root, args.sync_kills, rng)
+            if args.writers:
+                parts["writers"] = concurrent_writers(root, args.writers, args.races_each)
+            if args.train_kills:
+                window = (_TRAIN_WINDOW_S[0], args.train_window)
+                parts["train"] = train_kills(args.train_kills, rng, window)
     return {
         "seconds": round(time.perf_counter() - started, 1),
         "parts": {name: asdict(part) for name, part in parts.items()},
@@ -390,14 +385,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    saved = os.environ.get("RACER_TUI_HOME")
-    try:
-        report = run(args)
-    finally:
-        if saved is None:
-            os.environ.pop("RACER_TUI_HOME", None)
-        else:
-            os.environ["RACER_TUI_HOME"] = saved
+    report = run(args)
     if args.json:
         print(json.dumps(report, indent=2))
         return 0

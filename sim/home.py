@@ -7,6 +7,8 @@ temporary directory so they never touch a real racer's garage or league.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import platformdirs
@@ -24,6 +26,22 @@ def data_home() -> Path:
     root = Path(override) if override else Path(platformdirs.user_data_dir("racer-tui"))
     root.mkdir(parents=True, exist_ok=True)
     return root
+
+
+@contextmanager
+def home_at(path: Path) -> Iterator[Path]:
+    """Use `path` as the data directory until the block ends (a benchmark's scratch home:
+    it never touches the racer's own garage or league). Child processes started inside
+    inherit it through the environment."""
+    saved = os.environ.get(HOME_ENV)
+    os.environ[HOME_ENV] = str(path)
+    try:
+        yield path
+    finally:
+        if saved is None:
+            os.environ.pop(HOME_ENV, None)
+        else:
+            os.environ[HOME_ENV] = saved
 
 
 def user_tracks_dir() -> Path:

@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 from typing import Any, Final
 
 from league.store import League
+from league.sync.local import get_setting
 from league.sync.record import SyncRecord
 from league.trust.keys import fingerprint
 
@@ -171,10 +172,9 @@ class Roster:
             "ORDER BY id"
         )
         roster = cls.from_acts(Act(*row) for row in rows)
-        pin = league.query_one("SELECT value FROM sync_settings WHERE name = ?", (PIN_SETTING,))
-        if pin is None:
+        pinned = get_setting(league, PIN_SETTING)
+        if pinned is None:
             return roster
-        pinned = str(pin[0])
         if roster.founder is None or roster.founder.startswith(pinned):
             roster.pinned = pinned
             return roster
