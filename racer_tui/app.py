@@ -8,18 +8,25 @@ CLI never imports it (tests/test_architecture.py checks both).
 
 from __future__ import annotations
 
-import gc
 from collections.abc import Callable
 from functools import partial
 from typing import Any, ClassVar
 
+from textual import events
 from textual.app import App
 from textual.binding import Binding, BindingType
 from textual.dom import DOMNode
 from textual.screen import Screen
+from textual.widget import AwaitMount
 from textual.widgets import DataTable
 
 from racer_tui.commands import PaletteCommand, RacerCommands
+from racer_tui.long_running import (
+    CHECK_SECONDS,
+    FREEZE_AFTER_SECONDS,
+    IdleCollector,
+    freeze_long_lived,
+)
 from racer_tui.screens.base import ModelAdded
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
 from racer_tui.screens.garage import GarageScreen
@@ -62,9 +69,7 @@ OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
     ("Tables", DataTable),
 )
 EVERYWHERE = "Everywhere"
-# Seconds after a section's first visit before what it built is frozen out of garbage
-# collection (its data loads in workers first).
-FREEZE_AFTER_SECONDS = 1.0
+HELP_SCREEN = "help"  # the installed help screen's name
 
 
 def _section_bindings() -> list[BindingType]:
@@ -103,30 +108,49 @@ class RacerTuiApp(App[int]):
     def __init__(self, *, start: str | None = None, long_running: bool = False) -> None:
         """`start` forces the first mode (tests); by default the garage, or the welcome
         screen when the garage is empty. `long_running` is the app a racer or host keeps
-        open for hours (see `_freeze_after_first_visit`); tests build many apps in one process and
-        leave it off."""
+        open for hours: it tunes garbage collection for that (`racer_tui.long_running`);
+        tests build many apps in one process and leave it off."""
         super().__init__()
         self.start_mode = start
         self.long_running = long_running
         self._frozen_modes: set[str] = set()
+        self._switching_to_shown_mode = False
+        self.collector = IdleCollector()
 
     def on_mount(self) -> None:
         first = self.start_mode or self._first_mode()
         self.switch_mode(first)
         self._freeze_after_first_visit(first)
+        if self.long_running:
+            self.collector.start()
+            self.set_interval(CHECK_SECONDS, self._collect_when_idle, name="idle-collector")
+
+    def _collect_when_idle(self) -> None:
+        # Only the sections open (a dialog or a race view closes soon): what survives a
+        # collection lives on, so it may be frozen. A key the driver has posted but the
+        # app has not handled yet would wait for the collection: the timer runs outside
+        # the app's queue, so it looks there first.
+        quiet = all(len(stack) <= 1 for stack in self._screen_stacks.values())
+        self.collector.tick(quiet=quiet, keys_waiting=not self._message_queue.empty())
+
+    def on_unmount(self) -> None:
+        self.collector.stop()
+
+    async def on_event(self, event: events.Event) -> None:
+        if isinstance(event, events.InputEvent):
+            self.collector.input_seen()
+        await super().on_event(event)
 
     def _freeze_after_first_visit(self, mode: str) -> None:
         """In the long-running app, once a section has been shown the first time (and its
         data read), keep what that built out of later garbage collections: modules, Textual
         and the sections live as long as the app, and every full collection walked them
         all (about 220,000 objects once every section has been seen). Measured on a short
-        run right after start-up, full-collection pauses went from 160-225 ms to 26-66 ms;
-        over a long soak (`python -m racer_tui.bench_soak`) Textual's own caches refill the
-        unfrozen heap and pauses of 150-300 ms come back (see issue 23's notes)."""
+        run right after start-up, full-collection pauses went from 160-225 ms to 26-66 ms."""
         if not self.long_running or mode in self._frozen_modes:
             return
         self._frozen_modes.add(mode)
-        self.set_timer(FREEZE_AFTER_SECONDS, _freeze_long_lived)
+        self.set_timer(FREEZE_AFTER_SECONDS, freeze_long_lived)
 
     def _first_mode(self) -> str:
         try:
@@ -154,6 +178,21 @@ class RacerTuiApp(App[int]):
         if action == "help":
             return not isinstance(self.screen, HelpScreen)
         return True
+
+    def switch_mode(self, mode: str) -> AwaitMount:
+        self._switching_to_shown_mode = bool(self._screen_stacks.get(mode))
+        try:
+            return super().switch_mode(mode)
+        finally:
+            self._switching_to_shown_mode = False
+
+    def delay_update(self, delay: float = 0.05) -> None:
+        # Textual's switch_mode holds every screen update back for 50 ms, to hide a screen
+        # being composed for the first time. A section shown before is composed already, and
+        # switch_mode lays it out and paints it at once, so the hold was only latency: 50 of
+        # the 65 ms a section switch took. It still holds for a section's first visit.
+        if not self._switching_to_shown_mode:
+            super().delay_update(delay)
 
     async def action_switch_section(self, mode: str) -> None:
         if mode in self.MODES and mode != self.current_mode:
@@ -223,11 +262,23 @@ class RacerTuiApp(App[int]):
     def action_help(self) -> None:
         if isinstance(self.screen, HelpScreen):
             return
+        # The help is the same for every screen and laying out its tables is most of what
+        # opening it costs (about 100 ms at 80x24): one screen is kept and shown again. A
+        # second one is made only while the kept one is open under another section.
+        if not self.is_screen_installed(HELP_SCREEN):
+            self.install_screen(self._new_help(), HELP_SCREEN)
+        kept = self.get_screen(HELP_SCREEN)
+        if any(kept in stack for stack in self._screen_stacks.values()):
+            self.push_screen(self._new_help())
+        else:
+            self.push_screen(HELP_SCREEN)
+
+    def _new_help(self) -> HelpScreen:
         notes = (
             f"Your models, tracks and league live in {data_home()} "
             "(set RACER_TUI_HOME to use another folder)."
         )
-        self.push_screen(HelpScreen(self.help_topics(), notes))
+        return HelpScreen(self.help_topics(), notes)
 
     def palette_commands(self, screen: Screen[object]) -> list[PaletteCommand]:
         """Every section's keys as commands, plus the keys of the screen the palette was
@@ -284,11 +335,6 @@ class RacerTuiApp(App[int]):
                 seen.add(binding.action)
                 described.append(binding)
         return described
-
-
-def _freeze_long_lived() -> None:
-    gc.collect()
-    gc.freeze()
 
 
 def create_app(*, start: str | None = None, long_running: bool = False) -> RacerTuiApp:

@@ -16,10 +16,10 @@ trial in Races, left when simulated, then its replay.
 
 Figures, over the measured part (everything after the warm-up, the first 5% of the
 actions and at least 50):
-- this process's RSS and live objects (`len(gc.get_objects())` after `gc.collect()`; the
-  objects the app froze at start-up are counted apart) after the warm-up, halfway and at
-  the end, and their growth per 1,000 actions over the measured part and over its second
-  half (a cache filling up flattens out in the second half; a leak does not);
+- this process's RSS and live objects (after `gc.collect()`, those the collector tracks
+  plus those the app froze) after the warm-up, halfway and at the end, and their growth
+  per 1,000 actions over the measured part and over its second half (a cache filling up
+  flattens out in the second half; a leak does not);
 - the longest garbage-collection pause and the number of full (generation 2) collections,
   from `gc.callbacks`;
 - key latency p50 / p95 / max: from the moment Pilot sends the key to the first time the
@@ -137,9 +137,11 @@ def rss_mb() -> float:
 
 
 def live_objects() -> int:
-    """Objects the collector tracks after a full collection (frozen ones excluded)."""
+    """Objects the collector tracks after a full collection, frozen ones included: the app
+    freezes what survives its idle collections, and garbage frozen in a cycle stays until
+    its next sweep, so leaving the frozen ones out would hide a leak."""
     gc.collect()
-    return len(gc.get_objects())
+    return len(gc.get_objects()) + gc.get_freeze_count()
 
 
 @dataclass
@@ -662,13 +664,15 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
             "second_half_growth_per_1000_actions": round(
                 (end.objects - middle.objects) * per_k_half, 1
             ),
-            "frozen_at_start_up": gc.get_freeze_count(),
+            "frozen_at_end": gc.get_freeze_count(),
         },
         "gc": {
             "longest_pause_ms": round(gc_watch.longest_ms, 3),
             "full_collections": gc_watch.full_collections,
             "collections": gc_watch.collections,
             "total_pause_ms": round(gc_watch.total_ms, 1),
+            "idle_collections": app.collector.collections,
+            "sweeps": app.collector.sweeps,
         },
         "key_latency_ms": percentiles(all_keys),
         "section_switch_latency_ms": percentiles(runner.latencies.get("section switch", [])),
@@ -732,11 +736,16 @@ def print_report(report: dict[str, Any]) -> None:
     table.add_row(
         "  in the second half", f"{objects['second_half_growth_per_1000_actions']:+,.1f}", ""
     )
-    table.add_row("objects frozen at start-up", f"{objects['frozen_at_start_up']:,}", "")
+    table.add_row("of them frozen at the end", f"{objects['frozen_at_end']:,}", "")
     table.add_row("longest GC pause", f"{gc_figures['longest_pause_ms']:.1f} ms", "")
     table.add_row(
         "full (gen 2) / all collections",
         f"{gc_figures['full_collections']} / {gc_figures['collections']}",
+        "",
+    )
+    table.add_row(
+        "of the full ones, run at idle / sweeps",
+        f"{gc_figures['idle_collections']} / {gc_figures['sweeps']}",
         "",
     )
     for name, figures in (("key", keys), ("section switch", switches)):

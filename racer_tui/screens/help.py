@@ -127,6 +127,15 @@ class HelpScreen(RacerScreen[None]):
     def on_mount(self) -> None:
         self._filter("")
 
+    def on_screen_resume(self) -> None:
+        # The app keeps one help screen and shows it again: each time it opens unfiltered,
+        # at the top, ready for typing.
+        search = self.query_one("#help-filter", Input)
+        if search.value:
+            search.value = ""  # Input.Changed shows every topic again
+        self.query_one("#help-topics", VerticalScroll).scroll_home(animate=False)
+        search.focus()
+
     @on(Input.Changed, "#help-filter")
     def _filter_changed(self, event: Input.Changed) -> None:
         self._filter(event.value)

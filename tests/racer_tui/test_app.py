@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from textual.command import CommandPalette
 from textual.widgets import Input
@@ -72,6 +73,32 @@ async def test_number_keys_switch_sections_and_keep_their_state() -> None:
         assert isinstance(app.screen, GarageScreen)
 
 
+async def test_a_section_shown_before_is_painted_at_once() -> None:
+    """Textual holds screen updates back for 50 ms on every mode switch (to hide a first
+    compose); a section already composed is painted as soon as its key is handled."""
+    new_model("ada")
+    app = create_app()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        shown: list[str] = []
+        original = app._display
+
+        def display(screen: Any, renderable: Any) -> None:
+            if renderable is not None and not app._batch_count:
+                shown.append(type(screen).__name__)
+            original(screen, renderable)
+
+        app._display = display  # type: ignore[method-assign]
+        app.switch_mode("tracks")  # first visit: composed now, so updates are held
+        assert app._batch_count == 1
+        await settle(pilot)
+        await wait_for(pilot, lambda: app._batch_count == 0)
+        app.switch_mode("garage")  # shown before: painted inside the switch itself
+        assert app._batch_count == 0
+        assert shown[-1] == "GarageScreen"
+        await settle(pilot)
+
+
 async def test_the_header_tabs_switch_sections_with_the_mouse() -> None:
     app = create_app(start="garage")
     async with app.run_test(size=(100, 30)) as pilot:
@@ -127,6 +154,27 @@ async def test_help_lists_every_binding_of_every_screen() -> None:
         assert "Clone" in filtered and "Delete" not in filtered
         await pilot.press("escape")
         assert isinstance(app.screen, GarageScreen)
+        # Opened again (the same screen, kept), it is unfiltered and ready for typing.
+        await pilot.press("question_mark")
+        await pilot.pause()
+        assert _help_text(app.screen) == text
+        await pilot.press(*"delete")
+        await pilot.pause()
+        assert "Delete" in _help_text(app.screen) and "Clone" not in _help_text(app.screen)
+
+
+async def test_help_opens_while_it_is_open_under_another_section() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.pause()
+        await pilot.press("question_mark")
+        kept = app.screen
+        assert isinstance(kept, HelpScreen)
+        await app.run_section_action("tracks", "app.help")  # as the palette would
+        await pilot.pause()
+        assert isinstance(app.screen, HelpScreen) and app.screen is not kept
+        await pilot.press("escape")
+        assert isinstance(app.screen, TracksScreen)
 
 
 async def test_f1_opens_help_from_the_editor() -> None:

@@ -60,7 +60,7 @@ def test_a_short_soak_reports_every_figure(racer_home: Path, tmp_path: Path) -> 
             assert report[name][moment] > 0, (name, moment)
         for growth in ("growth_per_1000_actions", "second_half_growth_per_1000_actions"):
             assert isinstance(report[name][growth], float), (name, growth)
-    assert report["objects"]["frozen_at_start_up"] > 0  # the long-running app froze them
+    assert report["objects"]["frozen_at_end"] > 0  # the long-running app froze them
     assert len(report["rss_mb"]["samples"]) > 0
 
     gc_figures = report["gc"]

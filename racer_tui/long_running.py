@@ -1,0 +1,112 @@
+"""Garbage collection for the app a racer or host keeps open for hours.
+
+Python's full (generation 2) collection walks every object the process holds. In the app
+those are mostly Textual's: the sections' widgets and, above all, the lines each widget
+last rendered (every `Strip` carries seven small caches: about 100,000 objects once every
+section has been seen). At Python's default settings a full collection came every dozen
+key presses and took 140-260 ms on an idle machine and up to 600 ms beside a training, so
+one key in twelve waited that long (`python -m racer_tui.bench_soak` measures it).
+
+So, in the long-running app only:
+- What lives as long as the app (modules, Textual, each section once it has been shown) is
+  frozen out of collection (`gc.freeze`) after a section's first visit.
+- Full collections run when input pauses (`IdleCollector`): a timer runs one once nobody
+  has pressed a key for a moment, no key is waiting to be handled, and young collections
+  have promoted enough objects to be worth it. Python's own automatic ones are made a
+  hundred times rarer: they remain as a bound on memory for someone who presses keys for
+  minutes without a pause. (Freezing more does not make them short: the sections render
+  their lines again as their data changes, so the rendered-line caches are renewed every
+  few hundred keys whatever is frozen.)
+- When only the sections are open, what survives an idle collection is frozen too (a
+  dialog would soon be garbage that a frozen heap does not free). Frozen objects are still
+  freed when their last reference goes; only garbage in a reference cycle stays, so every
+  few minutes, at a longer pause, a sweep unfreezes everything first and collects it all.
+- Young collections (generations 0 and 1) run as Python runs them: they are short.
+"""
+
+from __future__ import annotations
+
+import gc
+import time
+from collections.abc import Callable
+
+# Seconds after a section's first visit before what it built is frozen out of garbage
+# collection (its data loads in workers first).
+FREEZE_AFTER_SECONDS = 1.0
+# Input paused this long: a full collection now delays nobody's key.
+IDLE_SECONDS = 0.4
+# How often the idle check runs.
+CHECK_SECONDS = 0.1
+# Generation-1 collections since the last full one before an idle full collection is
+# worth running (Python's own threshold is 10, subject to its 25% rule).
+IDLE_COLLECT_AFTER = 10
+# Generation 2's automatic threshold while the app runs: a hundred times Python's, so with
+# keys pressed without pause a full collection still comes, about once per thousand keys.
+AUTOMATIC_FULL_AFTER = 1000
+# A sweep is due this long after the last one; it waits for input to pause this long
+# (a sweep walks everything: about a second beside a training)...
+SWEEP_SECONDS = 300.0
+SWEEP_IDLE_SECONDS = 3.0
+# ...unless it is this overdue: then the next ordinary pause will do.
+SWEEP_OVERDUE_SECONDS = 1200.0
+
+
+class IdleCollector:
+    """Moves full collections to the moments when input pauses."""
+
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+        self._clock = clock
+        self._last_input = clock()
+        self._last_sweep = clock()
+        self._threshold: tuple[int, int, int] | None = None
+        self.collections = 0
+        self.sweeps = 0
+
+    def start(self) -> None:
+        """Make automatic full collections rare (undone by `stop`)."""
+        if self._threshold is None:
+            self._threshold = gc.get_threshold()
+            young, middle, _ = self._threshold
+            gc.set_threshold(young, middle, AUTOMATIC_FULL_AFTER)
+            self._last_sweep = self._clock()
+
+    def stop(self) -> None:
+        if self._threshold is not None:
+            gc.set_threshold(*self._threshold)
+            self._threshold = None
+
+    def input_seen(self) -> None:
+        self._last_input = self._clock()
+
+    def tick(self, *, quiet: bool, keys_waiting: bool = False) -> bool:
+        """Run a full collection if input has paused and one is due; True if it ran.
+        `quiet`: only the sections are open, so what survives may be frozen.
+        `keys_waiting`: input has arrived that the app has not handled yet."""
+        if self._threshold is None or keys_waiting:
+            return False
+        now = self._clock()
+        paused = now - self._last_input
+        if paused < IDLE_SECONDS:
+            return False
+        since_sweep = now - self._last_sweep
+        sweep = quiet and (
+            (since_sweep >= SWEEP_SECONDS and paused >= SWEEP_IDLE_SECONDS)
+            or since_sweep >= SWEEP_OVERDUE_SECONDS
+        )
+        if not sweep and gc.get_count()[2] < IDLE_COLLECT_AFTER:
+            return False
+        if sweep:
+            gc.unfreeze()
+            self._last_sweep = now
+            self.sweeps += 1
+        gc.collect()
+        if quiet:
+            gc.freeze()
+        self.collections += 1
+        return True
+
+
+def freeze_long_lived() -> None:
+    """Collect, then keep everything alive now out of later collections."""
+    gc.collect()
+    gc.freeze()

@@ -1,0 +1,132 @@
+"""The long-running app's garbage collection: full collections wait for a pause in the
+input, what survives them is frozen when only the sections are open, and a sweep frees
+garbage that was frozen."""
+
+from __future__ import annotations
+
+import gc
+import weakref
+from collections.abc import Iterator
+
+import pytest
+
+from racer_tui.long_running import (
+    AUTOMATIC_FULL_AFTER,
+    IDLE_COLLECT_AFTER,
+    IDLE_SECONDS,
+    SWEEP_IDLE_SECONDS,
+    SWEEP_OVERDUE_SECONDS,
+    SWEEP_SECONDS,
+    IdleCollector,
+)
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+class Cycle:
+    """An object in a reference cycle: only the collector frees it."""
+
+    def __init__(self) -> None:
+        self.me = self
+
+
+@pytest.fixture
+def collector() -> Iterator[tuple[IdleCollector, Clock]]:
+    clock = Clock()
+    collector = IdleCollector(clock)
+    threshold = gc.get_threshold()
+    collector.start()
+    try:
+        yield collector, clock
+    finally:
+        collector.stop()
+        gc.unfreeze()  # the test process collects as usual again
+        assert gc.get_threshold() == threshold
+
+
+def promote() -> None:
+    """As many generation-1 collections as make an idle full collection due."""
+    for _ in range(IDLE_COLLECT_AFTER):
+        gc.collect(1)
+
+
+def test_automatic_full_collections_are_made_rare_and_restored(
+    collector: tuple[IdleCollector, Clock],
+) -> None:
+    assert gc.get_threshold()[2] == AUTOMATIC_FULL_AFTER
+    collector[0].stop()
+    assert gc.get_threshold()[2] != AUTOMATIC_FULL_AFTER
+
+
+def test_no_full_collection_while_keys_come_or_none_is_due(
+    collector: tuple[IdleCollector, Clock],
+) -> None:
+    idle, clock = collector
+    promote()
+    idle.input_seen()
+    clock.now += IDLE_SECONDS / 2
+    assert not idle.tick(quiet=True)  # a key was pressed a moment ago
+    clock.now += IDLE_SECONDS
+    assert not idle.tick(quiet=True, keys_waiting=True)  # a key is waiting to be handled
+    gc.collect()  # nothing promoted since: none due
+    assert not idle.tick(quiet=True)
+    assert idle.collections == 0
+
+
+def test_an_idle_collection_frees_cycles_and_freezes_only_when_quiet(
+    collector: tuple[IdleCollector, Clock],
+) -> None:
+    idle, clock = collector
+    clock.now += IDLE_SECONDS * 2
+    cycle = Cycle()
+    garbage = weakref.ref(cycle)
+    promote()  # it survives into generation 2
+    del cycle
+    gc.collect(1)
+    assert garbage() is not None  # young collections never look at generation 2
+    assert idle.tick(quiet=False)
+    assert garbage() is None
+    assert gc.get_freeze_count() == 0  # a dialog was open: nothing frozen
+    promote()
+    assert idle.tick(quiet=True)
+    assert gc.get_freeze_count() > 0
+
+
+def test_a_sweep_frees_garbage_that_was_frozen(collector: tuple[IdleCollector, Clock]) -> None:
+    idle, clock = collector
+    clock.now += IDLE_SECONDS * 2
+    kept = Cycle()
+    frozen_garbage = weakref.ref(kept)
+    promote()
+    assert idle.tick(quiet=True)  # `kept` is alive, so frozen
+    del kept  # now garbage, but frozen: ordinary collections never see it
+    promote()
+    assert idle.tick(quiet=True)
+    assert frozen_garbage() is not None
+    clock.now += SWEEP_SECONDS  # due, but the pause is short: only an ordinary collection
+    idle.input_seen()
+    clock.now += IDLE_SECONDS
+    promote()
+    assert idle.tick(quiet=True)
+    assert idle.sweeps == 0 and frozen_garbage() is not None
+    clock.now += SWEEP_IDLE_SECONDS  # a longer pause: the sweep
+    assert idle.tick(quiet=True)
+    assert idle.sweeps == 1
+    assert frozen_garbage() is None
+
+
+def test_an_overdue_sweep_takes_the_next_short_pause(
+    collector: tuple[IdleCollector, Clock],
+) -> None:
+    idle, clock = collector
+    clock.now += SWEEP_OVERDUE_SECONDS
+    idle.input_seen()
+    clock.now += IDLE_SECONDS
+    assert idle.tick(quiet=True)
+    assert idle.sweeps == 1
