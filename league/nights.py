@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from league.errors import LeagueError
+from league.errors import Fix, LeagueError
 from league.leaderboard import Filters, LeaderboardRow, leaderboard
 from league.racers import check_name, display_names, ensure_racer
 from league.races import find_local_track, record_race
@@ -392,8 +392,13 @@ def find_night_track(night: Night) -> Track:
     """The night's track on this machine, found by content hash."""
     track = find_local_track(night.track_hash, night.track_name)
     if track is None:
-        raise LeagueError(
+        problem = (
             f"league night {night.name!r} races on track {night.track_name!r}, which is not on "
-            "this machine; import it with `racer-tui tracks import FILE`."
+            "this machine"
+        )
+        raise LeagueError(
+            f"{problem}; import it with `racer-tui tracks import FILE`.",
+            problem=problem,
+            fix=Fix.IMPORT_TRACK,
         )
     return track

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from league.entries import refresh_entries
-from league.errors import LeagueError
+from league.errors import Fix, LeagueError
 from league.racers import check_name, display_names_overrides, ensure_racer
 from league.store import League, record_body
 from league.tracks import ensure_track, track_names
@@ -312,8 +312,13 @@ def race_replay(league: League, race_id: str) -> RaceReplay:
         )
     track = find_local_track(result.track_hash, result.track_name)
     if track is None:
-        raise LeagueError(
+        problem = (
             f"{result.racer}'s race was on track {result.track_name!r}, which is not on this "
-            "machine; import that track with `racer-tui tracks import FILE` to replay it."
+            "machine"
+        )
+        raise LeagueError(
+            f"{problem}; import that track with `racer-tui tracks import FILE` to replay it.",
+            problem=problem,
+            fix=Fix.IMPORT_TRACK,
         )
     return RaceReplay(result, track)

@@ -16,14 +16,22 @@ from textual.message import Message
 from textual.screen import ModalScreen, Screen
 from textual.worker import Worker, WorkerState
 
+from league.errors import Fix, LeagueError
 from sim.reward_function import RewardFunctionError
 
 # The libraries' error types are ValueErrors whose text is written for the racer.
 USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, RewardFunctionError)
 
 
+# Remedies the app offers itself, in its words: its keys, not the command line's commands.
+APP_FIXES = {Fix.IMPORT_TRACK: "import its .npy file in Tracks (2, then i)"}
+
+
 def error_message(error: BaseException) -> str:
     """One sentence for the racer, never a traceback."""
+    if isinstance(error, LeagueError) and error.fix is not None:
+        text = f"{error.problem}; {APP_FIXES[error.fix]}."
+        return text[:1].upper() + text[1:]
     if isinstance(error, USER_ERRORS):
         text = str(error)
         return text[:1].upper() + text[1:]

@@ -3,11 +3,14 @@ done with it (new, edit, clone, delete, import, export, race).
 
 Reading model folders, cloning, deleting, importing and exporting all happen in thread
 workers; each posts a past-tense message when it is done, and a failure becomes one error
-notification (see `racer_tui.screens.base`).
+notification (see `racer_tui.screens.base`). The job line under the table says what the
+last of them is doing or how it ended (a `Job`), so a slow import is never silent and a
+failure stays readable after its notification fades.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -21,9 +24,11 @@ from textual.containers import Container
 from textual.message import Message
 from textual.screen import Screen
 from textual.widgets import DataTable
+from textual.worker import Worker, WorkerState
 
+from racer_tui.jobs import Job
 from racer_tui.model_form import check_name, taken_names
-from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, ImportRequest, InputDialog
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.league_submit import RacerPrompt, submit_model_from
@@ -32,6 +37,7 @@ from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.training import TrainingScreen
 from racer_tui.session import keep_race
 from racer_tui.widgets.footer import RacerFooter
+from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
@@ -195,12 +201,15 @@ class GarageScreen(RacerScreen[None]):
         self.loaded = False
         self._generation = 0
         self.racer_prompt = RacerPrompt(self)
+        self.job = Job()  # the last import, export, clone or delete
+        self._job_fix = ""  # the key that tries the running job again, if it fails
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("garage")
         with Container(id="garage-body"):
             yield FittedTable(id="models", cursor_type="row", zebra_stripes=True)
             yield ModelDetail(id="model-detail")
+        yield JobLine(id="garage-job")
         yield RacerFooter()
 
     def on_mount(self) -> None:
@@ -355,6 +364,7 @@ class GarageScreen(RacerScreen[None]):
 
     def _clone_named(self, source: ModelFolder, name: str | None) -> None:
         if name is not None:
+            self._begin(f"Cloning {source.name} as {name}", "c")
             self._clone(source, name)
 
     @work(thread=True, group="garage-change", exit_on_error=False)
@@ -363,7 +373,8 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(ModelCloned(source.name, name))
 
     def on_model_cloned(self, message: ModelCloned) -> None:
-        self.notify(f"Cloned {message.source} as {message.name}.")
+        self._finish(f"cloned {message.source} as {message.name}.")
+        self.notify(f"Cloned {message.source} as {message.name}.", markup=False)
         self.reload(select=message.name)
 
     def action_delete_model(self) -> None:
@@ -379,6 +390,7 @@ class GarageScreen(RacerScreen[None]):
 
     def _delete_confirmed(self, folder: ModelFolder, yes: bool | None) -> None:
         if yes:
+            self._begin(f"Deleting {folder.name}", "d")
             self._delete(folder)
 
     @work(thread=True, group="garage-change", exit_on_error=False)
@@ -387,7 +399,8 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(ModelDeleted(folder.name))
 
     def on_model_deleted(self, message: ModelDeleted) -> None:
-        self.notify(f"Deleted {message.name}.")
+        self._finish(f"deleted {message.name}.")
+        self.notify(f"Deleted {message.name}.", markup=False)
         self.reload()
 
     def action_import_model(self) -> None:
@@ -395,13 +408,18 @@ class GarageScreen(RacerScreen[None]):
 
     def _import_requested(self, request: ImportRequest | None) -> None:
         if request is not None:
-            confirm_someone_elses_code(self, request, self._import)
+            confirm_someone_elses_code(self, request, self._begin_import)
+
+    def _begin_import(self, request: ImportRequest) -> None:
+        self._begin(f"Importing {Path(request.path).expanduser().name}", "i")
+        self._import(request)
 
     @work(thread=True, group="garage-change", exit_on_error=False)
     def _import(self, request: ImportRequest) -> None:
         self.post_message(import_into_garage(request))
 
     def on_model_imported(self, message: ModelImported) -> None:
+        self._finish(f"imported {message.name}.")
         notify_imported(self, message)
         self.reload(select=message.name)
 
@@ -430,6 +448,7 @@ class GarageScreen(RacerScreen[None]):
             return
         target = bundle_path(Path(path).expanduser())
         if not target.exists():
+            self._begin(f"Exporting {folder.name}", "x")
             self._export(folder, target)
             return
         dialog = ConfirmDialog(
@@ -440,6 +459,7 @@ class GarageScreen(RacerScreen[None]):
 
         def answered(replace: bool | None) -> None:
             if replace:
+                self._begin(f"Exporting {folder.name}", "x")
                 self._export(folder, target, replace=True)
 
         self.app.push_screen(dialog, answered)
@@ -450,12 +470,37 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(BundleExported(folder.name, written, export_notes(folder.metadata())))
 
     def on_bundle_exported(self, message: BundleExported) -> None:
+        self._finish(f"exported {message.name} to {message.path}.")
         notes = "".join(f"\n• {note}" for note in message.notes)
         self.notify(
             f"Exported {message.name} to {message.path}.{notes}",
             timeout=15 if notes else 10,
             markup=False,
         )
+
+    # --- the garage's job line ----------------------------------------------------------
+
+    def _begin(self, what: str, fix_key: str) -> None:
+        """An import, export, clone or delete starts: the line says so until it ends."""
+        self._job_fix = f"Press {fix_key} to try again."
+        now, wall = time.monotonic(), time.time()
+        self._show_job(self.job.running(what, total=None, now=now, wall=wall))
+
+    def _finish(self, outcome: str) -> None:
+        self._show_job(self.job.finished(outcome[:1].upper() + outcome[1:], wall=time.time()))
+
+    def _show_job(self, job: Job) -> None:
+        self.job = job
+        self.query_one("#garage-job", JobLine).show(job)
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        worker = event.worker
+        if worker.group == "garage-change" and worker.state is WorkerState.ERROR:
+            error = worker.error
+            text = error_message(error) if error is not None else "It stopped."
+            self._show_job(self.job.failed(text, self._job_fix, wall=time.time()))
+        # The base screen still notifies: the line keeps the failure after the toast fades.
+        super().on_worker_state_changed(event)
 
     async def action_train_model(self) -> None:
         """Open the Training section on this model and ask for the time budget."""

@@ -8,6 +8,7 @@ through the list stays instant.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import ClassVar
 
 from rich.text import Text
@@ -19,6 +20,7 @@ from textual.message import Message
 from textual.widgets import DataTable, Input, Static
 
 from racer_tui.screens.base import ModelAdded, RacerScreen
+from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.footer import RacerFooter
@@ -30,7 +32,7 @@ from sim.plural import counted
 from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
 from sim.track import Track, TrackError
-from sim.track_catalog import TrackInfo, list_tracks, resolve_track
+from sim.track_catalog import TrackInfo, import_track, list_tracks, resolve_track
 
 # Room for a console name in the list at 80 columns; the facts pane shows it whole.
 _LABEL_CELLS = 23
@@ -44,6 +46,12 @@ class ReferenceLapTimed(Message):
         self.text = text
 
 
+class TrackImported(Message):
+    def __init__(self, info: TrackInfo) -> None:
+        super().__init__()
+        self.info = info
+
+
 class TracksScreen(RacerScreen[None]):
     """Browse tracks: facts, a map, and the reference driver's lap time."""
 
@@ -51,6 +59,7 @@ class TracksScreen(RacerScreen[None]):
         Binding("r", "race", "Race the reference driver", tooltip="A 4-minute time trial"),
         Binding("n", "new_model", "New model here", tooltip="The model editor, on this track"),
         Binding("slash", "search", "Search", tooltip="Narrow the list by name or console name"),
+        Binding("i", "import_track", "Import", tooltip="A DeepRacer track file (.npy)"),
     ]
 
     def __init__(self) -> None:
@@ -143,6 +152,44 @@ class TracksScreen(RacerScreen[None]):
             return
         self.app.push_screen(ModelEditorScreen(track=track.name), self._model_created)
 
+    def action_import_track(self) -> None:
+        self.app.push_screen(
+            InputDialog(
+                "Import a track",
+                "A DeepRacer track file (.npy, as the simulator's routes folder keeps them). "
+                "It is kept under its file name. → completes a path.",
+                placeholder="path, e.g. ~/Downloads/my_track.npy",
+                confirm_label="Import",
+                check=_track_file_problem,
+                paths=True,
+            ),
+            self._import_chosen,
+        )
+
+    def _import_chosen(self, path: str | None) -> None:
+        if path is not None:
+            self._import(Path(path.strip()).expanduser())
+
+    @work(thread=True, exclusive=True, group="track-import", exit_on_error=False)
+    def _import(self, path: Path) -> None:
+        self.post_message(TrackImported(import_track(path)))
+
+    def on_track_imported(self, message: TrackImported) -> None:
+        info = message.info
+        self.notify(
+            f"Imported {info.name}."
+            if info.kind == "imported"
+            else f"{info.title} is already here; nothing was copied.",
+            markup=False,
+        )
+        self._infos = [i for i in list_tracks() if i.lappable]
+        search = self.query_one("#track-search", Input)
+        search.value = ""
+        self._fill("")
+        names = [row.name if row is not None else None for row in self._rows]
+        if info.name in names:
+            self.query_one("#tracks", DataTable).move_cursor(row=names.index(info.name))
+
     def _model_created(self, name: str | None) -> None:
         if name is not None:
             self.post_message(ModelAdded(name))
@@ -194,6 +241,17 @@ class TracksScreen(RacerScreen[None]):
         self._lap_texts[message.track.content_hash] = message.text
         if self.track is message.track:
             self._update_facts(message.track, message.text)
+
+
+def _track_file_problem(path: str) -> str | None:
+    """What is wrong with the path given for a track file, or None (the import checks the
+    file itself)."""
+    if not path.strip():
+        return "Give the path of a DeepRacer track file (.npy)."
+    file = Path(path.strip()).expanduser()
+    if not file.is_file():
+        return f"{path.strip()} is not a file; check the path (→ completes it)."
+    return None
 
 
 def _groups(infos: list[TrackInfo]) -> list[tuple[str, list[TrackInfo]]]:

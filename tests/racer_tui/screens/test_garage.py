@@ -110,6 +110,9 @@ async def test_import_the_shared_deepracer_folder(deepracer_dir: Path) -> None:
         told = notes.text()
         assert "Imported drfc-model" in told
         assert "template" in told  # it had no reward function: a template, said out loud
+        # The job line keeps how the import ended after the notification fades.
+        job = painted(app.screen.query_one("#garage-job"))
+        assert "Done at" in job and "Imported drfc-model." in job
         detail = app.screen.query_one(ModelDetail)
         detail.scroll_end(animate=False)
         await pilot.pause()
@@ -164,6 +167,9 @@ async def test_a_bad_import_is_an_error_notification_not_a_crash(tmp_path: Path)
         await settle(pilot)
         assert "has no model_metadata.json" in notes.text("error")
         assert app.is_running and _names() == []
+        job = painted(app.screen.query_one("#garage-job"))
+        assert "Failed at" in job and "has no model_metadata.json" in job
+        assert "Press i to try again." in job
 
 
 async def test_export_writes_a_bundle(tmp_path: Path) -> None:

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
 from textual.widgets import DataTable, Input, Select
 
 from racer_tui.app import create_app
+from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.garage import GarageScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen
@@ -13,7 +17,7 @@ from racer_tui.screens.tracks import TracksScreen
 from sim.garage.folder import open_model
 from sim.race.rules import DEFAULT_RULES
 from sim.track_catalog import list_tracks
-from tests.racer_tui.screens.tui_helpers import painted, settle, trained_model
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
 
 
 async def test_tracks_show_facts_and_the_reference_lap() -> None:
@@ -124,3 +128,34 @@ async def test_races_list_trained_models_and_rank_the_session() -> None:
         replay = app.screen
         assert isinstance(replay, RaceScreen)
         assert replay.setup.replay is not None
+
+
+async def test_a_track_file_is_imported_from_the_tracks_screen(
+    tmp_path: Path, deepracer_dir: Path
+) -> None:
+    """A replay or a night on a track this machine lacks says to import it: the Tracks
+    screen does that itself (i), so nobody needs the command line for it."""
+    file = tmp_path / "club_oval.npy"
+    shutil.copy(deepracer_dir / "tracks" / "Oval_track.npy", file)
+    broken = tmp_path / "broken.npy"
+    broken.write_bytes(b"not a track at all")
+    app = create_app(start="tracks")
+    notes = Notifications(app)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TracksScreen)
+        await pilot.press("i")
+        assert isinstance(app.screen, InputDialog)
+        app.screen.query_one(Input).value = str(broken)
+        await pilot.press("enter")
+        await settle(pilot)
+        assert app.screen is screen
+        assert "broken.npy" in notes.text("error") and "Traceback" not in notes.text()
+        await pilot.press("i")
+        app.screen.query_one(Input).value = str(file)
+        await pilot.press("enter")
+        await settle(pilot)
+        assert "club_oval" in [info.name for info in list_tracks()]
+        assert screen.track is not None and screen.track.name == "club_oval"
+        assert "club_oval" in painted(screen.query_one("#track-facts"))
