@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import bisect
 import math
-import weakref
-from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -61,6 +59,7 @@ class PolylineProjector:
         self._tree = cKDTree(samples)
         self._owners = owners
         self._grid: NDArray[np.intp] | None = None
+        self._point_projector: PointProjector | None = None  # made by PointProjector.of
         self._grid_origin = pts.min(axis=0) - _GRID_MARGIN
         extent = pts.max(axis=0) + _GRID_MARGIN - self._grid_origin
         self._grid_shape = (
@@ -214,16 +213,15 @@ class PointProjector:
     and two either side wins, the first on a tie, as `np.argmin` picks.
     """
 
-    _cache: ClassVar[weakref.WeakKeyDictionary[PolylineProjector, PointProjector]] = (
-        weakref.WeakKeyDictionary()
-    )
-
     @classmethod
     def of(cls, projector: PolylineProjector) -> PointProjector:
-        """One per projector (tracks cache theirs), so a new race starts without setup."""
-        found = cls._cache.get(projector)
+        """One per projector (tracks cache theirs), so a new race starts without setup.
+        The projector keeps it, so it goes when the projector's track goes. (A weak-keyed
+        cache kept them all: each value holds its key, so no key was ever released, and a
+        long session lost about a megabyte of lookup grids per race.)"""
+        found = projector._point_projector
         if found is None:
-            found = cls._cache[projector] = cls(projector)
+            found = projector._point_projector = cls(projector)
         return found
 
     def __init__(self, projector: PolylineProjector) -> None:

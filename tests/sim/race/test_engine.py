@@ -3,8 +3,10 @@ lap time, laps cut by the window, reversed cars turned round, determinism, live 
 
 from __future__ import annotations
 
+import gc
 import itertools
 import math
+import weakref
 from functools import cache
 
 import numpy as np
@@ -243,3 +245,15 @@ def test_a_full_four_minute_reference_race() -> None:
     assert len(result.laps) == math.floor((240.0 - result.laps[0].time_seconds) / settled[-1]) + 1
     assert result.total_offtracks == 0
     assert result.trace is not None and len(result.trace) == 3601
+
+
+def test_a_finished_race_lets_go_of_its_track_and_lookup_grids() -> None:
+    """A long session races on many Track objects (each race reads its track afresh);
+    the projectors and lookup grids a race builds must go with the track, not pile up."""
+    track = resolve_track("beginner-oval")
+    result = run_race(track, SHORT, racer="ada")
+    assert result.laps
+    gone = weakref.ref(track.centerline)
+    del track
+    gc.collect()
+    assert gone() is None
