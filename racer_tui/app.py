@@ -130,8 +130,7 @@ class RacerTuiApp(App[int]):
         # collection lives on, so it may be frozen. A key the driver has posted but the
         # app has not handled yet would wait for the collection: the timer runs outside
         # the app's queue, so it looks there first.
-        quiet = all(len(stack) <= 1 for stack in self._screen_stacks.values())
-        self.collector.tick(quiet=quiet, keys_waiting=not self._message_queue.empty())
+        self.collector.tick(quiet=self._quiet(), keys_waiting=not self._message_queue.empty())
 
     def on_unmount(self) -> None:
         self.collector.stop()
@@ -150,7 +149,17 @@ class RacerTuiApp(App[int]):
         if not self.long_running or mode in self._frozen_modes:
             return
         self._frozen_modes.add(mode)
-        self.set_timer(FREEZE_AFTER_SECONDS, freeze_long_lived)
+        self.set_timer(FREEZE_AFTER_SECONDS, self._freeze_if_quiet)
+
+    def _quiet(self) -> bool:
+        """Only the sections are open: nothing that will close soon (a dialog, a race view)
+        would be frozen with them."""
+        return all(len(stack) <= 1 for stack in self._screen_stacks.values())
+
+    def _freeze_if_quiet(self) -> None:
+        # With a dialog open, the idle collector freezes the section once it has closed.
+        if self._quiet():
+            freeze_long_lived()
 
     def _first_mode(self) -> str:
         try:
@@ -180,7 +189,8 @@ class RacerTuiApp(App[int]):
         return True
 
     def switch_mode(self, mode: str) -> AwaitMount:
-        self._switching_to_shown_mode = bool(self._screen_stacks.get(mode))
+        stack = self._screen_stacks.get(mode) or []
+        self._switching_to_shown_mode = bool(stack) and stack[0].is_mounted
         try:
             return super().switch_mode(mode)
         finally:
@@ -271,6 +281,8 @@ class RacerTuiApp(App[int]):
         if any(kept in stack for stack in self._screen_stacks.values()):
             self.push_screen(self._new_help())
         else:
+            if isinstance(kept, HelpScreen):
+                kept.reset()
             self.push_screen(HELP_SCREEN)
 
     def _new_help(self) -> HelpScreen:

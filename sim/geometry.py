@@ -217,7 +217,7 @@ class PointProjector:
     def of(cls, projector: PolylineProjector) -> PointProjector:
         """One per projector (tracks cache theirs), so a new race starts without setup.
         The projector keeps it, so it goes when the projector's track goes. (A weak-keyed
-        cache kept them all: each value holds its key, so no key was ever released, and a
+        cache kept them all: each value held its key, so no key was ever released, and a
         long session lost about a megabyte of lookup grids per race.)"""
         found = projector._point_projector
         if found is None:
@@ -225,7 +225,10 @@ class PointProjector:
         return found
 
     def __init__(self, projector: PolylineProjector) -> None:
-        self._projector = projector
+        # What the exact lookup needs, not the projector itself: the projector keeps this
+        # object, and a reference back would make a cycle that only a full collection frees.
+        self._tree = projector._tree
+        self._owners = projector._owners
         # Builds the projector's lookup grid if it has not been built yet.
         projector.project(projector.points[:1])
         grid = projector._grid
@@ -277,7 +280,9 @@ class PointProjector:
         row = 0 if row < 0 else (self._ny - 1 if row >= self._ny else row)
         seg = int(self._grid[col * self._ny + row])
         if seg < 0:
-            seg = int(self._projector.nearest_segments(np.array([[x, y]]))[0])
+            # As the projector's nearest_segments decides an ambiguous cell: the KD-tree.
+            _, nearest = self._tree.query(np.array([[x, y]]))
+            seg = int(self._owners[nearest[0]])
         n_seg = self._segments
         starts, vectors, inv_len_sq = self.starts, self.vectors, self._inv_len_sq
         best = (0, 0.0, 0.0, 0.0)

@@ -24,12 +24,12 @@ USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, RewardFunctionError)
 
 
 # Remedies the app offers itself, in its words: its keys, not the command line's commands.
-APP_FIXES = {Fix.IMPORT_TRACK: "import its .npy file in Tracks (2, then i)"}
+APP_FIXES = {Fix.IMPORT_TRACK: "import its .npy file on the Tracks screen (i there)"}
 
 
 def error_message(error: BaseException) -> str:
     """One sentence for the racer, never a traceback."""
-    if isinstance(error, LeagueError) and error.fix is not None:
+    if isinstance(error, LeagueError) and error.fix in APP_FIXES:
         text = f"{error.problem}; {APP_FIXES[error.fix]}."
         return text[:1].upper() + text[1:]
     if isinstance(error, USER_ERRORS):

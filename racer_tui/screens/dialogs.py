@@ -213,11 +213,20 @@ class ImportDialog(FormDialog[ImportRequest]):
         problem = None
         if not path:
             problem = "Give the path of a DeepRacer model folder or a .racer-bundle file."
-        elif not Path(path).expanduser().exists():
-            problem = f"{path} does not exist; check the path (→ completes it)."
+        elif not _exists(path):
+            problem = f"{path} does not exist or cannot be read; check the path (→ completes it)."
         elif name and not is_valid_name(name):
             problem = f"{name!r} cannot be a model name; use {NAME_RULE}."
         if problem is not None:
             show_problem(self.query_one("#problem", Static), problem)
             return
         self.dismiss(ImportRequest(path, name or None))
+
+
+def _exists(path: str) -> bool:
+    """Whether a typed path exists; False for one that cannot even be looked at (an
+    unknown ~user, a folder this user may not read) rather than an error."""
+    try:
+        return Path(path).expanduser().exists()
+    except (OSError, RuntimeError):
+        return False

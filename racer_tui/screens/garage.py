@@ -26,7 +26,7 @@ from textual.screen import Screen
 from textual.widgets import DataTable
 from textual.worker import Worker, WorkerState
 
-from racer_tui.jobs import Job
+from racer_tui.jobs import Job, JobState
 from racer_tui.model_form import check_name, taken_names
 from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, ImportRequest, InputDialog
@@ -341,6 +341,8 @@ class GarageScreen(RacerScreen[None]):
             self.reload(select=saved)
 
     def action_clone_model(self) -> None:
+        if self._busy():
+            return
         folder = self._highlighted_folder("clone")
         if folder is None:
             return
@@ -378,6 +380,8 @@ class GarageScreen(RacerScreen[None]):
         self.reload(select=message.name)
 
     def action_delete_model(self) -> None:
+        if self._busy():
+            return
         folder = self._highlighted_folder("delete")
         if folder is None:
             return
@@ -404,6 +408,8 @@ class GarageScreen(RacerScreen[None]):
         self.reload()
 
     def action_import_model(self) -> None:
+        if self._busy():
+            return
         self.app.push_screen(ImportDialog(), self._import_requested)
 
     def _import_requested(self, request: ImportRequest | None) -> None:
@@ -424,6 +430,8 @@ class GarageScreen(RacerScreen[None]):
         self.reload(select=message.name)
 
     def action_export_model(self) -> None:
+        if self._busy():
+            return
         folder = self._highlighted_folder("export")
         if folder is None:
             return
@@ -480,6 +488,18 @@ class GarageScreen(RacerScreen[None]):
 
     # --- the garage's job line ----------------------------------------------------------
 
+    def _busy(self) -> bool:
+        """One job at a time, so the line always speaks of the one that runs; True (and a
+        warning) while one runs."""
+        if self.job.state is JobState.RUNNING:
+            self.notify(
+                f"{self.job.what} is still running; try again when it is done.",
+                severity="warning",
+                markup=False,
+            )
+            return True
+        return False
+
     def _begin(self, what: str, fix_key: str) -> None:
         """An import, export, clone or delete starts: the line says so until it ends."""
         self._job_fix = f"Press {fix_key} to try again."
@@ -499,8 +519,10 @@ class GarageScreen(RacerScreen[None]):
             error = worker.error
             text = error_message(error) if error is not None else "It stopped."
             self._show_job(self.job.failed(text, self._job_fix, wall=time.time()))
-        # The base screen still notifies: the line keeps the failure after the toast fades.
-        super().on_worker_state_changed(event)
+        elif worker.group == "garage-change" and worker.state is WorkerState.CANCELLED:
+            self._show_job(self.job.stopped(wall=time.time()))  # never left "running"
+        # RacerScreen's handler runs next (Textual calls one per class) and notifies: the
+        # line keeps the failure after the toast fades.
 
     async def action_train_model(self) -> None:
         """Open the Training section on this model and ask for the time budget."""

@@ -127,12 +127,17 @@ class HelpScreen(RacerScreen[None]):
     def on_mount(self) -> None:
         self._filter("")
 
-    def on_screen_resume(self) -> None:
-        # The app keeps one help screen and shows it again: each time it opens unfiltered,
-        # at the top, ready for typing.
+    def reset(self) -> None:
+        """Unfiltered, at the top, ready for typing: as it opens again (the app keeps one
+        help screen). Not on every resume: coming back from the palette over the help
+        keeps what was typed."""
+        if not self.is_mounted:
+            return  # composing now: it starts that way
         search = self.query_one("#help-filter", Input)
         if search.value:
-            search.value = ""  # Input.Changed shows every topic again
+            with search.prevent(Input.Changed):
+                search.value = ""
+            self._filter("")
         self.query_one("#help-topics", VerticalScroll).scroll_home(animate=False)
         search.focus()
 

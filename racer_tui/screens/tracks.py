@@ -184,7 +184,8 @@ class TracksScreen(RacerScreen[None]):
         )
         self._infos = [i for i in list_tracks() if i.lappable]
         search = self.query_one("#track-search", Input)
-        search.value = ""
+        with search.prevent(Input.Changed):  # its handler would refill after the move below
+            search.value = ""
         self._fill("")
         names = [row.name if row is not None else None for row in self._rows]
         if info.name in names:
@@ -248,8 +249,11 @@ def _track_file_problem(path: str) -> str | None:
     file itself)."""
     if not path.strip():
         return "Give the path of a DeepRacer track file (.npy)."
-    file = Path(path.strip()).expanduser()
-    if not file.is_file():
+    try:
+        is_file = Path(path.strip()).expanduser().is_file()
+    except (OSError, RuntimeError) as error:  # an unknown ~user, a folder it may not read
+        return f"{path.strip()} cannot be read ({error}); check the path."
+    if not is_file:
         return f"{path.strip()} is not a file; check the path (→ completes it)."
     return None
 

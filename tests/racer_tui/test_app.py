@@ -152,11 +152,19 @@ async def test_help_lists_every_binding_of_every_screen() -> None:
         await pilot.pause()
         filtered = _help_text(app.screen)
         assert "Clone" in filtered and "Delete" not in filtered
+        # Back from the palette over it, the filter is still there.
+        help_screen = app.screen
+        await pilot.press("ctrl+p")
+        await pilot.pause()
+        await pilot.press("escape")
+        await pilot.pause()
+        assert app.screen is help_screen and _help_text(app.screen) == filtered
         await pilot.press("escape")
         assert isinstance(app.screen, GarageScreen)
         # Opened again (the same screen, kept), it is unfiltered and ready for typing.
         await pilot.press("question_mark")
         await pilot.pause()
+        assert app.screen is help_screen
         assert _help_text(app.screen) == text
         await pilot.press(*"delete")
         await pilot.pause()

@@ -111,7 +111,7 @@ async def test_import_the_shared_deepracer_folder(deepracer_dir: Path) -> None:
         assert "Imported drfc-model" in told
         assert "template" in told  # it had no reward function: a template, said out loud
         # The job line keeps how the import ended after the notification fades.
-        job = painted(app.screen.query_one("#garage-job"))
+        job = " ".join(painted(app.screen.query_one("#garage-job")).split())  # as read
         assert "Done at" in job and "Imported drfc-model." in job
         detail = app.screen.query_one(ModelDetail)
         detail.scroll_end(animate=False)
@@ -167,9 +167,27 @@ async def test_a_bad_import_is_an_error_notification_not_a_crash(tmp_path: Path)
         await settle(pilot)
         assert "has no model_metadata.json" in notes.text("error")
         assert app.is_running and _names() == []
-        job = painted(app.screen.query_one("#garage-job"))
+        job = " ".join(painted(app.screen.query_one("#garage-job")).split())  # as read
         assert "Failed at" in job and "has no model_metadata.json" in job
         assert "Press i to try again." in job
+        assert len([m for m, severity in notes.messages if severity == "error"]) == 1
+
+
+async def test_a_second_garage_job_waits_for_the_first() -> None:
+    """The job line speaks of one job: while one runs, another is refused in a sentence."""
+    new_model("ada")
+    app = create_app(start="garage")
+    notes = Notifications(app)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        garage = app.screen
+        assert isinstance(garage, GarageScreen)
+        garage._begin("Exporting ada", "x")
+        await pilot.press("d")
+        await settle(pilot)
+        assert app.screen is garage  # no delete question
+        assert "Exporting ada is still running" in notes.text("warning")
+        assert "Exporting ada" in painted(garage.query_one("#garage-job"))
 
 
 async def test_export_writes_a_bundle(tmp_path: Path) -> None:

@@ -84,7 +84,7 @@ async def test_a_race_without_a_trace_or_track_here_says_so_in_one_sentence() ->
         assert app.screen is races
         assert "'moon-base', which is not on this machine" in notes.text("error")
         # The app offers its own way to get the track, not a shell command.
-        assert "in Tracks (2, then i)" in notes.text("error")
+        assert "on the Tracks screen (i there)" in notes.text("error")
         assert "racer-tui" not in notes.text("error")
         await pilot.press("down", "enter")
         await settle(pilot)

@@ -152,6 +152,8 @@ async def test_a_track_file_is_imported_from_the_tracks_screen(
         await settle(pilot)
         assert app.screen is screen
         assert "broken.npy" in notes.text("error") and "Traceback" not in notes.text()
+        await pilot.press("slash", *"bowtie", "enter")  # a search is on when it lands
+        await settle(pilot)
         await pilot.press("i")
         app.screen.query_one(Input).value = str(file)
         await pilot.press("enter")
@@ -159,3 +161,4 @@ async def test_a_track_file_is_imported_from_the_tracks_screen(
         assert "club_oval" in [info.name for info in list_tracks()]
         assert screen.track is not None and screen.track.name == "club_oval"
         assert "club_oval" in painted(screen.query_one("#track-facts"))
+        assert screen.query_one("#track-search", Input).value == ""

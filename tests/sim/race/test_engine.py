@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from sim.car import STEP_SECONDS
+from sim.geometry import PointProjector, PolylineProjector
 from sim.race.driver import reference_driver
 from sim.race.engine import RaceTick, race_ticks, run_race
 from sim.race.result import RaceResult
@@ -257,3 +258,14 @@ def test_a_finished_race_lets_go_of_its_track_and_lookup_grids() -> None:
     del track
     gc.collect()
     assert gone() is None
+
+
+def test_a_point_projector_does_not_keep_its_projector_alive() -> None:
+    """No reference cycle: a dropped track's grids go at once, not at the next full
+    collection (which the long-running app makes rare)."""
+    projector = PolylineProjector(resolve_track("beginner-oval").center)
+    fast = PointProjector.of(projector)
+    assert PointProjector.of(projector) is fast  # one per projector
+    gone = weakref.ref(projector)
+    del projector, fast
+    assert gone() is None  # without gc.collect()
