@@ -2,15 +2,7 @@
 
 from __future__ import annotations
 
-from enum import Enum
-
-
-class Fix(Enum):
-    """A remedy that each front end offers its own way. The library's sentence names the
-    command line's command; the app, which can do the same with a key, says that instead
-    (`racer_tui.screens.base.error_message`)."""
-
-    IMPORT_TRACK = "import the track"
+from sim.remedies import Fix
 
 
 class LeagueError(ValueError):

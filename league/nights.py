@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from league.errors import Fix, LeagueError
+from league.errors import LeagueError
 from league.leaderboard import Filters, LeaderboardRow, leaderboard
 from league.racers import check_name, display_names, ensure_racer
 from league.races import find_local_track, record_race
@@ -27,6 +27,7 @@ from league.tracks import ensure_track
 from sim.ids import new_id
 from sim.plural import counted
 from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
+from sim.remedies import Fix
 from sim.track import Track
 
 if TYPE_CHECKING:

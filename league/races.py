@@ -14,13 +14,14 @@ from typing import Any
 import numpy as np
 
 from league.entries import refresh_entries
-from league.errors import Fix, LeagueError
+from league.errors import LeagueError
 from league.racers import check_name, display_names_overrides, ensure_racer
 from league.store import League, record_body
 from league.tracks import ensure_track, track_names
 from sim.ids import content_hash, is_valid_id
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
+from sim.remedies import Fix
 from sim.track import Track, TrackError
 from sim.track_catalog import find_track_by_hash, resolve_track
 

@@ -16,7 +16,8 @@ from textual.message import Message
 from textual.screen import ModalScreen, Screen
 from textual.worker import Worker, WorkerState
 
-from league.errors import Fix, LeagueError
+from league.errors import LeagueError
+from sim.remedies import Fix, Note
 from sim.reward_function import RewardFunctionError
 
 # The libraries' error types are ValueErrors whose text is written for the racer.
@@ -24,7 +25,22 @@ USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, RewardFunctionError)
 
 
 # Remedies the app offers itself, in its words: its keys, not the command line's commands.
-APP_FIXES = {Fix.IMPORT_TRACK: "import its .npy file on the Tracks screen (i there)"}
+APP_FIXES = {
+    Fix.IMPORT_TRACK: "import its .npy file on the Tracks screen (i there)",
+    Fix.TRAIN_MODEL: "press t in the Garage to train it",
+    Fix.CHOOSE_TRACK: (
+        "press e in the Garage to choose another (i on the Tracks screen imports a DeepRacer "
+        ".npy track)"
+    ),
+}
+
+
+def in_app_words(note: str) -> str:
+    """A library's note as the app says it: a remedy the app offers with a key is named by
+    its key, not by its command."""
+    if isinstance(note, Note) and note.fix in APP_FIXES:
+        return f"{note.problem}; {APP_FIXES[note.fix]}."
+    return note
 
 
 def error_message(error: BaseException) -> str:

@@ -28,7 +28,7 @@ from textual.worker import Worker, WorkerState
 
 from racer_tui.jobs import Job, JobState
 from racer_tui.model_form import check_name, taken_names
-from racer_tui.screens.base import RacerScreen, error_message
+from racer_tui.screens.base import RacerScreen, error_message, in_app_words
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, ImportRequest, InputDialog
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.league_submit import RacerPrompt, submit_model_from
@@ -159,7 +159,7 @@ def confirm_someone_elses_code(
 
 
 def notify_imported(screen: Screen[Any], message: ModelImported) -> None:
-    notes = "".join(f"\n• {note}" for note in message.notes)
+    notes = "".join(f"\n• {in_app_words(note)}" for note in message.notes)
     advice = "\nPress e in the garage to change its track or reward function." if notes else ""
     screen.notify(f"Imported {message.name}.{notes}{advice}", timeout=15, markup=False)
 

@@ -55,6 +55,7 @@ from sim.garage.folder import (
 )
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
 from sim.race.physics import DEEPRACER as DEEPRACER_PHYSICS
+from sim.remedies import Fix, Note
 
 BUNDLE_SUFFIX = ".racer-bundle"
 _T = TypeVar("_T")
@@ -110,9 +111,15 @@ def import_deepracer_folder(
     training_traces = _checked_traces(files.training_traces)
     policy = _racer_tui_policy(root)
     if policy is None:
+        untrained = (
+            "it starts untrained (DeepRacer's TensorFlow weights cannot drive a racer-tui car)"
+        )
         notes.append(
-            "it starts untrained (DeepRacer's TensorFlow weights cannot drive a racer-tui car): "
-            f"train it with `racer-tui train {chosen_name}`."
+            Note(
+                f"{untrained}: train it with `racer-tui train {chosen_name}`.",
+                problem=untrained,
+                fix=Fix.TRAIN_MODEL,
+            )
         )
 
     def populate(folder: ModelFolder) -> None:
@@ -194,9 +201,14 @@ def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]
     if world is not None and world in {info.name for info in list_tracks()}:
         return world
     where = f"it trained on {world!r}, which" if world else "its track"
+    problem = f"{where} is not a racer-tui track: it is set up on {DEFAULT_TRACK}"
     notes.append(
-        f"{where} is not a racer-tui track: it is set up on {DEFAULT_TRACK}; "
-        "choose another with --track (import DeepRacer .npy tracks with `racer-tui tracks import`)."
+        Note(
+            f"{problem}; choose another with --track (import DeepRacer .npy tracks with "
+            "`racer-tui tracks import`).",
+            problem=problem,
+            fix=Fix.CHOOSE_TRACK,
+        )
     )
     return DEFAULT_TRACK
 

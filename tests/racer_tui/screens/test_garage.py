@@ -110,6 +110,10 @@ async def test_import_the_shared_deepracer_folder(deepracer_dir: Path) -> None:
         told = notes.text()
         assert "Imported drfc-model" in told
         assert "template" in told  # it had no reward function: a template, said out loud
+        # Remedies are the app's keys, not shell commands (the CLI prints those).
+        assert "press t in the Garage to train it" in told
+        assert "press e in the Garage to choose another" in told
+        assert "`racer-tui" not in told
         # The job line keeps how the import ended after the notification fades.
         job = " ".join(painted(app.screen.query_one("#garage-job")).split())  # as read
         assert "Done at" in job and "Imported drfc-model." in job

@@ -17,6 +17,7 @@ from sim.garage.deepracer_import import import_deepracer_folder, import_model
 from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
 from sim.garage.options import DEFAULT_TRACK
 from sim.garage.summary import training_summary
+from sim.remedies import Fix, Note
 from sim.reward_function import RewardFunctionError, template_source
 
 
@@ -237,3 +238,13 @@ def test_a_drfc_training_trace_comes_along_for_deepracer_utils(drfc_copy: Path) 
     log = DeepRacerLog(str(folder.path))
     log.load()
     assert sorted(set(log.dataframe()["unique_episode"])) == [0, 1, 2, 3]
+
+
+def test_a_note_with_a_remedy_is_still_the_sentence_the_cli_prints(deepracer_dir: Path) -> None:
+    """Front ends may word a note's remedy their own way (`Note.problem`, `Note.fix`); as a
+    string it is the command line's sentence, and it serialises as one."""
+    result = import_model(deepracer_dir / "drfc-model")
+    untrained = next(n for n in result.notes if "starts untrained" in n)
+    assert isinstance(untrained, Note) and untrained.fix is Fix.TRAIN_MODEL
+    assert str(untrained) == f"{untrained.problem}: train it with `racer-tui train drfc-model`."
+    assert json.loads(json.dumps(list(result.notes))) == [str(n) for n in result.notes]

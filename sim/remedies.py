@@ -1,0 +1,29 @@
+"""Remedies that a sentence for the user ends with, named so that each front end can say
+them its own way: the library writes the command line's words (`racer-tui tracks import
+FILE`), and the app, which does the same with a key, says that instead
+(`racer_tui.screens.base`)."""
+
+from __future__ import annotations
+
+from enum import Enum
+
+
+class Fix(Enum):
+    IMPORT_TRACK = "import the track"
+    TRAIN_MODEL = "train the model"
+    CHOOSE_TRACK = "choose the model's track"
+
+
+class Note(str):
+    """A note for the user, as the command line prints it, that ends in a remedy: `problem`
+    is the sentence without the remedy and `fix` names it. It is a `str`, so everything
+    that prints, joins or serialises notes keeps working."""
+
+    problem: str
+    fix: Fix
+
+    def __new__(cls, text: str, *, problem: str, fix: Fix) -> Note:
+        note = super().__new__(cls, text)
+        note.problem = problem
+        note.fix = fix
+        return note
