@@ -38,15 +38,20 @@ APP_FIXES = {
 def in_app_words(note: str) -> str:
     """A library's note as the app says it: a remedy the app offers with a key is named by
     its key, not by its command."""
-    if isinstance(note, Note) and note.fix in APP_FIXES:
-        return f"{note.problem}; {APP_FIXES[note.fix]}."
+    if isinstance(note, Note):
+        return _with_app_fix(note.problem, note.fix) or note
     return note
+
+
+def _with_app_fix(problem: str, fix: Fix | None) -> str | None:
+    """The problem with the app's own remedy, or None when the app offers none."""
+    return f"{problem}; {APP_FIXES[fix]}." if fix in APP_FIXES else None
 
 
 def error_message(error: BaseException) -> str:
     """One sentence for the racer, never a traceback."""
-    if isinstance(error, LeagueError) and error.fix in APP_FIXES:
-        text = f"{error.problem}; {APP_FIXES[error.fix]}."
+    if isinstance(error, LeagueError):
+        text = _with_app_fix(error.problem, error.fix) or str(error)
         return text[:1].upper() + text[1:]
     if isinstance(error, USER_ERRORS):
         text = str(error)

@@ -375,8 +375,9 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(ModelCloned(source.name, name))
 
     def on_model_cloned(self, message: ModelCloned) -> None:
-        self._finish(f"cloned {message.source} as {message.name}.")
-        self.notify(f"Cloned {message.source} as {message.name}.", markup=False)
+        done = f"Cloned {message.source} as {message.name}."
+        self._finish(done)
+        self.notify(done, markup=False)
         self.reload(select=message.name)
 
     def action_delete_model(self) -> None:
@@ -403,8 +404,9 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(ModelDeleted(folder.name))
 
     def on_model_deleted(self, message: ModelDeleted) -> None:
-        self._finish(f"deleted {message.name}.")
-        self.notify(f"Deleted {message.name}.", markup=False)
+        done = f"Deleted {message.name}."
+        self._finish(done)
+        self.notify(done, markup=False)
         self.reload()
 
     def action_import_model(self) -> None:
@@ -425,7 +427,7 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(import_into_garage(request))
 
     def on_model_imported(self, message: ModelImported) -> None:
-        self._finish(f"imported {message.name}.")
+        self._finish(f"Imported {message.name}.")
         notify_imported(self, message)
         self.reload(select=message.name)
 
@@ -478,7 +480,7 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(BundleExported(folder.name, written, export_notes(folder.metadata())))
 
     def on_bundle_exported(self, message: BundleExported) -> None:
-        self._finish(f"exported {message.name} to {message.path}.")
+        self._finish(f"Exported {message.name} to {message.path}.")
         notes = "".join(f"\n• {note}" for note in message.notes)
         self.notify(
             f"Exported {message.name} to {message.path}.{notes}",
@@ -507,7 +509,7 @@ class GarageScreen(RacerScreen[None]):
         self._show_job(self.job.running(what, total=None, now=now, wall=wall))
 
     def _finish(self, outcome: str) -> None:
-        self._show_job(self.job.finished(outcome[:1].upper() + outcome[1:], wall=time.time()))
+        self._show_job(self.job.finished(outcome, wall=time.time()))
 
     def _show_job(self, job: Job) -> None:
         self.job = job

@@ -81,7 +81,7 @@ class TracksScreen(RacerScreen[None]):
 
     def on_mount(self) -> None:
         # The straight test road cannot be raced or lapped; `racer-tui tracks list` shows it.
-        self._infos = [info for info in list_tracks() if info.lappable]
+        self._infos = _raceable_tracks()
         self._fill("")
         self.query_one("#tracks", DataTable).focus()
 
@@ -182,7 +182,7 @@ class TracksScreen(RacerScreen[None]):
             else f"{info.title} is already here; nothing was copied.",
             markup=False,
         )
-        self._infos = [i for i in list_tracks() if i.lappable]
+        self._infos = _raceable_tracks()
         search = self.query_one("#track-search", Input)
         with search.prevent(Input.Changed):  # its handler would refill after the move below
             search.value = ""
@@ -242,6 +242,11 @@ class TracksScreen(RacerScreen[None]):
         self._lap_texts[message.track.content_hash] = message.text
         if self.track is message.track:
             self._update_facts(message.track, message.text)
+
+
+def _raceable_tracks() -> list[TrackInfo]:
+    """Every track the section lists (not the straight test road, which has no laps)."""
+    return [info for info in list_tracks() if info.lappable]
 
 
 def _track_file_problem(path: str) -> str | None:
