@@ -27,7 +27,7 @@ from racer_tui.long_running import (
     IdleCollector,
     freeze_long_lived,
 )
-from racer_tui.screens.base import ModelAdded
+from racer_tui.screens.base import ModelAdded, push_kept
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
 from racer_tui.screens.garage import GarageScreen
 from racer_tui.screens.help import HelpScreen, HelpTopic, binding_topics, declared_bindings
@@ -272,18 +272,7 @@ class RacerTuiApp(App[int]):
     def action_help(self) -> None:
         if isinstance(self.screen, HelpScreen):
             return
-        # The help is the same for every screen and laying out its tables is most of what
-        # opening it costs (about 100 ms at 80x24): one screen is kept and shown again. A
-        # second one is made only while the kept one is open under another section.
-        if not self.is_screen_installed(HELP_SCREEN):
-            self.install_screen(self._new_help(), HELP_SCREEN)
-        kept = self.get_screen(HELP_SCREEN)
-        if any(kept in stack for stack in self._screen_stacks.values()):
-            self.push_screen(self._new_help())
-        else:
-            if isinstance(kept, HelpScreen):
-                kept.reset()
-            self.push_screen(HELP_SCREEN)
+        push_kept(self, HELP_SCREEN, self._new_help)  # the same help for every screen
 
     def _new_help(self) -> HelpScreen:
         notes = (

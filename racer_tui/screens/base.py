@@ -9,9 +9,11 @@ request to report it. The app keeps running either way.
 
 from __future__ import annotations
 
-from typing import Any, TypeVar
+from collections.abc import Callable
+from typing import Any, Protocol, TypeVar, runtime_checkable
 
 from textual import events
+from textual.app import App
 from textual.message import Message
 from textual.screen import ModalScreen, Screen
 from textual.worker import Worker, WorkerState
@@ -73,6 +75,31 @@ def notify_worker_failure(screen: Screen[Any], worker: Worker[Any]) -> None:
 ResultT = TypeVar("ResultT")
 
 
+@runtime_checkable
+class Reopenable(Protocol):
+    def reset(self) -> None:
+        """Back to how the screen looks when it opens (a kept screen is opened again)."""
+
+
+def push_kept(app: App[Any], name: str, make: Callable[[], Screen[Any]]) -> None:
+    """Show the screen the app keeps under `name`, made by `make` the first time.
+
+    Composing and laying out a screen afresh is most of what opening it costs (80-150 ms
+    at 80x24 for the help's tables or the Sync screen's, twice that beside a training), so
+    a screen opened often is made once and shown again, `reset()` first when it has one.
+    A second one is made only while the kept one is already open under another section.
+    """
+    if not app.is_screen_installed(name):
+        app.install_screen(make(), name)
+    kept = app.get_screen(name)
+    if any(kept in stack for stack in app._screen_stacks.values()):
+        app.push_screen(make())
+        return
+    if isinstance(kept, Reopenable):
+        kept.reset()
+    app.push_screen(name)
+
+
 class ModelAdded(Message):
     """A model was created or imported outside the garage: the app shows it there."""
 
@@ -96,6 +123,12 @@ class RacerScreen(Screen[ResultT]):
         by a theme or CSS change), whether the terminal has focus, the app's classes."""
         app = self.app
         return (app._css_update_count, app.app_focus, tuple(sorted(app.classes)))
+
+    def _on_mount(self, event: events.Mount) -> None:
+        # Every node was styled as it was mounted, just now: the first resume need not
+        # restyle them all again (10-20 ms of opening a screen) unless the app's styling
+        # changed in between.
+        self._style_context = self._app_style_context()
 
     def _on_screen_suspend(self) -> None:
         self._style_context = self._app_style_context()

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 from typing import ClassVar
 
@@ -31,7 +32,7 @@ from league.report import (
 )
 from league.report import Column as ReportColumn
 from league.store import open_league
-from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.base import RacerScreen, push_kept
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.nights import NightsScreen
 from racer_tui.screens.projector import ProjectorScreen
@@ -359,7 +360,7 @@ class LeagueScreen(RacerScreen[None]):
         self.app.push_screen(NightsScreen(db_path=self.db_path))
 
     def action_sync(self) -> None:
-        self.app.push_screen(SyncScreen(db_path=self.db_path))
+        push_kept(self.app, f"sync:{self.db_path or ''}", partial(SyncScreen, db_path=self.db_path))
 
     def action_replay_entry(self) -> None:
         row = self.highlighted

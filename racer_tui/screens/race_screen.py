@@ -19,9 +19,9 @@ from textual import work
 from textual.app import ComposeResult
 from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
-from textual.screen import Screen
 from textual.widgets import DataTable, Digits, Static
 
+from racer_tui.screens.base import RacerScreen
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.race_map import CarMarker, RaceMap
 from sim.race.driver import Driver
@@ -64,7 +64,7 @@ def countdown_text(seconds: float) -> str:
     return f"{whole // 60}:{whole % 60:02d}"
 
 
-class RaceScreen(Screen[RaceResult | None]):
+class RaceScreen(RacerScreen[RaceResult | None]):
     """A time trial, live or replayed, with its laps table and countdown."""
 
     BINDINGS = [  # noqa: RUF012 - Textual's convention
@@ -121,23 +121,19 @@ class RaceScreen(Screen[RaceResult | None]):
     def on_mount(self) -> None:
         table = self.query_one("#laps", DataTable)
         table.add_columns("Lap", "Time", "Pen", "Off", "OK")
-        if self.setup.replay is not None:
-            self.ticks = replay_ticks(self.setup.replay)
-            self.result = self.setup.replay
-            if not self.ticks:
-                self.failure = (
-                    "This race has no trace here to replay: it was stored without one, or "
-                    "it is older than the races this session keeps (replay it from the "
-                    "league's recorded races if it was submitted)."
-                )
-        else:
-            self._run_race()
         self.set_interval(1.0 / FRAME_HZ, self._frame)
         self._update_panel(force=True)
+        # The race (or the replay's 3,600 ticks) is worked out in a thread once the screen
+        # has been drawn: started earlier, it holds the GIL while the first frame is laid
+        # out and the key that opened the view waits twice as long for its answer.
+        self.call_after_refresh(self._run_race)
 
     @work(thread=True, exclusive=True, group="race")
     def _run_race(self) -> None:
         setup = self.setup
+        if setup.replay is not None:
+            self._load_replay(setup.replay)
+            return
         try:
             driver = setup.driver() if setup.driver is not None else None
             stream = race_ticks(
@@ -150,10 +146,22 @@ class RaceScreen(Screen[RaceResult | None]):
         except Exception as error:  # shown to the racer; the app keeps running
             self.failure = f"The race stopped: {error}"
 
+    def _load_replay(self, replay: RaceResult) -> None:
+        ticks = replay_ticks(replay)
+        if not ticks:
+            self.failure = (
+                "This race has no trace here to replay: it was stored without one, or "
+                "it is older than the races this session keeps (replay it from the "
+                "league's recorded races if it was submitted)."
+            )
+        self.ticks = ticks  # one assignment: the frame timer sees no ticks or all of them
+        self.result = replay
+
     # --- playback --------------------------------------------------------------------
 
     def _frame(self) -> None:
         if not self.ticks:
+            self._wall_mark = time.monotonic()  # the clock starts with the first tick shown
             self._update_panel()
             return
         if not self.paused:

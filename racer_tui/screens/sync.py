@@ -163,6 +163,10 @@ class SyncScreen(RacerScreen[bool]):
         self._shown_progress: tuple[str, int] | None = None
         self.last_summary: Text | None = None  # what the sync run here did
         self.keys = Keys(None)
+        self._url_from_status = True  # the next status read fills the URL field
+        # Empty until the first read, and usually after it: a class changed after the
+        # screen is laid out restyles all of it (about 15 ms at 80x24).
+        self.add_class("-no-conflicts", "-no-quarantine", "-no-waiting-keys")
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league", "shared store")
@@ -186,6 +190,21 @@ class SyncScreen(RacerScreen[bool]):
     def on_mount(self) -> None:
         self.action_reload()
 
+    def reset(self) -> None:
+        """As a fresh Sync screen opens (the app keeps one and shows it again): what the
+        last visit's sync did is not news now, the URL field shows the saved store again,
+        and the status is read again at once."""
+        if not self.is_mounted or self.syncing:
+            return  # composing now, or still syncing (leaving is refused until it ends)
+        self.pulled = 0
+        self.last_summary = None
+        self._show_job(Job())
+        self.query_one("#problem", Static).update("")
+        self._url_from_status = True
+        if self.status is not None:
+            self._show_status(self.status)  # the last read, until the new one lands
+        self.action_reload()
+
     # --- reading the status ------------------------------------------------------------
 
     def action_reload(self) -> None:
@@ -199,20 +218,23 @@ class SyncScreen(RacerScreen[bool]):
         self.post_message(SyncStatusRead(status, keys))
 
     def on_sync_status_read(self, message: SyncStatusRead) -> None:
-        first = self.status is None
         self.status = message.status
         self._show_keys(message.keys)
-        overview = message.status.overview
-        url = self.query_one("#sync-url", Input)
-        if first:
-            url.value = overview.store or ""
-            if overview.store is None:
-                url.focus()
+        self._show_status(message.status)
+
+    def _show_status(self, status: SyncStatus) -> None:
+        store = status.overview.store
+        if self._url_from_status:  # as it opens; later the field is the racer's
+            self._url_from_status = False
+            url = self.query_one("#sync-url", Input)
+            if url.value != (store or ""):
+                url.value = store or ""
+            (self.query_one("#sync-now", Button) if store else url).focus()
         if not self.syncing:
             self.query_one("#sync-summary", Static).update(
                 self.last_summary or self._last_runs_text()
             )
-        self._fill_tables(message.status)
+        self._fill_tables(status)
 
     def _last_runs_text(self) -> Text:
         if self.status is None or self.status.overview.store is None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 from textual.app import App
+from textual.pilot import Pilot
 from textual.widgets import DataTable, Static
 
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup, clock_text, countdown_text
@@ -14,6 +15,15 @@ from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 
 SHORT = RaceRules(window_seconds=20.0)
+
+
+async def worked_out(pilot: Pilot[None], screen: RaceScreen) -> None:
+    """Until the race (or the replay's ticks), started once the screen is drawn, is ready."""
+    for _ in range(1000):
+        if screen.result is not None or screen.failure is not None:
+            return
+        await pilot.pause(0.02)
+    raise AssertionError("the race was not worked out within 20 s")
 
 
 def test_clock_formats() -> None:
@@ -30,7 +40,7 @@ async def test_a_live_race_fills_the_laps_table_and_returns_its_result() -> None
     app: App[None] = App()
     async with app.run_test(size=(100, 30)) as pilot:
         await app.push_screen(screen)
-        await app.workers.wait_for_complete()
+        await worked_out(pilot, screen)
         await pilot.press("e")
         await pilot.pause()
         result = screen.result
@@ -57,6 +67,7 @@ async def test_a_recorded_race_replays_with_a_ghost() -> None:
     app: App[None] = App()
     async with app.run_test(size=(80, 24)) as pilot:
         await app.push_screen(screen)
+        await worked_out(pilot, screen)
         await pilot.press("e")
         await pilot.pause()
         table = screen.query_one("#laps", DataTable)

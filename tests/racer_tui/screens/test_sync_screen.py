@@ -309,6 +309,43 @@ async def test_a_failed_sync_never_shows_the_last_success_as_news(
         assert "sync failed" not in status_line(app)
 
 
+async def test_the_sync_screen_opened_again_shows_the_present_not_the_last_visit(
+    tmp_path: Path, store_url: str
+) -> None:
+    # The app keeps one Sync screen (composing it is most of what opening it costs); a
+    # second visit must look like a first one, read afresh.
+    data_home()
+    record("ana", [11.0])
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        first = await open_sync(pilot)
+        await set_store(pilot, first, store_url)
+        await pilot.press("s")
+        await settle(pilot)
+        assert "Synced with" in summary(first)
+        assert "Done at" in painted(first.query_one(JobLine))
+        # The racer types half a URL, thinks better of it and leaves without saving.
+        field = first.query_one("#sync-url", Input)
+        field.focus()
+        field.value = "dir:/mnt/half-typ"
+        await pilot.press("escape", "escape")
+        await settle(pilot)
+        assert isinstance(app.screen, LeagueScreen)
+        record("bo", [12.0])  # a race recorded since: not pushed yet
+        again = await open_sync(pilot)
+        assert again is first
+        assert again.query_one("#sync-url", Input).value == store_url
+        assert summary(again) == ""  # the last visit's sync is not news
+        assert painted(again.query_one(JobLine)).strip() == ""
+        shown = painted(again.query_one("#sync-summary"))
+        assert "Last push:" in shown and "new here, not pushed yet" in shown
+        assert "0 new here" not in shown  # bo's race (racer and race records) is counted
+        await pilot.press("s")
+        await settle(pilot)
+        assert "Synced with" in summary(again)
+        assert again.pulled == 0  # this visit pulled nothing new
+
+
 async def test_a_malformed_record_in_the_store_is_listed_as_quarantined(
     store_url: str,
 ) -> None:
