@@ -2,16 +2,9 @@
 
 from __future__ import annotations
 
-from sim.remedies import Fix
+from sim.remedies import RemedyError
 
 
-class LeagueError(ValueError):
-    """Something asked of the league that cannot be done; the message is for the user.
-
-    `problem` is what is wrong, without the remedy, and `fix` names the remedy, when the
-    message ends in a command that a front end may offer in its own words."""
-
-    def __init__(self, message: str, *, problem: str = "", fix: Fix | None = None) -> None:
-        super().__init__(message)
-        self.problem = problem or message
-        self.fix = fix
+class LeagueError(RemedyError):
+    """Something asked of the league that cannot be done; the message is for the user
+    (with its `problem` and `fix` when it ends in a command a front end words its own way)."""

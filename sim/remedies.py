@@ -12,6 +12,7 @@ class Fix(Enum):
     IMPORT_TRACK = "import the track"
     TRAIN_MODEL = "train the model"
     CHOOSE_TRACK = "choose the model's track"
+    RENAME = "give it another name"
 
 
 class Note(str):
@@ -27,3 +28,14 @@ class Note(str):
         note.problem = problem
         note.fix = fix
         return note
+
+
+class RemedyError(ValueError):
+    """An error whose message is one sentence for the user. When the message ends in a
+    remedy that a front end may offer its own way, `problem` is the sentence without it
+    and `fix` names it (as for a Note)."""
+
+    def __init__(self, message: str, *, problem: str = "", fix: Fix | None = None) -> None:
+        super().__init__(message)
+        self.problem = problem or message
+        self.fix = fix

@@ -30,6 +30,7 @@ from sim.atomic import write_text_atomic
 from sim.home import user_tracks_dir
 from sim.names import NAME_PATTERN, NAME_RULE
 from sim.official_tracks import OfficialTrack, official_tracks
+from sim.remedies import Fix, Note
 from sim.track_errors import TrackError
 
 if TYPE_CHECKING:
@@ -245,26 +246,61 @@ def _unknown_name(name: str, infos: list[TrackInfo]) -> str:
 
 
 def _check_name(name: str) -> None:
-    if not _NAME.fullmatch(name):
-        raise TrackError(
-            f"{name!r} cannot be a track name; use {NAME_RULE}, for example with --name."
-        )
+    problem = _name_rule_problem(name)
+    if problem is not None:
+        raise TrackError(f"{problem}, for example with --name.", problem=problem, fix=Fix.RENAME)
 
 
 def _check_new_name(name: str) -> None:
-    _check_name(name)
+    problem = new_name_problem(name)
+    if problem is not None:
+        raise TrackError(_renamed(problem), problem=problem, fix=Fix.RENAME)
+
+
+def _renamed(problem: str) -> str:
+    return f"{problem}; choose another name with --name."
+
+
+def _name_rule_problem(name: str) -> str | None:
+    return None if _NAME.fullmatch(name) else f"{name!r} cannot be a track name; use {NAME_RULE}"
+
+
+def new_name_problem(name: str) -> str | None:
+    """Why `name` cannot name a new track, without the remedy (each front end asks for
+    another name its own way), or None."""
+    rule = _name_rule_problem(name)
+    if rule is not None:
+        return rule
     # Compared without case: on macOS and Windows "Oval.npy" and "oval.npy" are one file.
     folded = name.casefold()
     shipped = _shipped_named(name)
     if shipped is not None:
-        raise TrackError(
-            f"{name!r} is the name of {_a(shipped.kind)} track; choose another name with --name."
-        )
+        return f"{name!r} is the name of {_a(shipped.kind)} track"
     for npy in user_tracks_dir().glob("*.npy"):
         if npy.stem.casefold() == folded:
-            raise TrackError(
-                f"a track named {npy.stem!r} is already imported; choose another name with --name."
-            )
+            return f"a track named {npy.stem!r} is already imported"
+    return None
+
+
+def import_problem(path: Path, name: str | None = None) -> str | None:
+    """What would stop `import_track(path, name)`, or None when it would work: the file is
+    read and checked, nothing is kept. A front end asks this while the racer can still
+    change the path or the name; a name's problem is a Note whose fix is Fix.RENAME."""
+    from sim.track import load_track
+
+    source = Path(path).expanduser()
+    chosen = name if name is not None else source.stem
+    problem = _name_rule_problem(chosen)
+    if problem is None:
+        try:
+            track = load_track(source, chosen)
+        except TrackError as error:
+            return str(error)
+        shipped = _shipped_named(chosen)
+        if shipped is not None and shipped.content_hash == track.content_hash:
+            return None  # the shipped file itself: import_track says it is already here
+        problem = new_name_problem(chosen)
+    return None if problem is None else Note(_renamed(problem), problem=problem, fix=Fix.RENAME)
 
 
 def _user_path(name: str) -> Path:
@@ -289,7 +325,7 @@ def _user_info(npy: Path) -> TrackInfo:
         facts = _facts_from_file(npy, facts)
     info = _info({**facts, "name": npy.stem}, npy, kind="imported")
     if _shadowed(npy.stem):
-        note = "hidden by the track of the same name; re-import the file with --name"
+        note = "hidden by the track of the same name; import the file again under another name"
         return TrackInfo(**{**info.__dict__, "description": note})
     return info
 

@@ -3,6 +3,8 @@ reporting a bad name) never pays for importing the geometry libraries that check
 
 from __future__ import annotations
 
+from sim.remedies import RemedyError
 
-class TrackError(ValueError):
+
+class TrackError(RemedyError):
     """A track file, array or name that cannot be used; the message is meant for the user."""

@@ -18,8 +18,7 @@ from textual.message import Message
 from textual.screen import ModalScreen, Screen
 from textual.worker import Worker, WorkerState
 
-from league.errors import LeagueError
-from sim.remedies import Fix, Note
+from sim.remedies import Fix, Note, RemedyError
 from sim.reward_function import RewardFunctionError
 
 # The libraries' error types are ValueErrors whose text is written for the racer.
@@ -34,6 +33,7 @@ APP_FIXES = {
         "press e in the Garage to choose another (i on the Tracks screen imports a DeepRacer "
         ".npy track)"
     ),
+    Fix.RENAME: "type another name in the import dialog's name field",
 }
 
 
@@ -50,9 +50,15 @@ def _with_app_fix(problem: str, fix: Fix | None) -> str | None:
     return f"{problem}; {APP_FIXES[fix]}." if fix in APP_FIXES else None
 
 
+def sentence(text: str) -> str:
+    """A library message as a sentence: capital first, full stop last."""
+    text = text[:1].upper() + text[1:]
+    return text if text.endswith((".", "!", "?")) else text + "."
+
+
 def error_message(error: BaseException) -> str:
     """One sentence for the racer, never a traceback."""
-    if isinstance(error, LeagueError):
+    if isinstance(error, RemedyError):  # the league's, a track's: its remedy in app words
         text = _with_app_fix(error.problem, error.fix) or str(error)
         return text[:1].upper() + text[1:]
     if isinstance(error, USER_ERRORS):

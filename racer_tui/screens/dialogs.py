@@ -177,8 +177,15 @@ class ImportRequest:
     name: str | None  # None: the folder's (or bundle's) own name
 
 
-class ImportDialog(FormDialog[ImportRequest]):
-    """A DeepRacer model folder or a .racer-bundle file, and optionally a new name."""
+class PathNameDialog(FormDialog[ImportRequest]):
+    """A path (→ completes it) and an optional new name, checked by `problem` before the
+    dialog closes: a name that is taken or a file that cannot be used is said under the
+    fields, with what was typed still there to change."""
+
+    TITLE = ""
+    BODY = ""
+    PATH_PLACEHOLDER = ""
+    NAME_PLACEHOLDER = ""
 
     def __init__(self, path: str = "") -> None:
         super().__init__()
@@ -186,41 +193,55 @@ class ImportDialog(FormDialog[ImportRequest]):
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
-            yield Label("Import a model", classes="dialog-title")
-            yield Static(
-                "A DeepRacer model folder (as DeepRacer for Cloud or the console's download "
-                "lays it out) or a .racer-bundle file from another racer. "
-                "→ completes a path.",
-                classes="dialog-body",
-            )
+            yield Label(self.TITLE, classes="dialog-title")
+            yield Static(self.BODY, classes="dialog-body")
             yield Input(
                 self._path,
-                placeholder="path, e.g. ~/Downloads/my-model",
+                placeholder=self.PATH_PLACEHOLDER,
                 suggester=PathSuggester(),
                 id="path",
             )
-            yield Input(placeholder="model name (empty: the folder's name)", id="name")
+            yield Input(placeholder=self.NAME_PLACEHOLDER, id="name")
             yield from self.form_buttons("Import")
 
     def on_mount(self) -> None:
         self.query_one("#path", Input).focus()
 
+    def problem(self, path: str, name: str | None) -> str | None:
+        """What is wrong with the path or the name, or None."""
+        raise NotImplementedError
+
     @on(Input.Submitted)
     @on(Button.Pressed, "#confirm")
     def _confirm(self) -> None:
         path = self.query_one("#path", Input).value.strip()
-        name = self.query_one("#name", Input).value.strip()
-        problem = None
-        if not path:
-            problem = "Give the path of a DeepRacer model folder or a .racer-bundle file."
-        elif not _exists(path):
-            problem = f"{path} does not exist or cannot be read; check the path (→ completes it)."
-        elif name and not is_valid_name(name):
-            problem = f"{name!r} cannot be a model name; use {NAME_RULE}."
+        name = self.query_one("#name", Input).value.strip() or None
+        problem = self.problem(path, name)
         if problem is not None:
             show_problem(self.query_one("#problem", Static), problem)
             return
-        self.dismiss(ImportRequest(path, name or None))
+        self.dismiss(ImportRequest(path, name))
+
+
+class ImportDialog(PathNameDialog):
+    """A DeepRacer model folder or a .racer-bundle file, and optionally a new name."""
+
+    TITLE = "Import a model"
+    BODY = (
+        "A DeepRacer model folder (as DeepRacer for Cloud or the console's download lays it "
+        "out) or a .racer-bundle file from another racer. → completes a path."
+    )
+    PATH_PLACEHOLDER = "path, e.g. ~/Downloads/my-model"
+    NAME_PLACEHOLDER = "model name (empty: the folder's name)"
+
+    def problem(self, path: str, name: str | None) -> str | None:
+        if not path:
+            return "Give the path of a DeepRacer model folder or a .racer-bundle file."
+        if not _exists(path):
+            return f"{path} does not exist or cannot be read; check the path (→ completes it)."
+        if name and not is_valid_name(name):
+            return f"{name!r} cannot be a model name; use {NAME_RULE}."
+        return None
 
 
 def _exists(path: str) -> bool:

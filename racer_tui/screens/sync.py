@@ -52,7 +52,7 @@ from league.trust import membership
 from league.trust.keys import KeyFileError, load_or_create_key
 from league.trust.membership import KeyRow
 from racer_tui.jobs import Job
-from racer_tui.screens.base import RacerScreen, error_message, notify_worker_failure
+from racer_tui.screens.base import RacerScreen, error_message, notify_worker_failure, sentence
 from racer_tui.screens.dialogs import ConfirmDialog, show_problem
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.job_line import JobLine
@@ -81,12 +81,6 @@ QUARANTINE_COLUMNS = (
 )
 CELL = 48  # characters of one side of a conflict or a reason in a cell; the rest is cut
 URL_HINT = "dir:PATH (a shared folder) or dynamodb://TABLE?region=R"
-
-
-def sentence(text: str) -> str:
-    """A library message as a sentence: capital first, full stop last."""
-    text = text[:1].upper() + text[1:]
-    return text if text.endswith((".", "!", "?")) else text + "."
 
 
 def cut(text: str, limit: int = CELL) -> Text:

@@ -19,8 +19,8 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import DataTable, Input, Static
 
-from racer_tui.screens.base import ModelAdded, RacerScreen
-from racer_tui.screens.dialogs import InputDialog
+from racer_tui.screens.base import ModelAdded, RacerScreen, in_app_words, sentence
+from racer_tui.screens.dialogs import ImportRequest, PathNameDialog
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.footer import RacerFooter
@@ -32,7 +32,13 @@ from sim.plural import counted
 from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
 from sim.track import Track, TrackError
-from sim.track_catalog import TrackInfo, import_track, list_tracks, resolve_track
+from sim.track_catalog import (
+    TrackInfo,
+    import_problem,
+    import_track,
+    list_tracks,
+    resolve_track,
+)
 
 # Room for a console name in the list at 80 columns; the facts pane shows it whole.
 _LABEL_CELLS = 23
@@ -153,26 +159,15 @@ class TracksScreen(RacerScreen[None]):
         self.app.push_screen(ModelEditorScreen(track=track.name), self._model_created)
 
     def action_import_track(self) -> None:
-        self.app.push_screen(
-            InputDialog(
-                "Import a track",
-                "A DeepRacer track file (.npy, as the simulator's routes folder keeps them). "
-                "It is kept under its file name. → completes a path.",
-                placeholder="path, e.g. ~/Downloads/my_track.npy",
-                confirm_label="Import",
-                check=_track_file_problem,
-                paths=True,
-            ),
-            self._import_chosen,
-        )
+        self.app.push_screen(TrackImportDialog(), self._import_chosen)
 
-    def _import_chosen(self, path: str | None) -> None:
-        if path is not None:
-            self._import(Path(path.strip()).expanduser())
+    def _import_chosen(self, request: ImportRequest | None) -> None:
+        if request is not None:
+            self._import(Path(request.path).expanduser(), request.name)
 
     @work(thread=True, exclusive=True, group="track-import", exit_on_error=False)
-    def _import(self, path: Path) -> None:
-        self.post_message(TrackImported(import_track(path)))
+    def _import(self, path: Path, name: str | None) -> None:
+        self.post_message(TrackImported(import_track(path, name)))
 
     def on_track_imported(self, message: TrackImported) -> None:
         info = message.info
@@ -249,18 +244,29 @@ def _raceable_tracks() -> list[TrackInfo]:
     return [info for info in list_tracks() if info.lappable]
 
 
-def _track_file_problem(path: str) -> str | None:
-    """What is wrong with the path given for a track file, or None (the import checks the
-    file itself)."""
-    if not path.strip():
-        return "Give the path of a DeepRacer track file (.npy)."
-    try:
-        is_file = Path(path.strip()).expanduser().is_file()
-    except (OSError, RuntimeError) as error:  # an unknown ~user, a folder it may not read
-        return f"{path.strip()} cannot be read ({error}); check the path."
-    if not is_file:
-        return f"{path.strip()} is not a file; check the path (→ completes it)."
-    return None
+class TrackImportDialog(PathNameDialog):
+    """A DeepRacer .npy track file and optionally the name to keep it under; the file is
+    read and checked, and the name too, before the dialog closes."""
+
+    TITLE = "Import a track"
+    BODY = (
+        "A DeepRacer track file (.npy, as the simulator's routes folder keeps them). "
+        "→ completes a path."
+    )
+    PATH_PLACEHOLDER = "path, e.g. ~/Downloads/my_track.npy"
+    NAME_PLACEHOLDER = "track name (empty: the file's name)"
+
+    def problem(self, path: str, name: str | None) -> str | None:
+        if not path:
+            return "Give the path of a DeepRacer track file (.npy)."
+        try:
+            is_file = Path(path).expanduser().is_file()
+        except (OSError, RuntimeError) as error:  # an unknown ~user, a folder it may not read
+            return f"{path} cannot be read ({error}); check the path."
+        if not is_file:
+            return f"{path} is not a file; check the path (→ completes it)."
+        problem = import_problem(Path(path).expanduser(), name)
+        return None if problem is None else sentence(in_app_words(problem))
 
 
 def _groups(infos: list[TrackInfo]) -> list[tuple[str, list[TrackInfo]]]:

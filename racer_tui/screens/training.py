@@ -174,10 +174,6 @@ class ObservationMade(Message):
 class LeaveWhileTraining(RacerModal[str | None]):
     """Quit with a training running: "stop" it, "keep" it running, or None to stay."""
 
-    DEFAULT_CSS = """
-    LeaveWhileTraining { align: center middle; }
-    """
-
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("s", "answer('stop')", "Stop it"),
         Binding("k", "answer('keep')", "Keep running"),

@@ -96,9 +96,8 @@ def import_deepracer_folder(
         )
     chosen_name = name if name is not None else root.resolve().name
     if name is None and not _usable_name(chosen_name):
-        raise ModelError(
-            f"the folder name {chosen_name!r} cannot be a model name; give one with --name."
-        )
+        problem = f"the folder name {chosen_name!r} cannot be a model name"
+        raise ModelError(f"{problem}; give one with --name.", problem=problem, fix=Fix.RENAME)
     check_model_name(chosen_name)
     notes: list[str] = []
     metadata = _read(read_model_metadata, files.model_metadata)

@@ -69,6 +69,7 @@ from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
 from sim.home import data_home
 from sim.ids import canonical_json
 from sim.names import NAME_RULE, is_valid_name
+from sim.remedies import RemedyError
 from sim.track import Track, TrackError
 
 if TYPE_CHECKING:
@@ -98,7 +99,7 @@ def models_dir() -> Path:
     return path
 
 
-class ModelError(ValueError):
+class ModelError(RemedyError):
     """A model that is missing, misnamed or unusable; one sentence saying what to do."""
 
 

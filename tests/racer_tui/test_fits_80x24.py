@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 from textual.app import App
 from textual.pilot import Pilot
+from textual.screen import ModalScreen
 from textual.widget import Widget
 from textual.widgets import DataTable, Input, TextArea
 from textual.widgets._footer import FooterKey
@@ -79,6 +80,13 @@ def cut_off(app: App[Any]) -> list[str]:
         needs, has = table.virtual_size.width, table.scrollable_content_region.width
         if needs > has:
             problems.append(f"table #{table.id} needs {needs} columns and has {has}")
+    if isinstance(screen, ModalScreen):
+        for dialog in screen.query(".dialog"):
+            region = dialog.region
+            left, right = region.x, width - region.right
+            top, bottom = region.y, app.size.height - region.bottom
+            if abs(left - right) > 1 or abs(top - bottom) > 1:
+                problems.append(f"the dialog is not centred ({region})")
     for widget in screen.query(Widget):
         # Below the bottom edge is fine: the container scrolls (and says so with its bar).
         if widget.region.width and widget.region.right > width:
@@ -107,6 +115,7 @@ PLACES: dict[str, tuple[str, Steps, str]] = {
     "garage": ("garage", keys(), "GarageScreen"),
     "delete dialog": ("garage", keys("d"), "ConfirmDialog"),
     "import dialog": ("garage", keys("i"), "ImportDialog"),
+    "track import dialog": ("tracks", keys("i"), "TrackImportDialog"),
     "export dialog": ("garage", keys("down", "x"), "InputDialog"),
     "clone dialog": ("garage", keys("c"), "InputDialog"),
     "editor car tab": ("garage", keys("e"), "ModelEditorScreen"),
@@ -123,6 +132,7 @@ PLACES: dict[str, tuple[str, Steps, str]] = {
     "nights": ("league", keys("n"), "NightsScreen"),
     "open night dialog": ("league", keys("n", "o"), "NewNightDialog"),
     "add entrant dialog": ("league", keys("n", "a"), "AddEntrantDialog"),
+    "new season dialog": ("league", keys("n", "s"), "NewSeasonDialog"),
     "projector": ("league", keys("p"), "ProjectorScreen"),
     "sync": ("league", keys("y"), "SyncScreen"),
     "help": ("garage", keys("question_mark"), "HelpScreen"),

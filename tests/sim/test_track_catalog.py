@@ -10,11 +10,13 @@ import pytest
 import yaml
 
 from sim.home import user_tracks_dir
+from sim.remedies import Fix, Note
 from sim.track import TrackError, load_track
 from sim.track_catalog import (
     TrackInfo,
     find_track_by_hash,
     find_track_info,
+    import_problem,
     import_track,
     list_tracks,
     resolve_track,
@@ -140,7 +142,7 @@ def test_an_older_import_named_like_an_official_track_is_shown_as_hidden(
     hidden = list_tracks()[-1]
 
     assert (hidden.name, hidden.kind) == ("reinvent_base", "imported")
-    assert "--name" in hidden.description
+    assert "import the file again under another name" in hidden.description
     assert resolve_track("reinvent_base").length == pytest.approx(17.71, abs=0.01)
 
 
@@ -202,6 +204,39 @@ def test_importing_twice_is_refused(deepracer_dir: Path) -> None:
 
     again = import_track(source, "reinvent-copy")
     assert again.name == "reinvent-copy"
+
+
+def test_a_taken_name_names_its_remedy_for_any_front_end(deepracer_dir: Path) -> None:
+    source = deepracer_dir / "tracks" / "reinvent_base.npy"
+    import_track(source, "club")
+    with pytest.raises(TrackError) as raised:
+        import_track(source, "club")
+    assert raised.value.fix is Fix.RENAME
+    assert raised.value.problem == "a track named 'club' is already imported"
+
+
+def test_import_problem_says_what_an_import_would_meet_and_keeps_nothing(
+    deepracer_dir: Path, tmp_path: Path
+) -> None:
+    oval = deepracer_dir / "tracks" / "Oval_track.npy"
+    assert import_problem(oval, "club") is None
+    # The shipped file under its own name: the import would say it is already here.
+    assert import_problem(deepracer_dir / "tracks" / "reinvent_base.npy") is None
+    taken = import_problem(oval, "reinvent_base")
+    assert isinstance(taken, Note) and taken.fix is Fix.RENAME
+    assert taken.problem == "'reinvent_base' is the name of an official track"
+    assert (
+        taken
+        == "'reinvent_base' is the name of an official track; choose another name with --name."
+    )
+    bad_name = import_problem(oval, "has space")
+    assert isinstance(bad_name, Note) and "letters, digits" in bad_name.problem
+    broken = tmp_path / "broken.npy"
+    broken.write_bytes(b"not a track")
+    broken_problem = import_problem(broken)
+    assert broken_problem is not None and "is not a NumPy .npy file" in broken_problem
+    assert not isinstance(broken_problem, Note)  # the file, not its name, is the problem
+    assert list(user_tracks_dir().iterdir()) == []
 
 
 def test_import_reversed_runs_clockwise(deepracer_dir: Path) -> None:

@@ -8,12 +8,11 @@ from pathlib import Path
 from textual.widgets import DataTable, Input, Select
 
 from racer_tui.app import create_app
-from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.garage import GarageScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen
 from racer_tui.screens.races import RacesScreen
-from racer_tui.screens.tracks import TracksScreen
+from racer_tui.screens.tracks import TrackImportDialog, TracksScreen
 from sim.garage.folder import open_model
 from sim.race.rules import DEFAULT_RULES
 from sim.track_catalog import list_tracks
@@ -130,11 +129,17 @@ async def test_races_list_trained_models_and_rank_the_session() -> None:
         assert replay.setup.replay is not None
 
 
+def unwrapped(text: str) -> str:
+    """Painted text without its white space: a long path wraps anywhere."""
+    return "".join(text.split())
+
+
 async def test_a_track_file_is_imported_from_the_tracks_screen(
     tmp_path: Path, deepracer_dir: Path
 ) -> None:
     """A replay or a night on a track this machine lacks says to import it: the Tracks
-    screen does that itself (i), so nobody needs the command line for it."""
+    screen does that itself (i), so nobody needs the command line for it. A file that
+    cannot be used or a name that is taken is said in the dialog, with the path kept."""
     file = tmp_path / "club_oval.npy"
     shutil.copy(deepracer_dir / "tracks" / "Oval_track.npy", file)
     broken = tmp_path / "broken.npy"
@@ -146,19 +151,41 @@ async def test_a_track_file_is_imported_from_the_tracks_screen(
         screen = app.screen
         assert isinstance(screen, TracksScreen)
         await pilot.press("i")
-        assert isinstance(app.screen, InputDialog)
-        app.screen.query_one(Input).value = str(broken)
+        dialog = app.screen
+        assert isinstance(dialog, TrackImportDialog)
+        dialog.query_one("#path", Input).value = str(broken)
         await pilot.press("enter")
         await settle(pilot)
-        assert app.screen is screen
-        assert "broken.npy" in notes.text("error") and "Traceback" not in notes.text()
+        assert app.screen is dialog  # still open, the path still there to correct
+        problem = unwrapped(painted(dialog.query_one("#problem")))
+        assert "broken.npy:isnotaNumPy.npyfile" in problem
+        assert "Traceback" not in notes.text()
+        await pilot.press("escape")
         await pilot.press("slash", *"bowtie", "enter")  # a search is on when it lands
         await settle(pilot)
         await pilot.press("i")
-        app.screen.query_one(Input).value = str(file)
+        app.screen.query_one("#path", Input).value = str(file)
         await pilot.press("enter")
         await settle(pilot)
         assert "club_oval" in [info.name for info in list_tracks()]
         assert screen.track is not None and screen.track.name == "club_oval"
         assert "club_oval" in painted(screen.query_one("#track-facts"))
         assert screen.query_one("#track-search", Input).value == ""
+        # The same file again: the name is taken. The dialog says so in the app's words
+        # (no --name: that is the command line's) and takes another name.
+        await pilot.press("i")
+        dialog = app.screen
+        assert isinstance(dialog, TrackImportDialog)
+        dialog.query_one("#path", Input).value = str(file)
+        await pilot.press("enter")
+        await settle(pilot)
+        assert app.screen is dialog
+        problem = unwrapped(painted(dialog.query_one("#problem")))
+        assert "isalreadyimported" in problem and "namefield" in problem
+        assert "--name" not in problem
+        dialog.query_one("#name", Input).value = "club_oval_2"
+        await pilot.press("enter")
+        await settle(pilot)
+        assert app.screen is screen
+        assert {"club_oval", "club_oval_2"} <= {info.name for info in list_tracks()}
+        assert screen.track is not None and screen.track.name == "club_oval_2"
