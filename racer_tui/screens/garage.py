@@ -49,7 +49,7 @@ from sim.garage.deepracer_import import BUNDLE_SUFFIX, import_model
 from sim.garage.deepracer_notes import export_notes
 from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
 from sim.garage.options import spec_of
-from sim.garage.overview import model_details, model_row
+from sim.garage.overview import listing_signature, model_details, model_row
 from sim.race.driver import Driver
 from sim.race.rules import DEFAULT_RULES
 
@@ -64,6 +64,7 @@ COLUMNS = (
     Col("best lap"),
 )
 NARROW = 120  # below this many columns the detail panel goes under the table
+WATCH_SECONDS = 2.0  # how often the Garage looks for changes made outside it
 
 
 def short_actions(row: dict[str, Any]) -> str:
@@ -78,11 +79,24 @@ def short_actions(row: dict[str, Any]) -> str:
 
 
 class ModelsLoaded(Message):
-    def __init__(self, rows: list[dict[str, Any]], select: str | None, generation: int) -> None:
+    def __init__(
+        self,
+        rows: list[dict[str, Any]],
+        select: str | None,
+        generation: int,
+        signature: tuple[tuple[object, ...], ...],
+    ) -> None:
         super().__init__()
         self.rows = rows
         self.select = select
         self.generation = generation  # a cancelled, slower read must not win
+        self.signature = signature  # what the rows were read from (`listing_signature`)
+
+
+class ListingLooked(Message):
+    def __init__(self, signature: tuple[tuple[object, ...], ...]) -> None:
+        super().__init__()
+        self.signature = signature
 
 
 class ModelDetailsLoaded(Message):
@@ -203,6 +217,7 @@ class GarageScreen(RacerScreen[None]):
         self.racer_prompt = RacerPrompt(self)
         self.job = Job()  # the last import, export, clone or delete
         self._job_fix = ""  # the key that tries the running job again, if it fails
+        self._signature: tuple[tuple[object, ...], ...] = ()  # of the rows shown
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("garage")
@@ -214,30 +229,53 @@ class GarageScreen(RacerScreen[None]):
 
     def on_mount(self) -> None:
         self.reload()
+        self.set_interval(WATCH_SECONDS, self._watch)
 
     def on_resize(self) -> None:
         self.set_class(self.size.width < NARROW, "-narrow")
 
     def on_screen_resume(self) -> None:
         if self.loaded:
-            self.reload(select=self.highlighted_name)
+            self.reload()
 
     # --- loading ---------------------------------------------------------------------------
 
     def reload(self, select: str | None = None) -> None:
-        """Read the garage again (in a worker); `select` moves the cursor to that model."""
+        """Read the garage again (in a worker); `select` moves the cursor to that model, or
+        else it stays on the model it is on when the list arrives."""
         self._generation += 1
         self._load_models(select, self._generation)
 
     @work(thread=True, exclusive=True, group="garage-list", exit_on_error=False)
     def _load_models(self, select: str | None, generation: int) -> None:
+        signature = listing_signature()  # before the rows: a change after it is seen next
         rows = [model_row(folder) for folder in list_models()]
-        self.post_message(ModelsLoaded(rows, select, generation))
+        self.post_message(ModelsLoaded(rows, select, generation, signature))
+
+    def _watch(self) -> None:
+        # A training started or ended from the command line (or the Training section), new
+        # weights or an evaluation change what the list says: it is read again when they
+        # do, while the Garage is on screen (it is read again on every return anyway).
+        if self.loaded and self.is_current and not self.workers_in("garage-list"):
+            self._read_signature()
+
+    @work(thread=True, exclusive=True, group="garage-watch", exit_on_error=False)
+    def _read_signature(self) -> None:
+        self.post_message(ListingLooked(listing_signature()))
+
+    def on_listing_looked(self, message: ListingLooked) -> None:
+        if message.signature != self._signature and not self.workers_in("garage-list"):
+            self.reload()
+
+    def workers_in(self, group: str) -> bool:
+        return any(worker.group == group and worker.is_running for worker in self.workers)
 
     def on_models_loaded(self, message: ModelsLoaded) -> None:
         if message.generation != self._generation:
             return
         self.loaded = True
+        self._signature = message.signature
+        select = message.select if message.select is not None else self.highlighted_name
         self.rows = message.rows
         cells = [
             (
@@ -263,7 +301,7 @@ class GarageScreen(RacerScreen[None]):
             )
             return
         names = [row["name"] for row in message.rows]
-        index = names.index(message.select) if message.select in names else 0
+        index = names.index(select) if select in names else 0
         table.move_cursor(row=index)
         self._load_details(names[index])
 
@@ -316,7 +354,7 @@ class GarageScreen(RacerScreen[None]):
             return None
 
     def action_reload(self) -> None:
-        self.reload(select=self.highlighted_name)
+        self.reload()
 
     def action_new_model(self) -> None:
         self.app.push_screen(ModelEditorScreen(), self._editor_closed)

@@ -487,7 +487,7 @@ class TrainingScreen(RacerScreen[None]):
                 if ended is None:
                     stderr.seek(0)
                     tail = stderr.read()[-2000:].decode("utf-8", "replace")
-                    self.apply_event(request.model, failure_from_stderr(process.returncode, tail))
+                    self._ended_silently(request.model, process.returncode, tail)
                 else:
                     # The last event is written: let the child exit before the next starts.
                     with contextlib.suppress(TimeoutError):
@@ -539,7 +539,10 @@ class TrainingScreen(RacerScreen[None]):
                     await asyncio.sleep(1.0)
                 return None
 
-            await self._follow(name, log, start, exited)
+            if await self._follow(name, log, start, exited) is None:
+                # Gone without its last event (killed, crashed): said as it is, never left
+                # looking like a run that is still going.
+                self._ended_silently(name, None, "")
         except asyncio.CancelledError:
             cancelled = True
             raise
@@ -575,13 +578,25 @@ class TrainingScreen(RacerScreen[None]):
         finally:
             waiter.cancel()
 
+    def _ended_silently(self, name: str, returncode: int | None, stderr_tail: str) -> None:
+        """A run whose process ended without writing its last event (`returncode` None: not
+        this app's child, so its exit status is unknown)."""
+        figures = self.figures.get(name)
+        if figures is not None and figures.ended is not None:
+            return  # its end is already known
+        elapsed = figures.elapsed if figures is not None and figures.started else 0.0
+        self.apply_event(name, failure_from_stderr(returncode, stderr_tail, elapsed=elapsed))
+
     def _line(self, name: str, line: bytes, *, replay: bool) -> events.Ended | None:
         try:
             event = events.decode(line.strip())
         except events.EventError:
             return None  # a stray line is skipped, never fatal
         if replay and isinstance(event, events.Episode | events.Update | events.System):
-            return None  # already read from the model's metrics and run history
+            # Already read from the model's metrics and run history; its time still says
+            # how far the run has got (an adopted run is not at 0:00).
+            self.figures.setdefault(name, TrainingFigures()).heard_at(event.elapsed)
+            return None
         self.apply_event(name, event)
         return event if isinstance(event, events.Ended) else None
 

@@ -76,6 +76,13 @@ class TrainingFigures:
         figures.version += 1
         return figures
 
+    def heard_at(self, elapsed: float) -> None:
+        """The run was last heard of `elapsed` seconds in (an event whose figures are
+        already counted)."""
+        if elapsed > self.elapsed:
+            self.elapsed = elapsed
+            self.version += 1
+
     def fold(self, event: events.Event) -> None:
         self.elapsed = max(self.elapsed, event.elapsed)
         if isinstance(event, events.Started):

@@ -487,14 +487,20 @@ def _opened(path: Path) -> ModelFolder:
 def list_models() -> list[ModelFolder]:
     """The garage's models by name (hidden temporary folders are skipped). Folders of the
     old layout are migrated; one that cannot be still lists, and says why when opened."""
-    found: list[ModelFolder] = []
-    for path in sorted(models_dir().iterdir(), key=lambda p: p.name.casefold()):
-        if not is_valid_name(path.name) or not is_model_folder(path):
-            continue
+    found = model_folders()
+    for folder in found:
         with contextlib.suppress(MigrationError):
-            migrate_folder(path)
-        found.append(ModelFolder(path))
+            migrate_folder(folder.path)
     return found
+
+
+def model_folders() -> list[ModelFolder]:
+    """The garage's model folders by name, as they are (nothing migrated: a quick look)."""
+    return [
+        ModelFolder(path)
+        for path in sorted(models_dir().iterdir(), key=lambda p: p.name.casefold())
+        if is_valid_name(path.name) and is_model_folder(path)
+    ]
 
 
 def check_new_model_name(name: str) -> Path:

@@ -7,11 +7,12 @@ wording of a model's state lives in one place.
 from __future__ import annotations
 
 from dataclasses import asdict
+from pathlib import Path
 from typing import Any
 
 from sim.action_space import ActionSpace
 from sim.deepracer_files import DeepRacerFileError, EvaluationTrial, read_evaluation_metrics
-from sim.garage.folder import ModelError, ModelFolder
+from sim.garage.folder import ModelError, ModelFolder, model_folders
 from sim.garage.summary import training_summary
 
 
@@ -21,6 +22,30 @@ def describe_actions(space: ActionSpace) -> str:
         return f"{len(space.actions)} discrete, up to {space.max_speed:g} m/s"
     (steer_low, steer_high), (speed_low, speed_high) = space.steering_range, space.speed_range
     return f"continuous {steer_low:g}..{steer_high:g} deg, {speed_low:g}..{speed_high:g} m/s"
+
+
+def listing_signature() -> tuple[tuple[object, ...], ...]:
+    """What a garage listing shows that can change outside the app showing it (a training
+    the command line starts or that ends, new weights, an evaluation, an edited car): cheap
+    enough to read every few seconds, where reading the listing itself is not."""
+    return tuple(
+        (
+            folder.name,
+            folder.is_training(),
+            _changed_at(folder.policy_file),
+            _changed_at(folder.metadata_file),
+            _changed_at(folder.training_params_file),
+            len(folder.evaluation_files()),
+        )
+        for folder in model_folders()
+    )
+
+
+def _changed_at(path: Path) -> int | None:
+    try:
+        return path.stat().st_mtime_ns
+    except OSError:
+        return None
 
 
 def model_row(folder: ModelFolder) -> dict[str, Any]:

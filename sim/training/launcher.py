@@ -66,16 +66,21 @@ def _decode(line: bytes | str) -> events.Event | None:
         return None
 
 
-def failure_from_stderr(returncode: int | None, stderr_tail: str) -> events.Ended:
-    """The ending for a child that died without writing its last event (the app uses it
-    too, for a child it adopted after a restart)."""
+def failure_from_stderr(
+    returncode: int | None, stderr_tail: str, *, elapsed: float = 0.0
+) -> events.Ended:
+    """The ending for a child that died without writing its last event, `elapsed` seconds
+    into its run as its last event said (the app uses it too)."""
     last = stderr_tail.strip().splitlines()[-1] if stderr_tail.strip() else ""
-    reason = f"the training process exited with code {returncode}"
+    if returncode is None:  # not our child: its exit status cannot be known
+        reason = "the training process ended without writing how (it was killed or crashed)"
+    else:
+        reason = f"the training process exited with code {returncode}"
     if returncode is not None and returncode < 0:
         with contextlib.suppress(ValueError):
             reason = f"the training process was killed by {signal.Signals(-returncode).name}"
     return events.Ended(
-        elapsed=0.0,
+        elapsed=elapsed,
         kind="failed",
         message=f"{reason}: {last}" if last else reason,
         total_steps=0,
@@ -175,10 +180,12 @@ class TrainingProcess:
     def events(self) -> Iterator[events.Event]:
         """Every event until the child's last one (synthesised if it died silently)."""
         assert self._popen.stdout is not None
+        elapsed = 0.0
         for line in self._popen.stdout:
             event = _decode(line)
             if event is None:
                 continue
+            elapsed = max(elapsed, event.elapsed)
             if isinstance(event, events.Ended):
                 if self.overran is not None:
                     event = overran(event, self.overran)
@@ -188,7 +195,7 @@ class TrainingProcess:
         for timer in self._timers:
             timer.cancel()
         if self.ended is None:
-            self.ended = failure_from_stderr(code, _tail(self._stderr))
+            self.ended = failure_from_stderr(code, _tail(self._stderr), elapsed=elapsed)
             if self.overran is not None:
                 self.ended = overran(self.ended, self.overran)
             yield self.ended
@@ -249,16 +256,18 @@ class AsyncTrainingProcess:
 
     async def events(self) -> AsyncIterator[events.Event]:
         assert self._process.stdout is not None
+        elapsed = 0.0
         async for line in self._process.stdout:
             event = _decode(line)
             if event is None:
                 continue
+            elapsed = max(elapsed, event.elapsed)
             if isinstance(event, events.Ended):
                 self.ended = event
             yield event
         code = await self._process.wait()
         if self.ended is None:
-            self.ended = failure_from_stderr(code, _tail(self._stderr))
+            self.ended = failure_from_stderr(code, _tail(self._stderr), elapsed=elapsed)
             yield self.ended
         self._stderr.close()
 

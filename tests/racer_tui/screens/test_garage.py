@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 from textual.widgets import DataTable, Input
@@ -16,7 +18,13 @@ from racer_tui.widgets.model_detail import ModelDetail
 from sim.garage.bundle import read_bundle
 from sim.garage.folder import list_models, open_model
 from sim.garage.options import new_model
-from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
+from tests.racer_tui.screens.tui_helpers import (
+    Notifications,
+    painted,
+    settle,
+    trained_model,
+    wait_for,
+)
 
 
 def _names() -> list[str]:
@@ -40,6 +48,41 @@ async def test_the_table_lists_models_and_the_detail_follows_the_cursor() -> Non
         await settle(pilot)
         text = painted(detail)
         assert "bob" in text and "lidar" in text
+
+
+async def test_the_list_follows_changes_made_outside_it_and_keeps_the_cursor_on_its_model() -> None:
+    new_model("ada")
+    new_model("bob")
+    app = create_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await settle(pilot)
+        garage = app.screen
+        assert isinstance(garage, GarageScreen)
+        await pilot.press("down")
+        await settle(pilot)
+        assert garage.highlighted_name == "bob"
+
+        def status_of(name: str) -> str:
+            table = garage.query_one("#models", DataTable)
+            rows = [table.get_row_at(i) for i in range(table.row_count)]
+            return next(row[1].plain for row in rows if row[0].plain == name)
+
+        # The host starts a training of ada from the command line, and someone copies a
+        # model in that sorts first: nobody presses a key in the app.
+        sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+        try:
+            state = {"state": "running", "pid": sleeper.pid, "message": "training"}
+            open_model("ada").training_state_file.write_text(json.dumps(state))
+            new_model("aaa")
+            await wait_for(pilot, lambda: status_of("ada") == "training", tries=200)
+            assert garage.highlighted_name == "bob"  # the model, not the row number
+            assert [row["name"] for row in garage.rows] == ["aaa", "ada", "bob"]
+        finally:
+            sleeper.kill()
+            sleeper.wait()
+        # The training process is gone: the list says so by itself.
+        await wait_for(pilot, lambda: status_of("ada") == "untrained", tries=200)
+        assert garage.highlighted_name == "bob"
 
 
 async def test_clone_takes_a_name_and_copies_the_model() -> None:

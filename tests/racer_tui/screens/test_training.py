@@ -235,6 +235,36 @@ async def test_a_training_left_running_is_shown_again_and_can_be_stopped(
     assert not os.path.exists(f"/proc/{sleeper.pid}/status") or sleeper.poll() is not None
 
 
+async def test_an_adopted_training_that_is_killed_says_so_instead_of_running_on(
+    sleeper: subprocess.Popen[bytes],
+) -> None:
+    # A run the command line started, 75 s in; then it is killed (out of memory, kill -9)
+    # and never writes its last event.
+    folder = new_model("ada")
+    state = {"state": "running", "pid": sleeper.pid, "message": "training"}
+    folder.training_state_file.write_text(json.dumps(state))
+    started = events.Started(0.0, "ada", "hairpin", ("vector",), 8, "scratch", 0, 5.0, 4242)
+    episode = events.Episode(75.0, 1, 0, 12.0, 40.0, None, "Off track", 90)
+    folder.training_log.write_text(events.encode(started) + "\n" + events.encode(episode) + "\n")
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        notes = Notifications(app)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        await wait_for(pilot, lambda: screen.live is not None and screen.rows != [])
+        charts = screen.query_one(TrainingCharts)
+        await wait_for(pilot, lambda: "left" in painted(charts))
+        assert "training 1:15 of 5:00" in painted(charts)
+        sleeper.kill()
+        await wait_for(pilot, lambda: screen.live is None, tries=200)
+        charts.redraw_now()
+        await pilot.pause()
+        shown = painted(charts)
+        assert "left" not in shown
+        assert "failed after 1:15" in shown  # when it was last heard of, not 0:00
+        assert "ended without writing how" in notes.text("error")
+
+
 def test_the_agents_eye_view_draws_camera_and_lidar() -> None:
     import numpy as np
 
