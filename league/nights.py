@@ -187,7 +187,10 @@ def model_spec(model: str) -> str:
 
     spec = model.strip()
     if not spec or len(spec) > MAX_MODEL_SPEC:
-        raise LeagueError("--model must name a garage model, a bundle file or `reference`.")
+        raise LeagueError(
+            "--model must name a garage model, a bundle file or `reference`.",
+            problem="the car must be a garage model, a bundle file or `reference`",
+        )
     if spec == REFERENCE_NAME:
         return spec
     if spec.endswith(BUNDLE_SUFFIX):
@@ -197,8 +200,8 @@ def model_spec(model: str) -> str:
         return str(path.resolve())
     try:
         folder = open_model(spec)
-    except ModelError as error:
-        raise LeagueError(str(error)) from None
+    except ModelError as error:  # its remedy too: the app names its own keys
+        raise LeagueError(str(error), problem=error.problem, fix=error.fix) from None
     if folder.path.parent == models_dir():
         return folder.name
     return str(folder.path.resolve())

@@ -13,6 +13,7 @@ class Fix(Enum):
     TRAIN_MODEL = "train the model"
     CHOOSE_TRACK = "choose the model's track"
     RENAME = "give it another name"
+    CHOOSE_MODEL = "choose or create a model"
 
 
 class Note(str):

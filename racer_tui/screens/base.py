@@ -33,7 +33,8 @@ APP_FIXES = {
         "press e in the Garage to choose another (i on the Tracks screen imports a DeepRacer "
         ".npy track)"
     ),
-    Fix.RENAME: "type another name in the import dialog's name field",
+    Fix.RENAME: "give another name in the dialog's name field",
+    Fix.CHOOSE_MODEL: "the Garage (1) lists your models, and n there creates one",
 }
 
 
@@ -58,8 +59,10 @@ def sentence(text: str) -> str:
 
 def error_message(error: BaseException) -> str:
     """One sentence for the racer, never a traceback."""
-    if isinstance(error, RemedyError):  # the league's, a track's: its remedy in app words
-        text = _with_app_fix(error.problem, error.fix) or str(error)
+    if isinstance(error, RemedyError):  # its remedy in the app's words, or none of the CLI's
+        text = _with_app_fix(error.problem, error.fix)
+        if text is None:
+            return sentence(error.problem) if error.problem != str(error) else sentence(str(error))
         return text[:1].upper() + text[1:]
     if isinstance(error, USER_ERRORS):
         text = str(error)

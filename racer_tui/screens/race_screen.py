@@ -21,7 +21,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Digits, Static
 
-from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.race_map import CarMarker, RaceMap
 from sim.race.driver import Driver
@@ -144,7 +144,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
                 if tick.result is not None:
                     self.result = tick.result
         except Exception as error:  # shown to the racer; the app keeps running
-            self.failure = f"The race stopped: {error}"
+            self.failure = f"The race stopped. {error_message(error)}"
 
     def _load_replay(self, replay: RaceResult) -> None:
         ticks = replay_ticks(replay)

@@ -67,6 +67,7 @@ from sim.garage.summary import (
     training_summary,
 )
 from sim.names import is_valid_name
+from sim.remedies import Fix, Note
 
 BUNDLE_FORMAT = "racer-tui-bundle"
 BUNDLE_VERSION = 1
@@ -527,8 +528,11 @@ def _known_track(params: TrainingParams, notes: list[str]) -> str:
     known = {info.name for info in list_tracks()}
     if params.world_name in known:
         return params.world_name
-    notes.append(
+    problem = (
         f"it trained on track {params.world_name!r}, which is not here: it is set up on "
-        f"{DEFAULT_TRACK}; choose another with --track."
+        f"{DEFAULT_TRACK}"
+    )
+    notes.append(
+        Note(f"{problem}; choose another with --track.", problem=problem, fix=Fix.CHOOSE_TRACK)
     )
     return DEFAULT_TRACK

@@ -69,7 +69,7 @@ from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
 from sim.home import data_home
 from sim.ids import canonical_json
 from sim.names import NAME_RULE, is_valid_name
-from sim.remedies import RemedyError
+from sim.remedies import Fix, RemedyError
 from sim.track import Track, TrackError
 
 if TYPE_CHECKING:
@@ -464,9 +464,12 @@ def open_model(name_or_path: str) -> ModelFolder:
             "folder; give a garage model name, or bring in a DeepRacer download with "
             "`racer-tui model import PATH`."
         )
+    problem = f"there is no model named {name_or_path!r}"
     raise ModelError(
-        f"there is no model named {name_or_path!r}; `racer-tui model list` shows your models "
-        "and `racer-tui model new NAME` creates one."
+        f"{problem}; `racer-tui model list` shows your models and `racer-tui model new NAME` "
+        "creates one.",
+        problem=problem,
+        fix=Fix.CHOOSE_MODEL,
     )
 
 
@@ -510,9 +513,12 @@ def check_new_model_name(name: str) -> Path:
     folded = name.casefold()
     for existing in models_dir().iterdir():
         if existing.name.casefold() == folded and not existing.name.startswith("."):
+            problem = f"a model named {existing.name!r} already exists"
             raise ModelError(
-                f"a model named {existing.name!r} already exists; choose another name or "
-                f"delete it with `racer-tui model delete {existing.name}`."
+                f"{problem}; choose another name or delete it with "
+                f"`racer-tui model delete {existing.name}`.",
+                problem=problem,
+                fix=Fix.RENAME,
             )
     return models_dir() / name
 

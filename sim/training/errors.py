@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from sim.remedies import RemedyError
 
-class PolicyError(ValueError):
+
+class PolicyError(RemedyError):
     """A policy file that cannot drive this model; one sentence saying what to do."""
 
 

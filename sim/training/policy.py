@@ -32,6 +32,7 @@ from sim.atomic import write_bytes_atomic
 from sim.deepracer_files import NEURAL_NETWORKS, ModelMetadata
 from sim.observations import VECTOR_SIZE, Observer, SensorOptions
 from sim.race.driver import DriverAction
+from sim.remedies import Fix
 from sim.simulation import TrackSimulation
 from sim.training.errors import PolicyError
 
@@ -500,9 +501,11 @@ class PolicyDriver:
 def driver_for_model(folder: ModelFolder) -> PolicyDriver:
     """The driver for a garage model's `policy.safetensors`."""
     if not folder.has_policy():
+        problem = f"model {folder.name!r} has no trained policy yet"
         raise PolicyError(
-            f"model {folder.name!r} has no trained policy yet; train it first with "
-            f"`racer-tui train {folder.name}`."
+            f"{problem}; train it first with `racer-tui train {folder.name}`.",
+            problem=problem,
+            fix=Fix.TRAIN_MODEL,
         )
     metadata = folder.metadata()
     network = load_policy(folder.policy_file, metadata)

@@ -130,7 +130,10 @@ async def test_running_a_heat_before_the_draw_says_what_to_do() -> None:
         assert "no drawn heats waiting" in notes.text("error")
         await pilot.press("a", *"ada", "enter", *"no-such-model", "enter")
         await settle(pilot)
-        assert "no-such-model" in notes.text("error")
+        errors = notes.text("error")
+        assert "There is no model named 'no-such-model'" in errors
+        assert "the Garage (1) lists your models, and n there creates one" in errors
+        assert "racer-tui" not in errors  # the command line's words stay there
 
 
 async def test_drawing_with_nobody_waiting_names_the_key_not_a_command() -> None:

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import dataclasses
+from functools import partial
 
 from textual.app import App
 from textual.pilot import Pilot
 from textual.widgets import DataTable, Static
 
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup, clock_text, countdown_text
+from sim.garage.options import new_model
 from sim.race.engine import run_race
 from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
+from sim.training.policy import driver_for_model
 
 SHORT = RaceRules(window_seconds=20.0)
 
@@ -77,6 +80,28 @@ async def test_a_recorded_race_replays_with_a_ghost() -> None:
         assert screen.paused
         assert screen.race_clock < recorded.laps[0].time_seconds
         assert table.row_count == 0
+
+
+async def test_a_race_that_cannot_start_says_why_in_the_apps_words() -> None:
+    # A night's heat for an entrant whose model lost its weights (retrained from scratch
+    # and stopped before the first save, copied without them).
+    folder = new_model("ada")
+    screen = RaceScreen(
+        RaceSetup(
+            track=resolve_track("beginner-oval"),
+            rules=SHORT,
+            racer="Ada",
+            driver=partial(driver_for_model, folder),
+        )
+    )
+    app: App[None] = App()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await app.push_screen(screen)
+        await worked_out(pilot, screen)
+        assert screen.failure is not None
+        assert "Model 'ada' has no trained policy yet" in screen.failure
+        assert "press t in the Garage to train it" in screen.failure
+        assert "racer-tui" not in screen.failure
 
 
 def test_off_tracks_past_the_limit_say_the_lap_is_lost() -> None:
