@@ -87,6 +87,9 @@ def cut_off(app: App[Any]) -> list[str]:
             top, bottom = region.y, app.size.height - region.bottom
             if abs(left - right) > 1 or abs(top - bottom) > 1:
                 problems.append(f"the dialog is not centred ({region})")
+            taller = dialog.virtual_size.height > dialog.scrollable_content_region.height
+            if taller and not dialog.show_vertical_scrollbar:
+                problems.append("the dialog's last lines are cut off, with no scroll bar")
     for widget in screen.query(Widget):
         # Below the bottom edge is fine: the container scrolls (and says so with its bar).
         if widget.region.width and widget.region.right > width:
