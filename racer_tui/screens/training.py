@@ -24,6 +24,7 @@ import signal
 import tempfile
 import time
 from dataclasses import dataclass, field
+from datetime import datetime
 from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
@@ -61,6 +62,7 @@ from sim.training.launcher import (
     STOP_TIMEOUT,
     budget_grace,
     failure_from_stderr,
+    overran,
     worker_command,
 )
 from sim.training.run_history import read_history
@@ -114,9 +116,42 @@ def load_figures(folder: ModelFolder) -> TrainingFigures:
     (empty before the first run)."""
     history = read_history(folder.training_history)
     try:
-        return TrainingFigures.from_metrics(folder.training_metrics(), history)
+        figures = TrainingFigures.from_metrics(folder.training_metrics(), history)
     except ModelError:  # unreadable metrics: the episode charts start with the next run
-        return TrainingFigures.from_metrics(None, history)
+        figures = TrainingFigures.from_metrics(None, history)
+    figures.ended, figures.ended_at = last_ending(folder)
+    return figures
+
+
+def last_ending(folder: ModelFolder) -> tuple[events.Ended | None, float | None]:
+    """How the model's last run ended and when (wall time), from the trainer's state file:
+    what the run line says after a restart. None while a run is going or before any."""
+    state = folder.training_state()
+    if state is None or folder.is_training():
+        return None, None
+    try:
+        at: float | None = datetime.fromisoformat(str(state.get("updated_at"))).timestamp()
+    except ValueError:
+        at = None
+    kind, message = str(state["state"]), str(state.get("message") or "")
+    if kind == "running":  # its process is gone without a last word
+        kind, message = "failed", "the training process ended without writing how"
+    return (
+        events.Ended(
+            elapsed=_number(state.get("elapsed_seconds")),
+            kind=kind,
+            message=message,
+            total_steps=int(_number(state.get("steps"))),
+            episodes=int(_number(state.get("episodes"))),
+            best_progress=_number(state.get("best_progress")),
+            best_lap=None,
+        ),
+        at,
+    )
+
+
+def _number(value: object) -> float:
+    return float(value) if isinstance(value, int | float) and not isinstance(value, bool) else 0.0
 
 
 def latest_observation(folder: ModelFolder) -> Observation | None:
@@ -582,8 +617,8 @@ class TrainingScreen(RacerScreen[None]):
         """A run whose process ended without writing its last event (`returncode` None: not
         this app's child, so its exit status is unknown)."""
         figures = self.figures.get(name)
-        if figures is not None and figures.ended is not None:
-            return  # its end is already known
+        if figures is not None and figures.started is not None and figures.ended is not None:
+            return  # this run's end is already known
         elapsed = figures.elapsed if figures is not None and figures.started else 0.0
         self.apply_event(name, failure_from_stderr(returncode, stderr_tail, elapsed=elapsed))
 
@@ -603,9 +638,21 @@ class TrainingScreen(RacerScreen[None]):
     def apply_event(self, name: str, event: events.Event) -> None:
         """Fold one event into `name`'s figures (the charts redraw on their calm tick).
         Tests inject events here without a process, as the log tail does."""
+        live = self.live
+        if (
+            isinstance(event, events.Ended)
+            and live is not None
+            and live.model == name
+            and live.stop_asked is not None
+            and live.minutes
+        ):
+            # The app stopped it for running past its budget: said so, as the CLI says it,
+            # not as the child saw it ("stopped on request").
+            event = overran(event, live.minutes * 60.0)
         figures = self.figures.setdefault(name, TrainingFigures())
         figures.fold(event)
-        live = self.live
+        if isinstance(event, events.Ended):
+            figures.ended_at = time.time()
         if isinstance(event, events.Started) and live is not None and live.model == name:
             live.minutes = event.max_minutes
         if isinstance(event, events.Ended):

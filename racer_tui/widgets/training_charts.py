@@ -23,6 +23,7 @@ from textual.containers import Grid, Vertical
 from textual.widgets import Static
 
 from racer_tui.widgets.chart import MAX_POINTS, LineChart
+from racer_tui.widgets.job_line import local_clock
 from sim.deepracer_files import TrainingMetrics
 from sim.training import events
 
@@ -49,6 +50,7 @@ class TrainingFigures:
     evaluation: events.Evaluation | None = None
     system: events.System | None = None
     ended: events.Ended | None = None
+    ended_at: float | None = None  # wall time of the end, when known
     elapsed: float = 0.0
     version: int = 0  # bumped by every change, so views redraw only when needed
 
@@ -88,6 +90,7 @@ class TrainingFigures:
         if isinstance(event, events.Started):
             # A new run's clock starts again (the history holds the earlier runs' times).
             self.started, self.ended, self.elapsed = event, None, event.elapsed
+            self.ended_at = None
         elif isinstance(event, events.Episode):
             self._episode(event.reward, event.progress, event.lap_time, event.status)
         elif isinstance(event, events.Update):
@@ -144,10 +147,12 @@ def run_line(figures: TrainingFigures, model: str = "") -> RenderableType:
     (DeepRacer's stop condition, so the time left is exact), or how it ended."""
     started, ended = figures.started, figures.ended
     name = Text.assemble((model, "bold"), ": ") if model else Text()
+    if ended is not None:  # this session's run, or the last one before it (its state file)
+        last = "" if started is not None else "last run "
+        when = f" at {local_clock(figures.ended_at)}" if figures.ended_at is not None else ""
+        return name + Text(f"{last}{ended.kind}{when} after {clock(ended.elapsed)}", style="dim")
     if started is None:
         return name + Text("not training now", style="dim")
-    if ended is not None:
-        return name + Text(f"{ended.kind} after {clock(ended.elapsed)}", style="dim")
     elapsed = figures.elapsed
     budget = started.max_minutes * 60.0
     if budget <= 0:

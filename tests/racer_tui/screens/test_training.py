@@ -7,11 +7,13 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
 import time
 from collections.abc import AsyncIterator, Iterator
+from datetime import UTC, datetime
 from typing import Any
 
 import pytest
@@ -127,7 +129,33 @@ async def test_the_run_clock_and_time_left_show_at_80x24() -> None:
         charts.redraw_now()
         await pilot.pause()
         text = painted(charts)
-        assert "stopped after 4:10" in text and "left" not in text
+        assert re.search(r"stopped at \d\d:\d\d after 4:10", text) and "left" not in text
+
+
+async def test_after_a_restart_the_run_line_says_how_and_when_the_last_run_ended() -> None:
+    folder = new_model("ada")
+    ended = datetime(2026, 11, 20, 21, 5, tzinfo=UTC)
+    state = {
+        "state": "finished",
+        "pid": 999_999_999,
+        "updated_at": ended.isoformat(),
+        "elapsed_seconds": 3600.0,
+        "steps": 90_000,
+        "episodes": 1200,
+        "message": "the time limit was reached",
+    }
+    folder.training_state_file.write_text(json.dumps(state))
+    app = create_app(start="training")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        charts = screen.query_one(TrainingCharts)
+        charts.redraw_now()
+        await pilot.pause()
+        at = time.strftime("%H:%M", time.localtime(ended.timestamp()))
+        assert f"ada: last run finished at {at} after 60:00" in painted(charts)
+        assert "not training now" not in painted(charts)
 
 
 async def test_charts_show_the_history_in_training_json() -> None:
@@ -261,7 +289,7 @@ async def test_an_adopted_training_that_is_killed_says_so_instead_of_running_on(
         await pilot.pause()
         shown = painted(charts)
         assert "left" not in shown
-        assert "failed after 1:15" in shown  # when it was last heard of, not 0:00
+        assert re.search(r"failed at \d\d:\d\d after 1:15", shown)  # not 0:00
         assert "ended without writing how" in notes.text("error")
 
 
