@@ -6,6 +6,8 @@ training track, so there is something moving on screen before anything has been 
 
 from __future__ import annotations
 
+import time
+from pathlib import Path
 from typing import ClassVar
 
 from rich.text import Text
@@ -14,8 +16,10 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Button, Static
+from textual.worker import Worker, WorkerState
 
-from racer_tui.screens.base import ModelAdded, RacerScreen
+from racer_tui.jobs import Job, JobState
+from racer_tui.screens.base import ModelAdded, RacerScreen, error_message
 from racer_tui.screens.dialogs import ImportDialog, ImportRequest
 from racer_tui.screens.garage import (
     ModelImported,
@@ -26,6 +30,7 @@ from racer_tui.screens.garage import (
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.widgets.demo_race import DemoRace
 from racer_tui.widgets.footer import RacerFooter
+from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.section_header import SectionHeader
 from sim.garage.options import DEFAULT_TRACK
 from sim.track_catalog import resolve_track
@@ -66,9 +71,14 @@ class WelcomeScreen(RacerScreen[None]):
                 yield Static(intro_text(), id="welcome-intro")
                 yield Button("Create your first model (n)", id="welcome-new", variant="primary")
                 yield Button("Import a DeepRacer model (i)", id="welcome-import")
+                yield JobLine(id="welcome-job")
             with Vertical(id="welcome-demo"):
                 yield DemoRace(resolve_track(DEFAULT_TRACK), id="demo")
         yield RacerFooter()
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.job = Job()  # the last import
 
     def on_mount(self) -> None:
         self.query_one("#welcome-new", Button).focus()
@@ -79,19 +89,46 @@ class WelcomeScreen(RacerScreen[None]):
 
     @on(Button.Pressed, "#welcome-import")
     def action_import_model(self) -> None:
+        if self.job.state is JobState.RUNNING:
+            self.notify(f"{self.job.what} is still running.", severity="warning", markup=False)
+            return
         self.app.push_screen(ImportDialog(), self._import_requested)
 
     def _import_requested(self, request: ImportRequest | None) -> None:
         if request is not None:
-            confirm_someone_elses_code(self, request, self._import)
+            confirm_someone_elses_code(self, request, self._begin_import)
+
+    def _begin_import(self, request: ImportRequest) -> None:
+        # A DeepRacer folder can take a few seconds: the line says it is running, and
+        # keeps a failure after its notification fades.
+        what = f"Importing {Path(request.path).expanduser().name}"
+        self._show_job(self.job.running(what, total=None, now=time.monotonic(), wall=time.time()))
+        self._import(request)
 
     @work(thread=True, group="welcome-import", exit_on_error=False)
     def _import(self, request: ImportRequest) -> None:
         self.post_message(import_into_garage(request))
 
+    def _show_job(self, job: Job) -> None:
+        self.job = job
+        self.query_one("#welcome-job", JobLine).show(job)
+
     def on_model_imported(self, message: ModelImported) -> None:
+        self._show_job(self.job.finished(f"Imported {message.name}.", wall=time.time()))
         notify_imported(self, message)
         self._model_ready(message.name)
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        worker = event.worker
+        if worker.group != "welcome-import":
+            return
+        if worker.state is WorkerState.ERROR:
+            error = worker.error
+            text = error_message(error) if error is not None else "It stopped."
+            self._show_job(self.job.failed(text, "Press i to try again.", wall=time.time()))
+        elif worker.state is WorkerState.CANCELLED:
+            self._show_job(self.job.stopped(wall=time.time()))
+        # RacerScreen's handler runs next (Textual calls one per class) and notifies.
 
     def _model_ready(self, name: str | None) -> None:
         if name is not None:
