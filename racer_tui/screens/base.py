@@ -33,7 +33,7 @@ APP_FIXES = {
         "press e in the Garage to choose another (i on the Tracks screen imports a DeepRacer "
         ".npy track)"
     ),
-    Fix.RENAME: "give another name in the dialog's name field",
+    Fix.RENAME: "choose another name",
     Fix.CHOOSE_MODEL: "the Garage (1) lists your models, and n there creates one",
 }
 

@@ -218,6 +218,7 @@ class GarageScreen(RacerScreen[None]):
         self.job = Job()  # the last import, export, clone or delete
         self._job_fix = ""  # the key that tries the running job again, if it fails
         self._signature: tuple[tuple[object, ...], ...] = ()  # of the rows shown
+        self._pending_select: str | None = None  # a model to select when the list lands
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("garage")
@@ -242,9 +243,12 @@ class GarageScreen(RacerScreen[None]):
 
     def reload(self, select: str | None = None) -> None:
         """Read the garage again (in a worker); `select` moves the cursor to that model, or
-        else it stays on the model it is on when the list arrives."""
+        else it stays on the model it is on when the list arrives. A model asked for is
+        selected even when a later reload (a return to the Garage) overtakes this one."""
+        if select is not None:
+            self._pending_select = select
         self._generation += 1
-        self._load_models(select, self._generation)
+        self._load_models(self._pending_select, self._generation)
 
     @work(thread=True, exclusive=True, group="garage-list", exit_on_error=False)
     def _load_models(self, select: str | None, generation: int) -> None:
@@ -275,6 +279,7 @@ class GarageScreen(RacerScreen[None]):
             return
         self.loaded = True
         self._signature = message.signature
+        self._pending_select = None
         select = message.select if message.select is not None else self.highlighted_name
         self.rows = message.rows
         cells = [

@@ -147,7 +147,11 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             self.failure = f"The race stopped. {error_message(error)}"
 
     def _load_replay(self, replay: RaceResult) -> None:
-        ticks = replay_ticks(replay)
+        try:
+            ticks = replay_ticks(replay)
+        except (ValueError, IndexError) as error:  # a trace from elsewhere that does not add up
+            self.failure = f"This race cannot be replayed: its trace is damaged ({error})."
+            return
         if not ticks:
             self.failure = (
                 "This race has no trace here to replay: it was stored without one, or "

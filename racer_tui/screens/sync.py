@@ -193,10 +193,13 @@ class SyncScreen(RacerScreen[bool]):
         self.pulled = 0
         self.last_summary = None
         self._show_job(Job())
-        self.query_one("#problem", Static).update("")
-        self._url_from_status = True
-        if self.status is not None:
-            self._show_status(self.status)  # the last read, until the new one lands
+        show_problem(self.query_one("#problem", Static), "")
+        url = self.query_one("#sync-url", Input)
+        url.remove_class("-problem")
+        self._url_from_status = True  # the fresh read fills the field, not the last one
+        if self.status is not None:  # the last read's store and tables until then
+            url.value = self.status.overview.store or ""
+            self._show_status(self.status)
         self.action_reload()
 
     # --- reading the status ------------------------------------------------------------
@@ -214,16 +217,16 @@ class SyncScreen(RacerScreen[bool]):
     def on_sync_status_read(self, message: SyncStatusRead) -> None:
         self.status = message.status
         self._show_keys(message.keys)
-        self._show_status(message.status)
-
-    def _show_status(self, status: SyncStatus) -> None:
-        store = status.overview.store
+        store = message.status.overview.store
         if self._url_from_status:  # as it opens; later the field is the racer's
             self._url_from_status = False
             url = self.query_one("#sync-url", Input)
             if url.value != (store or ""):
                 url.value = store or ""
             (self.query_one("#sync-now", Button) if store else url).focus()
+        self._show_status(message.status)
+
+    def _show_status(self, status: SyncStatus) -> None:
         if not self.syncing:
             self.query_one("#sync-summary", Static).update(
                 self.last_summary or self._last_runs_text()

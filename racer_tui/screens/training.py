@@ -120,6 +120,7 @@ def load_figures(folder: ModelFolder) -> TrainingFigures:
     except ModelError:  # unreadable metrics: the episode charts start with the next run
         figures = TrainingFigures.from_metrics(None, history)
     figures.ended, figures.ended_at = last_ending(folder)
+    figures.ended_before = figures.ended is not None
     return figures
 
 
@@ -129,16 +130,16 @@ def last_ending(folder: ModelFolder) -> tuple[events.Ended | None, float | None]
     state = folder.training_state()
     if state is None or folder.is_training():
         return None, None
-    try:
-        at: float | None = datetime.fromisoformat(str(state.get("updated_at"))).timestamp()
-    except ValueError:
-        at = None
+    at, since = _wall(state.get("updated_at")), _wall(state.get("started_at"))
+    # The file's elapsed_seconds counts every run of the model (it resumes); this run's
+    # own time is from its start to its last word.
+    elapsed = at - since if at is not None and since is not None and at >= since else 0.0
     kind, message = str(state["state"]), str(state.get("message") or "")
     if kind == "running":  # its process is gone without a last word
         kind, message = "failed", "the training process ended without writing how"
     return (
         events.Ended(
-            elapsed=_number(state.get("elapsed_seconds")),
+            elapsed=elapsed,
             kind=kind,
             message=message,
             total_steps=int(_number(state.get("steps"))),
@@ -148,6 +149,13 @@ def last_ending(folder: ModelFolder) -> tuple[events.Ended | None, float | None]
         ),
         at,
     )
+
+
+def _wall(value: object) -> float | None:
+    try:
+        return datetime.fromisoformat(str(value)).timestamp()
+    except ValueError:
+        return None
 
 
 def _number(value: object) -> float:
@@ -349,20 +357,25 @@ class TrainingScreen(RacerScreen[None]):
             return
         self.watched = name
         known = self.figures.get(name)
-        if known is not None:
-            self.query_one(TrainingCharts).show(known, name)
-        else:
-            self.query_one(TrainingCharts).show(TrainingFigures(), name)
+        self.query_one(TrainingCharts).show(known or TrainingFigures(), name)
+        if not self._live_run_of(name):
+            # Read again each time: a run of it may have ended (or been made from the
+            # command line) since its figures were last read.
             self._load_figures(name)
         self._observe(name)
+
+    def _live_run_of(self, name: str) -> bool:
+        return self.live is not None and self.live.model == name
 
     @work(thread=True, group="training-history", exit_on_error=False)
     def _load_figures(self, name: str) -> None:
         self.post_message(FiguresLoaded(name, load_figures(open_model(name))))
 
     def on_figures_loaded(self, message: FiguresLoaded) -> None:
-        # A live run may have started meanwhile: its figures are already the truth.
-        figures = self.figures.setdefault(message.name, message.figures)
+        if self._live_run_of(message.name) and message.name in self.figures:
+            figures = self.figures[message.name]  # a run started meanwhile: the truth now
+        else:
+            self.figures[message.name] = figures = message.figures
         if message.name == self.watched:
             self.query_one(TrainingCharts).show(figures, message.name)
 
@@ -489,6 +502,7 @@ class TrainingScreen(RacerScreen[None]):
         try:
             folder = open_model(request.model)
             figures = await asyncio.to_thread(load_figures, folder)
+            figures.starting()  # until its first event: not the last run's ending
             self.figures[request.model] = figures
             if request.model == self.watched:
                 self.query_one(TrainingCharts).show(figures, request.model)

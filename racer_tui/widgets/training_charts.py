@@ -51,6 +51,8 @@ class TrainingFigures:
     system: events.System | None = None
     ended: events.Ended | None = None
     ended_at: float | None = None  # wall time of the end, when known
+    ended_before: bool = False  # `ended` is the last run before this session's (its file)
+    is_starting: bool = False  # a run was started and has not said so yet
     elapsed: float = 0.0
     version: int = 0  # bumped by every change, so views redraw only when needed
 
@@ -78,6 +80,12 @@ class TrainingFigures:
         figures.version += 1
         return figures
 
+    def starting(self) -> None:
+        """A new run is on its way: the last one's ending is no longer the news."""
+        self.ended, self.ended_at, self.ended_before = None, None, False
+        self.is_starting = True
+        self.version += 1
+
     def heard_at(self, elapsed: float) -> None:
         """The run was last heard of `elapsed` seconds in (an event whose figures are
         already counted)."""
@@ -90,7 +98,7 @@ class TrainingFigures:
         if isinstance(event, events.Started):
             # A new run's clock starts again (the history holds the earlier runs' times).
             self.started, self.ended, self.elapsed = event, None, event.elapsed
-            self.ended_at = None
+            self.ended_at, self.ended_before, self.is_starting = None, False, False
         elif isinstance(event, events.Episode):
             self._episode(event.reward, event.progress, event.lap_time, event.status)
         elif isinstance(event, events.Update):
@@ -103,7 +111,7 @@ class TrainingFigures:
             self.system = event
             _append(self.cpu, event.cpu_percent)
         elif isinstance(event, events.Ended):
-            self.ended = event
+            self.ended, self.ended_before, self.is_starting = event, False, False
         self.version += 1
 
     def _episode(self, reward: float, progress: float, lap: float | None, status: str) -> None:
@@ -148,11 +156,13 @@ def run_line(figures: TrainingFigures, model: str = "") -> RenderableType:
     started, ended = figures.started, figures.ended
     name = Text.assemble((model, "bold"), ": ") if model else Text()
     if ended is not None:  # this session's run, or the last one before it (its state file)
-        last = "" if started is not None else "last run "
+        last = "last run " if figures.ended_before else ""
         when = f" at {local_clock(figures.ended_at)}" if figures.ended_at is not None else ""
-        return name + Text(f"{last}{ended.kind}{when} after {clock(ended.elapsed)}", style="dim")
+        took = f" after {clock(ended.elapsed)}" if ended.elapsed > 0 or not last else ""
+        return name + Text(f"{last}{ended.kind}{when}{took}", style="dim")
     if started is None:
-        return name + Text("not training now", style="dim")
+        waiting = "starting…" if figures.is_starting else "not training now"
+        return name + Text(waiting, style="dim")
     elapsed = figures.elapsed
     budget = started.max_minutes * 60.0
     if budget <= 0:

@@ -85,6 +85,25 @@ async def test_the_list_follows_changes_made_outside_it_and_keeps_the_cursor_on_
         assert garage.highlighted_name == "bob"
 
 
+async def test_a_model_made_elsewhere_is_selected_when_the_garage_shows_it() -> None:
+    # Created from the Tracks screen (n) after the Garage was shown once: the Garage's own
+    # reload on coming back must not drop the model it was asked to select.
+    new_model("ada")
+    new_model("bob")
+    app = create_app()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await settle(pilot)
+        garage = app.screen
+        assert isinstance(garage, GarageScreen) and garage.highlighted_name == "ada"
+        await pilot.press("2")
+        await settle(pilot)
+        new_model("cy")
+        await app.show_model("cy")
+        await settle(pilot)
+        assert app.screen is garage
+        assert garage.highlighted_name == "cy"
+
+
 async def test_clone_takes_a_name_and_copies_the_model() -> None:
     trained_model("ada")
     app = create_app()

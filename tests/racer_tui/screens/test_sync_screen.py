@@ -324,9 +324,15 @@ async def test_the_sync_screen_opened_again_shows_the_present_not_the_last_visit
         await settle(pilot)
         assert "Synced with" in summary(first)
         assert "Done at" in painted(first.query_one(JobLine))
-        # The racer types half a URL, thinks better of it and leaves without saving.
+        # The racer types a URL that is refused, then half of another, and leaves without
+        # saving.
         field = first.query_one("#sync-url", Input)
         field.focus()
+        field.value = "ftp://nowhere"
+        await pilot.press("enter")
+        await settle(pilot)
+        assert painted(first.query_one("#problem")).strip()  # said under the field
+        assert field.has_class("-problem") and first.query_one("#problem").has_class("-shown")
         field.value = "dir:/mnt/half-typ"
         await pilot.press("escape", "escape")
         await settle(pilot)
@@ -335,6 +341,8 @@ async def test_the_sync_screen_opened_again_shows_the_present_not_the_last_visit
         again = await open_sync(pilot)
         assert again is first
         assert again.query_one("#sync-url", Input).value == store_url
+        assert not again.query_one("#sync-url", Input).has_class("-problem")
+        assert not again.query_one("#problem").has_class("-shown")
         assert summary(again) == ""  # the last visit's sync is not news
         assert painted(again.query_one(JobLine)).strip() == ""
         shown = painted(again.query_one("#sync-summary"))

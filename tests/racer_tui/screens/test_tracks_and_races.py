@@ -181,7 +181,7 @@ async def test_a_track_file_is_imported_from_the_tracks_screen(
         await settle(pilot)
         assert app.screen is dialog
         problem = unwrapped(painted(dialog.query_one("#problem")))
-        assert "isalreadyimported" in problem and "namefield" in problem
+        assert "isalreadyimported;chooseanothername." in problem
         assert "--name" not in problem
         dialog.query_one("#name", Input).value = "club_oval_2"
         await pilot.press("enter")

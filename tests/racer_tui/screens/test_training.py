@@ -13,7 +13,7 @@ import subprocess
 import sys
 import time
 from collections.abc import AsyncIterator, Iterator
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 from typing import Any
 
 import pytest
@@ -138,8 +138,9 @@ async def test_after_a_restart_the_run_line_says_how_and_when_the_last_run_ended
     state = {
         "state": "finished",
         "pid": 999_999_999,
+        "started_at": (ended - timedelta(minutes=20)).isoformat(),
         "updated_at": ended.isoformat(),
-        "elapsed_seconds": 3600.0,
+        "elapsed_seconds": 3600.0,  # every run of the model: the last one was its third
         "steps": 90_000,
         "episodes": 1200,
         "message": "the time limit was reached",
@@ -154,7 +155,7 @@ async def test_after_a_restart_the_run_line_says_how_and_when_the_last_run_ended
         charts.redraw_now()
         await pilot.pause()
         at = time.strftime("%H:%M", time.localtime(ended.timestamp()))
-        assert f"ada: last run finished at {at} after 60:00" in painted(charts)
+        assert f"ada: last run finished at {at} after 20:00" in painted(charts)
         assert "not training now" not in painted(charts)
 
 
