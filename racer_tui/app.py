@@ -26,6 +26,7 @@ from racer_tui.long_running import (
     FREEZE_AFTER_SECONDS,
     IdleCollector,
     freeze_long_lived,
+    malloc_trim,
 )
 from racer_tui.screens.base import ModelAdded, push_kept
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
@@ -115,7 +116,7 @@ class RacerTuiApp(App[int]):
         self.long_running = long_running
         self._frozen_modes: set[str] = set()
         self._switching_to_shown_mode = False
-        self.collector = IdleCollector()
+        self.collector = IdleCollector(trim=malloc_trim())
 
     def on_mount(self) -> None:
         first = self.start_mode or self._first_mode()

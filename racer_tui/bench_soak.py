@@ -673,6 +673,7 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
             "total_pause_ms": round(gc_watch.total_ms, 1),
             "idle_collections": app.collector.collections,
             "sweeps": app.collector.sweeps,
+            "memory_returned_to_the_system": app.collector.trims,
         },
         "key_latency_ms": percentiles(all_keys),
         "section_switch_latency_ms": percentiles(runner.latencies.get("section switch", [])),
@@ -746,6 +747,11 @@ def print_report(report: dict[str, Any]) -> None:
     table.add_row(
         "of the full ones, run at idle / sweeps",
         f"{gc_figures['idle_collections']} / {gc_figures['sweeps']}",
+        "",
+    )
+    table.add_row(
+        "free memory returned to the system",
+        f"{gc_figures['memory_returned_to_the_system']} times",
         "",
     )
     for name, figures in (("key", keys), ("section switch", switches)):

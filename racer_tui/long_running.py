@@ -22,10 +22,16 @@ So, in the long-running app only:
   freed when their last reference goes; only garbage in a reference cycle stays, so every
   few minutes, at a longer pause, a sweep unfreezes everything first and collects it all.
 - Young collections (generations 0 and 1) run as Python runs them: they are short.
+- After an idle collection, at most once a minute, the C allocator is asked to give the
+  memory it holds free back to the system (`malloc_trim`, glibc only). The app's thread
+  workers each allocate from their own glibc arena, and what they free stays in it: the
+  process's resident memory crept up by 10-15 MB between trims in the soak benchmark with
+  the live objects flat.
 """
 
 from __future__ import annotations
 
+import ctypes
 import gc
 import time
 from collections.abc import Callable
@@ -49,18 +55,37 @@ SWEEP_SECONDS = 300.0
 SWEEP_IDLE_SECONDS = 3.0
 # ...unless it is this overdue: then the next ordinary pause will do.
 SWEEP_OVERDUE_SECONDS = 1200.0
+# At most this often, after an idle collection, free memory goes back to the system.
+TRIM_SECONDS = 60.0
+
+
+def malloc_trim() -> Callable[[], object] | None:
+    """glibc's `malloc_trim(0)`, or None where the C library has none (macOS, musl)."""
+    try:
+        trim = ctypes.CDLL("libc.so.6").malloc_trim
+    except (OSError, AttributeError):
+        return None
+    trim.argtypes = [ctypes.c_size_t]
+    return lambda: trim(0)
 
 
 class IdleCollector:
     """Moves full collections to the moments when input pauses."""
 
-    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self,
+        clock: Callable[[], float] = time.monotonic,
+        trim: Callable[[], object] | None = None,
+    ) -> None:
         self._clock = clock
+        self._trim = trim
         self._last_input = clock()
         self._last_sweep = clock()
+        self._last_trim = clock()
         self._threshold: tuple[int, int, int] | None = None
         self.collections = 0
         self.sweeps = 0
+        self.trims = 0
 
     def start(self) -> None:
         """Make automatic full collections rare (undone by `stop`)."""
@@ -103,6 +128,10 @@ class IdleCollector:
         if quiet:
             gc.freeze()
         self.collections += 1
+        if self._trim is not None and now - self._last_trim >= TRIM_SECONDS:
+            self._trim()
+            self._last_trim = now
+            self.trims += 1
         return True
 
 

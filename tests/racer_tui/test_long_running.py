@@ -17,7 +17,9 @@ from racer_tui.long_running import (
     SWEEP_IDLE_SECONDS,
     SWEEP_OVERDUE_SECONDS,
     SWEEP_SECONDS,
+    TRIM_SECONDS,
     IdleCollector,
+    malloc_trim,
 )
 
 
@@ -130,3 +132,26 @@ def test_an_overdue_sweep_takes_the_next_short_pause(
     clock.now += IDLE_SECONDS
     assert idle.tick(quiet=True)
     assert idle.sweeps == 1
+
+
+def test_free_memory_goes_back_to_the_system_at_most_once_a_minute() -> None:
+    clock = Clock()
+    trims: list[float] = []
+    idle = IdleCollector(clock, trim=lambda: trims.append(clock.now))
+    idle.start()
+    try:
+        for _ in range(8):  # an idle collection every 20 s for 160 s
+            clock.now += 20.0
+            promote()
+            assert idle.tick(quiet=False)
+        assert len(trims) == idle.trims == 2  # after 60 s and after 120 s, not every time
+        assert trims[1] - trims[0] >= TRIM_SECONDS
+    finally:
+        idle.stop()
+
+
+def test_the_c_library_trim_runs_where_there_is_one() -> None:
+    trim = malloc_trim()
+    if trim is None:
+        pytest.skip("this C library has no malloc_trim (not glibc)")
+    trim()  # returns memory; must not raise
