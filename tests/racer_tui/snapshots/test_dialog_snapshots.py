@@ -4,9 +4,12 @@ The delete question and the model import dialog are in test_snapshots.py."""
 
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
 from typing import Any
 
 from textual.pilot import Pilot
+from textual.widgets import Input
 
 from league.nights import new_night
 from league.store import open_league
@@ -74,3 +77,21 @@ def test_leave_while_training_question(snap_compare: Compare, size: tuple[int, i
     two_models()
     app = create_app(start="training")
     assert snap_compare(app, terminal_size=size, run_before=prepared(ask))
+
+
+@SIZES
+def test_someone_elses_reward_code_question(
+    snap_compare: Compare, size: tuple[int, int], deepracer_dir: Path, fixed_home: Path
+) -> None:
+    # A friend's DeepRacer folder brings its reward_function.py: asked before importing.
+    folder = fixed_home / "from-a-friend"
+    shutil.copytree(deepracer_dir / "drfc-model", folder)
+    (folder / "reward_function.py").write_text("def reward_function(params):\n    return 1.0\n")
+
+    async def ask(pilot: Pilot[Any]) -> None:
+        await pilot.press("i")
+        pilot.app.screen.query_one("#path", Input).value = str(folder)
+        await pilot.press("enter")
+
+    two_models()
+    assert snap_compare(create_app(), terminal_size=size, run_before=prepared(ask))
