@@ -14,6 +14,7 @@ class Fix(Enum):
     CHOOSE_TRACK = "choose the model's track"
     RENAME = "give it another name"
     CHOOSE_MODEL = "choose or create a model"
+    SET_RACER_NAME = "save this machine's racer name"
 
 
 class Note(str):

@@ -25,6 +25,7 @@ from league.trust.keys import SigningKey, fingerprint
 from league.trust.roster import FOUNDER_ID, Roster, record_digest, same_racer
 from sim.ids import new_id
 from sim.plain_names import look_alike_key
+from sim.remedies import Fix, Note
 
 MIN_FINGERPRINT_DIGITS: Final = 8
 
@@ -95,10 +96,15 @@ def propose_key(league: League, key: SigningKey) -> tuple[bool, str | None]:
     # be anybody): the organiser admits the key under it.
     racer = get_setting(league, RACER_SETTING)
     if not racer:
-        return False, (
+        problem = (
             "this machine's signing key was not proposed to the organiser because no racer "
-            "name is saved here yet; run `racer-tui racer me NAME` (or submit from the app "
-            "under your name), then sync again"
+            "name is saved here yet"
+        )
+        return False, Note(
+            f"{problem}; run `racer-tui racer me NAME` (or submit from the app under your "
+            "name), then sync again",
+            problem=problem,
+            fix=Fix.SET_RACER_NAME,
         )
     with league.transaction():
         _act(
@@ -197,10 +203,15 @@ def _refuse_look_alike(league: League, roster: Roster, name: str) -> None:
         others.add(found)
     for other in sorted(others):
         if other and not same_racer(other, name) and look_alike_key(other) == wanted:
+            problem = (
+                f"{name!r} cannot be told apart from racer {other!r} on a leaderboard; ask the "
+                "racer to choose another name and sync again"
+            )
             raise LeagueError(
                 f"{name!r} cannot be told apart from racer {other!r} on a leaderboard; ask the "
                 "racer to choose another name (`racer-tui racer me NAME`, then sync), or admit "
-                "the key under another name with --racer."
+                "the key under another name with --racer.",
+                problem=problem,
             )
 
 

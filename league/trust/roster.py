@@ -239,7 +239,8 @@ class Roster:
             proposed = self.proposed.get(signer)
             offer = (
                 f"proposed for racer {proposed}: the organiser compares the fingerprint "
-                f"with {proposed}, then runs `racer-tui racer admit {proposed}`"
+                f"with {proposed}, then admits it (a on the Sync screen, or "
+                f"`racer-tui racer admit {proposed}`)"
                 if proposed
                 else "nobody has proposed it"
             )

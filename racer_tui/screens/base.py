@@ -35,6 +35,7 @@ APP_FIXES = {
     ),
     Fix.RENAME: "choose another name",
     Fix.CHOOSE_MODEL: "the Garage (1) lists your models, and n there creates one",
+    Fix.SET_RACER_NAME: "submit a result under your name (u in the Garage), then sync again",
 }
 
 

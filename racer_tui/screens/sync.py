@@ -16,7 +16,7 @@ the command line), then synced.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 from typing import ClassVar
@@ -52,7 +52,13 @@ from league.trust import membership
 from league.trust.keys import KeyFileError, load_or_create_key
 from league.trust.membership import KeyRow
 from racer_tui.jobs import Job
-from racer_tui.screens.base import RacerScreen, error_message, notify_worker_failure, sentence
+from racer_tui.screens.base import (
+    RacerScreen,
+    error_message,
+    in_app_words,
+    notify_worker_failure,
+    sentence,
+)
 from racer_tui.screens.dialogs import ConfirmDialog, show_problem
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.job_line import JobLine
@@ -525,7 +531,10 @@ class SyncScreen(RacerScreen[bool]):
         self.pulled += summary.pulled
         self._show_job(self.job.finished(summary_headline(summary), wall=time.time()))
         # Conflicts and quarantined records are in the tables below, with their reasons.
-        lines = [summary_headline(summary), *summary_details(summary, message.notes, items=False)]
+        # Remedies by the app's keys, not the command line's commands.
+        shown = replace(summary, notes=[in_app_words(note) for note in summary.notes])
+        notes = [in_app_words(note) for note in message.notes]
+        lines = [summary_headline(summary), *summary_details(shown, notes, items=False)]
         self.last_summary = Text("\n".join(lines))  # text from the store: plain
         self.query_one("#sync-summary", Static).update(self.last_summary)
         problems = bool(summary.conflicts or summary.quarantined)

@@ -354,6 +354,26 @@ async def test_the_sync_screen_opened_again_shows_the_present_not_the_last_visit
         assert again.pulled == 0  # this visit pulled nothing new
 
 
+async def test_a_racer_with_no_name_yet_is_told_how_to_give_one_in_the_app(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, store_url: str
+) -> None:
+    on_machine(monkeypatch, tmp_path / "organiser")
+    found_here(store_url)
+    with open_league() as league:
+        sync_league(league, store_url)
+    on_machine(monkeypatch, tmp_path / "newcomer")  # has never said who they are
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        screen = await open_sync(pilot)
+        await set_store(pilot, screen, store_url)
+        await pilot.press("s")
+        await settle(pilot)
+        said = summary(screen)
+        assert "no racer name is saved here yet" in said
+        assert "submit a result under your name (u in the Garage), then sync again" in said
+        assert "racer-tui" not in said  # the command line's words stay there
+
+
 async def test_a_malformed_record_in_the_store_is_listed_as_quarantined(
     store_url: str,
 ) -> None:
