@@ -48,6 +48,7 @@ from sim.ids import canonical_json, content_hash
 from sim.names import is_valid_name
 from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
+from sim.remedies import Fix
 from sim.track import Track, TrackError
 from sim.track_catalog import resolve_track
 
@@ -265,9 +266,11 @@ def _evaluation_path(folder: Path, files: DeepRacerFiles, named: Path | None) ->
         return path
     latest = files.latest_evaluation
     if latest is None:
+        problem = f"{folder}: there are no evaluation metrics (metrics/EvaluationMetrics-*.json)"
         raise LeagueError(
-            f"{folder}: there are no evaluation metrics (metrics/EvaluationMetrics-*.json); "
-            "evaluate the model first, or name a file with --evaluation."
+            f"{problem}; evaluate the model first, or name a file with --evaluation.",
+            problem=problem,
+            fix=Fix.EVALUATE_MODEL,
         )
     return latest
 
@@ -289,14 +292,19 @@ def _track(
     try:
         found = resolve_track(params.world_name)
     except TrackError:
+        problem = f"{where}: WORLD_NAME {params.world_name!r} is not a track racer-tui knows"
         raise LeagueError(
-            f"{where}: WORLD_NAME {params.world_name!r} is not a track racer-tui knows; "
-            "name the track with --track (a track name or a DeepRacer .npy file)."
+            f"{problem}; name the track with --track (a track name or a DeepRacer .npy file).",
+            problem=problem,
+            fix=Fix.IMPORT_TRACK,
         ) from None
     if params.track_hash and params.track_hash != found.content_hash:
-        raise LeagueError(
+        problem = (
             f"{where}: the track named {params.world_name!r} is not the one this model was "
-            "set up on (its content differs); name the right track with --track."
+            "set up on (its content differs)"
+        )
+        raise LeagueError(
+            f"{problem}; name the right track with --track.", problem=problem, fix=Fix.IMPORT_TRACK
         )
     return found
 

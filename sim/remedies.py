@@ -15,6 +15,7 @@ class Fix(Enum):
     RENAME = "give it another name"
     CHOOSE_MODEL = "choose or create a model"
     SET_RACER_NAME = "save this machine's racer name"
+    EVALUATE_MODEL = "evaluate the model"
 
 
 class Note(str):

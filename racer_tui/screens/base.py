@@ -36,6 +36,7 @@ APP_FIXES = {
     Fix.RENAME: "choose another name",
     Fix.CHOOSE_MODEL: "the Garage (1) lists your models, and n there creates one",
     Fix.SET_RACER_NAME: "submit a result under your name (u in the Garage), then sync again",
+    Fix.EVALUATE_MODEL: "press v in the Garage to evaluate it",
 }
 
 

@@ -16,6 +16,7 @@ from league.submissions import submit
 from sim.action_space import discrete_grid
 from sim.deepracer_files import ModelMetadata, write_evaluation_metrics, write_training_metrics
 from sim.garage.folder import ModelFolder, create_model
+from sim.remedies import Fix
 from sim.track_catalog import resolve_track
 from tests.league.helpers import REWARD, TRACK, model_folder, training_metrics, trials
 
@@ -147,8 +148,10 @@ def test_no_evaluation_says_to_evaluate_first(tmp_path: Path) -> None:
     folder = model_folder(tmp_path)
     for path in folder.glob("metrics/EvaluationMetrics-*.json"):
         path.unlink()
-    with pytest.raises(LeagueError, match="no evaluation metrics"):
+    with pytest.raises(LeagueError, match="no evaluation metrics") as raised:
         assemble(str(folder), "ana")
+    # The command line's remedy names --evaluation; the app says its own (sim.remedies).
+    assert raised.value.fix is Fix.EVALUATE_MODEL and "--evaluation" not in raised.value.problem
 
 
 def test_a_drfc_folder_without_metadata_is_named(deepracer_dir: Path, tmp_path: Path) -> None:
