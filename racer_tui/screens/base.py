@@ -9,6 +9,7 @@ request to report it. The app keeps running either way.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import Any, Protocol, TypeVar, runtime_checkable
 
@@ -18,6 +19,8 @@ from textual.message import Message
 from textual.screen import ModalScreen, Screen
 from textual.worker import Worker, WorkerState
 
+from racer_tui.jobs import Job, JobState
+from racer_tui.widgets.job_line import JobLine
 from sim.remedies import Fix, Note, RemedyError
 from sim.reward_function import RewardFunctionError
 
@@ -81,6 +84,55 @@ def error_message(error: BaseException) -> str:
 def notify_worker_failure(screen: Screen[Any], worker: Worker[Any]) -> None:
     if worker.state is WorkerState.ERROR and worker.error is not None:
         screen.notify(error_message(worker.error), severity="error", timeout=10, markup=False)
+
+
+class ScreenJobs:
+    """A screen's own jobs (imports, exports, clones, deletes) on its job line, one at a
+    time so the line always speaks of the one that runs. A job's worker runs in `group`;
+    when it fails the line keeps the failure, with the key that tries again, after the
+    screen's notification fades."""
+
+    def __init__(self, screen: Screen[Any], line: str, group: str) -> None:
+        self._screen = screen
+        self._line = line
+        self.group = group
+        self.job = Job()
+        self._fix = ""  # the key that tries the running job again, if it fails
+
+    def busy(self) -> bool:
+        """True (and a warning) while a job runs."""
+        if self.job.state is JobState.RUNNING:
+            self._screen.notify(
+                f"{self.job.what} is still running; try again when it is done.",
+                severity="warning",
+                markup=False,
+            )
+            return True
+        return False
+
+    def begin(self, what: str, fix_key: str) -> None:
+        self._fix = f"Press {fix_key} to try again."
+        now, wall = time.monotonic(), time.time()
+        self._show(self.job.running(what, total=None, now=now, wall=wall))
+
+    def finish(self, outcome: str) -> None:
+        self._show(self.job.finished(outcome, wall=time.time()))
+
+    def worker_changed(self, worker: Worker[Any]) -> None:
+        """A worker's end, from the screen's `on_worker_state_changed` (whose base handler
+        still notifies a failure)."""
+        if worker.group != self.group:
+            return
+        if worker.state is WorkerState.ERROR:
+            error = worker.error
+            text = error_message(error) if error is not None else "It stopped."
+            self._show(self.job.failed(text, self._fix, wall=time.time()))
+        elif worker.state is WorkerState.CANCELLED:
+            self._show(self.job.stopped(wall=time.time()))  # never left "running"
+
+    def _show(self, job: Job) -> None:
+        self.job = job
+        self._screen.query_one(self._line, JobLine).show(job)
 
 
 ResultT = TypeVar("ResultT")

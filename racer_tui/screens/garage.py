@@ -10,7 +10,6 @@ failure stays readable after its notification fades.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -24,11 +23,10 @@ from textual.containers import Container
 from textual.message import Message
 from textual.screen import Screen
 from textual.widgets import DataTable
-from textual.worker import Worker, WorkerState
+from textual.worker import Worker
 
-from racer_tui.jobs import Job, JobState
 from racer_tui.model_form import check_name, taken_names
-from racer_tui.screens.base import RacerScreen, error_message, in_app_words
+from racer_tui.screens.base import RacerScreen, ScreenJobs, in_app_words
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, ImportRequest, InputDialog
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.league_submit import RacerPrompt, submit_model_from
@@ -215,8 +213,7 @@ class GarageScreen(RacerScreen[None]):
         self.loaded = False
         self._generation = 0
         self.racer_prompt = RacerPrompt(self)
-        self.job = Job()  # the last import, export, clone or delete
-        self._job_fix = ""  # the key that tries the running job again, if it fails
+        self.jobs = ScreenJobs(self, "#garage-job", "garage-change")
         self._signature: tuple[tuple[object, ...], ...] = ()  # of the rows shown
         self._pending_select: str | None = None  # a model to select when the list lands
 
@@ -384,7 +381,7 @@ class GarageScreen(RacerScreen[None]):
             self.reload(select=saved)
 
     def action_clone_model(self) -> None:
-        if self._busy():
+        if self.jobs.busy():
             return
         folder = self._highlighted_folder("clone")
         if folder is None:
@@ -409,7 +406,7 @@ class GarageScreen(RacerScreen[None]):
 
     def _clone_named(self, source: ModelFolder, name: str | None) -> None:
         if name is not None:
-            self._begin(f"Cloning {source.name} as {name}", "c")
+            self.jobs.begin(f"Cloning {source.name} as {name}", "c")
             self._clone(source, name)
 
     @work(thread=True, group="garage-change", exit_on_error=False)
@@ -419,12 +416,12 @@ class GarageScreen(RacerScreen[None]):
 
     def on_model_cloned(self, message: ModelCloned) -> None:
         done = f"Cloned {message.source} as {message.name}."
-        self._finish(done)
+        self.jobs.finish(done)
         self.notify(done, markup=False)
         self.reload(select=message.name)
 
     def action_delete_model(self) -> None:
-        if self._busy():
+        if self.jobs.busy():
             return
         folder = self._highlighted_folder("delete")
         if folder is None:
@@ -438,7 +435,7 @@ class GarageScreen(RacerScreen[None]):
 
     def _delete_confirmed(self, folder: ModelFolder, yes: bool | None) -> None:
         if yes:
-            self._begin(f"Deleting {folder.name}", "d")
+            self.jobs.begin(f"Deleting {folder.name}", "d")
             self._delete(folder)
 
     @work(thread=True, group="garage-change", exit_on_error=False)
@@ -448,12 +445,12 @@ class GarageScreen(RacerScreen[None]):
 
     def on_model_deleted(self, message: ModelDeleted) -> None:
         done = f"Deleted {message.name}."
-        self._finish(done)
+        self.jobs.finish(done)
         self.notify(done, markup=False)
         self.reload()
 
     def action_import_model(self) -> None:
-        if self._busy():
+        if self.jobs.busy():
             return
         self.app.push_screen(ImportDialog(), self._import_requested)
 
@@ -462,7 +459,7 @@ class GarageScreen(RacerScreen[None]):
             confirm_someone_elses_code(self, request, self._begin_import)
 
     def _begin_import(self, request: ImportRequest) -> None:
-        self._begin(f"Importing {Path(request.path).expanduser().name}", "i")
+        self.jobs.begin(f"Importing {Path(request.path).expanduser().name}", "i")
         self._import(request)
 
     @work(thread=True, group="garage-change", exit_on_error=False)
@@ -470,12 +467,12 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(import_into_garage(request))
 
     def on_model_imported(self, message: ModelImported) -> None:
-        self._finish(f"Imported {message.name}.")
+        self.jobs.finish(f"Imported {message.name}.")
         notify_imported(self, message)
         self.reload(select=message.name)
 
     def action_export_model(self) -> None:
-        if self._busy():
+        if self.jobs.busy():
             return
         folder = self._highlighted_folder("export")
         if folder is None:
@@ -501,7 +498,7 @@ class GarageScreen(RacerScreen[None]):
             return
         target = bundle_path(Path(path).expanduser())
         if not target.exists():
-            self._begin(f"Exporting {folder.name}", "x")
+            self.jobs.begin(f"Exporting {folder.name}", "x")
             self._export(folder, target)
             return
         dialog = ConfirmDialog(
@@ -512,7 +509,7 @@ class GarageScreen(RacerScreen[None]):
 
         def answered(replace: bool | None) -> None:
             if replace:
-                self._begin(f"Exporting {folder.name}", "x")
+                self.jobs.begin(f"Exporting {folder.name}", "x")
                 self._export(folder, target, replace=True)
 
         self.app.push_screen(dialog, answered)
@@ -523,7 +520,7 @@ class GarageScreen(RacerScreen[None]):
         self.post_message(BundleExported(folder.name, written, export_notes(folder.metadata())))
 
     def on_bundle_exported(self, message: BundleExported) -> None:
-        self._finish(f"Exported {message.name} to {message.path}.")
+        self.jobs.finish(f"Exported {message.name} to {message.path}.")
         notes = "".join(f"\n• {note}" for note in message.notes)
         self.notify(
             f"Exported {message.name} to {message.path}.{notes}",
@@ -531,41 +528,8 @@ class GarageScreen(RacerScreen[None]):
             markup=False,
         )
 
-    # --- the garage's job line ----------------------------------------------------------
-
-    def _busy(self) -> bool:
-        """One job at a time, so the line always speaks of the one that runs; True (and a
-        warning) while one runs."""
-        if self.job.state is JobState.RUNNING:
-            self.notify(
-                f"{self.job.what} is still running; try again when it is done.",
-                severity="warning",
-                markup=False,
-            )
-            return True
-        return False
-
-    def _begin(self, what: str, fix_key: str) -> None:
-        """An import, export, clone or delete starts: the line says so until it ends."""
-        self._job_fix = f"Press {fix_key} to try again."
-        now, wall = time.monotonic(), time.time()
-        self._show_job(self.job.running(what, total=None, now=now, wall=wall))
-
-    def _finish(self, outcome: str) -> None:
-        self._show_job(self.job.finished(outcome, wall=time.time()))
-
-    def _show_job(self, job: Job) -> None:
-        self.job = job
-        self.query_one("#garage-job", JobLine).show(job)
-
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
-        worker = event.worker
-        if worker.group == "garage-change" and worker.state is WorkerState.ERROR:
-            error = worker.error
-            text = error_message(error) if error is not None else "It stopped."
-            self._show_job(self.job.failed(text, self._job_fix, wall=time.time()))
-        elif worker.group == "garage-change" and worker.state is WorkerState.CANCELLED:
-            self._show_job(self.job.stopped(wall=time.time()))  # never left "running"
+        self.jobs.worker_changed(event.worker)
         # RacerScreen's handler runs next (Textual calls one per class) and notifies: the
         # line keeps the failure after the toast fades.
 

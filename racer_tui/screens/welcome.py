@@ -6,7 +6,6 @@ training track, so there is something moving on screen before anything has been 
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import ClassVar
 
@@ -16,10 +15,9 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Button, Static
-from textual.worker import Worker, WorkerState
+from textual.worker import Worker
 
-from racer_tui.jobs import Job, JobState
-from racer_tui.screens.base import ModelAdded, RacerScreen, error_message
+from racer_tui.screens.base import ModelAdded, RacerScreen, ScreenJobs
 from racer_tui.screens.dialogs import ImportDialog, ImportRequest
 from racer_tui.screens.garage import (
     ModelImported,
@@ -78,7 +76,7 @@ class WelcomeScreen(RacerScreen[None]):
 
     def __init__(self) -> None:
         super().__init__()
-        self.job = Job()  # the last import
+        self.jobs = ScreenJobs(self, "#welcome-job", "welcome-import")  # the last import
 
     def on_mount(self) -> None:
         self.query_one("#welcome-new", Button).focus()
@@ -89,8 +87,7 @@ class WelcomeScreen(RacerScreen[None]):
 
     @on(Button.Pressed, "#welcome-import")
     def action_import_model(self) -> None:
-        if self.job.state is JobState.RUNNING:
-            self.notify(f"{self.job.what} is still running.", severity="warning", markup=False)
+        if self.jobs.busy():
             return
         self.app.push_screen(ImportDialog(), self._import_requested)
 
@@ -101,34 +98,20 @@ class WelcomeScreen(RacerScreen[None]):
     def _begin_import(self, request: ImportRequest) -> None:
         # A DeepRacer folder can take a few seconds: the line says it is running, and
         # keeps a failure after its notification fades.
-        what = f"Importing {Path(request.path).expanduser().name}"
-        self._show_job(self.job.running(what, total=None, now=time.monotonic(), wall=time.time()))
+        self.jobs.begin(f"Importing {Path(request.path).expanduser().name}", "i")
         self._import(request)
 
     @work(thread=True, group="welcome-import", exit_on_error=False)
     def _import(self, request: ImportRequest) -> None:
         self.post_message(import_into_garage(request))
 
-    def _show_job(self, job: Job) -> None:
-        self.job = job
-        self.query_one("#welcome-job", JobLine).show(job)
-
     def on_model_imported(self, message: ModelImported) -> None:
-        self._show_job(self.job.finished(f"Imported {message.name}.", wall=time.time()))
+        self.jobs.finish(f"Imported {message.name}.")
         notify_imported(self, message)
         self._model_ready(message.name)
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
-        worker = event.worker
-        if worker.group != "welcome-import":
-            return
-        if worker.state is WorkerState.ERROR:
-            error = worker.error
-            text = error_message(error) if error is not None else "It stopped."
-            self._show_job(self.job.failed(text, "Press i to try again.", wall=time.time()))
-        elif worker.state is WorkerState.CANCELLED:
-            self._show_job(self.job.stopped(wall=time.time()))
-        # RacerScreen's handler runs next (Textual calls one per class) and notifies.
+        self.jobs.worker_changed(event.worker)  # RacerScreen's handler then notifies
 
     def _model_ready(self, name: str | None) -> None:
         if name is not None:

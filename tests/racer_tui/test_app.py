@@ -254,7 +254,7 @@ async def test_a_failed_import_on_the_welcome_screen_stays_said_there(tmp_path: 
         await settle(pilot)
         assert app.screen is welcome
         shown = welcome.query_one("#welcome-job", JobLine)
-        assert shown.display and shown.job is welcome.job
+        assert shown.display and shown.job is welcome.jobs.job
         line = job_text(shown.job).plain  # the whole line (the column scrolls to it)
         assert line.startswith("Failed at") and "has no model_metadata.json" in line
         assert line.endswith("Press i to try again.")

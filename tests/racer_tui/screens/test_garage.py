@@ -248,7 +248,7 @@ async def test_a_second_garage_job_waits_for_the_first() -> None:
         await settle(pilot)
         garage = app.screen
         assert isinstance(garage, GarageScreen)
-        garage._begin("Exporting ada", "x")
+        garage.jobs.begin("Exporting ada", "x")
         await pilot.press("d")
         await settle(pilot)
         assert app.screen is garage  # no delete question
