@@ -144,23 +144,28 @@ class Reopenable(Protocol):
         """Back to how the screen looks when it opens (a kept screen is opened again)."""
 
 
-def push_kept(app: App[Any], name: str, make: Callable[[], Screen[Any]]) -> None:
-    """Show the screen the app keeps under `name`, made by `make` the first time.
+def kept_screen(app: App[Any], name: str, make: Callable[[], Screen[Any]]) -> Screen[Any]:
+    """The screen the app keeps under `name`, made by `make` the first time, ready to show.
 
     Composing and laying out a screen afresh is most of what opening it costs (80-150 ms
-    at 80x24 for the help's tables or the Sync screen's, twice that beside a training), so
-    a screen opened often is made once and shown again, `reset()` first when it has one.
-    A second one is made only while the kept one is already open under another section.
+    at 80x24 for the help's tables or the Sync screen's, twice that beside a training; a
+    third of a question dialog's 50 ms), so a screen opened often is made once and shown
+    again, `reset()` first when it has one. A fresh one is made only while the kept one is
+    already open (under another section, or below a screen it opened).
     """
     if not app.is_screen_installed(name):
         app.install_screen(make(), name)
     kept = app.get_screen(name)
     if any(kept in stack for stack in app._screen_stacks.values()):
-        app.push_screen(make())
-        return
+        return make()
     if isinstance(kept, Reopenable):
         kept.reset()
-    app.push_screen(name)
+    return kept
+
+
+def push_kept(app: App[Any], name: str, make: Callable[[], Screen[Any]]) -> None:
+    """Show the screen the app keeps under `name` (see `kept_screen`)."""
+    app.push_screen(kept_screen(app, name, make))
 
 
 class ModelAdded(Message):
@@ -171,43 +176,46 @@ class ModelAdded(Message):
         self.name = name
 
 
-class RacerScreen(Screen[ResultT]):
-    """A full screen whose failed workers become error notifications, and which comes back
-    from a section switch without restyling itself when nothing its styles depend on
-    changed meanwhile."""
+def _app_style_context(screen: Screen[Any]) -> tuple[object, ...]:
+    """What the app's styling of a screen rests on: the stylesheet's version (bumped by a
+    theme or CSS change), whether the terminal has focus, the app's classes."""
+    app = screen.app
+    return (app._css_update_count, app.app_focus, tuple(sorted(app.classes)))
+
+
+class _RestyledOnlyWhenNeeded:
+    """Textual restyles every node of a screen each time it is shown, even just after
+    mounting styled them all: a third of a section switch's work, and 10-20 ms of opening
+    a dialog. A switch already restyles after a theme or CSS change (App.switch_mode
+    compares the CSS version), and a screen's own nodes restyle as their classes change,
+    hidden or not; so when the app's styling context is what it was when the screen was
+    mounted or left, showing it skips the restyle."""
 
     _style_context: tuple[object, ...] | None = None
 
-    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
-        notify_worker_failure(self, event.worker)
-
-    def _app_style_context(self) -> tuple[object, ...]:
-        """What the app's styling of this screen rests on: the stylesheet's version (bumped
-        by a theme or CSS change), whether the terminal has focus, the app's classes."""
-        app = self.app
-        return (app._css_update_count, app.app_focus, tuple(sorted(app.classes)))
-
     def _on_mount(self, event: events.Mount) -> None:
-        # Every node was styled as it was mounted, just now: the first resume need not
-        # restyle them all again (10-20 ms of opening a screen) unless the app's styling
-        # changed in between.
-        self._style_context = self._app_style_context()
+        assert isinstance(self, Screen)
+        self._style_context = _app_style_context(self)
 
     def _on_screen_suspend(self) -> None:
-        self._style_context = self._app_style_context()
+        assert isinstance(self, Screen)
+        self._style_context = _app_style_context(self)
 
     def _on_screen_resume(self, event: events.ScreenResume) -> None:
-        # Textual restyles every node of a screen each time it is shown again: a third of
-        # a section switch's work. A switch already restyles after a theme or CSS change
-        # (App.switch_mode compares the CSS version), and the screen's own nodes restyle
-        # as their classes change, hidden or not; so when the app's styling context is
-        # what it was when the screen was left, the resumed screen skips the restyle.
-        if event.refresh_styles and self._style_context == self._app_style_context():
+        assert isinstance(self, Screen)
+        if event.refresh_styles and self._style_context == _app_style_context(self):
             event.prevent_default()  # Screen's own handler, with the restyle, is not run
             Screen._on_screen_resume(self, events.ScreenResume(refresh_styles=False))
 
 
-class RacerModal(ModalScreen[ResultT]):
+class RacerScreen(_RestyledOnlyWhenNeeded, Screen[ResultT]):
+    """A full screen whose failed workers become error notifications."""
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        notify_worker_failure(self, event.worker)
+
+
+class RacerModal(_RestyledOnlyWhenNeeded, ModalScreen[ResultT]):
     """A dialog whose failed workers become error notifications."""
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:

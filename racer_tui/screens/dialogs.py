@@ -11,17 +11,17 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar, TypeVar
+from typing import Any, ClassVar, TypeVar
 
 from rich.text import Text
 from textual import on
-from textual.app import ComposeResult
+from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.suggester import Suggester
 from textual.widgets import Button, Input, Label, Static
 
-from racer_tui.screens.base import RacerModal
+from racer_tui.screens.base import RacerModal, kept_screen
 from sim.names import NAME_RULE, is_valid_name
 
 MAX_PATH_SUGGESTIONS = 200  # a huge folder is not listed in full while typing
@@ -60,7 +60,8 @@ class PathSuggester(Suggester):
 
 class ConfirmDialog(RacerModal[bool]):
     """Yes or no, with the consequence spelled out. Enter never confirms by accident:
-    the focus starts on Cancel."""
+    the focus is on Cancel each time the question is shown. Ask through `ask`, which
+    shows the app's one kept question dialog."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("y", "answer(True)", "Yes"),
@@ -75,13 +76,24 @@ class ConfirmDialog(RacerModal[bool]):
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
-            yield Label(Text(self._title), classes="dialog-title")
-            yield Static(Text(self._message), classes="dialog-body")
+            yield Label(Text(self._title), classes="dialog-title", id="question-title")
+            yield Static(Text(self._message), classes="dialog-body", id="question-body")
             with Horizontal(classes="dialog-buttons"):
                 yield Button("Cancel (n)", id="cancel")
-                yield Button(f"{self._confirm_label} (y)", id="confirm", variant="error")
+                yield Button(self._confirm_text(), id="confirm", variant="error")
 
-    def on_mount(self) -> None:
+    def _confirm_text(self) -> str:
+        return f"{self._confirm_label} (y)"
+
+    def pose(self, title: str, message: str, confirm_label: str) -> None:
+        """Ask this question next time the dialog is shown."""
+        self._title, self._message, self._confirm_label = title, message, confirm_label
+        if self.is_mounted:  # a kept dialog shows its new question; a new one composes it
+            self.query_one("#question-title", Label).update(Text(title))
+            self.query_one("#question-body", Static).update(Text(message))
+            self.query_one("#confirm", Button).label = self._confirm_text()
+
+    def on_screen_resume(self) -> None:
         self.query_one("#cancel", Button).focus()
 
     def action_answer(self, answer: bool) -> None:
@@ -94,6 +106,25 @@ class ConfirmDialog(RacerModal[bool]):
     @on(Button.Pressed, "#cancel")
     def _cancel(self) -> None:
         self.dismiss(False)
+
+
+QUESTION_SCREEN = "question"
+
+
+def ask(
+    app: App[Any],
+    title: str,
+    message: str,
+    answered: Callable[[bool | None], None],
+    *,
+    confirm_label: str = "Delete",
+) -> None:
+    """Ask a yes-or-no question in the app's kept question dialog; `answered` gets the
+    answer (True for yes) once the racer gives it."""
+    dialog = kept_screen(app, QUESTION_SCREEN, lambda: ConfirmDialog(title, message))
+    assert isinstance(dialog, ConfirmDialog)
+    dialog.pose(title, message, confirm_label)
+    app.push_screen(dialog, answered)
 
 
 RequestT = TypeVar("RequestT")

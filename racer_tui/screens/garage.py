@@ -27,7 +27,7 @@ from textual.worker import Worker
 
 from racer_tui.model_form import check_name, taken_names
 from racer_tui.screens.base import RacerScreen, ScreenJobs, in_app_words
-from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, ImportRequest, InputDialog
+from racer_tui.screens.dialogs import ImportDialog, ImportRequest, InputDialog, ask
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.league_submit import RacerPrompt, submit_model_from
 from racer_tui.screens.model_editor import ModelEditorScreen
@@ -155,19 +155,20 @@ def confirm_someone_elses_code(
     if not source.is_dir() or locate_files(source).reward_function is None:
         then(request)
         return
-    dialog = ConfirmDialog(
-        f"Import {source.name} with its reward function?",
-        "The folder's reward_function.py is code someone wrote. Importing only reads it; "
-        "training this model, or Check (ctrl+r) in the editor, runs it with your rights. If "
-        "it is not yours, read it first (e, Reward function tab) before you run it.",
-        confirm_label="Import",
-    )
 
     def answered(yes: bool | None) -> None:
         if yes:
             then(request)
 
-    screen.app.push_screen(dialog, answered)
+    ask(
+        screen.app,
+        f"Import {source.name} with its reward function?",
+        "The folder's reward_function.py is code someone wrote. Importing only reads it; "
+        "training this model, or Check (ctrl+r) in the editor, runs it with your rights. If "
+        "it is not yours, read it first (e, Reward function tab) before you run it.",
+        answered,
+        confirm_label="Import",
+    )
 
 
 def notify_imported(screen: Screen[Any], message: ModelImported) -> None:
@@ -426,12 +427,13 @@ class GarageScreen(RacerScreen[None]):
         folder = self._highlighted_folder("delete")
         if folder is None:
             return
-        dialog = ConfirmDialog(
+        ask(
+            self.app,
             f"Delete {folder.name}?",
             f"This deletes the folder {folder.path} with its policy, checkpoints, metrics and "
             "reward function. It cannot be undone; export a bundle first to keep a copy.",
+            partial(self._delete_confirmed, folder),
         )
-        self.app.push_screen(dialog, partial(self._delete_confirmed, folder))
 
     def _delete_confirmed(self, folder: ModelFolder, yes: bool | None) -> None:
         if yes:
@@ -501,18 +503,19 @@ class GarageScreen(RacerScreen[None]):
             self.jobs.begin(f"Exporting {folder.name}", "x")
             self._export(folder, target)
             return
-        dialog = ConfirmDialog(
-            f"Replace {target.name}?",
-            f"{target} already exists. Replacing it loses the model bundle it holds now.",
-            confirm_label="Replace",
-        )
 
         def answered(replace: bool | None) -> None:
             if replace:
                 self.jobs.begin(f"Exporting {folder.name}", "x")
                 self._export(folder, target, replace=True)
 
-        self.app.push_screen(dialog, answered)
+        ask(
+            self.app,
+            f"Replace {target.name}?",
+            f"{target} already exists. Replacing it loses the model bundle it holds now.",
+            answered,
+            confirm_label="Replace",
+        )
 
     @work(thread=True, group="garage-change", exit_on_error=False)
     def _export(self, folder: ModelFolder, path: Path, *, replace: bool = False) -> None:
@@ -601,11 +604,10 @@ class GarageScreen(RacerScreen[None]):
             if answer:
                 submit_model_from(self, self.racer_prompt, folder.name, allow_stale=True)
 
-        self.app.push_screen(
-            ConfirmDialog(
-                "Submit an old evaluation?",
-                f"{stale}. Press v to evaluate it again, or submit this evaluation anyway.",
-                confirm_label="Submit anyway",
-            ),
+        ask(
+            self.app,
+            "Submit an old evaluation?",
+            f"{stale}. Press v to evaluate it again, or submit this evaluation anyway.",
             confirmed,
+            confirm_label="Submit anyway",
         )

@@ -56,7 +56,7 @@ from racer_tui.model_form import (
 )
 from racer_tui.reward_map_text import map_text
 from racer_tui.screens.base import RacerScreen
-from racer_tui.screens.dialogs import ConfirmDialog
+from racer_tui.screens.dialogs import ask
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.table_fill import FittedTable, fill_table
@@ -558,13 +558,14 @@ class ModelEditorScreen(RacerScreen[str | None]):
         if editor.text == source:
             return
         if editor.text.strip() and editor.text not in {template_source(t) for t in TEMPLATES}:
-            dialog = ConfirmDialog(
+            ask(
+                self.app,
                 "Replace the reward function?",
                 f"The editor holds your own reward function; loading the {name} template "
                 "replaces it.",
+                lambda yes: self._load_template(source) if yes else None,
                 confirm_label="Replace",
             )
-            self.app.push_screen(dialog, lambda yes: self._load_template(source) if yes else None)
             return
         self._load_template(source)
 
@@ -701,12 +702,13 @@ class ModelEditorScreen(RacerScreen[str | None]):
 
     def action_cancel(self) -> None:
         if self.initial is not None and self.values() != self.initial:
-            dialog = ConfirmDialog(
+            ask(
+                self.app,
                 "Discard your changes?",
                 "The form has changes that are not saved.",
+                self._discard_confirmed,
                 confirm_label="Discard",
             )
-            self.app.push_screen(dialog, self._discard_confirmed)
             return
         self.dismiss(None)
 

@@ -58,7 +58,7 @@ from league.seasons import (
 from league.store import League, open_league
 from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.base import RacerScreen
-from racer_tui.screens.dialogs import ConfirmDialog, FormDialog, PathSuggester, show_problem
+from racer_tui.screens.dialogs import FormDialog, PathSuggester, ask, show_problem
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
@@ -662,13 +662,14 @@ class NightsScreen(RacerScreen[None]):
             if waiting
             else ""
         )
-        dialog = ConfirmDialog(
+        ask(
+            self.app,
             f"Close {night.name}?",
             "Closing makes the standings final and adds the points to the season; no more "
             f"entrants, draws or heats.{extra}",
+            partial(self._close_confirmed, night, bool(waiting)),
             confirm_label="Close night",
         )
-        self.app.push_screen(dialog, partial(self._close_confirmed, night, bool(waiting)))
 
     def _close_confirmed(self, night: Night, force: bool, yes: bool | None) -> None:
         if yes:

@@ -59,7 +59,7 @@ from racer_tui.screens.base import (
     notify_worker_failure,
     sentence,
 )
-from racer_tui.screens.dialogs import ConfirmDialog, show_problem
+from racer_tui.screens.dialogs import ask, show_problem
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.section_header import SectionHeader
@@ -349,14 +349,15 @@ class SyncScreen(RacerScreen[bool]):
         if not self.keys.waiting or not 0 <= table.cursor_row < len(self.keys.waiting):
             return
         row = self.keys.waiting[table.cursor_row]
-        dialog = ConfirmDialog(
+        ask(
+            self.app,
             f"Admit {row.racer}'s key {row.fingerprint}?",
             f"Ask {row.racer} to read out the fingerprint on their own Sync screen first: an "
             f"admitted key's results reach every leaderboard as {row.racer}'s. What it "
             "signed so far is let in now, and the admission goes out with the next sync.",
+            partial(self._admit_answered, row),
             confirm_label="Admit",
         )
-        self.app.push_screen(dialog, partial(self._admit_answered, row))
 
     def _admit_answered(self, row: KeyRow, yes: bool | None) -> None:
         if yes:
@@ -487,14 +488,15 @@ class SyncScreen(RacerScreen[bool]):
             if folder_missing
             else "There is no racer-tui store there yet. "
         )
-        dialog = ConfirmDialog(
+        ask(
+            self.app,
             f"Set up a store at {url}?",
             f"{where}Setting one up makes it ready for the whole league (as `racer-tui sync "
             "init` does), then this league syncs with it; every other racer then sets the "
             "same URL here and presses s.",
+            partial(self._set_up_answered, url),
             confirm_label="Set up and sync",
         )
-        self.app.push_screen(dialog, partial(self._set_up_answered, url))
 
     def _set_up_answered(self, url: str, yes: bool | None) -> None:
         if not yes:

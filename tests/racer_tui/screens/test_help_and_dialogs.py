@@ -1,15 +1,19 @@
-"""Help rows come from BINDINGS; the path field completes like a shell."""
+"""Help rows come from BINDINGS; the path field completes like a shell; the kept question
+dialog asks each question afresh."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import ClassVar
 
+from textual.app import App
 from textual.binding import Binding, BindingType
+from textual.widgets import Button
 from textual.screen import Screen
 
-from racer_tui.screens.dialogs import PathSuggester
+from racer_tui.screens.dialogs import ConfirmDialog, PathSuggester, ask
 from racer_tui.screens.help import binding_topics, declared_bindings, key_rows, topic_table
+from tests.racer_tui.screens.tui_helpers import painted, settle
 
 
 class Base(Screen[None]):
@@ -55,3 +59,42 @@ async def test_path_suggester_completes_the_last_part(tmp_path: Path) -> None:
     assert await suggester.get_suggestion(str(tmp_path / "no")) == f"{tmp_path}/notes.txt"
     assert await suggester.get_suggestion(str(tmp_path / "zzz")) is None
     assert await suggester.get_suggestion(str(tmp_path / "missing" / "x")) is None
+
+
+async def test_the_kept_question_dialog_asks_each_question_afresh() -> None:
+    """One dialog is kept for every yes-or-no question: the second question shows its own
+    words and button, starts on Cancel again even after the last one was left on the
+    confirm button, and its answer goes to the second asker only."""
+    answers: list[tuple[str, bool | None]] = []
+    app: App[None] = App()
+    async with app.run_test(size=(80, 24)) as pilot:
+        ask(app, "Delete ada?", "Gone for good.", lambda yes: answers.append(("ada", yes)))
+        await settle(pilot)
+        first = app.screen
+        assert isinstance(first, ConfirmDialog)
+        await pilot.press("tab")  # onto the confirm button, then answer no with Esc
+        assert app.screen.focused is first.query_one("#confirm", Button)
+        await pilot.press("escape")
+        await settle(pilot)
+        ask(
+            app,
+            "Replace bob.racer-bundle?",
+            "It exists.",
+            lambda yes: answers.append(("bob", yes)),
+            confirm_label="Replace",
+        )
+        await settle(pilot)
+        assert app.screen is first  # the same dialog, not composed again
+        text = painted(app.screen)
+        assert "Replace bob.racer-bundle?" in text and "It exists." in text
+        assert "Replace (y)" in text and "Delete" not in text and "ada" not in text
+        assert app.screen.focused is first.query_one("#cancel", Button)
+        await pilot.press("enter")  # Enter on Cancel: no
+        await settle(pilot)
+        assert answers == [("ada", False), ("bob", False)]
+        ask(app, "Delete cy?", "Gone.", lambda yes: answers.append(("cy", yes)))
+        await settle(pilot)
+        await pilot.press("y")
+        await settle(pilot)
+        assert answers[-1] == ("cy", True)
+        assert not isinstance(app.screen, ConfirmDialog)
