@@ -26,6 +26,7 @@ from racer_tui.long_running import (
     FREEZE_AFTER_SECONDS,
     IdleCollector,
     freeze_long_lived,
+    limit_malloc_arenas,
     malloc_trim,
 )
 from racer_tui.screens.base import ModelAdded, push_kept
@@ -117,6 +118,8 @@ class RacerTuiApp(App[int]):
         self._frozen_modes: set[str] = set()
         self._switching_to_shown_mode = False
         self.collector = IdleCollector(trim=malloc_trim())
+        if long_running:
+            limit_malloc_arenas()  # before the app starts its worker threads
 
     def on_mount(self) -> None:
         first = self.start_mode or self._first_mode()

@@ -22,11 +22,13 @@ So, in the long-running app only:
   freed when their last reference goes; only garbage in a reference cycle stays, so every
   few minutes, at a longer pause, a sweep unfreezes everything first and collects it all.
 - Young collections (generations 0 and 1) run as Python runs them: they are short.
-- After an idle collection, at most once a minute, the C allocator is asked to give the
-  memory it holds free back to the system (`malloc_trim`, glibc only). The app's thread
-  workers each allocate from their own glibc arena, and what they free stays in it: the
-  process's resident memory crept up by 10-15 MB between trims in the soak benchmark with
-  the live objects flat.
+- While input pauses, at most every `TRIM_SECONDS`, the C allocator is asked to give the
+  memory it holds free back to the system (`malloc_trim`, glibc only; 0.4-3 ms in an app
+  of 250 MB). The app's thread workers (a heat's simulation, a sync) free what they built
+  into the allocator, not the system: the process's resident memory crept up by 10-15 MB
+  between trims in the soak benchmark with the live objects flat. For the same reason the
+  long-running app lets glibc keep at most `MALLOC_ARENAS` arenas (`limit_malloc_arenas`):
+  by default every thread may get its own, each holding its own free memory.
 """
 
 from __future__ import annotations
@@ -55,8 +57,12 @@ SWEEP_SECONDS = 300.0
 SWEEP_IDLE_SECONDS = 3.0
 # ...unless it is this overdue: then the next ordinary pause will do.
 SWEEP_OVERDUE_SECONDS = 1200.0
-# At most this often, after an idle collection, free memory goes back to the system.
-TRIM_SECONDS = 60.0
+# At most this often, while input pauses, free memory goes back to the system.
+TRIM_SECONDS = 10.0
+# glibc's allocator arenas for the long-running app: the main thread's and one shared by
+# the worker threads (glibc's default allows eight per core).
+MALLOC_ARENAS = 2
+_M_ARENA_MAX = -8  # glibc's mallopt parameter number for the arena limit
 
 
 def malloc_trim() -> Callable[[], object] | None:
@@ -67,6 +73,17 @@ def malloc_trim() -> Callable[[], object] | None:
         return None
     trim.argtypes = [ctypes.c_size_t]
     return lambda: trim(0)
+
+
+def limit_malloc_arenas(arenas: int = MALLOC_ARENAS) -> bool:
+    """Let glibc's allocator keep at most `arenas` arenas; False where it cannot (not
+    glibc). Arenas already made stay; call it before the app starts its threads."""
+    try:
+        mallopt = ctypes.CDLL("libc.so.6").mallopt
+    except (OSError, AttributeError):
+        return False
+    mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
+    return bool(mallopt(_M_ARENA_MAX, arenas))
 
 
 class IdleCollector:
@@ -104,7 +121,8 @@ class IdleCollector:
         self._last_input = self._clock()
 
     def tick(self, *, quiet: bool, keys_waiting: bool = False) -> bool:
-        """Run a full collection if input has paused and one is due; True if it ran.
+        """Run a full collection if input has paused and one is due, and return free
+        memory to the system if that is due; True if a collection ran.
         `quiet`: only the sections are open, so what survives may be frozen.
         `keys_waiting`: input has arrived that the app has not handled yet."""
         if self._threshold is None or keys_waiting:
@@ -113,6 +131,14 @@ class IdleCollector:
         paused = now - self._last_input
         if paused < IDLE_SECONDS:
             return False
+        collected = self._collect_if_due(now, paused, quiet=quiet)
+        if self._trim is not None and now - self._last_trim >= TRIM_SECONDS:
+            self._trim()
+            self._last_trim = now
+            self.trims += 1
+        return collected
+
+    def _collect_if_due(self, now: float, paused: float, *, quiet: bool) -> bool:
         since_sweep = now - self._last_sweep
         sweep = quiet and (
             (since_sweep >= SWEEP_SECONDS and paused >= SWEEP_IDLE_SECONDS)
@@ -128,10 +154,6 @@ class IdleCollector:
         if quiet:
             gc.freeze()
         self.collections += 1
-        if self._trim is not None and now - self._last_trim >= TRIM_SECONDS:
-            self._trim()
-            self._last_trim = now
-            self.trims += 1
         return True
 
 

@@ -5,6 +5,7 @@ garbage that was frozen."""
 from __future__ import annotations
 
 import gc
+import itertools
 import weakref
 from collections.abc import Iterator
 
@@ -19,6 +20,7 @@ from racer_tui.long_running import (
     SWEEP_SECONDS,
     TRIM_SECONDS,
     IdleCollector,
+    limit_malloc_arenas,
     malloc_trim,
 )
 
@@ -134,20 +136,34 @@ def test_an_overdue_sweep_takes_the_next_short_pause(
     assert idle.sweeps == 1
 
 
-def test_free_memory_goes_back_to_the_system_at_most_once_a_minute() -> None:
+def test_free_memory_goes_back_to_the_system_while_input_pauses_not_on_every_tick() -> None:
     clock = Clock()
     trims: list[float] = []
     idle = IdleCollector(clock, trim=lambda: trims.append(clock.now))
     idle.start()
     try:
-        for _ in range(8):  # an idle collection every 20 s for 160 s
-            clock.now += 20.0
-            promote()
-            assert idle.tick(quiet=False)
-        assert len(trims) == idle.trims == 2  # after 60 s and after 120 s, not every time
-        assert trims[1] - trims[0] >= TRIM_SECONDS
+        for _ in range(16):  # a pause every 5 s for 80 s; nothing for the collector to do
+            clock.now += 5.0
+            idle.tick(quiet=False)
+        assert len(trims) == idle.trims == 8  # every other pause, not every one
+        assert all(b - a >= TRIM_SECONDS for a, b in itertools.pairwise(trims))
+        clock.now += 60.0
+        idle.input_seen()  # a key just now: no trim until input pauses again
+        idle.tick(quiet=False)
+        assert idle.trims == 8
+        clock.now += IDLE_SECONDS
+        idle.tick(quiet=False, keys_waiting=True)
+        assert idle.trims == 8
+        idle.tick(quiet=False)
+        assert idle.trims == 9
     finally:
         idle.stop()
+
+
+def test_the_c_library_arena_limit_is_accepted_where_there_is_one() -> None:
+    if malloc_trim() is None:
+        pytest.skip("this C library is not glibc")
+    assert limit_malloc_arenas()
 
 
 def test_the_c_library_trim_runs_where_there_is_one() -> None:

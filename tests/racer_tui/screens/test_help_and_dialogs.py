@@ -8,8 +8,8 @@ from typing import ClassVar
 
 from textual.app import App
 from textual.binding import Binding, BindingType
-from textual.widgets import Button
 from textual.screen import Screen
+from textual.widgets import Button
 
 from racer_tui.screens.dialogs import ConfirmDialog, PathSuggester, ask
 from racer_tui.screens.help import binding_topics, declared_bindings, key_rows, topic_table
