@@ -25,6 +25,7 @@ from racer_tui.long_running import (
     CHECK_SECONDS,
     FREEZE_AFTER_SECONDS,
     IdleCollector,
+    forget_removed_widgets_styles,
     freeze_long_lived,
     limit_malloc_arenas,
     malloc_trim,
@@ -117,7 +118,7 @@ class RacerTuiApp(App[int]):
         self.long_running = long_running
         self._frozen_modes: set[str] = set()
         self._switching_to_shown_mode = False
-        self.collector = IdleCollector(trim=malloc_trim())
+        self.collector = IdleCollector(trim=malloc_trim(), forget=forget_removed_widgets_styles)
         if long_running:
             limit_malloc_arenas()  # before the app starts its worker threads
 

@@ -75,3 +75,10 @@ class Job:
         elapsed = now - self.started
         left = elapsed * (1.0 - fraction) / fraction
         return left if math.isfinite(left) else None
+
+
+def sentence(text: str) -> str:
+    """A library's or a job's message as a sentence: capital first, full stop last."""
+    text = text.strip()
+    text = text[:1].upper() + text[1:]
+    return text if not text or text.endswith((".", "!", "?")) else text + "."

@@ -22,6 +22,10 @@ So, in the long-running app only:
   freed when their last reference goes; only garbage in a reference cycle stays, so every
   few minutes, at a longer pause, a sweep unfreezes everything first and collects it all.
 - Young collections (generations 0 and 1) run as Python runs them: they are short.
+- Before an idle collection, Textual's memo of background styles is emptied
+  (`forget_removed_widgets_styles`): it keeps the rendered lines of up to 1,024 widgets long
+  removed, about 20 MB once a league night's first 18 heats have opened and closed their
+  race views.
 - While input pauses, at most every `TRIM_SECONDS`, the C allocator is asked to give the
   memory it holds free back to the system (`malloc_trim`, glibc only; 0.4-3 ms in an app
   of 250 MB). The app's thread workers (a heat's simulation, a sync) free what they built
@@ -37,6 +41,8 @@ import ctypes
 import gc
 import time
 from collections.abc import Callable
+
+from textual._styles_cache import StylesCache
 
 # Seconds after a section's first visit before what it built is frozen out of garbage
 # collection (its data loads in workers first).
@@ -86,6 +92,19 @@ def limit_malloc_arenas(arenas: int = MALLOC_ARENAS) -> bool:
     return bool(mallopt(_M_ARENA_MAX, arenas))
 
 
+def forget_removed_widgets_styles() -> None:
+    """Let removed widgets' rendered lines go.
+
+    Textual (8.2.8) memoises `StylesCache.get_inner_outer` with an `lru_cache(1024)` on the
+    method, so each entry's key holds the `StylesCache` it was called on (`self`), and with
+    it the rendered lines of its widget long after the widget was removed
+    (Textualize/textual#6665, open). Every race view, dialog and table row that is built
+    and dropped adds entries until 1,024 widgets' lines are pinned. Emptying the memo frees
+    them; widgets still on screen refill it with two small styles each as they next render.
+    """
+    StylesCache.get_inner_outer.cache_clear()
+
+
 class IdleCollector:
     """Moves full collections to the moments when input pauses."""
 
@@ -93,9 +112,13 @@ class IdleCollector:
         self,
         clock: Callable[[], float] = time.monotonic,
         trim: Callable[[], object] | None = None,
+        forget: Callable[[], object] | None = None,
     ) -> None:
+        """`trim` returns free memory to the system; `forget` drops memos that would keep
+        garbage alive, just before an idle collection."""
         self._clock = clock
         self._trim = trim
+        self._forget = forget
         self._last_input = clock()
         self._last_sweep = clock()
         self._last_trim = clock()
@@ -150,6 +173,8 @@ class IdleCollector:
             gc.unfreeze()
             self._last_sweep = now
             self.sweeps += 1
+        if self._forget is not None:
+            self._forget()
         gc.collect()
         if quiet:
             gc.freeze()

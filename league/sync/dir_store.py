@@ -162,10 +162,15 @@ class DirStore:
 
     def _check_ready(self) -> None:
         if not self.root.is_dir():
-            missing = StoreFolderMissingError if self.root.parent.is_dir() else StoreUnavailable
-            raise missing(
-                f"the shared folder {self.root} is not there: check that the drive or synced "
-                "folder is connected, or create the store with `racer-tui sync init`"
+            if self.root.parent.is_dir():
+                raise StoreFolderMissingError(
+                    f"the shared folder {self.root} is not there: check that the drive or "
+                    "synced folder is connected, or create the store with `racer-tui sync init`"
+                )
+            # Not even the folder it would be made in: nothing can set a store up there.
+            raise StoreUnavailable(
+                f"the shared folder {self.root} is not there, nor {self.root.parent}: check "
+                "that the drive or synced folder is connected and that the path is right"
             )
         marker = self.root / MARKER_NAME
         try:

@@ -19,7 +19,7 @@ from textual.message import Message
 from textual.screen import ModalScreen, Screen
 from textual.worker import Worker, WorkerState
 
-from racer_tui.jobs import Job, JobState
+from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.job_line import JobLine
 from sim.remedies import Fix, Note, RemedyError
 from sim.reward_function import RewardFunctionError
@@ -54,12 +54,6 @@ def in_app_words(note: str) -> str:
 def _with_app_fix(problem: str, fix: Fix | None) -> str | None:
     """The problem with the app's own remedy, or None when the app offers none."""
     return f"{problem}; {APP_FIXES[fix]}." if fix in APP_FIXES else None
-
-
-def sentence(text: str) -> str:
-    """A library message as a sentence: capital first, full stop last."""
-    text = text[:1].upper() + text[1:]
-    return text if text.endswith((".", "!", "?")) else text + "."
 
 
 def error_message(error: BaseException) -> str:

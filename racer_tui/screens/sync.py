@@ -51,13 +51,12 @@ from league.sync.status import (
 from league.trust import membership
 from league.trust.keys import KeyFileError, load_or_create_key
 from league.trust.membership import KeyRow
-from racer_tui.jobs import Job
+from racer_tui.jobs import Job, sentence
 from racer_tui.screens.base import (
     RacerScreen,
     error_message,
     in_app_words,
     notify_worker_failure,
-    sentence,
 )
 from racer_tui.screens.dialogs import ask, show_problem
 from racer_tui.widgets.footer import RacerFooter
@@ -491,9 +490,9 @@ class SyncScreen(RacerScreen[bool]):
         ask(
             self.app,
             f"Set up a store at {url}?",
-            f"{where}Setting one up makes it ready for the whole league (as `racer-tui sync "
-            "init` does), then this league syncs with it; every other racer then sets the "
-            "same URL here and presses s.",
+            f"{where}Setting one up makes it ready for the whole league, with your key as "
+            "its organiser's, then this league syncs with it; every other racer then sets "
+            "the same URL here and presses s.",
             partial(self._set_up_answered, url),
             confirm_label="Set up and sync",
         )

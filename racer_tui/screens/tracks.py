@@ -19,7 +19,8 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import DataTable, Input, Static
 
-from racer_tui.screens.base import ModelAdded, RacerScreen, in_app_words, sentence
+from racer_tui.jobs import sentence
+from racer_tui.screens.base import ModelAdded, RacerScreen, in_app_words
 from racer_tui.screens.dialogs import ImportRequest, PathNameDialog
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup

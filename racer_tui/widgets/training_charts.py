@@ -22,6 +22,7 @@ from textual.app import ComposeResult
 from textual.containers import Grid, Vertical
 from textual.widgets import Static
 
+from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.chart import MAX_POINTS, LineChart
 from racer_tui.widgets.job_line import local_clock
 from sim.deepracer_files import TrainingMetrics
@@ -150,31 +151,66 @@ def clock(seconds: float) -> str:
     return f"{minutes}:{rest:02d}"
 
 
+# How a run's ending reads, for each way it can end (events.ENDINGS).
+_ENDED_STATES = {
+    "finished": JobState.DONE,
+    "stopped": JobState.STOPPED,
+    "failed": JobState.FAILED,
+}
+TRAIN_AGAIN = "Press t to train again."
+
+
+def training_job(figures: TrainingFigures, model: str = "") -> Job:
+    """The run as the app's one status model for long jobs (`racer_tui.jobs`): running
+    with its clock against its budget (`done` and `total` in seconds), or how and when it
+    ended, a failure with its reason and the key that starts another run."""
+    what = f"Training {model}".strip()
+    ended, started = figures.ended, figures.started
+    if ended is not None:
+        state = _ENDED_STATES.get(ended.kind, JobState.FAILED)
+        failed = state is JobState.FAILED
+        return Job(
+            what,
+            state,
+            at=figures.ended_at or 0.0,
+            done=ended.elapsed,
+            outcome=ended.message if failed else "",
+            fix=TRAIN_AGAIN if failed else "",
+        )
+    if started is None:
+        return Job(what, JobState.RUNNING if figures.is_starting else JobState.IDLE)
+    budget = started.max_minutes * 60.0
+    return Job(what, JobState.RUNNING, done=figures.elapsed, total=budget if budget > 0 else None)
+
+
 def run_line(figures: TrainingFigures, model: str = "") -> RenderableType:
     """Whose figures these are, and where the run is: its clock against the time budget
     (DeepRacer's stop condition, so the time left is exact), or how it ended."""
-    started, ended = figures.started, figures.ended
+    job = training_job(figures, model)
     name = Text.assemble((model, "bold"), ": ") if model else Text()
-    if ended is not None:  # this session's run, or the last one before it (its state file)
+    if job.state is JobState.IDLE:
+        return name + Text("not training now", style="dim")
+    if job.state is not JobState.RUNNING:  # this session's run, or the last one before it
+        assert figures.ended is not None
         last = "last run " if figures.ended_before else ""
-        when = f" at {local_clock(figures.ended_at)}" if figures.ended_at is not None else ""
-        took = f" after {clock(ended.elapsed)}" if ended.elapsed > 0 or not last else ""
-        return name + Text(f"{last}{ended.kind}{when}{took}", style="dim")
-    if started is None:
-        waiting = "starting…" if figures.is_starting else "not training now"
-        return name + Text(waiting, style="dim")
-    elapsed = figures.elapsed
-    budget = started.max_minutes * 60.0
-    if budget <= 0:
-        return name + Text(f"training {clock(elapsed)}")
+        when = f" at {local_clock(job.at)}" if job.at else ""
+        took = f" after {clock(job.done)}" if job.done > 0 or not last else ""
+        ending = name + Text(f"{last}{figures.ended.kind}{when}{took}", style="dim")
+        if job.state is JobState.FAILED:  # why, and what to do: not only in a toast
+            ending += Text(f": {sentence(job.outcome)} {job.fix}".rstrip(), style="red")
+        return ending
+    if figures.started is None:
+        return name + Text("starting…", style="dim")
+    if job.total is None:
+        return name + Text(f"training {clock(job.done)}")
     line = Table.grid(expand=True)
     line.add_column(no_wrap=True)
     line.add_column(ratio=1)
     line.add_column(no_wrap=True)
     line.add_row(
-        name + Text(f"training {clock(elapsed)} of {clock(budget)} "),
-        ProgressBar(total=budget, completed=min(elapsed, budget)),
-        Text(f" {clock(budget - elapsed)} left"),
+        name + Text(f"training {clock(job.done)} of {clock(job.total)} "),
+        ProgressBar(total=job.total, completed=min(job.done, job.total)),
+        Text(f" {clock(job.total - job.done)} left"),
     )
     return line
 

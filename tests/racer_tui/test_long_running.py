@@ -10,6 +10,10 @@ import weakref
 from collections.abc import Iterator
 
 import pytest
+from textual._styles_cache import StylesCache
+from textual.app import App, ComposeResult
+from textual.containers import Vertical
+from textual.widgets import Label
 
 from racer_tui.long_running import (
     AUTOMATIC_FULL_AFTER,
@@ -20,6 +24,7 @@ from racer_tui.long_running import (
     SWEEP_SECONDS,
     TRIM_SECONDS,
     IdleCollector,
+    forget_removed_widgets_styles,
     limit_malloc_arenas,
     malloc_trim,
 )
@@ -151,7 +156,7 @@ def test_free_memory_goes_back_to_the_system_while_input_pauses_not_on_every_tic
         idle.input_seen()  # a key just now: no trim until input pauses again
         idle.tick(quiet=False)
         assert idle.trims == 8
-        clock.now += IDLE_SECONDS
+        clock.now += IDLE_SECONDS * 2
         idle.tick(quiet=False, keys_waiting=True)
         assert idle.trims == 8
         idle.tick(quiet=False)
@@ -171,3 +176,54 @@ def test_the_c_library_trim_runs_where_there_is_one() -> None:
     if trim is None:
         pytest.skip("this C library has no malloc_trim (not glibc)")
     trim()  # returns memory; must not raise
+
+
+def test_an_idle_collection_first_forgets_memos_that_keep_garbage() -> None:
+    clock = Clock()
+    forgotten: list[int] = []
+    idle = IdleCollector(clock, forget=lambda: forgotten.append(gc.get_count()[2]))
+    idle.start()
+    try:
+        clock.now += IDLE_SECONDS * 2
+        gc.collect()
+        idle.tick(quiet=False)
+        assert forgotten == []  # no collection due: nothing to forget for
+        promote()
+        assert idle.tick(quiet=False)
+        assert len(forgotten) == 1 and forgotten[0] >= IDLE_COLLECT_AFTER  # before collecting
+    finally:
+        idle.stop()
+
+
+class Rebuilds(App[None]):
+    """The minimal reproduction of Textualize/textual#6665: a list rebuilt over and over."""
+
+    def compose(self) -> ComposeResult:
+        yield Vertical(id="cards")
+
+    async def rebuild(self) -> None:
+        cards = self.query_one("#cards", Vertical)
+        await cards.remove_children()
+        await cards.mount_all(Label(f"card {n}", classes="card") for n in range(40))
+
+
+def _styles_caches_alive() -> int:
+    gc.collect()
+    return sum(1 for thing in gc.get_objects() if type(thing) is StylesCache)
+
+
+async def test_removed_widgets_rendered_lines_are_let_go() -> None:
+    app = Rebuilds()
+    async with app.run_test(size=(80, 24)) as pilot:
+        for _ in range(10):
+            await app.rebuild()
+            await pilot.pause()
+        on_screen = len(app.screen.query("*")) + 1  # the widgets and the screen
+        # Textual's memo keeps the styles caches of widgets removed long ago...
+        assert _styles_caches_alive() > on_screen + 200
+        forget_removed_widgets_styles()
+        # ...until it is emptied: what remains belongs to widgets still on screen.
+        assert _styles_caches_alive() <= on_screen
+        await app.rebuild()
+        await pilot.pause()
+        assert "card 39" in str(app.screen.query(Label).last().render())  # still draws

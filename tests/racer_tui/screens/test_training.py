@@ -17,12 +17,19 @@ from datetime import UTC, datetime, timedelta
 from typing import Any
 
 import pytest
+from rich.text import Text
 from textual.pilot import Pilot
 
 from racer_tui.app import create_app
+from racer_tui.jobs import JobState
 from racer_tui.screens.training import LeaveWhileTraining, LiveRun, TrainingScreen
 from racer_tui.widgets.chart import LineChart
-from racer_tui.widgets.training_charts import TrainingCharts, TrainingFigures
+from racer_tui.widgets.training_charts import (
+    TrainingCharts,
+    TrainingFigures,
+    run_line,
+    training_job,
+)
 from sim.deepracer_files import TrainingEpisode, TrainingMetrics, write_training_metrics
 from sim.garage.options import new_model
 from sim.training import events
@@ -42,6 +49,34 @@ def sample_events() -> list[events.Event]:
         events.System(2.0, 97.0, 310.0),
         events.Ended(3.0, "finished", "the time limit was reached", 2048, 3, 55.0, None),
     ]
+
+
+def test_a_run_is_one_job_from_start_to_its_ending() -> None:
+    """The run line reads the app's one status model for long jobs: idle, starting,
+    running against its budget, then done, stopped or failed with the key that helps."""
+    figures = TrainingFigures()
+    assert training_job(figures, "ada").state is JobState.IDLE
+    figures.starting()
+    starting = training_job(figures, "ada")
+    assert starting.state is JobState.RUNNING and starting.total is None
+    run = sample_events()
+    for event in run[:3]:
+        figures.fold(event)
+    running = training_job(figures, "ada")
+    assert (running.state, running.done, running.total) == (JobState.RUNNING, 0.9, 300.0)
+    assert running.what == "Training ada"
+    for kind, state in (
+        ("finished", JobState.DONE),
+        ("stopped", JobState.STOPPED),
+        ("failed", JobState.FAILED),
+    ):
+        figures.fold(events.Ended(4.0, kind, "reward_function raised ValueError", 9, 3, 40, None))
+        job = training_job(figures, "ada")
+        assert (job.state, job.done) == (state, 4.0)
+        assert bool(job.fix) is (state is JobState.FAILED)  # only a failure needs a remedy
+    line = run_line(figures, "ada")
+    assert isinstance(line, Text) and "ada: failed" in line.plain
+    assert "Reward_function raised ValueError. Press t to train again." in line.plain
 
 
 def test_figures_fold_episodes_updates_and_endings() -> None:
@@ -291,6 +326,9 @@ async def test_an_adopted_training_that_is_killed_says_so_instead_of_running_on(
         shown = painted(charts)
         assert "left" not in shown
         assert re.search(r"failed at \d\d:\d\d after 1:15", shown)  # not 0:00
+        # Why, and what to do, stay on the dashboard after the notification has gone.
+        assert "ended without writing how" in " ".join(shown.split())
+        assert "Press t to train again" in " ".join(shown.split())
         assert "ended without writing how" in notes.text("error")
 
 

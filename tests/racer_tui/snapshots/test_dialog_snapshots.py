@@ -1,6 +1,7 @@
 """SVG snapshots of the dialogs the screens' own snapshots do not open, at the three sizes:
 each opens centred over its screen, with every field, its words and its buttons readable.
-The delete question and the model import dialog are in test_snapshots.py."""
+The delete question and the model import dialog are in test_snapshots.py; the other
+yes-or-no questions share its dialog, so two more with long words stand for them."""
 
 from __future__ import annotations
 
@@ -8,14 +9,18 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+import pytest
 from textual.pilot import Pilot
 from textual.widgets import Input
 
 from league.nights import new_night
 from league.store import open_league
 from racer_tui.app import create_app
+from racer_tui.screens import sync
 from racer_tui.screens.training import LeaveWhileTraining
+from racer_tui.widgets import job_line
 from sim.track_catalog import resolve_track
+from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES
 from tests.racer_tui.snapshots.test_snapshots import Compare, prepared, two_models
 
@@ -95,3 +100,36 @@ def test_someone_elses_reward_code_question(
 
     two_models()
     assert snap_compare(create_app(), terminal_size=size, run_before=prepared(ask))
+
+
+@SIZES
+def test_discard_changes_question(snap_compare: Compare, size: tuple[int, int]) -> None:
+    # Esc in the model editor with a name typed: asked before the form is thrown away.
+    app = create_app(start="garage")
+    assert snap_compare(app, terminal_size=size, run_before=pressing("n", *"draft", "escape"))
+
+
+@SIZES
+def test_set_up_a_store_question(
+    snap_compare: Compare,
+    size: tuple[int, int],
+    fixed_home: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # s on the Sync screen with a shared folder that is not there (yet): set one up? The
+    # sync's failure behind the question says when it failed: at a fixed time here.
+    monkeypatch.setattr(job_line, "local_clock", lambda wall: "21:05")
+    monkeypatch.setattr(sync, "local_time", lambda iso: "21:05")
+
+    async def ask(pilot: Pilot[Any]) -> None:
+        await pilot.press("y")
+        await settle(pilot)
+        field = pilot.app.screen.query_one("#sync-url", Input)
+        field.focus()
+        field.value = f"dir:{fixed_home / 'league-share'}"
+        await pilot.press("enter")
+        await settle(pilot)
+        await pilot.press("s")
+
+    app = create_app(start="league")
+    assert snap_compare(app, terminal_size=size, run_before=prepared(ask))
