@@ -85,6 +85,15 @@ async def set_store(pilot: Pilot[int], screen: SyncScreen, url: str) -> None:
     await settle(pilot)
 
 
+async def sync_with(pilot: Pilot[int], url: str) -> SyncScreen:
+    """Open the Sync screen, set the store and press s: what a racer does to sync."""
+    screen = await open_sync(pilot)
+    await set_store(pilot, screen, url)
+    await pilot.press("s")
+    await settle(pilot)
+    return screen
+
+
 def summary(screen: SyncScreen) -> str:
     """What the last sync did, as shown under the store (unwrapped)."""
     return screen.last_summary.plain if screen.last_summary is not None else ""
@@ -153,10 +162,7 @@ async def test_at_80_columns_the_status_line_keeps_room_for_the_store(
     record("ana", [11.0])
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:
-        screen = await open_sync(pilot)
-        await set_store(pilot, screen, store_url)
-        await pilot.press("s")
-        await settle(pilot)
+        await sync_with(pilot, store_url)
         await pilot.press("escape")
         await settle(pilot)
         line = status_line(app)
@@ -187,10 +193,7 @@ async def test_the_organiser_admits_a_racers_key_from_the_sync_screen(
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:
         notes = Notifications(app)
-        screen = await open_sync(pilot)
-        await set_store(pilot, screen, store_url)
-        await pilot.press("s")
-        await settle(pilot)
+        screen = await sync_with(pilot, store_url)
         title = painted(screen.query_one("#sync-keys-title"))
         assert "Keys waiting for admission (1)" in title
         keys = painted(screen.query_one("#sync-keys"))
@@ -248,10 +251,7 @@ async def test_a_new_store_is_set_up_from_the_app_when_the_racer_says_so(
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:
         notes = Notifications(app)
-        screen = await open_sync(pilot)
-        await set_store(pilot, screen, url)
-        await pilot.press("s")
-        await settle(pilot)
+        screen = await sync_with(pilot, url)
         dialog = app.screen
         assert isinstance(dialog, ConfirmDialog)
         text = painted(dialog)
@@ -281,10 +281,7 @@ async def test_a_failed_sync_never_shows_the_last_success_as_news(
     record("ana", [11.0])
     app = create_app(start="league")
     async with app.run_test(size=(100, 30)) as pilot:
-        screen = await open_sync(pilot)
-        await set_store(pilot, screen, store_url)
-        await pilot.press("s")
-        await settle(pilot)
+        screen = await sync_with(pilot, store_url)
         assert "Synced with" in summary(screen)
         # The shared folder goes away (the USB stick is pulled) and the racer syncs again.
         shutil.rmtree(store_url.removeprefix("dir:"))
@@ -364,10 +361,7 @@ async def test_a_racer_with_no_name_yet_is_told_how_to_give_one_in_the_app(
     on_machine(monkeypatch, tmp_path / "newcomer")  # has never said who they are
     app = create_app(start="league")
     async with app.run_test(size=(100, 30)) as pilot:
-        screen = await open_sync(pilot)
-        await set_store(pilot, screen, store_url)
-        await pilot.press("s")
-        await settle(pilot)
+        screen = await sync_with(pilot, store_url)
         said = summary(screen)
         assert "no racer name is saved here yet" in said
         assert "submit a result under your name (u in the Garage), then sync again" in said
