@@ -20,11 +20,12 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json, print_table
+from racer_tui.reward_lap_text import lap_chart
 from racer_tui.reward_map_text import map_text
 from sim.action_space import MAX_SPEED
 from sim.atomic import write_bytes_atomic
 from sim.reward_function import TEMPLATES, read_reward_file, template_source
-from sim.reward_lap import DEFAULT_SPEEDS, verdict
+from sim.reward_lap import DEFAULT_SPEEDS, line_verdict, verdict
 from sim.reward_map import (
     DEFAULT_SPACING,
     DEFAULT_SPEED,
@@ -66,14 +67,23 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     )
     drawn.add_argument("--spacing", type=float, default=DEFAULT_SPACING, help="metres per cell")
     lap = reward_commands.add_parser(
-        "lap", help="what a reward function pays for a lap at each speed: does it pay for speed?"
+        "lap",
+        help="what a reward function pays along a lap of the centre line and of the racing "
+        "line at each speed: does it pay for speed?",
     )
-    lap.add_argument("function", help="a reward function file, or a template's name")
-    lap.add_argument("--track", default=DEFAULT_TRACK, help=f"default {DEFAULT_TRACK}")
+    lap.add_argument(
+        "function",
+        nargs="?",
+        help="a reward function file, or a template's name (omitted with --model)",
+    )
+    lap.add_argument(
+        "--model",
+        help="a garage model: its reward function, track and action space's speeds (unless given)",
+    )
+    lap.add_argument("--track", help=f"default {DEFAULT_TRACK}, or the model's")
     lap.add_argument(
         "--speeds",
-        default=",".join(f"{speed:g}" for speed in DEFAULT_SPEEDS),
-        help="m/s, comma-separated (default 1,2,3,4)",
+        help="m/s, comma-separated (default 1,2,3,4, or the model's action space's speeds)",
     )
     lap.add_argument("--json", action="store_true")
     out = drawn.add_mutually_exclusive_group()
@@ -137,7 +147,7 @@ def _map(args: argparse.Namespace) -> int:
         write_bytes_atomic(Path(args.png), png_bytes(reward_map, track=track))
         print(f"Wrote {args.png}.")
     else:
-        Console().print(map_text(reward_map, shutil.get_terminal_size().columns))
+        Console().print(map_text(reward_map, shutil.get_terminal_size().columns, track=track))
     if reward_map.first_failure:
         print(
             f"The function failed on {len(reward_map.failed)} cells (red): "
@@ -170,27 +180,46 @@ def _function(given: str) -> tuple[str, str]:
 
 
 def _lap(args: argparse.Namespace) -> int:
-    try:
-        speeds = tuple(float(part) for part in args.speeds.split(","))
-    except ValueError:
+    speeds: tuple[float, ...] = DEFAULT_SPEEDS
+    track_name = args.track or DEFAULT_TRACK
+    if args.model is not None:
+        from sim.garage.folder import open_model
+
+        folder = open_model(args.model)
+        speeds = folder.metadata().action_space.speeds()
+        track_name = args.track or folder.training_params().world_name
+    if args.speeds is not None:
+        speeds = _speeds(args.speeds)
+    track = resolve_track(track_name)
+    if args.function is not None:
+        source, name = _function(args.function)
+    elif args.model is not None:
+        source, name = folder.reward_source(), str(folder.reward_file)
+    else:
         raise MapOptionError(
-            f"--speeds must be m/s separated by commas, for example 1,2,3,4, not {args.speeds!r}."
-        ) from None
-    if not speeds or not all(0.1 <= speed <= MAX_SPEED for speed in speeds):
-        raise MapOptionError(f"--speeds must each be from 0.1 to {MAX_SPEED:g} m/s.")
-    track = resolve_track(args.track)
-    source, name = _function(args.function)
-    pays = lap_pay_of_source(source, name, args.track, tuple(sorted(set(speeds))))
+            "Give a reward function file or a template's name, or --model NAME for a "
+            "garage model's own function."
+        )
+    pays = lap_pay_of_source(source, name, track_name, tuple(sorted(set(speeds))))
     if args.json:
         print_json({"track": track.name, "laps": [pay.to_json() for pay in pays]})
         return 0
-    table = Table(title=Text(f"One lap of {track.name}'s centre line: {name}"))
-    for title in ("m/s", "steps", "reward per lap", "per second"):
-        table.add_column(title, justify="right")
-    for pay in pays:
-        table.add_row(
-            f"{pay.speed:g}", f"{pay.steps:,}", f"{pay.total:.4g}", f"{pay.per_second:.4g}"
-        )
-    print_table(table)
-    print(verdict(pays))
+    console = Console()
+    console.print(Text(f"One lap of {track.name}: {name}", style="bold"))
+    console.print(lap_chart(pays, shutil.get_terminal_size().columns))
+    for said in (verdict(pays), line_verdict(pays)):
+        if said is not None:
+            console.print(Text(said))  # wrapped to the terminal, never read as markup
     return 0
+
+
+def _speeds(text: str) -> tuple[float, ...]:
+    try:
+        speeds = tuple(float(part) for part in text.split(","))
+    except ValueError:
+        raise MapOptionError(
+            f"--speeds must be m/s separated by commas, for example 1,2,3,4, not {text!r}."
+        ) from None
+    if not speeds or not all(0.1 <= speed <= MAX_SPEED for speed in speeds):
+        raise MapOptionError(f"--speeds must each be from 0.1 to {MAX_SPEED:g} m/s.")
+    return speeds

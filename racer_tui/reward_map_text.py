@@ -1,16 +1,33 @@
 """A reward map (sim.reward_map) as terminal text: two map rows per character line (the
 upper half block takes one row's colour, its background the next), thinned to fit a
-width, with a legend. Rich only, so the headless CLI and the model editor both draw it."""
+width, with a legend. Given the track, its edges, centre line and start line are drawn
+over the colours as dots on the cells they cross, so the colours stay visible behind them.
+Rich only, so the headless CLI and the model editor both draw it."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 from rich.color import Color
 from rich.style import Style
 from rich.text import Text
 
-from sim.reward_map import FAILED_COLOUR, RewardMap, colour, pixel_rows
+from sim.reward_map import (
+    BORDER_COLOUR,
+    CENTRE_COLOUR,
+    FAILED_COLOUR,
+    START_COLOUR,
+    RewardMap,
+    colour,
+    pixel_rows,
+)
+from sim.track import Track
+
+# What is drawn over the colours, later ones over earlier ones where they cross a cell.
+_EDGE = ("•", BORDER_COLOUR)
+_CENTRE = ("·", CENTRE_COLOUR)
+_START = ("■", START_COLOUR)
 
 
 def _rgb(rgb: tuple[int, int, int]) -> Color:
@@ -21,17 +38,63 @@ def _rgb(rgb: tuple[int, int, int]) -> Color:
 _HALF_BLOCK = "▀"
 
 
-def map_text(reward_map: RewardMap, width: int, *, legend: bool = True) -> Text:
-    """Two map rows per line, a cell per character, thinned to fit `width` columns."""
+def _marks(
+    reward_map: RewardMap, track: Track, step: int
+) -> dict[tuple[int, int], tuple[str, tuple[int, int, int]]]:
+    """(text line, column) -> the glyph and colour of the track line crossing that cell."""
+    spacing = reward_map.options.spacing
+    origin_x, origin_y = reward_map.origin
+    rows = len(reward_map.values)
+    marks: dict[tuple[int, int], tuple[str, tuple[int, int, int]]] = {}
+    for line, mark in (
+        (track.center, _CENTRE),
+        (track.inner, _EDGE),  # where a shown cell holds both, the road's edge matters more
+        (track.outer, _EDGE),
+        (track.points[0, 2:6].reshape(2, 2), _START),  # across the road at the first point
+    ):
+        points = np.asarray(line, dtype=float)
+        lengths = np.hypot(*np.diff(points, axis=0).T)
+        # Half a shown cell apart: every cell the line crosses gets at least one sample.
+        samples = [
+            np.linspace(start, end, max(2, math.ceil(length / (spacing * step / 2)) + 1))
+            for start, end, length in zip(points[:-1], points[1:], lengths, strict=True)
+        ]
+        xy = np.vstack(samples)
+        column = np.round((xy[:, 0] - origin_x) / spacing).astype(int) // step
+        row_from_top = rows - 1 - np.round((xy[:, 1] - origin_y) / spacing).astype(int)
+        line_index = (row_from_top // step) // 2
+        for key in zip(line_index.tolist(), column.tolist(), strict=True):
+            marks[key] = mark
+    return marks
+
+
+def _mix(a: tuple[int, int, int], b: tuple[int, int, int]) -> tuple[int, int, int]:
+    return (a[0] + b[0]) // 2, (a[1] + b[1]) // 2, (a[2] + b[2]) // 2
+
+
+def map_text(
+    reward_map: RewardMap, width: int, *, legend: bool = True, track: Track | None = None
+) -> Text:
+    """Two map rows per line, a cell per character, thinned to fit `width` columns; with
+    `track`, its lines drawn over the colours."""
     rows = pixel_rows(reward_map)
     columns = len(rows[0]) if rows else 0
     step = max(1, math.ceil(columns / max(20, width - 1)))
     thinned = [row[::step] for row in rows[::step]]
+    marks = _marks(reward_map, track, step) if track is not None else {}
     text = Text()
-    for upper, lower in zip(thinned[::2], [*thinned[1::2], []], strict=False):
+    for line_index, (upper, lower) in enumerate(
+        zip(thinned[::2], [*thinned[1::2], []], strict=False)
+    ):
         for index, top in enumerate(upper):
             bottom = lower[index] if index < len(lower) else (0, 0, 0)
-            text.append(_HALF_BLOCK, style=Style(color=_rgb(top), bgcolor=_rgb(bottom)))
+            mark = marks.get((line_index, index))
+            if mark is None:
+                text.append(_HALF_BLOCK, style=Style(color=_rgb(top), bgcolor=_rgb(bottom)))
+            else:
+                glyph, rgb = mark
+                behind = _rgb(_mix(top, bottom))
+                text.append(glyph, style=Style(color=_rgb(rgb), bgcolor=behind, bold=True))
         text.append("\n")
     if not legend:
         return text
@@ -49,4 +112,13 @@ def map_text(reward_map: RewardMap, width: int, *, legend: bool = True) -> Text:
         text.append(" · ")
         text.append("██", style=Style(color=_rgb(FAILED_COLOUR)))
         text.append(" failed")
+    if track is not None:
+        for (glyph, rgb), meaning in (
+            (_EDGE, "road edges"),
+            (_CENTRE, "centre line"),
+            (_START, "start"),
+        ):
+            text.append("  ")
+            text.append(glyph, style=Style(color=_rgb(rgb), bold=True))
+            text.append(f" {meaning}")
     return text

@@ -47,6 +47,14 @@ class ActionSpace:
             return max(action.speed for action in self.actions)
         return self.speed_range[1]
 
+    def speeds(self, levels: int = 4) -> tuple[float, ...]:
+        """The speeds a car of this space drives, slowest first: a discrete space's own,
+        a continuous range at `levels` evenly spaced speeds."""
+        if self.kind == "discrete":
+            return tuple(sorted({action.speed for action in self.actions}))
+        low, high = self.speed_range
+        return tuple(sorted({round(float(v), 3) for v in np.linspace(low, high, levels)}))
+
     def gym_space(self) -> gym.spaces.Space[Any]:
         """Discrete(n), or a Box in [-1, 1]^2 that `targets` scales to the ranges.
 

@@ -16,7 +16,7 @@ it lets a new racer watch a race before training anything.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -204,6 +204,9 @@ class ReferenceLap:
     lap_time: float  # standing start at the start line, seconds; nan if it did not finish
     status: str
     planned_time: float  # what the speed profile promises for a flying lap
+    # Where the car was after each step, from the start up to the step that finished the
+    # lap (the line as driven: the controller cuts inside the planned line in corners).
+    path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)), compare=False, repr=False)
 
     @property
     def completed(self) -> bool:
@@ -218,6 +221,8 @@ def reference_lap(
     driver = ReferenceDriver(track, car)
     sim.reset_car(0, start_s=0.0)
     previous_progress = 0.0
+    path = [(float(sim.fleet.x[0]), float(sim.fleet.y[0]))]
+    planned = driver.line.planned_lap_time()
     for _ in range(int(max_seconds * STEP_HZ)):
         steering, speed = driver.act(sim)
         sim.apply(steering, speed)
@@ -227,12 +232,11 @@ def reference_lap(
             # Interpolate inside the last step so lap times are not quantised to 1/15 s.
             fraction = (100.0 - previous_progress) / max(progress - previous_progress, 1e-9)
             elapsed = (int(sim.steps[0]) - 1 + min(max(fraction, 0.0), 1.0)) * STEP_SECONDS
-            return ReferenceLap(track.name, elapsed, str(status), driver.line.planned_lap_time())
+            return ReferenceLap(track.name, elapsed, str(status), planned, np.array(path))
         if status != EpisodeStatus.IN_PROGRESS:
-            return ReferenceLap(
-                track.name, float("nan"), str(status), driver.line.planned_lap_time()
-            )
+            return ReferenceLap(track.name, float("nan"), str(status), planned, np.array(path))
+        path.append((float(sim.fleet.x[0]), float(sim.fleet.y[0])))
         previous_progress = progress
     return ReferenceLap(
-        track.name, float("nan"), str(EpisodeStatus.TIME_UP), driver.line.planned_lap_time()
+        track.name, float("nan"), str(EpisodeStatus.TIME_UP), planned, np.array(path)
     )

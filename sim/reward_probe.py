@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from sim.reward_function import RewardFunctionError
-from sim.reward_lap import LapPay
+from sim.reward_lap import LINES, LapPay
 from sim.reward_limit import DEFAULT_SECONDS
 from sim.reward_map import MapOptions, RewardMap
 
@@ -91,9 +91,7 @@ def _map_request(track: str, options: MapOptions) -> dict[str, Any]:
 
 
 def _laps(rows: list[dict[str, Any]]) -> tuple[LapPay, ...]:
-    return tuple(
-        LapPay(float(row["speed"]), int(row["steps"]), float(row["total"])) for row in rows
-    )
+    return tuple(LapPay.from_json(row) for row in rows)
 
 
 def map_reward_source(
@@ -115,13 +113,16 @@ def lap_pay_of_source(
     name: str,
     track: str,
     speeds: tuple[float, ...],
+    lines: tuple[str, ...] = LINES,
     *,
     seconds: float = DEFAULT_SECONDS,
     deadline: float = CHECK_DEADLINE_SECONDS,
 ) -> list[LapPay]:
-    """What the code pays for one lap of the centre line at each speed (sim.reward_lap),
+    """What the code pays for one lap of each line at each speed (sim.reward_lap),
     computed in a child process."""
-    ok = _ask_child("lap", source, name, seconds, deadline, track=track, speeds=list(speeds))
+    ok = _ask_child(
+        "lap", source, name, seconds, deadline, track=track, speeds=list(speeds), lines=list(lines)
+    )
     return list(_laps(ok["laps"]))
 
 
@@ -228,11 +229,12 @@ def _probe(request: dict[str, Any]) -> dict[str, Any]:
 
 
 def _lap_answer(reward: Any, request: dict[str, Any]) -> list[dict[str, Any]]:
-    from sim.reward_lap import lap_rewards
+    from sim.reward_lap import CENTRE_LINE, lap_rewards
     from sim.track_catalog import resolve_track
 
     speeds = tuple(float(speed) for speed in request["speeds"])
-    pays = lap_rewards(reward, resolve_track(str(request["track"])), speeds)
+    lines = tuple(str(line) for line in request.get("lines", (CENTRE_LINE,)))
+    pays = lap_rewards(reward, resolve_track(str(request["track"])), speeds, lines)
     return [pay.to_json() for pay in pays]
 
 

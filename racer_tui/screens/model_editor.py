@@ -618,7 +618,9 @@ class ModelEditorScreen(RacerScreen[str | None]):
             editor.set_class(False, "-problem")
             if message.reward_map is not None:
                 width = max(20, shown_map.size.width or 40)
-                shown_map.update(map_text(message.reward_map, width))
+                previewed = self.query_one("#track-preview", TrackMap).track
+                on = previewed if previewed and previewed.name == message.reward_map.track else None
+                shown_map.update(map_text(message.reward_map, width, track=on))
             else:
                 shown_map.update(Text("no map: choose a track on the Car tab", style="dim"))
             return

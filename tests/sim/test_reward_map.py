@@ -143,3 +143,44 @@ def test_the_command_draws_writes_json_and_png_and_refuses_bad_input(
     hangs.write_text("def reward_function(params):\n    while True:\n        pass\n")
     assert main(["reward", "map", str(hangs), "--track", "hairpin-circuit"]) == 2
     assert "line 2: reward_function did not return within 1 s" in capsys.readouterr().err
+
+
+def test_the_terminal_map_draws_the_road_its_centre_line_and_its_start_over_the_colours() -> None:
+    from rich.console import Console
+
+    from racer_tui.reward_map_text import map_text
+
+    reward_map = compute_map(load_template("follow_center_line"), HAIRPIN, COARSE)
+    bare = map_text(reward_map, 200, legend=False)
+    assert set(bare.plain) <= {"▀", "\n"}
+    drawn = map_text(reward_map, 200, legend=False, track=HAIRPIN)
+    lines = drawn.plain.splitlines()
+    assert len(lines) == len(bare.plain.splitlines())
+
+    def cell(x: float, y: float) -> tuple[int, int]:
+        """The text line and column of the map cell holding (x, y); 200 columns: no thinning."""
+        column = round((x - reward_map.origin[0]) / COARSE.spacing)
+        row = len(reward_map.values) - 1 - round((y - reward_map.origin[1]) / COARSE.spacing)
+        return row // 2, column
+
+    # A point far from the start where the road runs up the screen: its centre and its
+    # edges are in cells of their own (where it runs across, a text line holds two rows).
+    heading = np.diff(HAIRPIN.center, axis=0)
+    upright = [
+        i
+        for i in range(len(heading) // 4, 3 * len(heading) // 4)
+        if abs(heading[i, 1]) > 3 * abs(heading[i, 0])
+    ]
+    middle = upright[len(upright) // 2]
+    line, column = cell(*HAIRPIN.center[middle])
+    assert lines[line][column] == "·"
+    line, column = cell(*HAIRPIN.inner[middle])
+    assert lines[line][column] == "•"
+    line, column = cell(*HAIRPIN.center[0])
+    assert lines[line][column] == "■"
+    # The colour stays behind the dot: the centre cell is on the top band, not black.
+    offset = sum(len(text) + 1 for text in lines[:line]) + column
+    style = drawn.get_style_at_offset(Console(), offset)
+    assert style.bgcolor is not None and style.bgcolor.get_truecolor() != (0, 0, 0)
+    legend = map_text(reward_map, 200, track=HAIRPIN).plain.splitlines()[-1]
+    assert "• road edges" in legend and "· centre line" in legend and "■ start" in legend
