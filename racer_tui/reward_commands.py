@@ -11,6 +11,7 @@ import argparse
 import math
 import shutil
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +23,7 @@ from rich.text import Text
 from racer_tui.output import print_json, print_table
 from racer_tui.reward_lap_text import lap_chart
 from racer_tui.reward_map_text import map_text
-from sim.action_space import MAX_SPEED
+from sim.action_space import MAX_SPEED, ActionSpace
 from sim.atomic import write_bytes_atomic
 from sim.reward_function import TEMPLATES, read_reward_file, template_source
 from sim.reward_lap import DEFAULT_SPEEDS, line_verdict, verdict
@@ -57,9 +58,10 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     drawn = reward_commands.add_parser(
         "map", help="draw what a reward function pays everywhere on a track"
     )
-    drawn.add_argument("function", help="a reward function file, or a template's name")
-    drawn.add_argument("--track", default=DEFAULT_TRACK, help=f"default {DEFAULT_TRACK}")
-    drawn.add_argument("--speed", type=float, default=DEFAULT_SPEED, help="m/s (default 2)")
+    _function_arguments(drawn, "track and top speed")
+    drawn.add_argument(
+        "--speed", type=float, help="m/s (default 2, or the model's action space's top speed)"
+    )
     drawn.add_argument(
         "--heading",
         default="track",
@@ -68,19 +70,10 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     drawn.add_argument("--spacing", type=float, default=DEFAULT_SPACING, help="metres per cell")
     lap = reward_commands.add_parser(
         "lap",
-        help="what a reward function pays along a lap of the centre line and of the racing "
-        "line at each speed: does it pay for speed?",
+        help="what a reward function pays along a lap of the centre line and of the "
+        "reference driver's line at each speed: does it pay for speed?",
     )
-    lap.add_argument(
-        "function",
-        nargs="?",
-        help="a reward function file, or a template's name (omitted with --model)",
-    )
-    lap.add_argument(
-        "--model",
-        help="a garage model: its reward function, track and action space's speeds (unless given)",
-    )
-    lap.add_argument("--track", help=f"default {DEFAULT_TRACK}, or the model's")
+    _function_arguments(lap, "track and action space's speeds")
     lap.add_argument(
         "--speeds",
         help="m/s, comma-separated (default 1,2,3,4, or the model's action space's speeds)",
@@ -89,6 +82,50 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     out = drawn.add_mutually_exclusive_group()
     out.add_argument("--json", action="store_true", help="print the grid as JSON")
     out.add_argument("--png", metavar="FILE", help="write the map as a PNG image")
+
+
+def _function_arguments(parser: argparse.ArgumentParser, model_gives: str) -> None:
+    parser.add_argument(
+        "function",
+        nargs="?",
+        help="a reward function file, or a template's name (omitted with --model)",
+    )
+    parser.add_argument(
+        "--model", help=f"a garage model: its reward function, and its {model_gives} unless given"
+    )
+    parser.add_argument("--track", help=f"default {DEFAULT_TRACK}, or the model's")
+
+
+@dataclass(frozen=True)
+class _Subject:
+    """What `reward map` and `reward lap` look at: a function's code and name, the track
+    (as given: a .npy path is read again by the child, not looked up by name), and the
+    model's action space when one was named."""
+
+    source: str
+    name: str
+    track_name: str
+    action_space: ActionSpace | None
+
+
+def _subject(args: argparse.Namespace) -> _Subject:
+    if args.model is None:
+        if args.function is None:
+            raise MapOptionError(
+                "Give a reward function file or a template's name, or --model NAME for a "
+                "garage model's own function."
+            )
+        source, name = _function(args.function)
+        return _Subject(source, name, args.track or DEFAULT_TRACK, None)
+    from sim.garage.folder import open_model
+
+    folder = open_model(args.model)
+    space = folder.metadata().action_space
+    track_name = args.track or folder.training_params().world_name
+    if args.function is not None:
+        source, name = _function(args.function)
+        return _Subject(source, name, track_name, space)
+    return _Subject(folder.reward_source(), str(folder.reward_file), track_name, space)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -132,15 +169,18 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _map(args: argparse.Namespace) -> int:
-    options = MapOptions(args.spacing, args.speed, _heading(args.heading))
+    subject = _subject(args)
+    speed = args.speed
+    if speed is None:
+        space = subject.action_space
+        speed = DEFAULT_SPEED if space is None else space.max_speed
+    options = MapOptions(args.spacing, speed, _heading(args.heading))
     if not (0.02 <= options.spacing <= 1.0):
         raise MapOptionError(f"--spacing must be from 0.02 to 1 m, not {options.spacing:g}.")
     if not (0.0 < options.speed <= MAX_SPEED):
         raise MapOptionError(f"--speed must be above 0 and at most {MAX_SPEED:g} m/s.")
-    track = resolve_track(args.track)
-    source, name = _function(args.function)
-    # The argument as given: a .npy path is read again by the child, not looked up by name.
-    reward_map = map_reward_source(source, name, args.track, options)
+    track = resolve_track(subject.track_name)
+    reward_map = map_reward_source(subject.source, subject.name, subject.track_name, options)
     if args.json:
         print_json(reward_map.to_json())
     elif args.png:
@@ -180,32 +220,21 @@ def _function(given: str) -> tuple[str, str]:
 
 
 def _lap(args: argparse.Namespace) -> int:
-    speeds: tuple[float, ...] = DEFAULT_SPEEDS
-    track_name = args.track or DEFAULT_TRACK
-    if args.model is not None:
-        from sim.garage.folder import open_model
-
-        folder = open_model(args.model)
-        speeds = folder.metadata().action_space.speeds()
-        track_name = args.track or folder.training_params().world_name
+    subject = _subject(args)
+    space = subject.action_space
     if args.speeds is not None:
         speeds = _speeds(args.speeds)
-    track = resolve_track(track_name)
-    if args.function is not None:
-        source, name = _function(args.function)
-    elif args.model is not None:
-        source, name = folder.reward_source(), str(folder.reward_file)
     else:
-        raise MapOptionError(
-            "Give a reward function file or a template's name, or --model NAME for a "
-            "garage model's own function."
-        )
-    pays = lap_pay_of_source(source, name, track_name, tuple(sorted(set(speeds))))
+        speeds = DEFAULT_SPEEDS if space is None else space.speeds()
+    track = resolve_track(subject.track_name)
+    pays = lap_pay_of_source(
+        subject.source, subject.name, subject.track_name, tuple(sorted(set(speeds)))
+    )
     if args.json:
         print_json({"track": track.name, "laps": [pay.to_json() for pay in pays]})
         return 0
     console = Console()
-    console.print(Text(f"One lap of {track.name}: {name}", style="bold"))
+    console.print(Text(f"One lap of {track.name}: {subject.name}", style="bold"))
     console.print(lap_chart(pays, shutil.get_terminal_size().columns))
     for said in (verdict(pays), line_verdict(pays)):
         if said is not None:

@@ -184,3 +184,24 @@ def test_the_terminal_map_draws_the_road_its_centre_line_and_its_start_over_the_
     assert style.bgcolor is not None and style.bgcolor.get_truecolor() != (0, 0, 0)
     legend = map_text(reward_map, 200, track=HAIRPIN).plain.splitlines()[-1]
     assert "• road edges" in legend and "· centre line" in legend and "■ start" in legend
+
+
+def test_the_command_maps_a_garage_models_own_function_on_its_track_at_its_top_speed(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    model = ["model", "new", "quick", "--track", "hairpin-circuit", "--max-speed", "3"]
+    assert main([*model, "--reward", "prevent_zigzag"]) == 0
+    capsys.readouterr()
+    assert main(["reward", "map", "--model", "quick", "--spacing", "0.3", "--json"]) == 0
+    grid = json.loads(capsys.readouterr().out)
+    assert (grid["track"], grid["speed"]) == ("hairpin-circuit", 3.0)
+    zigzag = ["reward", "map", "prevent_zigzag", "--track", "hairpin-circuit", "--speed", "3"]
+    assert main([*zigzag, "--spacing", "0.3", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["values"] == grid["values"]
+    # Given, the speed and track win over the model's.
+    given = ["--speed", "1", "--track", "reinvent_base", "--spacing", "0.5", "--json"]
+    assert main(["reward", "map", "--model", "quick", *given]) == 0
+    grid = json.loads(capsys.readouterr().out)
+    assert (grid["track"], grid["speed"]) == ("reinvent_base", 1.0)
+    assert main(["reward", "map"]) == 2
+    assert "or --model NAME for a garage model's own function" in capsys.readouterr().err
