@@ -132,9 +132,9 @@ class RacerTuiApp(App[int]):
 
     def _collect_when_idle(self) -> None:
         # Only the sections open (a dialog or a race view closes soon): what survives a
-        # collection lives on, so it may be frozen. A key the driver has posted but the
-        # app has not handled yet would wait for the collection: the timer runs outside
-        # the app's queue, so it looks there first.
+        # sweep lives on, so it may be frozen. A key the driver has posted but the app has
+        # not handled yet would wait for the collection: the timer runs outside the app's
+        # queue, so it looks there first.
         self.collector.tick(quiet=self._quiet(), keys_waiting=not self._message_queue.empty())
 
     def on_unmount(self) -> None:
@@ -162,7 +162,7 @@ class RacerTuiApp(App[int]):
         return all(len(stack) <= 1 for stack in self._screen_stacks.values())
 
     def _freeze_if_quiet(self) -> None:
-        # With a dialog open, the idle collector freezes the section once it has closed.
+        # With a dialog open, the next sweep freezes the section instead.
         if self._quiet():
             freeze_long_lived()
 

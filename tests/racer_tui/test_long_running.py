@@ -1,6 +1,6 @@
 """The long-running app's garbage collection: full collections wait for a pause in the
-input, what survives them is frozen when only the sections are open, and a sweep frees
-garbage that was frozen."""
+input and freeze nothing; a sweep frees garbage that was frozen and, when only the
+sections are open, freezes what survives it."""
 
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ from racer_tui.long_running import (
     TRIM_SECONDS,
     IdleCollector,
     forget_removed_widgets_styles,
+    freeze_long_lived,
     limit_malloc_arenas,
     malloc_trim,
 )
@@ -88,7 +89,7 @@ def test_no_full_collection_while_keys_come_or_none_is_due(
     assert idle.collections == 0
 
 
-def test_an_idle_collection_frees_cycles_and_freezes_only_when_quiet(
+def test_an_idle_collection_frees_cycles_and_freezes_nothing(
     collector: tuple[IdleCollector, Clock],
 ) -> None:
     idle, clock = collector
@@ -101,20 +102,28 @@ def test_an_idle_collection_frees_cycles_and_freezes_only_when_quiet(
     assert garbage() is not None  # young collections never look at generation 2
     assert idle.tick(quiet=False)
     assert garbage() is None
-    assert gc.get_freeze_count() == 0  # a dialog was open: nothing frozen
+    # Alive at a quiet idle collection and dropped just after, as a footer key or a toast
+    # is: it must not outlive the next idle collection by being frozen in between.
+    removed_soon = Cycle()
+    removed = weakref.ref(removed_soon)
     promote()
     assert idle.tick(quiet=True)
-    assert gc.get_freeze_count() > 0
+    assert gc.get_freeze_count() == 0
+    del removed_soon
+    promote()
+    assert idle.tick(quiet=True)
+    assert removed() is None
 
 
-def test_a_sweep_frees_garbage_that_was_frozen(collector: tuple[IdleCollector, Clock]) -> None:
+def test_a_sweep_frees_garbage_that_was_frozen_and_freezes_what_lives(
+    collector: tuple[IdleCollector, Clock],
+) -> None:
     idle, clock = collector
     clock.now += IDLE_SECONDS * 2
-    kept = Cycle()
-    frozen_garbage = weakref.ref(kept)
-    promote()
-    assert idle.tick(quiet=True)  # `kept` is alive, so frozen
-    del kept  # now garbage, but frozen: ordinary collections never see it
+    removed_later = Cycle()
+    frozen_garbage = weakref.ref(removed_later)
+    freeze_long_lived()  # as after a section's first visit
+    del removed_later  # now garbage, but frozen: ordinary collections never see it
     promote()
     assert idle.tick(quiet=True)
     assert frozen_garbage() is not None
@@ -124,10 +133,17 @@ def test_a_sweep_frees_garbage_that_was_frozen(collector: tuple[IdleCollector, C
     promote()
     assert idle.tick(quiet=True)
     assert idle.sweeps == 0 and frozen_garbage() is not None
-    clock.now += SWEEP_IDLE_SECONDS  # a longer pause: the sweep
-    assert idle.tick(quiet=True)
+    clock.now += SWEEP_IDLE_SECONDS  # a longer pause, but a dialog is open: no sweep
+    assert not idle.tick(quiet=False)
+    assert idle.sweeps == 0
+    long_lived = Cycle()
+    assert idle.tick(quiet=True)  # the dialog closed: the sweep
     assert idle.sweeps == 1
     assert frozen_garbage() is None
+    # What lives on is out of later collections again: frozen, in no generation.
+    assert gc.is_tracked(long_lived)
+    assert not any(o is long_lived for generation in range(3) for o in gc.get_objects(generation))
+    assert gc.get_freeze_count() > 0
 
 
 def test_an_overdue_sweep_takes_the_next_short_pause(
