@@ -20,6 +20,11 @@ actions and at least 50):
   plus those the app froze) after the warm-up, halfway and at the end, and their growth
   per 1,000 actions over the measured part and over its second half (a cache filling up
   flattens out in the second half; a leak does not);
+- RSS at rest at the same points: right after giving free memory back to the system, as
+  the long-running app does at every pause in input (`racer_tui.long_running`, at most every
+  10 s). RSS taken at any other moment also counts what the C allocator holds free since
+  the last pause, 0 to 15 MB here, which makes a growth figure over 10,000 actions mostly
+  noise; the issue's growth target is judged on both, and both are printed;
 - the longest garbage-collection pause and the number of full (generation 2) collections,
   from `gc.callbacks`;
 - key latency p50 / p95 / max: from the moment Pilot sends the key to the first time the
@@ -134,6 +139,17 @@ def percentiles(values: list[float]) -> dict[str, float | int]:
 
 def rss_mb() -> float:
     return float(psutil.Process().memory_info().rss) / 1e6
+
+
+def rss_at_rest_mb() -> float:
+    """RSS once free memory has gone back to the system, as the app does when input
+    pauses (the raw RSS where the C library cannot: not glibc)."""
+    from racer_tui.long_running import malloc_trim
+
+    trim = malloc_trim()
+    if trim is not None:
+        trim()
+    return rss_mb()
 
 
 def live_objects() -> int:
@@ -558,7 +574,14 @@ class Soak:
 class Snapshot:
     actions: int
     rss_mb: float
-    objects: int
+    objects: int  # after a full collection
+    rest_mb: float  # RSS after that collection and a trim
+
+    @classmethod
+    def now(cls, actions: int) -> Snapshot:
+        rss = rss_mb()  # first: the collection and the trim below change it
+        objects = live_objects()
+        return cls(actions, rss, objects, rss_at_rest_mb())
 
 
 async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
@@ -603,20 +626,20 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
                     kind = next(kinds)
                 done += 1
                 if done == warmup:
-                    warm = Snapshot(done, rss_mb(), live_objects())
+                    warm = Snapshot.now(done)
                     runner.measuring = gc_watch.measuring = True
                     measured_started = time.perf_counter()
                 elif done == halfway:
                     # A bounded cache fills up and stops; a leak keeps going: the second
                     # half's growth tells them apart. Its own full collection is not counted.
                     gc_watch.measuring = False
-                    middle = Snapshot(done, rss_mb(), live_objects())
+                    middle = Snapshot.now(done)
                     gc_watch.measuring = True
                 if done > warmup and (done - warmup) % sample_every == 0:
                     samples.append((done, round(rss_mb(), 1)))
             gc_watch.measuring = False
             measured_s = time.perf_counter() - measured_started
-            end = Snapshot(done, rss_mb(), live_objects())
+            end = Snapshot.now(done)
             on_section = runner.on_section()
             mode = app.current_mode
     finally:
@@ -655,6 +678,15 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
                 (end.rss_mb - middle.rss_mb) * per_k_half, 3
             ),
             "samples": samples,
+        },
+        "rss_at_rest_mb": {
+            "after_warmup": round(warm.rest_mb, 1),
+            "end": round(end.rest_mb, 1),
+            "growth_per_1000_actions": round((end.rest_mb - warm.rest_mb) * per_k, 3),
+            "halfway": round(middle.rest_mb, 1),
+            "second_half_growth_per_1000_actions": round(
+                (end.rest_mb - middle.rest_mb) * per_k_half, 3
+            ),
         },
         "objects": {
             "after_warmup": warm.objects,
@@ -724,6 +756,22 @@ def print_report(report: dict[str, Any]) -> None:
     table.add_row(
         "  in the second half",
         f"{rss['second_half_growth_per_1000_actions']:+.3f} MB",
+        f"< {TARGET_GROWTH_MB:g} MB",
+    )
+    rest = report["rss_at_rest_mb"]
+    table.add_row(
+        "RSS at rest after warm-up / halfway / end",
+        f"{rest['after_warmup']:.1f} / {rest['halfway']:.1f} / {rest['end']:.1f}",
+        "",
+    )
+    table.add_row(
+        "RSS at rest growth per 1,000 actions",
+        f"{rest['growth_per_1000_actions']:+.3f} MB",
+        f"< {TARGET_GROWTH_MB:g} MB",
+    )
+    table.add_row(
+        "  in the second half",
+        f"{rest['second_half_growth_per_1000_actions']:+.3f} MB",
         f"< {TARGET_GROWTH_MB:g} MB",
     )
     table.add_row(

@@ -103,9 +103,10 @@ class _Subject:
     model's action space when one was named."""
 
     source: str
-    name: str
+    name: str  # as errors name it: the file's path, or the template's file
     track_name: str
     action_space: ActionSpace | None
+    title: str  # as the racer named it: the file, the template, or "MODEL's reward function"
 
 
 def _subject(args: argparse.Namespace) -> _Subject:
@@ -116,7 +117,7 @@ def _subject(args: argparse.Namespace) -> _Subject:
                 "garage model's own function."
             )
         source, name = _function(args.function)
-        return _Subject(source, name, args.track or DEFAULT_TRACK, None)
+        return _Subject(source, name, args.track or DEFAULT_TRACK, None, args.function)
     from sim.garage.folder import open_model
 
     folder = open_model(args.model)
@@ -124,8 +125,9 @@ def _subject(args: argparse.Namespace) -> _Subject:
     track_name = args.track or folder.training_params().world_name
     if args.function is not None:
         source, name = _function(args.function)
-        return _Subject(source, name, track_name, space)
-    return _Subject(folder.reward_source(), str(folder.reward_file), track_name, space)
+        return _Subject(source, name, track_name, space, args.function)
+    title = f"{folder.name}'s reward function"
+    return _Subject(folder.reward_source(), str(folder.reward_file), track_name, space, title)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -234,7 +236,7 @@ def _lap(args: argparse.Namespace) -> int:
         print_json({"track": track.name, "laps": [pay.to_json() for pay in pays]})
         return 0
     console = Console()
-    console.print(Text(f"One lap of {track.name}: {subject.name}", style="bold"))
+    console.print(Text(f"One lap of {track.name}: {subject.title}", style="bold"))
     console.print(lap_chart(pays, shutil.get_terminal_size().columns))
     for said in (verdict(pays), line_verdict(pays)):
         if said is not None:

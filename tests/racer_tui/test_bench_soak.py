@@ -55,13 +55,16 @@ def test_a_short_soak_reports_every_figure(racer_home: Path, tmp_path: Path) -> 
     assert report["heat_simulation_s"]["count"] > 0
     assert report["sync_s"]["count"] > 0
 
-    for name in ("rss_mb", "objects"):
+    for name in ("rss_mb", "rss_at_rest_mb", "objects"):
         for moment in ("after_warmup", "halfway", "end"):
             assert report[name][moment] > 0, (name, moment)
         for growth in ("growth_per_1000_actions", "second_half_growth_per_1000_actions"):
             assert isinstance(report[name][growth], float), (name, growth)
     assert report["objects"]["frozen_at_end"] > 0  # the long-running app froze them
     assert len(report["rss_mb"]["samples"]) > 0
+    # At rest, free memory has gone back to the system: never more than the RSS just before.
+    for moment in ("after_warmup", "halfway", "end"):
+        assert report["rss_at_rest_mb"][moment] <= report["rss_mb"][moment] + 0.5, moment
 
     gc_figures = report["gc"]
     assert gc_figures["longest_pause_ms"] >= 0.0

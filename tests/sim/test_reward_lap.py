@@ -125,6 +125,8 @@ def test_the_command_charts_both_lines_at_a_models_own_speeds(
         (line, speed) for line in LINES for speed in (1.5, 3.0)
     ]
     assert all(len(lap["rewards"]) == lap["steps"] - 1 for lap in laps)
+    assert main(["reward", "lap", "--model", "slowpoke"]) == 0
+    assert "One lap of hairpin-circuit: slowpoke's reward function" in capsys.readouterr().out
     monkeypatch.setenv("COLUMNS", "80")
     assert main(["reward", "lap", "follow_center_line", "--track", "hairpin-circuit"]) == 0
     out = capsys.readouterr().out
