@@ -39,7 +39,7 @@ _HALF_BLOCK = "▀"
 
 
 def _marks(
-    reward_map: RewardMap, track: Track, step: int
+    reward_map: RewardMap, track: Track, scale: float
 ) -> dict[tuple[int, int], tuple[str, tuple[int, int, int]]]:
     """(text line, column) -> the glyph and colour of the track line crossing that cell."""
     spacing = reward_map.options.spacing
@@ -56,13 +56,13 @@ def _marks(
         lengths = np.hypot(*np.diff(points, axis=0).T)
         # Half a shown cell apart: every cell the line crosses gets at least one sample.
         samples = [
-            np.linspace(start, end, max(2, math.ceil(length / (spacing * step / 2)) + 1))
+            np.linspace(start, end, max(2, math.ceil(length / (spacing * scale / 2)) + 1))
             for start, end, length in zip(points[:-1], points[1:], lengths, strict=True)
         ]
         xy = np.vstack(samples)
-        column = np.round((xy[:, 0] - origin_x) / spacing).astype(int) // step
-        row_from_top = rows - 1 - np.round((xy[:, 1] - origin_y) / spacing).astype(int)
-        line_index = (row_from_top // step) // 2
+        column = np.floor(np.round((xy[:, 0] - origin_x) / spacing) / scale).astype(int)
+        row_from_top = rows - 1 - np.round((xy[:, 1] - origin_y) / spacing)
+        line_index = np.floor(row_from_top / scale).astype(int) // 2
         for key in zip(line_index.tolist(), column.tolist(), strict=True):
             marks[key] = mark
     return marks
@@ -75,13 +75,16 @@ def _mix(a: tuple[int, int, int], b: tuple[int, int, int]) -> tuple[int, int, in
 def map_text(
     reward_map: RewardMap, width: int, *, legend: bool = True, track: Track | None = None
 ) -> Text:
-    """Two map rows per line, a cell per character, thinned to fit `width` columns; with
-    `track`, its lines drawn over the colours."""
+    """Two map rows per line, a cell per character, thinned to fit `width` columns (each
+    shown cell is the map's cell at its top-left corner: `scale` map cells apart, a
+    fraction, so the map fills the width); with `track`, its lines drawn over the colours."""
     rows = pixel_rows(reward_map)
     columns = len(rows[0]) if rows else 0
-    step = max(1, math.ceil(columns / max(20, width - 1)))
-    thinned = [row[::step] for row in rows[::step]]
-    marks = _marks(reward_map, track, step) if track is not None else {}
+    scale = max(1.0, columns / max(20, width - 1))
+    kept_columns = [int(i * scale) for i in range(math.floor(columns / scale))]
+    kept_rows = [int(i * scale) for i in range(math.floor(len(rows) / scale))]
+    thinned = [[rows[r][c] for c in kept_columns] for r in kept_rows]
+    marks = _marks(reward_map, track, scale) if track is not None else {}
     text = Text()
     for line_index, (upper, lower) in enumerate(
         zip(thinned[::2], [*thinned[1::2], []], strict=False)
@@ -107,7 +110,7 @@ def map_text(
     heading = reward_map.options.heading
     facing = "along the track" if heading is None else f"facing {heading:g}°"
     text.append(f", at {reward_map.options.speed:g} m/s {facing}")
-    text.append(f", {reward_map.options.spacing * step:g} m per cell")
+    text.append(f", {reward_map.options.spacing * scale:.2g} m per cell")
     if reward_map.failed:
         text.append(" · ")
         text.append("██", style=Style(color=_rgb(FAILED_COLOUR)))
