@@ -26,7 +26,7 @@ from racer_tui.reward_map_text import map_text
 from sim.action_space import MAX_SPEED, ActionSpace
 from sim.atomic import write_bytes_atomic
 from sim.reward_function import TEMPLATES, read_reward_file, template_source
-from sim.reward_lap import DEFAULT_SPEEDS, line_verdict, verdict
+from sim.reward_lap import DEFAULT_SPEEDS, LINES, REFERENCE_LINE, line_verdict, verdict
 from sim.reward_map import (
     DEFAULT_SPACING,
     DEFAULT_SPEED,
@@ -238,9 +238,16 @@ def _lap(args: argparse.Namespace) -> int:
     console = Console()
     console.print(Text(f"One lap of {track.name}: {subject.title}", style="bold"))
     console.print(lap_chart(pays, shutil.get_terminal_size().columns))
-    for said in (verdict(pays), line_verdict(pays)):
-        if said is not None:
-            console.print(Text(said))  # wrapped to the terminal, never read as markup
+    missing = [line for line in LINES if line not in {pay.line for pay in pays}]
+    said = [verdict(pays), line_verdict(pays)]
+    if REFERENCE_LINE in missing:
+        said.append(
+            f"The reference driver does not finish a lap of {track.name}, so only the centre "
+            "line is charted."
+        )
+    for sentence in said:
+        if sentence is not None:
+            console.print(Text(sentence))  # wrapped to the terminal, never read as markup
     return 0
 
 

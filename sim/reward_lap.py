@@ -65,6 +65,10 @@ class LapPay:
         )
 
 
+class NoLapError(ValueError):
+    """A line with no lap to drive on this track (the reference driver does not finish one)."""
+
+
 def line_path(track: Track, line: str) -> PolylineProjector:
     """The closed line a lap drives, starting across the road from the start line."""
     if line == CENTRE_LINE:
@@ -74,7 +78,7 @@ def line_path(track: Track, line: str) -> PolylineProjector:
 
         lap = reference_lap(track)
         if not lap.completed:
-            raise ValueError(f"the reference driver does not finish a lap of {track.name}")
+            raise NoLapError(f"the reference driver does not finish a lap of {track.name}")
         # Closed back to the standing start; steps too short to matter (the first
         # instants of the start) are dropped, as a polyline cannot repeat a point.
         points = np.vstack([lap.path, lap.path[:1]])
@@ -89,10 +93,14 @@ def lap_rewards(
     speeds: tuple[float, ...],
     lines: tuple[str, ...] = (CENTRE_LINE,),
 ) -> list[LapPay]:
-    """The lap's pay on each line at each speed (see the module docstring), line by line."""
+    """The lap's pay on each line at each speed (see the module docstring), line by line;
+    a line with no lap on this track (`NoLapError`) is left out."""
     pays = []
     for line in lines:
-        path = line_path(track, line)
+        try:
+            path = line_path(track, line)
+        except NoLapError:
+            continue
         for speed in speeds:
             steps = max(2, int(np.ceil(path.total_length / (speed / STEP_HZ))))
             along = np.mod(np.arange(steps) * (speed / STEP_HZ), path.total_length)

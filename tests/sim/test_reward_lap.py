@@ -142,3 +142,25 @@ def test_the_command_charts_both_lines_at_a_models_own_speeds(
     assert "Give a reward function file or a template's name" in capsys.readouterr().err
     assert main(["reward", "lap", "--model", "nobody"]) == 2
     assert "there is no model named 'nobody'" in capsys.readouterr().err
+
+
+def test_a_track_the_reference_driver_cannot_finish_is_charted_on_its_centre_line(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import racer_tui.reward_commands
+    import sim.reference_driver
+    from sim.reference_driver import ReferenceLap
+
+    def off_the_road(track: object, *args: object, **kwargs: object) -> ReferenceLap:
+        return ReferenceLap("hairpin-circuit", float("nan"), "off_track", 10.0)
+
+    monkeypatch.setattr(sim.reference_driver, "reference_lap", off_the_road)
+    pays = lap_rewards(load_template("follow_center_line"), HAIRPIN, (1.0, 2.0), LINES)
+    assert [pay.line for pay in pays] == [CENTRE_LINE, CENTRE_LINE]
+    assert line_verdict(pays) is None
+    # The command (whose child process this test cannot reach) says why a line is missing.
+    monkeypatch.setattr(racer_tui.reward_commands, "lap_pay_of_source", lambda *a, **k: pays)
+    assert main(["reward", "lap", "follow_center_line", "--track", "hairpin-circuit"]) == 0
+    out = " ".join(capsys.readouterr().out.split())  # as read, whatever the terminal's width
+    assert "does not finish a lap of hairpin-circuit, so only the centre line is charted" in out
+    assert "reference line" not in out
