@@ -584,6 +584,23 @@ class Snapshot:
         return cls(actions, rss, objects, rss_at_rest_mb())
 
 
+def growth(
+    points: tuple[Snapshot, Snapshot, Snapshot], figure: str, digits: int | None, per: int
+) -> dict[str, Any]:
+    """A figure after warm-up, halfway and at the end (rounded to `digits`), and its growth
+    per 1,000 actions over the measured part and over its second half (to `per` digits)."""
+    warm, middle, end = (getattr(point, figure) for point in points)
+    per_k = 1000.0 / max(1, points[2].actions - points[0].actions)
+    per_k_half = 1000.0 / max(1, points[2].actions - points[1].actions)
+    return {
+        "after_warmup": round(warm, digits),
+        "end": round(end, digits),
+        "growth_per_1000_actions": round((end - warm) * per_k, per),
+        "halfway": round(middle, digits),
+        "second_half_growth_per_1000_actions": round((end - middle) * per_k_half, per),
+    }
+
+
 async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
     """Drive the app for `actions` actions; the figures of the part after `warmup`."""
     from racer_tui.app import create_app
@@ -646,8 +663,7 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
         gc.callbacks.remove(gc_watch)
     assert warm is not None
     middle = middle or warm  # fewer than two measured actions: no halves
-    per_k = 1000.0 / max(1, end.actions - warm.actions)
-    per_k_half = 1000.0 / max(1, end.actions - middle.actions)
+    points = (warm, middle, end)
     all_keys = [ms for values in runner.latencies.values() for ms in values]
     notes = []
     if runner.unseen:
@@ -669,33 +685,10 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
         "measured_actions": end.actions - warm.actions,
         "measured_seconds": round(measured_s, 1),
         "displays": clock.displays,
-        "rss_mb": {
-            "after_warmup": round(warm.rss_mb, 1),
-            "end": round(end.rss_mb, 1),
-            "growth_per_1000_actions": round((end.rss_mb - warm.rss_mb) * per_k, 3),
-            "halfway": round(middle.rss_mb, 1),
-            "second_half_growth_per_1000_actions": round(
-                (end.rss_mb - middle.rss_mb) * per_k_half, 3
-            ),
-            "samples": samples,
-        },
-        "rss_at_rest_mb": {
-            "after_warmup": round(warm.rest_mb, 1),
-            "end": round(end.rest_mb, 1),
-            "growth_per_1000_actions": round((end.rest_mb - warm.rest_mb) * per_k, 3),
-            "halfway": round(middle.rest_mb, 1),
-            "second_half_growth_per_1000_actions": round(
-                (end.rest_mb - middle.rest_mb) * per_k_half, 3
-            ),
-        },
+        "rss_mb": {**growth(points, "rss_mb", 1, 3), "samples": samples},
+        "rss_at_rest_mb": growth(points, "rest_mb", 1, 3),
         "objects": {
-            "after_warmup": warm.objects,
-            "end": end.objects,
-            "growth_per_1000_actions": round((end.objects - warm.objects) * per_k, 1),
-            "halfway": middle.objects,
-            "second_half_growth_per_1000_actions": round(
-                (end.objects - middle.objects) * per_k_half, 1
-            ),
+            **growth(points, "objects", None, 1),
             "frozen_at_end": gc.get_freeze_count(),
         },
         "gc": {

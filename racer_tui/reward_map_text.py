@@ -21,6 +21,8 @@ from sim.reward_map import (
     RewardMap,
     colour,
     pixel_rows,
+    polyline_samples,
+    start_line,
 )
 from sim.track import Track
 
@@ -50,16 +52,9 @@ def _marks(
         (track.center, _CENTRE),
         (track.inner, _EDGE),  # where a shown cell holds both, the road's edge matters more
         (track.outer, _EDGE),
-        (track.points[0, 2:6].reshape(2, 2), _START),  # across the road at the first point
+        (start_line(track), _START),
     ):
-        points = np.asarray(line, dtype=float)
-        lengths = np.hypot(*np.diff(points, axis=0).T)
-        # Half a shown cell apart: every cell the line crosses gets at least one sample.
-        samples = [
-            np.linspace(start, end, max(2, math.ceil(length / (spacing * scale / 2)) + 1))
-            for start, end, length in zip(points[:-1], points[1:], lengths, strict=True)
-        ]
-        xy = np.vstack(samples)
+        xy = polyline_samples(line, spacing * scale / 2)
         column = np.floor(np.round((xy[:, 0] - origin_x) / spacing) / scale).astype(int)
         row_from_top = rows - 1 - np.round((xy[:, 1] - origin_y) / spacing)
         line_index = np.floor(row_from_top / scale).astype(int) // 2

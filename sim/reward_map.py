@@ -209,7 +209,7 @@ def png_bytes(reward_map: RewardMap, scale: int = 4, track: Track | None = None)
             (track.inner, BORDER_COLOUR),
             (track.outer, BORDER_COLOUR),
             (track.center, CENTRE_COLOUR),
-            (track.points[0, 2:6].reshape(2, 2), START_COLOUR),  # across the road at row 0
+            (start_line(track), START_COLOUR),
         ):
             _draw(image, reward_map, scale, line, rgb)
     raw = b"".join(b"\x00" + image[y].tobytes() for y in range(height))  # filter 0 per line
@@ -227,6 +227,24 @@ def png_bytes(reward_map: RewardMap, scale: int = 4, track: Track | None = None)
     )
 
 
+def start_line(track: Track) -> np.ndarray:
+    """The start line's two ends, across the road at the track's first point."""
+    return track.points[0, 2:6].reshape(2, 2)
+
+
+def polyline_samples(line: np.ndarray, apart: float) -> np.ndarray:
+    """Points along a polyline in metres, at most `apart` metres from one to the next, so
+    every cell of that size the line crosses gets one."""
+    points = np.asarray(line, dtype=float)
+    lengths = np.hypot(*np.diff(points, axis=0).T)
+    return np.vstack(
+        [
+            np.linspace(start, end, max(2, int(np.ceil(length / apart)) + 1))
+            for start, end, length in zip(points[:-1], points[1:], lengths, strict=True)
+        ]
+    )
+
+
 def _draw(
     image: np.ndarray,
     reward_map: RewardMap,
@@ -238,14 +256,7 @@ def _draw(
     spacing = reward_map.options.spacing
     origin_x, origin_y = reward_map.origin
     rows = len(reward_map.values)
-    points = np.asarray(line, dtype=float)
-    lengths = np.hypot(*np.diff(points, axis=0).T)
-    pixel = spacing / scale
-    samples = [
-        np.linspace(start, end, max(2, int(np.ceil(length / pixel)) + 1))
-        for start, end, length in zip(points[:-1], points[1:], lengths, strict=True)
-    ]
-    xy = np.vstack(samples)
+    xy = polyline_samples(line, spacing / scale)
     column = np.floor(((xy[:, 0] - origin_x) / spacing + 0.5) * scale).astype(int)
     row = np.floor((rows - 0.5 - (xy[:, 1] - origin_y) / spacing) * scale).astype(int)
     inside = (row >= 0) & (row < image.shape[0]) & (column >= 0) & (column < image.shape[1])
