@@ -14,13 +14,13 @@ from racer_tui.bench_kill import main
 def test_killed_pushes_pulls_and_trainings_lose_nothing(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    args = ["--sync-kills", "2", "--records", "300", "--writers", "3"]
+    args = ["--sync-kills", "1", "--records", "300", "--writers", "3"]
     args += ["--train-kills", "1", "--train-window", "6"]
     assert main([*args, "--races-each", "4", "--seed", "3", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["problems"] == []
     assert (report["lost"], report["duplicated"], report["corrupt"]) == (0, 0, 0)
     parts = report["parts"]
-    assert parts["push"]["runs"] == parts["pull"]["runs"] == 2
+    assert parts["push"]["runs"] == parts["pull"]["runs"] == 1
     assert parts["writers"]["runs"] == 3
     assert parts["train"]["runs"] == 1 and parts["train"]["killed_mid_way"] == 1
