@@ -21,6 +21,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Digits, Static
 
+from racer_tui.jobs import Job, JobState
 from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.race_map import CarMarker, RaceMap
@@ -62,6 +63,30 @@ def countdown_text(seconds: float) -> str:
     """m:ss for the window countdown (rounded up, so it shows 0:00 only at the end)."""
     whole = int(np.ceil(max(seconds, 0.0) - 1e-9))
     return f"{whole // 60}:{whole % 60:02d}"
+
+
+# What a racer can do once the race is over or has failed, in the race view's own keys.
+AFTER_THE_RACE = "r replays, Esc goes back."
+LEAVE = "Esc goes back."
+
+
+def race_job(setup: RaceSetup, tick: RaceTick | None, failure: str | None) -> Job:
+    """The race as the app's one status model for long jobs (`racer_tui.jobs`), at the
+    moment the view shows: starting, running on the race clock against its window
+    (`done` and `total` in seconds), finished with its best lap, or failed with why and
+    the key that leaves."""
+    verb = "Replaying" if setup.replay is not None else "Racing"
+    what = f"{verb} {setup.racer} on {setup.track.name}"
+    window = setup.rules.window_seconds
+    if failure:
+        return Job(what, JobState.FAILED, outcome=failure, fix=LEAVE)
+    if tick is None:
+        return Job(what, JobState.RUNNING, total=window)
+    if tick.result is None:
+        return Job(what, JobState.RUNNING, done=tick.clock, total=window)
+    best = tick.result.best_lap
+    outcome = f"best lap {clock_text(best.time_seconds)}" if best is not None else "no lap counted"
+    return Job(what, JobState.DONE, done=tick.clock, total=window, outcome=outcome)
 
 
 class RaceScreen(RacerScreen[RaceResult | None]):
@@ -208,11 +233,17 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         if tick is not None and len(tick.laps) != self._laps_shown:
             self._add_laps(tick)
 
+    @property
+    def job(self) -> Job:
+        """Where the race is, as the view shows it now."""
+        return race_job(self.setup, self.ticks[self._index] if self.ticks else None, self.failure)
+
     def _facts(self, tick: RaceTick | None) -> Text:
         rules = self.setup.rules
         text = Text()
-        if self.failure:
-            return Text(self.failure, style="bold red")
+        job = race_job(self.setup, tick, self.failure)
+        if job.state is JobState.FAILED:
+            return Text(f"{job.outcome} {job.fix}", style="bold red")
         if tick is None:
             return Text("Starting the race…", style="dim")
         limit = "∞" if rules.max_offtracks_per_lap is None else str(rules.max_offtracks_per_lap)
@@ -243,9 +274,9 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             gap = best - leader
             text.append(f"  gap {gap:+.3f}", style="green" if gap <= 0 else "yellow")
         text.append("\n")
-        if tick.result is not None:
+        if job.state is JobState.DONE:
             text.append("Finished. ", style="bold green")
-            text.append("r replays, Esc goes back.", style="dim")
+            text.append(AFTER_THE_RACE, style="dim")
         return text
 
     def _add_laps(self, tick: RaceTick) -> None:

@@ -9,7 +9,15 @@ from textual.app import App
 from textual.pilot import Pilot
 from textual.widgets import DataTable, Static
 
-from racer_tui.screens.race_screen import RaceScreen, RaceSetup, clock_text, countdown_text
+from racer_tui.jobs import JobState
+from racer_tui.screens.race_screen import (
+    LEAVE,
+    RaceScreen,
+    RaceSetup,
+    clock_text,
+    countdown_text,
+    race_job,
+)
 from sim.garage.options import new_model
 from sim.race.engine import run_race
 from sim.race.replay import ghost_lap
@@ -44,10 +52,17 @@ async def test_a_live_race_fills_the_laps_table_and_returns_its_result() -> None
     async with app.run_test(size=(100, 30)) as pilot:
         await app.push_screen(screen)
         await worked_out(pilot, screen)
+        # Worked out, but played back at 1x: the race is still running as the view shows it.
+        assert screen.job.state is JobState.RUNNING and screen.job.total == 20.0
+        assert screen.job.what == "Racing [bold]Ada on beginner-oval"
         await pilot.press("e")
         await pilot.pause()
         result = screen.result
         assert result is not None and result.racer == "[bold]Ada"
+        best = result.best_lap
+        assert best is not None
+        assert screen.job.state is JobState.DONE
+        assert screen.job.outcome == f"best lap {clock_text(best.time_seconds)}"
         table = screen.query_one("#laps", DataTable)
         assert table.row_count == len(result.laps) >= 2
         assert table.get_row_at(0)[1] == clock_text(result.laps[0].time_seconds)
@@ -102,6 +117,24 @@ async def test_a_race_that_cannot_start_says_why_in_the_apps_words() -> None:
         assert "Model 'ada' has no trained policy yet" in screen.failure
         assert "press t in the Garage to train it" in screen.failure
         assert "racer-tui" not in screen.failure
+        # The race's status says it failed, why, and which key leaves the view.
+        assert screen.job.state is JobState.FAILED and screen.job.fix == LEAVE
+        await pilot.pause(0.2)  # the panel redraws at 10 Hz
+        facts = str(screen.query_one("#race-facts", Static).render())
+        assert "Model 'ada' has no trained policy yet" in facts and facts.endswith(LEAVE)
+
+
+def test_a_replay_is_a_job_of_its_own_from_its_first_tick_to_its_result() -> None:
+    track = resolve_track("beginner-oval")
+    recorded = run_race(track, SHORT, racer="Ada")
+    setup = RaceSetup(track=track, rules=SHORT, racer="Ada", replay=recorded)
+    starting = race_job(setup, None, None)
+    assert (starting.what, starting.state, starting.done) == (
+        "Replaying Ada on beginner-oval",
+        JobState.RUNNING,
+        0.0,
+    )
+    assert race_job(setup, None, "This race cannot be replayed.").state is JobState.FAILED
 
 
 def test_off_tracks_past_the_limit_say_the_lap_is_lost() -> None:
