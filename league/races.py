@@ -88,9 +88,12 @@ def record_race(
         if existing is not None:
             if existing["content_hash"] == content_hash(record_body(fields_, {"laps": laps})):
                 return result.result_id
-            raise LeagueError(
+            problem = (  # the app corrects nothing: it says the problem alone
                 f"race {result.result_id} is already recorded with different content; "
-                "a recorded race never changes (use `racer-tui correct` for corrections)."
+                "a recorded race never changes"
+            )
+            raise LeagueError(
+                f"{problem} (use `racer-tui correct` for corrections).", problem=problem
             )
         if night_id is not None:
             _check_night(league, night_id, result)

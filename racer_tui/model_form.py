@@ -42,6 +42,7 @@ from sim.garage.options import (
 )
 from sim.names import NAME_RULE, is_valid_name
 from sim.observations import SensorError, normalise_sensors
+from sim.remedies import Note, RemedyError
 from sim.reward_function import RewardFunctionError, check_reward_code
 from sim.track import TrackError
 
@@ -62,6 +63,14 @@ TUNABLE = tuple(spec for spec in HYPERPARAMETER_SPECS.values() if spec.tunable)
 class FieldProblem:
     field: str  # the form field's id
     message: str  # one sentence saying what is allowed
+
+
+def field_message(error: RemedyError) -> str:
+    """A library error as a field's problem: a Note when it ends in a remedy, so the editor
+    says the app's own remedy (`in_app_words`), never the command line's."""
+    if error.fix is None:
+        return str(error)
+    return Note(str(error), problem=error.problem, fix=error.fix)
 
 
 class FormError(ValueError):
@@ -261,7 +270,7 @@ def spec_of_form(
     try:
         resolve_track(values.track)
     except TrackError as error:
-        problems.append(FieldProblem("track", str(error)))
+        problems.append(FieldProblem("track", field_message(error)))
     sensors: tuple[str, ...] = base.metadata.sensors
     try:
         sensors = normalise_sensors(values.sensor.split("+"))

@@ -33,6 +33,7 @@ from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, load_rules, rules_from_mapping
+from sim.remedies import RemedyError
 from sim.track import Track, TrackError
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
@@ -42,8 +43,16 @@ EXIT_USER_ERROR = 2
 BUNDLE_SUFFIX = ".racer-bundle"
 
 
-class RaceSetupError(ValueError):
-    """An entrant, option or output folder the race cannot use; one sentence to stderr."""
+class RaceSetupError(RemedyError):
+    """An entrant, option or output folder the race cannot use; one sentence to stderr
+    (a library error's remedy kept, so the app's race view offers its own key)."""
+
+    @classmethod
+    def about(cls, error: Exception, prefix: str = "") -> RaceSetupError:
+        """`error`, after `prefix`, with its remedy when it has one."""
+        problem = error.problem if isinstance(error, RemedyError) else str(error)
+        fix = error.fix if isinstance(error, RemedyError) else None
+        return cls(f"{prefix}{error}", problem=f"{prefix}{problem}", fix=fix)
 
 
 USER_ERRORS: tuple[type[Exception], ...] = (RaceSetupError, RulesError, TrackError)
@@ -241,7 +250,7 @@ def resolve_driver(spec: str, track: Track) -> Driver:
         folder = open_model(spec)
         return _policy_driver(spec, lambda policy: policy.driver_for_model(folder))
     except (ModelError, DeepRacerFileError) as error:
-        raise RaceSetupError(str(error)) from None
+        raise RaceSetupError.about(error) from None
 
 
 class DriversByHash:
@@ -280,7 +289,7 @@ def _policy_driver(spec: str, build: Callable[[ModuleType], Driver]) -> Driver:
     try:
         return build(policy)
     except PolicyError as error:
-        raise RaceSetupError(f"cannot race {spec!r}: {error}") from None
+        raise RaceSetupError.about(error, f"cannot race {spec!r}: ") from None
 
 
 # --- outputs ------------------------------------------------------------------------------------

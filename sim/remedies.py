@@ -16,6 +16,8 @@ class Fix(Enum):
     CHOOSE_MODEL = "choose or create a model"
     SET_RACER_NAME = "save this machine's racer name"
     EVALUATE_MODEL = "evaluate the model"
+    IMPORT_MODEL = "import the DeepRacer model folder"
+    RUN_HEATS = "run the night's waiting heats"
 
 
 class Note(str):

@@ -133,7 +133,7 @@ def find_track_info(name: str) -> TrackInfo:
     if by_console:
         choices = " or ".join(f"{track.world_name} ({track.direction})" for track in by_console)
         raise TrackError(f"{name!r} is {len(by_console)} tracks; give one of: {choices}.")
-    raise TrackError(_unknown_name(name, infos))
+    raise _unknown_name(name, infos)
 
 
 def resolve_track(name_or_path: str) -> Track:
@@ -226,7 +226,7 @@ def _console_matches(folded: str) -> list[OfficialTrack]:
     return main or named
 
 
-def _unknown_name(name: str, infos: list[TrackInfo]) -> str:
+def _unknown_name(name: str, infos: list[TrackInfo]) -> TrackError:
     by_fold: dict[str, str] = {}
     for info in infos:
         by_fold.setdefault(info.name.casefold(), info.name)
@@ -234,11 +234,12 @@ def _unknown_name(name: str, infos: list[TrackInfo]) -> str:
             by_fold.setdefault(info.console_name.casefold(), info.console_name)
     close = difflib.get_close_matches(name.casefold(), list(by_fold), n=4, cutoff=0.6)
     near = ", ".join(repr(by_fold[key]) for key in close)
-    return (
-        f"there is no track named {name!r}"
-        + (f" (close names: {near})" if close else "")
-        + "; give a name that `racer-tui tracks list` shows, or the path of a DeepRacer .npy "
-        "file (`racer-tui tracks import FILE` keeps one)."
+    problem = f"there is no track named {name!r}" + (f" (close names: {near})" if close else "")
+    return TrackError(
+        f"{problem}; give a name that `racer-tui tracks list` shows, or the path of a "
+        "DeepRacer .npy file (`racer-tui tracks import FILE` keeps one).",
+        problem=problem,
+        fix=Fix.IMPORT_TRACK,
     )
 
 

@@ -40,6 +40,8 @@ APP_FIXES = {
     Fix.CHOOSE_MODEL: "the Garage (1) lists your models, and n there creates one",
     Fix.SET_RACER_NAME: "submit a result under your name (u in the Garage), then sync again",
     Fix.EVALUATE_MODEL: "press v in the Garage to evaluate it",
+    Fix.IMPORT_MODEL: "give a garage model's name, or import the folder in the Garage (i there)",
+    Fix.RUN_HEATS: "run them (r), or press c again to close the night anyway",
 }
 
 

@@ -26,7 +26,7 @@ from textual.widgets import DataTable
 from textual.worker import Worker
 
 from racer_tui.model_form import check_name, taken_names
-from racer_tui.screens.base import RacerScreen, ScreenJobs, in_app_words
+from racer_tui.screens.base import RacerScreen, ScreenJobs, error_message, in_app_words
 from racer_tui.screens.dialogs import ImportDialog, ImportRequest, InputDialog, ask
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.league_submit import RacerPrompt, submit_model_from
@@ -331,7 +331,7 @@ class GarageScreen(RacerScreen[None]):
             details = model_details(folder)
             space = folder.metadata().action_space
         except ModelError as error:
-            self.post_message(ModelDetailsFailed(name, str(error)))
+            self.post_message(ModelDetailsFailed(name, error_message(error)))
             return
         self.post_message(ModelDetailsLoaded(name, details, space))
 
@@ -353,7 +353,7 @@ class GarageScreen(RacerScreen[None]):
         try:
             return open_model(name)
         except ModelError as error:
-            self.notify(str(error), severity="error", markup=False)
+            self.notify(error_message(error), severity="error", markup=False)
             return None
 
     def action_reload(self) -> None:
@@ -571,7 +571,7 @@ class GarageScreen(RacerScreen[None]):
         try:
             track = folder.track()
         except ModelError as error:
-            self.notify(str(error), severity="error", markup=False)
+            self.notify(error_message(error), severity="error", markup=False)
             return
         setup = RaceSetup(
             track=track,

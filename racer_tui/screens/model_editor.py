@@ -49,13 +49,14 @@ from racer_tui.model_form import (
     FormValues,
     action_space_of,
     create_from_form,
+    field_message,
     save_edit,
     spec_of_form,
     taken_names,
     values_of,
 )
 from racer_tui.reward_map_text import map_text
-from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.base import RacerScreen, in_app_words
 from racer_tui.screens.dialogs import ask
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from racer_tui.widgets.footer import RacerFooter
@@ -524,7 +525,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
         try:
             self.post_message(TrackPreviewLoaded(resolve_track(name)))
         except TrackError as error:
-            self.post_message(FormRejected((FieldProblem("track", str(error)),)))
+            self.post_message(FormRejected((FieldProblem("track", field_message(error)),)))
 
     def on_track_preview_loaded(self, message: TrackPreviewLoaded) -> None:
         self.query_one("#track-preview", TrackMap).track = message.track
@@ -687,7 +688,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
 
     def on_form_rejected(self, message: FormRejected) -> None:
         for problem in message.problems:
-            self._set_problem(problem.field, problem.message)
+            self._set_problem(problem.field, in_app_words(problem.message))
         first = message.problems[0]
         self.query_one(TabbedContent).active = tab_of(first.field)
         widgets = self.query(f"#{first.field}")
@@ -695,7 +696,8 @@ class ModelEditorScreen(RacerScreen[str | None]):
             widgets.first().focus()
         count = len(message.problems)
         more = f" (and {count - 1} more)" if count > 1 else ""
-        self.notify(f"Not saved: {first.message}{more}", severity="error", timeout=8, markup=False)
+        said = in_app_words(first.message)
+        self.notify(f"Not saved: {said}{more}", severity="error", timeout=8, markup=False)
 
     def on_model_saved(self, message: ModelSaved) -> None:
         verb = "Created" if message.created else "Saved"

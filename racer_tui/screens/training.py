@@ -38,7 +38,7 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import Button, DataTable, Label, Static
 
-from racer_tui.screens.base import RacerModal, RacerScreen
+from racer_tui.screens.base import RacerModal, RacerScreen, error_message
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.widgets.agent_view import AgentView, Observation, observe_at
@@ -456,7 +456,7 @@ class TrainingScreen(RacerScreen[None]):
             folder = open_model(name)
             minutes = folder.last_budget_minutes() or folder.training_params().max_minutes
         except ModelError as error:
-            self.notify(str(error), severity="error", markup=False)
+            self.notify(error_message(error), severity="error", markup=False)
             return
         dialog = InputDialog(
             f"Train {name}",

@@ -250,7 +250,12 @@ class ModelFolder:
         try:
             return resolve_track(world)
         except TrackError as error:
-            raise ModelError(f"model {self.name!r} trains on track {world!r}: {error}") from None
+            where = f"model {self.name!r} trains on track {world!r}"
+            raise ModelError(  # the app's remedy: choose the model's track (or import it)
+                f"{where}: {error}",
+                problem=f"{where}: {error.problem}",
+                fix=Fix.CHOOSE_TRACK if error.fix is not None else None,
+            ) from None
 
     def env_config(self) -> EnvConfig:
         """Track, action space, sensors and reward function: what training and evaluation run,
@@ -459,10 +464,14 @@ def open_model(name_or_path: str) -> ModelFolder:
     if path.is_dir() and (is_model_folder(path) or needs_migration(path)):
         return _opened(path)
     if path.is_dir():
+        problem = (
+            f"{path / MODEL_METADATA_PATH} does not exist, so {name_or_path} is not a model folder"
+        )
         raise ModelError(
-            f"{path / MODEL_METADATA_PATH} does not exist, so {name_or_path} is not a model "
-            "folder; give a garage model name, or bring in a DeepRacer download with "
-            "`racer-tui model import PATH`."
+            f"{problem}; give a garage model name, or bring in a DeepRacer download with "
+            "`racer-tui model import PATH`.",
+            problem=problem,
+            fix=Fix.IMPORT_MODEL,
         )
     problem = f"there is no model named {name_or_path!r}"
     raise ModelError(
@@ -598,7 +607,7 @@ def _catalog_track(track: str) -> Track:
     try:
         return resolve_track(track)
     except TrackError as error:
-        raise ModelError(str(error)) from None
+        raise ModelError(str(error), problem=error.problem, fix=error.fix) from None
 
 
 def _umask() -> int:
