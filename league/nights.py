@@ -23,6 +23,7 @@ from league.racers import check_name, display_names, ensure_racer
 from league.races import find_local_track, record_race
 from league.seasons import DEFAULT_POINTS, get_season
 from league.store import League, now_iso
+from league.timekeeper.car import is_physical, physical_spec
 from league.tracks import ensure_track
 from sim.ids import new_id
 from sim.plural import counted
@@ -169,6 +170,7 @@ def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant
         )
         if duplicate:
             raise LeagueError(f"{name!r} is already entered with {spec!r} on this night.")
+        _same_kind_of_car(league, night, spec)
         entrant_id = league.insert_record(
             "night_entrants",
             {"night_id": night.id, "racer": name, "model": spec, "created_at": now_iso()},
@@ -177,10 +179,23 @@ def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant
     return Entrant(entrant_id, name, shown, spec)
 
 
+def _same_kind_of_car(league: League, night: Night, spec: str) -> None:
+    """A night races physical cars or simulated ones, never both: its standings are one
+    ranking, and lap times of a real track and of a simulator are never ranked together
+    (`sim.race.physics`)."""
+    for row in league.query("SELECT model FROM night_entrants WHERE night_id = ?", (night.id,)):
+        if is_physical(row["model"]) != is_physical(spec):
+            kind = "physical cars" if is_physical(row["model"]) else "simulated cars"
+            raise LeagueError(
+                f"league night {night.name!r} races {kind}; a real track's lap times and a "
+                "simulator's are never ranked together, so open another night for this car."
+            )
+
+
 def model_spec(model: str) -> str:
     """What an entrant races, checked now rather than when the heat starts: `reference`, a
-    garage model name, or the absolute path of a bundle or model folder (so `night run`
-    finds it from any working directory)."""
+    garage model name, the absolute path of a bundle or model folder (so `night run`
+    finds it from any working directory), or a physical car (`league.timekeeper.car`)."""
     from sim.garage.deepracer_import import BUNDLE_SUFFIX
     from sim.garage.folder import ModelError, models_dir, open_model
     from sim.race.driver import REFERENCE_NAME
@@ -188,11 +203,13 @@ def model_spec(model: str) -> str:
     spec = model.strip()
     if not spec or len(spec) > MAX_MODEL_SPEC:
         raise LeagueError(
-            "--model must name a garage model, a bundle file or `reference`.",
-            problem="the car must be a garage model, a bundle file or `reference`",
+            "--model must name a garage model, a bundle file, `reference` or `physical`.",
+            problem="the car must be a garage model, a bundle file, `reference` or `physical`",
         )
     if spec == REFERENCE_NAME:
         return spec
+    if is_physical(spec):
+        return physical_spec(spec)
     if spec.endswith(BUNDLE_SUFFIX):
         path = Path(spec).expanduser()
         if not path.is_file():
@@ -315,7 +332,8 @@ def run_heats(
 
     `resolve_driver(model spec, track)` turns an entrant's model into a driver (the front
     end supplies it, so the league never imports policies). A heat that fails stops the
-    run; the heats before it stay recorded.
+    run; the heats before it stay recorded. So does a physical car's heat: only the app's
+    timekeeper can time it.
     """
     _open(league, night)  # record_race checks again for each heat, inside its transaction
     if track.content_hash != night.track_hash:
@@ -332,6 +350,12 @@ def run_heats(
         )
     recorded: list[str] = []
     for heat in todo[:limit]:
+        if is_physical(heat.entrant.model):
+            raise LeagueError(
+                f"heat {heat.position} is {heat.entrant.display_name}'s physical car, which a "
+                "timekeeper times: run it in the app (r on the Nights screen); the heats "
+                "before it are recorded."
+            )
         driver = resolve_driver(heat.entrant.model, track)
         result = run_race(track, night.rules, driver, racer=heat.entrant.racer, seed=heat.seed)
         recorded.append(record_race(league, result, night.id, heat_id=heat.id))
@@ -382,9 +406,11 @@ def close_night(
         _open(league, night)
         waiting = len(pending_heats(league, night))
         if waiting and not force:
+            problem = f"league night {night.name!r} still has {counted(waiting, 'heat')} to run"
             raise LeagueError(
-                f"league night {night.name!r} still has {counted(waiting, 'heat')} to run; "
-                "run them with `racer-tui night run`, or close anyway with --force."
+                f"{problem}; run them with `racer-tui night run`, or close anyway with --force.",
+                problem=problem,
+                fix=Fix.RUN_HEATS,
             )
         league.insert_record(
             "night_closures", {"night_id": night.id, "closed_by": who, "created_at": now_iso()}

@@ -13,6 +13,7 @@ import os
 import re
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from sim.home import LEAGUE_ENV
@@ -69,6 +70,12 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         help="the league database for the app and every command (default: league.db in the "
         f"data folder, or ${LEAGUE_ENV}); a command's own --db still wins",
     )
+    parser.add_argument(
+        "--timer",
+        metavar="PATH",
+        help="an automatic lap timer for the app's timekeeper: a serial device or named pipe "
+        "sending a line 'lap' as the car crosses the line and 'reset' for a car reset",
+    )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in _command_modules(command):
         module.register(commands)
@@ -107,7 +114,7 @@ def _subcommand(arguments: Sequence[str]) -> str | None:
     for argument in arguments:
         if skip_value:
             skip_value = False
-        elif argument == "--db":
+        elif argument in ("--db", "--timer"):
             skip_value = True
         elif not argument.startswith("-"):
             return argument
@@ -129,6 +136,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.environ[LEAGUE_ENV] = args.league_db
     if args.command is None:
         from racer_tui.app import run_app
+
+        if args.timer:
+            from league.timekeeper.feed import TIMER_ENV, check_timer_path
+
+            problem = check_timer_path(args.timer)
+            if problem is not None:
+                print(f"racer-tui: {problem}", file=sys.stderr)
+                return EXIT_USER_ERROR
+            os.environ[TIMER_ENV] = str(Path(args.timer).resolve())
 
         return run_app()
     try:

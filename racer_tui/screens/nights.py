@@ -56,10 +56,12 @@ from league.seasons import (
     season_standings,
 )
 from league.store import League, open_league
+from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import FormDialog, PathSuggester, ask, show_problem
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
@@ -153,7 +155,8 @@ class EntrantRequest:
 
 
 class AddEntrantDialog(FormDialog[EntrantRequest]):
-    """A racer and what they race: `reference`, a garage model or a bundle file."""
+    """A racer and what they race: `reference`, a garage model, a bundle file or a physical
+    car."""
 
     def __init__(self, models: list[str]) -> None:
         super().__init__()
@@ -164,13 +167,14 @@ class AddEntrantDialog(FormDialog[EntrantRequest]):
             yield Label("Add an entrant", classes="dialog-title")
             yield Static(
                 "The racer's name, and the car: `reference` (the reference driver), a garage "
-                "model name, or the path of a .racer-bundle file. → completes.",
+                "model name, the path of a .racer-bundle file, or `physical` for a real car "
+                "timed by hand (`physical:NAME` names it). → completes.",
                 classes="dialog-body",
             )
             yield Input(placeholder="racer name", id="entrant-racer")
             yield Input(
-                placeholder="reference, a model name or a bundle path",
-                suggester=SuggestFromList([REFERENCE_NAME, *self._models]),
+                placeholder="reference, a model, a bundle path or physical",
+                suggester=SuggestFromList([REFERENCE_NAME, PHYSICAL, *self._models]),
                 id="entrant-model",
             )
             yield from self.form_buttons("Add")
@@ -190,7 +194,7 @@ class AddEntrantDialog(FormDialog[EntrantRequest]):
         if not racer or not model:
             show_problem(
                 self.query_one("#problem", Static),
-                "Give the racer's name and the car (reference, a model or a bundle).",
+                "Give the racer's name and the car (reference, a model, a bundle or physical).",
             )
             return
         self.dismiss(EntrantRequest(racer, model))
@@ -310,7 +314,7 @@ class SeasonCreated(Message):
 
 
 class HeatReady(Message):
-    def __init__(self, night: Night, heat: Heat, setup: RaceSetup) -> None:
+    def __init__(self, night: Night, heat: Heat, setup: RaceSetup | TimekeeperSetup) -> None:
         super().__init__()
         self.night = night
         self.heat = heat
@@ -331,9 +335,21 @@ def read_night(league: League, night_id: str) -> NightState:
     return NightState(night, heats(league, night), results, table, season_name, season)
 
 
-def heat_setup(league: League, night: Night, heat: Heat, track: Track) -> RaceSetup:
+def heat_setup(
+    league: League, night: Night, heat: Heat, track: Track
+) -> RaceSetup | TimekeeperSetup:
     """The race view's setup for a heat: the night's rules, the heat's seed, and the
-    night's leader so far as the ghost and the gap."""
+    night's leader so far as the ghost and the gap; a physical car's heat is the
+    timekeeper's."""
+    entrant = heat.entrant
+    if is_physical(entrant.model):
+        return TimekeeperSetup(
+            track=track,
+            rules=night.rules,
+            racer=entrant.racer,
+            car=car_name(entrant.model),
+            title=f"Heat {heat.position}: {entrant.display_name}, {car_name(entrant.model)}",
+        )
     table = standings(league, night)
     leader = table[0].entry if table and table[0].entry.score is not None else None
     ghost = ghost_lap(race_result(league, leader.record_id)) if leader is not None else None
@@ -629,9 +645,11 @@ class NightsScreen(RacerScreen[None]):
         self.post_message(HeatReady(night, waiting[0], setup))
 
     def on_heat_ready(self, message: HeatReady) -> None:
-        self.app.push_screen(
-            RaceScreen(message.setup), partial(self._heat_finished, message.night, message.heat)
+        setup = message.setup
+        screen: RacerScreen[RaceResult | None] = (
+            TimekeeperScreen(setup) if isinstance(setup, TimekeeperSetup) else RaceScreen(setup)
         )
+        self.app.push_screen(screen, partial(self._heat_finished, message.night, message.heat))
 
     def _heat_finished(self, night: Night, heat: Heat, result: RaceResult | None) -> None:
         if result is None:
@@ -679,7 +697,13 @@ class NightsScreen(RacerScreen[None]):
     def _close(self, night: Night, force: bool) -> None:
         with open_league(self.db_path) as league:
             closer = local_racer_name(league) or HOST_NAME
-            close_night(league, night, closer, force=force)
+            try:
+                close_night(league, night, closer, force=force)
+            except LeagueError:
+                # Heats drawn elsewhere since the night was shown: show them, so the next
+                # c asks about them and closes anyway (the error says so).
+                self.post_message(NightChanged(night.id, ""))
+                raise
         self.post_message(NightChanged(night.id, f"Closed {night.name}; the standings are final."))
 
     def action_leave(self) -> None:

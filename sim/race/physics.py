@@ -3,8 +3,9 @@ one leaderboard.
 
 racer-tui's own physics is versioned by `sim.car.PHYSICS_VERSION` ("racer-tui/2"); laps
 timed by AWS DeepRacer's own simulator (console and DeepRacer-for-Cloud evaluations) are
-"deepracer". Results recorded before physics was recorded are racer-tui's version 1, or
-DeepRacer's when they came from its files.
+"deepracer". Laps of a physical car, timed by a league's timekeeper, are "physical": a real
+track, not a simulator, so they too are ranked apart. Results recorded before physics was
+recorded are racer-tui's version 1, or DeepRacer's when they came from its files.
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ from sim.car import PHYSICS_VERSION
 CURRENT: Final = f"racer-tui/{PHYSICS_VERSION}"
 BEFORE_VERSIONING: Final = "racer-tui/1"
 DEEPRACER: Final = "deepracer"
-PATTERN: Final = re.compile(r"racer-tui/[1-9][0-9]{0,5}|deepracer")
+PHYSICAL: Final = "physical"
+PATTERN: Final = re.compile(r"racer-tui/[1-9][0-9]{0,5}|deepracer|physical")
 
 
 def is_physics(value: object) -> bool:
@@ -28,6 +30,8 @@ def describe(physics: str) -> str:
     """ "DeepRacer's simulator", "racer-tui physics 2"."""
     if physics == DEEPRACER:
         return "DeepRacer's simulator"
+    if physics == PHYSICAL:
+        return "a physical car on a real track"
     return f"racer-tui physics {physics.removeprefix('racer-tui/')}"
 
 
@@ -39,4 +43,6 @@ def board_suffix(physics: str) -> str:
         return ""
     if physics == DEEPRACER:
         return " (DeepRacer)"
+    if physics == PHYSICAL:
+        return " (physical)"
     return f" (physics {physics.removeprefix('racer-tui/')})"

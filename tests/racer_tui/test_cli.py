@@ -226,3 +226,15 @@ def test_console_script_runs_without_a_terminal(tmp_path: Path) -> None:
     )
     assert result.returncode == 0
     assert json.loads(result.stdout)
+
+
+def test_a_timer_that_is_not_there_is_said_before_the_app_starts(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    missing = tmp_path / "ttyUSB9"
+    assert main(["--timer", str(missing)]) == 2
+    said = capsys.readouterr().err
+    assert said == (
+        f"racer-tui: The timer {missing} cannot be found (No such file or directory); "
+        "check the path.\n"
+    )

@@ -112,6 +112,20 @@ def keys(*pressed: str) -> Steps:
     return press
 
 
+async def a_timed_heat(pilot: Pilot[Any]) -> None:
+    """A physical car's heat with laps captured, one of them over the resets limit."""
+    from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
+
+    setup = TimekeeperSetup(resolve_track("reinvent_base"), SHORT, LONG_RACER, LONG_MODEL)
+    keeper = TimekeeperScreen(setup)
+    await pilot.app.push_screen(keeper)
+    keeper.clock = lambda: 100.0
+    await pilot.press("space")
+    keeper.clock = lambda: 109.8
+    await pilot.press("r", "r", "r", "r", "l")
+    await settle(pilot)
+
+
 # place -> (the section it starts from, the keys that lead there, the screen it shows).
 # The garage's second row is the trained model (rows sort by name).
 PLACES: dict[str, tuple[str, Steps, str]] = {
@@ -139,6 +153,7 @@ PLACES: dict[str, tuple[str, Steps, str]] = {
     "projector": ("league", keys("p"), "ProjectorScreen"),
     "sync": ("league", keys("y"), "SyncScreen"),
     "help": ("garage", keys("question_mark"), "HelpScreen"),
+    "timekeeper": ("league", a_timed_heat, "TimekeeperScreen"),
 }
 
 

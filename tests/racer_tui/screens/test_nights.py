@@ -6,10 +6,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from textual.pilot import Pilot
 from textual.screen import Screen
 from textual.widgets import DataTable, Input, Select
 
-from league.nights import list_nights, new_night, standings
+from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
 from league.seasons import get_season, new_season, season_standings
 from league.store import open_league
 from racer_tui.app import create_app
@@ -20,6 +21,16 @@ from racer_tui.screens.race_screen import RaceScreen
 from sim.home import data_home
 from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
+
+
+async def the_nights_screen(pilot: Pilot[Any]) -> NightsScreen:
+    """From the League section (the app started there), the Nights screen (n)."""
+    await settle(pilot)
+    await pilot.press("n")
+    await settle(pilot)
+    nights = pilot.app.screen
+    assert isinstance(nights, NightsScreen)
+    return nights
 
 
 def table_rows(screen: Screen[Any], table_id: str) -> list[list[str]]:
@@ -153,4 +164,55 @@ async def test_drawing_with_nobody_waiting_names_the_key_not_a_command() -> None
         await settle(pilot)
         errors = notes.text("error")
         assert "no entrants waiting to race; add one (a), then draw (d)" in errors
+        assert "racer-tui" not in errors
+
+
+async def test_closing_a_night_drawn_elsewhere_names_the_keys_and_shows_the_heats() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        for racer in ("ada", "bob"):
+            add_entrant(league, night, racer, "reference")
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 40)) as pilot:
+        notes = Notifications(app)
+        screen = await the_nights_screen(pilot)
+        with open_league() as league:  # the command line draws while the app shows the night
+            draw_heats(league, night, seed=1)
+        await pilot.press("c")
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("y")
+        await settle(pilot)
+        errors = notes.text("error")
+        assert "still has 2 heats to run; run them (r), or press c again to close" in errors
+        assert "racer-tui" not in errors and "--force" not in errors
+        assert [row[3] for row in table_rows(screen, "#heats")] == ["next (r)", "waiting"]
+        await pilot.press("c")  # as the error says: the dialog now knows of the heats
+        dialog = app.screen
+        assert isinstance(dialog, ConfirmDialog)
+        assert "2 heats have not raced" in painted(dialog)
+        await pilot.press("y")
+        await settle(pilot)
+    with open_league() as league:
+        assert list_nights(league)[0].closed
+
+
+async def test_an_entrant_folder_that_is_not_a_model_names_the_garages_key(
+    tmp_path: Path,
+) -> None:
+    stranger = tmp_path / "download"
+    stranger.mkdir()
+    with open_league() as league:
+        new_night(league, resolve_track("beginner-oval"), name="friday")
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 40)) as pilot:
+        notes = Notifications(app)
+        await settle(pilot)
+        await pilot.press("n")
+        await settle(pilot)
+        await pilot.press("a", *"ada", "enter", *str(stranger), "enter")
+        await settle(pilot)
+        errors = notes.text("error")
+        assert f"so {stranger} is not a model folder" in errors
+        assert "give a garage model's name, or import the folder in the Garage (i there)" in errors
         assert "racer-tui" not in errors

@@ -13,8 +13,9 @@ from league.nights import list_nights
 from league.seasons import get_season, list_seasons, new_season
 from league.store import open_league
 from racer_tui.app import create_app
-from racer_tui.screens.nights import NewNightDialog, NewSeasonDialog, NightsScreen, season_problem
+from racer_tui.screens.nights import NewNightDialog, NewSeasonDialog, season_problem
 from sim.home import data_home
+from tests.racer_tui.screens.test_nights import the_nights_screen
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 
 
@@ -41,11 +42,7 @@ async def test_a_host_creates_a_season_and_opens_a_night_in_it() -> None:
     app = create_app(start="league")
     async with app.run_test(size=(100, 30)) as pilot:
         notes = Notifications(app)
-        await settle(pilot)
-        await pilot.press("n")
-        await settle(pilot)
-        nights = app.screen
-        assert isinstance(nights, NightsScreen)
+        nights = await the_nights_screen(pilot)
 
         await pilot.press("s")
         await settle(pilot)

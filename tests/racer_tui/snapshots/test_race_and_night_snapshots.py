@@ -1,6 +1,7 @@
 """SVG snapshots of the race view (a recorded race replayed to its end, with the ghost of
-its best lap) and of the host's league-night screen part-way through a night (two heats
-drawn, one raced). Races are deterministic, so the laps, times and standings are fixed.
+its best lap), of the host's league-night screen part-way through a night (two heats
+drawn, one raced) and of the timekeeper part-way through a physical car's heat. Races
+are deterministic, so the laps, times and standings are fixed.
 Update after a deliberate change with
 `pytest tests/racer_tui/snapshots/test_race_and_night_snapshots.py --snapshot-update`."""
 
@@ -11,12 +12,14 @@ from typing import Any
 
 from textual.app import App
 from textual.pilot import Pilot
+from textual.screen import Screen
 
 from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
 from sim.home import data_home
 from sim.race.engine import run_race
 from sim.race.replay import ghost_lap
@@ -29,13 +32,15 @@ Compare = Callable[..., bool]
 SHORT = RaceRules(window_seconds=30.0)
 
 
-class ReplayApp(App[None]):
-    def __init__(self, screen: RaceScreen) -> None:
+class OneScreenApp(App[None]):
+    """An app showing one screen, as a section would push it."""
+
+    def __init__(self, screen: Screen[Any]) -> None:
         super().__init__()
-        self.race = screen
+        self.shown = screen
 
     def on_mount(self) -> None:
-        self.push_screen(self.race)
+        self.push_screen(self.shown)
 
 
 @SIZES
@@ -51,7 +56,7 @@ def test_race_view_at_the_end_of_a_replay(snap_compare: Compare, size: tuple[int
         await pilot.press("e")
         await settle(pilot)
 
-    app = ReplayApp(RaceScreen(setup))
+    app = OneScreenApp(RaceScreen(setup))
     assert snap_compare(app, terminal_size=size, run_before=to_the_end)
 
 
@@ -73,3 +78,27 @@ def test_league_night_part_way(snap_compare: Compare, size: tuple[int, int]) -> 
 
     app = create_app(start="league")
     assert snap_compare(app, terminal_size=size, run_before=open_nights)
+
+
+@SIZES
+def test_timekeeper_part_way(snap_compare: Compare, size: tuple[int, int]) -> None:
+    """Three laps of a physical car, one over the resets limit, 4.2 s into the fourth."""
+    setup = TimekeeperSetup(
+        track=resolve_track("reinvent_base"),
+        rules=RaceRules(penalty_seconds=0.0),
+        racer="[b]Ada[/b]",
+        car="blue car",
+        title="Heat 2: [b]Ada[/b], blue car",
+    )
+    keeper = TimekeeperScreen(setup)
+    moments = iter([0.0, 9.8, 9.8, 20.2, 20.2, 20.2, 20.2, 20.2, 31.2])
+
+    async def laps(pilot: Pilot[Any]) -> None:
+        for key in ("space", "l", "r", "l", "r", "r", "r", "r", "l"):
+            now = next(moments)
+            keeper.clock = lambda now=now: now
+            await pilot.press(key)
+        keeper.clock = lambda: 35.4
+        await pilot.pause(0.2)  # the clocks redraw at 10 Hz
+
+    assert snap_compare(OneScreenApp(keeper), terminal_size=size, run_before=laps)

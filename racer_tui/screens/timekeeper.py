@@ -1,0 +1,330 @@
+"""The timekeeper: a physical car's heat timed by hand (or by an automatic timer's lap
+triggers), with big clocks readable from a metre away.
+
+The state machine is `league.timekeeper.heat.TimekeptHeat`; this screen feeds it keys and
+timer lines with the moment each came and draws what it holds. Leaving a finished race
+returns its result, which the Nights screen records like a simulated heat's.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import ClassVar
+
+from rich.text import Text
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.message import Message
+from textual.widgets import DataTable, Digits, Label, Static
+
+from league.timekeeper.feed import TIMER_ENV, FeedError, Trigger, follow, parse_trigger
+from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat
+from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.dialogs import ask
+from racer_tui.screens.race_screen import clock_text, countdown_text
+from racer_tui.widgets.footer import RacerFooter
+from sim.race.result import RaceResult
+from sim.race.rules import RaceRules, lap_counts
+from sim.track import Track
+
+CLOCK_HZ = 10.0
+
+
+@dataclass(frozen=True)
+class TimekeeperSetup:
+    track: Track
+    rules: RaceRules
+    racer: str
+    car: str  # the car's name on the board
+    title: str = ""
+    timer: str | None = None  # an automatic timer's path, if the host gave one
+
+
+class TimerLine(Message):
+    def __init__(self, moment: float, text: str) -> None:
+        super().__init__()
+        self.moment = moment
+        self.text = text
+
+
+def lap_clock_text(seconds: float) -> str:
+    """m:ss.t for the lap in progress (tenths: hundredths flicker unreadably)."""
+    tenths = int(max(seconds, 0.0) * 10 + 1e-6)  # down, as a stopwatch shows; 4.2 stays 4.2
+    minutes, rest = divmod(tenths, 600)
+    return f"{minutes}:{rest // 10:02d}.{rest % 10}"
+
+
+def car_hash(car: str) -> str:
+    """A physical car's stand-in for a model's content hash: one per car name."""
+    return "physical-" + hashlib.sha256(car.encode()).hexdigest()[:16]
+
+
+class TimekeeperScreen(RacerScreen[RaceResult | None]):
+    """Race time left and the lap in progress in big digits, the laps so far, and a key for
+    everything the timekeeper does."""
+
+    # Each key's tooltip is its line in the panel beside the laps, which shows every key:
+    # the footer cannot hold them all at 80 columns, and a timekeeper must not hunt for
+    # "did not finish" while a car is stuck.
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("space", "start_pause", "Start/pause", tooltip="start / pause", priority=True),
+        Binding("l", "capture", "Lap", tooltip="capture lap / ⏎", priority=True),
+        Binding("enter", "capture", "Lap", show=False, priority=True),
+        Binding("r", "reset", "Reset", tooltip="car reset", priority=True),
+        Binding("e", "end", "End race", tooltip="end the race"),
+        Binding("R", "undo_reset", "Undo reset", tooltip="undo a reset", show=False),
+        Binding("u", "undo_capture", "Undo lap", tooltip="undo a lap", show=False),
+        Binding("f", "did_not_finish", "Not finished", tooltip="did not finish", show=False),
+        Binding("x", "strike", "Strike lap", tooltip="strike a lap", show=False),
+        Binding("escape", "leave", "Back", tooltip="back", show=False),
+    ]
+    DEFAULT_CSS = """
+    TimekeeperScreen #tk-title { text-style: bold; height: 1; }
+    TimekeeperScreen #tk-clocks { height: 4; }
+    TimekeeperScreen .tk-clock { width: 1fr; height: 4; }
+    TimekeeperScreen #tk-facts { height: 1; }
+    TimekeeperScreen #tk-said { height: auto; max-height: 2; }
+    TimekeeperScreen #tk-body { height: 1fr; }
+    TimekeeperScreen #tk-laps { width: 1fr; }
+    TimekeeperScreen #tk-keys { width: 24; padding: 0 0 0 2; }
+    """
+
+    def __init__(self, setup: TimekeeperSetup) -> None:
+        super().__init__()
+        self.setup = setup
+        self.heat = TimekeptHeat(setup.rules)
+        self.clock: Callable[[], float] = time.monotonic  # a test may drive its own clock
+        self.said = Text("Space starts the race when the car leaves the line.", style="dim")
+        self._stop_feed = threading.Event()
+        self._laps_shown: tuple[bool, ...] | None = None  # struck-out flags of the laps shown
+
+    def compose(self) -> ComposeResult:
+        setup = self.setup
+        title = setup.title or f"{setup.racer}, {setup.car}, on {setup.track.name}"
+        yield Static(Text(title), id="tk-title")
+        with Horizontal(id="tk-clocks"):
+            with Vertical(classes="tk-clock"):
+                yield Label("Time left")
+                yield Digits(countdown_text(setup.rules.window_seconds), id="tk-left")
+            with Vertical(classes="tk-clock"):
+                yield Label("This lap")
+                yield Digits(lap_clock_text(0.0), id="tk-lap")
+        yield Static(id="tk-facts")
+        yield Static(id="tk-said")
+        with Horizontal(id="tk-body"):
+            yield DataTable(id="tk-laps", cursor_type="row", zebra_stripes=True)
+            yield Static(self._keys(), id="tk-keys")
+        yield RacerFooter()
+
+    def on_mount(self) -> None:
+        self.query_one("#tk-laps", DataTable).add_columns("Lap", "Time", "Raw", "Resets", "Counts")
+        self.set_interval(1.0 / CLOCK_HZ, self._draw_clocks)
+        self._draw()
+        timer = self.setup.timer if self.setup.timer is not None else os.environ.get(TIMER_ENV)
+        if timer:
+            self._follow_timer(timer)
+
+    def on_unmount(self) -> None:
+        self._stop_feed.set()
+
+    # --- the timer's lines ------------------------------------------------------------
+
+    @work(thread=True, exclusive=True, group="timer", exit_on_error=False)
+    def _follow_timer(self, path: str) -> None:
+        try:
+            for moment, line in follow(path, self._stop_feed, self.clock):
+                self.post_message(TimerLine(moment, line))
+        except (FeedError, OSError) as error:
+            text = str(error) if isinstance(error, FeedError) else f"The timer {path}: {error}"
+            self.post_message(TimerLine(self.clock(), f"# {text}"))
+
+    def on_timer_line(self, message: TimerLine) -> None:
+        if message.text.startswith("# "):  # the feed itself failed: keys still work
+            self._say(f"{message.text[2:]} Keys still time the race.", error=True)
+            return
+        try:
+            trigger = parse_trigger(message.text)
+        except FeedError as error:
+            self._say(str(error), error=True)
+            return
+        if trigger is Trigger.LAP:
+            self._apply(lambda: self.heat.capture(message.moment, from_timer=True))
+        elif trigger is Trigger.RESET:
+            self._apply(lambda: self.heat.reset(message.moment))
+
+    # --- keys -------------------------------------------------------------------------
+
+    def action_start_pause(self) -> None:
+        now = self.clock()
+        self._apply(lambda: self.heat.start_or_pause(now))
+
+    def action_capture(self) -> None:
+        now = self.clock()
+        self._apply(lambda: self.heat.capture(now))
+
+    def action_reset(self) -> None:
+        now = self.clock()
+        self._apply(lambda: self.heat.reset(now))
+
+    def action_undo_reset(self) -> None:
+        self._apply(self.heat.undo_reset)
+
+    def action_undo_capture(self) -> None:
+        now = self.clock()
+        self._apply(lambda: self.heat.undo_capture(now))
+
+    def action_did_not_finish(self) -> None:
+        now = self.clock()
+        self._apply(lambda: self.heat.did_not_finish(now))
+
+    def action_strike(self) -> None:
+        table = self.query_one("#tk-laps", DataTable)
+        if not self.heat.laps:
+            self._say("No lap has been captured yet.", error=True)
+            return
+        number = self.heat.laps[min(table.cursor_row, len(self.heat.laps) - 1)].number
+        self._apply(lambda: self.heat.strike(number))
+
+    def action_end(self) -> None:
+        if self.heat.phase is Phase.OVER:
+            self._say("The race is over: Esc records it and goes back.")
+            return
+        if self.heat.phase is Phase.READY:
+            self._say("The race has not started; Space starts it.", error=True)
+            return
+        moment = self.clock()  # the race ends when e was pressed, not when answered
+
+        def answered(yes: bool | None) -> None:
+            if yes:
+                self._apply(lambda: self.heat.end(moment))
+
+        ask(
+            self.app,
+            "End the race?",
+            "The lap in progress does not count. The laps captured so far make the result.",
+            answered,
+            confirm_label="End race",
+        )
+
+    def action_leave(self) -> None:
+        heat = self.heat
+        if heat.phase is Phase.OVER:
+            setup = self.setup
+            self.dismiss(
+                heat.result(
+                    racer=setup.racer,
+                    car=setup.car,
+                    car_hash=car_hash(setup.car),
+                    track_name=setup.track.name,
+                    track_hash=setup.track.content_hash,
+                )
+            )
+            return
+        if heat.phase is Phase.READY:
+            self.dismiss(None)
+            return
+
+        def answered(yes: bool | None) -> None:
+            if yes:
+                self.dismiss(None)
+
+        ask(
+            self.app,
+            "Leave this heat?",
+            "Its laps so far are not recorded; the heat can be run again.",
+            answered,
+            confirm_label="Leave",
+        )
+
+    # --- drawing ----------------------------------------------------------------------
+
+    def _apply(self, change: Callable[[], str]) -> None:
+        """Run one input on the heat and say what it did, or why it could not."""
+        try:
+            said = change()
+        except TimekeeperError as error:
+            self._say(str(error), error=True)
+        else:
+            self._say(said)
+        self._draw()
+
+    def _say(self, text: str, *, error: bool = False) -> None:
+        self.said = Text(text, style="bold red" if error else "")
+        self.query_one("#tk-said", Static).update(self.said)
+
+    def _draw_clocks(self) -> None:
+        now = self.clock()
+        heat = self.heat
+        self.query_one("#tk-left", Digits).update(countdown_text(heat.time_left(now)))
+        self.query_one("#tk-lap", Digits).update(lap_clock_text(heat.lap_clock(now)))
+
+    def _draw(self) -> None:
+        self._draw_clocks()
+        self.query_one("#tk-facts", Static).update(self._facts())
+        self.query_one("#tk-said", Static).update(self.said)
+        if tuple(lap.struck for lap in self.heat.laps) != self._laps_shown:
+            self._fill_laps()
+
+    def _keys(self) -> Text:
+        text = Text()
+        for binding in self.BINDINGS:
+            if isinstance(binding, Binding) and binding.tooltip:
+                key = "Esc" if binding.key == "escape" else binding.key
+                text.append(f"{key:<6}", style="bold")
+                text.append(f"{binding.tooltip}\n")
+        return text
+
+    def _facts(self) -> Text:
+        heat, rules = self.heat, self.setup.rules
+        limit = rules.max_offtracks_per_lap
+        text = Text()
+        phase = {
+            Phase.READY: ("Ready", "bold"),
+            Phase.RUNNING: ("Running", "bold green"),
+            Phase.PAUSED: ("Paused", "bold yellow"),
+            Phase.OVER: ("Race over", "bold"),
+        }[heat.phase]
+        text.append(phase[0], style=phase[1])
+        over = limit is not None and heat.resets > limit
+        resets = f"  Resets {heat.resets}" + ("" if limit is None else f"/{limit}")
+        text.append(resets, style="red" if over else "")
+        records = heat.lap_records()
+        counting = [lap for lap in records if lap_counts(lap, rules)]
+        best = min((lap.time_seconds for lap in counting), default=None)
+        text.append("  Best ")
+        text.append(clock_text(best) if best is not None else "-", style="bold")
+        text.append(f"  {len(counting)} of {len(records)} laps count")
+        return text
+
+    def _fill_laps(self) -> None:
+        table = self.query_one("#tk-laps", DataTable)
+        row, before = table.cursor_row, len(self._laps_shown or ())
+        table.clear()
+        rules = self.setup.rules
+        for lap, captured in zip(self.heat.lap_records(), self.heat.laps, strict=True):
+            if not captured.finished:
+                verdict = Text("not finished", style="red")
+            elif captured.struck:
+                verdict = Text("struck out", style="red")
+            elif lap_counts(lap, rules):
+                verdict = Text("✓", style="green")
+            else:
+                verdict = Text("✗ resets", style="red")
+            table.add_row(
+                str(lap.number),
+                clock_text(lap.time_seconds),
+                clock_text(lap.raw_seconds),
+                str(lap.offtracks),
+                verdict,
+            )
+        self._laps_shown = tuple(lap.struck for lap in self.heat.laps)
+        if self.heat.laps:  # a new lap is highlighted; a lap struck out keeps its row
+            same = len(self.heat.laps) == before
+            table.move_cursor(row=row if same else len(self.heat.laps) - 1)

@@ -1,0 +1,141 @@
+"""A physical car's heat on a league night, timed with the keyboard and with an automatic
+timer's lines: the timekeeper's keys, its clocks, and the result recorded like any heat's."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+from textual.widgets import Digits
+
+from league.nights import list_nights, new_night, standings
+from league.races import race_result
+from league.store import open_league
+from racer_tui.app import create_app
+from racer_tui.screens.dialogs import ConfirmDialog
+from racer_tui.screens.nights import AddEntrantDialog
+from racer_tui.screens.timekeeper import TimekeeperScreen, lap_clock_text
+from sim.race.physics import PHYSICAL
+from sim.race.rules import RaceRules
+from sim.track_catalog import resolve_track
+from tests.racer_tui.screens.test_nights import table_rows, the_nights_screen
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
+
+
+class Stopwatch:
+    """The timekeeper's clock, moved by the test."""
+
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def test_the_lap_clock_shows_tenths() -> None:
+    assert lap_clock_text(9.87) == "0:09.8"
+    assert lap_clock_text(71.25) == "1:11.2"
+
+
+async def test_a_physical_cars_heat_is_timed_by_hand_and_recorded_on_the_night() -> None:
+    with open_league() as league:
+        rules = RaceRules(window_seconds=60.0, penalty_seconds=2.0, max_offtracks_per_lap=3)
+        new_night(league, resolve_track("beginner-oval"), rules=rules, name="friday")
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        nights = await the_nights_screen(pilot)
+        await pilot.press("a")
+        assert isinstance(app.screen, AddEntrantDialog)
+        await pilot.press(*"carol", "enter", *"physical:blue car", "enter")
+        await settle(pilot)
+        await pilot.press("d")
+        await settle(pilot)
+        assert table_rows(nights, "#heats")[0][2] == "physical:blue car"
+
+        await pilot.press("r")
+        await settle(pilot)
+        keeper = app.screen
+        assert isinstance(keeper, TimekeeperScreen)
+        assert keeper.setup.car == "blue car"
+        watch = Stopwatch()
+        keeper.clock = watch
+        await pilot.press("l")  # before the start: said, not captured
+        assert "start the race first" in str(keeper.said)
+        await pilot.press("space")
+        watch.now += 3.0
+        await pilot.press("r")
+        watch.now += 7.0
+        await pilot.press("l")  # lap 1: 10 s and one reset (+2 s)
+        assert str(keeper.said) == "Lap 1: 12.000 s, counts."
+        watch.now += 2.5
+        await pilot.pause(0.15)  # the clocks redraw ten times a second
+        assert str(keeper.query_one("#tk-lap", Digits).value) == "0:02.5"
+        assert str(keeper.query_one("#tk-left", Digits).value) == "0:48"
+        for _ in range(4):
+            await pilot.press("r")
+        assert "over 3, this lap will not count" in str(keeper.said)
+        watch.now += 6.5
+        await pilot.press("l")  # lap 2: 9 s, but four resets
+        laps = table_rows(keeper, "#tk-laps")
+        assert [row[0] for row in laps] == ["1", "2"]
+        assert laps[0][4] == "✓" and laps[1][4] == "✗ resets"
+        facts = painted(keeper.query_one("#tk-facts"))
+        assert "Best 0:12.000" in facts and "1 of 2 laps count" in facts
+
+        await pilot.press("e")
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("y")
+        await pilot.pause()
+        assert "Race over" in painted(keeper.query_one("#tk-facts"))
+        await pilot.press("escape")  # records the heat and goes back
+        await settle(pilot)
+        assert app.screen is nights
+        assert "Recorded carol's heat: best lap 12.000 s." in notes.text()
+
+    with open_league() as league:
+        (night,) = list_nights(league)
+        (standing,) = standings(league, night)
+        assert (standing.entry.racer, standing.entry.score) == ("carol", 12.0)
+        result = race_result(league, standing.entry.record_id)
+        assert result.physics == PHYSICAL and result.model_name == "blue car"
+        assert [(lap.raw_seconds, lap.offtracks, lap.valid) for lap in result.laps] == [
+            (10.0, 1, True),
+            (9.0, 4, False),  # four resets: over the limit
+        ]
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pseudo-terminal")
+async def test_an_automatic_timers_lines_start_the_race_and_capture_laps(
+    tmp_path: Path,
+) -> None:
+    from racer_tui.screens.timekeeper import TimekeeperSetup
+
+    controller, device = os.openpty()
+    setup = TimekeeperSetup(
+        track=resolve_track("beginner-oval"),
+        rules=RaceRules(window_seconds=60.0),
+        racer="dan",
+        car="red car",
+        timer=os.ttyname(device),
+    )
+    keeper = TimekeeperScreen(setup)
+    watch = Stopwatch()
+    keeper.clock = watch
+    app = create_app(start="league")
+    try:
+        async with app.run_test(size=(80, 24)) as pilot:
+            await app.push_screen(keeper)
+            await pilot.pause()
+            os.write(controller, b"lap\r\n")  # the car crosses the line: the race starts
+            await wait_for(pilot, lambda: keeper.heat.phase.value == "running")
+            watch.now += 11.0
+            os.write(controller, b"reset\r\nlap\r\n")
+            await wait_for(pilot, lambda: len(keeper.heat.laps) == 1)
+            assert (keeper.heat.laps[0].raw_seconds, keeper.heat.laps[0].resets) == (11.0, 1)
+            os.write(controller, b"banana\r\n")
+            await wait_for(pilot, lambda: "neither 'lap' nor 'reset'" in str(keeper.said))
+    finally:
+        os.close(controller)
+        os.close(device)
