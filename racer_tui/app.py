@@ -25,6 +25,7 @@ from racer_tui.long_running import (
     CHECK_SECONDS,
     FREEZE_AFTER_SECONDS,
     IdleCollector,
+    favour_the_interface,
     forget_removed_widgets_styles,
     freeze_long_lived,
     limit_malloc_arenas,
@@ -121,6 +122,7 @@ class RacerTuiApp(App[int]):
         self.collector = IdleCollector(trim=malloc_trim(), forget=forget_removed_widgets_styles)
         if long_running:
             limit_malloc_arenas()  # before the app starts its worker threads
+            favour_the_interface()
 
     def on_mount(self) -> None:
         first = self.start_mode or self._first_mode()

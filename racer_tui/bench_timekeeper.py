@@ -7,8 +7,9 @@ heat, in three conditions one after the other: nothing else running; a simulated
 racing in the app's own process (a thread, as a night's heat does, beside the timekeeper
 of another heat); a vector training child at full load (`racer-tui train`, as a host runs
 one beside the app). In each, `--keys` presses alternate Car Reset (`r`) and Capture Lap
-(`l`); a key's latency is from the press to the first screen update that shows its effect
-(the sentence the timekeeper says), timed where Textual hands each update to the terminal
+(`l`), in heats of 24 laps (a 4-minute heat of 10 s laps, then the next); a key's
+latency is from the press to the first screen update that shows its effect (the sentence
+the timekeeper says), timed where Textual hands each update to the terminal
 (`racer_tui.bench_soak.DisplayClock`). Figures are printed, never judged here; the target
 (issue 15) is p95 under 50 ms.
 """
@@ -45,6 +46,7 @@ from racer_tui.bench_soak import (
 SIZE = (80, 24)
 KEY_TIMEOUT = 5.0
 LAP_SECONDS = 10.0  # the timekeeper's own clock moves this much per captured lap
+HEAT_KEYS = 48  # 24 laps of 10 s: a 4-minute heat
 
 
 class BusyHeat:
@@ -74,7 +76,8 @@ class BusyHeat:
 
 
 async def press_keys(keys: int) -> list[float]:
-    """Open the timekeeper, start the race, and time `keys` alternating r and l presses."""
+    """Time `keys` alternating r and l presses, in heats of `HEAT_KEYS` (a new timekeeper
+    for each, started with space, as a night's physical heats follow one another)."""
     from racer_tui.app import create_app
     from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
     from sim.race.rules import RaceRules
@@ -82,23 +85,29 @@ async def press_keys(keys: int) -> list[float]:
 
     app = create_app(long_running=True)
     latencies: list[float] = []
+    rules = RaceRules(window_seconds=3600.0, max_offtracks_per_lap=None)
+    setup = TimekeeperSetup(resolve_track(DEFAULT_TRACK), rules, "bench", "bench car")
+    moment = [0.0]
     async with app.run_test(size=SIZE) as pilot:
         clock = DisplayClock(app)
-        rules = RaceRules(window_seconds=3600.0, max_offtracks_per_lap=None)
-        keeper = TimekeeperScreen(
-            TimekeeperSetup(resolve_track(DEFAULT_TRACK), rules, "bench", "bench car")
-        )
-        moment = [0.0]
-        keeper.clock = lambda: moment[0]
-        await app.push_screen(keeper)
-        await pilot.press("space")
+        keeper: TimekeeperScreen | None = None
         for press in range(keys):
+            if press % HEAT_KEYS == 0:
+                if keeper is not None:
+                    app.pop_screen()
+                keeper = TimekeeperScreen(setup)
+                keeper.clock = lambda: moment[0]
+                await app.push_screen(keeper)
+                await pilot.press("space")
+            assert keeper is not None
             key = "r" if press % 2 == 0 else "l"
             if key == "l":
                 moment[0] += LAP_SECONDS
             said = "this lap." if key == "r" else "counts."
 
-            def answered(screen: Screen[Any], said: str = said) -> bool:
+            def answered(
+                screen: Screen[Any], said: str = said, keeper: TimekeeperScreen = keeper
+            ) -> bool:
                 return screen is keeper and str(keeper.said).endswith(said)
 
             expectation = Expectation(key, answered, time.perf_counter())

@@ -262,8 +262,15 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
     def _draw_clocks(self) -> None:
         now = self.clock()
         heat = self.heat
-        self.query_one("#tk-left", Digits).update(countdown_text(heat.time_left(now)))
-        self.query_one("#tk-lap", Digits).update(lap_clock_text(heat.lap_clock(now)))
+        # Digits repaints on every update: only a changed value is worth one (ten times a
+        # second while the race runs, never while it stands still).
+        for selector, value in (
+            ("#tk-left", countdown_text(heat.time_left(now))),
+            ("#tk-lap", lap_clock_text(heat.lap_clock(now))),
+        ):
+            digits = self.query_one(selector, Digits)
+            if digits.value != value:
+                digits.update(value)
 
     def _draw(self) -> None:
         self._draw_clocks()
@@ -304,11 +311,19 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         return text
 
     def _fill_laps(self) -> None:
+        """Add the laps captured since the last time; all of them again when one shown has
+        changed (taken back or struck out), which is rare: a table filled afresh repaints
+        every row."""
         table = self.query_one("#tk-laps", DataTable)
-        row, before = table.cursor_row, len(self._laps_shown or ())
-        table.clear()
+        flags = tuple(lap.struck for lap in self.heat.laps)
+        shown = self._laps_shown or ()
+        row = table.cursor_row
+        kept = len(shown) <= len(flags) and flags[: len(shown)] == shown
+        if not kept:
+            table.clear()
         rules = self.setup.rules
-        for lap, captured in zip(self.heat.lap_records(), self.heat.laps, strict=True):
+        records = self.heat.lap_records()
+        for lap, captured in list(zip(records, self.heat.laps, strict=True))[table.row_count :]:
             if not captured.finished:
                 verdict = Text("not finished", style="red")
             elif captured.struck:
@@ -324,7 +339,6 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
                 str(lap.offtracks),
                 verdict,
             )
-        self._laps_shown = tuple(lap.struck for lap in self.heat.laps)
-        if self.heat.laps:  # a new lap is highlighted; a lap struck out keeps its row
-            same = len(self.heat.laps) == before
-            table.move_cursor(row=row if same else len(self.heat.laps) - 1)
+        self._laps_shown = flags
+        if flags:  # a new lap is highlighted; a lap struck out keeps its row
+            table.move_cursor(row=row if len(flags) == len(shown) else len(flags) - 1)

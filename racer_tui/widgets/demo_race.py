@@ -94,8 +94,8 @@ class DemoRace(Vertical):
         return bool(self.ticks) and self.ticks[-1].finished
 
     def _frame(self) -> None:
-        if not self.ticks:
-            return
+        if not self.ticks or not self.screen.is_current:
+            return  # covered by another screen (a dialog, the timekeeper): nothing to draw
         elapsed = self.clock() - self._started
         if self.finished:
             elapsed %= self.ticks[-1].clock

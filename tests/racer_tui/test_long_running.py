@@ -243,3 +243,19 @@ async def test_removed_widgets_rendered_lines_are_let_go() -> None:
         await app.rebuild()
         await pilot.pause()
         assert "card 39" in str(app.screen.query(Label).last().render())  # still draws
+
+
+def test_only_the_long_running_app_hands_the_interpreter_to_its_interface_sooner() -> None:
+    import sys
+
+    from racer_tui.app import create_app
+    from racer_tui.long_running import SWITCH_INTERVAL_SECONDS
+
+    before = sys.getswitchinterval()
+    try:
+        create_app()
+        assert sys.getswitchinterval() == before
+        create_app(long_running=True)  # what `racer-tui` starts: heats run in threads
+        assert sys.getswitchinterval() == SWITCH_INTERVAL_SECONDS < before
+    finally:
+        sys.setswitchinterval(before)
