@@ -25,7 +25,6 @@ from textual.suggester import SuggestFromList
 from textual.widgets import Button, DataTable, Input, Label, Select, Static
 
 from league.errors import LeagueError
-from league.leaderboard import LeaderboardRow
 from league.local_racer import HOST_NAME, local_racer_name
 from league.nights import (
     Heat,
@@ -71,7 +70,7 @@ from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
-from sim.race.rules import DEFAULT_RULES, load_rules
+from sim.race.rules import DEFAULT_RULES, RaceRules, RankingMethod, RulesError, load_rules
 from sim.track import Track
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
@@ -89,13 +88,41 @@ RACER = replace(NAME, label="racer")
 class NightRequest:
     track: str
     name: str | None
-    rules_file: str | None
+    rules: RaceRules  # read and checked in the dialog, frozen in the night when it opens
     season_id: str | None
 
 
+# The ranking choices of the open-night dialog; None keeps the rules' own.
+RANKINGS: list[tuple[str, RankingMethod]] = [
+    ("ranked by best lap", RankingMethod.BEST_LAP),
+    ("ranked by best average of consecutive laps", RankingMethod.BEST_AVERAGE),
+    ("ranked by total time of the first laps", RankingMethod.TOTAL_TIME),
+]
+
+
+def read_night_rules(path: str) -> tuple[RaceRules | None, str | None]:
+    """The rules in the file at `path` (empty: the league's), or what is wrong with it."""
+    if not path:
+        return DEFAULT_RULES, None
+    file = Path(path).expanduser()
+    if not file.is_file():
+        return None, f"There is no rules file {path}; check the path or leave it empty."
+    try:
+        return load_rules(file), None
+    except (RulesError, OSError) as error:
+        text = str(error)
+        return None, text[:1].upper() + text[1:]
+
+
 class NewNightDialog(FormDialog[NightRequest]):
-    """Track, optional name, optional rules file and season. The rules are frozen when
-    the night opens, so they are shown (read-only) on the night afterwards."""
+    """Track, optional name, optional rules file, ranking and season. Enter moves to the
+    next field; the button or Ctrl+S opens the night. The rules are read here, so a bad
+    file is said under the fields with nothing typed lost; they are frozen when the night
+    opens and shown (read-only) on the night afterwards."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("ctrl+s", "open_night", "Open night", priority=True),
+    ]
 
     def __init__(self, seasons: list[tuple[str, str]], season_id: str | None = None) -> None:
         """`seasons` as (name, id); `season_id` is chosen to start with (None: no season)."""
@@ -115,34 +142,49 @@ class NewNightDialog(FormDialog[NightRequest]):
                 suggester=PathSuggester(),
                 id="night-rules",
             )
+            yield Select(RANKINGS, prompt="ranked as the rules say", id="night-ranking")
             yield Select(
                 self._seasons,
                 prompt="no season",
                 value=self._season_id if self._season_id is not None else Select.NULL,
                 id="night-season",
             )
-            yield Static(Text(f"League rules: {DEFAULT_RULES.describe()}."), classes="dialog-body")
+            yield Static(
+                Text(
+                    f"League rules: {DEFAULT_RULES.describe()}. Enter moves to the next "
+                    "field; Ctrl+S opens the night."
+                ),
+                classes="dialog-body",
+            )
             yield from self.form_buttons("Open night")
 
     def on_mount(self) -> None:
         self.query_one("#night-name", Input).focus()
 
     @on(Input.Submitted)
+    def _next_field(self) -> None:
+        self.focus_next()
+
+    def action_open_night(self) -> None:
+        self._confirm()
+
     @on(Button.Pressed, "#confirm")
     def _confirm(self) -> None:
-        rules = self.query_one("#night-rules", Input).value.strip()
-        if rules and not Path(rules).expanduser().is_file():
-            show_problem(
-                self.query_one("#problem", Static),
-                f"There is no rules file {rules}; check the path or leave it empty.",
-            )
+        path = self.query_one("#night-rules", Input).value.strip()
+        rules, problem = read_night_rules(path)
+        if rules is None:
+            show_problem(self.query_one("#problem", Static), problem or "")
+            self.query_one("#night-rules", Input).focus()
             return
+        ranking = self.query_one("#night-ranking", Select).value
+        if isinstance(ranking, RankingMethod):
+            rules = replace(rules, ranking=ranking)
         season = self.query_one("#night-season", Select).value
         self.dismiss(
             NightRequest(
                 track=str(self.query_one("#night-track", Select).value),
                 name=self.query_one("#night-name", Input).value.strip() or None,
-                rules_file=str(Path(rules).expanduser()) if rules else None,
+                rules=rules,
                 season_id=None if season is Select.NULL else str(season),
             )
         )
@@ -278,7 +320,7 @@ class NightsLoaded(Message):
 class NightState:
     night: Night
     heats: list[Heat]
-    results: dict[str, LeaderboardRow]  # race id -> its entry
+    best_laps: dict[str, float | None]  # race id -> its best counting lap (corrections kept)
     standings: list[Standing]
     season_name: str | None
     season: list[SeasonStanding] | None  # once the night is closed and in a season
@@ -324,7 +366,6 @@ class HeatReady(Message):
 def read_night(league: League, night_id: str) -> NightState:
     night = get_night(league, night_id)
     table = standings(league, night)
-    results = {row.entry.record_id: row.entry for row in table}
     season_name = None
     season = None
     if night.season_id is not None:
@@ -332,7 +373,15 @@ def read_night(league: League, night_id: str) -> NightState:
         season_name = found.name
         if night.closed:
             season = season_standings(league, found)
-    return NightState(night, heats(league, night), results, table, season_name, season)
+    # Every race's own best lap, not only the racer's best race of the night (the entries
+    # cache keeps each race's figures with corrections applied).
+    best_laps = {
+        str(row["entry_id"]): row["best_lap"]
+        for row in league.query(
+            "SELECT entry_id, best_lap FROM entries WHERE night_id = ?", (night_id,)
+        )
+    }
+    return NightState(night, heats(league, night), best_laps, table, season_name, season)
 
 
 def heat_setup(
@@ -393,6 +442,9 @@ class NightsScreen(RacerScreen[None]):
         self.db_path = db_path
         self.nights: list[Night] = []
         self.state: NightState | None = None
+        # The night the pane shows or is loading: the list's cursor decides it, never the
+        # order in which loads come back.
+        self.showing: str | None = None
         self.new_season_id: str | None = None  # created here: new nights start in it
 
     def compose(self) -> ComposeResult:
@@ -432,7 +484,7 @@ class NightsScreen(RacerScreen[None]):
         table = self.query_one("#nights", DataTable)
         fill_table(table, NIGHT_COLUMNS, rows)
         if not self.nights:
-            self.state = None
+            self.state = self.showing = None
             self.query_one("#night-rules", Static).update(
                 Text(
                     "No league nights yet. Press o to open one (s first creates a season "
@@ -444,14 +496,20 @@ class NightsScreen(RacerScreen[None]):
         ids = [n.id for n in self.nights]
         index = ids.index(message.select) if message.select in ids else 0
         table.move_cursor(row=index)
-        self._load_night(ids[index])
+        self._show_night(ids[index], again=True)
 
     @on(DataTable.RowHighlighted, "#nights")
     def _night_highlighted(self, event: DataTable.RowHighlighted) -> None:
         if 0 <= event.cursor_row < len(self.nights):
-            night = self.nights[event.cursor_row]
-            if self.state is None or self.state.night.id != night.id:
-                self._load_night(night.id)
+            self._show_night(self.nights[event.cursor_row].id)
+
+    def _show_night(self, night_id: str, *, again: bool = False) -> None:
+        """Show the night under the cursor (`again`: read it even if it is shown: it
+        changed). A list filled afresh highlights its first row before the cursor moves to
+        the night chosen, so the last night asked for wins, not the last read."""
+        if again or night_id != self.showing:
+            self.showing = night_id
+            self._load_night(night_id)
 
     @work(thread=True, exclusive=True, group="night-view", exit_on_error=False)
     def _load_night(self, night_id: str) -> None:
@@ -460,6 +518,8 @@ class NightsScreen(RacerScreen[None]):
         self.post_message(NightLoaded(state))
 
     def on_night_loaded(self, message: NightLoaded) -> None:
+        if message.state.night.id != self.showing:
+            return  # read for a row the cursor has left since
         self.state = state = message.state
         night = state.night
         text = Text()
@@ -479,9 +539,8 @@ class NightsScreen(RacerScreen[None]):
         next_marked = False
         for number, heat in enumerate(state.heats, start=1):
             if heat.race_id is not None:
-                entry = state.results.get(heat.race_id)
-                best = entry.best_lap if entry is not None else None
-                result = Text("raced" if best is None else f"best {seconds(best)}")
+                best = state.best_laps.get(heat.race_id)
+                result = Text("no lap counted" if best is None else f"best {seconds(best)}")
             elif not next_marked and not state.night.closed:
                 result = Text("next (r)", style="bold green")
                 next_marked = True
@@ -530,6 +589,9 @@ class NightsScreen(RacerScreen[None]):
     # --- actions -----------------------------------------------------------------------
 
     def _current(self, doing: str) -> Night | None:
+        if self.showing is not None and (self.state is None or self.state.night.id != self.showing):
+            self.notify(f"The night is still being read; {doing} in a moment.", severity="warning")
+            return None
         if self.state is None:
             self.notify(f"Open a night first (o), then {doing}.", severity="warning")
             return None
@@ -556,7 +618,10 @@ class NightsScreen(RacerScreen[None]):
             taken = [name for name, _ in message.seasons]
             self.app.push_screen(NewSeasonDialog(taken), self._season_requested)
             return
-        dialog = NewNightDialog(message.seasons, self.new_season_id)
+        # The season created here, or else the newest: the league's current season, also
+        # after a restart (a night opened outside it would lose its points to the season).
+        newest = message.seasons[-1][1] if message.seasons else None
+        dialog = NewNightDialog(message.seasons, self.new_season_id or newest)
         self.app.push_screen(dialog, self._night_requested)
 
     def action_new_season(self) -> None:
@@ -585,11 +650,10 @@ class NightsScreen(RacerScreen[None]):
 
     @work(thread=True, group="nights-change", exit_on_error=False)
     def _open_night(self, request: NightRequest) -> None:
-        rules = load_rules(request.rules_file) if request.rules_file else DEFAULT_RULES
         track = resolve_track(request.track)
         with open_league(self.db_path) as league:
             night = new_night(
-                league, track, rules=rules, name=request.name, season=request.season_id
+                league, track, rules=request.rules, name=request.name, season=request.season_id
             )
         self.post_message(NightChanged(night.id, f"Opened {night.name} on {night.track_name}."))
 

@@ -19,6 +19,7 @@ from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
 from racer_tui.screens.race_screen import RaceScreen
 from sim.home import data_home
+from sim.race.rules import RankingMethod
 from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 
@@ -59,10 +60,19 @@ async def test_a_host_runs_a_whole_night_from_the_app(tmp_path: Path) -> None:
         dialog = app.screen
         assert isinstance(dialog, NewNightDialog)
         dialog.query_one("#night-track", Select).value = "beginner-oval"
-        dialog.query_one("#night-rules", Input).value = str(rules)
         season = dialog.query_one("#night-season", Select)
-        season.value = next(value for _, value in season._options if value != Select.NULL)
-        await pilot.press(*"friday", "enter")
+        labels = {value: label for label, value in season._options}
+        assert labels[season.value] == "spring"  # the league's current season, by default
+        await pilot.press(*"friday", "enter")  # Enter moves on: it does not open the night
+        assert app.screen is dialog and dialog.focused is dialog.query_one("#night-rules")
+        bad = tmp_path / "bad.yaml"
+        bad.write_text("window_seconds: [\n")
+        await pilot.press(*str(bad), "ctrl+s")  # a broken file is said here, nothing lost
+        assert app.screen is dialog
+        assert "is not valid YAML" in painted(dialog.query_one("#problem"))
+        assert dialog.query_one("#night-name", Input).value == "friday"
+        dialog.query_one("#night-rules", Input).value = str(rules)
+        await pilot.press("ctrl+s")
         await settle(pilot)
         assert app.screen is nights
         shown = painted(nights.query_one("#night-rules"))
@@ -134,7 +144,7 @@ async def test_running_a_heat_before_the_draw_says_what_to_do() -> None:
         assert "Open a night first" in notes.text("warning")
         await pilot.press("o")
         await settle(pilot)
-        await pilot.press("enter")  # the defaults: league rules, first track
+        await pilot.press("ctrl+s")  # the defaults: league rules, first track
         await settle(pilot)
         await pilot.press("r")
         await settle(pilot)
@@ -165,6 +175,23 @@ async def test_drawing_with_nobody_waiting_names_the_key_not_a_command() -> None
         errors = notes.text("error")
         assert "no entrants waiting to race; add one (a), then draw (d)" in errors
         assert "racer-tui" not in errors
+
+
+async def test_the_open_night_dialog_sets_the_ranking_over_the_rules() -> None:
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        nights = await the_nights_screen(pilot)
+        await pilot.press("o")
+        await settle(pilot)
+        app.screen.query_one("#night-ranking", Select).value = RankingMethod.BEST_AVERAGE
+        await pilot.press(*"sunday", "ctrl+s")
+        await settle(pilot)
+        assert app.screen is nights
+        shown = " ".join(painted(nights.query_one("#night-rules")).split())  # wrapped at 80
+        assert "ranked by best average of 3 consecutive laps" in shown
+    with open_league() as league:
+        (night,) = list_nights(league)
+    assert (night.name, night.rules.ranking) == ("sunday", RankingMethod.BEST_AVERAGE)
 
 
 async def test_closing_a_night_drawn_elsewhere_names_the_keys_and_shows_the_heats() -> None:
@@ -216,3 +243,49 @@ async def test_an_entrant_folder_that_is_not_a_model_names_the_garages_key(
         assert f"so {stranger} is not a model folder" in errors
         assert "give a garage model's name, or import the folder in the Garage (i there)" in errors
         assert "racer-tui" not in errors
+
+
+async def test_the_night_shown_is_the_one_under_the_cursor_after_it_changes() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        for name in ("thursday", "friday", "saturday"):  # the list shows the newest first
+            new_night(league, resolve_track("beginner-oval"), name=name)
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        nights = await the_nights_screen(pilot)
+        await pilot.press("down", "down")  # thursday, the oldest
+        await settle(pilot)
+        await pilot.press("c", "y")  # close it: the list is read again
+        await settle(pilot)
+        rows = table_rows(nights, "#nights")
+        assert [(row[0], row[2]) for row in rows] == [
+            ("saturday", "open"),
+            ("friday", "open"),
+            ("thursday", "closed"),
+        ]
+        assert nights.query_one("#nights", DataTable).cursor_row == 2
+        assert nights.state is not None and nights.state.night.name == "thursday"
+        assert painted(nights.query_one("#night-rules")).startswith("thursday")
+
+
+async def test_every_raced_heat_shows_its_own_best_lap() -> None:
+    from league.nights import run_heats
+    from racer_tui.race_commands import resolve_driver
+    from sim.race.rules import RaceRules
+    from tests.racer_tui.screens.tui_helpers import trained_model
+
+    trained_model("wobbly")  # untrained weights: it may count no lap at all
+    oval = resolve_track("beginner-oval")
+    with open_league() as league:
+        night = new_night(league, oval, rules=RaceRules(window_seconds=12.0), name="friday")
+        add_entrant(league, night, "ada", "reference")
+        add_entrant(league, night, "ada", "wobbly")  # the same racer's second car
+        draw_heats(league, night, seed=3)
+        run_heats(league, night, oval, resolve_driver)
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        nights = await the_nights_screen(pilot)
+        results = {row[2]: row[3] for row in table_rows(nights, "#heats")}
+    assert results["reference"].startswith("best ")
+    assert results["wobbly"] == "no lap counted" or results["wobbly"].startswith("best ")
+    assert results["wobbly"] != results["reference"]  # not the racer's best race twice

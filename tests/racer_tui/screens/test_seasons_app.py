@@ -69,10 +69,19 @@ async def test_a_host_creates_a_season_and_opens_a_night_in_it() -> None:
         season = night_dialog.query_one("#night-season", Select)
         labels = {value: label for label, value in season._options}
         assert labels[season.value] == "Spring 2025"
-        await pilot.press(*"opener", "enter")
+        await pilot.press(*"opener", "ctrl+s")
         await settle(pilot)
         assert showing(app) is nights
         assert "season Spring 2025" in painted(nights.query_one("#night-rules"))
+
+    restarted = create_app(start="league")  # the next night, after a restart of the app
+    async with restarted.run_test(size=(100, 30)) as pilot:
+        await the_nights_screen(pilot)
+        await pilot.press("o")
+        await settle(pilot)
+        season = restarted.screen.query_one("#night-season", Select)
+        labels = {value: label for label, value in season._options}
+        assert labels[season.value] == "Spring 2025"  # still the current season
 
     with open_league() as league:
         spring = get_season(league, "Spring 2025")
