@@ -27,6 +27,7 @@ from textual.widgets import Button, DataTable, Input, Label, Select, Static
 from league.errors import LeagueError
 from league.local_racer import HOST_NAME, local_racer_name
 from league.nights import (
+    Entrant,
     Heat,
     Night,
     Standing,
@@ -321,6 +322,7 @@ class NightState:
     night: Night
     heats: list[Heat]
     best_laps: dict[str, float | None]  # race id -> its best counting lap (corrections kept)
+    undrawn: list[Entrant]  # entered, with no heat in the order yet
     standings: list[Standing]
     season_name: str | None
     season: list[SeasonStanding] | None  # once the night is closed and in a season
@@ -381,7 +383,10 @@ def read_night(league: League, night_id: str) -> NightState:
             "SELECT entry_id, best_lap FROM entries WHERE night_id = ?", (night_id,)
         )
     }
-    return NightState(night, heats(league, night), best_laps, table, season_name, season)
+    order = heats(league, night)
+    in_order = {heat.entrant.id for heat in order}
+    undrawn = [entrant for entrant in entrants(league, night) if entrant.id not in in_order]
+    return NightState(night, order, best_laps, undrawn, table, season_name, season)
 
 
 def heat_setup(
@@ -455,7 +460,7 @@ class NightsScreen(RacerScreen[None]):
                 yield FittedTable(id="nights", cursor_type="row", zebra_stripes=True)
             with Vertical(id="night-view"):
                 yield Static("", id="night-rules")
-                yield Label("Heats, in running order", classes="field-label")
+                yield Label("Entrants and heats, in running order", classes="field-label")
                 yield FittedTable(id="heats", cursor_type="row", zebra_stripes=True)
                 yield Label("Standings", id="standings-title", classes="field-label")
                 yield FittedTable(id="standings", cursor_type="row", zebra_stripes=True)
@@ -549,6 +554,9 @@ class NightsScreen(RacerScreen[None]):
             rows.append(
                 [str(number), Text(heat.entrant.display_name), Text(heat.entrant.model), result]
             )
+        for entrant in state.undrawn:  # listed as they are added, before any draw
+            waiting = Text("entered (d draws)", style="dim")
+            rows.append(["", Text(entrant.display_name), Text(entrant.model), waiting])
         fill_table(self.query_one("#heats", DataTable), HEAT_COLUMNS, rows)
 
     def _show_standings(self, state: NightState) -> None:

@@ -83,6 +83,11 @@ async def test_a_host_runs_a_whole_night_from_the_app(tmp_path: Path) -> None:
             assert isinstance(app.screen, AddEntrantDialog)
             await pilot.press(*racer, "enter", *"reference", "enter")
             await settle(pilot)
+        # Listed as they are added, before the draw.
+        assert [row[1:] for row in table_rows(nights, "#heats")] == [
+            ["ada", "reference", "entered (d draws)"],
+            ["[b]bob[/b]", "reference", "entered (d draws)"],
+        ]
         await pilot.press("d")
         await settle(pilot)
         heats = table_rows(nights, "#heats")
