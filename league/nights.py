@@ -18,10 +18,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from league.errors import LeagueError
-from league.leaderboard import Filters, LeaderboardRow, leaderboard
+from league.leaderboard import LeaderboardRow
 from league.racers import check_name, display_names, ensure_racer
 from league.races import find_local_track, record_race
-from league.seasons import DEFAULT_POINTS, get_season
+from league.seasons import DEFAULT_POINTS, get_season, night_results
 from league.store import League, now_iso
 from league.timekeeper.car import is_physical, physical_spec
 from league.tracks import ensure_track
@@ -170,26 +170,12 @@ def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant
         )
         if duplicate:
             raise LeagueError(f"{name!r} is already entered with {spec!r} on this night.")
-        _same_kind_of_car(league, night, spec)
         entrant_id = league.insert_record(
             "night_entrants",
             {"night_id": night.id, "racer": name, "model": spec, "created_at": now_iso()},
         )
     shown = display_names(league, name).get(name, name)
     return Entrant(entrant_id, name, shown, spec)
-
-
-def _same_kind_of_car(league: League, night: Night, spec: str) -> None:
-    """A night races physical cars or simulated ones, never both: its standings are one
-    ranking, and lap times of a real track and of a simulator are never ranked together
-    (`sim.race.physics`)."""
-    for row in league.query("SELECT model FROM night_entrants WHERE night_id = ?", (night.id,)):
-        if is_physical(row["model"]) != is_physical(spec):
-            kind = "physical cars" if is_physical(row["model"]) else "simulated cars"
-            raise LeagueError(
-                f"league night {night.name!r} races {kind}; a real track's lap times and a "
-                "simulator's are never ranked together, so open another night for this car."
-            )
 
 
 def model_spec(model: str) -> str:
@@ -376,11 +362,12 @@ def night_points(league: League, night: Night) -> tuple[int, ...]:
 def standings(league: League, night: Night, points: Sequence[int] | None = None) -> list[Standing]:
     """Each racer's best race of the night, ranked under the night's rules, with points.
 
+    One ranking, as the season counts it: a night may race simulated and physical cars
+    together (the host's choice), though the leaderboard never ranks their laps together.
     A racer without a valid score is unplaced and scores no points.
     """
     table = tuple(points) if points is not None else night_points(league, night)
-    rows = leaderboard(league, Filters(night_ids=[night.id]), method=None)
-    return standings_from(rows, table)
+    return standings_from(night_results(league, [night.id]), table)
 
 
 def standings_from(rows: Sequence[LeaderboardRow], points: Sequence[int]) -> list[Standing]:

@@ -202,3 +202,40 @@ def test_an_entrant_model_is_checked_when_added(league: League, tmp_path: Path) 
     assert entrant.model == str(folder.resolve())
     with pytest.raises(LeagueError, match="already entered"):
         nights.add_entrant(league, night, "ANA", str(folder))
+
+
+def test_a_night_of_simulated_and_physical_cars_is_one_ranking(league: League) -> None:
+    """The host may mix cars: the night's standings rank them all once, as the season
+    counts them; only the leaderboard keeps a real track's laps on a board of their own."""
+    from dataclasses import replace
+
+    from league.leaderboard import Filters, leaderboard
+    from sim.race.physics import PHYSICAL
+
+    new_season(league, "mixed", parse_points("10,6,4"))
+    rules = RaceRules(window_seconds=60.0)
+    night = nights.new_night(league, resolve_track(TRACK), rules=rules, season="mixed")
+    nights.add_entrant(league, night, "ana", "reference")
+    nights.add_entrant(league, night, "bob", "physical:blue car")
+    nights.add_entrant(league, night, "cy", "reference")
+    order = nights.draw_heats(league, night, seed=5)
+    laps = {"ana": [11.0], "bob": [10.5], "cy": [12.0]}
+    for heat in order:
+        result = race_result(heat.entrant.racer, laps[heat.entrant.racer], rules=rules)
+        if heat.entrant.racer == "bob":
+            result = replace(result, physics=PHYSICAL)
+        record_race(league, result, night.id, heat_id=heat.id)
+    standings = nights.close_night(league, night, "host")
+    assert [(s.position, s.entry.racer, s.points) for s in standings] == [
+        (1, "bob", 10),
+        (2, "ana", 6),
+        (3, "cy", 4),
+    ]
+    season = season_standings(league, get_season(league, "mixed"))
+    assert [(s.racer, s.points) for s in season] == [("bob", 10), ("ana", 6), ("cy", 4)]
+    boards = leaderboard(league, Filters(), method=None)
+    assert [(row.racer, row.rank, row.physics == PHYSICAL) for row in boards] == [
+        ("ana", 1, False),
+        ("cy", 2, False),
+        ("bob", 1, True),
+    ]
