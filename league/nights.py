@@ -314,12 +314,13 @@ def run_heats(
     on_result: Callable[[Heat, RaceResult], None] | None = None,
     limit: int | None = None,
 ) -> list[str]:
-    """Race the pending heats in order, headless, recording each result as it finishes.
+    """Race the pending simulated heats in order, headless, recording each result as it
+    finishes; up to `limit` of them.
 
     `resolve_driver(model spec, track)` turns an entrant's model into a driver (the front
     end supplies it, so the league never imports policies). A heat that fails stops the
-    run; the heats before it stay recorded. So does a physical car's heat: only the app's
-    timekeeper can time it.
+    run; the heats before it stay recorded. A physical car's heat is passed over and stays
+    waiting (`timekept_heats`): only the app's timekeeper can time it.
     """
     _open(league, night)  # record_race checks again for each heat, inside its transaction
     if track.content_hash != night.track_hash:
@@ -334,20 +335,25 @@ def run_heats(
             f"league night {night.name!r} has no drawn heats waiting; draw them with "
             "`racer-tui night draw`."
         )
+    simulated = [heat for heat in todo if not is_physical(heat.entrant.model)]
+    if not simulated:
+        raise LeagueError(
+            f"the heats waiting on league night {night.name!r} are physical cars', which a "
+            "timekeeper times: run them in the app (r on the Nights screen)."
+        )
     recorded: list[str] = []
-    for heat in todo[:limit]:
-        if is_physical(heat.entrant.model):
-            raise LeagueError(
-                f"heat {heat.position} is {heat.entrant.display_name}'s physical car, which a "
-                "timekeeper times: run it in the app (r on the Nights screen); the heats "
-                "before it are recorded."
-            )
+    for heat in simulated[:limit]:
         driver = resolve_driver(heat.entrant.model, track)
         result = run_race(track, night.rules, driver, racer=heat.entrant.racer, seed=heat.seed)
         recorded.append(record_race(league, result, night.id, heat_id=heat.id))
         if on_result is not None:
             on_result(heat, result)
     return recorded
+
+
+def timekept_heats(league: League, night: Night) -> list[Heat]:
+    """The heats waiting for a timekeeper: physical cars'."""
+    return [heat for heat in pending_heats(league, night) if is_physical(heat.entrant.model)]
 
 
 # --- standings ----------------------------------------------------------------------------------

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import partial
+from pathlib import Path
 from typing import Any, ClassVar
 
 from textual import events
@@ -109,13 +110,23 @@ class RacerTuiApp(App[int]):
         Binding("q", "quit", "Quit"),
     ]
 
-    def __init__(self, *, start: str | None = None, long_running: bool = False) -> None:
+    def __init__(
+        self,
+        *,
+        start: str | None = None,
+        long_running: bool = False,
+        projector_night: str | None = None,
+        db_path: Path | None = None,
+    ) -> None:
         """`start` forces the first mode (tests); by default the garage, or the welcome
         screen when the garage is empty. `long_running` is the app a racer or host keeps
         open for hours: it tunes garbage collection for that (`racer_tui.long_running`);
-        tests build many apps in one process and leave it off."""
+        tests build many apps in one process and leave it off. `projector_night` opens
+        on that night's projector (`racer-tui night projector`), in league `db_path`."""
         super().__init__()
         self.start_mode = start
+        self.projector_night = projector_night
+        self.db_path = db_path
         self.long_running = long_running
         self._frozen_modes: set[str] = set()
         self._switching_to_shown_mode = False
@@ -128,6 +139,10 @@ class RacerTuiApp(App[int]):
         first = self.start_mode or self._first_mode()
         self.switch_mode(first)
         self._freeze_after_first_visit(first)
+        if self.projector_night is not None:
+            from racer_tui.screens.night_projector import NightProjectorScreen
+
+            self.push_screen(NightProjectorScreen(self.projector_night, db_path=self.db_path))
         if self.long_running:
             self.collector.start()
             self.set_interval(CHECK_SECONDS, self._collect_when_idle, name="idle-collector")
@@ -345,9 +360,17 @@ class RacerTuiApp(App[int]):
         return described
 
 
-def create_app(*, start: str | None = None, long_running: bool = False) -> RacerTuiApp:
+def create_app(
+    *,
+    start: str | None = None,
+    long_running: bool = False,
+    projector_night: str | None = None,
+    db_path: Path | None = None,
+) -> RacerTuiApp:
     """The app, as the CLI, the tests and the snapshots build it."""
-    return RacerTuiApp(start=start, long_running=long_running)
+    return RacerTuiApp(
+        start=start, long_running=long_running, projector_night=projector_night, db_path=db_path
+    )
 
 
 def run_app() -> int:

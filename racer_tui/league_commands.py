@@ -140,6 +140,10 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
     close.add_argument("--by", help="who closes it (default: this machine's racer name)")
     close.add_argument("--force", action="store_true", help="close even with heats waiting")
     close.add_argument("--json", action="store_true")
+    projector = actions.add_parser(
+        "projector", parents=[db], help="the night full-screen, for the venue's big screen"
+    )
+    projector.add_argument("night")
 
 
 def _register_season(commands: Parsers, db: argparse.ArgumentParser) -> None:
@@ -199,8 +203,23 @@ def run(args: argparse.Namespace) -> int:
         "racer": _racer,
         "correct": _correct,
     }
+    if args.command == "night" and args.night_command == "projector":
+        return _night_projector(args)
     with open_league(args.db) as league:
         return handlers[args.command](league, args)
+
+
+def _night_projector(args: argparse.Namespace) -> int:
+    """The app, straight on a night's projector: for the venue's screen, in a terminal of
+    its own beside the host's racer-tui (Esc leaves it for the rest of the app)."""
+    from league.nights import get_night
+    from league.store import open_league
+    from racer_tui.app import create_app
+
+    with open_league(args.db) as league:
+        night = get_night(league, args.night)  # a wrong name is one sentence, before the app
+    create_app(long_running=True, projector_night=night.id, db_path=args.db).run()
+    return 0
 
 
 def _table(title: str) -> Table:
@@ -432,7 +451,7 @@ def _night_list(league: League, as_json: bool) -> int:
 
 
 def _night_run(league: League, night: Any, limit: int | None) -> int:
-    from league.nights import find_night_track, run_heats
+    from league.nights import find_night_track, run_heats, timekept_heats
 
     try:
         race_commands = importlib.import_module("racer_tui.race_commands")
@@ -462,6 +481,12 @@ def _night_run(league: League, night: Any, limit: int | None) -> int:
         )
 
     run_heats(league, night, track, resolve_driver, on_result=report, limit=limit)
+    for heat in timekept_heats(league, night):
+        print(
+            f"heat {heat.position}: {heat.entrant.display_name}'s physical car waits for a "
+            "timekeeper: run it in the app (r on the Nights screen).",
+            flush=True,
+        )
     return 0
 
 

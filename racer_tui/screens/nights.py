@@ -25,18 +25,17 @@ from textual.suggester import SuggestFromList
 from textual.widgets import Button, DataTable, Input, Label, Select, Static
 
 from league.errors import LeagueError
+from league.live_heat import LiveHeatWriter, live_heat_path
 from league.local_racer import HOST_NAME, local_racer_name
+from league.night_state import NightState, read_night
 from league.nights import (
-    Entrant,
     Heat,
     Night,
-    Standing,
     add_entrant,
     close_night,
     draw_heats,
     entrants,
     find_night_track,
-    get_night,
     heats,
     list_nights,
     new_night,
@@ -48,18 +47,16 @@ from league.races import race_result, record_race
 from league.report import SCORE_TITLES, seconds
 from league.seasons import (
     DEFAULT_POINTS,
-    SeasonStanding,
-    get_season,
     list_seasons,
     new_season,
     parse_points,
-    season_standings,
 )
-from league.store import League, open_league
+from league.store import League, default_db_path, open_league
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import FormDialog, PathSuggester, ask, show_problem
+from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
 from racer_tui.widgets.footer import RacerFooter
@@ -317,17 +314,6 @@ class NightsLoaded(Message):
         self.select = select
 
 
-@dataclass(frozen=True)
-class NightState:
-    night: Night
-    heats: list[Heat]
-    best_laps: dict[str, float | None]  # race id -> its best counting lap (corrections kept)
-    undrawn: list[Entrant]  # entered, with no heat in the order yet
-    standings: list[Standing]
-    season_name: str | None
-    season: list[SeasonStanding] | None  # once the night is closed and in a season
-
-
 class NightLoaded(Message):
     def __init__(self, state: NightState) -> None:
         super().__init__()
@@ -365,44 +351,32 @@ class HeatReady(Message):
         self.setup = setup
 
 
-def read_night(league: League, night_id: str) -> NightState:
-    night = get_night(league, night_id)
-    table = standings(league, night)
-    season_name = None
-    season = None
-    if night.season_id is not None:
-        found = get_season(league, night.season_id)
-        season_name = found.name
-        if night.closed:
-            season = season_standings(league, found)
-    # Every race's own best lap, not only the racer's best race of the night (the entries
-    # cache keeps each race's figures with corrections applied).
-    best_laps = {
-        str(row["entry_id"]): row["best_lap"]
-        for row in league.query(
-            "SELECT entry_id, best_lap FROM entries WHERE night_id = ?", (night_id,)
-        )
-    }
-    order = heats(league, night)
-    in_order = {heat.entrant.id for heat in order}
-    undrawn = [entrant for entrant in entrants(league, night) if entrant.id not in in_order]
-    return NightState(night, order, best_laps, undrawn, table, season_name, season)
-
-
 def heat_setup(
-    league: League, night: Night, heat: Heat, track: Track
+    league: League, night: Night, heat: Heat, track: Track, league_file: Path | None = None
 ) -> RaceSetup | TimekeeperSetup:
     """The race view's setup for a heat: the night's rules, the heat's seed, and the
     night's leader so far as the ghost and the gap; a physical car's heat is the
-    timekeeper's."""
+    timekeeper's. Either tells the night's projector where the heat is."""
     entrant = heat.entrant
+    order = heats(league, night)
+    number = next((i for i, h in enumerate(order, start=1) if h.id == heat.id), heat.position)
+    car = car_name(entrant.model) if is_physical(entrant.model) else entrant.model
+    live = LiveHeatWriter(
+        live_heat_path(league_file or default_db_path(), night.id),
+        night_id=night.id,
+        heat_id=heat.id,
+        heat_number=number,
+        racer=entrant.display_name,
+        car=car,
+    )
     if is_physical(entrant.model):
         return TimekeeperSetup(
             track=track,
             rules=night.rules,
             racer=entrant.racer,
-            car=car_name(entrant.model),
-            title=f"Heat {heat.position}: {entrant.display_name}, {car_name(entrant.model)}",
+            car=car,
+            title=f"Heat {number}: {entrant.display_name}, {car}",
+            live=live,
         )
     table = standings(league, night)
     leader = table[0].entry if table and table[0].entry.score is not None else None
@@ -415,7 +389,8 @@ def heat_setup(
         seed=heat.seed,
         ghost=ghost,
         leader_seconds=leader.score if leader is not None else None,
-        title=f"Heat {heat.position}: {heat.entrant.display_name} ({heat.entrant.model})",
+        title=f"Heat {number}: {heat.entrant.display_name} ({heat.entrant.model})",
+        live=live,
     )
 
 
@@ -429,6 +404,7 @@ class NightsScreen(RacerScreen[None]):
         Binding("r", "run_heat", "Run heat", tooltip="Race the next heat live"),
         Binding("c", "close_night", "Close night", tooltip="Final standings and season points"),
         Binding("s", "new_season", "New season", tooltip="Its nights add up to standings"),
+        Binding("p", "projector", "Projector", tooltip="The night on the venue's big screen"),
         Binding("escape", "leave", "Back"),
     ]
     AUTO_FOCUS = "#nights"
@@ -713,7 +689,7 @@ class NightsScreen(RacerScreen[None]):
                     f"{night.name} has no drawn heats waiting; add entrants (a) and draw (d)."
                 )
             track = find_night_track(night)
-            setup = heat_setup(league, night, waiting[0], track)
+            setup = heat_setup(league, night, waiting[0], track, self.db_path)
         self.post_message(HeatReady(night, waiting[0], setup))
 
     def on_heat_ready(self, message: HeatReady) -> None:
@@ -777,6 +753,15 @@ class NightsScreen(RacerScreen[None]):
                 self.post_message(NightChanged(night.id, ""))
                 raise
         self.post_message(NightChanged(night.id, f"Closed {night.name}; the standings are final."))
+
+    def action_projector(self) -> None:
+        """Any night, open or closed: a closed one shows its final standings."""
+        if self.showing is None:
+            self.notify(
+                "Open a night first (o), then show it on the projector.", severity="warning"
+            )
+            return
+        self.app.push_screen(NightProjectorScreen(self.showing, db_path=self.db_path))
 
     def action_leave(self) -> None:
         self.dismiss(None)

@@ -21,6 +21,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Digits, Static
 
+from league.live_heat import LiveHeatWriter
 from racer_tui.jobs import Job, JobState
 from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.widgets.footer import RacerFooter
@@ -51,6 +52,7 @@ class RaceSetup:
     ghost: GhostLap | None = None
     leader_seconds: float | None = None  # the leaderboard leader's score, for the gap
     title: str = ""
+    live: LiveHeatWriter | None = None  # a night's heat: where it is, for the projector
 
 
 def clock_text(seconds: float) -> str:
@@ -128,6 +130,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self._offtrack_xy: list[tuple[float, float]] = []
         self._laps_shown = 0
         self._last_panel = 0.0
+        self._over_on_air = False  # the projector was told the heat is over: it stays so
         self.frames = 0
 
     def compose(self) -> ComposeResult:
@@ -232,6 +235,42 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self.query_one("#race-facts", Static).update(self._facts(tick))
         if tick is not None and len(tick.laps) != self._laps_shown:
             self._add_laps(tick)
+        self._on_air(tick, remaining)
+
+    def _on_air(self, tick: RaceTick | None, remaining: float) -> None:
+        """Tell a night's projector where the heat is, as this view shows it. Once the
+        finish has been shown the heat stays over, also while the racer replays it."""
+        live = self.setup.live
+        if live is None or self.failure:
+            return
+        if tick is not None and tick.result is not None:
+            self._over_on_air = True
+        if self._over_on_air and self.result is not None:
+            best = self.result.best_lap
+            live.publish(
+                state="over",
+                time_left=0.0,
+                lap=len(self.result.laps),
+                lap_time=0.0,
+                best_lap=best.time_seconds if best is not None else None,
+                offtracks=0,
+                limit=self.setup.rules.max_offtracks_per_lap,
+            )
+            return
+        valid = [lap.time_seconds for lap in tick.laps if lap.valid] if tick else []
+        live.publish(
+            state="ready" if tick is None else "paused" if self.paused else "running",
+            time_left=remaining,
+            lap=tick.lap if tick else 1,
+            lap_time=tick.lap_time if tick else 0.0,
+            best_lap=min(valid, default=None),
+            offtracks=tick.lap_offtracks if tick else 0,
+            limit=self.setup.rules.max_offtracks_per_lap,
+        )
+
+    def on_unmount(self) -> None:
+        if self.setup.live is not None:
+            self.setup.live.clear()  # the heat is no longer running here
 
     @property
     def job(self) -> Job:

@@ -24,6 +24,7 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import DataTable, Digits, Label, Static
 
+from league.live_heat import LiveHeatWriter
 from league.timekeeper.feed import TIMER_ENV, FeedError, Trigger, follow, parse_trigger
 from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat
 from racer_tui.screens.base import RacerScreen
@@ -45,6 +46,7 @@ class TimekeeperSetup:
     car: str  # the car's name on the board
     title: str = ""
     timer: str | None = None  # an automatic timer's path, if the host gave one
+    live: LiveHeatWriter | None = None  # a night's heat: where it is, for the projector
 
 
 class TimerLine(Message):
@@ -133,6 +135,8 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
     def on_unmount(self) -> None:
         self._stop_feed.set()
+        if self.setup.live is not None:
+            self.setup.live.clear()  # the heat is no longer running here
 
     # --- the timer's lines ------------------------------------------------------------
 
@@ -271,6 +275,16 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             digits = self.query_one(selector, Digits)
             if digits.value != value:
                 digits.update(value)
+        if self.setup.live is not None:
+            self.setup.live.publish(
+                state=heat.phase.value,
+                time_left=heat.time_left(now),
+                lap=len(heat.laps) + (heat.phase is not Phase.OVER),
+                lap_time=heat.lap_clock(now) if heat.phase is not Phase.OVER else 0.0,
+                best_lap=self._best(),
+                offtracks=heat.resets,
+                limit=self.setup.rules.max_offtracks_per_lap,
+            )
 
     def _draw(self) -> None:
         self._draw_clocks()
@@ -303,12 +317,18 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         resets = f"  Resets {heat.resets}" + ("" if limit is None else f"/{limit}")
         text.append(resets, style="red" if over else "")
         records = heat.lap_records()
-        counting = [lap for lap in records if lap_counts(lap, rules)]
-        best = min((lap.time_seconds for lap in counting), default=None)
+        counting = sum(1 for lap in records if lap_counts(lap, rules))
+        best = self._best()
         text.append("  Best ")
         text.append(clock_text(best) if best is not None else "-", style="bold")
-        text.append(f"  {len(counting)} of {len(records)} laps count")
+        text.append(f"  {counting} of {len(records)} laps count")
         return text
+
+    def _best(self) -> float | None:
+        """The best lap that counts so far."""
+        rules = self.setup.rules
+        laps = self.heat.lap_records()
+        return min((lap.time_seconds for lap in laps if lap_counts(lap, rules)), default=None)
 
     def _fill_laps(self) -> None:
         """Add the laps captured since the last time; all of them again when one shown has

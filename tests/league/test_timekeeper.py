@@ -126,7 +126,15 @@ def test_a_timekept_heat_is_a_league_result_on_a_board_of_its_own() -> None:
 
 def test_a_physical_car_enters_a_night_but_only_the_timekeeper_runs_its_heat() -> None:
     from league.errors import LeagueError
-    from league.nights import add_entrant, draw_heats, new_night, run_heats
+    from league.nights import (
+        add_entrant,
+        draw_heats,
+        new_night,
+        pending_heats,
+        run_heats,
+        timekept_heats,
+    )
+    from sim.race.driver import reference_driver
     from sim.track_catalog import resolve_track
 
     track = resolve_track("beginner-oval")
@@ -138,6 +146,12 @@ def test_a_physical_car_enters_a_night_but_only_the_timekeeper_runs_its_heat() -
             add_entrant(league, night, "carol", "physical:blue car")
         with pytest.raises(LeagueError, match="is not a car name"):
             add_entrant(league, night, "dan", "physical:\u200b")
+        add_entrant(league, night, "dan", "reference")
         draw_heats(league, night, seed=1)
-        with pytest.raises(LeagueError, match="physical car, which a timekeeper times"):
+        # The simulated heat runs headless whatever the order; the physical one waits.
+        raced = run_heats(league, night, track, lambda spec, track: reference_driver(track))
+        assert len(raced) == 1
+        assert [heat.entrant.racer for heat in pending_heats(league, night)] == ["carol"]
+        assert [heat.entrant.racer for heat in timekept_heats(league, night)] == ["carol"]
+        with pytest.raises(LeagueError, match="physical cars', which a timekeeper times"):
             run_heats(league, night, track, resolve_driver=lambda spec, track: None)  # type: ignore[arg-type,return-value]

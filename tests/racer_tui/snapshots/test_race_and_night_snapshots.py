@@ -18,6 +18,7 @@ from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.race_commands import resolve_driver
+from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
 from sim.home import data_home
@@ -102,3 +103,33 @@ def test_timekeeper_part_way(snap_compare: Compare, size: tuple[int, int]) -> No
         await pilot.pause(0.2)  # the clocks redraw at 10 Hz
 
     assert snap_compare(OneScreenApp(keeper), terminal_size=size, run_before=laps)
+
+
+@SIZES
+def test_night_projector_with_a_heat_running(snap_compare: Compare, size: tuple[int, int]) -> None:
+    """Two heats raced, the second just now (highlighted), the third on the track."""
+    from tests.racer_tui.screens.test_night_projector import (
+        Clock,
+        a_night_with_one_heat_raced,
+        on_air,
+        record_heat,
+    )
+
+    night = a_night_with_one_heat_raced()
+    clock = Clock()
+
+    async def a_result_then_a_heat(pilot: Pilot[Any]) -> None:
+        await settle(pilot)
+        screen = pilot.app.screen
+        assert isinstance(screen, NightProjectorScreen)
+        screen.clock = clock
+        with open_league() as league:
+            record_heat(league, night, 1)
+        screen.action_refresh_now()
+        await settle(pilot)
+        on_air(night, clock, heat_index=2)
+        screen._read_live()
+        await pilot.pause()
+
+    app = create_app(start="league", projector_night=night.id)
+    assert snap_compare(app, terminal_size=size, run_before=a_result_then_a_heat)

@@ -1,0 +1,196 @@
+"""The heat running now, for the venue's projector: a small JSON file beside the league.
+
+A heat runs in the host's racer-tui (the race view, or the timekeeper for a physical
+car); the night's projector is often another racer-tui, in another terminal on the
+venue's screen. Results reach it through the league database, but the heat in progress
+is not in the database until it ends. So the screen running it writes where it is (clock,
+lap, best lap) to `live-heats/<night id>.json` beside the league file a few times a
+second, atomically, and the projector reads it.
+
+The writer touches the file at least every `HEARTBEAT_SECONDS`, even while a heat stands
+still; a file older than `STALE_SECONDS` belongs to a racer-tui that was closed or killed
+mid-heat, and the projector then shows no heat running. The file is untrusted input like
+any other: a reader that finds anything unexpected in it treats it as absent.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import tempfile
+import time
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+FOLDER = "live-heats"
+HEARTBEAT_SECONDS = 0.5
+STALE_SECONDS = 5.0
+MAX_TEXT = 200
+MAX_BYTES = 4096
+STATES = ("ready", "running", "paused", "over")
+
+
+@dataclass(frozen=True)
+class LiveHeat:
+    """Where the heat in progress is, as the screen running it shows it."""
+
+    night_id: str
+    heat_id: str
+    heat_number: int  # in the night's running order, from 1
+    racer: str  # the racer's display name
+    car: str  # the model, bundle or physical car
+    state: str  # one of STATES
+    time_left: float  # seconds of the race window
+    lap: int  # the lap in progress, from 1
+    lap_time: float  # seconds into it
+    best_lap: float | None  # the best lap that counts so far
+    offtracks: int  # this lap's off-tracks (a physical car's resets)
+    limit: int | None  # the rules' off-track limit per lap
+    written_at: float = 0.0  # wall clock (time.time()) of the write
+
+
+def live_heat_path(league_file: Path, night_id: str) -> Path:
+    return league_file.parent / FOLDER / f"{night_id}.json"
+
+
+def read_live_heat(path: Path, night_id: str, now: float | None = None) -> LiveHeat | None:
+    """The heat running now on night `night_id`, or None: no file, a stale one, or one
+    that does not hold what a writer writes."""
+    try:
+        with path.open("rb") as handle:
+            raw = handle.read(MAX_BYTES + 1)
+        heat = _parse(json.loads(raw)) if len(raw) <= MAX_BYTES else None
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
+    if heat is None or heat.night_id != night_id:
+        return None
+    moment = time.time() if now is None else now
+    if not -STALE_SECONDS < moment - heat.written_at <= STALE_SECONDS:
+        return None  # its writer stopped (closed or killed), or a clock far off
+    return heat
+
+
+def _parse(data: Any) -> LiveHeat | None:
+    if not isinstance(data, dict):
+        return None
+    texts = ("night_id", "heat_id", "racer", "car", "state")
+    if not all(isinstance(data.get(key), str) and len(data[key]) <= MAX_TEXT for key in texts):
+        return None
+    if data["state"] not in STATES:
+        return None
+    counts = ("heat_number", "lap", "offtracks")
+    if not all(_count(data.get(key)) for key in counts):
+        return None
+    numbers = ("time_left", "lap_time", "written_at")
+    if not all(_number(data.get(key)) for key in numbers):
+        return None
+    best, limit = data.get("best_lap"), data.get("limit")
+    if not (best is None or _number(best)) or not (limit is None or _count(limit)):
+        return None
+    fields = {key: data[key] for key in (*texts, *counts, *numbers)}
+    return LiveHeat(best_lap=best, limit=limit, **fields)
+
+
+def _count(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and 0 <= value < 1_000_000
+
+
+def _number(value: Any) -> bool:
+    return (
+        isinstance(value, int | float)
+        and not isinstance(value, bool)
+        and math.isfinite(value)
+        and value >= 0
+    )
+
+
+class LiveHeatWriter:
+    """Writes one heat's progress for the projector: on every change of state, lap,
+    off-tracks or best lap at once, otherwise at most every HEARTBEAT_SECONDS; `clear`
+    when the heat is left. A failed write never stops the heat: the projector is a bonus,
+    the heat is not."""
+
+    def __init__(
+        self, path: Path, *, night_id: str, heat_id: str, heat_number: int, racer: str, car: str
+    ) -> None:
+        self.path = path
+        self.heat = LiveHeat(
+            night_id=night_id,
+            heat_id=heat_id,
+            heat_number=heat_number,
+            racer=racer,
+            car=car,
+            state="ready",
+            time_left=0.0,
+            lap=1,
+            lap_time=0.0,
+            best_lap=None,
+            offtracks=0,
+            limit=None,
+        )
+        self.writes = 0
+        self._last_at = -math.inf
+        self._written = False
+
+    def publish(
+        self,
+        *,
+        state: str,
+        time_left: float,
+        lap: int,
+        lap_time: float,
+        best_lap: float | None,
+        offtracks: int,
+        limit: int | None,
+        now: float | None = None,
+    ) -> bool:
+        """Write the heat's progress if it changed or the heartbeat is due; whether it did."""
+        moment = time.time() if now is None else now
+        last = self.heat
+        changed = not self._written or (last.state, last.lap, last.offtracks, last.best_lap) != (
+            state,
+            lap,
+            offtracks,
+            best_lap,
+        )
+        if not changed and moment - self._last_at < HEARTBEAT_SECONDS:
+            return False
+        heat = replace(
+            last,
+            state=state,
+            time_left=max(time_left, 0.0),
+            lap=lap,
+            lap_time=max(lap_time, 0.0),
+            best_lap=best_lap,
+            offtracks=offtracks,
+            limit=limit,
+            written_at=moment,
+        )
+        try:
+            self._write(json.dumps(asdict(heat), sort_keys=True))
+        except OSError:
+            return False
+        self.heat, self._last_at, self._written = heat, moment, True
+        self.writes += 1
+        return True
+
+    def _write(self, text: str) -> None:
+        """Atomic (a reader sees the old file or the new one) but not synced to disk: the
+        file is worth a second of the heat, and a sync could hold up a timekeeper's key."""
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd, temporary = tempfile.mkstemp(prefix=".live.", dir=self.path.parent)
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as handle:
+                handle.write(text)
+            os.replace(temporary, self.path)
+        except BaseException:
+            Path(temporary).unlink(missing_ok=True)
+            raise
+
+    def clear(self) -> None:
+        with contextlib.suppress(OSError):  # stale within seconds anyway
+            self.path.unlink(missing_ok=True)
+        self._written = False

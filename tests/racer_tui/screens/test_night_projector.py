@@ -1,0 +1,153 @@
+"""A league night on the venue's screen: the heat running now (from the file its screen
+writes), the night's standings with points and gaps, the newest result highlighted for a
+while, and the final standings once the night closes."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+from league.live_heat import STALE_SECONDS, LiveHeatWriter, live_heat_path
+from league.nights import Night, add_entrant, close_night, draw_heats, heats, new_night
+from league.races import record_race
+from league.store import default_db_path, open_league
+from racer_tui.app import create_app
+from racer_tui.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen
+from sim.home import data_home
+from sim.race.physics import PHYSICAL
+from sim.race.rules import RaceRules
+from sim.track_catalog import resolve_track
+from tests.league.helpers import race_result
+from tests.racer_tui.screens.tui_helpers import painted, settle
+
+RULES = RaceRules(window_seconds=120.0, penalty_seconds=2.0, max_offtracks_per_lap=3)
+LAPS = {"ana": [12.0, 11.5], "[b]bob[/b]": [10.5], "cy": [13.0]}
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.now = 5000.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def a_night_with_one_heat_raced() -> Night:
+    """Three entrants (bob drives a physical car), drawn; the first heat raced."""
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), rules=RULES, name="friday")
+        add_entrant(league, night, "ana", "reference")
+        add_entrant(league, night, "[b]bob[/b]", "physical:blue car")
+        add_entrant(league, night, "cy", "reference")
+        draw_heats(league, night, seed=11)
+        record_heat(league, night, 0)
+    return night
+
+
+def record_heat(league: Any, night: Night, index: int) -> str:
+    heat = heats(league, night)[index]
+    racer = heat.entrant.racer
+    result = race_result(racer, LAPS[racer], rules=RULES, track=resolve_track("beginner-oval"))
+    if racer == "[b]bob[/b]":
+        result = replace(result, physics=PHYSICAL, model_name="blue car")
+    record_race(league, result, night.id, heat_id=heat.id)
+    return racer
+
+
+def on_air(night: Night, clock: Clock, *, heat_index: int) -> LiveHeatWriter:
+    with open_league() as league:
+        heat = heats(league, night)[heat_index]
+    writer = LiveHeatWriter(
+        live_heat_path(default_db_path(), night.id),
+        night_id=night.id,
+        heat_id=heat.id,
+        heat_number=heat_index + 1,
+        racer=heat.entrant.display_name,
+        car="blue car",
+    )
+    writer.publish(
+        state="running",
+        time_left=95.2,
+        lap=3,
+        lap_time=4.25,
+        best_lap=10.5,
+        offtracks=1,
+        limit=3,
+        now=clock.now,
+    )
+    return writer
+
+
+async def test_the_projector_follows_a_night_from_heat_to_heat() -> None:
+    night = a_night_with_one_heat_raced()
+    with open_league() as league:
+        first = heats(league, night)[0].entrant.display_name
+    clock = Clock()
+    app = create_app(start="league", projector_night=night.id)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, NightProjectorScreen)
+        screen.clock = clock
+        assert "friday · beginner-oval · ranked by best lap" in painted(
+            screen.query_one("#np-title")
+        )
+        now = painted(screen.query_one("#np-heat"))
+        assert "Next up: heat 2 of 3" in now
+        standings = painted(screen.query_one("#np-standings"))
+        assert first in standings and "25" in standings  # the first heat's points
+        assert screen.news is None  # a result already there when it opened is not news
+
+        # The next heat starts in the host's racer-tui: the projector shows it running.
+        writer = on_air(night, clock, heat_index=1)
+        screen._read_live()
+        await pilot.pause()
+        now = painted(screen.query_one("#np-heat"))
+        with open_league() as league:
+            second = heats(league, night)[1].entrant.display_name
+        assert "Racing now: heat 2 of 3" in now and second in now
+        assert "Lap 3  0:04.2" in now and "off 1/3" in now and "best 0:10.500" in now
+
+        # It ends: recorded, and the file is gone. The result is news for a while.
+        with open_league() as league:
+            racer = record_heat(league, night, 1)
+        writer.clear()
+        screen._read_live()
+        await settle(pilot)
+        assert screen.highlight == racer
+        news = painted(screen.query_one("#np-news"))
+        assert f"New result: {second}, best lap" in news
+        rows = painted(screen.query_one("#np-standings"))
+        ranks = [line.split()[0] for line in rows.splitlines()[2:] if line.strip()]
+        assert ranks == ["1", "2"]  # one rank per racer, never two 1s
+        assert "+" in rows  # the gap to the leader
+
+        clock.now += HIGHLIGHT_SECONDS
+        screen._read_live()
+        await pilot.pause()
+        assert screen.highlight is None and painted(screen.query_one("#np-news")).strip() == ""
+
+        # A racer-tui killed mid-heat leaves its file behind: stale, it is no heat.
+        on_air(night, clock, heat_index=2)
+        clock.now += STALE_SECONDS + 1
+        screen._read_live()
+        await pilot.pause()
+        assert "Next up: heat 3 of 3" in painted(screen.query_one("#np-heat"))
+
+        with open_league() as league:
+            record_heat(league, night, 2)
+            close_night(league, night, "host")
+        screen.action_refresh_now()
+        await settle(pilot)
+        assert "final standings" in painted(screen.query_one("#np-title"))
+        assert "The night is over" in painted(screen.query_one("#np-heat"))
+        rows = painted(screen.query_one("#np-standings"))
+        assert "[b]bob[/b]" in rows and "blue car" in rows  # names are plain text
+        assert [line.split()[-1] for line in rows.splitlines()[2:] if line.strip()] == [
+            "25",
+            "18",
+            "15",
+        ]
+        await pilot.press("escape")
+        assert not isinstance(app.screen, NightProjectorScreen)
