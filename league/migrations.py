@@ -423,6 +423,22 @@ SELECT '', kind || ' ' || record_id, 'it was pulled before results were signed a
 DELETE FROM sync_pending
 """
 
+# Version 7: a host's changes to a night before it runs, as rows of their own (nothing is
+# edited in place): an entrant withdrawn before their heat, a night deleted before any
+# heat was raced. `target` is the entrant's id, or the night's for a deletion.
+NIGHT_CHANGES = """
+CREATE TABLE night_changes (
+    id TEXT PRIMARY KEY,
+    night_id TEXT NOT NULL REFERENCES nights(id),
+    action TEXT NOT NULL,
+    target TEXT NOT NULL,
+    made_by TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX night_changes_night ON night_changes(night_id)
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -430,6 +446,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("recent races index", _script(RECENT_RACES)),
     Migration("physics of results", _script(PHYSICS), True),
     Migration("signed results", _script(SIGNED_RESULTS)),
+    Migration("night changes", _script(NIGHT_CHANGES)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

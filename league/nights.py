@@ -36,6 +36,11 @@ if TYPE_CHECKING:
     from sim.race.result import RaceResult
 
 MAX_MODEL_SPEC = 500
+# A host's changes to a night, each a row of `night_changes`: an entrant withdrawn before
+# their heat (target: the entrant), the night deleted before any heat (target: the night).
+WITHDRAW = "withdraw"
+DELETE = "delete"
+NIGHT_CHANGES = (WITHDRAW, DELETE)
 _ID_PREFIX = re.compile(r"[0-9A-HJKMNP-TV-Z]{8,26}")  # the start of a record id
 
 
@@ -136,13 +141,60 @@ def get_night(league: League, spec: str) -> Night:
                 "(see `racer-tui night list`)."
             )
         row = rows[0] if rows else None
-    if row is None:
+    if row is None or row["id"] in _deleted_nights(league):
         raise LeagueError(f"there is no league night {spec!r}; see `racer-tui night list`.")
     return _night(league, row)
 
 
 def list_nights(league: League) -> list[Night]:
-    return [_night(league, row) for row in league.query("SELECT * FROM nights ORDER BY id")]
+    deleted = _deleted_nights(league)
+    return [
+        _night(league, row)
+        for row in league.query("SELECT * FROM nights ORDER BY id")
+        if row["id"] not in deleted
+    ]
+
+
+# A deletion counts only while the night has no race: one pulled from another machine
+# never hides results recorded here.
+_DELETED_SQL = f"""
+    SELECT c.night_id FROM night_changes c
+    WHERE c.action = '{DELETE}' AND c.target = c.night_id
+      AND NOT EXISTS (SELECT 1 FROM races r WHERE r.night_id = c.night_id)
+"""
+# Likewise a withdrawal counts only while the entrant has not raced.
+_WITHDRAWN_SQL = f"""
+    SELECT c.target FROM night_changes c
+    WHERE c.night_id = ? AND c.action = '{WITHDRAW}'
+      AND NOT EXISTS (
+          SELECT 1 FROM races r JOIN heats h ON h.id = r.heat_id
+          WHERE r.night_id = c.night_id AND h.entrant_id = c.target
+      )
+"""
+
+
+def _deleted_nights(league: League) -> set[str]:
+    return {row[0] for row in league.query(_DELETED_SQL)}
+
+
+def _withdrawn(league: League, night: Night) -> set[str]:
+    return {row[0] for row in league.query(_WITHDRAWN_SQL, (night.id,))}
+
+
+def delete_night(league: League, night: Night, made_by: str) -> None:
+    """Delete a night no heat has been raced on (opened by mistake, or never held). A
+    night with results stays: close it instead, so its results keep counting."""
+    who = check_name(made_by, "name")
+    with league.transaction():
+        _open(league, night)
+        if league.query_one("SELECT 1 FROM races WHERE night_id = ?", (night.id,)):
+            raise LeagueError(
+                f"league night {night.name!r} has raced heats, so it cannot be deleted; "
+                "close it instead (its results stay in the league).",
+                problem=f"league night {night.name!r} has raced heats",
+                fix=Fix.CLOSE_NIGHT,
+            )
+        _change(league, night, DELETE, night.id, who)
 
 
 def _open(league: League, night: Night) -> None:
@@ -164,9 +216,9 @@ def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant
     with league.transaction():
         _open(league, night)
         name = ensure_racer(league, racer)
-        duplicate = league.query_one(
-            "SELECT 1 FROM night_entrants WHERE night_id = ? AND racer = ? AND model = ?",
-            (night.id, name, spec),
+        duplicate = any(
+            entrant.racer.casefold() == name.casefold() and entrant.model == spec
+            for entrant in entrants(league, night)
         )
         if duplicate:
             raise LeagueError(f"{name!r} is already entered with {spec!r} on this night.")
@@ -176,6 +228,54 @@ def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant
         )
     shown = display_names(league, name).get(name, name)
     return Entrant(entrant_id, name, shown, spec)
+
+
+def withdraw_entrant(league: League, night: Night, entrant_id: str, made_by: str) -> Entrant:
+    """Take an entrant out of the night before their heat: they leave the running order,
+    and the same racer and car may be entered again."""
+    who = check_name(made_by, "name")
+    with league.transaction():
+        _open(league, night)
+        found = {entrant.id: entrant for entrant in entrants(league, night)}
+        entrant = found.get(entrant_id)
+        if entrant is None:
+            raise LeagueError(f"there is no entrant {entrant_id} on league night {night.name!r}.")
+        if entrant_id in _raced(league, night):
+            raise LeagueError(
+                f"{entrant.display_name} has raced on league night {night.name!r}; their "
+                "result stays (a correction can disqualify a lap)."
+            )
+        _change(league, night, WITHDRAW, entrant_id, who)
+    return entrant
+
+
+def find_entrant(league: League, night: Night, racer: str, model: str | None = None) -> Entrant:
+    """The night's entrant `racer` (with `model`, when the racer has entered twice)."""
+    found = [
+        entrant
+        for entrant in entrants(league, night)
+        if racer.casefold() in (entrant.racer.casefold(), entrant.display_name.casefold())
+        and (model is None or entrant.model == model_spec(model))
+    ]
+    if not found:
+        raise LeagueError(f"{racer!r} has not entered league night {night.name!r}.")
+    if len(found) > 1:
+        cars = ", ".join(entrant.model for entrant in found)
+        raise LeagueError(f"{racer!r} has entered {len(found)} cars ({cars}); give --model too.")
+    return found[0]
+
+
+def _change(league: League, night: Night, action: str, target: str, who: str) -> None:
+    league.insert_record(
+        "night_changes",
+        {
+            "night_id": night.id,
+            "action": action,
+            "target": target,
+            "made_by": who,
+            "created_at": now_iso(),
+        },
+    )
 
 
 def model_spec(model: str) -> str:
@@ -211,12 +311,15 @@ def model_spec(model: str) -> str:
 
 
 def entrants(league: League, night: Night) -> list[Entrant]:
+    """The night's entrants in the order they were entered, less those withdrawn."""
     shown = display_names(league)
+    withdrawn = _withdrawn(league, night)
     return [
         Entrant(row["id"], row["racer"], shown.get(row["racer"], row["racer"]), row["model"])
         for row in league.query(
             "SELECT * FROM night_entrants WHERE night_id = ? ORDER BY id", (night.id,)
         )
+        if row["id"] not in withdrawn
     ]
 
 
@@ -245,21 +348,46 @@ def draw_heats(league: League, night: Night, seed: int | None = None) -> list[He
                 "`racer-tui night add`."
             )
         random.Random(chosen).shuffle(waiting)
-        draw_id = new_id()
-        created = now_iso()
-        for position, entrant in enumerate(waiting, start=1):
-            league.insert_record(
-                "heats",
-                {
-                    "night_id": night.id,
-                    "draw_id": draw_id,
-                    "draw_seed": chosen,
-                    "position": position,
-                    "entrant_id": entrant.id,
-                    "created_at": created,
-                },
-            )
+        _store_order(league, night, waiting, chosen)
     return heats(league, night)
+
+
+def move_heat(league: League, night: Night, heat_id: str, offset: int) -> list[Heat]:
+    """Move a waiting heat `offset` places up (negative) or down the running order: the
+    host's change to the draw, stored as a new order of the heats still to race."""
+    with league.transaction():
+        _open(league, night)
+        waiting = pending_heats(league, night)
+        index = next((i for i, heat in enumerate(waiting) if heat.id == heat_id), None)
+        if index is None:
+            raise LeagueError("only a heat still waiting to race can be moved.")
+        target = min(max(index + offset, 0), len(waiting) - 1)
+        if target == index:
+            edge = "first" if offset < 0 else "last"
+            raise LeagueError(f"that heat is already the {edge} still to race.")
+        order = [heat.entrant for heat in waiting]
+        order.insert(target, order.pop(index))
+        seed = league.query("SELECT draw_seed FROM heats WHERE id = ?", (heat_id,))[0][0]
+        _store_order(league, night, order, int(seed))
+    return heats(league, night)
+
+
+def _store_order(league: League, night: Night, order: Sequence[Entrant], seed: int) -> None:
+    """A new draw: the entrants' heats in this order (call inside a transaction)."""
+    draw_id = new_id()
+    created = now_iso()
+    for position, entrant in enumerate(order, start=1):
+        league.insert_record(
+            "heats",
+            {
+                "night_id": night.id,
+                "draw_id": draw_id,
+                "draw_seed": seed,
+                "position": position,
+                "entrant_id": entrant.id,
+                "created_at": created,
+            },
+        )
 
 
 def heats(league: League, night: Night) -> list[Heat]:
@@ -277,6 +405,8 @@ def heats(league: League, night: Night) -> list[Heat]:
     latest = rows[-1]["draw_id"] if rows else None
     pending: list[Heat] = []
     for row in rows:
+        if row["entrant_id"] not in by_id:
+            continue  # withdrawn before their heat
         heat = Heat(
             row["id"],
             row["position"],

@@ -43,6 +43,7 @@ SHARED_TABLES: dict[str, Children | None] = {
     "night_entrants": None,
     "heats": None,
     "night_closures": None,
+    "night_changes": None,
     "submissions": Children("submission_laps", "submission_id", SUBMISSION_LAP_COLUMNS),
     "races": Children("race_laps", "race_id", RACE_LAP_COLUMNS),
     "corrections": None,

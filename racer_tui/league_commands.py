@@ -144,6 +144,23 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
         "projector", parents=[db], help="the night full-screen, for the venue's big screen"
     )
     projector.add_argument("night")
+    withdraw = actions.add_parser(
+        "withdraw", parents=[db], help="take an entrant out before their heat"
+    )
+    withdraw.add_argument("night")
+    withdraw.add_argument("racer")
+    withdraw.add_argument("--model", help="which car, when the racer entered more than one")
+    withdraw.add_argument("--by", help="who withdraws them (default: this machine's racer name)")
+    move = actions.add_parser("move", parents=[db], help="move a waiting heat in the order")
+    move.add_argument("night")
+    move.add_argument("racer")
+    move.add_argument(
+        "--to", type=int, required=True, metavar="N", help="its place among the heats to race"
+    )
+    move.add_argument("--model", help="which car, when the racer entered more than one")
+    delete = actions.add_parser("delete", parents=[db], help="delete a night with no heat raced")
+    delete.add_argument("night")
+    delete.add_argument("--by", help="who deletes it (default: this machine's racer name)")
 
 
 def _register_season(commands: Parsers, db: argparse.ArgumentParser) -> None:
@@ -413,11 +430,46 @@ def _night(league: League, args: argparse.Namespace) -> int:
         return 0
     if action == "run":
         return _night_run(league, night, args.heats)
+    if action == "withdraw":
+        entrant = nights.find_entrant(league, night, args.racer, args.model)
+        who = args.by or local_racer_name(league) or HOST_NAME
+        nights.withdraw_entrant(league, night, entrant.id, who)
+        print(f"Withdrew {entrant.display_name} ({entrant.model}) from {night.name}.")
+        return 0
+    if action == "move":
+        return _night_move(league, night, args)
+    if action == "delete":
+        who = args.by or local_racer_name(league) or HOST_NAME
+        nights.delete_night(league, night, who)
+        print(f"Deleted league night {night.name} ({night.id}).")
+        return 0
     if action == "close":
         who = args.by or local_racer_name(league) or HOST_NAME
         standings = nights.close_night(league, night, who, force=args.force)
         return _print_standings(night, standings, args.json, title=f"{night.name}: final standings")
     return _night_show(league, night, args.json)
+
+
+def _night_move(league: League, night: Any, args: argparse.Namespace) -> int:
+    from league import nights
+
+    entrant = nights.find_entrant(league, night, args.racer, args.model)
+    waiting = nights.pending_heats(league, night)
+    index = next((i for i, heat in enumerate(waiting) if heat.entrant.id == entrant.id), None)
+    if index is None:
+        raise LeagueError(
+            f"{entrant.display_name} has no heat waiting on {night.name}; draw the heats "
+            "first (`racer-tui night draw`)."
+        )
+    if not 1 <= args.to <= len(waiting):
+        raise LeagueError(f"--to must be from 1 to {len(waiting)}, the heats still to race.")
+    if args.to - 1 == index:
+        raise LeagueError(f"{entrant.display_name}'s heat is already number {args.to} to race.")
+    order = nights.move_heat(league, night, waiting[index].id, args.to - 1 - index)
+    for number, heat in enumerate(order, start=1):
+        if heat.race_id is None:
+            print(f"heat {number}: {heat.entrant.display_name} ({heat.entrant.model})")
+    return 0
 
 
 def _night_list(league: League, as_json: bool) -> int:

@@ -18,6 +18,7 @@ class Fix(Enum):
     EVALUATE_MODEL = "evaluate the model"
     IMPORT_MODEL = "import the DeepRacer model folder"
     RUN_HEATS = "run the night's waiting heats"
+    CLOSE_NIGHT = "close the night"
 
 
 class Note(str):

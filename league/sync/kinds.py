@@ -22,6 +22,7 @@ TABLE_OF_KIND: Final[dict[str, str]] = {
     "entrant": "night_entrants",
     "heat": "heats",
     "night_closure": "night_closures",
+    "night_change": "night_changes",
     "submission": "submissions",
     "race": "races",
     "correction": "corrections",

@@ -39,6 +39,7 @@ KINDS: Final = (
     "entrant",
     "heat",
     "night_closure",
+    "night_change",
     "submission",
     "race",
     "correction",

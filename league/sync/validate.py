@@ -23,6 +23,7 @@ from typing import Any, Final
 
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
 from league.errors import LeagueError
+from league.nights import NIGHT_CHANGES
 from league.racers import HEX_COLOUR, check_name
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
 from league.seasons import check_points
@@ -255,6 +256,13 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
     "night_closure": {
         "night_id": _t(record_id),
         "closed_by": _t(name),
+        "created_at": _t(timestamp),
+    },
+    "night_change": {
+        "night_id": _t(record_id),
+        "action": _t(one_of(*NIGHT_CHANGES)),
+        "target": _t(record_id),
+        "made_by": _t(name),
         "created_at": _t(timestamp),
     },
     "submission": {

@@ -47,7 +47,7 @@ ACTIONS: Final = ("found", "propose", "admit", "retire", "revoke")
 ROLES: Final = ("organiser", "racer")
 # Kinds only an organiser signs: the running of nights and seasons, and corrections.
 ORGANISER_KINDS: Final = frozenset(
-    {"season", "night", "entrant", "heat", "night_closure", "correction"}
+    {"season", "night", "entrant", "heat", "night_closure", "night_change", "correction"}
 )
 # Kinds any admitted racer may sign, whoever they name: a track brought to the league,
 # the map from a model to its stored bundle.

@@ -42,6 +42,7 @@ APP_FIXES = {
     Fix.EVALUATE_MODEL: "press v in the Garage to evaluate it",
     Fix.IMPORT_MODEL: "give a garage model's name, or import the folder in the Garage (i there)",
     Fix.RUN_HEATS: "run them (r), or press c again to close the night anyway",
+    Fix.CLOSE_NIGHT: "close it instead (c): its results stay in the league",
 }
 
 

@@ -29,18 +29,22 @@ from league.live_heat import LiveHeatWriter, live_heat_path
 from league.local_racer import HOST_NAME, local_racer_name
 from league.night_state import NightState, read_night
 from league.nights import (
+    Entrant,
     Heat,
     Night,
     add_entrant,
     close_night,
+    delete_night,
     draw_heats,
     entrants,
     find_night_track,
     heats,
     list_nights,
+    move_heat,
     new_night,
     pending_heats,
     standings,
+    withdraw_entrant,
 )
 from league.racers import check_name
 from league.races import race_result, record_race
@@ -323,10 +327,11 @@ class NightLoaded(Message):
 class NightChanged(Message):
     """Something was added to a night: say so, then read it again."""
 
-    def __init__(self, night_id: str, note: str) -> None:
+    def __init__(self, night_id: str, note: str, *, focus_entrant: str | None = None) -> None:
         super().__init__()
         self.night_id = night_id
         self.note = note
+        self.focus_entrant = focus_entrant  # keep this entrant's row highlighted
 
 
 class SeasonsLoaded(Message):
@@ -403,8 +408,40 @@ class NightsScreen(RacerScreen[None]):
         Binding("d", "draw", "Draw", tooltip="Draw the order of the heats still to race"),
         Binding("r", "run_heat", "Run heat", tooltip="Race the next heat live"),
         Binding("c", "close_night", "Close night", tooltip="Final standings and season points"),
-        Binding("s", "new_season", "New season", tooltip="Its nights add up to standings"),
+        # Once a season, so out of the footer (the help and the palette list it): the
+        # projector's key is worth the room at 80 columns.
+        Binding(
+            "s", "new_season", "New season", tooltip="Its nights add up to standings", show=False
+        ),
         Binding("p", "projector", "Projector", tooltip="The night on the venue's big screen"),
+        Binding(
+            "w",
+            "withdraw",
+            "Withdraw entrant",
+            tooltip="Take the highlighted entrant out before their heat",
+            show=False,
+        ),
+        Binding(
+            "left_square_bracket",
+            "move_heat(-1)",
+            "Heat earlier",
+            tooltip="Move the highlighted waiting heat up the running order",
+            show=False,
+        ),
+        Binding(
+            "right_square_bracket",
+            "move_heat(1)",
+            "Heat later",
+            tooltip="Move the highlighted waiting heat down the running order",
+            show=False,
+        ),
+        Binding(
+            "delete",
+            "delete_night",
+            "Delete night",
+            tooltip="Delete a night no heat has raced on",
+            show=False,
+        ),
         Binding("escape", "leave", "Back"),
     ]
     AUTO_FOCUS = "#nights"
@@ -427,6 +464,8 @@ class NightsScreen(RacerScreen[None]):
         # order in which loads come back.
         self.showing: str | None = None
         self.new_season_id: str | None = None  # created here: new nights start in it
+        self.heat_rows: list[tuple[Heat | None, Entrant]] = []  # the heats table's rows
+        self._follow: str | None = None  # an entrant whose row the cursor follows (a move)
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league", "league nights")
@@ -517,6 +556,9 @@ class NightsScreen(RacerScreen[None]):
 
     def _show_heats(self, state: NightState) -> None:
         rows: list[list[str | Text]] = []
+        # What each row is, for the keys that act on the highlighted one.
+        self.heat_rows = [*((heat, heat.entrant) for heat in state.heats)]
+        self.heat_rows += [(None, entrant) for entrant in state.undrawn]
         next_marked = False
         for number, heat in enumerate(state.heats, start=1):
             if heat.race_id is not None:
@@ -533,7 +575,12 @@ class NightsScreen(RacerScreen[None]):
         for entrant in state.undrawn:  # listed as they are added, before any draw
             waiting = Text("entered (d draws)", style="dim")
             rows.append(["", Text(entrant.display_name), Text(entrant.model), waiting])
-        fill_table(self.query_one("#heats", DataTable), HEAT_COLUMNS, rows)
+        table = self.query_one("#heats", DataTable)
+        fill_table(table, HEAT_COLUMNS, rows)
+        follow, self._follow = self._follow, None
+        ids = [entrant.id for _, entrant in self.heat_rows]
+        if follow in ids:
+            table.move_cursor(row=ids.index(follow))
 
     def _show_standings(self, state: NightState) -> None:
         table = self.query_one("#standings", DataTable)
@@ -568,6 +615,7 @@ class NightsScreen(RacerScreen[None]):
     def on_night_changed(self, message: NightChanged) -> None:
         if message.note:
             self.notify(message.note, markup=False)
+        self._follow = message.focus_entrant
         self.reload(select=message.night_id)
 
     # --- actions -----------------------------------------------------------------------
@@ -753,6 +801,99 @@ class NightsScreen(RacerScreen[None]):
                 self.post_message(NightChanged(night.id, ""))
                 raise
         self.post_message(NightChanged(night.id, f"Closed {night.name}; the standings are final."))
+
+    def _highlighted_entrant(self, doing: str) -> tuple[Heat | None, Entrant] | None:
+        """The row under the heats table's cursor; the first press only moves there."""
+        table = self.query_one("#heats", DataTable)
+        if not self.heat_rows:
+            self.notify(f"There is nobody to {doing}: add an entrant (a).", severity="warning")
+            return None
+        if self.focused is not table:
+            table.focus()
+            self.notify(f"Highlight the entrant (↑ ↓), then press the key again to {doing}.")
+            return None
+        return self.heat_rows[min(table.cursor_row, len(self.heat_rows) - 1)]
+
+    def action_withdraw(self) -> None:
+        night = self._current("withdraw an entrant")
+        row = self._highlighted_entrant("withdraw them") if night is not None else None
+        if night is None or row is None:
+            return
+        heat, entrant = row
+        if heat is not None and heat.race_id is not None:
+            self.notify(
+                f"{entrant.display_name} has raced; their result stays.",
+                severity="warning",
+                markup=False,
+            )
+            return
+        ask(
+            self.app,
+            f"Withdraw {entrant.display_name}?",
+            f"{entrant.display_name} ({entrant.model}) leaves the running order; they can be "
+            "entered again (a).",
+            partial(self._withdraw_confirmed, night, entrant),
+            confirm_label="Withdraw",
+        )
+
+    def _withdraw_confirmed(self, night: Night, entrant: Entrant, yes: bool | None) -> None:
+        if yes:
+            self._withdraw(night, entrant)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _withdraw(self, night: Night, entrant: Entrant) -> None:
+        with open_league(self.db_path) as league:
+            withdraw_entrant(league, night, entrant.id, local_racer_name(league) or HOST_NAME)
+        self.post_message(NightChanged(night.id, f"Withdrew {entrant.display_name}."))
+
+    def action_move_heat(self, offset: int) -> None:
+        night = self._current("change the running order")
+        row = self._highlighted_entrant("move their heat") if night is not None else None
+        if night is None or row is None:
+            return
+        heat = row[0]
+        if heat is None or heat.race_id is not None:
+            self.notify(
+                "Only a drawn heat still to race moves; draw first (d).", severity="warning"
+            )
+            return
+        self._move(night, heat, offset)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _move(self, night: Night, heat: Heat, offset: int) -> None:
+        with open_league(self.db_path) as league:
+            move_heat(league, night, heat.id, offset)
+        self.post_message(NightChanged(night.id, "", focus_entrant=heat.entrant.id))
+
+    def action_delete_night(self) -> None:
+        night = self._current("delete it")
+        if night is None or self.state is None:
+            return
+        if any(heat.race_id is not None for heat in self.state.heats):
+            self.notify(
+                f"{night.name} has raced heats, so it cannot be deleted; close it instead (c): "
+                "its results stay in the league.",
+                severity="warning",
+                markup=False,
+            )
+            return
+        ask(
+            self.app,
+            f"Delete {night.name}?",
+            "No heat has raced on it. Its entrants and draw go with it.",
+            partial(self._delete_confirmed, night),
+            confirm_label="Delete night",
+        )
+
+    def _delete_confirmed(self, night: Night, yes: bool | None) -> None:
+        if yes:
+            self._delete(night)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _delete(self, night: Night) -> None:
+        with open_league(self.db_path) as league:
+            delete_night(league, night, local_racer_name(league) or HOST_NAME)
+        self.post_message(NightChanged("", f"Deleted {night.name}."))
 
     def action_projector(self) -> None:
         """Any night, open or closed: a closed one shows its final standings."""

@@ -239,3 +239,58 @@ def test_a_night_of_simulated_and_physical_cars_is_one_ranking(league: League) -
         ("cy", 2, False),
         ("bob", 1, True),
     ]
+
+
+def test_an_entrant_withdrawn_before_their_heat_leaves_the_order(league: League) -> None:
+    night = _night_with_entrants(league, RaceRules())
+    by_racer = {entrant.racer: entrant for entrant in nights.entrants(league, night)}
+    nights.withdraw_entrant(league, night, by_racer["dee"].id, "host")
+    assert [entrant.racer for entrant in nights.entrants(league, night)] == ["ana", "bob", "cy"]
+    nights.add_entrant(league, night, "dee", "reference")  # entered again: not a duplicate
+    nights.draw_heats(league, night, seed=3)
+    nights.run_heats(
+        league, night, resolve_track(TRACK), _resolve, run_race=FakeEngine(LAPS), limit=1
+    )
+    first = nights.heats(league, night)[0]
+    with pytest.raises(LeagueError, match="has raced"):
+        nights.withdraw_entrant(league, night, first.entrant.id, "host")
+    waiting = nights.pending_heats(league, night)
+    nights.withdraw_entrant(league, night, waiting[0].entrant.id, "host")  # after the draw
+    assert [heat.entrant.racer for heat in nights.pending_heats(league, night)] == [
+        heat.entrant.racer for heat in waiting[1:]
+    ]
+    with pytest.raises(LeagueError, match="no entrant"):
+        nights.withdraw_entrant(league, night, waiting[0].entrant.id, "host")
+
+
+def test_a_host_moves_a_waiting_heat_in_the_running_order(league: League) -> None:
+    night = _night_with_entrants(league, RaceRules())
+    drawn = [heat.entrant.racer for heat in nights.draw_heats(league, night, seed=5)]
+    last = nights.pending_heats(league, night)[-1]
+    moved = nights.move_heat(league, night, last.id, -1)
+    assert [heat.entrant.racer for heat in moved] == [*drawn[:2], drawn[3], drawn[2]]
+    with pytest.raises(LeagueError, match="already the first"):
+        nights.move_heat(league, night, moved[0].id, -1)
+    nights.run_heats(
+        league, night, resolve_track(TRACK), _resolve, run_race=FakeEngine(LAPS), limit=1
+    )
+    raced = nights.heats(league, night)[0]
+    with pytest.raises(LeagueError, match="still waiting"):
+        nights.move_heat(league, night, raced.id, 1)
+
+
+def test_only_a_night_without_results_can_be_deleted(league: League) -> None:
+    empty = nights.new_night(league, resolve_track(TRACK), name="mistake")
+    nights.add_entrant(league, empty, "ana", "reference")
+    nights.delete_night(league, empty, "host")
+    assert [n.name for n in nights.list_nights(league)] == []
+    with pytest.raises(LeagueError, match="no league night 'mistake'"):
+        nights.get_night(league, "mistake")
+    raced = _night_with_entrants(league, RaceRules())
+    nights.draw_heats(league, raced, seed=1)
+    nights.run_heats(
+        league, raced, resolve_track(TRACK), _resolve, run_race=FakeEngine(LAPS), limit=1
+    )
+    with pytest.raises(LeagueError, match="cannot be deleted; close it instead"):
+        nights.delete_night(league, raced, "host")
+    assert [n.name for n in nights.list_nights(league)] == ["Friday"]

@@ -47,18 +47,23 @@ def _fake_engine(
 
 
 def host_league(league: League, root: Path) -> None:
-    """What a league host's machine holds: a season with a closed night, corrections."""
+    """What a league host's machine holds: a season with a closed night (an entrant
+    withdrawn before the draw), a night deleted before it was held, corrections."""
     new_season(league, "spring", parse_points("10,6,4"))
     night = nights.new_night(
         league, resolve_track(TRACK), rules=RULES, name="Friday", season="spring"
     )
     for racer in NIGHT_LAPS:
         nights.add_entrant(league, night, racer, "reference")
+    late = nights.add_entrant(league, night, "ana", "physical")
+    nights.withdraw_entrant(league, night, late.id, "host")  # entered by mistake
     nights.draw_heats(league, night, seed=3)
     races = nights.run_heats(
         league, night, resolve_track(TRACK), lambda spec, _track: spec, run_race=_fake_engine
     )
     nights.close_night(league, night, "host")
+    never_held = nights.new_night(league, resolve_track(TRACK), rules=RULES, name="Saturday")
+    nights.delete_night(league, never_held, "host")
     disqualify_lap(league, races[0], 1, reason="cut the chicane", by="host")
     submitted = add_submissions(league, root, [("ana", (12.0, 12.5)), ("bob", (11.9,))])
     disqualify_lap(league, submitted[1], 1, reason="wrong track", by="host")

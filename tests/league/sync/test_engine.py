@@ -429,6 +429,7 @@ def test_a_pulled_page_is_all_or_nothing(
 def test_same_named_seasons_referred_to_by_id_are_a_conflict_not_a_swap(
     url: str, tmp_path: Path
 ) -> None:
+    from league.nights import list_nights
     from league.seasons import new_season
 
     with open_league(tmp_path / "a.db") as first, open_league(tmp_path / "b.db") as second:
@@ -439,7 +440,7 @@ def test_same_named_seasons_referred_to_by_id_are_a_conflict_not_a_swap(
         assert any("season" in line for line in found.conflicts)
         (conflict,) = second.query("SELECT * FROM sync_conflicts")
         assert "refer to it by id" in conflict["detail"]
-        assert second.query_one("SELECT count(*) FROM nights")[0] == 1
+        assert [night.name for night in list_nights(second)] == ["Friday"]
 
 
 def test_a_waiting_record_is_added_once_what_it_needs_is_made_here(tmp_path: Path) -> None:

@@ -294,3 +294,41 @@ async def test_every_raced_heat_shows_its_own_best_lap() -> None:
     assert results["reference"].startswith("best ")
     assert results["wobbly"] == "no lap counted" or results["wobbly"].startswith("best ")
     assert results["wobbly"] != results["reference"]  # not the racer's best race twice
+
+
+async def test_a_host_withdraws_an_entrant_moves_a_heat_and_deletes_an_unheld_night() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        for racer in ("ada", "bob", "cy"):
+            add_entrant(league, night, racer, "reference")
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        nights = await the_nights_screen(pilot)
+        await pilot.press("w")  # the first press goes to the heats list
+        assert nights.focused is nights.query_one("#heats", DataTable)
+        await pilot.press("down", "w")
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("y")
+        await settle(pilot)
+        assert "Withdrew bob." in notes.text()
+        assert [row[1] for row in table_rows(nights, "#heats")] == ["ada", "cy"]
+
+        await pilot.press("d")
+        await settle(pilot)
+        drawn = [row[1] for row in table_rows(nights, "#heats")]
+        nights.query_one("#heats", DataTable).move_cursor(row=1)
+        await pilot.press("left_square_bracket")  # the second heat goes first
+        await settle(pilot)
+        assert [row[1] for row in table_rows(nights, "#heats")] == drawn[::-1]
+        assert nights.query_one("#heats", DataTable).cursor_row == 0  # it follows the heat
+
+        await pilot.press("delete")
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("y")
+        await settle(pilot)
+        assert "Deleted friday." in notes.text()
+        assert "No league nights yet" in painted(nights.query_one("#night-rules"))
+    with open_league() as league:
+        assert list_nights(league) == []
