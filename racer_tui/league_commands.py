@@ -134,7 +134,13 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
     run.add_argument("--heats", type=int, metavar="N", help="run only the next N heats")
     show = actions.add_parser("show", parents=[db], help="rules, heats and standings")
     show.add_argument("night")
-    show.add_argument("--json", action="store_true")
+    show.add_argument("--json", action="store_true", help="the same as --format json")
+    show.add_argument(
+        "--format",
+        choices=FORMATS,
+        default="table",
+        help="json: the whole night; csv, markdown: the standings with points",
+    )
     close = actions.add_parser("close", parents=[db], help="close the night; print standings")
     close.add_argument("night")
     close.add_argument("--by", help="who closes it (default: this machine's racer name)")
@@ -447,7 +453,7 @@ def _night(league: League, args: argparse.Namespace) -> int:
         who = args.by or local_racer_name(league) or HOST_NAME
         standings = nights.close_night(league, night, who, force=args.force)
         return _print_standings(night, standings, args.json, title=f"{night.name}: final standings")
-    return _night_show(league, night, args.json)
+    return _night_show(league, night, "json" if args.json else args.format)
 
 
 def _night_move(league: League, night: Any, args: argparse.Namespace) -> int:
@@ -542,38 +548,15 @@ def _night_run(league: League, night: Any, limit: int | None) -> int:
     return 0
 
 
-def _night_show(league: League, night: Any, as_json: bool) -> int:
+def _night_show(league: League, night: Any, kind: str) -> int:
     from league import nights
+    from league.night_report import night_export
 
     entrants = nights.entrants(league, night)
     heats = nights.heats(league, night)
     standings = nights.standings(league, night)
-    if as_json:
-        print_json(
-            {
-                "id": night.id,
-                "name": night.name,
-                "track": night.track_name,
-                "track_hash": night.track_hash,
-                "season_id": night.season_id,
-                "closed": night.closed,
-                "rules": night.rules.to_dict(),
-                "entrants": [
-                    {"id": e.id, "racer": e.display_name, "racer_name": e.racer, "model": e.model}
-                    for e in entrants
-                ],
-                "heats": [
-                    {
-                        "position": h.position,
-                        "racer": h.entrant.display_name,
-                        "model": h.entrant.model,
-                        "race_id": h.race_id,
-                    }
-                    for h in heats
-                ],
-                "standings": _standings_json(standings),
-            }
-        )
+    if kind != "table":
+        print(night_export(night, entrants, heats, standings, kind), end="")
         return 0
     state = "closed" if night.closed else "open"
     print(f"{night.name} ({night.id}) on {night.track_name}, {state}.")
@@ -594,29 +577,13 @@ def _night_show(league: League, night: Any, as_json: bool) -> int:
     return _print_standings(night, standings, False, title=f"{night.name}: standings")
 
 
-def _standings_json(standings: Sequence[Any]) -> list[dict[str, Any]]:
-    return [
-        {
-            "position": s.position,
-            "racer": s.entry.display_name,
-            "racer_name": s.entry.racer,
-            "model": s.entry.model,
-            "points": s.points,
-            "score": s.entry.score,
-            "best_lap": s.entry.best_lap,
-            "laps": s.entry.valid_laps,
-            "offtracks": s.entry.offtracks,
-            "race_id": s.entry.record_id,
-        }
-        for s in standings
-    ]
-
-
 def _print_standings(night: Any, standings: Sequence[Any], as_json: bool, title: str) -> int:
     from league.report import SCORE_TITLES, seconds
 
     if as_json:
-        print_json(_standings_json(standings))
+        from league.night_report import standings_json
+
+        print_json(standings_json(standings))
         return 0
     table = _table(title)
     table.add_column("pos", justify="right")

@@ -34,6 +34,7 @@ from league.report import Column as ReportColumn
 from league.store import open_league
 from racer_tui.screens.base import RacerScreen, push_kept
 from racer_tui.screens.dialogs import InputDialog
+from racer_tui.screens.export_path import EXPORT_FORMATS, check_export_path
 from racer_tui.screens.nights import NightsScreen
 from racer_tui.screens.projector import ProjectorScreen
 from racer_tui.screens.races import replay_recorded_race
@@ -48,7 +49,6 @@ from sim.atomic import write_text_atomic
 from sim.plural import counted
 
 NARROW = 120  # below this many columns the detail panel goes under the table
-EXPORT_FORMATS = {".csv": "csv", ".json": "json", ".md": "markdown", ".markdown": "markdown"}
 # Table titles (league.report's) -> the sort keys league.leaderboard knows.
 SORT_BY_TITLE: dict[str, Column] = {
     "rank": Column.RANK,
@@ -84,15 +84,6 @@ def export_text(rows: list[LeaderboardRow], query: BoardQuery, kind: str) -> str
         query.method, show_track=several_boards(rows), iso_times=kind == "csv"
     )
     return to_csv(columns, rows) if kind == "csv" else to_markdown(columns, rows)
-
-
-def check_export_path(text: str) -> str | None:
-    suffix = Path(text).suffix.lower()
-    if suffix not in EXPORT_FORMATS:
-        return "End the file name with .csv, .json or .md to choose the format."
-    if not Path(text).expanduser().parent.is_dir():
-        return f"The folder {Path(text).expanduser().parent} does not exist; create it first."
-    return None
 
 
 # --- messages from the workers --------------------------------------------------------------

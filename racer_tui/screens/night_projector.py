@@ -24,6 +24,7 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import Digits, Label, Static
 
+from league.errors import LeagueError
 from league.live_heat import LiveHeat, live_heat_path, read_live_heat
 from league.night_state import NightState, read_night
 from league.report import SCORE_TITLES
@@ -37,11 +38,19 @@ from sim.race.physics import PHYSICAL
 POLL_SECONDS = 2.0  # the standings, from the database
 LIVE_SECONDS = 0.5  # the heat in progress, from its file
 HIGHLIGHT_SECONDS = 12.0  # how long a new result stands out
-ORDINALS = {1: "1st", 2: "2nd", 3: "3rd"}
+SUFFIXES = {1: "st", 2: "nd", 3: "rd"}
 
 
 def ordinal(place: int) -> str:
-    return ORDINALS.get(place if place % 100 not in (11, 12, 13) else 0, f"{place}th")
+    """1st, 2nd, 3rd, 4th ... 11th, 12th, 13th ... 21st, 22nd."""
+    teens = place % 100 in (11, 12, 13)
+    return f"{place}{'th' if teens else SUFFIXES.get(place % 10, 'th')}"
+
+
+class NightGone(Message):
+    def __init__(self, reason: str) -> None:
+        super().__init__()
+        self.reason = reason
 
 
 class NightRead(Message):
@@ -120,6 +129,7 @@ class NightProjectorScreen(RacerScreen[None]):
         self.highlight: str | None = None  # the racer of the newest result
         self._highlight_until = 0.0
         self._seen_races: set[str] | None = None  # None: nothing read yet, nothing is new
+        self.gone: str | None = None  # why the night cannot be read (deleted since)
         self._live_path = live_heat_path(db_path or default_db_path(), night_id)
 
     def compose(self) -> ComposeResult:
@@ -151,9 +161,20 @@ class NightProjectorScreen(RacerScreen[None]):
 
     @work(thread=True, exclusive=True, group="night-projector", exit_on_error=False)
     def _read_night(self) -> None:
-        with open_league(self.db_path) as league:
-            state = read_night(league, self.night_id)
+        try:
+            with open_league(self.db_path) as league:
+                state = read_night(league, self.night_id)
+        except LeagueError as error:  # deleted since: said on the screen, not every 2 s
+            self.post_message(NightGone(str(error)))
+            return
         self.post_message(NightRead(state))
+
+    def on_night_gone(self, message: NightGone) -> None:
+        self.gone = message.reason
+        self.state = None
+        self.query_one("#np-standings", Static).update("")
+        self.query_one("#np-news", Static).update("")
+        self._draw_now()
 
     def _read_live(self) -> None:
         live = read_live_heat(self._live_path, self.night_id, self.clock())
@@ -170,6 +191,7 @@ class NightProjectorScreen(RacerScreen[None]):
 
     def on_night_read(self, message: NightRead) -> None:
         self.reads += 1
+        self.gone = None
         state = self.state = message.state
         races = {heat.race_id: heat for heat in state.heats if heat.race_id is not None}
         new = sorted(set(races) - self._seen_races) if self._seen_races is not None else []
@@ -220,7 +242,12 @@ class NightProjectorScreen(RacerScreen[None]):
         label = self.query_one("#np-clock-label", Label)
         digits = self.query_one("#np-clock", Digits)
         if state is None:
-            heat.update(Text("Reading the night…", style="dim"))
+            if self.gone is not None:
+                text = Text("This night cannot be shown: ", style="bold red")
+                text.append(f"{self.gone} Esc leaves.")
+                heat.update(text)
+            else:
+                heat.update(Text("Reading the night…", style="dim"))
             return
         if live is not None:
             heat.update(self._heat_on_air(state, live))

@@ -27,6 +27,7 @@ from textual.widgets import Button, DataTable, Input, Label, Select, Static
 from league.errors import LeagueError
 from league.live_heat import LiveHeatWriter, live_heat_path
 from league.local_racer import HOST_NAME, local_racer_name
+from league.night_report import night_export
 from league.night_state import NightState, read_night
 from league.nights import (
     Entrant,
@@ -59,7 +60,8 @@ from league.store import League, default_db_path, open_league
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.base import RacerScreen
-from racer_tui.screens.dialogs import FormDialog, PathSuggester, ask, show_problem
+from racer_tui.screens.dialogs import FormDialog, InputDialog, PathSuggester, ask, show_problem
+from racer_tui.screens.export_path import EXPORT_FORMATS, check_export_path
 from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
@@ -67,6 +69,7 @@ from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
+from sim.atomic import write_text_atomic
 from sim.garage.folder import list_models
 from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME
@@ -414,6 +417,13 @@ class NightsScreen(RacerScreen[None]):
             "s", "new_season", "New season", tooltip="Its nights add up to standings", show=False
         ),
         Binding("p", "projector", "Projector", tooltip="The night on the venue's big screen"),
+        Binding(
+            "x",
+            "export",
+            "Export night",
+            tooltip="Standings with points as CSV or Markdown, or the whole night as JSON",
+            show=False,
+        ),
         Binding(
             "w",
             "withdraw",
@@ -894,6 +904,38 @@ class NightsScreen(RacerScreen[None]):
         with open_league(self.db_path) as league:
             delete_night(league, night, local_racer_name(league) or HOST_NAME)
         self.post_message(NightChanged("", f"Deleted {night.name}."))
+
+    def action_export(self) -> None:
+        """Any night, open or closed (an open one says its standings are so far)."""
+        if self.state is None or self.state.night.id != self.showing:
+            self.notify("Open a night first (o), then export it.", severity="warning")
+            return
+        night = self.state.night
+        stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in night.name).strip("-")
+        dialog = InputDialog(
+            f"Export {night.name}",
+            "The night's standings with points. The file name's ending chooses the format: "
+            ".csv or .md (Markdown) for the standings, .json for the whole night (rules, "
+            "entrants, heats and standings).",
+            value=str(Path.cwd() / f"{stem or 'night'}.csv"),
+            confirm_label="Export",
+            check=check_export_path,
+            paths=True,
+        )
+        self.app.push_screen(dialog, partial(self._export_to, self.state))
+
+    def _export_to(self, state: NightState, path: str | None) -> None:
+        if path is not None:
+            target = Path(path).expanduser()
+            self._export(state, target, EXPORT_FORMATS[target.suffix.lower()])
+
+    @work(thread=True, group="nights-export", exit_on_error=False)
+    def _export(self, state: NightState, path: Path, kind: str) -> None:
+        with open_league(self.db_path) as league:
+            entrants_now = entrants(league, state.night)
+        text = night_export(state.night, entrants_now, state.heats, state.standings, kind)
+        write_text_atomic(path, text)
+        self.post_message(NightChanged(state.night.id, f"Wrote {state.night.name} to {path}."))
 
     def action_projector(self) -> None:
         """Any night, open or closed: a closed one shows its final standings."""

@@ -471,7 +471,9 @@ class SyncScreen(RacerScreen[bool]):
                 "Press s to set one up.",
                 wall=wall,
             )
-        text = sentence(str(error)) if isinstance(error, SyncError | LeagueError) else None
+        # A league's refusal may end in a command-line remedy: error_message words it the
+        # app's way. A sync error is already a sentence for the racer.
+        text = sentence(str(error)) if isinstance(error, SyncError) else None
         return self.job.failed(
             text or error_message(error), "Fix that and press s to try again.", wall=wall
         )

@@ -294,3 +294,35 @@ def test_only_a_night_without_results_can_be_deleted(league: League) -> None:
     with pytest.raises(LeagueError, match="cannot be deleted; close it instead"):
         nights.delete_night(league, raced, "host")
     assert [n.name for n in nights.list_nights(league)] == ["Friday"]
+
+
+def test_a_night_exports_its_standings_with_points(league: League) -> None:
+    import csv
+    import io
+    import json
+
+    from league.night_report import night_export
+
+    new_season(league, "export", parse_points("10,6,4"))
+    night = nights.new_night(
+        league, resolve_track(TRACK), rules=RaceRules(), name="Fri *night*", season="export"
+    )
+    nights.add_entrant(league, night, "=cmd()", "reference")  # a formula-looking name
+    nights.add_entrant(league, night, "bob", "reference")
+    nights.draw_heats(league, night, seed=1)
+    laps = {"=cmd()": [11.0], "bob": [10.0]}
+    nights.run_heats(league, night, resolve_track(TRACK), _resolve, run_race=FakeEngine(laps))
+    parts = (night, nights.entrants(league, night), nights.heats(league, night))
+    table = nights.standings(league, night)
+
+    rows = list(csv.DictReader(io.StringIO(night_export(*parts, table, "csv"))))
+    assert [(r["position"], r["racer"], r["best lap"], r["points"]) for r in rows] == [
+        ("1", "bob", "10.000", "10"),
+        ("2", "'=cmd()", "11.000", "6"),  # a spreadsheet shows it, never runs it
+    ]
+    markdown = night_export(*parts, table, "markdown")
+    assert markdown.startswith("# Fri \\*night\\*: standings so far")
+    assert "| 1 | bob | reference | 10.000 | 1 | 0 | 10 |" in markdown
+    whole = json.loads(night_export(*parts, table, "json"))
+    assert [s["points"] for s in whole["standings"]] == [10, 6]
+    assert len(whole["heats"]) == 2 and whole["rules"]["window_seconds"] == 240.0

@@ -263,3 +263,77 @@ def test_a_new_night_defaults_to_the_reinvent_2018_track(
     assert code == 0, err
     _, out, _ = run_cli(capsys, "night", "show", "Default", "--db", db, "--json")
     assert json.loads(out)["track"] == "reinvent_base"
+
+
+def test_a_host_withdraws_moves_and_deletes_from_the_command_line(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    def cli(*args: str) -> tuple[int, str, str]:
+        return run_cli(capsys, "night", *args, "--db", db)
+
+    assert cli("new", "--track", "beginner-oval", "--name", "Fri")[0] == 0
+    for racer in ("ana", "bob", "cy"):
+        assert cli("add", "Fri", "--racer", racer, "--model", "reference")[0] == 0
+    assert cli("add", "Fri", "--racer", "ana", "--model", "physical")[0] == 0
+    code, _, err = cli("withdraw", "Fri", "ana")
+    assert code == 2 and "entered 2 cars (reference, physical); give --model too" in err
+    code, out, err = cli("withdraw", "Fri", "ana", "--model", "physical", "--by", "host")
+    assert code == 0 and "Withdrew ana (physical) from Fri." in out, err
+    code, out, _ = cli("draw", "Fri", "--seed", "2")
+    last = out.strip().splitlines()[-1].split()[2]
+    code, out, err = cli("move", "Fri", last, "--to", "1")
+    assert code == 0, err
+    assert out.splitlines()[0].split()[2] == last
+    assert "--to must be from 1 to 3" in cli("move", "Fri", last, "--to", "5")[2]
+    code, _, err = cli("delete", "Fri")
+    assert code == 0, err
+    code, out, _ = cli("list", "--json")
+    assert json.loads(out) == []
+
+
+def test_a_night_run_killed_mid_way_keeps_its_heats_and_runs_the_rest(tmp_path: Path) -> None:
+    """Each heat is recorded in one transaction as it finishes: a killed `night run`
+    leaves whole heats and waiting ones, and running it again finishes the night."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    from league.nights import add_entrant, draw_heats, get_night, heats, new_night, pending_heats
+    from league.store import open_league
+    from sim.track_catalog import resolve_track
+
+    db = str(tmp_path / "kill.db")
+    env = {**os.environ, "RACER_TUI_HOME": str(tmp_path / "home")}
+    command = [sys.executable, "-m", "racer_tui.cli", "night", "run", "Fri", "--db", db]
+    with open_league(Path(db)) as league:
+        night = new_night(league, resolve_track("reInvent2019_track"), name="Fri")
+        for number in range(8):
+            add_entrant(league, night, f"r{number}", "reference")
+        draw_heats(league, night, seed=1)
+    run = subprocess.Popen(
+        command,
+        env=env,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert run.stdout is not None
+    first = run.stdout.readline()
+    run.send_signal(signal.SIGKILL)
+    run.wait()
+    assert first.startswith("heat ")
+    with open_league(Path(db)) as league:
+        night = get_night(league, "Fri")
+        raced = [heat for heat in heats(league, night) if heat.race_id is not None]
+        assert 1 <= len(raced) <= 8
+        laps = league.query("SELECT count(*) FROM race_laps")[0][0]
+        entries = league.query("SELECT count(*) FROM entries WHERE night_id = ?", (night.id,))
+        assert entries[0][0] == len(raced) and laps > 0  # whole races, cache and all
+        waiting = len(pending_heats(league, night))
+    assert len(raced) + waiting == 8
+    if waiting:
+        subprocess.run(command, env=env, capture_output=True, check=True)
+    with open_league(Path(db)) as league:
+        night = get_night(league, "Fri")
+        assert pending_heats(league, night) == []
+        assert len({heat.entrant.racer for heat in heats(league, night)}) == 8

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from textual.pilot import Pilot
-from textual.widgets import Select
+from textual.widgets import Input, Select
 
 from league.live_heat import live_heat_path, read_live_heat
 from league.nights import list_nights, standings
@@ -97,16 +97,32 @@ async def test_a_new_host_runs_a_mixed_night_from_opening_to_season_points(
         dialog = app.screen
         assert isinstance(dialog, NewNightDialog)
         dialog.query_one("#night-track", Select).value = "beginner-oval"
-        await pilot.press(*"friday", "enter", *str(rules), "ctrl+s")
+        season = dialog.query_one("#night-season", Select)
+        labels = {value: label for label, value in season._options}
+        assert labels[season.value] == "spring"  # the league's current season, by default
+        await pilot.press(*"friday", "enter")  # Enter moves on: it does not open the night
+        assert app.screen is dialog and dialog.focused is dialog.query_one("#night-rules")
+        bad = tmp_path / "bad.yaml"
+        bad.write_text("window_seconds: [\n")
+        await pilot.press(*str(bad), "ctrl+s")  # a broken file is said here, nothing lost
+        assert app.screen is dialog
+        assert "is not valid YAML" in painted(dialog.query_one("#problem"))
+        assert dialog.query_one("#night-name", Input).value == "friday"
+        dialog.query_one("#night-rules", Input).value = str(rules)
+        await pilot.press("ctrl+s")
         await settle(pilot)
         assert app.screen is nights
+        shown = " ".join(painted(nights.query_one("#night-rules")).split())
+        assert "friday" in shown and "0:30 window" in shown and "season spring" in shown
 
-        for racer, car in (("ada", "quick"), ("bob", str(bundle)), ("carol", "physical:blue")):
+        # A name that looks like markup stays literal everywhere.
+        entries = (("ada", "quick"), ("[b]bob[/b]", str(bundle)), ("carol", "physical:blue"))
+        for racer, car in entries:
             await pilot.press("a")
             assert isinstance(app.screen, AddEntrantDialog)
             await pilot.press(*racer, "enter", *car, "enter")
             await settle(pilot)
-        assert [row[1] for row in table_rows(nights, "#heats")] == ["ada", "bob", "carol"]
+        assert [row[1] for row in table_rows(nights, "#heats")] == ["ada", "[b]bob[/b]", "carol"]
         assert "3 entered" in await projector_shows(pilot, nights)
 
         await pilot.press("d")
@@ -141,9 +157,22 @@ async def test_a_new_host_runs_a_mixed_night_from_opening_to_season_points(
         await settle(pilot)
         assert "Season standings: spring" in painted(nights.query_one("#standings-title"))
         season = {row[1]: row[2] for row in table_rows(nights, "#standings")}
-        assert set(season) == {"ada", "bob", "carol"}
+        assert set(season) == {"ada", "[b]bob[/b]", "carol"}
+        assert "[b]bob[/b]" in painted(nights.query_one("#standings"))
+        await pilot.press("r")  # a closed night takes no more heats
+        await settle(pilot)
+        assert "is closed" in notes.text("warning")
         shown = await projector_shows(pilot, nights)
         assert "final standings" in shown and "The night is over" in shown
+
+        await pilot.press("x")  # the final standings with points, for the league's site
+        app.screen.query_one("#answer", Input).value = str(tmp_path / "friday.md")
+        await pilot.press("enter")
+        await settle(pilot)
+        assert app.screen is nights
+    exported = (tmp_path / "friday.md").read_text()
+    assert exported.startswith("# friday: final standings")
+    assert all(f"| {racer} |" in exported for racer in ("ada", "\\[b\\]bob\\[/b\\]", "carol"))
 
     with open_league() as league:
         (night,) = list_nights(league)

@@ -8,17 +8,25 @@ from dataclasses import replace
 from typing import Any
 
 from league.live_heat import STALE_SECONDS, LiveHeatWriter, live_heat_path
-from league.nights import Night, add_entrant, close_night, draw_heats, heats, new_night
+from league.nights import (
+    Night,
+    add_entrant,
+    close_night,
+    delete_night,
+    draw_heats,
+    heats,
+    new_night,
+)
 from league.races import record_race
 from league.store import default_db_path, open_league
 from racer_tui.app import create_app
-from racer_tui.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen
+from racer_tui.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen, ordinal
 from sim.home import data_home
 from sim.race.physics import PHYSICAL
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 from tests.league.helpers import race_result
-from tests.racer_tui.screens.tui_helpers import painted, settle
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 
 RULES = RaceRules(window_seconds=120.0, penalty_seconds=2.0, max_offtracks_per_lap=3)
 LAPS = {"ana": [12.0, 11.5], "[b]bob[/b]": [10.5], "cy": [13.0]}
@@ -151,3 +159,31 @@ async def test_the_projector_follows_a_night_from_heat_to_heat() -> None:
         ]
         await pilot.press("escape")
         assert not isinstance(app.screen, NightProjectorScreen)
+
+
+def test_places_read_as_places() -> None:
+    assert [ordinal(place) for place in (1, 2, 3, 4, 11, 12, 13, 21, 22, 23, 111)] == [
+        "1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "23rd", "111th",
+    ]  # fmt: skip
+
+
+async def test_a_night_deleted_under_the_projector_is_said_once_on_screen() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), rules=RULES, name="oops")
+    app = create_app(start="league", projector_night=night.id)
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, NightProjectorScreen)
+        assert "No heats yet" in painted(screen.query_one("#np-heat"))
+        with open_league() as league:
+            delete_night(league, night, "host")
+        screen.action_refresh_now()
+        await settle(pilot)
+        screen._read_live()
+        await pilot.pause()
+        shown = painted(screen.query_one("#np-heat"))
+        assert "This night cannot be shown: there is no league night" in " ".join(shown.split())
+        assert notes.messages == []  # no error notification every two seconds

@@ -8,16 +8,13 @@ from typing import Any
 
 from textual.pilot import Pilot
 from textual.screen import Screen
-from textual.widgets import DataTable, Input, Select
+from textual.widgets import DataTable, Select
 
 from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
-from league.seasons import get_season, new_season, season_standings
 from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
-from racer_tui.screens.league import LeagueScreen
-from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
-from racer_tui.screens.race_screen import RaceScreen
+from racer_tui.screens.nights import NightsScreen
 from sim.home import data_home
 from sim.race.rules import RankingMethod
 from sim.track_catalog import resolve_track
@@ -39,103 +36,34 @@ def table_rows(screen: Screen[Any], table_id: str) -> list[list[str]]:
     return [[str(cell) for cell in table.get_row_at(i)] for i in range(table.row_count)]
 
 
-async def test_a_host_runs_a_whole_night_from_the_app(tmp_path: Path) -> None:
-    rules = tmp_path / "short.yaml"
-    rules.write_text("window_seconds: 12\n")
+def test_a_heat_races_against_the_nights_leader_so_far() -> None:
+    """The race view's setup for a heat: the night's rules and the heat's seed, and once a
+    heat has a counting lap, its best lap as the ghost and its score as the gap to beat.
+    (The whole night from the app is tests/racer_tui/screens/test_night_end_to_end.py.)"""
+    from league.nights import run_heats
+    from racer_tui.race_commands import resolve_driver
+    from racer_tui.screens.nights import heat_setup
+    from racer_tui.screens.race_screen import RaceSetup
+    from sim.race.rules import RaceRules
+
     data_home().mkdir(parents=True, exist_ok=True)
+    oval = resolve_track("beginner-oval")
+    rules = RaceRules(window_seconds=12.0)
     with open_league() as league:
-        new_season(league, "spring")
-    app = create_app(start="league")
-    async with app.run_test(size=(120, 40)) as pilot:
-        notes = Notifications(app)
-        await settle(pilot)
-        await pilot.press("n")
-        await settle(pilot)
-        nights = app.screen
-        assert isinstance(nights, NightsScreen)
-        assert "No league nights yet" in painted(nights.query_one("#night-rules"))
-
-        await pilot.press("o")
-        await settle(pilot)
-        dialog = app.screen
-        assert isinstance(dialog, NewNightDialog)
-        dialog.query_one("#night-track", Select).value = "beginner-oval"
-        season = dialog.query_one("#night-season", Select)
-        labels = {value: label for label, value in season._options}
-        assert labels[season.value] == "spring"  # the league's current season, by default
-        await pilot.press(*"friday", "enter")  # Enter moves on: it does not open the night
-        assert app.screen is dialog and dialog.focused is dialog.query_one("#night-rules")
-        bad = tmp_path / "bad.yaml"
-        bad.write_text("window_seconds: [\n")
-        await pilot.press(*str(bad), "ctrl+s")  # a broken file is said here, nothing lost
-        assert app.screen is dialog
-        assert "is not valid YAML" in painted(dialog.query_one("#problem"))
-        assert dialog.query_one("#night-name", Input).value == "friday"
-        dialog.query_one("#night-rules", Input).value = str(rules)
-        await pilot.press("ctrl+s")
-        await settle(pilot)
-        assert app.screen is nights
-        shown = painted(nights.query_one("#night-rules"))
-        assert "friday" in shown and "0:12 window" in shown and "season spring" in shown
-
-        for racer in ("ada", "[b]bob[/b]"):  # a name that looks like markup stays literal
-            await pilot.press("a")
-            assert isinstance(app.screen, AddEntrantDialog)
-            await pilot.press(*racer, "enter", *"reference", "enter")
-            await settle(pilot)
-        # Listed as they are added, before the draw.
-        assert [row[1:] for row in table_rows(nights, "#heats")] == [
-            ["ada", "reference", "entered (d draws)"],
-            ["[b]bob[/b]", "reference", "entered (d draws)"],
-        ]
-        await pilot.press("d")
-        await settle(pilot)
-        heats = table_rows(nights, "#heats")
-        assert sorted(row[1] for row in heats) == ["[b]bob[/b]", "ada"]
-        assert heats[0][3] == "next (r)" and heats[1][3] == "waiting"
-
-        for heat in range(2):
-            await pilot.press("r")
-            await settle(pilot)
-            race = app.screen
-            assert isinstance(race, RaceScreen)
-            assert race.setup.rules.window_seconds == 12.0
-            if heat == 1:  # the first heat's winner is the ghost and the gap to beat
-                assert race.setup.ghost is not None and race.setup.leader_seconds is not None
-            await pilot.press("e", "escape")
-            await settle(pilot)
-            assert app.screen is nights
-            standing_rows = table_rows(nights, "#standings")
-            assert len(standing_rows) == heat + 1  # the standings refresh after each heat
-        assert "Recorded ada's heat" in notes.text()
-        assert [row[5] for row in table_rows(nights, "#standings")] == ["25", "18"]
-
-        await pilot.press("c")
-        assert isinstance(app.screen, ConfirmDialog)
-        await pilot.press("y")
-        await settle(pilot)
-        assert "Season standings: spring" in painted(nights.query_one("#standings-title"))
-        season_rows = table_rows(nights, "#standings")
-        assert [row[2] for row in season_rows] == ["25", "18"]
-        assert {row[1] for row in season_rows} == {"ada", "[b]bob[/b]"}
-        assert "[b]bob[/b]" in painted(nights.query_one("#standings"))
-
-        await pilot.press("r")  # a closed night takes no more heats
-        await settle(pilot)
-        assert "is closed" in notes.text("warning")
-        await pilot.press("escape")
-        assert isinstance(app.screen, LeagueScreen)
-        await settle(pilot)
-        assert sorted(row.racer for row in app.screen.rows) == ["[b]bob[/b]", "ada"]
-
-    with open_league() as league:
-        (night,) = list_nights(league)
-        assert night.closed and night.rules.window_seconds == 12.0
-        assert [s.points for s in standings(league, night)] == [25, 18]
-        assert [s.points for s in season_standings(league, get_season(league, "spring"))] == [
-            25,
-            18,
-        ]
+        night = new_night(league, oval, rules=rules, name="friday")
+        for racer in ("ada", "bob"):
+            add_entrant(league, night, racer, "reference")
+        first, second = draw_heats(league, night, seed=2)
+        opening = heat_setup(league, night, first, oval)
+        assert isinstance(opening, RaceSetup)
+        assert opening.rules == rules and opening.seed == first.seed
+        assert opening.ghost is None and opening.leader_seconds is None
+        run_heats(league, night, oval, resolve_driver, limit=1)
+        (leader,) = standings(league, night)
+        later = heat_setup(league, night, second, oval)
+    assert isinstance(later, RaceSetup)
+    assert later.ghost is not None and later.leader_seconds == leader.entry.score
+    assert later.title.startswith("Heat 2: ")
 
 
 async def test_running_a_heat_before_the_draw_says_what_to_do() -> None:

@@ -1,0 +1,98 @@
+"""A league night as a file: its standings with points as CSV or Markdown (the same
+formatters and the same spreadsheet and Markdown safety as the leaderboard's export), or
+the whole night as JSON: rules, entrants, heats and standings."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from typing import Any
+
+from league.nights import Entrant, Heat, Night, Standing
+from league.report import SCORE_TITLES, Column, markdown_escape, seconds, to_csv, to_markdown
+from sim.race.physics import PHYSICAL
+from sim.race.rules import RankingMethod
+
+
+def standings_json(standings: Sequence[Standing]) -> list[dict[str, Any]]:
+    return [
+        {
+            "position": s.position,
+            "racer": s.entry.display_name,
+            "racer_name": s.entry.racer,
+            "model": s.entry.model,
+            "physical": s.entry.physics == PHYSICAL,
+            "points": s.points,
+            "score": s.entry.score,
+            "best_lap": s.entry.best_lap,
+            "laps": s.entry.valid_laps,
+            "offtracks": s.entry.offtracks,
+            "race_id": s.entry.record_id,
+        }
+        for s in standings
+    ]
+
+
+def night_json(
+    night: Night, entrants: Sequence[Entrant], heats: Sequence[Heat], standings: Sequence[Standing]
+) -> dict[str, Any]:
+    return {
+        "id": night.id,
+        "name": night.name,
+        "track": night.track_name,
+        "track_hash": night.track_hash,
+        "season_id": night.season_id,
+        "closed": night.closed,
+        "rules": night.rules.to_dict(),
+        "entrants": [
+            {"id": e.id, "racer": e.display_name, "racer_name": e.racer, "model": e.model}
+            for e in entrants
+        ],
+        "heats": [
+            {
+                "position": h.position,
+                "racer": h.entrant.display_name,
+                "model": h.entrant.model,
+                "race_id": h.race_id,
+            }
+            for h in heats
+        ],
+        "standings": standings_json(standings),
+    }
+
+
+def standings_columns(night: Night) -> list[Column]:
+    method = night.rules.ranking
+    columns = [
+        Column("position", lambda s: "-" if s.position is None else str(s.position), True),
+        Column("racer", lambda s: s.entry.display_name),
+        Column("car", lambda s: s.entry.model),
+    ]
+    if method is not RankingMethod.BEST_LAP:
+        columns.append(Column(SCORE_TITLES[method], lambda s: seconds(s.entry.score), True))
+    return [
+        *columns,
+        Column("best lap", lambda s: seconds(s.entry.best_lap), numeric=True),
+        Column("laps", lambda s: str(s.entry.valid_laps), numeric=True),
+        Column("off-tracks", lambda s: str(s.entry.offtracks), numeric=True),
+        Column("points", lambda s: str(s.points), numeric=True),
+    ]
+
+
+def night_export(
+    night: Night,
+    entrants: Sequence[Entrant],
+    heats: Sequence[Heat],
+    standings: Sequence[Standing],
+    kind: str,
+) -> str:
+    """The night as `kind`: json, csv or markdown."""
+    if kind == "json":
+        return json.dumps(night_json(night, entrants, heats, standings), indent=2) + "\n"
+    columns = standings_columns(night)
+    if kind == "csv":
+        return to_csv(columns, standings)
+    state = "final standings" if night.closed else "standings so far"
+    heading = f"# {markdown_escape(night.name)}: {state}\n\n"
+    about = markdown_escape(f"{night.track_name}; {night.rules.describe()}.")
+    return f"{heading}{about}\n\n{to_markdown(columns, standings)}"
