@@ -31,11 +31,107 @@ _GRID_MARGIN = 1.5
 # from a track's lines than this, and the rest of the bounding box (most of it on a long
 # track) falls back to the exact tree search. Building a big track's grid costs a third.
 _GRID_BAND = 1.0
+# The grid is worth its build (about 0.15 s for a big track's line) only for many
+# queries. Until this many points have been asked about in batches (`project`), the exact
+# tree search answers: the grid's answers are the same, so this changes no result, and a
+# batch amortises the search's overhead. A line only planned against (the reference
+# driver's racing line) never builds one. One car's per-step queries (PointProjector)
+# build it at once.
+_GRID_AFTER = 2000
 _NEIGHBOURS = np.arange(-2, 3)
 
 
 def segment_lengths(points: FloatArray) -> FloatArray:
     return np.asarray(np.hypot(*np.diff(points, axis=0).T), dtype=np.float64)
+
+
+class _LookupGrid:
+    """The cells around a polyline, each with the segment nearest its centre (or -1 where
+    the exact tree search must decide), built on first need: after `_GRID_AFTER` points
+    queried in batches, or for one car's per-step queries. Its projector and that
+    projector's PointProjector share it, and it refers to neither (a projector keeps its
+    PointProjector: a reference back would be a cycle)."""
+
+    def __init__(
+        self,
+        tree: cKDTree,
+        owners: NDArray[np.intp],
+        points: FloatArray,
+        segments: int,
+        closed: bool,
+    ) -> None:
+        self._tree = tree
+        self._owners = owners
+        self.segments = segments
+        self.closed = closed
+        self.origin = points.min(axis=0) - _GRID_MARGIN
+        extent = points.max(axis=0) + _GRID_MARGIN - self.origin
+        self.shape = (int(np.ceil(extent[0] / _GRID_CELL)), int(np.ceil(extent[1] / _GRID_CELL)))
+        self.cells: NDArray[np.intp] | None = None
+        self.queries = 0
+
+    def due(self, count: int) -> NDArray[np.intp] | None:
+        """The grid once `count` more points make it worth building; None until then."""
+        if self.cells is None:
+            self.queries += count
+            if self.queries >= _GRID_AFTER:
+                self.cells = self._build()
+        return self.cells
+
+    def built(self) -> NDArray[np.intp]:
+        """The grid, built now if it has not been."""
+        if self.cells is None:
+            self.cells = self._build()
+        return self.cells
+
+    def _build(self) -> NDArray[np.intp]:
+        """Nearest segment per cell, or -1 where the exact tree search must decide."""
+        nx, ny = self.shape
+        band = self._band_cells()
+        cells = np.flatnonzero(band.ravel())
+        centres = self.origin + (np.stack([cells // ny, cells % ny], axis=1) + 0.5) * _GRID_CELL
+        _, nearest = self._tree.query(centres)
+        flat = np.full(nx * ny, -1, dtype=np.intp)
+        flat[cells] = self._owners[nearest]
+        grid = flat.reshape(nx, ny)
+        n_seg = self.segments
+        padded = np.pad(grid, 1, mode="edge")
+        ambiguous = ~band
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                other = padded[1 + dx : 1 + dx + nx, 1 + dy : 1 + dy + ny]
+                gap = np.abs(grid - other)
+                if self.closed:
+                    gap = np.minimum(gap, n_seg - gap)
+                # A neighbour outside the band is unknown: decide this cell exactly too.
+                ambiguous |= (gap > 1) | (other < 0)
+        # The outermost ring also catches every point beyond the grid (indices are clipped).
+        ambiguous[[0, -1], :] = True
+        ambiguous[:, [0, -1]] = True
+        grid[ambiguous] = -1
+        return np.asarray(grid.ravel(), dtype=np.intp)
+
+    def _band_cells(self) -> NDArray[np.bool_]:
+        """Cells within about `_GRID_BAND` of the polyline (a square dilation of its cells)."""
+        nx, ny = self.shape
+        samples = self._tree.data
+        cell = ((samples - self.origin) / _GRID_CELL).astype(np.intp)
+        np.clip(cell, 0, (nx - 1, ny - 1), out=cell)
+        mask = np.zeros((nx, ny), dtype=np.int32)
+        mask[cell[:, 0], cell[:, 1]] = 1
+        reach = int(np.ceil(_GRID_BAND / _GRID_CELL))
+        for axis in (0, 1):
+            # Sliding-window sum of width 2*reach+1 along one axis, by cumulative sums.
+            pad = [(0, 0), (0, 0)]
+            pad[axis] = (reach + 1, reach)
+            total = np.cumsum(np.pad(mask, pad), axis=axis)
+            width = 2 * reach + 1
+            upper = [slice(None), slice(None)]
+            lower = [slice(None), slice(None)]
+            upper[axis] = slice(width, None)
+            lower[axis] = slice(None, -width)
+            mask = np.minimum(total[tuple(upper)] - total[tuple(lower)], 1)
+        return np.asarray(mask > 0)
 
 
 class PolylineProjector:
@@ -58,14 +154,8 @@ class PolylineProjector:
         samples, owners = self._resample()
         self._tree = cKDTree(samples)
         self._owners = owners
-        self._grid: NDArray[np.intp] | None = None
+        self._lookup = _LookupGrid(self._tree, owners, pts, len(self.lengths), self.closed)
         self._point_projector: PointProjector | None = None  # made by PointProjector.of
-        self._grid_origin = pts.min(axis=0) - _GRID_MARGIN
-        extent = pts.max(axis=0) + _GRID_MARGIN - self._grid_origin
-        self._grid_shape = (
-            int(np.ceil(extent[0] / _GRID_CELL)),
-            int(np.ceil(extent[1] / _GRID_CELL)),
-        )
 
     def _resample(self) -> tuple[FloatArray, NDArray[np.intp]]:
         counts = np.maximum(1, np.ceil(self.lengths / _SAMPLE_STEP).astype(np.intp))
@@ -75,64 +165,16 @@ class PolylineProjector:
         samples = self.starts[owners] + self.vectors[owners] * t[:, None]
         return samples, owners
 
-    def _build_grid(self) -> NDArray[np.intp]:
-        """Nearest segment per cell, or -1 where the exact tree search must decide."""
-        nx, ny = self._grid_shape
-        band = self._band_cells()
-        cells = np.flatnonzero(band.ravel())
-        centres = (
-            self._grid_origin + (np.stack([cells // ny, cells % ny], axis=1) + 0.5) * _GRID_CELL
-        )
-        _, nearest = self._tree.query(centres)
-        flat = np.full(nx * ny, -1, dtype=np.intp)
-        flat[cells] = self._owners[nearest]
-        grid = flat.reshape(nx, ny)
-        n_seg = len(self.lengths)
-        padded = np.pad(grid, 1, mode="edge")
-        ambiguous = ~band
-        for dx in (-1, 0, 1):
-            for dy in (-1, 0, 1):
-                other = padded[1 + dx : 1 + dx + nx, 1 + dy : 1 + dy + ny]
-                gap = np.abs(grid - other)
-                if self.closed:
-                    gap = np.minimum(gap, n_seg - gap)
-                # A neighbour outside the band is unknown: decide this cell exactly too.
-                ambiguous |= (gap > 1) | (other < 0)
-        # The outermost ring also catches every point beyond the grid (indices are clipped).
-        ambiguous[[0, -1], :] = True
-        ambiguous[:, [0, -1]] = True
-        grid[ambiguous] = -1
-        return np.asarray(grid.ravel(), dtype=np.intp)
-
-    def _band_cells(self) -> NDArray[np.bool_]:
-        """Cells within about `_GRID_BAND` of the polyline (a square dilation of its cells)."""
-        nx, ny = self._grid_shape
-        samples = self._tree.data
-        cell = ((samples - self._grid_origin) / _GRID_CELL).astype(np.intp)
-        np.clip(cell, 0, (nx - 1, ny - 1), out=cell)
-        mask = np.zeros((nx, ny), dtype=np.int32)
-        mask[cell[:, 0], cell[:, 1]] = 1
-        reach = int(np.ceil(_GRID_BAND / _GRID_CELL))
-        for axis in (0, 1):
-            # Sliding-window sum of width 2*reach+1 along one axis, by cumulative sums.
-            pad = [(0, 0), (0, 0)]
-            pad[axis] = (reach + 1, reach)
-            total = np.cumsum(np.pad(mask, pad), axis=axis)
-            width = 2 * reach + 1
-            upper = [slice(None), slice(None)]
-            lower = [slice(None), slice(None)]
-            upper[axis] = slice(width, None)
-            lower[axis] = slice(None, -width)
-            mask = np.minimum(total[tuple(upper)] - total[tuple(lower)], 1)
-        return np.asarray(mask > 0)
-
     def nearest_segments(self, query: FloatArray) -> NDArray[np.intp]:
-        if self._grid is None:
-            self._grid = self._build_grid()
-        nx, ny = self._grid_shape
-        cell = ((query - self._grid_origin) * (1.0 / _GRID_CELL)).astype(np.intp)
+        lookup = self._lookup
+        cells = lookup.due(len(query))
+        if cells is None:
+            _, nearest = self._tree.query(query)
+            return np.asarray(self._owners[nearest], dtype=np.intp)
+        nx, ny = lookup.shape
+        cell = ((query - lookup.origin) * (1.0 / _GRID_CELL)).astype(np.intp)
         np.clip(cell, 0, (nx - 1, ny - 1), out=cell)
-        seg: NDArray[np.intp] = self._grid[cell[:, 0] * ny + cell[:, 1]]
+        seg: NDArray[np.intp] = cells[cell[:, 0] * ny + cell[:, 1]]
         exact = seg < 0
         if exact.any():
             _, nearest = self._tree.query(query[exact])
@@ -209,8 +251,8 @@ class PointProjector:
     the arithmetic, so these repeat `project`, `point_at` and `direction_at` with Python
     floats: the same method and the same arithmetic, so the same answers (to the last bit
     or so). `project`: the projector's lookup grid names the nearest segment (the exact
-    KD-tree decides in ambiguous cells), then the closest projection onto that segment
-    and two either side wins, the first on a tie, as `np.argmin` picks.
+    KD-tree decides in ambiguous cells), then the closest projection onto that segment and
+    two either side wins, the first on a tie, as `np.argmin` picks.
     """
 
     @classmethod
@@ -229,13 +271,12 @@ class PointProjector:
         # object, and a reference back would make a cycle that only a full collection frees.
         self._tree = projector._tree
         self._owners = projector._owners
-        # Builds the projector's lookup grid if it has not been built yet.
-        projector.project(projector.points[:1])
-        grid = projector._grid
-        assert grid is not None
-        self._grid = grid
-        self._origin_x, self._origin_y = (float(v) for v in projector._grid_origin)
-        self._nx, self._ny = projector._grid_shape
+        self._lookup = projector._lookup
+        # One car's per-step queries: a single-point tree search costs about 50 us, far more
+        # than the grid's gather, so a race builds the grid at once.
+        self._grid = self._lookup.built()
+        self._origin_x, self._origin_y = (float(v) for v in self._lookup.origin)
+        self._nx, self._ny = self._lookup.shape
         self._inv_cell = 1.0 / _GRID_CELL
         self.starts: list[tuple[float, float]] = [(a, b) for a, b in projector.starts.tolist()]
         self.vectors: list[tuple[float, float]] = [(a, b) for a, b in projector.vectors.tolist()]
