@@ -256,25 +256,29 @@ class PointProjector:
     """
 
     @classmethod
-    def of(cls, projector: PolylineProjector) -> PointProjector:
+    def of(cls, projector: PolylineProjector, *, lazy: bool = False) -> PointProjector:
         """One per projector (tracks cache theirs), so a new race starts without setup.
         The projector keeps it, so it goes when the projector's track goes. (A weak-keyed
         cache kept them all: each value held its key, so no key was ever released, and a
-        long session lost about a megabyte of lookup grids per race.)"""
+        long session lost about a megabyte of lookup grids per race.) `lazy`: for a few
+        hundred queries (one reference lap), the grid is not worth building yet."""
         found = projector._point_projector
         if found is None:
-            found = projector._point_projector = cls(projector)
+            found = projector._point_projector = cls(projector, lazy=lazy)
+        elif not lazy and found._grid is None:
+            found._grid = found._lookup.built()
         return found
 
-    def __init__(self, projector: PolylineProjector) -> None:
+    def __init__(self, projector: PolylineProjector, *, lazy: bool = False) -> None:
         # What the exact lookup needs, not the projector itself: the projector keeps this
         # object, and a reference back would make a cycle that only a full collection frees.
         self._tree = projector._tree
         self._owners = projector._owners
         self._lookup = projector._lookup
         # One car's per-step queries: a single-point tree search costs about 50 us, far more
-        # than the grid's gather, so a race builds the grid at once.
-        self._grid = self._lookup.built()
+        # than the grid's gather, so a race builds the grid at once; a lazy one (a single
+        # reference lap) after `_GRID_AFTER` queries, as a batch-queried projector does.
+        self._grid = None if lazy else self._lookup.built()
         self._origin_x, self._origin_y = (float(v) for v in self._lookup.origin)
         self._nx, self._ny = self._lookup.shape
         self._inv_cell = 1.0 / _GRID_CELL
@@ -315,13 +319,19 @@ class PointProjector:
 
     def project(self, x: float, y: float) -> tuple[int, float, float, float]:
         """(segment, fraction along it, foot x, foot y) of the nearest point to (x, y)."""
-        col = int((x - self._origin_x) * self._inv_cell)
-        row = int((y - self._origin_y) * self._inv_cell)
-        col = 0 if col < 0 else (self._nx - 1 if col >= self._nx else col)
-        row = 0 if row < 0 else (self._ny - 1 if row >= self._ny else row)
-        seg = int(self._grid[col * self._ny + row])
+        grid = self._grid
+        if grid is None:
+            grid = self._grid = self._lookup.due(1)
+        seg = -1
+        if grid is not None:
+            col = int((x - self._origin_x) * self._inv_cell)
+            row = int((y - self._origin_y) * self._inv_cell)
+            col = 0 if col < 0 else (self._nx - 1 if col >= self._nx else col)
+            row = 0 if row < 0 else (self._ny - 1 if row >= self._ny else row)
+            seg = int(grid[col * self._ny + row])
         if seg < 0:
-            # As the projector's nearest_segments decides an ambiguous cell: the KD-tree.
+            # As the projector's nearest_segments decides without a grid, or in an
+            # ambiguous cell: the KD-tree.
             _, nearest = self._tree.query(np.array([[x, y]]))
             seg = int(self._owners[nearest[0]])
         n_seg = self._segments

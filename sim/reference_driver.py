@@ -220,7 +220,7 @@ def reference_lap(
     track: Track, car: CarSpec = DEEPRACER_CAR, max_seconds: float = 120.0
 ) -> ReferenceLap:
     """Drive one lap from a standing start at waypoint 0 and time it to the sub-step."""
-    sim = TrackSimulation(track, 1, car=car)
+    sim = TrackSimulation(track, 1, car=car, lookup_grids=False)  # one lap: no grids yet
     driver = ReferenceDriver(track, car)
     sim.reset_car(0, start_s=0.0)
     previous_progress = 0.0

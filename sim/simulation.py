@@ -109,7 +109,10 @@ class TrackSimulation:
         rules: EpisodeRules | None = None,
         cars_collide: bool = False,
         is_reversed: bool = False,
+        lookup_grids: bool = True,
     ) -> None:
+        """`lookup_grids=False` for a few hundred steps (one reference lap): the track's
+        lines answer by exact tree search until building their lookup grids pays off."""
         self.track = track
         self.n = n_cars
         self.car = car
@@ -130,11 +133,12 @@ class TrackSimulation:
         self._segments = len(centre.lengths)
         self._track_length = float(self._length)
         #: The centre line for one-point queries (per-step code for one car).
-        self.centre_projector = PointProjector.of(centre)
+        lazy = not lookup_grids
+        self.centre_projector = PointProjector.of(centre, lazy=lazy)
         self._point_projectors = (
             self.centre_projector,
-            PointProjector.of(track.inner_border),
-            PointProjector.of(track.outer_border),
+            PointProjector.of(track.inner_border, lazy=lazy),
+            PointProjector.of(track.outer_border, lazy=lazy),
         )
         self._wheel_offsets = [(float(f), float(left)) for f, left in car.wheel_offsets]
 
