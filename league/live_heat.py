@@ -63,8 +63,8 @@ def read_live_heat(path: Path, night_id: str, now: float | None = None) -> LiveH
         with path.open("rb") as handle:
             raw = handle.read(MAX_BYTES + 1)
         heat = _parse(json.loads(raw)) if len(raw) <= MAX_BYTES else None
-    except (OSError, ValueError, TypeError, KeyError):
-        return None
+    except Exception:  # untrusted: whatever it holds (deep nesting, a huge number) is
+        return None  # a heat not running, never a crashed projector
     if heat is None or heat.night_id != night_id:
         return None
     moment = time.time() if now is None else now
@@ -77,7 +77,7 @@ def _parse(data: Any) -> LiveHeat | None:
     if not isinstance(data, dict):
         return None
     texts = ("night_id", "heat_id", "racer", "car", "state")
-    if not all(isinstance(data.get(key), str) and len(data[key]) <= MAX_TEXT for key in texts):
+    if not all(_text(data.get(key)) for key in texts):
         return None
     if data["state"] not in STATES:
         return None
@@ -92,6 +92,11 @@ def _parse(data: Any) -> LiveHeat | None:
         return None
     fields = {key: data[key] for key in (*texts, *counts, *numbers)}
     return LiveHeat(best_lap=best, limit=limit, **fields)
+
+
+def _text(value: Any) -> bool:
+    """Text shown on the venue's screen: printable, so no escape sequence reaches it."""
+    return isinstance(value, str) and len(value) <= MAX_TEXT and value.isprintable()
 
 
 def _count(value: Any) -> bool:
@@ -121,8 +126,8 @@ class LiveHeatWriter:
             night_id=night_id,
             heat_id=heat_id,
             heat_number=heat_number,
-            racer=racer,
-            car=car,
+            racer=racer[:MAX_TEXT],
+            car=car[:MAX_TEXT],
             state="ready",
             time_left=0.0,
             lap=1,

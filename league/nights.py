@@ -13,7 +13,7 @@ import random
 import re
 import sqlite3
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -67,7 +67,7 @@ class Entrant:
 @dataclass(frozen=True)
 class Heat:
     id: str
-    position: int
+    position: int  # in the night's running order, from 1
     entrant: Entrant
     seed: int
     race_id: str | None  # the entrant's race in this night, once run
@@ -206,6 +206,8 @@ def _open(league: League, night: Night) -> None:
         raise LeagueError(
             f"league night {night.name!r} is closed; its results are final (open a new night)."
         )
+    if night.id in _deleted_nights(league):
+        raise LeagueError(f"league night {night.name!r} was deleted (open a new night).")
 
 
 # --- entrants and heats ------------------------------------------------------------------------
@@ -255,7 +257,7 @@ def find_entrant(league: League, night: Night, racer: str, model: str | None = N
         entrant
         for entrant in entrants(league, night)
         if racer.casefold() in (entrant.racer.casefold(), entrant.display_name.casefold())
-        and (model is None or entrant.model == model_spec(model))
+        and (model is None or _same_car(entrant.model, model))
     ]
     if not found:
         raise LeagueError(f"{racer!r} has not entered league night {night.name!r}.")
@@ -263,6 +265,18 @@ def find_entrant(league: League, night: Night, racer: str, model: str | None = N
         cars = ", ".join(entrant.model for entrant in found)
         raise LeagueError(f"{racer!r} has entered {len(found)} cars ({cars}); give --model too.")
     return found[0]
+
+
+def _same_car(entered: str, given: str) -> bool:
+    """Whether `given` names the car entered as `entered`, as a host would write it: the
+    same text, a physical car's spec, or a bundle's or folder's path or file name (the
+    car need not be on this machine any more)."""
+    given = given.strip()
+    if is_physical(given):
+        return entered == physical_spec(given)
+    if given in (entered, Path(entered).name):
+        return True
+    return entered == str(Path(given).expanduser().resolve())
 
 
 def _change(league: League, night: Night, action: str, target: str, who: str) -> None:
@@ -368,15 +382,20 @@ def move_heat(league: League, night: Night, heat_id: str, offset: int) -> list[H
         order = [heat.entrant for heat in waiting]
         order.insert(target, order.pop(index))
         seed = league.query("SELECT draw_seed FROM heats WHERE id = ?", (heat_id,))[0][0]
-        _store_order(league, night, order, int(seed))
+        # The draw's seed, with positions after the heats already raced: no heat of this
+        # draw ever races with a seed another one raced with.
+        raced = len(_raced(league, night))
+        _store_order(league, night, order, int(seed), first=raced + 1)
     return heats(league, night)
 
 
-def _store_order(league: League, night: Night, order: Sequence[Entrant], seed: int) -> None:
+def _store_order(
+    league: League, night: Night, order: Sequence[Entrant], seed: int, first: int = 1
+) -> None:
     """A new draw: the entrants' heats in this order (call inside a transaction)."""
     draw_id = new_id()
     created = now_iso()
-    for position, entrant in enumerate(order, start=1):
+    for position, entrant in enumerate(order, start=first):
         league.insert_record(
             "heats",
             {
@@ -419,7 +438,9 @@ def heats(league: League, night: Night) -> list[Heat]:
         elif row["draw_id"] == latest and heat.race_id is None:
             pending.append(heat)
     done.sort(key=lambda heat: heat.race_id or "")
-    return done + pending
+    # Numbered in the running order, the number every screen and command says (a draw's
+    # own positions restart with each draw and have gaps where an entrant withdrew).
+    return [replace(heat, position=number) for number, heat in enumerate(done + pending, 1)]
 
 
 def _heat_seed(draw_seed: int, position: int) -> int:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -238,9 +239,12 @@ def _night_projector(args: argparse.Namespace) -> int:
     from league.nights import get_night
     from league.store import open_league
     from racer_tui.app import create_app
+    from sim.home import LEAGUE_ENV
 
     with open_league(args.db) as league:
         night = get_night(league, args.night)  # a wrong name is one sentence, before the app
+    if args.db:  # the whole app, not only the projector, on that league (as --db does)
+        os.environ[LEAGUE_ENV] = str(args.db)
     create_app(long_running=True, projector_night=night.id, db_path=args.db).run()
     return 0
 
@@ -463,6 +467,8 @@ def _night_move(league: League, night: Any, args: argparse.Namespace) -> int:
     waiting = nights.pending_heats(league, night)
     index = next((i for i, heat in enumerate(waiting) if heat.entrant.id == entrant.id), None)
     if index is None:
+        if any(heat.entrant.id == entrant.id for heat in nights.heats(league, night)):
+            raise LeagueError(f"{entrant.display_name} has raced; only a waiting heat moves.")
         raise LeagueError(
             f"{entrant.display_name} has no heat waiting on {night.name}; draw the heats "
             "first (`racer-tui night draw`)."
@@ -472,9 +478,9 @@ def _night_move(league: League, night: Any, args: argparse.Namespace) -> int:
     if args.to - 1 == index:
         raise LeagueError(f"{entrant.display_name}'s heat is already number {args.to} to race.")
     order = nights.move_heat(league, night, waiting[index].id, args.to - 1 - index)
-    for number, heat in enumerate(order, start=1):
-        if heat.race_id is None:
-            print(f"heat {number}: {heat.entrant.display_name} ({heat.entrant.model})")
+    print("Still to race, in order (--to counts these):")
+    for place, heat in enumerate((h for h in order if h.race_id is None), start=1):
+        print(f"{place}. heat {heat.position}: {heat.entrant.display_name} ({heat.entrant.model})")
     return 0
 
 

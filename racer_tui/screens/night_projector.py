@@ -164,8 +164,10 @@ class NightProjectorScreen(RacerScreen[None]):
         try:
             with open_league(self.db_path) as league:
                 state = read_night(league, self.night_id)
-        except LeagueError as error:  # deleted since: said on the screen, not every 2 s
-            self.post_message(NightGone(str(error)))
+        except LeagueError:  # deleted since: said on the screen, not every 2 s
+            self.post_message(
+                NightGone("the night is no longer in the league (deleted, here or elsewhere).")
+            )
             return
         self.post_message(NightRead(state))
 

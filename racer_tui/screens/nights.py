@@ -366,9 +366,9 @@ def heat_setup(
     night's leader so far as the ghost and the gap; a physical car's heat is the
     timekeeper's. Either tells the night's projector where the heat is."""
     entrant = heat.entrant
-    order = heats(league, night)
-    number = next((i for i, h in enumerate(order, start=1) if h.id == heat.id), heat.position)
-    car = car_name(entrant.model) if is_physical(entrant.model) else entrant.model
+    number = heat.position
+    # A bundle's or folder's file name, not its path: the venue's screen shows it.
+    car = car_name(entrant.model) if is_physical(entrant.model) else Path(entrant.model).name
     live = LiveHeatWriter(
         live_heat_path(league_file or default_db_path(), night.id),
         night_id=night.id,

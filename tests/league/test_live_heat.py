@@ -92,6 +92,9 @@ def test_a_writer_that_stopped_is_a_heat_no_longer_running(tmp_path: Path) -> No
         lambda data: json.dumps({**data, "racer": "x" * 1000}),
         lambda data: json.dumps({key: v for key, v in data.items() if key != "car"}),
         lambda data: json.dumps({**data, "pad": "x" * MAX_BYTES}),
+        lambda data: json.dumps({**data, "time_left": 10**400}),  # past a float
+        lambda data: "[" * 3000,  # nested past the parser's recursion limit
+        lambda data: json.dumps({**data, "racer": "Ada\x1b[2J"}),  # a terminal escape
     ],
 )
 def test_a_damaged_file_is_no_heat_at_all(tmp_path: Path, damage: object) -> None:

@@ -277,6 +277,11 @@ def test_a_host_moves_a_waiting_heat_in_the_running_order(league: League) -> Non
     raced = nights.heats(league, night)[0]
     with pytest.raises(LeagueError, match="still waiting"):
         nights.move_heat(league, night, raced.id, 1)
+    waiting = nights.pending_heats(league, night)
+    order = nights.move_heat(league, night, waiting[-1].id, -2)
+    # Numbered in the running order; no heat races with a seed another raced with.
+    assert [heat.position for heat in order] == [1, 2, 3, 4]
+    assert len({heat.seed for heat in order}) == 4
 
 
 def test_only_a_night_without_results_can_be_deleted(league: League) -> None:

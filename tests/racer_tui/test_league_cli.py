@@ -283,7 +283,7 @@ def test_a_host_withdraws_moves_and_deletes_from_the_command_line(
     last = out.strip().splitlines()[-1].split()[2]
     code, out, err = cli("move", "Fri", last, "--to", "1")
     assert code == 0, err
-    assert out.splitlines()[0].split()[2] == last
+    assert out.splitlines()[1].startswith(f"1. heat 1: {last} ")
     assert "--to must be from 1 to 3" in cli("move", "Fri", last, "--to", "5")[2]
     code, _, err = cli("delete", "Fri")
     assert code == 0, err

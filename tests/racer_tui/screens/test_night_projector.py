@@ -185,5 +185,7 @@ async def test_a_night_deleted_under_the_projector_is_said_once_on_screen() -> N
         screen._read_live()
         await pilot.pause()
         shown = painted(screen.query_one("#np-heat"))
-        assert "This night cannot be shown: there is no league night" in " ".join(shown.split())
+        assert "This night cannot be shown: the night is no longer in the league" in " ".join(
+            shown.split()
+        )
         assert notes.messages == []  # no error notification every two seconds
