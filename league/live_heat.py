@@ -18,12 +18,12 @@ from __future__ import annotations
 import contextlib
 import json
 import math
-import os
-import tempfile
 import time
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
+
+from sim.atomic import write_text_atomic
 
 FOLDER = "live-heats"
 HEARTBEAT_SECONDS = 0.5
@@ -175,25 +175,14 @@ class LiveHeatWriter:
             written_at=moment,
         )
         try:
-            self._write(json.dumps(asdict(heat), sort_keys=True))
+            # Not synced to disk: the file is worth a second of the heat, and a sync could
+            # hold up a timekeeper's key.
+            write_text_atomic(self.path, json.dumps(asdict(heat), sort_keys=True), durable=False)
         except OSError:
             return False
         self.heat, self._last_at, self._written = heat, moment, True
         self.writes += 1
         return True
-
-    def _write(self, text: str) -> None:
-        """Atomic (a reader sees the old file or the new one) but not synced to disk: the
-        file is worth a second of the heat, and a sync could hold up a timekeeper's key."""
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, temporary = tempfile.mkstemp(prefix=".live.", dir=self.path.parent)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as handle:
-                handle.write(text)
-            os.replace(temporary, self.path)
-        except BaseException:
-            Path(temporary).unlink(missing_ok=True)
-            raise
 
     def clear(self) -> None:
         with contextlib.suppress(OSError):  # stale within seconds anyway

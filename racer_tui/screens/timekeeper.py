@@ -106,6 +106,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         self.said = Text("Space starts the race when the car leaves the line.", style="dim")
         self._stop_feed = threading.Event()
         self._laps_shown: tuple[bool, ...] | None = None  # struck-out flags of the laps shown
+        self.best_lap: float | None = None  # the best lap that counts so far
 
     def compose(self) -> ComposeResult:
         setup = self.setup
@@ -281,12 +282,13 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
                 time_left=heat.time_left(now),
                 lap=len(heat.laps) + (heat.phase is not Phase.OVER),
                 lap_time=heat.lap_clock(now) if heat.phase is not Phase.OVER else 0.0,
-                best_lap=self._best(),
+                best_lap=self.best_lap,
                 offtracks=heat.resets,
                 limit=self.setup.rules.max_offtracks_per_lap,
             )
 
     def _draw(self) -> None:
+        self.best_lap = self._best()  # changes only with an input, never with the clock
         self._draw_clocks()
         self.query_one("#tk-facts", Static).update(self._facts())
         self.query_one("#tk-said", Static).update(self.said)
@@ -318,7 +320,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         text.append(resets, style="red" if over else "")
         records = heat.lap_records()
         counting = sum(1 for lap in records if lap_counts(lap, rules))
-        best = self._best()
+        best = self.best_lap
         text.append("  Best ")
         text.append(clock_text(best) if best is not None else "-", style="bold")
         text.append(f"  {counting} of {len(records)} laps count")

@@ -28,7 +28,13 @@ from sim.home import data_home
 from sim.race.physics import PHYSICAL
 from tests.racer_tui.screens.test_nights import table_rows, the_nights_screen
 from tests.racer_tui.screens.test_timekeeper_screen import Stopwatch
-from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
+from tests.racer_tui.screens.tui_helpers import (
+    Notifications,
+    painted,
+    settle,
+    trained_model,
+    wait_for,
+)
 
 
 async def projector_shows(pilot: Pilot[Any], nights: NightsScreen) -> str:
@@ -60,11 +66,15 @@ async def time_the_physical_car(pilot: Pilot[Any], keeper: TimekeeperScreen) -> 
     for _ in range(4):
         watch.now += 1.0
         await pilot.press("r")
-    await pilot.pause(0.15)  # the clocks (and the live file) update ten times a second
     setup = keeper.setup
     assert setup.live is not None
-    live = read_live_heat(setup.live.path, setup.live.heat.night_id)
-    assert live is not None and (live.state, live.lap, live.offtracks) == ("running", 2, 4)
+    night_id, path = setup.live.heat.night_id, setup.live.path
+
+    def told() -> tuple[str, int, int] | None:
+        live = read_live_heat(path, night_id)
+        return None if live is None else (live.state, live.lap, live.offtracks)
+
+    await wait_for(pilot, lambda: told() == ("running", 2, 4))  # the clocks' next tick
     watch.now += 5.0
     await pilot.press("l")
     await pilot.press("e")
@@ -140,8 +150,7 @@ async def test_a_new_host_runs_a_mixed_night_from_opening_to_season_points(
                 await time_the_physical_car(pilot, heat)
             else:
                 assert isinstance(heat, RaceScreen)
-                await pilot.pause(0.2)  # drawn, and told to the projector
-                assert read_live_heat(live_file, night.id) is not None
+                await wait_for(pilot, lambda: read_live_heat(live_file, night.id) is not None)
                 await pilot.press("e", "escape")
                 await settle(pilot)
             assert app.screen is nights
