@@ -457,20 +457,24 @@ def user_version(conn: sqlite3.Connection) -> int:
 
 def check_version(conn: sqlite3.Connection, path: Path) -> None:
     """Refuse a database from a newer racer-tui, or one that is not a league at all."""
-    version = user_version(conn)
+    # One statement, so one snapshot: read apart, another racer-tui creating the league
+    # could commit between them, and its fresh tables with the version read before would
+    # look like a database that is not a league.
+    version, tables = conn.execute(
+        "SELECT (SELECT user_version FROM pragma_user_version), "
+        "(SELECT count(*) FROM sqlite_master WHERE type = 'table')"
+    ).fetchone()
     if version > SCHEMA_VERSION:
         raise LeagueError(
             f"league database {path} has schema version {version}, newer than the "
             f"{SCHEMA_VERSION} this racer-tui knows; upgrade racer-tui to open it "
             "(the file was not changed)."
         )
-    if version == 0:
-        tables = conn.execute("SELECT count(*) FROM sqlite_master WHERE type = 'table'")
-        if tables.fetchone()[0]:
-            raise LeagueError(
-                f"{path} is an SQLite database but not a racer-tui league; "
-                "choose another --db file (the file was not changed)."
-            )
+    if version == 0 and tables:
+        raise LeagueError(
+            f"{path} is an SQLite database but not a racer-tui league; "
+            "choose another --db file (the file was not changed)."
+        )
 
 
 def migrate(conn: sqlite3.Connection) -> int:

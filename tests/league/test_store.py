@@ -131,3 +131,33 @@ def test_shared_rows_carry_an_id_and_the_hash_of_their_content(league: League) -
     assert row["content_hash"] == content_hash(
         {"name": "ana", "display_name": "ana", "colour": "#000000", "created_at": "t"}
     )
+
+
+def _open_together(path: Path, openers: int) -> list[BaseException]:
+    """Open `path` from `openers` threads released at once; what each raised."""
+    import threading
+
+    failures: list[BaseException] = []
+    start = threading.Barrier(openers)
+
+    def opener() -> None:
+        start.wait()
+        try:
+            open_league(path).close()
+        except BaseException as error:  # collected for the test's assertion
+            failures.append(error)
+
+    threads = [threading.Thread(target=opener) for _ in range(openers)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    return failures
+
+
+def test_racer_tuis_creating_one_league_together_all_open_it(tmp_path: Path) -> None:
+    """The app's first start opens a new league from several workers at once: while one
+    creates it, another must never take the fresh tables for a database that is not a
+    league."""
+    for attempt in range(40):
+        assert _open_together(tmp_path / f"new-{attempt}.db", 6) == [], attempt
