@@ -15,6 +15,7 @@ therefore push and pull rows as they are; a change is always a new row (a correc
 from __future__ import annotations
 
 import sqlite3
+import time
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from datetime import UTC, datetime
@@ -125,6 +126,24 @@ def record_body(
     return body
 
 
+def _use_wal(conn: sqlite3.Connection) -> None:
+    """Put the database in WAL mode, waiting for any other racer-tui switching it too.
+
+    SQLite answers a journal-mode change that meets another connection's lock with "database
+    is locked" at once, without its busy handler: several workers opening a new league
+    together would otherwise refuse it.
+    """
+    deadline = time.monotonic() + BUSY_TIMEOUT_MS / 1000
+    while True:
+        try:
+            conn.execute("PRAGMA journal_mode = WAL")
+            return
+        except sqlite3.OperationalError as error:
+            if "locked" not in str(error) or time.monotonic() > deadline:
+                raise
+            time.sleep(0.01)
+
+
 def open_league(db_path: Path | None = None) -> League:
     """Open (creating and migrating as needed) the league database at `db_path`.
 
@@ -150,7 +169,7 @@ def open_league(db_path: Path | None = None) -> League:
     try:
         check_version(conn, path)  # before any statement that could write
         conn.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
-        conn.execute("PRAGMA journal_mode = WAL")
+        _use_wal(conn)
         conn.execute("PRAGMA synchronous = NORMAL")
         conn.execute("PRAGMA foreign_keys = ON")
         migrate(conn)
