@@ -23,7 +23,13 @@ from racer_tui import key_commands
 from racer_tui.output import print_json, print_table
 from sim.deepracer_files import DeepRacerFileError
 from sim.plural import counted
-from sim.race.rules import DEFAULT_RULES, RankingMethod, RulesError, load_rules
+from sim.race.rules import (
+    DEFAULT_RULES,
+    RankingMethod,
+    RulesError,
+    load_rules,
+    rules_from_mapping,
+)
 from sim.track_catalog import DEFAULT_TRACK
 
 if TYPE_CHECKING:
@@ -118,6 +124,12 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
     )
     new.add_argument(
         "--rules", type=Path, metavar="FILE", help="rules YAML (default rules if none)"
+    )
+    new.add_argument(
+        "--laps",
+        type=int,
+        metavar="N",
+        help="a lap-count race: each heat ends after N laps, or when the window closes first",
     )
     new.add_argument("--name")
     new.add_argument("--season", help="season name or id the night counts for")
@@ -419,6 +431,11 @@ def _night(league: League, args: argparse.Namespace) -> int:
         from sim.track_catalog import resolve_track
 
         rules = load_rules(args.rules) if args.rules else DEFAULT_RULES
+        if args.laps is not None:
+            try:
+                rules = rules_from_mapping({"lap_count": args.laps}, base=rules)
+            except RulesError as error:
+                raise RulesError(f"--laps: {error}") from None
         night = nights.new_night(
             league, resolve_track(args.track), rules=rules, name=args.name, season=args.season
         )

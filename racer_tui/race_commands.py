@@ -98,6 +98,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="rank by the best lap, the best average of N consecutive laps, or N laps' total",
     )
     parser.add_argument("--ranking-laps", type=int, metavar="N", help="N for the ranking")
+    parser.add_argument(
+        "--laps",
+        type=int,
+        metavar="N",
+        help="a lap-count race: it ends after N laps, or when the window closes first",
+    )
     parser.add_argument("--seed", type=int, default=0, help="recorded with each result")
     parser.add_argument("--json", action="store_true", help="print one JSON document")
     parser.add_argument("--record", action="store_true", help="store results in the league")
@@ -198,15 +204,16 @@ def race_rules(args: argparse.Namespace) -> RaceRules:
         ("--max-offtracks", "max_offtracks_per_lap", _offtrack_limit(args.max_offtracks)),
         ("--ranking", "ranking", args.ranking),
         ("--ranking-laps", "ranking_laps", args.ranking_laps),
+        ("--laps", "lap_count", args.laps),
     ]
-    for flag, key, value in overrides:
-        if value is None:
-            continue
+    given = [(flag, key, value) for flag, key, value in overrides if value is not None]
+    for flag, key, value in given:  # each value on its own first, so its flag is named
         try:
-            rules = rules_from_mapping({key: value}, base=rules)
+            rules_from_mapping({key: value}, base=RaceRules())
         except RulesError as error:
             raise RulesError(f"{flag}: {error}") from None
-    return rules
+    # Then together: `--laps 2 --ranking-laps 2` must not fail on the file's ranking_laps.
+    return rules_from_mapping({key: value for _, key, value in given}, base=rules)
 
 
 def _offtrack_limit(text: str | None) -> int | str | None:

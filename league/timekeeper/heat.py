@@ -5,7 +5,8 @@ the app, a timer feed and the tests drive it alike.
 Phases: READY (the car is on the line) -> RUNNING <-> PAUSED -> OVER. Both clocks, the
 race's and the lap's, run only while RUNNING. The race clock counts the rules' window down;
 when it reaches zero the race goes on until the lap in progress is captured (or the car did
-not finish it, or the timekeeper ends the race), as at DeepRacer's physical events.
+not finish it, or the timekeeper ends the race), as at DeepRacer's physical events. A
+lap-count race is over at the capture of its last lap, or when time is up as above.
 
 A lap's resets are its off-tracks: more than the rules' limit and the lap does not count,
 and each adds the rules' `penalty_seconds` to the lap's time (a league that counts only the
@@ -120,7 +121,7 @@ class TimekeptHeat:
 
     def undo_capture(self, now: float) -> str:
         """The last capture was a false finish: its lap goes on, with its resets. A false
-        finish that ended the race (after time was up) reopens it, paused."""
+        finish that ended the race (time was up, or its last lap) reopens it, paused."""
         if not self.laps:
             raise TimekeeperError("No lap has been captured yet.")
         lap = self.laps.pop()
@@ -161,6 +162,11 @@ class TimekeptHeat:
         return "Race over."
 
     # --- what it adds up to ---------------------------------------------------------------
+
+    def laps_completed(self) -> int:
+        """Laps the car finished, counting or not, for a lap-count race's end: a lap it did
+        not finish or the timekeeper struck out was not driven."""
+        return sum(1 for lap in self.laps if lap.finished and not lap.struck)
 
     def lap_records(self) -> tuple[LapRecord, ...]:
         records = []
@@ -249,7 +255,11 @@ class TimekeptHeat:
         said = f"Lap {lap.number}: {record.time_seconds:.3f} s, {verdict}."
         if not lap.finished:
             said = f"Lap {lap.number} not finished."
-        if self.expired(now):  # the lap in progress at zero was the last
+        if self.rules.lap_count is not None and self.laps_completed() >= self.rules.lap_count:
+            self._halt(now)
+            self.phase = Phase.OVER
+            said += f" {self.rules.lap_count} laps done: race over."
+        elif self.expired(now):  # the lap in progress at zero was the last
             self._halt(now)
             self.phase = Phase.OVER
             said += " Time is up: race over."

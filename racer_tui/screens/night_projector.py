@@ -201,8 +201,10 @@ class NightProjectorScreen(RacerScreen[None]):
         if new:
             self._announce(state, races[new[-1]].entrant.racer, new[-1])
         night = state.night
-        title = Text(f"{night.name} · {night.track_name} · ranked by ")
-        title.append(SCORE_TITLES[night.rules.ranking])
+        title = Text(f"{night.name} · {night.track_name} · ")
+        if night.rules.lap_count is not None:
+            title.append(f"{night.rules.lap_count}-lap race · ")
+        title.append(f"ranked by {SCORE_TITLES[night.rules.ranking]}")
         if night.closed:
             title.append(" · final standings")
         self.query_one("#np-title", Static).update(title)
@@ -275,7 +277,7 @@ class NightProjectorScreen(RacerScreen[None]):
         text.append(live.racer, style="bold")  # plain text, never markup
         text.append(f"  {live.car}\n", style="dim")
         if live.state != "over":
-            text.append(f"Lap {live.lap}  ", style="bold")
+            text.append(f"{state.night.rules.lap_of(live.lap)}  ", style="bold")
             text.append(lap_clock_text(live.lap_time))
             limit = "" if live.limit is None else f"/{live.limit}"
             over = live.limit is not None and live.offtracks > live.limit

@@ -75,7 +75,14 @@ from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
-from sim.race.rules import DEFAULT_RULES, RaceRules, RankingMethod, RulesError, load_rules
+from sim.race.rules import (
+    DEFAULT_RULES,
+    RaceRules,
+    RankingMethod,
+    RulesError,
+    load_rules,
+    rules_from_mapping,
+)
 from sim.track import Track
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
@@ -120,10 +127,17 @@ def read_night_rules(path: str) -> tuple[RaceRules | None, str | None]:
 
 
 class NewNightDialog(FormDialog[NightRequest]):
-    """Track, optional name, optional rules file, ranking and season. Enter moves to the
+    """Track, optional name, optional rules file and laps (a lap-count race), ranking and
+    season. Enter moves to the
     next field; the button or Ctrl+S opens the night. The rules are read here, so a bad
     file is said under the fields with nothing typed lost; they are frozen when the night
     opens and shown (read-only) on the night afterwards."""
+
+    DEFAULT_CSS = """
+    NewNightDialog #night-rules-row { height: auto; }
+    NewNightDialog #night-rules { width: 1fr; }
+    NewNightDialog #night-laps { width: 26; }
+    """
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("ctrl+s", "open_night", "Open night", priority=True),
@@ -142,11 +156,15 @@ class NewNightDialog(FormDialog[NightRequest]):
             yield Label("Track", classes="field-label")
             yield Select(track_options(), value=DEFAULT_TRACK, allow_blank=False, id="night-track")
             yield Input(placeholder="night name (empty: track and date)", id="night-name")
-            yield Input(
-                placeholder="rules file, YAML (empty: league rules, 4:00 window)",
-                suggester=PathSuggester(),
-                id="night-rules",
-            )
+            with Horizontal(id="night-rules-row"):
+                yield Input(
+                    placeholder="rules YAML (empty: league's)",
+                    suggester=PathSuggester(),
+                    id="night-rules",
+                )
+                # A lap-count race: each heat ends after this many laps (the rules' window
+                # still its time limit). Beside the rules, so the dialog keeps its height.
+                yield Input(placeholder="laps (empty: timed)", restrict=r"[0-9]*", id="night-laps")
             yield Select(RANKINGS, prompt="ranked as the rules say", id="night-ranking")
             yield Select(
                 self._seasons,
@@ -182,8 +200,25 @@ class NewNightDialog(FormDialog[NightRequest]):
             self.query_one("#night-rules", Input).focus()
             return
         ranking = self.query_one("#night-ranking", Select).value
+        laps = self.query_one("#night-laps", Input).value.strip()
+        chosen: dict[str, object] = {}
         if isinstance(ranking, RankingMethod):
-            rules = replace(rules, ranking=ranking)
+            chosen["ranking"] = ranking.value
+        if laps:
+            chosen["lap_count"] = int(laps)
+        try:
+            rules = rules_from_mapping(chosen, base=rules)
+        except RulesError as error:
+            text = str(error)
+            text = text[:1].upper() + text[1:]
+            if laps and 0 < int(laps) < rules.ranking_laps:  # say what to change here
+                text = (
+                    f"A race of {laps} laps cannot be ranked over {rules.ranking_laps} laps: "
+                    f"give at least {rules.ranking_laps} laps, or rank by best lap."
+                )
+            show_problem(self.query_one("#problem", Static), text)
+            self.query_one("#night-laps", Input).focus()
+            return
         season = self.query_one("#night-season", Select).value
         self.dismiss(
             NightRequest(

@@ -287,7 +287,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             return Text("Starting the race…", style="dim")
         limit = "∞" if rules.max_offtracks_per_lap is None else str(rules.max_offtracks_per_lap)
         state = "paused" if self.paused else f"{self.speed}x"
-        text.append(f"Lap {tick.lap}  ", style="bold")
+        text.append(f"{rules.lap_of(tick.lap)}  ", style="bold")
         text.append(clock_text(tick.lap_time) + "\n")
         over = (
             rules.max_offtracks_per_lap is not None

@@ -315,6 +315,8 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             Phase.OVER: ("Race over", "bold"),
         }[heat.phase]
         text.append(phase[0], style=phase[1])
+        if rules.lap_count is not None and heat.phase is not Phase.OVER:
+            text.append(f"  {rules.lap_of(heat.laps_completed() + 1)}")
         over = limit is not None and heat.resets > limit
         resets = f"  Resets {heat.resets}" + ("" if limit is None else f"/{limit}")
         text.append(resets, style="red" if over else "")

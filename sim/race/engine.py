@@ -2,7 +2,8 @@
 
 A race is one car on a `TrackSimulation` stepped at 15 Hz. It starts from a standstill on
 the start line (waypoint 0, like `sim.reference_driver.reference_lap`) and drives laps
-continuously until the window closes. The race clock is the simulation clock, plus the
+continuously until the window closes (or, in a lap-count race, until it has completed its
+laps). The race clock is the simulation clock, plus the
 penalty holds (a hold lasts exactly its penalty, so a 2.5 s penalty costs 2.5 s, not
 38 steps).
 
@@ -142,7 +143,7 @@ class _Race:
 
     @property
     def finished(self) -> bool:
-        return self.clock >= self.window - _EPS
+        return self.rules.race_over(self.clock + _EPS, len(self.laps))
 
     def tick(self) -> None:
         if self.hold_left > 0.0:

@@ -189,6 +189,13 @@ class RaceResult:
         if not isinstance(laps_data, list) or len(laps_data) > MAX_LAPS:
             raise ResultError(f"laps must be a list of at most {MAX_LAPS} laps.")
         laps = tuple(LapRecord.from_json(lap, f"laps[{i}]") for i, lap in enumerate(laps_data))
+        # Only counting laps are surely driven laps: a timekept heat also lists the laps its
+        # car did not finish and those the timekeeper struck out.
+        counting = sum(1 for lap in laps if lap.valid)
+        if rules.lap_count is not None and counting > rules.lap_count:
+            raise ResultError(
+                f"a race of {rules.lap_count} laps cannot have {counting} counting laps."
+            )
         for i, lap in enumerate(laps):
             limit = rules.max_offtracks_per_lap
             if lap.number != i + 1:

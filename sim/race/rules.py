@@ -1,7 +1,9 @@
 """League race rules: one frozen value that every race result and league night carries.
 
 A league night is a series of time trials: each car gets a window (4 minutes by default),
-drives laps continuously, and is ranked by its valid laps. An off-track puts the car back
+drives laps continuously, and is ranked by its valid laps. A lap-count race ends sooner,
+as soon as the car has completed its laps (DeepRacer's `maximumLaps`), the window still
+its time limit. An off-track puts the car back
 on the track and holds it for a penalty while the race clock runs; a lap with too many
 off-tracks does not count. The score of a set of laps is computed here so that every
 caller (race engine, league store, leaderboard) computes it the same way.
@@ -42,13 +44,31 @@ class RaceRules:
     ranking: RankingMethod = RankingMethod.BEST_LAP
     ranking_laps: int = 3  # N for best_average and total_time
     collision_penalty_seconds: float = 5.0
+    # None: a time race, driven for the whole window. N: the race ends when the car has
+    # completed N laps (counting or not), or when the window closes first.
+    lap_count: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         data = asdict(self)
         data["ranking"] = self.ranking.value
         if self.max_offtracks_per_lap is None:
             data["max_offtracks_per_lap"] = "unlimited"
+        if self.lap_count is None:
+            # Left out, so the rules of every time race written before lap-count races
+            # existed keep their stored form and content hash.
+            del data["lap_count"]
         return data
+
+    def lap_of(self, lap: int) -> str:
+        """The lap in progress as a racer reads it: "Lap 2", or "Lap 2 of 3" in a lap-count
+        race."""
+        return f"Lap {lap}" if self.lap_count is None else f"Lap {lap} of {self.lap_count}"
+
+    def race_over(self, clock: float, laps_completed: int) -> bool:
+        """Whether a race under these rules ends at `clock` with so many laps completed."""
+        if self.lap_count is not None and laps_completed >= self.lap_count:
+            return True
+        return clock >= self.window_seconds
 
     @property
     def laps_scored(self) -> int:
@@ -65,10 +85,11 @@ class RaceRules:
             RankingMethod.BEST_AVERAGE: f"best average of {self.ranking_laps} consecutive laps",
             RankingMethod.TOTAL_TIME: f"total time of {self.ranking_laps} laps",
         }[self.ranking]
-        return (
-            f"{_clock(self.window_seconds)} window, {self.penalty_seconds:g} s per off-track, "
-            f"{limit}, ranked by {ranking}"
-        )
+        length = f"{_clock(self.window_seconds)} window"
+        if self.lap_count is not None:
+            laps = "1 lap" if self.lap_count == 1 else f"{self.lap_count} laps"
+            length = f"race of {laps} within {_clock(self.window_seconds)}"
+        return f"{length}, {self.penalty_seconds:g} s per off-track, {limit}, ranked by {ranking}"
 
 
 DEFAULT_RULES = RaceRules()
@@ -97,14 +118,21 @@ def rules_from_mapping(data: Mapping[str, Any], base: RaceRules = DEFAULT_RULES)
     values.update(data)
     for key, (low, high) in _LIMITS.items():
         values[key] = _number(values[key], key, low, high)
-    return RaceRules(
+    rules = RaceRules(
         window_seconds=values["window_seconds"],
         penalty_seconds=values["penalty_seconds"],
         max_offtracks_per_lap=_offtrack_limit(values["max_offtracks_per_lap"]),
         ranking=_ranking(values["ranking"]),
         ranking_laps=_whole(values["ranking_laps"], "ranking_laps", 1, 100),
         collision_penalty_seconds=values["collision_penalty_seconds"],
+        lap_count=_lap_count(values.get("lap_count")),
     )
+    if rules.lap_count is not None and rules.laps_scored > rules.lap_count:
+        raise RulesError(
+            f"a race of {rules.lap_count} laps cannot be ranked over {rules.laps_scored} "
+            f"laps; make ranking_laps at most {rules.lap_count} or lap_count larger."
+        )
+    return rules
 
 
 def load_rules(path: Path | str) -> RaceRules:
@@ -160,6 +188,17 @@ def _offtrack_limit(value: object) -> int | None:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 1000:
         raise RulesError(
             f"{key} must be a whole number from 0 to 1000 or 'unlimited', not {value!r}."
+        )
+    return value
+
+
+def _lap_count(value: object) -> int | None:
+    if value is None or (isinstance(value, str) and value.strip().lower() == "none"):
+        return None
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 100:
+        raise RulesError(
+            "lap_count must be a whole number of laps from 1 to 100, or none for a race "
+            f"over the whole window, not {value!r}."
         )
     return value
 

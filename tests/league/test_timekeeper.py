@@ -65,6 +65,25 @@ def test_time_up_ends_the_race_at_the_next_capture_and_a_false_finish_reopens_it
     assert heat.phase is Phase.OVER and heat.laps[-1].raw_seconds == pytest.approx(37.0)
 
 
+def test_a_lap_count_race_is_over_at_the_capture_of_its_last_driven_lap() -> None:
+    heat = TimekeptHeat(RaceRules(window_seconds=60.0, lap_count=2))
+    heat.start_or_pause(0.0)
+    heat.capture(10.0)
+    heat.did_not_finish(15.0)  # not driven: it does not bring the end nearer
+    heat.start_or_pause(20.0)
+    assert heat.phase is Phase.RUNNING and heat.laps_completed() == 1
+    assert heat.capture(31.0) == "Lap 3: 11.000 s, counts. 2 laps done: race over."
+    assert heat.phase is Phase.OVER and heat.time_left(100.0) == pytest.approx(34.0)
+    result = result_of(heat)
+    assert [lap.valid for lap in result.laps] == [True, False, True]
+    assert result.rules.lap_count == 2
+    # Its lap that was not driven does not make it a result of more laps than its race.
+    assert RaceResult.from_json(result.to_json()).laps == result.laps
+    # The last capture was a false finish: the race opens again.
+    heat.undo_capture(32.0)
+    assert heat.phase is Phase.PAUSED
+
+
 def test_undo_a_capture_keeps_the_laps_resets_and_double_presses_are_refused() -> None:
     heat = TimekeptHeat(RULES)
     heat.start_or_pause(0.0)

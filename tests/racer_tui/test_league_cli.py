@@ -265,6 +265,31 @@ def test_a_new_night_defaults_to_the_reinvent_2018_track(
     assert json.loads(out)["track"] == "reinvent_base"
 
 
+def test_a_lap_count_night_races_each_heat_to_its_laps(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    def cli(*args: str) -> tuple[int, str, str]:
+        return run_cli(capsys, "night", *args, "--db", db)
+
+    code, _, err = cli("new", "--track", "beginner-oval", "--name", "Sprint", "--laps", "0")
+    assert code == 2 and err.startswith("racer-tui: --laps: lap_count must be a whole number")
+    code, out, err = cli("new", "--track", "beginner-oval", "--name", "Sprint", "--laps", "2")
+    assert code == 0, err
+    assert "race of 2 laps within 4:00" in out
+    for racer in ("ana", "bob"):
+        assert cli("add", "Sprint", "--racer", racer, "--model", "reference")[0] == 0
+    assert cli("draw", "Sprint")[0] == 0
+    code, _, err = cli("run", "Sprint")
+    assert code == 0, err
+    _, out, _ = cli("show", "Sprint", "--json")
+    shown = json.loads(out)
+    assert shown["rules"]["lap_count"] == 2
+    _, out, _ = run_cli(capsys, "leaderboard", "--night", "Sprint", "--db", db, "--format", "json")
+    rows = json.loads(out)
+    # A 4-minute window would have given dozens of laps on the oval; each heat drove two.
+    assert [row["laps"] for row in rows] == [2, 2]
+
+
 def test_a_host_withdraws_moves_and_deletes_from_the_command_line(
     capsys: pytest.CaptureFixture[str], db: str
 ) -> None:

@@ -7,6 +7,8 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+from textual.pilot import Pilot
+
 from league.live_heat import STALE_SECONDS, LiveHeatWriter, live_heat_path
 from league.nights import (
     Night,
@@ -87,6 +89,15 @@ def on_air(night: Night, clock: Clock, *, heat_index: int) -> LiveHeatWriter:
     return writer
 
 
+async def the_projector(pilot: Pilot[Any], clock: Clock) -> NightProjectorScreen:
+    """The projector the app started on, on the test's clock."""
+    await settle(pilot)
+    screen = pilot.app.screen
+    assert isinstance(screen, NightProjectorScreen)
+    screen.clock = clock
+    return screen
+
+
 async def test_the_projector_follows_a_night_from_heat_to_heat() -> None:
     night = a_night_with_one_heat_raced()
     with open_league() as league:
@@ -94,10 +105,7 @@ async def test_the_projector_follows_a_night_from_heat_to_heat() -> None:
     clock = Clock()
     app = create_app(start="league", projector_night=night.id)
     async with app.run_test(size=(80, 24)) as pilot:
-        await settle(pilot)
-        screen = app.screen
-        assert isinstance(screen, NightProjectorScreen)
-        screen.clock = clock
+        screen = await the_projector(pilot, clock)
         assert "friday · beginner-oval · ranked by best lap" in painted(
             screen.query_one("#np-title")
         )
@@ -189,3 +197,22 @@ async def test_a_night_deleted_under_the_projector_is_said_once_on_screen() -> N
             shown.split()
         )
         assert notes.messages == []  # no error notification every two seconds
+
+
+async def test_a_lap_count_night_says_so_and_shows_the_lap_of_the_race() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        rules = replace(RULES, lap_count=5)
+        night = new_night(league, resolve_track("beginner-oval"), rules=rules, name="sprint")
+        add_entrant(league, night, "ana", "reference")
+        draw_heats(league, night, seed=1)
+    clock = Clock()
+    app = create_app(start="league", projector_night=night.id)
+    async with app.run_test(size=(80, 24)) as pilot:
+        screen = await the_projector(pilot, clock)
+        title = painted(screen.query_one("#np-title"))
+        assert "sprint · beginner-oval · 5-lap race · ranked by best lap" in title
+        on_air(night, clock, heat_index=0)
+        screen._read_live()
+        await pilot.pause()
+        assert "Lap 3 of 5  0:04.2" in painted(screen.query_one("#np-heat"))

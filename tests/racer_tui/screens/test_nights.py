@@ -8,7 +8,7 @@ from typing import Any
 
 from textual.pilot import Pilot
 from textual.screen import Screen
-from textual.widgets import DataTable, Select
+from textual.widgets import DataTable, Input, Select
 
 from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
 from league.store import open_league
@@ -125,6 +125,30 @@ async def test_the_open_night_dialog_sets_the_ranking_over_the_rules() -> None:
     with open_league() as league:
         (night,) = list_nights(league)
     assert (night.name, night.rules.ranking) == ("sunday", RankingMethod.BEST_AVERAGE)
+
+
+async def test_the_open_night_dialog_makes_a_lap_count_race_and_says_what_cannot_be() -> None:
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        nights = await the_nights_screen(pilot)
+        await pilot.press("o")
+        await settle(pilot)
+        dialog = app.screen
+        dialog.query_one("#night-ranking", Select).value = RankingMethod.TOTAL_TIME
+        await pilot.press(*"sprint", "enter", "enter", *"2x", "ctrl+s")  # digits only
+        await settle(pilot)
+        assert app.screen is dialog  # total time of 3 laps cannot be had from 2
+        problem = " ".join(painted(dialog.query_one("#problem")).split())
+        assert "A race of 2 laps cannot be ranked over 3 laps: give at least 3 laps" in problem
+        assert dialog.query_one("#night-name", Input).value == "sprint"  # nothing lost
+        await pilot.press("backspace", "3", "ctrl+s")
+        await settle(pilot)
+        assert app.screen is nights
+        shown = " ".join(painted(nights.query_one("#night-rules")).split())
+        assert "race of 3 laps within 4:00" in shown
+    with open_league() as league:
+        (night,) = list_nights(league)
+    assert (night.rules.lap_count, night.rules.ranking) == (3, RankingMethod.TOTAL_TIME)
 
 
 async def test_closing_a_night_drawn_elsewhere_names_the_keys_and_shows_the_heats() -> None:

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from textual.widgets import Digits
 
-from league.nights import list_nights, new_night, standings
+from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
 from league.races import race_result
 from league.store import open_league
 from racer_tui.app import create_app
@@ -104,6 +104,35 @@ async def test_a_physical_cars_heat_is_timed_by_hand_and_recorded_on_the_night()
             (10.0, 1, True),
             (9.0, 4, False),  # four resets: over the limit
         ]
+
+
+async def test_a_lap_count_heat_shows_its_lap_of_the_race_and_ends_at_the_last() -> None:
+    with open_league() as league:
+        rules = RaceRules(window_seconds=60.0, lap_count=2)
+        night = new_night(league, resolve_track("beginner-oval"), rules=rules, name="sprint")
+        add_entrant(league, night, "dee", "physical")
+        draw_heats(league, night, seed=1)
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await the_nights_screen(pilot)
+        await pilot.press("r")
+        await settle(pilot)
+        keeper = app.screen
+        assert isinstance(keeper, TimekeeperScreen)
+        watch = Stopwatch()
+        keeper.clock = watch
+        await pilot.press("space")
+        assert "Lap 1 of 2" in painted(keeper.query_one("#tk-facts"))
+        watch.now += 10.0
+        await pilot.press("l")
+        assert "Lap 2 of 2" in painted(keeper.query_one("#tk-facts"))
+        watch.now += 9.0
+        await pilot.press("l")  # the last lap: no End key needed
+        assert str(keeper.said) == "Lap 2: 9.000 s, counts. 2 laps done: race over."
+        facts = painted(keeper.query_one("#tk-facts"))
+        assert "Race over" in facts and "Lap 3" not in facts
+        await pilot.pause(0.15)
+        assert str(keeper.query_one("#tk-left", Digits).value) == "0:41"  # stopped at 19 s
 
 
 @pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pseudo-terminal")

@@ -59,6 +59,22 @@ def test_laps_are_continuous_from_a_standing_start_and_timed_inside_the_step() -
     assert result.model_hash == f"reference:{hairpin().content_hash}"
 
 
+def test_a_lap_count_race_ends_as_its_last_lap_is_completed() -> None:
+    timed = clean_race()
+    rules = RaceRules(window_seconds=30.0, lap_count=2)
+    ticks = list(race_ticks(hairpin(), rules))
+    result = ticks[-1].result
+    assert result is not None
+    # The same two laps as the time race's first two, and not a step more.
+    assert result.laps == timed.laps[:2]
+    last = result.laps[-1]
+    assert ticks[-1].clock == pytest.approx(last.started_at + last.time_seconds, abs=STEP_SECONDS)
+    assert result.trace is not None and result.trace.statuses()[-1] == "lap_complete"
+    # The window is still its time limit: a car too slow for its laps stops when it closes.
+    slow = run_race(hairpin(), RaceRules(window_seconds=10.0, lap_count=3))
+    assert len(slow.laps) == 1
+
+
 def test_an_offtrack_costs_the_penalty_inside_the_lap_time() -> None:
     driver = ScriptedDriver(hairpin(), swerve_at=(150,))  # during lap 2
     result = run_race(hairpin(), SHORT, driver)

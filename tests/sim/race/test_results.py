@@ -239,6 +239,10 @@ def test_rules_load_from_yaml_with_defaults_for_unset_keys(tmp_path: Path) -> No
         ("ranking: fastest\n", "ranking"),
         ("ranking_laps: 0\n", "ranking_laps"),
         ("ranking_laps: true\n", "ranking_laps"),
+        ("lap_count: 0\n", "lap_count"),
+        ("lap_count: 2.5\n", "lap_count"),
+        ("lap_count: many\n", "lap_count"),
+        ("lap_count: 2\nranking: total_time\n", "ranking_laps at most 2"),
     ],
 )
 def test_a_bad_rules_file_names_the_key(tmp_path: Path, text: str, key: str) -> None:
@@ -293,3 +297,32 @@ def test_a_rules_file_may_merge_an_anchor(tmp_path: Path) -> None:
     from sim.strict_yaml import load_data
 
     assert load_data(merged.read_text())["rules"] == {"penalty_seconds": 3}
+
+
+def test_a_lap_count_race_is_rules_of_its_own_and_a_time_race_keeps_its_stored_form(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "rules.yaml"
+    path.write_text("lap_count: 5\nranking: total_time\n")
+    rules = load_rules(path)
+    assert rules.lap_count == 5
+    assert rules_from_mapping(rules.to_dict()) == rules
+    assert rules.describe().startswith("race of 5 laps within 4:00")
+    assert rules.lap_of(2) == "Lap 2 of 5"
+    # A time race's rules are stored as they were before lap-count races existed, so every
+    # result and night recorded until now keeps its content hash.
+    assert "lap_count" not in RaceRules().to_dict()
+    assert rules_from_mapping({"lap_count": None}, base=rules) == RaceRules(
+        ranking=RankingMethod.TOTAL_TIME
+    )
+    assert RaceRules().lap_of(2) == "Lap 2"
+
+
+def test_a_result_with_more_laps_than_its_lap_count_race_is_refused() -> None:
+    track = resolve_track("hairpin-circuit")
+    result = run_race(track, RaceRules(window_seconds=20.0))
+    assert result.completed_laps >= 2
+    data = result.to_json()
+    data["rules"] = {**data["rules"], "lap_count": 1}  # type: ignore[dict-item]
+    with pytest.raises(ResultError, match="race of 1 laps cannot have 2 counting laps"):
+        RaceResult.from_json(data)
