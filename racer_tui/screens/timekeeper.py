@@ -22,7 +22,7 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.widgets import DataTable, Digits, Label, Static
+from textual.widgets import Digits, Label, Static
 
 from league.live_heat import LiveHeatWriter
 from league.timekeeper.feed import TIMER_ENV, FeedError, Trigger, follow, parse_trigger
@@ -31,6 +31,7 @@ from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ask
 from racer_tui.screens.race_screen import clock_text, countdown_text
 from racer_tui.widgets.footer import RacerFooter
+from racer_tui.widgets.lap_list import LapList
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, lap_counts
 from sim.track import Track
@@ -122,12 +123,11 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         yield Static(id="tk-facts")
         yield Static(id="tk-said")
         with Horizontal(id="tk-body"):
-            yield DataTable(id="tk-laps", cursor_type="row", zebra_stripes=True)
+            yield LapList(id="tk-laps")
             yield Static(self._keys(), id="tk-keys")
         yield RacerFooter()
 
     def on_mount(self) -> None:
-        self.query_one("#tk-laps", DataTable).add_columns("Lap", "Time", "Raw", "Resets", "Counts")
         self.set_interval(1.0 / CLOCK_HZ, self._draw_clocks)
         self._draw()
         timer = self.setup.timer if self.setup.timer is not None else os.environ.get(TIMER_ENV)
@@ -190,11 +190,11 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         self._apply(lambda: self.heat.did_not_finish(now))
 
     def action_strike(self) -> None:
-        table = self.query_one("#tk-laps", DataTable)
-        if not self.heat.laps:
+        selected = self.query_one(LapList).selected
+        if not self.heat.laps or selected is None:
             self._say("No lap has been captured yet.", error=True)
             return
-        number = self.heat.laps[min(table.cursor_row, len(self.heat.laps) - 1)].number
+        number = self.heat.laps[min(selected, len(self.heat.laps) - 1)].number
         self._apply(lambda: self.heat.strike(number))
 
     def action_end(self) -> None:
@@ -262,7 +262,14 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
     def _say(self, text: str, *, error: bool = False) -> None:
         self.said = Text(text, style="bold red" if error else "")
-        self.query_one("#tk-said", Static).update(self.said)
+        self._show_said()
+
+    def _show_said(self) -> None:
+        # A layout repaints every widget on the screen: only a sentence that changes its
+        # height needs one, and most keys say a sentence.
+        said = self.query_one("#tk-said", Static)
+        lines = min(len(self.said.wrap(self.app.console, max(said.size.width, 1))), 2)
+        said.update(self.said, layout=lines != said.size.height)
 
     def _draw_clocks(self) -> None:
         now = self.clock()
@@ -290,8 +297,8 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
     def _draw(self) -> None:
         self.best_lap = self._best()  # changes only with an input, never with the clock
         self._draw_clocks()
-        self.query_one("#tk-facts", Static).update(self._facts())
-        self.query_one("#tk-said", Static).update(self.said)
+        self.query_one("#tk-facts", Static).update(self._facts(), layout=False)  # one line
+        self._show_said()
         if tuple(lap.struck for lap in self.heat.laps) != self._laps_shown:
             self._fill_laps()
 
@@ -335,19 +342,13 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         return min((lap.time_seconds for lap in laps if lap_counts(lap, rules)), default=None)
 
     def _fill_laps(self) -> None:
-        """Add the laps captured since the last time; all of them again when one shown has
-        changed (taken back or struck out), which is rare: a table filled afresh repaints
-        every row."""
-        table = self.query_one("#tk-laps", DataTable)
+        """Show the laps again: a new one is selected, a lap taken back or struck out keeps
+        the selection where it was."""
         flags = tuple(lap.struck for lap in self.heat.laps)
-        shown = self._laps_shown or ()
-        row = table.cursor_row
-        kept = len(shown) <= len(flags) and flags[: len(shown)] == shown
-        if not kept:
-            table.clear()
+        added = len(flags) > len(self._laps_shown or ())
         rules = self.setup.rules
-        records = self.heat.lap_records()
-        for lap, captured in list(zip(records, self.heat.laps, strict=True))[table.row_count :]:
+        lines = []
+        for lap, captured in zip(self.heat.lap_records(), self.heat.laps, strict=True):
             if not captured.finished:
                 verdict = Text("not finished", style="red")
             elif captured.struck:
@@ -356,13 +357,12 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
                 verdict = Text("✓", style="green")
             else:
                 verdict = Text("✗ resets", style="red")
-            table.add_row(
+            cells = (
                 str(lap.number),
                 clock_text(lap.time_seconds),
                 clock_text(lap.raw_seconds),
                 str(lap.offtracks),
-                verdict,
             )
+            lines.append((cells, verdict))
+        self.query_one(LapList).show(lines, select_last=added)
         self._laps_shown = flags
-        if flags:  # a new lap is highlighted; a lap struck out keeps its row
-            table.move_cursor(row=row if len(flags) == len(shown) else len(flags) - 1)

@@ -46,7 +46,12 @@ from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps
 from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
 from sim.resets import reset_pose
-from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.simulation import (
+    EpisodeRules,
+    EpisodeStatus,
+    TrackSimulation,
+    let_other_threads_run,
+)
 from sim.track import Track
 
 # DeepRacer's reversed rule stays; immobilized and the step limit are switched off (the
@@ -352,6 +357,7 @@ def race_ticks(
     yield race.live_tick()
     while not race.finished:
         race.tick()
+        let_other_threads_run(race.row)
         if not race.finished:
             yield race.live_tick()
     result = race.result()
@@ -373,6 +379,7 @@ def run_race(
     race = _start(track, rules, driver, racer=racer, seed=seed, car=car, keep_trace=keep_trace)
     while not race.finished:
         race.tick()
+        let_other_threads_run(race.row)
     return race.result()
 
 

@@ -44,7 +44,7 @@ from sim.deepracer_files import (
 )
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.resets import ResetRules
-from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation, let_other_threads_run
 from sim.track import Track
 from sim.training.logbook import closest_waypoint
 from sim.training.trace_pose import RowPoses
@@ -237,6 +237,7 @@ def run_trials(
     status: list[str] = [str(EpisodeStatus.IN_PROGRESS)] * trials
     progress = np.zeros(trials)
     for step in range(max_steps):
+        let_other_threads_run(step)  # the app evaluates in a worker thread
         clock = resetter.clock(sim)
         if on_progress is not None and step % PROGRESS_EVERY_STEPS == 0:
             on_progress(_trials_done(seconds, sim.progress, clock, max_seconds))

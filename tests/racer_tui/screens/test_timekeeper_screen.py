@@ -15,12 +15,19 @@ from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.nights import AddEntrantDialog
-from racer_tui.screens.timekeeper import TimekeeperScreen, lap_clock_text
+from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup, lap_clock_text
+from racer_tui.widgets.lap_list import LapList
 from sim.race.physics import PHYSICAL
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.test_nights import table_rows, the_nights_screen
-from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
+from tests.racer_tui.screens.tui_helpers import (
+    Notifications,
+    OneScreenApp,
+    painted,
+    settle,
+    wait_for,
+)
 
 
 class Stopwatch:
@@ -78,7 +85,7 @@ async def test_a_physical_cars_heat_is_timed_by_hand_and_recorded_on_the_night()
         assert "over 3, this lap will not count" in str(keeper.said)
         watch.now += 6.5
         await pilot.press("l")  # lap 2: 9 s, but four resets
-        laps = table_rows(keeper, "#tk-laps")
+        laps = keeper.query_one(LapList).rows()
         assert [row[0] for row in laps] == ["1", "2"]
         assert laps[0][4] == "✓" and laps[1][4] == "✗ resets"
         facts = painted(keeper.query_one("#tk-facts"))
@@ -133,6 +140,31 @@ async def test_a_lap_count_heat_shows_its_lap_of_the_race_and_ends_at_the_last()
         assert "Race over" in facts and "Lap 3" not in facts
         await pilot.pause(0.15)
         assert str(keeper.query_one("#tk-left", Digits).value) == "0:41"  # stopped at 19 s
+
+
+async def test_the_lap_chosen_with_the_arrows_is_struck_out_and_a_new_lap_is_chosen() -> None:
+    setup = TimekeeperSetup(resolve_track("beginner-oval"), RaceRules(), "eve", "red car")
+    keeper = TimekeeperScreen(setup)
+    watch = Stopwatch()
+    keeper.clock = watch
+    app = OneScreenApp(keeper)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("space")
+        for _ in range(3):
+            watch.now += 10.0
+            await pilot.press("l")
+        laps = keeper.query_one(LapList)
+        assert laps.selected == 2  # the newest lap
+        await pilot.press("up", "up", "x")
+        assert str(keeper.said) == "Lap 1 struck out."
+        assert [row[-1] for row in laps.rows()] == ["struck out", "✓", "✓"]
+        assert laps.selected == 0  # it stays on the lap struck out
+        watch.now += 10.0
+        await pilot.press("l")
+        assert laps.selected == 3
+        shown = painted(laps)
+        assert "Lap     Time      Raw Resets Counts" in shown
+        assert "  4 0:10.000 0:10.000      0 ✓" in shown
 
 
 @pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pseudo-terminal")

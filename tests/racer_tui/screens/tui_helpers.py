@@ -8,6 +8,7 @@ from typing import Any
 
 from textual.app import App
 from textual.pilot import Pilot
+from textual.screen import Screen
 from textual.widget import Widget
 from textual.worker import WorkerCancelled, WorkerFailed
 
@@ -72,3 +73,14 @@ def trained_model(name: str, **options: Any) -> ModelFolder:
     folder = new_model(name, **options)
     save_policy(folder.policy_file, build_network(folder.metadata()))
     return folder
+
+
+class OneScreenApp(App[None]):
+    """An app showing one screen, as a section would push it."""
+
+    def __init__(self, screen: Screen[Any]) -> None:
+        super().__init__()
+        self.shown = screen
+
+    def on_mount(self) -> None:
+        self.push_screen(self.shown)

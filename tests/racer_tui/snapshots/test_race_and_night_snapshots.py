@@ -10,9 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from textual.app import App
 from textual.pilot import Pilot
-from textual.screen import Screen
 
 from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.store import open_league
@@ -26,22 +24,11 @@ from sim.race.engine import run_race
 from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
-from tests.racer_tui.screens.tui_helpers import settle
+from tests.racer_tui.screens.tui_helpers import OneScreenApp, settle
 from tests.racer_tui.snapshots.sizes import SIZES
 
 Compare = Callable[..., bool]
 SHORT = RaceRules(window_seconds=30.0)
-
-
-class OneScreenApp(App[None]):
-    """An app showing one screen, as a section would push it."""
-
-    def __init__(self, screen: Screen[Any]) -> None:
-        super().__init__()
-        self.shown = screen
-
-    def on_mount(self) -> None:
-        self.push_screen(self.shown)
 
 
 @SIZES

@@ -1,0 +1,104 @@
+"""The timekeeper's laps: a header and one line per lap, newest at the bottom, one selected.
+
+Textual's DataTable renders every visible cell again whenever a row is added (its render
+caches are keyed by an update count that each `add_row` moves on), and by a 4-minute
+heat's last laps that made Capture Lap take 40-50 ms instead of 5 (`python -m
+racer_tui.bench_timekeeper`). A heat has a few dozen laps at most, so this list keeps each
+lap's line as text and draws the lines that fit: a new lap costs one line, and a change of
+selection never touches the clocks' layout.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import ClassVar
+
+from rich.text import Text
+from textual.binding import Binding, BindingType
+from textual.widget import Widget
+
+# (title, width); a lap's cells are padded to these, the last one is free.
+COLUMNS: tuple[tuple[str, int], ...] = (
+    ("Lap", 4),
+    ("Time", 9),
+    ("Raw", 9),
+    ("Resets", 7),
+    ("Counts", 0),
+)
+
+
+class LapList(Widget, can_focus=True):
+    """Laps as lines under a header; ↑/↓ choose the lap a key acts on (`selected`)."""
+
+    DEFAULT_CSS = """
+    LapList { height: 1fr; }
+    LapList > .lap-list--header { text-style: bold; }
+    LapList > .lap-list--selected { background: $block-cursor-background; }
+    LapList:focus > .lap-list--selected { text-style: bold; }
+    """
+    COMPONENT_CLASSES: ClassVar[set[str]] = {"lap-list--header", "lap-list--selected"}
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("up", "move(-1)", "Previous lap", show=False),
+        Binding("down", "move(1)", "Next lap", show=False),
+        Binding("home", "move(-1000)", "First lap", show=False),
+        Binding("end", "move(1000)", "Last lap", show=False),
+    ]
+
+    def __init__(self, *, id: str | None = None) -> None:
+        super().__init__(id=id)
+        self.lines: list[tuple[tuple[str, ...], Text]] = []  # each lap's cells and verdict
+        self.selected: int | None = None
+
+    def show(self, lines: Sequence[tuple[tuple[str, ...], Text]], *, select_last: bool) -> None:
+        """Show these laps; select the newest, or keep the selection where it was."""
+        self.lines = list(lines)
+        if not self.lines:
+            self.selected = None
+        elif select_last or self.selected is None:
+            self.selected = len(self.lines) - 1
+        else:
+            self.selected = min(self.selected, len(self.lines) - 1)
+        self.refresh()  # its size never depends on the laps: no layout
+
+    def action_move(self, by: int) -> None:
+        if self.selected is None:
+            return
+        self.selected = min(max(self.selected + by, 0), len(self.lines) - 1)
+        self.refresh()
+
+    def rows(self) -> list[list[str]]:
+        """Every lap's cells as plain text, the verdict last (for tests and exports)."""
+        return [[*cells, verdict.plain] for cells, verdict in self.lines]
+
+    def render(self) -> Text:
+        header_style = self.get_component_rich_style("lap-list--header", partial=True)
+        selected_style = self.get_component_rich_style("lap-list--selected", partial=True)
+        text = Text(no_wrap=True, overflow="ellipsis")
+        text.append(_line(tuple(title for title, _ in COLUMNS[:-1]), Text(COLUMNS[-1][0])))
+        text.stylize(header_style)
+        rows = max(self.size.height - 1, 0)
+        start = self._first_shown(rows)
+        for index in range(start, min(start + rows, len(self.lines))):
+            cells, verdict = self.lines[index]
+            line = _line(cells, verdict)
+            if index == self.selected:
+                line.pad_right(max(self.size.width - line.cell_len, 0))
+                line.stylize(selected_style)
+            text.append("\n")
+            text.append(line)
+        return text
+
+    def _first_shown(self, rows: int) -> int:
+        """The first lap shown: the newest laps that fit, or from the selected one up."""
+        last_start = max(len(self.lines) - rows, 0)
+        if self.selected is None or self.selected >= last_start:
+            return last_start
+        return self.selected
+
+
+def _line(cells: tuple[str, ...], last: Text) -> Text:
+    line = Text()
+    for cell, (_, width) in zip(cells, COLUMNS, strict=False):
+        line.append(cell.rjust(width - 1) + " ")
+    line.append(last)
+    return line
