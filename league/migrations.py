@@ -439,6 +439,13 @@ CREATE TABLE night_changes (
 CREATE INDEX night_changes_night ON night_changes(night_id)
 """
 
+# Version 8: the day a night is held (DREM's eventDate), which may differ from the day it
+# was opened in racer-tui. NULL for nights opened before: they are held on the day they
+# were opened.
+NIGHT_DATE = """
+ALTER TABLE nights ADD COLUMN held_on TEXT
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -447,6 +454,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("physics of results", _script(PHYSICS), True),
     Migration("signed results", _script(SIGNED_RESULTS)),
     Migration("night changes", _script(NIGHT_CHANGES)),
+    Migration("night dates", _script(NIGHT_DATE)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -43,6 +43,7 @@ def night_json(
         "track_hash": night.track_hash,
         "season_id": night.season_id,
         "closed": night.closed,
+        "held_on": night.held_on,
         "rules": night.rules.to_dict(),
         "entrants": [
             {"id": e.id, "racer": e.display_name, "racer_name": e.racer, "model": e.model}

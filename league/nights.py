@@ -14,6 +14,7 @@ import re
 import sqlite3
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from datetime import date, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -54,6 +55,7 @@ class Night:
     rules: RaceRules
     created_at: str
     closed: bool
+    held_on: str = ""  # YYYY-MM-DD: the day it is held (before nights had one: opened)
 
 
 @dataclass(frozen=True)
@@ -90,9 +92,12 @@ def new_night(
     rules: RaceRules = DEFAULT_RULES,
     name: str | None = None,
     season: str | None = None,
+    held_on: date | None = None,
 ) -> Night:
-    """Open a night on `track`; its rules are frozen in the row from now on."""
-    label = check_name(name, "night name") if name else f"{track.name} {now_iso()[:10]}"
+    """Open a night on `track`, held on `held_on` (today by default); its rules are frozen
+    in the row from now on."""
+    day = (held_on or datetime.now().date()).isoformat()  # the host's own calendar day
+    label = check_name(name, "night name") if name else f"{track.name} {day}"
     with league.transaction():
         season_row = get_season(league, season) if season else None
         ensure_track(league, track.content_hash, track.name)
@@ -104,9 +109,24 @@ def new_night(
                 "season_id": season_row.id if season_row else None,
                 "rules": json.dumps(rules.to_dict(), sort_keys=True),
                 "created_at": now_iso(),
+                "held_on": day,
             },
         )
     return get_night(league, night_id)
+
+
+def night_date(text: str) -> date:
+    """The day a host typed (YYYY-MM-DD), or a LeagueError saying how to write it."""
+    try:
+        day = date.fromisoformat(text.strip())
+    except ValueError:
+        day = None
+    if day is None or len(text.strip()) != 10 or not 2000 <= day.year <= 2100:
+        raise LeagueError(
+            f"{text.strip()!r} is not a night's date; write it as YYYY-MM-DD, "
+            f"for example {datetime.now().date().isoformat()}."
+        )
+    return day
 
 
 def _night(league: League, data: sqlite3.Row) -> Night:
@@ -121,6 +141,7 @@ def _night(league: League, data: sqlite3.Row) -> Night:
         rules=rules_from_mapping(json.loads(data["rules"])),
         created_at=data["created_at"],
         closed=closed is not None,
+        held_on=data["held_on"] or data["created_at"][:10],
     )
 
 

@@ -25,9 +25,11 @@ from sim.deepracer_files import DeepRacerFileError
 from sim.plural import counted
 from sim.race.rules import (
     DEFAULT_RULES,
+    RULE_PRESETS,
     RankingMethod,
     RulesError,
     load_rules,
+    preset_rules,
     rules_from_mapping,
 )
 from sim.track_catalog import DEFAULT_TRACK
@@ -122,8 +124,14 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
         default=DEFAULT_TRACK,
         help=f"the night's track (default: {DEFAULT_TRACK}, re:Invent 2018)",
     )
-    new.add_argument(
-        "--rules", type=Path, metavar="FILE", help="rules YAML (default rules if none)"
+    rules = new.add_mutually_exclusive_group()
+    rules.add_argument(
+        "--rules", type=Path, metavar="FILE", help="rules YAML (default: the league rules)"
+    )
+    rules.add_argument(
+        "--preset",
+        choices=[name for name, _, _ in RULE_PRESETS],
+        help="; ".join(f"{name}: {what}" for name, what, _ in RULE_PRESETS),
     )
     new.add_argument(
         "--laps",
@@ -132,6 +140,7 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
         help="a lap-count race: each heat ends after N laps, or when the window closes first",
     )
     new.add_argument("--name")
+    new.add_argument("--date", metavar="YYYY-MM-DD", help="the day it is held (default: today)")
     new.add_argument("--season", help="season name or id the night counts for")
     listing = actions.add_parser("list", parents=[db], help="all nights")
     listing.add_argument("--json", action="store_true")
@@ -431,15 +440,25 @@ def _night(league: League, args: argparse.Namespace) -> int:
         from sim.track_catalog import resolve_track
 
         rules = load_rules(args.rules) if args.rules else DEFAULT_RULES
+        if args.preset is not None:
+            rules = preset_rules(args.preset)
         if args.laps is not None:
             try:
                 rules = rules_from_mapping({"lap_count": args.laps}, base=rules)
             except RulesError as error:
                 raise RulesError(f"--laps: {error}") from None
+        held_on = nights.night_date(args.date) if args.date is not None else None
         night = nights.new_night(
-            league, resolve_track(args.track), rules=rules, name=args.name, season=args.season
+            league,
+            resolve_track(args.track),
+            rules=rules,
+            name=args.name,
+            season=args.season,
+            held_on=held_on,
         )
-        print(f"Opened league night {night.name} ({night.id}) on {night.track_name}.")
+        print(
+            f"Opened league night {night.name} ({night.id}) on {night.track_name}, {night.held_on}."
+        )
         print(f"Rules (frozen): {night.rules.describe()}.")
         return 0
     if action == "list":
@@ -514,6 +533,7 @@ def _night_list(league: League, as_json: bool) -> int:
                     "track": n.track_name,
                     "season_id": n.season_id,
                     "closed": n.closed,
+                    "held_on": n.held_on,
                     "created_at": n.created_at,
                     "rules": n.rules.to_dict(),
                 }
@@ -522,11 +542,11 @@ def _night_list(league: League, as_json: bool) -> int:
         )
         return 0
     table = _table("League nights")
-    for title in ("id", "name", "track", "state", "opened"):
+    for title in ("id", "name", "track", "state", "date"):
         table.add_column(title)
     for n in found:
         state = "closed" if n.closed else "open"
-        table.add_row(n.id, _text(n.name), _text(n.track_name), state, n.created_at[:16])
+        table.add_row(n.id, _text(n.name), _text(n.track_name), state, n.held_on)
     print_table(table)
     return 0
 
@@ -582,7 +602,7 @@ def _night_show(league: League, night: Any, kind: str) -> int:
         print(night_export(night, entrants, heats, standings, kind), end="")
         return 0
     state = "closed" if night.closed else "open"
-    print(f"{night.name} ({night.id}) on {night.track_name}, {state}.")
+    print(f"{night.name} ({night.id}) on {night.track_name}, {night.held_on}, {state}.")
     print(f"Rules: {night.rules.describe()}.")
     print(f"Entrants: {len(entrants)}; heats raced: {sum(h.race_id is not None for h in heats)}")
     if heats:

@@ -18,7 +18,7 @@ import math
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, date, datetime
 from typing import Any, Final
 
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
@@ -103,6 +103,16 @@ def timestamp(value: Any, field: str) -> None:
             parsed = None
     if parsed is None or parsed.utcoffset() is None:
         raise _bad(field, "is not an ISO-8601 time with a UTC offset")
+
+
+def day(value: Any, field: str) -> None:
+    """A calendar date, YYYY-MM-DD."""
+    try:
+        valid = isinstance(value, str) and len(value) == 10 and bool(date.fromisoformat(value))
+    except ValueError:
+        valid = False
+    if not valid:
+        raise _bad(field, "is not a date (YYYY-MM-DD)")
 
 
 def integer(low: int, high: int) -> Checker:
@@ -238,6 +248,8 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "season_id": _t(record_id, nullable=True),
         "rules": _t(json_text),
         "created_at": _t(timestamp),
+        # The day it is held; absent in nights opened before nights had one.
+        "held_on": Field("TEXT", day, nullable=True, optional=True),
     },
     "entrant": {
         "night_id": _t(record_id),

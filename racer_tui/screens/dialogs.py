@@ -30,6 +30,8 @@ MAX_PATH_SUGGESTIONS = 200  # a huge folder is not listed in full while typing
 def show_problem(line: Static, problem: str) -> None:
     line.update(Text(problem))
     line.set_class(bool(problem), "-shown")
+    if problem:  # a long form scrolls at 80x24: bring the sentence into view, once drawn
+        line.call_after_refresh(line.scroll_visible, animate=False)
 
 
 class PathSuggester(Suggester):

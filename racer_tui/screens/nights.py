@@ -11,6 +11,7 @@ result it returns is recorded with `record_race` into the night.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from datetime import date
 from functools import partial
 from pathlib import Path
 from typing import ClassVar
@@ -43,6 +44,7 @@ from league.nights import (
     list_nights,
     move_heat,
     new_night,
+    night_date,
     pending_heats,
     standings,
     withdraw_entrant,
@@ -77,10 +79,12 @@ from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import (
     DEFAULT_RULES,
+    RULE_PRESETS,
     RaceRules,
     RankingMethod,
     RulesError,
     load_rules,
+    preset_rules,
     rules_from_mapping,
 )
 from sim.track import Track
@@ -102,6 +106,7 @@ class NightRequest:
     name: str | None
     rules: RaceRules  # read and checked in the dialog, frozen in the night when it opens
     season_id: str | None
+    held_on: date | None = None  # None: today
 
 
 # The ranking choices of the open-night dialog; None keeps the rules' own.
@@ -134,6 +139,9 @@ class NewNightDialog(FormDialog[NightRequest]):
     opens and shown (read-only) on the night afterwards."""
 
     DEFAULT_CSS = """
+    NewNightDialog #night-name-row { height: auto; }
+    NewNightDialog #night-name { width: 1fr; }
+    NewNightDialog #night-date { width: 17; }
     NewNightDialog #night-rules-row { height: auto; }
     NewNightDialog #night-rules { width: 1fr; }
     NewNightDialog #night-laps { width: 26; }
@@ -155,15 +163,28 @@ class NewNightDialog(FormDialog[NightRequest]):
             yield Label("Open a league night", classes="dialog-title")
             yield Label("Track", classes="field-label")
             yield Select(track_options(), value=DEFAULT_TRACK, allow_blank=False, id="night-track")
-            yield Input(placeholder="night name (empty: track and date)", id="night-name")
+            with Horizontal(id="night-name-row"):
+                yield Input(placeholder="night name (empty: track and date)", id="night-name")
+                yield Input(
+                    placeholder="date: today",
+                    restrict=r"[0-9-]*",
+                    max_length=10,
+                    id="night-date",
+                )
+            yield Select(
+                [(f"{name} rules: {what}", name) for name, what, _ in RULE_PRESETS],
+                value=RULE_PRESETS[0][0],
+                allow_blank=False,
+                id="night-preset",
+            )
             with Horizontal(id="night-rules-row"):
                 yield Input(
-                    placeholder="rules YAML (empty: league's)",
+                    placeholder="or a rules YAML file",
                     suggester=PathSuggester(),
                     id="night-rules",
                 )
                 # A lap-count race: each heat ends after this many laps (the rules' window
-                # still its time limit). Beside the rules, so the dialog keeps its height.
+                # still its time limit).
                 yield Input(placeholder="laps (empty: timed)", restrict=r"[0-9]*", id="night-laps")
             yield Select(RANKINGS, prompt="ranked as the rules say", id="night-ranking")
             yield Select(
@@ -174,7 +195,7 @@ class NewNightDialog(FormDialog[NightRequest]):
             )
             yield Static(
                 Text(
-                    f"League rules: {DEFAULT_RULES.describe()}. Enter moves to the next "
+                    "The rules are frozen when the night opens. Enter moves to the next "
                     "field; Ctrl+S opens the night."
                 ),
                 classes="dialog-body",
@@ -183,6 +204,14 @@ class NewNightDialog(FormDialog[NightRequest]):
 
     def on_mount(self) -> None:
         self.query_one("#night-name", Input).focus()
+
+    def on_resize(self) -> None:
+        # Seven fields of three rows each do not fit 24 rows with the title and buttons:
+        # a short terminal gets one-row fields, so the whole form shows without scrolling.
+        short = self.app.size.height < 34
+        for field in self.query("Input, Select").results():
+            if isinstance(field, Input | Select):
+                field.compact = short
 
     @on(Input.Submitted)
     def _next_field(self) -> None:
@@ -194,11 +223,22 @@ class NewNightDialog(FormDialog[NightRequest]):
     @on(Button.Pressed, "#confirm")
     def _confirm(self) -> None:
         path = self.query_one("#night-rules", Input).value.strip()
-        rules, problem = read_night_rules(path)
+        preset = str(self.query_one("#night-preset", Select).value)
+        rules, problem = read_night_rules(path) if path else (preset_rules(preset), None)
         if rules is None:
             show_problem(self.query_one("#problem", Static), problem or "")
             self.query_one("#night-rules", Input).focus()
             return
+        held_on = None
+        typed_date = self.query_one("#night-date", Input).value.strip()
+        if typed_date:
+            try:
+                held_on = night_date(typed_date)
+            except LeagueError as error:
+                text = str(error)
+                show_problem(self.query_one("#problem", Static), text[:1].upper() + text[1:])
+                self.query_one("#night-date", Input).focus()
+                return
         ranking = self.query_one("#night-ranking", Select).value
         laps = self.query_one("#night-laps", Input).value.strip()
         chosen: dict[str, object] = {}
@@ -226,6 +266,7 @@ class NewNightDialog(FormDialog[NightRequest]):
                 name=self.query_one("#night-name", Input).value.strip() or None,
                 rules=rules,
                 season_id=None if season is Select.NULL else str(season),
+                held_on=held_on,
             )
         )
 
@@ -589,7 +630,8 @@ class NightsScreen(RacerScreen[None]):
         night = state.night
         text = Text()
         text.append(night.name, style="bold")
-        text.append(f"  on {night.track_name}  ")
+        held = "" if night.held_on in night.name else f", {night.held_on}"  # said once
+        text.append(f"  on {night.track_name}{held}  ")
         text.append("closed" if night.closed else "open", style="dim" if night.closed else "green")
         if state.season_name:
             text.append(f"  season {state.season_name}")
@@ -730,9 +772,16 @@ class NightsScreen(RacerScreen[None]):
         track = resolve_track(request.track)
         with open_league(self.db_path) as league:
             night = new_night(
-                league, track, rules=request.rules, name=request.name, season=request.season_id
+                league,
+                track,
+                rules=request.rules,
+                name=request.name,
+                season=request.season_id,
+                held_on=request.held_on,
             )
-        self.post_message(NightChanged(night.id, f"Opened {night.name} on {night.track_name}."))
+        self.post_message(
+            NightChanged(night.id, f"Opened {night.name} on {night.track_name}, {night.held_on}.")
+        )
 
     def action_add_entrant(self) -> None:
         night = self._current("add entrants")

@@ -94,6 +94,30 @@ class RaceRules:
 
 DEFAULT_RULES = RaceRules()
 
+# Rules a host picks by name instead of writing a file: (name, what it is, the rules).
+# "physical" is how DeepRacer's own physical events time a car (DREM's defaults: 4
+# minutes, at most 3 resets a lap): the time a marshal takes to put the car back is the
+# penalty, so no seconds are added.
+RULE_PRESETS: tuple[tuple[str, str, RaceRules], ...] = (
+    ("league", "4:00, 3 s per off-track, 3 a lap", DEFAULT_RULES),
+    ("physical", "4:00, 3 resets a lap, no time added", RaceRules(penalty_seconds=0.0)),
+    (
+        "practice",
+        "10:00, 3 s per off-track, no limit",
+        RaceRules(window_seconds=600.0, max_offtracks_per_lap=None),
+    ),
+)
+
+
+def preset_rules(name: str) -> RaceRules:
+    """The preset called `name`, or a RulesError listing them."""
+    for preset, _, rules in RULE_PRESETS:
+        if preset == name.strip().lower():
+            return rules
+    names = ", ".join(preset for preset, _, _ in RULE_PRESETS)
+    raise RulesError(f"there is no rules preset {name.strip()!r}; choose one of {names}.")
+
+
 # Numeric keys and their allowed ranges, in seconds.
 _LIMITS: dict[str, tuple[float, float]] = {
     "window_seconds": (10.0, 3600.0),

@@ -12,6 +12,7 @@ import pytest
 from league import nights
 from league.errors import LeagueError
 from league.races import record_race
+from league.records import record_body
 from league.seasons import get_season, new_season, parse_points, season_standings
 from league.store import League
 from sim.race.driver import reference_driver
@@ -331,3 +332,27 @@ def test_a_night_exports_its_standings_with_points(league: League) -> None:
     whole = json.loads(night_export(*parts, table, "json"))
     assert [s["points"] for s in whole["standings"]] == [10, 6]
     assert len(whole["heats"]) == 2 and whole["rules"]["window_seconds"] == 240.0
+
+
+def test_a_night_is_held_on_a_day_of_its_own_and_older_nights_on_the_day_they_opened(
+    league: League,
+) -> None:
+    from datetime import date, datetime
+
+    track = resolve_track(TRACK)
+    planned = nights.new_night(league, track, name="planned", held_on=date(2027, 3, 5))
+    assert planned.held_on == "2027-03-05"
+    today = nights.new_night(league, track)
+    assert today.held_on == datetime.now().date().isoformat()  # the host's calendar day
+    assert today.name == f"{track.name} {today.held_on}"
+    # A night opened before nights had a date is held on the day it was opened, and its
+    # record keeps the fields (and content hash) it was shared with.
+    league.conn.execute("UPDATE nights SET held_on = NULL WHERE id = ?", (planned.id,))
+    older = nights.get_night(league, planned.id)
+    assert older.held_on == older.created_at[:10]
+    assert "held_on" not in record_body(league, "nights", planned.id)
+    assert record_body(league, "nights", today.id)["held_on"] == today.held_on
+    for typed in ("2026-13-01", "5 March", "20270305", "1999-12-31"):
+        with pytest.raises(LeagueError, match="write it as YYYY-MM-DD"):
+            nights.night_date(typed)
+    assert nights.night_date(" 2027-03-05 ") == date(2027, 3, 5)

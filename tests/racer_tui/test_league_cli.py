@@ -273,9 +273,15 @@ def test_a_lap_count_night_races_each_heat_to_its_laps(
 
     code, _, err = cli("new", "--track", "beginner-oval", "--name", "Sprint", "--laps", "0")
     assert code == 2 and err.startswith("racer-tui: --laps: lap_count must be a whole number")
-    code, out, err = cli("new", "--track", "beginner-oval", "--name", "Sprint", "--laps", "2")
+    code, _, err = cli("new", "--name", "Sprint", "--date", "next friday")
+    assert code == 2 and "'next friday' is not a night's date; write it as YYYY-MM-DD" in err
+    code, out, err = cli(
+        "new", "--track", "beginner-oval", "--name", "Sprint", "--laps", "2", "--date",
+        "2027-01-08", "--preset", "physical",
+    )  # fmt: skip
     assert code == 0, err
-    assert "race of 2 laps within 4:00" in out
+    assert "on beginner-oval, 2027-01-08." in out
+    assert "race of 2 laps within 4:00, 0 s per off-track, at most 3 off-tracks" in out
     for racer in ("ana", "bob"):
         assert cli("add", "Sprint", "--racer", racer, "--model", "reference")[0] == 0
     assert cli("draw", "Sprint")[0] == 0
@@ -283,7 +289,7 @@ def test_a_lap_count_night_races_each_heat_to_its_laps(
     assert code == 0, err
     _, out, _ = cli("show", "Sprint", "--json")
     shown = json.loads(out)
-    assert shown["rules"]["lap_count"] == 2
+    assert shown["rules"]["lap_count"] == 2 and shown["held_on"] == "2027-01-08"
     _, out, _ = run_cli(capsys, "leaderboard", "--night", "Sprint", "--db", db, "--format", "json")
     rows = json.loads(out)
     # A 4-minute window would have given dozens of laps on the oval; each heat drove two.

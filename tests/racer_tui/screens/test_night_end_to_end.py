@@ -111,7 +111,9 @@ async def test_a_new_host_runs_a_mixed_night_from_opening_to_season_points(
         labels = {value: label for label, value in season._options}
         assert labels[season.value] == "spring"  # the league's current season, by default
         await pilot.press(*"friday", "enter")  # Enter moves on: it does not open the night
-        assert app.screen is dialog and dialog.focused is dialog.query_one("#night-rules")
+        assert app.screen is dialog and dialog.focused is dialog.query_one("#night-date")
+        await pilot.press("enter", "tab")  # today; past the rules preset to a rules file
+        assert dialog.focused is dialog.query_one("#night-rules")
         bad = tmp_path / "bad.yaml"
         bad.write_text("window_seconds: [\n")
         await pilot.press(*str(bad), "ctrl+s")  # a broken file is said here, nothing lost

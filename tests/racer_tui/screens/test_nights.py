@@ -3,6 +3,7 @@ with the reference driver, draw, run both heats live, close it, see the season p
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -16,7 +17,7 @@ from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.nights import NightsScreen
 from sim.home import data_home
-from sim.race.rules import RankingMethod
+from sim.race.rules import RankingMethod, preset_rules
 from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 
@@ -110,24 +111,27 @@ async def test_drawing_with_nobody_waiting_names_the_key_not_a_command() -> None
         assert "racer-tui" not in errors
 
 
-async def test_the_open_night_dialog_sets_the_ranking_over_the_rules() -> None:
+async def test_the_open_night_dialog_takes_a_preset_and_sets_the_ranking_over_it() -> None:
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:
         nights = await the_nights_screen(pilot)
         await pilot.press("o")
         await settle(pilot)
+        app.screen.query_one("#night-preset", Select).value = "physical"
         app.screen.query_one("#night-ranking", Select).value = RankingMethod.BEST_AVERAGE
         await pilot.press(*"sunday", "ctrl+s")
         await settle(pilot)
         assert app.screen is nights
         shown = " ".join(painted(nights.query_one("#night-rules")).split())  # wrapped at 80
         assert "ranked by best average of 3 consecutive laps" in shown
+        assert "0 s per off-track" in shown  # the physical cars' preset
     with open_league() as league:
         (night,) = list_nights(league)
     assert (night.name, night.rules.ranking) == ("sunday", RankingMethod.BEST_AVERAGE)
+    assert night.rules == replace(preset_rules("physical"), ranking=RankingMethod.BEST_AVERAGE)
 
 
-async def test_the_open_night_dialog_makes_a_lap_count_race_and_says_what_cannot_be() -> None:
+async def test_the_open_night_dialog_sets_a_date_and_a_lap_count_race() -> None:
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:
         nights = await the_nights_screen(pilot)
@@ -135,7 +139,9 @@ async def test_the_open_night_dialog_makes_a_lap_count_race_and_says_what_cannot
         await settle(pilot)
         dialog = app.screen
         dialog.query_one("#night-ranking", Select).value = RankingMethod.TOTAL_TIME
-        await pilot.press(*"sprint", "enter", "enter", *"2x", "ctrl+s")  # digits only
+        await pilot.press(*"sprint", "enter", *"2027-01-08", "enter")
+        assert dialog.focused is dialog.query_one("#night-preset", Select)
+        await pilot.press("tab", "tab", *"2x", "ctrl+s")  # past the rules file, to the laps
         await settle(pilot)
         assert app.screen is dialog  # total time of 3 laps cannot be had from 2
         problem = " ".join(painted(dialog.query_one("#problem")).split())
@@ -145,10 +151,11 @@ async def test_the_open_night_dialog_makes_a_lap_count_race_and_says_what_cannot
         await settle(pilot)
         assert app.screen is nights
         shown = " ".join(painted(nights.query_one("#night-rules")).split())
-        assert "race of 3 laps within 4:00" in shown
+        assert "race of 3 laps within 4:00" in shown and "reinvent_base, 2027-01-08" in shown
     with open_league() as league:
         (night,) = list_nights(league)
     assert (night.rules.lap_count, night.rules.ranking) == (3, RankingMethod.TOTAL_TIME)
+    assert night.held_on == "2027-01-08"
 
 
 async def test_closing_a_night_drawn_elsewhere_names_the_keys_and_shows_the_heats() -> None:

@@ -6,6 +6,7 @@ yes-or-no questions share its dialog, so two more with long words stand for them
 from __future__ import annotations
 
 import shutil
+from datetime import date
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +24,8 @@ from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES
 from tests.racer_tui.snapshots.test_snapshots import Compare, prepared, two_models
+
+FRIDAY = date(2026, 3, 6)  # a fixed day: the screens show it
 
 
 def pressing(*keys: str) -> Any:
@@ -62,7 +65,7 @@ def test_open_night_dialog(snap_compare: Compare, size: tuple[int, int]) -> None
 def test_add_entrant_dialog(snap_compare: Compare, size: tuple[int, int]) -> None:
     two_models()
     with open_league() as league:
-        new_night(league, resolve_track("beginner-oval"), name="friday")
+        new_night(league, resolve_track("beginner-oval"), name="friday", held_on=FRIDAY)
     app = create_app(start="league")
     assert snap_compare(app, terminal_size=size, run_before=pressing("n", "a"))
 

@@ -8,6 +8,7 @@ Update after a deliberate change with
 from __future__ import annotations
 
 from collections.abc import Callable
+from datetime import date
 from typing import Any
 
 from textual.pilot import Pilot
@@ -26,6 +27,8 @@ from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import OneScreenApp, settle
 from tests.racer_tui.snapshots.sizes import SIZES
+
+FRIDAY = date(2026, 3, 6)  # a fixed day: the screens show it
 
 Compare = Callable[..., bool]
 SHORT = RaceRules(window_seconds=30.0)
@@ -53,7 +56,7 @@ def test_league_night_part_way(snap_compare: Compare, size: tuple[int, int]) -> 
     data_home().mkdir(parents=True, exist_ok=True)
     oval = resolve_track("beginner-oval")
     with open_league() as league:
-        night = new_night(league, oval, rules=SHORT, name="friday")
+        night = new_night(league, oval, rules=SHORT, name="friday", held_on=FRIDAY)
         add_entrant(league, night, "ada", "reference")
         add_entrant(league, night, "[b]bob[/b]", "reference")
         draw_heats(league, night, seed=7)

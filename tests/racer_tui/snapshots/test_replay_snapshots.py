@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import replace
+from datetime import date
 from typing import Any
 
 from textual.pilot import Pilot
@@ -23,6 +24,8 @@ from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES
 
+FRIDAY = date(2026, 3, 6)  # a fixed day: the screens show it
+
 Compare = Callable[..., bool]
 
 
@@ -30,7 +33,7 @@ def recorded_races() -> None:
     data_home().mkdir(parents=True, exist_ok=True)
     oval = resolve_track("beginner-oval")
     with open_league() as league:
-        night = new_night(league, oval, name="friday")
+        night = new_night(league, oval, name="friday", held_on=FRIDAY)
         record_race(
             league,
             race_result("bob", [14.0, 13.2], model="bolt", started_at="2024-04-30T18:00:00.000Z"),
