@@ -95,5 +95,5 @@ def night_export(
         return to_csv(columns, standings)
     state = "final standings" if night.closed else "standings so far"
     heading = f"# {markdown_escape(night.name)}: {state}\n\n"
-    about = markdown_escape(f"{night.track_name}; {night.rules.describe()}.")
+    about = markdown_escape(f"{night.held_on}, {night.track_name}; {night.rules.describe()}.")
     return f"{heading}{about}\n\n{to_markdown(columns, standings)}"

@@ -115,6 +115,14 @@ def new_night(
     return get_night(league, night_id)
 
 
+def _local_day(stamp: str) -> str:
+    """The host's calendar day of a UTC time the league wrote (`created_at`)."""
+    try:
+        return datetime.fromisoformat(stamp).astimezone().date().isoformat()
+    except ValueError:
+        return stamp[:10]
+
+
 def night_date(text: str) -> date:
     """The day a host typed (YYYY-MM-DD), or a LeagueError saying how to write it."""
     try:
@@ -141,7 +149,7 @@ def _night(league: League, data: sqlite3.Row) -> Night:
         rules=rules_from_mapping(json.loads(data["rules"])),
         created_at=data["created_at"],
         closed=closed is not None,
-        held_on=data["held_on"] or data["created_at"][:10],
+        held_on=data["held_on"] or _local_day(data["created_at"]),
     )
 
 

@@ -3,11 +3,13 @@
     python -m racer_tui.bench_timekeeper [--keys 300] [--no-training] [--json]
 
 Drives the real app headless through Pilot, with the timekeeper open on a physical car's
-heat, in three conditions one after the other: nothing else running; a simulated heat
-racing in the app's own process (a thread, as a night's heat does, beside the timekeeper
-of another heat); a vector training child at full load (`racer-tui train`, as a host runs
-one beside the app). In each, `--keys` presses alternate Car Reset (`r`) and Capture Lap
-(`l`), in heats of 24 laps (a 4-minute heat of 10 s laps, then the next); a key's
+heat (each input also written to the heat's journal, as on a night), in three conditions
+one after the other: nothing else running; simulated races back to back in a thread of
+the app's own process (as an evaluation or a race view computes them: the harshest case,
+since they share one interpreter with the keys); a vector training child at full load
+(`racer-tui train`, as a host runs one beside the app). In each, `--keys` presses
+alternate Car Reset (`r`) and Capture Lap (`l`), in heats of 24 laps (a 4-minute heat of
+10 s laps, then the next); a key's
 latency is from the press to the first screen update that shows its effect (the sentence
 the timekeeper says), timed where Textual hands each update to the terminal
 (`racer_tui.bench_soak.DisplayClock`). Figures are printed, never judged here; the target
@@ -78,15 +80,18 @@ class BusyHeat:
 async def press_keys(keys: int) -> list[float]:
     """Time `keys` alternating r and l presses, in heats of `HEAT_KEYS` (a new timekeeper
     for each, started with space, as a night's physical heats follow one another)."""
+    from league.store import default_db_path
+    from league.timekeeper.journal import HeatJournal, journal_path
     from racer_tui.app import create_app
     from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
+    from sim.ids import new_id
     from sim.race.rules import RaceRules
     from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
     app = create_app(long_running=True)
     latencies: list[float] = []
     rules = RaceRules(window_seconds=3600.0, max_offtracks_per_lap=None)
-    setup = TimekeeperSetup(resolve_track(DEFAULT_TRACK), rules, "bench", "bench car")
+    track = resolve_track(DEFAULT_TRACK)
     moment = [0.0]
     async with app.run_test(size=SIZE) as pilot:
         clock = DisplayClock(app)
@@ -95,6 +100,10 @@ async def press_keys(keys: int) -> list[float]:
             if press % HEAT_KEYS == 0:
                 if keeper is not None:
                     app.pop_screen()
+                # As on a night: every input also goes to the heat's journal on disk.
+                heat_id = new_id()
+                journal = HeatJournal(journal_path(default_db_path(), heat_id), heat_id)
+                setup = TimekeeperSetup(track, rules, "bench", "bench car", journal=journal)
                 keeper = TimekeeperScreen(setup)
                 keeper.clock = lambda: moment[0]
                 await app.push_screen(keeper)

@@ -14,6 +14,7 @@ This path never imports textual, and imports torch only when a trained model rac
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -213,7 +214,13 @@ def race_rules(args: argparse.Namespace) -> RaceRules:
         except RulesError as error:
             raise RulesError(f"{flag}: {error}") from None
     # Then together: `--laps 2 --ranking-laps 2` must not fail on the file's ranking_laps.
-    return rules_from_mapping({key: value for _, key, value in given}, base=rules)
+    try:
+        return rules_from_mapping({key: value for _, key, value in given}, base=rules)
+    except RulesError as error:
+        text = str(error)
+        for flag, key, _ in overrides:  # what the racer typed, not the file's keys
+            text = re.sub(rf"\b{key}\b", f"{flag} ({key})", text)
+        raise RulesError(text) from None
 
 
 def _offtrack_limit(text: str | None) -> int | str | None:

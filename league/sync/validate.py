@@ -108,7 +108,8 @@ def timestamp(value: Any, field: str) -> None:
 def day(value: Any, field: str) -> None:
     """A calendar date, YYYY-MM-DD."""
     try:
-        valid = isinstance(value, str) and len(value) == 10 and bool(date.fromisoformat(value))
+        # Exactly as written, not one of the other forms Python reads (2026-W10-5).
+        valid = isinstance(value, str) and date.fromisoformat(value).isoformat() == value
     except ValueError:
         valid = False
     if not valid:

@@ -61,6 +61,7 @@ class TimekeptHeat:
         self._clock = 0.0  # race clock banked before the current run of RUNNING
         self._since: float | None = None  # `now` when RUNNING began, while it runs
         self._lap_start = 0.0  # race clock at the start of the lap in progress
+        self._ended_on_laps = False  # a lap-count race ended by its last lap
 
     # --- clocks --------------------------------------------------------------------------
 
@@ -129,6 +130,7 @@ class TimekeptHeat:
         self.resets += lap.resets
         if self.phase is Phase.OVER:
             self.phase = Phase.PAUSED
+            self._ended_on_laps = False
             return f"Lap {lap.number} taken back: the race is open again, paused."
         return f"Lap {lap.number} taken back: it goes on ({self._clock_text(now)})."
 
@@ -143,13 +145,36 @@ class TimekeptHeat:
             return f"Lap {lap.number} not finished; paused until the car is back on the line."
         return self._after_lap(now, lap)
 
-    def strike(self, number: int) -> str:
-        """Strike a captured lap out, or put it back (a lap that was not a lap)."""
-        for index, lap in enumerate(self.laps):
-            if lap.number == number:
-                self.laps[index] = replace(lap, struck=not lap.struck)
-                return f"Lap {number} {'struck out' if not lap.struck else 'counts again'}."
-        raise TimekeeperError(f"There is no lap {number} to strike out.")
+    def strike(self, number: int, now: float) -> str:
+        """Strike a captured lap out, or put it back (a lap that was not a lap). In a
+        lap-count race that decides how many laps the car still owes."""
+        index = next((i for i, lap in enumerate(self.laps) if lap.number == number), None)
+        if index is None:
+            raise TimekeeperError(f"There is no lap {number} to strike out.")
+        lap = self.laps[index]
+        count = self.rules.lap_count
+        owed = count is not None and lap.struck and lap.finished
+        if owed and count is not None and self.laps_completed() >= count:
+            raise TimekeeperError(
+                f"Lap {number} cannot count again: the race already has its {count} laps. "
+                "Take a later lap back first (u)."
+            )
+        self.laps[index] = replace(lap, struck=not lap.struck)
+        said = f"Lap {number} {'struck out' if not lap.struck else 'counts again'}."
+        if count is None:
+            return said
+        done = self.laps_completed()
+        if done >= count and self.phase in (Phase.RUNNING, Phase.PAUSED):
+            self._halt(now)
+            self.phase = Phase.OVER
+            self._ended_on_laps = True
+            return f"{said} {count} laps done: race over."
+        reopen = done < count and self.phase is Phase.OVER and self._ended_on_laps
+        if reopen and not self.expired(now):  # the car is owed a lap: it drives it
+            self.phase = Phase.PAUSED
+            self._ended_on_laps = False
+            return f"{said} The race is open again, paused: {count - done} more to drive."
+        return said
 
     def end(self, now: float) -> str:
         """End the race now; the lap in progress is not a lap."""
@@ -258,6 +283,7 @@ class TimekeptHeat:
         if self.rules.lap_count is not None and self.laps_completed() >= self.rules.lap_count:
             self._halt(now)
             self.phase = Phase.OVER
+            self._ended_on_laps = True
             said += f" {self.rules.lap_count} laps done: race over."
         elif self.expired(now):  # the lap in progress at zero was the last
             self._halt(now)

@@ -60,6 +60,7 @@ from league.seasons import (
 )
 from league.store import League, default_db_path, open_league
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
+from league.timekeeper.journal import HeatJournal, journal_path
 from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import FormDialog, InputDialog, PathSuggester, ask, show_problem
@@ -185,7 +186,7 @@ class NewNightDialog(FormDialog[NightRequest]):
                 )
                 # A lap-count race: each heat ends after this many laps (the rules' window
                 # still its time limit).
-                yield Input(placeholder="laps (empty: timed)", restrict=r"[0-9]*", id="night-laps")
+                yield Input(placeholder="laps (empty: rules')", restrict=r"[0-9]*", id="night-laps")
             yield Select(RANKINGS, prompt="ranked as the rules say", id="night-ranking")
             yield Select(
                 self._seasons,
@@ -206,7 +207,7 @@ class NewNightDialog(FormDialog[NightRequest]):
         self.query_one("#night-name", Input).focus()
 
     def on_resize(self) -> None:
-        # Seven fields of three rows each do not fit 24 rows with the title and buttons:
+        # Six rows of fields, three rows each, do not fit 24 with the title and buttons:
         # a short terminal gets one-row fields, so the whole form shows without scrolling.
         short = self.app.size.height < 34
         for field in self.query("Input, Select").results():
@@ -461,6 +462,7 @@ def heat_setup(
             car=car,
             title=f"Heat {number}: {entrant.display_name}, {car}",
             live=live,
+            journal=HeatJournal(journal_path(league_file or default_db_path(), heat.id), heat.id),
         )
     table = standings(league, night)
     leader = table[0].entry if table and table[0].entry.score is not None else None
@@ -855,6 +857,8 @@ class NightsScreen(RacerScreen[None]):
     def _record(self, night: Night, heat: Heat, result: RaceResult) -> None:
         with open_league(self.db_path) as league:
             record_race(league, result, night.id, heat_id=heat.id)
+        # Recorded: a physical car's heat has nothing left to resume.
+        journal_path(self.db_path or default_db_path(), heat.id).unlink(missing_ok=True)
         best = result.best_lap
         lap = f"best lap {best.time_seconds:.3f} s" if best is not None else "no valid lap"
         self.post_message(NightChanged(night.id, f"Recorded {heat.entrant.racer}'s heat: {lap}."))

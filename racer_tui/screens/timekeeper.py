@@ -27,11 +27,13 @@ from textual.widgets import Digits, Label, Static
 from league.live_heat import LiveHeatWriter
 from league.timekeeper.feed import TIMER_ENV, FeedError, Trigger, follow, parse_trigger
 from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat
+from league.timekeeper.journal import HeatJournal, Resumed, resume_heat, take_input
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ask
 from racer_tui.screens.race_screen import clock_text, countdown_text
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.lap_list import LapList
+from sim.plural import counted
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, lap_counts
 from sim.track import Track
@@ -48,6 +50,7 @@ class TimekeeperSetup:
     title: str = ""
     timer: str | None = None  # an automatic timer's path, if the host gave one
     live: LiveHeatWriter | None = None  # a night's heat: where it is, for the projector
+    journal: HeatJournal | None = None  # a night's heat: its inputs, to resume it
 
 
 class TimerLine(Message):
@@ -108,6 +111,10 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         self._stop_feed = threading.Event()
         self._laps_shown: tuple[bool, ...] | None = None  # struck-out flags of the laps shown
         self.best_lap: float | None = None  # the best lap that counts so far
+        # The heat runs on its own time: seconds since its first input (`_heat_time`), so
+        # its journal replays it in another racer-tui exactly.
+        self._origin: float | None = None
+        self._journal = setup.journal
 
     def compose(self) -> ComposeResult:
         setup = self.setup
@@ -133,6 +140,43 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         timer = self.setup.timer if self.setup.timer is not None else os.environ.get(TIMER_ENV)
         if timer:
             self._follow_timer(timer)
+        journal = self._journal
+        if journal is not None:
+            resumed = resume_heat(journal.path, journal.heat_id, self.setup.rules)
+            if resumed is not None:
+                self._offer_to_resume(resumed)
+
+    def _offer_to_resume(self, resumed: Resumed) -> None:
+        heat = resumed.heat
+        laps = counted(len(heat.laps), "lap")
+        where = (
+            "with its race over"
+            if heat.phase is Phase.OVER
+            else f"with {countdown_text(heat.time_left(resumed.at))} left"
+        )
+
+        def answered(yes: bool | None) -> None:
+            if yes:
+                self.heat = heat
+                self._origin = self.clock() - resumed.at
+                self._journal = resumed.journal
+                self._say(
+                    "Resumed: press Esc to record it."
+                    if heat.phase is Phase.OVER
+                    else "Resumed, paused: Space starts the clocks when the car is on the track."
+                )
+                self._draw()
+            else:
+                resumed.journal.forget()
+
+        ask(
+            self.app,
+            "Resume this heat?",
+            f"racer-tui stopped during this heat, {where} and {laps} captured. Resume it "
+            "where it stopped, or start it again?",
+            answered,
+            confirm_label="Resume",
+        )
 
     def on_unmount(self) -> None:
         self._stop_feed.set()
@@ -160,34 +204,29 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             self._say(str(error), error=True)
             return
         if trigger is Trigger.LAP:
-            self._apply(lambda: self.heat.capture(message.moment, from_timer=True))
+            self._input("timer_capture", message.moment)
         elif trigger is Trigger.RESET:
-            self._apply(lambda: self.heat.reset(message.moment))
+            self._input("reset", message.moment)
 
     # --- keys -------------------------------------------------------------------------
 
     def action_start_pause(self) -> None:
-        now = self.clock()
-        self._apply(lambda: self.heat.start_or_pause(now))
+        self._input("start_or_pause")
 
     def action_capture(self) -> None:
-        now = self.clock()
-        self._apply(lambda: self.heat.capture(now))
+        self._input("capture")
 
     def action_reset(self) -> None:
-        now = self.clock()
-        self._apply(lambda: self.heat.reset(now))
+        self._input("reset")
 
     def action_undo_reset(self) -> None:
-        self._apply(self.heat.undo_reset)
+        self._input("undo_reset")
 
     def action_undo_capture(self) -> None:
-        now = self.clock()
-        self._apply(lambda: self.heat.undo_capture(now))
+        self._input("undo_capture")
 
     def action_did_not_finish(self) -> None:
-        now = self.clock()
-        self._apply(lambda: self.heat.did_not_finish(now))
+        self._input("did_not_finish")
 
     def action_strike(self) -> None:
         selected = self.query_one(LapList).selected
@@ -195,7 +234,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             self._say("No lap has been captured yet.", error=True)
             return
         number = self.heat.laps[min(selected, len(self.heat.laps) - 1)].number
-        self._apply(lambda: self.heat.strike(number))
+        self._input("strike", lap=number)
 
     def action_end(self) -> None:
         if self.heat.phase is Phase.OVER:
@@ -208,7 +247,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
         def answered(yes: bool | None) -> None:
             if yes:
-                self._apply(lambda: self.heat.end(moment))
+                self._input("end", moment)
 
         ask(
             self.app,
@@ -238,6 +277,8 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
         def answered(yes: bool | None) -> None:
             if yes:
+                if self._journal is not None:
+                    self._journal.forget()  # given up: nothing to resume
                 self.dismiss(None)
 
         ask(
@@ -250,13 +291,24 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
     # --- drawing ----------------------------------------------------------------------
 
-    def _apply(self, change: Callable[[], str]) -> None:
-        """Run one input on the heat and say what it did, or why it could not."""
+    def _heat_time(self, now: float) -> float:
+        """`now` (this screen's clock) as the heat's own time."""
+        return 0.0 if self._origin is None else now - self._origin
+
+    def _input(self, kind: str, now: float | None = None, *, lap: int | None = None) -> None:
+        """Give the heat one input, note it in the journal, and say what it did or why it
+        could not."""
+        now = self.clock() if now is None else now
+        if self._origin is None:
+            self._origin = now
+        at = self._heat_time(now)
         try:
-            said = change()
+            said = take_input(self.heat, kind, at, lap)
         except TimekeeperError as error:
             self._say(str(error), error=True)
         else:
+            if self._journal is not None:
+                self._journal.took(kind, at, self.heat, lap)
             self._say(said)
         self._draw()
 
@@ -272,7 +324,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         said.update(self.said, layout=lines != said.size.height)
 
     def _draw_clocks(self) -> None:
-        now = self.clock()
+        now = self._heat_time(self.clock())
         heat = self.heat
         # Digits repaints on every update: only a changed value is worth one (ten times a
         # second while the race runs, never while it stands still).
@@ -283,11 +335,17 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             digits = self.query_one(selector, Digits)
             if digits.value != value:
                 digits.update(value)
+        if self._journal is not None and heat.phase is Phase.RUNNING:
+            self._journal.heartbeat(now)
         if self.setup.live is not None:
             self.setup.live.publish(
                 state=heat.phase.value,
                 time_left=heat.time_left(now),
-                lap=len(heat.laps) + (heat.phase is not Phase.OVER),
+                # In a lap-count race, the lap of the race (as the timekeeper's line says).
+                lap=(
+                    len(heat.laps) if self.setup.rules.lap_count is None else heat.laps_completed()
+                )
+                + (heat.phase is not Phase.OVER),
                 lap_time=heat.lap_clock(now) if heat.phase is not Phase.OVER else 0.0,
                 best_lap=self.best_lap,
                 offtracks=heat.resets,

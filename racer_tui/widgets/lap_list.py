@@ -2,10 +2,10 @@
 
 Textual's DataTable renders every visible cell again whenever a row is added (its render
 caches are keyed by an update count that each `add_row` moves on), and by a 4-minute
-heat's last laps that made Capture Lap take 40-50 ms instead of 5 (`python -m
-racer_tui.bench_timekeeper`). A heat has a few dozen laps at most, so this list keeps each
-lap's line as text and draws the lines that fit: a new lap costs one line, and a change of
-selection never touches the clocks' layout.
+heat's last laps that made Capture Lap take up to 56 ms; with this list it takes 9-17 ms
+(`python -m racer_tui.bench_timekeeper`). A heat has a few dozen laps at most, so this
+list keeps each lap's line as text and draws the lines that fit: a new lap costs one line,
+and a change of selection never touches the clocks' layout.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from collections.abc import Sequence
 from typing import ClassVar
 
 from rich.text import Text
+from textual import events
 from textual.binding import Binding, BindingType
 from textual.widget import Widget
 
@@ -28,7 +29,8 @@ COLUMNS: tuple[tuple[str, int], ...] = (
 
 
 class LapList(Widget, can_focus=True):
-    """Laps as lines under a header; ↑/↓ choose the lap a key acts on (`selected`)."""
+    """Laps as lines under a header; ↑/↓ or a click choose the lap a key acts on
+    (`selected`). The header counts the laps above and below the ones that fit."""
 
     DEFAULT_CSS = """
     LapList { height: 1fr; }
@@ -48,6 +50,7 @@ class LapList(Widget, can_focus=True):
         super().__init__(id=id)
         self.lines: list[tuple[tuple[str, ...], Text]] = []  # each lap's cells and verdict
         self.selected: int | None = None
+        self.top = 0  # the first lap shown
 
     def show(self, lines: Sequence[tuple[tuple[str, ...], Text]], *, select_last: bool) -> None:
         """Show these laps; select the newest, or keep the selection where it was."""
@@ -66,18 +69,35 @@ class LapList(Widget, can_focus=True):
         self.selected = min(max(self.selected + by, 0), len(self.lines) - 1)
         self.refresh()
 
+    def on_click(self, event: events.Click) -> None:
+        index = self.top + event.y - 1  # the header is row 0
+        if 0 <= event.y - 1 < self._rows() and index < len(self.lines):
+            self.selected = index
+            self.refresh()
+
+    def on_mouse_scroll_up(self, event: events.MouseScrollUp) -> None:
+        event.stop()
+        self.action_move(-1)
+
+    def on_mouse_scroll_down(self, event: events.MouseScrollDown) -> None:
+        event.stop()
+        self.action_move(1)
+
     def rows(self) -> list[list[str]]:
-        """Every lap's cells as plain text, the verdict last (for tests and exports)."""
+        """Every lap's cells as plain text, the verdict last."""
         return [[*cells, verdict.plain] for cells, verdict in self.lines]
 
     def render(self) -> Text:
         header_style = self.get_component_rich_style("lap-list--header", partial=True)
         selected_style = self.get_component_rich_style("lap-list--selected", partial=True)
+        rows = self._rows()
+        start = self.top = self._first_shown(rows)
         text = Text(no_wrap=True, overflow="ellipsis")
         text.append(_line(tuple(title for title, _ in COLUMNS[:-1]), Text(COLUMNS[-1][0])))
         text.stylize(header_style)
-        rows = max(self.size.height - 1, 0)
-        start = self._first_shown(rows)
+        above, below = start, max(len(self.lines) - start - rows, 0)
+        if above or below:  # laps that do not fit: say so, and which way they are
+            text.append(f"  ↑{above} ↓{below}", style="dim")
         for index in range(start, min(start + rows, len(self.lines))):
             cells, verdict = self.lines[index]
             line = _line(cells, verdict)
@@ -88,12 +108,15 @@ class LapList(Widget, can_focus=True):
             text.append(line)
         return text
 
+    def _rows(self) -> int:
+        return max(self.size.height - 1, 0)
+
     def _first_shown(self, rows: int) -> int:
-        """The first lap shown: the newest laps that fit, or from the selected one up."""
-        last_start = max(len(self.lines) - rows, 0)
-        if self.selected is None or self.selected >= last_start:
-            return last_start
-        return self.selected
+        """The first lap shown: as before, moved only as far as the selection needs."""
+        top = min(self.top, max(len(self.lines) - rows, 0))
+        if self.selected is not None and rows:
+            top = min(max(top, self.selected - rows + 1), self.selected)
+        return max(top, 0)
 
 
 def _line(cells: tuple[str, ...], last: Text) -> Text:

@@ -62,7 +62,10 @@ class RaceRules:
     def lap_of(self, lap: int) -> str:
         """The lap in progress as a racer reads it: "Lap 2", or "Lap 2 of 3" in a lap-count
         race."""
-        return f"Lap {lap}" if self.lap_count is None else f"Lap {lap} of {self.lap_count}"
+        if self.lap_count is None:
+            return f"Lap {lap}"
+        # After the last lap the count has moved on: the race's last lap is what was run.
+        return f"Lap {min(lap, self.lap_count)} of {self.lap_count}"
 
     def race_over(self, clock: float, laps_completed: int) -> bool:
         """Whether a race under these rules ends at `clock` with so many laps completed."""

@@ -84,6 +84,29 @@ def test_a_lap_count_race_is_over_at_the_capture_of_its_last_driven_lap() -> Non
     assert heat.phase is Phase.PAUSED
 
 
+def test_striking_laps_of_a_lap_count_race_keeps_it_to_its_laps() -> None:
+    heat = TimekeptHeat(RaceRules(window_seconds=60.0, lap_count=2))
+    heat.start_or_pause(0.0)
+    heat.capture(10.0)
+    heat.strike(1, 11.0)  # not a lap: the car still owes two
+    heat.capture(20.0)
+    assert heat.phase is Phase.RUNNING
+    heat.capture(30.0)
+    assert heat.phase is Phase.OVER  # laps 2 and 3 are its two
+    # Lap 1 cannot count again: the race would have three laps of two.
+    with pytest.raises(TimekeeperError, match="already has its 2 laps"):
+        heat.strike(1, 31.0)
+    assert RaceResult.from_json(result_of(heat).to_json()).rules.lap_count == 2
+    # Lap 3 struck out after the end: the car owes a lap and drives it.
+    said = heat.strike(3, 31.0)
+    assert said == "Lap 3 struck out. The race is open again, paused: 1 more to drive."
+    assert heat.phase is Phase.PAUSED
+    heat.start_or_pause(40.0)
+    # Putting lap 3 back while the car drives makes the two laps again: the race is over.
+    assert heat.strike(3, 42.0) == "Lap 3 counts again. 2 laps done: race over."
+    assert heat.phase is Phase.OVER and heat.laps_completed() == 2
+
+
 def test_undo_a_capture_keeps_the_laps_resets_and_double_presses_are_refused() -> None:
     heat = TimekeptHeat(RULES)
     heat.start_or_pause(0.0)
@@ -107,13 +130,13 @@ def test_a_lap_not_finished_or_struck_out_never_counts() -> None:
     assert heat.phase is Phase.PAUSED
     heat.start_or_pause(20.0)
     heat.capture(29.0)
-    heat.strike(1)  # lap 1 cut the track: the timekeeper strikes it out
+    heat.strike(1, 30.0)  # lap 1 cut the track: the timekeeper strikes it out
     heat.end(30.0)
     result = result_of(heat)
     assert [lap.valid for lap in result.laps] == [False, False, True]
     assert result.best_lap is not None and result.best_lap.time_seconds == 9.0
     assert result.physics == PHYSICAL
-    assert "counts again" in heat.strike(1)
+    assert "counts again" in heat.strike(1, 30.0)
 
 
 def test_an_automatic_timers_first_trigger_starts_the_race() -> None:

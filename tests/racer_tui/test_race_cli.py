@@ -173,6 +173,11 @@ def test_record_stores_the_results_in_the_league(capsys: pytest.CaptureFixture[s
         (("--race", "reference", "--track", "hairpin-circuit", "--window", "2"), "--window"),
         (("--race", "reference", *SHORT, "--racer", "two\nlines"), "racer name"),
         (("--race", "reference", *SHORT, "--seed", "-1"), "--seed"),
+        (("--race", "reference", *SHORT, "--laps", "0"), "--laps"),
+        (
+            ("--race", "reference", *SHORT, "--laps", "2", "--ranking", "total_time"),
+            "make --ranking-laps (ranking_laps) at most 2 or --laps (lap_count) larger",
+        ),
     ],
 )
 def test_bad_input_is_one_sentence_and_exit_2(

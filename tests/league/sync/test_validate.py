@@ -108,6 +108,7 @@ CASES: list[tuple[str, Change, str]] = [
     ("night", _set("season_id", "../../etc"), "not a record id"),
     ("night", _set("held_on", "2026-02-30"), "held_on is not a date"),
     ("night", _set("held_on", "20260201"), "held_on is not a date"),
+    ("night", _set("held_on", "2026-W10-5"), "held_on is not a date"),
     ("night", _rules({"lap_count": 0}), "are not race rules"),
     ("heat", _set("draw_seed", True), "draw_seed is not a whole number"),
     ("submission", _lap("time_seconds", 12), "is not a decimal number"),

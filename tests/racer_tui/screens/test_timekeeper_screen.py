@@ -5,13 +5,16 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import pytest
+from textual.pilot import Pilot
 from textual.widgets import Digits
 
 from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
 from league.races import race_result
-from league.store import open_league
+from league.store import default_db_path, open_league
+from league.timekeeper.journal import journal_path
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.nights import AddEntrantDialog
@@ -38,6 +41,19 @@ class Stopwatch:
 
     def __call__(self) -> float:
         return self.now
+
+
+async def the_first_heat_started(pilot: Pilot[Any]) -> tuple[TimekeeperScreen, Stopwatch]:
+    """The timekeeper of the night's first heat, started (Space) on the test's own clock."""
+    await the_nights_screen(pilot)
+    await pilot.press("r")
+    await settle(pilot)
+    keeper = pilot.app.screen
+    assert isinstance(keeper, TimekeeperScreen)
+    watch = Stopwatch()
+    keeper.clock = watch
+    await pilot.press("space")
+    return keeper, watch
 
 
 def test_the_lap_clock_shows_tenths() -> None:
@@ -121,14 +137,7 @@ async def test_a_lap_count_heat_shows_its_lap_of_the_race_and_ends_at_the_last()
         draw_heats(league, night, seed=1)
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:
-        await the_nights_screen(pilot)
-        await pilot.press("r")
-        await settle(pilot)
-        keeper = app.screen
-        assert isinstance(keeper, TimekeeperScreen)
-        watch = Stopwatch()
-        keeper.clock = watch
-        await pilot.press("space")
+        keeper, watch = await the_first_heat_started(pilot)
         assert "Lap 1 of 2" in painted(keeper.query_one("#tk-facts"))
         watch.now += 10.0
         await pilot.press("l")
@@ -165,6 +174,51 @@ async def test_the_lap_chosen_with_the_arrows_is_struck_out_and_a_new_lap_is_cho
         shown = painted(laps)
         assert "Lap     Time      Raw Resets Counts" in shown
         assert "  4 0:10.000 0:10.000      0 ✓" in shown
+
+
+async def test_a_heat_left_by_a_stopped_racer_tui_is_resumed_with_its_laps() -> None:
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        add_entrant(league, night, "dee", "physical:green car")
+        (heat,) = draw_heats(league, night, seed=1)
+    journal = journal_path(default_db_path(), heat.id)
+    first = create_app(start="league")
+    async with first.run_test(size=(80, 24)) as pilot:
+        keeper, watch = await the_first_heat_started(pilot)
+        watch.now += 11.0
+        await pilot.press("r", "l")  # lap 1: 11 s and a reset
+        watch.now += 4.0
+        await pilot.pause(0.15)  # a heartbeat: the race has run 15 s
+    assert journal.exists()  # racer-tui stopped in the middle of the heat
+
+    second = create_app(start="league")
+    async with second.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(second)
+        nights = await the_nights_screen(pilot)
+        await pilot.press("r")
+        await settle(pilot)
+        question = second.screen
+        assert isinstance(question, ConfirmDialog)
+        asked = " ".join(painted(question.query_one("#question-body")).split())
+        assert "racer-tui stopped during this heat, with 3:45 left and 1 lap captured" in asked
+        await pilot.press("y")
+        await settle(pilot)
+        keeper = second.screen
+        assert isinstance(keeper, TimekeeperScreen)
+        assert [row[1] for row in keeper.query_one(LapList).rows()] == ["0:14.000"]
+        assert "Resumed, paused" in str(keeper.said)
+        assert str(keeper.query_one("#tk-left", Digits).value) == "3:45"
+        watch = Stopwatch()
+        keeper.clock = watch
+        await pilot.press("space")
+        watch.now += 9.0
+        await pilot.press("l")  # lap 2: 4 s before the stop and 9 s after
+        assert str(keeper.said) == "Lap 2: 13.000 s, counts."
+        await pilot.press("e", "y", "escape")
+        await settle(pilot)
+        assert second.screen is nights
+        assert "Recorded dee's heat: best lap 13.000 s." in notes.text()
+    assert not journal.exists()  # recorded: nothing left to resume
 
 
 @pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pseudo-terminal")

@@ -309,6 +309,7 @@ def test_a_lap_count_race_is_rules_of_its_own_and_a_time_race_keeps_its_stored_f
     assert rules_from_mapping(rules.to_dict()) == rules
     assert rules.describe().startswith("race of 5 laps within 4:00")
     assert rules.lap_of(2) == "Lap 2 of 5"
+    assert rules.lap_of(6) == "Lap 5 of 5"  # the count moves on as the last lap ends
     # A time race's rules are stored as they were before lap-count races existed, so every
     # result and night recorded until now keeps its content hash.
     assert "lap_count" not in RaceRules().to_dict()

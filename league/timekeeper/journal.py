@@ -1,0 +1,172 @@
+"""A physical car's heat survives its racer-tui: every input the timekeeper gave, on disk.
+
+A heat is recorded in the league only when it ends. If racer-tui is killed, or the laptop
+sleeps for good, in the middle of a physical car's 4 minutes, the laps captured so far
+would be lost, and a real car would have to drive its heat again. So the timekeeper writes
+each input the heat took (a key or a timer line) to a small file beside the league, and
+while the race runs, a heartbeat of how long it has run. Opening the heat again replays
+the inputs on a new `TimekeptHeat` (it never reads a clock itself, so a replay is exact)
+and stops the clocks where the last heartbeat left them: the heat is back, paused, and
+the host starts it again when the car is on the track.
+
+Times are seconds since the heat's first input, on its own timekeeper's clock. Files are
+replaced whole on each write (atomic, not synced to disk: a killed process leaves the last
+whole file, which is what this is for). A file that cannot be read, or does not replay,
+is no journal: the heat starts afresh, as it did before journals.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat
+from sim.atomic import write_text_atomic
+from sim.race.rules import RaceRules
+
+FORMAT = 1
+FOLDER = "live-heats"  # beside the projector's live heats: the same life, the same place
+MAX_INPUTS = 5000  # a 4-minute heat has a few hundred at most
+MAX_BYTES = 1_000_000
+BEAT_SECONDS = 1.0  # how often a running heat notes how long it has run
+
+# The inputs a heat takes, by name: what the timekeeper's keys and a timer's lines do.
+_INPUTS: dict[str, Callable[[TimekeptHeat, float, int | None], str]] = {
+    "start_or_pause": lambda heat, at, _: heat.start_or_pause(at),
+    "capture": lambda heat, at, _: heat.capture(at),
+    "timer_capture": lambda heat, at, _: heat.capture(at, from_timer=True),
+    "reset": lambda heat, at, _: heat.reset(at),
+    "undo_reset": lambda heat, at, _: heat.undo_reset(),
+    "undo_capture": lambda heat, at, _: heat.undo_capture(at),
+    "did_not_finish": lambda heat, at, _: heat.did_not_finish(at),
+    "strike": lambda heat, at, lap: heat.strike(lap or 0, at),
+    "end": lambda heat, at, _: heat.end(at),
+}
+INPUTS = tuple(_INPUTS)
+
+
+def journal_path(league_file: Path, heat_id: str) -> Path:
+    return league_file.parent / FOLDER / f"{heat_id}.timekeeper.json"
+
+
+def take_input(heat: TimekeptHeat, kind: str, at: float, lap: int | None = None) -> str:
+    """Give `heat` one input; what it says, or TimekeeperError when its phase refuses it."""
+    return _INPUTS[kind](heat, at, lap)
+
+
+@dataclass
+class HeatJournal:
+    """The inputs one heat took, written to `path` as they come."""
+
+    path: Path
+    heat_id: str
+    started_at: str = ""  # the heat's own start, wall time (TimekeptHeat.started_at)
+    inputs: list[tuple[str, float, int | None]] = field(default_factory=list)
+    beat: float = 0.0  # how long the heat had been going at the last heartbeat
+
+    def took(self, kind: str, at: float, heat: TimekeptHeat, lap: int | None = None) -> None:
+        """Note an input the heat has just taken (never one it refused)."""
+        self.inputs.append((kind, round(at, 4), lap))
+        self.started_at = heat.started_at
+        self.beat = max(self.beat, at)
+        self._write()
+
+    def heartbeat(self, at: float) -> None:
+        """While the race runs: it ran until `at` (written at most every BEAT_SECONDS)."""
+        if self.inputs and at - self.beat >= BEAT_SECONDS:
+            self.beat = at
+            self._write()
+
+    def forget(self) -> None:
+        """The heat was recorded or given up: nothing to resume."""
+        self.inputs.clear()
+        self.path.unlink(missing_ok=True)
+
+    def _write(self) -> None:
+        document = {
+            "format": FORMAT,
+            "heat_id": self.heat_id,
+            "started_at": self.started_at,
+            "inputs": [list(item) for item in self.inputs],
+            "beat": round(self.beat, 4),
+        }
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(self.path, json.dumps(document), durable=False)
+
+
+@dataclass(frozen=True)
+class Resumed:
+    """A heat rebuilt from its journal, stopped where the journal ends."""
+
+    heat: TimekeptHeat
+    journal: HeatJournal
+    at: float  # the heat's own time where it stopped: later inputs carry on from here
+
+
+def resume_heat(path: Path, heat_id: str, rules: RaceRules) -> Resumed | None:
+    """The heat `heat_id` as its journal left it, or None: no journal, one for another
+    heat, one with no input, or one that cannot be read or replayed."""
+    journal = _read(path, heat_id)
+    if journal is None or not journal.inputs:
+        return None
+    heat = TimekeptHeat(rules)
+    try:
+        for kind, at, lap in journal.inputs:
+            take_input(heat, kind, at, lap)
+    except TimekeeperError:
+        return None  # not what this heat's rules and inputs make: not this heat's journal
+    at = max(journal.beat, journal.inputs[-1][1])
+    if heat.phase is Phase.RUNNING:
+        take_input(heat, "start_or_pause", at)  # stop the clocks where they were last seen
+        journal.inputs.append(("start_or_pause", at, None))
+    heat.started_at = journal.started_at or heat.started_at
+    return Resumed(heat, journal, at)
+
+
+def _read(path: Path, heat_id: str) -> HeatJournal | None:
+    try:
+        with path.open("rb") as handle:
+            raw = handle.read(MAX_BYTES + 1)
+        if len(raw) > MAX_BYTES:
+            return None
+        data = json.loads(raw)
+        return _parse(data, path, heat_id)
+    except (OSError, ValueError, TypeError, RecursionError):
+        return None
+
+
+def _parse(data: Any, path: Path, heat_id: str) -> HeatJournal | None:
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        return None
+    if data.get("heat_id") != heat_id or not isinstance(data.get("started_at"), str):
+        return None
+    inputs = data.get("inputs")
+    beat = data.get("beat")
+    if not isinstance(inputs, list) or len(inputs) > MAX_INPUTS or not _seconds(beat):
+        return None
+    parsed: list[tuple[str, float, int | None]] = []
+    last = 0.0
+    for item in inputs:
+        if not isinstance(item, list) or len(item) != 3:
+            return None
+        kind, at, lap = item
+        if kind not in _INPUTS or not _seconds(at) or at < last:
+            return None
+        if lap is not None and (isinstance(lap, bool) or not isinstance(lap, int)):
+            return None
+        parsed.append((kind, float(at), lap))
+        last = float(at)
+    return HeatJournal(path, heat_id, data["started_at"][:40], parsed, float(data["beat"]))
+
+
+def _seconds(value: Any) -> bool:
+    return (
+        isinstance(value, int | float)
+        and not isinstance(value, bool)
+        and math.isfinite(value)
+        and 0.0 <= value <= 86_400.0
+    )
