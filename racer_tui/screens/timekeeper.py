@@ -157,6 +157,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
         def answered(yes: bool | None) -> None:
             if yes:
+                resumed.accept()
                 self.heat = heat
                 self._origin = self.clock() - resumed.at
                 self._journal = resumed.journal
@@ -180,6 +181,8 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
     def on_unmount(self) -> None:
         self._stop_feed.set()
+        if self._journal is not None:
+            self._journal.close()  # the file stays: the heat may be resumed
         if self.setup.live is not None:
             self.setup.live.clear()  # the heat is no longer running here
 

@@ -40,6 +40,7 @@ def test_a_heat_comes_back_paused_where_its_last_heartbeat_left_it(tmp_path: Pat
     assert heat.time_left(1000.0) == pytest.approx(60.0 - 15.5)  # stopped: time stands
     assert heat.lap_clock(1000.0) == pytest.approx(5.5)
     # It goes on from there, and its journal with it.
+    resumed.accept()
     for kind, at in (("start_or_pause", 20.0), ("capture", 29.5)):
         take_input(heat, kind, at)
         resumed.journal.took(kind, at, heat)
@@ -66,32 +67,37 @@ def test_a_recorded_or_abandoned_heat_has_nothing_to_resume(tmp_path: Path) -> N
     assert not path.exists() and resume_heat(path, HEAT, RULES) is None
 
 
-def _document(**change: object) -> dict[str, object]:
-    return {
-        "format": 1,
-        "heat_id": HEAT,
-        "started_at": "2026-11-25T19:00:00.000Z",
-        "inputs": [["start_or_pause", 0.0, None], ["capture", 10.0, None]],
-        "beat": 12.0,
-        **change,
-    }
+HEADER = json.dumps({"format": 1, "heat_id": HEAT, "started_at": "2026-11-25T19:00:00.000Z"})
+
+
+def lines(*items: object, header: str = HEADER) -> str:
+    return "\n".join([header, *(json.dumps(item) for item in items)]) + "\n"
+
+
+def test_a_line_torn_by_a_kill_is_left_out_and_the_rest_stands(tmp_path: Path) -> None:
+    path = tmp_path / "heat.json"
+    text = lines(["start_or_pause", 0.0, None], ["capture", 10.0, None], ["beat", 12.0, None])
+    path.write_text(text + '["reset", 12.5, nu')
+    resumed = resume_heat(path, HEAT, RULES)
+    assert resumed is not None and resumed.at == 12.0
+    assert len(resumed.heat.laps) == 1 and resumed.heat.resets == 0
 
 
 @pytest.mark.parametrize(
     "content",
     [
-        json.dumps(_document(heat_id="01JDR0000000000000000OTHER")),  # another heat's
-        json.dumps(_document(inputs=[["capture", 10.0, None]])),  # does not replay
-        json.dumps(_document(inputs=[["start_or_pause", 5.0, None], ["reset", 1.0, None]])),
-        json.dumps(_document(inputs=[["explode", 1.0, None]])),
-        json.dumps(_document(inputs=[["start_or_pause", float("inf"), None]])),
-        json.dumps(_document(inputs=[["strike", 1.0, True]])),
-        json.dumps(_document(inputs=[])),
-        json.dumps(_document(format=2)),
-        json.dumps(_document(beat=-1)),
-        "[" * 100_000,
+        lines(["start_or_pause", 0.0, None], header=HEADER.replace(HEAT, "01JDR0000000OTHER")),
+        lines(["capture", 10.0, None]),  # does not replay: the race never started
+        lines(["start_or_pause", 5.0, None], ["reset", 1.0, None]),  # time runs backwards
+        lines(["explode", 1.0, None]),
+        lines(["start_or_pause", 1e300, None]),
+        lines(["start_or_pause", 0.0, None], ["strike", 1.0, True]),
+        lines(),
+        lines(["start_or_pause", 0.0, None], header=HEADER.replace('"format": 1', '"format": 2')),
+        "not json\n" + lines(["start_or_pause", 0.0, None]),
+        "[" * 100_000 + "\n",
         "x" * 2_000_000,
-        "\x00\xff not json",
+        "\x00\xff\n",
     ],
 )
 def test_a_damaged_or_foreign_journal_is_no_journal(tmp_path: Path, content: str) -> None:
