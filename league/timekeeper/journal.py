@@ -33,8 +33,9 @@ from sim.race.rules import RaceRules
 
 FORMAT = 1
 FOLDER = "live-heats"  # beside the projector's live heats: the same life, the same place
-MAX_INPUTS = 5000  # a 4-minute heat has a few hundred at most
-MAX_BYTES = 1_000_000
+# An hour's window (the rules' longest) is 3,600 heartbeats and its inputs.
+MAX_LINES = 20_000
+MAX_BYTES = 2_000_000
 BEAT_SECONDS = 1.0  # how often a running heat notes how long it has run
 BEAT = "beat"  # a heartbeat's line: the heat had run until then
 
@@ -159,7 +160,7 @@ def _read(path: Path, heat_id: str) -> HeatJournal | None:
 
 
 def _parse(items: list[Any], path: Path, heat_id: str) -> HeatJournal | None:
-    if not items or len(items) > MAX_INPUTS:
+    if not items or len(items) > MAX_LINES:
         return None
     header, *rest = items
     if not isinstance(header, dict) or header.get("format") != FORMAT:

@@ -96,7 +96,7 @@ def test_a_line_torn_by_a_kill_is_left_out_and_the_rest_stands(tmp_path: Path) -
         lines(["start_or_pause", 0.0, None], header=HEADER.replace('"format": 1', '"format": 2')),
         "not json\n" + lines(["start_or_pause", 0.0, None]),
         "[" * 100_000 + "\n",
-        "x" * 2_000_000,
+        "x" * 3_000_000,
         "\x00\xff\n",
     ],
 )
