@@ -157,10 +157,10 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
         def answered(yes: bool | None) -> None:
             if yes:
-                resumed.accept()
                 self.heat = heat
                 self._origin = self.clock() - resumed.at
                 self._journal = resumed.journal
+                self._keep_journal(resumed.accept)
                 self._say(
                     "Resumed: press Esc to record it."
                     if heat.phase is Phase.OVER
@@ -168,7 +168,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
                 )
                 self._draw()
             else:
-                resumed.journal.forget()
+                self._keep_journal(resumed.journal.forget)
 
         ask(
             self.app,
@@ -280,8 +280,9 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
         def answered(yes: bool | None) -> None:
             if yes:
-                if self._journal is not None:
-                    self._journal.forget()  # given up: nothing to resume
+                journal = self._journal
+                if journal is not None:
+                    self._keep_journal(journal.forget)  # given up: nothing to resume
                 self.dismiss(None)
 
         ask(
@@ -310,10 +311,25 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         except TimekeeperError as error:
             self._say(str(error), error=True)
         else:
-            if self._journal is not None:
-                self._journal.took(kind, at, self.heat, lap)
+            journal = self._journal
+            if journal is not None:
+                self._keep_journal(lambda: journal.took(kind, at, self.heat, lap))
             self._say(said)
         self._draw()
+
+    def _keep_journal(self, write: Callable[[], None]) -> None:
+        """Write to the heat's journal; if the disk refuses, say so once and time on
+        without it: a journal is a safety net, never a reason to stop a heat."""
+        try:
+            write()
+        except OSError as error:
+            self._journal = None
+            self.notify(
+                f"This heat's journal cannot be written ({error.strerror or error}): the "
+                "timing goes on, but if racer-tui stops, this heat cannot be resumed.",
+                severity="warning",
+                markup=False,
+            )
 
     def _say(self, text: str, *, error: bool = False) -> None:
         self.said = Text(text, style="bold red" if error else "")
@@ -338,8 +354,9 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             digits = self.query_one(selector, Digits)
             if digits.value != value:
                 digits.update(value)
-        if self._journal is not None and heat.phase is Phase.RUNNING:
-            self._journal.heartbeat(now)
+        journal = self._journal
+        if journal is not None and heat.phase is Phase.RUNNING:
+            self._keep_journal(lambda: journal.heartbeat(now))
         if self.setup.live is not None:
             self.setup.live.publish(
                 state=heat.phase.value,

@@ -14,7 +14,7 @@ from textual.widgets import Digits
 from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
 from league.races import race_result
 from league.store import default_db_path, open_league
-from league.timekeeper.journal import journal_path
+from league.timekeeper.journal import HeatJournal, journal_path
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.nights import AddEntrantDialog
@@ -219,6 +219,29 @@ async def test_a_heat_left_by_a_stopped_racer_tui_is_resumed_with_its_laps() -> 
         assert second.screen is nights
         assert "Recorded dee's heat: best lap 13.000 s." in notes.text()
     assert not journal.exists()  # recorded: nothing left to resume
+
+
+async def test_a_journal_the_disk_refuses_is_said_once_and_the_timing_goes_on(
+    tmp_path: Path,
+) -> None:
+    (tmp_path / "not-a-folder").write_text("")
+    journal = HeatJournal(tmp_path / "not-a-folder" / "heat.json", "01JDR0000000000000000HEAT1")
+    setup = TimekeeperSetup(
+        resolve_track("beginner-oval"), RaceRules(), "eve", "red car", journal=journal
+    )
+    keeper = TimekeeperScreen(setup)
+    watch = Stopwatch()
+    keeper.clock = watch
+    app = OneScreenApp(keeper)
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        await pilot.press("space")
+        watch.now += 10.0
+        await pilot.press("l")
+        assert str(keeper.said) == "Lap 1: 10.000 s, counts."
+        warnings = notes.text("warning")
+        assert warnings.count("This heat's journal cannot be written") == 1
+        assert "if racer-tui stops, this heat cannot be resumed" in warnings
 
 
 @pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pseudo-terminal")
