@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.car import STEP_SECONDS, CarSpec, Fleet
+from sim.car import CarSpec, Fleet
 from sim.deepracer_files import SimTraceRow
 from sim.geometry import FloatArray
 from sim.simulation import LOOK_AHEAD
@@ -109,14 +109,35 @@ def trace_runs(rows: Sequence[SimTraceRow], min_poses: int = _SETTLE + 4) -> lis
     return runs
 
 
-def _commands_at(runs: Sequence[Run], times: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Each run's command (steering degrees, speed) acting at its time in `times`."""
-    steering = np.empty(len(runs))
-    speed = np.empty(len(runs))
-    for i, run in enumerate(runs):
-        k = min(max(int(np.searchsorted(run.time, times[i], side="right")) - 1, 0), len(run) - 1)
-        steering[i], speed[i] = run.steering[k], run.speed[k]
-    return steering, speed
+class _Commands:
+    """Each run's commands by time, for looking up many runs at once."""
+
+    def __init__(self, runs: Sequence[Run]) -> None:
+        longest = max(len(run) for run in runs)
+        self._time = np.full((len(runs), longest), np.inf)
+        self._steering = np.zeros((len(runs), longest))
+        self._speed = np.zeros((len(runs), longest))
+        for i, run in enumerate(runs):
+            self._time[i, : len(run)] = run.time
+            self._steering[i, : len(run)] = run.steering
+            self._speed[i, : len(run)] = run.speed
+        self._rows = np.arange(len(runs))
+
+    def at(
+        self, times: FloatArray, rows: np.ndarray | None = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """The command (steering degrees, speed) acting at `times[i]` in run `rows[i]`
+        (every run when `rows` is None): the last one sent at or before it; before a run's
+        first pose, its first command. Asked at a sub-step's middle, this starts each
+        command on the sub-step nearest its time."""
+        rows = self._rows if rows is None else rows
+        sent = np.count_nonzero(self._time[rows] <= times[:, None], axis=1)
+        k = np.maximum(sent - 1, 0)
+        return self._steering[rows, k], self._speed[rows, k]
+
+
+def _substeps_until(seconds: float, car: Fleet) -> int:
+    return math.ceil(seconds / car.dt - 1e-9)
 
 
 @dataclass(frozen=True)
@@ -143,21 +164,23 @@ def replay_runs(runs: Sequence[Run], car: CarSpec) -> list[_Replayed]:
         )
     starts = np.array([run.time[0] for run in runs])
     duration = max(float(run.time[-1] - run.time[0]) for run in runs)
-    steps = math.ceil(duration / STEP_SECONDS) + 1
-    x, y, yaw, steering = (np.empty((steps + 1, len(runs))) for _ in range(4))
+    # DeepRacer sends its commands at irregular times (its steps jitter around 1/15 s):
+    # each one is applied from its own time, to the nearest physics sub-step, not on a 15 Hz
+    # grid that would start it up to a whole step late.
+    substeps = _substeps_until(duration, fleet) + 1
+    commands = _Commands(runs)
+    x, y, yaw, steering = (np.empty((substeps + 1, len(runs))) for _ in range(4))
     x[0], y[0], yaw[0], steering[0] = fleet.x, fleet.y, fleet.yaw, fleet.steering
-    for m in range(steps):
-        # The command acting at the step's start (a hair later, so a command starting
-        # exactly then counts).
-        fleet.set_targets(*_commands_at(runs, starts + m * STEP_SECONDS + 1e-9))
-        fleet.step()
+    for m in range(substeps):
+        fleet.set_targets(*commands.at(starts + (m + 0.5) * fleet.dt))
+        fleet.advance(1)
         x[m + 1], y[m + 1], yaw[m + 1], steering[m + 1] = (
             fleet.x,
             fleet.y,
             fleet.yaw,
             fleet.steering,
         )
-    grid = np.arange(steps + 1) * STEP_SECONDS
+    grid = np.arange(substeps + 1) * fleet.dt
     arc = np.concatenate(
         [
             np.zeros((1, len(runs))),
@@ -294,10 +317,10 @@ def _window_gaps(
         if run.time[k] + horizon <= run.time[-1]
     ]
     gaps: dict[float, list[float]] = {at: [] for at in GAP_TARGETS}
-    steps = round(horizon / STEP_SECONDS)
+    commands = _Commands(runs)
     for first in range(0, len(starts), _WINDOW_BATCH):
         batch = starts[first : first + _WINDOW_BATCH]
-        window_runs = [runs[r] for r, _ in batch]
+        rows = np.array([r for r, _ in batch])
         fleet = Fleet(len(batch), car)
         begin = np.empty(len(batch))
         for i, (r, k) in enumerate(batch):
@@ -311,18 +334,19 @@ def _window_gaps(
                 steering=float(replayed[r].steering[k]),
             )
             begin[i] = run.time[k]
-        for m in range(1, steps + 1):
-            fleet.set_targets(*_commands_at(window_runs, begin + (m - 1) * STEP_SECONDS + 1e-9))
-            fleet.step()
-            for at in GAP_TARGETS:
-                if m != round(at / STEP_SECONDS):
-                    continue
-                ahead = fleet.points_ahead(LOOK_AHEAD)
-                for i, run in enumerate(window_runs):
-                    when = begin[i] + m * STEP_SECONDS
-                    tx = np.interp(when, run.time, run.x + LOOK_AHEAD * np.cos(run.yaw))
-                    ty = np.interp(when, run.time, run.y + LOOK_AHEAD * np.sin(run.yaw))
-                    gaps[at].append(math.hypot(ahead[i, 0] - tx, ahead[i, 1] - ty))
+        done = 0
+        for at in sorted(GAP_TARGETS):
+            for m in range(done, _substeps_until(at, fleet)):
+                fleet.set_targets(*commands.at(begin + (m + 0.5) * fleet.dt, rows))
+                fleet.advance(1)
+            done = _substeps_until(at, fleet)
+            ahead = fleet.points_ahead(LOOK_AHEAD)
+            for i, (r, _) in enumerate(batch):
+                run = runs[r]
+                when = begin[i] + done * fleet.dt
+                tx = np.interp(when, run.time, run.x + LOOK_AHEAD * np.cos(run.yaw))
+                ty = np.interp(when, run.time, run.y + LOOK_AHEAD * np.sin(run.yaw))
+                gaps[at].append(math.hypot(ahead[i, 0] - tx, ahead[i, 1] - ty))
     return {at: np.array(values) for at, values in gaps.items()}
 
 

@@ -4,7 +4,7 @@ The car is a 0.324 m x 0.196 m box whose wheel centres span 0.164 m (wheelbase) 
 as in deepracer-simapp's URDF; those wheel centres decide on-track and off-track. How the
 car *turns* is calibrated separately, on DeepRacer's own sim-traces: its simulated front
 tyres slip, so a steering angle gives the curvature of a 0.27 m wheelbase, answering with a
-first-order lag (see `CarSpec` for each number and where it came from, and
+quick share and a first-order lag (see `CarSpec` for each number and where it came from, and
 `python -m sim.bench_calibration` for the replay that checks them). The rear axle does not
 slip sideways, so the body turns about it.
 
@@ -41,8 +41,10 @@ PHYSICS_SUBSTEPS = 4
 # different versions are not comparable: league records carry it and leaderboards keep
 # versions apart. Bump it with any change to the car or its sensors that changes lap
 # times. 2: steering gain, steering lag and motor response calibrated on DeepRacer's
-# sim-traces, and DeepRacer's own camera and scene (issue 25).
-PHYSICS_VERSION = 2
+# sim-traces, and DeepRacer's own camera and scene (issue 25). 3: the steering takes a
+# share of each command at once and the rest with a slower lag, as DeepRacer's traces
+# show once they are replayed at their own command times.
+PHYSICS_VERSION = 3
 
 # Collision categories: cars never collide with each other unless a race asks for it
 # (training runs many independent cars in one space).
@@ -86,15 +88,21 @@ class CarSpec:
     # Curvature = tan(steering) / (effective_wheelbase * (1 + understeer * v^2)). simapp sends
     # one angle to both steering hinges (no Ackermann: `send_action` in
     # `markov/agent_ctrl/utils.py`) and drives all four wheels at one speed, and its tyres
-    # slip (mu 0.5 in `urdf/deepracer/racecar.gazebo`), so the
-    # car turns as if its wheelbase were 0.27 m, not 0.164 m: fitted 0.273 m (path curvature
-    # 0.65 /m at 10 degrees and 1.7 /m at 25 degrees, 1 m/s). The traces show the curvature
-    # falling a little with speed: 3 % from 1 to 2 m/s (understeer 0.010 s^2/m^2). Fitted
-    # at 1-2.5 m/s; faster than that it is extrapolated.
-    effective_wheelbase: float = 0.273
-    understeer: float = 0.010
-    # First-order lag of the steering: 63 % of a steering step after 0.132 s (fitted).
-    steering_time_constant: float = 0.132
+    # slip (mu 0.5 in `urdf/deepracer/racecar.gazebo`), so the car turns as if its
+    # wheelbase were 0.26 m, not 0.164 m: fitted 0.264 m (path curvature 0.66 /m at 10
+    # degrees and 1.7 /m at 25 degrees, 1 m/s). The traces show the curvature falling a
+    # little with speed: 3.5 % from 1 to 2 m/s (understeer 0.012 s^2/m^2). Fitted at
+    # 1-2.5 m/s; faster than that it is extrapolated.
+    effective_wheelbase: float = 0.264
+    understeer: float = 0.012
+    # The steering: a new command moves the wheels 11 % of the way at once, the rest with a
+    # first-order lag of 0.166 s (fitted; as one plain lag, 0.134 s fits the traces worse
+    # and answers 13 % sooner than DeepRacer on the evaluation that checks it).
+    steering_time_constant: float = 0.166
+    steering_instant_share: float = 0.11
+    # A pull: the wheels settle this many degrees left of every command (negative: right).
+    # The kinematics car has none (fitted: +0.0 and +0.2 degrees on the two DRoA traces).
+    steering_offset_deg: float = 0.0
     # The motor: the car settles at 1.02 x the commanded speed (simapp turns m/s into wheel
     # spin with a 0.035 m radius, `get_wheel_radius`; the traces' speed over the commanded
     # one: 1.01-1.02), reached within a few steps: from standing, 2.5 m/s in about 4 steps
@@ -114,7 +122,7 @@ class CarSpec:
     def steering_for(self, curvature: FloatArray | float, speed: FloatArray | float) -> FloatArray:
         """The steering angle (radians) whose steady curvature at `speed` is `curvature`."""
         scale = self.effective_wheelbase * (1.0 + self.understeer * speed * speed)
-        return np.asarray(np.arctan(curvature * scale))
+        return np.asarray(np.arctan(curvature * scale) - math.radians(self.steering_offset_deg))
 
     @property
     def min_turn_radius(self) -> float:
@@ -139,23 +147,33 @@ DEEPRACER_CAR = CarSpec()
 
 # The car of simapp 3 and 4 (models of metadata version 3 or 4, e.g. what the console trained
 # until 2022): its "deepracer" URDF drives the steering hinges with effort PD controllers
-# (p 1.0, d 0.5 in `racecar_control.yaml`: a lag near d/p = 0.5 s) and the wheels with
-# effort P controllers, so it steers and accelerates far more slowly. Same wheel geometry.
-# Fitted on 2022 console and DeepRacer-for-Cloud training traces (simapp 4.0, 126 files of
-# deepracer-utils' test data); the shared console evaluation trace
-# (`../shared/deepracer/console-logs/`, simapp 4.0, not fitted) checks it. Its hinges are
-# not quite a first-order lag (a quick first answer, a slow tail, and after full lock 20
-# degrees still turns like 30), so after a lock-to-20-degree command this car turns about
-# 25 % less than DeepRacer's did. For reading old traces and models trained on that car;
-# not racer-tui's own physics.
+# (p 1.0, d 0.5 in `racecar_control.yaml`) and the wheels with effort P controllers, so it
+# steers and accelerates far more slowly. Same wheel geometry. Fitted by replaying 130
+# sim-traces of deepracer-utils' test data (simapp 4.0: the console's training run, two
+# DeepRacer-for-Cloud runs' training and evaluations) at their own command times; the
+# console's evaluations, the shared one among them (`../shared/deepracer/console-logs/`),
+# were not fitted and check it. What the traces show, and what simapp explains of it:
+# - a new command moves the hinges a little at once (9 % of it), as a PD controller's kick
+#   on a step would, and the rest follows a slow lag (0.39 s; the PD's d/p is 0.5 s);
+# - the car pulls left: every command turns as if it were 1.9 degrees further left, alike
+#   in all six groups of traces (+2.1 to +3.1 degrees fitted apart; the URDF turns both
+#   front wheels slightly left, 0.13 and 0.38 degrees, which cannot explain it all).
+#   Today's car has no pull;
+# - it turns as if its wheelbase were 0.30 m, and no tighter than 3.1 m/s^2 sideways (its
+#   tyres' mu is 0.5; the wheels driven at one speed scrub each other), which is where its
+#   curvature at 3 m/s and full lock levels off.
+# For racing models trained on that car (`car_for_simapp_version`); not racer-tui's own.
 SIMAPP4_CAR = CarSpec(
-    effective_wheelbase=0.267,
-    understeer=0.010,
-    steering_time_constant=0.340,
+    effective_wheelbase=0.297,
+    understeer=0.0,
+    steering_time_constant=0.386,
+    steering_offset_deg=1.92,
+    steering_instant_share=0.09,
     speed_gain=1.02,
     speed_time_constant=0.19,
     max_acceleration=4.4,
     max_braking=18.0,
+    grip=3.1,
 )
 
 
@@ -214,6 +232,9 @@ class Fleet:
         self.yaw = np.zeros(n_cars)
         self.speed = np.zeros(n_cars)  # longitudinal speed of the rear axle, m/s
         self.steering = np.zeros(n_cars)  # current wheel angle, radians
+        # The part of the wheel angle that follows the command with a lag (all of it unless
+        # the car takes a share of each command at once: `CarSpec.steering_instant_share`).
+        self._lagged_steering = np.zeros(n_cars)
         self.yaw_rate = np.zeros(n_cars)
         self.target_speed = np.zeros(n_cars)
         self.target_steering = np.zeros(n_cars)
@@ -223,6 +244,7 @@ class Fleet:
         self._bind_motion_buffer(extra_bodies=0)
         self._state_buffer = pmb.Buffer()
         self._max_steer = math.radians(spec.max_steering_deg)
+        self._steering_offset = math.radians(spec.steering_offset_deg)
         # Both lags as the fraction of the remaining error closed per physics sub-step.
         self._steer_blend = _blend(self.dt, spec.steering_time_constant)
         self._speed_blend = _blend(self.dt, spec.speed_time_constant)
@@ -253,6 +275,7 @@ class Fleet:
         self.x[car], self.y[car], self.yaw[car] = x, y, yaw
         self.speed[car] = speed
         self.steering[car] = steering
+        self._lagged_steering[car] = steering
         self.yaw_rate[car] = 0.0
         self.target_speed[car] = speed
         self.target_steering[car] = steering
@@ -275,8 +298,9 @@ class Fleet:
     def set_targets(self, steering_deg: FloatArray, speed: FloatArray) -> None:
         """Actions are targets: clipped to the car's limits, reached with lag in `step`."""
         # np.minimum/np.maximum: np.clip's result at a fraction of its per-call overhead.
-        self.target_steering[:] = np.minimum(
-            np.maximum(np.radians(steering_deg), -self._max_steer), self._max_steer
+        self.target_steering[:] = (
+            np.minimum(np.maximum(np.radians(steering_deg), -self._max_steer), self._max_steer)
+            + self._steering_offset
         )
         # DeepRacer's car settles a little above the commanded speed (`speed_gain`).
         self.target_speed[:] = (
@@ -287,10 +311,16 @@ class Fleet:
     # --- physics -------------------------------------------------------------------------
     def step(self) -> None:
         """Advance every car by one control step (1/15 s)."""
+        self.advance(self.substeps)
+
+    def advance(self, substeps: int) -> None:
+        """Advance every car by `substeps` physics sub-steps (`dt` each). A control step is
+        `self.substeps` of them; a replay of DeepRacer's irregular command times changes
+        the targets between single sub-steps."""
         self.crashed[:] = False
         if self._has_obstacles or self._cars_collide:
             self._sync_bodies()
-            for _ in range(self.substeps):
+            for _ in range(substeps):
                 self._update_actuators()
                 self._apply_tyre_model()
                 pmb.set_space_bodies(self.space, _BODY_FIELDS_MOTION, self._motion_buffer)
@@ -298,9 +328,9 @@ class Fleet:
                 self._read_back()
                 self._collect_contacts()
         elif self.n == 1:
-            self._step_one_free_car()
+            self._step_one_free_car(substeps)
         else:
-            for _ in range(self.substeps):
+            for _ in range(substeps):
                 self._update_actuators()
                 self._apply_tyre_model()
                 self._integrate()
@@ -315,8 +345,8 @@ class Fleet:
         self.y = self.y + motion[:, 1] * dt
         self.yaw = self.yaw + motion[:, 2] * dt
 
-    def _step_one_free_car(self) -> None:
-        """`step` for a lone car with nothing to hit, in plain floats: a race's hot path.
+    def _step_one_free_car(self, substeps: int) -> None:
+        """`advance` for a lone car with nothing to hit, in plain floats: a race's hot path.
 
         The same formulas as `_update_actuators`, `_apply_tyre_model` and `_integrate`,
         without the per-call overhead of numpy on length-1 arrays.
@@ -330,12 +360,18 @@ class Fleet:
         target_steering = float(self.target_steering[0])
         target_speed = float(self.target_speed[0])
         steering = float(self.steering[0])
+        instant = spec.steering_instant_share
+        lagged = float(self._lagged_steering[0])
         speed = float(self.speed[0])
         x, y, yaw = float(self.x[0]), float(self.y[0]), float(self.yaw[0])
         yaw_rate = 0.0
         sliding = False
-        for _ in range(self.substeps):
-            steering += (target_steering - steering) * steer_blend
+        for _ in range(substeps):
+            if instant:
+                lagged += (target_steering - lagged) * steer_blend
+                steering = instant * target_steering + (1.0 - instant) * lagged
+            else:
+                steering += (target_steering - steering) * steer_blend
             speed += min(max((target_speed - speed) * speed_blend, max_down), max_up)
             asked = math.tan(steering) / (turning_base * (1.0 + understeer * speed * speed))
             grip_curvature = grip / max(speed * speed, 1e-6)
@@ -350,6 +386,7 @@ class Fleet:
             y += (speed * sin_yaw + lateral * cos_yaw) * dt
             yaw += yaw_rate * dt
         self.steering[0] = steering
+        self._lagged_steering[0] = lagged if instant else steering
         self.speed = np.array([speed])
         self.yaw_rate = np.array([yaw_rate])
         self.sliding = np.array([sliding])
@@ -369,7 +406,13 @@ class Fleet:
         spec, dt = self.spec, self.dt
         # np.minimum/np.maximum rather than np.clip: same result, a fraction of the overhead
         # on small arrays, and this runs four times per step.
-        self.steering += (self.target_steering - self.steering) * self._steer_blend
+        instant = self.spec.steering_instant_share
+        if instant:
+            lagged = self._lagged_steering
+            lagged += (self.target_steering - lagged) * self._steer_blend
+            self.steering = instant * self.target_steering + (1.0 - instant) * lagged
+        else:
+            self.steering += (self.target_steering - self.steering) * self._steer_blend
         wanted = (self.target_speed - self.speed) * self._speed_blend
         self.speed += np.minimum(
             np.maximum(wanted, -spec.max_braking * dt), spec.max_acceleration * dt

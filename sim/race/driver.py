@@ -115,7 +115,8 @@ class ReferenceRaceDriver:
         alpha = math.atan2(local_y, local_x)
         wanted = 2.0 * math.sin(alpha) / distance
         turning = car.effective_wheelbase * (1.0 + car.understeer * speed * speed)
-        steering = math.degrees(math.atan(wanted * turning))  # car.steering_for, in floats
+        # car.steering_for, in floats
+        steering = math.degrees(math.atan(wanted * turning)) - car.steering_offset_deg
         total = line.total_length
         planned = min(
             _interp(line.cumulative, self._line_speeds, (s_here + speed * ahead) % total)

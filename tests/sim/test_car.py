@@ -3,11 +3,12 @@ determinism."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 
-from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, Fleet
+from sim.car import DEEPRACER_CAR, SIMAPP4_CAR, STEP_HZ, STEP_SECONDS, Fleet
 
 
 def drive(fleet: Fleet, steering: float, speed: float, steps: int) -> None:
@@ -159,3 +160,73 @@ def test_cars_collide_only_when_asked() -> None:
             fleet.step()
             touched |= fleet.crashed
         assert bool(touched.all()) is collide
+
+
+def test_the_old_car_pulls_left_and_todays_does_not() -> None:
+    """simapp 3-4's car turns as if every command were about two degrees further left (its
+    sim-traces, `SIMAPP4_CAR`): told to go straight it drifts left; today's car keeps its
+    line."""
+    for spec, drifts in ((SIMAPP4_CAR, True), (DEEPRACER_CAR, False)):
+        fleet = Fleet(1, spec)
+        fleet.place(0, 0.0, 0.0, 0.0, 1.0)
+        drive(fleet, 0.0, 1.0, 3 * STEP_HZ)
+        assert bool(fleet.y[0] > 0.05) is drifts, spec
+        assert fleet.yaw[0] >= 0.0
+    # Its planner asks for a little right to go straight, and goes straight.
+    fleet = Fleet(1, SIMAPP4_CAR)
+    fleet.place(0, 0.0, 0.0, 0.0, 1.0)
+    straight = float(np.degrees(SIMAPP4_CAR.steering_for(0.0, 1.0)))
+    assert math.isclose(straight, -SIMAPP4_CAR.steering_offset_deg)
+    drive(fleet, straight, 1.0, 3 * STEP_HZ)
+    assert abs(fleet.y[0]) < 1e-6
+
+
+def test_a_new_command_moves_the_wheels_a_share_at_once_and_the_rest_with_the_lag() -> None:
+    """DeepRacer's steering hinges, in both its cars, answer a new command a little within
+    a physics sub-step and then follow a lag (their traces); a plain lag moves less."""
+    plain = dataclasses.replace(DEEPRACER_CAR, steering_instant_share=0.0)
+    first = {}
+    for spec in (SIMAPP4_CAR, DEEPRACER_CAR, plain):
+        fleet = Fleet(1, spec)
+        fleet.place(0, 0.0, 0.0, 0.0, 1.0)
+        fleet.set_targets(np.array([30.0]), np.array([1.0]))
+        fleet.advance(1)
+        # The target is the command plus the car's pull.
+        first[spec] = fleet.steering[0] / math.radians(30.0 + spec.steering_offset_deg)
+        lag_alone = min(fleet.dt / spec.steering_time_constant, 1.0)
+        share = spec.steering_instant_share
+        assert math.isclose(first[spec], share + (1.0 - share) * lag_alone, rel_tol=1e-6)
+    assert SIMAPP4_CAR.steering_instant_share > 0.0 and DEEPRACER_CAR.steering_instant_share > 0.0
+    assert first[DEEPRACER_CAR] > first[plain]
+
+
+def test_a_lone_car_and_a_fleet_drive_the_old_car_alike() -> None:
+    """The lone car's float path and the fleet's arrays give the same steps, pull and share
+    included."""
+    lone, fleet = Fleet(1, SIMAPP4_CAR), Fleet(2, SIMAPP4_CAR)
+    lone.place(0, 1.0, 2.0, 0.5, 1.0, steering=0.1)
+    for car in range(2):
+        fleet.place(car, 1.0, 2.0, 0.5, 1.0, steering=0.1)
+    rng = np.random.default_rng(3)
+    for _ in range(40):
+        steering, speed = rng.uniform(-30, 30), rng.uniform(0.5, 3.0)
+        lone.set_targets(np.array([steering]), np.array([speed]))
+        fleet.set_targets(np.full(2, steering), np.full(2, speed))
+        lone.step()
+        fleet.step()
+    assert math.isclose(lone.x[0], fleet.x[1], abs_tol=1e-9)
+    assert math.isclose(lone.yaw[0], fleet.yaw[1], abs_tol=1e-9)
+    assert math.isclose(lone.steering[0], fleet.steering[1], abs_tol=1e-12)
+
+
+def test_a_step_is_its_physics_sub_steps() -> None:
+    stepped, advanced = Fleet(2), Fleet(2)
+    for fleet in (stepped, advanced):
+        fleet.place(0, 0.0, 0.0, 0.0, 1.0)
+        fleet.place(1, 1.0, 0.0, 0.3, 2.0)
+        fleet.set_targets(np.array([12.0, -25.0]), np.array([2.0, 3.0]))
+    stepped.step()
+    for _ in range(advanced.substeps):
+        advanced.advance(1)
+    assert np.array_equal(stepped.x, advanced.x)
+    assert np.array_equal(stepped.yaw, advanced.yaw)
