@@ -21,6 +21,12 @@ class Fix(Enum):
     CLOSE_NIGHT = "close the night"
 
 
+def fix_named(name: object) -> Fix | None:
+    """The remedy a file names (`Fix.X.name`), or None for none or a name this racer-tui
+    does not know (files are untrusted)."""
+    return Fix.__members__.get(name) if isinstance(name, str) else None
+
+
 class Note(str):
     """A note for the user, as the command line prints it, that ends in a remedy: `problem`
     is the sentence without the remedy and `fix` names it. It is a `str`, so everything

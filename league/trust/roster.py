@@ -215,8 +215,8 @@ class Roster:
             )
         if self.founder is None:
             return (
-                f"{theirs}unchecked: this league has no organiser yet (its organiser runs "
-                "`racer-tui sync init STORE` once)"
+                f"{theirs}unchecked: this league has no organiser yet (its organiser sets "
+                "the store up once: s on the Sync screen, or `racer-tui sync init STORE`)"
             )
         key = f"key {fingerprint(signer)}"
         if signer in self.revoked:

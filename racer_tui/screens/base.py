@@ -19,50 +19,20 @@ from textual.message import Message
 from textual.screen import ModalScreen, Screen
 from textual.worker import Worker, WorkerState
 
+from racer_tui.app_words import with_app_fix
 from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.job_line import JobLine
-from sim.remedies import Fix, Note, RemedyError
+from sim.remedies import RemedyError
 from sim.reward_function import RewardFunctionError
 
 # The libraries' error types are ValueErrors whose text is written for the racer.
 USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, RewardFunctionError)
 
 
-# Remedies the app offers itself, in its words: its keys, not the command line's commands.
-APP_FIXES = {
-    Fix.IMPORT_TRACK: "import its .npy file on the Tracks screen (i there)",
-    Fix.TRAIN_MODEL: "press t in the Garage to train it",
-    Fix.CHOOSE_TRACK: (
-        "press e in the Garage to choose another (i on the Tracks screen imports a DeepRacer "
-        ".npy track)"
-    ),
-    Fix.RENAME: "choose another name",
-    Fix.CHOOSE_MODEL: "the Garage (1) lists your models, and n there creates one",
-    Fix.SET_RACER_NAME: "submit a result under your name (u in the Garage), then sync again",
-    Fix.EVALUATE_MODEL: "press v in the Garage to evaluate it",
-    Fix.IMPORT_MODEL: "give a garage model's name, or import the folder in the Garage (i there)",
-    Fix.RUN_HEATS: "run them (r), or press c again to close the night anyway",
-    Fix.CLOSE_NIGHT: "close it instead (c): its results stay in the league",
-}
-
-
-def in_app_words(note: str) -> str:
-    """A library's note as the app says it: a remedy the app offers with a key is named by
-    its key, not by its command."""
-    if isinstance(note, Note):
-        return _with_app_fix(note.problem, note.fix) or note
-    return note
-
-
-def _with_app_fix(problem: str, fix: Fix | None) -> str | None:
-    """The problem with the app's own remedy, or None when the app offers none."""
-    return f"{problem}; {APP_FIXES[fix]}." if fix in APP_FIXES else None
-
-
 def error_message(error: BaseException) -> str:
     """One sentence for the racer, never a traceback."""
     if isinstance(error, RemedyError):  # its remedy in the app's words, or none of the CLI's
-        text = _with_app_fix(error.problem, error.fix)
+        text = with_app_fix(error.problem, error.fix)
         if text is None:
             return sentence(error.problem) if error.problem != str(error) else sentence(str(error))
         return text[:1].upper() + text[1:]

@@ -25,8 +25,9 @@ from textual.screen import Screen
 from textual.widgets import DataTable
 from textual.worker import Worker
 
+from racer_tui.app_words import in_app_words
 from racer_tui.model_form import check_name, taken_names
-from racer_tui.screens.base import RacerScreen, ScreenJobs, error_message, in_app_words
+from racer_tui.screens.base import RacerScreen, ScreenJobs, error_message
 from racer_tui.screens.dialogs import ImportDialog, ImportRequest, InputDialog, ask
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.league_submit import RacerPrompt, submit_model_from

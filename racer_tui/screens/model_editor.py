@@ -37,6 +37,7 @@ from textual.widgets import (
     TextArea,
 )
 
+from racer_tui.app_words import in_app_words
 from racer_tui.model_form import (
     CONTINUOUS,
     DISCRETE,
@@ -56,7 +57,7 @@ from racer_tui.model_form import (
     values_of,
 )
 from racer_tui.reward_map_text import map_text
-from racer_tui.screens.base import RacerScreen, in_app_words
+from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ask
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from racer_tui.widgets.footer import RacerFooter

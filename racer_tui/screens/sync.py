@@ -51,11 +51,11 @@ from league.sync.status import (
 from league.trust import membership
 from league.trust.keys import KeyFileError, load_or_create_key
 from league.trust.membership import KeyRow
+from racer_tui.app_words import in_app_words
 from racer_tui.jobs import Job, sentence
 from racer_tui.screens.base import (
     RacerScreen,
     error_message,
-    in_app_words,
     notify_worker_failure,
 )
 from racer_tui.screens.dialogs import ask, show_problem
@@ -581,8 +581,10 @@ class SyncScreen(RacerScreen[bool]):
             self._offer_set_up(self._syncing_url, isinstance(error, StoreFolderMissingError))
             return
         if worker.state is WorkerState.ERROR and isinstance(error, SyncError | LeagueError):
-            # The library's sentence says what is wrong and what to do: shown as it is.
-            self.notify(sentence(str(error)), severity="error", timeout=15, markup=False)
+            # The library's sentence says what is wrong and what to do: a sync error as it
+            # is, a league's with the app's own remedy where it has one.
+            said = error_message(error) if isinstance(error, LeagueError) else str(error)
+            self.notify(sentence(said), severity="error", timeout=15, markup=False)
             return
         notify_worker_failure(self, worker)
 

@@ -19,8 +19,9 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import DataTable, Input, Static
 
+from racer_tui.app_words import in_app_words
 from racer_tui.jobs import sentence
-from racer_tui.screens.base import ModelAdded, RacerScreen, in_app_words
+from racer_tui.screens.base import ModelAdded, RacerScreen
 from racer_tui.screens.dialogs import ImportRequest, PathNameDialog
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup

@@ -38,6 +38,7 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import Button, DataTable, Label, Static
 
+from racer_tui.app_words import said_in_app
 from racer_tui.screens.base import RacerModal, RacerScreen, error_message
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.evaluation import EvaluationScreen
@@ -56,6 +57,7 @@ from sim.garage.folder import (
     list_models,
     open_model,
 )
+from sim.remedies import fix_named
 from sim.simulation import LOOK_AHEAD
 from sim.training import events
 from sim.training.launcher import (
@@ -135,8 +137,10 @@ def last_ending(folder: ModelFolder) -> tuple[events.Ended | None, float | None]
     # own time is from its start to its last word.
     elapsed = at - since if at is not None and since is not None and at >= since else 0.0
     kind, message = str(state["state"]), str(state.get("message") or "")
+    problem, fix = str(state.get("problem") or ""), fix_named(state.get("fix"))
     if kind == "running":  # its process is gone without a last word
         kind, message = "failed", "the training process ended without writing how"
+        problem, fix = "", None
     return (
         events.Ended(
             elapsed=elapsed,
@@ -146,6 +150,8 @@ def last_ending(folder: ModelFolder) -> tuple[events.Ended | None, float | None]
             episodes=int(_number(state.get("episodes"))),
             best_progress=_number(state.get("best_progress")),
             best_lap=None,
+            problem=problem if fix is not None else "",
+            fix=fix.name if fix is not None else "",
         ),
         at,
     )
@@ -670,8 +676,9 @@ class TrainingScreen(RacerScreen[None]):
         if isinstance(event, events.Started) and live is not None and live.model == name:
             live.minutes = event.max_minutes
         if isinstance(event, events.Ended):
+            said = said_in_app(event.message, event.problem, event.remedy)
             self.notify(
-                f"Training of {name} {event.kind}: {event.message}.",
+                f"Training of {name} {event.kind}: {said.rstrip('.')}.",
                 severity="error" if event.kind == "failed" else "information",
                 timeout=10,
                 markup=False,

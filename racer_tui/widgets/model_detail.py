@@ -17,9 +17,11 @@ from textual.app import ComposeResult
 from textual.containers import Horizontal, VerticalScroll
 from textual.widgets import Static
 
+from racer_tui.app_words import said_in_app
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from sim.action_space import ActionSpace
 from sim.deepracer_files import HYPERPARAMETER_SPECS
+from sim.remedies import fix_named
 
 STATUS_STYLES = {
     "untrained": "dim",
@@ -186,7 +188,11 @@ class ModelDetail(VerticalScroll):
         if summary.get("state"):
             table.add_row("last run", _plain(summary["state"]))
         if summary.get("message"):
-            table.add_row("message", _plain(summary["message"]))
+            problem, fix = summary.get("problem"), fix_named(summary.get("fix"))
+            said = said_in_app(
+                str(summary["message"]), problem if isinstance(problem, str) else "", fix
+            )
+            table.add_row("message", _plain(said))
         return table
 
     @staticmethod

@@ -22,6 +22,7 @@ from textual.app import ComposeResult
 from textual.containers import Grid, Vertical
 from textual.widgets import Static
 
+from racer_tui.app_words import said_in_app
 from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.chart import MAX_POINTS, LineChart
 from racer_tui.widgets.job_line import local_clock
@@ -174,7 +175,7 @@ def training_job(figures: TrainingFigures, model: str = "") -> Job:
             state,
             at=figures.ended_at or 0.0,
             done=ended.elapsed,
-            outcome=ended.message if failed else "",
+            outcome=said_in_app(ended.message, ended.problem, ended.remedy) if failed else "",
             fix=TRAIN_AGAIN if failed else "",
         )
     if started is None:

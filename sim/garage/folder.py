@@ -205,8 +205,9 @@ class ModelFolder:
     @property
     def training_state_file(self) -> Path:
         """Written atomically by the trainer: {"state", "pid", "started_at", "updated_at",
-        "elapsed_seconds", "steps", "episodes", "best_progress", "message", "physics",
-        "budget_minutes"}."""
+        "elapsed_seconds", "steps", "episodes", "best_progress", "message", "problem", "fix",
+        "physics", "budget_minutes"}: `problem` and `fix` are a failure's message without
+        its remedy and the remedy's name (`sim.remedies.Fix`), or empty."""
         return self.path / TRAINING_STATE_FILE
 
     # --- the DeepRacer files -----------------------------------------------------------

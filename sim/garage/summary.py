@@ -45,11 +45,13 @@ def training_summary(folder: ModelFolder) -> dict[str, Any]:
         "state": None,
         "updated_at": None,
         "message": None,
+        "problem": None,  # a failure's message without its remedy, and the remedy's name
+        "fix": None,
         # The car the policy learnt (sim.race.physics); travels with a bundle's summary.
         "physics": folder.trained_physics(),
     }
     if state is not None:
-        for key in ("state", "updated_at", "message"):
+        for key in ("state", "updated_at", "message", "problem", "fix"):
             if isinstance(state.get(key), str):
                 summary[key] = state[key][:MAX_SUMMARY_TEXT]
         if _is_count(state.get("steps")):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sim.remedies import RemedyError
+from sim.remedies import Fix, RemedyError
 
 
 class PolicyError(RemedyError):
@@ -22,3 +22,11 @@ def describe_failure(error: BaseException) -> str:
     ):
         return str(error)
     return f"racer-tui failed unexpectedly ({type(error).__name__}: {error}); please report it."
+
+
+def failure_remedy(error: BaseException) -> tuple[str, Fix | None]:
+    """The failure without its remedy, and the remedy (for `events.Ended`'s `problem` and
+    `fix`), when its message ends in one a front end may offer its own way."""
+    if isinstance(error, RemedyError) and error.fix is not None:
+        return error.problem, error.fix
+    return "", None

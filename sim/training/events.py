@@ -22,8 +22,10 @@ from __future__ import annotations
 import json
 import math
 import types
-from dataclasses import asdict, dataclass, fields
+from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Any, ClassVar, Union, get_args, get_origin, get_type_hints
+
+from sim.remedies import Fix
 
 MAX_LINE_BYTES = 64_000
 
@@ -118,11 +120,20 @@ class Ended:
     TYPE: ClassVar[str] = "ended"
     elapsed: float
     kind: str  # "finished", "stopped" or "failed"
-    message: str
+    message: str  # as the command line says it
     total_steps: int
     episodes: int
     best_progress: float
     best_lap: float | None
+    # A failure whose message ends in a remedy a front end may offer its own way: the
+    # message without it, and the remedy's name (`sim.remedies.Fix`). Empty otherwise, and
+    # in the lines of older racer-tuis.
+    problem: str = ""
+    fix: str = ""
+
+    @property
+    def remedy(self) -> Fix | None:
+        return Fix[self.fix] if self.fix else None
 
 
 Event = Started | Episode | Update | Evaluation | System | Checkpoint | Ended
@@ -175,8 +186,12 @@ def decode(line: str | bytes) -> Event:
     values: dict[str, Any] = {}
     for spec in fields(cls):
         if spec.name not in data:
+            if spec.default is not MISSING:  # a field newer than the line's writer
+                continue
             raise EventError(f"{kind} event has no {spec.name!r}")
         values[spec.name] = _check(data[spec.name], _HINTS[cls][spec.name], f"{kind}.{spec.name}")
+    if cls is Ended and values.get("fix", "") not in ("", *Fix.__members__):
+        raise EventError(f"{kind}.fix names no remedy racer-tui knows")
     return cls(**values)  # type: ignore[no-any-return]
 
 

@@ -37,7 +37,7 @@ from sim.track import Track
 from sim.training import events
 from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
-from sim.training.errors import PolicyError, describe_failure
+from sim.training.errors import PolicyError, describe_failure, failure_remedy
 from sim.training.evaluation import EvaluationReport, run_trials
 from sim.training.logbook import Logbook
 from sim.training.policy import (
@@ -136,8 +136,8 @@ class Trainer:
         try:
             resumed_from = self._setup()
         except (ModelError, PolicyError, DeepRacerFileError) as error:
-            self._write_state("failed", str(error))
-            return self._ended("failed", str(error))
+            self._write_state("failed", str(error), error)
+            return self._ended("failed", str(error), error)
         self._clock0 = time.monotonic()  # the time limit counts training, not start-up
         self._write_state("running", "training")
         self.emit(
@@ -154,18 +154,19 @@ class Trainer:
             )
         )
         kind, message = "finished", "the time limit was reached"
+        failure: Exception | None = None
         try:
             self._loop()
             if self.should_stop():
                 kind, message = "stopped", "training was stopped"
         except Exception as error:
-            kind, message = "failed", describe_failure(error)
+            kind, message, failure = "failed", describe_failure(error), error
         try:
             self._finish()
         except Exception as error:  # the folder stays consistent; say what went wrong
-            kind, message = "failed", describe_failure(error)
-        self._write_state(kind, message)
-        return self._ended(kind, message)
+            kind, message, failure = "failed", describe_failure(error), error
+        self._write_state(kind, message, failure)
+        return self._ended(kind, message, failure)
 
     def _setup(self) -> str:
         self._remove_leftovers()
@@ -193,7 +194,8 @@ class Trainer:
         self._first_iteration = self.progress.iteration
         return resumed_from
 
-    def _ended(self, kind: str, message: str) -> events.Ended:
+    def _ended(self, kind: str, message: str, failure: BaseException | None = None) -> events.Ended:
+        problem, fix = failure_remedy(failure) if failure is not None else ("", None)
         return events.Ended(
             elapsed=self.elapsed,
             kind=kind,
@@ -202,6 +204,8 @@ class Trainer:
             episodes=self.progress.episodes,
             best_progress=max(self.progress.best_progress, 0.0),
             best_lap=self.progress.best_lap,
+            problem=problem,
+            fix=fix.name if fix is not None else "",
         )
 
     @property
@@ -423,7 +427,8 @@ class Trainer:
         self._write_metrics(force=True)
         self._checkpoint()
 
-    def _write_state(self, state: str, message: str) -> None:
+    def _write_state(self, state: str, message: str, failure: BaseException | None = None) -> None:
+        problem, fix = failure_remedy(failure) if failure is not None else ("", None)
         document: dict[str, Any] = {
             "state": state,
             "pid": os.getpid(),
@@ -435,6 +440,9 @@ class Trainer:
             "best_progress": max(self.progress.best_progress, 0.0),
             "best_lap": self.progress.best_lap,
             "message": message,
+            # A failure's remedy apart, for a front end that offers it its own way.
+            "problem": problem,
+            "fix": fix.name if fix is not None else "",
             # The car the policy learnt to drive: the Garage says when today's differs.
             "physics": CURRENT_PHYSICS,
             "budget_minutes": self.minutes,  # offered again for the next run

@@ -23,7 +23,7 @@ from typing import TextIO
 from sim import reward_limit
 from sim.reward_limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.training import events
-from sim.training.errors import describe_failure
+from sim.training.errors import describe_failure, failure_remedy
 
 EXIT_FAILED = 1
 EXIT_USER_ERROR = 2
@@ -150,11 +150,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return _train(args, emit, stop)
     except BaseException as error:  # the last line must say what happened
-        emit(_failed(describe_failure(error)))
+        emit(_failed(describe_failure(error), error))
         return EXIT_FAILED
 
 
-def _failed(message: str) -> events.Ended:
+def _failed(message: str, error: BaseException | None = None) -> events.Ended:
+    problem, fix = failure_remedy(error) if error is not None else ("", None)
     return events.Ended(
         elapsed=0.0,
         kind="failed",
@@ -163,6 +164,8 @@ def _failed(message: str) -> events.Ended:
         episodes=0,
         best_progress=0.0,
         best_lap=None,
+        problem=problem,
+        fix=fix.name if fix is not None else "",
     )
 
 
@@ -216,7 +219,7 @@ def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
         torch.set_num_threads(1)
         trainer = Trainer(folder, emit, stop, options)
     except user_errors as error:
-        emit(_failed(str(error)))
+        emit(_failed(str(error), error))
         return EXIT_USER_ERROR
     ended = trainer.run()
     if ended.kind == "stopped" and stop.reason:

@@ -4,6 +4,8 @@ command to type in a shell."""
 
 from __future__ import annotations
 
+import io
+import json
 from dataclasses import replace
 from pathlib import Path
 
@@ -13,9 +15,10 @@ from league.errors import LeagueError
 from league.nights import add_entrant, close_night, draw_heats, new_night
 from league.races import record_race
 from league.store import open_league
+from racer_tui.app_words import APP_FIXES, in_app_words
 from racer_tui.model_form import field_message
 from racer_tui.race_commands import RaceSetupError, resolve_driver
-from racer_tui.screens.base import APP_FIXES, error_message, in_app_words
+from racer_tui.screens.base import error_message
 from sim.garage.clone import clone_model
 from sim.garage.folder import ModelError, open_model
 from sim.garage.options import new_model
@@ -213,3 +216,32 @@ def test_a_race_views_driver_keeps_the_libraries_remedy() -> None:
         "to train it."
     )
     _in_the_app(said, "press t")
+
+
+def test_the_garage_says_a_failed_runs_remedy_the_apps_way() -> None:
+    """The trainer's state file keeps a failure's remedy apart; the Garage's training facts
+    say it with the app's key, and a file naming no known remedy keeps its message."""
+    from rich.console import Console
+
+    from racer_tui.widgets.model_detail import ModelDetail
+    from sim.garage.summary import training_summary
+
+    folder = new_model("rookie")
+    state = {
+        "state": "failed",
+        "message": "p; give a name that `racer-tui tracks list` shows",
+        "problem": "model 'rookie' trains on track 'zzqxw'",
+        "fix": "CHOOSE_TRACK",
+    }
+
+    def facts() -> str:
+        console = Console(width=200, record=True, file=io.StringIO())
+        console.print(ModelDetail._training(training_summary(folder)))
+        return console.export_text()
+
+    folder.training_state_file.write_text(json.dumps(state))
+    shown = facts()
+    assert "model 'rookie' trains on track 'zzqxw'; press e in the Garage" in shown
+    assert "racer-tui" not in shown
+    folder.training_state_file.write_text(json.dumps({**state, "fix": "NOT_A_FIX"}))
+    assert "`racer-tui tracks list`" in facts()

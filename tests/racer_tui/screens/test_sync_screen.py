@@ -438,3 +438,34 @@ async def test_conflicts_show_what_differs_and_both_sides() -> None:
         # The action is in the command palette, with the other League keys.
         titles = [command.text for command in app.palette_commands(app.screen)]
         assert "League: Sync" in titles and "This screen: Sync now" in titles
+
+
+async def test_a_league_refusal_during_a_sync_names_the_apps_key(
+    monkeypatch: pytest.MonkeyPatch, store_url: str
+) -> None:
+    """A league error that ends in a remedy the app offers with a key is said with that key,
+    in the toast and on the job line, never as the command line's command."""
+    import racer_tui.screens.sync as sync_screen
+    from league.errors import LeagueError
+    from sim.remedies import Fix
+
+    found_here(store_url)
+
+    def refuse(*_: object, **__: object) -> None:
+        problem = "a pulled race is on track 'zzqxw', which is not on this machine"
+        raise LeagueError(
+            f"{problem}; import it with `racer-tui tracks import FILE`.",
+            problem=problem,
+            fix=Fix.IMPORT_TRACK,
+        )
+
+    monkeypatch.setattr(sync_screen, "sync_league", refuse)
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        notes = Notifications(app)
+        screen = await sync_with(pilot, store_url)
+        said = notes.text("error")
+        assert "not on this machine; import its .npy file on the Tracks screen (i there)" in said
+        assert "racer-tui" not in said
+        line = painted(screen.query_one(JobLine))
+        assert "(i there)" in " ".join(line.split()) and "racer-tui" not in line

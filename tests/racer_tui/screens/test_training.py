@@ -428,3 +428,69 @@ async def test_a_training_far_past_its_budget_is_stopped_by_the_app(
         screen._tick()
         assert sleeper.wait(timeout=10) == -signal.SIGTERM
         assert "ran well past its 1-minute budget; stopping it" in notes.text("warning")
+
+
+MISSING_TRACK = events.Ended(
+    0.0,
+    "failed",
+    "model 'ada' trains on track 'zzqxw': there is no track named 'zzqxw'; give a name that "
+    "`racer-tui tracks list` shows, or the path of a DeepRacer .npy file",
+    0,
+    0,
+    0.0,
+    None,
+    problem="model 'ada' trains on track 'zzqxw': there is no track named 'zzqxw'",
+    fix="CHOOSE_TRACK",
+)
+
+
+def says_the_apps_remedy(text: str) -> bool:
+    flat = " ".join(text.split())
+    return (
+        "there is no track named 'zzqxw'; press e in the Garage to choose another" in flat
+        and "Press t to train again." in flat
+        and "racer-tui" not in flat
+    )
+
+
+async def test_a_failed_training_says_the_apps_remedy_live_and_after_a_restart() -> None:
+    """The child writes the command line's sentence and, apart, the problem and its remedy:
+    the app offers its own key, never a shell command, in its toast and its run line, and
+    again from the trainer's state file after a restart."""
+    folder = new_model("ada")
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        notes = Notifications(app)
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        screen.apply_event("ada", MISSING_TRACK)
+        charts = screen.query_one(TrainingCharts)
+        charts.redraw_now()
+        assert "press e in the Garage to choose another" in notes.text("error")
+        assert "racer-tui" not in notes.text("error")
+        # Its run line, once laid out (a longer text takes a frame to get its height).
+        await wait_for(pilot, lambda: says_the_apps_remedy(painted(charts)))
+    state = {
+        "state": "failed",
+        "pid": 999_999_999,
+        "started_at": datetime(2026, 11, 20, 21, 0, tzinfo=UTC).isoformat(),
+        "updated_at": datetime(2026, 11, 20, 21, 1, tzinfo=UTC).isoformat(),
+        "message": MISSING_TRACK.message,
+        "problem": MISSING_TRACK.problem,
+        "fix": MISSING_TRACK.fix,
+    }
+    folder.training_state_file.write_text(json.dumps(state))
+    app = create_app(start="training")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        charts = app.screen.query_one(TrainingCharts)
+        charts.redraw_now()
+        await wait_for(pilot, lambda: says_the_apps_remedy(painted(charts)))
+        assert "last run failed" in painted(charts)
+    # A state file naming a remedy this racer-tui does not know keeps the message as is.
+    folder.training_state_file.write_text(json.dumps({**state, "fix": "WIPE_DISK"}))
+    from racer_tui.screens.training import last_ending
+
+    ended, _ = last_ending(folder)
+    assert ended is not None and ended.remedy is None and ended.message == MISSING_TRACK.message

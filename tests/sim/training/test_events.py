@@ -7,6 +7,7 @@ import math
 
 import pytest
 
+from sim.remedies import Fix
 from sim.training import events
 
 SAMPLES: list[events.Event] = [
@@ -18,6 +19,9 @@ SAMPLES: list[events.Event] = [
     events.System(4.0, 95.5, 380.2),
     events.Checkpoint(4.1, 1, 2048, "checkpoints/latest.safetensors"),
     events.Ended(5.0, "stopped", "training was stopped", 2048, 80, 61.0, None),
+    events.Ended(
+        0.0, "failed", "p; run `racer-tui x`.", 0, 0, 0.0, None, problem="p", fix="TRAIN_MODEL"
+    ),
 ]
 
 
@@ -35,6 +39,21 @@ def test_each_ending_keeps_its_kind() -> None:
         line = events.encode(ended)
         assert json.loads(line)["type"] == kind
         assert events.decode(line) == ended
+
+
+def test_a_failure_carries_its_remedy_apart_and_older_lines_still_read() -> None:
+    ended = events.Ended(0.0, "failed", "p; run it.", 0, 0, 0.0, None, problem="p", fix="RENAME")
+    decoded = events.decode(events.encode(ended))
+    assert isinstance(decoded, events.Ended) and decoded.remedy is Fix.RENAME
+    # A line of a racer-tui before remedies travelled: no remedy, the message as it was.
+    older = '{"type":"failed","elapsed":0,"message":"m","total_steps":0,"episodes":0,'
+    older += '"best_progress":0,"best_lap":null}'
+    decoded = events.decode(older)
+    assert isinstance(decoded, events.Ended)
+    assert (decoded.message, decoded.problem, decoded.remedy) == ("m", "", None)
+    # A remedy this racer-tui does not know is no event.
+    with pytest.raises(events.EventError, match="names no remedy"):
+        events.decode(older[:-1] + ',"problem":"p","fix":"DELETE_EVERYTHING"}')
 
 
 def test_a_nan_figure_travels_as_null_and_comes_back_as_nan() -> None:

@@ -17,6 +17,7 @@ import pytest
 
 from sim.deepracer_files import read_sim_trace, read_training_metrics
 from sim.garage.folder import ModelFolder, ModelStatus
+from sim.remedies import Fix
 from sim.training import events
 from sim.training.checkpoint import LATEST
 from sim.training.launcher import TrainingProcess
@@ -125,6 +126,22 @@ def test_an_unknown_model_fails_with_one_sentence() -> None:
     ended = stream[0]
     assert isinstance(ended, events.Ended) and ended.kind == "failed"
     assert "no model named 'no-such-model'" in ended.message
+
+
+def test_a_model_whose_track_is_gone_fails_with_the_remedy_apart(model: ModelFolder) -> None:
+    """The command line's sentence names a command; the app needs the problem and the
+    remedy apart to offer its own key instead (`racer_tui.app_words`)."""
+    params = model.training_params_file
+    params.write_text(params.read_text().replace("reinvent_base", "zzqxw"))
+    process = TrainingProcess.start(model.name, minutes=1, extra=TINY)
+    (ended,) = list(process.events())
+    assert process.wait() != 0
+    assert isinstance(ended, events.Ended) and ended.kind == "failed"
+    assert "`racer-tui tracks list`" in ended.message
+    assert ended.problem == (
+        "model 'tiny' trains on track 'zzqxw': there is no track named 'zzqxw'"
+    )
+    assert ended.remedy is Fix.CHOOSE_TRACK
 
 
 def test_the_stop_flag_notices_a_vanished_parent() -> None:
