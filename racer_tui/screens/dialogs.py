@@ -70,30 +70,38 @@ class ConfirmDialog(RacerModal[bool]):
         Binding("n,escape", "answer(False)", "No"),
     ]
 
-    def __init__(self, title: str, message: str, confirm_label: str = "Delete") -> None:
+    def __init__(
+        self,
+        title: str,
+        message: str,
+        confirm_label: str = "Delete",
+        cancel_label: str = "Cancel",
+    ) -> None:
         super().__init__()
         self._title = title
         self._message = message
         self._confirm_label = confirm_label
+        self._cancel_label = cancel_label
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
             yield Label(Text(self._title), classes="dialog-title", id="question-title")
             yield Static(Text(self._message), classes="dialog-body", id="question-body")
             with Horizontal(classes="dialog-buttons"):
-                yield Button("Cancel (n)", id="cancel")
-                yield Button(self._confirm_text(), id="confirm", variant="error")
+                yield Button(f"{self._cancel_label} (n)", id="cancel")
+                yield Button(f"{self._confirm_label} (y)", id="confirm", variant="error")
 
-    def _confirm_text(self) -> str:
-        return f"{self._confirm_label} (y)"
-
-    def pose(self, title: str, message: str, confirm_label: str) -> None:
+    def pose(
+        self, title: str, message: str, confirm_label: str, cancel_label: str = "Cancel"
+    ) -> None:
         """Ask this question next time the dialog is shown."""
-        self._title, self._message, self._confirm_label = title, message, confirm_label
+        self._title, self._message = title, message
+        self._confirm_label, self._cancel_label = confirm_label, cancel_label
         if self.is_mounted:  # a kept dialog shows its new question; a new one composes it
             self.query_one("#question-title", Label).update(Text(title))
             self.query_one("#question-body", Static).update(Text(message))
-            self.query_one("#confirm", Button).label = self._confirm_text()
+            self.query_one("#confirm", Button).label = f"{confirm_label} (y)"
+            self.query_one("#cancel", Button).label = f"{cancel_label} (n)"
 
     def on_screen_resume(self) -> None:
         self.query_one("#cancel", Button).focus()
@@ -120,12 +128,14 @@ def ask(
     answered: Callable[[bool | None], None],
     *,
     confirm_label: str = "Delete",
+    cancel_label: str = "Cancel",
 ) -> None:
     """Ask a yes-or-no question in the app's kept question dialog; `answered` gets the
-    answer (True for yes) once the racer gives it."""
+    answer (True for yes) once the racer gives it. `cancel_label` names the no when it does
+    more than cancel (start a heat again, keep watching)."""
     dialog = kept_screen(app, QUESTION_SCREEN, lambda: ConfirmDialog(title, message))
     assert isinstance(dialog, ConfirmDialog)
-    dialog.pose(title, message, confirm_label)
+    dialog.pose(title, message, confirm_label, cancel_label)
     app.push_screen(dialog, answered)
 
 

@@ -554,6 +554,7 @@ class NightsScreen(RacerScreen[None]):
         self.new_season_id: str | None = None  # created here: new nights start in it
         self.heat_rows: list[tuple[Heat | None, Entrant]] = []  # the heats table's rows
         self._follow: str | None = None  # an entrant whose row the cursor follows (a move)
+        self._recorded_heats: set[str] = set()  # heats this screen has sent to the league
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league", "league nights")
@@ -837,13 +838,19 @@ class NightsScreen(RacerScreen[None]):
         self.post_message(HeatReady(night, waiting[0], setup))
 
     def on_heat_ready(self, message: HeatReady) -> None:
-        setup = message.setup
-        screen: RacerScreen[RaceResult | None] = (
-            TimekeeperScreen(setup) if isinstance(setup, TimekeeperSetup) else RaceScreen(setup)
-        )
-        self.app.push_screen(screen, partial(self._heat_finished, message.night, message.heat))
+        setup, night, heat = message.setup, message.night, message.heat
+        screen: RacerScreen[RaceResult | None]
+        if isinstance(setup, TimekeeperSetup):
+            screen = TimekeeperScreen(setup)
+        else:
+            # Recorded as its finish is shown: leaving the view records nothing more.
+            record = partial(self._record_heat, night, heat)
+            screen = RaceScreen(replace(setup, record=record))
+        self.app.push_screen(screen, partial(self._heat_finished, night, heat))
 
     def _heat_finished(self, night: Night, heat: Heat, result: RaceResult | None) -> None:
+        if heat.id in self._recorded_heats:
+            return
         if result is None:
             self.notify(
                 f"Heat {heat.position} was left before its race finished; press r to run it again.",
@@ -855,10 +862,16 @@ class NightsScreen(RacerScreen[None]):
 
     @work(thread=True, group="nights-change", exit_on_error=False)
     def _record(self, night: Night, heat: Heat, result: RaceResult) -> None:
+        self._record_heat(night, heat, result)
+
+    def _record_heat(self, night: Night, heat: Heat, result: RaceResult) -> None:
+        """Put a heat's result on the night (in a worker thread: this screen's, or the race
+        view's as the heat's finish is shown); raises what the league refuses."""
         with open_league(self.db_path) as league:
             record_race(league, result, night.id, heat_id=heat.id)
         # Recorded: a physical car's heat has nothing left to resume.
         journal_path(self.db_path or default_db_path(), heat.id).unlink(missing_ok=True)
+        self._recorded_heats.add(heat.id)
         best = result.best_lap
         lap = f"best lap {best.time_seconds:.3f} s" if best is not None else "no valid lap"
         self.post_message(NightChanged(night.id, f"Recorded {heat.entrant.racer}'s heat: {lap}."))

@@ -24,6 +24,7 @@ from textual.widgets import DataTable, Digits, Static
 from league.live_heat import LiveHeatWriter
 from racer_tui.jobs import Job, JobState
 from racer_tui.screens.base import RacerScreen, error_message
+from racer_tui.screens.dialogs import ask
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.race_map import CarMarker, RaceMap
 from sim.race.driver import Driver
@@ -53,6 +54,10 @@ class RaceSetup:
     leader_seconds: float | None = None  # the leaderboard leader's score, for the gap
     title: str = ""
     live: LiveHeatWriter | None = None  # a night's heat: where it is, for the projector
+    # A night's heat: records its result on the night (blocking, in the view's worker),
+    # once, when the view shows its finish: the host sees the heat end and the standings
+    # update at the same moment. Raises what the league refuses.
+    record: Callable[[RaceResult], None] | None = None
 
 
 def clock_text(seconds: float) -> str:
@@ -69,6 +74,9 @@ def countdown_text(seconds: float) -> str:
 
 # What a racer can do once the race is over or has failed, in the race view's own keys.
 AFTER_THE_RACE = "r replays, Esc goes back."
+# A night's heat, once its finish is shown.
+RECORDING = "Recording it on the night…"
+RECORDED = "Recorded on the night."
 LEAVE = "Esc goes back."
 
 
@@ -131,6 +139,8 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self._laps_shown = 0
         self._last_panel = 0.0
         self._over_on_air = False  # the projector was told the heat is over: it stays so
+        # A night's heat: "" until its finish is shown, then recording, recorded or why not.
+        self.recording = ""
         self.frames = 0
 
     def compose(self) -> ComposeResult:
@@ -208,6 +218,30 @@ class RaceScreen(RacerScreen[RaceResult | None]):
                 self._offtrack_xy.append((tick.x, tick.y))
         self._index = index
         self._draw(self.ticks[index])
+        result = self.ticks[index].result
+        if result is not None:
+            self._record_heat(result)
+
+    def _record_heat(self, result: RaceResult) -> None:
+        """A night's heat goes on the night once its finish is on screen."""
+        if self.setup.record is not None and not self.recording:
+            self.recording = RECORDING
+            self._update_panel(force=True)
+            self._send_to_night(result)
+
+    @work(thread=True, exclusive=True, group="race-record", exit_on_error=False)
+    def _send_to_night(self, result: RaceResult) -> None:
+        assert self.setup.record is not None
+        try:
+            self.setup.record(result)
+        except Exception as error:  # said in the view; Esc leaves it unrecorded
+            self.app.call_from_thread(self._recorded_as, f"Not recorded: {error_message(error)}")
+            return
+        self.app.call_from_thread(self._recorded_as, RECORDED)
+
+    def _recorded_as(self, outcome: str) -> None:
+        self.recording = outcome
+        self._update_panel(force=True)
 
     def _draw(self, tick: RaceTick) -> None:
         first = max(0, self._index - int(TRAIL_SECONDS * 15))
@@ -315,6 +349,10 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         text.append("\n")
         if job.state is JobState.DONE:
             text.append("Finished. ", style="bold green")
+            if self.recording in (RECORDING, RECORDED):
+                text.append(f"{self.recording} ", style="green")
+            elif self.recording:
+                text.append(f"{self.recording} ", style="bold red")
             text.append(AFTER_THE_RACE, style="dim")
         return text
 
@@ -353,8 +391,22 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             return
         self.show_ghost = not self.show_ghost
 
+    @property
+    def finish_shown(self) -> bool:
+        """The view has shown the race's end (a replay has it from the start)."""
+        return self.setup.replay is not None or (
+            bool(self.ticks) and self.ticks[self._index].result is not None
+        )
+
     def action_restart(self) -> None:
         """Play the race again from the start (the simulation is not run again)."""
+        if not self.finish_shown:
+            self.notify(
+                "The race has not finished yet: e shows its end, then r replays it.",
+                severity="warning",
+                markup=False,
+            )
+            return
         self.race_clock = 0.0
         self._index = 0
         self._offtrack_xy = []
@@ -372,4 +424,23 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             self._update_panel(force=True)
 
     def action_leave(self) -> None:
+        if self.recording == RECORDING:
+            self.notify("The heat is being recorded; a moment.", markup=False)
+            return
+        if self.setup.record is not None and not self.recording and not self.failure:
+            # A night's heat left before its finish is not recorded: asked, never silent.
+            ask(
+                self.app,
+                "Leave the heat before its finish?",
+                "It is not recorded, and r on the Nights screen runs it again. To record it, "
+                "keep watching, or press e to see its finish at once.",
+                self._leave_answered,
+                confirm_label="Leave unrecorded",
+                cancel_label="Keep watching",
+            )
+            return
         self.dismiss(self.result)
+
+    def _leave_answered(self, yes: bool | None) -> None:
+        if yes:
+            self.dismiss(None)

@@ -39,6 +39,8 @@ from sim.race.rules import RaceRules, lap_counts
 from sim.track import Track
 
 CLOCK_HZ = 10.0
+# Once the race is over: nothing is on the night until the timekeeper says so.
+RECORD_WITH_ESC = "Esc records the heat on the night (strike a lap out first with x)."
 
 
 @dataclass(frozen=True)
@@ -89,7 +91,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         Binding("u", "undo_capture", "Undo lap", tooltip="undo a lap", show=False),
         Binding("f", "did_not_finish", "Not finished", tooltip="did not finish", show=False),
         Binding("x", "strike", "Strike lap", tooltip="strike a lap", show=False),
-        Binding("escape", "leave", "Back", tooltip="back", show=False),
+        Binding("escape", "leave", "Back", tooltip="record / back", show=False),
     ]
     DEFAULT_CSS = """
     TimekeeperScreen #tk-title { text-style: bold; height: 1; }
@@ -162,7 +164,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
                 self._journal = resumed.journal
                 self._keep_journal(resumed.accept)
                 self._say(
-                    "Resumed: press Esc to record it."
+                    f"Resumed. {RECORD_WITH_ESC}"
                     if heat.phase is Phase.OVER
                     else "Resumed, paused: Space starts the clocks when the car is on the track."
                 )
@@ -174,9 +176,10 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             self.app,
             "Resume this heat?",
             f"racer-tui stopped during this heat, {where} and {laps} captured. Resume it "
-            "where it stopped, or start it again?",
+            "where it stopped, or start it again from the line?",
             answered,
             confirm_label="Resume",
+            cancel_label="Start again",
         )
 
     def on_unmount(self) -> None:
@@ -236,12 +239,18 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         if not self.heat.laps or selected is None:
             self._say("No lap has been captured yet.", error=True)
             return
-        number = self.heat.laps[min(selected, len(self.heat.laps) - 1)].number
-        self._input("strike", lap=number)
+        captured = self.heat.laps[min(selected, len(self.heat.laps) - 1)]
+        if not captured.finished:  # it never counts: striking it would change nothing
+            self._say(
+                f"Lap {captured.number} did not finish, so it never counts; nothing to strike.",
+                error=True,
+            )
+            return
+        self._input("strike", lap=captured.number)
 
     def action_end(self) -> None:
         if self.heat.phase is Phase.OVER:
-            self._say("The race is over: Esc records it and goes back.")
+            self._say(f"The race is over. {RECORD_WITH_ESC}")
             return
         if self.heat.phase is Phase.READY:
             self._say("The race has not started; Space starts it.", error=True)
@@ -306,6 +315,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         if self._origin is None:
             self._origin = now
         at = self._heat_time(now)
+        was_over = self.heat.phase is Phase.OVER
         try:
             said = take_input(self.heat, kind, at, lap)
         except TimekeeperError as error:
@@ -314,6 +324,8 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             journal = self._journal
             if journal is not None:
                 self._keep_journal(lambda: journal.took(kind, at, self.heat, lap))
+            if self.heat.phase is Phase.OVER and not was_over:
+                said = f"{said} {RECORD_WITH_ESC}"
             self._say(said)
         self._draw()
 

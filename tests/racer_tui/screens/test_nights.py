@@ -291,3 +291,57 @@ async def test_a_host_withdraws_an_entrant_moves_a_heat_and_deletes_an_unheld_ni
         assert "No league nights yet" in painted(nights.query_one("#night-rules"))
     with open_league() as league:
         assert list_nights(league) == []
+
+
+async def test_a_heat_is_recorded_as_its_finish_shows_and_never_left_silently() -> None:
+    """A host who leaves a simulated heat before its finish is asked, and the heat stays
+    to run again; r mid-heat does not restart it; the finish on screen records the heat at
+    once (the projector and `night show` see it before anyone presses Esc), and leaving
+    after it records nothing twice."""
+    from league.night_state import read_night
+    from racer_tui.screens.race_screen import RECORDED, RaceScreen
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = new_night(
+            league, resolve_track("beginner-oval"), rules=replace(preset_rules("league"),
+            window_seconds=20.0), name="friday",
+        )  # fmt: skip
+        add_entrant(league, night, "ada", "reference")
+        draw_heats(league, night, seed=1)
+
+    def heats_raced() -> int:
+        with open_league() as league:
+            return sum(1 for heat in read_night(league, night.id).heats if heat.race_id)
+
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 30)) as pilot:
+        notes = Notifications(app)
+        nights = await the_nights_screen(pilot)
+        await pilot.press("r")
+        await settle(pilot)
+        heat = app.screen
+        assert isinstance(heat, RaceScreen)
+        await pilot.press("r")  # replay before the finish: refused, the heat runs on
+        assert "has not finished yet" in notes.text("warning")
+        await pilot.press("escape")
+        assert isinstance(app.screen, ConfirmDialog)  # asked, never silent
+        await pilot.press("n")
+        assert app.screen is heat
+        await pilot.press("escape", "y")  # left unrecorded: still waiting
+        await settle(pilot)
+        assert app.screen is nights and heats_raced() == 0
+        assert "press r to run it again" in notes.text("warning")
+
+        await pilot.press("r")
+        await settle(pilot)
+        heat = app.screen
+        assert isinstance(heat, RaceScreen)
+        await pilot.press("e")  # its finish at once: recorded while the view stays
+        await settle(pilot)
+        assert app.screen is heat and heats_raced() == 1
+        assert RECORDED in painted(heat.query_one("#race-facts"))
+        await pilot.press("escape")
+        await settle(pilot)
+        assert app.screen is nights and heats_raced() == 1
+        assert notes.text().count("Recorded ada's heat") == 1

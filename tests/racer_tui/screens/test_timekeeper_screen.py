@@ -144,7 +144,10 @@ async def test_a_lap_count_heat_shows_its_lap_of_the_race_and_ends_at_the_last()
         assert "Lap 2 of 2" in painted(keeper.query_one("#tk-facts"))
         watch.now += 9.0
         await pilot.press("l")  # the last lap: no End key needed
-        assert str(keeper.said) == "Lap 2: 9.000 s, counts. 2 laps done: race over."
+        assert str(keeper.said) == (
+            "Lap 2: 9.000 s, counts. 2 laps done: race over. Esc records the heat on the "
+            "night (strike a lap out first with x)."
+        )  # nothing is on the night until Esc, and the timekeeper is told so
         facts = painted(keeper.query_one("#tk-facts"))
         assert "Race over" in facts and "Lap 3" not in facts
         await pilot.pause(0.15)
@@ -201,6 +204,9 @@ async def test_a_heat_left_by_a_stopped_racer_tui_is_resumed_with_its_laps() -> 
         assert isinstance(question, ConfirmDialog)
         asked = " ".join(painted(question.query_one("#question-body")).split())
         assert "racer-tui stopped during this heat, with 3:45 left and 1 lap captured" in asked
+        # The question's answers are its buttons: resume, or start again from the line.
+        buttons = {str(button.label) for button in question.query("Button")}
+        assert buttons == {"Resume (y)", "Start again (n)"}
         await pilot.press("y")
         await settle(pilot)
         keeper = second.screen
@@ -277,3 +283,20 @@ async def test_an_automatic_timers_lines_start_the_race_and_capture_laps(
     finally:
         os.close(controller)
         os.close(device)
+
+
+async def test_a_lap_that_did_not_finish_is_not_struck_out_in_name_only() -> None:
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        add_entrant(league, night, "dee", "physical")
+        draw_heats(league, night, seed=1)
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        keeper, watch = await the_first_heat_started(pilot)
+        watch.now += 12.0
+        await pilot.press("l")  # lap 1 counts
+        watch.now += 5.0
+        await pilot.press("f")  # lap 2 did not finish: it never counts
+        await pilot.press("x")  # the newest lap is selected
+        assert str(keeper.said) == ("Lap 2 did not finish, so it never counts; nothing to strike.")
+        assert [row[-1] for row in keeper.query_one(LapList).rows()][-1] == "not finished"
