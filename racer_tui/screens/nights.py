@@ -541,6 +541,8 @@ class NightsScreen(RacerScreen[None]):
     NightsScreen #night-rules { height: auto; }
     NightsScreen #heats { height: 1fr; min-height: 4; }
     NightsScreen #standings { height: 1fr; min-height: 4; }
+    NightsScreen #season { height: 1fr; min-height: 4; }
+    NightsScreen .-hidden { display: none; }
     """
 
     def __init__(self, *, db_path: Path | None = None) -> None:
@@ -568,6 +570,9 @@ class NightsScreen(RacerScreen[None]):
                 yield FittedTable(id="heats", cursor_type="row", zebra_stripes=True)
                 yield Label("Standings", id="standings-title", classes="field-label")
                 yield FittedTable(id="standings", cursor_type="row", zebra_stripes=True)
+                # A closed night of a season: where it left the season, under its own.
+                yield Label("", id="season-title", classes="field-label -hidden")
+                yield FittedTable(id="season", cursor_type="row", classes="-hidden")
         yield RacerFooter()
 
     def on_mount(self) -> None:
@@ -673,18 +678,26 @@ class NightsScreen(RacerScreen[None]):
             table.move_cursor(row=ids.index(follow))
 
     def _show_standings(self, state: NightState) -> None:
+        self._show_night_standings(state)
+        self._show_season(state)
+
+    def _show_season(self, state: NightState) -> None:
+        title = self.query_one("#season-title", Label)
+        table = self.query_one("#season", DataTable)
+        title.set_class(state.season is None, "-hidden")
+        table.set_class(state.season is None, "-hidden")
+        if state.season is None:
+            return
+        title.update(Text(f"Season standings: {state.season_name}"))
+        rows: list[list[str | Text]] = [
+            [str(s.position), Text(s.display_name), str(s.points), str(s.nights), str(s.wins)]
+            for s in state.season
+        ]
+        fill_table(table, ("#", RACER, "points", Col("nights", keep=2), Col("wins", keep=1)), rows)
+
+    def _show_night_standings(self, state: NightState) -> None:
         table = self.query_one("#standings", DataTable)
         title = self.query_one("#standings-title", Label)
-        if state.season is not None:
-            title.update(Text(f"Season standings: {state.season_name}"))
-            rows: list[list[str | Text]] = [
-                [str(s.position), Text(s.display_name), str(s.points), str(s.nights), str(s.wins)]
-                for s in state.season
-            ]
-            fill_table(
-                table, ("#", RACER, "points", Col("nights", keep=2), Col("wins", keep=1)), rows
-            )
-            return
         closed = "final " if state.night.closed else ""
         title.update(Text(f"Night standings ({closed}with points)"))
         score_title = SCORE_TITLES[state.night.rules.ranking]

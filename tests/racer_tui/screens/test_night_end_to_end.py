@@ -166,10 +166,16 @@ async def test_a_new_host_runs_a_mixed_night_from_opening_to_season_points(
         assert isinstance(app.screen, ConfirmDialog)
         await pilot.press("y")
         await settle(pilot)
-        assert "Season standings: spring" in painted(nights.query_one("#standings-title"))
-        season = {row[1]: row[2] for row in table_rows(nights, "#standings")}
+        assert "Season standings: spring" in painted(nights.query_one("#season-title"))
+        season = {row[1]: row[2] for row in table_rows(nights, "#season")}
         assert set(season) == {"ada", "[b]bob[/b]", "carol"}
-        assert "[b]bob[/b]" in painted(nights.query_one("#standings"))
+        assert "[b]bob[/b]" in painted(nights.query_one("#season"))
+        # The night's own final standings stay on screen above the season's.
+        assert "Night standings (final with points)" in painted(
+            nights.query_one("#standings-title")
+        )
+        tonight = {row[1]: row[-1] for row in table_rows(nights, "#standings")}
+        assert tonight == season  # a season's first night: its points are the season's
         await pilot.press("r")  # a closed night takes no more heats
         await settle(pilot)
         assert "is closed" in notes.text("warning")
