@@ -24,7 +24,7 @@ from league.racers import check_name, display_names, ensure_racer
 from league.races import find_local_track, record_race
 from league.seasons import DEFAULT_POINTS, get_season, night_results
 from league.store import League, now_iso
-from league.timekeeper.car import is_physical, physical_spec
+from league.timekeeper.car import car_name, is_physical, physical_spec
 from league.tracks import ensure_track
 from sim.ids import new_id
 from sim.plural import counted
@@ -64,6 +64,16 @@ class Entrant:
     racer: str
     display_name: str
     model: str  # `reference`, a garage model name, or an absolute bundle/folder path
+
+    @property
+    def car(self) -> str:
+        """The car as every screen and board names it: a garage model by its name, a bundle
+        or model folder by its file name (never its whole path), a physical car by its own
+        name, marked physical."""
+        if is_physical(self.model):
+            name = car_name(self.model)
+            return name if name == "physical car" else f"{name} (physical)"
+        return Path(self.model).name if Path(self.model).is_absolute() else self.model
 
 
 @dataclass(frozen=True)

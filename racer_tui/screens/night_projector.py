@@ -299,7 +299,7 @@ class NightProjectorScreen(RacerScreen[None]):
             text.append("Next up: ", style="bold green")
             text.append(f"heat {raced + 1} of {len(state.heats)}\n")
             text.append(after.entrant.display_name, style="bold")
-            text.append(f"  {after.entrant.model}", style="dim")
+            text.append(f"  {after.entrant.car}", style="dim")
             return text
         if state.undrawn:
             text.append("Entrants are coming in", style="bold")

@@ -94,7 +94,7 @@ from sim.track_catalog import DEFAULT_TRACK, resolve_track
 # In the narrow panes the optional columns (keep 1 and 2) give way before a name loses its end.
 NAME = Col("", keep=3, shrink_to=10, collapses=False)
 NIGHT_COLUMNS = (replace(NAME, label="night"), Col("track", keep=1, shrink_to=8), Col("state"))
-HEAT_COLUMNS = ("#", replace(NAME, label="racer"), Col("model", keep=1, shrink_to=8), "result")
+HEAT_COLUMNS = ("#", replace(NAME, label="racer"), Col("car", keep=1, shrink_to=8), "result")
 RACER = replace(NAME, label="racer")
 
 
@@ -444,8 +444,7 @@ def heat_setup(
     timekeeper's. Either tells the night's projector where the heat is."""
     entrant = heat.entrant
     number = heat.position
-    # A bundle's or folder's file name, not its path: the venue's screen shows it.
-    car = car_name(entrant.model) if is_physical(entrant.model) else Path(entrant.model).name
+    car = entrant.car  # a bundle's or folder's file name, not its path: the venue sees it
     live = LiveHeatWriter(
         live_heat_path(league_file or default_db_path(), night.id),
         night_id=night.id,
@@ -459,7 +458,7 @@ def heat_setup(
             track=track,
             rules=night.rules,
             racer=entrant.racer,
-            car=car,
+            car=car_name(entrant.model),  # the result's car: its name, as boards key it
             title=f"Heat {number}: {entrant.display_name}, {car}",
             live=live,
             journal=HeatJournal(journal_path(league_file or default_db_path(), heat.id), heat.id),
@@ -475,7 +474,7 @@ def heat_setup(
         seed=heat.seed,
         ghost=ghost,
         leader_seconds=leader.score if leader is not None else None,
-        title=f"Heat {number}: {heat.entrant.display_name} ({heat.entrant.model})",
+        title=f"Heat {number}: {heat.entrant.display_name} ({entrant.car})",
         live=live,
     )
 
@@ -665,11 +664,11 @@ class NightsScreen(RacerScreen[None]):
             else:
                 result = Text("waiting", style="dim")
             rows.append(
-                [str(number), Text(heat.entrant.display_name), Text(heat.entrant.model), result]
+                [str(number), Text(heat.entrant.display_name), Text(heat.entrant.car), result]
             )
         for entrant in state.undrawn:  # listed as they are added, before any draw
             waiting = Text("entered (d draws)", style="dim")
-            rows.append(["", Text(entrant.display_name), Text(entrant.model), waiting])
+            rows.append(["", Text(entrant.display_name), Text(entrant.car), waiting])
         table = self.query_one("#heats", DataTable)
         fill_table(table, HEAT_COLUMNS, rows)
         follow, self._follow = self._follow, None
@@ -701,7 +700,7 @@ class NightsScreen(RacerScreen[None]):
         closed = "final " if state.night.closed else ""
         title.update(Text(f"Night standings ({closed}with points)"))
         score_title = SCORE_TITLES[state.night.rules.ranking]
-        rows = [
+        rows: list[list[str | Text]] = [
             [
                 str(s.position) if s.position is not None else "-",
                 Text(s.entry.display_name),
@@ -813,7 +812,7 @@ class NightsScreen(RacerScreen[None]):
     def _add_entrant(self, night: Night, request: EntrantRequest) -> None:
         with open_league(self.db_path) as league:
             entrant = add_entrant(league, night, request.racer, request.model)
-        self.post_message(NightChanged(night.id, f"Entered {entrant.racer} with {entrant.model}."))
+        self.post_message(NightChanged(night.id, f"Entered {entrant.racer} with {entrant.car}."))
 
     def action_draw(self) -> None:
         night = self._current("draw the heats")
@@ -954,7 +953,7 @@ class NightsScreen(RacerScreen[None]):
         ask(
             self.app,
             f"Withdraw {entrant.display_name}?",
-            f"{entrant.display_name} ({entrant.model}) leaves the running order; they can be "
+            f"{entrant.display_name} ({entrant.car}) leaves the running order; they can be "
             "entered again (a).",
             partial(self._withdraw_confirmed, night, entrant),
             confirm_label="Withdraw",

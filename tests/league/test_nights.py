@@ -359,3 +359,17 @@ def test_a_night_is_held_on_a_day_of_its_own_and_older_nights_on_the_day_they_op
         with pytest.raises(LeagueError, match="write it as YYYY-MM-DD"):
             nights.night_date(typed)
     assert nights.night_date(" 2027-03-05 ") == date(2027, 3, 5)
+
+
+def test_an_entrants_car_is_named_the_same_everywhere(tmp_path: Path) -> None:
+    """Heats, the race view, the projector and the notes name a car alike: a bundle by its
+    file name, never its path; a physical car by its name, marked physical."""
+    from league.nights import Entrant
+
+    def car(model: str) -> str:
+        return Entrant("id", "ada", "Ada", model).car
+
+    assert car(str(tmp_path / "beta-car.racer-bundle")) == "beta-car.racer-bundle"
+    assert car("alpha-car") == "alpha-car" and car("reference") == "reference"
+    assert car("physical:red-car") == "red-car (physical)"
+    assert car("physical") == "physical car"
