@@ -134,12 +134,14 @@ def _local_day(stamp: str) -> str:
 
 
 def night_date(text: str) -> date:
-    """The day a host typed (YYYY-MM-DD), or a LeagueError saying how to write it."""
+    """The day a host typed (YYYY-MM-DD, or with / or . between), or a LeagueError saying
+    how to write it."""
+    typed = text.strip().replace("/", "-").replace(".", "-")
     try:
-        day = date.fromisoformat(text.strip())
+        day = date.fromisoformat(typed)
     except ValueError:
         day = None
-    if day is None or len(text.strip()) != 10 or not 2000 <= day.year <= 2100:
+    if day is None or len(typed) != 10 or not 2000 <= day.year <= 2100:
         raise LeagueError(
             f"{text.strip()!r} is not a night's date; write it as YYYY-MM-DD, "
             f"for example {datetime.now().date().isoformat()}."

@@ -166,12 +166,9 @@ class NewNightDialog(FormDialog[NightRequest]):
             yield Select(track_options(), value=DEFAULT_TRACK, allow_blank=False, id="night-track")
             with Horizontal(id="night-name-row"):
                 yield Input(placeholder="night name (empty: track and date)", id="night-name")
-                yield Input(
-                    placeholder="date: today",
-                    restrict=r"[0-9-]*",
-                    max_length=10,
-                    id="night-date",
-                )
+                # Anything typed stays as typed: a date the host mistypes is said back to
+                # them as they wrote it, never silently trimmed.
+                yield Input(placeholder="date: today", max_length=10, id="night-date")
             yield Select(
                 [(f"{name} rules: {what}", name) for name, what, _ in RULE_PRESETS],
                 value=RULE_PRESETS[0][0],

@@ -359,6 +359,10 @@ def test_a_night_is_held_on_a_day_of_its_own_and_older_nights_on_the_day_they_op
         with pytest.raises(LeagueError, match="write it as YYYY-MM-DD"):
             nights.night_date(typed)
     assert nights.night_date(" 2027-03-05 ") == date(2027, 3, 5)
+    # Slashes or dots between year, month and day read the same; the other order does not.
+    assert nights.night_date("2027/03/05") == nights.night_date("2027.03.05") == date(2027, 3, 5)
+    with pytest.raises(LeagueError, match="'05/03/2027' is not a night's date"):
+        nights.night_date("05/03/2027")  # said back as typed
 
 
 def test_an_entrants_car_is_named_the_same_everywhere(tmp_path: Path) -> None:

@@ -345,3 +345,30 @@ async def test_a_heat_is_recorded_as_its_finish_shows_and_never_left_silently() 
         await settle(pilot)
         assert app.screen is nights and heats_raced() == 1
         assert notes.text().count("Recorded ada's heat") == 1
+
+
+async def test_a_nights_date_is_kept_as_typed_and_said_back_when_wrong() -> None:
+    """Nothing typed into the date is dropped: a date with slashes opens the night on that
+    day, and a date that is not one is said back as the host wrote it."""
+    from racer_tui.screens.nights import NewNightDialog
+
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await the_nights_screen(pilot)
+        await pilot.press("o")
+        await settle(pilot)
+        dialog = app.screen
+        assert isinstance(dialog, NewNightDialog)
+        await pilot.press(*"friday", "enter", *"27 Nov")
+        assert dialog.query_one("#night-date", Input).value == "27 Nov"
+        await pilot.press("ctrl+s")
+        assert app.screen is dialog
+        assert "'27 Nov' is not a night's date" in painted(dialog.query_one("#problem"))
+        date_field = dialog.query_one("#night-date", Input)
+        date_field.value = ""
+        await pilot.press(*"2026/11/27", "ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, NightsScreen)
+    with open_league() as league:
+        (night,) = list_nights(league)
+    assert (night.name, night.held_on) == ("friday", "2026-11-27")
