@@ -60,6 +60,21 @@ class PathSuggester(Suggester):
         return value + names[0][len(start) :]
 
 
+class NameOrPathSuggester(Suggester):
+    """Completes a name from a list, or, once the value looks like a path (it starts with
+    /, ~ or .), the last part of that path."""
+
+    def __init__(self, names: list[str]) -> None:
+        super().__init__(use_cache=False, case_sensitive=True)
+        self._names = names
+        self._paths = PathSuggester()
+
+    async def get_suggestion(self, value: str) -> str | None:
+        if value.startswith(("/", "~", ".")):
+            return await self._paths.get_suggestion(value)
+        return next((name for name in self._names if name.startswith(value) and value), None)
+
+
 class ConfirmDialog(RacerModal[bool]):
     """Yes or no, with the consequence spelled out. Enter never confirms by accident:
     the focus is on Cancel each time the question is shown. Ask through `ask`, which

@@ -10,6 +10,7 @@ result it returns is recorded with `record_race` into the night.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from datetime import date
 from functools import partial
@@ -22,7 +23,6 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
-from textual.suggester import SuggestFromList
 from textual.widgets import Button, DataTable, Input, Label, Select, Static
 
 from league.errors import LeagueError
@@ -62,8 +62,15 @@ from league.store import League, default_db_path, open_league
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from league.timekeeper.journal import HeatJournal, journal_path
 from racer_tui.race_commands import resolve_driver
-from racer_tui.screens.base import RacerScreen
-from racer_tui.screens.dialogs import FormDialog, InputDialog, PathSuggester, ask, show_problem
+from racer_tui.screens.base import RacerScreen, error_message
+from racer_tui.screens.dialogs import (
+    FormDialog,
+    InputDialog,
+    NameOrPathSuggester,
+    PathSuggester,
+    ask,
+    show_problem,
+)
 from racer_tui.screens.export_path import EXPORT_FORMATS, check_export_path
 from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
@@ -275,13 +282,16 @@ class EntrantRequest:
     model: str
 
 
-class AddEntrantDialog(FormDialog[EntrantRequest]):
+class AddEntrantDialog(FormDialog[str]):
     """A racer and what they race: `reference`, a garage model, a bundle file or a physical
     car."""
 
-    def __init__(self, models: list[str]) -> None:
+    def __init__(self, models: list[str], add: Callable[[EntrantRequest], str]) -> None:
+        """`add` enters the racer (blocking, in this dialog's worker) and says so, or raises
+        what the league refuses: the dialog stays open with what was typed and says why."""
         super().__init__()
         self._models = models
+        self._add = add
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
@@ -295,7 +305,7 @@ class AddEntrantDialog(FormDialog[EntrantRequest]):
             yield Input(placeholder="racer name", id="entrant-racer")
             yield Input(
                 placeholder="reference, a model, a bundle path or physical",
-                suggester=SuggestFromList([REFERENCE_NAME, PHYSICAL, *self._models]),
+                suggester=NameOrPathSuggester([REFERENCE_NAME, PHYSICAL, *self._models]),
                 id="entrant-model",
             )
             yield from self.form_buttons("Add")
@@ -318,7 +328,18 @@ class AddEntrantDialog(FormDialog[EntrantRequest]):
                 "Give the racer's name and the car (reference, a model, a bundle or physical).",
             )
             return
-        self.dismiss(EntrantRequest(racer, model))
+        self._enter(EntrantRequest(racer, model))
+
+    @work(thread=True, exclusive=True, group="entrant-add", exit_on_error=False)
+    def _enter(self, request: EntrantRequest) -> None:
+        try:
+            said = self._add(request)
+        except Exception as error:  # the league's refusal, said where the host typed
+            self.app.call_from_thread(
+                show_problem, self.query_one("#problem", Static), error_message(error)
+            )
+            return
+        self.app.call_from_thread(self.dismiss, said)
 
 
 @dataclass(frozen=True)
@@ -799,17 +820,18 @@ class NightsScreen(RacerScreen[None]):
         night = self._current("add entrants")
         if night is not None:
             models = [folder.name for folder in list_models() if folder.has_policy()]
-            self.app.push_screen(AddEntrantDialog(models), partial(self._entrant_chosen, night))
+            dialog = AddEntrantDialog(models, partial(self._add_entrant, night))
+            self.app.push_screen(dialog, partial(self._entrant_added, night))
 
-    def _entrant_chosen(self, night: Night, request: EntrantRequest | None) -> None:
-        if request is not None:
-            self._add_entrant(night, request)
+    def _entrant_added(self, night: Night, said: str | None) -> None:
+        if said is not None:
+            self.post_message(NightChanged(night.id, said))
 
-    @work(thread=True, group="nights-change", exit_on_error=False)
-    def _add_entrant(self, night: Night, request: EntrantRequest) -> None:
+    def _add_entrant(self, night: Night, request: EntrantRequest) -> str:
+        """Enter a racer on the night (blocking: the dialog's worker runs it)."""
         with open_league(self.db_path) as league:
             entrant = add_entrant(league, night, request.racer, request.model)
-        self.post_message(NightChanged(night.id, f"Entered {entrant.racer} with {entrant.car}."))
+        return f"Entered {entrant.racer} with {entrant.car}."
 
     def action_draw(self) -> None:
         night = self._current("draw the heats")

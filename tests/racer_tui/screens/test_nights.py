@@ -9,13 +9,13 @@ from typing import Any
 
 from textual.pilot import Pilot
 from textual.screen import Screen
-from textual.widgets import DataTable, Input, Select
+from textual.widgets import DataTable, Input, Select, Static
 
 from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
 from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
-from racer_tui.screens.nights import NightsScreen
+from racer_tui.screens.nights import AddEntrantDialog, NightsScreen
 from sim.home import data_home
 from sim.race.rules import RankingMethod, preset_rules
 from sim.track_catalog import resolve_track
@@ -85,10 +85,31 @@ async def test_running_a_heat_before_the_draw_says_what_to_do() -> None:
         assert "no drawn heats waiting" in notes.text("error")
         await pilot.press("a", *"ada", "enter", *"no-such-model", "enter")
         await settle(pilot)
-        errors = notes.text("error")
-        assert "There is no model named 'no-such-model'" in errors
-        assert "the Garage (1) lists your models, and n there creates one" in errors
-        assert "racer-tui" not in errors  # the command line's words stay there
+        # Said in the dialog, which stays open with what was typed.
+        dialog = app.screen
+        assert isinstance(dialog, AddEntrantDialog)
+        said = " ".join(painted(dialog.query_one("#problem")).split())
+        assert "There is no model named 'no-such-model'" in said
+        assert "the Garage (1) lists your models, and n there creates one" in said
+        assert "racer-tui" not in said  # the command line's words stay there
+        assert dialog.query_one("#entrant-racer", Input).value == "ada"
+        model = dialog.query_one("#entrant-model", Input)
+        model.value = ""
+        await pilot.press(*"refer")
+        await pilot.pause()
+        await pilot.press("right")  # → completes a name...
+        assert model.value == "reference"
+        model.value = ""
+        await pilot.press(*str(data_home())[:-1])
+        await pilot.pause()
+        await pilot.press("right")  # ...and a path, for a bundle file
+        assert model.value == str(data_home()) + "/"
+        model.value = "reference"
+        await pilot.press("enter")
+        await settle(pilot)
+        assert isinstance(app.screen, NightsScreen) and "Entered ada with reference." in (
+            notes.text()
+        )
 
 
 async def test_drawing_with_nobody_waiting_names_the_key_not_a_command() -> None:
@@ -203,7 +224,8 @@ async def test_an_entrant_folder_that_is_not_a_model_names_the_garages_key(
         await settle(pilot)
         await pilot.press("a", *"ada", "enter", *str(stranger), "enter")
         await settle(pilot)
-        errors = notes.text("error")
+        assert not notes.text("error")  # said in the dialog, where it was typed
+        errors = str(app.screen.query_one("#problem", Static).content)
         assert f"so {stranger} is not a model folder" in errors
         assert "give a garage model's name, or import the folder in the Garage (i there)" in errors
         assert "racer-tui" not in errors
