@@ -53,6 +53,12 @@ class NightGone(Message):
         self.reason = reason
 
 
+# What the last line says: the view updates itself while the night runs; once it is
+# closed its standings are final.
+OPEN_HINT = "Esc leaves · updates by itself as heats run and end"
+CLOSED_HINT = "Esc leaves · the night is closed: its standings are final"
+
+
 class NightRead(Message):
     def __init__(self, state: NightState) -> None:
         super().__init__()
@@ -141,7 +147,7 @@ class NightProjectorScreen(RacerScreen[None]):
                 yield Digits("-:--", id="np-clock")
         yield Static("", id="np-news")
         yield Static("", id="np-standings")
-        yield Static("Esc leaves · updates by itself as heats run and end", id="np-hint")
+        yield Static(OPEN_HINT, id="np-hint")
 
     def on_mount(self) -> None:
         self.action_refresh_now()
@@ -208,6 +214,7 @@ class NightProjectorScreen(RacerScreen[None]):
         if night.closed:
             title.append(" · final standings")
         self.query_one("#np-title", Static).update(title)
+        self.query_one("#np-hint", Static).update(CLOSED_HINT if night.closed else OPEN_HINT)
         self._draw_standings()
         self._draw_now()
 
