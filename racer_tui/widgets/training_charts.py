@@ -83,8 +83,10 @@ class TrainingFigures:
         return figures
 
     def starting(self) -> None:
-        """A new run is on its way: the last one's ending is no longer the news."""
+        """A new run is on its way: the last one's ending is no longer the news, and its
+        clock and budget are not the new run's (they come with its `started` event)."""
         self.ended, self.ended_at, self.ended_before = None, None, False
+        self.started, self.elapsed = None, 0.0
         self.is_starting = True
         self.version += 1
 

@@ -77,6 +77,11 @@ def test_a_run_is_one_job_from_start_to_its_ending() -> None:
     line = run_line(figures, "ada")
     assert isinstance(line, Text) and "ada: failed" in line.plain
     assert "Reward_function raised ValueError. Press t to train again." in line.plain
+    # The next run is starting: not the last run's clock against its budget.
+    figures.starting()
+    again = training_job(figures, "ada")
+    assert (again.state, again.done, again.total) == (JobState.RUNNING, 0.0, None)
+    assert "starting" in str(run_line(figures, "ada"))
 
 
 def test_figures_fold_episodes_updates_and_endings() -> None:
