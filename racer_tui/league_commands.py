@@ -576,8 +576,9 @@ def _night_run(league: League, night: Any, limit: int | None) -> int:
         best = result.best_lap
         lap = "no valid lap" if best is None else f"best lap {best.time_seconds:.3f} s"
         print(
-            f"heat {heat.position}: {heat.entrant.display_name} ({heat.entrant.model}) "
-            f"{lap}, {result.valid_laps} valid laps, {result.total_offtracks} off-tracks",
+            f"heat {heat.position}: {heat.entrant.display_name} ({heat.entrant.car}) "
+            f"{lap}, {counted(result.valid_laps, 'valid lap')}, "
+            f"{counted(result.total_offtracks, 'off-track')}",
             flush=True,
         )
 

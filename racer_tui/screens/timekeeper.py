@@ -422,7 +422,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         best = self.best_lap
         text.append("  Best ")
         text.append(clock_text(best) if best is not None else "-", style="bold")
-        text.append(f"  {counting} of {len(records)} laps count")
+        text.append(f"  {counting} of {counted(len(records), 'lap')} count")
         return text
 
     def _best(self) -> float | None:

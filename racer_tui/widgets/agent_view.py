@@ -13,6 +13,7 @@ sensor work and belongs in a thread worker; the widget only draws what it is giv
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass
 
 import numpy as np
@@ -147,6 +148,9 @@ def polar_lines(
     return lines
 
 
+MAX_CAPTION_LINES = 3
+
+
 class AgentView(Widget):
     """Draws the latest `Observation`; repaints only when a new one is shown."""
 
@@ -184,12 +188,14 @@ class AgentView(Widget):
         observation = self.observation
         if observation is None:
             return [Strip([Segment(self.message[:width], dim)])]
-        caption = Strip([Segment(observation.caption[:width], dim)])
-        body_rows = height - 1
+        # The caption wraps rather than being cut (a vector model's says what it sees).
+        wrapped = textwrap.wrap(observation.caption, max(width, 1))[:MAX_CAPTION_LINES]
+        captions = [Strip([Segment(line, dim)]) for line in wrapped or [""]]
+        body_rows = height - len(captions)
         if body_rows < 1 or width < 4:
-            return [caption]
+            return captions
         if observation.frame is not None:
-            return [caption, *half_block_lines(observation.frame, width, body_rows)]
+            return [*captions, *half_block_lines(observation.frame, width, body_rows)]
         if observation.ranges is not None and observation.angles_deg is not None:
             accent = Style(color="cyan")
             body = polar_lines(
@@ -199,5 +205,5 @@ class AgentView(Widget):
                 (width, body_rows),
                 accent,
             )
-            return [caption, *body]
-        return [caption]
+            return [*captions, *body]
+        return captions

@@ -27,6 +27,7 @@ from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.chart import MAX_POINTS, LineChart
 from racer_tui.widgets.job_line import local_clock
 from sim.deepracer_files import TrainingMetrics
+from sim.plural import counted
 from sim.training import events
 
 MEAN_WINDOW = 20  # episodes in the running means, like the DeepRacer console's
@@ -227,8 +228,14 @@ def figures_lines(figures: TrainingFigures, model: str = "") -> Group:
 def counters(figures: TrainingFigures) -> Text:
     update, system, evaluation = figures.update, figures.system, figures.evaluation
     text = Text()
-    text.append(f"{figures.episodes:,}")
-    text.append(" episodes  ", style="dim")
+    # Every car's episodes, as the trainer counts them; the charts plot the episodes of the
+    # cars it reports (DeepRacer's metrics file does the same), a share of them.
+    charted = figures.episodes
+    every = update.episodes if update is not None and update.episodes > charted else charted
+    number, noun = counted(every, "episode").split(" ", 1)
+    shown = f" {noun} ({charted:,} charted)  " if every > charted else f" {noun}  "
+    text.append(number)
+    text.append(shown, style="dim")
     text.append(_number(update.total_steps if update else None, ",.0f"))
     text.append(" steps  ", style="dim")
     text.append("laps ", style="dim")

@@ -20,6 +20,7 @@ from typing import Any, Protocol
 
 import yaml
 
+from sim.plural import counted
 from sim.strict_yaml import DuplicateKeyError, load_data
 
 
@@ -81,7 +82,7 @@ class RaceRules:
         limit = (
             "unlimited off-tracks"
             if self.max_offtracks_per_lap is None
-            else f"at most {self.max_offtracks_per_lap} off-tracks per lap"
+            else f"at most {counted(self.max_offtracks_per_lap, 'off-track')} per lap"
         )
         ranking = {
             RankingMethod.BEST_LAP: "best lap",

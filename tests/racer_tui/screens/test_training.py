@@ -359,6 +359,31 @@ def test_the_agents_eye_view_draws_camera_and_lidar() -> None:
     assert "▲" in text and any(0x2800 < ord(ch) <= 0x28FF for ch in text)  # hits drawn
 
 
+async def test_the_agents_eye_views_caption_wraps_instead_of_being_cut() -> None:
+    """A vector model's view says what the model sees; in a narrow pane it takes two lines
+    rather than losing its end."""
+    import numpy as np
+    from textual.app import App, ComposeResult
+
+    from racer_tui.widgets.agent_view import AgentView, observe_at
+
+    track = new_model("ada").track()
+    x, y = (float(v) for v in track.points[0, :2])
+    observation = observe_at(track, ("vector",), (x, y, 0.0), "step 12 of episode 3")
+    view = AgentView()
+
+    class Pane(App[None]):
+        def compose(self) -> ComposeResult:
+            yield view
+
+    async with Pane().run_test(size=(30, 16)) as pilot:
+        view.show(observation)
+        await pilot.pause()
+        shown = " ".join(painted(view).split())
+        assert "camera (the model sees the vector state) · step 12 of episode 3" in shown
+        assert np.asarray(observation.frame).size > 0
+
+
 def test_the_agents_eye_view_comes_from_the_newest_traced_step(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -499,3 +524,20 @@ async def test_a_failed_training_says_the_apps_remedy_live_and_after_a_restart()
 
     ended, _ = last_ending(folder)
     assert ended is not None and ended.remedy is None and ended.message == MISSING_TRACK.message
+
+
+def test_the_counters_say_every_cars_episodes_and_how_many_are_charted() -> None:
+    """The trainer counts every car's episodes; the charts plot the reported cars' share.
+    Both figures are shown, so neither is mistaken for the other."""
+    from racer_tui.widgets.training_charts import counters
+
+    figures = TrainingFigures()
+    for event in sample_events()[:4]:  # three charted episodes, then an update
+        figures.fold(event)
+    figures.fold(
+        events.Update(2.0, 2, 9000, 11418, 1.5, 0, 0.4, 0, 0.1, 5000.0, 40, 16.0, 50.0, 1, None)
+    )
+    assert counters(figures).plain.startswith("11,418 episodes (3 charted)")
+    alone = TrainingFigures()
+    alone.fold(sample_events()[1])  # no update yet: only the charted count is known
+    assert counters(alone).plain.startswith("1 episode  ")
