@@ -77,12 +77,15 @@ def standings_table(state: NightState, highlight: str | None, spaced: bool) -> T
     table.add_column("laps", justify="right", width=4)
     table.add_column("pts", justify="right", width=4)
     leader = state.standings[0].entry.score if state.standings else None
+    # A night of physical cars only needs no "(physical)" on every row: the mark is for a
+    # night that mixes them with simulated ones (and it cut the car's name at 80 columns).
+    mixed = len({s.entry.physics == PHYSICAL for s in state.standings}) > 1
     for index, standing in enumerate(state.standings):
         entry = standing.entry
         score = entry.score
         gap = "" if score is None or leader is None or index == 0 else f"+{score - leader:.3f}"
         car = entry.model
-        if entry.physics == PHYSICAL and PHYSICAL not in car.casefold():
+        if mixed and entry.physics == PHYSICAL and PHYSICAL not in car.casefold():
             car += f" ({PHYSICAL})"
         style = "on grey15" if index % 2 else ""
         if highlight is not None and entry.racer == highlight:

@@ -216,3 +216,25 @@ async def test_a_lap_count_night_says_so_and_shows_the_lap_of_the_race() -> None
         screen._read_live()
         await pilot.pause()
         assert "Lap 3 of 5  0:04.2" in painted(screen.query_one("#np-heat"))
+
+
+async def test_a_night_of_physical_cars_names_them_without_marking_each() -> None:
+    """'(physical)' tells physical cars from simulated ones on a mixed night; on a night of
+    physical cars only it would be on every row and cut the cars' names at 80 columns."""
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), rules=RULES, name="garage")
+        add_entrant(league, night, "ana", "physical:red racer")
+        add_entrant(league, night, "cy", "physical:green machine")
+        for heat in draw_heats(league, night, seed=3):
+            racer = heat.entrant.racer
+            car = "red racer" if racer == "ana" else "green machine"
+            result = race_result(racer, LAPS[racer], rules=RULES)
+            result = replace(result, physics=PHYSICAL, model_name=car)
+            record_race(league, result, night.id, heat_id=heat.id)
+    app = create_app(start="league", projector_night=night.id)
+    async with app.run_test(size=(80, 24)) as pilot:
+        screen = await the_projector(pilot, Clock())
+        rows = painted(screen.query_one("#np-standings"))
+        assert "red racer" in rows and "green machine" in rows
+        assert "physical" not in rows
