@@ -8,6 +8,7 @@ CLI never imports it (tests/test_architecture.py checks both).
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -20,9 +21,11 @@ from textual.dom import DOMNode
 from textual.screen import Screen
 from textual.widget import AwaitMount
 from textual.widgets import DataTable
+from textual.worker import WorkerState
 
 from racer_tui.commands import PaletteCommand, RacerCommands
 from racer_tui.long_running import (
+    CALM_SECONDS,
     CHECK_SECONDS,
     FREEZE_AFTER_SECONDS,
     IdleCollector,
@@ -44,6 +47,7 @@ from racer_tui.screens.race_screen import RaceScreen
 from racer_tui.screens.races import RacesScreen
 from racer_tui.screens.sync import SyncScreen
 from racer_tui.screens.tracks import TracksScreen
+from racer_tui.screens.training import RUN_GROUP as TRAINING_RUN_GROUP
 from racer_tui.screens.training import LeaveWhileTraining, TrainingScreen
 from racer_tui.screens.welcome import WelcomeScreen
 from racer_tui.sections import SECTIONS, WELCOME_MODE, section_for
@@ -129,6 +133,9 @@ class RacerTuiApp(App[int]):
         self.db_path = db_path
         self.long_running = long_running
         self._frozen_modes: set[str] = set()
+        self._stacks_seen: tuple[int, ...] = ()  # the screens open at the last idle check
+        self._stacks_changed_at = 0.0
+        self.calm_clock: Callable[[], float] = time.monotonic  # a test moves its own
         self._switching_to_shown_mode = False
         self.collector = IdleCollector(trim=malloc_trim(), forget=forget_removed_widgets_styles)
         if long_running:
@@ -148,11 +155,27 @@ class RacerTuiApp(App[int]):
             self.set_interval(CHECK_SECONDS, self._collect_when_idle, name="idle-collector")
 
     def _collect_when_idle(self) -> None:
-        # Only the sections open (a dialog or a race view closes soon): what survives a
-        # sweep lives on, so it may be frozen. A key the driver has posted but the app has
-        # not handled yet would wait for the collection: the timer runs outside the app's
-        # queue, so it looks there first.
-        self.collector.tick(quiet=self._quiet(), keys_waiting=not self._message_queue.empty())
+        # Calm (only the sections open, no work in a thread, no screen come or gone for a
+        # few seconds): what survives a sweep lives on, so it may be frozen. A key the
+        # driver has posted but the app has not handled yet would wait for the collection:
+        # the timer runs outside the app's queue, so it looks there first.
+        self.collector.tick(quiet=self._calm(), keys_waiting=not self._message_queue.empty())
+
+    def _calm(self) -> bool:
+        """Nothing transient is alive to be frozen by a sweep: only the sections are open,
+        no worker runs (a heat, a sync, a reload; following a training is no transient
+        work), and no screen has come or gone for `CALM_SECONDS` (what a closed dialog or
+        race view built is still being let go)."""
+        now = self.calm_clock()
+        stacks = tuple(id(screen) for stack in self._screen_stacks.values() for screen in stack)
+        if stacks != self._stacks_seen:
+            self._stacks_seen, self._stacks_changed_at = stacks, now
+        if now - self._stacks_changed_at < CALM_SECONDS or not self._quiet():
+            return False
+        return not any(
+            worker.state is WorkerState.RUNNING and worker.group != TRAINING_RUN_GROUP
+            for worker in self.workers
+        )
 
     def on_unmount(self) -> None:
         self.collector.stop()

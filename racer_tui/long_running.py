@@ -27,7 +27,9 @@ So, in the long-running app only:
   hundred keys, not to walking what lives.
 - Every few minutes, at a longer pause with only the sections open, a sweep unfreezes
   everything, collects it all (what was frozen at start-up and has been removed since) and
-  freezes what survives again.
+  freezes what survives again. It waits for calm: no worker running and no screen come or
+  gone for a few seconds, so the transient objects of a heat, a sync or a dialog just
+  closed are not frozen with what lives.
 - Young collections (generations 0 and 1) run as Python runs them: they are short.
 - Worker threads (a heat's simulation) hand the interpreter back every millisecond, not
   every five (`favour_the_interface`), so a key does not wait behind them.
@@ -61,6 +63,9 @@ FREEZE_AFTER_SECONDS = 1.0
 IDLE_SECONDS = 0.4
 # How often the idle check runs.
 CHECK_SECONDS = 0.1
+# A sweep freezes what survives it only this long after the last screen came or went, with
+# no worker running: a heat's, a sync's or a dialog's objects being let go are not frozen.
+CALM_SECONDS = 5.0
 # Generation-1 collections since the last full one before an idle full collection is
 # worth running (Python's own threshold is 10, subject to its 25% rule).
 IDLE_COLLECT_AFTER = 10

@@ -257,6 +257,11 @@ class LeaveWhileTraining(RacerModal[str | None]):
         self.dismiss(event.button.id if event.button.id in ("stop", "keep") else None)
 
 
+# The workers that follow a training for as long as it runs (its process's events, or an
+# outside run's log): long-lived by design, unlike the app's other workers.
+RUN_GROUP = "training-run"
+
+
 class TrainingScreen(RacerScreen[None]):
     """Models on the left with their training state; the highlighted one's charts."""
 
@@ -500,7 +505,7 @@ class TrainingScreen(RacerScreen[None]):
         self.live = LiveRun(request.model, pid=0, minutes=request.minutes)
         self._run(request)
 
-    @work(group="training-run", exit_on_error=False)
+    @work(group=RUN_GROUP, exit_on_error=False)
     async def _run(self, request: TrainingRequest) -> None:
         live = self.live
         assert live is not None
@@ -564,7 +569,7 @@ class TrainingScreen(RacerScreen[None]):
         self.live = LiveRun(name, pid=pid, minutes=None)
         self._follow_adopted(name, pid)
 
-    @work(group="training-run", exit_on_error=False)
+    @work(group=RUN_GROUP, exit_on_error=False)
     async def _follow_adopted(self, name: str, pid: int) -> None:
         cancelled = False
         try:

@@ -17,6 +17,7 @@ from textual.widgets import Label
 
 from racer_tui.long_running import (
     AUTOMATIC_FULL_AFTER,
+    CALM_SECONDS,
     IDLE_COLLECT_AFTER,
     IDLE_SECONDS,
     SWEEP_IDLE_SECONDS,
@@ -263,3 +264,46 @@ def test_only_the_long_running_app_hands_the_interpreter_to_its_interface_sooner
         assert sys.getswitchinterval() == SWITCH_INTERVAL_SECONDS < before
     finally:
         sys.setswitchinterval(before)
+
+
+async def test_a_sweep_waits_for_calm_before_it_freezes_what_survives() -> None:
+    """A sweep freezes what survives it: not while a dialog is open, a worker computes or a
+    screen has just come or gone (their objects are on their way out), but a training
+    followed for hours does not keep the app from ever being calm."""
+    import threading
+
+    from racer_tui.app import create_app
+    from racer_tui.screens.help import HelpScreen
+    from racer_tui.screens.training import RUN_GROUP
+    from tests.racer_tui.screens.tui_helpers import settle
+
+    now = [0.0]
+
+    def calm_after(seconds: float) -> bool:
+        now[0] += seconds
+        return app._calm()
+
+    app = create_app(start="garage")
+    app.calm_clock = lambda: now[0]
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        app._calm()  # the screens seen so far
+        assert calm_after(CALM_SECONDS)
+        await pilot.press("question_mark")
+        await settle(pilot)
+        assert isinstance(app.screen, HelpScreen)
+        assert not calm_after(CALM_SECONDS)  # a screen over the sections
+        await pilot.press("escape")
+        await settle(pilot)
+        assert not calm_after(0.1)  # just closed: its objects are still being let go
+        assert calm_after(CALM_SECONDS)
+        release = threading.Event()
+        app.run_worker(release.wait, thread=True, group="heat")
+        await pilot.pause()
+        assert not calm_after(CALM_SECONDS)  # a heat computes in a thread
+        follow = threading.Event()
+        app.run_worker(follow.wait, thread=True, group=RUN_GROUP)
+        release.set()
+        await pilot.pause(0.1)
+        assert calm_after(CALM_SECONDS)  # following a training is no transient work
+        follow.set()
