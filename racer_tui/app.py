@@ -37,15 +37,18 @@ from racer_tui.long_running import (
 )
 from racer_tui.screens.base import ModelAdded, push_kept
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
+from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.garage import GarageScreen
 from racer_tui.screens.help import HelpScreen, HelpTopic, binding_topics, declared_bindings
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
 from racer_tui.screens.projector import ProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen
 from racer_tui.screens.races import RacesScreen
 from racer_tui.screens.sync import SyncScreen
+from racer_tui.screens.timekeeper import TimekeeperScreen
 from racer_tui.screens.tracks import TracksScreen
 from racer_tui.screens.training import RUN_GROUP as TRAINING_RUN_GROUP
 from racer_tui.screens.training import LeaveWhileTraining, TrainingScreen
@@ -67,6 +70,9 @@ OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
     ("Model editor", ModelEditorScreen),
     ("Race view", RaceScreen),
     ("League nights", NightsScreen),
+    ("Timekeeper (a physical car's heat)", TimekeeperScreen),
+    ("Night projector", NightProjectorScreen),
+    ("Evaluation", EvaluationScreen),
     ("Projector", ProjectorScreen),
     ("Shared store (sync)", SyncScreen),
     ("League night dialogs", NewNightDialog),
@@ -111,7 +117,12 @@ class RacerTuiApp(App[int]):
     BINDINGS: ClassVar[list[BindingType]] = [
         *_section_bindings(),
         Binding("question_mark,f1", "help", "Help", tooltip="Every key of every screen"),
-        Binding("q", "quit", "Quit"),
+        Binding("q", "quit", "Quit", tooltip="From a section's own screen"),
+        # Textual binds ctrl+q to "quit", which `check_action` allows only on a section's
+        # screen (so a stray q never leaves an editor or a heat): ctrl+q quits from any.
+        Binding(
+            "ctrl+q", "quit_anywhere", "Quit", tooltip="From any screen", show=False, priority=True
+        ),
     ]
 
     def __init__(
@@ -229,6 +240,8 @@ class RacerTuiApp(App[int]):
             # Only from a section's own screen: in an editor or a race, a stray digit or q
             # must not leave it (ctrl+q still quits from anywhere).
             return len(self.screen_stack) <= 1
+        if action == "quit_anywhere":
+            return True
         if action == "help":
             return not isinstance(self.screen, HelpScreen)
         return True
@@ -269,6 +282,9 @@ class RacerTuiApp(App[int]):
             return None
         return stack[0] if stack and isinstance(stack[0], TrainingScreen) else None
 
+    async def action_quit_anywhere(self) -> None:
+        await self.action_quit()
+
     async def action_quit(self) -> None:
         """Quit; with a training running, first ask whether to stop it or keep it running."""
         training = self.training_screen()
@@ -302,13 +318,11 @@ class RacerTuiApp(App[int]):
         classes += [(s.title, SECTION_SCREENS[s.mode]) for s in SECTIONS]
         classes += list(OTHER_SCREENS)
         palette = Binding(self.COMMAND_PALETTE_BINDING, "command_palette", "Command palette")
-        quit_key = Binding("ctrl+q", "quit", "Quit")
         return binding_topics(
             classes,
             self.get_key_display,
             extra=[
                 (EVERYWHERE, palette),
-                (EVERYWHERE, quit_key),
                 (EVERYWHERE, Binding("tab", "focus_next", "Next field")),
                 (EVERYWHERE, Binding("shift+tab", "focus_previous", "Previous field")),
             ],

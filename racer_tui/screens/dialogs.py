@@ -55,9 +55,12 @@ class PathSuggester(Suggester):
                 )
         except OSError:
             return None
-        if not names or names[0] == start:
+        # Like a shell: as far as every match agrees (one match: all of it), never the first
+        # of several that differ (/tmp/wa must not become /tmp/walk/ when /tmp/walk2 is there).
+        shared = os.path.commonprefix(names)  # noqa: RUF071 - names in one folder, by character
+        if len(shared) <= len(start):
             return None
-        return value + names[0][len(start) :]
+        return value + shared[len(start) :]
 
 
 class NameOrPathSuggester(Suggester):
@@ -161,6 +164,14 @@ class FormDialog(RacerModal[RequestT | None]):
     """A dialog with fields, a problem line and Cancel/confirm buttons; Esc cancels."""
 
     BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+
+    @on(Input.Changed)
+    def _problem_answered(self) -> None:
+        """A problem said is about what was typed then: once the racer changes a field it
+        is no longer the news (the next confirm checks again)."""
+        line = self.query("#problem").first(Static) if self.query("#problem") else None
+        if line is not None and line.has_class("-shown"):
+            show_problem(line, "")
 
     def form_buttons(self, confirm_label: str) -> ComposeResult:
         """The problem line and the button row every form ends with."""

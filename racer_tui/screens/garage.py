@@ -60,7 +60,7 @@ COLUMNS = (
     Col("track", keep=4),
     Col("sensor", keep=1),
     Col("actions", keep=2),
-    Col("best lap"),
+    Col("best eval"),  # the best lap of the model's evaluations (v), not of its training
 )
 NARROW = 120  # below this many columns the detail panel goes under the table
 WATCH_SECONDS = 2.0  # how often the Garage looks for changes made outside it

@@ -299,7 +299,8 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             "Leave this heat?",
             "Its laps so far are not recorded; the heat can be run again.",
             answered,
-            confirm_label="Leave",
+            confirm_label="Leave unrecorded",
+            cancel_label="Keep timing",
         )
 
     # --- drawing ----------------------------------------------------------------------
@@ -361,7 +362,11 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         # second while the race runs, never while it stands still).
         for selector, value in (
             ("#tk-left", countdown_text(heat.time_left(now))),
-            ("#tk-lap", lap_clock_text(heat.lap_clock(now))),
+            # Once the race is over no lap is running: its clock says so.
+            (
+                "#tk-lap",
+                "-:--.-" if heat.phase is Phase.OVER else lap_clock_text(heat.lap_clock(now)),
+            ),
         ):
             digits = self.query_one(selector, Digits)
             if digits.value != value:

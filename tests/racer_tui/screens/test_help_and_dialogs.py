@@ -9,7 +9,7 @@ from typing import ClassVar
 from textual.app import App
 from textual.binding import Binding, BindingType
 from textual.screen import Screen
-from textual.widgets import Button
+from textual.widgets import Button, Static
 
 from racer_tui.screens.dialogs import ConfirmDialog, PathSuggester, ask
 from racer_tui.screens.help import binding_topics, declared_bindings, key_rows, topic_table
@@ -59,6 +59,32 @@ async def test_path_suggester_completes_the_last_part(tmp_path: Path) -> None:
     assert await suggester.get_suggestion(str(tmp_path / "no")) == f"{tmp_path}/notes.txt"
     assert await suggester.get_suggestion(str(tmp_path / "zzz")) is None
     assert await suggester.get_suggestion(str(tmp_path / "missing" / "x")) is None
+    # Several matches: as far as they agree, like a shell, never the first of them.
+    (tmp_path / "walk").mkdir()
+    (tmp_path / "walk2").mkdir()
+    assert await suggester.get_suggestion(str(tmp_path / "wa")) == f"{tmp_path}/walk"
+    assert await suggester.get_suggestion(str(tmp_path / "walk")) is None
+
+
+async def test_a_forms_problem_goes_once_a_field_changes() -> None:
+    """A problem is about what was typed: changing a field takes it away (the next confirm
+    checks again), so a fixed date is not still called wrong."""
+    from racer_tui.app import create_app
+    from racer_tui.screens.nights import NewNightDialog
+
+    app = create_app(start="league")
+    async with app.run_test(size=(100, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        await settle(pilot)
+        await pilot.press("o")
+        await settle(pilot)
+        dialog = app.screen
+        assert isinstance(dialog, NewNightDialog)
+        await pilot.press(*"friday", "enter", *"28 Nov", "ctrl+s")
+        assert "is not a night's date" in str(dialog.query_one("#problem", Static).content)
+        await pilot.press("backspace")
+        assert not dialog.query_one("#problem", Static).has_class("-shown")
 
 
 async def test_the_kept_question_dialog_asks_each_question_afresh() -> None:
