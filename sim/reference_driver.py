@@ -45,22 +45,6 @@ class RacingLine:
         return float(np.sum(seg / mean_speed))
 
 
-def _border_extents(track: Track, s_query: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Signed lateral extents (right, left) of the road at arc lengths `s_query`."""
-    centre = track.centerline
-    tangents = centre.vectors / centre.lengths[:, None]
-    # Tangent at each waypoint: average of the segments meeting there (loop: wraps).
-    at_point = tangents + np.roll(tangents, 1, axis=0)
-    at_point /= np.maximum(np.hypot(*at_point.T), 1e-12)[:, None]
-    at_point = np.vstack([at_point, at_point[:1]])
-    normals = np.stack([-at_point[:, 1], at_point[:, 0]], axis=1)
-    inner_off = np.einsum("ij,ij->i", track.inner - track.center, normals)
-    outer_off = np.einsum("ij,ij->i", track.outer - track.center, normals)
-    left = np.maximum(inner_off, outer_off)
-    right = np.minimum(inner_off, outer_off)
-    return np.interp(s_query, centre.cumulative, right), np.interp(s_query, centre.cumulative, left)
-
-
 def loop_curvature(points: FloatArray, span: int) -> FloatArray:
     """Signed curvature of a closed point loop (without its closing point), via circumcircles."""
     prev_p = np.roll(points, span, axis=0)
@@ -75,17 +59,9 @@ def loop_curvature(points: FloatArray, span: int) -> FloatArray:
 
 
 def plan_racing_line(track: Track, car: CarSpec = DEEPRACER_CAR) -> RacingLine:
-    centre = track.centerline
-    count = max(round(centre.total_length / _SPACING), 60)
-    s = np.linspace(0.0, centre.total_length, count, endpoint=False)
-    base = centre.point_at(s)
-    tangent = centre.direction_at(s)
-    # Smooth the tangents so the normals do not jump at polyline corners.
-    for _ in range(3):
-        tangent = (np.roll(tangent, 1, axis=0) + tangent + np.roll(tangent, -1, axis=0)) / 3.0
-        tangent /= np.hypot(*tangent.T)[:, None]
-    normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
-    right, left = _border_extents(track, s)
+    s, base, normal = track.resampled(_SPACING)
+    count = len(s)
+    right, left = track.lateral_extents(s)
     low = np.minimum(right + _EDGE_MARGIN, 0.0)
     high = np.maximum(left - _EDGE_MARGIN, 0.0)
 

@@ -121,6 +121,43 @@ class Track:
     def direction(self) -> Direction:
         return "counter-clockwise" if signed_area(self.center[:-1]) > 0 else "clockwise"
 
+    def lateral_extents(self, s: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The road's signed lateral extents (right, left: negative to the right) at
+        centre-line arc lengths `s`, measured along each waypoint's normal."""
+        centre = self.centerline
+        tangents = centre.vectors / centre.lengths[:, None]
+        # Tangent at each waypoint: average of the segments meeting there (loop: wraps).
+        at_point = tangents + np.roll(tangents, 1, axis=0)
+        at_point /= np.maximum(np.hypot(*at_point.T), 1e-12)[:, None]
+        at_point = np.vstack([at_point, at_point[:1]])
+        normals = np.stack([-at_point[:, 1], at_point[:, 0]], axis=1)
+        inner_off = np.einsum("ij,ij->i", self.inner - self.center, normals)
+        outer_off = np.einsum("ij,ij->i", self.outer - self.center, normals)
+        left = np.maximum(inner_off, outer_off)
+        right = np.minimum(inner_off, outer_off)
+        return (
+            np.interp(s, centre.cumulative, right),
+            np.interp(s, centre.cumulative, left),
+        )
+
+    def resampled(
+        self, spacing: float, least: int = 60
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The centre line every `spacing` metres round the loop (at least `least` points,
+        the closing point left out): arc lengths, points, and unit normals (pointing left)
+        from tangents smoothed so that they do not jump at the polyline's corners. The
+        frame a line across the road is drawn in (`offset * normal` from each point)."""
+        centre = self.centerline
+        count = max(round(centre.total_length / spacing), least)
+        s = np.linspace(0.0, centre.total_length, count, endpoint=False)
+        base = centre.point_at(s)
+        tangent = centre.direction_at(s)
+        for _ in range(3):
+            tangent = (np.roll(tangent, 1, axis=0) + tangent + np.roll(tangent, -1, axis=0)) / 3.0
+            tangent /= np.hypot(*tangent.T)[:, None]
+        normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+        return s, base, normal
+
     @property
     def waypoints(self) -> list[tuple[float, float]]:
         """Centre points as DeepRacer's `waypoints` param lists them (closing point included)."""
