@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.table import Table
 from rich.text import Text
@@ -23,7 +24,17 @@ from sim.track_catalog import (
     save_user_track,
 )
 
+if TYPE_CHECKING:  # `tracks list` imports no simulator
+    from sim.action_space import ActionSpace
+
 NAMES = ("tracks",)
+
+
+class TrackOptionError(ValueError):
+    """An option of a tracks command that cannot be used; the message says which and why."""
+
+
+USER_ERRORS: tuple[type[Exception], ...] = (TrackOptionError,)
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -40,9 +51,30 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     kinds.add_argument("--official", action="store_true", help="AWS DeepRacer's tracks")
     kinds.add_argument("--imported", action="store_true", help="tracks you imported")
     listing.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    show = track_commands.add_parser("show", help="one track's facts and its reference lap")
+    show = track_commands.add_parser(
+        "show", help="one track's facts, its limit laps and its reference lap"
+    )
     show.add_argument("track", help="track name (world or console name) or .npy file")
+    show.add_argument(
+        "--model", metavar="MODEL", help="also the limit laps within MODEL's action space"
+    )
     show.add_argument("--json", action="store_true")
+    line = track_commands.add_parser(
+        "line",
+        help="the limit lap's racing line with its target speeds (CSV, or --python / --json)",
+    )
+    line.add_argument("track", help="track name (world or console name) or .npy file")
+    line.add_argument(
+        "--model", metavar="MODEL", help="the line within MODEL's action space (its speeds)"
+    )
+    line.add_argument(
+        "--every", type=float, default=0.1, metavar="METRES", help="metres between points"
+    )
+    shape = line.add_mutually_exclusive_group()
+    shape.add_argument(
+        "--python", action="store_true", help="a Python list a reward function can paste"
+    )
+    shape.add_argument("--json", action="store_true")
     importer = track_commands.add_parser("import", help="import a DeepRacer .npy track file")
     importer.add_argument("file", help="DeepRacer track file (.npy, shape N x 6)")
     importer.add_argument("--name", help="name to store it under (default: the file name)")
@@ -69,7 +101,9 @@ def run(args: argparse.Namespace) -> int:
         }
         return _list(_filtered(list_tracks(), args.search, kinds), args.json)
     if action == "show":
-        return _show(args.track, args.json)
+        return _show(args.track, args.model, args.json)
+    if action == "line":
+        return _line(args.track, args.model, args.every, args.python, args.json)
     if action == "import":
         return _import(Path(args.file), args.name, args.reverse, args.description)
     return _generate(args.seed, args.width, args.save, args.json)
@@ -157,10 +191,23 @@ def _console_or_description(info: TrackInfo) -> str:
 _DIRECTIONS = {"counter-clockwise": "ccw", "clockwise": "cw", "straight": "-"}
 
 
-def _facts(track_name: str) -> dict[str, object]:
+def _model_space(model: str | None) -> ActionSpace | None:
+    if model is None:
+        return None
+    from sim.garage.folder import ModelError, open_model
+
+    try:
+        return open_model(model).metadata().action_space
+    except ModelError as error:  # said as the garage says it, for --model
+        raise TrackOptionError(str(error)) from None
+
+
+def _facts(track_name: str, model: str | None) -> dict[str, object]:
+    from sim.coach.limit_lap import limit_lap
     from sim.reference_driver import reference_lap
 
     track = resolve_track(track_name)
+    space = _model_space(model)
     lap = reference_lap(track)
     facts = dict(track.summary())
     if not Path(track_name).suffix:
@@ -168,14 +215,61 @@ def _facts(track_name: str) -> dict[str, object]:
         facts["kind"] = info.kind
         facts["console_name"] = info.console_name
         facts["release_date"] = info.release_date
+    limit = limit_lap(track)
+    facts["limit_flying_lap_s"] = round(limit.flying_seconds, 3)
+    facts["limit_standing_lap_s"] = round(limit.standing_seconds, 3)
+    if space is not None:
+        within = limit_lap(track, space=space)
+        facts["model"] = model
+        facts["model_limit_flying_lap_s"] = round(within.flying_seconds, 3)
+        facts["model_limit_standing_lap_s"] = round(within.standing_seconds, 3)
     facts["reference_lap_s"] = None if math.isnan(lap.lap_time) else round(lap.lap_time, 3)
     facts["reference_status"] = lap.status
     facts["content_hash"] = track.content_hash
     return facts
 
 
-def _show(track_name: str, as_json: bool) -> int:
-    facts = _facts(track_name)
+def _line(track_name: str, model: str | None, every: float, as_python: bool, as_json: bool) -> int:
+    from sim.coach.limit_lap import limit_lap
+
+    if not every > 0.0:
+        raise TrackOptionError(f"--every must be a positive number of metres, not {every:g}.")
+    track = resolve_track(track_name)
+    lap = limit_lap(track, space=_model_space(model))
+    points, speeds = lap.resampled(every)
+    rows = [
+        [round(float(x), 4), round(float(y), 4), round(float(v), 3)]
+        for (x, y), v in zip(points, speeds, strict=True)
+    ]
+    if as_json:
+        print_json(
+            {
+                "track": track.name,
+                "limits": lap.limits,
+                "flying_lap_s": round(lap.flying_seconds, 3),
+                "standing_lap_s": round(lap.standing_seconds, 3),
+                "columns": ["x", "y", "speed"],
+                "points": rows,
+            }
+        )
+    elif as_python:
+        print(
+            f"# The limit lap's line on {track.name} ({lap.limits}): [x, y, target speed m/s]"
+            f" every {every:g} m; a flying lap of {lap.flying_seconds:.3f} s."
+        )
+        print("RACING_LINE = [")
+        for row in rows:
+            print(f"    {row},")
+        print("]")
+    else:
+        print("x,y,speed")
+        for x, y, v in rows:
+            print(f"{x},{y},{v}")
+    return 0
+
+
+def _show(track_name: str, model: str | None, as_json: bool) -> int:
+    facts = _facts(track_name, model)
     if as_json:
         print_json(facts)
         return 0

@@ -37,6 +37,10 @@ class CarLimits:
     braking: float  # m/s^2
     effective_wheelbase: float
     understeer: float
+    # Seconds the car's path curvature takes to follow its steering (the lag of the part
+    # of a command the wheels do not take at once): a line that bends faster than this
+    # is driven wider than it is drawn.
+    steering_lag: float
     # The speeds the car can hold, slowest first: one for a continuous range (any speed up
     # to it), one per speed for a discrete space.
     levels: tuple[SpeedLevel, ...]
@@ -113,6 +117,7 @@ def car_limits(car: CarSpec = DEEPRACER_CAR, space: ActionSpace | None = None) -
         braking=car.max_braking,
         effective_wheelbase=car.effective_wheelbase,
         understeer=car.understeer,
+        steering_lag=car.steering_time_constant * (1.0 - car.steering_instant_share),
         levels=levels,
         continuous=continuous,
         crawl=crawl,

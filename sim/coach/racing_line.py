@@ -29,7 +29,7 @@ from scipy import sparse
 
 from sim.car import DEEPRACER_CAR
 from sim.coach.limits import CarLimits
-from sim.coach.speed_profile import SpeedProfile, flying_profile
+from sim.coach.speed_profile import SpeedProfile, driven_corner_speeds, flying_profile
 from sim.geometry import FloatArray
 from sim.reference_driver import loop_curvature
 from sim.track import Track
@@ -133,7 +133,7 @@ def box_qp(
     )
     if near is not None:
         solver.warm_start(x=near)
-    x = solver.solve().x
+    x = solver.solve(raise_error=False).x  # a failed solve is said by x, handled below
     if x is None or not np.all(np.isfinite(x)):
         x = near if near is not None else np.zeros(n)
     return np.asarray(np.clip(x, low, high))
@@ -184,7 +184,7 @@ def fit_of(frame: RoadFrame, offsets: FloatArray, limits: CarLimits) -> LineFit:
     span = max(1, round(CURVATURE_SPAN / SPACING))
     curvature = loop_curvature(points, span)
     steps = np.hypot(*(np.roll(points, -1, axis=0) - points).T)
-    profile = flying_profile(limits.corner_speed(curvature), steps, limits)
+    profile = flying_profile(driven_corner_speeds(curvature, steps, limits), steps, limits)
     closed = np.vstack([points, points[:1]])
     return LineFit(offsets, closed, np.append(curvature, curvature[0]), profile)
 

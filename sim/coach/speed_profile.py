@@ -6,6 +6,11 @@ next (v'^2 = v^2 + 2 a ds), a backward pass how fast it can fall before the next
 Both passes are one vectorised scan each: with u = v^2 and K the running sum of 2 a ds,
 u_i = K_i + min over j <= i of (C_j - K_j) for the caps C.
 
+- The car's steering answers with a lag, so its path bends later than a line drawn with
+  sudden changes of curvature: where the line straightens, the car is still turning. A
+  profile for a line the car can follow (`driven_corner_speeds`) takes each point's
+  curvature as the larger of the line's and the lagging car's, at the profile's own
+  speeds (a few rounds, each from the last).
 - Flying lap: the car is already at speed on the line; the profile is the loop's steady
   state (three laps are scanned, the middle one is kept).
 - Standing start: from rest at the line's first point, the lap ends back at it; the lap
@@ -75,3 +80,36 @@ def standing_profile(corner: FloatArray, steps: FloatArray, limits: CarLimits) -
     squared = _profile(caps, np.tile(steps, 2)[:-1], limits)
     speeds = np.sqrt(np.maximum(squared[: n + 1], 0.0))
     return SpeedProfile(speeds, steps, float(np.sum(_step_times(steps, speeds))))
+
+
+LAG_ROUNDS = 3
+
+
+def lagging_curvature(
+    curvature: FloatArray, steps: FloatArray, speeds: FloatArray, lag: float
+) -> FloatArray:
+    """The curvature of a car whose steering follows the line's `curvature` with a lag of
+    `lag` seconds, driving at `speeds`: a first-order filter over the distance covered in
+    that time, round the loop twice so that it starts settled."""
+    n = len(curvature)
+    previous = np.roll(steps, 1)  # metres from the point before
+    blend = 1.0 - np.exp(-previous / (np.maximum(speeds[:n], 0.3) * max(lag, 1e-6)))
+    bend = float(curvature[-1])
+    out = np.empty(n)
+    line, share = curvature.tolist(), blend.tolist()
+    for _ in range(2):
+        for i in range(n):
+            bend += (line[i] - bend) * share[i]
+            out[i] = bend
+    return out
+
+
+def driven_corner_speeds(curvature: FloatArray, steps: FloatArray, limits: CarLimits) -> FloatArray:
+    """Corner speeds for a line the car follows with its steering's lag (module
+    docstring): at each point, the larger of the line's curvature and the car's."""
+    corner = limits.corner_speed(curvature)
+    for _ in range(LAG_ROUNDS):
+        speeds = flying_profile(corner, steps, limits).speeds
+        lagging = lagging_curvature(curvature, steps, speeds, limits.steering_lag)
+        corner = limits.corner_speed(np.maximum(np.abs(curvature), np.abs(lagging)))
+    return corner

@@ -23,8 +23,8 @@ from sim.track import Track
 
 # How quickly the car is brought back onto the line: over about this distance (metres),
 # longer at speed.
-_REACH_BASE = 0.25
-_REACH_PER_SPEED = 0.1  # seconds
+_REACH_BASE = 0.45
+_REACH_PER_SPEED = 0.2  # seconds
 _SPEED_AHEAD = (0.0, 0.05, 0.1, 0.15)  # seconds of the plan the speed command looks at
 
 
@@ -88,6 +88,7 @@ def drive_line(
     points: FloatArray,
     speeds: FloatArray,
     curvature: FloatArray,
+    *,
     car: CarSpec = DEEPRACER_CAR,
     max_seconds: float = 300.0,
 ) -> DrivenLaps:
@@ -116,6 +117,11 @@ def drive_line(
             sim.continue_episode(0, after - track.length)
             after -= track.length
         elif status != EpisodeStatus.IN_PROGRESS:
-            return DrivenLaps(*(laps + [math.nan, math.nan])[:2], str(status))
+            return _unfinished(laps, str(status))
         before = after
-    return DrivenLaps(*(laps + [math.nan, math.nan])[:2], str(EpisodeStatus.TIME_UP))
+    return _unfinished(laps, str(EpisodeStatus.TIME_UP))
+
+
+def _unfinished(laps: list[float], status: str) -> DrivenLaps:
+    standing = laps[0] if laps else math.nan
+    return DrivenLaps(standing, math.nan, status)

@@ -90,6 +90,40 @@ def test_bad_track_files_give_one_sentence_and_exit_2(
     assert "Traceback" not in err
 
 
+def test_a_track_shows_its_limit_laps_and_gives_its_racing_line(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """`tracks show` gives the flying and standing limit laps beside the reference lap, and
+    within a model's action space; `tracks line` the line with its speeds, as CSV, as a
+    list a reward function pastes, or as JSON."""
+    import ast
+
+    from sim.garage.options import new_model
+
+    new_model("slowpoke", max_speed=1.5, speed_levels=2)
+    code, out, _ = run_cli(capsys, "tracks", "show", "hairpin-circuit", "--model", "slowpoke")
+    assert code == 0
+    code, out, _ = run_cli(
+        capsys, "tracks", "show", "hairpin-circuit", "--model", "slowpoke", "--json"
+    )
+    facts = json.loads(out)
+    flying, standing = facts["limit_flying_lap_s"], facts["limit_standing_lap_s"]
+    assert flying < standing < facts["reference_lap_s"]
+    assert facts["model_limit_flying_lap_s"] > flying + 1.0  # what 1.5 m/s costs
+    code, out, _ = run_cli(capsys, "tracks", "line", "hairpin-circuit", "--every", "0.5")
+    lines = out.splitlines()
+    assert code == 0 and lines[0] == "x,y,speed" and len(lines) > 30
+    code, out, _ = run_cli(capsys, "tracks", "line", "hairpin-circuit", "--python")
+    source = out.split("RACING_LINE = ", 1)[1]
+    points = ast.literal_eval(source)  # pastes as it prints
+    assert all(len(point) == 3 and 0.1 <= point[2] <= 4.1 for point in points)
+    code, out, _ = run_cli(capsys, "tracks", "line", "hairpin-circuit", "--json")
+    line = json.loads(out)
+    assert line["flying_lap_s"] == flying and line["columns"] == ["x", "y", "speed"]
+    code, _, err = run_cli(capsys, "tracks", "line", "hairpin-circuit", "--every", "0")
+    assert code == 2 and "--every must be a positive number" in err
+
+
 def test_unknown_track_name_suggests_close_names(capsys: pytest.CaptureFixture[str]) -> None:
     code, _, err = run_cli(capsys, "tracks", "show", "reinvent-base")
     assert code == 2
