@@ -30,6 +30,7 @@ from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_label
 from racer_tui.widgets.track_map import TrackMap
+from sim.coach.limit_lap import limit_lap
 from sim.plural import counted
 from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
@@ -207,9 +208,9 @@ class TracksScreen(RacerScreen[None]):
             return
         self.query_one("#track-map", TrackMap).track = track
         cached = self._lap_texts.get(track.content_hash)
-        self._update_facts(track, cached or "reference lap: timing…")
+        self._update_facts(track, cached or "limit and reference laps: working them out…")
         if cached is None:
-            self._time_reference_lap(track)
+            self._time_laps(track)
 
     def _update_facts(self, track: Track, lap_text: str) -> None:
         info = next((i for i in self._infos if i.name == track.name), None)
@@ -226,12 +227,19 @@ class TracksScreen(RacerScreen[None]):
         self.query_one("#track-facts", Static).update(facts)
 
     @work(thread=True, exclusive=True, group="reference-lap", exit_on_error=False)
-    def _time_reference_lap(self, track: Track) -> None:
+    def _time_laps(self, track: Track) -> None:
+        """The limit laps (the fastest racer-tui's car can drive) and the reference driver's
+        lap, in a worker: a few tenths of a second, more on a long track."""
+        limit = limit_lap(track)
         lap = reference_lap(track)
-        text = (
+        reference = (
             f"reference lap: {lap.lap_time:.3f} s"
             if not math.isnan(lap.lap_time)
             else f"reference lap: {lap.status}"
+        )
+        text = (
+            f"limit lap: {limit.flying_seconds:.3f} s flying, "
+            f"{limit.standing_seconds:.3f} s from a standing start\n{reference}"
         )
         self.post_message(ReferenceLapTimed(track, text))
 

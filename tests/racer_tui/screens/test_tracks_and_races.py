@@ -19,14 +19,15 @@ from sim.track_catalog import list_tracks
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
 
 
-async def test_tracks_show_facts_and_the_reference_lap() -> None:
+async def test_tracks_show_facts_the_limit_laps_and_the_reference_lap() -> None:
     app = create_app(start="tracks")
     async with app.run_test(size=(120, 36)) as pilot:
         await settle(pilot)
         screen = app.screen
         assert isinstance(screen, TracksScreen)
         facts = painted(screen.query_one("#track-facts"))
-        assert "beginner-oval" in facts and "reference lap:" in facts and "timing" not in facts
+        assert "beginner-oval" in facts and "reference lap:" in facts and "working" not in facts
+        assert "limit lap:" in facts and "s flying" in facts  # the fastest the car can go
         await pilot.press("down")
         await settle(pilot)
         assert "hairpin-circuit" in painted(screen.query_one("#track-facts"))
