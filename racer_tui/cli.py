@@ -29,6 +29,7 @@ COMMAND_MODULES: dict[str, tuple[str, ...]] = {
     "racer_tui.league_commands": ("submit", "leaderboard", "night", "season", "racer", "correct"),
     "racer_tui.train_commands": ("train", "evaluate"),
     "racer_tui.sync_commands": ("sync",),
+    "racer_tui.coach_commands": ("coach",),
 }
 
 
