@@ -87,9 +87,7 @@ def coach_model(folder: ModelFolder, lap: str = BEST) -> Coaching:
     episodes = sorted({row.episode for row in rows})
     if len(episodes) < number:
         raise LapAnalysisError(f"the evaluation's sim-trace holds no trial {number}.")
-    path = replace(
-        path_of_trial(rows, episodes[number - 1], laps[number]), label=f"trial {number}"
-    )
+    path = replace(path_of_trial(rows, episodes[number - 1], laps[number]), label=f"trial {number}")
     return coach_path(folder.track(), path, folder.metadata().action_space)
 
 
