@@ -36,6 +36,7 @@ from racer_tui.long_running import (
     malloc_trim,
 )
 from racer_tui.screens.base import ModelAdded, push_kept
+from racer_tui.screens.coach import CoachScreen
 from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.garage import GarageScreen
@@ -73,6 +74,7 @@ OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
     ("Timekeeper (a physical car's heat)", TimekeeperScreen),
     ("Night projector", NightProjectorScreen),
     ("Evaluation", EvaluationScreen),
+    ("Coach (a lap against the limit lap)", CoachScreen),
     ("Projector", ProjectorScreen),
     ("Shared store (sync)", SyncScreen),
     ("League night dialogs", NewNightDialog),

@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     title = Text(
         f"{args.model} on {coaching.track.name}, {report.label}: {report.seconds:.3f} s, "
-        f"{report.gap_percent:.1f} % over the flying limit lap ({report.flying_limit:.3f} s "
+        f"{report.gap_words} ({report.flying_limit:.3f} s "
         f"within its actions; {coaching.car_limit.flying_seconds:.3f} s with any)"
     )
     table = Table(title=title, title_justify="left")

@@ -27,6 +27,7 @@ from sim.garage.options import (
     DEFAULT_SPEED_LEVELS,
     DEFAULT_STEERING_LEVELS,
     DEFAULT_TRACK,
+    LINE_ACTIONS,
     parse_hp_assignments,
     parse_range,
 )
@@ -116,6 +117,18 @@ def _add_spec_options(parser: argparse.ArgumentParser, *, for_clone: bool) -> No
         metavar="FILE.json",
         help="an explicit action list (or a model_metadata.json)",
     )
+    line = parser.add_argument_group("discrete action space from the track's racing line")
+    line.add_argument(
+        "--actions-from-line",
+        action="store_true",
+        help="the actions the limit lap's line asks for, clustered (racer-tui tracks line)",
+    )
+    line.add_argument(
+        "--action-count",
+        type=int,
+        metavar="N",
+        help=f"at most how many actions --actions-from-line makes, 3-30 (default {LINE_ACTIONS})",
+    )
     continuous = parser.add_argument_group("continuous action space")
     continuous.add_argument("--continuous", action="store_true")
     continuous.add_argument(
@@ -182,6 +195,12 @@ def _spec_options(args: argparse.Namespace) -> dict[str, Any]:
         options["sensors"] = [part.strip() for item in args.sensor for part in item.split(",")]
     if args.continuous:
         options["continuous"] = True
+    if args.action_count is not None and not args.actions_from_line:
+        raise ModelError("--action-count needs --actions-from-line.")
+    if args.actions_from_line:
+        options["actions_from_line"] = (
+            LINE_ACTIONS if args.action_count is None else args.action_count
+        )
     if args.steering_range is not None:
         options["steering_range"] = parse_range(
             args.steering_range, "--steering-range", -MAX_STEERING, MAX_STEERING, "degrees"

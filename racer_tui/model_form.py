@@ -39,6 +39,7 @@ from sim.garage.options import (
     ModelSpec,
     create_from_spec,
     default_model_spec,
+    racing_line_followed,
 )
 from sim.names import NAME_RULE, is_valid_name
 from sim.observations import SensorError, normalise_sensors
@@ -296,7 +297,7 @@ def spec_of_form(
     if problems:
         raise FormError(problems)
     metadata = replace(base.metadata, action_space=space, sensors=sensors)
-    return replace(
+    spec = replace(
         base,
         track=values.track,
         metadata=metadata,
@@ -305,6 +306,7 @@ def spec_of_form(
         reward_origin="editor",
         max_minutes=float(values.max_minutes),
     )
+    return racing_line_followed(spec, base)
 
 
 def _hyperparameters(

@@ -116,18 +116,25 @@ def _subject(args: argparse.Namespace) -> _Subject:
                 "Give a reward function file or a template's name, or --model NAME for a "
                 "garage model's own function."
             )
-        source, name = _function(args.function)
-        return _Subject(source, name, args.track or DEFAULT_TRACK, None, args.function)
+        track_name = args.track or DEFAULT_TRACK
+        source, name = _function(args.function, track_name, None)
+        return _Subject(source, name, track_name, None, args.function)
     from sim.garage.folder import open_model
 
     folder = open_model(args.model)
     space = folder.metadata().action_space
-    track_name = args.track or folder.training_params().world_name
+    own_track = folder.training_params().world_name
+    track_name = args.track or own_track
     if args.function is not None:
-        source, name = _function(args.function)
+        source, name = _function(args.function, track_name, space)
         return _Subject(source, name, track_name, space, args.function)
     title = f"{folder.name}'s reward function"
-    return _Subject(folder.reward_source(), str(folder.reward_file), track_name, space, title)
+    source = folder.reward_source()
+    if track_name != own_track:  # a racing_line reward pays for the line of the track mapped
+        from sim.coach.reward_line import line_followed
+
+        source = line_followed(source, (own_track, space), (track_name, space))
+    return _Subject(source, str(folder.reward_file), track_name, space, title)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -214,10 +221,11 @@ def _heading(text: str) -> float | None:
     return value
 
 
-def _function(given: str) -> tuple[str, str]:
-    """(source, name) of a template's name or a reward function file (read, not run)."""
+def _function(given: str, track_name: str, space: ActionSpace | None) -> tuple[str, str]:
+    """(source, name) of a template's name (racing_line with the line of `track_name`) or a
+    reward function file (read, not run)."""
     if given in TEMPLATES:
-        return template_source(given), TEMPLATES[given]
+        return template_source(given, track_name, space), TEMPLATES[given]
     return read_reward_file(Path(given)), given
 
 

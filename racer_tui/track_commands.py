@@ -61,7 +61,7 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     show.add_argument("--json", action="store_true")
     line = track_commands.add_parser(
         "line",
-        help="the limit lap's racing line with its target speeds (CSV, or --python / --json)",
+        help="the limit lap's racing line with the speed to command (CSV, or --python / --json)",
     )
     line.add_argument("track", help="track name (world or console name) or .npy file")
     line.add_argument(
@@ -231,16 +231,14 @@ def _facts(track_name: str, model: str | None) -> dict[str, object]:
 
 def _line(track_name: str, model: str | None, every: float, as_python: bool, as_json: bool) -> int:
     from sim.coach.limit_lap import limit_lap
+    from sim.coach.reward_line import command_rows, line_comment, python_line
 
     if not every > 0.0:
         raise TrackOptionError(f"--every must be a positive number of metres, not {every:g}.")
     track = resolve_track(track_name)
-    lap = limit_lap(track, space=_model_space(model))
-    points, speeds = lap.resampled(every)
-    rows = [
-        [round(float(x), 4), round(float(y), 4), round(float(v), 3)]
-        for (x, y), v in zip(points, speeds, strict=True)
-    ]
+    space = _model_space(model)
+    lap = limit_lap(track, space=space)
+    rows = command_rows(lap, every, space=space)
     if as_json:
         print_json(
             {
@@ -249,18 +247,12 @@ def _line(track_name: str, model: str | None, every: float, as_python: bool, as_
                 "flying_lap_s": round(lap.flying_seconds, 3),
                 "standing_lap_s": round(lap.standing_seconds, 3),
                 "columns": ["x", "y", "speed"],
+                "speed": "to command (params['speed']): the car drives a little faster",
                 "points": rows,
             }
         )
     elif as_python:
-        print(
-            f"# The limit lap's line on {track.name} ({lap.limits}): [x, y, target speed m/s]"
-            f" every {every:g} m; a flying lap of {lap.flying_seconds:.3f} s."
-        )
-        print("RACING_LINE = [")
-        for row in rows:
-            print(f"    {row},")
-        print("]")
+        print(python_line(rows, line_comment(lap, every)))
     else:
         print("x,y,speed")
         for x, y, v in rows:

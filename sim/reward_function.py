@@ -19,18 +19,22 @@ import linecache
 import math
 import numbers
 import os
+import re
 import sys
 import time
 import types
 from collections.abc import Callable, Mapping
 from importlib import resources
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from sim import reward_limit
 from sim.reward_limit import RewardTimeout
+
+if TYPE_CHECKING:  # gymnasium's import is not needed to load a reward function
+    from sim.action_space import ActionSpace
 
 # DeepRacer rejects rewards outside this range (and NaN or inf).
 MAX_ABS_REWARD = 1e5
@@ -44,7 +48,16 @@ TEMPLATES: dict[str, str] = {
     "stay_inside_borders": "stay_inside_borders.py",
     "prevent_zigzag": "prevent_zigzag.py",
     "object_avoidance": "object_avoidance.py",
+    "racing_line": "racing_line.py",
 }
+# The template whose copy in a model holds the line of the model's track (sim.coach): the
+# shipped file's empty list is replaced by the comment and list `sim.coach.reward_line`
+# writes, matched exactly by `_WRITTEN_LINE` (a line of any other shape is the racer's).
+RACING_LINE_TEMPLATE = "racing_line"
+EMPTY_LINE = "RACING_LINE = []"
+_WRITTEN_LINE = re.compile(
+    r"^# The limit lap's line on [^\n]*\nRACING_LINE = \[\n(?:    \[[^\n]*\],\n)*\]$", re.M
+)
 
 # The racer's module gets its own name so `if __name__ == "__main__":` test code in their file
 # does not run, and it is never put in sys.modules so two loaded files cannot see each other.
@@ -327,8 +340,9 @@ def load_reward_source(source: str, name: str) -> RewardFunction:
     return _load(source, name, name)
 
 
-def template_source(name: str) -> str:
-    """The text of one of the reward templates (see `TEMPLATES`)."""
+def template_source(name: str, track: str | None = None, space: ActionSpace | None = None) -> str:
+    """The text of one of the reward templates (see `TEMPLATES`). The racing_line template
+    comes with the line of `track` (default: reinvent_base) within `space`'s actions."""
     try:
         file_name = TEMPLATES[name]
     except KeyError:
@@ -337,7 +351,26 @@ def template_source(name: str) -> str:
             "is not a reward function template",
             advice=f"choose one of {', '.join(TEMPLATES)}",
         ) from None
-    return resources.files("sim.reward_templates").joinpath(file_name).read_text(encoding="utf-8")
+    text = resources.files("sim.reward_templates").joinpath(file_name).read_text(encoding="utf-8")
+    if name != RACING_LINE_TEMPLATE:
+        return text
+    from sim.coach.reward_line import with_track_line  # the coach's numpy and osqp, only here
+    from sim.track_catalog import DEFAULT_TRACK, resolve_track
+
+    return with_track_line(text, resolve_track(track or DEFAULT_TRACK), space)
+
+
+def template_name(source: str) -> str | None:
+    """Which template `source` is, unchanged (racing_line with a line racer-tui wrote for
+    any track), or None."""
+    for name, file_name in TEMPLATES.items():
+        text = resources.files("sim.reward_templates").joinpath(file_name).read_text("utf-8")
+        compared = source
+        if name == RACING_LINE_TEMPLATE:
+            compared = _WRITTEN_LINE.sub(EMPTY_LINE, source, count=1)
+        if compared == text:
+            return name
+    return None
 
 
 def load_template(name: str) -> RewardFunction:

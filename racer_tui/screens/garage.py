@@ -28,6 +28,7 @@ from textual.worker import Worker
 from racer_tui.app_words import in_app_words
 from racer_tui.model_form import check_name, taken_names
 from racer_tui.screens.base import RacerScreen, ScreenJobs, error_message
+from racer_tui.screens.coach import CoachScreen
 from racer_tui.screens.dialogs import ImportDialog, ImportRequest, InputDialog, ask
 from racer_tui.screens.evaluation import EvaluationScreen
 from racer_tui.screens.league_submit import RacerPrompt, submit_model_from
@@ -206,6 +207,12 @@ class GarageScreen(RacerScreen[None]):
         Binding("d", "delete_model", "Delete", tooltip="Delete the highlighted model (asks)"),
         Binding("i", "import_model", "Import", tooltip="A DeepRacer folder or a .racer-bundle"),
         Binding("x", "export_model", "Export", tooltip="Write a .racer-bundle for the league"),
+        Binding(
+            "o",
+            "coach_model",
+            "Coach",
+            tooltip="The latest evaluation's best lap against the limit lap, by sector",
+        ),
         Binding("ctrl+r", "reload", "Reload", tooltip="Read the model folders again", show=False),
     ]
 
@@ -558,6 +565,22 @@ class GarageScreen(RacerScreen[None]):
             )
             return
         self.app.push_screen(EvaluationScreen(folder.name))
+
+    def action_coach_model(self) -> None:
+        folder = self._highlighted_folder("coach")
+        if folder is None:
+            return
+        if not folder.evaluation_files():
+            self.notify(
+                f"{folder.name} has no evaluation to coach yet; press v to evaluate it first.",
+                severity="warning",
+                markup=False,
+            )
+            return
+        from sim.coach.session import coach_model  # the coach's numpy and osqp, when used
+
+        load = partial(coach_model, folder)
+        self.app.push_screen(CoachScreen(folder.name, "latest evaluation", load))
 
     def action_race_model(self) -> None:
         folder = self._highlighted_folder("race")

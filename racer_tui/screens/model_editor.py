@@ -67,7 +67,7 @@ from racer_tui.widgets.track_map import TrackMap
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder
 from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
-from sim.reward_function import TEMPLATES, RewardFunctionError, template_source
+from sim.reward_function import TEMPLATES, RewardFunctionError, template_name, template_source
 from sim.reward_lap import LapPay, verdict
 from sim.reward_map import MapOptions, RewardMap
 from sim.track import Track, TrackError
@@ -555,11 +555,25 @@ class ModelEditorScreen(RacerScreen[str | None]):
             return  # cleared back to its prompt
         name = event.value
         event.select.clear()
-        source = template_source(name)
+        values = self.values()
+        try:
+            space: ActionSpace | None = action_space_of(values, self.kept)
+        except FormError:
+            space = None  # fields being typed: the line for any action
+        self._write_template(name, values.track or None, space)
+
+    @work(thread=True, exclusive=True, group="editor-template", exit_on_error=False)
+    def _write_template(self, name: str, track: str | None, space: ActionSpace | None) -> None:
+        """The template's text, off the screen's thread: racing_line's holds the limit lap's
+        line of the form's track, which takes a second or two to work out the first time."""
+        source = template_source(name, track, space)
+        self.app.call_from_thread(self._offer_template, name, source)
+
+    def _offer_template(self, name: str, source: str) -> None:
         editor = self.query_one("#reward", TextArea)
         if editor.text == source:
             return
-        if editor.text.strip() and editor.text not in {template_source(t) for t in TEMPLATES}:
+        if editor.text.strip() and template_name(editor.text) is None:
             ask(
                 self.app,
                 "Replace the reward function?",

@@ -12,6 +12,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from rich.text import Text
@@ -74,6 +75,7 @@ def countdown_text(seconds: float) -> str:
 
 # What a racer can do once the race is over or has failed, in the race view's own keys.
 AFTER_THE_RACE = "r replays, Esc goes back."
+AFTER_A_LAP = "r replays, o coaches its best lap, Esc goes back."
 # A night's heat, once its finish is shown.
 RECORDING = "Recording it on the night…"
 RECORDED = "Recorded on the night."
@@ -110,6 +112,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         Binding("g", "toggle_ghost", "Ghost"),
         Binding("r", "restart", "Replay"),
         Binding("e", "skip_to_end", "End", show=False),
+        Binding("o", "coach", "Coach", tooltip="Its best lap against the limit lap, by sector"),
         Binding("escape", "leave", "Back"),
     ]
     DEFAULT_CSS = """
@@ -353,7 +356,8 @@ class RaceScreen(RacerScreen[RaceResult | None]):
                 text.append(f"{self.recording} ", style="green")
             elif self.recording:
                 text.append(f"{self.recording} ", style="bold red")
-            text.append(AFTER_THE_RACE, style="dim")
+            counted = tick.result is not None and tick.result.best_lap is not None
+            text.append(AFTER_A_LAP if counted else AFTER_THE_RACE, style="dim")
         return text
 
     def _add_laps(self, tick: RaceTick) -> None:
@@ -414,6 +418,29 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self.query_one("#laps", DataTable).clear()
         self._rebase()
         self.paused = False
+
+    def action_coach(self) -> None:
+        """The Coach view on the race's fastest counted lap."""
+        if self.failure:
+            self.notify(f"{self.failure} There is no lap to coach.", markup=False)
+            return
+        result = self.result if self.finish_shown else None
+        if result is None:
+            self.notify(
+                "The race has not finished yet: e shows its end, then o coaches its best lap.",
+                severity="warning",
+                markup=False,
+            )
+            return
+        best = result.best_lap
+        if best is None:
+            self.notify("No lap of this race counted, so there is no lap to coach.", markup=False)
+            return
+        from racer_tui.screens.coach import CoachScreen
+        from sim.coach.session import coach_race
+
+        load = partial(coach_race, self.setup.track, result)
+        self.app.push_screen(CoachScreen(self.setup.racer, f"lap {best.number}", load))
 
     def action_skip_to_end(self) -> None:
         """Jump to the end of what has been simulated so far."""

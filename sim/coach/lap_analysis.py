@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from sim.coach.limit_lap import LimitLap
 from sim.coach.sectors import Sector, centre_positions, unwrapped
@@ -69,6 +70,26 @@ class SectorReport:
         return self.seconds - self.limit_seconds
 
 
+@dataclass(frozen=True, eq=False)
+class LapTrace:
+    """The lap row by row, for drawing it: where each row is along the track, and the car's
+    speed there beside the limit lap's."""
+
+    along: FloatArray  # metres along the centre line from the start line, never decreasing
+    speed: FloatArray  # m/s
+    target: FloatArray  # m/s, the limit lap's speed at the nearest point of its line
+
+    def sector_index(self, sectors: Sequence[Sector]) -> NDArray[np.intp]:
+        """Each row's sector (an index into `sectors`, which run from the start line)."""
+        starts = np.array([sector.start for sector in sectors])
+        return np.clip(np.searchsorted(starts, self.along, side="right") - 1, 0, len(starts) - 1)
+
+    def resampled(self, count: int) -> tuple[FloatArray, FloatArray]:
+        """(speed, target) at `count` evenly spaced points from the start line to the end."""
+        at = np.linspace(float(self.along[0]), float(self.along[-1]), count)
+        return np.interp(at, self.along, self.speed), np.interp(at, self.along, self.target)
+
+
 @dataclass(frozen=True)
 class LapReport:
     label: str
@@ -76,11 +97,19 @@ class LapReport:
     limit_seconds: float  # the limit lap of the same kind (standing or flying)
     flying_limit: float
     sectors: tuple[SectorReport, ...]
+    trace: LapTrace
 
     @property
     def gap_percent(self) -> float:
         """The lap over the flying limit lap, percent."""
         return (self.seconds / self.flying_limit - 1.0) * 100.0
+
+    @property
+    def gap_words(self) -> str:
+        """ "2.4 % over the flying limit lap" (a lap can beat it: the limit lap keeps all four
+        wheels on the road, the rules only one)."""
+        side = "over" if self.gap_percent >= 0.0 else "under"
+        return f"{abs(self.gap_percent):.1f} % {side} the flying limit lap"
 
     def ranked(self) -> list[SectorReport]:
         return sorted(self.sectors, key=lambda report: report.lost, reverse=True)
@@ -109,18 +138,25 @@ def path_of_trial(
     rows: Sequence[SimTraceRow], trial: int, official: float | None = None
 ) -> DrivenPath:
     """Trial `trial` (its `episode` number) of a DeepRacer sim-trace, if it completed its
-    lap. A row's pose is the car's at the row before's `tstamp` (DeepRacer's row timing);
-    X, Y are the point 0.14 m ahead of the car's centre."""
+    lap. A row's pose is the car's at the row before's `tstamp`, the lap's last row's at its
+    own (DeepRacer's row timing); X, Y are the point 0.14 m ahead of the car's centre."""
     mine = [row for row in rows if row.episode == trial]
-    if not mine or mine[-1].episode_status != "lap_complete":
+    if len(mine) < 3 or mine[-1].episode_status != "lap_complete":
         raise LapAnalysisError(f"trial {trial} of the trace did not complete its lap.")
-    times = [mine[0].tstamp] + [row.tstamp for row in mine[:-1]]
+    # The last row shows the line crossed, at its own time (`sim.training.trace_pose`).
+    times = [mine[0].tstamp] + [row.tstamp for row in mine[:-2]] + [mine[-1].tstamp]
     yaw = np.radians([row.yaw for row in mine])
     x = np.array([row.x for row in mine]) - LOOK_AHEAD * np.cos(yaw)
     y = np.array([row.y for row in mine]) - LOOK_AHEAD * np.sin(yaw)
     t = np.array(times) - times[0]
-    moved = np.hypot(np.diff(x), np.diff(y))
-    speed = np.concatenate([[0.0], moved / np.maximum(np.diff(t), 1e-6)])
+    moved, dt = np.hypot(np.diff(x), np.diff(y)), np.diff(t)
+    # The first two rows share a time stamp (each row's pose is at the row before's): a
+    # step without time takes the speed of the step after it.
+    timed = np.flatnonzero(dt > 1e-6)
+    if len(timed) == 0:
+        raise LapAnalysisError(f"trial {trial} of the trace has no time between its rows.")
+    after = timed[np.minimum(np.searchsorted(timed, np.arange(len(dt))), len(timed) - 1)]
+    speed = np.concatenate([[0.0], moved[after] / dt[after]])
     return DrivenPath(
         t, x, y, speed, from_rest=True, label=f"trial {trial}", official_seconds=official
     )
@@ -173,7 +209,14 @@ def analyse_lap(
     limit_lap_seconds = limit.standing_seconds if path.from_rest else limit.flying_seconds
     crossing = float(np.interp(length, reach, path.t) - np.interp(0.0, reach, path.t))
     seconds = path.official_seconds if path.official_seconds is not None else crossing
-    return LapReport(path.label, seconds, limit_lap_seconds, limit.flying_seconds, tuple(reports))
+    return LapReport(
+        path.label,
+        seconds,
+        limit_lap_seconds,
+        limit.flying_seconds,
+        tuple(reports),
+        LapTrace(reach, path.speed, target),
+    )
 
 
 def _times(distances: FloatArray, speeds: FloatArray) -> FloatArray:
@@ -197,6 +240,11 @@ def _braking_gap(along: FloatArray, speed: FloatArray, target: FloatArray) -> fl
 def coach_sentence(report: SectorReport) -> str:
     """One plain sentence: the time lost, and the largest of what explains it."""
     name = report.sector.name
+    if report.lost <= -0.005:
+        gained = f"{name}: {-report.lost:.2f} s faster than the limit lap"
+        if report.off_line >= _OFF_LINE:
+            return f"{gained}, {report.off_line:.2f} m off its line."
+        return f"{gained}."
     if report.lost <= 0.005:
         return f"{name}: no time lost against the limit lap."
     causes: list[tuple[float, str]] = []

@@ -16,16 +16,26 @@ from sim.coach.lap_analysis import (
     LapAnalysisError,
     LapReport,
     analyse_lap,
+    path_of_race_lap,
     path_of_trial,
 )
 from sim.coach.limit_lap import LimitLap, limit_lap
 from sim.coach.sectors import Sector, track_sectors
-from sim.deepracer_files import read_evaluation_metrics, read_sim_trace, stamp_in
-from sim.garage.folder import ModelFolder
+from sim.deepracer_files import (
+    DeepRacerFileError,
+    read_evaluation_metrics,
+    read_sim_trace,
+    stamp_in,
+)
+from sim.garage.folder import ModelError, ModelFolder, open_model
+from sim.race.result import RaceResult
 from sim.remedies import Fix
 from sim.track import Track
 
 BEST = "best"
+# A sim-trace whose track_len is within this share of the model's track's length was driven
+# there (DeepRacer's own length of a track may differ from racer-tui's by centimetres).
+_SAME_LENGTH = 0.02
 
 
 @dataclass(frozen=True)
@@ -84,11 +94,41 @@ def coach_model(folder: ModelFolder, lap: str = BEST) -> Coaching:
         if number not in laps:
             raise LapAnalysisError(f"trial {number} of the evaluation did not complete its lap.")
     rows = read_sim_trace(trace_file)
+    track = folder.track()
+    if rows and abs(rows[0].track_len - track.length) > _SAME_LENGTH * track.length:
+        raise LapAnalysisError(
+            f"{folder.name}'s latest evaluation was driven on another track than its own "
+            f"({track.name}); evaluate it on {track.name} to coach it there."
+        )
     episodes = sorted({row.episode for row in rows})
     if len(episodes) < number:
         raise LapAnalysisError(f"the evaluation's sim-trace holds no trial {number}.")
     path = replace(path_of_trial(rows, episodes[number - 1], laps[number]), label=f"trial {number}")
-    return coach_path(folder.track(), path, folder.metadata().action_space)
+    return coach_path(track, path, folder.metadata().action_space)
+
+
+def coach_race(track: Track, result: RaceResult) -> Coaching:
+    """The fastest counted lap of a race or replay. Its limit lap is within the action space
+    of the garage model that drove it, when that model is here unchanged; else any action."""
+    best = result.best_lap
+    if best is None:
+        raise LapAnalysisError("no lap of this race counted, so it has no lap to coach.")
+    if result.trace is None:
+        raise LapAnalysisError(
+            "this race kept no trace of its laps, so they cannot be followed; race it again."
+        )
+    path = path_of_race_lap(result.trace, best.number, official=best.time_seconds)
+    return coach_path(track, path, _racing_model_space(result))
+
+
+def _racing_model_space(result: RaceResult) -> ActionSpace | None:
+    try:
+        folder = open_model(result.model_name)
+        if folder.content_hash() == result.model_hash:
+            return folder.metadata().action_space
+    except (ModelError, DeepRacerFileError, OSError):
+        pass  # the reference driver, or a model not in this garage: the car's own limit
+    return None
 
 
 def _trial_number(text: str, trials: int) -> int:

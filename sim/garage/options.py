@@ -38,6 +38,8 @@ from sim.track_catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
 # --- the defaults of `racer-tui model new` (the Training helper benchmarks these) --------
 # re:Invent 2018, the track of the league rule (sim.track_catalog says why).
 DEFAULT_TRACK = CATALOG_DEFAULT_TRACK
+# How many actions --actions-from-line clusters by default: the console's default grid has 10.
+LINE_ACTIONS = 10
 DEFAULT_SENSORS: tuple[str, ...] = ("vector",)
 DEFAULT_MAX_STEERING = 30.0
 DEFAULT_STEERING_LEVELS = 5
@@ -104,6 +106,7 @@ def model_spec(
     continuous: bool = False,
     steering_range: tuple[float, float] | None = None,
     speed_range: tuple[float, float] | None = None,
+    actions_from_line: int | None = None,
     reward: str | None = None,
     hyperparameters: Mapping[str, object] | None = None,
     minutes: float | None = None,
@@ -111,10 +114,13 @@ def model_spec(
     """`base` (default: `default_model_spec()`) with the given console options applied.
 
     The action space comes from exactly one of: the grid options (max steering, steering
-    levels, max speed, speed levels; unset ones take the defaults), an actions file, or
-    `continuous` with optional ranges. With none of them, `base`'s action space is kept.
+    levels, max speed, speed levels; unset ones take the defaults), an actions file,
+    `continuous` with optional ranges, or `actions_from_line` (that many actions clustered
+    from the track's limit lap). With none of them, `base`'s action space is kept.
+    A racing_line reward follows the model's track and action space when either changes.
     """
-    spec = base or default_model_spec()
+    before = base or default_model_spec()
+    spec = before
     if track is not None:
         spec = replace(spec, track=_checked_track(track))
     metadata = spec.metadata
@@ -125,14 +131,20 @@ def model_spec(
             raise ModelError(f"--sensor: {error}") from None
     grid = (max_steering, steering_levels, max_speed, speed_levels)
     space = _action_space(
-        grid, actions_file, continuous=continuous, ranges=(steering_range, speed_range)
+        grid,
+        actions_file,
+        continuous=continuous,
+        ranges=(steering_range, speed_range),
+        from_line=None if actions_from_line is None else (spec.track, actions_from_line),
     )
     if space is not None:
         metadata = replace(metadata, action_space=space)
     spec = replace(spec, metadata=metadata)
     if reward is not None:
-        source, origin = reward_choice(reward)
+        source, origin = reward_choice(reward, spec.track, metadata.action_space)
         spec = replace(spec, reward_source=source, reward_origin=origin)
+    else:
+        spec = racing_line_followed(spec, before)
     if hyperparameters:
         try:
             checked = check_hyperparameters(
@@ -194,9 +206,12 @@ def _checked_track(track: str) -> str:
     return track
 
 
-def reward_choice(reward: str) -> tuple[str, str]:
-    """(source, origin) for a template name or a reward function file, checked without
-    running it (it runs when the racer trains or checks it)."""
+def reward_choice(
+    reward: str, track: str = DEFAULT_TRACK, space: ActionSpace | None = None
+) -> tuple[str, str]:
+    """(source, origin) for a template name (racing_line with the line of `track` within
+    `space`'s actions) or a reward function file, checked without running it (it runs when
+    the racer trains or checks it)."""
     from sim.reward_function import (
         TEMPLATES,
         check_reward_code,
@@ -205,7 +220,7 @@ def reward_choice(reward: str) -> tuple[str, str]:
     )
 
     if reward in TEMPLATES:
-        return template_source(reward), reward
+        return template_source(reward, track, space), reward
     path = Path(reward).expanduser()
     if not path.exists():
         raise ModelError(
@@ -256,6 +271,7 @@ def _action_space(
     *,
     continuous: bool,
     ranges: tuple[tuple[float, float] | None, tuple[float, float] | None],
+    from_line: tuple[str, int] | None = None,
 ) -> ActionSpace | None:
     uses_grid = any(value is not None for value in grid)
     uses_ranges = any(value is not None for value in ranges)
@@ -265,6 +281,7 @@ def _action_space(
             ("--max-steering/--steering-levels/--max-speed/--speed-levels", uses_grid),
             ("--actions", actions_file is not None),
             ("--continuous", continuous),
+            ("--actions-from-line", from_line is not None),
         )
         if used
     ]
@@ -276,6 +293,8 @@ def _action_space(
         return _grid(*grid)
     if actions_file is not None:
         return read_actions_file(actions_file)
+    if from_line is not None:
+        return _line_actions(*from_line)
     if continuous:
         steering, speed = ranges
         return ActionSpace(
@@ -309,6 +328,29 @@ def _grid(
     if levels not in SPEED_LEVELS:
         raise ModelError(f"--speed-levels must be 1, 2 or 3, not {levels}.")
     return discrete_grid(steer, steer_levels, speed, levels)
+
+
+def _line_actions(track: str, count: int) -> ActionSpace:
+    from sim.coach.line_actions import LineActionsError, actions_from_line
+    from sim.track_catalog import resolve_track
+
+    try:
+        return actions_from_line(resolve_track(track), count)
+    except LineActionsError as error:
+        raise ModelError(f"--actions-from-line: {error}") from None
+
+
+def racing_line_followed(spec: ModelSpec, before: ModelSpec) -> ModelSpec:
+    """`spec` with a racing_line reward's line redrawn when its track or actions changed
+    from `before`'s (only the template as racer-tui wrote it; see `line_followed`)."""
+    was = (before.track, before.metadata.action_space)
+    now = (spec.track, spec.metadata.action_space)
+    if was == now:
+        return spec  # before the coach's imports: most specs keep their track and actions
+    from sim.coach.reward_line import line_followed
+
+    source = line_followed(spec.reward_source, was, now)
+    return spec if source == spec.reward_source else replace(spec, reward_source=source)
 
 
 def read_actions_file(path: Path) -> ActionSpace:

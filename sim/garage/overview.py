@@ -140,13 +140,10 @@ def folder_evaluation(folder: ModelFolder, file_name: str) -> tuple[EvaluationTr
 
 def reward_origin(folder: ModelFolder) -> str:
     """Which template the reward function is, or "custom"."""
-    from sim.reward_function import TEMPLATES, template_source
+    from sim.reward_function import template_name
 
-    source = folder.reward_source()
-    for name in TEMPLATES:
-        if source == template_source(name):
-            return f"template {name}"
-    return "custom"
+    name = template_name(folder.reward_source())
+    return "custom" if name is None else f"template {name}"
 
 
 def _action_rows(space: ActionSpace) -> list[dict[str, Any]]:

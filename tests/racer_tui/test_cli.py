@@ -116,7 +116,13 @@ def test_a_track_shows_its_limit_laps_and_gives_its_racing_line(
     code, out, _ = run_cli(capsys, "tracks", "line", "hairpin-circuit", "--python")
     source = out.split("RACING_LINE = ", 1)[1]
     points = ast.literal_eval(source)  # pastes as it prints
-    assert all(len(point) == 3 and 0.1 <= point[2] <= 4.1 for point in points)
+    # The speed to command (params["speed"]): never above the console's 4 m/s.
+    assert all(len(point) == 3 and 0.1 <= point[2] <= 4.0 for point in points)
+    code, out, _ = run_cli(
+        capsys, "tracks", "line", "hairpin-circuit", "--python", "--model", "slowpoke"
+    )
+    slow = ast.literal_eval(out.split("RACING_LINE = ", 1)[1])
+    assert max(point[2] for point in slow) == 1.5 and "(the action space)" in out
     code, out, _ = run_cli(capsys, "tracks", "line", "hairpin-circuit", "--json")
     line = json.loads(out)
     assert line["flying_lap_s"] == flying and line["columns"] == ["x", "y", "speed"]

@@ -12,7 +12,7 @@ from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from sim.garage.folder import list_models, open_model
 from sim.garage.options import new_model
-from sim.reward_function import template_source
+from sim.reward_function import template_name, template_source
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
 
 BROKEN_REWARD = """def reward_function(params):
@@ -166,14 +166,30 @@ async def test_a_template_replaces_own_code_only_after_asking() -> None:
         area = editor.query_one("#reward", TextArea)
         area.load_text("def reward_function(params):\n    return 1.0\n")
         editor.query_one("#reward-template", Select).value = "prevent_zigzag"
-        await pilot.pause()
+        await settle(pilot)
         assert isinstance(app.screen, ConfirmDialog)
         await pilot.press("n")
         assert "return 1.0" in area.text
         editor.query_one("#reward-template", Select).value = "prevent_zigzag"
-        await pilot.pause()
+        await settle(pilot)
         await pilot.press("y")
         assert area.text == template_source("prevent_zigzag")
+
+
+async def test_the_racing_line_template_comes_with_the_line_of_the_forms_track() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        editor = _editor(app)
+        editor.query_one("#track", Select).value = "hairpin-circuit"
+        await settle(pilot)
+        editor.query_one("#reward-template", Select).value = "racing_line"
+        await settle(pilot)
+        area = editor.query_one("#reward", TextArea)
+        # A template replaces a template without asking; the line is the form's track's.
+        assert "The limit lap's line on hairpin-circuit (the action space)" in area.text
+        assert template_name(area.text) == "racing_line"
 
 
 async def test_edit_saves_changes_to_the_model_files() -> None:

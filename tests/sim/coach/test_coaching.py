@@ -77,3 +77,16 @@ def test_coach_explains_a_models_evaluated_lap(capsys: pytest.CaptureFixture[str
     assert main(["coach", "coachee", "--lap", "7"]) == 2
     assert "from 1 to 2" in capsys.readouterr().err
     assert np.isfinite(coached["lap_s"])
+
+
+def test_a_sector_faster_than_the_limit_lap_says_so() -> None:
+    from sim.coach.lap_analysis import SectorReport
+    from sim.coach.sectors import Sector
+
+    corner = Sector("T2", corner=True, start=3.0, end=5.0)
+    faster = SectorReport(corner, 0.9, 1.0, off_line=0.2, speed_gap=0.1, apex_gap=0.0,
+                          braking_gap=0.0)  # fmt: skip
+    # The limit lap keeps all four wheels on the road; a car may cut further inside.
+    assert coach_sentence(faster) == "T2: 0.10 s faster than the limit lap, 0.20 m off its line."
+    level = SectorReport(corner, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0)
+    assert coach_sentence(level) == "T2: no time lost against the limit lap."

@@ -1,0 +1,84 @@
+"""The limit lap's line as a reward function reads it, and the `racing_line` template with a
+track's line written in.
+
+A reward function compares the car with the line through DeepRacer's params, and its
+`speed` is the *commanded* speed (the action's), not the speed driven: the car settles at
+`speed_gain` times what it is told. So each row is [x, y, speed to command], the limit lap's
+speed divided by the gain and kept inside the action space's speeds, and the same rows go to
+`racer-tui tracks line` and into a model's reward function.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+import numpy as np
+
+from sim.action_space import ActionSpace
+from sim.car import DEEPRACER_CAR, CarSpec
+from sim.coach.limit_lap import LimitLap, limit_lap
+from sim.reward_function import EMPTY_LINE
+from sim.track import Track
+
+# Metres between the points written into a reward function: a scan of a lap's points runs on
+# every step, and the function measures the distance to the segment between points, so 0.2 m
+# loses nothing a car can drive.
+REWARD_SPACING: Final = 0.2
+
+
+def command_rows(
+    lap: LimitLap, every: float, car: CarSpec = DEEPRACER_CAR, space: ActionSpace | None = None
+) -> list[list[float]]:
+    """The line every `every` metres as [x, y, speed to command] rows, rounded for people."""
+    points, speeds = lap.resampled(every)
+    low, high = (car.min_speed, car.max_speed)
+    if space is not None:
+        low, high = min(space.speeds()), space.max_speed
+    commands = np.clip(speeds / car.speed_gain, low, high)
+    return [
+        [round(float(x), 4), round(float(y), 4), round(float(v), 3)]
+        for (x, y), v in zip(points, commands, strict=True)
+    ]
+
+
+def python_line(rows: list[list[float]], comment: str) -> str:
+    """`RACING_LINE = [...]` as a reward function pastes it, under a `# comment` line."""
+    body = "".join(f"    {row},\n" for row in rows)
+    return f"# {comment}\nRACING_LINE = [\n{body}]"
+
+
+def line_comment(lap: LimitLap, every: float) -> str:
+    return (
+        f"The limit lap's line on {lap.track_name} ({lap.limits}): [x, y, speed to command m/s]"
+        f" every {every:g} m; a flying lap of {lap.flying_seconds:.3f} s."
+    )
+
+
+def with_track_line(template: str, track: Track, space: ActionSpace | None = None) -> str:
+    """The racing_line template with `track`'s line (within `space`'s actions) written in."""
+    lap = limit_lap(track, space=space)
+    rows = command_rows(lap, REWARD_SPACING, space=space)
+    line = python_line(rows, line_comment(lap, REWARD_SPACING))
+    if EMPTY_LINE not in template:
+        raise ValueError("the racing_line template has lost its RACING_LINE = [] line")
+    return template.replace(f"\n{EMPTY_LINE}\n", f"\n{line}\n", 1)
+
+
+def line_followed(
+    source: str,
+    was: tuple[str, ActionSpace | None],
+    now: tuple[str, ActionSpace | None],
+) -> str:
+    """`source` with its line redrawn for track and actions `now`, when it is the racing_line
+    template exactly as written for `was` (a line the racer changed is theirs, and kept)."""
+    from sim.reward_function import RACING_LINE_TEMPLATE, template_name, template_source
+    from sim.track import TrackError
+
+    if was == now or template_name(source) != RACING_LINE_TEMPLATE:
+        return source
+    try:
+        if source != template_source(RACING_LINE_TEMPLATE, *was):
+            return source
+        return template_source(RACING_LINE_TEMPLATE, *now)
+    except TrackError:
+        return source  # a track that no longer resolves: the function stays as it was
