@@ -282,6 +282,21 @@ class Fleet:
         self.sliding[car] = False
         self.crashed[car] = False
 
+    def copy_car(self, other: Fleet, car: int) -> None:
+        """Put every car of this fleet in the state of `other`'s car `car`, mid-drive (to try
+        commands on copies of it; nothing to collide with, so no bodies are moved)."""
+        for mine, theirs in (
+            (self.x, other.x),
+            (self.y, other.y),
+            (self.yaw, other.yaw),
+            (self.speed, other.speed),
+            (self.steering, other.steering),
+            (self._lagged_steering, other._lagged_steering),
+            (self.yaw_rate, other.yaw_rate),
+        ):
+            mine[:] = theirs[car]
+        self._bodies_stale = True
+
     def add_box(self, x: float, y: float, yaw: float, length: float, width: float) -> pymunk.Shape:
         """A static box (DeepRacer's object-avoidance obstacles are 0.3 m boxes)."""
         shape = pymunk.Poly.create_box(self.space.static_body, (length, width))

@@ -94,6 +94,7 @@ def test_the_simulator_drives_the_limit_lap_within_three_percent(name: str) -> N
     assert driven.completed, driven.status
     assert abs(driven.flying / lap.flying_seconds - 1.0) <= 0.03
     assert abs(driven.standing / lap.standing_seconds - 1.0) <= 0.05
+    assert driven.off_line < 0.10  # it follows the line, not a shortcut of its own
 
 
 def test_an_action_space_with_slower_speeds_costs_time() -> None:
