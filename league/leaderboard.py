@@ -121,6 +121,11 @@ def leaderboard(
 def _board_rows(league: League, filters: Filters, method: RankingMethod) -> list[LeaderboardRow]:
     """From the `board` table: each racer's best, sorted in SQL nearly as rank() will (the
     order only has to be close: rank() decides, and sorts a nearly sorted list fast)."""
+    return _rows(league, *board_sql(filters, method))
+
+
+def board_sql(filters: Filters, method: RankingMethod) -> tuple[str, list[Any]]:
+    """The board query: one range of the `board_in_order` index, read in its order."""
     clauses = ["b.method = ?"]
     params: list[Any] = [method.value]
     if filters.track_hash is not None:
@@ -136,7 +141,7 @@ def _board_rows(league: League, filters: Filters, method: RankingMethod) -> list
         ORDER BY b.track_hash, b.physics, b.unscored, b.score, b.scoring_offtracks,
                  b.valid_laps DESC, b.recorded_at, b.racer, b.entry_id
     """
-    return _rows(league, sql, params)
+    return sql, params
 
 
 def grouped_rows(

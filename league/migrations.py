@@ -446,6 +446,16 @@ NIGHT_DATE = """
 ALTER TABLE nights ADD COLUMN held_on TEXT
 """
 
+# Version 9: a track's leaderboard read in ranking order from one covering index: no sort of
+# its rows and no lookup of each in the board (league.leaderboard._board_rows).
+BOARD_ORDER = """
+CREATE INDEX board_in_order ON board (
+    method, track_hash, physics, unscored, score, scoring_offtracks, valid_laps DESC,
+    recorded_at, racer, entry_id, kind, model_name, night_id, best_lap, average_lap,
+    offtracks, laps_driven
+)
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -455,6 +465,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("signed results", _script(SIGNED_RESULTS)),
     Migration("night changes", _script(NIGHT_CHANGES)),
     Migration("night dates", _script(NIGHT_DATE)),
+    Migration("leaderboard in ranking order", _script(BOARD_ORDER)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 
