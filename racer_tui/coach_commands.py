@@ -52,6 +52,8 @@ def run(args: argparse.Namespace) -> int:
                 "flying_limit_s": round(report.flying_limit, 3),
                 "car_flying_limit_s": round(coaching.car_limit.flying_seconds, 3),
                 "gap_to_flying_limit_percent": round(report.gap_percent, 1),
+                "from_rest": report.from_rest,
+                "notes": report.notes(),
                 "sectors": [_sector_json(item, coach_sentence(item)) for item in ranked],
             }
         )
@@ -71,12 +73,14 @@ def run(args: argparse.Namespace) -> int:
         sentence = coach_sentence(item).split(": ", 1)[1]
         table.add_row(
             item.sector.name,
-            f"{item.lost:+.2f} s",
+            item.lost_text,
             f"{item.seconds:.2f}",
             f"{item.limit_seconds:.2f}",
             Text(sentence),
         )
     print_table(table)
+    for note in report.notes():
+        print(note)
     return 0
 
 

@@ -56,7 +56,9 @@ TEMPLATES: dict[str, str] = {
 RACING_LINE_TEMPLATE = "racing_line"
 EMPTY_LINE = "RACING_LINE = []"
 _WRITTEN_LINE = re.compile(
-    r"^# The limit lap's line on [^\n]*\nRACING_LINE = \[\n(?:    \[[^\n]*\],\n)*\]$", re.M
+    r"^# The limit lap's line on [^\n]*\n(?:# [^\n]*\n)?"
+    r"RACING_LINE = \[\n(?:    \[[^\n]*\],\n)*\]$",
+    re.M,
 )
 
 # The racer's module gets its own name so `if __name__ == "__main__":` test code in their file

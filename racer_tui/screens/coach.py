@@ -47,6 +47,8 @@ def summary_text(coaching: Coaching) -> Text:
     else:
         text.append(f"({report.flying_limit:.3f} s within its actions; ")
         text.append(f"{coaching.car_limit.flying_seconds:.3f} s with any)")
+    if report.from_rest:  # the table's limits are the standing lap's: say so, or they disagree
+        text.append(f"; sectors against the standing limit, {report.limit_seconds:.3f} s")
     return text
 
 
@@ -61,6 +63,9 @@ class CoachScreen(RacerScreen[None]):
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("escape", "leave", "Back"),
+        # The sector table takes these itself; here so the help lists them.
+        Binding("down", "sector(1)", "Next sector", show=False),
+        Binding("up", "sector(-1)", "Previous sector", show=False),
     ]
     DEFAULT_CSS = """
     CoachScreen { padding: 0 1; }
@@ -108,6 +113,11 @@ class CoachScreen(RacerScreen[None]):
     def action_leave(self) -> None:
         self.dismiss(None)
 
+    def action_sector(self, step: int) -> None:
+        table = self.query_one("#coach-sectors", DataTable)
+        table.focus()
+        table.move_cursor(row=max(table.cursor_row + step, 0))
+
     @work(thread=True, exclusive=True, group="coach", exit_on_error=False)
     def _coach(self) -> None:
         self.post_message(CoachingReady(self._load()))
@@ -125,7 +135,7 @@ class CoachScreen(RacerScreen[None]):
             item = sectors[index]
             table.add_row(
                 Text(item.sector.name),
-                Text(f"{item.lost:+.2f} s", justify="right"),
+                Text(item.lost_text, justify="right"),
                 Text(f"{item.seconds:.2f}", justify="right"),
                 Text(f"{item.limit_seconds:.2f}", justify="right"),
             )

@@ -571,8 +571,9 @@ class GarageScreen(RacerScreen[None]):
         if folder is None:
             return
         if not folder.evaluation_files():
+            first = "press v to evaluate it" if folder.has_policy() else "press t to train it"
             self.notify(
-                f"{folder.name} has no evaluation to coach yet; press v to evaluate it first.",
+                f"{folder.name} has no evaluation to coach yet; {first} first.",
                 severity="warning",
                 markup=False,
             )

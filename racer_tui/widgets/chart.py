@@ -46,6 +46,8 @@ def running_mean(values: Sequence[float], window: int) -> list[float]:
 def format_value(value: float) -> str:
     if not math.isfinite(value):
         return "-"
+    if value == 0.0:
+        return "0"  # beside "4.0" on the same axis, "0.000" reads as a finer scale
     magnitude = abs(value)
     # Thousands and millions as 21.8k / 1.2M: an axis label has about 6 columns, and
     # "2.18e+04" is both wider and harder to read at a glance.
@@ -132,6 +134,7 @@ class LineChart(Widget):
 
     def on_resize(self) -> None:
         self._lines = None
+        self.refresh()
 
     # --- drawing ---------------------------------------------------------------------
 

@@ -69,6 +69,12 @@ class SectorReport:
     def lost(self) -> float:
         return self.seconds - self.limit_seconds
 
+    @property
+    def lost_text(self) -> str:
+        """ "+0.21 s", never "-0.00 s"."""
+        shown = round(self.lost, 2) or 0.0  # -0.0 is falsy: a nil loss has no sign to show
+        return f"{shown:+.2f} s"
+
 
 @dataclass(frozen=True, eq=False)
 class LapTrace:
@@ -98,6 +104,7 @@ class LapReport:
     flying_limit: float
     sectors: tuple[SectorReport, ...]
     trace: LapTrace
+    from_rest: bool = False  # a standing lap: its sectors are timed against the standing limit
 
     @property
     def gap_percent(self) -> float:
@@ -110,6 +117,22 @@ class LapReport:
         wheels on the road, the rules only one)."""
         side = "over" if self.gap_percent >= 0.0 else "under"
         return f"{abs(self.gap_percent):.1f} % {side} the flying limit lap"
+
+    def notes(self) -> list[str]:
+        """What the headline figure does not say: which limit the sectors are timed against,
+        and why a lap may beat a limit lap."""
+        notes = []
+        if self.from_rest:
+            notes.append(
+                f"The lap starts from rest, so its sectors are timed against the standing "
+                f"limit lap ({self.limit_seconds:.3f} s)."
+            )
+        if any(report.lost <= -0.005 for report in self.sectors):
+            notes.append(
+                "The limit lap keeps all four wheels on the road; this lap cuts further in "
+                "places (DeepRacer counts a car off only when all four are off)."
+            )
+        return notes
 
     def ranked(self) -> list[SectorReport]:
         return sorted(self.sectors, key=lambda report: report.lost, reverse=True)
@@ -216,6 +239,7 @@ def analyse_lap(
         limit.flying_seconds,
         tuple(reports),
         LapTrace(reach, path.speed, target),
+        from_rest=path.from_rest,
     )
 
 
@@ -243,8 +267,8 @@ def coach_sentence(report: SectorReport) -> str:
     if report.lost <= -0.005:
         gained = f"{name}: {-report.lost:.2f} s faster than the limit lap"
         if report.off_line >= _OFF_LINE:
-            return f"{gained}, {report.off_line:.2f} m off its line."
-        return f"{gained}."
+            gained += f", {report.off_line:.2f} m off its line"
+        return f"{gained} (which keeps all four wheels on the road)."
     if report.lost <= 0.005:
         return f"{name}: no time lost against the limit lap."
     causes: list[tuple[float, str]] = []

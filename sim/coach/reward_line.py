@@ -42,15 +42,18 @@ def command_rows(
 
 
 def python_line(rows: list[list[float]], comment: str) -> str:
-    """`RACING_LINE = [...]` as a reward function pastes it, under a `# comment` line."""
+    """`RACING_LINE = [...]` as a reward function pastes it, under `comment` (# lines)."""
     body = "".join(f"    {row},\n" for row in rows)
-    return f"# {comment}\nRACING_LINE = [\n{body}]"
+    said = "".join(f"# {line}\n" for line in comment.splitlines())
+    return f"{said}RACING_LINE = [\n{body}]"
 
 
 def line_comment(lap: LimitLap, every: float) -> str:
+    """Two lines, each short enough for an editor 80 columns wide."""
     return (
-        f"The limit lap's line on {lap.track_name} ({lap.limits}): [x, y, speed to command m/s]"
-        f" every {every:g} m; a flying lap of {lap.flying_seconds:.3f} s."
+        f"The limit lap's line on {lap.track_name} ({lap.limits}):\n"
+        f"[x, y, speed to command m/s] every {every:g} m; a flying lap of "
+        f"{lap.flying_seconds:.3f} s."
     )
 
 

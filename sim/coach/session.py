@@ -61,6 +61,13 @@ def coach_path(track: Track, path: DrivenPath, space: ActionSpace | None = None)
 def coach_model(folder: ModelFolder, lap: str = BEST) -> Coaching:
     """The model's lap `lap` ("best", or a trial number) of its latest evaluation."""
     files = folder.evaluation_files()
+    if not files and not folder.has_policy():
+        problem = f"{folder.name} has not been trained, so it has no lap to coach"
+        raise LapAnalysisError(
+            f"{problem}; train it, then evaluate it (racer-tui train {folder.name}).",
+            problem=problem,
+            fix=Fix.TRAIN_MODEL,
+        )
     if not files:
         problem = f"{folder.name} has no evaluation to coach"
         raise LapAnalysisError(

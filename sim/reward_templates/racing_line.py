@@ -5,17 +5,17 @@ What it teaches: where to be and how fast. RACING_LINE
 holds the limit lap's line of the model's track (racer-tui
 writes it in when the model is made; `racer-tui tracks
 line TRACK --python` prints it for any track), each point
-[x, y, speed to command]. A step pays up to 1 for being
-on the line, falling to nothing half the road's width
-away, and up to 1 more for commanding the line's speed
-there, falling to nothing 1 m/s away; the speed pays only
-as much as the car is on the line. Off the road a step
-pays almost nothing.
+[x, y, speed to command]. A step pays more the nearer
+the car is to the line (nothing half the road's width
+away): a fifth of that for being there, the rest for
+commanding the line's speed there (nothing 1 m/s away),
+all in proportion to the speed, so that every metre of a
+lap pays alike and a slow lap's extra steps do not pay
+more. Off the road a step pays almost nothing.
 
-Where it stops helping: the line is the simulator's
-fastest, so a car that cannot hold it yet learns to crawl
-along it first. Pasted into the DeepRacer console with
-its line it runs unchanged.
+Where it stops helping: the line keeps all four wheels on
+the road; a car may cut further. Pasted into the DeepRacer
+console with its line it runs unchanged.
 """
 
 import math
@@ -26,6 +26,9 @@ RACING_LINE = []
 # track's width), and how far off the line's speed.
 LINE_REACH = 0.5
 SPEED_REACH = 1.0  # m/s
+# What being on the line pays at any speed; the rest of a step's pay is for its speed.
+ON_LINE_SHARE = 0.2
+TOP_SPEED = 4.0  # m/s, the console's fastest action: a step pays at most 1
 OFF_THE_ROAD = 0.001
 
 
@@ -72,4 +75,6 @@ def reward_function(params):
     on_line = max(0.0, 1.0 - off_line / reach)
     speed_gap = abs(params["speed"] - here[2])
     on_speed = max(0.0, 1.0 - speed_gap / SPEED_REACH)
-    return float(OFF_THE_ROAD + on_line**2 + on_line * on_speed)
+    share = ON_LINE_SHARE + (1.0 - ON_LINE_SHARE) * on_speed
+    pace = min(params["speed"], TOP_SPEED) / TOP_SPEED
+    return float(OFF_THE_ROAD + on_line**2 * share * pace)

@@ -68,7 +68,7 @@ async def test_a_model_without_an_evaluation_is_sent_to_evaluate_first() -> None
         notes = Notifications(app)
         await pilot.press("o")
         assert not isinstance(app.screen, CoachScreen)
-        assert "press v to evaluate it first" in notes.text("warning")
+        assert "press t to train it first" in notes.text("warning")  # untrained: train first
 
 
 async def test_a_coaching_that_fails_says_why_in_the_view() -> None:

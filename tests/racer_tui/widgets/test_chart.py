@@ -18,6 +18,7 @@ def test_values_are_formatted_for_a_narrow_axis() -> None:
     assert format_value(21_812.0) == "21.8k"
     assert format_value(432_512.0) == "433k"
     assert format_value(-12_500_000.0) == "-12.5M"
+    assert format_value(0.0) == "0" and format_value(0.004) == "0.004"
     assert format_value(12.345) == "12.3"
     assert format_value(0.01234) == "0.012"
     assert format_value(float("nan")) == "-"

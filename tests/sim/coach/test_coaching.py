@@ -60,7 +60,7 @@ def test_coach_explains_a_models_evaluated_lap(capsys: pytest.CaptureFixture[str
     new_model("coachee", track="hairpin-circuit")
     folder = open_model("coachee")
     code = main(["coach", "coachee"])
-    assert code == 2 and "has no evaluation to coach" in capsys.readouterr().err
+    assert code == 2 and "has not been trained, so it has no lap" in capsys.readouterr().err
     track = folder.track()
     evaluate_model(folder, trials=2, driver=ReferenceRaceDriver(track))
     assert main(["coach", "coachee", "--json"]) == 0
@@ -87,6 +87,11 @@ def test_a_sector_faster_than_the_limit_lap_says_so() -> None:
     faster = SectorReport(corner, 0.9, 1.0, off_line=0.2, speed_gap=0.1, apex_gap=0.0,
                           braking_gap=0.0)  # fmt: skip
     # The limit lap keeps all four wheels on the road; a car may cut further inside.
-    assert coach_sentence(faster) == "T2: 0.10 s faster than the limit lap, 0.20 m off its line."
+    assert coach_sentence(faster) == (
+        "T2: 0.10 s faster than the limit lap, 0.20 m off its line "
+        "(which keeps all four wheels on the road)."
+    )
+    assert SectorReport(corner, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0).lost_text == "+0.00 s"
+    assert SectorReport(corner, 0.999, 1.0, 0.0, 0.0, 0.0, 0.0).lost_text == "+0.00 s"
     level = SectorReport(corner, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0)
     assert coach_sentence(level) == "T2: no time lost against the limit lap."

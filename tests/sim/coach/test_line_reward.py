@@ -61,10 +61,14 @@ def test_the_racing_line_template_pays_for_the_line_and_its_speed() -> None:
     index = int(np.argmin([row[2] for row in rows]))  # the slowest point, in a corner
     target = rows[index][2]
     on_line = reward(params_on_the_line(index, target))
-    assert on_line == pytest.approx(2.001, abs=0.01)
+    # In proportion to the speed (of the console's 4 m/s), so a slow lap's extra steps
+    # do not pay more than a fast lap's.
+    assert on_line == pytest.approx(0.001 + target / 4.0, abs=0.01)
     assert reward(params_on_the_line(index, target, aside=0.2)) < on_line
     assert reward(params_on_the_line(index, target, aside=0.6)) == pytest.approx(0.001)
     assert reward(params_on_the_line(index, target + 0.5)) < on_line
+    crawling = reward(params_on_the_line(index, 0.5))
+    assert crawling * target / 0.5 < on_line  # per metre, crawling on the line pays less
     off = {**params_on_the_line(index, target), "is_offtrack": True}
     assert reward(off) == pytest.approx(0.001)
 
