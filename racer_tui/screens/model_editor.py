@@ -180,6 +180,9 @@ def field(label: str, widget: Widget, allowed: str = "", field_id: str = "") -> 
     )
 
 
+OUTDATED_MAP = Text("changed since the last map: ctrl+r maps what it pays now", style="dim")
+
+
 class ModelEditorScreen(RacerScreen[str | None]):
     """`folder` None creates a model (from the defaults, on `track` if given); otherwise it
     edits that model in place."""
@@ -515,11 +518,20 @@ class ModelEditorScreen(RacerScreen[str | None]):
     @on(TextArea.Changed, "#reward")
     def _reward_changed(self) -> None:
         self._set_problem("reward", "")
+        self._outdate_map()
 
     @on(Select.Changed, "#track")
     def _track_changed(self, event: Select.Changed) -> None:
         if isinstance(event.value, str):
             self._load_preview(event.value)
+            self._outdate_map()
+
+    def _outdate_map(self) -> None:
+        """A map of what the function paid is of the code and track it was made for: once
+        either changes it is taken down, not left to speak for the new ones."""
+        if self.last_check is not None:
+            self.last_check = None
+            self.query_one("#reward-map", Static).update(OUTDATED_MAP)
 
     @work(thread=True, exclusive=True, group="editor-preview", exit_on_error=False)
     def _load_preview(self, name: str) -> None:

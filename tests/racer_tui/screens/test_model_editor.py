@@ -112,6 +112,9 @@ async def test_reward_check_shows_the_value_then_the_error_with_its_line() -> No
         assert editor.last_check is not None and editor.last_check.value is not None
         area = editor.query_one("#reward", TextArea)
         area.load_text(BROKEN_REWARD)
+        await pilot.pause()
+        # The map was of the code before: it is taken down, not left to speak for this one.
+        assert "changed since the last map" in painted(editor.query_one("#reward-map"))
         await pilot.press("ctrl+r")
         await settle(pilot)
         text = painted(result)
