@@ -313,11 +313,11 @@ def _show(name: str, as_json: bool) -> int:
             actions.add_column(column, justify="right")
         for action in details["actions"]:
             actions.add_row(
-                str(action["index"]), f"{action['steering_angle']:g}", f"{action['speed']:g}"
+                str(action["index"]), f"{action['steering_angle']:.1f}", f"{action['speed']:.2f}"
             )
         print_table(actions)
     print_table(_key_values("Hyperparameters", details["hyperparameters"]))
-    print_table(_key_values("Training", details["training"]))
+    print_table(_training_table(details["training"]))
     for evaluation in details["evaluations"]:
         print_table(_evaluation_table(evaluation))
     return 0
@@ -329,6 +329,35 @@ def _key_values(title: str, values: dict[str, Any]) -> Table:
     table.add_column("value")
     for key, value in values.items():
         table.add_row(key, Text("-" if value is None else f"{value}"))
+    return table
+
+
+# `model show`'s words for the training summary's keys (the JSON keeps the keys); a fact
+# with nothing to say (no failure, no state yet) is left out.
+TRAINING_LABELS = {
+    "episodes": "episodes",
+    "laps_completed": "laps completed",
+    "best_progress": "best progress (%)",
+    "recent_progress": "recent progress (%)",
+    "recent_reward": "recent reward",
+    "training_seconds": "training time (s)",
+    "steps": "steps",
+    "state": "state",
+    "updated_at": "updated",
+    "message": "last message",
+    "problem": "problem",
+    "physics": "car it learnt",
+}
+
+
+def _training_table(values: dict[str, Any]) -> Table:
+    table = Table(title="Training", show_header=False)
+    table.add_column("key")
+    table.add_column("value")
+    for key, value in values.items():
+        if value is None or value == "" or key not in TRAINING_LABELS:
+            continue
+        table.add_row(TRAINING_LABELS[key], Text(f"{value}"))
     return table
 
 
