@@ -109,13 +109,35 @@ def leaderboard(
     own, whose track name says which. Boards in the order of their names.
     `method=None` scores each entry by its own rules' method (a night's races).
     """
+    ranked: Callable[[Sequence[LeaderboardRow]], list[LeaderboardRow]]
     if method is not None and filters.night_ids is None:
         entries = _board_rows(league, filters, method)
+        ranked = in_ranking_order
     else:
         entries = grouped_rows(league, filters, method, group_by="track_hash, physics, racer")
+        ranked = rank
     boards = {board_of(entry): entry.track_name for entry in entries}
     order = sorted(boards, key=lambda key: (boards[key].casefold(), key))
-    return rank_groups(entries, board_of, order)
+    return rank_groups(entries, board_of, order, ranked)
+
+
+def in_ranking_order(rows: Sequence[LeaderboardRow]) -> list[LeaderboardRow]:
+    """`rank(rows)` for one board's rows as `board_sql` returns them, without sorting them
+    again: the board's scores are rounded to the millisecond as `ranking_key` rounds them,
+    so the SQL order is the ranking order up to the last tie-breaks (the racer's name
+    case-folded, then the id), and only rows tied before those are sorted."""
+    result: list[LeaderboardRow] = []
+    run: list[LeaderboardRow] = []
+    tied: tuple[Any, ...] | None = None
+    for row in rows:
+        key = (row.score, row.scoring_offtracks, row.valid_laps, row.recorded_at)
+        if key != tied and run:
+            result.extend(rank(run) if len(run) > 1 else run)
+            run = []
+        run.append(row)
+        tied = key
+    result.extend(rank(run) if len(run) > 1 else run)
+    return result
 
 
 def _board_rows(league: League, filters: Filters, method: RankingMethod) -> list[LeaderboardRow]:
@@ -161,11 +183,17 @@ def _rows(league: League, sql: str, params: Sequence[Any]) -> list[LeaderboardRo
     rows = [LeaderboardRow(*values) for values in cursor.execute(sql, params)]
     shown = display_names_overrides(league)
     tracks = track_names(league)
+    named: dict[tuple[str, str], str] = {}  # a board's name, worked out once per board
     for row in rows:
-        row.display_name = shown.get(row.racer, row.racer)
-        row.track_name = (tracks.get(row.track_hash) or row.track_hash[:12]) + board_suffix(
-            row.physics
-        )
+        if shown:
+            row.display_name = shown.get(row.racer, row.racer)
+        board = (row.track_hash, row.physics)
+        name = named.get(board)
+        if name is None:
+            name = named[board] = (tracks.get(row.track_hash) or row.track_hash[:12]) + (
+                board_suffix(row.physics)
+            )
+        row.track_name = name
     return rows
 
 
@@ -183,14 +211,16 @@ def rank_groups(
     entries: Sequence[LeaderboardRow],
     group: Callable[[LeaderboardRow], Any],
     order: Sequence[Any],
+    ranked: Callable[[Sequence[LeaderboardRow]], list[LeaderboardRow]] = rank,
 ) -> list[LeaderboardRow]:
-    """Rank each group with league.ranking.rank and number it from 1; groups in `order`."""
+    """Rank each group with league.ranking.rank (or `ranked`, which must order as it does)
+    and number it from 1; groups in `order`."""
     groups: dict[Any, list[LeaderboardRow]] = {}
     for entry in entries:
         groups.setdefault(group(entry), []).append(entry)
     result: list[LeaderboardRow] = []
     for key in order:
-        for position, entry in enumerate(rank(groups.get(key, [])), start=1):
+        for position, entry in enumerate(ranked(groups.get(key, [])), start=1):
             entry.rank = position
             result.append(entry)
     return result

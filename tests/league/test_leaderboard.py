@@ -167,3 +167,28 @@ def test_a_tracks_leaderboard_is_read_in_order_from_one_index(league: League) ->
     plan = " ".join(str(row[3]) for row in league.conn.execute(f"EXPLAIN QUERY PLAN {sql}", params))
     assert "COVERING INDEX board_in_order" in plan
     assert "TEMP B-TREE" not in plan
+
+
+def test_a_board_read_in_index_order_ranks_exactly_as_rank_does(league: League) -> None:
+    # The board path numbers rows in the order SQL returns them, sorting only rows tied up
+    # to the racer's name: it must agree with rank() everywhere, ties and casing included.
+    from league.leaderboard import _board_rows, board_of, rank_groups
+
+    rng = random.Random(5)
+    names = ["ana", "Bob", "bob2", "Émile", "émilie", "zoe", "Zed", "ßigma", "SSam", "al"]
+    for i, name in enumerate(names):
+        for _ in range(2):
+            laps = [rng.choice([11.0, 11.0004, 11.5, 12.0]) for _ in range(3)]
+            started = rng.choice(["2024-05-01T19:00:00.000Z", "2024-05-01T19:00:00.001Z"])
+            offtracks = [rng.choice([0, 0, 1]) for _ in laps]
+            record_race(
+                league,
+                race_result(name, laps, offtracks=offtracks, started_at=started, seed=i),
+            )
+    for method in RankingMethod:
+        rows = leaderboard(league, Filters(), method)
+        fresh = _board_rows(league, Filters(), method)
+        order = list(dict.fromkeys(board_of(row) for row in rows))
+        expected = rank_groups(fresh, board_of, order)  # rank() over the whole board
+        assert [row.record_id for row in rows] == [row.record_id for row in expected]
+        assert [row.rank for row in rows] == list(range(1, len(rows) + 1))
