@@ -2,10 +2,10 @@
 
 Entries are submissions (evaluations) and races. The cached `entries` table (see
 league.entries) holds every entry's score under every ranking method with corrections
-applied, and `board` each racer's best entry per track and method in ranking order: a
-track's leaderboard is one range scan of `board`, and `rank()` then puts the (already
-nearly sorted) rows in the league's one total order. Filtered boards (a night, a season)
-pick each racer's best straight from `entries`.
+applied, and `board` each racer's best entry per track and method: a track's leaderboard
+is one range of the `board_in_order` index, already in the league's one total order but
+for the last tie-breaks, which `in_ranking_order` settles with `rank()`. Filtered boards (a
+night, a season) pick each racer's best straight from `entries` and rank them all.
 """
 
 from __future__ import annotations
