@@ -323,15 +323,17 @@ class TrainingParams:
             world_name=world,
             race_type=str(data.get("RACE_TYPE", "TIME_TRIAL")),
             max_minutes=float(minutes),
-            alternate_driving_direction=_flag(data, "ALTERNATE_DRIVING_DIRECTION", False, where),
-            change_start_position=_flag(data, "CHANGE_START_POSITION", True, where),
-            reverse_direction=_flag(data, "REVERSE_DIR", False, where),
+            alternate_driving_direction=read_flag(
+                data, "ALTERNATE_DRIVING_DIRECTION", False, where
+            ),
+            change_start_position=read_flag(data, "CHANGE_START_POSITION", True, where),
+            reverse_direction=read_flag(data, "REVERSE_DIR", False, where),
             track_hash=str(data.get("TRACK_HASH", "")),
             extra=extra,
         )
 
 
-def _flag(data: Mapping[str, Any], key: str, default: bool, where: str) -> bool:
+def read_flag(data: Mapping[str, Any], key: str, default: bool, where: str) -> bool:
     """A yes/no setting; DeepRacer's tools write them as YAML booleans or as the strings
     "true"/"false" (simapp reads both, `markov/utils.py` str2bool)."""
     value = data.get(key, default)
