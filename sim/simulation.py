@@ -39,6 +39,8 @@ from numpy.typing import NDArray
 
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
 from sim.geometry import FloatArray, PointProjector
+from sim.objects.field import ObstacleField
+from sim.objects.settings import ObstacleSettings
 from sim.reward_sample_params import no_objects
 from sim.track import Track
 
@@ -112,9 +114,12 @@ class TrackSimulation:
         cars_collide: bool = False,
         is_reversed: bool = False,
         lookup_grids: bool = True,
+        obstacles: ObstacleSettings | None = None,
+        seed: int = 0,
     ) -> None:
         """`lookup_grids=False` for a few hundred steps (one reference lap): the track's
-        lines answer by exact tree search until building their lookup grids pays off."""
+        lines answer by exact tree search until building their lookup grids pays off.
+        `obstacles`: an object-avoidance race's boxes, each car its own (drawn from `seed`)."""
         self.track = track
         self.n = n_cars
         self.car = car
@@ -169,6 +174,12 @@ class TrackSimulation:
         self.reverse = np.zeros(n, dtype=bool)
         self._sign = np.ones(n)
         self._any_reverse = False
+        self.obstacles = (
+            ObstacleField(track, obstacles, n, seed=seed)
+            if obstacles is not None and obstacles.boxes
+            else None
+        )
+        self.hit_box = np.zeros(n, dtype=bool)  # a corner of the car inside one of its boxes
 
     # --- episodes ------------------------------------------------------------------------
     def start_position(self, car: int, episode: int) -> float:
@@ -214,6 +225,8 @@ class TrackSimulation:
             else:
                 s = start_s[k]
             s %= self._length
+            if self.obstacles is not None and self.episode[car] > 0:
+                self.obstacles.draw(car)  # a randomised race's boxes move every episode
             self.episode[car] += 1
             self._set_reverse(car, backwards)
             self._place_along(car, s, backwards)
@@ -341,6 +354,17 @@ class TrackSimulation:
         self.track_width = np.hypot(*(outer_foot - inner_foot).T)
         wheels = fleet.wheel_positions().reshape(-1, 2)
         self.wheels_on = track.on_road(wheels).reshape(self.n, 4)
+        self._measure_boxes()
+
+    def _measure_boxes(self) -> None:
+        if self.obstacles is not None:
+            fleet = self.fleet
+            self.hit_box = self.obstacles.crashed(fleet.x, fleet.y, fleet.yaw, self.car)
+
+    @property
+    def crashed(self) -> NDArray[np.bool_]:
+        """Cars that hit something this step: a box of theirs, or a body pymunk collides."""
+        return np.asarray(self.fleet.crashed | self.hit_box)
 
     def _judge(self) -> None:
         rules = self.rules
@@ -352,7 +376,7 @@ class TrackSimulation:
         outcomes = np.select(
             [
                 self.travelled >= self._length,
-                self.fleet.crashed,
+                self.crashed,
                 ~self.wheels_on.any(axis=1),
                 self._still >= rules.immobilized_steps,
                 self._falling >= rules.reversed_steps,
@@ -417,12 +441,13 @@ class TrackSimulation:
         self.wheels_on = np.asarray(
             shapely.contains_xy(self.track.road, wheel_x, wheel_y), dtype=bool
         ).reshape(1, 4)
+        self._measure_boxes()
 
     def _judge_one(self) -> None:
         rules = self.rules
         if self.travelled[0] >= self._length:
             outcome = 3
-        elif self.fleet.crashed[0]:
+        elif self.fleet.crashed[0] or self.hit_box[0]:
             outcome = 1
         elif not self.wheels_on[0].any():
             outcome = 2
@@ -527,7 +552,7 @@ class TrackSimulation:
         steer = self.steering_cmd.tolist()
         all_on: list[bool] = np.all(self.wheels_on, axis=1).tolist()
         offtrack = self.offtrack.tolist()
-        crashed = self.fleet.crashed.tolist()
+        crashed = self.crashed.tolist()
         waypoints = [self._waypoints] * self.n
         reversed_flags = [self.is_reversed] * self.n
         projection = self.s
@@ -560,10 +585,15 @@ class TrackSimulation:
                 "is_crashed": crashed[i],
                 "projection_distance": proj[i],
                 "sim_time": sim_time[i],
-                **no_objects(),
+                **self._object_params(i, x[i], y[i], heading[i]),
             }
             for i in range(self.n)
         ]
+
+    def _object_params(self, car: int, x: float, y: float, heading: float) -> dict[str, Any]:
+        if self.obstacles is None:
+            return no_objects()
+        return self.obstacles.params(car, float(self.s[car]), (x, y), heading)
 
 
 # Every so many steps a stepping loop lets the other threads of its process run.

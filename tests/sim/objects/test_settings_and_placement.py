@@ -10,7 +10,8 @@ import pytest
 
 from sim.deepracer_files import DeepRacerFileError, TrainingParams, parse_training_params
 from sim.objects.placement import CLEAR_BEFORE_LINE, Lanes, obstacle_distances, obstacle_poses
-from sim.objects.settings import Lane, ObstacleSettings, RaceType, race_settings
+from sim.objects.reading import race_settings
+from sim.objects.settings import Lane, ObstacleSettings, RaceType
 from sim.track_catalog import resolve_track
 
 

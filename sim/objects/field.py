@@ -1,0 +1,132 @@
+"""The boxes of an object-avoidance simulation, car by car, and what DeepRacer makes of them:
+crashes and the reward `params`' object keys (docs/deepracer-objects.md).
+
+Each car of a simulation drives its own episode, so each has its own boxes, drawn again when
+its episode starts if the race randomises them. A crash is DeepRacer's: a corner of the car's
+footprint inside a box's rectangle (the box and 0.1 m more), no distance threshold.
+
+The params follow simapp's `get_object_reward_params`: objects in their own order (not
+sorted), `objects_distance` in metres along the centre line from its first waypoint,
+`closest_objects` the one behind and the one ahead of the car's look-ahead point along the
+track (wrapping round the lap), headings and speeds 0 for boxes (simapp fills them only
+with bot cars). `object_in_camera` says whether the next object is inside the camera's
+field of view; simapp compares against the object before it (an off-by-one in its camera
+check), which racer-tui does not copy.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from sim.car import CarSpec
+from sim.geometry import FloatArray
+from sim.objects.placement import BOX_LENGTH, BOX_WIDTH, Lanes, obstacle_poses
+from sim.objects.settings import Lane, ObstacleSettings
+from sim.track import Track
+
+# The DeepRacer camera's horizontal field of view and near plane (simapp `frustum.py`).
+CAMERA_FIELD_OF_VIEW: Final = 1.13  # radians
+CAMERA_NEAR: Final = 0.2  # metres
+
+
+class ObstacleField:
+    """`settings`' boxes for each of `cars` cars on `track`, drawn from `seed`."""
+
+    def __init__(
+        self, track: Track, settings: ObstacleSettings, cars: int, *, seed: int = 0
+    ) -> None:
+        self.settings = settings
+        self.lanes = Lanes.of(track)
+        # simapp: left of centre = inside the inner half of the road XOR the track turning
+        # clockwise (the inner border is on the right then).
+        self._inner_is_left = track.direction == "counter-clockwise"
+        self.length = self.lanes.centre.total_length
+        self.boxes = settings.boxes
+        self._rng = np.random.default_rng(seed)
+        k = self.boxes
+        self.x = np.zeros((cars, k))
+        self.y = np.zeros((cars, k))
+        self.heading = np.zeros((cars, k))  # radians
+        self.distance = np.zeros((cars, k))  # metres along the centre line
+        self.left = np.zeros((cars, k), dtype=bool)  # left of the centre line, driving on
+        self.from_centre = np.zeros((cars, k))
+        self.drawn = np.zeros(cars, dtype=bool)
+        for car in range(cars):
+            self.draw(car)
+
+    def draw(self, car: int) -> None:
+        """The boxes of `car`'s next episode: the same ones unless the race randomises them."""
+        if self.drawn[car] and not self.settings.randomize:
+            return
+        poses = obstacle_poses(self.settings, self.lanes, self._rng)
+        for i, pose in enumerate(poses):
+            self.x[car, i], self.y[car, i] = pose.x, pose.y
+            self.heading[car, i] = pose.heading
+            self.distance[car, i] = pose.distance
+            self.left[car, i] = (pose.lane is Lane.INNER) == self._inner_is_left
+            _, _, foot = self.lanes.centre.project(np.array([[pose.x, pose.y]]))
+            self.from_centre[car, i] = math.hypot(pose.x - foot[0, 0], pose.y - foot[0, 1])
+        self.drawn[car] = True
+
+    def crashed(
+        self, x: FloatArray, y: FloatArray, yaw: FloatArray, car_spec: CarSpec
+    ) -> NDArray[np.bool_]:
+        """Cars with a corner of their footprint inside one of their boxes."""
+        if self.boxes == 0:
+            return np.zeros(len(x), dtype=bool)
+        half_l, half_w = car_spec.length / 2.0, car_spec.width / 2.0
+        corners = np.array(
+            [[half_l, half_w], [half_l, -half_w], [-half_l, half_w], [-half_l, -half_w]]
+        )
+        cos, sin = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+        # (cars, 4) corner positions in the world.
+        cx = x[:, None] + corners[:, 0] * cos - corners[:, 1] * sin
+        cy = y[:, None] + corners[:, 0] * sin + corners[:, 1] * cos
+        # Into each box's frame: (cars, boxes, 4).
+        dx = cx[:, None, :] - self.x[:, :, None]
+        dy = cy[:, None, :] - self.y[:, :, None]
+        bc, bs = np.cos(self.heading)[:, :, None], np.sin(self.heading)[:, :, None]
+        along = dx * bc + dy * bs
+        across = -dx * bs + dy * bc
+        inside = (np.abs(along) <= BOX_LENGTH / 2.0) & (np.abs(across) <= BOX_WIDTH / 2.0)
+        return np.asarray(inside.any(axis=(1, 2)))
+
+    def params(
+        self, car: int, ahead_s: float, ahead_xy: tuple[float, float], heading_deg: float
+    ) -> dict[str, Any]:
+        """The object keys of `car`'s params; `ahead_s` is its look-ahead point's distance
+        along the centre line, `heading_deg` its heading."""
+        k = self.boxes
+        distances = self.distance[car].tolist()
+        order = sorted(range(k), key=distances.__getitem__)
+        ahead = [i for i in order if distances[i] > ahead_s]
+        next_index = ahead[0] if ahead else order[0]
+        previous_index = order[order.index(next_index) - 1]
+        return {
+            "closest_objects": [previous_index, next_index],
+            "objects_location": [
+                [float(a), float(b)] for a, b in zip(self.x[car], self.y[car], strict=True)
+            ],
+            "objects_left_of_center": self.left[car].tolist(),
+            "objects_speed": [0.0] * k,
+            "objects_heading": [0.0] * k,
+            "objects_distance": distances,
+            "objects_distance_from_center": self.from_centre[car].tolist(),
+            "object_in_camera": self._in_camera(car, next_index, ahead_xy, heading_deg),
+        }
+
+    def _in_camera(
+        self, car: int, index: int, ahead_xy: tuple[float, float], heading_deg: float
+    ) -> bool:
+        dx = float(self.x[car, index]) - ahead_xy[0]
+        dy = float(self.y[car, index]) - ahead_xy[1]
+        bearing = math.atan2(dy, dx) - math.radians(heading_deg)
+        bearing = math.atan2(math.sin(bearing), math.cos(bearing))
+        forward = dx * math.cos(math.radians(heading_deg)) + dy * math.sin(
+            math.radians(heading_deg)
+        )
+        return forward >= CAMERA_NEAR and abs(bearing) <= CAMERA_FIELD_OF_VIEW / 2.0

@@ -1,0 +1,100 @@
+"""Boxes in the simulation: each car's own, a crash as DeepRacer judges it, and the reward
+params' object keys as simapp computes them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sim.objects.settings import Lane, ObstacleSettings
+from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.track_catalog import resolve_track
+
+TRACK = "reinvent_base"
+# Two boxes on the first straight of re:Invent 2018: one in the inner lane, one in the outer.
+FIXED = ObstacleSettings(positions=((0.12, Lane.INNER), (0.05, Lane.OUTER)))
+
+
+def drive_straight(sim: TrackSimulation, steps: int, speed: float = 1.0) -> None:
+    for _ in range(steps):
+        sim.apply(np.zeros(sim.n), np.full(sim.n, speed))
+        if sim.done.all():
+            return
+
+
+def test_driving_into_a_box_is_a_crash_and_the_other_lane_is_clear() -> None:
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 2, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),)))
+    box = sim.obstacles
+    assert box is not None
+    start = 0.1 * box.length - 0.8  # 0.8 m before the box, along the centre line
+    sim.reset_cars([0, 1], [start, start])
+    # Car 0 drives the inner lane, straight at the box; car 1 the outer lane, past it.
+    for car, lane_offset in ((0, 1.0), (1, -1.0)):
+        sim.place(car, start, offset=lane_offset * float(sim.track_width[car]) / 4)
+    drive_straight(sim, 30)
+    assert sim.status[0] == EpisodeStatus.CRASHED
+    assert sim.status[1] == EpisodeStatus.IN_PROGRESS
+    params = sim.all_params()
+    assert params[1]["is_crashed"] is False
+
+
+def test_object_params_are_simapps() -> None:
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 1, obstacles=FIXED)
+    sim.reset_car(0, 0.08 * track.length)  # between the two boxes
+    params = sim.all_params()[0]
+    inner, outer = 0.12 * track.length, 0.05 * track.length
+    assert params["objects_distance"] == pytest.approx([inner, outer], abs=0.02)
+    # [behind, ahead] of the car's look-ahead point, as indices into the unsorted lists.
+    assert params["closest_objects"] == [1, 0]
+    assert params["objects_left_of_center"] == [True, False]  # re:Invent 2018 turns left
+    width = float(sim.track_width[0])
+    assert params["objects_distance_from_center"] == pytest.approx([width / 4] * 2, rel=0.2)
+    assert params["objects_speed"] == [0.0, 0.0] and params["objects_heading"] == [0.0, 0.0]
+    (x, y), _ = params["objects_location"]
+    assert math.hypot(x - params["x"], y - params["y"]) < 2.0
+    assert params["object_in_camera"] is True  # the next box is ahead, a little to the left
+    sim.reset_car(0, 0.5 * track.length)  # past both: the next one wraps round the lap
+    assert sim.all_params()[0]["closest_objects"] == [0, 1]
+    assert sim.all_params()[0]["object_in_camera"] is False
+
+
+def test_each_car_has_its_own_boxes_and_randomised_ones_move_every_episode() -> None:
+    settings = ObstacleSettings(count=3, randomize=True)
+    sim = TrackSimulation(resolve_track(TRACK), 2, obstacles=settings, seed=4)
+    sim.reset_all()
+    field = sim.obstacles
+    assert field is not None
+    first = field.distance.copy()
+    assert not np.allclose(first[0], first[1])  # two cars, two draws
+    sim.reset_car(0)
+    assert not np.allclose(field.distance[0], first[0])  # a new episode, new boxes
+    assert np.allclose(field.distance[1], first[1])  # the other car's episode goes on
+    fixed = TrackSimulation(resolve_track(TRACK), 1, obstacles=FIXED)
+    before = fixed.obstacles.distance.copy() if fixed.obstacles is not None else None
+    fixed.reset_car(0)
+    fixed.reset_car(0)
+    assert fixed.obstacles is not None and np.array_equal(fixed.obstacles.distance, before)
+
+
+def test_a_time_trial_has_no_object_keys_filled() -> None:
+    sim = TrackSimulation(resolve_track(TRACK), 1)
+    sim.reset_car(0)
+    params = sim.all_params()[0]
+    assert sim.obstacles is None and params["objects_location"] == []
+    assert params["closest_objects"] == [0, 0]
+
+
+def test_one_car_crashes_into_a_box_as_a_fleet_car_does() -> None:
+    # One car takes the simulation's plain-float path (races): the same judgement.
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 1, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),)))
+    start = 0.1 * track.length - 0.8
+    sim.reset_car(0, start)
+    sim.place(0, start, offset=float(sim.track_width[0]) / 4)
+    drive_straight(sim, 30)
+    assert sim.status[0] == EpisodeStatus.CRASHED
+    assert sim.all_params()[0]["is_crashed"] is True
