@@ -109,6 +109,15 @@ class Observer:
             parts["camera"] = frames[..., None]
         if self._lidar is not None:
             scan = self._lidar.scan(x, y, yaw)
+            boxes = self.sim.obstacles
+            if boxes is not None:  # the lidar sees each car's own boxes as well as borders
+                which = np.arange(self.sim.n)[pick]
+                spec = self._lidar.spec
+                seen = boxes.ray_distances(
+                    which, x, y, yaw, angles=self._lidar.angles, max_range=spec.max_range
+                )
+                scan = np.clip(np.minimum(scan, seen), spec.min_range, spec.max_range)
+                scan = scan.astype(np.float32)
             if "lidar" in self.spaces:
                 parts["lidar"] = scan
             else:

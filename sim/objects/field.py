@@ -24,7 +24,14 @@ from numpy.typing import NDArray
 
 from sim.car import CarSpec
 from sim.geometry import FloatArray
-from sim.objects.placement import BOX_LENGTH, BOX_WIDTH, Lanes, obstacle_poses
+from sim.objects.placement import (
+    BOX_LENGTH,
+    BOX_MODEL_LENGTH,
+    BOX_MODEL_WIDTH,
+    BOX_WIDTH,
+    Lanes,
+    obstacle_poses,
+)
 from sim.objects.settings import Lane, ObstacleSettings
 from sim.track import Track
 
@@ -95,6 +102,44 @@ class ObstacleField:
         inside = (np.abs(along) <= BOX_LENGTH / 2.0) & (np.abs(across) <= BOX_WIDTH / 2.0)
         return np.asarray(inside.any(axis=(1, 2)))
 
+    def ray_distances(
+        self,
+        cars: NDArray[np.intp],
+        x: FloatArray,
+        y: FloatArray,
+        yaw: FloatArray,
+        *,
+        angles: FloatArray,
+        max_range: float,
+    ) -> FloatArray:
+        """(len(cars), rays) metres from each car's centre to the first of its boxes along
+        each ray (`angles` from the heading), `max_range` where none is that close: the
+        boxes as a lidar sees them, the slab test in each box's frame."""
+        theta = np.asarray(yaw)[:, None] + np.asarray(angles)[None, :]  # (n, rays)
+        hit = np.full(theta.shape, max_range)
+        if self.boxes == 0:
+            return hit
+        dir_x, dir_y = np.cos(theta)[:, :, None], np.sin(theta)[:, :, None]
+        bx, by, bh = (
+            self.x[cars][:, None, :],
+            self.y[cars][:, None, :],
+            self.heading[cars][:, None, :],
+        )
+        cos, sin = np.cos(bh), np.sin(bh)
+        ox = np.asarray(x)[:, None, None] - bx
+        oy = np.asarray(y)[:, None, None] - by
+        # The ray's origin and direction in the box's frame: (n, rays, boxes).
+        o_along, o_across = ox * cos + oy * sin, -ox * sin + oy * cos
+        d_along, d_across = dir_x * cos + dir_y * sin, -dir_x * sin + dir_y * cos
+        with np.errstate(divide="ignore", invalid="ignore"):
+            near_a, far_a = _slab(o_along, d_along, BOX_MODEL_LENGTH / 2.0)
+            near_c, far_c = _slab(o_across, d_across, BOX_MODEL_WIDTH / 2.0)
+        enter = np.maximum(near_a, near_c)
+        leave = np.minimum(far_a, far_c)
+        seen = (enter <= leave) & (leave >= 0.0)
+        distance = np.where(seen, np.maximum(enter, 0.0), np.inf).min(axis=2)
+        return np.asarray(np.minimum(hit, distance))
+
     def params(
         self, car: int, ahead_s: float, ahead_xy: tuple[float, float], heading_deg: float
     ) -> dict[str, Any]:
@@ -130,3 +175,17 @@ class ObstacleField:
             math.radians(heading_deg)
         )
         return forward >= CAMERA_NEAR and abs(bearing) <= CAMERA_FIELD_OF_VIEW / 2.0
+
+
+def _slab(origin: FloatArray, direction: FloatArray, half: float) -> tuple[FloatArray, FloatArray]:
+    """Where a ray enters and leaves the slab |u| <= half (-inf, inf when it runs inside
+    it, parallel; inf, -inf when it runs outside it, parallel)."""
+    first = (-half - origin) / direction
+    second = (half - origin) / direction
+    near = np.minimum(first, second)
+    far = np.maximum(first, second)
+    parallel = direction == 0.0
+    inside = np.abs(origin) <= half
+    near = np.where(parallel, np.where(inside, -np.inf, np.inf), near)
+    far = np.where(parallel, np.where(inside, np.inf, -np.inf), far)
+    return np.asarray(near), np.asarray(far)

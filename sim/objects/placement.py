@@ -27,7 +27,10 @@ from sim.track import Track
 
 # Metres kept free before the start line (simapp's end of the evenly spaced range).
 CLEAR_BEFORE_LINE: Final = 1.0
-# A box as DeepRacer's crash check sees it: its 0.4 x 0.3 m model and 0.1 m more.
+# A box as sensors see it (simapp's box_obstacle model, 0.25 m high) ...
+BOX_MODEL_LENGTH: Final = 0.4  # along the road
+BOX_MODEL_WIDTH: Final = 0.3
+# ... and as DeepRacer's crash check sees it: 0.1 m more each way.
 BOX_LENGTH: Final = 0.5
 BOX_WIDTH: Final = 0.4
 

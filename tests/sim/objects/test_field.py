@@ -98,3 +98,31 @@ def test_one_car_crashes_into_a_box_as_a_fleet_car_does() -> None:
     drive_straight(sim, 30)
     assert sim.status[0] == EpisodeStatus.CRASHED
     assert sim.all_params()[0]["is_crashed"] is True
+
+
+def test_the_lidar_sees_a_cars_own_boxes() -> None:
+    from sim.observations import Observer
+
+    track = resolve_track(TRACK)
+    settings = ObstacleSettings(positions=((0.1, Lane.INNER),))
+    with_box = TrackSimulation(track, 2, obstacles=settings)
+    without = TrackSimulation(track, 2)
+    start = 0.1 * track.length - 0.8
+    for sim in (with_box, without):
+        sim.reset_cars([0, 1], [start, start])
+        for car in (0, 1):  # in the box's lane, 0.8 m before its centre
+            sim.place(car, start, offset=float(sim.track_width[car]) / 4)
+    seen = Observer(with_box, ("lidar",)).observe()
+    clear = Observer(without, ("lidar",)).observe()
+    ahead = seen.shape[1] // 2  # a full circle's middle ray points straight ahead
+    # The box's near face is 0.8 - 0.2 = 0.6 m ahead of the car's centre.
+    assert float(seen[0, ahead]) == pytest.approx(0.6, abs=0.03)
+    assert float(clear[0, ahead]) > 1.0
+    behind = 0
+    assert float(seen[0, behind]) == pytest.approx(float(clear[0, behind]), abs=1e-5)
+    field = with_box.obstacles
+    assert field is not None
+    # Only the car's own boxes: a car without boxes here sees past the spot.
+    field.x[1], field.y[1] = 100.0, 100.0
+    again = Observer(with_box, ("lidar",)).observe()
+    assert float(again[1, ahead]) > 1.0 and float(again[0, ahead]) < 0.7
