@@ -26,6 +26,7 @@ import numpy as np
 
 from sim.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
 from sim.car import DEEPRACER_CAR, CarSpec
+from sim.objects.settings import ObstacleSettings
 from sim.observations import Observer, SensorOptions, normalise_sensors
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
@@ -46,6 +47,7 @@ class EnvConfig:
     sensor_options: SensorOptions = field(default_factory=SensorOptions)
     car: CarSpec = DEEPRACER_CAR
     is_reversed: bool = False  # DeepRacer's REVERSE_DIR: drive the track the other way round
+    obstacles: ObstacleSettings | None = None  # an object-avoidance race's boxes
 
     @classmethod
     def build(
@@ -100,7 +102,12 @@ class EnvConfig:
     def simulation(self, n_cars: int) -> TrackSimulation:
         """The cars' simulation, on the track driven the way this config drives it."""
         return TrackSimulation(
-            self.track, n_cars, car=self.car, rules=self.rules, is_reversed=self.is_reversed
+            self.track,
+            n_cars,
+            car=self.car,
+            rules=self.rules,
+            is_reversed=self.is_reversed,
+            obstacles=self.obstacles,
         )
 
 

@@ -74,6 +74,7 @@ from sim.track import Track, TrackError
 
 if TYPE_CHECKING:
     from sim.env import EnvConfig
+    from sim.objects.settings import ObstacleSettings
     from sim.reward_function import RewardFunction
 
 MODELS_DIR = "models"
@@ -266,6 +267,7 @@ class ModelFolder:
 
         metadata = self.metadata()
         params = self.training_params()
+        obstacles = self._obstacles(params)
         return EnvConfig(
             track=self.track(),
             action_space=metadata.action_space,
@@ -276,7 +278,28 @@ class ModelFolder:
                 alternate_direction=params.alternate_driving_direction,
             ),
             is_reversed=params.reverse_direction,
+            obstacles=obstacles,
         )
+
+    def _obstacles(self, params: TrainingParams) -> ObstacleSettings | None:
+        """An object-avoidance model's boxes; a head-to-bot model is refused in one sentence
+        rather than trained as a time trial without a word."""
+        from sim.objects.reading import race_settings
+        from sim.objects.settings import RaceType
+
+        try:
+            settings = race_settings(params, str(self.training_params_file))
+        except DeepRacerFileError as error:
+            raise ModelError(str(error)) from None
+        if settings.race_type is RaceType.HEAD_TO_BOT:
+            raise ModelError(
+                f"{self.name} is a HEAD_TO_BOT model, and racer-tui cannot drive bot cars "
+                "yet; set RACE_TYPE: TIME_TRIAL in its training_params.yaml to train it "
+                "as a time trial."
+            )
+        if settings.race_type is RaceType.OBJECT_AVOIDANCE:
+            return settings.obstacles
+        return None
 
     # --- metrics -------------------------------------------------------------------------
 

@@ -1,0 +1,51 @@
+"""A model's race type reaches its training: an object-avoidance model's cars meet boxes,
+its reward function sees them, and a head-to-bot model is refused in one sentence."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from sim.deepracer_files import write_training_params
+from sim.env import BatchedDeepRacer
+from sim.garage.folder import ModelError, ModelFolder
+from sim.garage.options import new_model
+
+
+def with_race(folder: ModelFolder, race_type: str, **keys: object) -> None:
+    params = folder.training_params()
+    changed = replace(params, race_type=race_type, extra={**params.extra, **keys})
+    write_training_params(folder.training_params_file, changed)
+
+
+def test_an_object_avoidance_model_trains_among_its_boxes() -> None:
+    folder = new_model("dodger", sensors=["lidar"], reward="object_avoidance")
+    with_race(folder, "OBJECT_AVOIDANCE", NUMBER_OF_OBSTACLES=3, RANDOMIZE_OBSTACLE_LOCATIONS=True)
+    config = folder.env_config()
+    assert config.obstacles is not None and config.obstacles.boxes == 3
+    env = BatchedDeepRacer(config, 4)
+    env.reset()
+    sim = env.sim
+    assert sim.obstacles is not None
+    params = sim.all_params()
+    assert all(len(p["objects_location"]) == 3 for p in params)
+    # The object_avoidance template pays for keeping away from them: it reads real boxes.
+    rewards = [config.reward_functions(1)[0](p) for p in params]
+    assert all(np.isfinite(rewards))
+
+
+def test_a_time_trial_model_trains_without_boxes() -> None:
+    folder = new_model("plain")
+    assert folder.env_config().obstacles is None
+
+
+def test_a_head_to_bot_model_is_refused_with_what_to_do() -> None:
+    folder = new_model("chaser")
+    with_race(folder, "HEAD_TO_BOT", NUMBER_OF_BOT_CARS=2)
+    with pytest.raises(ModelError, match="cannot drive bot cars yet; set RACE_TYPE: TIME_TRIAL"):
+        folder.env_config()
+    with_race(folder, "OBJECT_AVOIDANCE", NUMBER_OF_OBSTACLES=99)
+    with pytest.raises(ModelError, match="NUMBER_OF_OBSTACLES must be a whole number from 0"):
+        folder.env_config()
