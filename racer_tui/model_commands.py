@@ -22,6 +22,7 @@ from sim.garage.options import (
     DEFAULT_MAX_SPEED,
     DEFAULT_MAX_STEERING,
     DEFAULT_MINUTES,
+    DEFAULT_OBSTACLES,
     DEFAULT_REWARD,
     DEFAULT_SENSORS,
     DEFAULT_SPEED_LEVELS,
@@ -139,6 +140,23 @@ def _add_spec_options(parser: argparse.ArgumentParser, *, for_clone: bool) -> No
     continuous.add_argument(
         "--speed-range", metavar="LOW,HIGH", help=f"m/s (default {MIN_SPEED:g},{MAX_SPEED:g})"
     )
+    race = parser.add_argument_group("race type")
+    race.add_argument(
+        "--race-type",
+        metavar="TYPE",
+        help="time-trial (default) or object-avoidance (boxes on the track)",
+    )
+    race.add_argument(
+        "--obstacles",
+        type=int,
+        metavar="N",
+        help=f"boxes in an object-avoidance race, 1-10 (default {DEFAULT_OBSTACLES})",
+    )
+    race.add_argument(
+        "--randomize-obstacles",
+        action="store_true",
+        help="place the boxes again, at random, every episode",
+    )
     parser.add_argument(
         "--reward",
         metavar="TEMPLATE|FILE",
@@ -211,6 +229,12 @@ def _spec_options(args: argparse.Namespace) -> dict[str, Any]:
         )
     if args.hp:
         options["hyperparameters"] = parse_hp_assignments(args.hp)
+    if args.race_type is not None:
+        options["race_type"] = args.race_type.strip().lower()
+    if args.obstacles is not None:
+        options["obstacles"] = args.obstacles
+    if args.randomize_obstacles:
+        options["randomize_obstacles"] = True
     return {key: value for key, value in options.items() if value is not None}
 
 
@@ -294,6 +318,7 @@ def _show(name: str, as_json: bool) -> int:
     for label, value in (
         ("status", details["status"]),
         ("track", details["track"]),
+        ("race", details["race"]),
         ("sensor", details["sensor"]),
         ("actions", details["actions_summary"]),
         ("network", metadata["neural_network"]),

@@ -230,6 +230,8 @@ class TrackSimulation:
             self.episode[car] += 1
             self._set_reverse(car, backwards)
             self._place_along(car, s, backwards)
+            if self.obstacles is not None and not backwards:
+                self._clear_of_boxes(car, s)
             centre_s[k] = s
         index = np.asarray(cars, dtype=np.intp)
         self.steps[index] = 0
@@ -246,6 +248,14 @@ class TrackSimulation:
         half = self._length / 2.0
         ahead = np.mod(self.s[index] - centre_s + half, self._length) - half
         self.travelled[index] = ahead * self._sign[index]
+
+    def _clear_of_boxes(self, car: int, s: float) -> None:
+        """Start in the other lane than a box right by the start (as DeepRacer does)."""
+        assert self.obstacles is not None
+        lane = self.obstacles.start_lane(car, s)
+        if lane is not None:
+            pose = self.obstacles.lanes.pose(s, lane)
+            self.fleet.place(car, pose.x, pose.y, pose.heading, 0.0)
 
     def _set_reverse(self, car: int, backwards: bool) -> None:
         self.reverse[car] = backwards

@@ -569,6 +569,8 @@ def create_model(
     max_minutes: float = 60.0,
     populate: Callable[[ModelFolder], None] | None = None,
     notes: Mapping[str, str] | None = None,
+    race_type: str = "TIME_TRIAL",
+    race_keys: Mapping[str, object] | None = None,
 ) -> ModelFolder:
     """Create model `name` in the garage, all at once (temporary folder, then rename).
 
@@ -577,7 +579,8 @@ def create_model(
     `reward_function(params)` (checked without running it).
     `populate` may add more files (a policy, metrics) to the folder before it appears: it is
     called with the temporary folder. `notes` are kept in training_params.yaml (for
-    example where the model came from).
+    example where the model came from). `race_type` and `race_keys` are DeepRacer's race
+    type and its settings' keys (`sim.objects.settings.race_keys`).
     """
     from sim.reward_function import check_reward_code
 
@@ -595,9 +598,10 @@ def create_model(
     check_reward_code(reward_source, REWARD_FUNCTION)  # RewardFunctionError before writing
     params = TrainingParams(
         world_name=resolved.name,
+        race_type=race_type,
         max_minutes=float(max_minutes),
         track_hash=resolved.content_hash,
-        extra=dict(notes or {}),
+        extra={**dict(race_keys or {}), **dict(notes or {})},
     )
     temporary = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=models_dir()))
     try:

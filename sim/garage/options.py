@@ -74,6 +74,8 @@ class ModelSpec:
     reward_source: str = ""
     reward_origin: str = DEFAULT_REWARD  # a template name or the file it was read from
     max_minutes: float = DEFAULT_MINUTES
+    race_type: str = "TIME_TRIAL"  # DeepRacer's RACE_TYPE
+    race_keys: Mapping[str, object] = field(default_factory=dict)  # its settings' keys
 
 
 def default_action_space() -> ActionSpace:
@@ -110,6 +112,9 @@ def model_spec(
     reward: str | None = None,
     hyperparameters: Mapping[str, object] | None = None,
     minutes: float | None = None,
+    race_type: str | None = None,
+    obstacles: int | None = None,
+    randomize_obstacles: bool = False,
 ) -> ModelSpec:
     """`base` (default: `default_model_spec()`) with the given console options applied.
 
@@ -153,6 +158,8 @@ def model_spec(
         except DeepRacerFileError as error:
             raise ModelError(str(error)) from None
         spec = replace(spec, hyperparameters=checked)
+    if race_type is not None or obstacles is not None or randomize_obstacles:
+        spec = _with_race(spec, race_type, obstacles, randomize_obstacles)
     if minutes is not None:
         if not (math.isfinite(minutes) and MIN_MINUTES <= minutes <= MAX_MINUTES):
             raise ModelError(
@@ -176,6 +183,8 @@ def create_from_spec(name: str, spec: ModelSpec, **create_options: Any) -> Model
         hyperparameters=spec.hyperparameters,
         reward_source=spec.reward_source,
         max_minutes=spec.max_minutes,
+        race_type=spec.race_type,
+        race_keys=spec.race_keys,
         **create_options,
     )
 
@@ -190,6 +199,8 @@ def spec_of(folder: ModelFolder) -> ModelSpec:
         reward_source=folder.reward_source(),
         reward_origin=str(folder.reward_file),
         max_minutes=params.max_minutes,
+        race_type=params.race_type,
+        race_keys={key: value for key, value in params.extra.items() if key in RACE_KEYS},
     )
 
 
@@ -204,6 +215,49 @@ def _checked_track(track: str) -> str:
     except TrackError as error:
         raise ModelError(f"--track: {error}") from None
     return track
+
+
+# The race types `model new --race-type` makes, by the names racers type.
+RACE_TYPES = {"time-trial": "TIME_TRIAL", "object-avoidance": "OBJECT_AVOIDANCE"}
+DEFAULT_OBSTACLES = 3  # the console's default for an object-avoidance model
+MAX_OBSTACLES = 10
+RACE_KEYS = frozenset(
+    {
+        "NUMBER_OF_OBSTACLES",
+        "MIN_DISTANCE_BETWEEN_OBSTACLES",
+        "RANDOMIZE_OBSTACLE_LOCATIONS",
+        "OBSTACLE_TYPE",
+        "IS_OBSTACLE_BOT_CAR",
+        "OBJECT_POSITIONS",
+    }
+)
+
+
+def _with_race(
+    spec: ModelSpec, race_type: str | None, obstacles: int | None, randomize: bool
+) -> ModelSpec:
+    """`spec` racing `race_type` (a name of RACE_TYPES, "head-to-bot" refused for now)."""
+    from sim.objects.settings import ObstacleSettings, race_keys
+
+    chosen = race_type if race_type is not None else "object-avoidance"
+    if chosen == "head-to-bot":
+        raise ModelError(
+            "--race-type head-to-bot: racer-tui cannot drive bot cars yet; choose time-trial "
+            "or object-avoidance."
+        )
+    if chosen not in RACE_TYPES:
+        raise ModelError(f"--race-type must be one of {', '.join(RACE_TYPES)}, not {chosen!r}.")
+    if chosen == "time-trial":
+        if obstacles is not None or randomize:
+            raise ModelError(
+                "--obstacles and --randomize-obstacles need --race-type object-avoidance."
+            )
+        return replace(spec, race_type="TIME_TRIAL", race_keys={})
+    count = DEFAULT_OBSTACLES if obstacles is None else obstacles
+    if not 1 <= count <= MAX_OBSTACLES:
+        raise ModelError(f"--obstacles must be from 1 to {MAX_OBSTACLES}, not {count}.")
+    keys = race_keys(ObstacleSettings(count=count, randomize=randomize))
+    return replace(spec, race_type=RACE_TYPES[chosen], race_keys=keys)
 
 
 def reward_choice(

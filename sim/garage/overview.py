@@ -11,7 +11,12 @@ from pathlib import Path
 from typing import Any
 
 from sim.action_space import ActionSpace
-from sim.deepracer_files import DeepRacerFileError, EvaluationTrial, read_evaluation_metrics
+from sim.deepracer_files import (
+    DeepRacerFileError,
+    EvaluationTrial,
+    TrainingParams,
+    read_evaluation_metrics,
+)
 from sim.garage.folder import ModelError, ModelFolder, model_folders
 from sim.garage.summary import training_summary
 
@@ -52,7 +57,8 @@ def model_row(folder: ModelFolder) -> dict[str, Any]:
     """One line of `model list`; a damaged folder still lists, with the problem as its status."""
     try:
         metadata = folder.metadata()
-        track = folder.training_params().world_name
+        params = folder.training_params()
+        track = params.world_name
         best = folder.best_evaluation_lap()
         status = str(folder.status())
     except ModelError as error:
@@ -64,15 +70,33 @@ def model_row(folder: ModelFolder) -> dict[str, Any]:
             "sensor": None,
             "actions": None,
             "best_lap_s": None,
+            "race": None,
         }
     return {
         "name": folder.name,
         "status": status,
         "track": track,
+        "race": race_words(params),
         "sensor": "+".join(metadata.sensors),
         "actions": describe_actions(metadata.action_space),
         "best_lap_s": best,
     }
+
+
+def race_words(params: TrainingParams) -> str:
+    """The race type as racers say it: "time trial", "object avoidance, 3 boxes (random)"."""
+    kind = params.race_type.strip().upper()
+    if kind == "OBJECT_AVOIDANCE":
+        extra = params.extra
+        boxes = extra.get("OBJECT_POSITIONS") or []
+        count = (
+            len(boxes) if isinstance(boxes, list) and boxes else extra.get("NUMBER_OF_OBSTACLES", 0)
+        )
+        random = str(extra.get("RANDOMIZE_OBSTACLE_LOCATIONS", False)).lower() == "true"
+        return f"object avoidance, {count} boxes{' (random)' if random else ''}"
+    if kind == "HEAD_TO_BOT":
+        return f"head-to-bot, {params.extra.get('NUMBER_OF_BOT_CARS', 0)} bots"
+    return "time trial"
 
 
 def model_details(folder: ModelFolder) -> dict[str, Any]:
@@ -103,6 +127,7 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         "status": str(folder.status()),
         "content_hash": folder.content_hash(),
         "track": params.world_name,
+        "race": race_words(params),
         "track_hash": params.track_hash,
         "max_minutes": params.max_minutes,
         "sensor": "+".join(metadata.sensors),

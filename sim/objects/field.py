@@ -38,6 +38,8 @@ from sim.track import Track
 # The DeepRacer camera's horizontal field of view and near plane (simapp `frustum.py`).
 CAMERA_FIELD_OF_VIEW: Final = 1.13  # radians
 CAMERA_NEAR: Final = 0.2  # metres
+# A car starts in the other lane than a box this close along the track (simapp).
+START_CLEARANCE: Final = 1.0
 
 
 class ObstacleField:
@@ -78,6 +80,16 @@ class ObstacleField:
             _, _, foot = self.lanes.centre.project(np.array([[pose.x, pose.y]]))
             self.from_centre[car, i] = math.hypot(pose.x - foot[0, 0], pose.y - foot[0, 1])
         self.drawn[car] = True
+
+    def start_lane(self, car: int, s: float) -> Lane | None:
+        """The lane a car starting at `s` takes: the other one than a box of its within 1 m
+        along the track (simapp's `_get_car_start_model_state`), or None (the centre)."""
+        for i in range(self.boxes):
+            gap = (self.distance[car, i] - s + self.length / 2.0) % self.length - self.length / 2.0
+            if abs(gap) <= START_CLEARANCE:
+                inner = self.left[car, i] == self._inner_is_left
+                return Lane.OUTER if inner else Lane.INNER
+        return None
 
     def crashed(
         self, x: FloatArray, y: FloatArray, yaw: FloatArray, car_spec: CarSpec

@@ -64,3 +64,21 @@ class RaceSettings:
     race_type: RaceType = RaceType.TIME_TRIAL
     obstacles: ObstacleSettings = ObstacleSettings()
     bots: BotSettings = BotSettings()
+
+
+def race_keys(obstacles: ObstacleSettings) -> dict[str, object]:
+    """An object-avoidance race's settings as `training_params.yaml` keys, the way the
+    DeepRacer console and DRfC write them."""
+    keys: dict[str, object] = {
+        "NUMBER_OF_OBSTACLES": obstacles.count,
+        "MIN_DISTANCE_BETWEEN_OBSTACLES": obstacles.min_distance_percent,
+        "RANDOMIZE_OBSTACLE_LOCATIONS": obstacles.randomize,
+        "OBSTACLE_TYPE": obstacles.obstacle_type,
+        "IS_OBSTACLE_BOT_CAR": obstacles.bot_car,
+    }
+    if obstacles.positions:
+        keys["OBJECT_POSITIONS"] = [
+            f"{progress:g},{-1 if lane is Lane.OUTER else 1}"
+            for progress, lane in obstacles.positions
+        ]
+    return keys

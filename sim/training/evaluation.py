@@ -35,6 +35,7 @@ from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
 from sim.deepracer_files import (
     PREPARE_STATUS,
     SIM_TRACE_COLUMNS,
+    DeepRacerFileError,
     EvaluationTrial,
     SimTraceColumns,
     evaluation_stamp,
@@ -42,6 +43,7 @@ from sim.deepracer_files import (
     trace_status,
     write_evaluation_metrics,
 )
+from sim.objects.settings import ObstacleSettings
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.resets import ResetRules
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation, let_other_threads_run
@@ -214,6 +216,7 @@ def run_trials(
     trace: TrialTrace | None = None,
     resets: ResetRules = TRAINING_RESETS,
     on_progress: Callable[[float], None] | None = None,
+    obstacles: ObstacleSettings | None = None,
 ) -> list[TrialResult]:
     """Drive `trials` one-lap trials from the start line with `driver`, recording every
     step of every trial into `trace` when one is given. `on_progress` hears how far the
@@ -221,7 +224,14 @@ def run_trials(
     if not 1 <= trials <= MAX_TRIALS:
         raise ValueError(f"the number of trials must be between 1 and {MAX_TRIALS}.")
     max_steps = max(1, int(max_seconds * STEP_HZ))
-    sim = TrackSimulation(track, trials, car=car, rules=EpisodeRules(max_steps=max_steps))
+    sim = TrackSimulation(
+        track,
+        trials,
+        car=car,
+        rules=EpisodeRules(max_steps=max_steps),
+        obstacles=obstacles,
+        seed=seed,
+    )
     sim.reset_cars(range(trials), [0.0] * trials)
     for index, (offset, yaw_error) in enumerate(start_poses(trials, seed)):
         if index == 0:
@@ -369,6 +379,7 @@ def evaluate_model(
         resets=resets,
         trace=trace,
         on_progress=on_progress,
+        obstacles=_race_obstacles(folder),
     )
     rows = evaluation_trials(results)
     stamp = _free_stamp(folder, datetime.now(UTC))
@@ -379,6 +390,20 @@ def evaluate_model(
     path = folder.evaluation_metrics_file(stamp)
     write_evaluation_metrics(path, rows, physics=CURRENT_PHYSICS)
     return EvaluationReport(track=chosen.name, trials=tuple(results), metrics_file=path)
+
+
+def _race_obstacles(folder: ModelFolder) -> ObstacleSettings | None:
+    """An object-avoidance model's boxes, evaluated as it trains (none for other types and
+    for a race type racer-tui does not drive yet)."""
+    from sim.garage.folder import ModelError
+    from sim.objects.reading import race_settings
+    from sim.objects.settings import RaceType
+
+    try:
+        settings = race_settings(folder.training_params())
+    except (DeepRacerFileError, ModelError):
+        return None  # training says what is wrong with it; an evaluation drives a time trial
+    return settings.obstacles if settings.race_type is RaceType.OBJECT_AVOIDANCE else None
 
 
 def _free_stamp(folder: ModelFolder, when: datetime) -> str:

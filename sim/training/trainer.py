@@ -332,7 +332,11 @@ class Trainer:
             self.network, self.metadata, name=self.folder.name, content_hash="", live=True
         )
         results = run_trials(
-            driver, self.evaluation_track, EVALUATION_TRIALS, max_seconds=EVALUATION_SECONDS
+            driver,
+            self.evaluation_track,
+            EVALUATION_TRIALS,
+            max_seconds=EVALUATION_SECONDS,
+            obstacles=self.config.obstacles,  # an object-avoidance model meets its boxes
         )
         return EvaluationReport(track=self.config.track.name, trials=tuple(results))
 

@@ -33,6 +33,7 @@ def test_new_list_and_show(capsys: pytest.CaptureFixture[str]) -> None:
             "name": "speedy",
             "status": "untrained",
             "track": "reinvent_base",
+            "race": "time trial",
             "sensor": "vector",
             "actions": "10 discrete, up to 4 m/s",
             "best_lap_s": None,
@@ -210,3 +211,25 @@ def test_export_and_import_a_bundle(
 def test_the_model_commands_stay_headless() -> None:
     report = _import_report(["racer_tui.model_commands"])
     assert report["racer_tui.model_commands"] == []
+
+
+def test_a_model_for_object_avoidance_is_made_with_deepracers_keys(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    code, _, _ = run_cli(
+        capsys, "model", "new", "dodger", "--race-type", "object-avoidance", "--obstacles", "4",
+        "--randomize-obstacles", "--sensor", "lidar", "--reward", "object_avoidance",
+    )  # fmt: skip
+    assert code == 0
+    params = open_model("dodger").training_params()
+    assert params.race_type == "OBJECT_AVOIDANCE"
+    assert params.extra["NUMBER_OF_OBSTACLES"] == 4
+    assert params.extra["RANDOMIZE_OBSTACLE_LOCATIONS"] is True
+    assert params.extra["OBSTACLE_TYPE"] == "box_obstacle"
+    code, out, _ = run_cli(capsys, "model", "show", "dodger")
+    assert "object avoidance, 4 boxes (random)" in out
+    assert open_model("dodger").env_config().obstacles is not None  # it trains among them
+    code, _, err = run_cli(capsys, "model", "new", "chaser", "--race-type", "head-to-bot")
+    assert code == 2 and "cannot drive bot cars yet" in err
+    code, _, err = run_cli(capsys, "model", "new", "x", "--obstacles", "11")
+    assert code == 2 and "--obstacles must be from 1 to 10" in err

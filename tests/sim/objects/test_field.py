@@ -14,7 +14,7 @@ from sim.track_catalog import resolve_track
 
 TRACK = "reinvent_base"
 # Two boxes on the first straight of re:Invent 2018: one in the inner lane, one in the outer.
-FIXED = ObstacleSettings(positions=((0.12, Lane.INNER), (0.05, Lane.OUTER)))
+FIXED = ObstacleSettings(positions=((0.15, Lane.INNER), (0.02, Lane.OUTER)))
 
 
 def drive_straight(sim: TrackSimulation, steps: int, speed: float = 1.0) -> None:
@@ -44,9 +44,9 @@ def test_driving_into_a_box_is_a_crash_and_the_other_lane_is_clear() -> None:
 def test_object_params_are_simapps() -> None:
     track = resolve_track(TRACK)
     sim = TrackSimulation(track, 1, obstacles=FIXED)
-    sim.reset_car(0, 0.08 * track.length)  # between the two boxes
+    sim.reset_car(0, 0.08 * track.length)  # between the two boxes, over 1 m from each
     params = sim.all_params()[0]
-    inner, outer = 0.12 * track.length, 0.05 * track.length
+    inner, outer = 0.15 * track.length, 0.02 * track.length
     assert params["objects_distance"] == pytest.approx([inner, outer], abs=0.02)
     # [behind, ahead] of the car's look-ahead point, as indices into the unsorted lists.
     assert params["closest_objects"] == [1, 0]
@@ -126,3 +126,27 @@ def test_the_lidar_sees_a_cars_own_boxes() -> None:
     field.x[1], field.y[1] = 100.0, 100.0
     again = Observer(with_box, ("lidar",)).observe()
     assert float(again[1, ahead]) > 1.0 and float(again[0, ahead]) < 0.7
+
+
+def test_a_car_starting_by_a_box_starts_in_the_other_lane() -> None:
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 1, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),)))
+    box = sim.obstacles
+    assert box is not None
+    sim.reset_car(0, float(box.distance[0, 0]) - 0.3)  # 0.3 m before the box
+    sim.apply(np.zeros(1), np.full(1, 1.0))
+    assert sim.status[0] == EpisodeStatus.IN_PROGRESS  # not started inside or against it
+    assert sim.all_params()[0]["is_left_of_center"] is False  # the outer lane: right of centre
+
+
+def test_trials_meet_the_boxes_and_a_crash_ends_a_training_trial() -> None:
+    from sim.race.driver import ReferenceRaceDriver
+    from sim.training.evaluation import run_trials
+
+    track = resolve_track(TRACK)
+    boxes = ObstacleSettings(positions=((0.3, Lane.INNER), (0.3, Lane.OUTER)))  # a wall
+    results = run_trials(ReferenceRaceDriver(track), track, 2, obstacles=boxes)
+    assert all(result.status == EpisodeStatus.CRASHED for result in results)
+    assert all(25.0 < result.progress < 35.0 for result in results)
+    clear = run_trials(ReferenceRaceDriver(track), track, 2)
+    assert all(result.status == EpisodeStatus.LAP_COMPLETE for result in clear)
