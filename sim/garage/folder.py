@@ -298,6 +298,11 @@ class ModelFolder:
                 "as a time trial."
             )
         if settings.race_type is RaceType.OBJECT_AVOIDANCE:
+            from sim.garage.options import blind_to_boxes
+
+            blind = blind_to_boxes(settings.race_type, self.metadata().sensors)
+            if blind is not None:
+                raise ModelError(f"{self.name} races object avoidance, but {blind}")
             return settings.obstacles
         return None
 

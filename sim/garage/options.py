@@ -160,6 +160,9 @@ def model_spec(
         spec = replace(spec, hyperparameters=checked)
     if race_type is not None or obstacles is not None or randomize_obstacles:
         spec = _with_race(spec, race_type, obstacles, randomize_obstacles)
+    blind = blind_to_boxes(spec.race_type, spec.metadata.sensors)
+    if blind is not None:
+        raise ModelError(f"--sensor: {blind}")
     if minutes is not None:
         if not (math.isfinite(minutes) and MIN_MINUTES <= minutes <= MAX_MINUTES):
             raise ModelError(
@@ -231,6 +234,18 @@ RACE_KEYS = frozenset(
         "OBJECT_POSITIONS",
     }
 )
+
+
+def blind_to_boxes(race_type: str, sensors: Sequence[str]) -> str | None:
+    """Why a model of `race_type` with `sensors` could not see its boxes, or None."""
+    if race_type.strip().upper() != "OBJECT_AVOIDANCE":
+        return None
+    if any(sensor in ("lidar", "sector_lidar") for sensor in sensors):
+        return None
+    return (
+        "an object-avoidance model needs a lidar (lidar or sector_lidar): racer-tui's "
+        "camera and vector state do not show the boxes yet."
+    )
 
 
 def _with_race(

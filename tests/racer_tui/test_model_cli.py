@@ -233,3 +233,6 @@ def test_a_model_for_object_avoidance_is_made_with_deepracers_keys(
     assert code == 2 and "cannot drive bot cars yet" in err
     code, _, err = run_cli(capsys, "model", "new", "x", "--obstacles", "11")
     assert code == 2 and "--obstacles must be from 1 to 10" in err
+    # Only the lidar sees boxes so far: a model that could not see them is not made.
+    code, _, err = run_cli(capsys, "model", "new", "blind", "--race-type", "object-avoidance")
+    assert code == 2 and "needs a lidar" in err
