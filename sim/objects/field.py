@@ -30,6 +30,7 @@ from sim.objects.placement import (
     BOX_MODEL_WIDTH,
     BOX_WIDTH,
     Lanes,
+    ObjectPose,
     obstacle_poses,
 )
 from sim.objects.settings import Lane, ObstacleSettings
@@ -40,6 +41,11 @@ CAMERA_FIELD_OF_VIEW: Final = 1.13  # radians
 CAMERA_NEAR: Final = 0.2  # metres
 # A car starts in the other lane than a box this close along the track (simapp).
 START_CLEARANCE: Final = 1.0
+# After hitting a box a car is put back this far behind it, in the other lane; the box is
+# the one nearest the car along the track, within CLOSEST_GAP (simapp RESET_BEHIND_DIST,
+# CLOSEST_OBJ_GAP).
+RESET_BEHIND: Final = 1.0
+CLOSEST_GAP: Final = 1.0
 
 
 class ObstacleField:
@@ -90,6 +96,22 @@ class ObstacleField:
                 inner = self.left[car, i] == self._inner_is_left
                 return Lane.OUTER if inner else Lane.INNER
         return None
+
+    def reset_behind(self, car: int, s: float) -> ObjectPose | None:
+        """Where DeepRacer puts a car back after it hit a box: `RESET_BEHIND` metres behind
+        the box nearest its centre-line distance `s` (within `CLOSEST_GAP`), in the other
+        lane, facing along it (simapp's crash reset); None when no box is that close."""
+        best, best_gap = None, CLOSEST_GAP
+        for i in range(self.boxes):
+            gap = (self.distance[car, i] - s + self.length / 2.0) % self.length - self.length / 2.0
+            if abs(gap) <= best_gap:
+                best, best_gap = i, abs(gap)
+        if best is None:
+            return None
+        inner = self.left[car, best] == self._inner_is_left
+        lane = Lane.OUTER if inner else Lane.INNER
+        behind = (self.distance[car, best] - RESET_BEHIND) % self.length
+        return self.lanes.pose(float(behind), lane)
 
     def crashed(
         self, x: FloatArray, y: FloatArray, yaw: FloatArray, car_spec: CarSpec

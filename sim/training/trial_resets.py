@@ -1,7 +1,8 @@
 """Resets inside evaluation trials: put back, penalised, and counted as DeepRacer does.
 
 An evaluation trial survives up to `ResetRules.number_of_resets` off-tracks, crashes,
-reversals and stops: each puts the car back (`sim.resets.reset_pose`) and adds its penalty to
+reversals and stops: each puts the car back (`sim.resets.reset_pose`; after hitting one of
+an object-avoidance race's boxes, 1 m behind it in the other lane) and adds its penalty to
 the trial's clock, during which DeepRacer holds the car still (simapp
 `rollout_agent_ctrl.py`, `_judge_action_at_run_phase`); the next one ends the trial. The
 count is per trial, as simapp clears it at every episode start (`_clear_data`).
@@ -14,7 +15,7 @@ import numpy as np
 from sim.car import STEP_SECONDS
 from sim.geometry import FloatArray
 from sim.resets import MAX_RESETS, RESETTABLE, ResetRules, reset_pose
-from sim.simulation import TrackSimulation
+from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.track import Track
 
 # Training's own evaluations end a trial at the first off-track, as DeepRacer training does
@@ -50,7 +51,13 @@ class TrialResets:
         resets.append(str(status))
         self.penalty[car] += self.rules.penalty(status)
         s = float(self._s[car])
-        x, y, yaw = reset_pose(self.track, s, float(self._x[car]), float(self._y[car]))
+        behind = None
+        if status == EpisodeStatus.CRASHED and sim.obstacles is not None:
+            behind = sim.obstacles.reset_behind(car, float(sim.s[car]))
+        if behind is not None:  # DeepRacer: behind the box it hit, in the other lane
+            x, y, yaw = behind.x, behind.y, behind.heading
+        else:
+            x, y, yaw = reset_pose(self.track, s, float(self._x[car]), float(self._y[car]))
         sim.put(car, x, y, yaw, 0.0)
         length = self.track.length
         moved = (float(sim.s[car]) - s + length / 2.0) % length - length / 2.0

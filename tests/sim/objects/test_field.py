@@ -150,3 +150,31 @@ def test_trials_meet_the_boxes_and_a_crash_ends_a_training_trial() -> None:
     assert all(25.0 < result.progress < 35.0 for result in results)
     clear = run_trials(ReferenceRaceDriver(track), track, 2)
     assert all(result.status == EpisodeStatus.LAP_COMPLETE for result in clear)
+
+
+def test_an_evaluation_puts_a_car_that_hit_a_box_behind_it_in_the_other_lane() -> None:
+    from sim.training.trial_resets import EVALUATION_RESETS, TrialResets
+
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 1, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),)))
+    box = sim.obstacles
+    assert box is not None
+    start = float(box.distance[0, 0]) - 0.8
+    sim.reset_car(0, start)
+    sim.place(0, start, offset=float(sim.track_width[0]) / 4)  # in the box's lane
+    resets = TrialResets(track, 1, EVALUATION_RESETS)
+    for _ in range(30):
+        resets.before_step(sim)
+        sim.apply(np.zeros(1), np.full(1, 1.0))
+        if sim.status[0] != EpisodeStatus.IN_PROGRESS:
+            break
+    assert sim.status[0] == EpisodeStatus.CRASHED
+    assert resets.put_back(sim, 0, sim.status[0])
+    assert resets.penalty[0] == 5.0  # DeepRacer's COLLISION_PENALTY
+    params = sim.all_params()[0]
+    # 1 m behind the box along the track, in the outer lane (right of the centre line).
+    assert params["is_left_of_center"] is False
+    behind = (float(box.distance[0, 0]) - float(sim.s[0])) % track.length
+    assert behind == pytest.approx(1.0 - 0.14, abs=0.1)  # params measure 0.14 m ahead
+    sim.apply(np.zeros(1), np.full(1, 1.0))
+    assert sim.status[0] == EpisodeStatus.IN_PROGRESS  # clear of the box, driving on
