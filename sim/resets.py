@@ -18,9 +18,7 @@ import math
 import weakref
 from dataclasses import dataclass
 
-import numpy as np
-
-from sim.geometry import FloatArray, PointProjector, PolylineProjector
+from sim.geometry import PointProjector
 from sim.simulation import EpisodeStatus
 from sim.track import Track
 
@@ -112,19 +110,12 @@ _LANES: weakref.WeakKeyDictionary[Track, _Lanes] = weakref.WeakKeyDictionary()
 def _lanes(track: Track) -> _Lanes:
     found = _LANES.get(track)
     if found is None:
-        centre = track.center
         found = _LANES[track] = _Lanes(
             PointProjector.of(track.centerline),
-            PointProjector(PolylineProjector(_without_repeats((track.inner + centre) / 2.0))),
-            PointProjector(PolylineProjector(_without_repeats((track.outer + centre) / 2.0))),
+            PointProjector(track.inner_lane),
+            PointProjector(track.outer_lane),
         )
     return found
-
-
-def _without_repeats(points: FloatArray) -> FloatArray:
-    keep = np.ones(len(points), dtype=bool)
-    keep[1:] = np.hypot(*np.diff(points, axis=0).T) > 1e-9
-    return np.asarray(points[keep], dtype=np.float64)
 
 
 def reset_pose(track: Track, s: float, car_x: float, car_y: float) -> tuple[float, float, float]:

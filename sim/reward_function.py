@@ -14,6 +14,7 @@ same path as a racer's file.
 from __future__ import annotations
 
 import ast
+import functools
 import inspect
 import linecache
 import math
@@ -353,7 +354,7 @@ def template_source(name: str, track: str | None = None, space: ActionSpace | No
             "is not a reward function template",
             advice=f"choose one of {', '.join(TEMPLATES)}",
         ) from None
-    text = resources.files("sim.reward_templates").joinpath(file_name).read_text(encoding="utf-8")
+    text = _template_text(file_name)
     if name != RACING_LINE_TEMPLATE:
         return text
     from sim.coach.reward_line import with_track_line  # the coach's numpy and osqp, only here
@@ -362,11 +363,18 @@ def template_source(name: str, track: str | None = None, space: ActionSpace | No
     return with_track_line(text, resolve_track(track or DEFAULT_TRACK), space)
 
 
+@functools.cache
+def _template_text(file_name: str) -> str:
+    """A template file as shipped (read once: the garage compares every model's reward
+    function with all of them)."""
+    return resources.files("sim.reward_templates").joinpath(file_name).read_text(encoding="utf-8")
+
+
 def template_name(source: str) -> str | None:
     """Which template `source` is, unchanged (racing_line with a line racer-tui wrote for
     any track), or None."""
     for name, file_name in TEMPLATES.items():
-        text = resources.files("sim.reward_templates").joinpath(file_name).read_text("utf-8")
+        text = _template_text(file_name)
         compared = source
         if name == RACING_LINE_TEMPLATE:
             compared = _WRITTEN_LINE.sub(EMPTY_LINE, source, count=1)

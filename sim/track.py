@@ -102,6 +102,16 @@ class Track:
     def outer_border(self) -> PolylineProjector:
         return PolylineProjector(_dedupe_ring(self.outer))
 
+    # DeepRacer's two lanes (simapp `track_data.py`): the lines midway between the centre line
+    # and each border, where cars are put back and objects stand.
+    @cached_property
+    def inner_lane(self) -> PolylineProjector:
+        return PolylineProjector(_without_repeats((self.inner + self.center) / 2.0))
+
+    @cached_property
+    def outer_lane(self) -> PolylineProjector:
+        return PolylineProjector(_without_repeats((self.outer + self.center) / 2.0))
+
     @property
     def length(self) -> float:
         """Centre line length in metres (DeepRacer's `track_length`)."""
@@ -301,6 +311,12 @@ def _normalise(array: object, label: str) -> FloatArray:
     else:
         points[-1] = points[0]
     return np.ascontiguousarray(points)
+
+
+def _without_repeats(points: FloatArray) -> FloatArray:
+    keep = np.ones(len(points), dtype=bool)
+    keep[1:] = np.hypot(*np.diff(points, axis=0).T) > 1e-9
+    return np.asarray(points[keep], dtype=np.float64)
 
 
 def _dedupe_ring(ring: FloatArray) -> FloatArray:

@@ -54,12 +54,7 @@ class Lanes:
 
     @classmethod
     def of(cls, track: Track) -> Lanes:
-        centre = track.center
-        return cls(
-            PolylineProjector(centre),
-            PolylineProjector((centre + track.inner) / 2.0),
-            PolylineProjector((centre + track.outer) / 2.0),
-        )
+        return cls(track.centerline, track.inner_lane, track.outer_lane)
 
     def pose(self, distance: float, lane: Lane) -> ObjectPose:
         """Where lane `lane` passes the centre line's point `distance` along it."""
