@@ -20,6 +20,15 @@ from typing import Any, Protocol
 
 import yaml
 
+from sim.objects.settings import (
+    MAX_BOT_CARS,
+    MAX_BOT_SPEED,
+    MAX_OBSTACLES,
+    BotSettings,
+    ObstacleSettings,
+    RaceSettings,
+    RaceType,
+)
 from sim.plural import counted
 from sim.strict_yaml import DuplicateKeyError, load_data
 
@@ -48,10 +57,41 @@ class RaceRules:
     # None: a time race, driven for the whole window. N: the race ends when the car has
     # completed N laps (counting or not), or when the window closes first.
     lap_count: int | None = None
+    # DeepRacer's race type. The objects are the same for every car of a night, so laps
+    # compare: boxes evenly spaced in alternating lanes (DeepRacer's layout when it does
+    # not randomise them), or drawn from the race's seed when randomised; bot cars at
+    # `bot_speed` m/s, changing lanes every 3-5 s with `bot_lane_change`.
+    race_type: RaceType = RaceType.TIME_TRIAL
+    obstacles: int = 0
+    randomize_obstacles: bool = False
+    bots: int = 0
+    bot_speed: float = 1.0
+    bot_lane_change: bool = False
+
+    def __post_init__(self) -> None:
+        if self.race_type is RaceType.OBJECT_AVOIDANCE and not 1 <= self.obstacles <= MAX_OBSTACLES:
+            raise RulesError(
+                f"an object-avoidance race needs obstacles from 1 to {MAX_OBSTACLES}, "
+                f"not {self.obstacles}."
+            )
+        if self.race_type is RaceType.HEAD_TO_BOT and not 1 <= self.bots <= MAX_BOT_CARS:
+            raise RulesError(
+                f"a head-to-bot race needs bots from 1 to {MAX_BOT_CARS}, not {self.bots}."
+            )
 
     def to_dict(self) -> dict[str, Any]:
         data = asdict(self)
         data["ranking"] = self.ranking.value
+        data["race_type"] = self.race_type.value.lower()
+        # Only the keys of the race's own type are kept, and none for a time trial, so the
+        # rules of every race written before other race types existed keep their stored
+        # form and content hash.
+        if self.race_type is not RaceType.OBJECT_AVOIDANCE:
+            del data["obstacles"], data["randomize_obstacles"]
+        if self.race_type is not RaceType.HEAD_TO_BOT:
+            del data["bots"], data["bot_speed"], data["bot_lane_change"]
+        if self.race_type is RaceType.TIME_TRIAL:
+            del data["race_type"]
         if self.max_offtracks_per_lap is None:
             data["max_offtracks_per_lap"] = "unlimited"
         if self.lap_count is None:
@@ -78,6 +118,30 @@ class RaceRules:
     def laps_scored(self) -> int:
         return 1 if self.ranking is RankingMethod.BEST_LAP else self.ranking_laps
 
+    @property
+    def race_settings(self) -> RaceSettings:
+        """The race's objects as the simulation takes them (DeepRacer's settings)."""
+        if self.race_type is RaceType.OBJECT_AVOIDANCE:
+            boxes = ObstacleSettings(count=self.obstacles, randomize=self.randomize_obstacles)
+            return RaceSettings(self.race_type, obstacles=boxes)
+        if self.race_type is RaceType.HEAD_TO_BOT:
+            bots = BotSettings(
+                count=self.bots, speed=self.bot_speed, lane_change=self.bot_lane_change
+            )
+            return RaceSettings(self.race_type, bots=bots)
+        return RaceSettings()
+
+    @property
+    def race_words(self) -> str:
+        """The race type as a racer reads it: "time trial", "object avoidance (3 boxes)"."""
+        if self.race_type is RaceType.OBJECT_AVOIDANCE:
+            shuffled = ", shuffled" if self.randomize_obstacles else ""
+            return f"object avoidance ({counted(self.obstacles, 'box', 'boxes')}{shuffled})"
+        if self.race_type is RaceType.HEAD_TO_BOT:
+            lanes = ", changing lanes" if self.bot_lane_change else ""
+            return f"head-to-bot ({counted(self.bots, 'bot')} at {self.bot_speed:g} m/s{lanes})"
+        return "time trial"
+
     def describe(self) -> str:
         limit = (
             "unlimited off-tracks"
@@ -93,7 +157,11 @@ class RaceRules:
         if self.lap_count is not None:
             laps = "1 lap" if self.lap_count == 1 else f"{self.lap_count} laps"
             length = f"race of {laps} within {_clock(self.window_seconds)}"
-        return f"{length}, {self.penalty_seconds:g} s per off-track, {limit}, ranked by {ranking}"
+        words = f"{length}, {self.penalty_seconds:g} s per off-track, {limit}, ranked by {ranking}"
+        if self.race_type is RaceType.TIME_TRIAL:
+            return words
+        crash = f"{self.collision_penalty_seconds:g} s per crash"
+        return f"{self.race_words}: {words}, {crash}"
 
 
 DEFAULT_RULES = RaceRules()
@@ -109,6 +177,16 @@ RULE_PRESETS: tuple[tuple[str, str, RaceRules], ...] = (
         "practice",
         "10:00, 3 s per off-track, no limit",
         RaceRules(window_seconds=600.0, max_offtracks_per_lap=None),
+    ),
+    (
+        "object-avoidance",
+        "4:00 among 3 boxes, 5 s per crash",
+        RaceRules(race_type=RaceType.OBJECT_AVOIDANCE, obstacles=3),
+    ),
+    (
+        "head-to-bot",
+        "4:00 among 3 bots at 1 m/s, 5 s per crash",
+        RaceRules(race_type=RaceType.HEAD_TO_BOT, bots=3, bot_lane_change=True),
     ),
 )
 
@@ -154,6 +232,7 @@ def rules_from_mapping(data: Mapping[str, Any], base: RaceRules = DEFAULT_RULES)
         ranking_laps=_whole(values["ranking_laps"], "ranking_laps", 1, 100),
         collision_penalty_seconds=values["collision_penalty_seconds"],
         lap_count=_lap_count(values.get("lap_count")),
+        **_race_type_values(values),
     )
     if rules.lap_count is not None and rules.laps_scored > rules.lap_count:
         raise RulesError(
@@ -228,6 +307,42 @@ def _lap_count(value: object) -> int | None:
             "lap_count must be a whole number of laps from 1 to 100, or none for a race "
             f"over the whole window, not {value!r}."
         )
+    return value
+
+
+def _race_type_values(values: Mapping[str, Any]) -> dict[str, Any]:
+    """The race type's keys, checked; a type's own keys take its defaults when left out."""
+    raw = values.get("race_type", "time_trial")
+    try:
+        race_type = RaceType(str(raw).strip().upper().replace("-", "_"))
+    except ValueError:
+        choices = ", ".join(kind.value.lower() for kind in RaceType)
+        raise RulesError(f"race_type must be one of {choices}, not {raw!r}.") from None
+    out: dict[str, Any] = {"race_type": race_type}
+    if race_type is RaceType.OBJECT_AVOIDANCE:
+        out["obstacles"] = _whole(values.get("obstacles", 3), "obstacles", 1, MAX_OBSTACLES)
+        out["randomize_obstacles"] = _flag(
+            values.get("randomize_obstacles", False), "randomize_obstacles"
+        )
+    elif race_type is RaceType.HEAD_TO_BOT:
+        out["bots"] = _whole(values.get("bots", 3), "bots", 1, MAX_BOT_CARS)
+        speed = values.get("bot_speed", 1.0)
+        if (
+            isinstance(speed, bool)
+            or not isinstance(speed, int | float)
+            or not (0.1 <= float(speed) <= MAX_BOT_SPEED)
+        ):
+            raise RulesError(
+                f"bot_speed must be a number of m/s from 0.1 to {MAX_BOT_SPEED:g}, not {speed!r}."
+            )
+        out["bot_speed"] = float(speed)
+        out["bot_lane_change"] = _flag(values.get("bot_lane_change", False), "bot_lane_change")
+    return out
+
+
+def _flag(value: object, key: str) -> bool:
+    if not isinstance(value, bool):
+        raise RulesError(f"{key} must be true or false, not {value!r}.")
     return value
 
 
