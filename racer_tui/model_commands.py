@@ -19,6 +19,8 @@ from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
 from sim.garage.options import (
+    DEFAULT_BOT_SPEED,
+    DEFAULT_BOTS,
     DEFAULT_MAX_SPEED,
     DEFAULT_MAX_STEERING,
     DEFAULT_MINUTES,
@@ -144,7 +146,8 @@ def _add_spec_options(parser: argparse.ArgumentParser, *, for_clone: bool) -> No
     race.add_argument(
         "--race-type",
         metavar="TYPE",
-        help="time-trial (default) or object-avoidance (boxes on the track)",
+        help="time-trial (default), object-avoidance (boxes on the track) or head-to-bot "
+        "(bot cars driving it)",
     )
     race.add_argument(
         "--obstacles",
@@ -156,6 +159,23 @@ def _add_spec_options(parser: argparse.ArgumentParser, *, for_clone: bool) -> No
         "--randomize-obstacles",
         action="store_true",
         help="place the boxes again, at random, every episode",
+    )
+    race.add_argument(
+        "--bots",
+        type=int,
+        metavar="N",
+        help=f"bot cars in a head-to-bot race, 1-6 (default {DEFAULT_BOTS})",
+    )
+    race.add_argument(
+        "--bot-speed",
+        type=float,
+        metavar="M/S",
+        help=f"the bot cars' speed (default {DEFAULT_BOT_SPEED:g} m/s)",
+    )
+    race.add_argument(
+        "--bot-lane-change",
+        action="store_true",
+        help="bot cars change lanes every 3-5 s",
     )
     parser.add_argument(
         "--reward",
@@ -235,6 +255,12 @@ def _spec_options(args: argparse.Namespace) -> dict[str, Any]:
         options["obstacles"] = args.obstacles
     if args.randomize_obstacles:
         options["randomize_obstacles"] = True
+    if args.bots is not None:
+        options["bots"] = args.bots
+    if args.bot_speed is not None:
+        options["bot_speed"] = args.bot_speed
+    if args.bot_lane_change:
+        options["bot_lane_change"] = True
     return {key: value for key, value in options.items() if value is not None}
 
 

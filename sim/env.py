@@ -26,7 +26,7 @@ import numpy as np
 
 from sim.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
 from sim.car import DEEPRACER_CAR, CarSpec
-from sim.objects.settings import ObstacleSettings
+from sim.objects.settings import RaceSettings
 from sim.observations import Observer, SensorOptions, normalise_sensors
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
@@ -47,7 +47,7 @@ class EnvConfig:
     sensor_options: SensorOptions = field(default_factory=SensorOptions)
     car: CarSpec = DEEPRACER_CAR
     is_reversed: bool = False  # DeepRacer's REVERSE_DIR: drive the track the other way round
-    obstacles: ObstacleSettings | None = None  # an object-avoidance race's boxes
+    race: RaceSettings | None = None  # boxes or bot cars: None for a time trial
 
     @classmethod
     def build(
@@ -107,7 +107,7 @@ class EnvConfig:
             car=self.car,
             rules=self.rules,
             is_reversed=self.is_reversed,
-            obstacles=self.obstacles,
+            race=self.race,
         )
 
 

@@ -109,11 +109,11 @@ class Observer:
             parts["camera"] = frames[..., None]
         if self._lidar is not None:
             scan = self._lidar.scan(x, y, yaw)
-            boxes = self.sim.obstacles
-            if boxes is not None:  # the lidar sees each car's own boxes as well as borders
+            objects = self.sim.objects
+            if objects is not None:  # the lidar sees each car's own objects and the borders
                 which = np.arange(self.sim.n)[pick]
                 spec = self._lidar.spec
-                seen = boxes.ray_distances(
+                seen = objects.ray_distances(
                     which, x, y, yaw, angles=self._lidar.angles, max_range=spec.max_range
                 )
                 scan = np.clip(np.minimum(scan, seen), spec.min_range, spec.max_range)

@@ -39,8 +39,8 @@ from numpy.typing import NDArray
 
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
 from sim.geometry import FloatArray, PointProjector
-from sim.objects.field import ObstacleField
-from sim.objects.settings import ObstacleSettings
+from sim.objects.settings import RaceSettings
+from sim.objects.world import object_field
 from sim.reward_sample_params import no_objects
 from sim.track import Track
 
@@ -114,12 +114,13 @@ class TrackSimulation:
         cars_collide: bool = False,
         is_reversed: bool = False,
         lookup_grids: bool = True,
-        obstacles: ObstacleSettings | None = None,
+        race: RaceSettings | None = None,
         seed: int = 0,
     ) -> None:
         """`lookup_grids=False` for a few hundred steps (one reference lap): the track's
         lines answer by exact tree search until building their lookup grids pays off.
-        `obstacles`: an object-avoidance race's boxes, each car its own (drawn from `seed`)."""
+        `race`: an object-avoidance race's boxes or a head-to-bot race's bot cars, each car
+        its own (placed from `seed`)."""
         self.track = track
         self.n = n_cars
         self.car = car
@@ -174,12 +175,9 @@ class TrackSimulation:
         self.reverse = np.zeros(n, dtype=bool)
         self._sign = np.ones(n)
         self._any_reverse = False
-        self.obstacles = (
-            ObstacleField(track, obstacles, n, seed=seed)
-            if obstacles is not None and obstacles.boxes
-            else None
-        )
-        self.hit_box = np.zeros(n, dtype=bool)  # a corner of the car inside one of its boxes
+        self.objects = object_field(track, race, n, seed=seed)
+        # A car that ran into one of its objects this step (DeepRacer's crash).
+        self.hit_object = np.zeros(n, dtype=bool)
 
     # --- episodes ------------------------------------------------------------------------
     def start_position(self, car: int, episode: int) -> float:
@@ -225,13 +223,13 @@ class TrackSimulation:
             else:
                 s = start_s[k]
             s %= self._length
-            if self.obstacles is not None and self.episode[car] > 0:
-                self.obstacles.draw(car)  # a randomised race's boxes move every episode
+            if self.objects is not None and self.episode[car] > 0:
+                self.objects.draw(car)  # shuffled boxes move, bots start again
             self.episode[car] += 1
             self._set_reverse(car, backwards)
             self._place_along(car, s, backwards)
-            if self.obstacles is not None and not backwards:
-                self._clear_of_boxes(car, s)
+            if self.objects is not None and not backwards:
+                self._clear_of_objects(car, s)
             centre_s[k] = s
         index = np.asarray(cars, dtype=np.intp)
         self.steps[index] = 0
@@ -249,12 +247,12 @@ class TrackSimulation:
         ahead = np.mod(self.s[index] - centre_s + half, self._length) - half
         self.travelled[index] = ahead * self._sign[index]
 
-    def _clear_of_boxes(self, car: int, s: float) -> None:
-        """Start in the other lane than a box right by the start (as DeepRacer does)."""
-        assert self.obstacles is not None
-        lane = self.obstacles.start_lane(car, s)
+    def _clear_of_objects(self, car: int, s: float) -> None:
+        """Start in the other lane than an object right by the start (as DeepRacer does)."""
+        assert self.objects is not None
+        lane = self.objects.start_lane(car, s)
         if lane is not None:
-            pose = self.obstacles.lanes.pose(s, lane)
+            pose = self.objects.lanes.pose(s, lane)
             self.fleet.place(car, pose.x, pose.y, pose.heading, 0.0)
 
     def _set_reverse(self, car: int, backwards: bool) -> None:
@@ -331,6 +329,8 @@ class TrackSimulation:
         before_x, before_y = self.fleet.x.copy(), self.fleet.y.copy()
         self.fleet.set_targets(steering_deg, speed)
         self.fleet.step()
+        if self.objects is not None:
+            self.objects.advance(STEP_SECONDS)
         self._measure()
         self.steps += 1
         delta = np.mod(self.s - before_s + self._length / 2.0, self._length) - self._length / 2.0
@@ -364,17 +364,17 @@ class TrackSimulation:
         self.track_width = np.hypot(*(outer_foot - inner_foot).T)
         wheels = fleet.wheel_positions().reshape(-1, 2)
         self.wheels_on = track.on_road(wheels).reshape(self.n, 4)
-        self._measure_boxes()
+        self._measure_objects()
 
-    def _measure_boxes(self) -> None:
-        if self.obstacles is not None:
+    def _measure_objects(self) -> None:
+        if self.objects is not None:
             fleet = self.fleet
-            self.hit_box = self.obstacles.crashed(fleet.x, fleet.y, fleet.yaw, self.car)
+            self.hit_object = self.objects.crashed(fleet.x, fleet.y, fleet.yaw, self.s, self.car)
 
     @property
     def crashed(self) -> NDArray[np.bool_]:
-        """Cars that hit something this step: a box of theirs, or a body pymunk collides."""
-        return np.asarray(self.fleet.crashed | self.hit_box)
+        """Cars that crashed this step: into an object of theirs, or a body pymunk collides."""
+        return np.asarray(self.fleet.crashed | self.hit_object)
 
     def _judge(self) -> None:
         rules = self.rules
@@ -413,6 +413,8 @@ class TrackSimulation:
         before_x, before_y = float(fleet.x[0]), float(fleet.y[0])
         fleet.set_targets(steering_deg, speed)
         fleet.step()
+        if self.objects is not None:
+            self.objects.advance(STEP_SECONDS)
         self._measure_one()
         self.steps += 1
         length = self._length
@@ -451,13 +453,13 @@ class TrackSimulation:
         self.wheels_on = np.asarray(
             shapely.contains_xy(self.track.road, wheel_x, wheel_y), dtype=bool
         ).reshape(1, 4)
-        self._measure_boxes()
+        self._measure_objects()
 
     def _judge_one(self) -> None:
         rules = self.rules
         if self.travelled[0] >= self._length:
             outcome = 3
-        elif self.fleet.crashed[0] or self.hit_box[0]:
+        elif self.fleet.crashed[0] or self.hit_object[0]:
             outcome = 1
         elif not self.wheels_on[0].any():
             outcome = 2
@@ -601,9 +603,9 @@ class TrackSimulation:
         ]
 
     def _object_params(self, car: int, x: float, y: float, heading: float) -> dict[str, Any]:
-        if self.obstacles is None:
+        if self.objects is None:
             return no_objects()
-        return self.obstacles.params(car, float(self.s[car]), (x, y), heading)
+        return self.objects.params(car, float(self.s[car]), (x, y), heading)
 
 
 # Every so many steps a stepping loop lets the other threads of its process run.

@@ -74,7 +74,7 @@ from sim.track import Track, TrackError
 
 if TYPE_CHECKING:
     from sim.env import EnvConfig
-    from sim.objects.settings import ObstacleSettings
+    from sim.objects.settings import RaceSettings
     from sim.reward_function import RewardFunction
 
 MODELS_DIR = "models"
@@ -267,7 +267,7 @@ class ModelFolder:
 
         metadata = self.metadata()
         params = self.training_params()
-        obstacles = self._obstacles(params)
+        race = self._race(params)
         return EnvConfig(
             track=self.track(),
             action_space=metadata.action_space,
@@ -278,12 +278,12 @@ class ModelFolder:
                 alternate_direction=params.alternate_driving_direction,
             ),
             is_reversed=params.reverse_direction,
-            obstacles=obstacles,
+            race=race,
         )
 
-    def _obstacles(self, params: TrainingParams) -> ObstacleSettings | None:
-        """An object-avoidance model's boxes; a head-to-bot model is refused in one sentence
-        rather than trained as a time trial without a word."""
+    def _race(self, params: TrainingParams) -> RaceSettings | None:
+        """An object-avoidance model's boxes or a head-to-bot model's bot cars (None for a
+        time trial); a model whose sensors cannot see them is refused in one sentence."""
         from sim.objects.reading import race_settings
         from sim.objects.settings import RaceType
 
@@ -291,20 +291,14 @@ class ModelFolder:
             settings = race_settings(params, str(self.training_params_file))
         except DeepRacerFileError as error:
             raise ModelError(str(error)) from None
-        if settings.race_type is RaceType.HEAD_TO_BOT:
-            raise ModelError(
-                f"{self.name} is a HEAD_TO_BOT model, and racer-tui cannot drive bot cars "
-                "yet; set RACE_TYPE: TIME_TRIAL in its training_params.yaml to train it "
-                "as a time trial."
-            )
-        if settings.race_type is RaceType.OBJECT_AVOIDANCE:
-            from sim.garage.options import blind_to_boxes
+        if settings.race_type is RaceType.TIME_TRIAL:
+            return None
+        from sim.garage.options import blind_to_objects
 
-            blind = blind_to_boxes(settings.race_type, self.metadata().sensors)
-            if blind is not None:
-                raise ModelError(f"{self.name} races object avoidance, but {blind}")
-            return settings.obstacles
-        return None
+        blind = blind_to_objects(settings.race_type, self.metadata().sensors)
+        if blind is not None:
+            raise ModelError(f"{self.name} races {settings.race_type.words}, but {blind}")
+        return settings
 
     # --- metrics -------------------------------------------------------------------------
 

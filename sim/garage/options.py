@@ -115,6 +115,9 @@ def model_spec(
     race_type: str | None = None,
     obstacles: int | None = None,
     randomize_obstacles: bool = False,
+    bots: int | None = None,
+    bot_speed: float | None = None,
+    bot_lane_change: bool = False,
 ) -> ModelSpec:
     """`base` (default: `default_model_spec()`) with the given console options applied.
 
@@ -158,9 +161,10 @@ def model_spec(
         except DeepRacerFileError as error:
             raise ModelError(str(error)) from None
         spec = replace(spec, hyperparameters=checked)
-    if race_type is not None or obstacles is not None or randomize_obstacles:
-        spec = _with_race(spec, race_type, obstacles, randomize_obstacles)
-    blind = blind_to_boxes(spec.race_type, spec.metadata.sensors)
+    race_options = _RaceOptions(obstacles, randomize_obstacles, bots, bot_speed, bot_lane_change)
+    if race_type is not None or race_options.given:
+        spec = _with_race(spec, race_type, race_options)
+    blind = blind_to_objects(spec.race_type, spec.metadata.sensors)
     if blind is not None:
         raise ModelError(f"--sensor: {blind}")
     if minutes is not None:
@@ -221,7 +225,11 @@ def _checked_track(track: str) -> str:
 
 
 # The race types `model new --race-type` makes, by the names racers type.
-RACE_TYPES = {"time-trial": "TIME_TRIAL", "object-avoidance": "OBJECT_AVOIDANCE"}
+RACE_TYPES = {
+    "time-trial": "TIME_TRIAL",
+    "object-avoidance": "OBJECT_AVOIDANCE",
+    "head-to-bot": "HEAD_TO_BOT",
+}
 DEFAULT_OBSTACLES = 3  # the console's default for an object-avoidance model
 MAX_OBSTACLES = 10
 RACE_KEYS = frozenset(
@@ -232,47 +240,93 @@ RACE_KEYS = frozenset(
         "OBSTACLE_TYPE",
         "IS_OBSTACLE_BOT_CAR",
         "OBJECT_POSITIONS",
+        "NUMBER_OF_BOT_CARS",
+        "MIN_DISTANCE_BETWEEN_BOT_CARS",
+        "RANDOMIZE_BOT_CAR_LOCATIONS",
+        "BOT_CAR_SPEED",
+        "IS_LANE_CHANGE",
+        "LOWER_LANE_CHANGE_TIME",
+        "UPPER_LANE_CHANGE_TIME",
+        "LANE_CHANGE_DISTANCE",
+        "PENALTY_SECONDS",
     }
 )
+DEFAULT_BOTS = 3  # the console's default for a head-to-bot model
+DEFAULT_BOT_SPEED = 1.0  # m/s
 
 
-def blind_to_boxes(race_type: str, sensors: Sequence[str]) -> str | None:
-    """Why a model of `race_type` with `sensors` could not see its boxes, or None."""
-    if race_type.strip().upper() != "OBJECT_AVOIDANCE":
+def blind_to_objects(race_type: str, sensors: Sequence[str]) -> str | None:
+    """Why a model of `race_type` with `sensors` could not see its boxes or bots, or None."""
+    if race_type.strip().upper() not in ("OBJECT_AVOIDANCE", "HEAD_TO_BOT"):
         return None
-    if any(sensor in ("lidar", "sector_lidar") for sensor in sensors):
+    if any(sensor in ("camera", "lidar", "sector_lidar") for sensor in sensors):
         return None
     return (
-        "an object-avoidance model needs a lidar (lidar or sector_lidar): racer-tui's "
-        "camera and vector state do not show the boxes yet."
+        "a model that races among objects needs a camera or a lidar: racer-tui's vector "
+        "state does not show them."
     )
 
 
-def _with_race(
-    spec: ModelSpec, race_type: str | None, obstacles: int | None, randomize: bool
-) -> ModelSpec:
-    """`spec` racing `race_type` (a name of RACE_TYPES, "head-to-bot" refused for now)."""
-    from sim.objects.settings import ObstacleSettings, race_keys
+@dataclass(frozen=True)
+class _RaceOptions:
+    """`model new`'s options for the objects of a race type."""
 
-    chosen = race_type if race_type is not None else "object-avoidance"
-    if chosen == "head-to-bot":
-        raise ModelError(
-            "--race-type head-to-bot: racer-tui cannot drive bot cars yet; choose time-trial "
-            "or object-avoidance."
-        )
+    obstacles: int | None = None
+    randomize_obstacles: bool = False
+    bots: int | None = None
+    bot_speed: float | None = None
+    bot_lane_change: bool = False
+
+    @property
+    def for_boxes(self) -> bool:
+        return self.obstacles is not None or self.randomize_obstacles
+
+    @property
+    def for_bots(self) -> bool:
+        return self.bots is not None or self.bot_speed is not None or self.bot_lane_change
+
+    @property
+    def given(self) -> bool:
+        return self.for_boxes or self.for_bots
+
+
+def _with_race(spec: ModelSpec, race_type: str | None, options: _RaceOptions) -> ModelSpec:
+    """`spec` racing `race_type` (a name of RACE_TYPES; without one, the type the object
+    options belong to)."""
+    from sim.objects.settings import (
+        MAX_BOT_CARS,
+        MAX_BOT_SPEED,
+        BotSettings,
+        ObstacleSettings,
+        race_keys,
+    )
+
+    default = "head-to-bot" if options.for_bots else "object-avoidance"
+    chosen = race_type if race_type is not None else default
     if chosen not in RACE_TYPES:
         raise ModelError(f"--race-type must be one of {', '.join(RACE_TYPES)}, not {chosen!r}.")
+    if options.for_boxes and chosen != "object-avoidance":
+        raise ModelError("--obstacles and --randomize-obstacles need --race-type object-avoidance.")
+    if options.for_bots and chosen != "head-to-bot":
+        raise ModelError("--bots, --bot-speed and --bot-lane-change need --race-type head-to-bot.")
     if chosen == "time-trial":
-        if obstacles is not None or randomize:
-            raise ModelError(
-                "--obstacles and --randomize-obstacles need --race-type object-avoidance."
-            )
         return replace(spec, race_type="TIME_TRIAL", race_keys={})
-    count = DEFAULT_OBSTACLES if obstacles is None else obstacles
+    if chosen == "head-to-bot":
+        count = DEFAULT_BOTS if options.bots is None else options.bots
+        if not 1 <= count <= MAX_BOT_CARS:
+            raise ModelError(f"--bots must be from 1 to {MAX_BOT_CARS}, not {count}.")
+        speed = DEFAULT_BOT_SPEED if options.bot_speed is None else options.bot_speed
+        if not (math.isfinite(speed) and 0.1 <= speed <= MAX_BOT_SPEED):
+            raise ModelError(
+                f"--bot-speed must be from 0.1 to {MAX_BOT_SPEED:g} m/s, not {speed:g}."
+            )
+        settings = BotSettings(count=count, speed=speed, lane_change=options.bot_lane_change)
+        return replace(spec, race_type=RACE_TYPES[chosen], race_keys=race_keys(settings))
+    count = DEFAULT_OBSTACLES if options.obstacles is None else options.obstacles
     if not 1 <= count <= MAX_OBSTACLES:
         raise ModelError(f"--obstacles must be from 1 to {MAX_OBSTACLES}, not {count}.")
-    keys = race_keys(ObstacleSettings(count=count, randomize=randomize))
-    return replace(spec, race_type=RACE_TYPES[chosen], race_keys=keys)
+    boxes = ObstacleSettings(count=count, randomize=options.randomize_obstacles)
+    return replace(spec, race_type=RACE_TYPES[chosen], race_keys=race_keys(boxes))
 
 
 def reward_choice(

@@ -95,7 +95,13 @@ def race_words(params: TrainingParams) -> str:
         random = str(extra.get("RANDOMIZE_OBSTACLE_LOCATIONS", False)).lower() == "true"
         return f"object avoidance, {count} boxes{' (random)' if random else ''}"
     if kind == "HEAD_TO_BOT":
-        return f"head-to-bot, {params.extra.get('NUMBER_OF_BOT_CARS', 0)} bots"
+        extra = params.extra
+        lanes = str(extra.get("IS_LANE_CHANGE", False)).lower() == "true"
+        speed = extra.get("BOT_CAR_SPEED", 0.2)
+        return (
+            f"head-to-bot, {extra.get('NUMBER_OF_BOT_CARS', 0)} bots at {speed} m/s"
+            f"{' (changing lanes)' if lanes else ''}"
+        )
     return "time trial"
 
 

@@ -1,22 +1,25 @@
-"""The boxes of an object-avoidance simulation, car by car, and what DeepRacer makes of them:
-crashes and the reward `params`' object keys (docs/deepracer-objects.md).
+"""The objects of a simulation, car by car, and what DeepRacer makes of them: crashes, what
+sensors see and the reward `params`' object keys (docs/deepracer-objects.md). `ObjectField`
+is what boxes and bot cars share; `ObstacleField` stands an object-avoidance race's boxes,
+`sim.objects.bots.BotField` drives a head-to-bot race's bot cars.
 
-Each car of a simulation drives its own episode, so each has its own boxes, drawn again when
-its episode starts if the race randomises them. A crash is DeepRacer's: a corner of the car's
-footprint inside a box's rectangle (the box and 0.1 m more), no distance threshold.
+Each car of a simulation drives its own episode, so each has its own objects, placed again
+when its episode starts. A crash is DeepRacer's: a corner of the car's footprint inside an
+object's rectangle (for a box, the box and 0.1 m more), no distance threshold.
 
 The params follow simapp's `get_object_reward_params`: objects in their own order (not
 sorted), `objects_distance` in metres along the centre line from its first waypoint,
 `closest_objects` the one behind and the one ahead of the car's look-ahead point along the
 track (wrapping round the lap), headings and speeds 0 for boxes (simapp fills them only
-with bot cars). `object_in_camera` says whether the next object is inside the camera's
-field of view; simapp compares against the object before it (an off-by-one in its camera
-check), which racer-tui does not copy.
+with bot cars, and then gives every object the bots' speed). `object_in_camera` says whether
+the next object is inside the camera's field of view; simapp compares against the object
+before it (an off-by-one in its camera check), which racer-tui does not copy.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, Final
 
 import numpy as np
@@ -25,6 +28,10 @@ from numpy.typing import NDArray
 from sim.car import CarSpec
 from sim.geometry import FloatArray
 from sim.objects.placement import (
+    BOT_CAR_HEIGHT,
+    BOT_CAR_LENGTH,
+    BOT_CAR_WIDTH,
+    BOX_HEIGHT,
     BOX_LENGTH,
     BOX_MODEL_LENGTH,
     BOX_MODEL_WIDTH,
@@ -48,21 +55,45 @@ RESET_BEHIND: Final = 1.0
 CLOSEST_GAP: Final = 1.0
 
 
-class ObstacleField:
-    """`settings`' boxes for each of `cars` cars on `track`, drawn from `seed`."""
+@dataclass(frozen=True)
+class ObjectShape:
+    """An object's size: its crash rectangle (DeepRacer's, on the ground) and its body as
+    the sensors see it (metres)."""
+
+    crash_length: float  # along its heading
+    crash_width: float
+    length: float
+    width: float
+    height: float
+
+
+BOX_SHAPE: Final = ObjectShape(BOX_LENGTH, BOX_WIDTH, BOX_MODEL_LENGTH, BOX_MODEL_WIDTH, BOX_HEIGHT)
+BOT_CAR_SHAPE: Final = ObjectShape(
+    BOT_CAR_LENGTH, BOT_CAR_WIDTH, BOT_CAR_LENGTH, BOT_CAR_WIDTH, BOT_CAR_HEIGHT
+)
+
+
+class ObjectField:
+    """`count` objects of one `shape` for each of `cars` cars on `track`: where they are
+    and what DeepRacer makes of them. Subclasses place them (`draw`) and move them."""
+
+    #: What `objects_speed` reports for every object (simapp: the bots' speed, boxes too),
+    #: and whether `objects_heading` is filled (only when there are bot cars).
+    reported_speed: float = 0.0
+    reports_heading: bool = False
 
     def __init__(
-        self, track: Track, settings: ObstacleSettings, cars: int, *, seed: int = 0
+        self, track: Track, count: int, cars: int, shape: ObjectShape, *, seed: int = 0
     ) -> None:
-        self.settings = settings
+        self.shape = shape
         self.lanes = Lanes.of(track)
         # simapp: left of centre = inside the inner half of the road XOR the track turning
         # clockwise (the inner border is on the right then).
         self._inner_is_left = track.direction == "counter-clockwise"
         self.length = self.lanes.centre.total_length
-        self.boxes = settings.boxes
+        self.count = count
         self._rng = np.random.default_rng(seed)
-        k = self.boxes
+        k = count
         self.x = np.zeros((cars, k))
         self.y = np.zeros((cars, k))
         self.heading = np.zeros((cars, k))  # radians
@@ -70,56 +101,66 @@ class ObstacleField:
         self.left = np.zeros((cars, k), dtype=bool)  # left of the centre line, driving on
         self.from_centre = np.zeros((cars, k))
         self.drawn = np.zeros(cars, dtype=bool)
-        for car in range(cars):
-            self.draw(car)
 
+    # --- what subclasses do ------------------------------------------------------------
     def draw(self, car: int) -> None:
-        """The boxes of `car`'s next episode: the same ones unless the race randomises them."""
-        if self.drawn[car] and not self.settings.randomize:
-            return
-        poses = obstacle_poses(self.settings, self.lanes, self._rng)
-        for i, pose in enumerate(poses):
-            self.x[car, i], self.y[car, i] = pose.x, pose.y
-            self.heading[car, i] = pose.heading
-            self.distance[car, i] = pose.distance
-            self.left[car, i] = (pose.lane is Lane.INNER) == self._inner_is_left
-            _, _, foot = self.lanes.centre.project(np.array([[pose.x, pose.y]]))
-            self.from_centre[car, i] = math.hypot(pose.x - foot[0, 0], pose.y - foot[0, 1])
-        self.drawn[car] = True
+        """Place `car`'s objects for its next episode."""
+        raise NotImplementedError
+
+    def advance(self, seconds: float) -> None:
+        """Let every car's objects move on by one step of `seconds` (boxes stand still)."""
+
+    def pass_time(self, car: int, seconds: float) -> None:
+        """`car` is held for `seconds` (a penalty): its objects move on meanwhile."""
+
+    def after_crash(self, cars: NDArray[np.bool_]) -> None:
+        """Cars whose objects ran into them from behind this step (bots pause)."""
+
+    def reset_behind(self, car: int, s: float) -> ObjectPose | None:
+        """Where DeepRacer puts a car back after it crashed near distance `s`; None: where
+        an off-track would."""
+        return None
+
+    # --- shared --------------------------------------------------------------------------
+    def _set(self, car: int, i: int, pose: ObjectPose) -> None:
+        self.x[car, i], self.y[car, i] = pose.x, pose.y
+        self.heading[car, i] = pose.heading
+        self.distance[car, i] = pose.distance
+        self.left[car, i] = (pose.lane is Lane.INNER) == self._inner_is_left
+        _, _, foot = self.lanes.centre.project(np.array([[pose.x, pose.y]]))
+        self.from_centre[car, i] = math.hypot(pose.x - foot[0, 0], pose.y - foot[0, 1])
 
     def start_lane(self, car: int, s: float) -> Lane | None:
-        """The lane a car starting at `s` takes: the other one than a box of its within 1 m
-        along the track (simapp's `_get_car_start_model_state`), or None (the centre)."""
-        for i in range(self.boxes):
+        """The lane a car starting at `s` takes: the other one than an object of its within
+        1 m along the track (simapp's `_get_car_start_model_state`), or None (the centre)."""
+        for i in range(self.count):
             gap = (self.distance[car, i] - s + self.length / 2.0) % self.length - self.length / 2.0
             if abs(gap) <= START_CLEARANCE:
                 inner = self.left[car, i] == self._inner_is_left
                 return Lane.OUTER if inner else Lane.INNER
         return None
 
-    def reset_behind(self, car: int, s: float) -> ObjectPose | None:
-        """Where DeepRacer puts a car back after it hit a box: `RESET_BEHIND` metres behind
-        the box nearest its centre-line distance `s` (within `CLOSEST_GAP`), in the other
-        lane, facing along it (simapp's crash reset); None when no box is that close."""
-        best, best_gap = None, CLOSEST_GAP
-        for i in range(self.boxes):
-            gap = (self.distance[car, i] - s + self.length / 2.0) % self.length - self.length / 2.0
-            if abs(gap) <= best_gap:
-                best, best_gap = i, abs(gap)
-        if best is None:
-            return None
-        inner = self.left[car, best] == self._inner_is_left
-        lane = Lane.OUTER if inner else Lane.INNER
-        behind = (self.distance[car, best] - RESET_BEHIND) % self.length
-        return self.lanes.pose(float(behind), lane)
-
-    def crashed(
+    def hits(
         self, x: FloatArray, y: FloatArray, yaw: FloatArray, car_spec: CarSpec
     ) -> NDArray[np.bool_]:
-        """Cars with a corner of their footprint inside one of their boxes."""
-        if self.boxes == 0:
-            return np.zeros(len(x), dtype=bool)
+        """(cars, objects): a corner of the car's footprint inside the object's crash
+        rectangle."""
         half_l, half_w = car_spec.length / 2.0, car_spec.width / 2.0
+        shape = self.shape
+        # Nothing can touch unless the centres are within both half-diagonals: most steps
+        # of a race end here, for a few numpy calls.
+        reach = math.hypot(half_l, half_w) + math.hypot(shape.crash_length, shape.crash_width) / 2
+        if len(x) == 1:  # a race's one car: plain floats beat numpy's per-call costs
+            cx, cy, limit = float(x[0]), float(y[0]), reach * reach
+            if all(
+                (cx - ox) ** 2 + (cy - oy) ** 2 > limit
+                for ox, oy in zip(self.x[0].tolist(), self.y[0].tolist(), strict=True)
+            ):
+                return np.zeros((1, self.count), dtype=bool)
+        else:
+            near = (x[:, None] - self.x) ** 2 + (y[:, None] - self.y) ** 2 <= reach * reach
+            if not near.any():
+                return near
         corners = np.array(
             [[half_l, half_w], [half_l, -half_w], [-half_l, half_w], [-half_l, -half_w]]
         )
@@ -127,14 +168,25 @@ class ObstacleField:
         # (cars, 4) corner positions in the world.
         cx = x[:, None] + corners[:, 0] * cos - corners[:, 1] * sin
         cy = y[:, None] + corners[:, 0] * sin + corners[:, 1] * cos
-        # Into each box's frame: (cars, boxes, 4).
+        # Into each object's frame: (cars, objects, 4).
         dx = cx[:, None, :] - self.x[:, :, None]
         dy = cy[:, None, :] - self.y[:, :, None]
         bc, bs = np.cos(self.heading)[:, :, None], np.sin(self.heading)[:, :, None]
         along = dx * bc + dy * bs
         across = -dx * bs + dy * bc
-        inside = (np.abs(along) <= BOX_LENGTH / 2.0) & (np.abs(across) <= BOX_WIDTH / 2.0)
-        return np.asarray(inside.any(axis=(1, 2)))
+        inside = (np.abs(along) <= shape.crash_length / 2.0) & (
+            np.abs(across) <= shape.crash_width / 2.0
+        )
+        return np.asarray(inside.any(axis=2))
+
+    def crashed(
+        self, x: FloatArray, y: FloatArray, yaw: FloatArray, s: FloatArray, car_spec: CarSpec
+    ) -> NDArray[np.bool_]:
+        """Cars that crashed into one of their objects (`s`: each car's look-ahead point's
+        distance along the centre line). Hitting a box is always a crash."""
+        if self.count == 0:
+            return np.zeros(len(x), dtype=bool)
+        return np.asarray(self.hits(x, y, yaw, car_spec).any(axis=1))
 
     def ray_distances(
         self,
@@ -146,12 +198,12 @@ class ObstacleField:
         angles: FloatArray,
         max_range: float,
     ) -> FloatArray:
-        """(len(cars), rays) metres from each car's centre to the first of its boxes along
-        each ray (`angles` from the heading), `max_range` where none is that close: the
-        boxes as a lidar sees them, the slab test in each box's frame."""
+        """(len(cars), rays) metres from each car's centre to the first of its objects
+        along each ray (`angles` from the heading), `max_range` where none is that close:
+        the objects as a lidar sees them, the slab test in each object's frame."""
         theta = np.asarray(yaw)[:, None] + np.asarray(angles)[None, :]  # (n, rays)
         hit = np.full(theta.shape, max_range)
-        if self.boxes == 0:
+        if self.count == 0:
             return hit
         dir_x, dir_y = np.cos(theta)[:, :, None], np.sin(theta)[:, :, None]
         bx, by, bh = (
@@ -162,12 +214,12 @@ class ObstacleField:
         cos, sin = np.cos(bh), np.sin(bh)
         ox = np.asarray(x)[:, None, None] - bx
         oy = np.asarray(y)[:, None, None] - by
-        # The ray's origin and direction in the box's frame: (n, rays, boxes).
+        # The ray's origin and direction in the object's frame: (n, rays, objects).
         o_along, o_across = ox * cos + oy * sin, -ox * sin + oy * cos
         d_along, d_across = dir_x * cos + dir_y * sin, -dir_x * sin + dir_y * cos
         with np.errstate(divide="ignore", invalid="ignore"):
-            near_a, far_a = _slab(o_along, d_along, BOX_MODEL_LENGTH / 2.0)
-            near_c, far_c = _slab(o_across, d_across, BOX_MODEL_WIDTH / 2.0)
+            near_a, far_a = _slab(o_along, d_along, self.shape.length / 2.0)
+            near_c, far_c = _slab(o_across, d_across, self.shape.width / 2.0)
         enter = np.maximum(near_a, near_c)
         leave = np.minimum(far_a, far_c)
         seen = (enter <= leave) & (leave >= 0.0)
@@ -179,7 +231,7 @@ class ObstacleField:
     ) -> dict[str, Any]:
         """The object keys of `car`'s params; `ahead_s` is its look-ahead point's distance
         along the centre line, `heading_deg` its heading."""
-        k = self.boxes
+        k = self.count
         distances = self.distance[car].tolist()
         order = sorted(range(k), key=distances.__getitem__)
         ahead = [i for i in order if distances[i] > ahead_s]
@@ -191,8 +243,8 @@ class ObstacleField:
                 [float(a), float(b)] for a, b in zip(self.x[car], self.y[car], strict=True)
             ],
             "objects_left_of_center": self.left[car].tolist(),
-            "objects_speed": [0.0] * k,
-            "objects_heading": [0.0] * k,
+            "objects_speed": [self.reported_speed] * k,
+            "objects_heading": self.heading[car].tolist() if self.reports_heading else [0.0] * k,
             "objects_distance": distances,
             "objects_distance_from_center": self.from_centre[car].tolist(),
             "object_in_camera": self._in_camera(car, next_index, ahead_xy, heading_deg),
@@ -209,6 +261,48 @@ class ObstacleField:
             math.radians(heading_deg)
         )
         return forward >= CAMERA_NEAR and abs(bearing) <= CAMERA_FIELD_OF_VIEW / 2.0
+
+
+class ObstacleField(ObjectField):
+    """`settings`' boxes for each of `cars` cars on `track`, drawn from `seed`."""
+
+    def __init__(
+        self, track: Track, settings: ObstacleSettings, cars: int, *, seed: int = 0
+    ) -> None:
+        # IS_OBSTACLE_BOT_CAR parks bot cars where the boxes would stand.
+        shape = BOT_CAR_SHAPE if settings.bot_car else BOX_SHAPE
+        super().__init__(track, settings.boxes, cars, shape, seed=seed)
+        self.settings = settings
+        for car in range(cars):
+            self.draw(car)
+
+    @property
+    def boxes(self) -> int:
+        return self.count
+
+    def draw(self, car: int) -> None:
+        """The boxes of `car`'s next episode: the same ones unless the race randomises them."""
+        if self.drawn[car] and not self.settings.randomize:
+            return
+        for i, pose in enumerate(obstacle_poses(self.settings, self.lanes, self._rng)):
+            self._set(car, i, pose)
+        self.drawn[car] = True
+
+    def reset_behind(self, car: int, s: float) -> ObjectPose | None:
+        """Where DeepRacer puts a car back after it hit a box: `RESET_BEHIND` metres behind
+        the box nearest its centre-line distance `s` (within `CLOSEST_GAP`), in the other
+        lane, facing along it (simapp's crash reset); None when no box is that close."""
+        best, best_gap = None, CLOSEST_GAP
+        for i in range(self.count):
+            gap = (self.distance[car, i] - s + self.length / 2.0) % self.length - self.length / 2.0
+            if abs(gap) <= best_gap:
+                best, best_gap = i, abs(gap)
+        if best is None:
+            return None
+        inner = self.left[car, best] == self._inner_is_left
+        lane = Lane.OUTER if inner else Lane.INNER
+        behind = (self.distance[car, best] - RESET_BEHIND) % self.length
+        return self.lanes.pose(float(behind), lane)
 
 
 def _slab(origin: FloatArray, direction: FloatArray, half: float) -> tuple[FloatArray, FloatArray]:

@@ -30,9 +30,15 @@ CLEAR_BEFORE_LINE: Final = 1.0
 # A box as sensors see it (simapp's box_obstacle model, 0.25 m high) ...
 BOX_MODEL_LENGTH: Final = 0.4  # along the road
 BOX_MODEL_WIDTH: Final = 0.3
+BOX_HEIGHT: Final = 0.25
 # ... and as DeepRacer's crash check sees it: 0.1 m more each way.
 BOX_LENGTH: Final = 0.5
 BOX_WIDTH: Final = 0.4
+# A bot car: DeepRacer's car body, whose crash footprint is simapp's BOT_CAR_DIMENSION (the
+# racecar's too) and whose height is the car's shell over the ground (about 0.16 m).
+BOT_CAR_LENGTH: Final = 0.3235
+BOT_CAR_WIDTH: Final = 0.1961
+BOT_CAR_HEIGHT: Final = 0.16
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,13 @@ class RaceType(StrEnum):
     OBJECT_AVOIDANCE = "OBJECT_AVOIDANCE"
     HEAD_TO_BOT = "HEAD_TO_BOT"
 
+    @property
+    def words(self) -> str:
+        """As a racer says it: "time trial", "object avoidance", "head-to-bot"."""
+        return {"TIME_TRIAL": "time trial", "OBJECT_AVOIDANCE": "object avoidance"}.get(
+            self.value, "head-to-bot"
+        )
+
 
 class Lane(StrEnum):
     """The two lanes, each midway between the centre line and one border."""
@@ -66,9 +73,21 @@ class RaceSettings:
     bots: BotSettings = BotSettings()
 
 
-def race_keys(obstacles: ObstacleSettings) -> dict[str, object]:
-    """An object-avoidance race's settings as `training_params.yaml` keys, the way the
-    DeepRacer console and DRfC write them."""
+def race_keys(settings: ObstacleSettings | BotSettings) -> dict[str, object]:
+    """An object-avoidance or head-to-bot race's settings as `training_params.yaml` keys,
+    the way the DeepRacer console and DRfC write them."""
+    if isinstance(settings, BotSettings):
+        return {
+            "NUMBER_OF_BOT_CARS": settings.count,
+            "MIN_DISTANCE_BETWEEN_BOT_CARS": settings.min_distance,
+            "RANDOMIZE_BOT_CAR_LOCATIONS": settings.randomize,
+            "BOT_CAR_SPEED": settings.speed,
+            "IS_LANE_CHANGE": settings.lane_change,
+            "LOWER_LANE_CHANGE_TIME": settings.lower_lane_change_time,
+            "UPPER_LANE_CHANGE_TIME": settings.upper_lane_change_time,
+            "LANE_CHANGE_DISTANCE": settings.lane_change_distance,
+        }
+    obstacles = settings
     keys: dict[str, object] = {
         "NUMBER_OF_OBSTACLES": obstacles.count,
         "MIN_DISTANCE_BETWEEN_OBSTACLES": obstacles.min_distance_percent,

@@ -107,7 +107,11 @@ class ReferenceRaceDriver:
         seg, t, _, _ = line.project(x, y)
         s_here = line.arc_length(seg, t)
         speed = max(float(fleet.speed[0]), 0.3)
-        target_x, target_y = line.point_at(s_here + (0.25 + 0.12 * speed))
+        reach = 0.25 + 0.12 * speed
+        target_x, target_y = line.point_at(s_here + reach)
+        avoid = None if sim.objects is None else _way_round(sim, reach, speed)
+        if avoid is not None:
+            target_x, target_y, slow_to = avoid
         dx, dy = target_x - rear_x, target_y - rear_y
         local_x = dx * cos_yaw + dy * sin_yaw
         local_y = -dx * sin_yaw + dy * cos_yaw
@@ -123,8 +127,59 @@ class ReferenceRaceDriver:
             for ahead in _HORIZON
         )
         planned = min(planned, math.sqrt(car.grip * GRIP_USE / max(abs(wanted), 1e-6)))
+        if avoid is not None:
+            planned = min(planned, slow_to)
         limit = car.max_steering_deg
         return min(max(steering, -limit), limit), planned
+
+
+# How the reference driver gets round a race's boxes and bot cars: it looks this far ahead
+# along the centre line (metres, plus a second's driving), and passes an object with this
+# much between its centre and the object's (its half-width, the object's crash half-width
+# and a margin), keeping its own centre this far inside the borders.
+_LOOK_FOR_OBJECTS = 1.0
+_PASS_CLEARANCE = 0.42
+_BORDER_MARGIN = 0.13
+# Until it is this far past an object it keeps out of its way.
+_PAST_OBJECT = 0.45
+# Passing, it drives no faster than this (m/s): the swerve needs the grip.
+_PASSING_SPEED = 2.2
+
+
+def _way_round(
+    sim: TrackSimulation, reach: float, speed: float
+) -> tuple[float, float, float] | None:
+    """Where to aim (x, y) and how fast to go at most while getting round the nearest of
+    car 0's objects ahead, or None when none is in the way: a target `reach` metres on along
+    the centre line, beside it on the other side of the object, far enough to clear it. A
+    bot car it cannot pass in time it follows at the bot's speed."""
+    field = sim.objects
+    assert field is not None
+    length = field.length
+    s_car = float(sim.s[0])
+    horizon = _LOOK_FOR_OBJECTS + speed
+    nearest, nearest_gap = -1, math.inf
+    for i, d in enumerate(field.distance[0].tolist()):
+        gap = (d - s_car + length / 2.0) % length - length / 2.0
+        if -_PAST_OBJECT < gap < horizon and gap < nearest_gap:
+            nearest, nearest_gap = i, gap
+    if nearest < 0:
+        return None
+    side = 1.0 if field.left[0, nearest] else -1.0
+    offset = side * float(field.from_centre[0, nearest])
+    width = float(sim.track_width[0])
+    room = width / 2.0 - _BORDER_MARGIN
+    # The side with more road: away from the object's side of the centre line.
+    wanted = offset - side * _PASS_CLEARANCE
+    wanted = min(max(wanted, -room), room)
+    centre = sim.centre_projector
+    at = s_car + reach
+    cx, cy = centre.point_at(at)
+    tx, ty = centre.direction_at(at)
+    slow_to = _PASSING_SPEED
+    if field.reported_speed > 0.0 and abs(wanted - offset) < _PASS_CLEARANCE - 0.05:
+        slow_to = field.reported_speed  # no room to pass: follow it
+    return cx - ty * wanted, cy + tx * wanted, slow_to
 
 
 # The reference driver plans speed over these seconds ahead (np.linspace(0, 0.35, 6)).

@@ -21,8 +21,11 @@ What happens when DeepRacer's episode rules trigger (a race never ends on them):
   along the track, and held for `penalty_seconds` like an off-track: someone has to pick it
   up. It counts as a reset, not an off-track, so it does not invalidate the lap; the
   driving the wrong way already cost time.
-- Crashed (objects on the track, once those race types exist): put back like an
-  off-track and held for `collision_penalty_seconds`.
+- Crashed (object avoidance and head-to-bot, `sim.objects`): held for
+  `collision_penalty_seconds` and counted in the lap's crashes. After hitting a box the car
+  is put back 1 m behind it in the other lane, as DeepRacer does; after running into a bot
+  from behind, put back like an off-track. The bots drive on while the car is held (simapp's
+  do); they stop only when one of them runs into the car from behind.
 - Immobilized: switched off. A car that does not move simply loses time until the window
   closes.
 - A lap still in progress when the window closes does not count; its off-tracks still
@@ -90,6 +93,8 @@ class RaceTick:
     status: str  # sim-trace status of this row: in_progress, off_track, pause, lap_complete ...
     penalty_remaining: float  # seconds of penalty hold still to serve
     result: RaceResult | None = None
+    # The race's boxes or bot cars on this row: (x, y, heading in degrees) each.
+    objects: tuple[tuple[float, float, float], ...] = ()
 
     @property
     def finished(self) -> bool:
@@ -116,7 +121,9 @@ class _Race:
         self.racer = racer
         self.seed = seed
         self.started_at = now_iso()
-        self.sim = sim = TrackSimulation(track, 1, car=car, rules=RACE_EPISODE_RULES)
+        self.sim = sim = TrackSimulation(
+            track, 1, car=car, rules=RACE_EPISODE_RULES, race=rules.race_settings, seed=seed
+        )
         sim.reset_car(0, start_s=0.0)
         driver.reset(sim)
         self.length = track.length
@@ -128,6 +135,7 @@ class _Race:
         self.lap = 1
         self.lap_start = 0.0
         self.lap_offtracks = 0
+        self.lap_crashes = 0
         self.lap_penalty = 0.0
         self.laps: list[LapRecord] = []
         self.laps_view: tuple[LapRecord, ...] = ()
@@ -161,6 +169,8 @@ class _Race:
         served = min(STEP_SECONDS, self.hold_left, self.window - self.clock)
         self.held += served
         self.hold_left -= served
+        if self.sim.objects is not None:
+            self.sim.objects.pass_time(0, served)  # the bots drive on
         if self.hold_left < _EPS:
             self.hold_left = 0.0
         self.status = _PAUSE
@@ -197,6 +207,7 @@ class _Race:
                 self.status = _OFF_TRACK
             elif status == EpisodeStatus.CRASHED:
                 pause = self.rules.collision_penalty_seconds
+                self.lap_crashes += 1
                 self.status = _CRASHED
             elif status == EpisodeStatus.REVERSED:
                 pause = self.rules.penalty_seconds
@@ -238,6 +249,7 @@ class _Race:
             offtracks=self.lap_offtracks,
             valid=True,
             started_at=self.lap_start,
+            crashes=self.lap_crashes,
         )
         if not lap_counts(lap, self.rules):
             lap = replace(lap, valid=False)
@@ -246,13 +258,20 @@ class _Race:
         self.lap += 1
         self.lap_start = crossing
         self.lap_offtracks = 0
+        self.lap_crashes = 0
         self.lap_penalty = 0.0
 
     def _put_back(self, s_ahead: float, car_x: float, car_y: float, travelled: float) -> None:
         """Put the car back where DeepRacer would, given where its look-ahead point
         (`s_ahead`) and its centre were a step before it left; progress follows it."""
         sim = self.sim
-        x, y, yaw = reset_pose(self.track, s_ahead, car_x, car_y)
+        behind = None
+        if self.status == _CRASHED and sim.objects is not None:
+            behind = sim.objects.reset_behind(0, float(sim.s[0]))
+        if behind is not None:  # DeepRacer: behind the box it hit, in the other lane
+            x, y, yaw = behind.x, behind.y, behind.heading
+        else:
+            x, y, yaw = reset_pose(self.track, s_ahead, car_x, car_y)
         sim.put(0, x, y, yaw, 0.0)
         moved = (float(sim.s[0]) - s_ahead + self.length / 2.0) % self.length - self.length / 2.0
         sim.continue_episode(0, travelled + moved)
@@ -313,6 +332,18 @@ class _Race:
             status=TRACE_STATUSES[self.status],
             penalty_remaining=self.hold_left,
             result=result,
+            objects=self._objects(),
+        )
+
+    def _objects(self) -> tuple[tuple[float, float, float], ...]:
+        field = self.sim.objects
+        if field is None:
+            return ()
+        return tuple(
+            (x, y, math.degrees(h))
+            for x, y, h in zip(
+                field.x[0].tolist(), field.y[0].tolist(), field.heading[0].tolist(), strict=True
+            )
         )
 
     def result(self) -> RaceResult:

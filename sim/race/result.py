@@ -40,9 +40,12 @@ class LapRecord:
     offtracks: int
     valid: bool  # counts under the rules' off-track limit
     started_at: float  # race clock when the lap started, seconds
+    # Crashes into boxes or bot cars (object-avoidance and head-to-bot races): each cost
+    # the rules' collision penalty, inside `penalty_seconds`.
+    crashes: int = 0
 
     def to_json(self) -> dict[str, Any]:
-        return {
+        data: dict[str, Any] = {
             "number": self.number,
             "time_seconds": self.time_seconds,
             "raw_seconds": self.raw_seconds,
@@ -51,6 +54,9 @@ class LapRecord:
             "valid": self.valid,
             "started_at": self.started_at,
         }
+        if self.crashes:  # left out otherwise: a time trial's laps keep their stored form
+            data["crashes"] = self.crashes
+        return data
 
     @classmethod
     def from_json(cls, data: object, where: str) -> LapRecord:
@@ -64,6 +70,7 @@ class LapRecord:
             offtracks=_whole(data, "offtracks", where, 0),
             valid=_flag(data, "valid", where),
             started_at=_seconds(data, "started_at", where),
+            crashes=_whole(data, "crashes", where, 0) if "crashes" in data else 0,
         )
         if abs(lap.raw_seconds + lap.penalty_seconds - lap.time_seconds) > 1e-3:
             raise ResultError(f"{where}.time_seconds is not raw_seconds plus penalty_seconds.")

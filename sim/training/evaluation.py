@@ -43,7 +43,7 @@ from sim.deepracer_files import (
     trace_status,
     write_evaluation_metrics,
 )
-from sim.objects.settings import ObstacleSettings
+from sim.objects.settings import RaceSettings
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.resets import ResetRules
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation, let_other_threads_run
@@ -216,7 +216,7 @@ def run_trials(
     trace: TrialTrace | None = None,
     resets: ResetRules = TRAINING_RESETS,
     on_progress: Callable[[float], None] | None = None,
-    obstacles: ObstacleSettings | None = None,
+    race: RaceSettings | None = None,
 ) -> list[TrialResult]:
     """Drive `trials` one-lap trials from the start line with `driver`, recording every
     step of every trial into `trace` when one is given. `on_progress` hears how far the
@@ -229,7 +229,7 @@ def run_trials(
         trials,
         car=car,
         rules=EpisodeRules(max_steps=max_steps),
-        obstacles=obstacles,
+        race=race,
         seed=seed,
     )
     sim.reset_cars(range(trials), [0.0] * trials)
@@ -379,7 +379,7 @@ def evaluate_model(
         resets=resets,
         trace=trace,
         on_progress=on_progress,
-        obstacles=_race_obstacles(folder),
+        race=_race_settings(folder),
     )
     rows = evaluation_trials(results)
     stamp = _free_stamp(folder, datetime.now(UTC))
@@ -392,9 +392,8 @@ def evaluate_model(
     return EvaluationReport(track=chosen.name, trials=tuple(results), metrics_file=path)
 
 
-def _race_obstacles(folder: ModelFolder) -> ObstacleSettings | None:
-    """An object-avoidance model's boxes, evaluated as it trains (none for other types and
-    for a race type racer-tui does not drive yet)."""
+def _race_settings(folder: ModelFolder) -> RaceSettings | None:
+    """A model's boxes or bot cars, evaluated as it trains (None for a time trial)."""
     from sim.garage.folder import ModelError
     from sim.objects.reading import race_settings
     from sim.objects.settings import RaceType
@@ -403,7 +402,7 @@ def _race_obstacles(folder: ModelFolder) -> ObstacleSettings | None:
         settings = race_settings(folder.training_params())
     except (DeepRacerFileError, ModelError):
         return None  # training says what is wrong with it; an evaluation drives a time trial
-    return settings.obstacles if settings.race_type is RaceType.OBJECT_AVOIDANCE else None
+    return None if settings.race_type is RaceType.TIME_TRIAL else settings
 
 
 def _free_stamp(folder: ModelFolder, when: datetime) -> str:

@@ -336,7 +336,7 @@ class Trainer:
             self.evaluation_track,
             EVALUATION_TRIALS,
             max_seconds=EVALUATION_SECONDS,
-            obstacles=self.config.obstacles,  # an object-avoidance model meets its boxes
+            race=self.config.race,  # a model meets its boxes or bots
         )
         return EvaluationReport(track=self.config.track.name, trials=tuple(results))
 

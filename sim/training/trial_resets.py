@@ -52,8 +52,8 @@ class TrialResets:
         self.penalty[car] += self.rules.penalty(status)
         s = float(self._s[car])
         behind = None
-        if status == EpisodeStatus.CRASHED and sim.obstacles is not None:
-            behind = sim.obstacles.reset_behind(car, float(sim.s[car]))
+        if status == EpisodeStatus.CRASHED and sim.objects is not None:
+            behind = sim.objects.reset_behind(car, float(sim.s[car]))
         if behind is not None:  # DeepRacer: behind the box it hit, in the other lane
             x, y, yaw = behind.x, behind.y, behind.heading
         else:

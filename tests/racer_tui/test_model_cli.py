@@ -228,11 +228,22 @@ def test_a_model_for_object_avoidance_is_made_with_deepracers_keys(
     assert params.extra["OBSTACLE_TYPE"] == "box_obstacle"
     code, out, _ = run_cli(capsys, "model", "show", "dodger")
     assert "object avoidance, 4 boxes (random)" in out
-    assert open_model("dodger").env_config().obstacles is not None  # it trains among them
-    code, _, err = run_cli(capsys, "model", "new", "chaser", "--race-type", "head-to-bot")
-    assert code == 2 and "cannot drive bot cars yet" in err
+    assert open_model("dodger").env_config().race is not None  # it trains among them
+    code, _, _ = run_cli(
+        capsys, "model", "new", "chaser", "--sensor", "lidar", "--bots", "2", "--bot-lane-change"
+    )
+    assert code == 0
+    params = open_model("chaser").training_params()
+    assert params.race_type == "HEAD_TO_BOT" and params.extra["NUMBER_OF_BOT_CARS"] == 2
+    assert params.extra["IS_LANE_CHANGE"] is True and params.extra["BOT_CAR_SPEED"] == 1.0
+    code, out, _ = run_cli(capsys, "model", "show", "chaser")
+    assert "head-to-bot, 2 bots at 1.0 m/s" in out and "lanes)" in out
+    code, _, err = run_cli(capsys, "model", "new", "x", "--bots", "2", "--obstacles", "3")
+    assert code == 2 and "--obstacles and --randomize-obstacles need" in err
     code, _, err = run_cli(capsys, "model", "new", "x", "--obstacles", "11")
     assert code == 2 and "--obstacles must be from 1 to 10" in err
-    # Only the lidar sees boxes so far: a model that could not see them is not made.
-    code, _, err = run_cli(capsys, "model", "new", "blind", "--race-type", "object-avoidance")
-    assert code == 2 and "needs a lidar" in err
+    # The vector state does not show objects: a model that could not see them is not made.
+    code, _, err = run_cli(
+        capsys, "model", "new", "blind", "--race-type", "object-avoidance", "--sensor", "vector"
+    )
+    assert code == 2 and "needs a camera or a lidar" in err

@@ -8,13 +8,17 @@ import math
 import numpy as np
 import pytest
 
-from sim.objects.settings import Lane, ObstacleSettings
+from sim.objects.settings import Lane, ObstacleSettings, RaceSettings, RaceType
 from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.track_catalog import resolve_track
 
 TRACK = "reinvent_base"
 # Two boxes on the first straight of re:Invent 2018: one in the inner lane, one in the outer.
 FIXED = ObstacleSettings(positions=((0.15, Lane.INNER), (0.02, Lane.OUTER)))
+
+
+def boxes(settings: ObstacleSettings) -> RaceSettings:
+    return RaceSettings(RaceType.OBJECT_AVOIDANCE, obstacles=settings)
 
 
 def drive_straight(sim: TrackSimulation, steps: int, speed: float = 1.0) -> None:
@@ -26,8 +30,8 @@ def drive_straight(sim: TrackSimulation, steps: int, speed: float = 1.0) -> None
 
 def test_driving_into_a_box_is_a_crash_and_the_other_lane_is_clear() -> None:
     track = resolve_track(TRACK)
-    sim = TrackSimulation(track, 2, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),)))
-    box = sim.obstacles
+    sim = TrackSimulation(track, 2, race=boxes(ObstacleSettings(positions=((0.1, Lane.INNER),))))
+    box = sim.objects
     assert box is not None
     start = 0.1 * box.length - 0.8  # 0.8 m before the box, along the centre line
     sim.reset_cars([0, 1], [start, start])
@@ -43,7 +47,7 @@ def test_driving_into_a_box_is_a_crash_and_the_other_lane_is_clear() -> None:
 
 def test_object_params_are_simapps() -> None:
     track = resolve_track(TRACK)
-    sim = TrackSimulation(track, 1, obstacles=FIXED)
+    sim = TrackSimulation(track, 1, race=boxes(FIXED))
     sim.reset_car(0, 0.08 * track.length)  # between the two boxes, over 1 m from each
     params = sim.all_params()[0]
     inner, outer = 0.15 * track.length, 0.02 * track.length
@@ -64,34 +68,34 @@ def test_object_params_are_simapps() -> None:
 
 def test_each_car_has_its_own_boxes_and_randomised_ones_move_every_episode() -> None:
     settings = ObstacleSettings(count=3, randomize=True)
-    sim = TrackSimulation(resolve_track(TRACK), 2, obstacles=settings, seed=4)
+    sim = TrackSimulation(resolve_track(TRACK), 2, race=boxes(settings), seed=4)
     sim.reset_all()
-    field = sim.obstacles
+    field = sim.objects
     assert field is not None
     first = field.distance.copy()
     assert not np.allclose(first[0], first[1])  # two cars, two draws
     sim.reset_car(0)
     assert not np.allclose(field.distance[0], first[0])  # a new episode, new boxes
     assert np.allclose(field.distance[1], first[1])  # the other car's episode goes on
-    fixed = TrackSimulation(resolve_track(TRACK), 1, obstacles=FIXED)
-    before = fixed.obstacles.distance.copy() if fixed.obstacles is not None else None
+    fixed = TrackSimulation(resolve_track(TRACK), 1, race=boxes(FIXED))
+    before = fixed.objects.distance.copy() if fixed.objects is not None else None
     fixed.reset_car(0)
     fixed.reset_car(0)
-    assert fixed.obstacles is not None and np.array_equal(fixed.obstacles.distance, before)
+    assert fixed.objects is not None and np.array_equal(fixed.objects.distance, before)
 
 
 def test_a_time_trial_has_no_object_keys_filled() -> None:
     sim = TrackSimulation(resolve_track(TRACK), 1)
     sim.reset_car(0)
     params = sim.all_params()[0]
-    assert sim.obstacles is None and params["objects_location"] == []
+    assert sim.objects is None and params["objects_location"] == []
     assert params["closest_objects"] == [0, 0]
 
 
 def test_one_car_crashes_into_a_box_as_a_fleet_car_does() -> None:
     # One car takes the simulation's plain-float path (races): the same judgement.
     track = resolve_track(TRACK)
-    sim = TrackSimulation(track, 1, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),)))
+    sim = TrackSimulation(track, 1, race=boxes(ObstacleSettings(positions=((0.1, Lane.INNER),))))
     start = 0.1 * track.length - 0.8
     sim.reset_car(0, start)
     sim.place(0, start, offset=float(sim.track_width[0]) / 4)
@@ -105,7 +109,7 @@ def test_the_lidar_sees_a_cars_own_boxes() -> None:
 
     track = resolve_track(TRACK)
     settings = ObstacleSettings(positions=((0.1, Lane.INNER),))
-    with_box = TrackSimulation(track, 2, obstacles=settings)
+    with_box = TrackSimulation(track, 2, race=boxes(settings))
     without = TrackSimulation(track, 2)
     start = 0.1 * track.length - 0.8
     for sim in (with_box, without):
@@ -120,7 +124,7 @@ def test_the_lidar_sees_a_cars_own_boxes() -> None:
     assert float(clear[0, ahead]) > 1.0
     behind = 0
     assert float(seen[0, behind]) == pytest.approx(float(clear[0, behind]), abs=1e-5)
-    field = with_box.obstacles
+    field = with_box.objects
     assert field is not None
     # Only the car's own boxes: a car without boxes here sees past the spot.
     field.x[1], field.y[1] = 100.0, 100.0
@@ -130,8 +134,8 @@ def test_the_lidar_sees_a_cars_own_boxes() -> None:
 
 def test_a_car_starting_by_a_box_starts_in_the_other_lane() -> None:
     track = resolve_track(TRACK)
-    sim = TrackSimulation(track, 1, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),)))
-    box = sim.obstacles
+    sim = TrackSimulation(track, 1, race=boxes(ObstacleSettings(positions=((0.1, Lane.INNER),))))
+    box = sim.objects
     assert box is not None
     sim.reset_car(0, float(box.distance[0, 0]) - 0.3)  # 0.3 m before the box
     sim.apply(np.zeros(1), np.full(1, 1.0))
@@ -144,8 +148,8 @@ def test_trials_meet_the_boxes_and_a_crash_ends_a_training_trial() -> None:
     from sim.training.evaluation import run_trials
 
     track = resolve_track(TRACK)
-    boxes = ObstacleSettings(positions=((0.3, Lane.INNER), (0.3, Lane.OUTER)))  # a wall
-    results = run_trials(ReferenceRaceDriver(track), track, 2, obstacles=boxes)
+    wall = ObstacleSettings(positions=((0.3, Lane.INNER), (0.3, Lane.OUTER)))  # a wall
+    results = run_trials(ReferenceRaceDriver(track), track, 2, race=boxes(wall))
     assert all(result.status == EpisodeStatus.CRASHED for result in results)
     assert all(25.0 < result.progress < 35.0 for result in results)
     clear = run_trials(ReferenceRaceDriver(track), track, 2)
@@ -156,8 +160,8 @@ def test_an_evaluation_puts_a_car_that_hit_a_box_behind_it_in_the_other_lane() -
     from sim.training.trial_resets import EVALUATION_RESETS, TrialResets
 
     track = resolve_track(TRACK)
-    sim = TrackSimulation(track, 1, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),)))
-    box = sim.obstacles
+    sim = TrackSimulation(track, 1, race=boxes(ObstacleSettings(positions=((0.1, Lane.INNER),))))
+    box = sim.objects
     assert box is not None
     start = float(box.distance[0, 0]) - 0.8
     sim.reset_car(0, start)

@@ -24,11 +24,11 @@ def test_an_object_avoidance_model_trains_among_its_boxes() -> None:
     folder = new_model("dodger", sensors=["lidar"], reward="object_avoidance")
     with_race(folder, "OBJECT_AVOIDANCE", NUMBER_OF_OBSTACLES=3, RANDOMIZE_OBSTACLE_LOCATIONS=True)
     config = folder.env_config()
-    assert config.obstacles is not None and config.obstacles.boxes == 3
+    assert config.race is not None and config.race.obstacles.boxes == 3
     env = BatchedDeepRacer(config, 4)
     env.reset()
     sim = env.sim
-    assert sim.obstacles is not None
+    assert sim.objects is not None
     params = sim.all_params()
     assert all(len(p["objects_location"]) == 3 for p in params)
     # The object_avoidance template pays for keeping away from them: it reads real boxes.
@@ -38,14 +38,28 @@ def test_an_object_avoidance_model_trains_among_its_boxes() -> None:
 
 def test_a_time_trial_model_trains_without_boxes() -> None:
     folder = new_model("plain")
-    assert folder.env_config().obstacles is None
+    assert folder.env_config().race is None
 
 
-def test_a_head_to_bot_model_is_refused_with_what_to_do() -> None:
-    folder = new_model("chaser")
-    with_race(folder, "HEAD_TO_BOT", NUMBER_OF_BOT_CARS=2)
-    with pytest.raises(ModelError, match="cannot drive bot cars yet; set RACE_TYPE: TIME_TRIAL"):
-        folder.env_config()
+def test_a_head_to_bot_model_trains_among_its_bots_and_a_blind_one_is_refused() -> None:
+    folder = new_model("chaser", sensors=["lidar"])
+    with_race(folder, "HEAD_TO_BOT", NUMBER_OF_BOT_CARS=2, BOT_CAR_SPEED=0.5)
+    config = folder.env_config()
+    assert config.race is not None and config.race.bots.count == 2
+    env = BatchedDeepRacer(config, 2)
+    env.reset()
+    before = env.sim.all_params()[0]["objects_distance"]
+    for _ in range(15):
+        env.sim.apply(np.zeros(2), np.zeros(2))
+    params = env.sim.all_params()[0]
+    # A second later each bot is half a metre further on, and says its speed.
+    moved = [(b - a) % env.sim.track.length for a, b in zip(before, params["objects_distance"])]
+    assert moved == pytest.approx([0.5, 0.5], abs=0.01)
+    assert params["objects_speed"] == [0.5, 0.5]
+    blind = new_model("blind", sensors=["vector"])
+    with_race(blind, "HEAD_TO_BOT", NUMBER_OF_BOT_CARS=2)
+    with pytest.raises(ModelError, match="needs a camera or a lidar"):
+        blind.env_config()
     with_race(folder, "OBJECT_AVOIDANCE", NUMBER_OF_OBSTACLES=99)
     with pytest.raises(ModelError, match="NUMBER_OF_OBSTACLES must be a whole number from 0"):
         folder.env_config()

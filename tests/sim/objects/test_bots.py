@@ -1,0 +1,156 @@
+"""Head-to-bot: bot cars that drive their lanes at their speed and change lanes as simapp's
+do, crashes judged as DeepRacer judges them, and races among boxes and bots."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sim.objects.settings import BotSettings, RaceSettings, RaceType
+from sim.race.engine import race_ticks, run_race
+from sim.race.result import RaceResult
+from sim.race.rules import preset_rules
+from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.track_catalog import resolve_track
+
+TRACK = "reinvent_base"
+
+
+def bots(**settings: object) -> RaceSettings:
+    return RaceSettings(RaceType.HEAD_TO_BOT, bots=BotSettings(**settings))  # type: ignore[arg-type]
+
+
+def stand_still(sim: TrackSimulation, steps: int) -> None:
+    for _ in range(steps):
+        sim.apply(np.zeros(sim.n), np.zeros(sim.n))
+
+
+def test_bots_drive_their_lanes_at_their_speed() -> None:
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 1, race=bots(count=2, speed=0.6))
+    sim.reset_car(0, start_s=0.0)
+    field = sim.objects
+    assert field is not None
+    before = field.distance[0].copy()
+    stand_still(sim, 30)  # two seconds
+    moved = (field.distance[0] - before) % track.length
+    assert moved == pytest.approx([1.2, 1.2], abs=0.01)
+    # Not randomised, the lanes alternate: the first bot in the inner lane, the next outer;
+    # each a quarter of the road from the centre line.
+    quarter = [float(np.mean(track.widths)) / 4.0] * 2
+    assert field.from_centre[0] == pytest.approx(quarter, abs=0.03)
+    inner_is_left = track.direction == "counter-clockwise"
+    assert field.left[0].tolist() == [inner_is_left, not inner_is_left]
+    params = sim.all_params()[0]
+    assert params["objects_speed"] == [0.6, 0.6]
+    # Headings in radians along the lane: the bots drive the way the track runs.
+    for heading, distance in zip(
+        params["objects_heading"], params["objects_distance"], strict=True
+    ):
+        tangent = sim.centre_projector.direction_at(distance)
+        assert math.cos(heading - math.atan2(tangent[1], tangent[0])) > 0.95
+
+
+def test_a_bot_changes_lanes_after_three_to_five_seconds() -> None:
+    sim = TrackSimulation(resolve_track(TRACK), 1, race=bots(count=1, speed=1.0, lane_change=True))
+    sim.reset_car(0, start_s=0.0)
+    field = sim.objects
+    assert field is not None
+    first_side = bool(field.left[0, 0])
+    sides = []
+    for _ in range(15 * 7):
+        stand_still(sim, 1)
+        sides.append(bool(field.left[0, 0]))
+    switched = sides.index(not first_side)
+    # simapp: U(3, 5) s in its lane, then one second (1 m at 1 m/s) across.
+    assert 3.0 <= switched / 15 <= 6.0
+    assert all(side != first_side for side in sides[switched + 15 :])
+
+
+def test_running_into_a_bot_is_a_crash_but_being_run_into_is_not() -> None:
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 1, race=bots(count=1, speed=0.3))
+    sim.reset_car(0, start_s=0.0)
+    field = sim.objects
+    assert field is not None
+    # Put the car 0.5 m behind the bot, in its lane, and drive into it.
+    bot_x, bot_y, bot_yaw = float(field.x[0, 0]), float(field.y[0, 0]), float(field.heading[0, 0])
+    back = 0.5
+    sim.put(0, bot_x - back * math.cos(bot_yaw), bot_y - back * math.sin(bot_yaw), bot_yaw)
+    for _ in range(30):
+        sim.apply(np.zeros(1), np.full(1, 2.0))
+        if sim.done[0]:
+            break
+    assert sim.status[0] == EpisodeStatus.CRASHED
+
+    # A car standing in a bot's way is hit from behind: no crash of the car's; the bots
+    # stop for their penalty seconds instead.
+    sim = TrackSimulation(track, 1, race=bots(count=1, speed=1.0, penalty_seconds=2.0))
+    sim.reset_car(0, start_s=0.0)
+    field = sim.objects
+    assert field is not None
+    ahead = 0.6
+    sim.put(0, bot_x + ahead * math.cos(bot_yaw), bot_y + ahead * math.sin(bot_yaw), bot_yaw)
+    stand_still(sim, 15)
+    assert sim.status[0] == EpisodeStatus.IN_PROGRESS
+    assert field.paused[0] > 0.0
+    where = float(field.distance[0, 0])
+    stand_still(sim, 10)
+    assert float(field.distance[0, 0]) == pytest.approx(where)  # standing still, paused
+
+
+def test_the_lidar_sees_a_bot_ahead() -> None:
+    from sim.observations import Observer, SensorOptions
+
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 1, race=bots(count=1, speed=0.0))
+    sim.reset_car(0, start_s=0.0)
+    field = sim.objects
+    assert field is not None
+    x, y, yaw = float(field.x[0, 0]), float(field.y[0, 0]), float(field.heading[0, 0])
+    sim.put(0, x - 1.0 * math.cos(yaw), y - 1.0 * math.sin(yaw), yaw)
+    observer = Observer(sim, ("lidar",), SensorOptions(lidar_rays=64))
+    scan = observer.observe()[0]
+    ahead = int(np.argmin(np.abs(np.cos(observer._lidar.angles) - 1.0)))
+    # The ray straight ahead meets the bot's tail, half its length short of 1 m.
+    assert float(scan[ahead]) == pytest.approx(1.0 - 0.3235 / 2.0, abs=0.05)
+
+
+@pytest.mark.parametrize("preset", ["object-avoidance", "head-to-bot"])
+def test_the_reference_driver_finishes_laps_among_objects(preset: str) -> None:
+    track = resolve_track(TRACK)
+    rules = preset_rules(preset)
+    result = run_race(track, rules, seed=3)
+    assert result.valid_laps >= 10  # a baseline for the race type
+    assert result.rules.race_type is not RaceType.TIME_TRIAL
+    # The same race again is the same race: objects placed and driven from the seed.
+    again = run_race(track, rules, seed=3)
+    assert [lap.time_seconds for lap in again.laps] == [lap.time_seconds for lap in result.laps]
+    # The result keeps the race type and each lap its crashes through JSON.
+    back = RaceResult.from_json(result.to_json())
+    assert back.rules == rules
+    assert [lap.crashes for lap in back.laps] == [lap.crashes for lap in result.laps]
+
+
+def test_a_crash_in_a_race_costs_the_collision_penalty_and_is_counted_in_its_lap() -> None:
+    track = resolve_track(TRACK)
+    rules = preset_rules("head-to-bot")
+    result = run_race(track, rules, seed=0)
+    crashed = [lap for lap in result.laps if lap.crashes]
+    assert crashed, "the bots caught the reference driver at least once"
+    for lap in crashed:
+        assert lap.penalty_seconds >= lap.crashes * rules.collision_penalty_seconds - 1e-9
+
+
+def test_a_live_race_shows_where_the_objects_are() -> None:
+    track = resolve_track(TRACK)
+    ticks = race_ticks(track, preset_rules("head-to-bot"))
+    first = next(ticks)
+    for _ in range(30):
+        later = next(ticks)
+    assert len(first.objects) == 3
+    assert later.objects != first.objects  # the bots drove on
+    boxes = next(race_ticks(track, preset_rules("object-avoidance")))
+    assert len(boxes.objects) == 3
