@@ -53,7 +53,10 @@ def test_a_head_to_bot_model_trains_among_its_bots_and_a_blind_one_is_refused() 
         env.sim.apply(np.zeros(2), np.zeros(2))
     params = env.sim.all_params()[0]
     # A second later each bot is half a metre further on, and says its speed.
-    moved = [(b - a) % env.sim.track.length for a, b in zip(before, params["objects_distance"])]
+    moved = [
+        (b - a) % env.sim.track.length
+        for a, b in zip(before, params["objects_distance"], strict=True)
+    ]
     assert moved == pytest.approx([0.5, 0.5], abs=0.01)
     assert params["objects_speed"] == [0.5, 0.5]
     blind = new_model("blind", sensors=["vector"])
