@@ -189,7 +189,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
 
     def _load_replay(self, replay: RaceResult) -> None:
         try:
-            ticks = replay_ticks(replay)
+            ticks = replay_ticks(replay, self.setup.track)
         except (ValueError, IndexError) as error:  # a trace from elsewhere that does not add up
             self.failure = f"This race cannot be replayed: its trace is damaged ({error})."
             return
@@ -256,6 +256,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             trail=trail,
             ghost=ghost_xy,
             offtracks=np.array(self._offtrack_xy).reshape(-1, 2),
+            objects=tick.objects,
         )
         self.frames += 1
         self._update_panel()

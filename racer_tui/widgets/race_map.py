@@ -1,5 +1,5 @@
 """The race view's top-down map: the track in braille, with the car, its trail, a ghost,
-the start line and off-track marks drawn over it.
+the start line, off-track marks and the race's boxes or bot cars drawn over it.
 
 Built for 20+ frames per second at a small CPU cost: the track is rasterised once per
 size, every row is cached as a Strip, and an update repaints only the rows whose cells
@@ -29,6 +29,7 @@ _ARROWS = "→↗↑↖←↙↓↘"
 _GHOST = "◆"
 _OFFTRACK = "✕"
 _START = "┃"
+_OBJECT = "■"  # a box or a bot car
 
 
 @dataclass(frozen=True)
@@ -100,6 +101,7 @@ class RaceMap(Widget):
     RaceMap > .race-map--car { color: $warning; text-style: bold; }
     RaceMap > .race-map--ghost { color: $secondary; }
     RaceMap > .race-map--offtrack { color: $error; text-style: bold; }
+    RaceMap > .race-map--object { color: $primary; text-style: bold; }
     """
     COMPONENT_CLASSES: ClassVar[set[str]] = {
         "race-map--border",
@@ -108,6 +110,7 @@ class RaceMap(Widget):
         "race-map--car",
         "race-map--ghost",
         "race-map--offtrack",
+        "race-map--object",
     }
 
     def __init__(
@@ -123,6 +126,7 @@ class RaceMap(Widget):
         self._car: CarMarker | None = None
         self._ghost: tuple[float, float] | None = None
         self._offtracks: FloatArray = np.zeros((0, 2))
+        self._objects: tuple[tuple[float, float, float], ...] = ()
         self._marks: dict[tuple[int, int], tuple[str, str]] = {}  # (col,row) -> glyph, class
         self._rows: list[Strip | None] = []
         self.frames_drawn = 0  # rows of the car repainted: one per displayed frame
@@ -147,10 +151,13 @@ class RaceMap(Widget):
         trail: FloatArray | None = None,
         ghost: tuple[float, float] | None = None,
         offtracks: FloatArray | None = None,
+        objects: tuple[tuple[float, float, float], ...] = (),
     ) -> None:
-        """Move the car and overlays; repaints only the rows that change."""
+        """Move the car and overlays (`objects`: the race's boxes or bot cars, x, y and
+        heading each); repaints only the rows that change."""
         self._car = car
         self._ghost = ghost
+        self._objects = objects
         if trail is not None:
             self._trail_world = np.asarray(trail, dtype=np.float64).reshape(-1, 2)
         if offtracks is not None:
@@ -201,6 +208,8 @@ class RaceMap(Widget):
             return marks
         for x, y in self._offtracks:
             marks[projection.cell(float(x), float(y))] = (_OFFTRACK, "race-map--offtrack")
+        for x, y, _ in self._objects:
+            marks[projection.cell(x, y)] = (_OBJECT, "race-map--object")
         if self._ghost is not None:
             marks[projection.cell(*self._ghost)] = (_GHOST, "race-map--ghost")
         car = self._car

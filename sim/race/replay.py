@@ -2,19 +2,29 @@
 
 A recorded race (a RaceResult with its RaceTrace, from the league or a sim-trace CSV)
 plays back through the same RaceTick stream a live race produces, so one view draws both.
+A race among boxes or bot cars replays them too: they are placed again from the rules and
+the race's seed, and the bots driven again along the trace's clock, as the race drove them
+(on while the car drove or was held, stopped when one ran into the car from behind).
 A ghost is one lap of a trace, positioned by time since its lap started, drawn beside
 the car for comparison.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
+from sim.car import DEEPRACER_CAR, STEP_SECONDS
+from sim.objects.settings import RaceType
+from sim.objects.world import object_field
 from sim.race.engine import RaceTick
 from sim.race.result import LapRecord, RaceResult
+from sim.race.trace import PAUSE_STATUS
+from sim.simulation import LOOK_AHEAD
+from sim.track import Track
 
 _EPS = 1e-6
 
@@ -51,8 +61,59 @@ def ghost_lap(result: RaceResult, lap: LapRecord | None = None) -> GhostLap | No
     return GhostLap(lap.time_seconds, times, xy)
 
 
-def replay_ticks(result: RaceResult) -> list[RaceTick]:
-    """The race's ticks rebuilt from its trace; empty when the result carries no trace."""
+def replay_ticks(result: RaceResult, track: Track | None = None) -> list[RaceTick]:
+    """The race's ticks rebuilt from its trace; empty when the result carries no trace.
+    With the race's `track`, a race among boxes or bots shows them too."""
+    ticks = _car_ticks(result)
+    if track is None or result.rules.race_type is RaceType.TIME_TRIAL or not ticks:
+        return ticks
+    return [
+        replace(tick, objects=objects)
+        for tick, objects in zip(ticks, _replayed_objects(result, track, ticks), strict=True)
+    ]
+
+
+def _replayed_objects(
+    result: RaceResult, track: Track, ticks: list[RaceTick]
+) -> list[tuple[tuple[float, float, float], ...]]:
+    """Where the race's objects were on each tick (see the module docstring)."""
+    field = object_field(track, result.rules.race_settings, 1, seed=result.seed)
+    if field is None:
+        return [()] * len(ticks)
+    centre = track.centerline
+    shown = []
+    previous = 0.0
+    for tick in ticks:
+        if tick.step > 0:
+            if tick.status == PAUSE_STATUS:
+                field.pass_time(0, tick.clock - previous)
+            else:
+                field.advance(STEP_SECONDS)
+                yaw = math.radians(tick.heading)
+                ahead = np.array(
+                    [[tick.x + LOOK_AHEAD * math.cos(yaw), tick.y + LOOK_AHEAD * math.sin(yaw)]]
+                )
+                seg, t, _ = centre.project(ahead)
+                field.crashed(
+                    np.array([tick.x]),
+                    np.array([tick.y]),
+                    np.array([yaw]),
+                    centre.arc_length(seg, t),
+                    DEEPRACER_CAR,
+                )
+        previous = tick.clock
+        shown.append(
+            tuple(
+                (x, y, math.degrees(h))
+                for x, y, h in zip(
+                    field.x[0].tolist(), field.y[0].tolist(), field.heading[0].tolist(), strict=True
+                )
+            )
+        )
+    return shown
+
+
+def _car_ticks(result: RaceResult) -> list[RaceTick]:
     trace = result.trace
     if trace is None or len(trace) == 0:
         return []

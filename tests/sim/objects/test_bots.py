@@ -4,6 +4,7 @@ do, crashes judged as DeepRacer judges them, and races among boxes and bots."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -154,3 +155,23 @@ def test_a_live_race_shows_where_the_objects_are() -> None:
     assert later.objects != first.objects  # the bots drove on
     boxes = next(race_ticks(track, preset_rules("object-avoidance")))
     assert len(boxes.objects) == 3
+
+
+@pytest.mark.parametrize("preset", ["object-avoidance", "head-to-bot"])
+def test_a_replay_shows_the_objects_where_the_race_had_them(preset: str) -> None:
+    from sim.race.replay import replay_ticks
+
+    track = resolve_track(TRACK)
+    rules = replace(preset_rules(preset), window_seconds=40.0)
+    live = list(race_ticks(track, rules, seed=2))
+    result = live[-1].result
+    assert result is not None
+    replayed = replay_ticks(result, track)
+    assert len(replayed) == len(live)
+    worst = max(
+        math.hypot(a[0] - b[0], a[1] - b[1])
+        for tick, again in zip(live, replayed, strict=True)
+        for a, b in zip(tick.objects, again.objects, strict=True)
+    )
+    assert worst < 0.01
+    assert replay_ticks(result)[5].objects == ()  # without the track: the car alone
