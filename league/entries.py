@@ -6,9 +6,11 @@ applied. Scores come from sim.race.rules.score_laps, the same function races use
 stored rounded to the millisecond exactly as league.ranking.ranking_key rounds them, so an
 SQL `ORDER BY` on the cached columns agrees with `rank()` within one racer.
 
-The `board` table keeps each racer's best entry per track and physics under every method,
-clustered by (method, track), so the leaderboard of a track is one range scan. Laps of
-different physics (sim.race.physics) are never ranked together: each has its own board.
+The `board` table keeps each racer's best entry per track, race type and physics under
+every method, clustered by (method, track), so the leaderboard of a track is one range
+scan. Laps of different physics (sim.race.physics) or race types (league.race_types: a
+time trial, object avoidance, head-to-bot) are never ranked together: each has its own
+board.
 
 Both are derived data: `refresh_entries` recomputes the rows a change touched (call it in
 the same transaction as the change, e.g. after sync inserts pulled rows) and
@@ -25,6 +27,7 @@ from itertools import groupby
 from typing import Any
 
 from league.assembler import CONSOLE, DRFC
+from league.race_types import race_type_of
 from league.store import League
 from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
 from sim.race.rules import (
@@ -73,6 +76,7 @@ ENTRY_COLUMNS = (
     "racer",
     "track_hash",
     "physics",
+    "race_type",
     "model_name",
     "night_id",
     "recorded_at",
@@ -117,25 +121,29 @@ def best_entries_sql(score: str, offtracks: str, where: str, group_by: str) -> s
     return f"""
         SELECT entry_id, kind, racer, model_name, track_hash, night_id, recorded_at,
                laps_driven, valid_laps, offtracks, best_lap, average_lap,
-               {score} AS score, {offtracks} AS scoring_offtracks, physics,
+               {score} AS score, {offtracks} AS scoring_offtracks, physics, race_type,
                min({entry_key_sql(score, offtracks)}) AS pick
         FROM entries {where}
         GROUP BY {group_by}
     """
 
 
+# What makes a board, and each racer's one row on it: a track, a race type, a physics.
+BOARD_GROUPS = "track_hash, race_type, physics, racer"
+
+
 def _board_insert(method: RankingMethod, where: str) -> str:
     score, offtracks = score_column(method)
     return f"""
         INSERT INTO board (
-            method, track_hash, physics, unscored, score, scoring_offtracks, valid_laps,
-            recorded_at, racer, entry_id, kind, model_name, night_id, best_lap, average_lap,
-            offtracks, laps_driven
+            method, track_hash, race_type, physics, unscored, score, scoring_offtracks,
+            valid_laps, recorded_at, racer, entry_id, kind, model_name, night_id, best_lap,
+            average_lap, offtracks, laps_driven
         )
-        SELECT '{method.value}', track_hash, physics, score IS NULL, coalesce(score, 0),
-               scoring_offtracks, valid_laps, recorded_at, racer, entry_id, kind, model_name,
-               night_id, best_lap, average_lap, offtracks, laps_driven
-        FROM ({best_entries_sql(score, offtracks, where, "track_hash, physics, racer")})
+        SELECT '{method.value}', track_hash, race_type, physics, score IS NULL,
+               coalesce(score, 0), scoring_offtracks, valid_laps, recorded_at, racer, entry_id,
+               kind, model_name, night_id, best_lap, average_lap, offtracks, laps_driven
+        FROM ({best_entries_sql(score, offtracks, where, BOARD_GROUPS)})
     """
 
 
@@ -182,6 +190,7 @@ def entry_values(source: EntrySource, disqualified: Iterable[int] = ()) -> tuple
         source.racer,
         source.track_hash,
         source.physics,
+        race_type_of(source.rules),
         source.model_name,
         source.night_id,
         source.recorded_at,

@@ -2,10 +2,12 @@
 
 Entries are submissions (evaluations) and races. The cached `entries` table (see
 league.entries) holds every entry's score under every ranking method with corrections
-applied, and `board` each racer's best entry per track and method: a track's leaderboard
-is one range of the `board_in_order` index, already in the league's one total order but
-for the last tie-breaks, which `in_ranking_order` settles with `rank()`. Filtered boards (a
-night, a season) pick each racer's best straight from `entries` and rank them all.
+applied, and `board` each racer's best entry per board and method. A board is a track
+under one race type (league.race_types) and one physics (sim.race.physics): a track's
+leaderboard of one race type is one range of the `board_in_order` index, already in the
+league's one total order but for the last tie-breaks, which `in_ranking_order` settles with
+`rank()`. Filtered boards (a night, a season) pick each racer's best straight from
+`entries` and rank them all.
 """
 
 from __future__ import annotations
@@ -15,13 +17,13 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
-from league.entries import best_entries_sql, score_column
+from league.entries import BOARD_GROUPS, best_entries_sql, score_column
 from league.errors import LeagueError
+from league.race_types import RACE_TYPES, board_name
 from league.racers import display_names_overrides
 from league.ranking import rank
 from league.store import League
 from league.tracks import track_names
-from sim.race.physics import board_suffix
 from sim.race.rules import RankingMethod
 
 BY_CHOICES: dict[str, RankingMethod] = {
@@ -56,6 +58,7 @@ class LeaderboardRow:
     offtracks: int
     laps_driven: int
     physics: str  # which simulator timed the laps (sim.race.physics): each its own board
+    race_type: str  # league.race_types: "time_trial", "object_avoidance"...: each its own board
     rank: int = 0
 
 
@@ -64,6 +67,7 @@ class Filters:
     track_hash: str | None = None
     racer: str | None = None  # racer name
     night_ids: Sequence[str] | None = None  # None: every entry; a list: races of these nights
+    race_type: str | None = None  # None: every race type's boards; else that one's
 
 
 def _where(filters: Filters) -> tuple[str, list[Any]]:
@@ -78,6 +82,9 @@ def _where(filters: Filters) -> tuple[str, list[Any]]:
     if filters.night_ids is not None:
         clauses.append(f"night_id IN ({', '.join('?' for _ in filters.night_ids)})")
         params.extend(filters.night_ids)
+    if filters.race_type is not None:
+        clauses.append("race_type = ?")
+        params.append(filters.race_type)
     return (f"WHERE {' AND '.join(clauses)}" if clauses else ""), params
 
 
@@ -95,7 +102,7 @@ NATIVE_OFFTRACKS = (
 _ROW_COLUMNS = """
     b.entry_id, b.kind, b.racer, b.racer, b.model_name, b.track_hash, b.track_hash,
     b.night_id, {score}, b.scoring_offtracks, b.valid_laps, b.recorded_at, b.best_lap,
-    b.average_lap, b.offtracks, b.laps_driven, b.physics
+    b.average_lap, b.offtracks, b.laps_driven, b.physics, b.race_type
 """
 
 
@@ -104,9 +111,10 @@ def leaderboard(
 ) -> list[LeaderboardRow]:
     """Ranked rows, board by board, `rank` numbered from 1 per board.
 
-    A board is one track under one physics (sim.race.physics): laps timed by another
-    version of the car, or by DeepRacer's own simulator, are ranked on a board of their
-    own, whose track name says which. Boards in the order of their names.
+    A board is one track under one race type and one physics: laps among boxes or bot
+    cars, timed by another version of the car, or by DeepRacer's own simulator, are ranked
+    on a board of their own, whose track name says which (league.race_types.board_name).
+    Boards in the order of their names.
     `method=None` scores each entry by its own rules' method (a night's races).
     """
     ranked: Callable[[Sequence[LeaderboardRow]], list[LeaderboardRow]]
@@ -114,7 +122,7 @@ def leaderboard(
         entries = _board_rows(league, filters, method)
         ranked = in_ranking_order
     else:
-        entries = grouped_rows(league, filters, method, group_by="track_hash, physics, racer")
+        entries = grouped_rows(league, filters, method, group_by=BOARD_GROUPS)
         ranked = rank
     boards = {board_of(entry): entry.track_name for entry in entries}
     order = sorted(boards, key=lambda key: (boards[key].casefold(), key))
@@ -153,6 +161,14 @@ def board_sql(filters: Filters, method: RankingMethod) -> tuple[str, list[Any]]:
     if filters.track_hash is not None:
         clauses.append("b.track_hash = ?")
         params.append(filters.track_hash)
+    if filters.race_type is not None:
+        if filters.track_hash is None:
+            # Every track's board of one race type: the race type is a column of the index
+            # after the track, so the tracks are named (every entry's track is in `tracks`,
+            # a foreign key) to read one range per track, still in order, with no sort.
+            clauses.append("b.track_hash IN (SELECT track_hash FROM tracks)")
+        clauses.append("b.race_type = ?")
+        params.append(filters.race_type)
     if filters.racer is not None:
         clauses.append("b.racer = ?")
         params.append(filters.racer)
@@ -160,7 +176,7 @@ def board_sql(filters: Filters, method: RankingMethod) -> tuple[str, list[Any]]:
     sql = f"""
         SELECT {columns} FROM board b
         WHERE {" AND ".join(clauses)}
-        ORDER BY b.track_hash, b.physics, b.unscored, b.score, b.scoring_offtracks,
+        ORDER BY b.track_hash, b.race_type, b.physics, b.unscored, b.score, b.scoring_offtracks,
                  b.valid_laps DESC, b.recorded_at, b.racer, b.entry_id
     """
     return sql, params
@@ -183,23 +199,34 @@ def _rows(league: League, sql: str, params: Sequence[Any]) -> list[LeaderboardRo
     rows = [LeaderboardRow(*values) for values in cursor.execute(sql, params)]
     shown = display_names_overrides(league)
     tracks = track_names(league)
-    named: dict[tuple[str, str], str] = {}  # a board's name, worked out once per board
+    named: dict[tuple[str, str, str], str] = {}  # a board's name, worked out once per board
     for row in rows:
         if shown:
             row.display_name = shown.get(row.racer, row.racer)
-        board = (row.track_hash, row.physics)
+        board = (row.track_hash, row.race_type, row.physics)
         name = named.get(board)
         if name is None:
-            name = named[board] = (tracks.get(row.track_hash) or row.track_hash[:12]) + (
-                board_suffix(row.physics)
-            )
+            track = tracks.get(row.track_hash) or row.track_hash[:12]
+            name = named[board] = board_name(track, row.physics, row.race_type)
         row.track_name = name
     return rows
 
 
-def board_of(row: LeaderboardRow) -> tuple[str, str]:
-    """The board a row is ranked on: its track under its physics."""
-    return row.track_hash, row.physics
+def board_of(row: LeaderboardRow) -> tuple[str, str, str]:
+    """The board a row is ranked on: its track under its race type and its physics."""
+    return row.track_hash, row.race_type, row.physics
+
+
+def race_types_on(league: League, track_hash: str) -> list[str]:
+    """The race types with entries on a track's boards, in the league's order
+    (league.race_types.RACE_TYPES): one probe of the `board_in_order` index per race type."""
+    sql = "SELECT 1 FROM board WHERE method = ? AND track_hash = ? AND race_type = ? LIMIT 1"
+    method = RankingMethod.BEST_LAP.value
+    return [
+        kind
+        for kind in RACE_TYPES
+        if league.conn.execute(sql, (method, track_hash, kind)).fetchone() is not None
+    ]
 
 
 def several_boards(rows: Sequence[LeaderboardRow]) -> bool:

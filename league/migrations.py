@@ -456,6 +456,69 @@ CREATE INDEX board_in_order ON board (
 )
 """
 
+# Version 10: DeepRacer's race type (time trial, object avoidance, head-to-bot) of each
+# entry, from its race's rules (a submission is a time trial): laps among boxes or bots
+# are ranked on a board of their own, as laps of other physics are. The shared rows do not
+# change (a race's rules already say its type; every row recorded before is a time trial).
+# The cache tables are made again with the column, the board keyed and read in order by
+# it after the track, and rebuilt from the shared rows.
+RACE_TYPES = """
+DROP TABLE board;
+DROP TABLE entries;
+CREATE TABLE entries (
+    entry_id TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    racer TEXT NOT NULL,
+    track_hash TEXT NOT NULL,
+    physics TEXT NOT NULL,
+    race_type TEXT NOT NULL,
+    model_name TEXT NOT NULL,
+    night_id TEXT,
+    recorded_at TEXT NOT NULL,
+    laps_driven INTEGER NOT NULL,
+    valid_laps INTEGER NOT NULL,
+    offtracks INTEGER NOT NULL,
+    best_lap REAL,
+    average_lap REAL,
+    native_method TEXT NOT NULL,
+    score_best_lap REAL,
+    offtracks_best_lap INTEGER NOT NULL,
+    score_best_average REAL,
+    offtracks_best_average INTEGER NOT NULL,
+    score_total_time REAL,
+    offtracks_total_time INTEGER NOT NULL,
+    PRIMARY KEY (track_hash, racer, entry_id)
+) WITHOUT ROWID;
+CREATE UNIQUE INDEX entries_id ON entries(entry_id);
+CREATE INDEX entries_night ON entries(night_id) WHERE night_id IS NOT NULL;
+CREATE TABLE board (
+    method TEXT NOT NULL,
+    track_hash TEXT NOT NULL,
+    race_type TEXT NOT NULL,
+    physics TEXT NOT NULL,
+    unscored INTEGER NOT NULL,
+    score REAL NOT NULL,
+    scoring_offtracks INTEGER NOT NULL,
+    valid_laps INTEGER NOT NULL,
+    recorded_at TEXT NOT NULL,
+    racer TEXT NOT NULL,
+    entry_id TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    model_name TEXT NOT NULL,
+    night_id TEXT,
+    best_lap REAL,
+    average_lap REAL,
+    offtracks INTEGER NOT NULL,
+    laps_driven INTEGER NOT NULL,
+    PRIMARY KEY (method, track_hash, race_type, physics, racer)
+) WITHOUT ROWID;
+CREATE INDEX board_in_order ON board (
+    method, track_hash, race_type, physics, unscored, score, scoring_offtracks,
+    valid_laps DESC, recorded_at, racer, entry_id, kind, model_name, night_id, best_lap,
+    average_lap, offtracks, laps_driven
+)
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -466,6 +529,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("night changes", _script(NIGHT_CHANGES)),
     Migration("night dates", _script(NIGHT_DATE)),
     Migration("leaderboard in ranking order", _script(BOARD_ORDER)),
+    Migration("race types of results", _script(RACE_TYPES), True),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

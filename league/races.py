@@ -15,6 +15,7 @@ import numpy as np
 
 from league.entries import refresh_entries
 from league.errors import LeagueError
+from league.race_types import TIME_TRIAL
 from league.racers import check_name, display_names_overrides, ensure_racer
 from league.store import League, record_body
 from league.tracks import ensure_track, track_names
@@ -197,15 +198,18 @@ def race_result(league: League, race_id: str) -> RaceResult:
     return result.with_trace(race_trace(league, race_id))
 
 
-def best_lap_race(league: League, track_hash: str, physics: str) -> str | None:
+def best_lap_race(
+    league: League, track_hash: str, physics: str, race_type: str = TIME_TRIAL
+) -> str | None:
     """The recorded race with the league's best lap on a track, among races of `physics`
-    that kept their trace (a ghost needs one); None when there is none."""
+    and `race_type` (a lap among boxes is no ghost for a time trial) that kept their trace
+    (a ghost needs one); None when there is none."""
     row = league.query_one(
         "SELECT e.entry_id FROM entries e WHERE e.track_hash = ? AND e.physics = ? "
-        "AND e.best_lap IS NOT NULL "
+        "AND e.race_type = ? AND e.best_lap IS NOT NULL "
         "AND EXISTS (SELECT 1 FROM race_traces t WHERE t.race_id = e.entry_id) "
         "ORDER BY e.best_lap, e.entry_id LIMIT 1",
-        (track_hash, physics),
+        (track_hash, physics, race_type),
     )
     return None if row is None else str(row[0])
 

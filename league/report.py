@@ -75,6 +75,7 @@ def leaderboard_json(rows: Sequence[LeaderboardRow], method: RankingMethod) -> l
             "track": row.track_name,
             "track_hash": row.track_hash,
             "physics": row.physics,
+            "race_type": row.race_type,
             "ranking": method.value,
             "score": row.score,
             "best_lap": row.best_lap,

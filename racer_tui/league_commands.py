@@ -19,8 +19,11 @@ from rich.table import Table
 from rich.text import Text
 
 from league.errors import LeagueError
+from league.race_types import OPTION_CHOICES, option_name
 from racer_tui import key_commands
 from racer_tui.output import print_json, print_table
+from racer_tui.rules_option import HELP as RULES_HELP
+from racer_tui.rules_option import rules_option
 from sim.deepracer_files import DeepRacerFileError
 from sim.plural import counted
 from sim.race.rules import (
@@ -28,7 +31,6 @@ from sim.race.rules import (
     RULE_PRESETS,
     RankingMethod,
     RulesError,
-    load_rules,
     preset_rules,
     rules_from_mapping,
 )
@@ -95,6 +97,13 @@ def _register_leaderboard(commands: Parsers, db: argparse.ArgumentParser) -> Non
         "leaderboard", parents=[db], help="each racer's best entry per track, ranked"
     )
     board.add_argument("--track", help="only this track")
+    board.add_argument(
+        "--race-type",
+        type=lambda text: option_name(text.strip().lower()),
+        choices=OPTION_CHOICES,
+        help="which of a track's boards: time-trial (the default with --track), "
+        "object-avoidance or head-to-bot; without --track, every race type's boards",
+    )
     board.add_argument("--racer", help="only this racer")
     board.add_argument("--night", help="only races of this league night")
     board.add_argument("--season", help="only races of this season's nights")
@@ -126,7 +135,9 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
     )
     rules = new.add_mutually_exclusive_group()
     rules.add_argument(
-        "--rules", type=Path, metavar="FILE", help="rules YAML (default: the league rules)"
+        "--rules",
+        metavar="FILE|PRESET",
+        help=f"{RULES_HELP} (default: the league rules)",
     )
     rules.add_argument(
         "--preset",
@@ -335,6 +346,7 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
         sort_rows,
     )
     from league.nights import get_night, list_nights
+    from league.race_types import TIME_TRIAL, parse_race_type
     from league.racers import get_racer
     from league.report import (
         leaderboard_columns,
@@ -356,16 +368,27 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
             if night_ids is None
             else [night for night in night_ids if night in season_nights]
         )
+    track = track_for(league, args.track) if args.track else None
+    # A track's board is its time trials' unless --race-type picks another; a night's races
+    # are of the night's race type, and a listing of every track shows every board.
+    race_type = (
+        parse_race_type(args.race_type)
+        if args.race_type
+        else (TIME_TRIAL if track is not None and night_ids is None else None)
+    )
     filters = Filters(
-        track_hash=track_for(league, args.track).track_hash if args.track else None,
+        track_hash=track.track_hash if track is not None else None,
         racer=get_racer(league, args.racer).name if args.racer else None,
         night_ids=night_ids,
+        race_type=race_type,
     )
     # A night's races rank by the night's own rules unless --by says otherwise.
     method = (
         method_for(args.by) if args.by else (None if night_ids is not None else method_for("best"))
     )
     rows = leaderboard(league, filters, method)
+    if not rows and track is not None and race_type is not None:
+        _other_boards(league, track.track_hash, track.name, race_type, args.format == "table")
     rows = sort_rows(rows, args.sort, reverse=args.reverse)
     if args.limit is not None:
         if args.limit < 1:
@@ -384,8 +407,8 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
     elif args.format == "markdown":
         sys.stdout.write(to_markdown(columns, rows))
     else:
-        # One table per board: a track under one physics (sim.race.physics), ranked alone.
-        boards: dict[tuple[str, str], list[LeaderboardRow]] = {}
+        # One table per board: a track under one race type and one physics, ranked alone.
+        boards: dict[tuple[str, str, str], list[LeaderboardRow]] = {}
         for row in rows:
             boards.setdefault(board_of(row), []).append(row)
         single = len(boards) == 1 or args.sort != "rank"
@@ -393,6 +416,25 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
         for group in groups:
             _print_board(group, columns if single else _without_track(columns), shown_method)
     return 0
+
+
+def _other_boards(
+    league: League, track_hash: str, track_name: str, race_type: str, on_stdout: bool
+) -> None:
+    """Say which race types a track has laps of, when the board asked for has none (on
+    stderr beside JSON, CSV or Markdown, which stay the data alone)."""
+    from league.leaderboard import race_types_on
+    from league.race_types import words
+
+    others = [kind for kind in race_types_on(league, track_hash) if kind != race_type]
+    if not others:
+        return
+    options = " or ".join(f"--race-type {option_name(kind)}" for kind in others)
+    print(
+        f"No {words(race_type).replace(' ', '-')} laps on {track_name} yet; its other "
+        f"board{'s' if len(others) > 1 else ''}: {options}.",
+        file=sys.stdout if on_stdout else sys.stderr,
+    )
 
 
 def _print_board(
@@ -439,7 +481,7 @@ def _night(league: League, args: argparse.Namespace) -> int:
     if action == "new":
         from sim.track_catalog import resolve_track
 
-        rules = load_rules(args.rules) if args.rules else DEFAULT_RULES
+        rules = rules_option(args.rules) if args.rules else DEFAULT_RULES
         if args.preset is not None:
             rules = preset_rules(args.preset)
         if args.laps is not None:
@@ -522,6 +564,7 @@ def _night_move(league: League, night: Any, args: argparse.Namespace) -> int:
 
 def _night_list(league: League, as_json: bool) -> int:
     from league.nights import list_nights
+    from league.race_types import race_type_of
 
     found = list_nights(league)
     if as_json:
@@ -535,6 +578,7 @@ def _night_list(league: League, as_json: bool) -> int:
                     "closed": n.closed,
                     "held_on": n.held_on,
                     "created_at": n.created_at,
+                    "race_type": race_type_of(n.rules),
                     "rules": n.rules.to_dict(),
                 }
                 for n in found

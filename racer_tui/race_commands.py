@@ -27,13 +27,15 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json
+from racer_tui.rules_option import HELP as RULES_HELP
+from racer_tui.rules_option import rules_option
 from sim.deepracer_files import DeepRacerFileError
 from sim.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
-from sim.race.rules import RaceRules, RankingMethod, RulesError, load_rules, rules_from_mapping
+from sim.race.rules import RaceRules, RankingMethod, RulesError, rules_from_mapping
 from sim.remedies import RemedyError
 from sim.track import Track, TrackError
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
@@ -70,7 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="racer-tui --race",
         description=(
-            "Race models in 4-minute time trials under league rules, without the app. "
+            "Race models in 4-minute time trials under league rules (or the race type "
+            "the rules choose: object avoidance, head-to-bot), without the app. "
             "MODEL is `reference` (the no-learning reference driver), a garage model name, "
             f"or a {BUNDLE_SUFFIX} file. Several models race one after the other and are ranked."
         ),
@@ -85,7 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--racer", help="the racer's name in the results (default: each model's name)"
     )
-    parser.add_argument("--rules", type=Path, help="YAML rules file (unset keys keep defaults)")
+    parser.add_argument("--rules", metavar="FILE|PRESET", help=RULES_HELP)
     parser.add_argument("--window", type=float, metavar="SECONDS", help="race window")
     parser.add_argument("--penalty", type=float, metavar="SECONDS", help="off-track penalty")
     parser.add_argument(
@@ -198,7 +201,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def race_rules(args: argparse.Namespace) -> RaceRules:
     """The rules file (or the defaults), then each command-line override, validated."""
-    rules = load_rules(args.rules) if args.rules is not None else RaceRules()
+    rules = rules_option(args.rules) if args.rules is not None else RaceRules()
     overrides: list[tuple[str, str, object]] = [
         ("--window", "window_seconds", args.window),
         ("--penalty", "penalty_seconds", args.penalty),

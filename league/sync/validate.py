@@ -24,6 +24,7 @@ from typing import Any, Final
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
 from league.errors import LeagueError
 from league.nights import NIGHT_CHANGES
+from league.race_types import HEAD_TO_BOT, OBJECT_AVOIDANCE, race_type_of, words
 from league.racers import HEX_COLOUR, check_name
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
 from league.seasons import check_points
@@ -441,14 +442,33 @@ def _check_season(record: SyncRecord) -> None:
         ) from None
 
 
+# The keys of each race type's own objects (sim.race.rules.RaceRules). Rules of another race
+# type never carry them (RaceRules.to_dict leaves them out), and rules_from_mapping would
+# pass over them: a record with them says one race type in its keys and another in its
+# race_type, and would be ranked as the one nobody can see it raced.
+_RACE_TYPE_KEYS: Final = {
+    "obstacles": OBJECT_AVOIDANCE,
+    "randomize_obstacles": OBJECT_AVOIDANCE,
+    "bots": HEAD_TO_BOT,
+    "bot_speed": HEAD_TO_BOT,
+    "bot_lane_change": HEAD_TO_BOT,
+}
+
+
 def _rules(text_value: str) -> None:
     data = json.loads(text_value)
     try:
         if not isinstance(data, dict):
             raise RulesError("not an object")
-        rules_from_mapping(data)
-    except RulesError as error:
-        raise _bad("rules", f"are not race rules ({error})") from None
+        rules = rules_from_mapping(data)
+    except RulesError as error:  # its own sentence, inside this one
+        raise _bad("rules", f"are not race rules ({str(error).rstrip('.')})") from None
+    kind = race_type_of(rules)
+    for key, owner in _RACE_TYPE_KEYS.items():
+        if key in data and owner != kind:
+            raise _bad(
+                "rules", f"are a {words(kind)}'s but set {key}, which only {words(owner)} has"
+            )
 
 
 def _check_night(record: SyncRecord) -> None:

@@ -1,6 +1,10 @@
 """League: the leaderboard, sortable by every column, filtered by track, night and season,
 with the highlighted entry's detail beside it, export, the projector and league nights.
 
+Boards of one race type are shown at a time (time trials, object avoidance, head-to-bot
+never share a board): when the chosen track has laps of more than one, a line says which
+race type is shown and t switches to the next.
+
 Every database read runs in a thread worker that opens its own connection and posts a
 past-tense message; the formatters for the table cells and the exports are the league's
 own (league.report), so the app, the CLI and the exported files agree.
@@ -20,9 +24,10 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Container, VerticalScroll
 from textual.message import Message
-from textual.widgets import DataTable
+from textual.widgets import DataTable, Static
 
 from league.leaderboard import Column, LeaderboardRow, several_boards, sort_rows
+from league.race_types import TIME_TRIAL, board_name, words
 from league.report import (
     SCORE_TITLES,
     leaderboard_columns,
@@ -39,7 +44,7 @@ from racer_tui.screens.nights import NightsScreen
 from racer_tui.screens.projector import ProjectorScreen
 from racer_tui.screens.races import replay_recorded_race
 from racer_tui.screens.sync import SyncScreen
-from racer_tui.widgets.board_filters import BoardFilters, BoardQuery, FilterOptions, board_rows
+from racer_tui.widgets.board_filters import BoardFilters, BoardQuery, BoardView, FilterOptions
 from racer_tui.widgets.entry_detail import EntryDetail, describe_entry
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
@@ -91,13 +96,30 @@ def export_text(rows: list[LeaderboardRow], query: BoardQuery, kind: str) -> str
 
 class BoardLoaded(Message):
     def __init__(
-        self, rows: list[LeaderboardRow], options: FilterOptions, query: BoardQuery, generation: int
+        self, view: BoardView, options: FilterOptions, query: BoardQuery, generation: int
     ) -> None:
         super().__init__()
-        self.rows = rows
+        self.view = view
         self.options = options
-        self.query = query
+        self.query = query  # as shown: its race type is the view's
         self.generation = generation  # a slower, older read must not win
+
+
+def race_type_line(view: BoardView) -> Text:
+    """Which race type's boards are shown, and what t switches to ("" when every lap is
+    a time trial, as in a league that races nothing else)."""
+    if view.race_types in ([], [TIME_TRIAL]):
+        return Text()
+    text = Text.assemble((f"{words(view.race_type).capitalize()} boards", "bold"))
+    others = [kind for kind in view.race_types if kind != view.race_type]
+    if not others:
+        text.append("  (no other race type has laps here)", style="dim")
+        return text
+    after = view.race_types[(view.race_types.index(view.race_type) + 1) % len(view.race_types)]
+    text.append(f"  ·  t switches to {words(after)}", style="dim")
+    if len(others) > 1:
+        text.append(f" ({len(view.race_types)} race types here)", style="dim")
+    return text
 
 
 class EntryDescribed(Message):
@@ -126,6 +148,13 @@ class LeagueScreen(RacerScreen[None]):
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("s", "sort_next", "Sort", tooltip="Sort by the next column (or click a header)"),
         Binding("r", "reverse", "Reverse", tooltip="Reverse the sort order"),
+        Binding(
+            "t",
+            "race_type",
+            "Race type",
+            tooltip="The boards of another race type (time trial, object avoidance, "
+            "head-to-bot) on the chosen track",
+        ),
         Binding("x", "export", "Export", tooltip="Write the table as CSV, JSON or Markdown"),
         Binding("n", "nights", "Nights", tooltip="Run a league night: entrants, heats, standings"),
         Binding("p", "projector", "Projector", tooltip="Full-screen leaderboard in large type"),
@@ -135,6 +164,8 @@ class LeagueScreen(RacerScreen[None]):
     ]
     AUTO_FOCUS = "#board"  # the keys (s, r, arrows) act on the table from the start
     DEFAULT_CSS = """
+    LeagueScreen #board-race-type { height: 1; padding: 0 1; }
+    LeagueScreen #board-race-type.-hidden { display: none; }
     LeagueScreen #league-body { height: 1fr; layout: horizontal; }
     LeagueScreen #board { width: 3fr; height: 1fr; }
     LeagueScreen #entry-scroll { width: 2fr; min-width: 36; border-left: vkey $panel-lighten-2; }
@@ -154,12 +185,16 @@ class LeagueScreen(RacerScreen[None]):
         self.titles: list[str] = []
         self.order = SortOrder()
         self.shown_query = BoardQuery()
+        self.race_type = TIME_TRIAL  # the host's choice; shown when the track has laps of it
+        self.race_types: list[str] = []  # with laps under the filters: what t cycles through
+        self.track_names: dict[str, str] = {}  # the league's tracks by hash
         self.loaded = False
         self._generation = 0
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league")
         yield BoardFilters(id="board-filters")
+        yield Static("", id="board-race-type", classes="-hidden")
         with Container(id="league-body"):
             yield FittedTable(id="board", cursor_type="row", zebra_stripes=True)
             with VerticalScroll(id="entry-scroll"):
@@ -183,7 +218,8 @@ class LeagueScreen(RacerScreen[None]):
 
     def reload(self) -> None:
         self._generation += 1
-        self._load(self.query_one(BoardFilters).current, self._generation)
+        query = replace(self.query_one(BoardFilters).current, race_type=self.race_type)
+        self._load(query, self._generation)
 
     def action_reload(self) -> None:
         self.reload()
@@ -195,20 +231,28 @@ class LeagueScreen(RacerScreen[None]):
 
     @work(thread=True, exclusive=True, group="league-board", exit_on_error=False)
     def _load(self, query: BoardQuery, generation: int) -> None:
-        from racer_tui.widgets.board_filters import filter_options
+        from racer_tui.widgets.board_filters import board_view, filter_options
 
         with open_league(self.db_path) as league:
-            rows = board_rows(league, query)
+            view = board_view(league, query)
             options = filter_options(league)
-        self.post_message(BoardLoaded(rows, options, query, generation))
+        shown = replace(query, race_type=view.race_type)
+        self.post_message(BoardLoaded(view, options, shown, generation))
 
     def on_board_loaded(self, message: BoardLoaded) -> None:
         if message.generation != self._generation:
             return
         self.loaded = True
         self.query_one(BoardFilters).set_options(message.options)
-        self.ranked = message.rows
+        self.ranked = message.view.rows
         self.shown_query = message.query
+        self.race_types = message.view.race_types
+        self.track_names = {track_hash: name for name, track_hash in message.options.tracks}
+        line = race_type_line(message.view)
+        label = self.query_one("#board-race-type", Static)
+        label.update(line)
+        label.set_class(not line.plain, "-hidden")
+        self.refresh_bindings()  # t shows only when there is another race type to show
         self._show()
 
     def _columns(self) -> list[ReportColumn]:
@@ -216,7 +260,21 @@ class LeagueScreen(RacerScreen[None]):
         # With a track chosen, still a track column when its laps of other physics than
         # today's are on boards of their own (the column names each board).
         show_track = query.track_hash is None or several_boards(self.ranked)
-        return leaderboard_columns(query.method, show_track=show_track)
+        columns = leaderboard_columns(query.method, show_track=show_track)
+        if query.race_type == TIME_TRIAL:
+            return columns
+        # One race type's boards: the line above the table names it, so the track column
+        # keeps its room for the track (and the model its place at 80 columns).
+        return [
+            ReportColumn(column.title, self._track_cell, column.numeric)
+            if column.title == "track"
+            else column
+            for column in columns
+        ]
+
+    def _track_cell(self, row: LeaderboardRow) -> str:
+        track = self.track_names.get(row.track_hash)
+        return row.track_name if track is None else board_name(track, row.physics, TIME_TRIAL)
 
     def _show(self) -> None:
         table = self.query_one("#board", DataTable)
@@ -310,6 +368,24 @@ class LeagueScreen(RacerScreen[None]):
         column = SORT_BY_TITLE[self.titles[index]]
         same = column == (self.order.column or Column.RANK)
         self.sort_by(column, reverse=not self.order.reverse if same else False)
+
+    # --- race types ----------------------------------------------------------------------
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "race_type":
+            return len(self.race_types) > 1
+        return True
+
+    def action_race_type(self) -> None:
+        """The boards of the next race type with laps under the filters."""
+        kinds = self.race_types
+        if len(kinds) < 2:
+            return
+        shown = self.shown_query.race_type
+        self.race_type = (
+            kinds[(kinds.index(shown) + 1) % len(kinds)] if shown in kinds else kinds[0]
+        )
+        self.reload()
 
     # --- export, projector, nights -------------------------------------------------------
 

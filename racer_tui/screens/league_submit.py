@@ -21,6 +21,7 @@ from textual.screen import Screen
 from league.board_place import board_place, place_sentence
 from league.errors import LeagueError
 from league.local_racer import local_racer_name, save_local_racer_name
+from league.race_types import race_type_of
 from league.racers import check_name
 from league.races import record_race_as
 from league.store import open_league
@@ -108,7 +109,7 @@ def submit_race(result: RaceResult, racer: str, db_path: Path | None) -> RaceSub
     with open_league(db_path) as league:
         name = save_local_racer_name(league, racer)
         race_id = record_race_as(league, result, name)
-        place = board_place(league, name, result.track_hash)
+        place = board_place(league, name, result.track_hash, race_type=race_type_of(result.rules))
     best = result.best_lap
     lap = f"best lap {seconds_text(best.time_seconds)}" if best is not None else "no valid lap"
     sentence = (

@@ -32,6 +32,7 @@ from league.store import default_db_path, open_league
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.race_screen import clock_text, countdown_text
 from racer_tui.screens.timekeeper import lap_clock_text
+from sim.objects.settings import RaceType
 from sim.plural import counted
 from sim.race.physics import PHYSICAL
 
@@ -115,7 +116,9 @@ class NightProjectorScreen(RacerScreen[None]):
     ]
     DEFAULT_CSS = """
     NightProjectorScreen { background: $background; }
-    NightProjectorScreen #np-title { height: 1; padding: 0 2; text-style: bold; color: $accent; }
+    NightProjectorScreen #np-title {
+        height: auto; max-height: 2; padding: 0 2; text-style: bold; color: $accent;
+    }
     NightProjectorScreen #np-now { height: 5; padding: 0 2; }
     NightProjectorScreen #np-heat { width: 1fr; height: 5; padding: 1 0 0 0; }
     NightProjectorScreen #np-clock-box { width: auto; height: 5; }
@@ -211,6 +214,9 @@ class NightProjectorScreen(RacerScreen[None]):
             self._announce(state, races[new[-1]].entrant.racer, new[-1])
         night = state.night
         title = Text(f"{night.name} · {night.track_name} · ")
+        if night.rules.race_type is not RaceType.TIME_TRIAL:
+            title.append(night.rules.race_words, style="bold")  # what the cars race among
+            title.append(" · ")
         if night.rules.lap_count is not None:
             title.append(f"{night.rules.lap_count}-lap race · ")
         title.append(f"ranked by {SCORE_TITLES[night.rules.ranking]}")

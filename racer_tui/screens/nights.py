@@ -81,6 +81,7 @@ from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
 from sim.atomic import write_text_atomic
 from sim.garage.folder import list_models
+from sim.objects.settings import RaceType
 from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
@@ -661,7 +662,12 @@ class NightsScreen(RacerScreen[None]):
         if state.season_name:
             text.append(f"  season {state.season_name}")
         text.append("\nRules (frozen): ", style="dim")
-        text.append(night.rules.describe())
+        rules, described = night.rules, night.rules.describe()
+        if rules.race_type is not RaceType.TIME_TRIAL and described.startswith(rules.race_words):
+            # Not a time trial: the race type first, where the host's eye lands.
+            text.append(rules.race_words, style="bold")
+            described = described.removeprefix(rules.race_words)
+        text.append(described)
         self.query_one("#night-rules", Static).update(text)
         self._show_heats(state)
         self._show_standings(state)

@@ -49,7 +49,7 @@ def projector_table(rows: Sequence[LeaderboardRow], show_track: bool) -> Table:
     table.add_column("time", justify="right", width=9)
     table.add_column("gap", justify="right", width=8)
     table.add_column("laps", justify="right", width=4)
-    leaders: dict[tuple[str, str], float | None] = {}
+    leaders: dict[tuple[str, str, str], float | None] = {}
     for row in rows:  # ranked board by board: the first row of a board leads it
         leaders.setdefault(board_of(row), row.score)
     for index, row in enumerate(rows):

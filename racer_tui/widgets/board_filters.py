@@ -1,6 +1,11 @@
 """The leaderboard's filter bar (track, night, season, ranking method) and the query it
 describes, shared by the League section and the projector so both rank the same way.
 
+A query also names a race type (league.race_types): the boards shown are of one race type
+at a time, the one asked for when the chosen track (night, season) has laps of it, else
+the first that has (time trials first), so choosing a track never shows an empty board
+while it has laps of another race type.
+
 `board_rows` and `filter_options` read the database: call them in a thread worker, with a
 league opened in that thread (SQLite connections belong to the thread that opened them).
 """
@@ -17,6 +22,7 @@ from textual.widgets import Select
 
 from league.leaderboard import BY_CHOICES, Filters, LeaderboardRow, leaderboard
 from league.nights import list_nights
+from league.race_types import TIME_TRIAL, in_order
 from league.seasons import list_seasons
 from league.store import League
 from league.tracks import track_names
@@ -33,6 +39,7 @@ class BoardQuery:
     night_id: str | None = None
     season_id: str | None = None
     by: str = "best"
+    race_type: str = TIME_TRIAL  # whose boards: see board_view
 
     @property
     def method(self) -> RankingMethod:
@@ -58,14 +65,35 @@ def filter_options(league: League) -> FilterOptions:
     return FilterOptions([(name, key) for key, name in tracks], nights, seasons)
 
 
-def board_rows(league: League, query: BoardQuery) -> list[LeaderboardRow]:
-    """The ranked rows for `query` (a season means the races of its nights)."""
+@dataclass(frozen=True)
+class BoardView:
+    """What a query shows: the rows of one race type's boards, which race type that is,
+    and every race type with laps under the query's other filters (in the league's order)."""
+
+    rows: list[LeaderboardRow]
+    race_type: str
+    race_types: list[str]
+
+
+def board_view(league: League, query: BoardQuery) -> BoardView:
+    """The ranked rows for `query` (a season means the races of its nights), of the query's
+    race type when there are laps of it, else of the first race type that has some."""
     night_ids: list[str] | None = [query.night_id] if query.night_id else None
     if query.season_id is not None:
         in_season = [n.id for n in list_nights(league) if n.season_id == query.season_id]
         night_ids = in_season if night_ids is None else [n for n in night_ids if n in in_season]
     filters = Filters(track_hash=query.track_hash, night_ids=night_ids)
-    return leaderboard(league, filters, query.method)
+    rows = leaderboard(league, filters, query.method)  # every race type's: ranked per board
+    present = in_order({row.race_type for row in rows})
+    shown = query.race_type if query.race_type in present or not present else present[0]
+    if present != [shown]:
+        rows = [row for row in rows if row.race_type == shown]
+    return BoardView(rows, shown, present)
+
+
+def board_rows(league: League, query: BoardQuery) -> list[LeaderboardRow]:
+    """The ranked rows `board_view` shows for `query`."""
+    return board_view(league, query).rows
 
 
 def _value(select: Select[str]) -> str | None:
