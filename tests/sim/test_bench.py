@@ -14,7 +14,12 @@ def test_bench_json_reports_every_sensor_and_builtin_track(
 ) -> None:
     assert main(["--json", "--seconds", "0.05", "--cars", "2"]) == 0
     report = json.loads(capsys.readouterr().out)
-    assert [row["sensor"] for row in report["sensors"]] == ["vector", "lidar", "camera 160x120"]
+    rows = [(row["sensor"], row["race"]) for row in report["sensors"]]
+    assert rows == [
+        (sensor, race)
+        for sensor in ("vector", "lidar", "camera 160x120")
+        for race in ("time trial", "3 boxes", "3 bots")
+    ]
     assert all(row["steps_per_s"] > 0 for row in report["sensors"])
     laps = {row["track"]: row for row in report["reference_laps"]}
     assert {"beginner-oval", "hairpin-circuit", "bowtie-chicane", "speedway", "grand-prix"} <= set(
