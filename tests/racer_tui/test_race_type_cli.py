@@ -1,0 +1,173 @@
+"""Race types from the command line: `--rules object-avoidance` (a preset's name) races and
+records among boxes, a night opened with that preset says so, and `racer-tui leaderboard`
+keeps each race type on a board of its own: a track's time trials by default,
+`--race-type` for another, every board without --track, and JSON rows naming it."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from league.nights import get_night
+from league.races import record_race
+from league.store import open_league
+from racer_tui.cli import main
+from sim.race.rules import preset_rules
+from tests.league.helpers import TRACK, race_result
+
+BOXES = preset_rules("object-avoidance")
+
+
+@pytest.fixture(autouse=True)
+def wide_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("COLUMNS", "160")  # rich tables wide enough that no name wraps
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture
+def db(tmp_path: Path) -> str:
+    """One track, two races of each kind: ana leads the time trials, cy (quicker still)
+    the object-avoidance races."""
+    path = tmp_path / "league.db"
+    with open_league(path) as league:
+        record_race(league, race_result("ana", [10.0]))
+        record_race(league, race_result("bex", [11.0]))
+        record_race(league, race_result("cy", [9.0], rules=BOXES))
+        record_race(league, race_result("bex", [12.5], rules=BOXES))
+    return str(path)
+
+
+def _rows(out: str) -> list[tuple[int, str, float, str]]:
+    return [(r["rank"], r["racer"], r["best_lap"], r["race_type"]) for r in json.loads(out)]
+
+
+def test_a_tracks_board_is_its_time_trials_unless_another_race_type_is_asked_for(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    board = ("leaderboard", "--db", db, "--track", TRACK, "--format", "json")
+
+    code, out, err = run_cli(capsys, *board)
+    assert code == 0, err
+    assert _rows(out) == [(1, "ana", 10.0, "time_trial"), (2, "bex", 11.0, "time_trial")]
+
+    code, out, err = run_cli(capsys, *board, "--race-type", "object-avoidance")
+    assert code == 0, err
+    assert _rows(out) == [
+        (1, "cy", 9.0, "object_avoidance"),
+        (2, "bex", 12.5, "object_avoidance"),
+    ]
+    assert {row["track"] for row in json.loads(out)} == {f"{TRACK} (object avoidance)"}
+
+
+def test_every_board_is_printed_on_its_own_without_a_track(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    code, out, err = run_cli(capsys, "leaderboard", "--db", db)
+
+    assert code == 0, err
+    assert f"Leaderboard: {TRACK}, ranked by best lap" in out
+    assert f"Leaderboard: {TRACK} (object avoidance), ranked by best lap" in out
+    trials, boxes = out.split("(object avoidance)")
+    assert trials.index("ana") < trials.index("bex") and "cy" not in trials
+    assert boxes.index("cy") < boxes.index("bex") and "ana" not in boxes
+
+    code, out, err = run_cli(
+        capsys, "leaderboard", "--db", db, "--race-type", "object_avoidance", "--format", "json"
+    )
+    assert code == 0, err
+    assert [row[1] for row in _rows(out)] == ["cy", "bex"]
+
+
+def test_an_empty_board_says_which_race_types_the_track_has(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    board = ("leaderboard", "--db", db, "--track", TRACK, "--race-type", "head-to-bot")
+    hint = (
+        f"No head-to-bot laps on {TRACK} yet; its other boards: --race-type time-trial or "
+        "--race-type object-avoidance."
+    )
+
+    code, out, _ = run_cli(capsys, *board)
+    assert code == 0 and hint in out
+
+    code, out, err = run_cli(capsys, *board, "--format", "json")
+    assert code == 0 and json.loads(out) == [] and hint in err  # stdout stays the data
+
+
+def test_an_unknown_race_type_lists_the_choices(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    with pytest.raises(SystemExit) as exited:  # argparse's own usage error
+        main(["leaderboard", "--db", db, "--race-type", "drag-race"])
+    assert exited.value.code == 2
+    err = capsys.readouterr().err
+    assert "time-trial" in err and "object-avoidance" in err and "head-to-bot" in err
+
+
+def test_a_race_with_a_presets_rules_is_recorded_on_that_race_types_board(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    db = str(tmp_path / "league.db")
+    race = ("--race", "reference", "--track", TRACK, "--window", "10", "--record", "--db", db)
+
+    code, out, err = run_cli(capsys, *race, "--rules", "object-avoidance", "--json")
+
+    assert code == 0, err
+    document = json.loads(out)
+    assert document["rules"]["race_type"] == "object_avoidance"
+    assert document["races"][0]["rules"]["race_type"] == "object_avoidance"
+    code, out, err = run_cli(
+        capsys, "leaderboard", "--db", db, "--track", TRACK, "--format", "json"
+    )
+    assert code == 0 and json.loads(out) == []  # nothing on the time trials' board
+    boxes = ("--race-type", "object-avoidance", "--format", "json")
+    code, out, err = run_cli(capsys, "leaderboard", "--db", db, "--track", TRACK, *boxes)
+    assert [row["id"] for row in json.loads(out)] == document["recorded"]
+
+
+def test_rules_name_a_preset_or_a_file(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run_cli(capsys, "--race", "reference", "--rules", "boxes-please")
+    assert code == 2
+    assert err == (
+        "racer-tui: there is no rules file or preset called 'boxes-please'; give a rules YAML "
+        "file or one of the presets: league, physical, practice, object-avoidance, "
+        "head-to-bot.\n"
+    )
+
+
+def test_a_night_opened_with_the_object_avoidance_preset_keeps_it(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    db = str(tmp_path / "league.db")
+    for how in (("--preset", "object-avoidance"), ("--rules", "object-avoidance")):
+        code, out, err = run_cli(
+            capsys, "night", "new", "--db", db, "--track", TRACK, "--name", how[0][2:], *how
+        )
+        assert code == 0, err
+        assert "Rules (frozen): object avoidance (3 boxes): 4:00 window" in out
+
+    code, out, _ = run_cli(capsys, "night", "list", "--db", db, "--json")
+    nights = json.loads(out)
+    assert [(n["name"], n["race_type"]) for n in nights] == [
+        ("preset", "object_avoidance"),
+        ("rules", "object_avoidance"),
+    ]
+    assert nights[0]["rules"]["obstacles"] == 3
+    with open_league(Path(db)) as league:
+        night = get_night(league, "preset")
+        record_race(league, race_result("ana", [9.5], rules=night.rules), night.id)
+    # A night's board is of the night's race type, with no --race-type to give.
+    code, out, err = run_cli(
+        capsys, "leaderboard", "--db", db, "--night", "preset", "--format", "json"
+    )
+    assert code == 0, err
+    assert _rows(out) == [(1, "ana", 9.5, "object_avoidance")]
+    code, out, _ = run_cli(capsys, "night", "show", "preset", "--db", db)
+    assert "Rules: object avoidance (3 boxes): " in out
