@@ -1,5 +1,6 @@
 """SVG snapshots of the League section and the projector at 80x24 and 120x40, with fixed
-race results (fixed times and dates; ids are never shown).
+race results (fixed times and dates; ids are never shown), and of the section on a board
+of another race type than time trials.
 Update after a deliberate change with
 `pytest tests/racer_tui/snapshots/test_league_snapshots.py --snapshot-update`."""
 
@@ -54,3 +55,23 @@ def test_projector(snap_compare: Compare, size: tuple[int, int]) -> None:
 
     app = create_app(start="league")
     assert snap_compare(app, terminal_size=size, run_before=project)
+
+
+@SIZES
+def test_leaderboard_of_another_race_type(snap_compare: Compare, size: tuple[int, int]) -> None:
+    """The oval raced among boxes too: t shows its object-avoidance board."""
+    from sim.race.rules import preset_rules
+
+    fixed_results()
+    with open_league() as league:
+        boxes = preset_rules("object-avoidance")
+        record_race(league, race_result("eve", [14.0, 13.5], model="box-dodger", rules=boxes))
+        record_race(league, race_result("ada", [15.25], model="ada-car", rules=boxes))
+
+    async def switch(pilot: Pilot[Any]) -> None:
+        await settle(pilot)
+        await pilot.press("t")
+        await settle(pilot)
+
+    app = create_app(start="league")
+    assert snap_compare(app, terminal_size=size, run_before=switch)
