@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from league.errors import LeagueError
+from league.race_types import RACE_TYPES, TIME_TRIAL
 from league.racers import check_name
 from sim.deepracer_files import (
     HYPERPARAMETERS_PATH,
@@ -106,6 +107,7 @@ class Submission:
     evaluation_file: str
     laps: tuple[EvaluationLap, ...]
     physics: str = CURRENT_PHYSICS  # which simulator timed the laps (sim.race.physics)
+    race_type: str = TIME_TRIAL  # league.race_types: which board its laps are ranked on
     stale: str | None = None  # why the evaluation is older than the policy, if it is
 
     @property
@@ -189,6 +191,7 @@ def assemble(
         evaluation_file=evaluation_path.name,
         laps=tuple(EvaluationLap.from_trial(i + 1, trial) for i, trial in enumerate(trials)),
         physics=physics,
+        race_type=_race_type(params, files),
         stale=ModelFolder(folder).stale_evaluation(evaluation_path)
         if source == RACER_TUI
         else None,
@@ -273,6 +276,22 @@ def _evaluation_path(folder: Path, files: DeepRacerFiles, named: Path | None) ->
             fix=Fix.EVALUATE_MODEL,
         )
     return latest
+
+
+def _race_type(params: TrainingParams | None, files: DeepRacerFiles) -> str:
+    """The race type the model was set up for, from its training_params.yaml (DeepRacer's
+    RACE_TYPE, as the console and DeepRacer-for-Cloud write it; none: a time trial): its
+    evaluation drove among that race type's objects, so its laps go on that board."""
+    if params is None:
+        return TIME_TRIAL
+    value = params.race_type.strip().lower().replace("-", "_")
+    if value not in RACE_TYPES:
+        choices = ", ".join(kind.upper() for kind in RACE_TYPES)
+        raise LeagueError(
+            f"{files.training_params}: RACE_TYPE must be one of {choices}, "
+            f"not {params.race_type!r}."
+        )
+    return value
 
 
 def _track(

@@ -27,7 +27,7 @@ from itertools import groupby
 from typing import Any
 
 from league.assembler import CONSOLE, DRFC
-from league.race_types import race_type_of
+from league.race_types import TIME_TRIAL, race_type_of
 from league.store import League
 from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
 from sim.race.rules import (
@@ -40,7 +40,8 @@ from sim.race.rules import (
 )
 
 # Submissions are DeepRacer evaluations: each trial is one lap, ranked by the league's
-# default rules (best lap, at most 3 off-tracks per lap, 3 laps for average/total).
+# default rules (best lap, at most 3 off-tracks per lap, 3 laps for average/total), on
+# the board of the race type the model was set up for (its training_params.yaml).
 SUBMISSION_RULES = DEFAULT_RULES
 
 
@@ -68,6 +69,8 @@ class EntrySource:
     recorded_at: str
     rules: RaceRules
     laps: tuple[ScoredLap, ...]
+    # league.race_types; None: the rules' (a submission's is its own, scored as the league's)
+    race_type: str | None = None
 
 
 ENTRY_COLUMNS = (
@@ -190,7 +193,7 @@ def entry_values(source: EntrySource, disqualified: Iterable[int] = ()) -> tuple
         source.racer,
         source.track_hash,
         source.physics,
-        race_type_of(source.rules),
+        source.race_type or race_type_of(source.rules),
         source.model_name,
         source.night_id,
         source.recorded_at,
@@ -236,7 +239,7 @@ def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[En
         "SELECT s.id, s.racer, s.track_hash, s.model_name, s.submitted_at, "
         "l.number, l.time_seconds, l.offtracks, l.completed, "
         f"coalesce(s.physics, CASE WHEN s.source IN ('{DRFC}', '{CONSOLE}') "
-        f"THEN '{DEEPRACER}' ELSE '{BEFORE_VERSIONING}' END) FROM submissions s "
+        f"THEN '{DEEPRACER}' ELSE '{BEFORE_VERSIONING}' END), s.race_type FROM submissions s "
         f"LEFT JOIN submission_laps l ON l.submission_id = s.id {where} "
         "ORDER BY s.id, l.number",
         params,
@@ -258,6 +261,7 @@ def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[En
             recorded_at=first[4],
             rules=SUBMISSION_RULES,
             laps=laps,
+            race_type=first[10] or TIME_TRIAL,
         )
     where, params = _in_clause(ids, "r.id")
     races = conn.execute(

@@ -519,6 +519,14 @@ CREATE INDEX board_in_order ON board (
 )
 """
 
+# Version 11: the race type of a submission, from its model's training_params.yaml (an
+# object-avoidance model's evaluation drives among its boxes): NULL for a time trial, as
+# every submission made before, so their records keep their content hashes. The cache is
+# unchanged (every submission there is a time trial).
+SUBMISSION_RACE_TYPES = """
+ALTER TABLE submissions ADD COLUMN race_type TEXT
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -530,6 +538,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("night dates", _script(NIGHT_DATE)),
     Migration("leaderboard in ranking order", _script(BOARD_ORDER)),
     Migration("race types of results", _script(RACE_TYPES), True),
+    Migration("race types of submissions", _script(SUBMISSION_RACE_TYPES)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -53,7 +53,7 @@ SHARED_TABLES: dict[str, Children | None] = {
 # Columns later versions added to shared tables; a record without them is still whole.
 OPTIONAL_COLUMNS: dict[str, frozenset[str]] = {
     "nights": frozenset({"held_on"}),
-    "submissions": frozenset({"physics"}),
+    "submissions": frozenset({"physics", "race_type"}),
     "races": frozenset({"physics"}),
 }
 

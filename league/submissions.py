@@ -11,6 +11,7 @@ from typing import Any
 from league.assembler import EvaluationLap, Submission, assemble
 from league.entries import refresh_entries
 from league.errors import LeagueError
+from league.race_types import TIME_TRIAL
 from league.racers import check_name, ensure_racer
 from league.store import League, now_iso
 from league.tracks import ensure_track
@@ -79,6 +80,13 @@ def submit(league: League, submission: Submission) -> Submitted:
                 "fingerprint": fingerprint,
                 "submitted_at": now_iso(),
                 "physics": submission.physics,
+                # Left out (NULL) for a time trial: such records keep the body, and so the
+                # content hash, they always had (league.records.OPTIONAL_COLUMNS).
+                **(
+                    {}
+                    if submission.race_type == TIME_TRIAL
+                    else {"race_type": submission.race_type}
+                ),
             },
             children={"laps": laps},
         )

@@ -318,6 +318,7 @@ def _submit(league: League, args: argparse.Namespace) -> int:
                 "model": submission.model_name,
                 "track": submission.track_name,
                 "source": submission.source,
+                "race_type": submission.race_type,
                 "best_lap": best,
                 "laps": len(submission.completed_laps),
                 "trials": len(submission.laps),
@@ -327,9 +328,15 @@ def _submit(league: League, args: argparse.Namespace) -> int:
     if outcome.duplicate:
         print(f"Already in the league as {outcome.submission_id}; nothing added.")
         return 0
+    from league.race_types import TIME_TRIAL, board_name
+
     lap_text = "no completed lap" if best is None else f"best lap {best:.3f} s"
+    # Said when it is not a time trial: its laps go on that race type's board.
+    where = board_name(submission.track_name, submission.physics, submission.race_type)
+    if submission.race_type == TIME_TRIAL:
+        where = submission.track_name
     print(
-        f"Submitted {submission.model_name} for {submission.racer} on {submission.track_name}: "
+        f"Submitted {submission.model_name} for {submission.racer} on {where}: "
         f"{lap_text}, {len(submission.completed_laps)} of {len(submission.laps)} trials "
         f"completed (id {outcome.submission_id})."
     )

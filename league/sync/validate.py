@@ -221,6 +221,11 @@ def physics(value: Any, field: str) -> None:
 
 # Which simulator timed the laps (sim.race.physics); absent in records made before.
 _PHYSICS = Field("TEXT", physics, nullable=True, optional=True)
+# A submission's race type when it is not a time trial (league.race_types); absent in time
+# trials, as in every submission made before race types.
+_SUBMISSION_RACE_TYPE = Field(
+    "TEXT", one_of(OBJECT_AVOIDANCE, HEAD_TO_BOT), nullable=True, optional=True
+)
 
 
 # Every shared table's columns except id and content_hash (a test holds these to the
@@ -295,6 +300,7 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "fingerprint": _t(sha256_hex),
         "submitted_at": _t(timestamp),
         "physics": _PHYSICS,
+        "race_type": _SUBMISSION_RACE_TYPE,
     },
     "race": {
         "racer": _t(name),

@@ -131,7 +131,9 @@ def submit_evaluation(
     with open_league(db_path) as league:
         name = save_local_racer_name(league, racer)
         submission, outcome = submit_model(league, model, name, allow_stale=allow_stale)
-        place = board_place(league, submission.racer, submission.track_hash)
+        place = board_place(
+            league, submission.racer, submission.track_hash, race_type=submission.race_type
+        )
     where = place_sentence(place, outcome.submission_id)
     if outcome.duplicate:
         return (

@@ -5,6 +5,7 @@ made before race types existed opens with every board it had, now its time trial
 from __future__ import annotations
 
 import sqlite3
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -22,8 +23,10 @@ from league.race_types import (
     parse_race_type,
 )
 from league.races import best_lap_race, record_race
+from league.records import record_body
 from league.store import League, open_league
 from league.submissions import submit
+from sim.ids import content_hash
 from sim.race.physics import CURRENT
 from sim.race.rules import preset_rules
 from tests.league.helpers import TRACK, model_folder, race_result
@@ -113,9 +116,54 @@ def test_a_ghost_for_a_time_trial_is_never_a_lap_among_boxes(league: League) -> 
     assert best_lap_race(league, trial.track_hash, CURRENT, OBJECT_AVOIDANCE) == boxed.result_id
 
 
-def test_submissions_are_time_trials(league: League, tmp_path: Path) -> None:
-    submit(league, assemble(str(model_folder(tmp_path)), "ana"))
-    assert {row.race_type for row in leaderboard(league, Filters())} == {TIME_TRIAL}
+def _set_up_for(folder: Path, race_type: str) -> Path:
+    """The model folder, its training_params.yaml saying RACE_TYPE: `race_type`."""
+    from sim.deepracer_files import TRAINING_PARAMS, TrainingParams, write_training_params
+    from sim.track_catalog import resolve_track
+
+    track = resolve_track(TRACK)
+    params = TrainingParams(world_name=track.name, track_hash=track.content_hash)
+    write_training_params(folder / TRAINING_PARAMS, replace(params, race_type=race_type))
+    return folder
+
+
+def test_a_submission_is_ranked_on_the_board_of_its_models_race_type(
+    league: League, tmp_path: Path
+) -> None:
+    trial = submit(league, assemble(str(model_folder(tmp_path, "trial", laps=(12.0,))), "ana"))
+    boxes = model_folder(tmp_path, "boxes", laps=(11.0,))  # quicker, among its boxes
+    boxed = submit(league, assemble(str(_set_up_for(boxes, "OBJECT_AVOIDANCE")), "bex"))
+
+    assert _board(league) == [
+        (TRACK, 1, "ana", TIME_TRIAL),
+        (f"{TRACK} (object avoidance)", 1, "bex", OBJECT_AVOIDANCE),
+    ]
+    # A time trial's record is as it always was; the other says its race type.
+    assert "race_type" not in record_body(league, "submissions", trial.submission_id)
+    body = record_body(league, "submissions", boxed.submission_id)
+    assert body["race_type"] == OBJECT_AVOIDANCE
+    for made in (trial, boxed):  # each hashed as its record's body says
+        stored = league.query_one(
+            "SELECT content_hash FROM submissions WHERE id = ?", (made.submission_id,)
+        )
+        body = record_body(league, "submissions", made.submission_id)
+        assert stored is not None and stored[0] == content_hash(body)
+    place = board_place(league, "bex", league_track_hash(league), race_type=OBJECT_AVOIDANCE)
+    assert place is not None and place.rank == 1
+
+
+def test_a_models_unknown_race_type_is_one_sentence_naming_the_file(tmp_path: Path) -> None:
+    folder = _set_up_for(model_folder(tmp_path), "DRAG_RACE")
+    with pytest.raises(LeagueError) as raised:
+        assemble(str(folder), "ana")
+    assert str(raised.value) == (
+        f"{folder / 'training_params.yaml'}: RACE_TYPE must be one of TIME_TRIAL, "
+        "OBJECT_AVOIDANCE, HEAD_TO_BOT, not 'DRAG_RACE'."
+    )
+
+
+def league_track_hash(league: League) -> str:
+    return str(leaderboard(league, Filters())[0].track_hash)
 
 
 def test_board_names_say_the_race_type_and_the_physics() -> None:
@@ -166,8 +214,9 @@ def _version_9_league(path: Path, made: Path) -> None:
     for migration in MIGRATIONS[:9]:
         migration.apply(conn)
     conn.execute("ATTACH DATABASE ? AS made", (str(made),))
-    for table in _SHARED:
-        conn.execute(f"INSERT INTO main.{table} SELECT * FROM made.{table}")
+    for table in _SHARED:  # version 9's columns (later ones are NULL in these rows)
+        columns = ", ".join(row[1] for row in conn.execute(f"PRAGMA main.table_info({table})"))
+        conn.execute(f"INSERT INTO main.{table} ({columns}) SELECT {columns} FROM made.{table}")
     for table, columns in _V9_CACHE_COLUMNS.items():
         conn.execute(f"INSERT INTO main.{table} ({columns}) SELECT {columns} FROM made.{table}")
     conn.execute("PRAGMA user_version = 9")

@@ -171,3 +171,28 @@ def test_a_night_opened_with_the_object_avoidance_preset_keeps_it(
     assert _rows(out) == [(1, "ana", 9.5, "object_avoidance")]
     code, out, _ = run_cli(capsys, "night", "show", "preset", "--db", db)
     assert "Rules: object avoidance (3 boxes): " in out
+
+
+def test_an_object_avoidance_models_evaluation_is_submitted_to_that_board(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, db: str
+) -> None:
+    from sim.deepracer_files import TRAINING_PARAMS, TrainingParams, write_training_params
+    from sim.track_catalog import resolve_track
+    from tests.league.helpers import model_folder
+
+    folder = model_folder(tmp_path / "models", "box-car", laps=(8.5,))
+    oval = resolve_track(TRACK)
+    params = TrainingParams(oval.name, race_type="OBJECT_AVOIDANCE", track_hash=oval.content_hash)
+    write_training_params(folder / TRAINING_PARAMS, params)
+
+    code, out, err = run_cli(capsys, "submit", str(folder), "--racer", "dee", "--db", db)
+
+    assert code == 0, err
+    assert out.startswith(f"Submitted box-car for dee on {TRACK} (object avoidance): ")
+    boxes = ("--race-type", "object-avoidance", "--format", "json")
+    code, out, err = run_cli(capsys, "leaderboard", "--db", db, "--track", TRACK, *boxes)
+    assert _rows(out)[0] == (1, "dee", 8.5, "object_avoidance")
+    code, out, err = run_cli(
+        capsys, "leaderboard", "--db", db, "--track", TRACK, "--format", "json"
+    )
+    assert "dee" not in {row[1] for row in _rows(out)}

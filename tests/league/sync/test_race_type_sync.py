@@ -80,6 +80,46 @@ def test_a_synced_object_avoidance_race_lands_on_its_own_board(
     assert [row.best_lap for row in leaderboard(viewer.league, only_trials)] == [11.8]
 
 
+def test_a_synced_object_avoidance_submission_lands_on_its_own_board(
+    machines: dict[str, Machine], tmp_path: Path
+) -> None:
+    from league.assembler import assemble
+    from league.submissions import submit
+    from sim.deepracer_files import TRAINING_PARAMS, TrainingParams, write_training_params
+    from tests.league.helpers import TRACK, model_folder
+
+    ana, viewer = machines["ana"], machines["viewer"]
+    folder = model_folder(tmp_path / "models", "boxes", laps=(9.5,))
+    oval = resolve_track(TRACK)
+    write_training_params(
+        folder / TRAINING_PARAMS,
+        TrainingParams(oval.name, race_type="OBJECT_AVOIDANCE", track_hash=oval.content_hash),
+    )
+    submit(ana.league, assemble(str(folder), "ana"))
+    ana.sync()
+
+    viewer.sync()
+
+    assert viewer.quarantine() == {}
+    assert (f"{TRACK} (object avoidance)", OBJECT_AVOIDANCE, "ana", 9.5) in _boards(viewer.league)
+
+
+@pytest.mark.parametrize("bad", ["time_trial", "drag_race", 3])
+def test_a_submission_naming_another_race_type_is_refused(
+    league: League, tmp_path: Path, bad: object
+) -> None:
+    from league.assembler import assemble
+    from league.submissions import submit
+    from tests.league.helpers import model_folder
+
+    made = submit(league, assemble(str(model_folder(tmp_path)), "ana"))
+    body = record_body(league, "submissions", made.submission_id)
+    check_record(make_record("submission", new_id(), {**body, "race_type": "head_to_bot"}))
+
+    with pytest.raises(RecordInvalidError, match="its race_type is not one of"):
+        check_record(make_record("submission", new_id(), {**body, "race_type": bad}))
+
+
 # --- the rules of pulled records -------------------------------------------------------------
 
 
