@@ -122,7 +122,7 @@ def recorded_row(race: RecordedRace) -> list[str | Text]:
         Text(race.display_name),
         seconds_text(race.best_lap),
         str(race.valid_laps),
-        Text(race.track_name),
+        Text(race.track_label),
         Text(race.model_name),
         Text(race.night_name or "-"),
     ]

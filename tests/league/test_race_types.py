@@ -258,3 +258,16 @@ def test_a_league_from_before_race_types_opens_with_its_boards_intact(tmp_path: 
         (3, "cy", TRACK),
         (4, "bo", TRACK),
     ]
+
+
+def test_the_recorded_races_list_says_a_race_type_that_is_not_a_time_trial(
+    league: League,
+) -> None:
+    from league.races import recent_races
+
+    record_race(league, race_result("ana", [10.0], started_at="2024-05-01T19:00:00.000Z"))
+    record_race(league, race_result("bex", [12.0], rules=BOXES))
+
+    labels = [(race.racer, race.track_label) for race in recent_races(league)]
+
+    assert sorted(labels) == [("ana", TRACK), ("bex", f"{TRACK} (object avoidance)")]
