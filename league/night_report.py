@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from league.nights import Entrant, Heat, Night, Standing
+from league.race_types import race_type_of
 from league.report import SCORE_TITLES, Column, markdown_escape, seconds, to_csv, to_markdown
 from sim.race.physics import PHYSICAL
 from sim.race.rules import RankingMethod
@@ -44,6 +45,7 @@ def night_json(
         "season_id": night.season_id,
         "closed": night.closed,
         "held_on": night.held_on,
+        "race_type": race_type_of(night.rules),
         "rules": night.rules.to_dict(),
         "entrants": [
             {"id": e.id, "racer": e.display_name, "racer_name": e.racer, "model": e.model}

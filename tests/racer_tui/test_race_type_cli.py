@@ -171,6 +171,8 @@ def test_a_night_opened_with_the_object_avoidance_preset_keeps_it(
     assert _rows(out) == [(1, "ana", 9.5, "object_avoidance")]
     code, out, _ = run_cli(capsys, "night", "show", "preset", "--db", db)
     assert "Rules: object avoidance (3 boxes): " in out
+    code, out, _ = run_cli(capsys, "night", "show", "preset", "--db", db, "--json")
+    assert json.loads(out)["race_type"] == "object_avoidance"
 
 
 def test_an_object_avoidance_models_evaluation_is_submitted_to_that_board(
