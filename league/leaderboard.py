@@ -98,9 +98,11 @@ NATIVE_OFFTRACKS = (
 )
 # LeaderboardRow's fields in order, from a table or subquery aliased `b` with the cached
 # columns; display and track names are filled in afterwards from small lookups (joining
-# them row by row costs more than the rest of the query).
+# them row by row costs more than the rest of the query). The track name's place holds ''
+# (Python's one empty string), not a copy of the 64-character track hash per row: that
+# copy cost about what the race type's column costs.
 _ROW_COLUMNS = """
-    b.entry_id, b.kind, b.racer, b.racer, b.model_name, b.track_hash, b.track_hash,
+    b.entry_id, b.kind, b.racer, b.racer, b.model_name, b.track_hash, '',
     b.night_id, {score}, b.scoring_offtracks, b.valid_laps, b.recorded_at, b.best_lap,
     b.average_lap, b.offtracks, b.laps_driven, b.physics, b.race_type
 """
