@@ -34,12 +34,20 @@ from sim.deepracer_files import (
 from sim.garage.clone import incompatibility
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, list_models
 from sim.garage.options import (
+    DEFAULT_BOT_SPEED,
+    DEFAULT_BOTS,
+    DEFAULT_OBSTACLES,
+    RACE_KEYS,
+    RACE_TYPES,
     SPEED_LEVELS,
     STEERING_LEVELS,
     ModelSpec,
+    RaceOptions,
+    blind_to_objects,
     create_from_spec,
     default_model_spec,
     racing_line_followed,
+    with_race,
 )
 from sim.names import NAME_RULE, is_valid_name
 from sim.observations import SensorError, normalise_sensors
@@ -49,6 +57,12 @@ from sim.track import TrackError
 
 REWARD_FILE_NAME = "reward_function.py"
 # The sensor choices the console offers, in racer-tui's names.
+# DeepRacer's race types as the editor offers them: (label, RACE_TYPES key).
+RACE_TYPE_CHOICES: tuple[tuple[str, str], ...] = (
+    ("time trial", "time-trial"),
+    ("object avoidance", "object-avoidance"),
+    ("head-to-bot", "head-to-bot"),
+)
 SENSOR_CHOICES: tuple[tuple[str, str], ...] = (
     ("vector", "vector"),
     ("lidar", "LIDAR"),
@@ -101,6 +115,16 @@ class FormValues:
     max_minutes: str
     reward_source: str
     hyperparameters: Mapping[str, str] = field(default_factory=dict)
+    # DeepRacer's race type (a key of RACE_TYPES) and its objects: how many boxes or bot
+    # cars, the bots' speed, and whether the boxes are shuffled / the bots change lanes.
+    race_type: str = "time-trial"
+    race_objects: str = str(DEFAULT_OBSTACLES)
+    bot_speed: str = f"{DEFAULT_BOT_SPEED:g}"
+    race_shuffle: bool = False
+
+    @property
+    def race(self) -> tuple[str, str, str, bool]:
+        return (self.race_type, self.race_objects, self.bot_speed, self.race_shuffle)
 
 
 def sensor_key(sensors: tuple[str, ...]) -> str:
@@ -132,6 +156,7 @@ def values_of(spec: ModelSpec, name: str = "") -> FormValues:
     assert default_grid is not None
     steer, steer_levels, speed, speed_levels = grid or default_grid
     (steer_low, steer_high), (speed_low, speed_high) = space.steering_range, space.speed_range
+    race = _race_values(spec)
     return FormValues(
         name=name,
         track=spec.track,
@@ -150,7 +175,71 @@ def values_of(spec: ModelSpec, name: str = "") -> FormValues:
         hyperparameters={
             hp.name: str(spec.hyperparameters.get(hp.name, hp.default)) for hp in TUNABLE
         },
+        race_type=race[0],
+        race_objects=race[1],
+        bot_speed=race[2],
+        race_shuffle=race[3],
     )
+
+
+def _race_values(spec: ModelSpec) -> tuple[str, str, str, bool]:
+    """The race type's fields of the form (type, objects, bot speed, shuffle), from
+    DeepRacer's keys."""
+    keys = spec.race_keys
+    kind = {value: key for key, value in RACE_TYPES.items()}.get(
+        spec.race_type.strip().upper(), "time-trial"
+    )
+    speed = f"{DEFAULT_BOT_SPEED:g}"
+    if kind == "head-to-bot":
+        return (
+            kind,
+            str(keys.get("NUMBER_OF_BOT_CARS", DEFAULT_BOTS)),
+            str(keys.get("BOT_CAR_SPEED", speed)),
+            str(keys.get("IS_LANE_CHANGE", False)).lower() == "true",
+        )
+    if kind == "object-avoidance":
+        positions = keys.get("OBJECT_POSITIONS")
+        count = len(positions) if isinstance(positions, list) and positions else None
+        return (
+            kind,
+            str(count or keys.get("NUMBER_OF_OBSTACLES", DEFAULT_OBSTACLES)),
+            speed,
+            str(keys.get("RANDOMIZE_OBSTACLE_LOCATIONS", False)).lower() == "true",
+        )
+    return (kind, str(DEFAULT_OBSTACLES), speed, False)
+
+
+def _with_race_of_form(
+    spec: ModelSpec, values: FormValues, base: ModelSpec, problems: list[FieldProblem]
+) -> ModelSpec:
+    """`spec` with the form's race type; the base model's own keys (an imported model's
+    OBJECT_POSITIONS, say) are kept as they are while the racer leaves the fields alone."""
+    if values.race == values_of(base).race:
+        return spec
+    if values.race_type == "time-trial":
+        return replace(spec, race_type="TIME_TRIAL", race_keys={})
+    count = _number(values.race_objects)
+    whole = None if count is None or count != int(count) else int(count)
+    if whole is None:
+        problems.append(FieldProblem("race-objects", "Give a whole number of boxes or bot cars."))
+        return spec
+    bots = values.race_type == "head-to-bot"
+    speed = _number(values.bot_speed) if bots else None
+    if bots and speed is None:
+        problems.append(FieldProblem("bot-speed", "The bots' speed must be a number of m/s."))
+        return spec
+    options = (
+        RaceOptions(bots=whole, bot_speed=speed, bot_lane_change=values.race_shuffle)
+        if bots
+        else RaceOptions(obstacles=whole, randomize_obstacles=values.race_shuffle)
+    )
+    try:
+        return with_race(spec, values.race_type, options)
+    except ModelError as error:
+        where = "bot-speed" if "--bot-speed" in str(error) else "race-objects"
+        message = str(error).replace("--obstacles", "Boxes").replace("--bots", "Bot cars")
+        problems.append(FieldProblem(where, message.replace("--bot-speed", "The bots' speed")))
+        return spec
 
 
 # --- checking ---------------------------------------------------------------------------
@@ -294,11 +383,15 @@ def spec_of_form(
     reward = reward_problem(values.reward_source)
     if reward is not None:
         problems.append(FieldProblem("reward", str(reward)))
+    raced = _with_race_of_form(base, values, base, problems)
+    blind = blind_to_objects(raced.race_type, sensors)
+    if blind is not None:
+        problems.append(FieldProblem("sensor", blind[0].upper() + blind[1:]))
     if problems:
         raise FormError(problems)
     metadata = replace(base.metadata, action_space=space, sensors=sensors)
     spec = replace(
-        base,
+        raced,
         track=values.track,
         metadata=metadata,
         hyperparameters=hyperparameters,
@@ -369,11 +462,16 @@ def save_edit(folder: ModelFolder, spec: ModelSpec) -> ModelFolder:
         raise ModelError(str(error)) from None
     track = resolve_track(spec.track)
     check_reward_code(spec.reward_source, REWARD_FILE_NAME)
+    before = folder.training_params()
+    # The race type's keys are the spec's; every other key the file holds stays.
+    extra = {key: value for key, value in before.extra.items() if key not in RACE_KEYS}
     params = replace(
-        folder.training_params(),
+        before,
         world_name=track.name,
         track_hash=track.content_hash,
         max_minutes=float(spec.max_minutes),
+        race_type=spec.race_type,
+        extra={**extra, **dict(spec.race_keys)},
     )
     write_bytes_atomic(folder.reward_file, spec.reward_source.encode("utf-8"))
     write_hyperparameters(folder.hyperparameters_file, hyperparameters)

@@ -42,6 +42,7 @@ from racer_tui.model_form import (
     CONTINUOUS,
     DISCRETE,
     KEPT,
+    RACE_TYPE_CHOICES,
     REWARD_FILE_NAME,
     SENSOR_CHOICES,
     TUNABLE,
@@ -291,6 +292,34 @@ class ModelEditorScreen(RacerScreen[str | None]):
                     Input(values.max_minutes, id="max-minutes"),
                     f"{MIN_MINUTES:g} to {MAX_MINUTES:g}",
                 )
+                yield field(
+                    "Race type",
+                    Select(
+                        RACE_TYPE_CHOICES, value=values.race_type, allow_blank=False, id="race-type"
+                    ),
+                )
+                with Vertical(id="race-fields"):
+                    yield field(
+                        "Boxes or bot cars",
+                        Input(values.race_objects, id="race-objects"),
+                        "1-10 boxes, 1-6 bots",
+                    )
+                    with Vertical(id="bot-speed-field"):
+                        yield field(
+                            "Bot cars' speed (m/s)",
+                            Input(values.bot_speed, id="bot-speed"),
+                            "0.1 to 4",
+                        )
+                    yield field(
+                        "Shuffle the boxes / bots change lanes",
+                        Select(
+                            [("no", False), ("yes", True)],
+                            value=values.race_shuffle,
+                            allow_blank=False,
+                            id="race-shuffle",
+                        ),
+                        "boxes: every episode; bots: every 3-5 s",
+                    )
             yield TrackMap(id="track-preview")
 
     def _actions_tab(self, values: FormValues) -> ComposeResult:
@@ -413,6 +442,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
                 self.dismiss(None)
                 return
         self._show_kind()
+        self._show_race()
         self._refresh_actions()
         if self.initial is not None:
             self._load_preview(self.initial.track)
@@ -456,6 +486,10 @@ class ModelEditorScreen(RacerScreen[str | None]):
             max_minutes=self._input("max-minutes"),
             reward_source=self.query_one("#reward", TextArea).text,
             hyperparameters=hyperparameters,
+            race_type=str(self._select("race-type")),
+            race_objects=self._input("race-objects"),
+            bot_speed=self._input("bot-speed"),
+            race_shuffle=self._select("race-shuffle") is True,
         )
 
     # --- live feedback ------------------------------------------------------------------------
@@ -498,6 +532,19 @@ class ModelEditorScreen(RacerScreen[str | None]):
                 rows.append((str(index), f"{steer:g}", f"{round(action.speed, 2):g}", turn))
         fill_table(self.query_one("#action-table", DataTable), ACTION_COLUMNS, rows)
 
+    def _show_race(self) -> None:
+        """A race type's own fields, shown only for it: none for a time trial, no speed for
+        boxes."""
+        race = self._select("race-type")
+        self.query_one("#race-fields").display = race != "time-trial"
+        self.query_one("#bot-speed-field").display = race == "head-to-bot"
+
+    @on(Select.Changed, "#race-type")
+    def _race_changed(self) -> None:
+        self._show_race()
+        for field_id in ("race-objects", "bot-speed", "sensor"):
+            self._set_problem(field_id, "")
+
     @on(Select.Changed, "#action-kind")
     def _kind_changed(self) -> None:
         self._show_kind()
@@ -512,7 +559,12 @@ class ModelEditorScreen(RacerScreen[str | None]):
         field_id = str(event.input.id)
         if field_id in ACTION_FIELDS:
             self._refresh_actions()
-        elif field_id.startswith("hp-") or field_id in ("max-minutes", "name"):
+        elif field_id.startswith("hp-") or field_id in (
+            "max-minutes",
+            "name",
+            "race-objects",
+            "bot-speed",
+        ):
             self._set_problem(field_id, "")
 
     @on(TextArea.Changed, "#reward")

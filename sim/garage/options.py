@@ -161,9 +161,9 @@ def model_spec(
         except DeepRacerFileError as error:
             raise ModelError(str(error)) from None
         spec = replace(spec, hyperparameters=checked)
-    race_options = _RaceOptions(obstacles, randomize_obstacles, bots, bot_speed, bot_lane_change)
+    race_options = RaceOptions(obstacles, randomize_obstacles, bots, bot_speed, bot_lane_change)
     if race_type is not None or race_options.given:
-        spec = _with_race(spec, race_type, race_options)
+        spec = with_race(spec, race_type, race_options)
     blind = blind_to_objects(spec.race_type, spec.metadata.sensors)
     if blind is not None:
         raise ModelError(f"--sensor: {blind}")
@@ -268,8 +268,8 @@ def blind_to_objects(race_type: str, sensors: Sequence[str]) -> str | None:
 
 
 @dataclass(frozen=True)
-class _RaceOptions:
-    """`model new`'s options for the objects of a race type."""
+class RaceOptions:
+    """`model new`'s (and the editor's) options for the objects of a race type."""
 
     obstacles: int | None = None
     randomize_obstacles: bool = False
@@ -290,7 +290,7 @@ class _RaceOptions:
         return self.for_boxes or self.for_bots
 
 
-def _with_race(spec: ModelSpec, race_type: str | None, options: _RaceOptions) -> ModelSpec:
+def with_race(spec: ModelSpec, race_type: str | None, options: RaceOptions) -> ModelSpec:
     """`spec` racing `race_type` (a name of RACE_TYPES; without one, the type the object
     options belong to)."""
     from sim.objects.settings import (

@@ -256,3 +256,55 @@ async def test_switching_tabs_with_function_keys_keeps_a_focused_field() -> None
             focused = app.focused
             pane = editor.query_one(f"#{tab}")
             assert focused is not None and pane in focused.ancestors, (key, focused)
+
+
+async def test_the_race_type_is_chosen_in_the_editor_and_kept_when_edited() -> None:
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        editor = _editor(app)
+        await pilot.press(*"chaser")
+        assert not editor.query_one("#race-fields").display  # a time trial has no objects
+        editor.query_one("#race-type", Select).value = "head-to-bot"
+        await pilot.pause()
+        assert editor.query_one("#race-fields").display
+        assert editor.query_one("#bot-speed-field").display
+        editor.query_one("#race-objects", Input).value = "2"
+        editor.query_one("#bot-speed", Input).value = "0.8"
+        editor.query_one("#race-shuffle", Select).value = True
+        # The vector state cannot see bots: saving says so by the sensor.
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert app.screen is editor
+        assert "needs a camera or a lidar" in painted(editor.query_one("#sensor-problem"))
+        editor.query_one("#sensor", Select).value = "lidar"
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+    params = open_model("chaser").training_params()
+    assert params.race_type == "HEAD_TO_BOT"
+    assert params.extra["NUMBER_OF_BOT_CARS"] == 2
+    assert params.extra["BOT_CAR_SPEED"] == 0.8
+    assert params.extra["IS_LANE_CHANGE"] is True
+
+    # Edited to object avoidance with shuffled boxes: the bots' keys go, the boxes' come.
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        await pilot.press("e")
+        editor = _editor(app)
+        assert editor.query_one("#race-type", Select).value == "head-to-bot"
+        assert editor.query_one("#race-objects", Input).value == "2"
+        editor.query_one("#race-type", Select).value = "object-avoidance"
+        await pilot.pause()
+        assert not editor.query_one("#bot-speed-field").display
+        editor.query_one("#race-objects", Input).value = "4"
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+    params = open_model("chaser").training_params()
+    assert params.race_type == "OBJECT_AVOIDANCE"
+    assert params.extra["NUMBER_OF_OBSTACLES"] == 4
+    assert params.extra["RANDOMIZE_OBSTACLE_LOCATIONS"] is True
+    assert "NUMBER_OF_BOT_CARS" not in params.extra
