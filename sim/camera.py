@@ -5,7 +5,9 @@ the ground at a fixed distance ahead, so the ground point of pixel (row r, colum
 the car's frame is (forward[r], lateral[r, c]); per call only the car's rotation and
 translation are applied before gathering cells of the track raster's texture (what the
 camera sees there is `sim.camera_scene`). Above the horizon each column sees the wall it
-faces, up to the wall's top, and the background over it.
+faces, up to the wall's top, and the background over it. Solid objects on the track
+(`Solids`: DeepRacer's boxes, head-to-bot's bot cars) are drawn last, over the ground and
+the walls, as upright boxes through the same pinhole.
 
 Poses are (x, y, yaw): body centre in metres, yaw in radians counter-clockwise from +x.
 A camera keeps scratch buffers, so use one per thread.
@@ -14,14 +16,18 @@ A camera keeps scratch buffers, so use one per thread.
 from __future__ import annotations
 
 import bisect
+import functools
+import itertools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import gymnasium as gym
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sim import camera_scene as scene
+from sim.plural import counted
 from sim.raster import TrackRaster
 from sim.track import Track
 
@@ -87,6 +93,102 @@ DEEPRACER_CAMERA = CameraSpec()
 PHYSICAL_CAR_CAMERA = CameraSpec(
     fov_deg=120.0, mount_forward=0.12, mount_height=0.10, pitch_deg=15.0
 )
+
+
+@dataclass(frozen=True)
+class Solids:
+    """Solid objects standing on the track, each car its own k of them (DeepRacer's boxes,
+    head-to-bot's bot cars): upright boxes from the ground up to `height`.
+
+    `x`, `y` (metres, the footprint's centre) and `heading` (radians counter-clockwise
+    from +x, the direction of `length`) are (n_cars, k) float arrays: row i holds car i's
+    objects. `length`, `width`, `height` (metres) and the grey levels of the sides and of
+    the top are (k,) arrays, one per object. Arrays are checked and converted to float64
+    and uint8 on construction; what the camera needs of them is worked out on first use
+    and kept, so objects that stay put can be drawn frame after frame from one Solids.
+    """
+
+    x: NDArray[np.float64]
+    y: NDArray[np.float64]
+    heading: NDArray[np.float64]
+    length: NDArray[np.float64]
+    width: NDArray[np.float64]
+    height: NDArray[np.float64]
+    side_tone: NDArray[np.uint8]
+    top_tone: NDArray[np.uint8]
+
+    def __post_init__(self) -> None:
+        places = [np.asarray(getattr(self, name), dtype=np.float64) for name in _PLACES]
+        sizes = [np.asarray(getattr(self, name), dtype=np.float64) for name in _SIZES]
+        tones = [np.asarray(getattr(self, name)) for name in _TONES]
+        shape = places[0].shape
+        if len(shape) != 2 or any(a.shape != shape for a in places):
+            raise ValueError("solids' x, y and heading must be 2-D arrays (n_cars, k) alike")
+        k = shape[1]
+        if any(a.shape != (k,) for a in sizes + tones):
+            raise ValueError(
+                f"solids' length, width, height and tones must be 1-D arrays of {k} values "
+                "(one per object)"
+            )
+        if not math.isfinite(float(sum(a.sum() for a in places))):
+            raise ValueError("a solid's place holds NaN or infinity")
+        if not all(bool((np.isfinite(a) & (a > 0)).all()) for a in sizes):
+            raise ValueError("solids' length, width and height must be positive metres")
+        for name, tone in zip(_TONES, tones, strict=True):
+            if tone.dtype != np.uint8:
+                if not np.issubdtype(tone.dtype, np.integer) or (
+                    tone.size and not 0 <= tone.min() <= tone.max() <= 255
+                ):
+                    raise ValueError(f"solids' {name} must be grey levels, whole numbers 0-255")
+                object.__setattr__(self, name, tone.astype(np.uint8))
+        for name, array in zip(_PLACES, places, strict=True):
+            object.__setattr__(self, name, array)
+        for name, array in zip(_SIZES, sizes, strict=True):
+            object.__setattr__(self, name, array)
+
+    @property
+    def cars(self) -> int:
+        """How many cars the objects are laid out for (rows of `x`)."""
+        return int(self.x.shape[0])
+
+    @functools.cached_property
+    def _spheres(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Each object's bounding sphere: its middle (n_cars, 4, k) as homogeneous world
+        coordinates (x, y, z, 1), and its radius (k,)."""
+        n, k = self.x.shape
+        middle = np.empty((n, 4, k))
+        middle[:, 0], middle[:, 1], middle[:, 2], middle[:, 3] = self.x, self.y, self.height / 2, 1
+        return middle, np.sqrt(self.length**2 + self.width**2 + self.height**2) / 2
+
+    @functools.cached_property
+    def _boxes(self) -> _Boxes:
+        """The objects' corners, footprints and axes in world coordinates."""
+        n, k = self.x.shape
+        half = np.stack([self.length, self.width], axis=1) / 2
+        along = np.stack([np.cos(self.heading), np.sin(self.heading)], axis=-1)
+        axes = np.stack([along, along[..., ::-1] * _FLIP], axis=2)
+        centre = np.stack([self.x, self.y], axis=-1)
+        # From the centre half the length along, half the width across, and up.
+        reach = (axes * half[:, :, None])[..., None]  # (n, k, 2, 2, 1)
+        corners = np.ones((n, k, 4, 8))
+        corners[:, :, :2] = centre[..., None] + reach[:, :, 0] * _CORNERS[:, 1]
+        corners[:, :, :2] += reach[:, :, 1] * _CORNERS[:, 2]
+        corners[:, :, 2] = self.height[:, None] * _CORNERS[:, 3]
+        return _Boxes(corners, centre, axes, half)
+
+
+class _Boxes(NamedTuple):
+    """Solids as the camera draws them, in world coordinates, for n cars' k objects."""
+
+    corners: NDArray[np.float64]  # (n, k, 4, 8): homogeneous (x, y, z, 1), as in _CORNERS
+    centre: NDArray[np.float64]  # (n, k, 2): the footprint's centre
+    axes: NDArray[np.float64]  # (n, k, 2, 2): unit vectors along the length, and across
+    half: NDArray[np.float64]  # (k, 2): half the length, half the width
+
+
+_PLACES = ("x", "y", "heading")
+_SIZES = ("length", "width", "height")
+_TONES = ("side_tone", "top_tone")
 
 
 class _Band:
@@ -184,6 +286,30 @@ class Camera:
         up = -(sin_p + down[:ground_row, None] * cos_p)
         level = np.hypot(cos_p - down[:ground_row, None] * sin_p, right[None, :])
         self._tan_elevation = np.where(up > 0, up / level, -np.inf).astype(np.float32)
+        # Solids: a point (ahead, left, up) in metres from the lens, in the car's frame, goes
+        # to homogeneous pixel coordinates (X, Y, Z) = this matrix times it: it lies at depth
+        # Z along the optical axis and shows at column X / Z and row Y / Z (pixel edges at
+        # whole numbers, as above).
+        self._project = np.array(
+            [
+                [width / 2 * cos_p, -focal, -width / 2 * sin_p],
+                [height / 2 * cos_p - focal * sin_p, 0.0, -height / 2 * sin_p - focal * cos_p],
+                [cos_p, 0.0, -sin_p],
+            ]
+        )
+        # X, width Z - X and Z, which are negative for a point left of the image, right of
+        # it or behind the lens, scaled to its distance from that side of the frustum.
+        sides = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, width], [0.0, 0.0, 1.0]])
+        self._frustum_sides = sides / np.linalg.norm(sides @ self._project, axis=1)[:, None]
+        # Turning world (x, y) by the car's yaw, then projecting: the cosine's part and the
+        # sine's (ahead = x cos + y sin, left = y cos - x sin).
+        self._turn_cos = self._project[:, :2]
+        self._turn_sin = self._project[:, 1::-1] * _FLIP
+        self._lens_drop = -spec.mount_height * self._project[:, 2]  # the lens above the ground
+        self._all_columns = np.array([0.0, width])[:, None]
+        self._columns = np.arange(width)
+        self._pixel_centres = self._columns + 0.5
+        self._steps = np.arange(0, 0)  # one row apart down a flattened frame, grown as needed
         sampled = sum(band.lateral.size for band in self._split)
         self._chunk = max(1, _CHUNK_PIXELS // max(1, sampled))
         for band in self._split:
@@ -195,18 +321,41 @@ class Camera:
         return self.spec.height, self.spec.width
 
     def render(
-        self, x: ArrayLike, y: ArrayLike, yaw: ArrayLike, out: UInt8Array | None = None
+        self,
+        x: ArrayLike,
+        y: ArrayLike,
+        yaw: ArrayLike,
+        solids: Solids | None = None,
+        out: UInt8Array | None = None,
     ) -> UInt8Array:
-        """Frames for N poses, (N, H, W) uint8; pass `out` to reuse an output array."""
+        """Frames for N poses, (N, H, W) uint8; pass `out` to reuse an output array.
+
+        With `solids` (laid out for the same N cars) each car also sees its own objects,
+        standing on the ground in front of the walls."""
         table = _pose_table(x, y, yaw)
         n = table.shape[1]
         height, width = self.shape
+        if solids is not None and solids.cars != n:
+            raise ValueError(f"solids are laid out for {counted(solids.cars, 'car')}, not {n}")
         if out is None:
             out = np.empty((n, height, width), dtype=np.uint8)
         elif out.shape != (n, height, width) or out.dtype != np.uint8:
             raise ValueError(f"out must be a uint8 array of shape {(n, height, width)}")
         if n == 0:
             return out
+        self._render_scene(table, out)
+        if solids is not None and solids.x.size:
+            if out.flags.c_contiguous:
+                self._draw_solids(table, solids, out)
+            else:
+                frames = np.ascontiguousarray(out)
+                self._draw_solids(table, solids, frames)
+                out[...] = frames
+        return out
+
+    def _render_scene(self, table: NDArray[np.float64], out: UInt8Array) -> None:
+        """The ground, the walls and the background over them, into `out`."""
+        n = table.shape[1]
         terms = self._car_terms(table)
         wall_tone, wall_top = self._walls(terms[:, _AHEAD], terms[:, _LEFT])
         nearest_wall = terms[:, _NEAREST]
@@ -239,7 +388,141 @@ class Camera:
                 far = out[start:stop, self.ground_row : self.ground_row + far_rows]
                 # BEYOND_WALLS is 0 and every ground tone is brighter than any wall.
                 np.maximum(far, wall_tone[start:stop, None, :], out=far)
-        return out
+
+    def _draw_solids(self, table: NDArray[np.float64], solids: Solids, out: UInt8Array) -> None:
+        """Each car's solids over its frame in `out` (C-contiguous), nearest last.
+
+        A box seen from a point outside it fills the cone from the lens over it, bounded
+        by the planes through the lens and the box's outline edges (at most six, listed
+        in _OUTLINES). Each plane's trace on the image is a line, and a pixel lies in the
+        cone when its centre is on the inner side of every line: that holds even for
+        corners behind the lens, so nothing needs clipping. In an image column each line
+        bounds the rows from above or from below, so an object covers one run of rows
+        per column: `_runs` works them out for all objects and columns at once.
+
+        Only elementwise operations and matrix products per car touch the numbers, so a
+        car's frame does not depend on what else is drawn with it. Numpy's calls cost more
+        here than its arithmetic, hence the terse style."""
+        height, width = self.shape
+        k = solids.x.shape[1]
+        # Per car, the map from homogeneous world coordinates to homogeneous pixel ones
+        # (X, Y, Z: column X / Z, row Y / Z, depth Z): into the car's frame from the lens,
+        # then through the lens.
+        trig = np.cos(table[2, :, None] - _QUARTER_TURN)[:, :, None, None]  # cos, sin
+        lens = table[:2].T + self.spec.mount_forward * trig[:, :, 0, 0]
+        to_pixels = np.empty((len(lens), 3, 4))
+        turned = to_pixels[:, :, :2]
+        np.add(trig[:, 0] * self._turn_cos, trig[:, 1] * self._turn_sin, out=turned)
+        to_pixels[:, :, 2] = self._project[:, 2]
+        shift = turned[:, :, 0] * lens[:, :1] + turned[:, :, 1] * lens[:, 1:]
+        np.subtract(self._lens_drop, shift, out=to_pixels[:, :, 3])
+        # In view unless its bounding sphere lies wholly outside a side of the frustum.
+        middle, radius = solids._spheres
+        inside = np.minimum.reduce(self._frustum_sides @ (to_pixels @ middle), axis=1)
+        which = (inside > -radius).ravel().nonzero()[0]
+        count = len(which)
+        if not count:
+            return
+        car, kind = which // k, which % k
+        boxes = solids._boxes
+        # Corner j of object v: (X, Y, Z) at corners[:, j, v].
+        mapping = to_pixels[car].transpose(1, 2, 0)[:, :, None]  # (3, 4, 1, V)
+        world = boxes.corners[car, kind].transpose(1, 2, 0)  # (4, 8, V), rows x, y, z, 1
+        corners = mapping[:, 0] * world[0] + mapping[:, 1] * world[1]
+        corners += mapping[:, 2] * world[2]
+        corners += mapping[:, 3]
+        # Columns each object can cover: its corners' span, or all when one lies behind.
+        depth = corners[2]
+        ahead = np.minimum.reduce(depth) > 0
+        column = corners[0] / np.where(ahead, depth, 1.0)
+        lowest, highest = np.minimum.reduce(column), np.maximum.reduce(column)
+        extent = np.array([np.floor(lowest), np.ceil(highest)])
+        extent = np.where(ahead, extent, self._all_columns)
+        extent = np.minimum(np.maximum(extent, 0.0), width)
+        span = int(np.maximum.reduce(extent[1] - extent[0]))
+        if span <= 0:
+            return
+        first = np.minimum(extent[0], width - span).astype(np.intp)
+        centres = first[:, None] + self._pixel_centres[:span]  # (V, span)
+        # The lens in each object's own frame (u along its length, v across): which of its
+        # sides face it, and whether it looks down on the top, pick the outline.
+        half = boxes.half[kind]
+        offset = lens[car] - boxes.centre[car, kind]
+        axes = boxes.axes[car, kind]
+        lens_uv = axes[:, :, 0] * offset[:, :1] + axes[:, :, 1] * offset[:, 1:]
+        region = (lens_uv >= -half).astype(np.intp) + (lens_uv > half)
+        above = self.spec.mount_height > solids.height[kind]
+        outline = _OUTLINES[region @ _REGION_WEIGHTS + above].transpose(1, 2, 0)  # (2, 6, V)
+        corners = corners.reshape(3, -1)  # corner j of object v at j * V + v
+        mine = np.arange(count)
+        start, end = _runs(corners[:, outline * count + mine], centres, height)
+        if above.any():
+            # Seen from above, a column's run holds the top's run, with side above and
+            # below it (looking steeply past a corner shows a sliver of side over the top).
+            lid_start, lid_end = _runs(corners[:, _TOP_OUTLINE * count + mine], centres, height)
+            lid_start = np.where(above[:, None], np.clip(lid_start, start, end), start)
+            lid_end = np.where(above[:, None], np.clip(lid_end, lid_start, end), start)
+            runs = np.array([start, lid_start, lid_start, lid_end, lid_end, end])
+            side, top = solids.side_tone[kind], solids.top_tone[kind]
+            tones = np.array([side, top, side])
+        else:
+            runs, tones = np.array([start, end]), solids.side_tone[kind][None]
+        # Painter's order: each car's farthest object first, an object's distance being
+        # that of its footprint's nearest point from the lens. (Checked against ray
+        # casting for objects half a metre or more apart; two closer together, near the
+        # car, can come out in the wrong order for a few pixels along an edge.)
+        gap = np.hypot(*np.maximum(np.abs(lens_uv) - half, 0.0).T)
+        order = np.lexsort((-gap, car))
+        self._paint(out, runs, tones, car=car, first=first, order=order)
+
+    def _paint(
+        self,
+        out: UInt8Array,
+        runs: NDArray[np.intp],
+        tones: UInt8Array,
+        *,
+        car: NDArray[np.intp],
+        first: NDArray[np.intp],
+        order: NDArray[np.intp],
+    ) -> None:
+        """Paints objects' runs of rows into their cars' frames, objects in `order` (by
+        car, farthest first): `runs` (2 * parts, V, span) holds each part's (side, or side,
+        top, side) first and past-the-end rows per column of the object's window, which
+        begins at column `first`, and `tones` (parts, V) the parts' tones.
+
+        All pixels go through one flat index, in layers: the farthest object of each car,
+        then the next farthest and so on (objects of one layer belong to different cars,
+        so cannot overlap)."""
+        height, width = self.shape
+        cars = car[order]
+        rank = np.arange(len(order)) - np.searchsorted(cars, cars)  # within its car
+        by_layer = np.argsort(rank, kind="stable")
+        order, rank = order[by_layer], rank[by_layer]
+        start, stop = runs[0::2, order], runs[1::2, order]  # (parts, V, span)
+        lengths = (stop - start).transpose(1, 0, 2).ravel()  # by object, part, column
+        ends = np.add.accumulate(lengths)
+        total = int(ends[-1])
+        if not total:
+            return
+        # Each run's pixels, a row apart down its column of the frames flattened.
+        offset = car[order] * (height * width) + first[order]
+        origin = start.transpose(1, 0, 2) * width + (
+            offset[:, None, None] + self._columns[: runs.shape[2]]
+        )
+        index = np.repeat(origin.ravel() - width * (ends - lengths), lengths)
+        if len(self._steps) < total:
+            self._steps = np.arange(0, 2 * total * width, width)
+        index += self._steps[:total]
+        parts = ends.reshape(len(order), -1, runs.shape[2])[:, :, -1]  # (V, parts)
+        tones = tones[:, order].T
+        tone = tones.flat[0]
+        uniform = bool((tones == tone).all())
+        if not uniform:
+            values = np.repeat(tones.ravel(), np.diff(parts.ravel(), prepend=0))
+        frames = out.reshape(-1)
+        layers = parts[:-1, -1][np.diff(rank) > 0].tolist()
+        for low, high in itertools.pairwise([0, *layers, total]):
+            frames[index[low:high]] = tone if uniform else values[low:high]
 
     def _gather(
         self,
@@ -357,6 +640,82 @@ _CELLS = slice(4, 6)
 _AHEAD = slice(6, 10)
 _LEFT = slice(10, 14)
 _NEAREST = 14
+
+# Solids' corners as multiples of (1, half length, half width, height): the bottom four
+# counter-clockwise from (+u, +v), u along the object's length and v across it, then the
+# top four above them.
+_FOOTPRINT = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)]
+_CORNERS = np.array([(1.0, u, v, z) for z in (0.0, 1.0) for u, v in _FOOTPRINT])
+
+
+def _outline(u: int, v: int, above: bool) -> list[int]:
+    """The corners (as in _CORNERS) around a box's outline seen from a lens in region
+    (u, v) of its footprint (0: past its -u or -v side, 1: between the two sides, 2: past
+    the + side), below or above its top: along the bottom of the sides facing the lens,
+    from the lens's left to its right, then back along the top, over those sides from
+    below and round the far side from above. Always six: a repeated corner adds an edge
+    of no length, which bounds nothing, so a lens inside the box sees box all round."""
+    if (u, v) == (1, 1):
+        return [4, 5, 6, 7, 7, 7] if above else [0] * 6
+    sides = {(2, 1): 3, (0, 1): 1, (1, 2): 0, (1, 0): 2}  # one side faces the lens
+    meet = {(2, 2): 0, (0, 2): 1, (0, 0): 2, (2, 0): 3}  # two sides, meeting at this corner
+    if (u, v) in sides:
+        near = [sides[u, v], (sides[u, v] + 1) % 4]
+    else:
+        near = [(meet[u, v] + i) % 4 for i in (-1, 0, 1)]
+    top = [(near[-1] + i) % 4 for i in range(6 - len(near))] if above else near[::-1]
+    ring = near + [4 + corner for corner in top]
+    return ring + ring[-1:] * (6 - len(ring))
+
+
+# Outline corners and the next ones round, by region (u * 3 + v) * 2 + above.
+_RINGS = np.array(
+    [_outline(u, v, above) for u in range(3) for v in range(3) for above in (False, True)]
+)
+_OUTLINES = np.stack([_RINGS, np.roll(_RINGS, -1, axis=1)], axis=1)  # (18, 2, 6)
+_TOP_OUTLINE = np.array([[4, 5, 6, 7], [5, 6, 7, 4]])[..., None]
+# (x, y) to (-y, x): a quarter turn counter-clockwise.
+_FLIP = np.array([-1.0, 1.0])
+# Region number (u * 3 + v) * 2 from the regions along u and v.
+_REGION_WEIGHTS = np.array([6, 2])
+
+
+def _runs(
+    ends: NDArray[np.float64], centres: NDArray[np.float64], height: int
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Per object and column, the first row and the row past the last whose pixel centre
+    looks into the cone from the lens over an outline.
+
+    `ends` (3, 2, m, V) holds the outline's edges: the X, Y, Z (homogeneous pixel
+    coordinates) of each of V objects' m corners and of the next ones round, going round
+    the same way as seen from the lens; `centres` (V, columns) the columns' pixel centres.
+    An edge and the lens span a plane whose trace on the image is the line
+    A x + B y + C = 0, (A, B, C) the cross product of the next corner and this one: the
+    outlines go round so that the inside is where A x + B y + C > 0."""
+    (x0, x1), (y0, y1), (z0, z1) = ends
+    a = y1 * z0 - z1 * y0
+    b = z1 * x0 - x1 * z0
+    c = x1 * y0 - y1 * x0
+    # Where B > 0 the line bounds the first row, y >= -(A x + C) / B, where B < 0 the
+    # last one; an upright line (B = 0) is leant a hair, so that it still bounds the rows,
+    # by -+infinity either side, and an edge of no length (A = B = C = 0) bounds nothing.
+    upright = b == 0.0
+    if upright.any():
+        b[upright] = 1e-9 * (np.abs(a) + np.abs(c))[upright] + 1e-300
+    below = b > 0
+    scale = -1.0 / np.abs(b)
+    # Both bounds as maxima over lines of slope * x + offset: the first row's, and the
+    # last row's negated; each line takes part in one, and in the other bounds nothing.
+    slope = a * scale
+    offset = c * scale - (below - 0.5)  # rows' centres are at r + 0.5
+    first = np.where(below, offset, -np.inf)
+    last = np.where(below, -np.inf, offset)
+    across = slope[..., None] * centres  # (m, V, columns)
+    start = np.ceil(np.maximum.reduce(across + first[..., None]))
+    start = np.minimum(np.maximum(start, 0.0), height)
+    across += last[..., None]
+    end = np.minimum(np.floor(-np.maximum.reduce(across)) + 1, height)
+    return start.astype(np.intp), np.maximum(end, start).astype(np.intp)
 
 
 def camera_space(spec: CameraSpec | None = None) -> gym.spaces.Box:

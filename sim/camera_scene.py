@@ -47,6 +47,24 @@ WALL_HIGH_Y = 6
 BEYOND_WALLS = 0
 GROUND_FLOOR = max(WALL_LOW_X, WALL_HIGH_X, WALL_LOW_Y, WALL_HIGH_Y) + 1
 
+# Solid objects standing on the track (`sim.camera.Solids`), drawn as upright boxes in
+# flat tones: their sides in one tone, their top in a slightly lighter one, so the edge
+# between the two shows wherever a camera looks down on an object. The tones are
+# racer-tui's choice, not read off DeepRacer frames: what a model needs is that an object
+# never blends into what lies around it, so each tone keeps more than four grain spreads
+# (ROAD_GRAIN, GRASS_GRAIN) from the road and the field and well away from the bands.
+# * DeepRacer's box_obstacle, a cardboard box 0.4 m long, 0.3 m wide and 0.25 m tall, in a
+#   mid grey-brown: lighter than the road, darker than the field and the dashes.
+# * A bot car in head-to-bot racing, DeepRacer's car body (0.3235 m long, 0.1961 m wide,
+#   about 0.16 m tall), in a dark grey: darker than the road, a little brighter than the
+#   walls.
+# DeepRacer's camera, 0.127 m up, is lower than either object's top, so it sees their
+# sides only; a higher camera sees the tops too.
+BOX_SIDE = 96
+BOX_TOP = 112
+BOT_CAR_SIDE = 30
+BOT_CAR_TOP = 36
+
 # Grain: the spread (standard deviation, grey levels) of the textures at racer-tui's 1 cm
 # cells, between what DeepRacer's 160x120 frame shows near the car (road 4.8, field 2)
 # and a few metres ahead (2.5).
