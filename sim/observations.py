@@ -105,7 +105,9 @@ class Observer:
         pick: Any = slice(None) if cars is None else np.asarray(cars, dtype=np.intp)
         x, y, yaw = fleet.x[pick], fleet.y[pick], fleet.yaw[pick]
         if self._camera is not None:
-            frames = self._camera.render(x, y, yaw)
+            objects = self.sim.objects  # each car's own boxes or bot cars, drawn in its view
+            solids = None if objects is None else objects.solids(np.arange(self.sim.n)[pick])
+            frames = self._camera.render(x, y, yaw, solids=solids)
             parts["camera"] = frames[..., None]
         if self._lidar is not None:
             scan = self._lidar.scan(x, y, yaw)

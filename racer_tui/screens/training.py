@@ -57,8 +57,10 @@ from sim.garage.folder import (
     list_models,
     open_model,
 )
+from sim.objects.field import ObjectField
 from sim.remedies import fix_named
 from sim.simulation import LOOK_AHEAD
+from sim.track import Track
 from sim.training import events
 from sim.training.launcher import (
     STOP_TIMEOUT,
@@ -186,7 +188,32 @@ def latest_observation(folder: ModelFolder) -> Observation | None:
     # The trace's X, Y is DeepRacer's point ahead of the car; the view is from the car.
     yaw = math.radians(row.yaw)
     x, y = row.x - LOOK_AHEAD * math.cos(yaw), row.y - LOOK_AHEAD * math.sin(yaw)
-    return observe_at(folder.track(), sensors, (x, y, row.yaw), caption)
+    track = folder.track()
+    objects, caption = _objects_seen(folder, track, caption)
+    return observe_at(track, sensors, (x, y, row.yaw), caption, objects)
+
+
+def _objects_seen(
+    folder: ModelFolder, track: Track, caption: str
+) -> tuple[ObjectField | None, str]:
+    """The model's boxes, when the view can show them where they stood: boxes that are not
+    shuffled stand in the same places every episode. Shuffled boxes and bot cars are not in
+    the trace, so the caption says they are left out rather than drawing them elsewhere."""
+    from sim.deepracer_files import DeepRacerFileError
+    from sim.objects.reading import race_settings
+    from sim.objects.settings import RaceType
+    from sim.objects.world import object_field
+
+    try:
+        race = race_settings(folder.training_params())
+    except (DeepRacerFileError, ModelError):
+        return None, caption
+    if race.race_type is RaceType.TIME_TRIAL:
+        return None, caption
+    if race.race_type is RaceType.OBJECT_AVOIDANCE and not race.obstacles.randomize:
+        return object_field(track, race, 1), caption
+    what = "bot cars" if race.race_type is RaceType.HEAD_TO_BOT else "shuffled boxes"
+    return None, f"{caption} · its {what} are not shown"
 
 
 def _pid_alive(pid: int) -> bool:

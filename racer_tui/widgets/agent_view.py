@@ -25,6 +25,7 @@ from textual.strip import Strip
 from textual.widget import Widget
 
 from racer_tui.widgets.braille import braille_char, set_dots, styled_runs
+from sim.objects.field import ObjectField
 from sim.sensors import Camera, Lidar, LidarSpec
 from sim.track import Track
 
@@ -66,15 +67,26 @@ def observe_at(
     sensors: tuple[str, ...],
     pose: tuple[float, float, float],
     caption: str,
+    objects: ObjectField | None = None,
 ) -> Observation:
-    """The model's sensor at a pose (sim-trace yaw is in degrees). Lidar models get the
-    lidar; every other model gets the camera (a vector model sees numbers, but the
-    camera shows a racer where the car is)."""
+    """The model's sensor at a pose (sim-trace yaw is in degrees), seeing `objects` (car
+    0's boxes or bots) if given. Lidar models get the lidar; every other model gets the
+    camera (a vector model sees numbers, but the camera shows a racer where the car is)."""
     x, y, yaw_deg = pose
     yaw = math.radians(yaw_deg)
     if "lidar" in sensors or "sector_lidar" in sensors:
         lidar = _lidar(track)
         ranges = lidar.scan([x], [y], [yaw])[0]
+        if objects is not None:
+            seen = objects.ray_distances(
+                np.array([0]),
+                np.array([x]),
+                np.array([y]),
+                np.array([yaw]),
+                angles=lidar.angles,
+                max_range=lidar.spec.max_range,
+            )[0]
+            ranges = np.minimum(ranges, seen).astype(np.float32)
         spec: LidarSpec = lidar.spec
         return Observation(
             f"lidar · {caption}",
@@ -82,7 +94,8 @@ def observe_at(
             angles_deg=np.asarray(spec.angles_deg),
             max_range=spec.max_range,
         )
-    frame = _camera(track).render([x], [y], [yaw])[0]
+    solids = None if objects is None else objects.solids(np.array([0]))
+    frame = _camera(track).render([x], [y], [yaw], solids=solids)[0]
     label = "camera" if "camera" in sensors else "camera (the model sees the vector state)"
     return Observation(f"{label} · {caption}", frame=frame)
 

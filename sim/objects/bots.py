@@ -155,6 +155,7 @@ class BotField(ObjectField):
 
     def _place_one(self, clock: float) -> None:
         """`_place` for car 0 alone, bot by bot in plain floats; the same numbers."""
+        self.placed += 1
         at, rows, length = self._table.at_list, self._table.rows, self.length
         last = len(at) - 2
         speed, across = self.settings.speed, self.settings.lane_change_distance
@@ -220,6 +221,7 @@ class BotField(ObjectField):
     def _place(self, cars: NDArray[np.intp]) -> None:
         """Put `cars`' bots where their clocks say: in their lane beside their centre-line
         point, or part of the way over to the other lane while they change."""
+        self.placed += 1
         clock = self.clock[cars][:, None]
         d = self._centre_distance(cars, clock)
         entries = self._table.lookup(d)  # (cars, bots, lane, column)

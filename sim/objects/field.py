@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,6 +42,9 @@ from sim.objects.placement import (
 )
 from sim.objects.settings import Lane, ObstacleSettings
 from sim.track import Track
+
+if TYPE_CHECKING:
+    from sim.camera import Solids
 
 # The DeepRacer camera's horizontal field of view and near plane (simapp `frustum.py`).
 CAMERA_FIELD_OF_VIEW: Final = 1.13  # radians
@@ -65,11 +68,12 @@ class ObjectShape:
     length: float
     width: float
     height: float
+    is_car: bool = False  # a bot car (the camera draws it darker than a box)
 
 
 BOX_SHAPE: Final = ObjectShape(BOX_LENGTH, BOX_WIDTH, BOX_MODEL_LENGTH, BOX_MODEL_WIDTH, BOX_HEIGHT)
 BOT_CAR_SHAPE: Final = ObjectShape(
-    BOT_CAR_LENGTH, BOT_CAR_WIDTH, BOT_CAR_LENGTH, BOT_CAR_WIDTH, BOT_CAR_HEIGHT
+    BOT_CAR_LENGTH, BOT_CAR_WIDTH, BOT_CAR_LENGTH, BOT_CAR_WIDTH, BOT_CAR_HEIGHT, is_car=True
 )
 
 
@@ -101,6 +105,10 @@ class ObjectField:
         self.left = np.zeros((cars, k), dtype=bool)  # left of the centre line, driving on
         self.from_centre = np.zeros((cars, k))
         self.drawn = np.zeros(cars, dtype=bool)
+        # Objects that stand still are handed to the camera as one Solids until they move
+        # (it keeps its geometry between frames); `placed` counts the placings.
+        self.placed = 0
+        self._solids: tuple[tuple[int, bytes], Solids] | None = None
 
     # --- what subclasses do ------------------------------------------------------------
     def draw(self, car: int) -> None:
@@ -122,6 +130,33 @@ class ObjectField:
         return None
 
     # --- shared --------------------------------------------------------------------------
+    def solids(self, cars: NDArray[np.intp]) -> Solids:
+        """`cars`' objects as the camera draws them (rows in `cars`' order)."""
+        from sim import camera_scene as scene
+        from sim.camera import Solids
+
+        key = (self.placed, np.asarray(cars, dtype=np.intp).tobytes())
+        if self._solids is not None and self._solids[0] == key:
+            return self._solids[1]
+        shape, k = self.shape, self.count
+        side, top = (
+            (scene.BOT_CAR_SIDE, scene.BOT_CAR_TOP)
+            if shape.is_car
+            else (scene.BOX_SIDE, scene.BOX_TOP)
+        )
+        solids = Solids(
+            x=self.x[cars],
+            y=self.y[cars],
+            heading=self.heading[cars],
+            length=np.full(k, shape.length),
+            width=np.full(k, shape.width),
+            height=np.full(k, shape.height),
+            side_tone=np.full(k, side, dtype=np.uint8),
+            top_tone=np.full(k, top, dtype=np.uint8),
+        )
+        self._solids = (key, solids)
+        return solids
+
     def _set(self, car: int, i: int, pose: ObjectPose) -> None:
         self.x[car, i], self.y[car, i] = pose.x, pose.y
         self.heading[car, i] = pose.heading
@@ -287,6 +322,7 @@ class ObstacleField(ObjectField):
         for i, pose in enumerate(obstacle_poses(self.settings, self.lanes, self._rng)):
             self._set(car, i, pose)
         self.drawn[car] = True
+        self.placed += 1
 
     def reset_behind(self, car: int, s: float) -> ObjectPose | None:
         """Where DeepRacer puts a car back after it hit a box: `RESET_BEHIND` metres behind

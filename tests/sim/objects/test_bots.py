@@ -175,3 +175,41 @@ def test_a_replay_shows_the_objects_where_the_race_had_them(preset: str) -> None
     )
     assert worst < 0.01
     assert replay_ticks(result)[5].objects == ()  # without the track: the car alone
+
+
+def test_the_camera_sees_each_cars_own_objects() -> None:
+    from sim import camera_scene as scene
+    from sim.objects.settings import Lane, ObstacleSettings
+    from sim.observations import Observer
+
+    track = resolve_track(TRACK)
+    boxes = RaceSettings(
+        RaceType.OBJECT_AVOIDANCE, obstacles=ObstacleSettings(positions=((0.1, Lane.INNER),))
+    )
+    sim = TrackSimulation(track, 1, race=boxes)
+    sim.reset_car(0, start_s=0.0)
+    field = sim.objects
+    assert field is not None
+    x, y, yaw = float(field.x[0, 0]), float(field.y[0, 0]), float(field.heading[0, 0])
+    sim.put(0, x - 1.0 * math.cos(yaw), y - 1.0 * math.sin(yaw), yaw)
+    frame = Observer(sim, ("camera",)).observe()[0, ..., 0]
+    plain = TrackSimulation(track, 1)
+    plain.reset_car(0, start_s=0.0)
+    plain.put(0, x - 1.0 * math.cos(yaw), y - 1.0 * math.sin(yaw), yaw)
+    empty = Observer(plain, ("camera",)).observe()[0, ..., 0]
+    # A box a metre ahead fills a block of its own grey in the middle of the picture.
+    changed = frame != empty
+    assert changed.sum() > 200
+    assert (frame[changed] == scene.BOX_SIDE).mean() > 0.9
+    middle = frame[:, 60:100]
+    assert (middle == scene.BOX_SIDE).sum() > 100
+
+    # Bot cars are drawn darker, moving with their clock.
+    sim = TrackSimulation(track, 1, race=bots(count=1, speed=0.0))
+    sim.reset_car(0, start_s=0.0)
+    field = sim.objects
+    assert field is not None
+    x, y, yaw = float(field.x[0, 0]), float(field.y[0, 0]), float(field.heading[0, 0])
+    sim.put(0, x - 0.8 * math.cos(yaw), y - 0.8 * math.sin(yaw), yaw)
+    frame = Observer(sim, ("camera",)).observe()[0, ..., 0]
+    assert (frame == scene.BOT_CAR_SIDE).sum() > 100
