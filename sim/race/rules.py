@@ -234,6 +234,14 @@ def rules_from_mapping(data: Mapping[str, Any], base: RaceRules = DEFAULT_RULES)
         lap_count=_lap_count(values.get("lap_count")),
         **_race_type_values(values),
     )
+    for key in data:  # a key of another race type would be silently dropped: say so
+        owner = _RACE_TYPE_KEYS.get(str(key))
+        if owner is not None and owner is not rules.race_type:
+            raise RulesError(
+                f"{key} is for {owner.words} races, but these rules are a "
+                f"{rules.race_type.words}'s; set race_type: {owner.value.lower()} or leave "
+                f"{key} out."
+            )
     if rules.lap_count is not None and rules.laps_scored > rules.lap_count:
         raise RulesError(
             f"a race of {rules.lap_count} laps cannot be ranked over {rules.laps_scored} "
@@ -308,6 +316,16 @@ def _lap_count(value: object) -> int | None:
             f"over the whole window, not {value!r}."
         )
     return value
+
+
+# Each race type's own keys.
+_RACE_TYPE_KEYS: dict[str, RaceType] = {
+    "obstacles": RaceType.OBJECT_AVOIDANCE,
+    "randomize_obstacles": RaceType.OBJECT_AVOIDANCE,
+    "bots": RaceType.HEAD_TO_BOT,
+    "bot_speed": RaceType.HEAD_TO_BOT,
+    "bot_lane_change": RaceType.HEAD_TO_BOT,
+}
 
 
 def _race_type_values(values: Mapping[str, Any]) -> dict[str, Any]:
