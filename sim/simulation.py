@@ -576,6 +576,11 @@ class TrackSimulation:
         proj = projection.tolist()
         previous = self._previous_waypoints().tolist()
         sim_time = (self.steps * STEP_SECONDS).tolist()
+        objects = (
+            [no_objects() for _ in range(self.n)]
+            if self.objects is None
+            else self.objects.all_params(self.s.tolist(), x, y, heading)
+        )
         return [
             {
                 "all_wheels_on_track": all_on[i],
@@ -597,15 +602,10 @@ class TrackSimulation:
                 "is_crashed": crashed[i],
                 "projection_distance": proj[i],
                 "sim_time": sim_time[i],
-                **self._object_params(i, x[i], y[i], heading[i]),
+                **objects[i],
             }
             for i in range(self.n)
         ]
-
-    def _object_params(self, car: int, x: float, y: float, heading: float) -> dict[str, Any]:
-        if self.objects is None:
-            return no_objects()
-        return self.objects.params(car, float(self.s[car]), (x, y), heading)
 
 
 # Every so many steps a stepping loop lets the other threads of its process run.

@@ -64,18 +64,20 @@ class _LaneTable:
             offset = tangent[:, 0] * rel[:, 1] - tangent[:, 1] * rel[:, 0]
             columns.append(np.column_stack([foot, direction, offset]))
         self.table = np.stack(columns, axis=1)  # (entries, lane, [x, y, cos, sin, offset])
+        self._flat = self.table.reshape(len(self.at), 10)
+        self._per_metre = np.append(1.0 / np.diff(self.at), 0.0)
         # The same as plain lists, for one car's bots stepped in plain floats.
         self.at_list: list[float] = self.at.tolist()
-        self.rows: list[list[float]] = self.table.reshape(len(self.at), 10).tolist()
+        self.rows: list[list[float]] = self._flat.tolist()
 
     def lookup(self, distance: FloatArray) -> FloatArray:
-        """(..., 2 lanes, 5) both lanes' entries at these centre-line distances."""
-        at = self.at
-        d = np.asarray(distance) % at[-1]
-        index = np.clip(np.searchsorted(at, d, side="right") - 1, 0, len(at) - 2)
-        frac = ((d - at[index]) / (at[index + 1] - at[index]))[..., None, None]
-        low, high = self.table[index], self.table[index + 1]
-        return np.asarray(low + frac * (high - low))
+        """(..., 10) both lanes' entries (inner x, y, cos, sin, offset, then the outer's)
+        at these centre-line distances, each in [0, the centre line's length)."""
+        index = np.searchsorted(self.at, distance, side="right") - 1
+        np.minimum(index, len(self.at) - 2, out=index)  # a distance rounded up to the length
+        frac = ((distance - self.at[index]) * self._per_metre[index])[..., None]
+        low = self._flat[index]
+        return np.asarray(low + frac * (self._flat[index + 1] - low))
 
 
 class BotField(ObjectField):
@@ -215,36 +217,41 @@ class BotField(ObjectField):
         self._next_change_end = float(self.change_end[0].min())
 
     # --- where they are ------------------------------------------------------------------
-    def _centre_distance(self, cars: NDArray[np.intp], clock: FloatArray) -> FloatArray:
+    def _centre_distance(self, cars: slice | NDArray[np.intp], clock: FloatArray) -> FloatArray:
         return np.asarray((self.start[cars] + clock * self.settings.speed) % self.length)
 
     def _place(self, cars: NDArray[np.intp]) -> None:
         """Put `cars`' bots where their clocks say: in their lane beside their centre-line
         point, or part of the way over to the other lane while they change."""
         self.placed += 1
-        clock = self.clock[cars][:, None]
-        d = self._centre_distance(cars, clock)
-        entries = self._table.lookup(d)  # (cars, bots, lane, column)
-        on_outer = self.outer[cars].astype(np.intp)[..., None]
-        here = np.take_along_axis(entries, on_outer[..., None], axis=2)[:, :, 0]
-        there = np.take_along_axis(entries, 1 - on_outer[..., None], axis=2)[:, :, 0]
-        begin, end = self.change_start[cars], self.change_end[cars]
-        changing = np.isfinite(end) & (clock >= begin) & (end > begin)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            u = np.where(changing, np.clip((clock - begin) / (end - begin), 0.0, 1.0), 0.0)
-        blend = u * u * (3.0 - 2.0 * u)
-        x = here[..., 0] + blend * (there[..., 0] - here[..., 0])
-        y = here[..., 1] + blend * (there[..., 1] - here[..., 1])
-        offset = here[..., 4] + blend * (there[..., 4] - here[..., 4])
-        # Moving across while moving along: the heading turns by the slope of the move
-        # (its offset's change per metre along the lane).
-        slope = (there[..., 4] - here[..., 4]) * 6.0 * u * (1.0 - u)
-        slope = slope / self.settings.lane_change_distance
-        self.x[cars], self.y[cars] = x, y
-        self.heading[cars] = np.arctan2(here[..., 3], here[..., 2]) + np.arctan(slope)
-        self.distance[cars] = d
-        self.from_centre[cars] = np.abs(offset)
-        self.left[cars] = offset > 0.0
+        rows: slice | NDArray[np.intp] = slice(None) if len(cars) == len(self.clock) else cars
+        clock = self.clock[rows][:, None]
+        d = self._centre_distance(rows, clock)
+        entries = self._table.lookup(d)  # (cars, bots, [inner x, y, cos, sin, offset, outer ...])
+        outer = self.outer[rows][..., None]
+        here = np.where(outer, entries[..., 5:], entries[..., :5])
+        x, y, offset = here[..., 0], here[..., 1], here[..., 4]
+        heading = np.arctan2(here[..., 3], here[..., 2])
+        begin, end = self.change_start[rows], self.change_end[rows]
+        changing = (clock >= begin) & (end > begin) & np.isfinite(end)
+        if changing.any():
+            there = np.where(outer, entries[..., :5], entries[..., 5:])
+            with np.errstate(invalid="ignore", divide="ignore"):
+                u = np.where(changing, np.clip((clock - begin) / (end - begin), 0.0, 1.0), 0.0)
+            blend = u * u * (3.0 - 2.0 * u)
+            x = x + blend * (there[..., 0] - x)
+            y = y + blend * (there[..., 1] - y)
+            across = there[..., 4] - offset
+            offset = offset + blend * across
+            # Moving across while moving along: the heading turns by the slope of the move
+            # (its offset's change per metre along the lane).
+            slope = across * 6.0 * u * (1.0 - u) / self.settings.lane_change_distance
+            heading = heading + np.arctan(slope)
+        self.x[rows], self.y[rows] = x, y
+        self.heading[rows] = heading
+        self.distance[rows] = d
+        self.from_centre[rows] = np.abs(offset)
+        self.left[rows] = offset > 0.0
 
     def crashed(
         self, x: FloatArray, y: FloatArray, yaw: FloatArray, s: FloatArray, car_spec: CarSpec

@@ -194,8 +194,24 @@ class ObjectField:
                 return np.zeros((1, self.count), dtype=bool)
         else:
             near = (x[:, None] - self.x) ** 2 + (y[:, None] - self.y) ** 2 <= reach * reach
-            if not near.any():
+            close = np.flatnonzero(near.any(axis=1))
+            if len(close) == 0:
                 return near
+            if len(close) < len(x):  # the full test only for the cars near an object
+                hits = np.zeros_like(near)
+                hits[close] = self._hits_of(close, x[close], y[close], yaw[close], car_spec)
+                return hits
+        return self._hits_of(slice(None), x, y, yaw, car_spec)
+
+    def _hits_of(
+        self,
+        cars: slice | NDArray[np.intp],
+        x: FloatArray,
+        y: FloatArray,
+        yaw: FloatArray,
+        car_spec: CarSpec,
+    ) -> NDArray[np.bool_]:
+        half_l, half_w = car_spec.length / 2.0, car_spec.width / 2.0
         corners = np.array(
             [[half_l, half_w], [half_l, -half_w], [-half_l, half_w], [-half_l, -half_w]]
         )
@@ -204,11 +220,13 @@ class ObjectField:
         cx = x[:, None] + corners[:, 0] * cos - corners[:, 1] * sin
         cy = y[:, None] + corners[:, 0] * sin + corners[:, 1] * cos
         # Into each object's frame: (cars, objects, 4).
-        dx = cx[:, None, :] - self.x[:, :, None]
-        dy = cy[:, None, :] - self.y[:, :, None]
-        bc, bs = np.cos(self.heading)[:, :, None], np.sin(self.heading)[:, :, None]
+        dx = cx[:, None, :] - self.x[cars][:, :, None]
+        dy = cy[:, None, :] - self.y[cars][:, :, None]
+        heading = self.heading[cars]
+        bc, bs = np.cos(heading)[:, :, None], np.sin(heading)[:, :, None]
         along = dx * bc + dy * bs
         across = -dx * bs + dy * bc
+        shape = self.shape
         inside = (np.abs(along) <= shape.crash_length / 2.0) & (
             np.abs(across) <= shape.crash_width / 2.0
         )
@@ -261,41 +279,43 @@ class ObjectField:
         distance = np.where(seen, np.maximum(enter, 0.0), np.inf).min(axis=2)
         return np.asarray(np.minimum(hit, distance))
 
-    def params(
-        self, car: int, ahead_s: float, ahead_xy: tuple[float, float], heading_deg: float
-    ) -> dict[str, Any]:
-        """The object keys of `car`'s params; `ahead_s` is its look-ahead point's distance
-        along the centre line, `heading_deg` its heading."""
+    def all_params(
+        self,
+        ahead_s: list[float],
+        ahead_x: list[float],
+        ahead_y: list[float],
+        heading_deg: list[float],
+    ) -> list[dict[str, Any]]:
+        """The object keys of every car's params (fresh lists each: a reward function may
+        change them); per car, `ahead_s` is its look-ahead point's distance along the centre
+        line, (`ahead_x`, `ahead_y`) the point, `heading_deg` its heading."""
         k = self.count
-        distances = self.distance[car].tolist()
-        order = sorted(range(k), key=distances.__getitem__)
-        ahead = [i for i in order if distances[i] > ahead_s]
-        next_index = ahead[0] if ahead else order[0]
-        previous_index = order[order.index(next_index) - 1]
-        return {
-            "closest_objects": [previous_index, next_index],
-            "objects_location": [
-                [float(a), float(b)] for a, b in zip(self.x[car], self.y[car], strict=True)
-            ],
-            "objects_left_of_center": self.left[car].tolist(),
-            "objects_speed": [self.reported_speed] * k,
-            "objects_heading": self.heading[car].tolist() if self.reports_heading else [0.0] * k,
-            "objects_distance": distances,
-            "objects_distance_from_center": self.from_centre[car].tolist(),
-            "object_in_camera": self._in_camera(car, next_index, ahead_xy, heading_deg),
-        }
-
-    def _in_camera(
-        self, car: int, index: int, ahead_xy: tuple[float, float], heading_deg: float
-    ) -> bool:
-        dx = float(self.x[car, index]) - ahead_xy[0]
-        dy = float(self.y[car, index]) - ahead_xy[1]
-        bearing = math.atan2(dy, dx) - math.radians(heading_deg)
-        bearing = math.atan2(math.sin(bearing), math.cos(bearing))
-        forward = dx * math.cos(math.radians(heading_deg)) + dy * math.sin(
-            math.radians(heading_deg)
-        )
-        return forward >= CAMERA_NEAR and abs(bearing) <= CAMERA_FIELD_OF_VIEW / 2.0
+        xs, ys = self.x.tolist(), self.y.tolist()
+        distances, left = self.distance.tolist(), self.left.tolist()
+        from_centre = self.from_centre.tolist()
+        headings = self.heading.tolist() if self.reports_heading else None
+        out = []
+        for car, d in enumerate(distances):
+            order = sorted(range(k), key=d.__getitem__)
+            s = ahead_s[car]
+            next_index = next((i for i in order if d[i] > s), order[0])
+            previous_index = order[order.index(next_index) - 1]
+            x, y = xs[car], ys[car]
+            out.append(
+                {
+                    "closest_objects": [previous_index, next_index],
+                    "objects_location": [[a, b] for a, b in zip(x, y, strict=True)],
+                    "objects_left_of_center": left[car],
+                    "objects_speed": [self.reported_speed] * k,
+                    "objects_heading": headings[car] if headings is not None else [0.0] * k,
+                    "objects_distance": d,
+                    "objects_distance_from_center": from_centre[car],
+                    "object_in_camera": _in_camera(
+                        x[next_index] - ahead_x[car], y[next_index] - ahead_y[car], heading_deg[car]
+                    ),
+                }
+            )
+        return out
 
 
 class ObstacleField(ObjectField):
@@ -339,6 +359,16 @@ class ObstacleField(ObjectField):
         lane = Lane.OUTER if inner else Lane.INNER
         behind = (self.distance[car, best] - RESET_BEHIND) % self.length
         return self.lanes.pose(float(behind), lane)
+
+
+def _in_camera(dx: float, dy: float, heading_deg: float) -> bool:
+    """Whether a point (dx, dy) from the camera is inside DeepRacer's camera frustum, seen
+    from a car heading `heading_deg`."""
+    heading = math.radians(heading_deg)
+    bearing = math.atan2(dy, dx) - heading
+    bearing = math.atan2(math.sin(bearing), math.cos(bearing))
+    forward = dx * math.cos(heading) + dy * math.sin(heading)
+    return forward >= CAMERA_NEAR and abs(bearing) <= CAMERA_FIELD_OF_VIEW / 2.0
 
 
 def _slab(origin: FloatArray, direction: FloatArray, half: float) -> tuple[FloatArray, FloatArray]:

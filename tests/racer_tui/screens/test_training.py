@@ -23,6 +23,7 @@ from textual.pilot import Pilot
 from racer_tui.app import create_app
 from racer_tui.jobs import JobState
 from racer_tui.screens.training import LeaveWhileTraining, LiveRun, TrainingScreen
+from racer_tui.widgets.agent_view import Observation
 from racer_tui.widgets.chart import LineChart
 from racer_tui.widgets.training_charts import (
     TrainingCharts,
@@ -405,8 +406,15 @@ def test_the_agents_eye_view_comes_from_the_newest_traced_step(
     (folder.training_trace_dir / "12-iteration.csv").write_text(newest)
     poses: list[tuple[float, float, float]] = []
 
-    def observe(track: object, sensors: object, pose: tuple[float, float, float], caption: str):
+    def observe(
+        track: object,
+        sensors: object,
+        pose: tuple[float, float, float],
+        caption: str,
+        objects: object = None,
+    ) -> str:
         poses.append(pose)
+        assert objects is None  # a time trial's model: nothing on the track
         return caption
 
     monkeypatch.setattr(training, "observe_at", observe)
@@ -541,3 +549,49 @@ def test_the_counters_say_every_cars_episodes_and_how_many_are_charted() -> None
     alone = TrainingFigures()
     alone.fold(sample_events()[1])  # no update yet: only the charted count is known
     assert counters(alone).plain.startswith("1 episode  ")
+
+
+def test_the_agents_eye_view_shows_boxes_that_stand_still_and_says_when_it_cannot() -> None:
+    import math
+    from dataclasses import replace
+
+    import numpy as np
+
+    from racer_tui.screens import training
+    from sim import camera_scene as scene
+    from sim.deepracer_files import SimTraceRow, sim_trace_text, write_training_params
+    from sim.simulation import LOOK_AHEAD
+
+    folder = new_model("dodger", sensors=["camera"])
+    params = folder.training_params()
+    fixed = replace(
+        params,
+        race_type="OBJECT_AVOIDANCE",
+        extra={**params.extra, "OBJECT_POSITIONS": ["0.1,1"]},
+    )
+    write_training_params(folder.training_params_file, fixed)
+    folder.training_trace_dir.mkdir()
+    track = folder.track()
+    box_s = 0.1 * track.length
+    x, y = track.centerline.point_at(np.array([box_s - 1.0]))[0].tolist()
+    dx, dy = track.centerline.direction_at(np.array([box_s - 1.0]))[0].tolist()
+    yaw = math.degrees(math.atan2(dy, dx))
+    ahead_x = x + LOOK_AHEAD * math.cos(math.radians(yaw))
+    ahead_y = y + LOOK_AHEAD * math.sin(math.radians(yaw))
+    row = SimTraceRow(
+        1, 4, ahead_x, ahead_y, yaw, 0, 1, 0, 1.0, False, True, 1, 0, track.length, 1.0,
+        "in_progress",
+    )  # fmt: skip
+    (folder.training_trace_dir / "1-iteration.csv").write_text(sim_trace_text([row]))
+    seen = training.latest_observation(folder)
+    assert isinstance(seen, Observation) and seen.frame is not None
+    assert (seen.frame == scene.BOX_SIDE).sum() > 100  # the box a metre ahead
+
+    shuffled = replace(
+        params,
+        race_type="OBJECT_AVOIDANCE",
+        extra={**params.extra, "NUMBER_OF_OBSTACLES": 3, "RANDOMIZE_OBSTACLE_LOCATIONS": True},
+    )
+    write_training_params(folder.training_params_file, shuffled)
+    seen = training.latest_observation(folder)
+    assert isinstance(seen, Observation) and "its shuffled boxes are not shown" in seen.caption
