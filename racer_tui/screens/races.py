@@ -14,7 +14,7 @@ synced races), newest first: any of them with a trace on this machine replays fr
 from __future__ import annotations
 
 import sqlite3
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
@@ -54,7 +54,7 @@ from sim.race.driver import REFERENCE_NAME
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
-from sim.race.rules import DEFAULT_RULES, RaceRules
+from sim.race.rules import DEFAULT_RULES, preset_rules
 from sim.track import Track
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
@@ -86,6 +86,16 @@ class DriverChoice:
     label: str
     folder: ModelFolder | None  # None: the reference driver
     track: str | None  # the model's own track
+    race_type: str | None = None  # the model's own race type (RACE_TYPES' values)
+
+
+# The race types a race can be run as: (label, rules preset or "" for the time trial).
+RACE_TYPE_CHOICES: tuple[tuple[str, str], ...] = (
+    ("time trial", ""),
+    ("object avoidance, 3 boxes", "object-avoidance"),
+    ("head-to-bot, 3 bots", "head-to-bot"),
+)
+_PRESET_OF_TYPE = {"OBJECT_AVOIDANCE": "object-avoidance", "HEAD_TO_BOT": "head-to-bot"}
 
 
 class DriversLoaded(Message):
@@ -101,10 +111,11 @@ def trained_drivers() -> list[DriverChoice]:
     for folder in list_models():
         if folder.has_policy():
             try:
-                track = folder.training_params().world_name
+                params = folder.training_params()
             except ValueError:
                 continue  # a damaged folder: the garage shows what is wrong with it
-            drivers.append(DriverChoice(folder.name, folder, track))
+            race = _PRESET_OF_TYPE.get(params.race_type.strip().upper(), "")
+            drivers.append(DriverChoice(folder.name, folder, params.world_name, race))
     return drivers
 
 
@@ -201,6 +212,13 @@ class RacesScreen(RacerScreen[None]):
                 yield Select(
                     self._track_options(), value=DEFAULT_TRACK, allow_blank=False, id="race-track"
                 )
+                yield Label("Race type", classes="field-label")
+                yield Select(
+                    [(label, preset) for label, preset in RACE_TYPE_CHOICES],
+                    value="",
+                    allow_blank=False,
+                    id="race-type",
+                )
                 yield Label("Window", classes="field-label")
                 yield Select(
                     [(label, seconds) for seconds, label in WINDOWS],
@@ -296,10 +314,13 @@ class RacesScreen(RacerScreen[None]):
     def _driver_highlighted(self, event: DataTable.RowHighlighted) -> None:
         if not 0 <= event.cursor_row < len(self.drivers):
             return
-        track = self.drivers[event.cursor_row].track
+        driver = self.drivers[event.cursor_row]
+        track = driver.track
         select = self.query_one("#race-track", Select)
         if track is not None and track in {value for _, value in self._track_options()}:
             select.value = track
+        if driver.race_type is not None:  # a model races the race type it trained for
+            self.query_one("#race-type", Select).value = driver.race_type
 
     def _track_options(self) -> list[tuple[Text, str]]:
         return track_options()
@@ -313,11 +334,9 @@ class RacesScreen(RacerScreen[None]):
             return
         track = resolve_track(str(self.query_one("#race-track", Select).value))
         window = self.query_one("#race-window", Select).value
-        rules = RaceRules(
-            window_seconds=float(str(window)),
-            penalty_seconds=DEFAULT_RULES.penalty_seconds,
-            max_offtracks_per_lap=DEFAULT_RULES.max_offtracks_per_lap,
-        )
+        preset = str(self.query_one("#race-type", Select).value)
+        base = preset_rules(preset) if preset else DEFAULT_RULES
+        rules = replace(base, window_seconds=float(str(window)))
         same_track = [r for r in self.results if r.track_hash == track.content_hash]
         # The session's leader on this track, or else the league's best lap there: the
         # first race of a track has a ghost too when the league has a lap on it.

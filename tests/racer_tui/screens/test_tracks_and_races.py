@@ -190,3 +190,27 @@ async def test_a_track_file_is_imported_from_the_tracks_screen(
         assert app.screen is screen
         assert {"club_oval", "club_oval_2"} <= {info.name for info in list_tracks()}
         assert screen.track is not None and screen.track.name == "club_oval_2"
+
+
+async def test_a_race_among_boxes_is_chosen_in_the_races_screen_and_drawn() -> None:
+    from racer_tui.widgets.race_map import RaceMap
+    from sim.objects.settings import RaceType
+
+    app = create_app(start="races")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        races = app.screen
+        assert isinstance(races, RacesScreen)
+        races.query_one("#race-type", Select).value = "object-avoidance"
+        races.query_one("#race-window", Select).value = 60.0
+        await pilot.pause()
+        await pilot.press("s")
+        race = app.screen
+        assert isinstance(race, RaceScreen)
+        assert race.setup.rules.race_type is RaceType.OBJECT_AVOIDANCE
+        assert race.setup.rules.window_seconds == 60.0
+        await settle(pilot)
+        # The three boxes stand on the map beside the car.
+        assert painted(race.query_one(RaceMap)).count("■") >= 2
+        await pilot.press("escape")
+        assert race.result is not None and race.result.valid_laps > 0
