@@ -1,7 +1,7 @@
 """How soon a fresh model learns to finish laps among DeepRacer's objects.
 
     python -m sim.objects.bench_training [--minutes 10] [--track reinvent_base] [--json]
-                                         [--keep FOLDER]
+                                         [--only boxes|bots] [--keep FOLDER]
 
 Two fresh lidar models with the object_avoidance reward template train, each in its own
 training child process on one core (side by side when the machine has two cores or more):
@@ -73,7 +73,7 @@ def _evaluate(run: Run) -> None:
     run.final_progress = sum(trial.progress for trial in report.trials) / len(report.trials)
 
 
-def run(track_name: str, minutes: float) -> dict[str, Any]:
+def run(track_name: str, minutes: float, only: str | None = None) -> dict[str, Any]:
     from sim.garage.options import new_model
 
     runs = [
@@ -88,6 +88,8 @@ def run(track_name: str, minutes: float) -> dict[str, Any]:
             {"race_type": "head-to-bot", "bots": 3, "bot_speed": 1.0, "bot_lane_change": True},
         ),
     ]
+    if only is not None:
+        runs = [item for item in runs if item.model == f"bench-{only}"]
     for item in runs:
         new_model(
             item.model,
@@ -161,11 +163,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--minutes", type=float, default=10.0, help="training per model")
     parser.add_argument("--track", default="reinvent_base")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--only", choices=("boxes", "bots"), help="train one of the two")
     parser.add_argument("--keep", help="keep the models in this data folder")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="racer-bench-") as scratch:
         os.environ["RACER_TUI_HOME"] = args.keep or scratch
-        result = run(args.track, args.minutes)
+        result = run(args.track, args.minutes, args.only)
     if args.json:
         sys.stdout.write(json.dumps(result, indent=2) + "\n")
     else:
