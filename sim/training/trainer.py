@@ -126,6 +126,7 @@ class Trainer:
         self.started_at = datetime.now(UTC)
         self._clock0 = time.monotonic()
         self._process = psutil.Process()
+        self._evaluations = 0  # evaluations run: shuffled boxes are drawn from it
         self._process.cpu_percent(interval=None)  # the first reading only sets the baseline
         self._last_metrics_write = -math.inf
         self._metrics_write_cost = 0.0
@@ -331,12 +332,19 @@ class Trainer:
         driver = PolicyDriver(
             self.network, self.metadata, name=self.folder.name, content_hash="", live=True
         )
+        race = self.config.race
+        # Shuffled boxes are drawn again for every evaluation, as DeepRacer draws them for
+        # every episode: one fixed draw can hold a pair that no car passes (two boxes half a
+        # metre apart in opposite lanes), and would cap every evaluation below a full set.
+        self._evaluations += 1
+        shuffled = race is not None and race.obstacles.randomize
         results = run_trials(
             driver,
             self.evaluation_track,
             EVALUATION_TRIALS,
             max_seconds=EVALUATION_SECONDS,
-            race=self.config.race,  # a model meets its boxes or bots
+            race=race,  # a model meets its boxes or bots
+            seed=self._evaluations if shuffled else 0,
         )
         return EvaluationReport(track=self.config.track.name, trials=tuple(results))
 
