@@ -254,10 +254,28 @@ class ObjectField:
         """(len(cars), rays) metres from each car's centre to the first of its objects
         along each ray (`angles` from the heading), `max_range` where none is that close:
         the objects as a lidar sees them, the slab test in each object's frame."""
-        theta = np.asarray(yaw)[:, None] + np.asarray(angles)[None, :]  # (n, rays)
-        hit = np.full(theta.shape, max_range)
+        hit = np.full((len(cars), len(angles)), max_range)
         if self.count == 0:
             return hit
+        # Only cars with an object within the lidar's reach need the rays: most have none.
+        shape = self.shape
+        reach = max_range + math.hypot(shape.length, shape.width) / 2.0
+        x, y = np.asarray(x), np.asarray(y)
+        near = (x[:, None] - self.x[cars]) ** 2 + (y[:, None] - self.y[cars]) ** 2 <= reach**2
+        rows = np.flatnonzero(near.any(axis=1))
+        if len(rows) == 0:
+            return hit
+        if len(rows) < len(cars):
+            hit[rows] = self.ray_distances(
+                np.asarray(cars)[rows],
+                x[rows],
+                y[rows],
+                np.asarray(yaw)[rows],
+                angles=angles,
+                max_range=max_range,
+            )
+            return hit
+        theta = np.asarray(yaw)[:, None] + np.asarray(angles)[None, :]  # (n, rays)
         dir_x, dir_y = np.cos(theta)[:, :, None], np.sin(theta)[:, :, None]
         bx, by, bh = (
             self.x[cars][:, None, :],
