@@ -394,8 +394,11 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
         method_for(args.by) if args.by else (None if night_ids is not None else method_for("best"))
     )
     rows = leaderboard(league, filters, method)
+    said = False
     if not rows and track is not None and race_type is not None:
-        _other_boards(league, track.track_hash, track.name, race_type, args.format == "table")
+        said = _other_boards(
+            league, track.track_hash, track.name, race_type, args.format == "table"
+        )
     rows = sort_rows(rows, args.sort, reverse=args.reverse)
     if args.limit is not None:
         if args.limit < 1:
@@ -418,6 +421,10 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
         boards: dict[tuple[str, str, str], list[LeaderboardRow]] = {}
         for row in rows:
             boards.setdefault(board_of(row), []).append(row)
+        if not rows:
+            if not said:
+                print(_no_laps(track.name if track is not None else None, race_type))
+            return 0
         single = len(boards) == 1 or args.sort != "rank"
         groups = [rows] if single else list(boards.values())
         for group in groups:
@@ -425,23 +432,37 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
     return 0
 
 
+def _no_laps(track_name: str | None, race_type: str | None) -> str:
+    """What an empty table says, and how laps get there."""
+    from league.race_types import words
+
+    kind = "" if race_type is None else f"{words(race_type).replace(' ', '-')} "
+    where = f" on {track_name}" if track_name is not None else " in this league"
+    return (
+        f"No {kind}laps{where} yet: record a race with racer-tui --race MODEL --record, "
+        "or submit an evaluation with racer-tui submit."
+    )
+
+
 def _other_boards(
     league: League, track_hash: str, track_name: str, race_type: str, on_stdout: bool
-) -> None:
+) -> bool:
     """Say which race types a track has laps of, when the board asked for has none (on
-    stderr beside JSON, CSV or Markdown, which stay the data alone)."""
+    stderr beside JSON, CSV or Markdown, which stay the data alone); False when it has
+    none at all."""
     from league.leaderboard import race_types_on
     from league.race_types import words
 
     others = [kind for kind in race_types_on(league, track_hash) if kind != race_type]
     if not others:
-        return
+        return False
     options = " or ".join(f"--race-type {option_name(kind)}" for kind in others)
     print(
         f"No {words(race_type).replace(' ', '-')} laps on {track_name} yet; its other "
         f"board{'s' if len(others) > 1 else ''}: {options}.",
         file=sys.stdout if on_stdout else sys.stderr,
     )
+    return True
 
 
 def _print_board(

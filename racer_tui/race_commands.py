@@ -30,6 +30,7 @@ from racer_tui.output import print_json
 from racer_tui.rules_option import HELP as RULES_HELP
 from racer_tui.rules_option import rules_option
 from sim.deepracer_files import DeepRacerFileError
+from sim.objects.settings import RaceType
 from sim.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
@@ -354,29 +355,40 @@ def _seconds(value: float | None) -> str:
 
 def race_table(result: RaceResult, track: Track) -> Table:
     """One race's laps. Names are user text: Text() keeps them literal, never markup."""
-    title = Text(f"{result.racer} ({result.model_name}) on {track.name}")
+    rules = result.rules
+    among = "" if rules.race_type is RaceType.TIME_TRIAL else f", {rules.race_words}"
+    title = Text(f"{result.racer} ({result.model_name}) on {track.name}{among}")
     table = Table(title=title, title_justify="left")
-    for name in ("lap", "time s", "raw s", "penalty s", "off-tracks", "counts"):
-        table.add_column(name, justify="right" if name != "counts" else "center")
+    # Crashes only where there is something to crash into.
+    crashes = rules.race_type is not RaceType.TIME_TRIAL
+    names = ("lap", "time s", "raw s", "penalty s", "off-tracks", "crashes", "counts")
+    for name in names:
+        if name != "crashes" or crashes:
+            table.add_column(name, justify="right" if name != "counts" else "center")
     scoring = set(result.scoring.lap_numbers)
     for lap in result.laps:
-        table.add_row(
+        cells = [
             f"{lap.number}{' *' if lap.number in scoring else ''}",
             f"{lap.time_seconds:.3f}",
             f"{lap.raw_seconds:.3f}",
             f"{lap.penalty_seconds:g}",
             str(lap.offtracks),
-            "yes" if lap.valid else "no",
-        )
+        ]
+        if crashes:
+            cells.append(str(lap.crashes))
+        table.add_row(*cells, "yes" if lap.valid else "no")
     return table
 
 
 def race_summary(result: RaceResult) -> str:
     best = result.best_lap
     laps = len(result.laps)
+    crashes = sum(lap.crashes for lap in result.laps)
+    crashed = f", {counted(crashes, 'crash', 'crashes')}" if crashes else ""
     return (
         f"{laps} lap{'s' if laps != 1 else ''}, {result.valid_laps} counting, "
-        f"{result.total_offtracks} off-track{'s' if result.total_offtracks != 1 else ''}; "
+        f"{result.total_offtracks} off-track{'s' if result.total_offtracks != 1 else ''}"
+        f"{crashed}; "
         f"best lap {_seconds(None if best is None else best.time_seconds)} s; "
         f"score {_seconds(result.score)} ({result.rules.describe()})."
     )

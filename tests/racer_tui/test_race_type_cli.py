@@ -198,3 +198,31 @@ def test_an_object_avoidance_models_evaluation_is_submitted_to_that_board(
         capsys, "leaderboard", "--db", db, "--track", TRACK, "--format", "json"
     )
     assert "dee" not in {row[1] for row in _rows(out)}
+
+
+def test_a_race_among_bots_says_its_race_type_and_counts_crashes_per_lap(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    code, out, _ = run_cli(
+        capsys, "--race", "reference", "--track", "reinvent_base", "--rules", "head-to-bot",
+        "--window", "60", "--db", str(tmp_path / "league.db"),
+    )  # fmt: skip
+    assert code == 0
+    # The title wraps at the table's width.
+    assert "on reinvent_base, head-to-bot (3 bots at 1 m/s, changing lanes)" in " ".join(
+        out.split()
+    )
+    assert any("crashes" in line and "off-tracks" in line for line in out.splitlines())
+    code, out, _ = run_cli(
+        capsys, "--race", "reference", "--track", "reinvent_base", "--window", "30",
+        "--db", str(tmp_path / "league.db"),
+    )  # fmt: skip
+    assert code == 0 and "crashes" not in out  # nothing to crash into in a time trial
+
+
+def test_an_empty_leaderboard_says_how_laps_get_there(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    code, out, _ = run_cli(capsys, "leaderboard", "--db", str(tmp_path / "empty.db"))
+    assert code == 0
+    assert "No laps in this league yet: record a race with racer-tui --race" in out
