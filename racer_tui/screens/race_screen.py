@@ -28,6 +28,7 @@ from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.screens.dialogs import ask
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.race_map import CarMarker, RaceMap
+from sim.objects.settings import RaceType
 from sim.race.driver import Driver
 from sim.race.engine import RaceTick, race_ticks
 from sim.race.replay import GhostLap, replay_ticks
@@ -59,6 +60,13 @@ class RaceSetup:
     # once, when the view shows its finish: the host sees the heat end and the standings
     # update at the same moment. Raises what the league refuses.
     record: Callable[[RaceResult], None] | None = None
+
+
+def race_title(setup: RaceSetup) -> str:
+    """The view's title: who races where, and among what when it is not a time trial."""
+    title = setup.title or f"{setup.racer} on {setup.track.name}"
+    rules = setup.rules
+    return title if rules.race_type is RaceType.TIME_TRIAL else f"{title} · {rules.race_words}"
 
 
 def clock_text(seconds: float) -> str:
@@ -151,9 +159,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         with Horizontal(id="race-body"):
             yield RaceMap(setup.track, id="race-map")
             with Vertical(id="race-side"):
-                yield Static(
-                    Text(setup.title or f"{setup.racer} on {setup.track.name}"), id="race-title"
-                )
+                yield Static(Text(race_title(setup)), id="race-title")
                 yield Digits(countdown_text(setup.rules.window_seconds), id="countdown")
                 yield Static(id="race-facts")
                 yield DataTable(id="laps", cursor_type="row", zebra_stripes=True)
@@ -339,6 +345,8 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             )
         else:
             text.append(f"Off-tracks this lap {tick.lap_offtracks}/{limit}\n")
+        if rules.race_type is not RaceType.TIME_TRIAL:
+            text.append(f"Crashes this lap {tick.lap_crashes}\n")
         if tick.penalty_remaining > 0:
             text.append(f"Penalty hold {tick.penalty_remaining:.1f} s\n", style="bold red")
         text.append(f"Speed {tick.speed:.1f} m/s   {state}\n")

@@ -95,6 +95,7 @@ class RaceTick:
     result: RaceResult | None = None
     # The race's boxes or bot cars on this row: (x, y, heading in degrees) each.
     objects: tuple[tuple[float, float, float], ...] = ()
+    lap_crashes: int = 0  # crashes into them in the lap in progress
 
     @property
     def finished(self) -> bool:
@@ -333,6 +334,7 @@ class _Race:
             penalty_remaining=self.hold_left,
             result=result,
             objects=self._objects(),
+            lap_crashes=self.lap_crashes,
         )
 
     def _objects(self) -> tuple[tuple[float, float, float], ...]:

@@ -22,7 +22,7 @@ from sim.objects.settings import RaceType
 from sim.objects.world import object_field
 from sim.race.engine import RaceTick
 from sim.race.result import LapRecord, RaceResult
-from sim.race.trace import PAUSE_STATUS
+from sim.race.trace import PAUSE_STATUS, STATUS_CODE
 from sim.simulation import LOOK_AHEAD
 from sim.track import Track
 
@@ -126,10 +126,9 @@ def _car_ticks(result: RaceResult) -> list[RaceTick]:
     offtrack_starts = np.flatnonzero(
         trace.offtrack & ~np.concatenate([[False], trace.offtrack[:-1]])
     )
-    start_times = clocks[offtrack_starts]
-    lap_offtracks = np.searchsorted(start_times, clocks + _EPS, side="right") - np.searchsorted(
-        start_times, lap_starts + _EPS, side="right"
-    )
+    lap_offtracks = _in_lap(clocks[offtrack_starts], clocks, lap_starts)
+    crash_times = clocks[trace.status == STATUS_CODE["crashed"]]
+    lap_crashes = _in_lap(crash_times, clocks, lap_starts)
     laps_done = [laps[:n] for n in range(len(laps) + 1)]
     window = result.rules.window_seconds
     last = len(trace) - 1
@@ -143,6 +142,7 @@ def _car_ticks(result: RaceResult) -> list[RaceTick]:
         np.maximum(clocks - lap_starts, 0.0).tolist(),
         trace.progress.tolist(),
         np.maximum(lap_offtracks, 0).tolist(),
+        np.maximum(lap_crashes, 0).tolist(),
         trace.offtrack.tolist(),
         trace.statuses(),
         strict=True,
@@ -165,6 +165,7 @@ def _car_ticks(result: RaceResult) -> list[RaceTick]:
             status=status,
             penalty_remaining=0.0,
             result=result if i == last else None,
+            lap_crashes=crashes,
         )
         for i, (
             clock,
@@ -176,7 +177,18 @@ def _car_ticks(result: RaceResult) -> list[RaceTick]:
             lap_time,
             progress,
             offtracks,
+            crashes,
             offtrack,
             status,
         ) in enumerate(rows)
     ]
+
+
+def _in_lap(
+    times: NDArray[np.float64], clocks: NDArray[np.float64], lap_starts: NDArray[np.float64]
+) -> NDArray[np.int64]:
+    """For each row, how many of `times` fall in its lap so far."""
+    return np.asarray(
+        np.searchsorted(times, clocks + _EPS, side="right")
+        - np.searchsorted(times, lap_starts + _EPS, side="right")
+    )

@@ -213,3 +213,18 @@ def test_the_camera_sees_each_cars_own_objects() -> None:
     sim.put(0, x - 0.8 * math.cos(yaw), y - 0.8 * math.sin(yaw), yaw)
     frame = Observer(sim, ("camera",)).observe()[0, ..., 0]
     assert (frame == scene.BOT_CAR_SIDE).sum() > 100
+
+
+def test_each_laps_crashes_are_counted_live_and_in_the_replay() -> None:
+    from sim.race.replay import replay_ticks
+
+    track = resolve_track(TRACK)
+    live = list(race_ticks(track, preset_rules("head-to-bot"), seed=0))
+    result = live[-1].result
+    assert result is not None
+    replayed = replay_ticks(result, track)
+    assert max(tick.lap_crashes for tick in live) >= 1
+    assert [t.lap_crashes for t in replayed] == [t.lap_crashes for t in live]
+    # A lap's count starts again at the line.
+    ends = [i for i in range(1, len(live)) if len(live[i].laps) > len(live[i - 1].laps)]
+    assert all(live[i].lap_crashes == 0 for i in ends)
