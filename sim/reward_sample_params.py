@@ -78,12 +78,12 @@ STEP_RATE_HZ = 15.0
 # Boxes sit in the middle of a lane, as DeepRacer places its obstacles.
 LANE_OFFSET = TRACK_WIDTH / 4
 # One box behind the car in its own lane and one ahead in the other lane: every object key has
-# a real value, yet nothing is close enough in the car's lane to change an avoidance reward.
+# a real value, yet nothing is close enough ahead to change an avoidance reward.
 SAMPLE_OBJECTS: tuple[tuple[float, float], ...] = ((0.6, -LANE_OFFSET), (4.1, LANE_OFFSET))
 
-# The DeepRacer camera sees about 120 degrees across; objects within half of that either side
-# of the heading and ahead of the car count as `object_in_camera`.
-_CAMERA_HALF_ANGLE = math.radians(60.0)
+# DeepRacer's camera sees 1.13 rad across (simapp `frustum.py`); objects within half of that
+# either side of the heading and ahead of the car count as `object_in_camera`.
+_CAMERA_HALF_ANGLE = 1.13 / 2.0
 
 
 def _stadium_waypoints() -> list[tuple[float, float]]:

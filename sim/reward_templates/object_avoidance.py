@@ -1,5 +1,5 @@
 """Stay on the road and keep clear of the next object in
-your lane (object avoidance and head-to-bot races).
+your way (object avoidance and head-to-bot races).
 
 Each step pays for two things, the second weighted four
 times the first:
@@ -7,13 +7,17 @@ times the first:
   the car's centre at least 5 cm inside the edge, almost
   nothing otherwise;
 - clearance: the next object ahead, when it is in the
-  car's lane, costs pay as the car closes in (full pay
+  car's way, costs pay as the car closes in (full pay
   from 0.8 m away, half from 0.5 m, a fifth from 0.3 m,
   and almost nothing nearer, where the car is about to
-  hit it). An object in the other lane costs nothing.
+  hit it). In the way means less than 0.4 m across the
+  road between the car's centre and the object's: a
+  box's crash zone reaches 0.2 m to each side of it and
+  the car is 0.2 m wide, so just over the centre line
+  from a box in the other lane is still in its way.
 
-What it teaches: change lanes before an object rather
-than brake into it.
+What it teaches: move well clear of an object before
+reaching it rather than brake into it.
 
 Where it stops helping: it measures the gap in a
 straight line, not along the road, and only to the next
@@ -26,8 +30,11 @@ import math
 
 EDGE_MARGIN = 0.05  # metres, car centre to road edge
 # At least this many metres from the next object in the
-# car's lane, and the clearance pay there.
+# car's way, and the clearance pay there.
 CLEARANCE = ((0.8, 1.0), (0.5, 0.5), (0.3, 0.2))
+# Metres across the road within which an object is in
+# the car's way.
+IN_THE_WAY = 0.4
 ALMOST_NOTHING = 0.001
 ROAD_WEIGHT = 1.0
 CLEARANCE_WEIGHT = 4.0
@@ -42,14 +49,25 @@ def road_pay(params):
     return ALMOST_NOTHING
 
 
+def across(params):
+    """The car's offset from the centre line, left +."""
+    side = 1 if params["is_left_of_center"] else -1
+    return side * params["distance_from_center"]
+
+
+def object_across(params, index):
+    """An object's offset from the centre line, left +."""
+    side = 1 if params["objects_left_of_center"][index] else -1
+    return side * params["objects_distance_from_center"][index]
+
+
 def clearance_pay(params):
     objects = params["objects_location"]
     if not objects:
         return 1.0
     ahead = params["closest_objects"][1]
-    lane = params["objects_left_of_center"][ahead]
-    if lane != params["is_left_of_center"]:
-        return 1.0  # the other lane
+    if abs(across(params) - object_across(params, ahead)) >= IN_THE_WAY:
+        return 1.0  # it passes beside the car
     object_x, object_y = objects[ahead]
     gap_x = params["x"] - object_x
     gap_y = params["y"] - object_y

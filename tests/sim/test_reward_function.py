@@ -191,27 +191,31 @@ def test_prevent_zigzag_cuts_a_fifth_for_steering_past_15_degrees(
 
 
 @pytest.mark.parametrize(
-    ("gap", "same_lane", "pays"),
+    ("gap", "car_across", "box_across", "pays"),
     [
-        (0.9, True, 5.001),  # 0.001 + the road (1.0) + 4 x full clearance
-        (0.8, True, 5.001),
-        (0.6, True, 3.001),  # half clearance
-        (0.4, True, 1.801),  # a fifth
-        (0.2, True, 1.005),  # about to hit it
-        (0.2, False, 5.001),  # the other lane costs nothing
+        (0.9, 0.1, 0.19, 5.001),  # 0.001 + the road (1.0) + 4 x full clearance
+        (0.8, 0.1, 0.19, 5.001),
+        (0.6, 0.1, 0.19, 3.001),  # half clearance
+        (0.4, 0.1, 0.19, 1.801),  # a fifth
+        (0.2, 0.1, 0.19, 1.005),  # about to hit it
+        (0.2, 0.25, -0.19, 5.001),  # well clear of a box in the other lane: it costs nothing
+        # Just over the centre line from a box in the other lane is still in its way: the
+        # box's crash zone reaches 0.2 m to its side and the car is 0.2 m wide.
+        (0.2, 0.05, -0.19, 1.005),
     ],
 )
-def test_object_avoidance_pays_for_clearance_in_the_cars_lane(
-    gap: float, same_lane: bool, pays: float
+def test_object_avoidance_pays_for_clearance_from_an_object_in_the_cars_way(
+    gap: float, car_across: float, box_across: float, pays: float
 ) -> None:
     params = road(
         x=1.0,
         y=2.0,
         objects_location=[(9.0, 9.0), (1.0 + gap, 2.0)],
         closest_objects=[0, 1],
-        objects_left_of_center=[True, same_lane],
-        is_left_of_center=True,
-        distance_from_center=0.1,
+        objects_left_of_center=[True, box_across > 0],
+        objects_distance_from_center=[0.0, abs(box_across)],
+        is_left_of_center=car_across > 0,
+        distance_from_center=abs(car_across),
     )
     assert load_template("object_avoidance")(params) == pytest.approx(pays)
     off_the_road = {**params, "all_wheels_on_track": False}
