@@ -49,7 +49,10 @@ class TrialResets:
         if status not in RESETTABLE or len(resets) >= self.rules.number_of_resets:
             return False
         resets.append(str(status))
-        self.penalty[car] += self.rules.penalty(status)
+        held = self.rules.penalty(status)
+        self.penalty[car] += held
+        if sim.objects is not None:
+            sim.objects.pass_time(car, held)  # bots drive on while the car is held
         s = float(self._s[car])
         behind = None
         if status == EpisodeStatus.CRASHED and sim.objects is not None:

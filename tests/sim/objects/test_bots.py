@@ -228,3 +228,22 @@ def test_each_laps_crashes_are_counted_live_and_in_the_replay() -> None:
     # A lap's count starts again at the line.
     ends = [i for i in range(1, len(live)) if len(live[i].laps) > len(live[i - 1].laps)]
     assert all(live[i].lap_crashes == 0 for i in ends)
+
+
+def test_an_evaluation_reset_lets_the_bots_drive_on_while_the_car_is_held() -> None:
+    from sim.resets import ResetRules
+    from sim.training.trial_resets import TrialResets
+
+    track = resolve_track(TRACK)
+    sim = TrackSimulation(track, 1, race=bots(count=2, speed=0.5))
+    sim.reset_car(0, start_s=0.0)
+    field = sim.objects
+    assert field is not None
+    resets = TrialResets(track, 1, ResetRules(number_of_resets=3, collision_penalty=5.0))
+    resets.before_step(sim)
+    before = field.distance[0].copy()
+    assert resets.put_back(sim, 0, EpisodeStatus.CRASHED)
+    # Held 5 s for the crash, as simapp holds the car: the bots went 2.5 m on meanwhile.
+    moved = (field.distance[0] - before) % track.length
+    assert moved == pytest.approx([2.5, 2.5], abs=0.01)
+    assert resets.penalty[0] == 5.0
