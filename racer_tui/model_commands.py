@@ -316,10 +316,16 @@ def _list(as_json: bool) -> int:
         table.add_column(column, no_wrap=column != "actions")
     table.add_column("best lap", justify="right", no_wrap=True)
     for row in rows:
+        # A race type other than the time trial under the track (`model show` says its
+        # boxes or bots): a column of its own does not fit 80 columns.
+        track = Text(row["track"] or "-")
+        race = (row["race"] or "time trial").split(",")[0]
+        if race != "time trial":
+            track.append(f"\n{race}", style="dim")
         table.add_row(
             Text(row["name"]),
             Text(row["status"]),
-            Text(row["track"] or "-"),
+            track,
             Text(row["sensor"] or "-"),
             Text(row["actions"] or row.get("problem", "-")),
             _seconds(row["best_lap_s"]),

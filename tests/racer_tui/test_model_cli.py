@@ -238,6 +238,8 @@ def test_a_model_for_object_avoidance_is_made_with_deepracers_keys(
     assert params.extra["IS_LANE_CHANGE"] is True and params.extra["BOT_CAR_SPEED"] == 1.0
     code, out, _ = run_cli(capsys, "model", "show", "chaser")
     assert "head-to-bot, 2 bots at 1.0 m/s" in out and "lanes)" in out
+    code, out, _ = run_cli(capsys, "model", "list")
+    assert "head-to-bot" in out and "object avoidance" in out  # under each one's track
     code, _, err = run_cli(capsys, "model", "new", "x", "--bots", "2", "--obstacles", "3")
     assert code == 2 and "--obstacles and --randomize-obstacles need" in err
     code, _, err = run_cli(capsys, "model", "new", "x", "--obstacles", "11")
