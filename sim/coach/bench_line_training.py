@@ -19,14 +19,11 @@ never judged.
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import sys
-import tempfile
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
+
+from sim.training.bench_runs import bench_home, print_result, train_side_by_side
 
 TRIALS = 5
 
@@ -93,9 +90,7 @@ def run(track_name: str, minutes: float) -> dict[str, Any]:
         reward="racing_line",
     )
     runs = [Run("default", "bench-default"), Run("racing line", "bench-line")]
-    side_by_side = (os.cpu_count() or 1) >= 2
-    with ThreadPoolExecutor(max_workers=2 if side_by_side else 1) as pool:
-        list(pool.map(lambda r: _train(r, minutes), runs))
+    side_by_side = train_side_by_side(runs, lambda r: _train(r, minutes))
     for item in runs:
         _evaluate(item)
     flying = limit_lap(track).flying_seconds
@@ -182,13 +177,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--keep", help="keep the models in this data folder")
     args = parser.parse_args(argv)
-    with tempfile.TemporaryDirectory(prefix="racer-bench-") as scratch:
-        os.environ["RACER_TUI_HOME"] = args.keep or scratch
+    with bench_home(args.keep):
         result = run(args.track, args.minutes)
-    if args.json:
-        sys.stdout.write(json.dumps(result, indent=2) + "\n")
-    else:
-        _print(result)
+    print_result(result, args.json, _print)
     return 0
 
 

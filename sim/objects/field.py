@@ -349,10 +349,6 @@ class ObstacleField(ObjectField):
         for car in range(cars):
             self.draw(car)
 
-    @property
-    def boxes(self) -> int:
-        return self.count
-
     def draw(self, car: int) -> None:
         """The boxes of `car`'s next episode: the same ones unless the race randomises them."""
         if self.drawn[car] and not self.settings.randomize:
