@@ -16,19 +16,9 @@ from league.store import open_league
 from racer_tui.cli import main
 from sim.race.rules import preset_rules
 from tests.league.helpers import TRACK, race_result
+from tests.racer_tui.test_league_cli import run_cli, wide_terminal  # noqa: F401 (autouse)
 
 BOXES = preset_rules("object-avoidance")
-
-
-@pytest.fixture(autouse=True)
-def wide_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("COLUMNS", "160")  # rich tables wide enough that no name wraps
-
-
-def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
-    code = main(list(args))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture
