@@ -2,17 +2,26 @@
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-STAMP := $(VENV)/.installed
+# The app needs only racer-tui; the tests also need the dev tools and the car extra
+# (OpenVINO, the physical car's runtime, which proves a car export loads).
+APP_STAMP := $(VENV)/.installed-app
+STAMP := $(VENV)/.installed-test
 
 .PHONY: run test lint bench clean
+
+$(APP_STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet -e .
+	touch $(APP_STAMP)
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e ".[dev]"
+	$(BIN)/pip install --quiet -e ".[dev,car]"
 	touch $(STAMP)
 
-run: $(STAMP)
+run: $(APP_STAMP)
 	$(BIN)/racer-tui $(ARGS)
 
 lint: $(STAMP)
@@ -23,7 +32,7 @@ lint: $(STAMP)
 test: lint
 	$(BIN)/pytest -n 2 -q
 
-bench: $(STAMP)
+bench: $(APP_STAMP)
 	$(BIN)/python -m sim.bench
 
 clean:

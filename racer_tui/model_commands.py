@@ -74,10 +74,21 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     importer.add_argument("--track", help=f"track to train on (default: {DEFAULT_TRACK})")
     importer.add_argument("--json", action="store_true")
 
-    export = actions.add_parser("export", help="write a model as a .racer-bundle file")
+    export = actions.add_parser(
+        "export", help="write a model as a .racer-bundle, or as the archive a DeepRacer car loads"
+    )
     export.add_argument("name")
-    export.add_argument("-o", "--output", help="bundle file (default: NAME.racer-bundle)")
-    export.add_argument("--force", action="store_true", help="replace an existing bundle file")
+    export.add_argument(
+        "--format",
+        choices=("bundle", "car"),
+        default="bundle",
+        help="bundle: racer-tui's own file (default); car: NAME.tar.gz for a physical DeepRacer",
+    )
+    export.add_argument(
+        "-o", "--output", help="file to write (default: NAME.racer-bundle, or NAME.tar.gz)"
+    )
+    export.add_argument("--force", action="store_true", help="replace an existing file")
+    export.add_argument("--json", action="store_true", help="print what was written as JSON")
 
 
 def _add_spec_options(parser: argparse.ArgumentParser, *, for_clone: bool) -> None:
@@ -211,7 +222,9 @@ def run(args: argparse.Namespace) -> int:
         return _delete(args.name, args.yes)
     if action == "import":
         return _import(args)
-    return _export(args.name, args.output, replace=args.force)
+    if args.format == "car":
+        return _export_car(args.name, args.output, replace=args.force, as_json=args.json)
+    return _export(args.name, args.output, replace=args.force, as_json=args.json)
 
 
 # --- new and clone ---------------------------------------------------------------------------
@@ -364,15 +377,21 @@ def _show(name: str, as_json: bool) -> int:
     ):
         facts.add_row(label, Text(str(value)))
     print_table(facts)
-    if details["actions"]:
-        actions = Table(title="Action space")
-        for column in ("#", "steering (deg)", "speed (m/s)"):
-            actions.add_column(column, justify="right")
-        for action in details["actions"]:
-            actions.add_row(
-                str(action["index"]), f"{action['steering_angle']:.1f}", f"{action['speed']:.2f}"
-            )
-        print_table(actions)
+    if details["car_refusal"] is None:
+        print_table(car_table(metadata["action_space_type"], details["on_the_car"]))
+    else:
+        if details["actions"]:
+            actions = Table(title="Action space")
+            for column in ("#", "steering (deg)", "speed (m/s)"):
+                actions.add_column(column, justify="right")
+            for action in details["actions"]:
+                actions.add_row(
+                    str(action["index"]),
+                    f"{action['steering_angle']:.1f}",
+                    f"{action['speed']:.2f}",
+                )
+            print_table(actions)
+        print(f"A DeepRacer car cannot run this model: {details['car_refusal']}.")
     print_table(_key_values("Hyperparameters", details["hyperparameters"]))
     print_table(_training_table(details["training"]))
     for evaluation in details["evaluations"]:
@@ -469,14 +488,70 @@ def _import(args: argparse.Namespace) -> int:
     )
 
 
-def _export(name: str, output: str | None, *, replace: bool) -> int:
+def _export(name: str, output: str | None, *, replace: bool, as_json: bool) -> int:
     from sim.garage.bundle import export_bundle
     from sim.garage.deepracer_notes import export_notes
 
     folder = open_model(name)
     out = Path(output) if output else Path(f"{folder.name}")
     written = export_bundle(folder, out, replace=replace)
+    notes = export_notes(folder.metadata())
+    if as_json:
+        print_json({"name": folder.name, "format": "bundle", "path": str(written), "notes": notes})
+        return 0
     print(f"Exported {folder.name} to {written}")
-    for note in export_notes(folder.metadata()):
+    for note in notes:
         print(f"Note: {note}")
     return 0
+
+
+def _export_car(name: str, output: str | None, *, replace: bool, as_json: bool) -> int:
+    from dataclasses import asdict
+
+    from sim.car_export.export import export_car_archive
+
+    folder = open_model(name)
+    out = Path(output) if output else Path(folder.name)
+    written = export_car_archive(folder, out, replace=replace)
+    if as_json:
+        print_json(
+            {
+                "name": folder.name,
+                "format": "car",
+                "path": str(written.path),
+                "on_the_car": [asdict(action) for action in written.actions],
+            }
+        )
+        return 0
+    print(f"Exported {folder.name} for a DeepRacer car to {written.path}")
+    print_table(car_table(written.metadata.action_space.kind, [asdict(a) for a in written.actions]))
+    print(
+        "Upload it on the car's web page (Models, Upload). The car steers each action as a "
+        "share of its calibrated steering lock and throttles it as a share of its max-speed "
+        "setting."
+    )
+    return 0
+
+
+def car_table(kind: str, rows: list[dict[str, Any]]) -> Table:
+    """The action space as a DeepRacer car drives it (`sim.car_export.car_mapping`)."""
+    table = Table(title="On a DeepRacer car")
+    columns = ("#", "steering (deg)", "speed (m/s)", "car steering", "car throttle")
+    for column in columns if kind == "discrete" else columns[1:]:
+        table.add_column(column, justify="right")
+    for row in rows:
+        cells = [
+            f"{row['steering_angle']:.1f}",
+            f"{row['speed']:.2f}",
+            _steering_words(row["steering"]),
+            f"{row['throttle']:.0%}",
+        ]
+        table.add_row(*([str(row["index"])] if kind == "discrete" else []), *cells)
+    table.caption = "car steering: share of its steering lock; throttle: of its max-speed setting"
+    return table
+
+
+def _steering_words(share: float) -> str:
+    if abs(share) < 0.005:
+        return "straight"
+    return f"{abs(share):.0%} {'left' if share > 0 else 'right'}"

@@ -47,9 +47,14 @@ MAX_UNPACKED_BYTES = MAX_ARCHIVE_BYTES + 1024 * 1024
 MAX_ENTRIES = 16
 _DIRECTORIES = {"", ".", "agent"}
 
-# The car's tensor names (simapp's and the car's model loader's): network_0 holds the
-# sensor's input, network_1 the policy head. SAC names its agent "policy", not "main".
-OUTPUT_NODE = "main_level/agent/{agent}/online/network_1/ppo_head_0/policy"
+# The car's tensor names (simapp's `boto/s3/constants.py` and the car's model loader's):
+# network_0 holds the sensors' inputs. PPO's agent scope is "main" and its policy head sits
+# in network_1; SAC's agent scope is "policy" and its head sits in network_0.
+OUTPUT_NODES = {
+    "clipped_ppo": "main_level/agent/main/online/network_1/ppo_head_0/policy",
+    "sac": "main_level/agent/policy/online/network_0/sac_policy_head_0/policy",
+}
+AGENT_SCOPES = {"clipped_ppo": "main", "sac": "policy"}
 INPUT_NODE = "main_level/agent/{agent}/online/network_0/{sensor}/{sensor}"
 CAMERA_SENSORS = ("FRONT_FACING_CAMERA", "STEREO_CAMERAS")
 
@@ -193,19 +198,31 @@ def _metadata(data: bytes, where: str) -> ModelMetadata:
 
 
 def _tensor_names(metadata: ModelMetadata, graph: FrozenGraph, where: str) -> tuple[str, str, str]:
-    """(DeepRacer sensor name, input node, output node) the car would use."""
-    if metadata.sensors != ("camera",):
+    """(DeepRacer camera name, camera input node, output node) the car would use.
+
+    DeepRacer's models have exactly one camera; a lidar beside it (DeepRacer Evo) is a
+    second input, which must be in the graph under its own name too."""
+    if "camera" not in metadata.sensors:
         sensed = " and ".join(SENSOR_FILE_NAMES[name] for name in metadata.sensors)
         raise CarModelError(
-            f"{where}: the model senses {sensed}; racer-tui runs car archives whose only "
-            "sensor is a camera."
+            f"{where}: the model senses {sensed} without a camera; DeepRacer's cars run only "
+            "models with a camera among their sensors."
         )
-    agent = "policy" if metadata.training_algorithm == "sac" else "main"
-    output_node = OUTPUT_NODE.format(agent=agent)
+    agent = AGENT_SCOPES[metadata.training_algorithm]
+    output_node = OUTPUT_NODES[metadata.training_algorithm]
     if output_node not in graph.nodes:
         raise CarModelError(
             f"{where}: the graph has no output named {output_node!r}; it is not a DeepRacer policy."
         )
+    for sensor in metadata.sensors:
+        if sensor == "camera":
+            continue
+        name = INPUT_NODE.format(agent=agent, sensor=SENSOR_FILE_NAMES[sensor])
+        if name not in graph.nodes:
+            raise CarModelError(
+                f"{where}: the metadata names the sensor {SENSOR_FILE_NAMES[sensor]}, but the "
+                f"graph has no input named {name!r}."
+            )
     # The metadata says "camera" for both of DeepRacer's cameras: the graph says which.
     for sensor in CAMERA_SENSORS:
         input_node = INPUT_NODE.format(agent=agent, sensor=sensor)

@@ -58,6 +58,7 @@ SUPPORTED_OPS = frozenset(
         "Rsqrt",
         "Sub",
         # Layers.
+        "AvgPool",
         "BiasAdd",
         "Conv2D",
         "FusedBatchNorm",

@@ -1,7 +1,7 @@
 """Runs a frozen TensorFlow graph (`sim.car_export.graph_def`) with torch on the CPU.
 
 Tensors keep TensorFlow's layout (NHWC) between ops, so Reshape and Flatten see the
-element order TensorFlow would; only Conv2D and MaxPool turn to torch's NCHW and back.
+element order TensorFlow would; only Conv2D and the pools turn to torch's NCHW and back.
 Padding follows TensorFlow: VALID, EXPLICIT, and SAME with the odd pixel after (bottom,
 right), not torch's symmetric padding. Nodes whose inputs are all constants are computed
 once when the runner is made (a frozen graph's `kernel/read` Identities, for example).
@@ -179,6 +179,22 @@ def _max_pool(node: GraphNode, args: list[Tensor]) -> Tensor:
     return functional.max_pool2d(image, window, strides).permute(0, 2, 3, 1)
 
 
+def _avg_pool(node: GraphNode, args: list[Tensor]) -> Tensor:
+    _nhwc(node)
+    (x,) = args
+    window = _spatial(node, "ksize")
+    strides = _spatial(node, "strides")
+    top, bottom, left, right = _padding(node, x.shape[1:3], window, strides, [1, 1])
+    image = functional.pad(x.permute(0, 3, 1, 2), (left, right, top, bottom))
+    total = functional.avg_pool2d(image, window, strides, divisor_override=1)
+    # SAME average pooling divides by the cells inside the image, not the window's size.
+    inside = functional.pad(
+        torch.ones_like(x[:1, :, :, :1]).permute(0, 3, 1, 2), (left, right, top, bottom)
+    )
+    count = functional.avg_pool2d(inside, window, strides, divisor_override=1)
+    return (total / count).permute(0, 2, 3, 1)
+
+
 def _bias_add(node: GraphNode, args: list[Tensor]) -> Tensor:
     _nhwc(node)
     return args[0] + args[1]
@@ -287,6 +303,7 @@ OPS: dict[str, OpFunction] = {
     "RealDiv": _binary(torch.div),
     "Rsqrt": _unary(torch.rsqrt),
     "Sub": _binary(torch.sub),
+    "AvgPool": _avg_pool,
     "BiasAdd": _bias_add,
     "Conv2D": _conv2d,
     "FusedBatchNorm": _batch_norm,

@@ -27,8 +27,8 @@ class CarPolicy:
         self._runner = GraphRunner(archive.graph, archive.output_node)
         if self._runner.inputs != (archive.input_node,):
             raise CarModelError(
-                f"{archive.path.name}: the policy reads {len(self._runner.inputs)} inputs; "
-                "a DeepRacer camera model reads one frame."
+                f"{archive.path.name}: the policy reads {len(self._runner.inputs)} inputs (a "
+                "lidar beside the camera); racer-tui drives car archives from their camera alone."
             )
         placeholder = archive.graph.node(archive.input_node)
         shape = placeholder.attrs["shape"].shape if "shape" in placeholder.attrs else None

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.action_space import ActionSpace
+from sim.car_export.car_mapping import car_actions, car_refusal
 from sim.deepracer_files import (
     DeepRacerFileError,
     EvaluationTrial,
@@ -140,6 +141,8 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         "actions_summary": describe_actions(space),
         "metadata": metadata.to_json(),
         "actions": _action_rows(space),
+        "on_the_car": [asdict(action) for action in car_actions(space)],
+        "car_refusal": car_refusal(metadata),
         "hyperparameters": folder.hyperparameters(),
         "reward_function": reward_origin(folder),
         "training": training_summary(folder),

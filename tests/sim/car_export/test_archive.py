@@ -154,11 +154,9 @@ def test_bad_metadata_is_refused_through_deepracer_files(tmp_path: Path) -> None
     assert "model_metadata.json" in message
 
 
-def test_a_lidar_model_is_refused_in_one_sentence(tmp_path: Path) -> None:
+def test_a_model_without_a_camera_is_refused_in_one_sentence(tmp_path: Path) -> None:
     lidar = {**METADATA, "sensor": ["LIDAR"]}
-    assert "only sensor is a camera" in refusal(
-        write_archive(tmp_path / "l.tar.gz", metadata=lidar)
-    )
+    assert "without a camera" in refusal(write_archive(tmp_path / "l.tar.gz", metadata=lidar))
 
 
 def test_a_graph_without_the_car_s_tensor_names_is_refused(tmp_path: Path) -> None:
