@@ -16,6 +16,7 @@ from rich.text import Text
 
 from racer_tui.output import print_json, print_table
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED
+from sim.car_export.errors import CarModelError
 from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
 from sim.garage.options import (
@@ -37,7 +38,7 @@ from sim.garage.options import (
 from sim.garage.overview import model_details, model_row
 
 NAMES = ("model",)
-USER_ERRORS: tuple[type[Exception], ...] = (ModelError, DeepRacerFileError)
+USER_ERRORS: tuple[type[Exception], ...] = (ModelError, DeepRacerFileError, CarModelError)
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -67,12 +68,23 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     delete.add_argument("--yes", action="store_true", help="do not ask")
 
     importer = actions.add_parser(
-        "import", help="import a DeepRacer model folder or a .racer-bundle file"
+        "import",
+        help="import a DeepRacer model folder, a .racer-bundle, or a car archive (.tar.gz)",
     )
-    importer.add_argument("path", help="DeepRacer model folder or .racer-bundle file")
+    importer.add_argument(
+        "path",
+        help="DeepRacer model folder, .racer-bundle file, or the .tar.gz a DeepRacer car loads",
+    )
     importer.add_argument("--name", help="name in your garage (default: the folder's/bundle's)")
     importer.add_argument("--track", help=f"track to train on (default: {DEFAULT_TRACK})")
     importer.add_argument("--json", action="store_true")
+
+    act = actions.add_parser(
+        "act", help="what a model does with a camera picture, as a DeepRacer car runs it"
+    )
+    act.add_argument("name", help="model name or folder, or a car archive (.tar.gz)")
+    act.add_argument("picture", help="a PNG or JPEG picture, any size (e.g. from your car)")
+    act.add_argument("--json", action="store_true")
 
     export = actions.add_parser(
         "export", help="write a model as a .racer-bundle, or as the archive a DeepRacer car loads"
@@ -222,6 +234,8 @@ def run(args: argparse.Namespace) -> int:
         return _delete(args.name, args.yes)
     if action == "import":
         return _import(args)
+    if action == "act":
+        return _act(args.name, Path(args.picture), as_json=args.json)
     if args.format == "car":
         return _export_car(args.name, args.output, replace=args.force, as_json=args.json)
     return _export(args.name, args.output, replace=args.force, as_json=args.json)
@@ -309,7 +323,9 @@ def _created(folder: ModelFolder, title: str, as_json: bool, notes: list[str]) -
     print_table(table)
     for note in notes:
         print(f"Note: {note}")
-    print(f"Next: racer-tui train {folder.name}")
+    # A car archive drives as it is; everything else learns first.
+    step = "evaluate" if folder.has_car_archive() else "train"
+    print(f"Next: racer-tui {step} {folder.name}")
     return 0
 
 
@@ -502,6 +518,49 @@ def _export(name: str, output: str | None, *, replace: bool, as_json: bool) -> i
     print(f"Exported {folder.name} to {written}")
     for note in notes:
         print(f"Note: {note}")
+    return 0
+
+
+def _act(name: str, picture: Path, *, as_json: bool) -> int:
+    from dataclasses import asdict
+
+    from sim.car_export.act import archive_answer, model_answer
+    from sim.car_export.frame import read_picture
+
+    rgb = read_picture(picture)
+    archive = Path(name).expanduser()
+    if archive.name.endswith((".tar.gz", ".tgz")) and archive.is_file():
+        result, label = archive_answer(archive, rgb), archive.name
+    else:
+        folder = open_model(name)
+        result, label = model_answer(folder.path, rgb), folder.name
+    if as_json:
+        print_json({"model": label, "picture": str(picture), **asdict(result)})
+        return 0
+    width, height = result.frame_size
+    chosen = result.action
+    if result.kind == "discrete":
+        table = Table(title=Text(f"{label} on {picture.name} ({width}x{height} grey, raw 0..255)"))
+        for column in ("#", "probability", "steering (deg)", "speed (m/s)", "car steering"):
+            table.add_column(column, justify="right")
+        for action, probability in zip(result.actions, result.outputs, strict=True):
+            mark = " <" if action.index == chosen.index else ""
+            table.add_row(
+                f"{action.index}{mark}",
+                f"{probability:.4f}",
+                f"{action.steering_angle:.1f}",
+                f"{action.speed:.2f}",
+                _steering_words(action.steering),
+            )
+        print_table(table)
+    else:
+        steer, speed = result.outputs
+        print(f"{label} on {picture.name} ({width}x{height} grey): mean {steer:+.4f} {speed:+.4f}")
+    what = f"action {chosen.index}: " if chosen.index is not None else ""
+    print(
+        f"The car takes {what}{chosen.steering_angle:.1f} deg at {chosen.speed:.2f} m/s, "
+        f"steering {_steering_words(chosen.steering)} at {chosen.throttle:.0%} throttle."
+    )
     return 0
 
 

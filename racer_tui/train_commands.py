@@ -217,6 +217,9 @@ def _train(args: argparse.Namespace) -> int:
     if not (math.isfinite(seconds) and seconds > 0):
         raise ModelError(f"--reward-seconds must be more than 0, not {seconds:g}.")
     folder = open_model(args.name)
+    problem = folder.car_archive_problem("train")
+    if problem is not None:
+        raise ModelError(problem)
     check_trainable(folder.metadata())  # before a child process starts
     if folder.is_training() or folder.training_locked():
         raise ModelError(

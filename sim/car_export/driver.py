@@ -30,12 +30,21 @@ class CarArchiveDriver:
     `run_trials` or the simulation for a like-for-like drive.
     """
 
-    def __init__(self, archive: CarArchive, camera: CameraSpec | None = None) -> None:
+    def __init__(
+        self,
+        archive: CarArchive,
+        camera: CameraSpec | None = None,
+        *,
+        name: str | None = None,
+        content_hash: str | None = None,
+    ) -> None:
+        """`name` and `content_hash` default to the archive's own (a garage model that
+        drives with the archive passes its name and hash, as races record them)."""
         # One frame per car is too small a batch to share between cores (as PolicyDriver).
         torch.set_num_threads(1)
         self.policy = CarPolicy(archive)
-        self.name = archive.name
-        self.content_hash = f"car-archive:{archive.content_hash}"
+        self.name = name or archive.name
+        self.content_hash = content_hash or f"car-archive:{archive.content_hash}"
         self._space = archive.metadata.action_space
         self.car = car_for_simapp_version(archive.metadata.simapp_version)
         # The camera's own defaults (DeepRacer's), at the frame size the graph takes.

@@ -33,8 +33,15 @@ import torch
 from torch import nn
 
 from sim.atomic import write_bytes_atomic
-from sim.car_export.archive import AGENT_SCOPES, GRAPH_MEMBER, INPUT_NODE, OUTPUT_NODES
+from sim.car_export.archive import (
+    AGENT_SCOPES,
+    GRAPH_MEMBER,
+    INPUT_NODE,
+    OUTPUT_NODES,
+    read_car_archive,
+)
 from sim.car_export.car_mapping import CarAction, car_actions, car_refusal
+from sim.car_export.errors import CarModelError
 from sim.car_export.graph_writer import GraphWriter, attr_b, attr_i, attr_ints, attr_s, attr_type
 from sim.deepracer_files import MODEL_METADATA, SENSOR_FILE_NAMES, ModelMetadata
 from sim.garage.folder import ModelError, ModelFolder
@@ -96,6 +103,14 @@ def export_car_archive(folder: ModelFolder, out: Path, *, replace: bool = False)
             f"model {folder.name!r} has no trained policy to export; train it first with "
             f"`racer-tui train {folder.name}`."
         )
+    if not folder.policy_file.is_file():  # imported from a car archive: hand it on as it is
+        data = folder.car_archive_file.read_bytes()
+        try:
+            read_car_archive(folder.car_archive_file)
+        except CarModelError as error:
+            raise ModelError(f"model {folder.name!r}: {error}") from None
+        write_bytes_atomic(target, data)
+        return CarExport(target, metadata, car_actions(metadata.action_space))
     network = load_policy(folder.policy_file, metadata)
     graph = policy_graph(network)
     metadata_bytes = (json.dumps(metadata.to_json(), indent=4) + "\n").encode("utf-8")

@@ -138,6 +138,12 @@ def export_bundle(folder: ModelFolder, out: Path, *, replace: bool = False) -> P
             f"{target} already exists; choose another file name, or replace it on purpose "
             "(`racer-tui model export --force`)."
         )
+    problem = folder.car_archive_problem(
+        "put in a .racer-bundle",
+        f"share it as a car archive with `racer-tui model export {folder.name} --format car`",
+    )
+    if problem is not None:
+        raise ModelError(problem)
     if not folder.has_policy():
         raise ModelError(
             f"model {folder.name!r} has no trained policy to export; train it first with "

@@ -19,6 +19,9 @@ from sim.garage.options import create_from_spec, model_spec, spec_of
 
 def clone_model(source: ModelFolder, name: str, **options: Any) -> ModelFolder:
     """Create `name` from `source` with `model_spec` options applied, copying its policy."""
+    problem = source.car_archive_problem("clone")
+    if problem is not None:
+        raise ModelError(problem)
     base = spec_of(source)
     spec = model_spec(base, **options) if options else base
     if source.has_policy():

@@ -70,8 +70,13 @@ class ImportResult:
 
 
 def import_model(path: Path, name: str | None = None, track: str | None = None) -> ImportResult:
-    """A DeepRacer model folder, or a `.racer-bundle` file, as a new garage model."""
+    """A DeepRacer model folder, a `.racer-bundle` file or a DeepRacer car archive
+    (`.tar.gz`), as a new garage model."""
     source = Path(path).expanduser()
+    if source.is_file() and source.name.endswith((".tar.gz", ".tgz")):
+        from sim.garage.car_archive_import import import_car_archive
+
+        return import_car_archive(source, name=name, track=track)
     if source.is_file():
         from sim.garage.bundle import install_bundle_report
 
@@ -79,7 +84,8 @@ def import_model(path: Path, name: str | None = None, track: str | None = None) 
     if source.is_dir():
         return import_deepracer_folder(source, name=name, track=track)
     raise ModelError(
-        f"{source} does not exist; give a DeepRacer model folder or a {BUNDLE_SUFFIX} file."
+        f"{source} does not exist; give a DeepRacer model folder, a {BUNDLE_SUFFIX} file or a "
+        "car archive (.tar.gz)."
     )
 
 

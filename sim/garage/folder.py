@@ -79,6 +79,8 @@ if TYPE_CHECKING:
 
 MODELS_DIR = "models"
 POLICY_FILE = "policy.safetensors"
+# An imported DeepRacer car archive, kept whole (sim.car_export reads it).
+CAR_ARCHIVE_FILE = "car-model.tar.gz"
 CHECKPOINTS_DIR = "checkpoints"
 TRAINING_STATE_FILE = "training-state.json"
 TRAINING_LOCK_FILE = ".training.lock"
@@ -148,6 +150,12 @@ class ModelFolder:
     def policy_file(self) -> Path:
         """The weights races use, written by the trainer (tensors only)."""
         return self.path / POLICY_FILE
+
+    @property
+    def car_archive_file(self) -> Path:
+        """A DeepRacer car archive this model drives with instead of a racer-tui policy
+        (`model import FILE.tar.gz`): TensorFlow weights, raced but never trained here."""
+        return self.path / CAR_ARCHIVE_FILE
 
     @property
     def checkpoints_dir(self) -> Path:
@@ -357,7 +365,23 @@ class ModelFolder:
     # --- state ---------------------------------------------------------------------------
 
     def has_policy(self) -> bool:
-        return self.policy_file.is_file()
+        """The model can drive: racer-tui's trained policy, or an imported car archive."""
+        return self.policy_file.is_file() or self.has_car_archive()
+
+    def has_car_archive(self) -> bool:
+        return self.car_archive_file.is_file()
+
+    def car_archive_problem(
+        self, doing: str, instead: str = "create a new model to train your own"
+    ) -> str | None:
+        """One sentence when this model drives with a car archive, which racer-tui can race
+        and export for the car but not `doing` (train, clone, bundle); None otherwise."""
+        if not self.has_car_archive():
+            return None
+        return (
+            f"model {self.name!r} drives with a DeepRacer car archive (TensorFlow weights), "
+            f"which racer-tui races but cannot {doing}; {instead}."
+        )
 
     def training_state(self) -> dict[str, Any] | None:
         """The trainer's last word on this model, or None if it never ran (or left junk)."""
@@ -424,8 +448,14 @@ class ModelFolder:
         return ModelStatus.TRAINED
 
     def content_hash(self) -> str:
-        """Identifies the exact car: metadata plus policy weights (the same as its bundle's)."""
-        policy = self.policy_file.read_bytes() if self.has_policy() else b""
+        """Identifies the exact car: metadata plus policy weights (the same as its bundle's),
+        or the car archive it drives with."""
+        if self.policy_file.is_file():
+            policy = self.policy_file.read_bytes()
+        elif self.has_car_archive():
+            policy = self.car_archive_file.read_bytes()
+        else:
+            policy = b""
         return model_content_hash(self.metadata(), policy)
 
 

@@ -31,7 +31,7 @@ from torch import nn
 from sim.atomic import write_bytes_atomic
 from sim.deepracer_files import NEURAL_NETWORKS, ModelMetadata
 from sim.observations import VECTOR_SIZE, Observer, SensorOptions
-from sim.race.driver import DriverAction
+from sim.race.driver import Driver, DriverAction
 from sim.remedies import Fix
 from sim.simulation import TrackSimulation
 from sim.training.errors import PolicyError
@@ -498,8 +498,20 @@ class PolicyDriver:
         )
 
 
-def driver_for_model(folder: ModelFolder) -> PolicyDriver:
-    """The driver for a garage model's `policy.safetensors`."""
+def driver_for_model(folder: ModelFolder) -> Driver:
+    """The driver for a garage model's `policy.safetensors`, or for the car archive it was
+    imported from (`sim.car_export`)."""
+    if not folder.policy_file.is_file() and folder.has_car_archive():
+        from sim.car_export.archive import read_car_archive
+        from sim.car_export.driver import CarArchiveDriver
+        from sim.car_export.errors import CarModelError
+        from sim.garage.folder import ModelError
+
+        try:
+            archive = read_car_archive(folder.car_archive_file)
+            return CarArchiveDriver(archive, name=folder.name, content_hash=folder.content_hash())
+        except CarModelError as error:
+            raise ModelError(f"model {folder.name!r}: {error}") from None
     if not folder.has_policy():
         problem = f"model {folder.name!r} has no trained policy yet"
         raise PolicyError(

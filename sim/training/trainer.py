@@ -105,6 +105,9 @@ class Trainer:
         self.should_stop = should_stop
         self.options = options or RunOptions()
         self.metadata = folder.metadata()
+        problem = folder.car_archive_problem("train")
+        if problem is not None:
+            raise ModelError(problem)
         check_trainable(self.metadata)  # a sac model is refused, never trained as PPO
         self.hyperparameters = folder.hyperparameters()
         params = folder.training_params()
