@@ -525,11 +525,12 @@ def _act(name: str, picture: Path, *, as_json: bool) -> int:
     from dataclasses import asdict
 
     from sim.car_export.act import archive_answer, model_answer
+    from sim.car_export.file_names import is_car_archive_name
     from sim.car_export.frame import read_picture
 
     rgb = read_picture(picture)
     archive = Path(name).expanduser()
-    if archive.name.endswith((".tar.gz", ".tgz")) and archive.is_file():
+    if is_car_archive_name(archive) and archive.is_file():
         result, label = archive_answer(archive, rgb), archive.name
     else:
         folder = open_model(name)

@@ -293,19 +293,20 @@ class PathNameDialog(FormDialog[ImportRequest]):
 
 
 class ImportDialog(PathNameDialog):
-    """A DeepRacer model folder or a .racer-bundle file, and optionally a new name."""
+    """A DeepRacer model folder, a .racer-bundle or a car archive, and optionally a name."""
 
     TITLE = "Import a model"
     BODY = (
         "A DeepRacer model folder (as DeepRacer for Cloud or the console's download lays it "
-        "out) or a .racer-bundle file from another racer. → completes a path."
+        "out), a .racer-bundle file from another racer, or a DeepRacer car archive (.tar.gz, "
+        "the file a physical car loads). → completes a path."
     )
     PATH_PLACEHOLDER = "path, e.g. ~/Downloads/my-model"
     NAME_PLACEHOLDER = "model name (empty: the folder's name)"
 
     def problem(self, path: str, name: str | None) -> str | None:
         if not path:
-            return "Give the path of a DeepRacer model folder or a .racer-bundle file."
+            return "Give the path of a DeepRacer model folder, a .racer-bundle or a .tar.gz file."
         if not _exists(path):
             return f"{path} does not exist or cannot be read; check the path (→ completes it)."
         if name and not is_valid_name(name):

@@ -42,6 +42,7 @@ from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_tex
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from sim.action_space import ActionSpace
+from sim.car_export.file_names import CAR_ARCHIVE_SUFFIX, car_archive_path, is_car_archive_name
 from sim.deepracer_files import locate_files
 from sim.garage.bundle import bundle_path, export_bundle
 from sim.garage.clone import clone_model
@@ -206,7 +207,12 @@ class GarageScreen(RacerScreen[None]):
         Binding("c", "clone_model", "Clone", tooltip="A new model starting from this one"),
         Binding("d", "delete_model", "Delete", tooltip="Delete the highlighted model (asks)"),
         Binding("i", "import_model", "Import", tooltip="A DeepRacer folder or a .racer-bundle"),
-        Binding("x", "export_model", "Export", tooltip="Write a .racer-bundle for the league"),
+        Binding(
+            "x",
+            "export_model",
+            "Export",
+            tooltip="A .racer-bundle for the league, or a .tar.gz for a DeepRacer car",
+        ),
         Binding(
             "o",
             "coach_model",
@@ -493,11 +499,31 @@ class GarageScreen(RacerScreen[None]):
                 severity="warning",
             )
             return
+        from sim.car_export.car_mapping import car_refusal
+
+        refusal = car_refusal(folder.metadata())
+        if folder.has_car_archive():
+            text = (
+                "This model drives with a DeepRacer car archive: it goes back to the car as a "
+                ".tar.gz file (a physical DeepRacer's Models, Upload). Save it as:"
+            )
+            suffix = CAR_ARCHIVE_SUFFIX
+        else:
+            car = (
+                f"A DeepRacer car cannot run this model: {refusal}."
+                if refusal
+                else "End the name with .tar.gz for a physical DeepRacer car instead (its "
+                "Models, Upload page)."
+            )
+            text = (
+                "A .racer-bundle holds the model's metadata, policy weights (tensors only) and "
+                f"training summary: everything a league host needs to race it. {car} Save as:"
+            )
+            suffix = BUNDLE_SUFFIX
         dialog = InputDialog(
             f"Export {folder.name}",
-            "A bundle holds the model's metadata, policy weights (tensors only) and training "
-            "summary: everything a league host needs to race it. Save it as:",
-            value=str(Path.cwd() / f"{folder.name}{BUNDLE_SUFFIX}"),
+            text,
+            value=str(Path.cwd() / f"{folder.name}{suffix}"),
             confirm_label="Export",
             paths=True,
         )
@@ -506,27 +532,41 @@ class GarageScreen(RacerScreen[None]):
     def _export_to(self, folder: ModelFolder, path: str | None) -> None:
         if path is None:
             return
-        target = bundle_path(Path(path).expanduser())
+        chosen = Path(path).expanduser()
+        for_car = is_car_archive_name(chosen) or folder.has_car_archive()
+        target = car_archive_path(chosen) if for_car else bundle_path(chosen)
         if not target.exists():
             self.jobs.begin(f"Exporting {folder.name}", "x")
-            self._export(folder, target)
+            self._export(folder, target, for_car=for_car)
             return
 
         def answered(replace: bool | None) -> None:
             if replace:
                 self.jobs.begin(f"Exporting {folder.name}", "x")
-                self._export(folder, target, replace=True)
+                self._export(folder, target, replace=True, for_car=for_car)
 
         ask(
             self.app,
             f"Replace {target.name}?",
-            f"{target} already exists. Replacing it loses the model bundle it holds now.",
+            f"{target} already exists. Replacing it loses the model it holds now.",
             answered,
             confirm_label="Replace",
         )
 
     @work(thread=True, group="garage-change", exit_on_error=False)
-    def _export(self, folder: ModelFolder, path: Path, *, replace: bool = False) -> None:
+    def _export(
+        self, folder: ModelFolder, path: Path, *, replace: bool = False, for_car: bool = False
+    ) -> None:
+        if for_car:
+            from sim.car_export.export import export_car_archive  # torch: only now
+
+            written = export_car_archive(folder, path, replace=replace).path
+            note = (
+                "For a DeepRacer car: upload it on the car's Models page; `racer-tui model "
+                f"show {folder.name}` lists how the car drives each action."
+            )
+            self.post_message(BundleExported(folder.name, written, (note,)))
+            return
         written = export_bundle(folder, path, replace=replace)
         self.post_message(BundleExported(folder.name, written, export_notes(folder.metadata())))
 

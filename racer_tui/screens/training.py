@@ -492,6 +492,9 @@ class TrainingScreen(RacerScreen[None]):
             return
         try:
             folder = open_model(name)
+            problem = folder.car_archive_problem("train")
+            if problem is not None:
+                raise ModelError(problem)
             minutes = folder.last_budget_minutes() or folder.training_params().max_minutes
         except ModelError as error:
             self.notify(error_message(error), severity="error", markup=False)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
 from sim.car_export.errors import CarModelError
+from sim.car_export.file_names import CAR_ARCHIVE_SUFFIXES
 from sim.car_export.graph_def import FrozenGraph, read_graph
 from sim.deepracer_files import (
     MAX_METADATA_BYTES,
@@ -75,7 +76,7 @@ class CarArchive:
     def name(self) -> str:
         """The archive's file name without `.tar.gz`: what races and results call it."""
         name = self.path.name
-        for suffix in (".tar.gz", ".tgz"):
+        for suffix in CAR_ARCHIVE_SUFFIXES:
             if name.endswith(suffix):
                 return name[: -len(suffix)]
         return self.path.stem

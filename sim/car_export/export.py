@@ -42,12 +42,12 @@ from sim.car_export.archive import (
 )
 from sim.car_export.car_mapping import CarAction, car_actions, car_refusal
 from sim.car_export.errors import CarModelError
+from sim.car_export.file_names import car_archive_path
 from sim.car_export.graph_writer import GraphWriter, attr_b, attr_i, attr_ints, attr_s, attr_type
 from sim.deepracer_files import MODEL_METADATA, SENSOR_FILE_NAMES, ModelMetadata
 from sim.garage.folder import ModelError, ModelFolder
 from sim.training.policy import CAMERA_POOL, PolicyNetwork, load_policy
 
-CAR_ARCHIVE_SUFFIX = ".tar.gz"
 # Every op the exported graph uses; a test holds the written graphs to this list.
 GRAPH_OPS = frozenset(
     {
@@ -78,12 +78,6 @@ class CarExport:
     path: Path
     metadata: ModelMetadata
     actions: tuple[CarAction, ...]
-
-
-def car_archive_path(out: Path) -> Path:
-    """`out`, with `.tar.gz` added if it lacks it (the car's upload page wants it)."""
-    out = Path(out).expanduser()
-    return out if out.name.endswith((".tar.gz", ".tgz")) else out.with_name(out.name + ".tar.gz")
 
 
 def export_car_archive(folder: ModelFolder, out: Path, *, replace: bool = False) -> CarExport:

@@ -23,12 +23,6 @@ from sim.garage.folder import ModelError, ModelFolder, check_model_name, create_
 from sim.garage.options import DEFAULT_REWARD, DEFAULT_TRACK
 from sim.remedies import Fix, Note
 
-CAR_ARCHIVE_SUFFIXES = (".tar.gz", ".tgz")
-
-
-def is_car_archive_name(path: Path) -> bool:
-    return path.name.endswith(CAR_ARCHIVE_SUFFIXES)
-
 
 def import_car_archive(
     path: Path, name: str | None = None, track: str | None = None

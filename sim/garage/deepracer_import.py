@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TypeVar
 
 from sim.atomic import write_bytes_atomic
+from sim.car_export.file_names import is_car_archive_name
 from sim.deepracer_files import (
     MAX_METRICS_BYTES,
     SIM_TRACE_COLUMNS,
@@ -73,7 +74,7 @@ def import_model(path: Path, name: str | None = None, track: str | None = None) 
     """A DeepRacer model folder, a `.racer-bundle` file or a DeepRacer car archive
     (`.tar.gz`), as a new garage model."""
     source = Path(path).expanduser()
-    if source.is_file() and source.name.endswith((".tar.gz", ".tgz")):
+    if source.is_file() and is_car_archive_name(source):
         from sim.garage.car_archive_import import import_car_archive
 
         return import_car_archive(source, name=name, track=track)

@@ -27,11 +27,17 @@ from sim.deepracer_files import (
     HYPERPARAMETER_SPECS,
     DeepRacerFileError,
     ModelMetadata,
+    TrainingParams,
     check_hyperparameters,
     default_hyperparameters,
 )
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, create_model
 from sim.observations import SensorError, normalise_sensors
+from sim.realworld.settings import (
+    CameraRandomisation,
+    camera_randomisation_keys,
+    read_camera_randomisation,
+)
 from sim.track import TrackError
 from sim.track_catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
 
@@ -76,6 +82,8 @@ class ModelSpec:
     max_minutes: float = DEFAULT_MINUTES
     race_type: str = "TIME_TRIAL"  # DeepRacer's RACE_TYPE
     race_keys: Mapping[str, object] = field(default_factory=dict)  # its settings' keys
+    # Camera randomisation while training (sim.realworld): camera models only.
+    camera_randomisation: CameraRandomisation = CameraRandomisation.OFF
 
 
 def default_action_space() -> ActionSpace:
@@ -118,6 +126,7 @@ def model_spec(
     bots: int | None = None,
     bot_speed: float | None = None,
     bot_lane_change: bool = False,
+    camera_randomisation: CameraRandomisation | None = None,
 ) -> ModelSpec:
     """`base` (default: `default_model_spec()`) with the given console options applied.
 
@@ -126,6 +135,8 @@ def model_spec(
     `continuous` with optional ranges, or `actions_from_line` (that many actions clustered
     from the track's limit lap). With none of them, `base`'s action space is kept.
     A racing_line reward follows the model's track and action space when either changes.
+    `camera_randomisation` (None: `base`'s) needs a camera sensor; one kept from `base`
+    is dropped when the sensors change to ones without a camera.
     """
     before = base or default_model_spec()
     spec = before
@@ -167,6 +178,7 @@ def model_spec(
     blind = blind_to_objects(spec.race_type, spec.metadata.sensors)
     if blind is not None:
         raise ModelError(f"--sensor: {blind}")
+    spec = with_camera_randomisation(spec, camera_randomisation)
     if minutes is not None:
         if not (math.isfinite(minutes) and MIN_MINUTES <= minutes <= MAX_MINUTES):
             raise ModelError(
@@ -191,7 +203,7 @@ def create_from_spec(name: str, spec: ModelSpec, **create_options: Any) -> Model
         reward_source=spec.reward_source,
         max_minutes=spec.max_minutes,
         race_type=spec.race_type,
-        race_keys=spec.race_keys,
+        race_keys={**spec.race_keys, **camera_randomisation_keys(spec.camera_randomisation)},
         **create_options,
     )
 
@@ -208,7 +220,33 @@ def spec_of(folder: ModelFolder) -> ModelSpec:
         max_minutes=params.max_minutes,
         race_type=params.race_type,
         race_keys={key: value for key, value in params.extra.items() if key in RACE_KEYS},
+        camera_randomisation=_stored_camera_randomisation(folder, params),
     )
+
+
+def _stored_camera_randomisation(
+    folder: ModelFolder, params: TrainingParams
+) -> CameraRandomisation:
+    try:
+        return read_camera_randomisation(params, str(folder.training_params_file))
+    except DeepRacerFileError as error:
+        raise ModelError(str(error)) from None
+
+
+def with_camera_randomisation(spec: ModelSpec, chosen: CameraRandomisation | None) -> ModelSpec:
+    """`spec` training with `chosen` camera randomisation (None: keep its own, dropped when
+    its sensors have no camera); ModelError when a model without a camera asks for it."""
+    has_camera = "camera" in spec.metadata.sensors
+    if chosen is None:
+        if spec.camera_randomisation.on and not has_camera:
+            return replace(spec, camera_randomisation=CameraRandomisation.OFF)
+        return spec
+    if chosen.on and not has_camera:
+        raise ModelError(
+            "camera randomisation needs a camera: choose FRONT_FACING_CAMERA or "
+            "STEREO_CAMERAS as the sensor, or leave it off."
+        )
+    return replace(spec, camera_randomisation=chosen)
 
 
 # --- single options ------------------------------------------------------------------------

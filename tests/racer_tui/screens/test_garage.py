@@ -359,3 +359,50 @@ async def test_the_train_dialog_offers_the_last_budget_and_refuses_less_than_a_m
         assert app.screen is dialog  # refused in the dialog
         assert "from 1 to 100000 minutes" in str(dialog.query_one("#problem").render())
         await pilot.press("escape")
+
+
+async def test_export_for_a_deepracer_car_and_import_it_back(tmp_path: Path) -> None:
+    """x with a .tar.gz name writes the car's archive; i imports it as a model that races
+    but is never trained (t says why)."""
+    from sim.car_export.archive import read_car_archive
+
+    trained_model("cam", sensors=["camera"])
+    app = create_app(start="garage")
+    notes = Notifications(app)
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("x")
+        assert isinstance(app.screen, InputDialog)
+        body = " ".join(painted(app.screen.query_one(".dialog-body")).split())
+        assert ".tar.gz for a physical DeepRacer car" in body
+        app.screen.query_one(Input).value = str(tmp_path / "for-my-car.tar.gz")
+        await pilot.press("enter")
+        await wait_for(pilot, (tmp_path / "for-my-car.tar.gz").is_file)
+        await settle(pilot)
+        archive = read_car_archive(tmp_path / "for-my-car.tar.gz")
+        assert archive.metadata == open_model("cam").metadata()
+        assert "For a DeepRacer car" in notes.text()
+
+        await pilot.press("i")
+        assert isinstance(app.screen, ImportDialog)
+        app.screen.query_one("#path", Input).value = str(tmp_path / "for-my-car.tar.gz")
+        await pilot.press("enter")
+        await wait_for(pilot, lambda: "for-my-car" in _names())
+        await settle(pilot)
+        assert open_model("for-my-car").has_car_archive()
+        assert isinstance(app.screen, GarageScreen)
+        assert app.screen.highlighted_name == "for-my-car"
+        await pilot.press("t")
+        await settle(pilot)
+        assert "drives with a DeepRacer car archive" in notes.text("error")
+
+
+async def test_the_export_dialog_says_when_a_car_cannot_run_the_model() -> None:
+    trained_model("vec")
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("x")
+        assert isinstance(app.screen, InputDialog)
+        text = " ".join(painted(app.screen.query_one(".dialog-body")).split())
+        assert "A DeepRacer car cannot run this model" in text and "VECTOR" in text
