@@ -7,8 +7,11 @@ exactly one model file). Archives come from anyone, so this reader:
 - never extracts to disk and never executes anything: members are read into memory;
 - caps the archive's size, each member's size and the bytes decompressed in all, so a
   small file cannot expand into gigabytes;
-- refuses absolute paths, `..`, links and devices, and any member but the two expected
-  (directory entries for `agent/` and `./`, which `tar` writes, are allowed);
+- refuses absolute paths, `..`, links and devices;
+- follows the car's loader on what else may be inside: it searches the archive for model
+  files (by extension, testing `ext in ".pb"`, so a file with no extension counts too) and
+  refuses it unless it finds exactly one. Other plain files (deepracer-for-cloud's car
+  upload tars a whole model folder) are skipped unread, as the car ignores them;
 - reads the metadata with `sim.deepracer_files` (the one home of DeepRacer's formats) and
   the graph with `sim.car_export.graph_def` (known ops only);
 - checks the graph has the input and output names the car uses for the metadata's sensor.
@@ -21,6 +24,7 @@ from __future__ import annotations
 import gzip
 import hashlib
 import io
+import posixpath
 import tarfile
 import zlib
 from dataclasses import dataclass
@@ -46,7 +50,6 @@ MAX_ARCHIVE_BYTES = MAX_GRAPH_BYTES + MAX_METADATA_BYTES
 # Headers and padding on top of the two members, for everything decompressed.
 MAX_UNPACKED_BYTES = MAX_ARCHIVE_BYTES + 1024 * 1024
 MAX_ENTRIES = 16
-_DIRECTORIES = {"", ".", "agent"}
 
 # The car's tensor names (simapp's `boto/s3/constants.py` and the car's model loader's):
 # network_0 holds the sensors' inputs. PPO's agent scope is "main" and its policy head sits
@@ -130,7 +133,7 @@ def _members(path: Path, where: str) -> dict[str, bytes]:
                         )
                     name = _checked_name(member, where)
                     if name is None:
-                        continue  # a directory entry
+                        continue  # a directory entry, or a file the car ignores
                     if name in found:
                         raise CarModelError(f"{where}: {name} appears twice in the archive.")
                     found[name] = _read_member(tar, member, name, where)
@@ -155,23 +158,27 @@ def _checked_name(member: tarfile.TarInfo, where: str) -> str | None:
         )
     name = "/".join(part for part in pure.parts if part != ".")
     if member.isdir():
-        if name in _DIRECTORIES:
-            return None
-        raise CarModelError(
-            f"{where}: the archive holds an unexpected folder {raw!r}; a car archive holds "
-            "only model_metadata.json and agent/model.pb."
-        )
+        return None
     if not member.isreg():
         raise CarModelError(
             f"{where}: the member {raw!r} is a link or special file; a car archive holds "
-            "only the two plain files model_metadata.json and agent/model.pb."
+            "only plain files (model_metadata.json and agent/model.pb)."
         )
-    if name not in MEMBERS:
+    if name in MEMBERS:
+        return name
+    if is_model_file(name):
         raise CarModelError(
-            f"{where}: the archive holds an unexpected member {raw!r}; a car archive holds "
-            "only model_metadata.json and agent/model.pb."
+            f"{where}: the archive holds another model file {raw!r} beside {GRAPH_MEMBER}; "
+            "the car loads an archive only when it finds exactly one."
         )
-    return name
+    return None  # the car ignores it, and so does racer-tui: it is never read
+
+
+def is_model_file(name: str) -> bool:
+    """Whether the car's loader counts `name` as a model file (model_loader_node.py:
+    `os.path.splitext(name)[1] not in (".pb")` tests a substring of ".pb", so a name with
+    no extension counts as well)."""
+    return posixpath.splitext(name)[1] in ".pb"
 
 
 def _read_member(tar: tarfile.TarFile, member: tarfile.TarInfo, name: str, where: str) -> bytes:

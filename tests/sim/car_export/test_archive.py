@@ -71,14 +71,29 @@ def test_a_member_outside_the_archive_is_refused(tmp_path: Path, name: str) -> N
     assert "points outside the archive" in message
 
 
-def test_an_extra_member_is_refused_by_name(tmp_path: Path) -> None:
+def test_files_the_car_ignores_are_skipped_unread(tmp_path: Path) -> None:
+    """deepracer-for-cloud's car upload tars a whole model folder; the car ignores what is
+    not a model file, and racer-tui never reads, extracts or runs it either."""
     members = {
         "model_metadata.json": json.dumps(METADATA).encode(),
         "agent/model.pb": camera_policy_graph(),
-        "agent/run_me.py": b"import os",
+        "agent/run_me.py": b"import os; os.system('echo pwned')",
+        "deepracer_checkpoints.json": b"{}",
     }
-    message = refusal(write_archive(tmp_path / "extra.tar.gz", members))
-    assert "unexpected member 'agent/run_me.py'" in message
+    archive = read_car_archive(write_archive(tmp_path / "extra.tar.gz", members))
+    plain = read_car_archive(write_archive(tmp_path / "plain.tar.gz"))
+    assert archive.content_hash == plain.content_hash
+
+
+@pytest.mark.parametrize("name", ["model_2.pb", "agent/checkpoint", "agent/model"])
+def test_a_second_model_file_is_refused_as_the_car_refuses_it(tmp_path: Path, name: str) -> None:
+    members = {
+        "model_metadata.json": json.dumps(METADATA).encode(),
+        "agent/model.pb": camera_policy_graph(),
+        name: b"weights",
+    }
+    message = refusal(write_archive(tmp_path / "two.tar.gz", members))
+    assert "another model file" in message and name in message
 
 
 def test_links_are_refused(tmp_path: Path) -> None:
