@@ -19,6 +19,7 @@ import bisect
 import functools
 import itertools
 import math
+import weakref
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -274,9 +275,9 @@ class Camera:
         # flat indices past either end of the grid onto past-the-walls cells as well.
         farthest = float(reach.max()) if len(reach) else 0.0
         pad = math.ceil((farthest + spec.mount_forward) / res) + 2
-        texture = np.pad(raster.texture, ((0, 0), (0, pad)), constant_values=scene.BEYOND_WALLS)
-        self._stride = texture.shape[1]
-        self._texture = texture.ravel()
+        # Any larger pad gives the same frames: cameras of one track whose pads round up
+        # alike share one padded texture (camera randomisation builds many of them).
+        self._texture, self._stride = _padded_texture(raster, -(-pad // _PAD_STEP) * _PAD_STEP)
         # Walls: each column's bearing at the horizon as a unit vector in the car's frame
         # (there a ray runs (1/cos p, -right) ahead and left), and how steeply each pixel
         # above the horizon looks up.
@@ -311,9 +312,7 @@ class Camera:
         self._pixel_centres = self._columns + 0.5
         self._steps = np.arange(0, 0)  # one row apart down a flattened frame, grown as needed
         sampled = sum(band.lateral.size for band in self._split)
-        self._chunk = max(1, _CHUNK_PIXELS // max(1, sampled))
-        for band in self._split:
-            band.resize(self._chunk)
+        self._chunk = max(1, _CHUNK_PIXELS // max(1, sampled))  # bands grow to it when used
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -716,6 +715,26 @@ def _runs(
     across += last[..., None]
     end = np.minimum(np.floor(-np.maximum.reduce(across)) + 1, height)
     return start.astype(np.intp), np.maximum(end, start).astype(np.intp)
+
+
+# Pads are rounded up to this many cells, so that cameras of one track share textures.
+_PAD_STEP = 512
+_padded_textures: weakref.WeakKeyDictionary[TrackRaster, dict[int, UInt8Array]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _padded_texture(raster: TrackRaster, pad: int) -> tuple[UInt8Array, int]:
+    """The raster's texture with `pad` cells past the walls after every row, flattened
+    (read-only, shared by every camera of the raster asking for that pad), and its stride."""
+    by_pad = _padded_textures.setdefault(raster, {})
+    flat = by_pad.get(pad)
+    if flat is None:
+        texture = np.pad(raster.texture, ((0, 0), (0, pad)), constant_values=scene.BEYOND_WALLS)
+        flat = texture.ravel()
+        flat.flags.writeable = False
+        by_pad[pad] = flat
+    return flat, raster.width + pad
 
 
 def camera_space(spec: CameraSpec | None = None) -> gym.spaces.Box:

@@ -17,7 +17,7 @@ training keeps two CPU cores busy.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -28,6 +28,8 @@ from sim.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_sp
 from sim.car import DEEPRACER_CAR, CarSpec
 from sim.objects.settings import RaceSettings
 from sim.observations import Observer, SensorOptions, normalise_sensors
+from sim.realworld.perturbation import draw_perturbation
+from sim.realworld.settings import CameraRandomisation
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track import Track
 
@@ -48,6 +50,9 @@ class EnvConfig:
     car: CarSpec = DEEPRACER_CAR
     is_reversed: bool = False  # DeepRacer's REVERSE_DIR: drive the track the other way round
     race: RaceSettings | None = None  # boxes or bot cars: None for a time trial
+    # A camera model's training draws each car a camera every episode (sim.realworld);
+    # off (the plain render) unless the model asks for it. Only camera models see it.
+    camera_randomisation: CameraRandomisation = CameraRandomisation.OFF
 
     @classmethod
     def build(
@@ -137,11 +142,13 @@ class BatchedDeepRacer:
     puts the final observation in `final_observations` (the convention of SB3's VecEnv).
     """
 
-    def __init__(self, config: EnvConfig, n_cars: int) -> None:
+    def __init__(self, config: EnvConfig, n_cars: int, seed: int | None = None) -> None:
         self.config = config
         self.n = n_cars
         self.sim = config.simulation(n_cars)
         self.observer = Observer(self.sim, config.sensors, config.sensor_options)
+        # Camera randomisation: a camera drawn per car per episode from `seed` (None: fresh).
+        self._camera_draws = np.random.default_rng(seed) if randomises_camera(config) else None
         self.observation_space = self.observer.space
         self.action_space = config.action_space.gym_space()
         self._rewards_by_car = config.reward_functions(n_cars)
@@ -152,7 +159,18 @@ class BatchedDeepRacer:
 
     def reset(self) -> Any:
         self.sim.reset_all()
+        self._draw_cameras(range(self.n))
         return self.observer.observe()
+
+    def _draw_cameras(self, cars: Sequence[int]) -> None:
+        """New episodes' cameras for `cars` when the config randomises the camera."""
+        draws = self._camera_draws
+        if draws is None:
+            return
+        settings = self.config.camera_randomisation
+        chosen = [draw_perturbation(settings, draws) for _ in cars]
+        noise_seed = int(draws.integers(2**62))  # used by the first call only
+        self.observer.perturb_camera(list(cars), chosen, noise_seed=noise_seed)
 
     def step(
         self, actions: np.ndarray
@@ -181,6 +199,7 @@ class BatchedDeepRacer:
             for car in finished_cars:
                 self.final_observations[car] = _row(obs, car)
             sim.reset_cars(finished_cars)
+            self._draw_cameras(finished_cars)
             # Only the restarted cars moved: observing just them saves a whole-fleet
             # camera render or lidar scan on most training steps.
             _set_rows(obs, finished, self.observer.observe(finished_cars))
@@ -194,6 +213,12 @@ class BatchedDeepRacer:
             if steps[i] > 1:  # step 1 is DeepRacer's "prepare" step
                 rewards[i] = functions[i](params)
         return rewards
+
+
+def randomises_camera(config: EnvConfig) -> bool:
+    """Whether episodes of `config` draw camera perturbations: a camera model whose
+    settings turn any family on."""
+    return config.camera_randomisation.on and "camera" in config.sensors
 
 
 def _set_rows(obs: Any, cars: np.ndarray, rows: Any) -> None:
@@ -240,6 +265,11 @@ class DeepRacerEnv(gym.Env[Any, Any]):
         elif seed is not None:
             start_s = float(self.np_random.uniform(0.0, length))
         self.sim.reset_car(0, start_s)
+        if randomises_camera(self.config):  # a new camera every episode, from the env's seed
+            rng = self.np_random
+            chosen = draw_perturbation(self.config.camera_randomisation, rng)
+            noise_seed = int(rng.integers(2**62))
+            self.observer.perturb_camera([0], [chosen], noise_seed=noise_seed)
         return _row(self.observer.observe(), 0), self._info()
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:

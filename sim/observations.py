@@ -12,13 +12,17 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
 from sim.geometry import FloatArray
 from sim.simulation import TrackSimulation
+
+if TYPE_CHECKING:
+    from sim.realworld.perturbation import CameraPerturbation
+    from sim.realworld.render import PerturbedCamera
 
 SENSOR_NAMES = ("camera", "lidar", "sector_lidar", "vector")
 DEEPRACER_SENSORS = {
@@ -73,6 +77,7 @@ class Observer:
         self.options = options or SensorOptions()
         spaces: dict[str, gym.spaces.Space[Any]] = {}
         self._camera: Any = None
+        self._perturbed: PerturbedCamera | None = None
         self._lidar: Any = None
         opts = self.options
         if "camera" in sensors:
@@ -97,6 +102,30 @@ class Observer:
             next(iter(spaces.values())) if len(spaces) == 1 else gym.spaces.Dict(spaces)
         )
 
+    def perturb_camera(
+        self,
+        cars: Sequence[int],
+        perturbations: Sequence[CameraPerturbation],
+        *,
+        noise_seed: int | None = None,
+    ) -> None:
+        """From now on car `cars[i]`'s camera sees through `perturbations[i]`
+        (`sim.realworld`); the others keep theirs, the plain camera until given one.
+        `noise_seed` seeds the sensor noise (on the first call only). Nothing changes for a
+        model without a camera."""
+        if self._camera is None:
+            return
+        if self._perturbed is None:
+            from sim.realworld.render import PerturbedCamera
+
+            self._perturbed = PerturbedCamera(self.sim.track, self._camera, self.sim.n, noise_seed)
+        self._perturbed.set(cars, perturbations)
+
+    @property
+    def camera_perturbations(self) -> tuple[CameraPerturbation, ...] | None:
+        """Each car's camera perturbation, or None while every car has the plain camera."""
+        return None if self._perturbed is None else self._perturbed.perturbations
+
     def observe(self, cars: Sequence[int] | None = None) -> Any:
         """Observations for all N cars, or for `cars` only (rows in that order): an
         (N, ...) array, or a dict of them."""
@@ -107,7 +136,11 @@ class Observer:
         if self._camera is not None:
             objects = self.sim.objects  # each car's own boxes or bot cars, drawn in its view
             solids = None if objects is None else objects.solids(np.arange(self.sim.n)[pick])
-            frames = self._camera.render(x, y, yaw, solids=solids)
+            if self._perturbed is None:
+                frames = self._camera.render(x, y, yaw, solids=solids)
+            else:  # camera randomisation (sim.realworld): each car through its own camera
+                which = np.arange(self.sim.n)[pick]
+                frames = self._perturbed.render(which, x, y, yaw, solids=solids)
             parts["camera"] = frames[..., None]
         if self._lidar is not None:
             scan = self._lidar.scan(x, y, yaw)

@@ -16,6 +16,8 @@ import sim
 TORCH_ALLOWED = {
     # A DeepRacer car archive's frozen graph, run with torch (the readers stay torch-free).
     "sim.car_export.driver",
+    # Writes a trained policy's tensors as the car's graph.
+    "sim.car_export.export",
     "sim.car_export.graph_runner",
     "sim.car_export.policy",
     "sim.training.checkpoint",

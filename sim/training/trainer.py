@@ -32,6 +32,7 @@ from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, ModelFolder
 from sim.observations import SensorOptions
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
+from sim.realworld.training import training_config
 from sim.simulation import reversed_track
 from sim.track import Track
 from sim.training import events
@@ -120,7 +121,7 @@ class Trainer:
             self.settings = PPOSettings.from_hyperparameters(self.hyperparameters)
         except ValueError as error:
             raise ModelError(f"{folder.hyperparameters_file}: {error}") from None
-        self.config = folder.env_config()
+        self.config = training_config(folder.env_config(), params, str(folder.training_params_file))
         self.cars = self.options.cars or default_cars(self.metadata.sensors)
         least, most = sample_limits(self.metadata.sensors, self.cars)
         self.min_samples = self.options.min_samples or least
@@ -174,7 +175,7 @@ class Trainer:
 
     def _setup(self) -> str:
         self._remove_leftovers()
-        env = BatchedVecEnv(self.config, self.cars)
+        env = BatchedVecEnv(self.config, self.cars, seed=self.options.seed)
         self.logbook = Logbook(
             self.folder.path,
             cars=self.cars,

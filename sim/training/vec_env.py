@@ -20,8 +20,9 @@ from sim.env import BatchedDeepRacer, EnvConfig, StepInfo
 class BatchedVecEnv(VecEnv):
     """N cars of one `BatchedDeepRacer` as N SB3 environments with automatic resets."""
 
-    def __init__(self, config: EnvConfig, n_cars: int) -> None:
-        self.batch = BatchedDeepRacer(config, n_cars)
+    def __init__(self, config: EnvConfig, n_cars: int, seed: int | None = None) -> None:
+        # `seed` seeds the cars' camera draws when the config randomises the camera.
+        self.batch = BatchedDeepRacer(config, n_cars, seed)
         super().__init__(n_cars, self.batch.observation_space, self.batch.action_space)
         self._actions: np.ndarray | None = None
         self.last_infos: list[StepInfo] = []

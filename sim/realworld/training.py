@@ -1,0 +1,33 @@
+"""Where a model's camera randomisation meets its training: the trainer's env config.
+
+Only the trainer's environments draw perturbations; evaluations (the training's own and a
+racer's) and races drive on the plain render, as the model's folder describes it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from sim.deepracer_files import DeepRacerFileError, TrainingParams
+from sim.env import EnvConfig
+from sim.garage.folder import ModelError
+from sim.realworld.settings import CameraRandomisation, read_camera_randomisation
+
+
+def training_config(
+    config: EnvConfig, params: TrainingParams, where: str = "training_params.yaml"
+) -> EnvConfig:
+    """`config` (a model's `env_config()`) with the camera randomisation its training
+    params ask for; a bad key is a ModelError naming it."""
+    settings = model_camera_randomisation(params, where)
+    if settings == config.camera_randomisation:
+        return config
+    return replace(config, camera_randomisation=settings)
+
+
+def model_camera_randomisation(params: TrainingParams, where: str) -> CameraRandomisation:
+    """The camera randomisation stored in a model's training params (off without keys)."""
+    try:
+        return read_camera_randomisation(params, where)
+    except DeepRacerFileError as error:
+        raise ModelError(str(error)) from None

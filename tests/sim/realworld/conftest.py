@@ -1,0 +1,32 @@
+"""Fixtures for camera randomisation: re:Invent 2018 and cars standing on it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sim.camera import Camera
+from sim.env import EnvConfig
+from sim.simulation import TrackSimulation
+from sim.track import Track
+from sim.track_catalog import resolve_track
+from tests.sim.realworld.helpers import CARS
+
+
+@pytest.fixture(scope="module")
+def reinvent() -> Track:
+    return resolve_track("reinvent_base")
+
+
+@pytest.fixture(scope="module")
+def camera(reinvent: Track) -> Camera:
+    return Camera(reinvent)
+
+
+@pytest.fixture
+def sim(reinvent: Track) -> TrackSimulation:
+    """CARS cars spread round the track on the centre line, at their episodes' start."""
+    simulation = EnvConfig(track=reinvent, sensors=("camera",)).simulation(CARS)
+    starts = np.linspace(0.0, reinvent.length, CARS, endpoint=False).tolist()
+    simulation.reset_cars(range(CARS), starts)
+    return simulation
