@@ -165,6 +165,13 @@ def _add_spec_options(parser: argparse.ArgumentParser, *, for_clone: bool) -> No
     continuous.add_argument(
         "--speed-range", metavar="LOW,HIGH", help=f"m/s (default {MIN_SPEED:g},{MAX_SPEED:g})"
     )
+    parser.add_argument(
+        "--camera-randomisation",
+        metavar="WHAT",
+        help="a camera model trains for the real world: on, off"
+        f"{'' if for_clone else ' (default)'}, or families from light, noise, blur, pose, "
+        "colours with strengths (e.g. light,noise=0.5)",
+    )
     race = parser.add_argument_group("race type")
     race.add_argument(
         "--race-type",
@@ -276,6 +283,14 @@ def _spec_options(args: argparse.Namespace) -> dict[str, Any]:
         )
     if args.hp:
         options["hyperparameters"] = parse_hp_assignments(args.hp)
+    if args.camera_randomisation is not None:
+        from sim.realworld.settings import parse_camera_randomisation
+
+        try:
+            chosen = parse_camera_randomisation(args.camera_randomisation)
+        except ValueError as error:
+            raise ModelError(f"--camera-randomisation: {error}") from None
+        options["camera_randomisation"] = chosen
     if args.race_type is not None:
         options["race_type"] = args.race_type.strip().lower()
     if args.obstacles is not None:
@@ -385,6 +400,11 @@ def _show(name: str, as_json: bool) -> int:
         ("network", metadata["neural_network"]),
         ("algorithm", metadata["training_algorithm"]),
         ("reward function", details["reward_function"]),
+        *(
+            [("camera randomisation", details["camera_randomisation"])]
+            if "camera" in details["sensor"].split("+")
+            else []
+        ),
         ("time limit", f"{details['max_minutes']:g} min"),
         ("content hash", details["content_hash"][:16]),
         ("folder", details["path"]),

@@ -51,6 +51,12 @@ from sim.garage.options import (
 )
 from sim.names import NAME_RULE, is_valid_name
 from sim.observations import SensorError, normalise_sensors
+from sim.realworld.settings import (
+    CameraRandomisation,
+    parse_camera_randomisation,
+    settings_text,
+    with_camera_randomisation_keys,
+)
 from sim.remedies import Note, RemedyError
 from sim.reward_function import RewardFunctionError, check_reward_code
 from sim.track import TrackError
@@ -121,6 +127,8 @@ class FormValues:
     race_objects: str = str(DEFAULT_OBSTACLES)
     bot_speed: str = f"{DEFAULT_BOT_SPEED:g}"
     race_shuffle: bool = False
+    # What a camera model's training randomises, as `parse_camera_randomisation` reads it.
+    camera_randomisation: str = "off"
 
     @property
     def race(self) -> tuple[str, str, str, bool]:
@@ -179,6 +187,7 @@ def values_of(spec: ModelSpec, name: str = "") -> FormValues:
         race_objects=race[1],
         bot_speed=race[2],
         race_shuffle=race[3],
+        camera_randomisation=settings_text(spec.camera_randomisation),
     )
 
 
@@ -383,6 +392,18 @@ def spec_of_form(
     reward = reward_problem(values.reward_source)
     if reward is not None:
         problems.append(FieldProblem("reward", str(reward)))
+    randomisation = CameraRandomisation.OFF
+    try:
+        randomisation = parse_camera_randomisation(values.camera_randomisation)
+    except ValueError as error:
+        problems.append(FieldProblem("camera-randomisation", _sentence(str(error))))
+    if randomisation.on and "camera" not in sensors:
+        problems.append(
+            FieldProblem(
+                "camera-randomisation",
+                "Camera randomisation needs a camera: choose the camera sensor, or write off.",
+            )
+        )
     raced = _with_race_of_form(base, values, base, problems)
     blind = blind_to_objects(raced.race_type, sensors)
     if blind is not None:
@@ -398,8 +419,13 @@ def spec_of_form(
         reward_source=values.reward_source,
         reward_origin="editor",
         max_minutes=float(values.max_minutes),
+        camera_randomisation=randomisation,
     )
     return racing_line_followed(spec, base)
+
+
+def _sentence(text: str) -> str:
+    return text[:1].upper() + text[1:]
 
 
 def _hyperparameters(
@@ -463,8 +489,10 @@ def save_edit(folder: ModelFolder, spec: ModelSpec) -> ModelFolder:
     track = resolve_track(spec.track)
     check_reward_code(spec.reward_source, REWARD_FILE_NAME)
     before = folder.training_params()
-    # The race type's keys are the spec's; every other key the file holds stays.
+    # The race type's and the camera randomisation's keys are the spec's; every other key
+    # the file holds stays.
     extra = {key: value for key, value in before.extra.items() if key not in RACE_KEYS}
+    extra = with_camera_randomisation_keys(extra, spec.camera_randomisation)
     params = replace(
         before,
         world_name=track.name,

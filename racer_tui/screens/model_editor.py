@@ -83,6 +83,7 @@ FIELD_TABS = {
     "track": "tab-car",
     "sensor": "tab-car",
     "max-minutes": "tab-car",
+    "camera-randomisation": "tab-car",
     "reward": "tab-reward",
 }
 ACTION_FIELDS = (
@@ -292,6 +293,13 @@ class ModelEditorScreen(RacerScreen[str | None]):
                     Input(values.max_minutes, id="max-minutes"),
                     f"{MIN_MINUTES:g} to {MAX_MINUTES:g}",
                 )
+                with Vertical(id="camera-randomisation-field"):
+                    randomisation = Input(values.camera_randomisation, id="camera-randomisation")
+                    randomisation.tooltip = (
+                        "Train for a real car's camera: off, on, or some of light, noise, "
+                        "blur, pose, colours, each with a strength 0-2 (light,noise=0.5)"
+                    )
+                    yield field("Camera randomisation", randomisation, "on, off, noise=0.5")
                 yield field(
                     "Race type",
                     Select(
@@ -443,6 +451,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
                 return
         self._show_kind()
         self._show_race()
+        self._show_camera_randomisation()
         self._refresh_actions()
         if self.initial is not None:
             self._load_preview(self.initial.track)
@@ -490,6 +499,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
             race_objects=self._input("race-objects"),
             bot_speed=self._input("bot-speed"),
             race_shuffle=self._select("race-shuffle") is True,
+            camera_randomisation=self._input("camera-randomisation"),
         )
 
     # --- live feedback ------------------------------------------------------------------------
@@ -539,6 +549,16 @@ class ModelEditorScreen(RacerScreen[str | None]):
         self.query_one("#race-fields").display = race != "time-trial"
         self.query_one("#bot-speed-field").display = race == "head-to-bot"
 
+    def _show_camera_randomisation(self) -> None:
+        """Camera randomisation is a camera model's: hidden for any other sensor."""
+        sensor = str(self._select("sensor"))
+        self.query_one("#camera-randomisation-field").display = "camera" in sensor.split("+")
+
+    @on(Select.Changed, "#sensor")
+    def _sensor_changed(self) -> None:
+        self._show_camera_randomisation()
+        self._set_problem("camera-randomisation", "")
+
     @on(Select.Changed, "#race-type")
     def _race_changed(self) -> None:
         self._show_race()
@@ -564,6 +584,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
             "name",
             "race-objects",
             "bot-speed",
+            "camera-randomisation",
         ):
             self._set_problem(field_id, "")
 

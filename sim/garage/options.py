@@ -243,8 +243,7 @@ def with_camera_randomisation(spec: ModelSpec, chosen: CameraRandomisation | Non
         return spec
     if chosen.on and not has_camera:
         raise ModelError(
-            "camera randomisation needs a camera: choose FRONT_FACING_CAMERA or "
-            "STEREO_CAMERAS as the sensor, or leave it off."
+            "camera randomisation needs a camera: choose the camera sensor, or leave it off."
         )
     return replace(spec, camera_randomisation=chosen)
 

@@ -143,6 +143,7 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         "actions": _action_rows(space),
         "on_the_car": [asdict(action) for action in car_actions(space)],
         "car_refusal": car_refusal(metadata),
+        "camera_randomisation": _camera_randomisation_words(folder, params),
         "hyperparameters": folder.hyperparameters(),
         "reward_function": reward_origin(folder),
         "training": training_summary(folder),
@@ -150,6 +151,16 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         "notes": {key: str(value) for key, value in params.extra.items()},
         "physics_note": physics_note(folder.trained_physics()),
     }
+
+
+def _camera_randomisation_words(folder: ModelFolder, params: TrainingParams) -> str:
+    """What the model's training randomises of its camera, in words ("off" when nothing)."""
+    from sim.realworld.settings import read_camera_randomisation
+
+    try:
+        return read_camera_randomisation(params, str(folder.training_params_file)).describe()
+    except DeepRacerFileError as error:
+        return str(error)
 
 
 def physics_note(trained: str | None) -> str | None:

@@ -169,6 +169,21 @@ def parse_camera_randomisation(text: str) -> CameraRandomisation:
     return chosen
 
 
+def settings_text(settings: CameraRandomisation) -> str:
+    """`settings` in the words `parse_camera_randomisation` reads back: "off", "on" (every
+    family at 1), or the families on with their strengths ("light,noise=0.5")."""
+    if not settings.on:
+        return "off"
+    if settings == CameraRandomisation():
+        return "on"
+    parts = []
+    for family in FAMILIES:
+        strength = settings.strength(family)
+        if strength > 0.0:
+            parts.append(family if strength == 1.0 else f"{family}={strength:g}")
+    return ",".join(parts)
+
+
 def as_mapping(settings: CameraRandomisation) -> dict[str, float]:
     """Family -> strength, for JSON output."""
     return {f.name: float(getattr(settings, f.name)) for f in fields(settings)}

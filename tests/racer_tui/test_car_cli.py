@@ -181,3 +181,23 @@ def test_model_act_prepares_a_picture_as_the_car_does() -> None:
     assert np.abs(frame.astype(np.float64) - expected).max() <= 1
     flat = np.full((37, 53, 3), (200, 100, 50), dtype=np.uint8)
     assert (car_frame(flat) == round(0.299 * 200 + 0.587 * 100 + 0.114 * 50)).all()
+
+
+def test_model_new_trains_for_the_real_world_on_request(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    code, _, err = run_cli(
+        capsys, "model", "new", "real", "--sensor", "camera", "--camera-randomisation", "on"
+    )
+    assert (code, err) == (0, "")
+    code, out, _ = run_cli(capsys, "model", "show", "real", "--json")
+    assert "sensor noise 1" in json.loads(out)["camera_randomisation"]
+    code, out, _ = run_cli(capsys, "model", "show", "real")
+    assert "camera randomisation" in out and "light and contrast 1" in out
+    for args, words in (
+        (("model", "new", "bad", "--sensor", "camera", "--camera-randomisation", "fog"), "'fog'"),
+        (("model", "new", "blind", "--camera-randomisation", "on"), "needs a camera"),
+    ):
+        code, _, err = run_cli(capsys, *args)
+        message = err.strip().removeprefix("racer-tui: ")
+        assert code == 2 and words in message and one_sentence(message), message

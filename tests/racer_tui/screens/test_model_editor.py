@@ -308,3 +308,48 @@ async def test_the_race_type_is_chosen_in_the_editor_and_kept_when_edited() -> N
     assert params.extra["NUMBER_OF_OBSTACLES"] == 4
     assert params.extra["RANDOMIZE_OBSTACLE_LOCATIONS"] is True
     assert "NUMBER_OF_BOT_CARS" not in params.extra
+
+
+async def test_camera_randomisation_is_chosen_in_the_editor_for_camera_models() -> None:
+    from sim.realworld.settings import CameraRandomisation, read_camera_randomisation
+
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        editor = _editor(app)
+        await pilot.press(*"for-my-car")
+        field = editor.query_one("#camera-randomisation-field")
+        assert not field.display  # the default sensor is the vector state: no camera
+        editor.query_one("#sensor", Select).value = "camera"
+        await pilot.pause()
+        assert field.display
+        editor.query_one("#camera-randomisation", Input).value = "light,banana"
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert app.screen is editor
+        problem = editor.query_one("#camera-randomisation-problem")
+        problem.scroll_visible(animate=False)
+        await pilot.pause()
+        told = " ".join(painted(problem).split())
+        assert "Unknown camera randomisation 'banana'" in told
+        editor.query_one("#camera-randomisation", Input).value = "light,noise=0.5"
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+    chosen = read_camera_randomisation(open_model("for-my-car").training_params())
+    assert chosen == CameraRandomisation(light=1.0, noise=0.5, blur=0, pose=0, colours=0)
+
+    # Edited: the field shows the stored setting, and off removes it from the file.
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        await pilot.press("e")
+        editor = _editor(app)
+        assert editor.query_one("#camera-randomisation", Input).value == "light,noise=0.5"
+        editor.query_one("#camera-randomisation", Input).value = "off"
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
+    params = open_model("for-my-car").training_params()
+    assert not any(key.startswith("CAMERA_RANDOMISATION") for key in params.extra)
