@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 # The app needs only racer-tui; the tests also need the dev tools and the car extra
-# (OpenVINO, the physical car's runtime, which proves a car export loads).
+# (OpenVINO and TensorFlow, which prove a car export loads as the car loads it).
 APP_STAMP := $(VENV)/.installed-app
 STAMP := $(VENV)/.installed-test
 

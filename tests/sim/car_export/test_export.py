@@ -1,8 +1,9 @@
 """Exporting for the car: the archive a physical DeepRacer loads.
 
 The graph is checked the way the car checks it: OpenVINO (the car's runtime, the test
-suite's converter) reads the frozen graph by the car's tensor names and gives the
-policy's outputs for frames of racer-tui's own camera; the archive passes the car loader's
+suite's converter) and TensorFlow (which wrote DeepRacer's own graphs) read the frozen
+graph by the car's tensor names and give the policy's outputs for frames of racer-tui's
+own camera; the archive passes the car loader's
 rules as aws-deepracer-systems-pkg applies them; and racer-tui's own reader and runner
 (what `model import` uses) give the same answers.
 """
@@ -39,6 +40,7 @@ ov = pytest.importorskip("openvino", reason="the car extra (OpenVINO) is not ins
 
 CAMERA = "main_level/agent/main/online/network_0/FRONT_FACING_CAMERA/FRONT_FACING_CAMERA"
 LIDAR = "main_level/agent/main/online/network_0/LIDAR/LIDAR"
+POLICY = "main_level/agent/main/online/network_1/ppo_head_0/policy"
 TINY = RunOptions(minutes=5, cars=2, seed=0, min_samples=32, max_samples=64, evaluation_seconds=0)
 # Attributes TensorFlow 1 writes for each op (what DeepRacer's own frozen graphs carry);
 # newer attributes (explicit_paddings, for example) would trip OpenVINO 2021 and TF 2.4.
@@ -182,9 +184,45 @@ def test_a_decisive_policy_chooses_the_same_actions_through_openvino(
     expected = policy_outputs(folder, frames, lidar_readings())
     assert len(set(expected.argmax(axis=1).tolist())) >= 3
     path = export_car_archive(folder, tmp_path / "decisive").path
-    got = openvino_outputs(path, {CAMERA: frames[..., np.newaxis].astype(np.float32)})
+    feeds = {CAMERA: frames[..., np.newaxis].astype(np.float32)}
+    for got in (openvino_outputs(path, feeds), tensorflow_outputs(path, feeds)):
+        np.testing.assert_allclose(got, expected, atol=1e-4, rtol=0)
+        assert (got.argmax(axis=1) == expected.argmax(axis=1)).all()
+
+
+def tensorflow_outputs(archive: Path, feeds: dict[str, np.ndarray]) -> np.ndarray:
+    """The archive's graph imported by TensorFlow (as a TensorFlow 1 frozen graph, the way
+    DeepRacer's tools load model.pb) and run by the car's tensor names."""
+    os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "2")
+    tf = pytest.importorskip("tensorflow", reason="the car extra (TensorFlow) is not installed")
+    with tarfile.open(archive) as tar:
+        member = tar.extractfile("agent/model.pb")
+        assert member is not None
+        graph_def = tf.compat.v1.GraphDef.FromString(member.read())
+    with tf.Graph().as_default() as graph:
+        tf.compat.v1.import_graph_def(graph_def, name="")
+        with tf.compat.v1.Session(graph=graph) as session:
+            output = graph.get_tensor_by_name(f"{POLICY}:0")
+            inputs = {graph.get_tensor_by_name(f"{name}:0"): value for name, value in feeds.items()}
+            return np.asarray(session.run(output, feed_dict=inputs))
+
+
+@pytest.mark.parametrize("kind", ["discrete", "continuous", "lidar"])
+def test_tensorflow_runs_the_exported_graph_as_the_policy_drives(
+    models: dict[str, ModelFolder], tmp_path: Path, kind: str
+) -> None:
+    folder = models[kind]
+    path = export_car_archive(folder, tmp_path / folder.name).path
+    frames, lidar = simulator_frames(), lidar_readings()
+    feeds = {CAMERA: frames[..., np.newaxis].astype(np.float32)}
+    if kind == "lidar":
+        feeds[LIDAR] = lidar
+    expected = policy_outputs(folder, frames, lidar)
+    got = tensorflow_outputs(path, feeds)
     np.testing.assert_allclose(got, expected, atol=1e-4, rtol=0)
-    assert (got.argmax(axis=1) == expected.argmax(axis=1)).all()
+    assert np.abs(got - expected).max() < 0.01 * np.ptp(expected, axis=0).max()
+    if kind != "continuous":
+        assert (got.argmax(axis=1) == expected.argmax(axis=1)).all()
 
 
 def test_racer_tui_runs_its_own_export_as_the_policy_drives(
