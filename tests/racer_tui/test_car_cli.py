@@ -14,6 +14,8 @@ import pytest
 from sim.car_export.frame import car_frame
 from sim.garage.folder import ModelFolder, open_model
 from sim.garage.options import new_model
+from sim.race.engine import run_race
+from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 from sim.training.evaluation import run_trials
 from sim.training.policy import driver_for_model
@@ -88,6 +90,17 @@ def test_the_round_trip_drives_the_same_laps(
     assert [trial.progress for trial in again] == [trial.progress for trial in original]
     assert [trial.seconds for trial in again] == [trial.seconds for trial in original]
     assert [trial.resets for trial in again] == [trial.resets for trial in original]
+    # And a race: the same laps, off-tracks and every action on the way.
+    rules = RaceRules(window_seconds=90.0)
+    raced = run_race(track, rules, driver_for_model(trained), seed=5)
+    raced_again = run_race(track, rules, driver_for_model(imported), seed=5)
+    assert raced_again.laps == raced.laps
+    assert raced_again.total_offtracks == raced.total_offtracks
+    assert raced.trace is not None and raced_again.trace is not None
+    assert len(raced.trace.t) > 1000  # 90 s of driving, every step compared
+    assert np.array_equal(raced_again.trace.action, raced.trace.action)
+    assert np.array_equal(raced_again.trace.x, raced.trace.x)
+    assert raced_again.model_name == "cam-car" and raced.model_name == "cam"
     assert [trial.status for trial in again] == [trial.status for trial in original]
 
 
