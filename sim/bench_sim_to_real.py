@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from sim.realworld.perturbation import PLAIN, CameraPerturbation, Palette
-from sim.training.bench_runs import bench_home, print_result, train_side_by_side
+from sim.training.bench_runs import bench_home, print_result, train_model, train_side_by_side
 
 DEFAULT_MINUTES = 20.0
 DEFAULT_TRIALS = 10
@@ -57,16 +57,8 @@ class Run:
 
 
 def _train(run: Run, minutes: float) -> Run:
-    from sim.training import events
-    from sim.training.launcher import TrainingProcess
-
-    process = TrainingProcess.start(run.model, minutes, [])
-    for event in process.events():
-        if isinstance(event, events.Update):
-            run.steps, run.training_seconds = event.total_steps, event.elapsed
-        elif isinstance(event, events.Ended):
-            run.ended = event.kind
-    process.wait()
+    trained = train_model(run.model, minutes)
+    run.steps, run.training_seconds, run.ended = trained.steps, trained.seconds, trained.ended
     return run
 
 

@@ -10,6 +10,7 @@ import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 Item = TypeVar("Item")
@@ -22,6 +23,35 @@ def train_side_by_side(items: Sequence[Item], train: Callable[[Item], object]) -
     with ThreadPoolExecutor(max_workers=2 if side_by_side else 1) as pool:
         list(pool.map(train, items))
     return side_by_side
+
+
+@dataclass
+class Trained:
+    """What a training child reported: its steps and seconds, how it ended, and (seconds
+    into training, laps, trials) of each of its own evaluations."""
+
+    steps: int = 0
+    seconds: float = 0.0
+    ended: str = ""
+    evaluations: list[tuple[float, int, int]] = field(default_factory=list)
+
+
+def train_model(model: str, minutes: float) -> Trained:
+    """Train garage model `model` for `minutes` in a child process, as the app does."""
+    from sim.training import events
+    from sim.training.launcher import TrainingProcess
+
+    trained = Trained()
+    process = TrainingProcess.start(model, minutes, [])
+    for event in process.events():
+        if isinstance(event, events.Update):
+            trained.steps, trained.seconds = event.total_steps, event.elapsed
+        elif isinstance(event, events.Evaluation):
+            trained.evaluations.append((event.elapsed, event.laps, event.trials))
+        elif isinstance(event, events.Ended):
+            trained.ended = event.kind
+    process.wait()
+    return trained
 
 
 @contextmanager
