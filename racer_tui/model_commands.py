@@ -77,6 +77,11 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     )
     importer.add_argument("--name", help="name in your garage (default: the folder's/bundle's)")
     importer.add_argument("--track", help=f"track to train on (default: {DEFAULT_TRACK})")
+    importer.add_argument(
+        "--untrained",
+        action="store_true",
+        help="leave a DeepRacer folder's own weights (model_N.pb) behind, to train it here",
+    )
     importer.add_argument("--json", action="store_true")
 
     act = actions.add_parser(
@@ -513,7 +518,9 @@ def _delete(name: str, yes: bool) -> int:
 def _import(args: argparse.Namespace) -> int:
     from sim.garage.deepracer_import import import_model
 
-    result = import_model(Path(args.path), name=args.name, track=args.track)
+    result = import_model(
+        Path(args.path), name=args.name, track=args.track, untrained=args.untrained
+    )
     if args.json:
         print_json(
             {**model_row(result.folder), "path": str(result.folder.path), "notes": result.notes}

@@ -16,6 +16,7 @@ exactly one model file). Archives come from anyone, so this reader:
   the graph with `sim.car_export.graph_def` (known ops only);
 - checks the graph has the input and output names the car uses for the metadata's sensor.
 
+`car_archive_bytes` writes the container (the export and the model folder import use it).
 No torch here: running the graph is `sim.car_export.graph_runner`'s job.
 """
 
@@ -83,6 +84,22 @@ class CarArchive:
             if name.endswith(suffix):
                 return name[: -len(suffix)]
         return self.path.stem
+
+
+def car_archive_bytes(metadata_json: bytes, graph: bytes) -> bytes:
+    """The `.tar.gz`: the two files, plain, owned by nobody, dated 0, so one model always
+    gives the same bytes."""
+    buffer = io.BytesIO()
+    with (
+        gzip.GzipFile(fileobj=buffer, mode="wb", mtime=0) as zipped,
+        tarfile.open(fileobj=zipped, mode="w", format=tarfile.USTAR_FORMAT) as tar,
+    ):
+        for name, data in ((MODEL_METADATA, metadata_json), (GRAPH_MEMBER, graph)):
+            info = tarfile.TarInfo(name)
+            info.size = len(data)
+            info.mode = 0o644
+            tar.addfile(info, io.BytesIO(data))
+    return buffer.getvalue()
 
 
 def read_car_archive(path: Path) -> CarArchive:

@@ -21,10 +21,7 @@ attributes TensorFlow 1 writes and nothing newer, under the names the car feeds 
 
 from __future__ import annotations
 
-import gzip
-import io
 import json
-import tarfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,16 +32,16 @@ from torch import nn
 from sim.atomic import write_bytes_atomic
 from sim.car_export.archive import (
     AGENT_SCOPES,
-    GRAPH_MEMBER,
     INPUT_NODE,
     OUTPUT_NODES,
+    car_archive_bytes,
     read_car_archive,
 )
 from sim.car_export.car_mapping import CarAction, car_actions, car_refusal
 from sim.car_export.errors import CarModelError
 from sim.car_export.file_names import car_archive_path
 from sim.car_export.graph_writer import GraphWriter, attr_b, attr_i, attr_ints, attr_s, attr_type
-from sim.deepracer_files import MODEL_METADATA, SENSOR_FILE_NAMES, ModelMetadata
+from sim.deepracer_files import SENSOR_FILE_NAMES, ModelMetadata
 from sim.garage.folder import ModelError, ModelFolder
 from sim.training.policy import CAMERA_POOL, PolicyNetwork, load_policy
 
@@ -110,22 +107,6 @@ def export_car_archive(folder: ModelFolder, out: Path, *, replace: bool = False)
     metadata_bytes = (json.dumps(metadata.to_json(), indent=4) + "\n").encode("utf-8")
     write_bytes_atomic(target, car_archive_bytes(metadata_bytes, graph))
     return CarExport(target, metadata, car_actions(metadata.action_space))
-
-
-def car_archive_bytes(metadata_json: bytes, graph: bytes) -> bytes:
-    """The `.tar.gz`: the two files, plain, owned by nobody, dated 0, so one model always
-    gives the same bytes."""
-    buffer = io.BytesIO()
-    with (
-        gzip.GzipFile(fileobj=buffer, mode="wb", mtime=0) as zipped,
-        tarfile.open(fileobj=zipped, mode="w", format=tarfile.USTAR_FORMAT) as tar,
-    ):
-        for name, data in ((MODEL_METADATA, metadata_json), (GRAPH_MEMBER, graph)):
-            info = tarfile.TarInfo(name)
-            info.size = len(data)
-            info.mode = 0o644
-            tar.addfile(info, io.BytesIO(data))
-    return buffer.getvalue()
 
 
 def policy_graph(network: PolicyNetwork) -> bytes:

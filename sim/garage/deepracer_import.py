@@ -4,8 +4,9 @@ Community tools (DeepRacer for Cloud, deepracer-utils) and the AWS console's dow
 lay the same files out differently; `sim.deepracer_files.locate_files` finds them. What a
 DeepRacer folder lacks is filled in and said out loud: no reward function -> the
 follow-the-centre-line template; a track racer-tui does not know -> the default track;
-no hyperparameters -> DeepRacer's defaults. DeepRacer's TensorFlow weights cannot drive
-a racer-tui car, so an imported model starts untrained, with its logs kept in the DRfC
+no hyperparameters -> DeepRacer's defaults. A folder with DeepRacer's own frozen weights
+(`model/model_<N>.pb`) drives with them as the car would (`sim.garage.frozen_graph`); one
+without, or imported `--untrained`, starts untrained. Its logs are kept in the DRfC
 layout: training and evaluation metrics and their sim-traces, so the Garage shows the
 training history and deepracer-utils reads the new folder (a copied racer-tui model folder
 keeps its `policy.safetensors` too, once checked to be plain tensors).
@@ -21,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 from sim.atomic import write_bytes_atomic
 from sim.car_export.file_names import is_car_archive_name
@@ -58,6 +59,9 @@ from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
 from sim.race.physics import DEEPRACER as DEEPRACER_PHYSICS
 from sim.remedies import Fix, Note
 
+if TYPE_CHECKING:
+    from sim.garage.frozen_graph import FolderWeights
+
 BUNDLE_SUFFIX = ".racer-bundle"
 _T = TypeVar("_T")
 
@@ -70,7 +74,9 @@ class ImportResult:
     notes: tuple[str, ...] = ()
 
 
-def import_model(path: Path, name: str | None = None, track: str | None = None) -> ImportResult:
+def import_model(
+    path: Path, name: str | None = None, track: str | None = None, *, untrained: bool = False
+) -> ImportResult:
     """A DeepRacer model folder, a `.racer-bundle` file or a DeepRacer car archive
     (`.tar.gz`), as a new garage model."""
     source = Path(path).expanduser()
@@ -83,7 +89,7 @@ def import_model(path: Path, name: str | None = None, track: str | None = None) 
 
         return install_bundle_report(source, name=name, track=track)
     if source.is_dir():
-        return import_deepracer_folder(source, name=name, track=track)
+        return import_deepracer_folder(source, name=name, track=track, untrained=untrained)
     raise ModelError(
         f"{source} does not exist; give a DeepRacer model folder, a {BUNDLE_SUFFIX} file or a "
         "car archive (.tar.gz)."
@@ -91,9 +97,11 @@ def import_model(path: Path, name: str | None = None, track: str | None = None) 
 
 
 def import_deepracer_folder(
-    path: Path, name: str | None = None, track: str | None = None
+    path: Path, name: str | None = None, track: str | None = None, *, untrained: bool = False
 ) -> ImportResult:
-    """Import a DeepRacer model folder as community tools write it."""
+    """Import a DeepRacer model folder as community tools write it. A folder with
+    DeepRacer's own frozen weights (`sim.garage.frozen_graph`) drives with them unless
+    `untrained`, which starts it afresh so racer-tui can train it."""
     root = Path(path).expanduser()
     files = locate_files(root)
     if files.model_metadata is None:
@@ -116,14 +124,13 @@ def import_deepracer_folder(
     evaluations = _evaluations(files)
     training_traces = _checked_traces(files.training_traces)
     policy = _racer_tui_policy(root)
-    if policy is None:
-        untrained = (
-            "it starts untrained (DeepRacer's TensorFlow weights cannot drive a racer-tui car)"
-        )
+    weights = None if policy is not None or untrained else _deepracer_weights(root, files, notes)
+    if policy is None and weights is None:
+        fresh = "it starts untrained"
         notes.append(
             Note(
-                f"{untrained}: train it with `racer-tui train {chosen_name}`.",
-                problem=untrained,
+                f"{fresh}: train it with `racer-tui train {chosen_name}`.",
+                problem=fresh,
                 fix=Fix.TRAIN_MODEL,
             )
         )
@@ -131,6 +138,8 @@ def import_deepracer_folder(
     def populate(folder: ModelFolder) -> None:
         if policy is not None:
             write_bytes_atomic(folder.policy_file, policy)
+        if weights is not None:
+            write_bytes_atomic(folder.car_archive_file, weights.archive)
         if training is not None:
             write_training_metrics(folder.training_metrics_file, training)
         for trace in training_traces:
@@ -159,6 +168,26 @@ def import_deepracer_folder(
         notes={"IMPORTED_FROM": str(root.resolve())},
     )
     return ImportResult(folder, tuple(notes))
+
+
+def _deepracer_weights(root: Path, files: DeepRacerFiles, notes: list[str]) -> FolderWeights | None:
+    """DeepRacer's own frozen weights, when the folder has them and they can drive here."""
+    from sim.car_export.errors import CarModelError
+    from sim.garage.frozen_graph import folder_weights
+
+    assert files.model_metadata is not None
+    try:
+        weights = folder_weights(root, files.model_metadata)
+    except CarModelError as error:
+        notes.append(f"its DeepRacer weights cannot drive in racer-tui: {error}")
+        return None
+    if weights is not None:
+        notes.append(
+            f"it drives with DeepRacer's own weights ({weights.graph.relative_to(root)}), run as "
+            "a DeepRacer car runs them; it races and exports for the car but cannot be "
+            "trained here: import it with --untrained to train it in racer-tui."
+        )
+    return weights
 
 
 def _racer_tui_policy(root: Path) -> bytes | None:
