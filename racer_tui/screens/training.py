@@ -189,18 +189,21 @@ def latest_observation(folder: ModelFolder) -> Observation | None:
     yaw = math.radians(row.yaw)
     x, y = row.x - LOOK_AHEAD * math.cos(yaw), row.y - LOOK_AHEAD * math.sin(yaw)
     track = folder.track()
-    objects, caption = _objects_seen(folder, track, caption)
+    objects, caption = _objects_seen(folder, track, caption, (row.episode, row.steps))
     return observe_at(track, sensors, (x, y, row.yaw), caption, objects)
 
 
 def _objects_seen(
-    folder: ModelFolder, track: Track, caption: str
+    folder: ModelFolder, track: Track, caption: str, at: tuple[int, int]
 ) -> tuple[ObjectField | None, str]:
-    """The model's boxes, when the view can show them where they stood: boxes that are not
-    shuffled stand in the same places every episode. Shuffled boxes and bot cars are not in
-    the trace, so the caption says they are left out rather than drawing them elsewhere."""
+    """The model's boxes or bots where they stood at the trace row `at` (episode, step):
+    boxes that are not shuffled stand in the same places every episode; shuffled boxes and
+    bot cars are where the trainer saw them at its last traced row (`sim.objects.seen`).
+    When that is not this row, the caption says they are left out rather than drawing
+    them elsewhere."""
     from sim.deepracer_files import DeepRacerFileError
     from sim.objects.reading import race_settings
+    from sim.objects.seen import read_seen
     from sim.objects.settings import RaceType
     from sim.objects.world import object_field
 
@@ -212,6 +215,9 @@ def _objects_seen(
         return None, caption
     if race.race_type is RaceType.OBJECT_AVOIDANCE and not race.obstacles.randomize:
         return object_field(track, race, 1), caption
+    seen = read_seen(folder.path)
+    if seen is not None and (seen.episode, seen.steps) == at:
+        return seen.field(track), caption
     what = "bot cars" if race.race_type is RaceType.HEAD_TO_BOT else "shuffled boxes"
     return None, f"{caption} · its {what} are not shown"
 

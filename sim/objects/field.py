@@ -336,6 +336,22 @@ class ObjectField:
         return out
 
 
+class StandingField(ObjectField):
+    """One car's objects standing where a training trace saw them (`sim.objects.seen`): what
+    the app's agent's-eye view draws for shuffled boxes and bot cars."""
+
+    def __init__(self, track: Track, shape: ObjectShape, poses: FloatArray) -> None:
+        """`poses` is (objects, 3): x, y and heading in radians."""
+        poses = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+        super().__init__(track, len(poses), 1, shape)
+        self.x[0], self.y[0], self.heading[0] = poses[:, 0], poses[:, 1], poses[:, 2]
+        self.drawn[0] = True
+        self.placed = 1
+
+    def draw(self, car: int) -> None:
+        """They stay where they were seen."""
+
+
 class ObstacleField(ObjectField):
     """`settings`' boxes for each of `cars` cars on `track`, drawn from `seed`."""
 

@@ -56,6 +56,8 @@ from sim.deepracer_files import (
     training_metrics_end,
     training_trace_path,
 )
+from sim.objects.field import ObjectField
+from sim.objects.seen import SeenObjects, write_seen
 from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.training.trace_pose import RowPoses
 
@@ -130,6 +132,8 @@ class Logbook:
         self._pending_trace: dict[int, list[_TracedEpisode]] = {}
         self._traced_iterations: dict[int, bool] = {}
         self._run_trace_bytes = 0
+        # The objects at the end of the last traced episode (sim.objects.seen).
+        self._seen: SeenObjects | None = None
         self.finished: list[FinishedEpisode] = []  # since the trainer last took them
         self.episodes = 0
         self.clock = 0.0  # simulated seconds
@@ -196,7 +200,7 @@ class Logbook:
         done = sim.done
         if done.any():
             for car in np.flatnonzero(done).tolist():
-                self._finish(car, int(sim.steps[car]), str(sim.status[car]))
+                self._finish(car, int(sim.steps[car]), str(sim.status[car]), sim.objects)
 
     def _grow(self, needed: int) -> None:
         size = self._buffer.shape[1]
@@ -206,7 +210,9 @@ class Logbook:
         grown[:, : self._buffer.shape[1]] = self._buffer
         self._buffer = grown
 
-    def _finish(self, car: int, steps: int, status: str) -> None:
+    def _finish(
+        self, car: int, steps: int, status: str, objects: ObjectField | None = None
+    ) -> None:
         self.episodes += 1
         number = self.episodes
         rows = self._buffer[car, :steps]
@@ -233,6 +239,11 @@ class Logbook:
                 (number - 1, self.clock, status, rows.copy())
             )
             self._run_trace_bytes += steps * _BYTES_PER_ROW
+            if objects is not None:  # where they stood at this, the last traced row so far
+                poses = np.stack([objects.x[car], objects.y[car], objects.heading[car]], axis=1)
+                self._seen = SeenObjects(
+                    number - 1, steps, objects.shape.is_car, tuple(map(tuple, poses.tolist()))
+                )
             self.sample = SimTraceSample(
                 number,
                 self.sample.traced_episodes + 1,
@@ -297,6 +308,9 @@ class Logbook:
                 sim_trace_lines(self._columns(episodes)),
             )
         self._pending_trace = {}
+        if self._seen is not None:
+            write_seen(self.folder, self._seen)
+            self._seen = None
 
     def _columns(self, episodes: list[_TracedEpisode]) -> SimTraceColumns:
         numbers, steps, stamps, statuses, blocks = [], [], [], [], []

@@ -560,6 +560,7 @@ def test_the_agents_eye_view_shows_boxes_that_stand_still_and_says_when_it_canno
     from racer_tui.screens import training
     from sim import camera_scene as scene
     from sim.deepracer_files import SimTraceRow, sim_trace_text, write_training_params
+    from sim.objects.seen import SeenObjects, write_seen
     from sim.simulation import LOOK_AHEAD
 
     folder = new_model("dodger", sensors=["camera"])
@@ -595,3 +596,17 @@ def test_the_agents_eye_view_shows_boxes_that_stand_still_and_says_when_it_canno
     write_training_params(folder.training_params_file, shuffled)
     seen = training.latest_observation(folder)
     assert isinstance(seen, Observation) and "its shuffled boxes are not shown" in seen.caption
+
+    # The trainer kept where they stood at this row: drawn there. A bot car there instead.
+    box_yaw = math.atan2(dy, dx)
+    for bots, tone in ((False, scene.BOX_SIDE), (True, scene.BOT_CAR_SIDE)):
+        box_x, box_y = track.centerline.point_at(np.array([box_s]))[0].tolist()
+        write_seen(folder.path, SeenObjects(1, 4, bots, ((box_x, box_y, box_yaw),)))
+        seen = training.latest_observation(folder)
+        assert isinstance(seen, Observation) and seen.frame is not None
+        assert "not shown" not in seen.caption
+        assert (seen.frame == tone).sum() > 100
+    # Kept for another row (the trace moved on): not drawn, and the caption says so.
+    write_seen(folder.path, SeenObjects(1, 5, False, ((box_x, box_y, box_yaw),)))
+    seen = training.latest_observation(folder)
+    assert isinstance(seen, Observation) and "not shown" in seen.caption

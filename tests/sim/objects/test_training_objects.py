@@ -66,3 +66,38 @@ def test_a_head_to_bot_model_trains_among_its_bots_and_a_blind_one_is_refused() 
     with_race(folder, "OBJECT_AVOIDANCE", NUMBER_OF_OBSTACLES=99)
     with pytest.raises(ModelError, match="NUMBER_OF_OBSTACLES must be a whole number from 0"):
         folder.env_config()
+
+
+def test_training_keeps_where_the_bots_stood_at_its_last_traced_row() -> None:
+    """The sim-trace has no object columns: the logbook keeps the objects of its last row
+    beside it (sim.objects.seen), for the app's agent's-eye view."""
+    from sim.deepracer_files import last_sim_trace_row
+    from sim.objects.seen import read_seen
+    from sim.training.logbook import Logbook
+
+    folder = new_model("chaser", sensors=["lidar"])
+    with_race(folder, "HEAD_TO_BOT", NUMBER_OF_BOT_CARS=3, BOT_CAR_SPEED=0.5)
+    env = BatchedDeepRacer(folder.env_config(), 2)
+    logbook = Logbook(
+        folder.path,
+        cars=2,
+        episodes_per_iteration=4,
+        track_length=env.sim.track.length,
+        waypoints=env.sim.track.center,
+        discrete=True,
+    )
+    env.watcher = logbook
+    env.reset()
+    while logbook.episodes < 3:
+        env.step(np.zeros(2, dtype=np.int64))  # hard right: off the road within seconds
+    logbook.flush()
+    seen = read_seen(folder.path)
+    assert seen is not None and seen.bots and len(seen.poses) == 3
+    traces = sorted(folder.training_trace_dir.glob("*-iteration.csv"))
+    row = last_sim_trace_row(traces[-1])
+    assert row is not None and (seen.episode, seen.steps) == (row.episode, row.steps)
+    # Each bot stands in a lane, within the road: half a lane from the centre line.
+    field = seen.field(env.sim.track)
+    _, _, feet = field.lanes.centre.project(np.array(seen.poses)[:, :2])
+    offsets = np.hypot(*(np.array(seen.poses)[:, :2] - feet).T)
+    assert np.all(offsets < env.sim.track.width / 2)
