@@ -18,7 +18,14 @@ from racer_tui.output import print_json, print_table
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.car_export.errors import CarModelError
 from sim.deepracer_files import DeepRacerFileError
-from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
+from sim.garage.folder import (
+    ModelError,
+    ModelFolder,
+    delete_model,
+    export_target,
+    list_models,
+    open_model,
+)
 from sim.garage.options import (
     DEFAULT_BOT_SPEED,
     DEFAULT_BOTS,
@@ -536,7 +543,7 @@ def _export(name: str, output: str | None, *, replace: bool, as_json: bool) -> i
     from sim.garage.deepracer_notes import export_notes
 
     folder = open_model(name)
-    out = Path(output) if output else Path(f"{folder.name}")
+    out = export_target(Path(output), folder.name) if output else Path(folder.name)
     written = export_bundle(folder, out, replace=replace)
     notes = export_notes(folder.metadata())
     if as_json:
@@ -557,7 +564,9 @@ def _act(name: str, picture: Path, *, as_json: bool) -> int:
 
     rgb = read_picture(picture)
     archive = Path(name).expanduser()
-    if is_car_archive_name(archive) and archive.is_file():
+    if is_car_archive_name(archive):
+        if not archive.is_file():
+            raise CarModelError(f"{archive}: the file does not exist; give a car archive.")
         result, label = archive_answer(archive, rgb), archive.name
     else:
         folder = open_model(name)
@@ -598,7 +607,7 @@ def _export_car(name: str, output: str | None, *, replace: bool, as_json: bool) 
     from sim.car_export.export import export_car_archive
 
     folder = open_model(name)
-    out = Path(output) if output else Path(folder.name)
+    out = export_target(Path(output), folder.name) if output else Path(folder.name)
     written = export_car_archive(folder, out, replace=replace)
     if as_json:
         print_json(
@@ -607,6 +616,7 @@ def _export_car(name: str, output: str | None, *, replace: bool, as_json: bool) 
                 "format": "car",
                 "path": str(written.path),
                 "on_the_car": [asdict(action) for action in written.actions],
+                "notes": list(written.notes),
             }
         )
         return 0
@@ -617,6 +627,8 @@ def _export_car(name: str, output: str | None, *, replace: bool, as_json: bool) 
         "share of its calibrated steering lock and throttles it as a share of its max-speed "
         "setting."
     )
+    for note in written.notes:
+        print(f"Note: {note}")
     return 0
 
 

@@ -475,6 +475,12 @@ def save_edit(folder: ModelFolder, spec: ModelSpec) -> ModelFolder:
             f"model {folder.name!r} is training right now; stop the training, then edit it."
         )
     metadata = spec.metadata
+    if folder.drives_with_car_archive() and metadata != folder.metadata():
+        raise ModelError(
+            f"{folder.name!r} drives with a DeepRacer car archive, whose graph was made for its "
+            "sensor, network and action space: keep them as they are (change its track, race "
+            "type or time limit)."
+        )
     if folder.has_policy():
         problem = incompatibility(folder.metadata(), metadata)
         if problem:

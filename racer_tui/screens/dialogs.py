@@ -19,7 +19,7 @@ from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.suggester import Suggester
-from textual.widgets import Button, Input, Label, Static
+from textual.widgets import Button, Checkbox, Input, Label, Static
 
 from racer_tui.screens.base import RacerModal, kept_screen
 from sim.names import NAME_RULE, is_valid_name
@@ -244,6 +244,7 @@ class InputDialog(FormDialog[str]):
 class ImportRequest:
     path: str
     name: str | None  # None: the folder's (or bundle's) own name
+    untrained: bool = False  # a DeepRacer folder's own weights are left behind
 
 
 class PathNameDialog(FormDialog[ImportRequest]):
@@ -255,6 +256,7 @@ class PathNameDialog(FormDialog[ImportRequest]):
     BODY = ""
     PATH_PLACEHOLDER = ""
     NAME_PLACEHOLDER = ""
+    UNTRAINED_LABEL = ""  # a box to leave a model's own weights behind, when not empty
 
     def __init__(self, path: str = "") -> None:
         super().__init__()
@@ -271,6 +273,8 @@ class PathNameDialog(FormDialog[ImportRequest]):
                 id="path",
             )
             yield Input(placeholder=self.NAME_PLACEHOLDER, id="name")
+            if self.UNTRAINED_LABEL:
+                yield Checkbox(self.UNTRAINED_LABEL, id="untrained", compact=True)
             yield from self.form_buttons("Import")
 
     def on_mount(self) -> None:
@@ -289,7 +293,9 @@ class PathNameDialog(FormDialog[ImportRequest]):
         if problem is not None:
             show_problem(self.query_one("#problem", Static), problem)
             return
-        self.dismiss(ImportRequest(path, name))
+        boxes = self.query("#untrained").results(Checkbox)
+        untrained = any(box.value for box in boxes)
+        self.dismiss(ImportRequest(path, name, untrained))
 
 
 class ImportDialog(PathNameDialog):
@@ -303,6 +309,7 @@ class ImportDialog(PathNameDialog):
     )
     PATH_PLACEHOLDER = "path, e.g. ~/Downloads/my-model"
     NAME_PLACEHOLDER = "model name (empty: the folder's name)"
+    UNTRAINED_LABEL = "Leave a folder's DeepRacer weights behind, to train it here"
 
     def problem(self, path: str, name: str | None) -> str | None:
         if not path:

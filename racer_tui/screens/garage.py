@@ -129,10 +129,11 @@ class ModelCloned(Message):
 
 
 class ModelImported(Message):
-    def __init__(self, name: str, notes: tuple[str, ...]) -> None:
+    def __init__(self, name: str, notes: tuple[str, ...], trains: bool = True) -> None:
         super().__init__()
         self.name = name
         self.notes = notes
+        self.trains = trains  # False: it drives with a car archive, never trained here
 
 
 class BundleExported(Message):
@@ -145,8 +146,12 @@ class BundleExported(Message):
 
 def import_into_garage(request: ImportRequest) -> ModelImported:
     """Run in a worker: the import itself (ModelError says what is wrong with the source)."""
-    result = import_model(Path(request.path).expanduser(), name=request.name)
-    return ModelImported(result.folder.name, result.notes)
+    result = import_model(
+        Path(request.path).expanduser(), name=request.name, untrained=request.untrained
+    )
+    return ModelImported(
+        result.folder.name, result.notes, not result.folder.drives_with_car_archive()
+    )
 
 
 def confirm_someone_elses_code(
@@ -176,7 +181,8 @@ def confirm_someone_elses_code(
 
 def notify_imported(screen: Screen[Any], message: ModelImported) -> None:
     notes = "".join(f"\n• {in_app_words(note)}" for note in message.notes)
-    advice = "\nPress e in the garage to change its track or reward function." if notes else ""
+    what = "track or reward function" if message.trains else "track"
+    advice = f"\nPress e in the garage to change its {what}." if notes else ""
     screen.notify(f"Imported {message.name}.{notes}{advice}", timeout=15, markup=False)
 
 
@@ -206,7 +212,12 @@ class GarageScreen(RacerScreen[None]):
         ),
         Binding("c", "clone_model", "Clone", tooltip="A new model starting from this one"),
         Binding("d", "delete_model", "Delete", tooltip="Delete the highlighted model (asks)"),
-        Binding("i", "import_model", "Import", tooltip="A DeepRacer folder or a .racer-bundle"),
+        Binding(
+            "i",
+            "import_model",
+            "Import",
+            tooltip="A DeepRacer folder, a .racer-bundle or a car archive (.tar.gz)",
+        ),
         Binding(
             "x",
             "export_model",
@@ -401,6 +412,10 @@ class GarageScreen(RacerScreen[None]):
         folder = self._highlighted_folder("clone")
         if folder is None:
             return
+        problem = folder.car_archive_problem("clone")
+        if problem is not None:
+            self.notify(problem[0].upper() + problem[1:], severity="warning", markup=False)
+            return
         taken = taken_names()
         suggestion = next(
             f"{folder.name}-{n}" for n in range(2, 10_000) if f"{folder.name}-{n}" not in taken
@@ -560,12 +575,12 @@ class GarageScreen(RacerScreen[None]):
         if for_car:
             from sim.car_export.export import export_car_archive  # torch: only now
 
-            written = export_car_archive(folder, path, replace=replace).path
+            exported = export_car_archive(folder, path, replace=replace)
             note = (
                 "For a DeepRacer car: upload it on the car's Models page; `racer-tui model "
                 f"show {folder.name}` lists how the car drives each action."
             )
-            self.post_message(BundleExported(folder.name, written, (note,)))
+            self.post_message(BundleExported(folder.name, exported.path, (note, *exported.notes)))
             return
         written = export_bundle(folder, path, replace=replace)
         self.post_message(BundleExported(folder.name, written, export_notes(folder.metadata())))

@@ -206,6 +206,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
         self.base: ModelSpec = default_model_spec()
         self.kept: ActionSpace | None = None  # an imported action list the form cannot build
         self.trained = False
+        self.archive = False  # drives with a DeepRacer car archive: its space is the graph's
         self.initial: FormValues | None = None
         self.saving = False
         self.last_check: RewardChecked | None = None
@@ -231,6 +232,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
             return values_of(self.base)
         self.base = spec_of(folder)
         self.trained = folder.has_policy()
+        self.archive = folder.drives_with_car_archive()
         values = values_of(self.base, folder.name)
         if values.action_kind == KEPT:
             self.kept = self.base.metadata.action_space
@@ -336,7 +338,13 @@ class ModelEditorScreen(RacerScreen[str | None]):
             kinds.insert(0, (f"as imported ({len(self.kept.actions)} actions)", KEPT))
         with Horizontal(classes="editor-columns"):
             with VerticalScroll(classes="editor-form"):
-                if self.trained:
+                if self.archive:
+                    yield Static(
+                        "This model drives with a DeepRacer car archive: its sensor and action "
+                        "space are the archive's, and stay as they are.",
+                        classes="editor-note",
+                    )
+                elif self.trained:
                     yield Static(
                         "This model is trained: keep its sensor, action type and number of "
                         "actions, or clone it to change them.",
@@ -558,6 +566,9 @@ class ModelEditorScreen(RacerScreen[str | None]):
     def _sensor_changed(self) -> None:
         self._show_camera_randomisation()
         self._set_problem("camera-randomisation", "")
+        if "camera" not in str(self._select("sensor")).split("+"):
+            # Hidden now: a setting left in it would refuse the save from out of sight.
+            self.query_one("#camera-randomisation", Input).value = "off"
 
     @on(Select.Changed, "#race-type")
     def _race_changed(self) -> None:

@@ -65,7 +65,7 @@ def model_answer(folder_path: Path, rgb: NDArray[np.uint8]) -> ModelAnswer:
     from sim.training.policy import load_policy
 
     folder = ModelFolder(folder_path)
-    if not folder.policy_file.is_file() and folder.has_car_archive():
+    if folder.drives_with_car_archive():
         return archive_answer(folder.car_archive_file, rgb)
     metadata = folder.metadata()
     if metadata.sensors != ("camera",):

@@ -1,8 +1,8 @@
 """Reading a DeepRacer car archive: the `.tar.gz` a physical car loads.
 
 It holds `model_metadata.json` at its root and one frozen TensorFlow graph,
-`agent/model.pb`, and nothing else (the car's loader rejects an archive unless it finds
-exactly one model file). Archives come from anyone, so this reader:
+`agent/model.pb` (the car's loader rejects an archive unless it finds exactly one model
+file); racer-tui's own export holds nothing else. Archives come from anyone, so this reader:
 
 - never extracts to disk and never executes anything: members are read into memory;
 - caps the archive's size, each member's size and the bytes decompressed in all, so a
@@ -146,7 +146,7 @@ def _members(path: Path, where: str) -> dict[str, bytes]:
                     if count > MAX_ENTRIES:
                         raise CarModelError(
                             f"{where}: the archive has more than {MAX_ENTRIES} entries; a car "
-                            "archive holds only model_metadata.json and agent/model.pb."
+                            "archive holds model_metadata.json, agent/model.pb and little else."
                         )
                     name = _checked_name(member, where)
                     if name is None:

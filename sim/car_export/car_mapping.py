@@ -106,3 +106,14 @@ def car_refusal(metadata: ModelMetadata) -> str | None:
             "graph for PPO models (clipped_ppo) only; clone it as a PPO model to export it"
         )
     return None
+
+
+def car_export_notes(metadata: ModelMetadata) -> tuple[str, ...]:
+    """What a racer should know before a car drives this export (one sentence each)."""
+    if "lidar" in metadata.sensors or "sector_lidar" in metadata.sensors:
+        return (
+            "Its lidar input is racer-tui's scan (64 rays all round the car, up to 2 m, in "
+            "metres) and its model_metadata.json sets no lidar_config, so a DeepRacer car feeds "
+            "its own lidar setup: drive it slowly first.",
+        )
+    return ()

@@ -29,7 +29,6 @@ import numpy as np
 import torch
 from torch import nn
 
-from sim.atomic import write_bytes_atomic
 from sim.car_export.archive import (
     AGENT_SCOPES,
     INPUT_NODE,
@@ -37,12 +36,12 @@ from sim.car_export.archive import (
     car_archive_bytes,
     read_car_archive,
 )
-from sim.car_export.car_mapping import CarAction, car_actions, car_refusal
+from sim.car_export.car_mapping import CarAction, car_actions, car_export_notes, car_refusal
 from sim.car_export.errors import CarModelError
 from sim.car_export.file_names import car_archive_path
 from sim.car_export.graph_writer import GraphWriter, attr_b, attr_i, attr_ints, attr_s, attr_type
 from sim.deepracer_files import SENSOR_FILE_NAMES, ModelMetadata
-from sim.garage.folder import ModelError, ModelFolder
+from sim.garage.folder import ModelError, ModelFolder, write_export
 from sim.training.policy import CAMERA_POOL, PolicyNetwork, load_policy
 
 # Every op the exported graph uses; a test holds the written graphs to this list.
@@ -75,6 +74,7 @@ class CarExport:
     path: Path
     metadata: ModelMetadata
     actions: tuple[CarAction, ...]
+    notes: tuple[str, ...] = ()
 
 
 def export_car_archive(folder: ModelFolder, out: Path, *, replace: bool = False) -> CarExport:
@@ -94,19 +94,23 @@ def export_car_archive(folder: ModelFolder, out: Path, *, replace: bool = False)
             f"model {folder.name!r} has no trained policy to export; train it first with "
             f"`racer-tui train {folder.name}`."
         )
-    if not folder.policy_file.is_file():  # imported from a car archive: hand it on as it is
+    if folder.drives_with_car_archive():  # hand DeepRacer's own graph on as it is
         data = folder.car_archive_file.read_bytes()
         try:
             read_car_archive(folder.car_archive_file)
         except CarModelError as error:
             raise ModelError(f"model {folder.name!r}: {error}") from None
-        write_bytes_atomic(target, data)
-        return CarExport(target, metadata, car_actions(metadata.action_space))
+        write_export(target, data)
+        return CarExport(
+            target, metadata, car_actions(metadata.action_space), car_export_notes(metadata)
+        )
     network = load_policy(folder.policy_file, metadata)
     graph = policy_graph(network)
     metadata_bytes = (json.dumps(metadata.to_json(), indent=4) + "\n").encode("utf-8")
-    write_bytes_atomic(target, car_archive_bytes(metadata_bytes, graph))
-    return CarExport(target, metadata, car_actions(metadata.action_space))
+    write_export(target, car_archive_bytes(metadata_bytes, graph))
+    return CarExport(
+        target, metadata, car_actions(metadata.action_space), car_export_notes(metadata)
+    )
 
 
 def policy_graph(network: PolicyNetwork) -> bytes:

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from sim.car_export.errors import CarModelError
 from sim.car_export.protobuf_wire import (
+    WireFormatError,
     as_bytes,
     as_float32,
     as_int,
@@ -225,6 +226,11 @@ def read_graph(data: bytes | memoryview, where: str = "agent/model.pb") -> Froze
     """Parse a serialized GraphDef; every problem is one `CarModelError` naming `where`."""
     try:
         graph = _graph(memoryview(data))
+    except WireFormatError as error:
+        raise CarModelError(
+            f"{where}: not a frozen TensorFlow graph ({str(error).rstrip('.')}); give the model "
+            "as DeepRacer or racer-tui exported it."
+        ) from None
     except CarModelError as error:
         raise CarModelError(f"{where}: {error}") from None
     unsupported = sorted(graph.ops - SUPPORTED_OPS)

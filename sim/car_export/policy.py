@@ -26,9 +26,10 @@ class CarPolicy:
         self.archive = archive
         self._runner = GraphRunner(archive.graph, archive.output_node)
         if self._runner.inputs != (archive.input_node,):
+            sensors = sorted({name.rsplit("/", 1)[-1] for name in self._runner.inputs})
             raise CarModelError(
-                f"{archive.path.name}: the policy reads {len(self._runner.inputs)} inputs (a "
-                "lidar beside the camera); racer-tui drives car archives from their camera alone."
+                f"{archive.path.name}: the policy reads {len(self._runner.inputs)} inputs "
+                f"({', '.join(sensors)}); racer-tui drives car archives from their camera alone."
             )
         placeholder = archive.graph.node(archive.input_node)
         shape = placeholder.attrs["shape"].shape if "shape" in placeholder.attrs else None

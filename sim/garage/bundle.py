@@ -58,6 +58,7 @@ from sim.garage.folder import (
     check_model_name,
     create_model,
     model_content_hash,
+    write_export,
 )
 from sim.garage.options import DEFAULT_REWARD, DEFAULT_TRACK
 from sim.garage.summary import (
@@ -195,7 +196,7 @@ def export_bundle(folder: ModelFolder, out: Path, *, replace: bool = False) -> P
         archive.writestr(MANIFEST, _json_bytes(manifest))
         for member, data in sorted(members.items()):
             archive.writestr(member, data)
-    write_bytes_atomic(target, buffer.getvalue())
+    write_export(target, buffer.getvalue())
     return target
 
 

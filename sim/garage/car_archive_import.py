@@ -38,15 +38,15 @@ def import_car_archive(
     except CarModelError as error:
         raise ModelError(str(error)) from None
     chosen = name if name is not None else archive.name
-    if name is None:
-        try:
-            check_model_name(chosen)
-        except ModelError:
-            problem = f"the file name {chosen!r} cannot be a model name"
-            raise ModelError(
-                f"{problem}; give one with --name.", problem=problem, fix=Fix.RENAME
-            ) from None
-    check_model_name(chosen)
+    try:
+        check_model_name(chosen)
+    except ModelError:
+        if name is not None:
+            raise
+        problem = f"the file name {chosen!r} cannot be a model name"
+        raise ModelError(
+            f"{problem}; give one with --name.", problem=problem, fix=Fix.RENAME
+        ) from None
     notes: list[str] = [
         "it drives with the archive's TensorFlow graph, which racer-tui runs as the car "
         "would (one greyscale frame, the most likely action); it races and exports for the "

@@ -185,7 +185,8 @@ def _deepracer_weights(root: Path, files: DeepRacerFiles, notes: list[str]) -> F
         notes.append(
             f"it drives with DeepRacer's own weights ({weights.graph.relative_to(root)}), run as "
             "a DeepRacer car runs them; it races and exports for the car but cannot be "
-            "trained here: import it with --untrained to train it in racer-tui."
+            "trained here: import it again leaving its weights behind (--untrained, or the "
+            "import dialog's box) to train it in racer-tui."
         )
     return weights
 

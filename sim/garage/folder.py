@@ -371,6 +371,10 @@ class ModelFolder:
     def has_car_archive(self) -> bool:
         return self.car_archive_file.is_file()
 
+    def drives_with_car_archive(self) -> bool:
+        """It races with a DeepRacer car archive's graph, having no racer-tui policy."""
+        return self.has_car_archive() and not self.policy_file.is_file()
+
     def car_archive_problem(
         self, doing: str, instead: str = "create a new model to train your own"
     ) -> str | None:
@@ -406,10 +410,12 @@ class ModelFolder:
     def trained_physics(self) -> str | None:
         """The physics (sim.race.physics) the policy learnt to drive, or None untrained. A
         policy whose trainer did not say was trained before physics was recorded."""
-        from sim.race.physics import BEFORE_VERSIONING, is_physics
+        from sim.race.physics import BEFORE_VERSIONING, DEEPRACER, is_physics
 
         if not self.has_policy():
             return None
+        if self.drives_with_car_archive():
+            return DEEPRACER  # DeepRacer's simulator trained its weights
         state = self.training_state()
         physics = None if state is None else state.get("physics")
         if physics is None:
@@ -457,6 +463,22 @@ class ModelFolder:
         else:
             policy = b""
         return model_content_hash(self.metadata(), policy)
+
+
+def write_export(target: Path, data: bytes) -> None:
+    """Write an exported file atomically; a place that cannot be written is one sentence."""
+    try:
+        write_bytes_atomic(target, data)
+    except OSError as error:
+        raise ModelError(
+            f"cannot write {target} ({error.strerror or error}); choose another file name."
+        ) from None
+
+
+def export_target(out: Path, name: str) -> Path:
+    """Where `-o OUT` puts model `name`'s export: inside OUT when it is a folder."""
+    out = Path(out).expanduser()
+    return out / name if out.is_dir() else out
 
 
 def model_content_hash(metadata: ModelMetadata, policy_bytes: bytes) -> str:

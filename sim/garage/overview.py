@@ -165,10 +165,15 @@ def _camera_randomisation_words(folder: ModelFolder, params: TrainingParams) -> 
 
 def physics_note(trained: str | None) -> str | None:
     """One sentence when the policy learnt another car than today's, else None."""
-    from sim.race.physics import CURRENT, describe
+    from sim.race.physics import CURRENT, DEEPRACER, describe
 
     if trained is None or trained == CURRENT:
         return None
+    if trained == DEEPRACER:  # a car archive's weights: they cannot be trained here
+        return (
+            f"trained in {describe(DEEPRACER)}, whose car handles differently from "
+            f"{describe(CURRENT)}: its laps here are not its laps there."
+        )
     return (
         f"trained on {describe(trained)}; today's car is {describe(CURRENT)} and handles "
         "differently: train it again before racing (its old laps keep their own board)."

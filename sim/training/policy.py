@@ -501,7 +501,7 @@ class PolicyDriver:
 def driver_for_model(folder: ModelFolder) -> Driver:
     """The driver for a garage model's `policy.safetensors`, or for the car archive it was
     imported from (`sim.car_export`)."""
-    if not folder.policy_file.is_file() and folder.has_car_archive():
+    if folder.drives_with_car_archive():
         from sim.car_export.archive import read_car_archive
         from sim.car_export.driver import CarArchiveDriver
         from sim.car_export.errors import CarModelError

@@ -214,3 +214,51 @@ def test_model_new_trains_for_the_real_world_on_request(
         code, _, err = run_cli(capsys, *args)
         message = err.strip().removeprefix("racer-tui: ")
         assert code == 2 and words in message and one_sentence(message), message
+
+
+def test_an_archive_model_keeps_the_archive_s_car_when_edited(
+    capsys: pytest.CaptureFixture[str], trained: ModelFolder, tmp_path: Path
+) -> None:
+    """Its graph was made for its sensor and action space: an edit that changes them would
+    show one car and race another, so it is refused; its track may change."""
+    from dataclasses import replace
+
+    from racer_tui.model_form import save_edit
+    from sim.action_space import discrete_grid
+    from sim.garage.folder import ModelError
+    from sim.garage.options import spec_of
+
+    archive = tmp_path / "cam.tar.gz"
+    run_cli(capsys, "model", "export", "cam", "--format", "car", "-o", str(archive))
+    run_cli(capsys, "model", "import", str(archive), "--name", "cam-car")
+    folder = open_model("cam-car")
+    spec = spec_of(folder)
+    faster = replace(spec.metadata, action_space=discrete_grid(30.0, 5, 4.0, 2))
+    with pytest.raises(ModelError) as raised:
+        save_edit(folder, replace(spec, metadata=faster))
+    assert one_sentence(str(raised.value)) and "car archive" in str(raised.value)
+    assert folder.metadata() == spec.metadata
+    save_edit(folder, replace(spec, track="reInvent2019_wide"))
+    assert folder.training_params().world_name == "reInvent2019_wide"
+    # It was trained in DeepRacer's simulator (its weights), which `model show` says without
+    # telling the racer to train it again.
+    _code, out, _ = run_cli(capsys, "model", "show", "cam-car", "--json")
+    details = json.loads(out)
+    assert "train it again" not in (details["physics_note"] or "")
+    assert "DeepRacer's simulator" in details["physics_note"]
+
+
+def test_exports_go_where_asked_or_say_why_they_cannot(
+    capsys: pytest.CaptureFixture[str], trained: ModelFolder, tmp_path: Path
+) -> None:
+    code, _, _ = run_cli(capsys, "model", "export", "cam", "--format", "car", "-o", str(tmp_path))
+    assert code == 0 and (tmp_path / "cam.tar.gz").is_file()  # a folder: NAME inside it
+    blocked = tmp_path / "a-file"  # a file where a folder would have to be (even root
+    blocked.write_text("not a folder")  # cannot write below it)
+    for fmt in ("car", "bundle"):
+        out_file = str(blocked / "x")
+        code, _, err = run_cli(capsys, "model", "export", "cam", "--format", fmt, "-o", out_file)
+        message = err.strip().removeprefix("racer-tui: ")
+        assert code == 2 and "cannot write" in message and one_sentence(message), message
+    code, _, err = run_cli(capsys, "model", "act", str(tmp_path / "gone.tar.gz"), str(DEMO))
+    assert code == 2 and "does not exist" in err
