@@ -411,7 +411,11 @@ def _show(name: str, as_json: bool) -> int:
         ("actions", details["actions_summary"]),
         ("network", metadata["neural_network"]),
         ("algorithm", metadata["training_algorithm"]),
-        ("reward function", details["reward_function"]),
+        *(
+            [("drives with", "a DeepRacer car archive, never trained here")]
+            if details["car_archive"]
+            else [("reward function", details["reward_function"])]
+        ),
         *(
             [("camera randomisation", details["camera_randomisation"])]
             if "camera" in details["sensor"].split("+")

@@ -127,11 +127,15 @@ class ModelDetail(VerticalScroll):
         table.add_row("track", _plain(details["track"]))
         table.add_row("sensor", _plain(details["sensor"]))
         table.add_row("actions", _plain(details["actions_summary"]))
-        table.add_row("reward function", _plain(details["reward_function"]))
-        table.add_row(
-            "training",
-            _plain(f"{metadata['training_algorithm']}, at most {details['max_minutes']:g} min"),
-        )
+        if details.get("car_archive"):
+            # Its weights are a DeepRacer graph: no reward function or training applies.
+            table.add_row("drives with", _plain("a DeepRacer car archive, never trained here"))
+        else:
+            table.add_row("reward function", _plain(details["reward_function"]))
+            table.add_row(
+                "training",
+                _plain(f"{metadata['training_algorithm']}, at most {details['max_minutes']:g} min"),
+            )
         table.add_row("network", _plain(metadata["neural_network"]))
         table.add_row("car hash", _plain(str(details["content_hash"])[:16]))
         table.add_row("folder", _plain(details["path"]))

@@ -143,6 +143,7 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         "actions": _action_rows(space),
         "on_the_car": [asdict(action) for action in car_actions(space)],
         "car_refusal": car_refusal(metadata),
+        "car_archive": folder.drives_with_car_archive(),
         "camera_randomisation": _camera_randomisation_words(folder, params),
         "hyperparameters": folder.hyperparameters(),
         "reward_function": reward_origin(folder),

@@ -246,6 +246,10 @@ def test_an_archive_model_keeps_the_archive_s_car_when_edited(
     details = json.loads(out)
     assert "train it again" not in (details["physics_note"] or "")
     assert "DeepRacer's simulator" in details["physics_note"]
+    assert details["car_archive"] is True
+    _code, out, _ = run_cli(capsys, "model", "show", "cam-car")
+    assert "a DeepRacer car archive, never trained here" in out
+    assert "reward function" not in out
 
 
 def test_exports_go_where_asked_or_say_why_they_cannot(
