@@ -86,14 +86,6 @@ def export_car_archive(folder: ModelFolder, out: Path, *, replace: bool = False)
             "(`racer-tui model export --format car --force`)."
         )
     metadata = folder.metadata()
-    refusal = car_refusal(metadata)
-    if refusal is not None:
-        raise ModelError(f"model {folder.name!r} cannot be exported for the car: {refusal}.")
-    if not folder.has_policy():
-        raise ModelError(
-            f"model {folder.name!r} has no trained policy to export; train it first with "
-            f"`racer-tui train {folder.name}`."
-        )
     if folder.drives_with_car_archive():  # hand DeepRacer's own graph on as it is
         data = folder.car_archive_file.read_bytes()
         try:
@@ -103,6 +95,14 @@ def export_car_archive(folder: ModelFolder, out: Path, *, replace: bool = False)
         write_export(target, data)
         return CarExport(
             target, metadata, car_actions(metadata.action_space), car_export_notes(metadata)
+        )
+    refusal = car_refusal(metadata)
+    if refusal is not None:
+        raise ModelError(f"model {folder.name!r} cannot be exported for the car: {refusal}.")
+    if not folder.has_policy():
+        raise ModelError(
+            f"model {folder.name!r} has no trained policy to export; train it first with "
+            f"`racer-tui train {folder.name}`."
         )
     network = load_policy(folder.policy_file, metadata)
     graph = policy_graph(network)

@@ -142,7 +142,8 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         "metadata": metadata.to_json(),
         "actions": _action_rows(space),
         "on_the_car": [asdict(action) for action in car_actions(space)],
-        "car_refusal": car_refusal(metadata),
+        # An archive model's graph is the car's own, whatever trained it.
+        "car_refusal": None if folder.drives_with_car_archive() else car_refusal(metadata),
         "car_archive": folder.drives_with_car_archive(),
         "camera_randomisation": _camera_randomisation_words(folder, params),
         "hyperparameters": folder.hyperparameters(),
