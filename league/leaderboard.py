@@ -15,6 +15,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
+from itertools import groupby
+from operator import attrgetter
 from typing import Any
 
 from league.entries import BOARD_GROUPS, best_entries_sql, score_column
@@ -119,16 +121,37 @@ def leaderboard(
     Boards in the order of their names.
     `method=None` scores each entry by its own rules' method (a night's races).
     """
-    ranked: Callable[[Sequence[LeaderboardRow]], list[LeaderboardRow]]
     if method is not None and filters.night_ids is None:
-        entries = _board_rows(league, filters, method)
-        ranked = in_ranking_order
-    else:
-        entries = grouped_rows(league, filters, method, group_by=BOARD_GROUPS)
-        ranked = rank
-    boards = {board_of(entry): entry.track_name for entry in entries}
-    order = sorted(boards, key=lambda key: (boards[key].casefold(), key))
-    return rank_groups(entries, board_of, order, ranked)
+        return _ranked_boards(_board_rows(league, filters, method))
+    entries = grouped_rows(league, filters, method, group_by=BOARD_GROUPS)
+    return rank_groups(entries, board_of, _board_order(entries), rank)
+
+
+def _board_order(rows: Sequence[LeaderboardRow]) -> list[tuple[str, str, str]]:
+    """The boards of `rows` in the order of their names."""
+    boards = {board_of(row): row.track_name for row in rows}
+    return sorted(boards, key=lambda key: (boards[key].casefold(), key))
+
+
+_BOARD_KEY = attrgetter("track_hash", "race_type", "physics")  # board_of, at C speed
+
+
+def _ranked_boards(rows: list[LeaderboardRow]) -> list[LeaderboardRow]:
+    """`rank_groups` for rows as `board_sql` returns them, board after board: each run of
+    one board is ranked by `in_ranking_order` and numbered, boards in the order of their
+    names. Thousands of rows are split where the board changes, in C (groupby), rather
+    than looked up row by row."""
+    boards = [(key, list(run)) for key, run in groupby(rows, _BOARD_KEY)]
+    if len({key for key, _ in boards}) != len(boards):  # a board in two runs: not in order
+        return rank_groups(rows, board_of, _board_order(rows), rank)
+    boards.sort(key=lambda board: (board[1][0].track_name.casefold(), board[0]))
+    result: list[LeaderboardRow] = []
+    for _, run in boards:
+        ranked = in_ranking_order(run)
+        for position, row in enumerate(ranked, start=1):
+            row.rank = position
+        result.extend(ranked)
+    return result
 
 
 def in_ranking_order(rows: Sequence[LeaderboardRow]) -> list[LeaderboardRow]:

@@ -192,3 +192,35 @@ def test_a_board_read_in_index_order_ranks_exactly_as_rank_does(league: League) 
         expected = rank_groups(fresh, board_of, order)  # rank() over the whole board
         assert [row.record_id for row in rows] == [row.record_id for row in expected]
         assert [row.rank for row in rows] == list(range(1, len(rows) + 1))
+
+
+def test_boards_ranked_from_runs_match_boards_ranked_by_lookup() -> None:
+    """The board query returns rows board after board, and the leaderboard ranks each run
+    as it comes (league.leaderboard._ranked_boards); rows of one board in two runs are
+    still ranked as one board, in the boards' name order, as the generic path ranks them."""
+    from league.leaderboard import LeaderboardRow, _ranked_boards
+
+    def row(racer: str, track: str, score: float, race_type: str = "time_trial") -> LeaderboardRow:
+        return LeaderboardRow(
+            f"id-{racer}-{track}-{race_type}", "race", racer, racer, "m", f"hash-{track}",
+            track, None, score, 0, 3, "2026-01-01T00:00:00Z", score, score, 0, 3,
+            "racer-tui/3", race_type,
+        )  # fmt: skip
+
+    rows = [
+        row("ana", "Zeta", 9.0),
+        row("bob", "Zeta", 8.0),
+        row("cy", "alpha", 7.5),
+        row("dee", "Zeta", 7.0),  # Zeta again, after another board: not one run
+        row("eve", "alpha", 6.0, "head_to_bot"),
+    ]
+    ranked = _ranked_boards(list(rows))
+    assert [(r.racer, r.rank) for r in ranked] == [
+        ("eve", 1),  # alpha, head to bot: a board of its own
+        ("cy", 1),  # alpha, time trial
+        ("dee", 1),  # Zeta: one board of three, ranked by score
+        ("bob", 2),
+        ("ana", 3),
+    ]
+    in_runs = _ranked_boards([rows[2], rows[4], rows[3], rows[1], rows[0]])
+    assert [(r.racer, r.rank) for r in in_runs] == [(r.racer, r.rank) for r in ranked]
