@@ -49,8 +49,8 @@ def import_car_archive(
         ) from None
     notes: list[str] = [
         "it drives with the archive's TensorFlow graph, which racer-tui runs as the car "
-        "would (one greyscale frame, the most likely action); it races and exports for the "
-        "car but cannot be trained here.",
+        "would (one greyscale frame; the most likely action, or a continuous space's mean); "
+        "it races and exports for the car but cannot be trained here.",
     ]
     if track is None:
         problem = f"a car archive does not say where it trained: it is set up on {DEFAULT_TRACK}"
