@@ -167,10 +167,7 @@ class BatchedDeepRacer:
         draws = self._camera_draws
         if draws is None:
             return
-        settings = self.config.camera_randomisation
-        chosen = [draw_perturbation(settings, draws) for _ in cars]
-        noise_seed = int(draws.integers(2**62))  # used by the first call only
-        self.observer.perturb_camera(list(cars), chosen, noise_seed=noise_seed)
+        draw_cameras(self.observer, self.config.camera_randomisation, draws, cars)
 
     def step(
         self, actions: np.ndarray
@@ -221,6 +218,18 @@ def randomises_camera(config: EnvConfig) -> bool:
     return config.camera_randomisation.on and "camera" in config.sensors
 
 
+def draw_cameras(
+    observer: Observer,
+    settings: CameraRandomisation,
+    rng: np.random.Generator,
+    cars: Sequence[int],
+) -> None:
+    """A new episode's camera for each of `cars`, drawn from `rng`."""
+    chosen = [draw_perturbation(settings, rng) for _ in cars]
+    noise_seed = int(rng.integers(2**62))  # seeds the sensor noise on the first call only
+    observer.perturb_camera(list(cars), chosen, noise_seed=noise_seed)
+
+
 def _set_rows(obs: Any, cars: np.ndarray, rows: Any) -> None:
     if isinstance(obs, dict):
         for key, part in obs.items():
@@ -266,10 +275,7 @@ class DeepRacerEnv(gym.Env[Any, Any]):
             start_s = float(self.np_random.uniform(0.0, length))
         self.sim.reset_car(0, start_s)
         if randomises_camera(self.config):  # a new camera every episode, from the env's seed
-            rng = self.np_random
-            chosen = draw_perturbation(self.config.camera_randomisation, rng)
-            noise_seed = int(rng.integers(2**62))
-            self.observer.perturb_camera([0], [chosen], noise_seed=noise_seed)
+            draw_cameras(self.observer, self.config.camera_randomisation, self.np_random, [0])
         return _row(self.observer.observe(), 0), self._info()
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:

@@ -27,7 +27,6 @@ from sim.deepracer_files import (
     HYPERPARAMETER_SPECS,
     DeepRacerFileError,
     ModelMetadata,
-    TrainingParams,
     check_hyperparameters,
     default_hyperparameters,
 )
@@ -36,7 +35,7 @@ from sim.observations import SensorError, normalise_sensors
 from sim.realworld.settings import (
     CameraRandomisation,
     camera_randomisation_keys,
-    read_camera_randomisation,
+    model_camera_randomisation,
 )
 from sim.track import TrackError
 from sim.track_catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
@@ -220,17 +219,8 @@ def spec_of(folder: ModelFolder) -> ModelSpec:
         max_minutes=params.max_minutes,
         race_type=params.race_type,
         race_keys={key: value for key, value in params.extra.items() if key in RACE_KEYS},
-        camera_randomisation=_stored_camera_randomisation(folder, params),
+        camera_randomisation=model_camera_randomisation(params, str(folder.training_params_file)),
     )
-
-
-def _stored_camera_randomisation(
-    folder: ModelFolder, params: TrainingParams
-) -> CameraRandomisation:
-    try:
-        return read_camera_randomisation(params, str(folder.training_params_file))
-    except DeepRacerFileError as error:
-        raise ModelError(str(error)) from None
 
 
 def with_camera_randomisation(spec: ModelSpec, chosen: CameraRandomisation | None) -> ModelSpec:

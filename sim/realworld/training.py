@@ -8,10 +8,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from sim.deepracer_files import DeepRacerFileError, TrainingParams
+from sim.deepracer_files import TrainingParams
 from sim.env import EnvConfig
-from sim.garage.folder import ModelError
-from sim.realworld.settings import CameraRandomisation, read_camera_randomisation
+from sim.realworld.settings import model_camera_randomisation
 
 
 def training_config(
@@ -23,11 +22,3 @@ def training_config(
     if settings == config.camera_randomisation:
         return config
     return replace(config, camera_randomisation=settings)
-
-
-def model_camera_randomisation(params: TrainingParams, where: str) -> CameraRandomisation:
-    """The camera randomisation stored in a model's training params (off without keys)."""
-    try:
-        return read_camera_randomisation(params, where)
-    except DeepRacerFileError as error:
-        raise ModelError(str(error)) from None
