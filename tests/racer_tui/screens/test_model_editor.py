@@ -13,7 +13,13 @@ from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from sim.garage.folder import list_models, open_model
 from sim.garage.options import new_model
 from sim.reward_function import template_name, template_source
-from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
+from tests.racer_tui.screens.tui_helpers import (
+    Notifications,
+    painted,
+    settle,
+    trained_model,
+    wait_for,
+)
 
 BROKEN_REWARD = """def reward_function(params):
     speed = params["speed"]
@@ -330,9 +336,13 @@ async def test_camera_randomisation_is_chosen_in_the_editor_for_camera_models() 
         assert app.screen is editor
         problem = editor.query_one("#camera-randomisation-problem")
         problem.scroll_visible(animate=False)
-        await pilot.pause()
-        told = " ".join(painted(problem).split())
-        assert "Unknown camera randomisation 'banana'" in told
+
+        def told() -> str:
+            return " ".join(painted(problem).split())
+
+        # The scroll lands on a later refresh, on a loaded machine several frames later.
+        await wait_for(pilot, lambda: "banana" in told())
+        assert "Unknown camera randomisation 'banana'" in told()
         editor.query_one("#camera-randomisation", Input).value = "light,noise=0.5"
         await pilot.press("ctrl+s")
         await settle(pilot)
