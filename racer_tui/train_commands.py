@@ -64,6 +64,12 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         help="time limit on each call of the reward function "
         f"(default {DEFAULT_REWARD_SECONDS:g} s)",
     )
+    train.add_argument(
+        "--processes",
+        type=int,
+        help="processes stepping the cars, each with a fleet of its own, and threads of the "
+        "learning step (default: the cores less one, left for the app)",
+    )
     train.add_argument("--json", action="store_true", help="stream the JSON events instead")
 
     evaluate = commands.add_parser("evaluate", help="time-trial evaluation, one lap per trial")
@@ -175,12 +181,20 @@ def _figures_table(figures: Figures) -> Table:
             "memory",
             number(system.rss_mb if system else None, ".0f") + " MB",
         ),
+        ("cars", _fleet(figures.started), "", ""),
     ]
     for label, value, label2, value2 in rows:
         table.add_row(
             Text(label, style="dim"), Text(value), Text(label2, style="dim"), Text(value2)
         )
     return table
+
+
+def _fleet(started: events.Started | None) -> str:
+    if started is None:
+        return "-"
+    processes = started.processes
+    return f"{started.cars} in {processes} process{'' if processes == 1 else 'es'}"
 
 
 class _Interrupts:
@@ -216,6 +230,8 @@ def _train(args: argparse.Namespace) -> int:
     seconds = args.reward_seconds
     if not (math.isfinite(seconds) and seconds > 0):
         raise ModelError(f"--reward-seconds must be more than 0, not {seconds:g}.")
+    if args.processes is not None and args.processes < 1:
+        raise ModelError(f"--processes must be 1 or more, not {args.processes}.")
     folder = open_model(args.name)
     problem = folder.car_archive_problem("train")
     if problem is not None:
@@ -230,11 +246,11 @@ def _train(args: argparse.Namespace) -> int:
     minutes = args.minutes if args.minutes is not None else folder.training_params().max_minutes
     # The child dies with this command (a killed command leaves no training running at
     # full CPU), and this command stops it if it ever runs well past its budget.
+    extra = ["--die-with-parent", "--reward-seconds", repr(float(seconds))]
+    if args.processes is not None:
+        extra += ["--processes", str(args.processes)]
     process = TrainingProcess.start(
-        str(folder.path),
-        args.minutes,
-        ["--die-with-parent", "--reward-seconds", repr(float(seconds))],
-        budget_seconds=minutes * 60.0,
+        str(folder.path), args.minutes, extra, budget_seconds=minutes * 60.0
     )
     with _Interrupts(process) as interrupts:
         show = _stream_json if args.json else _show_live

@@ -104,8 +104,13 @@ class EnvConfig:
         # two envs built from one config never share a car's state either.
         return [fresh() for _ in range(n_cars)]
 
-    def simulation(self, n_cars: int) -> TrackSimulation:
-        """The cars' simulation, on the track driven the way this config drives it."""
+    def simulation(
+        self, n_cars: int, first_car: int = 0, fleet_cars: int | None = None
+    ) -> TrackSimulation:
+        """The cars' simulation, on the track driven the way this config drives it.
+        `first_car`, `fleet_cars`: these are cars `first_car`.. of a larger training fleet
+        (sim.training.shards); their objects are drawn from `first_car`, so that each part
+        of the fleet meets boxes and bots of its own."""
         return TrackSimulation(
             self.track,
             n_cars,
@@ -113,6 +118,9 @@ class EnvConfig:
             rules=self.rules,
             is_reversed=self.is_reversed,
             race=self.race,
+            seed=first_car,
+            first_car=first_car,
+            fleet_cars=fleet_cars,
         )
 
 
@@ -142,10 +150,18 @@ class BatchedDeepRacer:
     puts the final observation in `final_observations` (the convention of SB3's VecEnv).
     """
 
-    def __init__(self, config: EnvConfig, n_cars: int, seed: int | None = None) -> None:
+    def __init__(
+        self,
+        config: EnvConfig,
+        n_cars: int,
+        seed: int | None = None,
+        *,
+        first_car: int = 0,
+        fleet_cars: int | None = None,
+    ) -> None:
         self.config = config
         self.n = n_cars
-        self.sim = config.simulation(n_cars)
+        self.sim = config.simulation(n_cars, first_car, fleet_cars)
         self.observer = Observer(self.sim, config.sensors, config.sensor_options)
         # Camera randomisation: a camera drawn per car per episode from `seed` (None: fresh).
         self._camera_draws = np.random.default_rng(seed) if randomises_camera(config) else None

@@ -116,13 +116,19 @@ class TrackSimulation:
         lookup_grids: bool = True,
         race: RaceSettings | None = None,
         seed: int = 0,
+        first_car: int = 0,
+        fleet_cars: int | None = None,
     ) -> None:
         """`lookup_grids=False` for a few hundred steps (one reference lap): the track's
         lines answer by exact tree search until building their lookup grids pays off.
         `race`: an object-avoidance race's boxes or a head-to-bot race's bot cars, each car
-        its own (placed from `seed`)."""
+        its own (placed from `seed`). `first_car` and `fleet_cars`: these cars are
+        `first_car`.. of a training fleet of `fleet_cars` split across processes, and start
+        where those cars of one whole fleet would (sim.training.shards)."""
         self.track = track
         self.n = n_cars
+        self.first_car = first_car
+        self.fleet_cars = n_cars if fleet_cars is None else fleet_cars
         self.car = car
         self.rules = rules or EpisodeRules()
         self.fleet = Fleet(n_cars, car, cars_collide=cars_collide)
@@ -190,7 +196,7 @@ class TrackSimulation:
         """
         if not self.rules.change_start:
             return 0.0
-        fraction = episode * self.rules.start_advance + car / self.n
+        fraction = episode * self.rules.start_advance + (self.first_car + car) / self.fleet_cars
         return (fraction % 1.0) * self._length
 
     def drives_reversed(self, car: int, episode: int) -> bool:
@@ -200,7 +206,7 @@ class TrackSimulation:
         training episode (simapp `finish_episode`); odd cars start the other way so that the
         fleet trains both directions evenly from the start.
         """
-        return self.rules.alternate_direction and (episode + car) % 2 == 1
+        return self.rules.alternate_direction and (episode + self.first_car + car) % 2 == 1
 
     def reset_car(self, car: int, start_s: float | None = None) -> None:
         """Put a car on the centre line, pointing along the track, for a new episode."""

@@ -46,6 +46,7 @@ class Started:
     total_steps: int
     max_minutes: float
     pid: int
+    processes: int = 1  # simulation processes the cars are spread over (sim.training.shards)
 
 
 @dataclass(frozen=True)

@@ -11,12 +11,11 @@ cars at once, each a DeepRacer car of its own, so the logbook follows each of th
 - Time is the simulated clock: every step of the fleet adds 1/15 s, so an episode's
   `elapsed_time_in_milliseconds` is its steps at 15 Hz and a sim-trace `tstamp` advances by
   1/15 s per row. A resumed training continues the clock from its last metrics row.
-- Every step of every car goes into a small per-car buffer (numpy, a few assignments per
-  step of the whole fleet), taken before a finished car restarts: the step's own action,
-  reward and status, and the pose as DeepRacer's row timing shows it (`sim.training.
-  trace_pose`: where the car was when the step began, or where the step left it if it
-  ended the episode): DeepRacer's point 0.14 m ahead of the car's centre, heading, all
-  four wheels on the road and progress.
+- Every step of every car is kept by a `StepRecorder` (sim.training.step_record) until
+  its episode ends; the logbook takes the ended episodes after each step of the fleet
+  (`add_step`). As a `StepWatcher` it records a batch in its own process; a training
+  spread across processes records in each and hands the episodes over
+  (sim.training.shards).
 
 The sim-trace is a sample, because the fleet runs hundreds of times faster than
 DeepRacer's one car: whole iterations are traced, every step of every car in them, while
@@ -56,10 +55,22 @@ from sim.deepracer_files import (
     training_metrics_end,
     training_trace_path,
 )
-from sim.objects.field import ObjectField
 from sim.objects.seen import SeenObjects, write_seen
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.training.trace_pose import RowPoses
+from sim.training.step_record import (
+    ACTION,
+    PROGRESS,
+    REWARD,
+    SEGMENT,
+    STEER,
+    THROTTLE,
+    WHEELS,
+    YAW,
+    EndedEpisode,
+    StepRecorder,
+    X,
+    Y,
+)
 
 TRACE_BASE_BYTES = 10_000_000
 TRACE_BYTES_PER_MINUTE = 1_000_000
@@ -67,10 +78,6 @@ TRACE_RULE = (
     "every step of every car in whole iterations, iteration 0 always, while a run's trace "
     "stays within 10 MB plus 1 MB per minute of training"
 )
-# Columns of the per-car step buffer (the segment becomes the closest waypoint only for the
-# rows that are written).
-_X, _Y, _YAW, _STEER, _THROTTLE, _ACTION, _REWARD, _WHEELS, _PROGRESS, _SEGMENT = range(10)
-_COLUMNS = 10
 _BYTES_PER_ROW = 110  # about what one row takes on disk, to budget before formatting
 # A traced episode waiting to be written: (episode column, clock at its end, status, rows).
 _TracedEpisode = tuple[int, float, str, NDArray[np.float64]]
@@ -123,11 +130,7 @@ class Logbook:
         self._started = clock()
         self._trace_base = trace_base_bytes
         self._trace_rate = trace_bytes_per_minute
-        self._buffer = np.zeros((cars, 256, _COLUMNS))
-        self._step = np.zeros((cars, _COLUMNS))  # one step of the fleet, before it is stored
-        self._step[:, _ACTION] = -1.0  # continuous actions have no index
-        self._rows = np.arange(cars)
-        self._poses = RowPoses()
+        self._recorder = StepRecorder(cars, discrete=discrete)
         self._pending_metrics: list[TrainingEpisode] = []
         self._pending_trace: dict[int, list[_TracedEpisode]] = {}
         self._traced_iterations: dict[int, bool] = {}
@@ -175,49 +178,25 @@ class Logbook:
     # --- every step ----------------------------------------------------------------------------
     def before_step(self, sim: TrackSimulation) -> None:
         """Note where every car is before the fleet's step (a row's pose is one row late)."""
-        self._poses.before_step(sim)
+        self._recorder.before_step(sim)
 
     def after_step(self, sim: TrackSimulation, actions: np.ndarray, rewards: np.ndarray) -> None:
         """Record the fleet's step; called by the env before finished cars restart."""
+        self._recorder.after_step(sim, actions, rewards)
+        self.add_step(self._recorder.take())
+
+    def add_step(self, ended: list[EndedEpisode]) -> None:
+        """One step of the whole fleet, and the episodes it ended, in the cars' order."""
         self.clock += STEP_SECONDS
-        row = sim.steps - 1
-        if int(row.max()) >= self._buffer.shape[1]:
-            self._grow(int(row.max()) + 1)
-        pose = self._poses.after_step(sim)
-        # Column by column into one block, then one store: a few microseconds per step.
-        step = self._step
-        step[:, _X : _Y + 1] = pose.ahead
-        step[:, _YAW] = pose.heading_deg
-        step[:, _STEER] = sim.steering_cmd
-        step[:, _THROTTLE] = sim.speed_cmd
-        if self._discrete:
-            step[:, _ACTION] = np.reshape(actions, self.cars)
-        step[:, _REWARD] = rewards
-        step[:, _WHEELS] = pose.wheels_on
-        step[:, _PROGRESS] = pose.progress
-        step[:, _SEGMENT] = pose.segment
-        self._buffer[self._rows, row] = step
-        done = sim.done
-        if done.any():
-            for car in np.flatnonzero(done).tolist():
-                self._finish(car, int(sim.steps[car]), str(sim.status[car]), sim.objects)
+        for episode in ended:
+            self._finish(episode)
 
-    def _grow(self, needed: int) -> None:
-        size = self._buffer.shape[1]
-        while size < needed:
-            size *= 2
-        grown = np.zeros((self.cars, size, _COLUMNS))
-        grown[:, : self._buffer.shape[1]] = self._buffer
-        self._buffer = grown
-
-    def _finish(
-        self, car: int, steps: int, status: str, objects: ObjectField | None = None
-    ) -> None:
+    def _finish(self, ended: EndedEpisode) -> None:
         self.episodes += 1
         number = self.episodes
-        rows = self._buffer[car, :steps]
-        reward = float(rows[:, _REWARD].sum())
-        progress = float(rows[-1, _PROGRESS])
+        rows, steps, status = ended.rows, ended.steps, ended.status
+        reward = float(rows[:, REWARD].sum())
+        progress = float(rows[-1, PROGRESS])
         end, elapsed = round(self.clock * 1000), round(steps * STEP_SECONDS * 1000)
         self._pending_metrics.append(
             TrainingEpisode(
@@ -232,18 +211,15 @@ class Logbook:
                 episode_status=status,
             )
         )
-        self.finished.append(FinishedEpisode(car, reward, progress, status, steps, number))
+        self.finished.append(FinishedEpisode(ended.car, reward, progress, status, steps, number))
         iteration = (number - 1) // self.per_iteration
         if self._traced(iteration):
             self._pending_trace.setdefault(iteration, []).append(
-                (number - 1, self.clock, status, rows.copy())
+                (number - 1, self.clock, status, rows)
             )
             self._run_trace_bytes += steps * _BYTES_PER_ROW
-            if objects is not None:  # where they stood at this, the last traced row so far
-                poses = np.stack([objects.x[car], objects.y[car], objects.heading[car]], axis=1)
-                self._seen = SeenObjects(
-                    number - 1, steps, objects.shape.is_car, tuple(map(tuple, poses.tolist()))
-                )
+            if ended.objects is not None:  # where they stood at this, the last traced row
+                self._seen = SeenObjects(number - 1, steps, ended.objects_are_cars, ended.objects)
             self.sample = SimTraceSample(
                 number,
                 self.sample.traced_episodes + 1,
@@ -331,18 +307,18 @@ class Logbook:
         return SimTraceColumns(
             episode=np.concatenate(numbers),
             steps=step,
-            x=data[:, _X],
-            y=data[:, _Y],
-            yaw=data[:, _YAW],
-            steer=data[:, _STEER],
-            throttle=data[:, _THROTTLE],
-            action=data[:, _ACTION].astype(np.int64),
-            reward=data[:, _REWARD],
+            x=data[:, X],
+            y=data[:, Y],
+            yaw=data[:, YAW],
+            steer=data[:, STEER],
+            throttle=data[:, THROTTLE],
+            action=data[:, ACTION].astype(np.int64),
+            reward=data[:, REWARD],
             done=done,
-            all_wheels_on_track=data[:, _WHEELS] > 0.5,
-            progress=data[:, _PROGRESS],
+            all_wheels_on_track=data[:, WHEELS] > 0.5,
+            progress=data[:, PROGRESS],
             closest_waypoint=closest_waypoint(
-                data[:, _X : _Y + 1], data[:, _SEGMENT].astype(np.int64), self._waypoints
+                data[:, X : Y + 1], data[:, SEGMENT].astype(np.int64), self._waypoints
             ),
             track_len=self.track_length,
             tstamp=np.concatenate(stamps),

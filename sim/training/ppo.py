@@ -37,7 +37,7 @@ from torch.nn import functional
 from sim.deepracer_files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_TYPE
 from sim.training.logbook import FinishedEpisode
 from sim.training.policy import NetworkSpec, PolicyNetwork, init_weights, observation_tensors
-from sim.training.vec_env import BatchedVecEnv
+from sim.training.vec_env import FleetVecEnv
 
 LOSS_TYPES = ("huber", "mean squared error")
 
@@ -152,6 +152,9 @@ class RacerPPO(PPO):
     episodes. Build it with `make_ppo`."""
 
     loss_type: str = "huber"
+    # Threads of the update: the simulation processes wait while it runs, so their cores
+    # are free; a camera network's update is most of a training's time (sim.training.shards).
+    update_threads: int = 1
 
     @staticmethod
     def _wrap_env(env: Any, verbose: int = 0, monitor_wrapper: bool = True) -> Any:
@@ -160,8 +163,8 @@ class RacerPPO(PPO):
         return env
 
     @property
-    def batched_env(self) -> BatchedVecEnv:
-        assert isinstance(self.env, BatchedVecEnv)
+    def batched_env(self) -> FleetVecEnv:
+        assert isinstance(self.env, FleetVecEnv)
         return self.env
 
     @property
@@ -179,6 +182,15 @@ class RacerPPO(PPO):
     # --- learning ------------------------------------------------------------------------
     def train(self) -> None:
         """The clipped PPO update over the rollout buffer; stats in `last_update`."""
+        torch.set_num_threads(self.update_threads)
+        try:
+            self._update()
+        finally:
+            # Collection runs one small forward pass a step: one thread, the cores are the
+            # simulation's.
+            torch.set_num_threads(1)
+
+    def _update(self) -> None:
         self.policy.set_training_mode(True)
         for group in self.policy.optimizer.param_groups:  # DeepRacer's lr is constant
             group["lr"] = float(self.lr_schedule(self._current_progress_remaining))
@@ -245,7 +257,7 @@ class RacerPPO(PPO):
         _resize(buffer, max_steps)
         buffer.reset()
         self.policy.set_training_mode(False)
-        space = env.batch.config.action_space
+        space = env.config.action_space
         discrete = space.kind == "discrete"
         finished: list[FinishedEpisode] = []
         dones = np.zeros(n, dtype=bool)
@@ -338,12 +350,13 @@ def _truncate(buffer: RolloutBuffer, steps: int) -> None:
 
 
 def make_ppo(
-    env: BatchedVecEnv,
+    env: FleetVecEnv,
     spec: NetworkSpec,
     settings: PPOSettings,
     *,
     max_samples: int,
     seed: int | None = None,
+    update_threads: int = 1,
 ) -> RacerPPO:
     """A RacerPPO on `env` with the network `spec` and DeepRacer-mapped `settings`."""
     torch.set_num_threads(1)  # tiny networks: threads cost more than they give
@@ -373,4 +386,5 @@ def make_ppo(
             verbose=0,
         )
     model.loss_type = settings.loss_type
+    model.update_threads = update_threads
     return model

@@ -27,12 +27,13 @@ import numpy as np
 import psutil
 import torch
 
+from sim import reward_limit
 from sim.atomic import write_text_atomic
 from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, ModelFolder
 from sim.observations import SensorOptions
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
-from sim.realworld.training import training_config
+from sim.realworld.training import folder_training_config
 from sim.simulation import reversed_track
 from sim.track import Track
 from sim.training import events
@@ -51,7 +52,8 @@ from sim.training.policy import (
 )
 from sim.training.ppo import PPOSettings, Rollout, make_ppo
 from sim.training.run_history import RunHistory
-from sim.training.vec_env import BatchedVecEnv
+from sim.training.shards import ShardedVecEnv, default_processes
+from sim.training.vec_env import BatchedVecEnv, FleetVecEnv
 
 REPORTED_CAR = 0  # the car whose episodes are streamed and logged, as DeepRacer's one car
 EVALUATION_TRIALS = 5
@@ -64,7 +66,10 @@ class RunOptions:
     """How a run is driven; the defaults are what `racer-tui train` uses."""
 
     minutes: float | None = None  # None: training_params.yaml's MAX_MINUTES
-    cars: int | None = None  # None: by sensor (see `default_cars`)
+    cars: int | None = None  # per process; None: by sensor (see `default_cars`)
+    # Processes that step the cars (sim.training.shards), and threads of the PPO update;
+    # None: the cores less one.
+    processes: int | None = None
     seed: int | None = None
     checkpoint_seconds: float = 10.0
     evaluation_seconds: float = 5.0  # least time between evaluations
@@ -121,17 +126,22 @@ class Trainer:
             self.settings = PPOSettings.from_hyperparameters(self.hyperparameters)
         except ValueError as error:
             raise ModelError(f"{folder.hyperparameters_file}: {error}") from None
-        self.config = training_config(folder.env_config(), params, str(folder.training_params_file))
-        self.cars = self.options.cars or default_cars(self.metadata.sensors)
+        self.config = folder_training_config(folder)
+        self.processes = self.options.processes or default_processes()
+        if self.processes < 1:
+            raise ModelError(f"a training needs at least 1 process, not {self.processes}.")
+        # Each process steps a fleet's worth of cars: a part steps little faster with fewer
+        # cars (its step costs little more for many), so more cores drive more cars.
+        self.cars = (self.options.cars or default_cars(self.metadata.sensors)) * self.processes
         least, most = sample_limits(self.metadata.sensors, self.cars)
         self.min_samples = self.options.min_samples or least
         self.max_samples = self.options.max_samples or most
         self.progress = Progress()
         self.started_at = datetime.now(UTC)
         self._clock0 = time.monotonic()
-        self._process = psutil.Process()
+        self._processes = [psutil.Process()]  # and the simulation processes, once started
         self._evaluations = 0  # evaluations run: shuffled boxes are drawn from it
-        self._process.cpu_percent(interval=None)  # the first reading only sets the baseline
+        self._processes[0].cpu_percent(interval=None)  # the first reading sets the baseline
         self._last_metrics_write = -math.inf
         self._metrics_write_cost = 0.0
 
@@ -141,6 +151,8 @@ class Trainer:
         try:
             resumed_from = self._setup()
         except (ModelError, PolicyError, DeepRacerFileError) as error:
+            if hasattr(self, "env"):
+                self.env.close()
             self._write_state("failed", str(error), error)
             return self._ended("failed", str(error), error)
         self._clock0 = time.monotonic()  # the time limit counts training, not start-up
@@ -156,6 +168,7 @@ class Trainer:
                 total_steps=self.progress.total_steps,
                 max_minutes=self.minutes,
                 pid=os.getpid(),
+                processes=self.processes,
             )
         )
         kind, message = "finished", "the time limit was reached"
@@ -170,24 +183,31 @@ class Trainer:
             self._finish()
         except Exception as error:  # the folder stays consistent; say what went wrong
             kind, message, failure = "failed", describe_failure(error), error
+        finally:
+            self.env.close()  # the simulation processes end with the run
         self._write_state(kind, message, failure)
         return self._ended(kind, message, failure)
 
     def _setup(self) -> str:
         self._remove_leftovers()
-        env = BatchedVecEnv(self.config, self.cars, seed=self.options.seed)
         self.logbook = Logbook(
             self.folder.path,
             cars=self.cars,
             episodes_per_iteration=self.settings.episodes_per_update,
             track_length=self.config.track.length,
-            waypoints=env.batch.sim.track.center,
+            waypoints=self.training_track.center,
             discrete=self.metadata.action_space.kind == "discrete",
         )
-        env.batch.watcher = self.logbook
+        self.env = self._fleet()
+        env = self.env
         spec = network_spec(self.metadata, SensorOptions())
         self.model = make_ppo(
-            env, spec, self.settings, max_samples=self.max_samples, seed=self.options.seed
+            env,
+            spec,
+            self.settings,
+            max_samples=self.max_samples,
+            seed=self.options.seed,
+            update_threads=self.processes,
         )
         self.network = self.model.network
         resumed_from = self._restore()
@@ -198,6 +218,28 @@ class Trainer:
         self._run_elapsed0 = self.progress.elapsed_seconds
         self._first_iteration = self.progress.iteration
         return resumed_from
+
+    def _fleet(self) -> FleetVecEnv:
+        """The cars, in this process or spread over several (the log sees every step)."""
+        if self.processes == 1:
+            env = BatchedVecEnv(self.config, self.cars, seed=self.options.seed)
+            env.batch.watcher = self.logbook
+            return env
+        limit = reward_limit.active()
+        sharded = ShardedVecEnv(
+            self.config,
+            self.folder.path,
+            self.cars,
+            self.processes,
+            seed=self.options.seed,
+            on_step=self.logbook.add_step,
+            reward_seconds=limit.seconds if limit is not None else None,
+        )
+        for pid in sharded.pids:
+            process = psutil.Process(pid)
+            process.cpu_percent(interval=None)
+            self._processes.append(process)
+        return sharded
 
     def _ended(self, kind: str, message: str, failure: BaseException | None = None) -> events.Ended:
         problem, fix = failure_remedy(failure) if failure is not None else ("", None)
@@ -321,9 +363,16 @@ class Trainer:
         )
 
     def _system(self) -> None:
-        with self._process.oneshot():
-            cpu = self._process.cpu_percent(interval=None)
-            rss = self._process.memory_info().rss / 1e6
+        """CPU (100 % a core, as `top` counts) and memory of the trainer and its simulation
+        processes together."""
+        cpu = rss = 0.0
+        for process in self._processes:
+            try:
+                with process.oneshot():
+                    cpu += process.cpu_percent(interval=None)
+                    rss += process.memory_info().rss / 1e6
+            except psutil.Error:  # a simulation process just ended: the run is ending too
+                continue
         self.emit(events.System(elapsed=self.elapsed, cpu_percent=cpu, rss_mb=round(rss, 1)))
 
     # --- evaluation and the best policy ---------------------------------------------------------
@@ -353,11 +402,16 @@ class Trainer:
         return EvaluationReport(track=self.config.track.name, trials=tuple(results))
 
     @property
-    def evaluation_track(self) -> Track:
-        """The track as this model trains on it: reversed with REVERSE_DIR, as DeepRacer's
-        evaluation episodes during training run on the same reversed lines."""
+    def training_track(self) -> Track:
+        """The track as this model trains on it: reversed with REVERSE_DIR (its waypoints
+        are the sim-trace's)."""
         track = self.config.track
         return reversed_track(track) if self.config.is_reversed else track
+
+    @property
+    def evaluation_track(self) -> Track:
+        """DeepRacer's evaluation episodes during training run on the training's lines."""
+        return self.training_track
 
     def _evaluate(self) -> None:
         started = time.monotonic()

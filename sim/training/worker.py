@@ -89,6 +89,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("model", help="model name in the garage, or a model folder path")
     parser.add_argument("--minutes", type=float, default=None, help="training time limit")
     parser.add_argument("--cars", type=int, default=None, help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--processes",
+        type=int,
+        default=None,
+        help="processes stepping the cars (default: the cores less one)",
+    )
     parser.add_argument("--seed", type=int, default=None, help=argparse.SUPPRESS)
     parser.add_argument("--checkpoint-seconds", type=float, default=10.0, help=argparse.SUPPRESS)
     parser.add_argument("--evaluation-seconds", type=float, default=5.0, help=argparse.SUPPRESS)
@@ -208,6 +214,7 @@ def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
         options = RunOptions(
             minutes=args.minutes,
             cars=args.cars,
+            processes=args.processes,
             seed=args.seed,
             checkpoint_seconds=args.checkpoint_seconds,
             evaluation_seconds=args.evaluation_seconds,

@@ -1,0 +1,180 @@
+"""A training fleet spread across processes steps, logs and fails as one fleet would."""
+
+from __future__ import annotations
+
+import json
+import signal
+from typing import Any
+
+import numpy as np
+import psutil
+import pytest
+
+from sim.garage.folder import ModelFolder
+from sim.garage.options import new_model
+from sim.realworld.training import folder_training_config
+from sim.reward_function import RewardFunctionError
+from sim.training import events
+from sim.training.launcher import TrainingProcess
+from sim.training.logbook import Logbook
+from sim.training.shards import FleetPart, PartError, ShardedVecEnv, split_fleet
+from sim.training.trainer import RunOptions, Trainer
+from sim.training.vec_env import BatchedVecEnv, FleetVecEnv
+
+CARS = 6
+STEPS = 300
+
+
+def test_a_fleet_is_split_as_evenly_as_it_comes() -> None:
+    assert split_fleet(6, 3) == [FleetPart(0, 2), FleetPart(2, 2), FleetPart(4, 2)]
+    assert split_fleet(7, 3) == [FleetPart(0, 3), FleetPart(3, 2), FleetPart(5, 2)]
+    assert split_fleet(2, 4) == [FleetPart(0, 1), FleetPart(1, 1)]  # never an empty part
+    with pytest.raises(ValueError):
+        split_fleet(0, 2)
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+    return np.array_equal(a, b)
+
+
+def _logbook(folder: ModelFolder, env: FleetVecEnv) -> Logbook:
+    return Logbook(
+        folder.path,
+        cars=CARS,
+        episodes_per_iteration=5,
+        track_length=env.config.track.length,
+        waypoints=env.config.track.center,
+        discrete=env.config.action_space.kind == "discrete",
+    )
+
+
+@pytest.mark.parametrize("sensor", ["vector", "camera"])
+def test_a_fleet_split_over_three_processes_steps_and_logs_as_the_whole_fleet(
+    sensor: str,
+) -> None:
+    whole_model = new_model("whole", sensors=[sensor])
+    split_model = new_model("split", sensors=[sensor])
+    config = folder_training_config(whole_model)
+    whole = BatchedVecEnv(config, CARS)
+    whole_log = _logbook(whole_model, whole)
+    whole.batch.watcher = whole_log
+    split_log = _logbook(split_model, whole)
+    split = ShardedVecEnv(
+        folder_training_config(split_model), split_model.path, CARS, 3, on_step=split_log.add_step
+    )
+    try:
+        assert split.processes == 3 and len(split.pids) == 2
+        assert _same(whole.reset(), split.reset())
+        rng = np.random.default_rng(7)
+        ended = 0
+        for step in range(STEPS):
+            actions = rng.integers(0, len(config.action_space.actions), CARS)
+            whole.step_async(actions)
+            split.step_async(actions)
+            obs_a, rewards_a, dones_a, infos_a = whole.step_wait()
+            obs_b, rewards_b, dones_b, infos_b = split.step_wait()
+            assert _same(obs_a, obs_b), f"step {step}"
+            assert np.array_equal(rewards_a, rewards_b) and np.array_equal(dones_a, dones_b)
+            assert whole.last_infos == split.last_infos
+            for car in np.flatnonzero(dones_a).tolist():
+                assert _same(
+                    infos_a[car]["terminal_observation"], infos_b[car]["terminal_observation"]
+                )
+                assert infos_a[car]["TimeLimit.truncated"] == infos_b[car]["TimeLimit.truncated"]
+            ended += int(dones_a.sum())
+    finally:
+        split.close()
+    assert ended >= CARS  # random driving leaves the road: every part restarted its cars
+    # Cars of every part finished episodes, and the one log numbered them as the whole's.
+    cars = {episode.car for episode in split_log.take_finished()}
+    assert cars & {0, 1} and cars & {2, 3} and cars & {4, 5}
+    whole_log.flush()
+    split_log.flush()
+    for name in ("TrainingMetrics.json", "training-simtrace/0-iteration.csv"):
+        files = [list(m.path.rglob(name.split("/")[-1])) for m in (whole_model, split_model)]
+        assert len(files[0]) == len(files[1]) == 1
+        assert files[0][0].read_bytes() == files[1][0].read_bytes()
+
+
+def test_a_simulation_process_that_fails_raises_its_own_error_in_the_trainer() -> None:
+    model = new_model("broken")
+    good_config = folder_training_config(model)  # read before the file breaks
+    model.reward_file.write_text(
+        "def reward_function(params):\n    return params['no such key']\n", encoding="utf-8"
+    )
+    split = ShardedVecEnv(good_config, model.path, 4, 2)
+    try:
+        split.reset()
+        with pytest.raises(RewardFunctionError, match="line 2") as raised:
+            for _ in range(3):  # step 1 is DeepRacer's prepare step: no reward call
+                split.step_async(np.zeros(4, dtype=np.int64))
+                split.step_wait()
+        assert "no such key" in str(raised.value)
+    finally:
+        split.close()
+
+
+def test_a_training_on_two_processes_drives_both_and_ends_them(model: ModelFolder) -> None:
+    stream: list[events.Event] = []
+    simulators: list[psutil.Process] = []
+
+    def emit(event: events.Event) -> None:
+        if isinstance(event, events.Started):
+            assert isinstance(trainer.env, ShardedVecEnv)
+            simulators.extend(psutil.Process(pid) for pid in trainer.env.pids)
+        stream.append(event)
+
+    def stop() -> bool:
+        return sum(isinstance(e, events.Update) for e in stream) >= 2
+
+    options = RunOptions(minutes=5, cars=2, processes=2, seed=0, min_samples=32, max_samples=64)
+    trainer = Trainer(model, emit, stop, options)
+    stream.append(trainer.run())
+    started, ended = stream[0], stream[-1]
+    assert isinstance(started, events.Started)
+    assert (started.cars, started.processes) == (4, 2)
+    assert isinstance(ended, events.Ended) and ended.kind == "stopped", ended
+    updates = [e for e in stream if isinstance(e, events.Update)]
+    assert updates[-1].total_steps % 4 == 0 and updates[-1].total_steps > 0
+    systems = [e for e in stream if isinstance(e, events.System)]
+    assert systems and systems[0].rss_mb > 0
+    # The simulation process is gone, and the model's files are a consistent training.
+    assert len(simulators) == 1
+    _, alive = psutil.wait_procs(simulators, timeout=10)
+    assert not alive
+    metrics = json.loads(model.training_metrics_file.read_text())
+    assert len(metrics["metrics"]) >= 1
+    assert model.has_policy()
+
+
+def test_killing_the_trainer_ends_its_simulation_processes(model: ModelFolder) -> None:
+    process = TrainingProcess.start(
+        str(model.path), 5, ["--processes", "3", "--cars", "2", "--seed", "0"]
+    )
+    trainer = psutil.Process(process.pid)
+    for event in process.events():
+        if isinstance(event, events.Started):
+            assert event.processes == 3
+            break
+    simulators = trainer.children()
+    assert len(simulators) >= 2
+    trainer.send_signal(signal.SIGKILL)
+    process.wait()
+    gone, alive = psutil.wait_procs(simulators, timeout=15)
+    assert not alive, [p.pid for p in alive]
+    assert len(gone) == len(simulators)
+
+
+def test_a_simulation_process_that_dies_is_one_sentence_in_the_trainer() -> None:
+    model = new_model("killed")
+    split = ShardedVecEnv(folder_training_config(model), model.path, 4, 2)
+    try:
+        split.reset()
+        psutil.Process(split.pids[0]).kill()
+        with pytest.raises(PartError, match=r"ended unexpectedly .*start the training again"):
+            split.step_async(np.zeros(4, dtype=np.int64))
+            split.step_wait()
+    finally:
+        split.close()
