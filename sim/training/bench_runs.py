@@ -36,13 +36,14 @@ class Trained:
     evaluations: list[tuple[float, int, int]] = field(default_factory=list)
 
 
-def train_model(model: str, minutes: float) -> Trained:
-    """Train garage model `model` for `minutes` in a child process, as the app does."""
+def train_model(model: str, minutes: float, extra: Sequence[str] = ()) -> Trained:
+    """Train garage model `model` for `minutes` in a child process, as the app does
+    (`extra`: more of the child's options)."""
     from sim.training import events
     from sim.training.launcher import TrainingProcess
 
     trained = Trained()
-    process = TrainingProcess.start(model, minutes, [])
+    process = TrainingProcess.start(model, minutes, extra)
     for event in process.events():
         if isinstance(event, events.Update):
             trained.steps, trained.seconds = event.total_steps, event.elapsed
