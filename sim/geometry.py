@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import bisect
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 FloatArray = NDArray[np.float64]
 
@@ -152,6 +155,10 @@ class PolylineProjector:
         self.closed = bool(np.allclose(pts[0], pts[-1]))
         self._inv_len_sq = 1.0 / (self.lengths * self.lengths)
         samples, owners = self._resample()
+        # Imported here: scipy.spatial takes about 0.1 s to import, which commands that
+        # never build a polyline (help, model list, the league's) should not pay.
+        from scipy.spatial import cKDTree
+
         self._tree = cKDTree(samples)
         self._owners = owners
         self._lookup = _LookupGrid(self._tree, owners, pts, len(self.lengths), self.closed)

@@ -19,7 +19,6 @@ from typing import Literal
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 from shapely.geometry import LinearRing, Polygon
 
 from sim.atomic import write_bytes_atomic
@@ -402,6 +401,8 @@ def _check_road_gaps(points: FloatArray, label: str) -> None:
     along = np.append(along[:-1][kept], along[-1])
     lap = float(along[-1])
     reach = float(widths.max()) + MIN_ROAD_GAP  # no closer pair can be a gap violation
+    from scipy.spatial import cKDTree  # see sim.geometry: a slow import, needed here only
+
     pairs = cKDTree(centre).query_pairs(reach, output_type="ndarray")
     if not len(pairs):
         return

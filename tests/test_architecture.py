@@ -23,6 +23,8 @@ TORCH_ALLOWED = {
     "sim.training.checkpoint",
     "sim.training.policy",
     "sim.training.ppo",
+    # The learner's side of a fleet over processes (its parts, fleet_parts, stay light).
+    "sim.training.shards",
     "sim.training.trainer",
     "sim.training.vec_env",
 }

@@ -41,6 +41,7 @@ from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
 from sim.training.errors import PolicyError, describe_failure, failure_remedy
 from sim.training.evaluation import EvaluationReport, run_trials
+from sim.training.fleet_parts import default_processes
 from sim.training.logbook import Logbook
 from sim.training.policy import (
     PolicyDriver,
@@ -52,7 +53,7 @@ from sim.training.policy import (
 )
 from sim.training.ppo import PPOSettings, Rollout, make_ppo
 from sim.training.run_history import RunHistory
-from sim.training.shards import ShardedVecEnv, default_processes
+from sim.training.shards import ShardedVecEnv
 from sim.training.vec_env import BatchedVecEnv, FleetVecEnv
 
 REPORTED_CAR = 0  # the car whose episodes are streamed and logged, as DeepRacer's one car

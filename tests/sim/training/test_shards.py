@@ -15,9 +15,10 @@ from sim.garage.options import new_model
 from sim.realworld.training import folder_training_config
 from sim.reward_function import RewardFunctionError
 from sim.training import events
+from sim.training.fleet_parts import FleetPart, PartError, split_fleet
 from sim.training.launcher import TrainingProcess
 from sim.training.logbook import Logbook
-from sim.training.shards import FleetPart, PartError, ShardedVecEnv, split_fleet
+from sim.training.shards import ShardedVecEnv
 from sim.training.trainer import RunOptions, Trainer
 from sim.training.vec_env import BatchedVecEnv, FleetVecEnv
 
@@ -124,6 +125,9 @@ def test_a_training_on_two_processes_drives_both_and_ends_them(model: ModelFolde
         if isinstance(event, events.Started):
             assert isinstance(trainer.env, ShardedVecEnv)
             simulators.extend(psutil.Process(pid) for pid in trainer.env.pids)
+            # A simulation process never loads the learner's torch (start-up and memory).
+            mapped = [m.path for p in simulators for m in p.memory_maps()]
+            assert mapped and not [path for path in mapped if "torch" in path]
         stream.append(event)
 
     def stop() -> bool:

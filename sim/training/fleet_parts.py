@@ -1,0 +1,172 @@
+"""One part of a training fleet in a process of its own: what it is, how it is set up, and
+the simulation process's life (sim.training.shards joins the parts into one fleet).
+
+Torch-free on purpose: a simulation process imports this module and the simulator, never
+the learner's torch and stable-baselines3 (a second or more of start-up, and hundreds of
+megabytes, in every process).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pickle
+import signal
+from dataclasses import dataclass
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sim.env import BatchedDeepRacer, StepInfo
+from sim.training.step_record import EndedEpisode, StepRecorder
+
+
+def usable_cores() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def default_processes() -> int:
+    """Simulation processes for a training: the cores less one, left for the app."""
+    return max(1, usable_cores() - 1)
+
+
+@dataclass(frozen=True)
+class FleetPart:
+    """Cars `first_car` .. `first_car + cars - 1` of the fleet."""
+
+    first_car: int
+    cars: int
+
+
+def split_fleet(cars: int, processes: int) -> list[FleetPart]:
+    """`cars` in `processes` parts as even as they come (the first ones one car larger);
+    never more parts than cars."""
+    if cars < 1 or processes < 1:
+        raise ValueError("a fleet needs at least one car and one process")
+    count = min(cars, processes)
+    size, larger = divmod(cars, count)
+    parts, first = [], 0
+    for index in range(count):
+        part = size + (1 if index < larger else 0)
+        parts.append(FleetPart(first, part))
+        first += part
+    return parts
+
+
+@dataclass(frozen=True)
+class PartSetup:
+    """What a simulation process needs to build its part (plain data: it is pickled)."""
+
+    folder: str  # the model folder: the process reads its config from there
+    part: FleetPart
+    fleet_cars: int
+    seed: int | None
+    record: bool  # keep step rows for the training log
+    discrete: bool
+    reward_seconds: float | None  # the reward call limit to install; None: none
+
+
+@dataclass
+class PartStep:
+    """One part's step, as the trainer joins it with the others."""
+
+    obs: Any
+    rewards: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    infos: list[StepInfo]
+    finals: dict[int, Any]  # the final observation of each car whose episode ended
+    ended: list[EndedEpisode]
+
+    @classmethod
+    def of(cls, batch: BatchedDeepRacer, step: Any, recorder: StepRecorder | None) -> PartStep:
+        obs, rewards, terminated, truncated, infos = step
+        ended = np.flatnonzero(terminated | truncated).tolist()
+        finals = {car: batch.final_observations[car] for car in ended}
+        taken = recorder.take() if recorder is not None else []
+        return cls(obs, rewards, terminated, truncated, infos, finals, taken)
+
+
+class PartError(RuntimeError):
+    """A simulation process failed in a way that could not be sent as its own error."""
+
+
+def serve_part(connection: Connection, setup: PartSetup) -> None:
+    """A simulation process's life: build the part, then answer reset and step until told
+    to close or until the trainer's end of the pipe closes."""
+    # Ctrl+C in a terminal reaches the whole process group: the trainer decides when its
+    # parts stop, and closes them.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        batch, recorder = _build_part(connection, setup)
+    except BaseException as error:
+        _send_error(connection, error)
+        return
+    connection.send(("ready", None))
+    while True:
+        try:
+            kind, value = connection.recv()
+        except (EOFError, OSError):
+            return  # the trainer is gone
+        if kind == "close":
+            return
+        try:
+            if kind == "reset":
+                reply: Any = batch.reset()
+            else:
+                reply = PartStep.of(batch, batch.step(value), recorder)
+            connection.send(("ok", reply))
+        except BaseException as error:
+            _send_error(connection, error)
+            return
+
+
+def _build_part(
+    connection: Connection, setup: PartSetup
+) -> tuple[BatchedDeepRacer, StepRecorder | None]:
+    from sim import reward_limit
+    from sim.garage.folder import ModelFolder
+    from sim.realworld.training import folder_training_config
+
+    if setup.reward_seconds is not None:
+        limit = reward_limit.install(setup.reward_seconds)
+
+        def stuck(seconds: float) -> None:
+            # From the watchdog thread while the main thread is stuck in racer code.
+            _send_error(
+                connection,
+                PartError(
+                    f"the reward function did not return within {seconds:g} s and would "
+                    "not be stopped (does it catch every exception?); make it return faster"
+                ),
+            )
+            os._exit(1)
+
+        limit.on_stuck = stuck
+    config = folder_training_config(ModelFolder(Path(setup.folder)))
+    part = setup.part
+    batch = BatchedDeepRacer(
+        config, part.cars, setup.seed, first_car=part.first_car, fleet_cars=setup.fleet_cars
+    )
+    recorder = None
+    if setup.record:
+        recorder = StepRecorder(part.cars, discrete=setup.discrete, first_car=part.first_car)
+        batch.watcher = recorder
+    return batch, recorder
+
+
+def _send_error(connection: Connection, error: BaseException) -> None:
+    """Send the error itself when it pickles, else its words; the trainer raises it."""
+    try:
+        pickle.loads(pickle.dumps(error))
+        sent: BaseException = error
+    except Exception:
+        sent = PartError(f"{type(error).__name__}: {error}")
+    with contextlib.suppress(BrokenPipeError, ConnectionResetError, OSError):
+        connection.send(("error", sent))
