@@ -229,12 +229,15 @@ class TrackSimulation:
             else:
                 s = start_s[k]
             s %= self._length
-            if self.objects is not None and self.episode[car] > 0:
-                self.objects.draw(car)  # shuffled boxes move, bots start again
+            objects = self.objects
+            if objects is not None and (self.episode[car] > 0 or backwards):
+                # Shuffled boxes move, bots start again, and either follow the car's way
+                # round (objects are placed for the track's way at the start).
+                objects.draw(car, backwards)
             self.episode[car] += 1
             self._set_reverse(car, backwards)
             self._place_along(car, s, backwards)
-            if self.objects is not None and not backwards:
+            if objects is not None:
                 self._clear_of_objects(car, s)
             centre_s[k] = s
         index = np.asarray(cars, dtype=np.intp)
@@ -256,9 +259,8 @@ class TrackSimulation:
     def _clear_of_objects(self, car: int, s: float) -> None:
         """Start in the other lane than an object right by the start (as DeepRacer does)."""
         assert self.objects is not None
-        lane = self.objects.start_lane(car, s)
-        if lane is not None:
-            pose = self.objects.lanes.pose(s, lane)
+        pose = self.objects.start_pose(car, s)
+        if pose is not None:
             self.fleet.place(car, pose.x, pose.y, pose.heading, 0.0)
 
     def _set_reverse(self, car: int, backwards: bool) -> None:

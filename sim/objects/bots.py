@@ -90,6 +90,7 @@ class BotField(ObjectField):
         self.settings = settings
         self.reported_speed = settings.speed
         self._table = _LaneTable(self.lanes)
+        self._table_backwards: _LaneTable | None = None  # the reversed track's, when needed
         k = settings.count
         self.start = np.zeros((cars, k))  # centre-line distance at the episode's start
         self.outer = np.zeros((cars, k), dtype=bool)  # the lane it drives (or leaves)
@@ -106,9 +107,13 @@ class BotField(ObjectField):
             self.draw(car)
 
     # --- episodes ------------------------------------------------------------------------
-    def draw(self, car: int) -> None:
+    def draw(self, car: int, backwards: bool = False) -> None:
         """Start `car`'s bots again for a new episode (placed anew every episode, as
-        simapp does, which also restarts their lane-change timers)."""
+        simapp does, which also restarts their lane-change timers); with `backwards` they
+        drive the reversed track's lanes, the car's way round (simapp rebuilds its bots'
+        lanes on the reversed track)."""
+        if self._turn(car, backwards) and backwards and self._table_backwards is None:
+            self._table_backwards = _LaneTable(self.lanes_of(car))
         s, k, rng = self.settings, self.count, self._rng
         end = self.length - CLEAR_BEFORE_LINE
         start = np.linspace(s.min_distance, end, k)
@@ -158,7 +163,8 @@ class BotField(ObjectField):
     def _place_one(self, clock: float) -> None:
         """`_place` for car 0 alone, bot by bot in plain floats; the same numbers."""
         self.placed += 1
-        at, rows, length = self._table.at_list, self._table.rows, self.length
+        table = self._table_of(0)
+        at, rows, length = table.at_list, table.rows, self.length
         last = len(at) - 2
         speed, across = self.settings.speed, self.settings.lane_change_distance
         starts, outer = self.start[0].tolist(), self.outer[0].tolist()
@@ -217,6 +223,12 @@ class BotField(ObjectField):
         self._next_change_end = float(self.change_end[0].min())
 
     # --- where they are ------------------------------------------------------------------
+    def _table_of(self, car: int) -> _LaneTable:
+        if self.backwards[car]:
+            assert self._table_backwards is not None
+            return self._table_backwards
+        return self._table
+
     def _centre_distance(self, cars: slice | NDArray[np.intp], clock: FloatArray) -> FloatArray:
         return np.asarray((self.start[cars] + clock * self.settings.speed) % self.length)
 
@@ -227,7 +239,15 @@ class BotField(ObjectField):
         rows: slice | NDArray[np.intp] = slice(None) if len(cars) == len(self.clock) else cars
         clock = self.clock[rows][:, None]
         d = self._centre_distance(rows, clock)
-        entries = self._table.lookup(d)  # (cars, bots, [inner x, y, cos, sin, offset, outer ...])
+        # (cars, bots, [inner x, y, cos, sin, offset, outer ...]), each car its way round.
+        backwards = self.backwards[rows]
+        if not backwards.any():
+            entries = self._table.lookup(d)
+        else:
+            assert self._table_backwards is not None
+            entries = np.empty((*d.shape, 10))
+            entries[~backwards] = self._table.lookup(d[~backwards])
+            entries[backwards] = self._table_backwards.lookup(d[backwards])
         outer = self.outer[rows][..., None]
         here = np.where(outer, entries[..., 5:], entries[..., :5])
         x, y, offset = here[..., 0], here[..., 1], here[..., 4]
@@ -263,7 +283,10 @@ class BotField(ObjectField):
             return np.zeros(len(x), dtype=bool)
         half = self.length / 2.0
         bot_front = self.distance + _FRONT
-        ahead = (bot_front - np.asarray(s)[:, None] + half) % self.length - half > 0.0
+        mine = np.asarray(s, dtype=np.float64)
+        if self.backwards.any():  # each car's distance its own way round, as its bots'
+            mine = np.where(self.backwards, (self.length - mine) % self.length, mine)
+        ahead = (bot_front - mine[:, None] + half) % self.length - half > 0.0
         crashed = (hits & ahead).any(axis=1)
         self.after_crash(np.asarray((hits & ~ahead).any(axis=1) & ~crashed))
         return np.asarray(crashed)

@@ -90,11 +90,18 @@ class ObjectField:
         self, track: Track, count: int, cars: int, shape: ObjectShape, *, seed: int = 0
     ) -> None:
         self.shape = shape
+        self._track = track
         self.lanes = Lanes.of(track)
+        self._lanes_backwards: Lanes | None = None  # built when a car first drives backwards
         # simapp: left of centre = inside the inner half of the road XOR the track turning
         # clockwise (the inner border is on the right then).
         self._inner_is_left = track.direction == "counter-clockwise"
         self.length = self.lanes.centre.total_length
+        # Cars driving the track against its rows this episode (ALTERNATE_DRIVING_DIRECTION):
+        # simapp reverses the track for the episode, so the car's objects stand, drive and
+        # are measured along the reversed lines; distances, lanes and sides here are each
+        # car's own way round.
+        self.backwards = np.zeros(cars, dtype=bool)
         self.count = count
         self._rng = np.random.default_rng(seed)
         k = count
@@ -111,8 +118,9 @@ class ObjectField:
         self._solids: tuple[tuple[int, bytes], Solids] | None = None
 
     # --- what subclasses do ------------------------------------------------------------
-    def draw(self, car: int) -> None:
-        """Place `car`'s objects for its next episode."""
+    def draw(self, car: int, backwards: bool = False) -> None:
+        """Place `car`'s objects for its next episode, which it drives the track's way
+        round or `backwards`."""
         raise NotImplementedError
 
     def advance(self, seconds: float) -> None:
@@ -130,6 +138,35 @@ class ObjectField:
         return None
 
     # --- shared --------------------------------------------------------------------------
+    def lanes_of(self, car: int) -> Lanes:
+        """The lanes as `car` drives them this episode."""
+        if not self.backwards[car]:
+            return self.lanes
+        if self._lanes_backwards is None:
+            self._lanes_backwards = Lanes.of(self._track.reversed())
+        return self._lanes_backwards
+
+    def inner_is_left(self, car: int) -> bool:
+        """Whether the inner lane is on `car`'s left this episode."""
+        return self._inner_is_left != bool(self.backwards[car])
+
+    def car_distance(self, car: int, s: float) -> float:
+        """A centre-line distance along the track's rows as `car` measures it this episode
+        (from the reversed line's first point when it drives backwards)."""
+        return (self.length - s) % self.length if self.backwards[car] else s
+
+    def _gap(self, car: int, i: int, distance: float) -> float:
+        """How far object `i` of `car` is ahead of `distance` along the track (negative:
+        behind), the shorter way round."""
+        half = self.length / 2.0
+        return float((self.distance[car, i] - distance + half) % self.length - half)
+
+    def _turn(self, car: int, backwards: bool) -> bool:
+        """Set `car`'s way round for its next episode; True when it changed."""
+        changed = bool(self.backwards[car]) != backwards
+        self.backwards[car] = backwards
+        return changed
+
     def solids(self, cars: NDArray[np.intp]) -> Solids:
         """`cars`' objects as the camera draws them (rows in `cars`' order)."""
         from sim import camera_scene as scene
@@ -161,18 +198,22 @@ class ObjectField:
         self.x[car, i], self.y[car, i] = pose.x, pose.y
         self.heading[car, i] = pose.heading
         self.distance[car, i] = pose.distance
-        self.left[car, i] = (pose.lane is Lane.INNER) == self._inner_is_left
+        self.left[car, i] = (pose.lane is Lane.INNER) == self.inner_is_left(car)
         _, _, foot = self.lanes.centre.project(np.array([[pose.x, pose.y]]))
         self.from_centre[car, i] = math.hypot(pose.x - foot[0, 0], pose.y - foot[0, 1])
 
-    def start_lane(self, car: int, s: float) -> Lane | None:
-        """The lane a car starting at `s` takes: the other one than an object of its within
-        1 m along the track (simapp's `_get_car_start_model_state`), or None (the centre)."""
+    def start_pose(self, car: int, s: float) -> ObjectPose | None:
+        """Where a car starting at centre-line distance `s` (along the track's rows) stands:
+        in the other lane than an object of its within 1 m along the track (simapp's
+        `_get_car_start_model_state`), facing its way round; None: on the centre line."""
+        mine = self.car_distance(car, s)
         for i in range(self.count):
-            gap = (self.distance[car, i] - s + self.length / 2.0) % self.length - self.length / 2.0
+            gap = (
+                self.distance[car, i] - mine + self.length / 2.0
+            ) % self.length - self.length / 2.0
             if abs(gap) <= START_CLEARANCE:
-                inner = self.left[car, i] == self._inner_is_left
-                return Lane.OUTER if inner else Lane.INNER
+                inner = self.left[car, i] == self.inner_is_left(car)
+                return self.lanes_of(car).pose(mine, Lane.OUTER if inner else Lane.INNER)
         return None
 
     def hits(
@@ -308,6 +349,8 @@ class ObjectField:
         change them); per car, `ahead_s` is its look-ahead point's distance along the centre
         line, (`ahead_x`, `ahead_y`) the point, `heading_deg` its heading."""
         k = self.count
+        if self.backwards.any():  # their look-ahead points' distances their own way round
+            ahead_s = [self.car_distance(car, s) for car, s in enumerate(ahead_s)]
         xs, ys = self.x.tolist(), self.y.tolist()
         distances, left = self.distance.tolist(), self.left.tolist()
         from_centre = self.from_centre.tolist()
@@ -348,7 +391,7 @@ class StandingField(ObjectField):
         self.drawn[0] = True
         self.placed = 1
 
-    def draw(self, car: int) -> None:
+    def draw(self, car: int, backwards: bool = False) -> None:
         """They stay where they were seen."""
 
 
@@ -365,11 +408,15 @@ class ObstacleField(ObjectField):
         for car in range(cars):
             self.draw(car)
 
-    def draw(self, car: int) -> None:
-        """The boxes of `car`'s next episode: the same ones unless the race randomises them."""
-        if self.drawn[car] and not self.settings.randomize:
+    def draw(self, car: int, backwards: bool = False) -> None:
+        """The boxes of `car`'s next episode: the same ones unless the race randomises them
+        (or the car turns round: they stand along its way round, as simapp places them on
+        the reversed track)."""
+        turned = self._turn(car, backwards)
+        if self.drawn[car] and not self.settings.randomize and not turned:
             return
-        for i, pose in enumerate(obstacle_poses(self.settings, self.lanes, self._rng)):
+        lanes = self.lanes_of(car)
+        for i, pose in enumerate(obstacle_poses(self.settings, lanes, self._rng)):
             self._set(car, i, pose)
         self.drawn[car] = True
         self.placed += 1
@@ -379,16 +426,19 @@ class ObstacleField(ObjectField):
         the box nearest its centre-line distance `s` (within `CLOSEST_GAP`), in the other
         lane, facing along it (simapp's crash reset); None when no box is that close."""
         best, best_gap = None, CLOSEST_GAP
+        mine = self.car_distance(car, s)
         for i in range(self.count):
-            gap = (self.distance[car, i] - s + self.length / 2.0) % self.length - self.length / 2.0
+            gap = (
+                self.distance[car, i] - mine + self.length / 2.0
+            ) % self.length - self.length / 2.0
             if abs(gap) <= best_gap:
                 best, best_gap = i, abs(gap)
         if best is None:
             return None
-        inner = self.left[car, best] == self._inner_is_left
+        inner = self.left[car, best] == self.inner_is_left(car)
         lane = Lane.OUTER if inner else Lane.INNER
         behind = (self.distance[car, best] - RESET_BEHIND) % self.length
-        return self.lanes.pose(float(behind), lane)
+        return self.lanes_of(car).pose(float(behind), lane)
 
 
 def _in_camera(dx: float, dy: float, heading_deg: float) -> bool:
