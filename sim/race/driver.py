@@ -77,9 +77,11 @@ class ReferenceRaceDriver:
         del sim  # stateless
 
     def act(self, sim: TrackSimulation) -> DriverAction:
-        if sim.n == 1:
-            steering_one, speed_one = self._act_one(sim)
-            steering, speed = np.array([steering_one]), np.array([speed_one])
+        if sim.n == 1 or sim.objects is not None:
+            # One car, or cars among objects (trials): car by car, each round its objects.
+            pairs = [self._act_one(sim, car) for car in range(sim.n)]
+            steering = np.array([pair[0] for pair in pairs])
+            speed = np.array([pair[1] for pair in pairs])
         else:
             steering, speed = self._driver.act(sim)
         return DriverAction(
@@ -88,28 +90,28 @@ class ReferenceRaceDriver:
             action_index=np.full(sim.n, -1, dtype=np.int64),
         )
 
-    def _act_one(self, sim: TrackSimulation) -> tuple[float, float]:
-        """`ReferenceDriver.act` for one car: pure pursuit on the racing line from where the
-        steering's lag will have taken the car, speed planned for where the car will be once
-        the motor has responded (same formulas)."""
+    def _act_one(self, sim: TrackSimulation, index: int = 0) -> tuple[float, float]:
+        """`ReferenceDriver.act` for car `index`: pure pursuit on the racing line from where
+        the steering's lag will have taken the car, speed planned for where the car will be
+        once the motor has responded (same formulas), and round its objects."""
         fleet = sim.fleet
         car, line = self._car, self._line
         lead = car.steering_time_constant
-        speed_now, yaw_rate = float(fleet.speed[0]), float(fleet.yaw_rate[0])
-        yaw_now = float(fleet.yaw[0])
+        speed_now, yaw_rate = float(fleet.speed[index]), float(fleet.yaw_rate[index])
+        yaw_now = float(fleet.yaw[index])
         middle = yaw_now + yaw_rate * (0.5 * lead)
-        x = float(fleet.x[0]) + speed_now * lead * math.cos(middle)
-        y = float(fleet.y[0]) + speed_now * lead * math.sin(middle)
+        x = float(fleet.x[index]) + speed_now * lead * math.cos(middle)
+        y = float(fleet.y[index]) + speed_now * lead * math.sin(middle)
         yaw = yaw_now + yaw_rate * lead
         cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
         half_base = car.wheelbase / 2.0
         rear_x, rear_y = x - half_base * cos_yaw, y - half_base * sin_yaw
         seg, t, _, _ = line.project(x, y)
         s_here = line.arc_length(seg, t)
-        speed = max(float(fleet.speed[0]), 0.3)
+        speed = max(speed_now, 0.3)
         reach = 0.25 + 0.12 * speed
         target_x, target_y = line.point_at(s_here + reach)
-        avoid = None if sim.objects is None else _way_round(sim, reach, speed)
+        avoid = None if sim.objects is None else _way_round(sim, reach, speed, index)
         if avoid is not None:
             target_x, target_y, slow_to = avoid
         dx, dy = target_x - rear_x, target_y - rear_y
@@ -147,27 +149,28 @@ _PASSING_SPEED = 2.2
 
 
 def _way_round(
-    sim: TrackSimulation, reach: float, speed: float
+    sim: TrackSimulation, reach: float, speed: float, car: int = 0
 ) -> tuple[float, float, float] | None:
     """Where to aim (x, y) and how fast to go at most while getting round the nearest of
-    car 0's objects ahead, or None when none is in the way: a target `reach` metres on along
+    `car`'s objects ahead, or None when none is in the way: a target `reach` metres on along
     the centre line, beside it on the other side of the object, far enough to clear it. A
-    bot car it cannot pass in time it follows at the bot's speed."""
+    bot car it cannot pass in time it follows at the bot's speed. (Races and trials drive
+    the track's way round: objects' distances are along its rows.)"""
     field = sim.objects
     assert field is not None
     length = field.length
-    s_car = float(sim.s[0])
+    s_car = float(sim.s[car])
     horizon = _LOOK_FOR_OBJECTS + speed
     nearest, nearest_gap = -1, math.inf
-    for i, d in enumerate(field.distance[0].tolist()):
+    for i, d in enumerate(field.distance[car].tolist()):
         gap = (d - s_car + length / 2.0) % length - length / 2.0
         if -_PAST_OBJECT < gap < horizon and gap < nearest_gap:
             nearest, nearest_gap = i, gap
     if nearest < 0:
         return None
-    side = 1.0 if field.left[0, nearest] else -1.0
-    offset = side * float(field.from_centre[0, nearest])
-    width = float(sim.track_width[0])
+    side = 1.0 if field.left[car, nearest] else -1.0
+    offset = side * float(field.from_centre[car, nearest])
+    width = float(sim.track_width[car])
     room = width / 2.0 - _BORDER_MARGIN
     # The side with more road: away from the object's side of the centre line.
     wanted = offset - side * _PASS_CLEARANCE

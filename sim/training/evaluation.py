@@ -236,9 +236,17 @@ def run_trials(
     for index, (offset, yaw_error) in enumerate(start_poses(trials, seed)):
         if index == 0:
             continue
-        sim.place(index, 0.0, offset)
-        yaw = float(sim.fleet.yaw[index]) + math.radians(yaw_error)
-        sim.put(index, float(sim.fleet.x[index]), float(sim.fleet.y[index]), yaw)
+        fleet = sim.fleet
+        if sim.objects is None:
+            sim.place(index, 0.0, offset)
+        else:
+            # The start may be in a lane, clear of a box by the line (simapp's start
+            # beside an object): the trial's offset is from there, not the centre line.
+            yaw = float(fleet.yaw[index])
+            x = float(fleet.x[index]) - math.sin(yaw) * offset
+            sim.put(index, x, float(fleet.y[index]) + math.cos(yaw) * offset, yaw)
+        yaw = float(fleet.yaw[index]) + math.radians(yaw_error)
+        sim.put(index, float(fleet.x[index]), float(fleet.y[index]), yaw)
     driver.reset(sim)
     resetter = TrialResets(track, trials, resets)
     length = track.length

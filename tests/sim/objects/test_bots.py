@@ -10,11 +10,13 @@ import numpy as np
 import pytest
 
 from sim.objects.settings import BotSettings, RaceSettings, RaceType
+from sim.race.driver import reference_driver
 from sim.race.engine import race_ticks, run_race
 from sim.race.result import RaceResult
 from sim.race.rules import preset_rules
 from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.track_catalog import resolve_track
+from sim.training.evaluation import run_trials
 
 TRACK = "reinvent_base"
 
@@ -133,6 +135,20 @@ def test_the_reference_driver_finishes_laps_among_objects(preset: str) -> None:
     back = RaceResult.from_json(result.to_json())
     assert back.rules == rules
     assert [lap.crashes for lap in back.laps] == [lap.crashes for lap in result.laps]
+
+
+@pytest.mark.parametrize("preset", ["object-avoidance", "head-to-bot"])
+@pytest.mark.parametrize("track_name", [TRACK, "reInvent2019_track"])
+def test_the_reference_driver_finishes_every_trial_among_objects(
+    preset: str, track_name: str
+) -> None:
+    # Five cars side by side, each among its own objects; the trials' start jitter is taken
+    # from where the car starts (in the other lane than a box by the line), so no trial
+    # starts inside a box's crash zone. Before, trials 2-5 among boxes crashed at once.
+    track = resolve_track(track_name)
+    race = preset_rules(preset).race_settings
+    results = run_trials(reference_driver(track), track, 5, race=race, seed=1)
+    assert [r.status for r in results] == [str(EpisodeStatus.LAP_COMPLETE)] * 5
 
 
 def test_a_crash_in_a_race_costs_the_collision_penalty_and_is_counted_in_its_lap() -> None:
