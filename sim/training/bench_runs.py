@@ -36,9 +36,10 @@ class Trained:
     evaluations: list[tuple[float, int, int]] = field(default_factory=list)
 
 
-def train_model(model: str, minutes: float, extra: Sequence[str] = ()) -> Trained:
+def train_model(model: str, minutes: float, extra: Sequence[str] = ("--processes", "1")) -> Trained:
     """Train garage model `model` for `minutes` in a child process, as the app does
-    (`extra`: more of the child's options)."""
+    (`extra`: more of the child's options). A benchmark's training takes one core unless
+    it says otherwise, whatever the machine has (the figures' targets are per core)."""
     from sim.training import events
     from sim.training.launcher import TrainingProcess
 
