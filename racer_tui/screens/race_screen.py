@@ -263,6 +263,8 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             ghost=ghost_xy,
             offtracks=np.array(self._offtrack_xy).reshape(-1, 2),
             objects=tick.objects,
+            # A head-to-bot race's objects are bot cars, drawn pointing where they drive.
+            objects_are_cars=self.setup.rules.race_type is RaceType.HEAD_TO_BOT,
         )
         self.frames += 1
         self._update_panel()

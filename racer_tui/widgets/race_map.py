@@ -29,7 +29,9 @@ _ARROWS = "→↗↑↖←↙↓↘"
 _GHOST = "◆"
 _OFFTRACK = "✕"
 _START = "┃"
-_OBJECT = "■"  # a box or a bot car
+_OBJECT = "■"  # a box
+# A bot car, pointing where it drives (the same steps as the car's arrows).
+_BOT_CARS = "▸◥▴◤◂◣▾◢"
 
 
 @dataclass(frozen=True)
@@ -127,6 +129,7 @@ class RaceMap(Widget):
         self._ghost: tuple[float, float] | None = None
         self._offtracks: FloatArray = np.zeros((0, 2))
         self._objects: tuple[tuple[float, float, float], ...] = ()
+        self._objects_are_cars = False
         self._marks: dict[tuple[int, int], tuple[str, str]] = {}  # (col,row) -> glyph, class
         self._rows: list[Strip | None] = []
         self.frames_drawn = 0  # rows of the car repainted: one per displayed frame
@@ -152,12 +155,15 @@ class RaceMap(Widget):
         ghost: tuple[float, float] | None = None,
         offtracks: FloatArray | None = None,
         objects: tuple[tuple[float, float, float], ...] = (),
+        *,
+        objects_are_cars: bool = False,
     ) -> None:
-        """Move the car and overlays (`objects`: the race's boxes or bot cars, x, y and
-        heading each); repaints only the rows that change."""
+        """Move the car and overlays (`objects`: the race's boxes or, `objects_are_cars`,
+        bot cars: x, y and heading in degrees each); repaints only the rows that change."""
         self._car = car
         self._ghost = ghost
         self._objects = objects
+        self._objects_are_cars = objects_are_cars
         if trail is not None:
             self._trail_world = np.asarray(trail, dtype=np.float64).reshape(-1, 2)
         if offtracks is not None:
@@ -208,8 +214,11 @@ class RaceMap(Widget):
             return marks
         for x, y in self._offtracks:
             marks[projection.cell(float(x), float(y))] = (_OFFTRACK, "race-map--offtrack")
-        for x, y, _ in self._objects:
-            marks[projection.cell(x, y)] = (_OBJECT, "race-map--object")
+        for x, y, heading in self._objects:
+            glyph = _OBJECT
+            if self._objects_are_cars:
+                glyph = _BOT_CARS[round((heading % 360.0) / 45.0) % 8]
+            marks[projection.cell(x, y)] = (glyph, "race-map--object")
         if self._ghost is not None:
             marks[projection.cell(*self._ghost)] = (_GHOST, "race-map--ghost")
         car = self._car

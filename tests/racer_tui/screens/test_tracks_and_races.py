@@ -214,3 +214,27 @@ async def test_a_race_among_boxes_is_chosen_in_the_races_screen_and_drawn() -> N
         assert painted(race.query_one(RaceMap)).count("■") >= 2
         await pilot.press("escape")
         assert race.result is not None and race.result.valid_laps > 0
+
+
+async def test_a_head_to_bot_race_draws_its_bot_cars_pointing_where_they_drive() -> None:
+    from racer_tui.widgets.race_map import RaceMap
+    from sim.objects.settings import RaceType
+
+    app = create_app(start="races")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        races = app.screen
+        assert isinstance(races, RacesScreen)
+        races.query_one("#race-type", Select).value = "head-to-bot"
+        races.query_one("#race-window", Select).value = 60.0
+        await pilot.pause()
+        await pilot.press("s")
+        race = app.screen
+        assert isinstance(race, RaceScreen)
+        assert race.setup.rules.race_type is RaceType.HEAD_TO_BOT
+        await settle(pilot)
+        drawn = painted(race.query_one(RaceMap))
+        # Bot cars are not boxes: each a triangle pointing its way round the track.
+        assert sum(drawn.count(glyph) for glyph in "▸◥▴◤◂◣▾◢") >= 2
+        assert "■" not in drawn
+        await pilot.press("escape")
