@@ -10,8 +10,10 @@ object's rectangle (for a box, the box and 0.1 m more), no distance threshold.
 The params follow simapp's `get_object_reward_params`: objects in their own order (not
 sorted), `objects_distance` in metres along the centre line from its first waypoint,
 `closest_objects` the one behind and the one ahead of the car's look-ahead point along the
-track (wrapping round the lap), headings and speeds 0 for boxes (simapp fills them only
-with bot cars, and then gives every object the bots' speed). `object_in_camera` says whether
+track (wrapping round the lap), both measured the car's own way round (a car driving
+backwards this episode measures along the reversed lines, from their first point),
+headings and speeds 0 for boxes (simapp fills them only with bot cars, and then gives every
+object the bots' speed). `object_in_camera` says whether
 the next object is inside the camera's field of view; simapp compares against the object
 before it (an off-by-one in its camera check), which racer-tui does not copy.
 """
@@ -208,10 +210,7 @@ class ObjectField:
         `_get_car_start_model_state`), facing its way round; None: on the centre line."""
         mine = self.car_distance(car, s)
         for i in range(self.count):
-            gap = (
-                self.distance[car, i] - mine + self.length / 2.0
-            ) % self.length - self.length / 2.0
-            if abs(gap) <= START_CLEARANCE:
+            if abs(self._gap(car, i, mine)) <= START_CLEARANCE:
                 inner = self.left[car, i] == self.inner_is_left(car)
                 return self.lanes_of(car).pose(mine, Lane.OUTER if inner else Lane.INNER)
         return None
@@ -428,9 +427,7 @@ class ObstacleField(ObjectField):
         best, best_gap = None, CLOSEST_GAP
         mine = self.car_distance(car, s)
         for i in range(self.count):
-            gap = (
-                self.distance[car, i] - mine + self.length / 2.0
-            ) % self.length - self.length / 2.0
+            gap = self._gap(car, i, mine)
             if abs(gap) <= best_gap:
                 best, best_gap = i, abs(gap)
         if best is None:

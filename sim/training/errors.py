@@ -16,10 +16,10 @@ def describe_failure(error: BaseException) -> str:
     from sim.garage.folder import ModelError
     from sim.reward_function import RewardFunctionError
     from sim.track_errors import TrackError
+    from sim.training.fleet_parts import PartError
 
-    if isinstance(
-        error, ModelError | PolicyError | DeepRacerFileError | RewardFunctionError | TrackError
-    ):
+    said = ModelError | PolicyError | DeepRacerFileError | RewardFunctionError | TrackError
+    if isinstance(error, said | PartError):
         return str(error)
     return f"racer-tui failed unexpectedly ({type(error).__name__}: {error}); please report it."
 

@@ -12,6 +12,8 @@ import contextlib
 import os
 import pickle
 import signal
+import sys
+import traceback
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -31,9 +33,15 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
+# More processes than this stop paying before the cores run out: every step waits for the
+# slowest part and the learner's share grows (sim.training.shards).
+MOST_DEFAULT_PROCESSES = 8
+
+
 def default_processes() -> int:
-    """Simulation processes for a training: the cores less one, left for the app."""
-    return max(1, usable_cores() - 1)
+    """Simulation processes for a training: the cores less one, left for the app (at most
+    MOST_DEFAULT_PROCESSES; `--processes` asks for more)."""
+    return max(1, min(usable_cores() - 1, MOST_DEFAULT_PROCESSES))
 
 
 @dataclass(frozen=True)
@@ -94,7 +102,8 @@ class PartStep:
 
 
 class PartError(RuntimeError):
-    """A simulation process failed in a way that could not be sent as its own error."""
+    """A simulation process failed in a way that could not be sent as its own error, or
+    ended; `str()` is one sentence for the racer."""
 
 
 def serve_part(connection: Connection, setup: PartSetup) -> None:
@@ -103,12 +112,17 @@ def serve_part(connection: Connection, setup: PartSetup) -> None:
     # Ctrl+C in a terminal reaches the whole process group: the trainer decides when its
     # parts stop, and closes them.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # The process inherits the trainer's stdout, which may be the training's event stream:
+    # what a reward function prints goes to stderr instead, never between two events.
+    sys.stdout.flush()
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
     try:
         batch, recorder = _build_part(connection, setup)
+        connection.send(("ready", None))
     except BaseException as error:
         _send_error(connection, error)
         return
-    connection.send(("ready", None))
     while True:
         try:
             kind, value = connection.recv()
@@ -138,12 +152,18 @@ def _build_part(
         limit = reward_limit.install(setup.reward_seconds)
 
         def stuck(seconds: float) -> None:
-            # From the watchdog thread while the main thread is stuck in racer code.
+            # From the watchdog thread while the main thread is stuck in racer code: said
+            # as the one-process training says it (sim.training.worker).
+            from sim.reward_function import RewardFunctionError
+
+            folder = ModelFolder(Path(setup.folder))
             _send_error(
                 connection,
-                PartError(
-                    f"the reward function did not return within {seconds:g} s and would "
-                    "not be stopped (does it catch every exception?); make it return faster"
+                RewardFunctionError(
+                    folder.reward_file,
+                    f"reward_function did not return within {seconds:g} s and would not "
+                    "be stopped (does it catch every exception?)",
+                    advice="make it return faster",
                 ),
             )
             os._exit(1)
@@ -162,7 +182,10 @@ def _build_part(
 
 
 def _send_error(connection: Connection, error: BaseException) -> None:
-    """Send the error itself when it pickles, else its words; the trainer raises it."""
+    """Send the error itself when it pickles, else its words; the trainer raises it. Its
+    traceback goes to stderr (the training's log), where only a fault of racer-tui's needs
+    it."""
+    traceback.print_exception(error)
     try:
         pickle.loads(pickle.dumps(error))
         sent: BaseException = error

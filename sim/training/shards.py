@@ -9,9 +9,10 @@ the others' observations, rewards and ended episodes (`sim.training.step_record`
 cars' order, so the learner and the training log see one fleet:
 
 - a part's cars start where the same cars of one whole fleet would (`first_car`,
-  `fleet_cars`), so with the same actions a split fleet steps exactly as the whole one;
+  `fleet_cars`), so with the same actions a split fleet of a time trial without camera
+  randomisation steps, and is logged, exactly as the whole one;
 - its boxes and bots, and its camera draws, are seeded from its first car, so the parts
-  meet different ones;
+  meet different ones (and a split fleet among them is not the whole one's draw);
 - episodes are numbered, metered and traced by the trainer's one `Logbook`.
 
 Where it stops scaling: every step waits for the slowest part (parts are kept even), the
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
+from collections.abc import Callable
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
@@ -43,7 +45,7 @@ from sim.training.fleet_parts import (
     serve_part,
     split_fleet,
 )
-from sim.training.step_record import StepRecorder
+from sim.training.step_record import EndedEpisode, StepRecorder
 from sim.training.vec_env import FleetVecEnv, sb3_infos
 
 JOIN_SECONDS = 5.0
@@ -64,7 +66,7 @@ class ShardedVecEnv(FleetVecEnv):
         processes: int,
         *,
         seed: int | None = None,
-        on_step: Any = None,
+        on_step: Callable[[list[EndedEpisode]], None] | None = None,
         reward_seconds: float | None = None,
     ) -> None:
         self.config = config

@@ -29,7 +29,6 @@ import torch
 
 from sim import reward_limit
 from sim.atomic import write_text_atomic
-from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, ModelFolder
 from sim.observations import SensorOptions
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
@@ -39,9 +38,9 @@ from sim.track import Track
 from sim.training import events
 from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
-from sim.training.errors import PolicyError, describe_failure, failure_remedy
+from sim.training.errors import describe_failure, failure_remedy
 from sim.training.evaluation import EvaluationReport, run_trials
-from sim.training.fleet_parts import default_processes
+from sim.training.fleet_parts import PartError, usable_cores
 from sim.training.logbook import Logbook
 from sim.training.policy import (
     PolicyDriver,
@@ -68,9 +67,9 @@ class RunOptions:
 
     minutes: float | None = None  # None: training_params.yaml's MAX_MINUTES
     cars: int | None = None  # per process; None: by sensor (see `default_cars`)
-    # Processes that step the cars (sim.training.shards), and threads of the PPO update;
-    # None: the cores less one.
-    processes: int | None = None
+    # Processes that step the cars (sim.training.shards), and threads of the PPO update
+    # (the training child's default is the cores less one: `default_processes`).
+    processes: int = 1
     seed: int | None = None
     checkpoint_seconds: float = 10.0
     evaluation_seconds: float = 5.0  # least time between evaluations
@@ -128,7 +127,7 @@ class Trainer:
         except ValueError as error:
             raise ModelError(f"{folder.hyperparameters_file}: {error}") from None
         self.config = folder_training_config(folder)
-        self.processes = self.options.processes or default_processes()
+        self.processes = self.options.processes
         if self.processes < 1:
             raise ModelError(f"a training needs at least 1 process, not {self.processes}.")
         # Each process steps a fleet's worth of cars: a part steps little faster with fewer
@@ -151,11 +150,12 @@ class Trainer:
         """Train; always ends with a checkpoint, a policy file and the training state."""
         try:
             resumed_from = self._setup()
-        except (ModelError, PolicyError, DeepRacerFileError) as error:
+        except Exception as error:  # a simulation process's own error too
             if hasattr(self, "env"):
                 self.env.close()
-            self._write_state("failed", str(error), error)
-            return self._ended("failed", str(error), error)
+            message = describe_failure(error)
+            self._write_state("failed", message, error)
+            return self._ended("failed", message, error)
         self._clock0 = time.monotonic()  # the time limit counts training, not start-up
         self._write_state("running", "training")
         self.emit(
@@ -175,17 +175,18 @@ class Trainer:
         kind, message = "finished", "the time limit was reached"
         failure: Exception | None = None
         try:
-            self._loop()
-            if self.should_stop():
-                kind, message = "stopped", "training was stopped"
-        except Exception as error:
-            kind, message, failure = "failed", describe_failure(error), error
-        try:
-            self._finish()
-        except Exception as error:  # the folder stays consistent; say what went wrong
-            kind, message, failure = "failed", describe_failure(error), error
+            try:
+                self._loop()
+                if self.should_stop():
+                    kind, message = "stopped", "training was stopped"
+            except Exception as error:
+                kind, message, failure = "failed", describe_failure(error), error
+            try:
+                self._finish()
+            except Exception as error:  # the folder stays consistent; say what went wrong
+                kind, message, failure = "failed", describe_failure(error), error
         finally:
-            self.env.close()  # the simulation processes end with the run
+            self.env.close()  # the simulation processes end with the run, however it ends
         self._write_state(kind, message, failure)
         return self._ended(kind, message, failure)
 
@@ -208,7 +209,8 @@ class Trainer:
             self.settings,
             max_samples=self.max_samples,
             seed=self.options.seed,
-            update_threads=self.processes,
+            # Never more threads than cores: more would only take turns.
+            update_threads=min(self.processes, usable_cores()),
         )
         self.network = self.model.network
         resumed_from = self._restore()
@@ -236,10 +238,17 @@ class Trainer:
             on_step=self.logbook.add_step,
             reward_seconds=limit.seconds if limit is not None else None,
         )
-        for pid in sharded.pids:
-            process = psutil.Process(pid)
-            process.cpu_percent(interval=None)
-            self._processes.append(process)
+        try:
+            for pid in sharded.pids:
+                process = psutil.Process(pid)
+                process.cpu_percent(interval=None)
+                self._processes.append(process)
+        except psutil.Error:  # a part ended already: say so as a part's end
+            sharded.close()
+            raise PartError(
+                "a simulation process of this training ended as it started; start the "
+                "training again, with --processes 1 if it keeps happening"
+            ) from None
         return sharded
 
     def _ended(self, kind: str, message: str, failure: BaseException | None = None) -> events.Ended:

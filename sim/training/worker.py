@@ -200,6 +200,7 @@ def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
     from sim.garage.folder import ModelError, open_model
     from sim.reward_function import RewardFunctionError
     from sim.track import TrackError
+    from sim.training.fleet_parts import default_processes
     from sim.training.policy import PolicyError
     from sim.training.trainer import RunOptions, Trainer
 
@@ -214,7 +215,7 @@ def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
         options = RunOptions(
             minutes=args.minutes,
             cars=args.cars,
-            processes=args.processes,
+            processes=default_processes() if args.processes is None else args.processes,
             seed=args.seed,
             checkpoint_seconds=args.checkpoint_seconds,
             evaluation_seconds=args.evaluation_seconds,

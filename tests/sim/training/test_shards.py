@@ -15,6 +15,7 @@ from sim.garage.options import new_model
 from sim.realworld.training import folder_training_config
 from sim.reward_function import RewardFunctionError
 from sim.training import events
+from sim.training.errors import describe_failure
 from sim.training.fleet_parts import FleetPart, PartError, split_fleet
 from sim.training.launcher import TrainingProcess
 from sim.training.logbook import Logbook
@@ -182,3 +183,56 @@ def test_a_simulation_process_that_dies_is_one_sentence_in_the_trainer() -> None
             split.step_wait()
     finally:
         split.close()
+
+
+def test_a_reward_call_stuck_in_a_simulation_process_is_the_racers_sentence() -> None:
+    model = new_model("stuck")
+    good_config = folder_training_config(model)
+    model.reward_file.write_text(
+        "import time\n"
+        "def reward_function(params):\n"
+        "    while True:\n"
+        "        try:\n"
+        "            time.sleep(1)\n"
+        "        except BaseException:\n"
+        "            pass\n",
+        encoding="utf-8",
+    )
+    split = ShardedVecEnv(good_config, model.path, 4, 2, reward_seconds=0.2)
+    try:
+        split.reset()
+        with pytest.raises(RewardFunctionError, match=r"did not return within 0\.2 s") as raised:
+            for _ in range(3):
+                split.step_async(np.zeros(4, dtype=np.int64))
+                split.step_wait()
+        said = describe_failure(raised.value)
+        assert "make it return faster" in said and "please report" not in said
+    finally:
+        split.close()
+
+
+def test_a_simulation_process_ending_is_said_without_blaming_racer_tui() -> None:
+    said = describe_failure(PartError("a simulation process of this training ended"))
+    assert said == "a simulation process of this training ended"
+
+
+def test_what_a_reward_function_prints_in_a_simulation_process_stays_out_of_stdout(
+    capfd: pytest.CaptureFixture[str],
+) -> None:
+    model = new_model("chatty")
+    good_config = folder_training_config(model)
+    model.reward_file.write_text(
+        "def reward_function(params):\n    print('REWARD-CHATTER')\n    return 1.0\n",
+        encoding="utf-8",
+    )
+    split = ShardedVecEnv(good_config, model.path, 4, 2)
+    try:
+        split.reset()
+        for _ in range(5):
+            split.step_async(np.zeros(4, dtype=np.int64))
+            split.step_wait()
+    finally:
+        split.close()  # the process ends, its buffers flushed
+    out, err = capfd.readouterr()
+    assert "REWARD-CHATTER" in err  # the training's event stream is stdout: not there
+    assert "REWARD-CHATTER" not in out
