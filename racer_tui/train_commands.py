@@ -68,7 +68,7 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         "--processes",
         type=int,
         help="processes stepping the cars, each with a fleet of its own, and threads of the "
-        "learning step (default: the cores less one, left for the app)",
+        "learning step (default: the cores less one, left for the app, at most 8)",
     )
     train.add_argument("--json", action="store_true", help="stream the JSON events instead")
 
