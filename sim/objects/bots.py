@@ -240,11 +240,11 @@ class BotField(ObjectField):
         clock = self.clock[rows][:, None]
         d = self._centre_distance(rows, clock)
         # (cars, bots, [inner x, y, cos, sin, offset, outer ...]), each car its way round.
-        backwards = self.backwards[rows]
-        if not backwards.any():
+        if not self.any_backwards:
             entries = self._table.lookup(d)
         else:
             assert self._table_backwards is not None
+            backwards = self.backwards[rows]
             entries = np.empty((*d.shape, 10))
             entries[~backwards] = self._table.lookup(d[~backwards])
             entries[backwards] = self._table_backwards.lookup(d[backwards])
@@ -284,7 +284,7 @@ class BotField(ObjectField):
         half = self.length / 2.0
         bot_front = self.distance + _FRONT
         mine = np.asarray(s, dtype=np.float64)
-        if self.backwards.any():  # each car's distance its own way round, as its bots'
+        if self.any_backwards:  # each car's distance its own way round, as its bots'
             mine = np.where(self.backwards, (self.length - mine) % self.length, mine)
         ahead = (bot_front - mine[:, None] + half) % self.length - half > 0.0
         crashed = (hits & ahead).any(axis=1)

@@ -104,6 +104,9 @@ class ObjectField:
         # are measured along the reversed lines; distances, lanes and sides here are each
         # car's own way round.
         self.backwards = np.zeros(cars, dtype=bool)
+        # Whether any car is: the per-step paths skip the reversed frame in one attribute
+        # read while none is (every race, most trainings).
+        self.any_backwards = False
         self.count = count
         self._rng = np.random.default_rng(seed)
         k = count
@@ -167,6 +170,7 @@ class ObjectField:
         """Set `car`'s way round for its next episode; True when it changed."""
         changed = bool(self.backwards[car]) != backwards
         self.backwards[car] = backwards
+        self.any_backwards = bool(self.backwards.any())
         return changed
 
     def solids(self, cars: NDArray[np.intp]) -> Solids:
@@ -348,7 +352,7 @@ class ObjectField:
         change them); per car, `ahead_s` is its look-ahead point's distance along the centre
         line, (`ahead_x`, `ahead_y`) the point, `heading_deg` its heading."""
         k = self.count
-        if self.backwards.any():  # their look-ahead points' distances their own way round
+        if self.any_backwards:  # their look-ahead points' distances their own way round
             ahead_s = [self.car_distance(car, s) for car, s in enumerate(ahead_s)]
         xs, ys = self.x.tolist(), self.y.tolist()
         distances, left = self.distance.tolist(), self.left.tolist()

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
+from typing import Any
 
+from textual.pilot import Pilot
 from textual.widgets import DataTable, Input, Select
 
 from racer_tui.app import create_app
@@ -192,21 +194,27 @@ async def test_a_track_file_is_imported_from_the_tracks_screen(
         assert screen.track is not None and screen.track.name == "club_oval_2"
 
 
+async def _start_a_minute_race(pilot: Pilot[Any], race_type: str) -> RaceScreen:
+    """From the Races screen, start a one-minute race of `race_type` (its Select value)."""
+    await settle(pilot)
+    races = pilot.app.screen
+    assert isinstance(races, RacesScreen)
+    races.query_one("#race-type", Select).value = race_type
+    races.query_one("#race-window", Select).value = 60.0
+    await pilot.pause()
+    await pilot.press("s")
+    race = pilot.app.screen
+    assert isinstance(race, RaceScreen)
+    return race
+
+
 async def test_a_race_among_boxes_is_chosen_in_the_races_screen_and_drawn() -> None:
     from racer_tui.widgets.race_map import RaceMap
     from sim.objects.settings import RaceType
 
     app = create_app(start="races")
     async with app.run_test(size=(80, 24)) as pilot:
-        await settle(pilot)
-        races = app.screen
-        assert isinstance(races, RacesScreen)
-        races.query_one("#race-type", Select).value = "object-avoidance"
-        races.query_one("#race-window", Select).value = 60.0
-        await pilot.pause()
-        await pilot.press("s")
-        race = app.screen
-        assert isinstance(race, RaceScreen)
+        race = await _start_a_minute_race(pilot, "object-avoidance")
         assert race.setup.rules.race_type is RaceType.OBJECT_AVOIDANCE
         assert race.setup.rules.window_seconds == 60.0
         await settle(pilot)
@@ -222,15 +230,7 @@ async def test_a_head_to_bot_race_draws_its_bot_cars_pointing_where_they_drive()
 
     app = create_app(start="races")
     async with app.run_test(size=(80, 24)) as pilot:
-        await settle(pilot)
-        races = app.screen
-        assert isinstance(races, RacesScreen)
-        races.query_one("#race-type", Select).value = "head-to-bot"
-        races.query_one("#race-window", Select).value = 60.0
-        await pilot.pause()
-        await pilot.press("s")
-        race = app.screen
-        assert isinstance(race, RaceScreen)
+        race = await _start_a_minute_race(pilot, "head-to-bot")
         assert race.setup.rules.race_type is RaceType.HEAD_TO_BOT
         await settle(pilot)
         drawn = painted(race.query_one(RaceMap))

@@ -9,6 +9,7 @@ import math
 import numpy as np
 import pytest
 
+from sim.objects.field import ObjectField
 from sim.objects.settings import BotSettings, Lane, ObstacleSettings, RaceSettings, RaceType
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.track_catalog import resolve_track
@@ -21,6 +22,15 @@ def _boxes(*positions: tuple[float, Lane]) -> RaceSettings:
     return RaceSettings(RaceType.OBJECT_AVOIDANCE, obstacles=ObstacleSettings(positions=positions))
 
 
+def _started(race: RaceSettings, cars: int = 2) -> tuple[TrackSimulation, ObjectField]:
+    """`cars` cars among `race`'s objects, each started (odd cars the other way round)."""
+    sim = TrackSimulation(TRACK, cars, rules=ALTERNATE, race=race)
+    sim.reset_all()
+    field = sim.objects
+    assert field is not None
+    return sim, field
+
+
 def _forward_s(x: float, y: float) -> float:
     """Distance along the track's rows of the centre-line point nearest (x, y)."""
     segment, t, _ = TRACK.centerline.project(np.array([[x, y]]))
@@ -29,13 +39,8 @@ def _forward_s(x: float, y: float) -> float:
 
 def test_boxes_stand_along_the_way_the_car_drives() -> None:
     # Car 1 starts its first episode the other way round (odd cars do, as in training).
-    sim = TrackSimulation(
-        TRACK, 2, rules=ALTERNATE, race=_boxes((0.25, Lane.INNER), (0.6, Lane.OUTER))
-    )
-    sim.reset_all()
+    sim, field = _started(_boxes((0.25, Lane.INNER), (0.6, Lane.OUTER)))
     assert sim.reverse.tolist() == [False, True]
-    field = sim.objects
-    assert field is not None
     length = TRACK.length
     for car in (0, 1):
         # OBJECT_POSITIONS are progress along the car's own way round.
@@ -50,13 +55,7 @@ def test_boxes_stand_along_the_way_the_car_drives() -> None:
 
 
 def test_a_backwards_car_measures_its_objects_its_own_way_round() -> None:
-    sim = TrackSimulation(
-        TRACK,
-        2,
-        rules=ALTERNATE,
-        race=_boxes((0.1, Lane.INNER), (0.4, Lane.OUTER), (0.7, Lane.INNER)),
-    )
-    sim.reset_all()
+    sim, field = _started(_boxes((0.1, Lane.INNER), (0.4, Lane.OUTER), (0.7, Lane.INNER)))
     for _ in range(20):  # both cars drive a little, each its way
         sim.apply(np.zeros(2), np.full(2, 1.0))
     params = sim.all_params()[1]
@@ -65,8 +64,6 @@ def test_a_backwards_car_measures_its_objects_its_own_way_round() -> None:
     )
     # The next object is the first one ahead of the car as it drives: found here from the
     # physical positions along the track's rows, where the backwards car's way is down.
-    field = sim.objects
-    assert field is not None
     car_s = _forward_s(float(sim.ahead[1, 0]), float(sim.ahead[1, 1]))
     behind_car = [
         (car_s - _forward_s(x, y)) % TRACK.length
@@ -77,11 +74,7 @@ def test_a_backwards_car_measures_its_objects_its_own_way_round() -> None:
 
 
 def test_a_backwards_cars_bots_drive_its_way_round() -> None:
-    race = RaceSettings(RaceType.HEAD_TO_BOT, bots=BotSettings(count=2, speed=0.6))
-    sim = TrackSimulation(TRACK, 2, rules=ALTERNATE, race=race)
-    sim.reset_all()
-    field = sim.objects
-    assert field is not None
+    sim, field = _started(RaceSettings(RaceType.HEAD_TO_BOT, bots=BotSettings(count=2, speed=0.6)))
 
     def where() -> list[float]:
         return [_forward_s(x, y) for x, y in zip(field.x[1], field.y[1], strict=True)]
@@ -99,11 +92,7 @@ def test_a_backwards_cars_bots_drive_its_way_round() -> None:
 
 
 def test_a_backwards_car_running_into_its_bot_crashes() -> None:
-    race = RaceSettings(RaceType.HEAD_TO_BOT, bots=BotSettings(count=1, speed=0.3))
-    sim = TrackSimulation(TRACK, 2, rules=ALTERNATE, race=race)
-    sim.reset_all()
-    field = sim.objects
-    assert field is not None
+    sim, field = _started(RaceSettings(RaceType.HEAD_TO_BOT, bots=BotSettings(count=1, speed=0.3)))
     x, y, yaw = float(field.x[1, 0]), float(field.y[1, 0]), float(field.heading[1, 0])
     sim.put(1, x - 0.5 * math.cos(yaw), y - 0.5 * math.sin(yaw), yaw)  # behind it, its way
     for _ in range(30):
@@ -116,10 +105,8 @@ def test_a_backwards_car_running_into_its_bot_crashes() -> None:
 def test_a_backwards_car_starts_in_the_other_lane_than_a_box_by_its_start() -> None:
     # Car 1 of 2 starts half a lap round, backwards: a box 0.3 m on from there, its way.
     ahead = 0.5 + 0.3 / TRACK.length
-    sim = TrackSimulation(TRACK, 2, rules=ALTERNATE, race=_boxes((ahead, Lane.INNER)))
-    sim.reset_all()
-    field = sim.objects
-    assert field is not None and field.backwards[1]
+    sim, field = _started(_boxes((ahead, Lane.INNER)))
+    assert field.backwards[1]
     x, y = float(sim.fleet.x[1]), float(sim.fleet.y[1])
     gap = abs(_forward_s(x, y) - _forward_s(float(field.x[1, 0]), float(field.y[1, 0])))
     assert gap < 1.0
