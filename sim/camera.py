@@ -39,15 +39,44 @@ Float32Array = NDArray[np.float32]
 # `bundle/urdf/deepracer/racecar.gazebo` (horizontal_fov 1.13 rad over 640x480, which
 # `bundle/markov/sensors/sensors_rollout.py` resizes to 160x120) and
 # `bundle/markov/cameras/frustum.py` (horizontal_fov 1.13, camera_pitch 0.2618, and the
-# camera 0.14529 m ahead of and 0.13033 m above base_link in simapp v3's physics: the
-# chain base_link -> chassis -> zed_camera_joint (pitched 0.2618) -> camera_joint of
-# `bundle/urdf/deepracer/deepracer_single_cam.urdf`). base_link lies midway between the
-# axles, as racer-tui's body centre does, and 3 mm below the ground the wheels stand on
-# (wheel centres 0.039 m above it, `meshes/deepracer/*_wheel.STL` 0.036 m in radius).
+# camera 0.14529 m ahead of and 0.13033 m above base_link: the chain base_link -> chassis
+# -> zed_camera_joint (pitched 0.2618) -> camera_joint of
+# `bundle/urdf/deepracer/deepracer_single_cam.urdf`, which every simapp since version 3
+# spawns, `deepracer_kinematics` included).
 DEEPRACER_FOV_RAD = 1.13
-DEEPRACER_PITCH_RAD = 0.2618
-DEEPRACER_MOUNT_FORWARD = 0.1453
-DEEPRACER_MOUNT_HEIGHT = 0.1273
+_URDF_PITCH_RAD = 0.2618
+_URDF_CAMERA = (0.14529, 0.13033)  # (ahead, up) of base_link, in the chassis' frame
+# The car stands on its wheels, and the URDF does not hold its chassis level: the rear
+# axle is 0.038999 m above base_link (base_link_joint 0.023249 + rear wheel joints
+# 0.01575) at 0.081663 m behind it, the front axle 0.035008 m above it (steering hinges
+# 0.011759) at 0.082311 m ahead, and all four wheels are 0.036 m in radius
+# (`meshes/deepracer/*_wheel.STL`). Resting on flat ground the chassis is tipped nose-up
+# by atan(0.003991 / 0.163974), 1.39 degrees, so the camera looks that much less far
+# down than its joint's 0.2618 and sits a little higher. DeepRacer's own frames show it:
+# fitting a pinhole camera to the centre-line dashes of deepracer-utils' `dr-demo-1.png`
+# (dashes 0.0508 m long every 0.1016 m, from `meshes/reinvent/reinvent_base.dae`) gives
+# a pitch of 0.2373 rad.
+_REAR_AXLE = (-0.081663, 0.038999)  # (ahead, up) of base_link
+_FRONT_AXLE = (0.082311, 0.035008)
+_WHEEL_RADIUS = 0.036
+
+
+def _resting_mount() -> tuple[float, float, float]:
+    """(ahead of the body centre, above the ground, pitch down in radians) of DeepRacer's
+    camera on a car at rest on flat ground. racer-tui's body centre is the point of the
+    ground midway between the axles, as base_link is midway between them in the URDF."""
+    (rear_x, rear_z), (front_x, front_z) = _REAR_AXLE, _FRONT_AXLE
+    tilt = math.atan2(rear_z - front_z, front_x - rear_x)  # nose up
+    # The ground line through both wheels' contact points, in the chassis' frame.
+    ground_x, ground_z = (rear_x + front_x) / 2, (rear_z + front_z) / 2 - _WHEEL_RADIUS
+    along = (math.cos(tilt), -math.sin(tilt))  # the ground's direction, ahead
+    up = (math.sin(tilt), math.cos(tilt))  # and its normal
+    dx, dz = _URDF_CAMERA[0] - ground_x, _URDF_CAMERA[1] - ground_z
+    return dx * along[0] + dz * along[1], dx * up[0] + dz * up[1], _URDF_PITCH_RAD - tilt
+
+
+# About 0.1418 m ahead, 0.1328 m up, 0.2375 rad (13.6 degrees) down.
+DEEPRACER_MOUNT_FORWARD, DEEPRACER_MOUNT_HEIGHT, DEEPRACER_PITCH_RAD = _resting_mount()
 
 # Pixels gathered per chunk: about 8 DeepRacer frames, enough that numpy's per-call costs
 # stop mattering (more does not help; fewer costs up to a third more time).
@@ -72,7 +101,7 @@ class CameraSpec:
     fov_deg: float = math.degrees(DEEPRACER_FOV_RAD)  # horizontal, about 64.7
     mount_forward: float = DEEPRACER_MOUNT_FORWARD  # metres ahead of the body centre
     mount_height: float = DEEPRACER_MOUNT_HEIGHT  # metres above the ground
-    pitch_deg: float = math.degrees(DEEPRACER_PITCH_RAD)  # down, 15.0
+    pitch_deg: float = math.degrees(DEEPRACER_PITCH_RAD)  # down, about 13.6
 
     def __post_init__(self) -> None:
         if self.width < 1 or self.height < 1:

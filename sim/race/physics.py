@@ -1,7 +1,7 @@
 """Which simulator's physics produced a lap: lap times of different physics never meet on
 one leaderboard.
 
-racer-tui's own physics is versioned by `sim.car.PHYSICS_VERSION` ("racer-tui/3"); laps
+racer-tui's own physics is versioned by `sim.car.PHYSICS_VERSION` ("racer-tui/4"); laps
 timed by AWS DeepRacer's own simulator (console and DeepRacer-for-Cloud evaluations) are
 "deepracer". Laps of a physical car, timed by a league's timekeeper, are "physical": a real
 track, not a simulator, so they too are ranked apart. Results recorded before physics was
@@ -27,7 +27,7 @@ def is_physics(value: object) -> bool:
 
 
 def describe(physics: str) -> str:
-    """ "DeepRacer's simulator", "racer-tui physics 3"."""
+    """ "DeepRacer's simulator", "racer-tui physics 4"."""
     if physics == DEEPRACER:
         return "DeepRacer's simulator"
     if physics == PHYSICAL:

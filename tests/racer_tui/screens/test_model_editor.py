@@ -335,13 +335,18 @@ async def test_camera_randomisation_is_chosen_in_the_editor_for_camera_models() 
         await settle(pilot)
         assert app.screen is editor
         problem = editor.query_one("#camera-randomisation-problem")
-        problem.scroll_visible(animate=False)
 
         def told() -> str:
             return " ".join(painted(problem).split())
 
-        # The scroll lands on a later refresh, on a loaded machine several frames later.
-        await wait_for(pilot, lambda: "banana" in told())
+        def scrolled_to_and_told() -> bool:
+            # The scroll lands on a later refresh, on a loaded machine several frames
+            # later, and one asked before the problem's layout settled scrolls to where it
+            # was: ask again until the text is painted.
+            problem.scroll_visible(animate=False)
+            return "banana" in told()
+
+        await wait_for(pilot, scrolled_to_and_told)
         assert "Unknown camera randomisation 'banana'" in told()
         editor.query_one("#camera-randomisation", Input).value = "light,noise=0.5"
         await pilot.press("ctrl+s")
