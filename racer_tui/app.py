@@ -30,10 +30,10 @@ from racer_tui.long_running import (
     FREEZE_AFTER_SECONDS,
     IdleCollector,
     favour_the_interface,
-    forget_removed_widgets_styles,
     freeze_long_lived,
     limit_malloc_arenas,
     malloc_trim,
+    memoise_background_styles_by_colour,
 )
 from racer_tui.screens.base import ModelAdded, push_kept
 from racer_tui.screens.coach import CoachScreen
@@ -150,7 +150,8 @@ class RacerTuiApp(App[int]):
         self._stacks_changed_at = 0.0
         self.calm_clock: Callable[[], float] = time.monotonic  # a test moves its own
         self._switching_to_shown_mode = False
-        self.collector = IdleCollector(trim=malloc_trim(), forget=forget_removed_widgets_styles)
+        self.collector = IdleCollector(trim=malloc_trim())
+        memoise_background_styles_by_colour()  # for every app: tests keep many in one process
         if long_running:
             limit_malloc_arenas()  # before the app starts its worker threads
             favour_the_interface()

@@ -33,10 +33,10 @@ So, in the long-running app only:
 - Young collections (generations 0 and 1) run as Python runs them: they are short.
 - Worker threads (a heat's simulation) hand the interpreter back every millisecond, not
   every five (`favour_the_interface`), so a key does not wait behind them.
-- Before an idle collection, Textual's memo of background styles is emptied
-  (`forget_removed_widgets_styles`): it keeps the rendered lines of up to 1,024 widgets long
-  removed, about 20 MB once a league night's first 18 heats have opened and closed their
-  race views.
+- Textual's memo of background styles is keyed on the colours alone
+  (`memoise_background_styles_by_colour`, in every app): Textual's own keeps the rendered
+  lines of up to 1,024 widgets long removed, 8-20 MB, and under steady key presses it
+  filled within a few hundred keys.
 - While input pauses, at most every `TRIM_SECONDS`, the C allocator is asked to give the
   memory it holds free back to the system (`malloc_trim`, glibc only; 0.4-3 ms in an app
   of 250 MB). The app's thread workers (a heat's simulation, a sync) free what they built
@@ -53,8 +53,11 @@ import gc
 import sys
 import time
 from collections.abc import Callable
+from functools import lru_cache
 
 from textual._styles_cache import StylesCache
+from textual.color import Color
+from textual.style import Style
 
 # Seconds after a section's first visit before what it built is frozen out of garbage
 # collection (its data loads in workers first).
@@ -119,17 +122,37 @@ def favour_the_interface() -> None:
     sys.setswitchinterval(SWITCH_INTERVAL_SECONDS)
 
 
-def forget_removed_widgets_styles() -> None:
+# Textual's own, as this module found it (the tests put it back to show the leak).
+TEXTUALS_GET_INNER_OUTER = StylesCache.get_inner_outer
+
+
+def memoise_background_styles_by_colour() -> None:
     """Let removed widgets' rendered lines go.
 
     Textual (8.2.8) memoises `StylesCache.get_inner_outer` with an `lru_cache(1024)` on the
     method, so each entry's key holds the `StylesCache` it was called on (`self`), and with
     it the rendered lines of its widget long after the widget was removed
-    (Textualize/textual#6665, open). Every race view, dialog and table row that is built
-    and dropped adds entries until 1,024 widgets' lines are pinned. Emptying the memo frees
-    them; widgets still on screen refill it with two small styles each as they next render.
-    """
-    StylesCache.get_inner_outer.cache_clear()
+    (Textualize/textual#6665, open). Every footer key, race view, dialog and table row that
+    is built and dropped adds entries until 1,024 widgets' lines are pinned: 8-20 MB, a
+    full memo within a few hundred keys of the soak benchmark. The method never reads
+    `self` (its answer is two styles made from the two colours), so the memo is kept on
+    the colours alone: a handful of entries, and nothing of any widget's.
+    Idempotent; a Textual whose method is no longer memoised is left as it is."""
+    compute = getattr(TEXTUALS_GET_INNER_OUTER, "__wrapped__", None)
+    if compute is None or StylesCache.get_inner_outer is not TEXTUALS_GET_INNER_OUTER:
+        return  # not a memoised method, or already replaced
+
+    @lru_cache(maxsize=1024)
+    def by_colour(base_background: Color, background: Color) -> tuple[Style, Style]:
+        styles: tuple[Style, Style] = compute(None, base_background, background)
+        return styles
+
+    def get_inner_outer(
+        self: StylesCache, base_background: Color, background: Color
+    ) -> tuple[Style, Style]:
+        return by_colour(base_background, background)
+
+    StylesCache.get_inner_outer = get_inner_outer  # type: ignore[method-assign, assignment]
 
 
 class IdleCollector:
@@ -139,13 +162,10 @@ class IdleCollector:
         self,
         clock: Callable[[], float] = time.monotonic,
         trim: Callable[[], object] | None = None,
-        forget: Callable[[], object] | None = None,
     ) -> None:
-        """`trim` returns free memory to the system; `forget` drops memos that would keep
-        garbage alive, just before an idle collection."""
+        """`trim` returns free memory to the system."""
         self._clock = clock
         self._trim = trim
-        self._forget = forget
         self._last_input = clock()
         self._last_sweep = clock()
         self._last_trim = clock()
@@ -200,8 +220,6 @@ class IdleCollector:
             gc.unfreeze()
             self._last_sweep = now
             self.sweeps += 1
-        if self._forget is not None:
-            self._forget()
         gc.collect()
         if sweep:
             gc.freeze()
