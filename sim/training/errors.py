@@ -18,8 +18,10 @@ def describe_failure(error: BaseException) -> str:
     from sim.track_errors import TrackError
     from sim.training.fleet_parts import PartError
 
-    said = ModelError | PolicyError | DeepRacerFileError | RewardFunctionError | TrackError
-    if isinstance(error, said | PartError):
+    racers_words = (
+        ModelError | PolicyError | DeepRacerFileError | RewardFunctionError | TrackError | PartError
+    )
+    if isinstance(error, racers_words):
         return str(error)
     return f"racer-tui failed unexpectedly ({type(error).__name__}: {error}); please report it."
 
