@@ -1,128 +1,260 @@
-"""The key footer of every screen, compact when the terminal is narrow.
+"""The key footer of every screen: one line, drawn by one widget.
 
-Textual's footer pads each key; at 80 columns that pushes half of a section's keys off
-the line. Below `COMPACT_WIDTH` the padding goes, and so does the palette key (the header
-shows it too). Keys that still do not fit are left out by priority rather than cut at the
-edge: a screen's own keys in the order it declares them, and the help key always, since
-the help screen (and the command palette) lists every key.
+Textual's own footer (8.2.8) is a container that builds a widget per key, and builds them
+all again each time the screen's bindings change: on every section switch, every dialog
+opened and closed, every focus move that changes a key. Each key widget, with the two
+style nodes Textual makes for its parts, is some forty objects in reference cycles that
+live until the next change, long enough to reach the oldest generation: in the soak
+benchmark they were most of what every full garbage collection had to free (about 250
+nodes and 20,000 objects every two seconds of key presses), and the footer kept every key
+it had ever shown besides (its `compact` watchers). This footer keeps the keys as data
+and draws them as one line of text: a change of keys is a repaint, not a recompose.
 
-It also stops a leak in Textual's own footer (8.2.8): every time a screen's bindings
-change the footer recomposes, and each new key is bound to the footer's `compact`
-reactive with `data_bind`, which adds a watcher to the footer. Textual drops the watchers
-of removed keys only when `compact` next changes, which at a fixed width is never: the
-footer held every key it ever showed (about 1,700 objects per section switch, and full
-garbage collections that grew to a second over a league night). `tests/racer_tui/
-widgets/test_footer.py` keeps the minimal reproduction.
+What it shows is Textual's footer's: each shown binding of the screen once per action, in
+the screen's order, disabled ones dim, and on the right the command palette's key when
+there is room. Below `COMPACT_WIDTH` the padding goes, and so does the palette key (the
+header shows it too). Keys that still do not fit are left out by priority rather than cut
+at the edge: a screen's own keys in the order it declares them, and the help key always,
+since the help screen (and the command palette) lists every key. A click on a key presses
+it; hovering shows its tooltip.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
+from rich.color import Color as RichColor
+from rich.style import Style
+from rich.text import Text
 from textual import events
-from textual.app import ComposeResult
+from textual.color import Color
 from textual.screen import Screen
-from textual.widgets import Footer
-from textual.widgets._footer import FooterKey
+from textual.widget import Widget
 
-# Where Textual keeps the watchers `watch` and `data_bind` add to a reactable (a private
-# attribute of `textual.reactive`, named the same since Textual 0.47).
-_WATCHERS_ATTRIBUTE = "__watchers"
 HELP_ACTION = "help"  # racer-tui's help key ("?") runs app.help
+PALETTE_EDGE = "\u258f"  # the thin bar left of the palette key, as Textual draws it
 
 
-class RacerFooter(Footer):
+@dataclass(frozen=True)
+class FooterKey:
+    """One key as the footer shows it."""
+
+    key: str  # what pressing it simulates
+    display: str  # as shown: "^r", "?"
+    description: str
+    action: str
+    enabled: bool
+    tooltip: str
+
+
+@dataclass(frozen=True)
+class PlacedKey:
+    """A key laid out on the line: it takes cells `start` to `end` (exclusive)."""
+
+    key: FooterKey
+    start: int
+    end: int
+
+
+def screen_keys(screen: Screen[Any]) -> tuple[tuple[FooterKey, ...], FooterKey | None]:
+    """The keys `screen` shows in a footer, and the command palette's key (or None)."""
+    app = screen.app
+    palette_binding = app.COMMAND_PALETTE_BINDING if app.ENABLE_COMMAND_PALETTE else None
+    keys: list[FooterKey] = []
+    actions: set[str] = set()
+    palette: FooterKey | None = None
+    for key, (_, binding, enabled, tooltip) in screen.active_bindings.items():
+        shown = FooterKey(
+            key=binding.key,
+            display=app.get_key_display(binding),
+            description=binding.description,
+            action=binding.action,
+            enabled=enabled,
+            tooltip=tooltip or binding.tooltip,
+        )
+        if key == palette_binding:
+            palette = shown
+        elif binding.show and binding.action not in actions:
+            actions.add(binding.action)  # the first key bound to an action stands for all
+            keys.append(shown)
+    return tuple(keys), palette
+
+
+def key_width(key: FooterKey, *, compact: bool) -> int:
+    """Cells one key takes on the line: its key, its label and the space around them."""
+    label = len(key.description) + 1 if key.description else 0
+    if compact:  # "k label" and one cell after it
+        return len(key.display) + label + 1
+    return len(key.display) + 2 + label  # " k label "
+
+
+def fitting(keys: tuple[FooterKey, ...], room: int, *, compact: bool) -> list[FooterKey]:
+    """The keys that fit in `room` cells, by priority (declared order, help always)."""
+    helps = [key for key in keys if key.action.endswith(HELP_ACTION)]
+    room -= sum(key_width(key, compact=compact) for key in helps)
+    kept: list[FooterKey] = []
+    for key in keys:
+        if key in helps:
+            continue
+        width = key_width(key, compact=compact)
+        if width > room:
+            break  # the keys after it matter less: leave them for the help screen
+        room -= width
+        kept.append(key)
+    return [key for key in keys if key in kept or key in helps]
+
+
+def palette_width(key: FooterKey) -> int:
+    """Cells the palette key takes: its edge, "^p palette" and a cell after it."""
+    return len(PALETTE_EDGE) + key_width(key, compact=True)
+
+
+DIM = Style(dim=True)
+
+
+@dataclass(frozen=True)
+class ThemeStyles:
+    """The footer's colours, from the theme's footer variables (as Textual's footer uses).
+
+    Read from the theme at each paint rather than declared as component classes: Textual
+    builds a style node per component class each time it restyles a widget, which it does
+    to every widget of a screen on each section switch."""
+
+    key: Style
+    description: Style
+    hover: Style  # added to a key under the mouse
+    edge: Style  # the bar left of the palette key
+
+    @classmethod
+    def of(cls, footer: Widget) -> ThemeStyles:
+        variables = footer.app.get_css_variables()
+        background = footer.styles.background
+
+        def colour(name: str, alpha: float = 1.0) -> RichColor:
+            laid = background + Color.parse(variables[name]).multiply_alpha(alpha)
+            return laid.rich_color
+
+        return cls(
+            key=Style(
+                color=colour("footer-key-foreground"),
+                bgcolor=colour("footer-key-background"),
+                bold=True,
+            ),
+            description=Style(
+                color=colour("footer-description-foreground"),
+                bgcolor=colour("footer-description-background"),
+            ),
+            hover=Style(bgcolor=colour("block-hover-background")),
+            edge=Style(color=colour("foreground", alpha=0.2)),
+        )
+
+
+class RacerFooter(Widget, can_focus=False):
     COMPACT_WIDTH = 110
+    DEFAULT_CSS = """
+    RacerFooter {
+        dock: bottom;
+        height: 1;
+        width: 1fr;
+        color: $footer-foreground;
+        background: $footer-background;
+    }
+    """
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self._last_shown: tuple[object, ...] | None = None
-        self._laid_out_for = 0  # the width the keys were last fitted to
+    def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
+        super().__init__(id=id, classes=classes)
+        self._keys: tuple[FooterKey, ...] = ()
+        self._palette: FooterKey | None = None
+        self._hovered: FooterKey | None = None
 
-    def on_resize(self, event: events.Resize) -> None:
-        compact = event.size.width < self.COMPACT_WIDTH
-        self.compact = compact
-        self.show_command_palette = not compact
-        if event.size.width != self._laid_out_for and self.is_attached and self.children:
-            # Which keys fit (and whether the palette key shows) depends on the width.
-            self.call_after_refresh(self.recompose)
-        self._laid_out_for = event.size.width
+    def on_mount(self) -> None:
+        self.screen.bindings_updated_signal.subscribe(self, self.bindings_changed)
+        self.bindings_changed(self.screen)
+
+    def on_unmount(self) -> None:
+        self.screen.bindings_updated_signal.unsubscribe(self)
 
     def bindings_changed(self, screen: Screen[Any]) -> None:
-        # Textual recomposes the footer every time the screen says its bindings changed,
-        # which a section switch says about six times over for the same keys: rebuilding
-        # and restyling a dozen keys each time was a third of a switch's work. Recompose
-        # only when what the footer shows is different.
-        shown = self._shown(screen)
-        if shown == self._last_shown and self.children:
+        # A section switch says the bindings changed about six times over for the same
+        # keys: repaint only when what the footer shows is different.
+        keys, palette = screen_keys(screen)
+        if (keys, palette) != (self._keys, self._palette):
+            self._keys, self._palette = keys, palette
+            self._hovered = None
+            self.refresh()
+
+    @property
+    def compact(self) -> bool:
+        return self.size.width < self.COMPACT_WIDTH
+
+    def placed(self) -> list[PlacedKey]:
+        """The keys on the line at the footer's width, where each one is drawn."""
+        width = self.size.width
+        compact = self.compact
+        palette = None if compact else self._palette
+        room = width - (palette_width(palette) if palette is not None else 0)
+        placed: list[PlacedKey] = []
+        start = 0
+        for key in fitting(self._keys, room, compact=compact):
+            end = start + key_width(key, compact=compact)
+            placed.append(PlacedKey(key, start, end))
+            start = end
+        if palette is not None:
+            placed.append(PlacedKey(palette, width - palette_width(palette), width))
+        return placed
+
+    def render(self) -> Text:
+        line = Text(no_wrap=True, overflow="crop", end="")
+        theme = ThemeStyles.of(self)
+        compact = self.compact
+        for place in self.placed():
+            key = place.key
+            line.append(" " * (place.start - line.cell_len))
+            keys, labels = theme.key, theme.description
+            if key == self._hovered:
+                keys, labels = keys + theme.hover, labels + theme.hover
+            if not key.enabled:
+                keys, labels = keys + DIM, labels + DIM
+            label = f" {key.description}" if key.description else ""
+            if key == self._palette:
+                line.append(PALETTE_EDGE, theme.edge)
+                line.append(key.display, keys)
+                line.append(label + " ", labels)
+            elif compact:
+                line.append(key.display, keys)
+                line.append(label, labels)
+                line.append(" ")
+            else:
+                line.append(f" {key.display} ", keys)
+                if key.description:
+                    line.append(f"{key.description} ", labels)
+        return line
+
+    def _key_at(self, x: int) -> FooterKey | None:
+        for place in self.placed():
+            if place.start <= x < place.end:
+                return place.key
+        return None
+
+    def on_mouse_move(self, event: events.MouseMove) -> None:
+        hovered = self._key_at(event.x)
+        if hovered != self._hovered:
+            self._hovered = hovered
+            self.tooltip = hovered.tooltip if hovered is not None and hovered.tooltip else None
+            self.refresh()
+
+    def on_leave(self, event: events.Leave) -> None:
+        if self._hovered is not None:
+            self._hovered = None
+            self.tooltip = None
+            self.refresh()
+
+    def on_mouse_down(self, event: events.MouseDown) -> None:
+        key = self._key_at(event.x)
+        if key is None:
             return
-        super().bindings_changed(screen)
-        if screen.app.app_focus and self.is_attached and screen is self.screen:
-            self._last_shown = shown  # Textual recomposes it (after the next refresh)
-
-    @staticmethod
-    def _shown(screen: Screen[Any]) -> tuple[object, ...]:
-        """What the footer would show for `screen`: the width, and each key as displayed,
-        its label, action, group, whether it is enabled and its tooltip."""
-        keys = tuple(
-            (
-                binding.key,
-                binding.key_display,
-                binding.description,
-                binding.action,
-                binding.group,
-                binding.show,
-                enabled,
-                tooltip,
-            )
-            for _, binding, enabled, tooltip in screen.active_bindings.values()
-        )
-        return (screen.app.size.width, *keys)  # which keys fit depends on the width
-
-    def compose(self) -> ComposeResult:
-        widgets = list(super().compose())
-        keys = [widget for widget in widgets if isinstance(widget, FooterKey)]
-        if len(keys) != len(widgets):  # binding groups: Textual lays those out itself
-            yield from widgets
-            return
-        yield from self._fitting(keys, self.app.size.width)
-
-    def _fitting(self, keys: list[FooterKey], width: int) -> list[FooterKey]:
-        """The keys that fit in `width` cells, by priority (declared order, help first)."""
-        palette = [key for key in keys if key.has_class("-command-palette")]
-        room = width - sum(self._width(key) + 1 for key in palette)  # its border
-        rest = [key for key in keys if key not in palette]
-        helps = [key for key in rest if key.action.endswith(HELP_ACTION)]
-        room -= sum(self._width(key) for key in helps)
-        kept: list[FooterKey] = []
-        for key in rest:
-            if key in helps:
-                continue
-            if self._width(key) > room:
-                break  # the keys after it matter less: leave them for the help screen
-            room -= self._width(key)
-            kept.append(key)
-        shown = set(map(id, [*kept, *helps, *palette]))
-        return [key for key in keys if id(key) in shown]
-
-    def _width(self, key: FooterKey) -> int:
-        """Cells one key takes: its key, its label and the space Textual's CSS gives it."""
-        label = len(key.description)
-        if self.compact:  # no padding, one cell of margin after
-            return len(key.key_display) + (label + 1 if label else 0) + 1
-        return len(key.key_display) + 2 + (label + 1 if label else 0)
-
-    async def recompose(self) -> None:
-        await super().recompose()
-        self.forget_removed_keys()
-
-    def forget_removed_keys(self) -> None:
-        """Drop the watchers that removed keys left on this footer, the way Textual itself
-        drops them when the watched value changes (watchers of closing nodes go)."""
-        watchers: dict[str, list[tuple[object, object]]] = getattr(self, _WATCHERS_ATTRIBUTE, {})
-        for entries in watchers.values():
-            entries[:] = [
-                (node, callback)
-                for node, callback in entries
-                if not getattr(node, "_closing", False)
-            ]
+        if key.enabled:
+            self.app.simulate_key(key.key)
+        else:
+            self.app.bell()

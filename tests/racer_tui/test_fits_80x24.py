@@ -17,20 +17,20 @@ from textual.pilot import Pilot
 from textual.screen import ModalScreen
 from textual.widget import Widget
 from textual.widgets import DataTable, Input, TextArea
-from textual.widgets._footer import FooterKey
 
 from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.races import record_race
 from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.race_commands import resolve_driver
+from racer_tui.widgets.footer import RacerFooter
 from sim.garage.options import new_model
 from sim.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 from tests.league.helpers import race_result
-from tests.racer_tui.screens.tui_helpers import settle, trained_model
+from tests.racer_tui.screens.tui_helpers import painted, settle, trained_model
 
 SIZE = (80, 24)
 # As long as names get in a real league (a model name may have 64 characters, a racer's 100).
@@ -71,9 +71,12 @@ def cut_off(app: App[Any]) -> list[str]:
     screen = app.screen
     width = app.size.width
     problems: list[str] = []
-    for key in screen.query(FooterKey):
-        if key.display and (key.region.right > width or not key.region.width):
-            problems.append(f"footer key {key.description!r} is cut")
+    for footer in screen.query(RacerFooter):
+        painted_line = painted(footer)
+        for place in footer.placed():
+            shown = f"{place.key.display} {place.key.description}".strip()
+            if footer.region.x + place.end > width or shown not in painted_line:
+                problems.append(f"footer key {place.key.description!r} is cut")
     for table in screen.query(DataTable):
         if not table.region.width:
             continue  # on a hidden tab

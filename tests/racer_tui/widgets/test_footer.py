@@ -1,7 +1,9 @@
-"""The footer keeps no key it no longer shows, and the app keeps nothing per section switch.
+"""The footer: what it shows and what its keys do, and that it builds nothing per change
+of keys; and the app keeps nothing per section switch.
 
-These count objects; they never time anything. The leak they guard against was Textual's
-footer holding every key it ever showed (see `racer_tui.widgets.footer`).
+The object counts never time anything. They guard against Textual's footer, which builds
+a widget per key at every change of keys and holds every key it ever showed (see
+`racer_tui.widgets.footer`).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from typing import Any, ClassVar
 
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
+from textual.dom import DOMNode
 from textual.pilot import Pilot
 from textual.screen import Screen
 from textual.widget import Widget
@@ -23,7 +26,7 @@ from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.help import HelpScreen
 from racer_tui.widgets.footer import RacerFooter
 from sim.garage.options import new_model
-from tests.racer_tui.screens.tui_helpers import settle
+from tests.racer_tui.screens.tui_helpers import painted, settle
 
 
 def _alive(kind: type[Any]) -> int:
@@ -44,7 +47,7 @@ def _objects() -> int:
     return len(gc.get_objects())
 
 
-def _modes(footer: type[Footer]) -> type[App[None]]:
+def _modes(footer: type[Widget]) -> type[App[None]]:
     """The minimal reproduction: five modes, each a screen with a footer and a binding."""
 
     class Section(Screen[None]):
@@ -71,7 +74,7 @@ async def _switch(pilot: Pilot[Any], times: int) -> None:
         await pilot.press("12345"[press % 5])  # waits for the app to go idle
 
 
-async def _keys_kept(footer: type[Footer]) -> int:
+async def _keys_kept(footer: type[Widget]) -> int:
     """Footer keys alive after 25 section switches, beyond those alive after 5."""
     app = _modes(footer)()
     async with app.run_test(size=(80, 24)) as pilot:
@@ -82,13 +85,42 @@ async def _keys_kept(footer: type[Footer]) -> int:
 
 
 async def test_textuals_own_footer_keeps_every_key_it_showed() -> None:
-    # Upstream behaviour (Textual 8.2.8), kept so the workaround can go when it changes:
-    # this test fails then, and RacerFooter.forget_removed_keys is no longer needed.
+    # Upstream behaviour (Textual 8.2.8), kept to show why racer-tui draws its own footer:
+    # when this fails, Textual's footer could be looked at again.
     assert await _keys_kept(Footer) > 25
 
 
-async def test_racer_footer_forgets_the_keys_it_no_longer_shows() -> None:
-    assert await _keys_kept(RacerFooter) <= 0
+async def _nodes_left_to_collect(footer: type[Widget]) -> int:
+    """Nodes (widgets and Textual's style nodes) that 25 section switches leave to the
+    cycle collector, after a warm-up."""
+    app = _modes(footer)()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await _switch(pilot, 10)
+        gc.collect()
+        gc.disable()  # so that all of it is still there to count
+        try:
+            await _switch(pilot, 25)
+            gc.set_debug(gc.DEBUG_SAVEALL)
+            gc.collect()
+        finally:
+            gc.set_debug(0)
+            gc.enable()
+        left = sum(isinstance(thing, DOMNode) for thing in gc.garbage)
+        gc.garbage.clear()
+        return left
+
+
+class NoFooter(Label):
+    """A screen's last line without any footer: what switching sections leaves anyway."""
+
+
+async def test_the_footer_builds_nothing_when_the_keys_change() -> None:
+    # Textual's footer builds a widget per key (and two style nodes for each) at every
+    # change of keys: about 100 nodes per switch here, each some forty objects in cycles
+    # that only a full collection frees. RacerFooter repaints one line instead.
+    without_a_footer = await _nodes_left_to_collect(NoFooter)
+    assert await _nodes_left_to_collect(Footer) > without_a_footer + 25 * 20
+    assert await _nodes_left_to_collect(RacerFooter) == without_a_footer
 
 
 async def test_switching_sections_and_opening_dialogs_keeps_no_objects() -> None:
@@ -120,3 +152,85 @@ async def _dialogs(pilot: Pilot[Any], times: int) -> None:
         await pilot.press(key)
         assert isinstance(pilot.app.screen, HelpScreen if key == "question_mark" else ConfirmDialog)
         await pilot.press("escape")
+
+
+class Keys(Screen[None]):
+    """Keys with long labels, one of them disabled while `locked`."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("a", "count('alpha')", "Alpha the first key"),
+        Binding("b", "count('bravo')", "Bravo the second key", tooltip="Counts a bravo"),
+        Binding("l", "count('locked')", "Locked key"),
+        Binding("c", "count('charlie')", "Charlie the third key"),
+        Binding("d", "count('delta')", "Delta the last key"),
+        Binding("question_mark", "help", "Help"),
+    ]
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.pressed: list[str] = []
+
+    def compose(self) -> ComposeResult:
+        yield Label("keys")
+        yield RacerFooter()
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        return None if parameters == ("locked",) else True  # None: shown, disabled
+
+    def action_count(self, name: str) -> None:
+        self.pressed.append(name)
+
+    def action_help(self) -> None:
+        self.pressed.append("help")
+
+
+class KeysApp(App[None]):
+    def __init__(self) -> None:
+        super().__init__()
+        self.bells = 0
+
+    def on_mount(self) -> None:
+        self.push_screen(Keys())
+
+    def bell(self) -> None:
+        self.bells += 1
+
+
+def _placed(app: App[Any], description: str) -> int:
+    """The column where the key labelled `description` starts."""
+    footer = app.screen.query_one(RacerFooter)
+    return next(place.start for place in footer.placed() if place.key.description == description)
+
+
+async def test_a_click_on_a_key_presses_it_and_a_disabled_key_only_rings() -> None:
+    app = KeysApp()
+    async with app.run_test(size=(130, 24)) as pilot:
+        await pilot.pause()
+        screen = app.screen
+        assert isinstance(screen, Keys)
+        await pilot.click(RacerFooter, offset=(_placed(app, "Bravo the second key") + 1, 0))
+        await pilot.click(RacerFooter, offset=(_placed(app, "Locked key") + 1, 0))
+        assert screen.pressed == ["bravo"]
+        assert app.bells == 1
+        footer = screen.query_one(RacerFooter)
+        await pilot.hover(RacerFooter, offset=(_placed(app, "Bravo the second key") + 1, 0))
+        assert footer.tooltip == "Counts a bravo"
+        await pilot.hover(RacerFooter, offset=(_placed(app, "Alpha the first key") + 1, 0))
+        assert footer.tooltip is None  # that key has none
+
+
+async def test_at_80_columns_the_later_keys_give_way_and_help_stays() -> None:
+    app = KeysApp()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        footer = app.screen.query_one(RacerFooter)
+        line = painted(footer)
+        assert line.startswith("a Alpha the first key b Bravo the second key l Locked key")
+        assert "? Help" in line  # declared last, shown always
+        assert "Delta" not in line and "^p" not in line  # no room: on the help screen
+        assert all(place.end <= 80 for place in footer.placed())
+    async with KeysApp().run_test(size=(130, 24)) as pilot:
+        await pilot.pause()
+        line = painted(pilot.app.screen.query_one(RacerFooter))
+        assert "Delta the last key" in line
+        assert line.rstrip().endswith("^p palette")
