@@ -13,13 +13,14 @@ So, in the long-running app only:
 - Full collections run when input pauses (`IdleCollector`): a timer runs one once nobody
   has pressed a key for a moment, no key is waiting to be handled, and young collections
   have promoted enough objects to be worth it. Python's own automatic ones are made a
-  hundred times rarer: they remain as a bound on memory for someone who presses keys for
-  minutes without a pause. (Freezing more does not make them short: the sections render
+  hundred times rarer. Someone who presses keys for minutes without a pause still gets
+  one every `BUSY_COLLECT_SECONDS`, between two keys: frequent, so each has little to
+  free and is short. (Freezing more does not make them shorter: the sections render
   their lines again as their data changes, so the rendered-line caches are renewed every
   few hundred keys whatever is frozen.)
 - What survives an idle collection is not frozen. Frozen objects are still freed when their
   last reference goes, but garbage in a reference cycle stays until everything is unfrozen,
-  and Textual's widgets are all cycles: a footer key, a table's rendered rows or a toast
+  and Textual's widgets are all cycles: a table's rendered rows, a dialog or a toast
   alive at that moment and removed a little later kept growing the frozen heap (about
   7,000 objects and 0.5 MB per 1,000 actions of the soak benchmark) until the next sweep,
   which under continuous input came once in 20 minutes. Freezing them did not make idle
@@ -72,9 +73,18 @@ CALM_SECONDS = 5.0
 # Generation-1 collections since the last full one before an idle full collection is
 # worth running (Python's own threshold is 10, subject to its 25% rule).
 IDLE_COLLECT_AFTER = 10
-# Generation 2's automatic threshold while the app runs: a hundred times Python's, so with
-# keys pressed without pause a full collection still comes, about once per thousand keys.
+# Generation 2's automatic threshold while the app runs: a hundred times Python's.
 AUTOMATIC_FULL_AFTER = 1000
+# With keys pressed without a pause, the automatic full collection hardly ever comes:
+# Python also waits until what was promoted since the last one is a quarter of the
+# long-lived heap (75,000 objects here), and in a soak of 3,000 keys without a pause none
+# came while the process grew from 203 MB to 435 MB of garbage. So a full collection is
+# also run this long after the last one, at a moment no key is waiting, pause or not.
+# Short because frequent: its time goes to freeing what was promoted since the last one,
+# not to walking what lives unfrozen (20,000-25,000 objects, 2-3 ms). 20 s apart, one took
+# up to 446 ms beside a training; 5 s apart, once the footer stopped building a widget per
+# key, 12-20 ms on an idle machine, and a key that met one beside a training waited 94 ms.
+BUSY_COLLECT_SECONDS = 2.0
 # A sweep is due this long after the last one; it waits for input to pause this long
 # (a sweep walks everything: about a second beside a training)...
 SWEEP_SECONDS = 300.0
@@ -132,7 +142,7 @@ def memoise_background_styles_by_colour() -> None:
     Textual (8.2.8) memoises `StylesCache.get_inner_outer` with an `lru_cache(1024)` on the
     method, so each entry's key holds the `StylesCache` it was called on (`self`), and with
     it the rendered lines of its widget long after the widget was removed
-    (Textualize/textual#6665, open). Every footer key, race view, dialog and table row that
+    (Textualize/textual#6665, open). Every race view, dialog, toast and table row that
     is built and dropped adds entries until 1,024 widgets' lines are pinned: 8-20 MB, a
     full memo within a few hundred keys of the soak benchmark. The method never reads
     `self` (its answer is two styles made from the two colours), so the memo is kept on
@@ -169,8 +179,10 @@ class IdleCollector:
         self._last_input = clock()
         self._last_sweep = clock()
         self._last_trim = clock()
+        self._last_collection = clock()
         self._threshold: tuple[int, int, int] | None = None
         self.collections = 0
+        self.busy_collections = 0  # of `collections`, those run while keys kept coming
         self.sweeps = 0
         self.trims = 0
 
@@ -200,13 +212,26 @@ class IdleCollector:
         now = self._clock()
         paused = now - self._last_input
         if paused < IDLE_SECONDS:
-            return False
+            return self._collect_if_long_busy(now)
         collected = self._collect_if_due(now, paused, quiet=quiet)
         if self._trim is not None and now - self._last_trim >= TRIM_SECONDS:
             self._trim()
             self._last_trim = now
             self.trims += 1
         return collected
+
+    def _collect_if_long_busy(self, now: float) -> bool:
+        """A full collection while keys keep coming, once `BUSY_COLLECT_SECONDS` have gone
+        by without one (never a sweep: what lives is not refrozen mid-typing)."""
+        if now - self._last_collection < BUSY_COLLECT_SECONDS:
+            return False
+        if gc.get_count()[2] < IDLE_COLLECT_AFTER:
+            return False
+        gc.collect()
+        self._last_collection = now
+        self.collections += 1
+        self.busy_collections += 1
+        return True
 
     def _collect_if_due(self, now: float, paused: float, *, quiet: bool) -> bool:
         since_sweep = now - self._last_sweep
@@ -223,6 +248,7 @@ class IdleCollector:
         gc.collect()
         if sweep:
             gc.freeze()
+        self._last_collection = now
         self.collections += 1
         return True
 

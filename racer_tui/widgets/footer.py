@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from rich.cells import cell_len
 from rich.color import Color as RichColor
 from rich.style import Style
 from rich.text import Text
@@ -83,10 +84,10 @@ def screen_keys(screen: Screen[Any]) -> tuple[tuple[FooterKey, ...], FooterKey |
 
 def key_width(key: FooterKey, *, compact: bool) -> int:
     """Cells one key takes on the line: its key, its label and the space around them."""
-    label = len(key.description) + 1 if key.description else 0
+    label = cell_len(key.description) + 1 if key.description else 0
     if compact:  # "k label" and one cell after it
-        return len(key.display) + label + 1
-    return len(key.display) + 2 + label  # " k label "
+        return cell_len(key.display) + label + 1
+    return cell_len(key.display) + 2 + label  # " k label "
 
 
 def fitting(keys: tuple[FooterKey, ...], room: int, *, compact: bool) -> list[FooterKey]:
@@ -107,7 +108,7 @@ def fitting(keys: tuple[FooterKey, ...], room: int, *, compact: bool) -> list[Fo
 
 def palette_width(key: FooterKey) -> int:
     """Cells the palette key takes: its edge, "^p palette" and a cell after it."""
-    return len(PALETTE_EDGE) + key_width(key, compact=True)
+    return cell_len(PALETTE_EDGE) + key_width(key, compact=True)
 
 
 DIM = Style(dim=True)

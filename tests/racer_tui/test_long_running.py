@@ -18,6 +18,7 @@ from textual.widgets import Label
 
 from racer_tui.long_running import (
     AUTOMATIC_FULL_AFTER,
+    BUSY_COLLECT_SECONDS,
     CALM_SECONDS,
     IDLE_COLLECT_AFTER,
     IDLE_SECONDS,
@@ -90,6 +91,33 @@ def test_no_full_collection_while_keys_come_or_none_is_due(
     gc.collect()  # nothing promoted since: none due
     assert not idle.tick(quiet=True)
     assert idle.collections == 0
+
+
+def test_keys_without_a_pause_still_get_a_full_collection_now_and_then(
+    collector: tuple[IdleCollector, Clock],
+) -> None:
+    # Someone pressing keys without ever pausing for IDLE_SECONDS: the garbage of their
+    # keys is still collected, every BUSY_COLLECT_SECONDS, when no key is waiting.
+    idle, clock = collector
+    cycle = Cycle()
+    garbage = weakref.ref(cycle)
+    promote()
+    del cycle
+    for _ in range(int(BUSY_COLLECT_SECONDS / 0.1) - 2):  # a key every tenth of a second
+        idle.input_seen()
+        clock.now += 0.1
+        assert not idle.tick(quiet=True)
+    assert garbage() is not None
+    clock.now += 0.5
+    idle.input_seen()
+    assert not idle.tick(quiet=True, keys_waiting=True)  # never ahead of a waiting key
+    assert idle.tick(quiet=True)
+    assert garbage() is None
+    assert idle.busy_collections == 1 and gc.get_freeze_count() == 0  # not a sweep
+    idle.input_seen()
+    clock.now += 0.1
+    promote()
+    assert not idle.tick(quiet=True)  # the next one is BUSY_COLLECT_SECONDS away
 
 
 def test_an_idle_collection_frees_cycles_and_freezes_nothing(
