@@ -182,7 +182,7 @@ class RacerFooter(Widget, can_focus=False):
         keys, palette = screen_keys(screen)
         if (keys, palette) != (self._keys, self._palette):
             self._keys, self._palette = keys, palette
-            self._hovered = None
+            self._hovered, self.tooltip = None, None  # the key under the mouse may be gone
             self.refresh()
 
     @property
