@@ -38,7 +38,7 @@ PALETTE_EDGE = "\u258f"  # the thin bar left of the palette key, as Textual draw
 
 
 @dataclass(frozen=True)
-class FooterKey:
+class ShownKey:
     """One key as the footer shows it."""
 
     key: str  # what pressing it simulates
@@ -53,20 +53,20 @@ class FooterKey:
 class PlacedKey:
     """A key laid out on the line: it takes cells `start` to `end` (exclusive)."""
 
-    key: FooterKey
+    key: ShownKey
     start: int
     end: int
 
 
-def screen_keys(screen: Screen[Any]) -> tuple[tuple[FooterKey, ...], FooterKey | None]:
+def screen_keys(screen: Screen[Any]) -> tuple[tuple[ShownKey, ...], ShownKey | None]:
     """The keys `screen` shows in a footer, and the command palette's key (or None)."""
     app = screen.app
     palette_binding = app.COMMAND_PALETTE_BINDING if app.ENABLE_COMMAND_PALETTE else None
-    keys: list[FooterKey] = []
+    keys: list[ShownKey] = []
     actions: set[str] = set()
-    palette: FooterKey | None = None
+    palette: ShownKey | None = None
     for key, (_, binding, enabled, tooltip) in screen.active_bindings.items():
-        shown = FooterKey(
+        shown = ShownKey(
             key=binding.key,
             display=app.get_key_display(binding),
             description=binding.description,
@@ -82,7 +82,7 @@ def screen_keys(screen: Screen[Any]) -> tuple[tuple[FooterKey, ...], FooterKey |
     return tuple(keys), palette
 
 
-def key_width(key: FooterKey, *, compact: bool) -> int:
+def key_width(key: ShownKey, *, compact: bool) -> int:
     """Cells one key takes on the line: its key, its label and the space around them."""
     label = cell_len(key.description) + 1 if key.description else 0
     if compact:  # "k label" and one cell after it
@@ -90,11 +90,11 @@ def key_width(key: FooterKey, *, compact: bool) -> int:
     return cell_len(key.display) + 2 + label  # " k label "
 
 
-def fitting(keys: tuple[FooterKey, ...], room: int, *, compact: bool) -> list[FooterKey]:
+def fitting(keys: tuple[ShownKey, ...], room: int, *, compact: bool) -> list[ShownKey]:
     """The keys that fit in `room` cells, by priority (declared order, help always)."""
     helps = [key for key in keys if key.action.endswith(HELP_ACTION)]
     room -= sum(key_width(key, compact=compact) for key in helps)
-    kept: list[FooterKey] = []
+    kept: list[ShownKey] = []
     for key in keys:
         if key in helps:
             continue
@@ -106,7 +106,7 @@ def fitting(keys: tuple[FooterKey, ...], room: int, *, compact: bool) -> list[Fo
     return [key for key in keys if key in kept or key in helps]
 
 
-def palette_width(key: FooterKey) -> int:
+def palette_width(key: ShownKey) -> int:
     """Cells the palette key takes: its edge, "^p palette" and a cell after it."""
     return cell_len(PALETTE_EDGE) + key_width(key, compact=True)
 
@@ -165,9 +165,9 @@ class RacerFooter(Widget, can_focus=False):
 
     def __init__(self, *, id: str | None = None, classes: str | None = None) -> None:
         super().__init__(id=id, classes=classes)
-        self._keys: tuple[FooterKey, ...] = ()
-        self._palette: FooterKey | None = None
-        self._hovered: FooterKey | None = None
+        self._keys: tuple[ShownKey, ...] = ()
+        self._palette: ShownKey | None = None
+        self._hovered: ShownKey | None = None
 
     def on_mount(self) -> None:
         self.screen.bindings_updated_signal.subscribe(self, self.bindings_changed)
@@ -232,7 +232,7 @@ class RacerFooter(Widget, can_focus=False):
                     line.append(f"{key.description} ", labels)
         return line
 
-    def _key_at(self, x: int) -> FooterKey | None:
+    def _key_at(self, x: int) -> ShownKey | None:
         for place in self.placed():
             if place.start <= x < place.end:
                 return place.key
