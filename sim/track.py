@@ -12,13 +12,15 @@ from __future__ import annotations
 
 import hashlib
 import io
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import shapely
+from numpy.lib import format as npy_format
 from shapely.geometry import LinearRing, Polygon
 
 from sim.atomic import write_bytes_atomic
@@ -248,25 +250,61 @@ def load_track(
             f"{MAX_TRACK_FILE_BYTES:,} (up to {MAX_WAYPOINTS:,} waypoints); resample it."
         )
     try:
-        with file.open("rb") as handle:
-            magic = handle.read(6)
-        # allow_pickle=False: a track file is data and must never run code when loaded.
-        array = np.load(file, allow_pickle=False) if magic == b"\x93NUMPY" else None
+        array = _read_npy(file, label, size)
     except OSError as exc:
         raise TrackError(f"{label}: cannot be read ({exc.strerror}).") from None
-    except ValueError:
-        raise TrackError(
-            f"{label}: holds pickled Python objects, which racer-tui never loads; "
-            "a track file is a plain float array."
-        ) from None
-    except EOFError:
-        array = None
-    if array is None:
-        raise TrackError(
-            f"{label}: is not a NumPy .npy file; export the track as a DeepRacer .npy file."
-        )
     track = Track.from_array(array, name or file.stem, description=description, source=label)
     return track.reversed() if reverse else track
+
+
+def _read_npy(file: Path, label: str, size: int) -> np.ndarray[Any, np.dtype[Any]]:
+    """The array in a .npy file, read only after its header has been checked against the
+    file: the header says how much to allocate, and a forged one (10^11 rows in a file of
+    600 bytes) would otherwise ask for terabytes before any other check could run."""
+    with file.open("rb") as handle:
+        try:
+            version = npy_format.read_magic(handle)
+            if version == (1, 0):
+                shape, fortran_order, dtype = npy_format.read_array_header_1_0(handle)
+            elif version == (2, 0):
+                shape, fortran_order, dtype = npy_format.read_array_header_2_0(handle)
+            else:
+                raise ValueError(f"unsupported .npy version {version}")
+            if any(extent < 0 for extent in shape):
+                raise ValueError(f"negative extent in shape {shape}")
+        except (ValueError, EOFError):
+            raise TrackError(
+                f"{label}: is not a NumPy .npy file; export the track as a DeepRacer .npy file."
+            ) from None
+        if dtype.hasobject:
+            raise TrackError(
+                f"{label}: holds pickled Python objects, which racer-tui never loads; "
+                "a track file is a plain float array."
+            )
+        _check_header(label, tuple(shape), dtype, size - handle.tell())
+        count = math.prod(shape)
+        data = handle.read(count * dtype.itemsize)
+    array = np.frombuffer(data, dtype=dtype, count=count)
+    return np.asarray(array.reshape(shape, order="F" if fortran_order else "C"))
+
+
+def _check_header(label: str, shape: tuple[int, ...], dtype: np.dtype[Any], held: int) -> None:
+    """Refuse a header whose array is not a track's, or that claims more data than the file
+    holds, before anything is allocated for it."""
+    if dtype.kind not in "fiu" or dtype.fields is not None or dtype.subdtype is not None:
+        raise TrackError(f"{label}: holds {dtype} values; a track is an array of numbers.")
+    claimed = math.prod(shape) * dtype.itemsize
+    if claimed > held:
+        rows = f"{shape[0]:,} rows" if shape else "a value"
+        raise TrackError(
+            f"{label}: its header claims {rows} ({claimed:,} bytes) but the file holds only "
+            f"{max(held, 0):,} bytes of data, so it is damaged or forged; export the track again."
+        )
+    if len(shape) != 2 or shape[1] != 6:
+        raise TrackError(
+            f"{label}: has shape {shape}; a DeepRacer track is (N, 6): "
+            "centre x,y, inner border x,y, outer border x,y."
+        )
 
 
 def _normalise(array: object, label: str) -> FloatArray:
