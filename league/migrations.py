@@ -527,6 +527,36 @@ SUBMISSION_RACE_TYPES = """
 ALTER TABLE submissions ADD COLUMN race_type TEXT
 """
 
+# Version 12: a race that cannot be re-run here is "unverifiable", as every board says of it
+# (league.trust.standing), no longer "skipped": the verdicts remembered before are renamed,
+# so `sync verify` tries them again as it always has and no reader meets the old word.
+UNVERIFIABLE_REPLAYS = """
+UPDATE sync_replays SET outcome = 'unverifiable' WHERE outcome = 'skipped'
+"""
+
+# Version 13: whose model is whose (league.sync.models). A model record is a racer's signed
+# word that a model hash is theirs, made for every model they race or submit with; `seen`
+# numbers them in the order this league first held them, so when two racers claim one
+# model the first seen keeps it whatever date the second one's record claims. A pulled
+# result's first sighting here (sync_first_seen) bounds the time it ranks by in a tie
+# (league.sync.dates): a date written earlier than the league could have seen it wins nothing.
+MODEL_RECORDS = """
+CREATE TABLE sync_models (
+    seen INTEGER PRIMARY KEY,
+    record_id TEXT NOT NULL UNIQUE,
+    racer TEXT NOT NULL COLLATE NOCASE,
+    model_name TEXT NOT NULL,
+    model_hash TEXT NOT NULL,
+    registered_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX sync_models_hash ON sync_models(model_hash, seen);
+CREATE TABLE sync_first_seen (
+    entry_id TEXT PRIMARY KEY,
+    seen_at TEXT NOT NULL
+) WITHOUT ROWID
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -539,6 +569,8 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("leaderboard in ranking order", _script(BOARD_ORDER)),
     Migration("race types of results", _script(RACE_TYPES), True),
     Migration("race types of submissions", _script(SUBMISSION_RACE_TYPES)),
+    Migration("unverifiable replays", _script(UNVERIFIABLE_REPLAYS)),
+    Migration("model records", _script(MODEL_RECORDS)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -41,7 +41,6 @@ if TYPE_CHECKING:
 NAMES = ("sync",)
 USER_ERRORS: tuple[type[Exception], ...] = (SyncError, LeagueError, ModelError)
 _EXCERPT = 60
-_OUTCOMES = ("same", "differs", "skipped")
 _RUN_ORDER = (
     "pushed",
     "pulled",
@@ -96,9 +95,10 @@ def register(commands: Parsers) -> None:
         help="re-run the league's races and withdraw any whose laps differ",
         description="Run each race again from the model, track, rules and seed it names "
         "(races are deterministic) and compare its laps. A race that comes out differently "
-        "leaves the leaderboard and is listed in quarantine; one whose model is not in this "
-        "garage is skipped (fetch it with `racer-tui sync fetch-bundle`). Races verified "
-        "before are not run again unless --again.",
+        "leaves the leaderboard and is listed in quarantine; one that cannot be re-run here "
+        "(its model is not in this garage: fetch it with `racer-tui sync fetch-bundle`; or it "
+        "was timed by another physics or by hand) is unverifiable, and the leaderboard says "
+        "so. Races verified before are not run again unless --again.",
     )
     verify.add_argument("--again", action="store_true", help="re-run races verified before")
     _common(verify, as_json=True)
@@ -389,11 +389,13 @@ def _verdicts(league: League, *, again: bool) -> list[Verdict]:
 
 
 def _print_verdicts(verdicts: list[Verdict]) -> None:
-    counts = {outcome: sum(v.outcome == outcome for v in verdicts) for outcome in _OUTCOMES}
+    from league.trust.replay import OUTCOMES
+
+    counts = {outcome: sum(v.outcome == outcome for v in verdicts) for outcome in OUTCOMES}
     print(
-        f"Re-ran {counted(len(verdicts) - counts['skipped'], 'race')}: {counts['same']} the "
-        f"same, {counts['differs']} different (withdrawn, see `racer-tui sync status`); "
-        f"{counts['skipped']} skipped."
+        f"Re-ran {counted(len(verdicts) - counts['unverifiable'], 'race')}: {counts['same']} "
+        f"the same, {counts['differs']} different (withdrawn, see `racer-tui sync status`); "
+        f"{counts['unverifiable']} unverifiable here."
     )
     for verdict in verdicts:
         if verdict.outcome != "same":

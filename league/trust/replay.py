@@ -5,8 +5,9 @@ deterministic, so any machine holding the model can run the race again and compa
 A race whose laps come out differently was not driven as it claims: it is taken out of
 the league and held in quarantine with the first lap that differs. A race that cannot
 be re-run here (its model or track is not on this machine, or it was timed by another
-version of the simulator) is skipped and says why. Each verdict is remembered per race
-and content (`sync_replays`), so a second run re-races only what is new.
+version of the simulator) is unverifiable here and says why: nothing vouches for its
+laps but its racer's signature. Each verdict is remembered per race and content
+(`sync_replays`), so a second run re-races only what is new or was unverifiable.
 
 The driver comes from the caller (`DriverFor`): running a trained model needs torch,
 which the league package never imports.
@@ -15,7 +16,7 @@ which the league package never imports.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from typing import Final, Literal
 
@@ -26,7 +27,7 @@ from league.sync.local import STORE_SETTING, get_setting
 from league.sync.record import Seal, SyncRecord
 from sim.race.driver import Driver
 from sim.race.engine import run_race
-from sim.race.physics import CURRENT
+from sim.race.physics import BEFORE_VERSIONING, CURRENT, PHYSICAL
 from sim.race.rules import RulesError, rules_from_mapping
 from sim.track import Track
 from sim.track_catalog import find_track_by_hash, resolve_track
@@ -34,7 +35,8 @@ from sim.track_catalog import find_track_by_hash, resolve_track
 # The model hash -> a driver of that exact model on `track`, or None when it is not here;
 # ValueError (one sentence) when it is here but cannot drive.
 DriverFor = Callable[[str, Track], Driver | None]
-Outcome = Literal["same", "differs", "skipped"]
+Outcome = Literal["same", "differs", "unverifiable"]
+OUTCOMES: Final[tuple[Outcome, ...]] = ("same", "differs", "unverifiable")
 # Recorded laps are the engine's own floats; anything past this is not rounding.
 _TOLERANCE_S: Final = 1e-6
 
@@ -44,7 +46,7 @@ class Verdict:
     race_id: str
     racer: str
     outcome: Outcome
-    detail: str  # one sentence: what differed, or why it was skipped ("" when the same)
+    detail: str  # one sentence: what differed, or why it is unverifiable ("" when the same)
 
 
 def verify_races(
@@ -52,14 +54,18 @@ def verify_races(
     driver_for: DriverFor,
     *,
     again: bool = False,
+    race_ids: Collection[str] | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> list[Verdict]:
-    """Re-run every race not verified before (`again`: every race) and judge it."""
+    """Re-run every race not verified before (`again`: every race; `race_ids`: only
+    these) and judge it."""
     rows = league.query(
         "SELECT r.id, r.racer, r.content_hash FROM races r LEFT JOIN sync_replays v "
         "ON v.race_id = r.id AND v.content_hash = r.content_hash "
-        "WHERE ? OR v.race_id IS NULL OR v.outcome = 'skipped' ORDER BY r.id",
-        (again,),
+        "WHERE (? OR v.race_id IS NULL OR v.outcome = 'unverifiable') "
+        f"{'' if race_ids is None else 'AND r.id IN (SELECT value FROM json_each(?))'} "
+        "ORDER BY r.id",
+        (again,) if race_ids is None else (again, json.dumps(list(race_ids))),
     )
     verdicts = []
     for done, row in enumerate(rows, start=1):
@@ -82,33 +88,32 @@ def verify_races(
 
 def _verify(league: League, race_id: str, racer: str, driver_for: DriverFor) -> Verdict:
     body = record_body(league, "races", race_id)
-    physics = body.get("physics") or "racer-tui/1"
+
+    def unverifiable(why: str, remedy: str = "") -> Verdict:
+        sentence = f"{why.rstrip('.')}, so it cannot be re-run here{remedy}"
+        return Verdict(race_id, racer, "unverifiable", sentence)
+
+    physics = body.get("physics") or BEFORE_VERSIONING
+    if physics == PHYSICAL:
+        return unverifiable("its laps were timed by hand on a real track")
     if physics != CURRENT:
-        return Verdict(
-            race_id,
-            racer,
-            "skipped",
-            f"it was timed with {physics}; this racer-tui drives {CURRENT}",
-        )
+        return unverifiable(f"it was timed with {physics} and this racer-tui drives {CURRENT}")
     info = find_track_by_hash(str(body["track_hash"]))
     if info is None:
-        return Verdict(race_id, racer, "skipped", "its track is not on this machine")
+        return unverifiable("its track is not on this machine")
     try:
         rules = rules_from_mapping(json.loads(body["rules"]))
     except RulesError as error:
-        return Verdict(race_id, racer, "skipped", f"its rules do not load here ({error})")
+        return unverifiable(f"its rules do not load here ({str(error).rstrip('.')})")
     track = resolve_track(info.name)
     try:
         driver = driver_for(str(body["model_hash"]), track)
     except ValueError as error:  # the model is here but cannot drive (its one sentence)
-        return Verdict(race_id, racer, "skipped", str(error))
+        return unverifiable(str(error))
     if driver is None:
-        return Verdict(
-            race_id,
-            racer,
-            "skipped",
-            f"its model {str(body['model_hash'])[:12]} is not in this garage "
-            "(racer-tui sync fetch-bundle installs it)",
+        return unverifiable(
+            f"its model {str(body['model_hash'])[:12]} is not in this garage",
+            " (racer-tui sync fetch-bundle installs it, if its racer shared it)",
         )
     result = run_race(track, rules, driver, racer=racer, seed=int(body["seed"]), keep_trace=False)
     claimed = body["laps"]

@@ -1,6 +1,6 @@
 """Verification by replay: races are deterministic, so re-running one from the model,
 track, rules and seed it names must give its laps; a race that does not is withdrawn and
-listed in quarantine, and one whose model is not here is skipped with the reason."""
+listed in quarantine, and one that cannot be re-run here is unverifiable with the reason."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from league.store import League, open_league
 from league.trust.replay import verify_races
 from racer_tui.cli import main
 from racer_tui.race_commands import DriversByHash
+from sim.ids import new_id
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
@@ -59,15 +60,61 @@ def test_a_true_race_verifies_and_a_forged_one_is_withdrawn(tmp_path: Path) -> N
         assert [v.outcome for v in verify_races(league, DriversByHash(), again=True)] == ["same"]
 
 
-def test_a_race_whose_model_is_not_here_is_skipped_with_how_to_fetch_it(tmp_path: Path) -> None:
+def test_a_race_whose_model_is_not_here_is_unverifiable_with_how_to_fetch_it(
+    tmp_path: Path,
+) -> None:
     with open_league(tmp_path / "league.db") as league:
         track = resolve_track("hairpin-circuit")
         result = run_race(track, RULES, reference_driver(track), racer="bob", seed=2)
         record_race(league, replace(result, model_hash="ab" * 32, model_name="bobs-car"))
         (verdict,) = verify_races(league, DriversByHash())
-        assert verdict.outcome == "skipped"
-        assert "not in this garage" in verdict.detail and "fetch-bundle" in verdict.detail
-        assert league.query_one("SELECT count(*) FROM races")[0] == 1  # skipped, not withdrawn
+        assert verdict.outcome == "unverifiable"
+        assert verdict.detail == (
+            "its model abababababab is not in this garage, so it cannot be re-run here "
+            "(racer-tui sync fetch-bundle installs it, if its racer shared it)"
+        )
+        assert len(league.query("SELECT id FROM races")) == 1  # not withdrawn
+        # Tried again on the next run: the model may have been fetched since.
+        assert [v.outcome for v in verify_races(league, DriversByHash())] == ["unverifiable"]
+
+
+def test_a_race_of_other_physics_or_a_physical_car_is_unverifiable_here(tmp_path: Path) -> None:
+    with open_league(tmp_path / "league.db") as league:
+        track = resolve_track("hairpin-circuit")
+        result = run_race(track, RULES, reference_driver(track), racer="bob", seed=2)
+        older = record_race(league, replace(result, physics="racer-tui/1"))
+        by_hand = record_race(league, replace(result, physics="physical", result_id=new_id()))
+        verdicts = {v.race_id: v for v in verify_races(league, DriversByHash())}
+    assert verdicts[older].outcome == verdicts[by_hand].outcome == "unverifiable"
+    assert verdicts[older].detail.startswith(
+        "it was timed with racer-tui/1 and this racer-tui drives racer-tui/"
+    )
+    assert verdicts[by_hand].detail == (
+        "its laps were timed by hand on a real track, so it cannot be re-run here"
+    )
+
+
+def test_a_verdict_stored_as_skipped_opens_as_unverifiable(tmp_path: Path) -> None:
+    """A league from before the word changed: its remembered verdicts are renamed by a
+    migration, and the race is tried again as before."""
+    import sqlite3
+
+    from league.migrations import SCHEMA_VERSION
+
+    db = tmp_path / "league.db"
+    with open_league(db) as league:
+        track = resolve_track("hairpin-circuit")
+        result = run_race(track, RULES, reference_driver(track), racer="bob", seed=2)
+        race = record_race(league, replace(result, model_hash="ab" * 32))
+        verify_races(league, DriversByHash())
+    with sqlite3.connect(db) as conn:
+        conn.execute("UPDATE sync_replays SET outcome = 'skipped'")
+        conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION - 1}")
+    conn.close()
+    with open_league(db) as league:
+        (row,) = league.query("SELECT race_id, outcome FROM sync_replays")
+        assert (row[0], row[1]) == (race, "unverifiable")
+        assert [v.race_id for v in verify_races(league, DriversByHash())] == [race]
 
 
 def test_sync_verify_reports_in_text_and_json(
@@ -80,6 +127,7 @@ def test_sync_verify_reports_in_text_and_json(
     assert main(["sync", "verify", "--db", str(db)]) == 0
     out = capsys.readouterr().out
     assert out.startswith("Re-ran 2 races: 1 the same, 1 different (withdrawn")
+    assert "; 0 unverifiable here." in out
     assert f"differs: race {forged} (mallory)" in out
     assert main(["sync", "verify", "--again", "--db", str(db), "--json"]) == 0
     (again,) = json.loads(capsys.readouterr().out)
