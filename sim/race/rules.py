@@ -43,6 +43,24 @@ class RankingMethod(StrEnum):
     TOTAL_TIME = "total_time"  # total time of the first N valid laps
 
 
+class Verification(StrEnum):
+    """Which results a board under these rules ranks, by each result's standing
+    (league.trust.standing): every one, or only those a machine can vouch for by racing
+    them again from the model, track, rules and seed they name."""
+
+    ANY = "any"
+    VERIFIABLE = "verifiable"  # verified by replay here, or its model is here to replay
+    REPLAYED = "replayed"  # verified by replay on this machine
+
+    @property
+    def words(self) -> str:
+        return {
+            Verification.ANY: "every result",
+            Verification.VERIFIABLE: "only results verified or verifiable by replay",
+            Verification.REPLAYED: "only results verified by replay",
+        }[self]
+
+
 @dataclass(frozen=True)
 class RaceRules:
     """Everything that decides how a time trial is run and scored."""
@@ -67,6 +85,8 @@ class RaceRules:
     bots: int = 0
     bot_speed: float = 1.0
     bot_lane_change: bool = False
+    # Which results count (a league night's standings): a setting of the organiser's.
+    verification: Verification = Verification.ANY
 
     def __post_init__(self) -> None:
         if self.race_type is RaceType.OBJECT_AVOIDANCE and not 1 <= self.obstacles <= MAX_OBSTACLES:
@@ -98,6 +118,10 @@ class RaceRules:
             # Left out, so the rules of every time race written before lap-count races
             # existed keep their stored form and content hash.
             del data["lap_count"]
+        if self.verification is Verification.ANY:
+            del data["verification"]  # likewise for every rules written before it existed
+        else:
+            data["verification"] = self.verification.value
         return data
 
     def lap_of(self, lap: int) -> str:
@@ -158,6 +182,8 @@ class RaceRules:
             laps = "1 lap" if self.lap_count == 1 else f"{self.lap_count} laps"
             length = f"race of {laps} within {_clock(self.window_seconds)}"
         words = f"{length}, {self.penalty_seconds:g} s per off-track, {limit}, ranked by {ranking}"
+        if self.verification is not Verification.ANY:
+            words = f"{words} ({self.verification.words})"
         if self.race_type is RaceType.TIME_TRIAL:
             return words
         crash = f"{self.collision_penalty_seconds:g} s per crash"
@@ -232,6 +258,7 @@ def rules_from_mapping(data: Mapping[str, Any], base: RaceRules = DEFAULT_RULES)
         ranking_laps=_whole(values["ranking_laps"], "ranking_laps", 1, 100),
         collision_penalty_seconds=values["collision_penalty_seconds"],
         lap_count=_lap_count(values.get("lap_count")),
+        verification=_verification(values.get("verification", Verification.ANY.value)),
         **_race_type_values(values),
     )
     for key in data:  # a key of another race type would be silently dropped: say so
@@ -362,6 +389,16 @@ def _flag(value: object, key: str) -> bool:
     if not isinstance(value, bool):
         raise RulesError(f"{key} must be true or false, not {value!r}.")
     return value
+
+
+def _verification(value: object) -> Verification:
+    try:
+        return Verification(str(value).strip().lower())
+    except ValueError:
+        choices = ", ".join(level.value for level in Verification)
+        raise RulesError(
+            f"verification must be one of {choices} (which results count), not {value!r}."
+        ) from None
 
 
 def _ranking(value: object) -> RankingMethod:
