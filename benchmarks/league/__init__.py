@@ -1,0 +1,1 @@
+"""League benchmarks: trust in shared results."""
