@@ -561,6 +561,46 @@ def _rows_end(path: Path, size: int) -> tuple[int | None, bool]:
     return end, end == len(head)
 
 
+def training_metrics_rows_after(
+    path: Path, offset: int
+) -> tuple[tuple[TrainingEpisode, ...], int | None]:
+    """The rows of the TrainingMetrics file at `path` from byte `offset` on, and the offset
+    to read from next time, so a watcher of a training reads each row once however long
+    the log grows: in our line layout a written row never moves (appends go over the
+    closing line). A file in another layout is read whole when `offset` is 0, and the next
+    offset is None: it has no place to continue from. A missing file has no rows yet.
+    Rows still being written are left for the next call."""
+    try:
+        size = path.stat().st_size
+        end, empty = _rows_end(path, size)
+        if end is None:
+            if offset:
+                return (), None
+            return read_training_metrics(path).episodes, None
+        start = max(offset, len(_METRICS_HEAD))
+        if empty or end <= start:
+            return (), max(offset, 0)
+        with path.open("rb") as handle:
+            handle.seek(start)
+            chunk = handle.read(end - start)
+    except FileNotFoundError:
+        return (), 0
+    except OSError as error:
+        raise DeepRacerFileError(f"{path}: cannot read it ({error.strerror}).") from None
+    rows: list[TrainingEpisode] = []
+    done = start
+    for line in chunk.split(b"\n"):
+        text = line.strip().strip(b",")
+        if text:
+            try:
+                data = json.loads(text)
+                rows.append(_row(TrainingEpisode, data, path, len(rows)))
+            except (json.JSONDecodeError, UnicodeDecodeError, DeepRacerFileError):
+                break  # caught mid-write: this row and the rest come next time
+        done += len(line) + 1
+    return tuple(rows), min(done, end)
+
+
 def training_metrics_end(path: Path) -> tuple[TrainingEpisode | None, SimTraceSample | None]:
     """The last row of a TrainingMetrics file and its sim-trace counts, reading only the
     file's end when it is in our line layout (a resumed training needs just these from a

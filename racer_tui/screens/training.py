@@ -9,7 +9,11 @@ can therefore leave a training running, and the next app session finds it again
 the child saves a checkpoint and writes its last event; training the model again resumes
 from that checkpoint.
 
-Events are applied to `TrainingFigures` as they arrive; the charts pick them up at 2 Hz.
+Every figure on the view comes from the training's own files, read by the same functions
+live and after a restart (`load_figures`, `read_new_rows`): its TrainingMetrics.json,
+followed as the trainer appends it; its run history (the stream's updates and system
+readings); its state file's last word, read again when the run ends. The charts pick the
+figures up at 2 Hz.
 Everything that reads files runs in thread workers; the log tail is an async worker that
 reads a few kilobytes at a time, so keys stay responsive while the child trains flat out.
 """
@@ -47,8 +51,18 @@ from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.model_detail import status_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
-from racer_tui.widgets.training_charts import TrainingCharts, TrainingFigures, clock
-from sim.deepracer_files import last_sim_trace_row
+from racer_tui.widgets.training_charts import (
+    MetricsMark,
+    TrainingCharts,
+    TrainingFigures,
+    clock,
+)
+from sim.deepracer_files import (
+    DeepRacerFileError,
+    TrainingEpisode,
+    last_sim_trace_row,
+    training_metrics_rows_after,
+)
 from sim.garage.folder import (
     MAX_MINUTES,
     MIN_MINUTES,
@@ -75,7 +89,7 @@ WORKER_MODULE = "sim.training.worker"
 TAIL_SECONDS = 0.25  # how often the log is read while a run is live
 TICK_SECONDS = 2.0  # run status, adopted runs and the agent's-eye view
 READ_CHUNK = 256_000
-HISTORY_SECONDS = 5.0  # how often TrainingMetrics.json is re-read for a run without a log
+METRICS_SECONDS = 1.0  # how often a live run's TrainingMetrics.json is read for new rows
 COLUMNS = (Col("model", keep=1, shrink_to=10, collapses=False), Col("state"))
 NARROW = 110  # below this width the agent's-eye view is hidden
 
@@ -116,21 +130,45 @@ def running_worker_pid(folder: ModelFolder) -> int | None:
 
 
 def load_figures(folder: ModelFolder) -> TrainingFigures:
-    """The model's training so far, every run: its TrainingMetrics and its run history
-    (empty before the first run)."""
-    history = read_history(folder.training_history)
-    try:
-        figures = TrainingFigures.from_metrics(folder.training_metrics(), history)
-    except ModelError:  # unreadable metrics: the episode charts start with the next run
-        figures = TrainingFigures.from_metrics(None, history)
+    """The model's training so far, every run: its TrainingMetrics, its run history and
+    how its last run ended (empty before the first run). What the view shows after a
+    restart, and at the end of a run it watched live."""
+    figures = TrainingFigures.from_metrics(None, read_history(folder.training_history))
+    figures.take_rows(*read_new_rows(folder, figures.metrics_mark))
     figures.ended, figures.ended_at = last_ending(folder)
     figures.ended_before = figures.ended is not None
     return figures
 
 
+NewRows = tuple[tuple[TrainingEpisode, ...], MetricsMark, bool]
+
+
+def read_new_rows(folder: ModelFolder, mark: MetricsMark) -> NewRows:
+    """The TrainingMetrics rows written since `mark`, where to continue from, and whether
+    the file was replaced whole since (read again from its first row). Unreadable
+    metrics give no rows: the episode charts go on from the next readable row."""
+    path = folder.training_metrics_file
+    try:
+        inode = path.stat().st_ino
+    except FileNotFoundError:
+        return (), MetricsMark(), mark.inode is not None
+    except OSError:
+        return (), mark, False
+    fresh = inode != mark.inode
+    offset = 0 if fresh else mark.offset
+    if offset is None:  # a layout read whole once, not replaced since
+        return (), mark, False
+    try:
+        rows, next_offset = training_metrics_rows_after(path, offset)
+    except DeepRacerFileError:
+        return (), MetricsMark(inode, None), fresh
+    return rows, MetricsMark(inode, next_offset), fresh
+
+
 def last_ending(folder: ModelFolder) -> tuple[events.Ended | None, float | None]:
     """How the model's last run ended and when (wall time), from the trainer's state file:
-    what the run line says after a restart. None while a run is going or before any."""
+    what the run line says after a restart, and at the end of a run watched live. None
+    while a run is going or before any."""
     state = folder.training_state()
     if state is None or folder.is_training():
         return None, None
@@ -141,7 +179,7 @@ def last_ending(folder: ModelFolder) -> tuple[events.Ended | None, float | None]
     kind, message = str(state["state"]), str(state.get("message") or "")
     problem, fix = str(state.get("problem") or ""), fix_named(state.get("fix"))
     if kind == "running":  # its process is gone without a last word
-        kind, message = "failed", "the training process ended without writing how"
+        kind, message = "failed", NO_LAST_WORD
         problem, fix = "", None
     return (
         events.Ended(
@@ -151,12 +189,15 @@ def last_ending(folder: ModelFolder) -> tuple[events.Ended | None, float | None]
             total_steps=int(_number(state.get("steps"))),
             episodes=int(_number(state.get("episodes"))),
             best_progress=_number(state.get("best_progress")),
-            best_lap=None,
+            best_lap=_number(state.get("best_lap")) or None,
             problem=problem if fix is not None else "",
             fix=fix.name if fix is not None else "",
         ),
         at,
     )
+
+
+NO_LAST_WORD = "the training process ended without writing how"
 
 
 def _wall(value: object) -> float | None:
@@ -240,10 +281,15 @@ class TrainingModelsRead(Message):
 
 
 class FiguresLoaded(Message):
-    def __init__(self, name: str, figures: TrainingFigures) -> None:
+    def __init__(
+        self, name: str, figures: TrainingFigures, replaces: TrainingFigures | None = None
+    ) -> None:
         super().__init__()
         self.name = name
         self.figures = figures
+        # A run's end read from its files: these figures take the place of `replaces`,
+        # the ones it was watched with live, unless something newer has since.
+        self.replaces = replaces
 
 
 class ObservationMade(Message):
@@ -412,14 +458,30 @@ class TrainingScreen(RacerScreen[None]):
         return self.live is not None and self.live.model == name
 
     @work(thread=True, group="training-history", exit_on_error=False)
-    def _load_figures(self, name: str) -> None:
-        self.post_message(FiguresLoaded(name, load_figures(open_model(name))))
+    def _load_figures(self, name: str, replaces: TrainingFigures | None = None) -> None:
+        try:
+            figures = load_figures(open_model(name))
+        except ModelError:
+            return  # the model is gone: the list says so on its next read
+        self.post_message(FiguresLoaded(name, figures, replaces))
 
     def on_figures_loaded(self, message: FiguresLoaded) -> None:
-        if self._live_run_of(message.name) and message.name in self.figures:
-            figures = self.figures[message.name]  # a run started meanwhile: the truth now
+        current = self.figures.get(message.name)
+        figures = message.figures
+        if message.replaces is not None:
+            if current is not message.replaces:
+                return  # a newer run of it is on screen
+            ended = figures.ended
+            if current.ended is not None and (ended is None or ended.message == NO_LAST_WORD):
+                # The state file has no last word of this run: what the app saw of its end
+                # (its process's exit, its error output) is all there is.
+                figures.ended, figures.ended_at = current.ended, current.ended_at
+            figures.ended_before = False
+            self.figures[message.name] = figures
+        elif self._live_run_of(message.name) and current is not None:
+            figures = current  # a run started meanwhile: the truth now
         else:
-            self.figures[message.name] = figures = message.figures
+            self.figures[message.name] = figures
         if message.name == self.watched:
             self.query_one(TrainingCharts).show(figures, message.name)
 
@@ -616,17 +678,12 @@ class TrainingScreen(RacerScreen[None]):
                 self.query_one(TrainingCharts).show(figures, name)
             log = folder.training_log
             if not log.is_file():
-                # Started without a log (by `racer-tui train`): follow TrainingMetrics.json instead.
-                waited = 0.0
+                # Started without a log (by `racer-tui train`): its metrics file as it grows,
+                # then the whole of its files once it is over.
                 while _pid_alive(pid):
-                    await asyncio.sleep(1.0)
-                    waited += 1.0
-                    if waited % HISTORY_SECONDS:
-                        continue
-                    figures = await asyncio.to_thread(load_figures, folder)
-                    self.figures[name] = figures
-                    if name == self.watched:
-                        self.query_one(TrainingCharts).show(figures, name)
+                    await asyncio.sleep(METRICS_SECONDS)
+                    await self.read_metrics(name)
+                self._load_figures(name, self.figures.get(name))
                 return
             start = log.stat().st_size
 
@@ -655,9 +712,13 @@ class TrainingScreen(RacerScreen[None]):
         the run history, so only the rest of them is used."""
         waiter = asyncio.ensure_future(wait())
         offset, pending = 0, b""
+        next_metrics = 0.0
         try:
             with log.open("rb") as handle:
                 while True:
+                    if time.monotonic() >= next_metrics:
+                        await self.read_metrics(name)
+                        next_metrics = time.monotonic() + METRICS_SECONDS
                     chunk = handle.read(READ_CHUNK)
                     if chunk:
                         lines = (pending + chunk).split(b"\n")
@@ -673,6 +734,20 @@ class TrainingScreen(RacerScreen[None]):
                     await asyncio.sleep(TAIL_SECONDS)
         finally:
             waiter.cancel()
+
+    async def read_metrics(self, name: str) -> None:
+        """Fold the rows the trainer appended to `name`'s TrainingMetrics.json since the
+        last look (read in a thread, folded here, where the charts read the figures)."""
+        figures = self.figures.get(name)
+        if figures is None:
+            return
+        try:
+            folder = open_model(name)
+        except ModelError:
+            return
+        new = await asyncio.to_thread(read_new_rows, folder, figures.metrics_mark)
+        if self.figures.get(name) is figures:  # not replaced meanwhile
+            figures.take_rows(*new)
 
     def _ended_silently(self, name: str, returncode: int | None, stderr_tail: str) -> None:
         """A run whose process ended without writing its last event (`returncode` None: not
@@ -717,6 +792,9 @@ class TrainingScreen(RacerScreen[None]):
         if isinstance(event, events.Started) and live is not None and live.model == name:
             live.minutes = event.max_minutes
         if isinstance(event, events.Ended):
+            # Its figures as its files have them now that it is over: the state file's
+            # clock and ending, the metrics' last rows. What a restart shows, shown now.
+            self._load_figures(name, figures)
             said = said_in_app(event.message, event.problem, event.remedy)
             self.notify(
                 f"Training of {name} {event.kind}: {said.rstrip('.')}.",

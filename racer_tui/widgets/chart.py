@@ -102,6 +102,8 @@ class LineChart(Widget):
         self._changed = False
         self._lines: list[Strip] | None = None
         self.repaints = 0
+        # What the plot says while it has nothing to draw: its owner knows why.
+        self.empty_text = "waiting for data…"
 
     def on_mount(self) -> None:
         self.set_interval(1.0 / self.refresh_hz, self.repaint_if_changed)
@@ -120,6 +122,12 @@ class LineChart(Widget):
     def replace(self, values: Sequence[float]) -> None:
         self.series[0].values = [float(v) for v in values][-MAX_POINTS:]
         self._changed = True
+
+    def say_when_empty(self, text: str) -> None:
+        """What the plot says while it has no value to draw (why it is empty)."""
+        if text != self.empty_text:
+            self.empty_text = text
+            self._changed = True
 
     @property
     def values(self) -> list[float]:
@@ -159,7 +167,7 @@ class LineChart(Widget):
             return lines
         finite = [v for s in self.series for v in s.values if math.isfinite(v)]
         if not finite:
-            blank = Strip([Segment("waiting for data…", Style(dim=True))])
+            blank = Strip([Segment(self.empty_text[:width], Style(dim=True))])
             return [*lines, blank]
         low, high = min(finite), max(finite)
         if high - low < 1e-9:

@@ -1,9 +1,15 @@
-"""The training dashboard: what a racer watches while a model trains, folded from events.
+"""The training dashboard: what a racer watches while a model trains.
 
-`TrainingFigures` folds the child's events (or a past run's TrainingMetrics.json) into plain
-lists and counters; it knows nothing of Textual, so tests can check it directly.
-`TrainingCharts` draws one model's figures: six `LineChart`s (each repaints at its own calm
-rate) and a few lines of counters, refreshed at 2 Hz however fast the events arrive.
+`TrainingFigures` folds a training's own files into plain lists and counters: the rows of
+its TrainingMetrics.json (every car's episodes and the evaluations between iterations, read
+as the trainer appends them), its run history (updates and system readings, the same
+events the child streams) and its state file's last word. Live and after a restart the same
+rows go through the same fold, so a figure shown while the model trains is the figure shown
+the next day. The child's `episode` events (one car's sample of what the metrics file
+holds) and `evaluation` events (rows of it again) are not folded. It knows nothing of Textual, so
+tests can check it directly. `TrainingCharts` draws one model's figures: six `LineChart`s
+(each repaints at its own calm rate) and a few lines of counters, refreshed at 2 Hz however
+fast the events arrive.
 """
 
 from __future__ import annotations
@@ -26,7 +32,7 @@ from racer_tui.app_words import said_in_app
 from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.chart import MAX_POINTS, LineChart
 from racer_tui.widgets.job_line import local_clock
-from sim.deepracer_files import TrainingMetrics
+from sim.deepracer_files import TrainingEpisode, TrainingMetrics
 from sim.plural import counted
 from sim.training import events
 
@@ -36,9 +42,29 @@ STATUS_REFRESH_HZ = 2.0
 LAP_COMPLETE = "Lap complete"
 
 
+@dataclass(frozen=True)
+class EvaluationFigures:
+    """The latest evaluation between iterations, from its TrainingMetrics rows."""
+
+    trials: int
+    laps: int
+    mean_progress: float
+    best_lap: float | None
+
+
+@dataclass(frozen=True)
+class MetricsMark:
+    """How far a TrainingMetrics file has been read: its inode (a file replaced whole is
+    read again from the start) and the byte offset to continue from (None: a layout with
+    no place to continue from, read whole once)."""
+
+    inode: int | None = None
+    offset: int | None = 0
+
+
 @dataclass
 class TrainingFigures:
-    """One model's training figures: the history from its files, then the live events."""
+    """One model's training figures: its metrics rows, run history and ending."""
 
     rewards: list[float] = field(default_factory=list)
     progress: list[float] = field(default_factory=list)
@@ -50,7 +76,7 @@ class TrainingFigures:
     completed: list[bool] = field(default_factory=list)  # per episode: lap complete?
     started: events.Started | None = None
     update: events.Update | None = None
-    evaluation: events.Evaluation | None = None
+    evaluation: EvaluationFigures | None = None
     system: events.System | None = None
     ended: events.Ended | None = None
     ended_at: float | None = None  # wall time of the end, when known
@@ -58,6 +84,9 @@ class TrainingFigures:
     is_starting: bool = False  # a run was started and has not said so yet
     elapsed: float = 0.0
     version: int = 0  # bumped by every change, so views redraw only when needed
+    metrics_mark: MetricsMark = field(default_factory=MetricsMark)
+    _evaluation_rows: list[TrainingEpisode] = field(default_factory=list)
+    _evaluating: bool = False  # the last row read was an evaluation's
 
     @classmethod
     def from_metrics(
@@ -71,7 +100,18 @@ class TrainingFigures:
         figures = cls()
         for event in history:
             figures.fold(event)
-        for row in metrics.episodes if metrics is not None else ():
+        figures.fold_rows(metrics.episodes if metrics is not None else ())
+        figures.version += 1
+        return figures
+
+    def fold_rows(self, rows: Sequence[TrainingEpisode]) -> None:
+        """Add TrainingMetrics rows, in the file's order: training episodes of every car,
+        and the evaluations between iterations (each a run of rows back to back)."""
+        for row in rows:
+            if row.phase == "evaluation":
+                self._evaluation_row(row)
+                continue
+            self._evaluating = False
             if row.phase != "training":
                 continue
             lap = (
@@ -79,9 +119,45 @@ class TrainingFigures:
                 if row.episode_status == LAP_COMPLETE
                 else None
             )
-            figures._episode(row.reward_score, row.completion_percentage, lap, row.episode_status)
-        figures.version += 1
-        return figures
+            self._episode(row.reward_score, row.completion_percentage, lap, row.episode_status)
+        if rows:
+            self.version += 1
+
+    def _evaluation_row(self, row: TrainingEpisode) -> None:
+        group = self._evaluation_rows
+        # simapp's evaluation rows follow each other from the clock: one that does not start
+        # where the last ended begins the next evaluation.
+        if not (self._evaluating and group and row.start_time == group[-1].metric_time):
+            group = self._evaluation_rows = []
+        group.append(row)
+        self._evaluating = True
+        laps = [
+            r.elapsed_time_in_milliseconds / 1000.0
+            for r in group
+            if r.episode_status == LAP_COMPLETE
+        ]
+        self.evaluation = EvaluationFigures(
+            trials=len(group),
+            laps=len(laps),
+            mean_progress=sum(r.completion_percentage for r in group) / len(group),
+            best_lap=min(laps) if laps else None,
+        )
+
+    def take_rows(self, rows: Sequence[TrainingEpisode], mark: MetricsMark, fresh: bool) -> None:
+        """New rows read from the metrics file up to `mark`; `fresh`: the file was replaced
+        whole, and `rows` are all of it."""
+        if fresh:
+            self.clear_rows()
+        self.fold_rows(rows)
+        self.metrics_mark = mark
+
+    def clear_rows(self) -> None:
+        """Forget what came from the metrics file (it was replaced whole: read it again)."""
+        self.rewards, self.progress, self.lap_times = [], [], []
+        self.completed, self.statuses = [], Counter()
+        self.evaluation, self._evaluation_rows, self._evaluating = None, [], False
+        self.metrics_mark = MetricsMark()
+        self.version += 1
 
     def starting(self) -> None:
         """A new run is on its way: the last one's ending is no longer the news, and its
@@ -99,19 +175,17 @@ class TrainingFigures:
             self.version += 1
 
     def fold(self, event: events.Event) -> None:
+        """Fold one event of the child's stream. Episodes and evaluations are not taken
+        from it (one car's sample): they come from the metrics file (`fold_rows`)."""
         self.elapsed = max(self.elapsed, event.elapsed)
         if isinstance(event, events.Started):
             # A new run's clock starts again (the history holds the earlier runs' times).
             self.started, self.ended, self.elapsed = event, None, event.elapsed
             self.ended_at, self.ended_before, self.is_starting = None, False, False
-        elif isinstance(event, events.Episode):
-            self._episode(event.reward, event.progress, event.lap_time, event.status)
         elif isinstance(event, events.Update):
             self.update = event
             _append(self.entropy, event.entropy)
             _append(self.steps_per_second, event.steps_per_second)
-        elif isinstance(event, events.Evaluation):
-            self.evaluation = event
         elif isinstance(event, events.System):
             self.system = event
             _append(self.cpu, event.cpu_percent)
@@ -228,14 +302,12 @@ def figures_lines(figures: TrainingFigures, model: str = "") -> Group:
 def counters(figures: TrainingFigures) -> Text:
     update, system, evaluation = figures.update, figures.system, figures.evaluation
     text = Text()
-    # Every car's episodes, as the trainer counts them; the charts plot the episodes of the
-    # cars it reports (DeepRacer's metrics file does the same), a share of them.
-    charted = figures.episodes
-    every = update.episodes if update is not None and update.episodes > charted else charted
+    # Every car's episodes, as the metrics file has them (the trainer's own count runs a
+    # write ahead of the file: the larger of the two).
+    every = max(figures.episodes, update.episodes if update is not None else 0)
     number, noun = counted(every, "episode").split(" ", 1)
-    shown = f" {noun} ({charted:,} charted)  " if every > charted else f" {noun}  "
     text.append(number)
-    text.append(shown, style="dim")
+    text.append(f" {noun}  ", style="dim")
     text.append(_number(update.total_steps if update else None, ",.0f"))
     text.append(" steps  ", style="dim")
     text.append("laps ", style="dim")
@@ -258,6 +330,17 @@ def counters(figures: TrainingFigures) -> Text:
     else:
         text.append("-", style="dim")
     return text
+
+
+def empty_reason(figures: TrainingFigures, chart_id: str) -> str:
+    """What an empty chart says in its plot's place: why it has nothing to draw."""
+    if figures.ended is not None and figures.ended.kind == "failed":
+        return "the training failed (see above)"
+    if chart_id == "lap-time" and figures.episodes:
+        return "no lap completed yet"
+    if figures.ended is None and (figures.started is not None or figures.is_starting):
+        return "waiting for data…"
+    return "no data yet: press t to train"
 
 
 class TrainingCharts(Vertical):
@@ -329,6 +412,7 @@ class TrainingCharts(Vertical):
             elif len(values) > known:
                 chart.extend(values[known:])
             self._lengths[chart_id] = len(values)
+            chart.say_when_empty(empty_reason(self.figures, chart_id))
         self.query_one("#figures", Static).update(figures_lines(self.figures, self.model))
 
     def redraw_now(self) -> None:

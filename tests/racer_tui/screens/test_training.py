@@ -31,9 +31,16 @@ from racer_tui.widgets.training_charts import (
     run_line,
     training_job,
 )
-from sim.deepracer_files import TrainingEpisode, TrainingMetrics, write_training_metrics
+from sim.deepracer_files import (
+    TrainingEpisode,
+    TrainingMetrics,
+    append_training_metrics,
+    write_training_metrics,
+)
+from sim.garage.folder import open_model
 from sim.garage.options import new_model
 from sim.training import events
+from sim.training.run_history import RunHistory
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
 
 
@@ -50,6 +57,20 @@ def sample_events() -> list[events.Event]:
         events.System(2.0, 97.0, 310.0),
         events.Ended(3.0, "finished", "the time limit was reached", 2048, 3, 55.0, None),
     ]
+
+
+def sample_rows() -> list[TrainingEpisode]:
+    """The episodes of `sample_events` as the trainer writes them to TrainingMetrics.json."""
+    return [
+        TrainingEpisode(12.0, 6000, 0, 6000, 1, 1, "training", 40.0, "Off track"),
+        TrainingEpisode(30.0, 17250, 6000, 11250, 2, 2, "training", 100.0, "Lap complete"),
+        TrainingEpisode(8.0, 21250, 17250, 4000, 3, 3, "training", 25.0, "Off track"),
+    ]
+
+
+def write_rows(folder: Any, rows: list[TrainingEpisode]) -> None:
+    """Append rows with the trainer's own writer (its logbook's flush)."""
+    append_training_metrics(folder.training_metrics_file, rows, TrainingMetrics(()))
 
 
 def test_a_run_is_one_job_from_start_to_its_ending() -> None:
@@ -85,10 +106,13 @@ def test_a_run_is_one_job_from_start_to_its_ending() -> None:
     assert "starting" in str(run_line(figures, "ada"))
 
 
-def test_figures_fold_episodes_updates_and_endings() -> None:
+def test_figures_fold_metrics_rows_updates_and_endings() -> None:
     figures = TrainingFigures()
     for event in sample_events():
         figures.fold(event)
+    # The stream's episodes are one car's sample: the figures come from the metrics rows.
+    assert figures.rewards == [] and figures.episodes == 0
+    figures.fold_rows(sample_rows())
     assert figures.rewards == [12.0, 30.0, 8.0]
     assert figures.lap_times == [11.25]
     assert figures.statuses == {"Off track": 2, "Lap complete": 1}
@@ -130,8 +154,13 @@ async def test_injected_events_reach_the_charts_and_counters() -> None:
         screen = app.screen
         assert isinstance(screen, TrainingScreen)
         notes = Notifications(app)
+        folder = open_model("ada")
+        write_rows(folder, sample_rows())
+        history = RunHistory(folder.training_history)
         for event in sample_events():
+            history.record(event)  # as the trainer does when it emits an update
             screen.apply_event("ada", event)
+            await screen.read_metrics("ada")  # as the log tail does between its lines
         charts = screen.query_one(TrainingCharts)
         charts.redraw_now()
         await pilot.pause()
@@ -534,20 +563,20 @@ async def test_a_failed_training_says_the_apps_remedy_live_and_after_a_restart()
     assert ended is not None and ended.remedy is None and ended.message == MISSING_TRACK.message
 
 
-def test_the_counters_say_every_cars_episodes_and_how_many_are_charted() -> None:
-    """The trainer counts every car's episodes; the charts plot the reported cars' share.
-    Both figures are shown, so neither is mistaken for the other."""
+def test_the_counters_count_every_cars_episodes() -> None:
+    """The metrics file holds every car's episodes; the trainer's own count in its updates
+    runs a write ahead of the file: the larger is shown, never the stream's one-car share."""
     from racer_tui.widgets.training_charts import counters
 
     figures = TrainingFigures()
-    for event in sample_events()[:4]:  # three charted episodes, then an update
-        figures.fold(event)
+    figures.fold_rows(sample_rows())
+    assert counters(figures).plain.startswith("3 episodes  ")
     figures.fold(
         events.Update(2.0, 2, 9000, 11418, 1.5, 0, 0.4, 0, 0.1, 5000.0, 40, 16.0, 50.0, 1, None)
     )
-    assert counters(figures).plain.startswith("11,418 episodes (3 charted)")
+    assert counters(figures).plain.startswith("11,418 episodes  ")
     alone = TrainingFigures()
-    alone.fold(sample_events()[1])  # no update yet: only the charted count is known
+    alone.fold_rows(sample_rows()[:1])
     assert counters(alone).plain.startswith("1 episode  ")
 
 

@@ -21,7 +21,7 @@ from racer_tui.widgets.training_charts import TrainingCharts
 from sim.deepracer_files import read_training_metrics
 from sim.garage.options import new_model
 from sim.training.checkpoint import LATEST
-from tests.racer_tui.screens.tui_helpers import settle, wait_for
+from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for
 
 pytestmark = pytest.mark.slow
 
@@ -79,12 +79,17 @@ async def test_train_watch_answer_keys_and_stop(monkeypatch: pytest.MonkeyPatch)
             charts.redraw_now()
             assert len(charts.query_one("#chart-reward", LineChart).values) >= 3
 
+            watched = figures["tiny"]
             await pilot.press("s")
             await wait_for(pilot, lambda: screen.live is None, tries=1200)
+            # Its end as its files have it: what a restart shows (issue 42).
+            await wait_for(pilot, lambda: figures["tiny"] is not watched, tries=200)
             ended = figures["tiny"].ended
             assert ended is not None and ended.kind == "stopped"
             view = screen.query_one(AgentView)
             await wait_for(pilot, lambda: view.observation is not None, tries=200)
+            charts.redraw_now()
+            live_text = " ".join(painted(charts.query_one("#figures")).split())
     finally:
         if pid > 0:
             with contextlib.suppress(ProcessLookupError):
@@ -94,3 +99,11 @@ async def test_train_watch_answer_keys_and_stop(monkeypatch: pytest.MonkeyPatch)
     state = folder.training_state()
     assert state is not None and state["state"] == "stopped"
     assert read_training_metrics(folder.training_metrics_file).episodes
+    again = create_app(start="training")
+    async with again.run_test(size=(120, 40)) as pilot:
+        await settle(pilot)
+        charts = again.screen.query_one(TrainingCharts)
+        await wait_for(pilot, lambda: charts.figures.episodes > 0)
+        charts.redraw_now()
+        restart_text = " ".join(painted(charts.query_one("#figures")).split())
+    assert restart_text.replace("last run ", "") == live_text

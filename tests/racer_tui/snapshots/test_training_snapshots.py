@@ -13,6 +13,8 @@ from textual.widgets import Input
 from racer_tui.app import create_app
 from racer_tui.screens.training import TrainingScreen
 from racer_tui.widgets.training_charts import TrainingCharts
+from sim.deepracer_files import TrainingEpisode, TrainingMetrics, append_training_metrics
+from sim.garage.folder import open_model
 from sim.garage.options import new_model
 from sim.training import events
 from tests.racer_tui.screens.tui_helpers import settle
@@ -40,6 +42,16 @@ def a_run() -> list[events.Event]:
     return out
 
 
+def as_row(episode: events.Episode) -> TrainingEpisode:
+    """An episode as the trainer's logbook writes it to TrainingMetrics.json."""
+    ms = round((episode.lap_time or episode.steps / 15) * 1000)
+    end = round(episode.elapsed * 1000)
+    return TrainingEpisode(
+        episode.reward, end, end - ms, ms, episode.episode, episode.episode, "training",
+        episode.progress, episode.status,
+    )  # fmt: skip
+
+
 @SIZES
 def test_training_with_a_run(snap_compare: Compare, size: tuple[int, int]) -> None:
     new_model("hairpin-hero")
@@ -49,8 +61,17 @@ def test_training_with_a_run(snap_compare: Compare, size: tuple[int, int]) -> No
         await settle(pilot)
         screen = pilot.app.screen
         assert isinstance(screen, TrainingScreen)
-        for event in a_run():
+        # The episodes in the model's metrics file, as the trainer writes them; the
+        # stream's events through the screen, as the log tail applies them.
+        run = a_run()
+        append_training_metrics(
+            open_model("hairpin-hero").training_metrics_file,
+            [as_row(event) for event in run if isinstance(event, events.Episode)],
+            TrainingMetrics(()),
+        )
+        for event in run:
             screen.apply_event("hairpin-hero", event)
+        await screen.read_metrics("hairpin-hero")
         charts = screen.query_one(TrainingCharts)
         charts.show(screen.figures["hairpin-hero"], "hairpin-hero")
         charts.redraw_now()
