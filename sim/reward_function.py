@@ -31,8 +31,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from sim import reward_limit
+from sim import reward_limit, reward_sandbox
 from sim.reward_limit import RewardTimeout
+from sim.reward_sandbox import ForbiddenInReward
 
 if TYPE_CHECKING:  # gymnasium's import is not needed to load a reward function
     from sim.action_space import ActionSpace
@@ -148,11 +149,19 @@ class RewardFunction:
             limit.started = 0.0
             raise self._timed_out(late) from None
         if limit.fired == started:  # it swallowed the interruption and returned later
+            refused = reward_sandbox.take_refusal(started)
+            if refused is not None:
+                raise self._raised_error(refused)
             raise self._timed_out(RewardTimeout(limit.seconds))
         return value
 
     def __repr__(self) -> str:
         return f"RewardFunction({self.name!r})"
+
+    def first_line(self) -> int | None:
+        """The line of `def reward_function` in the racer's file, when it is there."""
+        code = _own_code(self._function, self._filename)
+        return None if code is None else code.co_firstlineno
 
     def fresh(self) -> RewardFunction:
         """The same file loaded again into a module of its own.
@@ -181,8 +190,7 @@ class RewardFunction:
         )
 
     def _raised_error(self, error: BaseException) -> RewardFunctionError:
-        problem = f"reward_function raised {_describe_exception(error)}"
-        return RewardFunctionError(self.name, problem, _user_line(error, self._filename))
+        return _failure(error, self.name, self._filename, "reward_function")
 
     def _checked(self, value: object, params: RewardParams) -> float:
         reward = _as_reward(value)
@@ -216,7 +224,7 @@ class RewardFunction:
             limit.begin()
         try:
             value = self._function(dict(params))
-        except (Exception, SystemExit, RewardTimeout):
+        except (Exception, SystemExit, RewardTimeout, ForbiddenInReward):
             return code.co_firstlineno
         finally:
             if limit is not None:
@@ -420,12 +428,13 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
     except BaseException as error:  # the racer's module-level code may raise anything
         if limit is not None:
             limit.end()
-        problem = f"loading the file raised {_describe_exception(error)}"
-        line = _user_line(error, filename)
-        raise RewardFunctionError(display, problem, line, "fix the file and try again") from error
+        raise _failure(error, display, filename, "loading the file") from error
     finally:
         if limit is not None:
             limit.end()
+    refused = reward_sandbox.take_refusal(began) if limit is not None else None
+    if refused is not None:  # it swallowed the refusal
+        raise _failure(refused, display, filename, "loading the file")
     if limit is not None and limit.overran(began):  # it swallowed the interruption
         raise RewardFunctionError(
             display,
@@ -543,6 +552,31 @@ def _user_line(error: BaseException, filename: str) -> int | None:
             line = traceback.tb_lineno
         traceback = traceback.tb_next
     return line
+
+
+def _failure(error: BaseException, display: str, filename: str, who: str) -> RewardFunctionError:
+    """What `who` ("reward_function", "loading the file") raising `error` means, in one
+    sentence: a thing a reward may not do, memory, an exit, or the exception itself."""
+    line = _user_line(error, filename)
+    advice = FIX_ADVICE if who == "reward_function" else "fix the file and try again"
+    if isinstance(error, ForbiddenInReward):
+        problem = f"{who} {error.action}, which a reward function may not do"
+        return RewardFunctionError(display, problem, error.line_in(filename) or line, "remove it")
+    megabytes = reward_sandbox.memory_limit_mb()
+    if isinstance(error, MemoryError) and megabytes is not None:
+        problem = reward_sandbox.memory_problem(megabytes).replace("reward_function", who, 1)
+        return RewardFunctionError(
+            display, problem, line, "keep less in memory (smaller lists and arrays)"
+        )
+    if isinstance(error, SystemExit):
+        problem = f"{who} calls sys.exit() ({_describe_exception(error)}), which ends a process"
+        return RewardFunctionError(display, problem, line, "remove the exit() call")
+    problem = f"{who} raised {_describe_exception(error)}"
+    if isinstance(error, PermissionError) and reward_sandbox.landlock_status() == "applied":
+        advice = (
+            "a reward function may read only Python's files and its own folder, and write nowhere"
+        )
+    return RewardFunctionError(display, problem, line, advice)
 
 
 def _describe_exception(error: BaseException) -> str:

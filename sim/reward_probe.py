@@ -1,16 +1,18 @@
-"""Run a racer's reward function away from the caller: in a child process, with a time
-limit on every call and a deadline on the whole check. The child is no sandbox (it runs
-with the racer's rights, as training does); it keeps the caller's process from running,
-hanging on or crashing with the code.
+"""Run a racer's reward function away from the caller: in a child process of its own
+session, with a time limit on every call, a deadline on the whole check, a memory limit,
+no process left behind and (where Linux has Landlock) no file outside Python's and its own
+folder to read and none to write (sim.reward_sandbox). It keeps the caller's process from
+running, hanging on or crashing with the code.
 
 `racer-tui reward check` and the model editor's Check ask `check_reward_source`: the
 child (`python -m sim.reward_probe`) loads the code, calls it on DeepRacer-complete sample
 params and, when a track is given, on every step of the reference driver's lap, and
 answers with one JSON line. `map_reward_source` asks the child for a reward map instead
 (`sim.reward_map`). Whatever the code does (loops forever, sleeps, prints, exits
-its process, raises KeyboardInterrupt), the caller gets a `ProbeReport` or a
-`RewardFunctionError` in one sentence, and its own process never ran a line of it. (Code
-that means to can still write a false answer: the check is for the racer's own use.)
+its process, starts a process, allocates without bound, raises KeyboardInterrupt), the
+caller gets a `ProbeReport` or a `RewardFunctionError` in one sentence, its own process
+never ran a line of it, and no process of the check outlives it. What the function prints
+goes to /dev/null, never to a pipe the caller waits on.
 """
 
 from __future__ import annotations
@@ -23,10 +25,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from sim.reward_function import RewardFunctionError
+from sim import reward_sandbox
+from sim.reward_function import RewardFunction, RewardFunctionError
 from sim.reward_lap import LINES, LapPay
 from sim.reward_limit import DEFAULT_SECONDS
 from sim.reward_map import MapOptions, RewardMap
+from sim.reward_sandbox import DEFAULT_MEMORY_MB
 
 # The whole check (interpreter start, imports, the reference lap) must end within this;
 # a function slow enough to miss it would make training crawl anyway.
@@ -48,10 +52,11 @@ def check_reward_source(
     track: str | None = None,
     seconds: float = DEFAULT_SECONDS,
     deadline: float = CHECK_DEADLINE_SECONDS,
+    memory_mb: int = DEFAULT_MEMORY_MB,
 ) -> ProbeReport:
     """Run the code named `name` (a file path or a template's file name) in a child
     process; raise `RewardFunctionError` for anything wrong with it."""
-    ok = _ask_child("check", source, name, seconds, deadline, track=track)
+    ok = _ask_child("check", source, name, seconds, deadline, track=track, memory_mb=memory_mb)
     return ProbeReport(float(ok["sample_reward"]), ok["track"], tuple(ok["lap_rewards"]))
 
 
@@ -131,35 +136,47 @@ def _ask_child(
 ) -> dict[str, Any]:
     """The child's answer to one request (its "ok" part), or RewardFunctionError."""
     request = {"mode": mode, "source": source, "name": name, "seconds": seconds, **extra}
+    child = subprocess.Popen(
+        # -P: a `sim` folder in the working directory must not stand in for ours.
+        [sys.executable, "-P", "-m", "sim.reward_probe"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,  # the function's prints: unbounded, and not ours
+        # Its own session: whatever the function starts is in its process group, killed
+        # as a whole below however the check ends.
+        start_new_session=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
     try:
-        done = subprocess.run(
-            # -P: a `sim` folder in the working directory must not stand in for ours.
-            [sys.executable, "-P", "-m", "sim.reward_probe"],
-            input=json.dumps(request).encode("utf-8"),
-            stdout=subprocess.PIPE,
-            stderr=subprocess.DEVNULL,  # the function's prints: unbounded, and not ours
-            timeout=deadline,
-            check=False,
-            env={**os.environ, "PYTHONUNBUFFERED": "1"},
-        )
+        stdout, _ = child.communicate(json.dumps(request).encode("utf-8"), timeout=deadline)
     except subprocess.TimeoutExpired:
+        stdout = None
+    finally:
+        # The child kills its own descendants before it answers; this ends what is left of
+        # its session (the group outlives its leader while any member lives, so its id
+        # cannot have been given to another process).
+        reward_sandbox.kill_session(child.pid)
+        if child.stdout is not None:
+            child.stdout.close()
+        child.wait()
+    if stdout is None:
         raise RewardFunctionError(
             name,
             f"the check did not finish within {deadline:g} s, so it was stopped",
             advice="make the function return faster (each call should take well under "
             f"{seconds:g} s)",
         ) from None
-    answer = _answer(done.stdout)
+    answer = _answer(stdout)
     if answer is None:
-        if done.returncode < 0:
+        if child.returncode < 0:
             raise RewardFunctionError(
                 name,
-                f"the check's process was killed (signal {-done.returncode}) before it answered",
+                f"the check's process was killed (signal {-child.returncode}) before it answered",
                 advice="if it ran out of memory, make the function use less; then try again",
             )
         raise RewardFunctionError(
             name,
-            f"the function ended its own process (exit code {done.returncode}) instead of "
+            f"the function ended its own process (exit code {child.returncode}) instead of "
             "returning a reward",
             advice="remove the exit() or os._exit() call",
         )
@@ -197,30 +214,55 @@ def _answer(stdout: bytes) -> dict[str, Any] | None:
 # --- the child ---------------------------------------------------------------------------
 
 
-def _probe(request: dict[str, Any]) -> dict[str, Any]:
+class _Watched:
+    """A reward function whose every call is followed by a look for a process it left:
+    what the audit guard cannot see (a multiprocessing "spawn" start) is caught here."""
+
+    def __init__(self, reward: RewardFunction) -> None:
+        self.reward = reward
+        self._left_one(loading=True)
+
+    def __call__(self, params: Any) -> float:
+        value = self.reward(params)
+        self._left_one()
+        return value
+
+    def fresh(self) -> _Watched:
+        return _Watched(self.reward.fresh())
+
+    def _left_one(self, *, loading: bool = False) -> None:
+        if reward_sandbox.has_child_process():
+            reward_sandbox.end_descendants()
+            who = "loading the file" if loading else "reward_function"
+            raise RewardFunctionError(
+                self.reward.name,
+                f"{who} starts a process that outlives the call, which a reward function "
+                "may not do",
+                None if loading else self.reward.first_line(),
+                "remove it",
+            )
+
+
+def _probe(request: dict[str, Any], track: Any) -> dict[str, Any]:
     from sim.reward_function import load_reward_source
     from sim.reward_sample_params import sample_params
 
     name = str(request["name"])
-    reward = load_reward_source(str(request["source"]), name)
+    reward = _Watched(load_reward_source(str(request["source"]), name))
     mode = request.get("mode")
     if mode in ("lap", "map", "editor"):
         answer: dict[str, Any] = {}
         if mode == "editor":
             answer["sample_reward"] = reward(sample_params())
         if mode in ("lap", "editor"):
-            answer["laps"] = _lap_answer(reward.fresh(), request)
+            answer["laps"] = _lap_answer(reward.fresh(), track, request)
         if mode in ("map", "editor"):
-            answer["map"] = _map_answer(reward.fresh(), request)
+            answer["map"] = _map_answer(reward.fresh(), track, request)
         return {"ok": answer}
     sample = reward(sample_params())
-    track_name = request.get("track")
     lap: Sequence[float] = ()
     shown_track = None
-    if track_name:
-        from sim.track_catalog import resolve_track
-
-        track = resolve_track(str(track_name))
+    if track is not None:
         shown_track = track.name
         # The lap runs on the file loaded afresh, as a DeepRacer worker starts with it:
         # state the sample call left in the module does not leak into the lap.
@@ -228,19 +270,17 @@ def _probe(request: dict[str, Any]) -> dict[str, Any]:
     return {"ok": {"sample_reward": sample, "track": shown_track, "lap_rewards": list(lap)}}
 
 
-def _lap_answer(reward: Any, request: dict[str, Any]) -> list[dict[str, Any]]:
+def _lap_answer(reward: Any, track: Any, request: dict[str, Any]) -> list[dict[str, Any]]:
     from sim.reward_lap import CENTRE_LINE, lap_rewards
-    from sim.track_catalog import resolve_track
 
     speeds = tuple(float(speed) for speed in request["speeds"])
     lines = tuple(str(line) for line in request.get("lines", (CENTRE_LINE,)))
-    pays = lap_rewards(reward, resolve_track(str(request["track"])), speeds, lines)
+    pays = lap_rewards(reward, track, speeds, lines)
     return [pay.to_json() for pay in pays]
 
 
-def _map_answer(reward: Any, request: dict[str, Any]) -> dict[str, Any]:
+def _map_answer(reward: Any, track: Any, request: dict[str, Any]) -> dict[str, Any]:
     from sim.reward_map import compute_map
-    from sim.track_catalog import resolve_track
 
     heading = request.get("heading")
     options = MapOptions(
@@ -248,7 +288,7 @@ def _map_answer(reward: Any, request: dict[str, Any]) -> dict[str, Any]:
         float(request["speed"]),
         None if heading is None else float(heading),
     )
-    return compute_map(reward, resolve_track(str(request["track"])), options).to_json()
+    return compute_map(reward, track, options).to_json()
 
 
 def _reference_lap_rewards(reward: Any, track: Any) -> list[float]:
@@ -274,46 +314,63 @@ def _error_answer(
     return {"error": {"display": display, "problem": problem, "line": line, "advice": advice}}
 
 
+def _prepare(request: dict[str, Any]) -> Any:
+    """Everything the check reads, read before the files are closed off: its modules and
+    the track (a .npy path may be anywhere)."""
+    import sim.reference_driver
+    import sim.reward_lap
+    import sim.reward_map
+    import sim.reward_sample_params
+    import sim.simulation  # noqa: F401 - imported for what follows, not used here
+
+    track_name = request.get("track")
+    if not track_name:
+        return None
+    from sim.track_catalog import resolve_track
+
+    return resolve_track(str(track_name))
+
+
 def main() -> int:
-    # The answer goes to the real stdout; anything the racer's code prints goes to stderr,
-    # so a print() in the function cannot be taken for the answer.
+    # The answer goes to the real stdout; anything the racer's code prints goes to stderr
+    # (/dev/null), so a print() in the function cannot be taken for the answer.
     answer_stream = os.fdopen(os.dup(1), "w", encoding="utf-8")
     os.dup2(2, 1)
     sys.stdout = sys.stderr
     request = json.loads(sys.stdin.buffer.read().decode("utf-8"))
+    name = str(request.get("name"))
 
-    from sim import reward_limit
-
-    limit = reward_limit.install(float(request.get("seconds", DEFAULT_SECONDS)))
-
-    def stuck(limit_seconds: float) -> None:
-        answer_stream.write(
-            json.dumps(
-                _error_answer(
-                    str(request.get("name")),
-                    f"reward_function did not return within {limit_seconds:g} s and would not "
-                    "be stopped (does it catch every exception?)",
-                    "make it return faster",
-                )
-            )
-            + "\n"
-        )
+    def say(answer: dict[str, Any]) -> None:
+        answer_stream.write(json.dumps(answer) + "\n")
         answer_stream.flush()
-        os._exit(0)
 
-    limit.on_stuck = stuck
+    def stuck(error: RewardFunctionError) -> None:
+        reward_sandbox.end_descendants()
+        say(_error_answer(error.display, error.problem, error.advice, error.line))
+
+    reward_sandbox.become_subreaper()  # orphans of the function stay ours to end
+    reward_sandbox.install_call_limit(float(request.get("seconds", DEFAULT_SECONDS)), name, stuck)
+    reward_sandbox.guard_reward_calls()
     try:
-        answer = _probe(request)
+        track = _prepare(request)
+        reward_sandbox.close_off_files(name)
+        reward_sandbox.limit_memory(int(request.get("memory_mb", DEFAULT_MEMORY_MB)))
+        answer = _probe(request, track)
     except RewardFunctionError as error:
         answer = _error_answer(error.display, error.problem, error.advice, error.line)
+    except MemoryError:  # the function's memory, filled where racer-tui's code ran next
+        megabytes = reward_sandbox.memory_limit_mb() or DEFAULT_MEMORY_MB
+        answer = _error_answer(
+            name, reward_sandbox.memory_problem(megabytes), "keep less in memory"
+        )
     except BaseException as error:  # the track, or an interrupt
         answer = _error_answer(
-            str(request.get("name")),
+            name,
             f"the check could not run ({type(error).__name__}: {error})",
             "fix that and try again",
         )
-    answer_stream.write(json.dumps(answer) + "\n")
-    answer_stream.flush()
+    reward_sandbox.end_descendants()
+    say(answer)
     return 0
 
 
