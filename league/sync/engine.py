@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any, Final
 
 from league.store import League
-from league.sync import incoming, local, outgoing, profiles
+from league.sync import incoming, local, models, outgoing, profiles
 from league.sync.errors import CursorInvalidError
 from league.sync.protocol import ContentConflict, PullPage, RecordStore, VersionConflict
 from league.sync.record import KINDS, SyncRecord
@@ -145,6 +145,7 @@ def push(
     signing = signing_key or load_or_create_key()
     store.push([])  # reach the store (or fail with one sentence) before doing anything
     renames = profiles.push_profiles(league, store, key, signing)
+    models.register_models(league, signing.public_hex)  # the models this racer raced
     summary.pushed += renames.pushed
     summary.skipped += renames.skipped
     summary.refused.extend(renames.refused)

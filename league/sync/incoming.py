@@ -10,7 +10,10 @@ decides, record by record (roster acts first, then parents before children):
   again whenever the roster changes;
 - already here with the same content (or kept as an alias): nothing to do;
 - here with other content: a conflict, both sides kept;
+- dated before the league was founded, by a racer: refused (dates.py);
 - refers to something not here yet: waits in sync_pending;
+- a result that copies another racer's, or races a model another racer registered first:
+  refused; one whose model its racer has not registered yet: waits (models.py);
 - same natural key as a local row with another id: the identity rule (identity.py);
 - otherwise: inserted through league.records.store_record.
 
@@ -27,10 +30,11 @@ from typing import Final, Literal
 
 from league.entries import rebuild_entries, refresh_entries
 from league.records import record_body, store_record
-from league.store import League
-from league.sync import bundle_records, identity, profiles
+from league.store import League, now_iso
+from league.sync import bundle_records, identity, models, profiles
+from league.sync.dates import founding_refusal
 from league.sync.errors import RecordInvalidError
-from league.sync.kinds import BUNDLE_KIND, INSERT_ORDER, PROFILE_KIND, TABLE_OF_KIND
+from league.sync.kinds import BUNDLE_KIND, INSERT_ORDER, MODEL_KIND, PROFILE_KIND, TABLE_OF_KIND
 from league.sync.links import missing_references
 from league.sync.local import (
     add_conflict,
@@ -54,6 +58,7 @@ from league.trust.seals import is_genuine
 Outcome = Literal[
     "inserted", "already", "aliased", "replaced", "conflict", "known", "waiting", "held"
 ]
+_RESULT_KINDS: Final = ("submission", "race")
 
 
 @dataclass(frozen=True)
@@ -266,8 +271,11 @@ def _apply_trusted(
             hold(league, store, record, reason)
             result.held.append(f"{record.kind} {record.record_id}: {reason}")
             return "held"
+        too_early = founding_refusal(record, trust.roster)
+        if too_early is not None:
+            return _refuse(league, store, record, too_early, result.held)
         keep_seals(league, [record])
-    outcome = _apply(league, store, record, touched)
+    outcome = _apply(league, store, record, touched, roster=trust.roster, refused=result.held)
     if record.kind == ROSTER_KIND and outcome in ("inserted", "replaced"):
         trust.roster = Roster.load(league)
         trust.changed = True
@@ -284,6 +292,8 @@ def _already_here(league: League, record: SyncRecord) -> bool:
         return row is not None
     if record.kind == BUNDLE_KIND:
         sql = "SELECT 1 FROM sync_bundles WHERE record_id = ? AND content_hash = ?"
+    elif record.kind == MODEL_KIND:
+        return models.is_here(league, record.record_id, record.content_hash)
     else:
         table = TABLE_OF_KIND[record.kind]
         sql = (
@@ -333,12 +343,16 @@ def _count(result: PageResult, record: SyncRecord, outcome: Outcome) -> None:
 def _retry_pending(league: League, store: str, result: PageResult, touched: list[str]) -> None:
     """Insert waiting records whose references have arrived, until nothing more moves."""
     progress = True
+    roster = Roster.load(league)
     while progress:
         progress = False
         waiting = sorted(pending_records(league), key=lambda r: (INSERT_ORDER[r.kind], r.record_id))
         done: list[tuple[str, str]] = []
         for record in waiting:
-            outcome = _apply(league, store, record, touched, retry=True)  # trusted when pulled
+            # Trusted when pulled; its model is judged again, as model records arrive.
+            outcome = _apply(
+                league, store, record, touched, roster=roster, refused=result.held, retry=True
+            )
             if outcome != "waiting":
                 done.append((record.kind, record.record_id))
                 _count(result, record, outcome)
@@ -347,12 +361,21 @@ def _retry_pending(league: League, store: str, result: PageResult, touched: list
 
 
 def _apply(
-    league: League, store: str, record: SyncRecord, touched: list[str], *, retry: bool = False
+    league: League,
+    store: str,
+    record: SyncRecord,
+    touched: list[str],
+    *,
+    roster: Roster,
+    refused: list[str],
+    retry: bool = False,
 ) -> Outcome:
     if record.kind == PROFILE_KIND:
         return profiles.apply_pulled_profile(league, store, record)
     if record.kind == BUNDLE_KIND:
         return bundle_records.apply_pulled_bundle(league, store, record)
+    if record.kind == MODEL_KIND:
+        return models.apply_pulled_model(league, store, record)
     table = TABLE_OF_KIND[record.kind]
     here = league.query_one(f"SELECT content_hash FROM {table} WHERE id = ?", (record.record_id,))
     if here is not None:
@@ -371,15 +394,48 @@ def _apply(
         if not retry:
             add_pending(league, record, ", ".join(missing))
         return "waiting"
+    judged = models.verdict(league, record, roster)
+    if judged is not None and judged.action == "refuse":
+        return _refuse(league, store, record, judged.reason, refused)
+    if judged is not None:
+        if not retry:
+            add_pending(league, record, judged.reason)
+        return "waiting"
     clash = identity.find_clash(league, record)
     if clash is not None:
         return identity.resolve(league, store, record, clash)
     store_record(league, table, record.record_id, record.body, refresh=False)
-    if table in ("submissions", "races"):
+    if record.kind in _RESULT_KINDS:
         touched.append(record.record_id)
+        # When this league first saw it: a tie is not won by a date written earlier.
+        league.conn.execute(
+            "INSERT OR IGNORE INTO sync_first_seen (entry_id, seen_at) VALUES (?, ?)",
+            (record.record_id, now_iso()),
+        )
     elif record.kind == "correction" and record.body["kind"] == "disqualify_lap":
         touched.append(str(record.body["target"]))
     return "inserted"
+
+
+def _refuse(
+    league: League, store: str, record: SyncRecord, reason: str, refused: list[str]
+) -> Literal["held"]:
+    """Quarantine a valid, genuinely signed record that can never count here (no roster
+    change makes a forged date true or a copy someone's own), with `reason`."""
+    where = f"{record.kind} {record.record_id}"
+    add_quarantined(
+        league,
+        store,
+        quarantine(reason, where, record.canonical_body),
+        record.kind,
+        record.record_id,
+    )
+    league.conn.execute(
+        "DELETE FROM sync_seals WHERE kind = ? AND record_id = ? AND content_hash = ?",
+        (record.kind, record.record_id, record.content_hash),
+    )
+    refused.append(f"{where}: {reason}")
+    return "held"
 
 
 def _conflict(

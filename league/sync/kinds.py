@@ -1,9 +1,10 @@
 """Which shared league table each record kind is, and the order they are inserted in.
 
 Every table in league.records.SHARED_TABLES has exactly one kind, so a record's kind
-says where it goes and nothing is folded into another record's body. Two kinds belong
+says where it goes and nothing is folded into another record's body. Three kinds belong
 to sync itself rather than to a league table: `racer_profile` (a racer's versioned
-display name, see profiles.py) and `bundle` (which S3 bundle holds which model).
+display name, see profiles.py), `bundle` (which S3 bundle holds which model) and `model`
+(a racer's word that a model hash is theirs, see models.py).
 """
 
 from __future__ import annotations
@@ -30,11 +31,23 @@ TABLE_OF_KIND: Final[dict[str, str]] = {
 KIND_OF_TABLE: Final[dict[str, str]] = {table: kind for kind, table in TABLE_OF_KIND.items()}
 PROFILE_KIND: Final = "racer_profile"
 BUNDLE_KIND: Final = "bundle"
+MODEL_KIND: Final = "model"
 
-# Parents before the records that refer to them: the order to insert a pulled page in.
+# Parents before the records that refer to them: the order to insert a pulled page in. A
+# model record goes before the results that race its model, so they need not wait for it.
 LEAGUE_KINDS: Final[tuple[str, ...]] = tuple(KIND_OF_TABLE[table] for table in SHARED_TABLES)
+_BEFORE_RESULTS: Final = LEAGUE_KINDS.index("submission")
 INSERT_ORDER: Final[dict[str, int]] = {
-    kind: position for position, kind in enumerate((*LEAGUE_KINDS, PROFILE_KIND, BUNDLE_KIND))
+    kind: position
+    for position, kind in enumerate(
+        (
+            *LEAGUE_KINDS[:_BEFORE_RESULTS],
+            MODEL_KIND,
+            *LEAGUE_KINDS[_BEFORE_RESULTS:],
+            PROFILE_KIND,
+            BUNDLE_KIND,
+        )
+    )
 }
 
 _CROCKFORD: Final = "0123456789ABCDEFGHJKMNPQRSTVWXYZ"

@@ -18,8 +18,9 @@ from typing import Any, Final
 
 from league.records import SHARED_TABLES, Children, row_body
 from league.store import League
+from league.sync import models
 from league.sync.errors import RecordInvalidError
-from league.sync.kinds import BUNDLE_KIND, KIND_OF_TABLE
+from league.sync.kinds import BUNDLE_KIND, KIND_OF_TABLE, MODEL_KIND
 from league.sync.record import SyncRecord
 
 BATCH: Final = 1000
@@ -60,7 +61,7 @@ def count_unsent(league: League, store: str) -> int:
             (store,),
         )
         total += int(row[0]) if row else 0
-    return total
+    return total + models.count_unsent(league, store)
 
 
 def unsent_batches(league: League, store: str, batch: int = BATCH) -> Iterator[Batch]:
@@ -95,6 +96,9 @@ def unsent_batches(league: League, store: str, batch: int = BATCH) -> Iterator[B
         found = _records(BUNDLE_KIND, [(record_id, digest, body)])
         extra.records.extend(found.records)
         extra.damaged.extend(found.damaged)
+    found = _records(MODEL_KIND, models.unsent_models(league, store))
+    extra.records.extend(found.records)
+    extra.damaged.extend(found.damaged)
     if extra.records or extra.damaged:
         yield extra
 

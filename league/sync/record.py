@@ -46,6 +46,7 @@ KINDS: Final = (
     "racer_profile",
     "bundle",
     "roster",
+    "model",
 )
 # Kinds whose records change through numbered versions; every other kind is immutable.
 VERSIONED_KINDS: Final = frozenset({"racer_profile"})

@@ -15,10 +15,9 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from datetime import UTC, date, datetime
+from datetime import date, datetime
 from typing import Any, Final
 
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
@@ -29,12 +28,13 @@ from league.racers import HEX_COLOUR, check_name
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
 from league.seasons import check_points
 from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
+from league.sync.dates import check_dates
 from league.sync.errors import RecordInvalidError
-from league.sync.kinds import BUNDLE_KIND, PROFILE_KIND, profile_id
+from league.sync.kinds import BUNDLE_KIND, MODEL_KIND, PROFILE_KIND, profile_id
 from league.sync.record import HASH_PATTERN, SyncRecord, parse_json
 from league.trust.keys import is_public_hex
 from league.trust.roster import ACTIONS, FOUNDER_ID, ROLES
-from sim.ids import id_time_ms, is_valid_id
+from sim.ids import is_valid_id
 from sim.names import NAME_RULE, is_valid_name
 from sim.race.physics import is_physics
 from sim.race.plausible import fastest_possible_lap_by_hash
@@ -350,32 +350,15 @@ assert tuple(LAP_FIELDS["race"]) == RACE_LAP_COLUMNS
 MAX_LAPS: Final = {"submission": MAX_TRIALS, "race": 10_000}
 
 
-# Kinds whose rows are one per name or hash, where the first one made wins on every
-# machine (league.sync.identity): their ids carry the time they were made, so a record
-# dated before any league existed, or days ahead, would win by a forged date.
-IDENTITY_KINDS: Final = frozenset({"racer", "track", "season"})
-EARLIEST_ID_MS: Final = int(datetime(2024, 1, 1, tzinfo=UTC).timestamp() * 1000)
-FUTURE_ID_SLACK_MS: Final = 24 * 3600 * 1000
-
-
-def _check_id_date(record: SyncRecord) -> None:
-    made = id_time_ms(record.record_id)
-    if not EARLIEST_ID_MS <= made <= time.time() * 1000 + FUTURE_ID_SLACK_MS:
-        when = datetime.fromtimestamp(made / 1000, UTC).strftime("%Y-%m-%d")
-        raise RecordInvalidError(
-            f"its id claims it was made on {when}, which cannot be true; the first {record.kind} "
-            "made wins its name everywhere, so a forged date is not believed"
-        )
-
-
 def check_record(record: SyncRecord) -> None:
-    """RecordInvalidError (one sentence) unless `record` is a well-formed record of its kind."""
-    if record.kind in IDENTITY_KINDS:
-        _check_id_date(record)
+    """RecordInvalidError (one sentence) unless `record` is a well-formed record of its kind,
+    whose id and dates agree (league.sync.dates)."""
     if record.kind == PROFILE_KIND:
         _check_profile(record)
     elif record.kind == BUNDLE_KIND:
         _check_bundle(record.body)
+    elif record.kind == MODEL_KIND:
+        _check_fields(record.body, MODEL_FIELDS)
     else:
         _check_fields(
             record.body, FIELDS[record.kind], extra=("laps",) * (record.kind in LAP_FIELDS)
@@ -384,6 +367,7 @@ def check_record(record: SyncRecord) -> None:
             _check_laps(record.body.get("laps"), record.kind)
             _check_possible_laps(record)
         _SEMANTICS.get(record.kind, _nothing)(record)
+    check_dates(record)
 
 
 def _check_fields(
@@ -552,6 +536,14 @@ _SEMANTICS: Final[dict[str, Callable[[SyncRecord], None]]] = {
 }
 
 PROFILE_FIELDS: Final = {"racer": _t(name), "display_name": _t(name), "correction": _t(record_id)}
+# A racer's word that a model is theirs (league.sync.models): the model's name as their
+# results name it (a race's is a name, a submission's any text), and its hash.
+MODEL_FIELDS: Final = {
+    "racer": _t(name),
+    "model_name": _t(text(255)),
+    "model_hash": _t(model_hash),
+    "registered_at": _t(timestamp),
+}
 BUNDLE_FIELDS: Final = {
     "model_hash": _t(sha256_hex),
     "sha256": _t(sha256_hex),

@@ -58,6 +58,7 @@ OWNER_FIELD: Final = {
     "racer_profile": "racer",
     "submission": "racer",
     "race": "racer",
+    "model": "racer",  # a racer's word that a model is theirs (league.sync.models)
 }
 
 _CROCKFORD: Final = "0123456789ABCDEFGHJKMNPQRSTVWXYZ"

@@ -17,7 +17,7 @@ import pytest
 
 from league.local_racer import save_local_racer_name
 from league.races import record_race
-from league.store import League, open_league
+from league.store import League, now_iso, open_league
 from league.sync.engine import SyncSummary, store_key, sync
 from league.sync.record import SyncRecord, canonical_json, make_record
 from league.sync.stores import open_store
@@ -57,7 +57,10 @@ class Machine:
         }
 
     def race(self, racer: str, laps: list[float]) -> str:
-        result = race_result(racer, laps, track=resolve_track(HAIRPIN))
+        # Raced now with the racer's own model: a result dated before the league was
+        # founded, or driven with another racer's model, is not theirs.
+        track = resolve_track(HAIRPIN)
+        result = race_result(racer, laps, track=track, model=f"car-{racer}", started_at=now_iso())
         return record_race(self.league, result)
 
 
@@ -270,7 +273,7 @@ def test_a_forged_admission_counts_for_nothing(machines: dict[str, Machine]) -> 
         "signed_by": mallory.key.public_hex,
         "kept": None,
         "league": new_id(),
-        "created_at": "2026-11-24T00:00:00.000Z",
+        "created_at": now_iso(),  # made now, as its id says
     }
     act_id = new_id()
     store_record(mallory.league, "roster", act_id, body)
@@ -478,7 +481,7 @@ def test_an_admission_in_one_league_means_nothing_in_another(
                 "signed_by": mallory.key.public_hex,
                 "kept": None,
                 "league": None,
-                "created_at": "2026-11-24T00:00:00.000Z",
+                "created_at": now_iso(),  # made now, as its id says
             }
             store_record(other, "roster", new_id(), act)
         admitted = membership.admit(other, organiser.key, "mallory")
@@ -512,7 +515,7 @@ def test_an_admitted_racer_cannot_show_as_someone_else(
         "name": "carl",
         "display_name": "ana",
         "colour": "#112233",
-        "created_at": "2026-11-24T00:00:00.000Z",
+        "created_at": now_iso(),  # made now, as its id says
     }
     posing = new_id()
     store_record(carl.league, "racers", posing, body)

@@ -1,0 +1,158 @@
+"""Dates and ids that agree: a record may not claim to be older (or newer) than it can be.
+
+A record's id carries the time it was made (sim.ids: 48 bits of milliseconds), and its
+body carries its own date (`created_at`, a submission's `submitted_at`, a race's
+`started_at`, a model record's `registered_at`); both come from the maker's clock in the
+same save. Ties on a board go to the earlier result, and the first model record seen for
+a model hash makes it that racer's, so a forged early date would win both: a pulled record
+must have
+
+- an id dated between 2024 (before racer-tui shared anything) and now, give or take
+  DATE_TOLERANCE_MS;
+- its body's date within DATE_TOLERANCE_MS of its id's, except a race, whose id is made
+  when its result is saved: any time after it started (a race may be saved long after,
+  a result file imported later, say), never before;
+- when a racer (not an organiser) signed it, neither its id nor its date before the
+  league's founding (the founding act's league id is made when the organiser founds it),
+  so a result cannot rank first in a tie by a date older than the league. Racers and tracks may
+  be older: they are names, made on a racer's laptop before they joined, and keep the rule
+  of identity kinds (the first made wins; validate.py keeps them after 2024).
+
+`check_dates` needs nothing but the record (validate.py calls it for every kind);
+`founding_refusal` needs the roster (incoming.py calls it once the signer is known).
+"""
+
+from __future__ import annotations
+
+import time
+from datetime import UTC, datetime
+from typing import Final
+
+from league.sync.errors import RecordInvalidError
+from league.sync.kinds import BUNDLE_KIND, MODEL_KIND, PROFILE_KIND
+from league.sync.record import SyncRecord
+from league.trust.roster import FOUNDER_ID, ROSTER_KIND, Roster
+from sim.ids import id_time_ms
+
+# How far apart two clocks, or two stamps of one save, may honestly be. A record's id and
+# its date are taken by one clock a few milliseconds apart; the maker's clock and this
+# machine's (a record "from the future") and the founder's (a record "before the league")
+# differ by what laptops without a time server drift: seconds, rarely minutes. Ten minutes
+# lets every honest record through and leaves a forger nothing worth having (a tie is
+# decided by the first sighting here once dates are this close; see ranking_time).
+DATE_TOLERANCE_MS: Final = 10 * 60 * 1000
+EARLIEST_ID_MS: Final = int(datetime(2024, 1, 1, tzinfo=UTC).timestamp() * 1000)
+
+# The body's date of each kind; kinds not here carry none (a profile's id is derived from
+# its racer's name, a bundle record only maps two hashes).
+DATE_FIELD: Final[dict[str, str]] = {
+    "roster": "created_at",
+    "racer": "created_at",
+    "track": "created_at",
+    "season": "created_at",
+    "night": "created_at",
+    "entrant": "created_at",
+    "heat": "created_at",
+    "night_closure": "created_at",
+    "night_change": "created_at",
+    "correction": "created_at",
+    "submission": "submitted_at",
+    "race": "started_at",
+    MODEL_KIND: "registered_at",
+}
+# Names rather than results: made on a racer's laptop before they joined the league.
+_OLDER_THAN_THE_LEAGUE: Final = frozenset({"racer", "track", PROFILE_KIND, BUNDLE_KIND})
+IDENTITY_KINDS: Final = frozenset({"racer", "track", "season"})
+
+
+def iso_ms(text: str) -> int:
+    """Milliseconds since 1970 of an ISO-8601 time with a UTC offset (validate.py checked it)."""
+    return int(datetime.fromisoformat(text).timestamp() * 1000)
+
+
+def day_of(ms: int) -> str:
+    try:
+        return datetime.fromtimestamp(ms / 1000, UTC).strftime("%Y-%m-%d %H:%M UTC")
+    except (OverflowError, OSError, ValueError):
+        return "a time that does not exist"
+
+
+def _id_time(record: SyncRecord) -> int | None:
+    """When the record's id says it was made; None for ids that carry no time."""
+    if record.kind == PROFILE_KIND:
+        return None
+    if record.kind == ROSTER_KIND and record.record_id == FOUNDER_ID:
+        league = record.body.get("league")  # made when the organiser founded the league
+        return id_time_ms(league) if isinstance(league, str) else None
+    return id_time_ms(record.record_id)
+
+
+def check_dates(record: SyncRecord, now_ms: int | None = None) -> None:
+    """RecordInvalidError (one sentence) unless the record's id and dates agree and lie
+    between 2024 and now (call after its fields were checked)."""
+    made = _id_time(record)
+    if made is None:
+        return
+    now = int(time.time() * 1000) if now_ms is None else now_ms
+    if not EARLIEST_ID_MS <= made <= now + DATE_TOLERANCE_MS:
+        why = (
+            f"the first {record.kind} made wins its name everywhere"
+            if record.kind in IDENTITY_KINDS
+            else "ties and models go to the first made"
+        )
+        raise RecordInvalidError(
+            f"its id claims it was made on {day_of(made)[:10]}, which cannot be true; {why}, "
+            "so a forged date is not believed"
+        )
+    field = DATE_FIELD.get(record.kind)
+    if field is None:
+        return
+    dated = iso_ms(str(record.body[field]))
+    earliest, latest = dated - DATE_TOLERANCE_MS, dated + DATE_TOLERANCE_MS
+    if record.kind == "race":
+        latest = made  # saved when it ended: any time after it started
+    if not earliest <= made <= latest:
+        raise RecordInvalidError(
+            f"its {field} ({day_of(dated)}) and the time its id was made ({day_of(made)}) "
+            "disagree, so one of them was written by hand"
+        )
+
+
+def founded_ms(roster: Roster) -> int | None:
+    """When this league was founded (its founding act's league id), None before it is known."""
+    return None if roster.league is None else id_time_ms(roster.league)
+
+
+def founding_refusal(record: SyncRecord, roster: Roster) -> str | None:
+    """Why a pulled record cannot be the league's (dated before it was founded), or None.
+    An organiser's own records may be older: their league ran before it was shared."""
+    founded = founded_ms(roster)
+    made = _id_time(record)
+    if founded is None or made is None or record.kind in _OLDER_THAN_THE_LEAGUE:
+        return None
+    field = DATE_FIELD.get(record.kind)
+    if field is not None:  # a race's date may be older than its id (validate.py checked it)
+        made = min(made, iso_ms(str(record.body[field])))
+    if record.seal is not None and record.seal.signer in roster.organisers:
+        return None
+    if made >= founded - DATE_TOLERANCE_MS:
+        return None
+    return (
+        f"it is dated {day_of(made)}, before this league was founded ({day_of(founded)}); "
+        "nothing made before a league existed counts in it"
+    )
+
+
+def ranking_time(claimed: str, first_seen: str | None) -> str:
+    """The time a result ranks by in a tie: what it claims, but no earlier than the
+    tolerance before this league first saw it (pulled results; None for one made here)."""
+    if first_seen is None:
+        return claimed
+    try:
+        bound = iso_ms(first_seen) - DATE_TOLERANCE_MS
+        if iso_ms(claimed) >= bound:
+            return claimed
+    except ValueError:
+        return claimed
+    stamp = datetime.fromtimestamp(bound / 1000, UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")
+    return stamp[:-3] + "Z"

@@ -1,0 +1,303 @@
+"""A result belongs to the racer who drove it: model records, and the rule they carry.
+
+A submission or race names its car by model hash. A `model` record is a racer's signed
+word that a model hash is theirs: `{racer, model_name, model_hash, registered_at}`. Sync
+makes one, before each push, for every model this machine's racer (`racer-tui racer me`)
+raced or submitted with here and has not registered yet (`register_models`), dated by the
+first result that used it; the roster lets a racer's key sign only their own
+(league.trust.roster.OWNER_FIELD).
+
+A pulled result signed by a racer (an organiser's results, a night's heats say, are the
+organiser's word and need none) then must (`verdict`):
+
+- not copy a result of another racer already here: a race with the same model, track,
+  rules, seed and laps, or a submission of the same evaluation files;
+- name a model no other racer registered before its racer did: the first model record
+  this league saw for a model hash keeps it, whatever date a later one claims;
+- name a model its racer registered, dated no later than the result; until that model
+  record arrives, the result waits.
+
+The reference driver ("reference:<track hash>") is everybody's: its results are re-driven
+by anyone with the same seed, so they are neither registered nor copies. A DeepRacer
+evaluation (source drfc or console) names its files' fingerprint as its model hash, and is
+registered like any other model by the racer who submits it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Final, Literal
+
+from league.local_racer import RACER_SETTING
+from league.records import record_body
+from league.store import League
+from league.sync.dates import DATE_FIELD, DATE_TOLERANCE_MS, founded_ms, iso_ms
+from league.sync.kinds import MODEL_KIND
+from league.sync.local import add_conflict, body_text, get_setting
+from league.sync.record import SyncRecord, make_record
+from league.trust.roster import Roster, same_racer
+from sim.ids import new_id
+
+REFERENCE_PREFIX: Final = "reference:"
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    record_id: str
+    racer: str
+    model_name: str
+    model_hash: str
+    registered_at: str
+
+
+def add_model(league: League, record: SyncRecord) -> None:
+    body = record.body
+    league.conn.execute(
+        "INSERT INTO sync_models (record_id, racer, model_name, model_hash, registered_at, "
+        "content_hash) VALUES (?, ?, ?, ?, ?, ?)",
+        (
+            record.record_id,
+            body["racer"],
+            body["model_name"],
+            body["model_hash"],
+            body["registered_at"],
+            record.content_hash,
+        ),
+    )
+
+
+def apply_pulled_model(
+    league: League, store: str, record: SyncRecord
+) -> Literal["inserted", "already", "conflict", "known"]:
+    row = league.query_one(
+        "SELECT content_hash, racer, model_name, model_hash, registered_at FROM sync_models "
+        "WHERE record_id = ?",
+        (record.record_id,),
+    )
+    if row is None:
+        add_model(league, record)
+        return "inserted"
+    if row[0] == record.content_hash:
+        return "already"
+    local = dict(zip(("racer", "model_name", "model_hash", "registered_at"), row[1:], strict=True))
+    new = add_conflict(
+        league,
+        store,
+        MODEL_KIND,
+        record.record_id,
+        f"model record {record.record_id} differs here and in the store",
+        local=(str(row[0]), 0, body_text(local)),
+        remote=(record.content_hash, 0, body_text(record.body)),
+    )
+    return "conflict" if new else "known"
+
+
+def is_here(league: League, record_id: str, content_hash: str) -> bool:
+    row = league.query_one(
+        "SELECT 1 FROM sync_models WHERE record_id = ? AND content_hash = ?",
+        (record_id, content_hash),
+    )
+    return row is not None
+
+
+def models(league: League, model_hash: str) -> list[ModelInfo]:
+    """The model records for `model_hash`, in the order this league first held them."""
+    return [
+        ModelInfo(*row)
+        for row in league.query(
+            "SELECT record_id, racer, model_name, model_hash, registered_at FROM sync_models "
+            "WHERE model_hash = ? ORDER BY seen",
+            (model_hash,),
+        )
+    ]
+
+
+def unsent_models(league: League, store: str) -> list[tuple[str, str, dict[str, Any]]]:
+    """(id, content hash, body) of each model record `store` is not known to hold
+    (league.sync.outgoing sends them)."""
+    rows = league.query(
+        "SELECT record_id, content_hash, racer, model_name, model_hash, registered_at "
+        "FROM sync_models m WHERE NOT EXISTS (SELECT 1 FROM sync_in_store s WHERE s.store = ? "
+        "AND s.kind = ? AND s.record_id = m.record_id AND s.content_hash = m.content_hash) "
+        "ORDER BY seen",
+        (store, MODEL_KIND),
+    )
+    return [
+        (
+            record_id,
+            digest,
+            {
+                "racer": racer,
+                "model_name": model_name,
+                "model_hash": model_hash,
+                "registered_at": registered_at,
+            },
+        )
+        for record_id, digest, racer, model_name, model_hash, registered_at in rows
+    ]
+
+
+def count_unsent(league: League, store: str) -> int:
+    row = league.query_one(
+        "SELECT count(*) FROM sync_models m WHERE NOT EXISTS (SELECT 1 FROM sync_in_store s "
+        "WHERE s.store = ? AND s.kind = ? AND s.record_id = m.record_id "
+        "AND s.content_hash = m.content_hash)",
+        (store, MODEL_KIND),
+    )
+    return int(row[0]) if row else 0
+
+
+# --- registering this machine's models ----------------------------------------------------
+
+
+def register_models(league: League, signer: str) -> int:
+    """Make a model record for every model this machine's racer raced or submitted with
+    here (results `signer` sealed, or not sealed yet) and has not registered; returns how
+    many were made. Each is dated by the first such result, and never before the league's
+    founding (a result older than that does not count in it anyway)."""
+    racer = get_setting(league, RACER_SETTING)
+    if not racer:
+        return 0
+    founded = founded_ms(Roster.load(league))
+    first: dict[str, tuple[int, str, str]] = {}  # model hash -> (ms, its date, model name)
+    rows = league.query(
+        "SELECT 'race', id, model_hash, model_name, started_at FROM races WHERE racer = ?1 "
+        "UNION ALL SELECT 'submission', id, model_hash, model_name, submitted_at "
+        "FROM submissions WHERE racer = ?1",
+        (racer,),
+    )
+    for kind, record_id, model_hash, model_name, dated in rows:
+        if str(model_hash).startswith(REFERENCE_PREFIX) or _sealed_by_other(
+            league, kind, record_id, signer
+        ):
+            continue
+        try:
+            ms, stamp = iso_ms(str(dated)), str(dated)
+        except ValueError:
+            continue
+        if founded is not None and ms < founded - DATE_TOLERANCE_MS:
+            ms, stamp = founded, _iso(founded)  # its results in this league are from then on
+        if model_hash not in first or ms < first[model_hash][0]:
+            first[model_hash] = (ms, stamp, str(model_name))
+    made = 0
+    with league.transaction():
+        for model_hash, (ms, dated, model_name) in sorted(first.items()):
+            if any(same_racer(info.racer, racer) for info in models(league, model_hash)):
+                continue
+            body = {
+                "racer": racer,
+                "model_name": model_name,
+                "model_hash": model_hash,
+                "registered_at": dated,
+            }
+            add_model(league, make_record(MODEL_KIND, new_id(now_ms=ms), body))
+            made += 1
+    return made
+
+
+def _sealed_by_other(league: League, kind: str, record_id: str, signer: str) -> bool:
+    row = league.query_one(
+        "SELECT 1 FROM sync_seals WHERE kind = ? AND record_id = ? AND signer <> ?",
+        (kind, record_id, signer),
+    )
+    return row is not None
+
+
+def _iso(ms: int) -> str:
+    from datetime import UTC, datetime
+
+    return datetime.fromtimestamp(ms / 1000, UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-3] + "Z"
+
+
+# --- the rule for pulled results ----------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """A pulled result that cannot go in yet (`wait`) or ever (`refuse`), and why."""
+
+    action: Literal["wait", "refuse"]
+    reason: str
+
+
+def verdict(league: League, record: SyncRecord, roster: Roster) -> Verdict | None:
+    """None when a pulled submission or race may go in as far as its model is concerned."""
+    if record.kind not in ("race", "submission"):
+        return None
+    body = record.body
+    racer, model_hash = str(body["racer"]), str(body["model_hash"])
+    if model_hash.startswith(REFERENCE_PREFIX) or _signer(league, record) in roster.organisers:
+        return None
+    copied = _copied(league, record)
+    if copied is not None:
+        return Verdict("refuse", copied)
+    claims = models(league, model_hash)
+    if claims and not same_racer(claims[0].racer, racer):
+        owner = claims[0]
+        return Verdict(
+            "refuse",
+            f"it names model {model_hash[:12]}, which racer {owner.racer} registered first "
+            f"(model record {owner.record_id}): it copies {owner.racer}'s model, and a result "
+            "belongs to the racer who drove it",
+        )
+    own = [info for info in claims if same_racer(info.racer, racer)]
+    if not own:
+        return Verdict(
+            "wait",
+            f"racer {racer}'s model record for model {model_hash[:12]} (a result names a model "
+            "its racer registered)",
+        )
+    dated = iso_ms(str(body[DATE_FIELD[record.kind]]))
+    if all(iso_ms(info.registered_at) > dated + DATE_TOLERANCE_MS for info in own):
+        return Verdict(
+            "refuse",
+            f"racer {racer} registered its model {model_hash[:12]} only after this result "
+            f"(on {own[0].registered_at[:16]}), so it cannot have been driven with it",
+        )
+    return None
+
+
+def _signer(league: League, record: SyncRecord) -> str | None:
+    if record.seal is not None:
+        return record.seal.signer
+    row = league.query_one(
+        "SELECT signer FROM sync_seals WHERE kind = ? AND record_id = ? AND content_hash = ?",
+        (record.kind, record.record_id, record.content_hash),
+    )
+    return None if row is None else str(row[0])
+
+
+def _copied(league: League, record: SyncRecord) -> str | None:
+    """Why `record` is a copy of another racer's result here, or None."""
+    body = record.body
+    if record.kind == "submission":
+        row = league.query_one(
+            "SELECT id, racer FROM submissions WHERE fingerprint = ? AND racer <> ? AND id <> ? "
+            "ORDER BY id LIMIT 1",
+            (body["fingerprint"], body["racer"], record.record_id),
+        )
+        if row is None:
+            return None
+        return (
+            f"it copies racer {row[1]}'s submission {row[0]} (the same evaluation files under "
+            "another name)"
+        )
+    rows = league.query(
+        "SELECT id, racer FROM races WHERE model_hash = ? AND seed = ? AND track_hash = ? "
+        "AND rules = ? AND racer <> ? AND id <> ? ORDER BY id",
+        (
+            body["model_hash"],
+            body["seed"],
+            body["track_hash"],
+            body["rules"],
+            body["racer"],
+            record.record_id,
+        ),
+    )
+    for race_id, other in rows:
+        if record_body(league, "races", race_id)["laps"] == body["laps"]:
+            return (
+                f"it copies racer {other}'s race {race_id} (the same model, track, rules, seed "
+                "and laps under another name)"
+            )
+    return None
