@@ -113,7 +113,9 @@ class RaceScreen(RacerScreen[RaceResult | None]):
     """A time trial, live or replayed, with its laps table and countdown."""
 
     BINDINGS = [  # noqa: RUF012 - Textual's convention
-        Binding("space", "toggle_pause", "Pause"),
+        # One key, two words: the footer says what space does now (check_action).
+        Binding("space", "pause", "Pause"),
+        Binding("space", "resume", "Resume"),
         Binding("1", "speed(1)", "1x"),
         Binding("2", "speed(2)", "2x"),
         Binding("4", "speed(4)", "4x"),
@@ -141,6 +143,9 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self.failure: str | None = None
         self.speed = 1
         self.paused = False
+        # After e: the view keeps to the newest simulated tick until the finish (a slow
+        # machine may still be working the race out), not back at the chosen speed.
+        self.to_end = False
         self.show_ghost = setup.ghost is not None
         self.race_clock = 0.0
         self._wall_mark = time.monotonic()
@@ -215,7 +220,10 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             self._wall_mark = time.monotonic()  # the clock starts with the first tick shown
             self._update_panel()
             return
-        if not self.paused:
+        if self.to_end:
+            self.race_clock = max(self.race_clock, self.ticks[-1].clock)
+            self._rebase()
+        elif not self.paused:
             now = time.monotonic()
             self.race_clock = self._clock_mark + (now - self._wall_mark) * self.speed
         index = self._index
@@ -332,7 +340,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         if tick is None:
             return Text("Starting the race…", style="dim")
         limit = "∞" if rules.max_offtracks_per_lap is None else str(rules.max_offtracks_per_lap)
-        state = "paused" if self.paused else f"{self.speed}x"
+        state = self.playback
         text.append(f"{rules.lap_of(tick.lap)}  ", style="bold")
         text.append(clock_text(tick.lap_time) + "\n")
         over = (
@@ -390,14 +398,39 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self._wall_mark = time.monotonic()
         self._clock_mark = self.race_clock
 
+    @property
+    def playback(self) -> str:
+        """How the view plays the race now, as the panel says it."""
+        if self.to_end and not self.finish_shown:
+            return "to the end"
+        return "paused" if self.paused else f"{self.speed}x"
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        # Space pauses or resumes: the footer shows the one word that says what it does
+        # now (a binding whose check is False is hidden, and the key tries the other).
+        if action == "pause":
+            return not self.paused
+        if action == "resume":
+            return self.paused
+        return True
+
+    def action_pause(self) -> None:
+        self.action_toggle_pause()
+
+    def action_resume(self) -> None:
+        self.action_toggle_pause()
+
     def action_toggle_pause(self) -> None:
         self._rebase()
         self.paused = not self.paused
+        self.to_end = False
         self._update_panel(force=True)
+        self.refresh_bindings()
 
     def action_speed(self, speed: int) -> None:
         self._rebase()
         self.speed = speed if speed in SPEEDS else 1
+        self.to_end = False
         self._update_panel(force=True)
 
     def action_toggle_ghost(self) -> None:
@@ -429,6 +462,8 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self.query_one("#laps", DataTable).clear()
         self._rebase()
         self.paused = False
+        self.to_end = False
+        self.refresh_bindings()
 
     def action_coach(self) -> None:
         """The Coach view on the race's fastest counted lap."""
@@ -454,10 +489,14 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self.app.push_screen(CoachScreen(self.setup.racer, f"lap {best.number}", load))
 
     def action_skip_to_end(self) -> None:
-        """Jump to the end of what has been simulated so far."""
+        """Jump to the end of the race: to the newest tick worked out, and on with each new
+        one until the finish, however long the simulation still takes (space or a speed key
+        goes back to playing it)."""
         if self.ticks:
-            self.race_clock = self.ticks[-1].clock
-            self._rebase()
+            self.to_end = True
+            if self.paused:
+                self.paused = False
+                self.refresh_bindings()
             self._frame()
             self._update_panel(force=True)
 

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterator
 from functools import partial
 
+import pytest
 from textual.app import App
 from textual.pilot import Pilot
 from textual.widgets import DataTable, Static
@@ -19,7 +21,7 @@ from racer_tui.screens.race_screen import (
     race_job,
 )
 from sim.garage.options import new_model
-from sim.race.engine import run_race
+from sim.race.engine import RaceTick, run_race
 from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
@@ -153,3 +155,68 @@ def test_off_tracks_past_the_limit_say_the_lap_is_lost() -> None:
     assert "over 3" in facts and "won't count" in facts
     within = str(screen._facts(dataclasses.replace(tick, lap_offtracks=3)))
     assert "Off-tracks this lap 3/3" in within
+
+
+async def test_space_says_resume_in_the_footer_while_the_race_is_paused() -> None:
+    """Issue 42, point 6: the footer says what space does now."""
+    from racer_tui.widgets.footer import screen_keys
+
+    track = resolve_track("beginner-oval")
+    screen = RaceScreen(RaceSetup(track=track, rules=SHORT, racer="Ada"))
+    app: App[None] = App()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await app.push_screen(screen)
+        await worked_out(pilot, screen)
+
+        def space_says() -> list[str]:
+            keys, _ = screen_keys(screen)
+            return [key.description for key in keys if key.key == "space"]
+
+        assert space_says() == ["Pause"]
+        await pilot.press("space")
+        assert screen.paused and space_says() == ["Resume"]
+        await pilot.press("space")
+        assert not screen.paused and space_says() == ["Pause"]
+
+
+async def test_e_keeps_to_the_end_while_a_slow_machine_still_works_the_race_out(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Issue 42, point 6: `e` on a loaded machine jumped to the newest tick worked out,
+    then played on at 1x (and said so). It now follows the simulation to the finish."""
+    import threading
+
+    from racer_tui.screens import race_screen
+    from sim.race import engine as race_engine
+
+    release = threading.Event()
+    real = race_engine.race_ticks
+
+    def slow_ticks(*args: object, **kwargs: object) -> Iterator[RaceTick]:
+        for tick in real(*args, **kwargs):  # type: ignore[arg-type]
+            if tick.clock > 3.0:
+                release.wait(30)  # the machine is busy: the rest comes later
+            yield tick
+
+    monkeypatch.setattr(race_screen, "race_ticks", slow_ticks)
+    screen = RaceScreen(RaceSetup(track=resolve_track("beginner-oval"), rules=SHORT, racer="Ada"))
+    app: App[None] = App()
+    async with app.run_test(size=(100, 30)) as pilot:
+        await app.push_screen(screen)
+        for _ in range(500):
+            if screen.ticks and screen.ticks[-1].clock > 3.0:
+                break
+            await pilot.pause(0.02)
+        await pilot.press("e")
+        assert screen.playback == "to the end"
+        facts = str(screen.query_one("#race-facts", Static).render())
+        assert "to the end" in facts and "1x" not in facts
+        release.set()
+        await worked_out(pilot, screen)
+        # Worked out: the 20-second race's finish is on screen at the next frames, not
+        # after the rest of it played at 1x.
+        for _ in range(50):
+            if screen.finish_shown:
+                break
+            await pilot.pause(0.02)
+        assert screen.finish_shown and screen.race_clock >= screen.ticks[-1].clock
