@@ -24,6 +24,15 @@ from textual.widgets import DataTable
 from textual.worker import WorkerState
 
 from racer_tui.commands import PaletteCommand, RacerCommands
+from racer_tui.crash_report import (
+    EXIT_CRASH,
+    RecentKeys,
+    drop_unread_keys,
+    now,
+    report_text,
+    say_crash,
+    write_report,
+)
 from racer_tui.long_running import (
     CALM_SECONDS,
     CHECK_SECONDS,
@@ -55,6 +64,7 @@ from racer_tui.screens.training import RUN_GROUP as TRAINING_RUN_GROUP
 from racer_tui.screens.training import LeaveWhileTraining, TrainingScreen
 from racer_tui.screens.welcome import WelcomeScreen
 from racer_tui.sections import SECTIONS, WELCOME_MODE, section_for
+from racer_tui.textual_workarounds import apply_workarounds
 from sim.garage.folder import list_models
 from sim.home import data_home
 
@@ -140,6 +150,7 @@ class RacerTuiApp(App[int]):
         open for hours: it tunes garbage collection for that (`racer_tui.long_running`);
         tests build many apps in one process and leave it off. `projector_night` opens
         on that night's projector (`racer-tui night projector`), in league `db_path`."""
+        apply_workarounds()
         super().__init__()
         self.start_mode = start
         self.projector_night = projector_night
@@ -151,6 +162,9 @@ class RacerTuiApp(App[int]):
         self.calm_clock: Callable[[], float] = time.monotonic  # a test moves its own
         self._switching_to_shown_mode = False
         self.collector = IdleCollector(trim=malloc_trim())
+        self.recent_keys = RecentKeys()
+        self.crash_report: Path | None = None  # written on the first unexpected error
+        self.crash_report_problem: str | None = None  # why it could not be written
         memoise_background_styles_by_colour()  # for every app: tests keep many in one process
         if long_running:
             limit_malloc_arenas()  # before the app starts its worker threads
@@ -197,7 +211,41 @@ class RacerTuiApp(App[int]):
     async def on_event(self, event: events.Event) -> None:
         if isinstance(event, events.InputEvent):
             self.collector.input_seen()
+            if isinstance(event, events.Key) and not event.is_forwarded:
+                self.recent_keys.key(event.key)
+        elif isinstance(event, events.Paste) and not event.is_forwarded:
+            self.recent_keys.paste(event.text)
         await super().on_event(event)
+
+    # --- a crash is never silent -------------------------------------------------------------
+
+    def _handle_exception(self, error: Exception) -> None:
+        """An error no handler caught: Textual stops the app (restoring the terminal and
+        printing the traceback); first, the report of the first such error is written, while
+        the screen it happened on is still there to be read. Writing it can never stand in
+        the way of the exit."""
+        if self._exception is None and self.crash_report is None:
+            try:
+                when = now()
+                text = report_text(
+                    error,
+                    screen=type(self.screen).__name__ if self._screen_stacks else "(none)",
+                    screen_text=self._screen_text(),
+                    keys=self.recent_keys.listed(),
+                    when=when,
+                )
+                self.crash_report = write_report(text, when)
+            except Exception as failure:  # the app is going down either way
+                self.crash_report_problem = str(failure) or type(failure).__name__
+        super()._handle_exception(error)
+
+    def _screen_text(self) -> str:
+        """The screen as text, line by line, as the racer last saw it."""
+        try:
+            strips = self.screen._compositor.render_strips()
+            return "\n".join(strip.text.rstrip() for strip in strips)
+        except Exception as failure:  # a broken screen may be why it crashed
+            return f"(could not be read: {failure!r})"
 
     def _freeze_after_first_visit(self, mode: str) -> None:
         """In the long-running app, once a section has been shown the first time (and its
@@ -413,6 +461,20 @@ def create_app(
     )
 
 
-def run_app() -> int:
-    create_app(long_running=True).run()
-    return 0
+def run_app(*, projector_night: str | None = None, db_path: Path | None = None) -> int:
+    """Run the app in the terminal; the exit status for the shell (non-zero after a crash)."""
+    app = create_app(long_running=True, projector_night=projector_night, db_path=db_path)
+    app.run()
+    return exit_status(app)
+
+
+def exit_status(app: RacerTuiApp) -> int:
+    """Once the app has stopped and the terminal is back: after a crash, the keys typed for
+    the app that it never read are thrown away (they would run in the shell), one sentence
+    on stderr says where the report is, and the status is non-zero."""
+    code = app.return_code or 0
+    if code == 0 and app._exception is None:
+        return 0
+    drop_unread_keys()
+    say_crash(app.crash_report, app.crash_report_problem)
+    return code or EXIT_CRASH

@@ -60,6 +60,7 @@ from racer_tui.model_form import (
 from racer_tui.reward_map_text import map_text
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ask
+from racer_tui.screens.form_select import FormSelect
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.table_fill import FittedTable, fill_table
@@ -278,14 +279,13 @@ class ModelEditorScreen(RacerScreen[str | None]):
                 yield field("Model name", name, "" if self.folder is None else "clone to rename")
                 yield field(
                     "Track",
-                    Select(tracks, value=values.track, allow_blank=False, id="track"),
+                    FormSelect(tracks, value=values.track, id="track"),
                 )
                 yield field(
                     "Sensor",
-                    Select(
+                    FormSelect(
                         [(label, key) for key, label in sensors],
                         value=values.sensor,
-                        allow_blank=False,
                         id="sensor",
                     ),
                     "vector trains fastest",
@@ -304,9 +304,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
                     yield field("Camera randomisation", randomisation, "on, off, noise=0.5")
                 yield field(
                     "Race type",
-                    Select(
-                        RACE_TYPE_CHOICES, value=values.race_type, allow_blank=False, id="race-type"
-                    ),
+                    FormSelect(RACE_TYPE_CHOICES, value=values.race_type, id="race-type"),
                 )
                 with Vertical(id="race-fields"):
                     yield field(
@@ -322,10 +320,9 @@ class ModelEditorScreen(RacerScreen[str | None]):
                         )
                     yield field(
                         "Shuffle the boxes / bots change lanes",
-                        Select(
+                        FormSelect(
                             [("no", False), ("yes", True)],
                             value=values.race_shuffle,
-                            allow_blank=False,
                             id="race-shuffle",
                         ),
                         "boxes: every episode; bots: every 3-5 s",
@@ -352,7 +349,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
                     )
                 yield field(
                     "Action space",
-                    Select(kinds, value=values.action_kind, allow_blank=False, id="action-kind"),
+                    FormSelect(kinds, value=values.action_kind, id="action-kind"),
                 )
                 with Vertical(id="discrete-fields"):
                     yield field(
@@ -362,10 +359,9 @@ class ModelEditorScreen(RacerScreen[str | None]):
                     )
                     yield field(
                         "Steering angle granularity",
-                        Select(
+                        FormSelect(
                             [(str(n), n) for n in STEERING_LEVELS],
                             value=values.steering_levels,
-                            allow_blank=False,
                             id="steering-levels",
                         ),
                     )
@@ -376,10 +372,9 @@ class ModelEditorScreen(RacerScreen[str | None]):
                     )
                     yield field(
                         "Speed granularity",
-                        Select(
+                        FormSelect(
                             [(str(n), n) for n in SPEED_LEVELS],
                             value=values.speed_levels,
-                            allow_blank=False,
                             id="speed-levels",
                         ),
                     )
@@ -418,10 +413,9 @@ class ModelEditorScreen(RacerScreen[str | None]):
                 text = values.hyperparameters.get(spec.name, str(spec.default))
                 widget: Widget
                 if spec.choices:
-                    widget = Select(
+                    widget = FormSelect(
                         [(choice, choice) for choice in spec.choices],
                         value=text,
-                        allow_blank=False,
                         id=widget_id,
                     )
                 else:
@@ -476,9 +470,11 @@ class ModelEditorScreen(RacerScreen[str | None]):
         return widget.value
 
     def _select(self, widget_id: str) -> object:
+        """A choice of the form: the one it was built with until the Select has mounted
+        (a key in the burst that opened the editor may read the form before that)."""
         widget = self._widget(widget_id)
-        assert isinstance(widget, Select), widget_id
-        return widget.value
+        assert isinstance(widget, FormSelect), widget_id
+        return widget.chosen
 
     def values(self) -> FormValues:
         hyperparameters: dict[str, str] = {}

@@ -1,0 +1,73 @@
+"""Keys and pastes delivered as a terminal delivers them, for tests and the monkey.
+
+`Pilot.press` waits for the app to be idle after every key, so a test typing `5` after the
+`t` that opens a dialog only ever types into a dialog that is ready. A terminal does not
+wait: keys typed quickly arrive in one read and are all queued before the app handles the
+first one (issue 42: the editor crashed and the Train dialog lost keys only then). `burst`
+queues keys that way; `paste` queues a bracketed paste; `drain` waits (on the app's queues,
+not on a clock) until everything queued has been handled.
+"""
+
+from __future__ import annotations
+
+import unicodedata
+from collections.abc import Iterable
+from typing import Any
+
+from textual import events
+from textual.app import App
+from textual.keys import REPLACED_KEYS, _character_to_key, _get_unicode_name_from_key
+from textual.pilot import Pilot
+
+MAX_DRAIN_ROUNDS = 200  # a burst of a few hundred keys settles in a few rounds
+
+
+def key_event(key: str) -> events.Key:
+    """The Key event a terminal driver would post for `key` (as Pilot builds it)."""
+    if len(key) == 1 and not key.isalnum():
+        key = _character_to_key(key)
+    original = REPLACED_KEYS.get(key, key)
+    character: str | None
+    try:
+        character = unicodedata.lookup(_get_unicode_name_from_key(original))
+    except KeyError:
+        character = key if len(key) == 1 else None
+    return events.Key(key, character)
+
+
+def _deliver(app: App[Any], event: events.Event) -> None:
+    event.set_sender(app)
+    driver = app._driver
+    assert driver is not None, "the app is not running"
+    driver.send_message(event)
+
+
+def burst(app: App[Any], keys: Iterable[str]) -> None:
+    """Queue every key at once, without letting the app handle any in between."""
+    for key in keys:
+        _deliver(app, key_event(key))
+
+
+def paste(app: App[Any], text: str) -> None:
+    """Queue a bracketed paste of `text`, as a terminal sends it."""
+    _deliver(app, events.Paste(text))
+
+
+def _queues_empty(app: App[Any]) -> bool:
+    nodes: list[Any] = [app, *app.screen_stack]
+    focused = app.focused
+    if focused is not None:
+        nodes.append(focused)
+    return all(node._message_queue.empty() for node in nodes)
+
+
+async def drain(pilot: Pilot[Any]) -> None:
+    """Wait until the app has handled what was queued (and what that queued in turn)."""
+    quiet_rounds = 0
+    for _ in range(MAX_DRAIN_ROUNDS):
+        await pilot.pause()
+        if not pilot.app.is_running:
+            return
+        quiet_rounds = quiet_rounds + 1 if _queues_empty(pilot.app) else 0
+        if quiet_rounds >= 2:  # twice: a handler may post once more after the queue emptied
+            return

@@ -1,0 +1,44 @@
+"""Workarounds for Textual bugs the app's users can reach, applied once for the whole app.
+
+Each one names the bug, the Textual version it was seen in, and how to tell it is no longer
+needed (its test in tests/racer_tui/test_textual_workarounds.py then fails to reproduce the
+crash with the workaround taken out).
+"""
+
+from __future__ import annotations
+
+from textual.widgets import OptionList
+
+PATCHED = "_racer_tui_workaround"  # marks a patched method, so no patch is applied twice
+
+
+def apply_workarounds() -> None:
+    """Patch what must be patched; idempotent (every app built in a test calls it)."""
+    if not getattr(OptionList._move_page, PATCHED, False):
+        _page_keys_wait_for_lines()
+
+
+def _page_keys_wait_for_lines() -> None:
+    """Textual 8.2.8: `OptionList._move_page` reads the line of the highlighted option
+    (`_index_to_line[highlighted]`) and the list's `_lines`, which are only built once the
+    list has a size. A PageUp/PageDown that reaches a list before its first layout (the
+    command palette or a Select's overlay opened by the key just before it, in the same
+    burst of keys from the terminal) raised `KeyError: 0` and crashed the app (issue 42;
+    others hit it too, e.g. kagan-sh/kagan-legacy#31). Until the list has its lines, a page
+    key moves to the first or last option instead, which is where a page from the top
+    ends in a short list anyway."""
+    original = OptionList._move_page
+
+    def move_page(self: OptionList, direction: int) -> None:
+        highlighted = self.highlighted or 0
+        if self._options and highlighted not in self._index_to_line:
+            # `_index_to_line` builds the lines it can; still none: not laid out yet.
+            if direction < 0:
+                self.action_first()
+            else:
+                self.action_last()
+            return
+        original(self, direction)  # type: ignore[arg-type]
+
+    setattr(move_page, PATCHED, True)
+    OptionList._move_page = move_page  # type: ignore[method-assign]

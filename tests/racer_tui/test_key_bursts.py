@@ -1,0 +1,81 @@
+"""Keys in bursts, as a terminal delivers them (issue 42): nothing typed quickly crashes
+the app. Each test is a crash found by hand or by the monkey, queued with `burst` (no wait
+between keys), which `Pilot.press` (idle after every key) never reproduced."""
+
+from __future__ import annotations
+
+from textual.widgets import OptionList
+
+from racer_tui.app import create_app
+from racer_tui.keys_as_delivered import burst, drain
+from racer_tui.screens.garage import GarageScreen
+from racer_tui.screens.model_editor import ModelEditorScreen
+from sim.garage.options import new_model
+
+EDITOR_BURST = "down down up pagedown home end tab shift+tab enter escape question_mark escape"
+
+
+async def test_quick_keys_in_and_out_of_the_editor_never_crash_it() -> None:
+    # Issue 42, point 1: Esc in the burst that opened the editor read the steering-levels
+    # Select before it had mounted: int("Select.NULL") crashed the app.
+    new_model("one")
+    new_model("two")
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        burst(app, EDITOR_BURST.split() * 3)
+        await drain(pilot)
+        assert app._exception is None
+        assert app.is_running
+        assert isinstance(app.section_base, GarageScreen)
+
+
+async def test_escape_right_after_opening_the_editor_closes_it_unchanged() -> None:
+    new_model("one")
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        burst(app, ["e", "escape"])
+        await drain(pilot)
+        # Nothing was changed, so nothing is asked: the editor is simply closed.
+        assert not isinstance(app.screen, ModelEditorScreen)
+        assert isinstance(app.screen, GarageScreen)
+
+
+async def test_a_page_key_right_after_opening_the_palette_moves_without_crashing() -> None:
+    # Issue 42, point 2: a page key reaching the palette's list before its first layout
+    # raised KeyError: 0 in Textual's OptionList._move_page.
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        for page in ("pagedown", "pageup"):
+            burst(app, ["ctrl+p", page, page])
+            await drain(pilot)
+            assert app._exception is None
+            burst(app, ["escape"])
+            await drain(pilot)
+
+
+async def test_a_page_key_right_after_opening_a_select_moves_without_crashing() -> None:
+    new_model("one")
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        await pilot.press("e")
+        await drain(pilot)
+        burst(app, ["enter", "pagedown", "pagedown", "pageup", "escape", "enter", "pageup"])
+        await drain(pilot)
+        assert app._exception is None
+        assert isinstance(app.screen, ModelEditorScreen)
+
+
+async def test_a_page_key_before_layout_goes_to_the_end_it_points_at() -> None:
+    # The workaround itself: a list not laid out yet pages to its last or first option.
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)):
+        unshown = OptionList("a", "b", "c")
+        unshown.highlighted = 0
+        unshown._move_page(1)
+        assert unshown.highlighted == 2
+        unshown._move_page(-1)
+        assert unshown.highlighted == 0
