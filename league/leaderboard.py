@@ -7,12 +7,15 @@ under one race type (league.race_types) and one physics (sim.race.physics): a tr
 leaderboard of one race type is one range of the `board_in_order` index, already in the
 league's one total order but for the last tie-breaks, which `in_ranking_order` settles with
 `rank()`. Filtered boards (a night, a season) pick each racer's best straight from
-`entries` and rank them all.
+`entries` and rank them all; so do boards that rank only results verified by replay (a
+night's `verification` rule, or the viewer's choice): the results such a board does not
+rank are left out before each racer's best is picked.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import json
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from itertools import groupby
@@ -23,10 +26,11 @@ from league.entries import BOARD_GROUPS, best_entries_sql, score_column
 from league.errors import LeagueError
 from league.race_types import RACE_TYPES, board_name
 from league.racers import display_names_overrides
-from league.ranking import rank
+from league.ranking import counts_under, rank
 from league.store import League
 from league.tracks import track_names
-from sim.race.rules import RankingMethod
+from league.trust.standing import result_standings
+from sim.race.rules import RankingMethod, Verification, rules_from_mapping
 
 BY_CHOICES: dict[str, RankingMethod] = {
     "best": RankingMethod.BEST_LAP,
@@ -62,6 +66,9 @@ class LeaderboardRow:
     physics: str  # which simulator timed the laps (sim.race.physics): each its own board
     race_type: str  # league.race_types: "time_trial", "object_avoidance"...: each its own board
     rank: int = 0
+    # Its standing here (league.trust.standing: replayed, verifiable, unverifiable), once
+    # `mark_verification` has worked it out; "" until then.
+    verification: str = ""
 
 
 @dataclass(frozen=True)
@@ -70,6 +77,10 @@ class Filters:
     racer: str | None = None  # racer name
     night_ids: Sequence[str] | None = None  # None: every entry; a list: races of these nights
     race_type: str | None = None  # None: every race type's boards; else that one's
+    # Only results of this standing or better (a night's own rule may ask for more).
+    verification: Verification = Verification.ANY
+    # The garage's model hashes: its models' races are verifiable (league.trust.standing).
+    local_models: frozenset[str] = frozenset()
 
 
 def _where(filters: Filters) -> tuple[str, list[Any]]:
@@ -121,7 +132,7 @@ def leaderboard(
     Boards in the order of their names.
     `method=None` scores each entry by its own rules' method (a night's races).
     """
-    if method is not None and filters.night_ids is None:
+    if method is not None and filters.night_ids is None and not filters.verification.requires:
         return _ranked_boards(_board_rows(league, filters, method))
     entries = grouped_rows(league, filters, method, group_by=BOARD_GROUPS)
     return rank_groups(entries, board_of, _board_order(entries), rank)
@@ -213,9 +224,63 @@ def grouped_rows(
     """Each group's best entry straight from `entries` (for filtered, smaller sets)."""
     score, offtracks = (NATIVE_SCORE, NATIVE_OFFTRACKS) if method is None else score_column(method)
     where, params = _where(filters)
+    counted, counted_params = _verification_clause(league, filters)
+    if counted:
+        where = f"{where} AND {counted}" if where else f"WHERE {counted}"
+        params += counted_params
     inner = best_entries_sql(score, offtracks, where, group_by)
     sql = f"SELECT {_ROW_COLUMNS.format(score='b.score')} FROM ({inner}) b"
     return _rows(league, sql, params)
+
+
+_STRICTNESS = (Verification.ANY, Verification.VERIFIABLE, Verification.REPLAYED)
+
+
+def _verification_clause(league: League, filters: Filters) -> tuple[str, list[Any]]:
+    """A condition on `entries` that leaves out the results a board does not rank under
+    its verification rule: each night's own (frozen in its rules) or the filter's, the
+    stricter of the two; ("", []) when every result counts."""
+    if filters.night_ids is None:
+        if not filters.verification.requires:
+            return "", []
+        where, params = _where(filters)
+        # Only races can be raced again: a submission never counts under such a rule.
+        races = f"{where} AND kind = 'race'" if where else "WHERE kind = 'race'"
+        ids = [row[0] for row in league.query(f"SELECT entry_id FROM entries {races}", params)]
+        found = result_standings(league, ids, filters.local_models)
+        allowed = [i for i in ids if counts_under(found[i].standing, filters.verification)]
+        return "entry_id IN (SELECT value FROM json_each(?))", [json.dumps(allowed)]
+    required: dict[str, Verification] = {}
+    for night_id, rules in league.query(
+        "SELECT id, rules FROM nights WHERE id IN (SELECT value FROM json_each(?))",
+        (json.dumps(list(filters.night_ids)),),
+    ):
+        rule = rules_from_mapping(json.loads(rules)).verification
+        level = max(rule, filters.verification, key=_STRICTNESS.index)
+        if level.requires:
+            required[night_id] = level
+    if not required:
+        return "", []
+    rows = league.query(
+        "SELECT entry_id, night_id FROM entries WHERE night_id IN (SELECT value FROM json_each(?))",
+        (json.dumps(list(required)),),
+    )
+    found = result_standings(league, [row[0] for row in rows], filters.local_models)
+    left_out = [
+        entry_id
+        for entry_id, night_id in rows
+        if not counts_under(found[entry_id].standing, required[night_id])
+    ]
+    return "entry_id NOT IN (SELECT value FROM json_each(?))", [json.dumps(left_out)]
+
+
+def mark_verification(
+    league: League, rows: Sequence[LeaderboardRow], local_models: Collection[str] = ()
+) -> None:
+    """Fill in each row's standing here (`verification`), for the rows a board shows."""
+    found = result_standings(league, [row.record_id for row in rows], local_models)
+    for row in rows:
+        row.verification = found[row.record_id].standing.value
 
 
 def _rows(league: League, sql: str, params: Sequence[Any]) -> list[LeaderboardRow]:

@@ -29,6 +29,7 @@ def standings_json(standings: Sequence[Standing]) -> list[dict[str, Any]]:
             "laps": s.entry.valid_laps,
             "offtracks": s.entry.offtracks,
             "race_id": s.entry.record_id,
+            "verification": s.entry.verification or None,  # league.trust.standing, if known
         }
         for s in standings
     ]

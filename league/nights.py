@@ -33,6 +33,7 @@ from sim.remedies import Fix
 from sim.track import Track
 
 if TYPE_CHECKING:
+    from league.trust.replay import DriverFor
     from sim.race.driver import Driver
     from sim.race.result import RaceResult
 
@@ -579,14 +580,27 @@ def standings_from(rows: Sequence[LeaderboardRow], points: Sequence[int]) -> lis
 
 
 def close_night(
-    league: League, night: Night, closed_by: str, *, force: bool = False
+    league: League,
+    night: Night,
+    closed_by: str,
+    *,
+    force: bool = False,
+    driver_for: DriverFor | None = None,
 ) -> list[Standing]:
     """Close the night: no more entrants, draws or races; its standings count for the season.
 
     Heats still waiting are refused unless `force` (a car that cannot run must not hold the
-    night open): those entrants simply have no result.
+    night open): those entrants simply have no result. Under a `verification` rule the
+    night's simulated heats are first raced again here with `driver_for` (the caller's, as
+    for league.trust.replay): a heat whose laps differ is withdrawn, and the standings count
+    only what the rule allows (league.night_verification says which heats do not).
     """
     who = check_name(closed_by, "name")
+    if driver_for is not None and night.rules.verification.requires:
+        from league.night_verification import replay_heats  # it imports this module
+
+        _open(league, night)  # before racing heats again for a night that cannot close
+        replay_heats(league, night, driver_for)
     with league.transaction():
         _open(league, night)
         waiting = len(pending_heats(league, night))

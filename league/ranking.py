@@ -12,6 +12,8 @@ import math
 from collections.abc import Iterable
 from typing import Protocol, TypeVar
 
+from sim.race.rules import Verification
+
 
 class Rankable(Protocol):
     """What ranking needs from a result; race results and submissions both provide it."""
@@ -54,3 +56,18 @@ def ranking_key(entry: Rankable) -> tuple[int, float, int, int, str, str, str]:
 def rank(entries: Iterable[RankedT]) -> list[RankedT]:
     """Entries best first, in the league's total order."""
     return sorted(entries, key=ranking_key)
+
+
+# Which standings (league.trust.standing) each verification rule ranks.
+_COUNTED: dict[Verification, frozenset[str]] = {
+    Verification.ANY: frozenset({"replayed", "verifiable", "unverifiable"}),
+    Verification.VERIFIABLE: frozenset({"replayed", "verifiable"}),
+    Verification.REPLAYED: frozenset({"replayed"}),
+}
+
+
+def counts_under(standing: str, required: Verification) -> bool:
+    """Whether a result of this standing is ranked under rules requiring `required`; a board
+    leaves the others out before it picks each racer's best (a racer's lesser verified
+    result still counts when their best cannot)."""
+    return standing in _COUNTED[required]

@@ -41,8 +41,10 @@ def when(iso: str) -> str:
 
 
 def leaderboard_columns(
-    method: RankingMethod, *, show_track: bool, iso_times: bool = False
+    method: RankingMethod, *, show_track: bool, iso_times: bool = False, verification: bool = False
 ) -> list[Column]:
+    """The columns of a leaderboard; `verification` adds each row's standing here
+    (replayed, verifiable, unverifiable: league.trust.standing), once it is worked out."""
     columns = [
         Column("rank", lambda row: str(row.rank), numeric=True),
         Column("racer", lambda row: row.display_name),
@@ -62,6 +64,8 @@ def leaderboard_columns(
             (lambda row: row.recorded_at) if iso_times else (lambda row: when(row.recorded_at)),
         ),
     ]
+    if verification:
+        columns.append(Column("verification", lambda row: row.verification or "-"))
     return columns
 
 
@@ -87,6 +91,9 @@ def leaderboard_json(rows: Sequence[LeaderboardRow], method: RankingMethod) -> l
             "kind": row.kind,
             "id": row.record_id,
             "night_id": row.night_id,
+            # replayed, verifiable or unverifiable here (league.trust.standing); None when
+            # the front end did not work it out.
+            "verification": row.verification or None,
         }
         for row in rows
     ]

@@ -31,6 +31,7 @@ from sim.race.rules import (
     RULE_PRESETS,
     RankingMethod,
     RulesError,
+    Verification,
     preset_rules,
     rules_from_mapping,
 )
@@ -119,6 +120,13 @@ def _register_leaderboard(commands: Parsers, db: argparse.ArgumentParser) -> Non
         metavar="COLUMN",
         help="rank, racer, model, track, score, best, average, laps, offtracks, submitted",
     )
+    board.add_argument(
+        "--verification",
+        choices=[level.value for level in Verification],
+        default=Verification.ANY.value,
+        help="rank only results verified by replay on this machine (replayed), or those too "
+        "whose model is here to replay (verifiable); every row says which it is",
+    )
     board.add_argument("--reverse", action="store_true", help="reverse the sort order")
     board.add_argument("--limit", type=int, metavar="N", help="show the first N rows")
     board.add_argument("--format", choices=FORMATS, default="table")
@@ -149,6 +157,13 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
         type=int,
         metavar="N",
         help="a lap-count race: each heat ends after N laps, or when the window closes first",
+    )
+    new.add_argument(
+        "--verification",
+        choices=[level.value for level in Verification],
+        help="which heats the standings count: any (the default), verifiable (the host can "
+        "race them again) or replayed (the host raced them again at `night close`, with the "
+        "same laps); frozen with the rules",
     )
     new.add_argument("--name")
     new.add_argument("--date", metavar="YYYY-MM-DD", help="the day it is held (default: today)")
@@ -348,6 +363,7 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
         Filters,
         board_of,
         leaderboard,
+        mark_verification,
         method_for,
         several_boards,
         sort_rows,
@@ -383,11 +399,14 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
         if args.race_type
         else (TIME_TRIAL if track is not None and night_ids is None else None)
     )
+    models_here = _models_here()
     filters = Filters(
         track_hash=track.track_hash if track is not None else None,
         racer=get_racer(league, args.racer).name if args.racer else None,
         night_ids=night_ids,
         race_type=race_type,
+        verification=Verification(args.verification),
+        local_models=models_here,
     )
     # A night's races rank by the night's own rules unless --by says otherwise.
     method = (
@@ -404,13 +423,14 @@ def _leaderboard(league: League, args: argparse.Namespace) -> int:
         if args.limit < 1:
             raise LeagueError("--limit must be at least 1.")
         rows = rows[: args.limit]
+    mark_verification(league, rows, models_here)
     shown_method = method if method is not None else _night_method(league, night_ids)
     show_track = several_boards(rows)
     if args.format == "json":
         print_json(leaderboard_json(rows, shown_method))
         return 0
     columns = leaderboard_columns(
-        shown_method, show_track=show_track, iso_times=args.format == "csv"
+        shown_method, show_track=show_track, iso_times=args.format == "csv", verification=True
     )
     if args.format == "csv":
         sys.stdout.write(to_csv(columns, rows))
@@ -498,6 +518,13 @@ def _night_method(league: League, night_ids: Sequence[str] | None) -> RankingMet
     return DEFAULT_RULES.ranking
 
 
+def _models_here() -> frozenset[str]:
+    """The garage's model hashes: their results are verifiable here."""
+    from racer_tui.race_commands import DriversByHash
+
+    return DriversByHash().models_here()
+
+
 # --- nights ----------------------------------------------------------------------------------
 
 
@@ -517,6 +544,8 @@ def _night(league: League, args: argparse.Namespace) -> int:
                 rules = rules_from_mapping({"lap_count": args.laps}, base=rules)
             except RulesError as error:
                 raise RulesError(f"--laps: {error}") from None
+        if args.verification is not None:
+            rules = rules_from_mapping({"verification": args.verification}, base=rules)
         held_on = nights.night_date(args.date) if args.date is not None else None
         night = nights.new_night(
             league,
@@ -560,10 +589,39 @@ def _night(league: League, args: argparse.Namespace) -> int:
         print(f"Deleted league night {night.name} ({night.id}).")
         return 0
     if action == "close":
-        who = args.by or local_racer_name(league) or HOST_NAME
-        standings = nights.close_night(league, night, who, force=args.force)
-        return _print_standings(night, standings, args.json, title=f"{night.name}: final standings")
+        return _night_close(league, night, args)
     return _night_show(league, night, "json" if args.json else args.format)
+
+
+def _night_close(league: League, night: Any, args: argparse.Namespace) -> int:
+    """Close the night; under a verification rule, race its simulated heats again here
+    first, and say of each heat withdrawn or left out of the standings why (on stderr
+    beside --json, which stays the standings alone)."""
+    from league import nights
+    from league.local_racer import HOST_NAME, local_racer_name
+    from league.night_verification import replay_heats, uncounted_heats
+    from racer_tui.race_commands import DriversByHash
+
+    who = args.by or local_racer_name(league) or HOST_NAME
+    drivers = DriversByHash()
+    said = sys.stderr if args.json else sys.stdout
+    # Raced again here rather than by close_night, so what came out is said before a heat
+    # it withdrew holds the night open (a closed night is refused by close_night as ever).
+    if night.rules.verification.requires and not night.closed:
+        for sentence in replay_heats(league, night, drivers):
+            print(sentence, file=said)
+    standings = nights.close_night(league, night, who, force=args.force)
+    models_here = drivers.models_here()
+    for sentence in uncounted_heats(league, night, models_here):
+        print(sentence, file=said)
+    return _print_standings(
+        league,
+        night,
+        standings,
+        args.json,
+        f"{night.name}: final standings",
+        models_here=models_here,
+    )
 
 
 def _night_move(league: League, night: Any, args: argparse.Namespace) -> int:
@@ -666,12 +724,16 @@ def _night_run(league: League, night: Any, limit: int | None) -> int:
 
 def _night_show(league: League, night: Any, kind: str) -> int:
     from league import nights
+    from league.leaderboard import mark_verification
     from league.night_report import night_export
+    from league.night_verification import uncounted_heats
 
     entrants = nights.entrants(league, night)
     heats = nights.heats(league, night)
     standings = nights.standings(league, night)
+    models_here = _models_here()
     if kind != "table":
+        mark_verification(league, [s.entry for s in standings], models_here)
         print(night_export(night, entrants, heats, standings, kind), end="")
         return 0
     state = "closed" if night.closed else "open"
@@ -690,12 +752,26 @@ def _night_show(league: League, night: Any, kind: str) -> int:
                 heat.race_id or "waiting",
             )
         print_table(table)
-    return _print_standings(night, standings, False, title=f"{night.name}: standings")
+    for sentence in uncounted_heats(league, night, models_here):
+        print(sentence)
+    return _print_standings(
+        league, night, standings, False, f"{night.name}: standings", models_here=models_here
+    )
 
 
-def _print_standings(night: Any, standings: Sequence[Any], as_json: bool, title: str) -> int:
+def _print_standings(
+    league: League,
+    night: Any,
+    standings: Sequence[Any],
+    as_json: bool,
+    title: str,
+    *,
+    models_here: frozenset[str],
+) -> int:
+    from league.leaderboard import mark_verification
     from league.report import SCORE_TITLES, seconds
 
+    mark_verification(league, [s.entry for s in standings], models_here)
     if as_json:
         from league.night_report import standings_json
 
@@ -709,6 +785,7 @@ def _print_standings(night: Any, standings: Sequence[Any], as_json: bool, title:
     table.add_column("laps", justify="right")
     table.add_column("off-tracks", justify="right")
     table.add_column("points", justify="right")
+    table.add_column("verification")
     for s in standings:
         table.add_row(
             "-" if s.position is None else str(s.position),
@@ -718,6 +795,7 @@ def _print_standings(night: Any, standings: Sequence[Any], as_json: bool, title:
             str(s.entry.valid_laps),
             str(s.entry.offtracks),
             str(s.points),
+            s.entry.verification,
         )
     print_table(table)
     return 0

@@ -282,6 +282,15 @@ class DriversByHash:
     def __call__(self, model_hash: str, track: Track) -> Driver | None:
         if model_hash == f"{REFERENCE_NAME}:{track.content_hash}":
             return reference_driver(track)
+        path = self._hashed().get(model_hash)
+        return None if path is None else resolve_driver(path, track)
+
+    def models_here(self) -> frozenset[str]:
+        """The content hashes of the garage's models: their races are verifiable here
+        (league.trust.standing)."""
+        return frozenset(self._hashed())
+
+    def _hashed(self) -> dict[str, str]:
         if self._garage is None:
             from sim.garage.folder import ModelError, list_models
 
@@ -291,8 +300,7 @@ class DriversByHash:
                     self._garage.setdefault(folder.content_hash(), str(folder.path))
                 except (ModelError, OSError):
                     continue  # a damaged model is no one's race
-        path = self._garage.get(model_hash)
-        return None if path is None else resolve_driver(path, track)
+        return self._garage
 
 
 def _policy_driver(spec: str, build: Callable[[ModuleType], Driver]) -> Driver:

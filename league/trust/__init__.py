@@ -8,6 +8,9 @@ signature counts for what.
   pulled record's signer may have made it.
 - membership.py: what a racer or organiser does to the roster (found the league,
   propose a key, admit, retire, revoke).
+- replay.py: a race raced again here from what it names; one whose laps differ is withdrawn.
+- standing.py: each result's standing here (replayed, verifiable, unverifiable), which
+  boards show and a night's `verification` rule ranks by.
 
 Sync calls into this package: a push seals what it sends (league.sync.sealing), a pull
 verifies every seal and holds back records the roster does not allow (league.sync.incoming).

@@ -53,6 +53,11 @@ class Verification(StrEnum):
     REPLAYED = "replayed"  # verified by replay on this machine
 
     @property
+    def requires(self) -> bool:
+        """Whether some results do not count under it."""
+        return self is not Verification.ANY
+
+    @property
     def words(self) -> str:
         return {
             Verification.ANY: "every result",

@@ -96,25 +96,26 @@ def test_a_race_of_other_physics_or_a_physical_car_is_unverifiable_here(tmp_path
 
 def test_a_verdict_stored_as_skipped_opens_as_unverifiable(tmp_path: Path) -> None:
     """A league from before the word changed: its remembered verdicts are renamed by a
-    migration, and the race is tried again as before."""
+    migration when it is opened, and nothing else of them changes."""
     import sqlite3
 
-    from league.migrations import SCHEMA_VERSION
+    from league.migrations import MIGRATIONS
 
+    before = next(i for i, m in enumerate(MIGRATIONS) if m.description == "unverifiable replays")
     db = tmp_path / "league.db"
-    with open_league(db) as league:
-        track = resolve_track("hairpin-circuit")
-        result = run_race(track, RULES, reference_driver(track), racer="bob", seed=2)
-        race = record_race(league, replace(result, model_hash="ab" * 32))
-        verify_races(league, DriversByHash())
-    with sqlite3.connect(db) as conn:
-        conn.execute("UPDATE sync_replays SET outcome = 'skipped'")
-        conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION - 1}")
+    conn = sqlite3.connect(db)
+    for migration in MIGRATIONS[:before]:
+        migration.apply(conn)
+    conn.execute(
+        "INSERT INTO sync_replays VALUES ('01M8JX393J9JBZ9KJEMTPZ5FMH', 'h', 'skipped', "
+        "'its model is not in this garage', '2026-01-01T00:00:00.000Z')"
+    )
+    conn.execute(f"PRAGMA user_version = {before}")
+    conn.commit()
     conn.close()
     with open_league(db) as league:
-        (row,) = league.query("SELECT race_id, outcome FROM sync_replays")
-        assert (row[0], row[1]) == (race, "unverifiable")
-        assert [v.race_id for v in verify_races(league, DriversByHash())] == [race]
+        (row,) = league.query("SELECT outcome, detail FROM sync_replays")
+    assert (row[0], row[1]) == ("unverifiable", "its model is not in this garage")
 
 
 def test_sync_verify_reports_in_text_and_json(
