@@ -20,6 +20,8 @@ from league.racers import check_name, display_names_overrides, ensure_racer
 from league.store import League, record_body
 from league.tracks import ensure_track, track_names
 from sim.ids import content_hash, is_valid_id
+from sim.race.physics import PHYSICAL
+from sim.race.plausible import first_impossible_lap
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
 from sim.remedies import Fix
@@ -67,6 +69,7 @@ def record_race(
     """
     if not is_valid_id(result.result_id):
         raise LeagueError(f"race result id {result.result_id!r} is not a valid record id.")
+    check_possible_laps(result)  # before the transaction: a floor may take a second to work out
     laps = _lap_rows(result)
     with league.transaction():
         racer = ensure_racer(league, result.racer)
@@ -112,6 +115,21 @@ def record_race(
             )
         refresh_entries(league.conn, [result.result_id])
     return result.result_id
+
+
+def check_possible_laps(result: RaceResult) -> None:
+    """LeagueError unless every lap of `result` is one a car could drive on its track: no
+    quicker than the track's floor for its physics (`sim.race.plausible`)."""
+    driven = [
+        (lap.number, lap.raw_seconds)  # as driven: penalties only ever add time
+        for lap in result.laps
+        # A physical car's lap that does not count may be one it never finished (its time
+        # is when it was given up) or one the timekeeper struck out.
+        if result.physics != PHYSICAL or lap.valid
+    ]
+    impossible = first_impossible_lap(result.track_hash, result.physics, driven)
+    if impossible is not None:
+        raise LeagueError(f"The race was not recorded: {impossible.sentence(result.track_name)}.")
 
 
 def record_race_as(league: League, result: RaceResult, racer: str) -> str:

@@ -15,6 +15,7 @@ from league.race_types import TIME_TRIAL
 from league.racers import check_name, ensure_racer
 from league.store import League, now_iso
 from league.tracks import ensure_track
+from sim.race.plausible import first_impossible_lap
 
 LAP_COLUMNS = (
     "number",
@@ -50,7 +51,9 @@ def lap_row(lap: EvaluationLap) -> dict[str, Any]:
 
 
 def submit(league: League, submission: Submission) -> Submitted:
-    """Add `submission` to the league; sending the same one again adds nothing."""
+    """Add `submission` to the league; sending the same one again adds nothing. A lap no
+    car could drive is refused (LeagueError), before anything is written."""
+    check_possible_laps(submission)
     fingerprint = submission.fingerprint
     with league.transaction():
         racer = ensure_racer(league, submission.racer)  # the stored spelling of the name
@@ -93,6 +96,18 @@ def submit(league: League, submission: Submission) -> Submitted:
         insert_laps(league, submission_id, laps)
         refresh_entries(league.conn, [submission_id])
     return Submitted(submission_id, duplicate=False)
+
+
+def check_possible_laps(submission: Submission) -> None:
+    """LeagueError unless every completed lap is one a car could drive on the track: no
+    quicker than the track's floor for the physics that timed it (`sim.race.plausible`)."""
+    driven = [(lap.number, lap.time_seconds) for lap in submission.completed_laps]
+    impossible = first_impossible_lap(submission.track_hash, submission.physics, driven)
+    if impossible is not None:
+        raise LeagueError(
+            f"{submission.evaluation_file}: {impossible.sentence(submission.track_name)}, "
+            "so it cannot be submitted."
+        )
 
 
 def insert_laps(league: League, submission_id: str, laps: list[dict[str, Any]]) -> None:

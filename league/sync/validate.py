@@ -36,8 +36,8 @@ from league.trust.keys import is_public_hex
 from league.trust.roster import ACTIONS, FOUNDER_ID, ROLES
 from sim.ids import is_valid_id
 from sim.names import NAME_RULE, is_valid_name
-from sim.race.physics import is_physics
-from sim.race.plausible import fastest_possible_lap_by_hash
+from sim.race.physics import PHYSICAL, is_physics
+from sim.race.plausible import first_impossible_lap
 from sim.race.result import RaceResult, ResultError
 from sim.race.rules import RulesError, rules_from_mapping
 
@@ -401,19 +401,23 @@ def _check_laps(laps: Any, kind: str) -> None:
 
 
 def _check_possible_laps(record: SyncRecord) -> None:
-    """No lap quicker than any car could drive the track (when this machine knows it)."""
-    floor = fastest_possible_lap_by_hash(str(record.body["track_hash"]))
-    if floor is None:
-        return
-    for lap in record.body["laps"]:
-        if record.kind == "submission" and not lap["completed"]:
-            continue  # a trial that stopped part-way is not a lap
-        seconds = lap.get("raw_seconds", lap["time_seconds"])
-        if seconds < floor:
-            raise RecordInvalidError(
-                f"its lap {lap['number']} of {seconds:.3f} s is faster than any car can go "
-                f"round that track (at least {floor:.2f} s at 4 m/s on its shortest line)"
-            )
+    """No lap quicker than any car could drive the track (when this machine knows it), by
+    the floor for the physics that timed it (`sim.race.plausible`)."""
+    timed_by = str(record.body.get("physics") or "")
+    driven = [
+        (lap["number"], lap.get("raw_seconds", lap["time_seconds"]))
+        for lap in record.body["laps"]
+        # A trial that stopped part-way is not a lap; a physical car's lap that does not
+        # count may be one it never finished (its time is when it was given up).
+        if lap.get("completed", True) and (timed_by != PHYSICAL or lap.get("valid", True))
+    ]
+    impossible = first_impossible_lap(str(record.body["track_hash"]), timed_by, driven)
+    if impossible is not None:
+        raise RecordInvalidError(
+            f"its lap {impossible.number} of {impossible.seconds:.3f} s is faster than any "
+            f"car can go round that track (no lap under {impossible.floor:.3f} s is possible "
+            f"there: {impossible.why})"
+        )
 
 
 def _nothing(record: SyncRecord) -> None:

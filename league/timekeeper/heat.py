@@ -20,12 +20,21 @@ from enum import StrEnum
 
 from sim.ids import new_id
 from sim.race.physics import PHYSICAL
+from sim.race.plausible import fastest_possible_lap
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import RaceRules, lap_counts, score_laps
+from sim.track import Track
 
 # A capture this soon after the lap started is a double press or a timer's bounce, not a
 # lap: no DeepRacer track is driven in under a second.
 MIN_LAP_SECONDS = 1.0
+
+
+def physical_floor(track: Track) -> float:
+    """Seconds no real car's lap of `track` is under: its shortest loop at a real car's top
+    speed (`sim.race.plausible.PHYSICAL_TOP_SPEED`, which says why it is so generous), the
+    floor a physical heat's result is checked against when it is recorded."""
+    return fastest_possible_lap(track, PHYSICAL)
 
 
 class Phase(StrEnum):
@@ -52,8 +61,11 @@ class CapturedLap:
 class TimekeptHeat:
     """The heat's state. Every input takes `now`, seconds on a monotonic clock."""
 
-    def __init__(self, rules: RaceRules) -> None:
+    def __init__(self, rules: RaceRules, *, floor_seconds: float | None = None) -> None:
         self.rules = rules
+        # No lap under this is a lap a real car drove (`physical_floor`): a capture before
+        # it is a false finish, refused as a double press is.
+        self.floor_seconds = floor_seconds
         self.phase = Phase.READY
         self.laps: list[CapturedLap] = []
         self.resets = 0  # in the lap in progress
@@ -100,6 +112,12 @@ class TimekeptHeat:
         if seconds < MIN_LAP_SECONDS:
             raise TimekeeperError(
                 f"A lap of {seconds:.2f} s is a double press, not a lap; it was not captured."
+            )
+        if self.floor_seconds is not None and seconds < self.floor_seconds:
+            raise TimekeeperError(
+                f"A lap of {seconds:.2f} s is faster than a real car can drive this track "
+                f"(no lap under {self.floor_seconds:.2f} s), so it was not captured; "
+                "capture when the car crosses the line."
             )
         lap = self._close_lap(now, finished=True)
         return self._after_lap(now, lap)

@@ -125,9 +125,13 @@ class Resumed:
             self.journal.took("start_or_pause", self.at, self.heat)
 
 
-def resume_heat(path: Path, heat_id: str, rules: RaceRules) -> Resumed | None:
+def resume_heat(
+    path: Path, heat_id: str, rules: RaceRules, *, floor_seconds: float | None = None
+) -> Resumed | None:
     """The heat `heat_id` as its journal left it, or None: no journal, one for another
-    heat, one with no input, or one that cannot be read or replayed."""
+    heat, one with no input, or one that cannot be read or replayed. `floor_seconds` (the
+    heat's, `heat.physical_floor`) holds for the captures still to come: the journal's own
+    were taken as they were."""
     journal = _read(path, heat_id)
     if journal is None or not journal.inputs:
         return None
@@ -142,6 +146,7 @@ def resume_heat(path: Path, heat_id: str, rules: RaceRules) -> Resumed | None:
     if stopped:
         take_input(heat, "start_or_pause", at)  # stop the clocks where they were last seen
     heat.started_at = journal.started_at or heat.started_at
+    heat.floor_seconds = floor_seconds
     return Resumed(heat, journal, at, stopped)
 
 

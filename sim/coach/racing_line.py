@@ -228,10 +228,13 @@ def optimise_line(
     *,
     half_width: float = DEEPRACER_CAR.width / 2.0,
     on_candidate: Callable[[LineFit], None] | None = None,
+    frame: RoadFrame | None = None,
 ) -> LineFit:
     """The fastest line found (module docstring), beginning with the minimum-curvature
-    one. `on_candidate` hears every line tried (the benchmark counts them)."""
-    frame = road_frame(track, half_width)
+    one. `on_candidate` hears every line tried (the benchmark counts them). `frame` is
+    where the line may go when it is not the road less `half_width` (`sim.coach.lap_floor`
+    widens it by what a car may cut)."""
+    frame = frame if frame is not None else road_frame(track, half_width)
     problem = LineProblem.of(frame)
     n = len(frame.base)
     cap = tightest_turn(limits)

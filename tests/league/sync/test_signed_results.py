@@ -114,10 +114,10 @@ def _stored_race(machine: Machine, race_id: str) -> SyncRecord:
     return make_record("race", race_id, body)
 
 
-def _three_second_laps(record: SyncRecord) -> dict[str, object]:
+def _five_second_laps(record: SyncRecord) -> dict[str, object]:
     body = json.loads(canonical_json(record.body))
     body["laps"] = [
-        {**lap, "time_seconds": 3.5, "raw_seconds": 3.5, "penalty_seconds": 0.0}
+        {**lap, "time_seconds": 5.0, "raw_seconds": 5.0, "penalty_seconds": 0.0}
         for lap in body["laps"]
     ]
     return body
@@ -130,16 +130,16 @@ def test_the_issues_forgery_reaches_nobody_and_is_listed_with_its_reason(
     race_id = ana.race("ana", [12.5, 12.4])
     ana.sync()
     honest = _stored_race(ana, race_id)
-    # Every lap made 3.5 s (still possible on the hairpin's shortest line), the content
+    # Every lap made 5.0 s (still over the hairpin's floor, 4.64 s), the content
     # hash recomputed so the record looks whole, ana's seal left on it.
-    forged_body = _three_second_laps(honest)
+    forged_body = _five_second_laps(honest)
     forged = make_record("race", race_id, forged_body)
     assert forged.content_hash == hashlib.sha256(canonical_json(forged_body)).hexdigest()
     _rewrite_in_store(ana.url, forged.sealed(make_seal(honest, ana.key)))
 
     summary = viewer.sync()
     assert viewer.league.query_one("SELECT count(*) FROM races WHERE id = ?", (race_id,))[0] == 0
-    assert min(viewer.board().values()) > 11.0  # nobody shows a 3.5 s lap
+    assert min(viewer.board().values()) > 11.0  # nobody shows a 5.0 s lap
     (reason,) = [r for where, r in viewer.quarantine().items() if race_id in where]
     assert "signature does not match its content" in reason
     assert any(race_id in line for line in summary.quarantined)
@@ -160,7 +160,7 @@ def test_a_result_re_signed_by_the_wrong_key_never_reaches_a_leaderboard(
     ana, viewer = machines["ana"], machines["viewer"]
     race_id = ana.race("ana", [12.5, 12.4])
     ana.sync()
-    forged = make_record("race", race_id, _three_second_laps(_stored_race(ana, race_id)))
+    forged = make_record("race", race_id, _five_second_laps(_stored_race(ana, race_id)))
     wrong = machines[signer].key
     _rewrite_in_store(ana.url, forged.sealed(make_seal(forged, wrong)))
 
@@ -425,7 +425,7 @@ def test_a_key_proposed_under_a_look_alike_name_is_not_admitted(
 
     organiser = machines["organiser"]
     poser = Machine(tmp_path, "\u0430na", store_url)  # Cyrillic а, then "na"
-    poser.race("\u0430na", [4.0, 4.0])
+    poser.race("\u0430na", [5.0, 5.0])
     poser.sync()
     organiser.sync()
     with pytest.raises(LeagueError, match="cannot be told apart from racer 'ana'"):
