@@ -5,21 +5,34 @@ Layout::
 
     PATH/racer-tui-store.json                       marker written by `sync init`
     PATH/records/<kind>/<shard>/<id>.json           an immutable record
+    PATH/records/<kind>/<shard>/<id>.spare<n>.json  a spare copy of it (n = 1..8, see below)
     PATH/records/racer_profile/<shard>/<id>.v<version, 10 digits>.json
+    PATH/tmp/.tmp-<host>-<pid>-<random>             a record being written
 
 `<shard>` is the id's last character (32 folders per kind, filled evenly), which keeps
 every folder small enough for FAT32 USB sticks. Names are built only from the fixed kind
 list and validated ids.
 
-Writing is create-only and atomic: the record goes to a temporary name in the same
-folder (fsynced), then `os.link(temp, final)` publishes it; link fails if the final name
+Writing is create-only and atomic: the record goes to a temporary file in `tmp/`
+(fsynced), then `os.link(temp, final)` publishes it; link fails if the final name
 exists, so two racers writing at once never overwrite each other, and a reader never sees
-a partial file (temporary names do not match the record pattern). Where the filesystem has
+a partial file (temporary names do not match the record pattern). A push that is killed
+leaves its temporary file behind; every push and pull removes, from the one `tmp/` folder,
+those whose writer is gone: a process of this machine that no longer runs, or any file
+older than `_DEAD_TEMP_S` by the file server's clock (a write takes milliseconds, so only
+a dead writer's file gets that old, whichever machine it came from). Where the filesystem has
 no hard links (FAT32/exFAT), the record is written with O_CREAT|O_EXCL to its final name
 instead; readers then treat an incomplete file (not yet a whole JSON document) younger than
 `pending_grace_s` as still being written and retry it on the next pull rather than
 quarantining it. A whole record that fails its checks (an edited body, a recomputed hash
 that does not match) is no write in flight: it is quarantined at once.
+
+Spare copies: anyone who can write to the folder can overwrite or delete a record file,
+so a record's maker checks its own records at each sync (league.sync.restore) and, when
+the file under the record's name is gone or no longer its record, writes the record
+again: under its own name if that is free, else as the first free spare copy. Pullers
+read spares like any record file; a forged file beside a genuine spare is quarantined
+(its seal fails) while the genuine copy reaches the boards.
 
 Pull cursor: the set of record names already seen (compressed). Ids sort by *creation*
 time, but a racer who was offline pushes old ids late, so a "newest id seen" watermark
@@ -35,13 +48,16 @@ import errno
 import os
 import re
 import secrets
+import socket
 import stat
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final, TypeVar
+
+import psutil
 
 from league.sync.cursor import pack_cursor, unpack_cursor
 from league.sync.errors import (
@@ -55,6 +71,7 @@ from league.sync.errors import (
 )
 from league.sync.protocol import (
     DEFAULT_PAGE_SIZE,
+    SPARE_SLOTS,
     Conflict,
     ContentConflict,
     ProgressCallback,
@@ -82,12 +99,31 @@ MARKER_VERSION: Final = 1
 RECORDS_DIR: Final = "records"
 SHARDS: Final = "0123456789ABCDEFGHJKMNPQRSTVWXYZ"
 _CURSOR_TYPE: Final = "dir"
-_NAME: Final = re.compile(r"(?P<id>[0-9A-HJKMNP-TV-Z]{26})(?:\.v(?P<version>\d{10}))?\.json")
+_NAME: Final = re.compile(
+    r"(?P<id>[0-9A-HJKMNP-TV-Z]{26})(?:\.v(?P<version>\d{10})|\.spare(?P<spare>[1-8]))?\.json"
+)
+TEMP_DIR: Final = "tmp"
 _TEMP_PREFIX: Final = ".tmp-"
 _STALE_TEMP_S: Final = 24 * 3600
+# Older than this, a temporary file's writer is dead: writing one record takes
+# milliseconds, seconds on the slowest network drive.
+_DEAD_TEMP_S: Final = 600.0
 _NO_LINKS: Final = frozenset(
-    {errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.ENOSYS, errno.EMLINK, errno.EACCES}
+    {
+        errno.EPERM,
+        errno.ENOTSUP,
+        errno.EOPNOTSUPP,
+        errno.ENOSYS,
+        errno.EMLINK,
+        errno.EACCES,
+        errno.EXDEV,
+    }
 )
+# `.tmp-<host>-<pid>-<random>`: who wrote a temporary file, so that a machine can tell
+# its own dead writers' files at once (older names, `.tmp-<pid>-<random>`, age out).
+_TEMP_NAME: Final = re.compile(r"\.tmp-(?P<host>[A-Za-z0-9]{1,32})-(?P<pid>\d{1,10})-[0-9a-f]+")
+# This machine as temporary names give it: letters and digits of its host name.
+_HOST: Final = re.sub(r"[^A-Za-z0-9]", "", socket.gethostname())[:32] or "host"
 _O_NOFOLLOW: Final = getattr(os, "O_NOFOLLOW", 0)
 _O_NONBLOCK: Final = getattr(os, "O_NONBLOCK", 0)
 _O_BINARY: Final = getattr(os, "O_BINARY", 0)
@@ -159,6 +195,7 @@ class DirStore:
             self._publish(marker, data)
         self._check_ready()
         self._sweep_stale_temps()
+        self._sweep_dead_temps()
 
     def _check_ready(self) -> None:
         if not self.root.is_dir():
@@ -206,6 +243,44 @@ class DirStore:
                         if entry.stat(follow_symlinks=False).st_mtime < cutoff:
                             os.unlink(entry.path)
 
+    def _sweep_dead_temps(self) -> None:
+        """Remove the temporary files in `tmp/` whose writer is gone (a push that was
+        killed): a process of this machine that no longer runs, or, from any machine, a
+        file older than _DEAD_TEMP_S by the file server's clock. A live writer's file is
+        never touched, wherever it runs."""
+        entries = [e for e in _scan(self.root / TEMP_DIR) if e.name.startswith(_TEMP_PREFIX)]
+        undecided: list[os.DirEntry[str]] = []
+        for entry in entries:
+            match = _TEMP_NAME.fullmatch(entry.name)
+            if match and match["host"] == _HOST and not psutil.pid_exists(int(match["pid"])):
+                with contextlib.suppress(OSError):
+                    os.unlink(entry.path)
+            else:
+                undecided.append(entry)
+        if not undecided:
+            return
+        cutoff = self._server_now() - _DEAD_TEMP_S
+        for entry in undecided:
+            with contextlib.suppress(OSError):
+                if entry.stat(follow_symlinks=False).st_mtime < cutoff:
+                    os.unlink(entry.path)
+
+    def _server_now(self) -> float:
+        """The time by the clock that stamps the folder's files (a network drive's server,
+        which a machine's own clock may be minutes away from): a new file's mtime."""
+        probe = self._temp_path()
+        self._write_new(probe, b"", durable=False)
+        try:
+            return probe.stat().st_mtime
+        finally:
+            with contextlib.suppress(OSError):
+                os.unlink(probe)
+
+    def _temp_path(self) -> Path:
+        folder = self.root / TEMP_DIR
+        folder.mkdir(exist_ok=True)
+        return folder / f"{_TEMP_PREFIX}{_HOST}-{os.getpid()}-{secrets.token_hex(8)}"
+
     # -- push ---------------------------------------------------------------------------
 
     def push(
@@ -213,6 +288,7 @@ class DirStore:
     ) -> PushReport:
         self._check_ready()
         with self._folder_errors("write to"):
+            self._sweep_dead_temps()
             return self._push(records, progress)
 
     def _push(self, records: Iterable[SyncRecord], progress: ProgressCallback | None) -> PushReport:
@@ -293,7 +369,7 @@ class DirStore:
         """Create `final` holding `data` atomically; False if it already exists."""
         final.parent.mkdir(parents=True, exist_ok=True)
         if self._use_hard_links:
-            temp = final.parent / f"{_TEMP_PREFIX}{os.getpid()}-{secrets.token_hex(8)}"
+            temp = self._temp_path()
             self._write_new(temp, data)
             try:
                 os.link(temp, final)
@@ -313,7 +389,7 @@ class DirStore:
             return False
         return True
 
-    def _write_new(self, path: Path, data: bytes) -> None:
+    def _write_new(self, path: Path, data: bytes, *, durable: bool = True) -> None:
         """Write a new file (fails if it exists); removes it again if writing fails."""
         fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _O_BINARY, 0o644)
         try:
@@ -321,7 +397,7 @@ class DirStore:
                 view = memoryview(data)
                 while view:
                     view = view[os.write(fd, view) :]
-                if self.durable:
+                if self.durable and durable:
                     os.fsync(fd)
             finally:
                 os.close(fd)
@@ -330,11 +406,54 @@ class DirStore:
                 os.unlink(path)
             raise
 
+    # -- spare copies (league.sync.restore) ----------------------------------------------
+
+    def held_copies(
+        self, keys: Sequence[tuple[str, str]], *, spares: bool = False
+    ) -> dict[tuple[str, str], list[SyncRecord]]:
+        """The whole records the folder holds under each (kind, id): the file under the
+        record's own name, and with `spares` its spare copies too. A file that is not a
+        whole record of that kind and id is no copy of it (it is left to the pull to
+        quarantine)."""
+        self._check_ready()
+        wanted = [
+            (key, self._path_for(key[0], key[1], 0, spare))
+            for key in keys
+            if key[0] not in VERSIONED_KINDS
+            for spare in (range(SPARE_SLOTS + 1) if spares else (0,))
+        ]
+        copies: dict[tuple[str, str], list[SyncRecord]] = {key: [] for key in keys}
+        with self._folder_errors("read"):
+            found = list(self._run_parallel(self._read, [path for _, path in wanted]))
+        for (key, _), held in zip(wanted, found, strict=True):
+            if isinstance(held, SyncRecord) and held.key == key:
+                copies[key].append(held)
+        return copies
+
+    def write_spare(self, record: SyncRecord) -> str | None:
+        """Write `record` again: under its own name if that is free (its file was deleted),
+        else as the first free spare copy. Where it went, or None when every name is
+        taken."""
+        self._check_ready()
+        if record.kind in VERSIONED_KINDS:
+            return None
+        data = encode_envelope(record)
+        with self._folder_errors("write to"):
+            for spare in range(SPARE_SLOTS + 1):
+                path = self._path_for(record.kind, record.record_id, 0, spare)
+                if self._publish(path, data):
+                    if self.durable:
+                        _fsync_dir(path.parent)
+                    return str(path.relative_to(self.root))
+        return None
+
     # -- pull ---------------------------------------------------------------------------
 
     def pull(self, cursor: str | None = None, limit: int = DEFAULT_PAGE_SIZE) -> PullPage:
         self._check_ready()
         with self._folder_errors("read"):
+            with contextlib.suppress(OSError):  # a read-only share can still be pulled
+                self._sweep_dead_temps()
             return self._pull(cursor, limit)
 
     def _pull(self, cursor: str | None, limit: int) -> PullPage:
@@ -374,21 +493,22 @@ class DirStore:
 
     def _list_records(self) -> list[_Listed]:
         listed: list[_Listed] = []
+        temps: list[os.DirEntry[str]] = []
         for kind in KINDS:
             kind_dir = self.root / RECORDS_DIR / kind
             for shard in SHARDS:
                 for entry in _scan(kind_dir / shard):
                     match = _NAME.fullmatch(entry.name)
                     if match is None or not entry.is_file(follow_symlinks=False):
+                        if entry.name.startswith(_TEMP_PREFIX):
+                            temps.append(entry)
                         continue  # temporary files, conflicted copies, anything foreign
+                    order = match["version"] or (f"spare{match['spare']}" if match["spare"] else "")
                     listed.append(
-                        _Listed(
-                            f"{kind}/{entry.name}",
-                            entry.path,
-                            (match["id"], kind, match["version"] or ""),
-                        )
+                        _Listed(f"{kind}/{entry.name}", entry.path, (match["id"], kind, order))
                     )
         listed.sort(key=lambda item: item.sort_key)  # creation order, for a readable pull
+        _remove_dead_legacy_temps(temps)
         return listed
 
     def _read_with_mtime(self, listed: _Listed) -> tuple[SyncRecord | Quarantined | None, float]:
@@ -437,11 +557,12 @@ class DirStore:
                 "check that it is connected, writable and not full, then sync again"
             ) from None
 
-    def _path_for(self, kind: str, record_id: str, version: int) -> Path:
+    def _path_for(self, kind: str, record_id: str, version: int, spare: int = 0) -> Path:
         # kind and record_id come from a validated SyncRecord: never a foreign string.
-        name = (
-            f"{record_id}.v{version:010d}.json" if kind in VERSIONED_KINDS else f"{record_id}.json"
-        )
+        if kind in VERSIONED_KINDS:
+            name = f"{record_id}.v{version:010d}.json"
+        else:
+            name = f"{record_id}{f'.spare{spare}' if spare else ''}.json"
         return self.root / RECORDS_DIR / kind / record_id[-1] / name
 
     def _versions_of(self, kind: str, record_id: str) -> list[int]:
@@ -475,13 +596,15 @@ class DirStore:
 
 
 def _check_name(record: SyncRecord, listed: _Listed) -> SyncRecord | Quarantined:
-    """A record must sit under its own name, or create-only per id would mean nothing."""
+    """A record must sit under its own name (or one of its spare copies' names), or
+    create-only per id would mean nothing."""
     kind, _, file_name = listed.name.partition("/")
-    expected = (
-        f"{record.record_id}.v{record.version:010d}.json"
-        if record.kind in VERSIONED_KINDS
-        else f"{record.record_id}.json"
-    )
+    match = _NAME.fullmatch(file_name)
+    spare = match["spare"] if match else None
+    if record.kind in VERSIONED_KINDS:
+        expected = f"{record.record_id}.v{record.version:010d}.json"
+    else:
+        expected = f"{record.record_id}{f'.spare{spare}' if spare else ''}.json"
     if (
         record.kind != kind
         or file_name != expected
@@ -493,6 +616,16 @@ def _check_name(record: SyncRecord, listed: _Listed) -> SyncRecord | Quarantined
             file_name,
         )
     return record
+
+
+def _remove_dead_legacy_temps(temps: list[os.DirEntry[str]]) -> None:
+    """Temporary files that racer-tui before `tmp/` left beside the records (a killed push):
+    gone once old enough that no writer can still hold them."""
+    cutoff = time.time() - _DEAD_TEMP_S
+    for entry in temps:
+        with contextlib.suppress(OSError):
+            if entry.stat(follow_symlinks=False).st_mtime < cutoff:
+                os.unlink(entry.path)
 
 
 def _load_cursor(cursor: str | None) -> tuple[set[str], set[str]]:

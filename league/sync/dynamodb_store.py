@@ -16,13 +16,19 @@ from the server's clock (the Date header), and the cursor re-reads an overlap wi
 returned there: a put that was in flight, stamped a moment earlier than a later one, or
 not yet visible in the eventually-consistent index when we looked, is still found, and
 nothing is returned twice.
+
+Spare copies (league.sync.restore): a record whose item was deleted or replaced by
+someone with write access to the table is written again by its maker, under its own key
+if that is free, else as `<kind>#<id>#spare<n>` (n = 1..8), create-only like every put.
+A pull reads a spare as the record it is a copy of.
 """
 
 from __future__ import annotations
 
 import contextlib
+import re
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from functools import partial
 from typing import Any, Final
@@ -46,6 +52,7 @@ from league.sync.dynamodb_table import (
     meta_problem,
     record_item,
     record_pk,
+    shard_of,
     table_design_problem,
     watermark_key,
 )
@@ -57,6 +64,7 @@ from league.sync.errors import (
 )
 from league.sync.protocol import (
     DEFAULT_PAGE_SIZE,
+    SPARE_SLOTS,
     Conflict,
     ContentConflict,
     ProgressCallback,
@@ -76,6 +84,7 @@ _QUERY_LIMIT: Final = 1000
 _TABLE_WAIT_S: Final = 600.0
 _CREATE_ONLY: Final = "attribute_not_exists(#pk)"
 _VERSION_MATCHES: Final = "#v = :expected"
+_SPARE_PK: Final = re.compile(r"(?P<key>[a-z_]{1,32}#[0-9A-HJKMNP-TV-Z]{26})#spare[1-8]")
 
 
 class DynamoDbStore:
@@ -251,19 +260,17 @@ class DynamoDbStore:
                     held[pk] = held_hash_and_version(item)
         return held
 
-    def _batch_get(self, keys: list[Item]) -> list[Item]:
-        """BatchGetItem, re-requesting unprocessed keys (throttling) with backoff."""
+    def _batch_get(self, keys: list[Item], *, whole: bool = False) -> list[Item]:
+        """BatchGetItem (key, hash and version only, or `whole` items), re-requesting
+        unprocessed keys (throttling) with backoff."""
         found: list[Item] = []
         attempt = 1
         while keys:
-            request: dict[str, Any] = {
-                self.table: {
-                    "Keys": keys,
-                    "ProjectionExpression": "#pk, content_hash, #v",
-                    "ExpressionAttributeNames": {"#pk": PK, "#v": "version"},
-                    "ConsistentRead": True,
-                }
-            }
+            wanted: dict[str, Any] = {"Keys": keys, "ConsistentRead": True}
+            if not whole:
+                wanted["ProjectionExpression"] = "#pk, content_hash, #v"
+                wanted["ExpressionAttributeNames"] = {"#pk": PK, "#v": "version"}
+            request: dict[str, Any] = {self.table: wanted}
             response: Any = self._call(partial(self._client.batch_get_item, RequestItems=request))
             found.extend(response.get("Responses", {}).get(self.table, []))
             keys = list(response.get("UnprocessedKeys", {}).get(self.table, {}).get("Keys", []))
@@ -346,6 +353,65 @@ class DynamoDbStore:
             return _conflict(record, held_hash_and_version(old) if old else (None, 0))
         return decision
 
+    # -- spare copies (league.sync.restore) ----------------------------------------------
+
+    def held_copies(
+        self, keys: Sequence[tuple[str, str]], *, spares: bool = False
+    ) -> dict[tuple[str, str], list[SyncRecord]]:
+        """The whole records the table holds under each (kind, id): its own item, and with
+        `spares` its spare copies too; an item that is not a whole record of that kind
+        and id is no copy of it (the pull quarantines it)."""
+        self._check_ready()
+        slots = range(SPARE_SLOTS + 1) if spares else range(1)
+        pks = [
+            _spare_pk(kind, record_id, slot)
+            for kind, record_id in keys
+            if kind not in VERSIONED_KINDS
+            for slot in slots
+        ]
+        copies: dict[tuple[str, str], list[SyncRecord]] = {key: [] for key in keys}
+        for start in range(0, len(pks), _BATCH_GET_LIMIT):
+            batch: list[Item] = [{PK: {"S": pk}} for pk in pks[start : start + _BATCH_GET_LIMIT]]
+            for item in self._batch_get(batch, whole=True):
+                held = _decode(item)
+                if isinstance(held, SyncRecord) and held.key in copies:
+                    copies[held.key].append(held)
+        return copies
+
+    def write_spare(self, record: SyncRecord) -> str | None:
+        """Write `record` again: as its own item if that key is free (it was deleted), else
+        as the first free spare copy. The key it went to, or None when all are taken."""
+        self._check_ready()
+        if record.kind in VERSIONED_KINDS:
+            return None
+        client = self._client
+        for slot in range(SPARE_SLOTS + 1):
+            pk = _spare_pk(record.kind, record.record_id, slot)
+
+            def put(pk: str = pk, slot: int = slot) -> bool:
+                item = record_item(record, self._call.clock.now_ms())
+                if slot:
+                    item[PK] = {"S": pk}
+                    item[SHARD] = {"S": shard_of(pk)}
+                    # Its own place in the pull's index, apart from the item it copies.
+                    item[PUSHED_KEY] = {"S": f"{item[PUSHED_KEY]['S']}#spare{slot}"}
+                try:
+                    client.put_item(
+                        TableName=self.table,
+                        Item=item,
+                        ConditionExpression=_CREATE_ONLY,
+                        ExpressionAttributeNames={"#pk": PK},
+                    )
+                except botocore.exceptions.ClientError as exc:
+                    if error_code(exc) != "ConditionalCheckFailedException":
+                        raise
+                    return False
+                return True
+
+            if self._call(put):
+                return pk
+        return None
+
     # -- pull ---------------------------------------------------------------------------
 
     def pull(self, cursor: str | None = None, limit: int = DEFAULT_PAGE_SIZE) -> PullPage:
@@ -374,7 +440,7 @@ class DynamoDbStore:
                     key = item[PUSHED_KEY]["S"]
                     state.positions[shard] = key
                     if key not in state.seen:
-                        outcome = decode_item(item)
+                        outcome = _decode(item)
                         if isinstance(outcome, SyncRecord):
                             records.append(outcome)
                         else:
@@ -407,6 +473,21 @@ class DynamoDbStore:
             arguments["ExpressionAttributeNames"]["#k"] = PUSHED_KEY
             arguments["ExpressionAttributeValues"][":after"] = {"S": after}
         return self._client.query(**arguments)
+
+
+def _spare_pk(kind: str, record_id: str, slot: int) -> str:
+    """The key of a record's item (slot 0) or of its spare copy `slot`."""
+    pk = record_pk(kind, record_id)
+    return f"{pk}#spare{slot}" if slot else pk
+
+
+def _decode(item: Item) -> SyncRecord | Quarantined:
+    """A pulled item as a record; a spare copy reads as the record it copies."""
+    pk = item.get(PK, {}).get("S") if isinstance(item.get(PK), dict) else None
+    spare = _SPARE_PK.fullmatch(pk) if isinstance(pk, str) else None
+    if spare is not None and spare["key"].partition("#")[0] not in VERSIONED_KINDS:
+        item = {**item, PK: {"S": spare["key"]}}
+    return decode_item(item)
 
 
 def _decide(

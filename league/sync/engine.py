@@ -21,6 +21,11 @@ Records whose signer the roster does not allow are held in quarantine and tried 
 the roster changes; results whose key was revoked are withdrawn. Records pulled are
 recorded as held by the store, so they are never pushed back to it.
 
+Restore: after the pull, every record this machine signed that the store should hold is
+checked there, and one that was deleted or replaced (by anyone who can write to the
+store) is written back as a spare copy (restore.py), so a machine pulling afresh still
+finds the genuine record beside any forgery.
+
 An unreachable store raises a SyncError (one sentence) before anything local changes.
 """
 
@@ -36,6 +41,7 @@ from league.sync import incoming, local, models, outgoing, profiles
 from league.sync.errors import CursorInvalidError
 from league.sync.protocol import ContentConflict, PullPage, RecordStore, VersionConflict
 from league.sync.record import KINDS, SyncRecord
+from league.sync.restore import restore_own_records
 from league.sync.sealing import seal_all
 from league.sync.urls import parse_store_url
 from league.trust.keys import SigningKey, load_or_create_key
@@ -121,6 +127,8 @@ def sync(
     summary = summary.merged(push(league, store, key, progress=progress, signing_key=signing))
     if pull_records:
         summary = summary.merged(pull(league, store, key, progress=progress))
+    summary.notes.extend(restore_own_records(league, store, key, signing.public_hex))
+    if pull_records:
         proposed, note = propose_key(league, signing)
         if note is not None:
             summary.notes.append(note)

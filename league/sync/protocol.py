@@ -13,12 +13,17 @@ All stores share one contract so the league's sync code never knows which one it
   `next_cursor` only after the page's records are stored locally. A pull may return a
   record the caller already has (inserts must be idempotent by key and hash), and may
   return several versions of a versioned record (keep the highest).
+- `held_copies(keys, spares=)` reads what the store holds under each record's key (and
+  its spare copies), and `write_spare(record)` writes a record again after its copy in the
+  store was deleted or replaced: under its own key if that is free, else as the first free
+  of SPARE_SLOTS spare copies. Records are immutable, but anyone who can write to a shared
+  folder or table can still replace one; its maker puts it back (league.sync.restore).
 - `close()` releases connections; stores are also context managers.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -27,6 +32,10 @@ from league.sync.record import VERSIONED_KINDS, Quarantined, SyncRecord
 # Called as progress(done, total) while a push runs, from the calling thread.
 ProgressCallback = Callable[[int, int], None]
 DEFAULT_PAGE_SIZE = 500
+# Spare copies a record may have beside its own key: a maker whose record was replaced
+# writes it again in the next free one, so a forger must fill them all to keep it out,
+# and then the maker is told.
+SPARE_SLOTS = 8
 
 
 @dataclass(frozen=True)
@@ -134,6 +143,17 @@ class RecordStore(Protocol):
     ) -> PushReport: ...
 
     def pull(self, cursor: str | None = None, limit: int = DEFAULT_PAGE_SIZE) -> PullPage: ...
+
+    def held_copies(
+        self, keys: Sequence[tuple[str, str]], *, spares: bool = False
+    ) -> dict[tuple[str, str], list[SyncRecord]]:
+        """Whole records held under each (kind, id) key (and its spare copies' keys)."""
+        ...
+
+    def write_spare(self, record: SyncRecord) -> str | None:
+        """Write `record` under its own key if free, else its first free spare key;
+        where it went, or None if all are taken."""
+        ...
 
     def close(self) -> None: ...
 

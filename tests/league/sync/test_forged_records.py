@@ -1,0 +1,161 @@
+"""Forged deletions do not erase honest results: a racer's record that someone deleted or
+re-wrote in the store (re-hashed so that it looks whole) is kept by every machine that
+had it, and written back by its maker's next sync, so that a machine pulling afresh finds
+the honest result; with no genuine copy anywhere, the forgery is quarantined with its
+reason, never silently nothing. On the shared folder and on DynamoDB (loopback server).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from league.sync.aws import dynamodb_client
+from league.sync.dynamodb_table import record_item
+from league.sync.protocol import SPARE_SLOTS
+from league.sync.record import SyncRecord, encode_envelope, make_record
+from league.sync.urls import DynamoDbUrl, parse_store_url
+from league.trust.seals import make_seal
+from tests.league.sync.conftest import QUICK_RETRY
+from tests.league.sync.test_signed_results import (  # the league of machines these tests share
+    Machine,
+    machines,  # noqa: F401 (a fixture)
+)
+
+FORGED_LAP = 3.5
+
+
+def honest_race(machine: Machine, race_id: str) -> SyncRecord:
+    from league.records import record_body
+
+    return make_record("race", race_id, record_body(machine.league, "races", race_id))
+
+
+def forgery_of(honest: SyncRecord, machine: Machine) -> SyncRecord:
+    """Every lap made FORGED_LAP seconds, the hash recomputed, the maker's seal left on."""
+    body = dict(honest.body)
+    body["laps"] = [
+        {**lap, "time_seconds": FORGED_LAP, "raw_seconds": FORGED_LAP, "penalty_seconds": 0.0}
+        for lap in honest.body["laps"]
+    ]
+    return make_record("race", honest.record_id, body).sealed(make_seal(honest, machine.key))
+
+
+def _table(url: str) -> tuple[object, str]:
+    parsed = parse_store_url(url)
+    assert isinstance(parsed, DynamoDbUrl)
+    return dynamodb_client("us-east-1", parsed.endpoint, QUICK_RETRY, 1), parsed.table
+
+
+def _file(url: str, record_id: str, spare: int = 0) -> Path:
+    name = f"{record_id}.spare{spare}.json" if spare else f"{record_id}.json"
+    return Path(url.removeprefix("dir:")) / "records" / "race" / record_id[-1] / name
+
+
+def overwrite(url: str, record: SyncRecord, spare: int = 0) -> None:
+    """Write `record` over what the store holds under its key (or spare `spare`), as anyone
+    with write access to the folder or the table can."""
+    if url.startswith("dir:"):
+        path = _file(url, record.record_id, spare)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(encode_envelope(record))
+        return
+    client, table = _table(url)
+    item = record_item(record, 1_900_000_000_000 + spare)
+    if spare:
+        item["pk"] = {"S": f"race#{record.record_id}#spare{spare}"}
+        item["pushed_key"] = {"S": f"{item['pushed_key']['S']}#spare{spare}"}
+    client.put_item(TableName=table, Item=item)  # type: ignore[attr-defined]
+
+
+def delete(url: str, record_id: str) -> None:
+    if url.startswith("dir:"):
+        _file(url, record_id).unlink()
+        return
+    client, table = _table(url)
+    client.delete_item(TableName=table, Key={"pk": {"S": f"race#{record_id}"}})  # type: ignore[attr-defined]
+
+
+def laps_of(machine: Machine, race_id: str) -> list[float]:
+    rows = machine.league.query(
+        "SELECT time_seconds FROM race_laps WHERE race_id = ? ORDER BY number", (race_id,)
+    )
+    return [row[0] for row in rows]
+
+
+def test_the_honest_result_reaches_a_fresh_machine_once_its_racer_syncs_again(
+    machines: dict[str, Machine],  # noqa: F811
+) -> None:
+    ana, viewer = machines["ana"], machines["viewer"]
+    race_id = ana.race("ana", [12.5, 12.4])
+    ana.sync()
+    honest = honest_race(ana, race_id)
+    overwrite(ana.url, forgery_of(honest, ana))
+
+    # No genuine copy in the store yet: the fresh machine shows the forgery as quarantined.
+    before = viewer.sync()
+    assert laps_of(viewer, race_id) == []
+    assert "signature does not match its content" in viewer.quarantine()[f"race {race_id}"]
+    assert any(race_id in line for line in before.quarantined)
+
+    restored = ana.sync()
+    assert any(race_id in note and "wrote it back" in note for note in restored.notes), (
+        restored.notes
+    )
+
+    viewer.sync()
+    assert laps_of(viewer, race_id) == [12.5, 12.4]
+    assert FORGED_LAP not in viewer.board().values()
+    # Writing it back happens once: the spare copy stays genuine.
+    assert not any(race_id in note for note in ana.sync().notes)
+
+
+def test_a_machine_that_had_the_record_keeps_it_when_the_store_copy_is_forged(
+    machines: dict[str, Machine],  # noqa: F811
+) -> None:
+    ana, bob = machines["ana"], machines["bob"]
+    race_id = ana.race("ana", [12.5, 12.4])
+    ana.sync()
+    bob.sync()
+    assert laps_of(bob, race_id) == [12.5, 12.4]
+
+    overwrite(ana.url, forgery_of(honest_race(ana, race_id), ana))
+    bob.sync()
+
+    assert laps_of(bob, race_id) == [12.5, 12.4]
+    assert FORGED_LAP not in bob.board().values()
+
+
+def test_a_deleted_record_is_written_back_under_its_own_name(
+    machines: dict[str, Machine],  # noqa: F811
+) -> None:
+    ana, viewer = machines["ana"], machines["viewer"]
+    race_id = ana.race("ana", [12.5, 12.4])
+    ana.sync()
+    delete(ana.url, race_id)
+
+    notes = ana.sync().notes
+
+    assert any(race_id in note and "wrote it back" in note for note in notes)
+    if ana.url.startswith("dir:"):
+        assert _file(ana.url, race_id).exists()
+    viewer.sync()
+    assert laps_of(viewer, race_id) == [12.5, 12.4]
+
+
+def test_a_forger_who_fills_every_spare_place_is_named_to_the_maker(
+    machines: dict[str, Machine],  # noqa: F811
+) -> None:
+    ana, viewer = machines["ana"], machines["viewer"]
+    race_id = ana.race("ana", [12.5, 12.4])
+    ana.sync()
+    forged = forgery_of(honest_race(ana, race_id), ana)
+    for spare in range(SPARE_SLOTS + 1):
+        overwrite(ana.url, forged, spare)
+
+    notes = ana.sync().notes
+
+    (note,) = [note for note in notes if race_id in note]
+    assert "every spare place for it is taken" in note
+    viewer.sync()
+    assert laps_of(viewer, race_id) == []
+    assert "signature does not match" in viewer.quarantine()[f"race {race_id}"]
