@@ -34,6 +34,7 @@ from sim.reward_map import (
     png_bytes,
 )
 from sim.reward_probe import check_reward_source, lap_pay_of_source, map_reward_source
+from sim.reward_sandbox import DEFAULT_MEMORY_MB, check_memory_mb
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
 NAMES = ("reward",)
@@ -53,6 +54,12 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     check.add_argument("file", help="Python file defining reward_function(params)")
     check.add_argument(
         "--track", default=None, help=f"score a reference lap on this track ({DEFAULT_TRACK})"
+    )
+    check.add_argument(
+        "--reward-memory-mb",
+        type=float,
+        default=DEFAULT_MEMORY_MB,
+        help=f"memory the function may use (default {DEFAULT_MEMORY_MB} MB)",
     )
     check.add_argument("--json", action="store_true")
     drawn = reward_commands.add_parser(
@@ -142,12 +149,18 @@ def run(args: argparse.Namespace) -> int:
         return _map(args)
     if args.reward_command == "lap":
         return _lap(args)
+    try:
+        memory_mb = check_memory_mb(args.reward_memory_mb)
+    except ValueError as error:
+        raise MapOptionError(f"--reward-memory-mb: {error}.") from None
     source = read_reward_file(Path(args.file))
     track_name = args.track or DEFAULT_TRACK
     resolve_track(track_name)  # an unknown track is the racer's typo, said before any run
-    # In a child process with a time limit on every call: a function that loops, sleeps or
-    # exits its process is reported in one sentence, and never hangs this command.
-    probe = check_reward_source(source, str(args.file), track=track_name)
+    # In a child process of its own session, with a time limit on every call and a memory
+    # limit (sim.reward_sandbox): a function that loops, sleeps, exits its process, starts
+    # one or allocates without bound is reported in one sentence, never hangs this
+    # command, and leaves no process behind.
+    probe = check_reward_source(source, str(args.file), track=track_name, memory_mb=memory_mb)
     lap_rewards = probe.lap_rewards or (0.0,)
     report: dict[str, Any] = {
         "file": str(args.file),

@@ -32,6 +32,7 @@ from racer_tui.output import print_json, print_table
 from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, open_model
 from sim.reward_limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
+from sim.reward_sandbox import DEFAULT_MEMORY_MB, check_memory_mb
 from sim.training import events
 from sim.training.errors import PolicyError
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
@@ -63,6 +64,13 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         default=DEFAULT_REWARD_SECONDS,
         help="time limit on each call of the reward function "
         f"(default {DEFAULT_REWARD_SECONDS:g} s)",
+    )
+    train.add_argument(
+        "--reward-memory-mb",
+        type=float,
+        default=DEFAULT_MEMORY_MB,
+        help="memory the reward function may use in each training process "
+        f"(default {DEFAULT_MEMORY_MB} MB)",
     )
     train.add_argument(
         "--processes",
@@ -230,6 +238,10 @@ def _train(args: argparse.Namespace) -> int:
     seconds = args.reward_seconds
     if not (math.isfinite(seconds) and seconds > 0):
         raise ModelError(f"--reward-seconds must be more than 0, not {seconds:g}.")
+    try:
+        memory_mb = check_memory_mb(args.reward_memory_mb)
+    except ValueError as error:
+        raise ModelError(f"--reward-memory-mb: {error}.") from None
     if args.processes is not None and args.processes < 1:
         raise ModelError(f"--processes must be 1 or more, not {args.processes}.")
     folder = open_model(args.name)
@@ -247,6 +259,7 @@ def _train(args: argparse.Namespace) -> int:
     # The child dies with this command (a killed command leaves no training running at
     # full CPU), and this command stops it if it ever runs well past its budget.
     extra = ["--die-with-parent", "--reward-seconds", repr(float(seconds))]
+    extra += ["--reward-memory-mb", str(memory_mb)]
     if args.processes is not None:
         extra += ["--processes", str(args.processes)]
     process = TrainingProcess.start(

@@ -100,11 +100,12 @@ def data_bytes() -> int:
     return 0
 
 
-def limit_memory(megabytes: int) -> None:
-    """Let this process grow by at most `megabytes` from now on (RLIMIT_DATA, soft and
-    hard: the racer's code cannot raise it again)."""
+def limit_memory(megabytes: int, *, learner_mb: int = 0) -> None:
+    """Let this process grow by at most `megabytes` (and `learner_mb` for racer-tui's own
+    work in it) from now on (RLIMIT_DATA, soft and hard: the racer's code cannot raise it
+    again)."""
     global _memory_mb  # noqa: PLW0603 - one limit per process, read by error messages
-    limit = data_bytes() + megabytes * 1024 * 1024
+    limit = data_bytes() + (megabytes + learner_mb) * 1024 * 1024
     _soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
     if hard != resource.RLIM_INFINITY:
         limit = min(limit, hard)
@@ -329,14 +330,15 @@ def close_off_files(
     reward_file: str | Path | None,
     writable: Iterable[Path] = (),
     *,
+    reads: Iterable[Path] = (),
     scope_signals: bool = True,
 ) -> str:
     """Landlock this process: read only the Python tree, the system's libraries, the reward
-    file's folder and /proc/self; write only to /dev/null and `writable`. Call after every
-    import the process needs. Returns (and records) "applied" or why not."""
+    file's folder, /proc/self and `reads`; write only to /dev/null and `writable`. Call
+    after every import the process needs. Returns (and records) "applied" or why not."""
     global _landlock_status  # noqa: PLW0603
     preimport()
-    reads = [*python_tree(), *(Path(path) for path in SYSTEM_READS)]
+    reads = [*python_tree(), *(Path(path) for path in SYSTEM_READS), *reads]
     if reward_file is not None and Path(reward_file).is_file():
         reads.append(Path(os.path.realpath(reward_file)).parent)
     problem = landlock.restrict(reads, [Path("/dev/null"), *writable], scope_signals=scope_signals)

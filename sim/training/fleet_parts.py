@@ -21,7 +21,9 @@ from typing import Any
 
 import numpy as np
 
+from sim import reward_sandbox
 from sim.env import BatchedDeepRacer, StepInfo
+from sim.garage.folder import ModelFolder
 from sim.training.step_record import EndedEpisode, StepRecorder
 
 
@@ -108,21 +110,34 @@ class PartError(RuntimeError):
 
 def serve_part(connection: Connection, setup: PartSetup) -> None:
     """A simulation process's life: build the part, then answer reset and step until told
-    to close or until the trainer's end of the pipe closes."""
+    to close or until the trainer's end of the pipe closes. It runs the racer's reward
+    function, contained (sim.reward_sandbox): a memory limit, no process, thread or signal
+    from a reward call, Landlock (read Python's files and the model's folder, write
+    nowhere), and whatever is left under it ends with it."""
     # Ctrl+C in a terminal reaches the whole process group: the trainer decides when its
     # parts stop, and closes them.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    # The process inherits the trainer's stdout, which may be the training's event stream:
-    # what a reward function prints goes to stderr instead, never between two events.
+    # What a reward function prints goes to stderr (the training's log), never to a pipe.
     sys.stdout.flush()
     os.dup2(2, 1)
     sys.stdout = sys.stderr
+    reward_sandbox.become_subreaper()
+    reward_sandbox.guard_reward_calls()
     try:
-        batch, recorder = _build_part(connection, setup)
-        connection.send(("ready", None))
-    except BaseException as error:
-        _send_error(connection, error)
-        return
+        try:
+            batch, recorder = _build_part(connection, setup)
+            reward_sandbox.close_off_files(ModelFolder(Path(setup.folder)).reward_file)
+            reward_sandbox.limit_memory(reward_sandbox.memory_from_environment())
+            connection.send(("ready", None))
+        except BaseException as error:
+            _send_error(connection, error)
+            return
+        _serve(connection, batch, recorder)
+    finally:
+        reward_sandbox.end_descendants()
+
+
+def _serve(connection: Connection, batch: BatchedDeepRacer, recorder: StepRecorder | None) -> None:
     while True:
         try:
             kind, value = connection.recv()
@@ -144,31 +159,16 @@ def serve_part(connection: Connection, setup: PartSetup) -> None:
 def _build_part(
     connection: Connection, setup: PartSetup
 ) -> tuple[BatchedDeepRacer, StepRecorder | None]:
-    from sim import reward_limit
-    from sim.garage.folder import ModelFolder
     from sim.realworld.training import folder_training_config
 
     if setup.reward_seconds is not None:
-        limit = reward_limit.install(setup.reward_seconds)
-
-        def stuck(seconds: float) -> None:
-            # From the watchdog thread while the main thread is stuck in racer code: said
-            # as the one-process training says it (sim.training.worker).
-            from sim.reward_function import RewardFunctionError
-
-            folder = ModelFolder(Path(setup.folder))
-            _send_error(
-                connection,
-                RewardFunctionError(
-                    folder.reward_file,
-                    f"reward_function did not return within {seconds:g} s and would not "
-                    "be stopped (does it catch every exception?)",
-                    advice="make it return faster",
-                ),
-            )
-            os._exit(1)
-
-        limit.on_stuck = stuck
+        # From the watchdog thread while the main thread is stuck in racer code: said as
+        # the trainer's own process says it (sim.reward_sandbox.install_call_limit).
+        reward_sandbox.install_call_limit(
+            setup.reward_seconds,
+            ModelFolder(Path(setup.folder)).reward_file,
+            lambda error: _send_error(connection, error),
+        )
     config = folder_training_config(ModelFolder(Path(setup.folder)))
     part = setup.part
     batch = BatchedDeepRacer(

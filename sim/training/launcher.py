@@ -9,6 +9,11 @@ dies without a word.
 `TrainingProcess` is for synchronous callers (the CLI); `AsyncTrainingProcess` is for an
 asyncio event loop (the TUI), as Textual needs: never `multiprocessing` inside the app.
 Lines that are not valid events (a stray print from a library) are skipped, not fatal.
+
+The child's session is killed as a whole (SIGKILL to its process group) as soon as the
+child has exited, however it ended: nothing it started (its simulation processes, or a
+process a racer's reward function managed to leave) outlives the training, and nothing can
+hold the event pipe open after it, so reading the events always ends.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ import threading
 from collections.abc import AsyncIterator, Iterator, Sequence
 from typing import IO
 
+from sim.reward_sandbox import kill_session
 from sim.training import events
 
 STOP_TIMEOUT = 60.0  # seconds to wait for a checkpoint after SIGTERM before SIGKILL
@@ -102,6 +108,14 @@ def overran(ended: events.Ended, budget_seconds: float) -> events.Ended:
     )
 
 
+def _end_session_when_done(pid: int) -> None:
+    """Wait (without reaping) for the child to exit, then kill its session: whatever still
+    holds the event pipe goes with it."""
+    with contextlib.suppress(ChildProcessError, OSError):
+        os.waitid(os.P_PID, pid, os.WEXITED | os.WNOWAIT)
+    kill_session(pid)
+
+
 def _tail(handle: IO[bytes]) -> str:
     handle.seek(0, os.SEEK_END)
     size = handle.tell()
@@ -118,6 +132,10 @@ class TrainingProcess:
         self.ended: events.Ended | None = None
         self.overran: float | None = None  # the budget it ran past, when it was stopped
         self._timers: list[threading.Timer] = []
+        self._session_ender = threading.Thread(
+            target=_end_session_when_done, args=(popen.pid,), name="training-session", daemon=True
+        )
+        self._session_ender.start()
 
     @classmethod
     def start(
@@ -191,6 +209,7 @@ class TrainingProcess:
                     event = overran(event, self.overran)
                 self.ended = event
             yield event
+        self._session_ender.join()  # the child has exited and its session is ended
         code = self._popen.wait()
         for timer in self._timers:
             timer.cancel()
@@ -230,6 +249,12 @@ class AsyncTrainingProcess:
         self._process = process
         self._stderr = stderr
         self.ended: events.Ended | None = None
+        # asyncio reaps the child itself: its session is killed once it has exited.
+        self._session_ender = asyncio.ensure_future(self._end_session_when_done())
+
+    async def _end_session_when_done(self) -> None:
+        await self._process.wait()
+        kill_session(self._process.pid)
 
     @classmethod
     async def start(
@@ -266,6 +291,7 @@ class AsyncTrainingProcess:
                 self.ended = event
             yield event
         code = await self._process.wait()
+        await self._session_ender
         if self.ended is None:
             self.ended = failure_from_stderr(code, _tail(self._stderr), elapsed=elapsed)
             yield self.ended

@@ -21,13 +21,14 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import psutil
 import torch
 
-from sim import reward_limit
+from sim import reward_limit, reward_sandbox
 from sim.atomic import write_text_atomic
 from sim.garage.folder import ModelError, ModelFolder
 from sim.observations import SensorOptions
@@ -75,6 +76,9 @@ class RunOptions:
     evaluation_seconds: float = 5.0  # least time between evaluations
     min_samples: int | None = None
     max_samples: int | None = None
+    # The memory the reward function may use in the trainer's own process, beyond the
+    # learner's (see `Trainer._contain`); None: no limit (a trainer that runs no racer code).
+    reward_memory_mb: int | None = None
 
 
 def default_cars(sensors: tuple[str, ...]) -> int:
@@ -87,6 +91,11 @@ def sample_limits(sensors: tuple[str, ...], cars: int) -> tuple[int, int]:
     large, so camera rollouts are capped lower to keep memory small."""
     most = 4096 if "camera" in sensors else 16384
     return min(2048, most), max(most, cars * 2)
+
+
+# What an update needs beyond its rollout (torch's working memory, the network's
+# gradients and optimizer state): the margin of the trainer's memory limit.
+LEARNER_BASE_MB = 1024
 
 
 class Trainer:
@@ -157,6 +166,7 @@ class Trainer:
             self._write_state("failed", message, error)
             return self._ended("failed", message, error)
         self._clock0 = time.monotonic()  # the time limit counts training, not start-up
+        self._contain()
         self._write_state("running", "training")
         self.emit(
             events.Started(
@@ -221,6 +231,30 @@ class Trainer:
         self._run_elapsed0 = self.progress.elapsed_seconds
         self._first_iteration = self.progress.iteration
         return resumed_from
+
+    def _contain(self) -> None:
+        """The trainer's own process steps its part of the fleet, so it runs the racer's
+        reward function too: from here on it may grow by the reward's memory and what the
+        learner's rollouts and updates need, and (Landlock) read only Python's files, the
+        model's folder and its simulation processes' figures, and write only the folder."""
+        megabytes = self.options.reward_memory_mb
+        if megabytes is None:
+            return
+        reward_sandbox.limit_memory(megabytes, learner_mb=self._learner_mb())
+        figures = [Path(f"/proc/{process.pid}") for process in self._processes[1:]]
+        # Signals stay allowed: the trainer ends its simulation processes.
+        reward_sandbox.close_off_files(
+            self.folder.reward_file, [self.folder.path], reads=figures, scope_signals=False
+        )
+
+    def _learner_mb(self) -> int:
+        """Room for the learner beyond the reward's: its rollout of float32 observations,
+        a few copies of it in an update, and the update's working memory."""
+        space = self.env.observation_space
+        shapes = [sub.shape for sub in getattr(space, "spaces", {}).values()] or [space.shape]
+        values = sum(int(np.prod(shape or (1,))) for shape in shapes)
+        copies = 4
+        return LEARNER_BASE_MB + (self.max_samples * values * 4 * copies) // (1024 * 1024)
 
     def _fleet(self) -> FleetVecEnv:
         """The cars, in this process or spread over several (the log sees every step)."""

@@ -6,6 +6,13 @@ cleanly, saving a checkpoint, on SIGTERM, SIGINT or SIGHUP, when its parent proc
 exits (stdin is /dev/null, so the parent's pid is watched instead), or when stdout is
 closed. A user error (unknown model, bad files, another training of the same model
 running) is a `failed` event with one sentence and exit code 2.
+
+It runs the racer's reward function (in its own part of the fleet, and in the simulation
+processes it starts), so it contains it (sim.reward_sandbox): the events go out on a
+descriptor of their own, and the process's stdout, where the function's prints land, is
+the training's stderr log, never the pipe its parent reads; it is the subreaper of every
+process under it and ends them all before it exits, so nothing the function might leave
+running holds that pipe or a core.
 """
 
 from __future__ import annotations
@@ -20,8 +27,9 @@ from pathlib import Path
 from types import FrameType
 from typing import TextIO
 
-from sim import reward_limit
+from sim import reward_sandbox
 from sim.reward_limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
+from sim.reward_sandbox import DEFAULT_MEMORY_MB
 from sim.training import events
 from sim.training.errors import describe_failure, failure_remedy
 
@@ -107,6 +115,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help=f"time limit on each reward function call (default {DEFAULT_REWARD_SECONDS:g} s)",
     )
+    parser.add_argument(
+        "--reward-memory-mb",
+        type=float,
+        default=DEFAULT_MEMORY_MB,
+        help=f"memory the reward function may use in each process (default {DEFAULT_MEMORY_MB})",
+    )
     parser.add_argument("--die-with-parent", action="store_true", help=argparse.SUPPRESS)
     return parser
 
@@ -123,6 +137,17 @@ def _die_with_parent(parent_pid: int) -> None:
         os._exit(EXIT_FAILED)
 
 
+def _event_stream() -> TextIO:
+    """The events' own descriptor (not inherited by a program the process runs); stdout
+    becomes stderr, so a print (the reward function's, a library's) never lands between
+    two events, nor keeps the parent's pipe open in a process started from here."""
+    sys.stdout.flush()
+    stream = os.fdopen(os.dup(1), "w", encoding="utf-8")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    return stream
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     parent = args.parent_pid if args.parent_pid is not None else os.getppid()
@@ -130,34 +155,29 @@ def main(argv: Sequence[str] | None = None) -> int:
         _die_with_parent(parent)
     stop = StopFlag(parent)
     _install_signal_handlers(stop)
+    emit = EventWriter(_event_stream(), stop)
     seconds = DEFAULT_REWARD_SECONDS if args.reward_seconds is None else args.reward_seconds
     if not (seconds > 0 and seconds < float("inf")):
-        emit = EventWriter(sys.stdout, stop)
         emit(_failed(f"--reward-seconds must be a positive number, not {seconds:g}"))
         return EXIT_USER_ERROR
-    # Every call of the racer's reward function (and loading its file) is timed: one that
-    # hangs fails the training in a sentence naming its line, instead of hanging it.
-    limit = reward_limit.install(seconds)
-    emit = EventWriter(sys.stdout, stop)
-
-    def stuck(limit_seconds: float) -> None:
-        # From the watchdog thread: the call swallowed every interruption, so the run
-        # cannot go on; its last checkpoint stays on disk.
-        emit(
-            _failed(
-                f"the reward function did not return within {limit_seconds:g} s and would "
-                "not be stopped (does it catch every exception?); make it return faster"
-            )
-        )
-        os._exit(EXIT_FAILED)
-
-    limit.on_stuck = stuck
+    try:
+        memory_mb = reward_sandbox.check_memory_mb(args.reward_memory_mb)
+    except ValueError as error:
+        emit(_failed(f"--reward-memory-mb: {error}"))
+        return EXIT_USER_ERROR
+    # The simulation processes (started by "spawn") read the memory limit from here.
+    os.environ[reward_sandbox.MEMORY_ENV] = str(memory_mb)
+    reward_sandbox.become_subreaper()
+    reward_sandbox.guard_reward_calls()
     warnings.filterwarnings("ignore")  # library chatter must not reach the racer
     try:
-        return _train(args, emit, stop)
+        return _train(args, emit, stop, seconds, memory_mb)
     except BaseException as error:  # the last line must say what happened
         emit(_failed(describe_failure(error), error))
         return EXIT_FAILED
+    finally:
+        # Whatever a reward function left running ends with the training.
+        reward_sandbox.end_descendants()
 
 
 def _failed(message: str, error: BaseException | None = None) -> events.Ended:
@@ -195,7 +215,9 @@ def _lock_for_training(path: Path) -> bool:
     return True
 
 
-def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
+def _train(
+    args: argparse.Namespace, emit: EventWriter, stop: StopFlag, seconds: float, memory_mb: int
+) -> int:
     from sim.deepracer_files import DeepRacerFileError
     from sim.garage.folder import ModelError, open_model
     from sim.reward_function import RewardFunctionError
@@ -207,6 +229,15 @@ def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
     user_errors = (ModelError, PolicyError, DeepRacerFileError, RewardFunctionError, TrackError)
     try:
         folder = open_model(args.model)
+
+        def stuck(error: RewardFunctionError) -> None:
+            # From the watchdog thread: the call cannot be interrupted, so the run cannot
+            # go on; its last checkpoint stays on disk.
+            emit(_failed(str(error), error))
+
+        # Every call of the racer's reward function (and loading its file) is timed: one
+        # that hangs fails the training in a sentence naming its line.
+        reward_sandbox.install_call_limit(seconds, folder.reward_file, stuck)
         if folder.is_training() or not _lock_for_training(folder.training_lock_file):
             raise ModelError(
                 f"model {folder.name!r} is already training in another process; "
@@ -221,6 +252,7 @@ def _train(args: argparse.Namespace, emit: EventWriter, stop: StopFlag) -> int:
             evaluation_seconds=args.evaluation_seconds,
             min_samples=args.min_samples,
             max_samples=args.max_samples,
+            reward_memory_mb=memory_mb,
         )
         import torch
 
