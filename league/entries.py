@@ -233,10 +233,19 @@ def _in_clause(ids: Sequence[str] | None, column: str) -> tuple[str, list[str]]:
     return f"WHERE {column} IN (SELECT value FROM json_each(?))", [json.dumps(list(ids))]
 
 
+def _ranked_at(alias: str, column: str) -> str:
+    """The time a result ranks by in a tie: its own, or when this league first saw it if it
+    arrived claiming to be older than results already here (league.sync.dates.Arrivals)."""
+    return (
+        f"coalesce((SELECT seen_at FROM sync_first_seen WHERE entry_id = {alias}.id), "
+        f"{alias}.{column})"
+    )
+
+
 def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[EntrySource]:
     where, params = _in_clause(ids, "s.id")
     submissions = conn.execute(
-        "SELECT s.id, s.racer, s.track_hash, s.model_name, s.submitted_at, "
+        f"SELECT s.id, s.racer, s.track_hash, s.model_name, {_ranked_at('s', 'submitted_at')}, "
         "l.number, l.time_seconds, l.offtracks, l.completed, "
         f"coalesce(s.physics, CASE WHEN s.source IN ('{DRFC}', '{CONSOLE}') "
         f"THEN '{DEEPRACER}' ELSE '{BEFORE_VERSIONING}' END), s.race_type FROM submissions s "
@@ -265,7 +274,8 @@ def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[En
         )
     where, params = _in_clause(ids, "r.id")
     races = conn.execute(
-        "SELECT r.id, r.racer, r.track_hash, r.model_name, r.night_id, r.started_at, r.rules, "
+        "SELECT r.id, r.racer, r.track_hash, r.model_name, r.night_id, "
+        f"{_ranked_at('r', 'started_at')}, r.rules, "
         f"l.number, l.time_seconds, l.offtracks, l.valid, coalesce(r.physics, "
         f"'{BEFORE_VERSIONING}') FROM races r "
         f"LEFT JOIN race_laps l ON l.race_id = r.id {where} ORDER BY r.id, l.number",

@@ -28,6 +28,7 @@ import time
 from datetime import UTC, datetime
 from typing import Final
 
+from league.store import League, now_iso
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import BUNDLE_KIND, MODEL_KIND, PROFILE_KIND
 from league.sync.record import SyncRecord
@@ -38,8 +39,8 @@ from sim.ids import id_time_ms
 # its date are taken by one clock a few milliseconds apart; the maker's clock and this
 # machine's (a record "from the future") and the founder's (a record "before the league")
 # differ by what laptops without a time server drift: seconds, rarely minutes. Ten minutes
-# lets every honest record through and leaves a forger nothing worth having (a tie is
-# decided by the first sighting here once dates are this close; see ranking_time).
+# lets every honest record through and leaves a forger nothing worth having (a tie between
+# a result here and one arriving later goes to the first seen whatever; see Arrivals).
 DATE_TOLERANCE_MS: Final = 10 * 60 * 1000
 EARLIEST_ID_MS: Final = int(datetime(2024, 1, 1, tzinfo=UTC).timestamp() * 1000)
 
@@ -143,16 +144,49 @@ def founding_refusal(record: SyncRecord, roster: Roster) -> str | None:
     )
 
 
-def ranking_time(claimed: str, first_seen: str | None) -> str:
-    """The time a result ranks by in a tie: what it claims, but no earlier than the
-    tolerance before this league first saw it (pulled results; None for one made here)."""
-    if first_seen is None:
-        return claimed
-    try:
-        bound = iso_ms(first_seen) - DATE_TOLERANCE_MS
-        if iso_ms(claimed) >= bound:
-            return claimed
-    except ValueError:
-        return claimed
-    stamp = datetime.fromtimestamp(bound / 1000, UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")
-    return stamp[:-3] + "Z"
+class Arrivals:
+    """Ties go to the result the league saw first. A pulled result that claims to be older
+    than a result on its track already here ranks from the time it arrived
+    (`sync_first_seen`, which the leaderboard cache reads): a racer who syncs late loses a
+    tie they would have won, but nobody wins one by writing an early date. The latest time
+    on each track is read once per page and kept up to date as the page's results go in."""
+
+    def __init__(self) -> None:
+        self._latest: dict[str, float] = {}
+
+    def note(self, league: League, record: SyncRecord) -> None:
+        """Call when a pulled submission or race was just inserted."""
+        track, claimed = (
+            str(record.body["track_hash"]),
+            iso_ms(str(record.body[DATE_FIELD[record.kind]])),
+        )
+        now = time.time() * 1000
+        latest = self._latest.get(track)
+        if latest is None:
+            latest = _latest_on_track(league, track, record.record_id)
+        ranked_at = float(claimed)
+        if claimed < latest and claimed < now:
+            ranked_at = now
+            league.conn.execute(
+                "INSERT OR IGNORE INTO sync_first_seen (entry_id, seen_at) VALUES (?, ?)",
+                (record.record_id, now_iso()),
+            )
+        self._latest[track] = max(latest, ranked_at)
+
+
+def _latest_on_track(league: League, track: str, but: str) -> float:
+    """The latest time any result here on `track` ranks by, in ms (-inf for none)."""
+    row = league.query_one(
+        "SELECT max(t) FROM (SELECT julianday(coalesce(f.seen_at, r.started_at)) AS t "
+        "FROM races r LEFT JOIN sync_first_seen f ON f.entry_id = r.id "
+        "WHERE r.track_hash = ?1 AND r.id <> ?2 UNION ALL "
+        "SELECT julianday(coalesce(f.seen_at, s.submitted_at)) FROM submissions s "
+        "LEFT JOIN sync_first_seen f ON f.entry_id = s.id WHERE s.track_hash = ?1 AND s.id <> ?2)",
+        (track, but),
+    )
+    if row is None or row[0] is None:
+        return float("-inf")
+    return (float(row[0]) - _UNIX_EPOCH_JULIAN_DAY) * 86_400_000
+
+
+_UNIX_EPOCH_JULIAN_DAY: Final = 2440587.5

@@ -30,9 +30,9 @@ from typing import Final, Literal
 
 from league.entries import rebuild_entries, refresh_entries
 from league.records import record_body, store_record
-from league.store import League, now_iso
+from league.store import League
 from league.sync import bundle_records, identity, models, profiles
-from league.sync.dates import founding_refusal
+from league.sync.dates import Arrivals, founding_refusal
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import BUNDLE_KIND, INSERT_ORDER, MODEL_KIND, PROFILE_KIND, TABLE_OF_KIND
 from league.sync.links import missing_references
@@ -109,10 +109,11 @@ class PageResult:
 
 @dataclass
 class _Trust:
-    """The roster as this page changes it."""
+    """The roster as this page changes it, and the times its results arrived at."""
 
     roster: Roster
     changed: bool = False
+    arrivals: Arrivals = field(default_factory=Arrivals)
 
 
 def _sort_key(record: SyncRecord) -> tuple[int, int, str]:
@@ -275,7 +276,15 @@ def _apply_trusted(
         if too_early is not None:
             return _refuse(league, store, record, too_early, result.held)
         keep_seals(league, [record])
-    outcome = _apply(league, store, record, touched, roster=trust.roster, refused=result.held)
+    outcome = _apply(
+        league,
+        store,
+        record,
+        touched,
+        roster=trust.roster,
+        refused=result.held,
+        arrivals=trust.arrivals,
+    )
     if record.kind == ROSTER_KIND and outcome in ("inserted", "replaced"):
         trust.roster = Roster.load(league)
         trust.changed = True
@@ -343,7 +352,7 @@ def _count(result: PageResult, record: SyncRecord, outcome: Outcome) -> None:
 def _retry_pending(league: League, store: str, result: PageResult, touched: list[str]) -> None:
     """Insert waiting records whose references have arrived, until nothing more moves."""
     progress = True
-    roster = Roster.load(league)
+    roster, arrivals = Roster.load(league), Arrivals()
     while progress:
         progress = False
         waiting = sorted(pending_records(league), key=lambda r: (INSERT_ORDER[r.kind], r.record_id))
@@ -351,7 +360,14 @@ def _retry_pending(league: League, store: str, result: PageResult, touched: list
         for record in waiting:
             # Trusted when pulled; its model is judged again, as model records arrive.
             outcome = _apply(
-                league, store, record, touched, roster=roster, refused=result.held, retry=True
+                league,
+                store,
+                record,
+                touched,
+                roster=roster,
+                refused=result.held,
+                arrivals=arrivals,
+                retry=True,
             )
             if outcome != "waiting":
                 done.append((record.kind, record.record_id))
@@ -368,6 +384,7 @@ def _apply(
     *,
     roster: Roster,
     refused: list[str],
+    arrivals: Arrivals,
     retry: bool = False,
 ) -> Outcome:
     if record.kind == PROFILE_KIND:
@@ -407,11 +424,7 @@ def _apply(
     store_record(league, table, record.record_id, record.body, refresh=False)
     if record.kind in _RESULT_KINDS:
         touched.append(record.record_id)
-        # When this league first saw it: a tie is not won by a date written earlier.
-        league.conn.execute(
-            "INSERT OR IGNORE INTO sync_first_seen (entry_id, seen_at) VALUES (?, ?)",
-            (record.record_id, now_iso()),
-        )
+        arrivals.note(league, record)  # a tie is not won by a date written early
     elif record.kind == "correction" and record.body["kind"] == "disqualify_lap":
         touched.append(str(record.body["target"]))
     return "inserted"

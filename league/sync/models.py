@@ -25,6 +25,7 @@ registered like any other model by the racer who submits it.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from typing import Any, Final, Literal
 
@@ -154,11 +155,14 @@ def register_models(league: League, signer: str) -> int:
     """Make a model record for every model this machine's racer raced or submitted with
     here (results `signer` sealed, or not sealed yet) and has not registered; returns how
     many were made. Each is dated by the first such result, and never before the league's
-    founding (a result older than that does not count in it anyway)."""
+    founding (a result older than that does not count in it anyway). On an organiser's
+    machine, also endorse each model's first owner seen here (`endorse_owners`)."""
+    roster = Roster.load(league)
+    made = endorse_owners(league, signer) if signer in roster.organisers else 0
     racer = get_setting(league, RACER_SETTING)
     if not racer:
-        return 0
-    founded = founded_ms(Roster.load(league))
+        return made
+    founded = founded_ms(roster)
     first: dict[str, tuple[int, str, str]] = {}  # model hash -> (ms, its date, model name)
     rows = league.query(
         "SELECT 'race', id, model_hash, model_name, started_at FROM races WHERE racer = ?1 "
@@ -179,7 +183,6 @@ def register_models(league: League, signer: str) -> int:
             ms, stamp = founded, _iso(founded)  # its results in this league are from then on
         if model_hash not in first or ms < first[model_hash][0]:
             first[model_hash] = (ms, stamp, str(model_name))
-    made = 0
     with league.transaction():
         for model_hash, (ms, dated, model_name) in sorted(first.items()):
             if any(same_racer(info.racer, racer) for info in models(league, model_hash)):
@@ -193,6 +196,64 @@ def register_models(league: League, signer: str) -> int:
             add_model(league, make_record(MODEL_KIND, new_id(now_ms=ms), body))
             made += 1
     return made
+
+
+def endorse_owners(league: League, signer: str) -> int:
+    """The organiser's word on whose each model is: a copy, signed by `signer` (an organiser)
+    when pushed, of the first model record this machine saw for each model hash. A machine
+    pulling the store afresh sees every claim at once and cannot tell which came first; it
+    takes an organiser's record over any racer's (`owner`)."""
+    made = 0
+    with league.transaction():
+        rows = league.query(
+            "SELECT m.model_hash FROM sync_models m GROUP BY m.model_hash HAVING NOT EXISTS "
+            "(SELECT 1 FROM sync_models e JOIN sync_seals s ON s.kind = ? AND "
+            "s.record_id = e.record_id WHERE e.model_hash = m.model_hash AND s.signer = ?)",
+            (MODEL_KIND, signer),
+        )
+        for (model_hash,) in rows:
+            first = owner(league, model_hash, frozenset({signer}))
+            if first is None or _unsealed_here(league, model_hash):
+                continue
+            body = {
+                "racer": first.racer,
+                "model_name": first.model_name,
+                "model_hash": model_hash,
+                "registered_at": first.registered_at,
+            }
+            when = iso_ms(first.registered_at)
+            add_model(league, make_record(MODEL_KIND, new_id(now_ms=when), body))
+            made += 1
+    return made
+
+
+def _unsealed_here(league: League, model_hash: str) -> bool:
+    """Whether a model record for `model_hash` was made here and not pushed (signed) yet."""
+    row = league.query_one(
+        "SELECT 1 FROM sync_models m WHERE m.model_hash = ? AND NOT EXISTS "
+        "(SELECT 1 FROM sync_seals s WHERE s.kind = ? AND s.record_id = m.record_id)",
+        (model_hash, MODEL_KIND),
+    )
+    return row is not None
+
+
+def owner(league: League, model_hash: str, organisers: frozenset[str]) -> ModelInfo | None:
+    """Whose `model_hash` is: the first model record an organiser signed, else the first
+    this league saw (any racer's)."""
+    claims = models(league, model_hash)
+    if not claims:
+        return None
+    signed = {
+        str(row[0])
+        for row in league.query(
+            "SELECT s.record_id FROM sync_seals s JOIN sync_models m "
+            "ON m.record_id = s.record_id WHERE s.kind = ? AND m.model_hash = ? "
+            "AND s.signer IN (SELECT value FROM json_each(?))",
+            (MODEL_KIND, model_hash, json.dumps(sorted(organisers))),
+        )
+    }
+    endorsed = [info for info in claims if info.record_id in signed]
+    return (endorsed or claims)[0]
 
 
 def _sealed_by_other(league: League, kind: str, record_id: str, signer: str) -> bool:
@@ -232,12 +293,12 @@ def verdict(league: League, record: SyncRecord, roster: Roster) -> Verdict | Non
     if copied is not None:
         return Verdict("refuse", copied)
     claims = models(league, model_hash)
-    if claims and not same_racer(claims[0].racer, racer):
-        owner = claims[0]
+    first = owner(league, model_hash, frozenset(roster.organisers))
+    if first is not None and not same_racer(first.racer, racer):
         return Verdict(
             "refuse",
-            f"it names model {model_hash[:12]}, which racer {owner.racer} registered first "
-            f"(model record {owner.record_id}): it copies {owner.racer}'s model, and a result "
+            f"it names model {model_hash[:12]}, which racer {first.racer} registered first "
+            f"(model record {first.record_id}): it copies {first.racer}'s model, and a result "
             "belongs to the racer who drove it",
         )
     own = [info for info in claims if same_racer(info.racer, racer)]
