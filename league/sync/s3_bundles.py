@@ -5,16 +5,22 @@ Keys are content-addressed: `<prefix>/bundles/<sha256>.racer-bundle`. The same b
 uploaded once (an existing key is skipped), a key can only ever hold the bytes it is named
 after, and a download is size-limited and checked against its hash before it is moved
 into place atomically. A bundle holds tensors and JSON only; nothing fetched is executed.
+
+An upload is one PutObject (never a multipart upload), so a killed upload leaves nothing
+in the bucket. A killed download leaves its partial file beside the destination; the next
+download of that bundle removes those old enough that no download can still be writing.
 """
 
 from __future__ import annotations
 
 import base64
 import contextlib
+import glob
 import hashlib
 import os
 import re
 import tempfile
+import time
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -36,6 +42,8 @@ BUNDLE_SUFFIX: Final = ".racer-bundle"
 DEFAULT_MAX_BUNDLE_BYTES: Final = 256 * 1024 * 1024
 SHA256_PATTERN: Final = re.compile(r"[0-9a-f]{64}")
 _CHUNK: Final = 1024 * 1024
+# A partial download this old is a killed download's: a live one writes every few seconds.
+_DEAD_PART_S: Final = 600.0
 
 
 @dataclass(frozen=True)
@@ -145,6 +153,7 @@ class S3BundleStore:
                 f"{self.max_bytes}-byte limit: it was not downloaded"
             )
         destination.parent.mkdir(parents=True, exist_ok=True)
+        _remove_dead_parts(destination)
         fd, temp_name = tempfile.mkstemp(
             prefix=f".{destination.name}.", suffix=".part", dir=destination.parent
         )
@@ -212,6 +221,15 @@ class S3BundleStore:
                 digest.update(chunk)
                 out.write(chunk)
         return digest.hexdigest(), size
+
+
+def _remove_dead_parts(destination: Path) -> None:
+    """Partial downloads of `destination` left by a download that was killed."""
+    cutoff = time.time() - _DEAD_PART_S
+    for part in destination.parent.glob(f".{glob.escape(destination.name)}.*.part"):
+        with contextlib.suppress(OSError):
+            if part.lstat().st_mtime < cutoff:
+                part.unlink()
 
 
 def _hash_file(path: Path) -> tuple[str, int]:
