@@ -487,9 +487,13 @@ class Soak:
         await self.dialog("d", "delete question", ConfirmDialog)
 
     async def projector(self) -> None:
+        from racer_tui.screens.kiosk import LeaveKiosk
         from racer_tui.screens.projector import ProjectorScreen
 
-        await self.dialog("p", "projector", ProjectorScreen)
+        # A kiosk: Esc does nothing there; q asks, y leaves.
+        await self.key("p", "projector: open", lambda screen: isinstance(screen, ProjectorScreen))
+        await self.key("q", "projector: ask", lambda screen: isinstance(screen, LeaveKiosk))
+        await self.key("y", "projector: close", self.back_on_section)
 
     async def sort(self) -> None:
         from racer_tui.screens.league import LeagueScreen

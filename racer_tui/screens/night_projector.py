@@ -4,7 +4,9 @@ now, and the night's standings with points, the newest result highlighted for a 
 The standings come from the league database, read again every few seconds (heats end
 in this racer-tui or in another one beside it); the heat in progress comes from the
 small file its screen writes (`league.live_heat`), read twice a second. Nothing here
-needs a key: a host opens it, on the venue's screen, and leaves it. Esc leaves.
+needs a key: a host opens it, on the venue's screen, and leaves it. A kiosk
+(`racer_tui.screens.kiosk`): Esc does nothing, q asks and then leaves, and no other
+screen opens from it.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from league.live_heat import LiveHeat, live_heat_path, read_live_heat
 from league.night_state import NightState, read_night
 from league.report import SCORE_TITLES
 from league.store import default_db_path, open_league
-from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
 from racer_tui.screens.race_screen import clock_text, countdown_text
 from racer_tui.screens.timekeeper import lap_clock_text
 from sim.objects.settings import RaceType
@@ -56,8 +58,8 @@ class NightGone(Message):
 
 # What the last line says: the view updates itself while the night runs; once it is
 # closed its standings are final.
-OPEN_HINT = "Esc leaves · updates by itself as heats run and end"
-CLOSED_HINT = "Esc leaves · the night is closed: its standings are final"
+OPEN_HINT = f"{LEAVE_HINT} · updates by itself as heats run and end"
+CLOSED_HINT = f"{LEAVE_HINT} · the night is closed: its standings are final"
 
 
 class NightRead(Message):
@@ -106,14 +108,14 @@ def standings_table(state: NightState, highlight: str | None, spaced: bool) -> T
     return table
 
 
-class NightProjectorScreen(RacerScreen[None]):
+class NightProjectorScreen(KioskScreen):
     """Full-screen view of one league night for the venue; `db_path` None is the default
     league."""
 
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape", "leave", "Leave projector"),
+    BINDINGS: ClassVar[list[BindingType]] = kiosk_bindings(
         Binding("ctrl+r", "refresh_now", "Refresh", show=False),
-    ]
+    )
+    what = "night projector"
     DEFAULT_CSS = """
     NightProjectorScreen { background: $background; }
     NightProjectorScreen #np-title {
@@ -165,9 +167,6 @@ class NightProjectorScreen(RacerScreen[None]):
 
     def action_refresh_now(self) -> None:
         self._read_night()
-
-    def action_leave(self) -> None:
-        self.dismiss(None)
 
     # --- reading ---------------------------------------------------------------------------
 
@@ -264,7 +263,7 @@ class NightProjectorScreen(RacerScreen[None]):
         if state is None:
             if self.gone is not None:
                 text = Text("This night cannot be shown: ", style="bold red")
-                text.append(f"{self.gone} Esc leaves.")
+                text.append(f"{self.gone} q leaves.")
                 heat.update(text)
             else:
                 heat.update(Text("Reading the night…", style="dim"))

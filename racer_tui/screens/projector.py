@@ -2,7 +2,8 @@
 
 The leader's time in Digits, then big, spaced rows. A thread worker polls the database
 every few seconds, so results recorded by the host's heats (or synced from other
-machines) appear without a key press. Esc leaves.
+machines) appear without a key press. A kiosk (`racer_tui.screens.kiosk`): q asks, then
+leaves; no other screen opens from it.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from textual.widgets import Digits, Static
 from league.leaderboard import LeaderboardRow, board_of, several_boards
 from league.report import SCORE_TITLES
 from league.store import open_league
-from racer_tui.screens.base import RacerScreen
+from racer_tui.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
 from racer_tui.screens.race_screen import clock_text
 from racer_tui.widgets.board_filters import BoardQuery, board_rows
 
@@ -75,13 +76,12 @@ def projector_table(rows: Sequence[LeaderboardRow], show_track: bool) -> Table:
     return table
 
 
-class ProjectorScreen(RacerScreen[None]):
+class ProjectorScreen(KioskScreen):
     """Full-screen leaderboard for `query`; `db_path` None is the default league."""
 
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape", "leave", "Leave projector"),
+    BINDINGS: ClassVar[list[BindingType]] = kiosk_bindings(
         Binding("ctrl+r", "refresh_now", "Refresh", show=False),
-    ]
+    )
     DEFAULT_CSS = """
     ProjectorScreen { background: $background; }
     ProjectorScreen #projector-top { height: auto; padding: 1 2 0 2; }
@@ -108,7 +108,7 @@ class ProjectorScreen(RacerScreen[None]):
                 yield Static("", id="projector-leader-name")
             yield Digits("-:--.---", id="projector-leader")
         yield Static("", id="projector-rows")
-        yield Static("Esc leaves · refreshes every few seconds", id="projector-hint")
+        yield Static(f"{LEAVE_HINT} · refreshes every few seconds", id="projector-hint")
 
     def on_mount(self) -> None:
         self.action_refresh_now()
@@ -142,6 +142,3 @@ class ProjectorScreen(RacerScreen[None]):
             name.update(Text("No results yet" if not message.rows else "No valid lap yet"))
         show_track = several_boards(message.rows)
         self.query_one("#projector-rows", Static).update(projector_table(message.rows, show_track))
-
-    def action_leave(self) -> None:
-        self.dismiss(None)

@@ -188,5 +188,7 @@ async def test_the_projector_shows_the_leader_and_picks_up_new_results() -> None
         await settle(pilot)
         assert projector.query_one("#projector-leader", Digits).value == "0:10.500"
         assert "fay" in painted(projector.query_one("#projector-rows"))
-        await pilot.press("escape")
+        await pilot.press("escape")  # a kiosk: Esc does nothing
+        assert app.screen is projector
+        await pilot.press("q", "y")  # leaving asks first, then goes back
         assert isinstance(app.screen, LeagueScreen)

@@ -165,8 +165,11 @@ async def test_the_projector_follows_a_night_from_heat_to_heat() -> None:
             "18",
             "15",
         ]
-        await pilot.press("escape")
-        assert not isinstance(app.screen, NightProjectorScreen)
+        await pilot.press("escape")  # a kiosk: Esc does nothing
+        assert isinstance(app.screen, NightProjectorScreen)
+        assert app.return_code is None
+        await pilot.press("q", "y")  # leaving asks first; started alone, it quits
+        assert app.return_code == 0
 
 
 def test_places_read_as_places() -> None:
