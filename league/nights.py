@@ -12,7 +12,7 @@ import json
 import random
 import re
 import sqlite3
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, replace
 from datetime import date, datetime
 from pathlib import Path
@@ -558,15 +558,21 @@ def night_points(league: League, night: Night) -> tuple[int, ...]:
     return get_season(league, night.season_id).points
 
 
-def standings(league: League, night: Night, points: Sequence[int] | None = None) -> list[Standing]:
+def standings(
+    league: League,
+    night: Night,
+    points: Sequence[int] | None = None,
+    local_models: Collection[str] = (),
+) -> list[Standing]:
     """Each racer's best race of the night, ranked under the night's rules, with points.
 
     One ranking, as the season counts it: a night may race simulated and physical cars
     together (the host's choice), though the leaderboard never ranks their laps together.
-    A racer without a valid score is unplaced and scores no points.
+    A racer without a valid score is unplaced and scores no points. Under a `verification`
+    rule only the results it allows count (`local_models`: the garage's model hashes).
     """
     table = tuple(points) if points is not None else night_points(league, night)
-    return standings_from(night_results(league, [night.id]), table)
+    return standings_from(night_results(league, [night.id], local_models), table)
 
 
 def standings_from(rows: Sequence[LeaderboardRow], points: Sequence[int]) -> list[Standing]:

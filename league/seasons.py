@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import itertools
 import json
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 from league.errors import LeagueError
@@ -112,11 +112,16 @@ def closed_nights(league: League, season: Season) -> list[str]:
     return [row[0] for row in rows]
 
 
-def night_results(league: League, night_ids: Sequence[str]) -> list[LeaderboardRow]:
-    """Each racer's best race per night, ranked per night by the night's rules."""
+def night_results(
+    league: League, night_ids: Sequence[str], local_models: Collection[str] = ()
+) -> list[LeaderboardRow]:
+    """Each racer's best race per night, ranked per night by the night's rules (which
+    results count too: a night's `verification` rule; `local_models`, the garage's model
+    hashes, make their races verifiable)."""
     if not night_ids:
         return []
-    rows = grouped_rows(league, Filters(night_ids=night_ids), None, group_by="night_id, racer")
+    filters = Filters(night_ids=night_ids, local_models=frozenset(local_models))
+    rows = grouped_rows(league, filters, None, group_by="night_id, racer")
     return rank_groups(rows, lambda entry: entry.night_id, night_ids)
 
 

@@ -730,8 +730,8 @@ def _night_show(league: League, night: Any, kind: str) -> int:
 
     entrants = nights.entrants(league, night)
     heats = nights.heats(league, night)
-    standings = nights.standings(league, night)
     models_here = _models_here()
+    standings = nights.standings(league, night, local_models=models_here)
     if kind != "table":
         mark_verification(league, [s.entry for s in standings], models_here)
         print(night_export(night, entrants, heats, standings, kind), end="")

@@ -181,6 +181,10 @@ def test_before_close_a_replayed_night_counts_only_what_was_raced_again(league: 
     verifiable = _night_with_heats(league, "verifiable")
     # The reference driver can race ana's and bob's heats again here: they count until then.
     assert sorted(_placed(nights.standings(league, verifiable))) == ["ana", "bob"]
+    # With dan's model in this garage, his heat can be raced again here too.
+    here = nights.standings(league, verifiable, local_models={MADE_UP})
+    assert sorted(_placed(here)) == ["ana", "bob", "dan"]
+    assert len(uncounted_heats(league, verifiable, {MADE_UP})) == 1  # carol's, by hand
 
 
 def test_closing_a_replayed_night_races_its_heats_again_first(league: League) -> None:
