@@ -6,13 +6,15 @@ A name is plain text a person can read and tell apart from others: 1 to MAX_NAME
 printable characters, in Unicode's compatibility form (NFKC, so a full-width "Ａｄａ" is
 "Ada"), without line breaks, control characters, or invisible and direction-changing
 format characters (a right-to-left override or a zero-width space lets one name pose as
-another). `look_alike_key` folds the letters that look the same in Latin, Cyrillic and
-Greek, so "аda" with a Cyrillic "а" can be told to look like "ada".
+another). `look_alike_key` compares names as Unicode's confusable detection does (the
+skeleton of UTS #39), so "аda" with a Cyrillic "а", or "аոа" with an Armenian "ո", can be
+told to look like "ada" and "ana".
 """
 
 from __future__ import annotations
 
 import unicodedata
+from functools import cache
 
 MAX_NAME_LENGTH = 100
 # Control characters, surrogates, line and paragraph breaks, private-use and unassigned
@@ -28,19 +30,12 @@ def _is_variation_selector(char: str) -> bool:
     return "\ufe00" <= char <= "\ufe0f"
 
 
-# Letters that look like Latin ones (Cyrillic and Greek), and digits that look like letters.
-_LOOK_ALIKES = str.maketrans(
-    {
-        **dict(zip("аеорсухіјѕԁһԛԝӏвмнтк", "aeopcyxijsdhqwlbmhtk", strict=True)),
-        # Capital I of every script looks like l, as Latin "I" does (mapped below).
-        **dict(zip("АВЕЗІЈКМНОРСТУХ", "ABE3lJKMHOPCTYX", strict=True)),
-        **dict(zip("οανρτικυχ", "oavptikux", strict=True)),
-        **dict(zip("ΑΒΕΖΗΙΚΜΝΟΡΤΥΧ", "ABEZHlKMNOPTYX", strict=True)),
-        "0": "o",
-        "1": "l",
-        "I": "l",
-    }
-)
+# Canonical combining classes of marks drawn under a letter. UTS #39 takes some letters for
+# another letter with such a mark (Greek η for n with a line below): at a leaderboard's
+# size a reader sees the letter, not the mark, so a mark the table adds there is dropped.
+_BELOW: frozenset[int] = frozenset({202, 218, 220, 222, 233})
+# The left-to-right marks the table wraps right-to-left letters in, for display only.
+_DISPLAY_MARK = "\u200e"
 
 
 def normalised(text: str) -> str:
@@ -80,6 +75,52 @@ def _joins_symbols(text: str, index: int) -> bool:
 
 
 def look_alike_key(text: str) -> str:
-    """Equal for names a reader cannot tell apart: "аda" (Cyrillic а) and "ADA" give the
-    key of "ada"."""
-    return normalised(text).translate(_LOOK_ALIKES).casefold()
+    """Equal for names a reader cannot tell apart: "аda" (Cyrillic а), "ΑDA" (Greek Α) and
+    "ADA" give the key of "ada". The UTS #39 skeleton, taken again after folding case (the
+    table tells capital I from l, a reader of "Ian" and "lan" may not)."""
+    return _skeleton(_skeleton(normalised(text)).casefold())
+
+
+def _skeleton(text: str) -> str:
+    """UTS #39's skeleton: each character of the decomposed text replaced by its prototype,
+    decomposed again."""
+    table = _prototypes()
+    return unicodedata.normalize(
+        "NFD", "".join(table.get(char, char) for char in unicodedata.normalize("NFD", text))
+    )
+
+
+@cache
+def _prototypes() -> dict[str, str]:
+    """Each confusable character's prototype, from Unicode's confusables table as
+    confusable_homoglyphs ships it. That package keeps the table both ways (a character
+    beside each it is confusable with) and has no skeleton(), so the direction is read
+    back: a character with one partner that has others is a source and its partner the
+    prototype; a prototype of several characters or of a string is one itself; a pair
+    that has only each other maps both to the smaller (either may stand for both)."""
+    from confusable_homoglyphs import confusables  # type: ignore[import-untyped]  # 9,600 pairs: load on first use
+
+    partners: dict[str, list[str]] = {}
+    for char, entries in confusables.confusables_data.items():
+        key = char.replace(_DISPLAY_MARK, "")
+        partners.setdefault(key, []).extend(
+            entry["c"].replace(_DISPLAY_MARK, "") for entry in entries
+        )
+    table: dict[str, str] = {}
+    for char, others in partners.items():
+        if len(char) != 1 or len(others) != 1:
+            continue
+        (other,) = others
+        if len(other) == 1 and len(partners.get(other, ())) == 1:
+            other = min(char, other)
+        if other != char:
+            table[char] = _without_marks_below(other)
+    return table
+
+
+def _without_marks_below(prototype: str) -> str:
+    decomposed = unicodedata.normalize("NFD", prototype)
+    if len(decomposed) < 2:
+        return decomposed
+    kept = "".join(c for c in decomposed if unicodedata.combining(c) not in _BELOW)
+    return kept or decomposed
