@@ -204,6 +204,7 @@ def _model_space(model: str | None) -> ActionSpace | None:
 
 def _facts(track_name: str, model: str | None) -> dict[str, object]:
     from sim.coach.limit_lap import limit_lap
+    from sim.race.plausible import fastest_possible_lap
     from sim.reference_driver import reference_lap
 
     track = resolve_track(track_name)
@@ -218,6 +219,8 @@ def _facts(track_name: str, model: str | None) -> dict[str, object]:
     limit = limit_lap(track)
     facts["limit_flying_lap_s"] = round(limit.flying_seconds, 3)
     facts["limit_standing_lap_s"] = round(limit.standing_seconds, 3)
+    # The league's floor: no lap under it is accepted anywhere (sim.race.plausible).
+    facts["lap_floor_s"] = round(fastest_possible_lap(track), 3)
     if space is not None:
         within = limit_lap(track, space=space)
         facts["model"] = model
@@ -271,6 +274,7 @@ def _show(track_name: str, model: str | None, as_json: bool) -> int:
     for key, value in facts.items():
         table.add_row(key, Text("-" if value is None else str(value)))
     print_table(table)
+    print(f"No lap under {facts['lap_floor_s']:.3f} s is accepted (DeepRacer's rules at 4 m/s).")
     return 0
 
 

@@ -4,6 +4,7 @@ hand-edited evaluation, not as a recorded race or a night's heat, not timed by h
 
 from __future__ import annotations
 
+import json
 import sqlite3
 from dataclasses import replace
 from pathlib import Path
@@ -147,3 +148,12 @@ def test_a_night_heat_under_the_floor_is_not_recorded(league: League, floor: flo
     with pytest.raises(LeagueError, match=f"no lap under {floor:.3f} s is possible there"):
         record_race(league, forged, night.id, heat_id=heat.id)
     assert league.query_one("SELECT count(*) FROM races WHERE night_id = ?", (night.id,))[0] == 0
+
+
+def test_tracks_show_says_the_floor(capsys: pytest.CaptureFixture[str]) -> None:
+    floor = fastest_possible_lap(resolve_track("hairpin-circuit"))
+    assert main(["tracks", "show", "hairpin-circuit"]) == 0
+    out = capsys.readouterr().out
+    assert out.endswith(f"\nNo lap under {floor:.3f} s is accepted (DeepRacer's rules at 4 m/s).\n")
+    assert main(["tracks", "show", "hairpin-circuit", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["lap_floor_s"] == round(floor, 3)
