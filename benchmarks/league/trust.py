@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import json
 import os
 import sys
@@ -89,12 +90,16 @@ class Machine:
         with open_store(self.url) as store:
             sync(self.league, store, store_key(self.url), signing_key=self.key)
 
-    def holds(self, record_id: str) -> bool:
-        """Whether the record is in this machine's league at all (on a board or not)."""
-        return any(
-            self.league.query_one(f"SELECT 1 FROM {table} WHERE id = ?", (record_id,))
-            for table in ("races", "submissions")
-        )
+    def holds(self, record_id: str, best_lap: float | None = None) -> bool:
+        """Whether the record is in this machine's league at all, on a board or not (with
+        that best lap: a forged copy of an honest record is looked for by its laps)."""
+        row = self.league.query_one("SELECT best_lap FROM entries WHERE entry_id = ?", (record_id,))
+        if row is None:
+            return any(
+                self.league.query_one(f"SELECT 1 FROM {table} WHERE id = ?", (record_id,))
+                for table in ("races", "submissions")
+            )
+        return best_lap is None or (row[0] is not None and abs(float(row[0]) - best_lap) < 1e-6)
 
     def keeps(self, record_id: str, best_lap: float) -> bool:
         """Whether an honest record is in this league's entries with its best lap as driven
@@ -153,8 +158,14 @@ class World:
         return made
 
     def honest_race(self, machine: Machine, racer: str, seed: int) -> tuple[str, float]:
-        """The reference driver raced for real, recorded as `racer`'s."""
-        result = run_race(self.track, self.rules, racer=racer, seed=seed, keep_trace=False)
+        """A race of the racer's own car, as their machine records it: the laps are the
+        reference driver's, raced for real here; the car's name and hash are the racer's own
+        (their machine registers the model when it syncs), so a copy is another's model."""
+        driven = run_race(self.track, self.rules, racer=racer, seed=seed, keep_trace=False)
+        car = f"{racer}-car"
+        result = replace(
+            driven, model_name=car, model_hash=hashlib.sha256(car.encode()).hexdigest()
+        )
         record_race(machine.league, result)
         best = result.best_lap
         assert best is not None, "the reference driver completes laps"
@@ -479,7 +490,9 @@ def run_store(
             continue
         shown, accepted = {}, []
         if mark.record_id is not None:
-            accepted = [m.name for m in (organiser, fresh) if m.holds(mark.record_id)]
+            accepted = [
+                m.name for m in (organiser, fresh) if m.holds(mark.record_id, mark.best_lap)
+            ]
             shown = {
                 "organiser": organiser.shows(mark.record_id, mark.best_lap),
                 "fresh": fresh.shows(mark.record_id, mark.best_lap),
