@@ -8,7 +8,9 @@ CLI never imports it (tests/test_architecture.py checks both).
 
 from __future__ import annotations
 
+import asyncio
 import time
+from collections import deque
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -96,6 +98,12 @@ OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
     ("Tables", DataTable),
 )
 EVERYWHERE = "Everywhere"
+# A key waits for the one before it (see `_ready_for_input`): first by yielding to the
+# widgets at work, then by polling; a key lost on its way stops holding the next after:
+HELD_KEY_YIELDS = 200
+HELD_KEY_POLL_SECONDS = 0.002
+KEY_FLIGHT_SECONDS = 1.0
+HELD_KEY_CHECKS = HELD_KEY_YIELDS + int(KEY_FLIGHT_SECONDS / HELD_KEY_POLL_SECONDS) + 1
 HELP_SCREEN = "help"  # the installed help screen's name
 
 
@@ -163,6 +171,10 @@ class RacerTuiApp(App[int]):
         self._switching_to_shown_mode = False
         self.collector = IdleCollector(trim=malloc_trim())
         self.recent_keys = RecentKeys()
+        self._held_input: deque[events.Key | events.Paste] = deque()  # one key at a time
+        self._key_in_flight: events.Key | None = None
+        self._key_sent_at = 0.0
+        self._release_task: asyncio.Task[None] | None = None
         self.crash_report: Path | None = None  # written on the first unexpected error
         self.crash_report_problem: str | None = None  # why it could not be written
         memoise_background_styles_by_colour()  # for every app: tests keep many in one process
@@ -207,15 +219,91 @@ class RacerTuiApp(App[int]):
 
     def on_unmount(self) -> None:
         self.collector.stop()
+        if self._release_task is not None:
+            self._release_task.cancel()
 
     async def on_event(self, event: events.Event) -> None:
         if isinstance(event, events.InputEvent):
             self.collector.input_seen()
-            if isinstance(event, events.Key) and not event.is_forwarded:
+        if isinstance(event, events.Key | events.Paste) and not event.is_forwarded:
+            if isinstance(event, events.Key):
                 self.recent_keys.key(event.key)
-        elif isinstance(event, events.Paste) and not event.is_forwarded:
-            self.recent_keys.paste(event.text)
+            else:
+                self.recent_keys.paste(event.text)
+            if self._held_input or not self._ready_for_input():
+                self._hold(event)
+                return
+            await self._deliver(event)
+            return
         await super().on_event(event)
+
+    # --- one key at a time --------------------------------------------------------------------
+
+    # Keys typed quickly arrive in one read from the terminal, and Textual hands each to the
+    # focused widget as soon as it comes, before the keys ahead of it have been handled. A
+    # key's binding runs only once the key has bubbled back up to the app, so the keys after
+    # one that opens a dialog went to the screen below, or to a dialog not yet mounted and
+    # focused, and were lost (issue 42: `t`, Backspace Backspace 5 left the Train dialog's
+    # field empty; a paste the same). The app hands over one key at a time instead: the
+    # next waits while the last is in flight (not yet stopped by a widget or handled by the
+    # app) or while the screen on top has not mounted; waiting keys keep their order.
+
+    def _ready_for_input(self) -> bool:
+        if not self.screen.is_mounted:
+            return False
+        event = self._key_in_flight
+        if event is None:
+            return True
+        if event._stop_propagation or time.monotonic() - self._key_sent_at > KEY_FLIGHT_SECONDS:
+            # Stopped by the widget that used it, or lost on the way (a widget removed
+            # with the key in its queue): the next key may go.
+            self._key_in_flight = None
+            return True
+        return False
+
+    async def _deliver(self, event: events.Key | events.Paste) -> None:
+        if isinstance(event, events.Key):
+            self._key_in_flight, self._key_sent_at = event, time.monotonic()
+        await super().on_event(event)
+        if not event.is_forwarded and event is self._key_in_flight:
+            self._key_in_flight = None  # a priority binding used it here and then
+
+    async def _on_key(self, event: events.Key) -> None:
+        # App's own handler (the bindings of the focus chain) is called here, not after.
+        event.prevent_default()
+        try:
+            await super()._on_key(event)
+        finally:
+            if event is self._key_in_flight:
+                self._key_in_flight = None
+
+    def _hold(self, event: events.Key | events.Paste) -> None:
+        self._held_input.append(event)
+        self._release_when_ready()
+
+    def _release_when_ready(self) -> None:
+        if self._release_task is not None and not self._release_task.done():
+            return
+        self._release_task = asyncio.create_task(self._wait_then_release(), name="held keys")
+
+    async def _wait_then_release(self) -> None:
+        for attempt in range(HELD_KEY_CHECKS):
+            if self._ready_for_input():
+                break
+            screen = self.screen
+            if not screen.is_mounted:
+                await screen._mounted_event.wait()
+            else:  # the widget the last key went to is still at it: let it run
+                await asyncio.sleep(0 if attempt < HELD_KEY_YIELDS else HELD_KEY_POLL_SECONDS)
+        # Through the app's queue, behind the focus a screen set as it mounted.
+        self.call_later(self._release_held)
+
+    async def _release_held(self) -> None:
+        while self._held_input:
+            if not self._ready_for_input():  # a key just let go is in flight
+                self._release_when_ready()
+                return
+            await self._deliver(self._held_input.popleft())
 
     # --- a crash is never silent -------------------------------------------------------------
 
