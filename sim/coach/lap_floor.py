@@ -98,7 +98,10 @@ def compute_floor(track: Track, car: CarSpec = DEEPRACER_CAR) -> float | None:
     """The floor worked out afresh (`lap_floor` caches it); None when no line the able car
     can drive was found."""
     limits = floor_limits(car)
-    fit = optimise_line(track, limits, frame=widened_frame(track, cutting_reach(car)))
+    try:
+        fit = optimise_line(track, limits, frame=widened_frame(track, cutting_reach(car)))
+    except (ValueError, ArithmeticError):  # numpy's and the solver's: no line either
+        return None
     seconds = fit.profile.lap_seconds
     drivable = float(np.max(np.abs(fit.curvature))) <= tightest_turn(limits)
     if not drivable or not math.isfinite(seconds) or seconds <= 0.0:
