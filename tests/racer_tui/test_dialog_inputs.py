@@ -5,6 +5,7 @@ a terminal delivers them (`burst`: all at once), not pressed one by one as Pilot
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import pytest
 from textual.screen import Screen
@@ -21,7 +22,7 @@ TYPED = "abcdefghij" * 20  # 200 characters, no pause between them
 PASTED = "/a/pasted/path with spaces/" * 4
 CLEAR = ["ctrl+a", "ctrl+k"]  # what the racer types first over a suggested value
 
-CASES: dict[str, tuple[str, Callable[[], object], list[str], type[Screen[object]]]] = {
+CASES: dict[str, tuple[str, Callable[[], object], list[str], type[Screen[Any]]]] = {
     "train budget": ("garage", lambda: new_model("one"), ["t"], InputDialog),
     "clone name": ("garage", lambda: new_model("one"), ["c"], InputDialog),
     "export path": ("garage", lambda: trained_model("one"), ["x"], InputDialog),
