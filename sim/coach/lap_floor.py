@@ -125,18 +125,18 @@ def lap_floor(track: Track) -> float | None:
     """Seconds no lap on `track` can beat under DeepRacer's rules, or None when the coach
     found no line for it (module docstring). Cached by the track's content."""
     key = (track.content_hash, floor_key())
-    if key in _known:
-        return _known[key]
-    path = _cache_file(*key)
-    cached = _read_cached(path, track.content_hash)
-    if cached is None:
-        found = compute_floor(track)
-        _write_cached(path, track.content_hash, found)
-        _known[key] = found
-        return found
-    seconds = cached[0]
-    _known[key] = seconds
-    return seconds
+    if key not in _known:
+        try:
+            path: Path | None = _cache_file(*key)
+        except OSError:  # no data folder to keep it in: worked out for this process only
+            path = None
+        cached = None if path is None else _read_cached(path, track.content_hash)
+        if cached is None:
+            cached = (compute_floor(track),)
+            if path is not None:
+                _write_cached(path, track.content_hash, cached[0])
+        _known[key] = cached[0]
+    return _known[key]
 
 
 def forget_floors() -> None:
