@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from league.errors import LeagueError
 from league.store import League, now_iso
 from sim.plain_names import MAX_NAME_LENGTH, is_plain_name, look_alike_key, normalised
+from sim.remedies import echoed
 
 # Distinct, readable on dark and light terminals; a racer's default is picked by name.
 PALETTE = (
@@ -48,7 +49,7 @@ def check_name(text: str, what: str = "racer name") -> str:
     name = normalised(text)
     if not is_plain_name(name):
         raise LeagueError(
-            f"{text!r} cannot be a {what}: use 1 to {MAX_NAME_LENGTH} printable characters "
+            f"{echoed(text)} cannot be a {what}: use 1 to {MAX_NAME_LENGTH} printable characters "
             "(no line breaks, control characters or invisible characters)."
         )
     return name
@@ -66,7 +67,7 @@ def look_alike(league: League, name: str) -> str | None:
 
 def check_colour(text: str) -> str:
     if not HEX_COLOUR.fullmatch(text):
-        raise LeagueError(f"colour {text!r} must be #rrggbb, for example {PALETTE[0]}.")
+        raise LeagueError(f"colour {echoed(text)} must be #rrggbb, for example {PALETTE[0]}.")
     return text.lower()
 
 
@@ -94,7 +95,7 @@ def get_racer(league: League, name: str) -> Racer:
     racer = find_racer(league, name)
     if racer is None:
         raise LeagueError(
-            f"there is no racer called {name!r}; add one with `racer-tui racer add NAME` "
+            f"there is no racer called {echoed(name)}; add one with `racer-tui racer add NAME` "
             "or submit with --racer NAME."
         )
     return racer
@@ -107,7 +108,9 @@ def add_racer(
     clean = check_name(name)
     with league.transaction():
         if league.query_one("SELECT 1 FROM racers WHERE name = ?", (clean,)):
-            raise LeagueError(f"there is already a racer called {clean!r}; pick another name.")
+            raise LeagueError(
+                f"there is already a racer called {echoed(clean)}; pick another name."
+            )
         ensure_racer(league, clean, display_name=display_name, colour=colour)
     return get_racer(league, clean)
 
@@ -127,8 +130,8 @@ def ensure_racer(
     similar = look_alike(league, clean)
     if similar is not None:
         raise LeagueError(
-            f"{clean!r} looks like the racer {similar!r}; if that is you, use exactly that "
-            "name, otherwise choose a name that looks different."
+            f"{echoed(clean)} looks like the racer {echoed(similar)}; if that is you, use "
+            "exactly that name, otherwise choose a name that looks different."
         )
     shown = check_name(display_name, "display name") if display_name else clean
     league.insert_record(

@@ -57,7 +57,7 @@ from sim.realworld.settings import (
     settings_text,
     with_camera_randomisation_keys,
 )
-from sim.remedies import Note, RemedyError
+from sim.remedies import Note, RemedyError, echoed
 from sim.reward_function import RewardFunctionError, check_reward_code
 from sim.track import TrackError
 
@@ -327,7 +327,7 @@ def check_name(name: str, taken: set[str]) -> str | None:
     if not name:
         return "Give the model a name."
     if not is_valid_name(name):
-        return f"{name!r} cannot be a model name; use {NAME_RULE}."
+        return f"{echoed(name)} cannot be a model name; use {NAME_RULE}."
     if name.casefold() in taken:
         return f"A model named {name!r} already exists; choose another name."
     return None

@@ -37,7 +37,7 @@ from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, rules_from_mapping
-from sim.remedies import RemedyError
+from sim.remedies import RemedyError, echoed
 from sim.track import Track, TrackError
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 
@@ -244,7 +244,7 @@ def _racer_name(text: str) -> str:
     name = text.strip()
     if not is_plain_name(name):
         raise RaceSetupError(
-            f"{text!r} cannot be a racer name: use 1 to {MAX_NAME_LENGTH} printable "
+            f"{echoed(text)} cannot be a racer name: use 1 to {MAX_NAME_LENGTH} printable "
             "characters (no line breaks or control characters)."
         )
     return name

@@ -6,6 +6,13 @@ FILE`), and the app, which does the same with a key, says that instead
 from __future__ import annotations
 
 from enum import Enum
+from typing import Final
+
+# What a sentence quotes of something the user typed or a file said: enough to recognise
+# it, never a 10,000-character name repeated back whole.
+ECHO_CHARS: Final = 40
+# A path is shown as it is up to this length (a file's place matters more than a name's).
+PATH_ECHO_CHARS: Final = 120
 
 
 class Fix(Enum):
@@ -51,3 +58,20 @@ class RemedyError(ValueError):
         super().__init__(message)
         self.problem = problem or message
         self.fix = fix
+
+
+def echoed(value: object, limit: int = ECHO_CHARS) -> str:
+    """`value` quoted as a sentence for the user repeats it (its repr), cut to `limit`
+    characters with an ellipsis and its length when it is longer: "'aaaa…' (10,000
+    characters)"."""
+    text = value if isinstance(value, str) else str(value)
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit] + '…'!r} ({len(text):,} characters)"
+
+
+def echoed_path(path: object) -> str:
+    """A path as a sentence names a file: as it is, or `echoed` when it is longer than
+    PATH_ECHO_CHARS (no real file has a 10,000-character path)."""
+    text = str(path)
+    return text if len(text) <= PATH_ECHO_CHARS else echoed(text, PATH_ECHO_CHARS)

@@ -25,6 +25,7 @@ from shapely.geometry import LinearRing, Polygon
 
 from sim.atomic import write_bytes_atomic
 from sim.geometry import FloatArray, PolylineProjector, segment_lengths, signed_area
+from sim.remedies import echoed, echoed_path
 from sim.track_errors import TrackError as TrackError  # noqa: PLC0414 (re-exported for callers)
 
 Direction = Literal["counter-clockwise", "clockwise"]
@@ -71,7 +72,7 @@ class Track:
 
         `source` names the file in error messages ("<name>" when there is none).
         """
-        label = source or f"track {name!r}"
+        label = source or f"track {echoed(name)}"
         points = _normalise(array, label)
         _check_borders(points, label)
         _check_road_gaps(points, label)
@@ -240,10 +241,13 @@ def load_track(
 ) -> Track:
     """Load and validate a DeepRacer .npy track file."""
     file = Path(path)
-    label = str(file)
-    if not file.exists():
-        raise TrackError(f"{label}: no such file; give the path of a DeepRacer .npy track file.")
-    size = file.stat().st_size
+    label = echoed_path(file)
+    try:
+        size = file.stat().st_size
+    except OSError:  # none there, or a name no file can have (too long, say)
+        raise TrackError(
+            f"{label}: no such file; give the path of a DeepRacer .npy track file."
+        ) from None
     if size > MAX_TRACK_FILE_BYTES:
         raise TrackError(
             f"{label}: is {size:,} bytes; a track file is at most "

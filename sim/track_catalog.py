@@ -30,7 +30,7 @@ from sim.atomic import write_text_atomic
 from sim.home import user_tracks_dir
 from sim.names import NAME_PATTERN, NAME_RULE
 from sim.official_tracks import OfficialTrack, official_tracks
-from sim.remedies import Fix, Note
+from sim.remedies import Fix, Note, echoed
 from sim.track_errors import TrackError
 
 if TYPE_CHECKING:
@@ -132,7 +132,7 @@ def find_track_info(name: str) -> TrackInfo:
         return _official_info(by_console[0])
     if by_console:
         choices = " or ".join(f"{track.world_name} ({track.direction})" for track in by_console)
-        raise TrackError(f"{name!r} is {len(by_console)} tracks; give one of: {choices}.")
+        raise TrackError(f"{echoed(name)} is {len(by_console)} tracks; give one of: {choices}.")
     raise _unknown_name(name, infos)
 
 
@@ -141,12 +141,12 @@ def resolve_track(name_or_path: str) -> Track:
     from sim.track import load_track
 
     path = Path(name_or_path).expanduser()
-    if not _NAME.fullmatch(name_or_path) and (path.suffix == ".npy" or path.is_file()):
+    if not _NAME.fullmatch(name_or_path) and (path.suffix == ".npy" or _is_file(path)):
         return load_track(path)
     try:
         info = find_track_info(name_or_path)
     except TrackError:
-        if path.is_file():
+        if _is_file(path):
             return load_track(path)
         raise
     if not info.lappable:
@@ -155,6 +155,15 @@ def resolve_track(name_or_path: str) -> Track:
             f"so choose a loop such as {DEFAULT_TRACK} (re:Invent 2018)."
         )
     return load_track(info.path, info.name, description=info.description)
+
+
+def _is_file(path: Path) -> bool:
+    """Whether `path` is a file; False, not an error, for a name no file can have (too long
+    for the file system, say), which is then looked up as a track name."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
 
 
 def find_track_by_hash(content_hash: str) -> TrackInfo | None:
@@ -234,7 +243,9 @@ def _unknown_name(name: str, infos: list[TrackInfo]) -> TrackError:
             by_fold.setdefault(info.console_name.casefold(), info.console_name)
     close = difflib.get_close_matches(name.casefold(), list(by_fold), n=4, cutoff=0.6)
     near = ", ".join(repr(by_fold[key]) for key in close)
-    problem = f"there is no track named {name!r}" + (f" (close names: {near})" if close else "")
+    problem = f"there is no track named {echoed(name)}" + (
+        f" (close names: {near})" if close else ""
+    )
     return TrackError(
         f"{problem}; give a name that `racer-tui tracks list` shows, or the path of a "
         "DeepRacer .npy file (`racer-tui tracks import FILE` keeps one).",
@@ -263,7 +274,9 @@ def _renamed(problem: str) -> str:
 
 
 def _name_rule_problem(name: str) -> str | None:
-    return None if _NAME.fullmatch(name) else f"{name!r} cannot be a track name; use {NAME_RULE}"
+    if _NAME.fullmatch(name):
+        return None
+    return f"{echoed(name)} cannot be a track name; use {NAME_RULE}"
 
 
 def new_name_problem(name: str) -> str | None:
@@ -276,7 +289,7 @@ def new_name_problem(name: str) -> str | None:
     folded = name.casefold()
     shipped = _shipped_named(name)
     if shipped is not None:
-        return f"{name!r} is the name of {_a(shipped.kind)} track"
+        return f"{echoed(name)} is the name of {_a(shipped.kind)} track"
     for npy in user_tracks_dir().glob("*.npy"):
         if npy.stem.casefold() == folded:
             return f"a track named {npy.stem!r} is already imported"

@@ -7,6 +7,7 @@ from typing import Final
 
 from league.errors import LeagueError
 from sim.plain_names import MAX_NAME_LENGTH, is_plain_name
+from sim.remedies import echoed
 
 PHYSICAL: Final = "physical"
 _PREFIX: Final = f"{PHYSICAL}:"
@@ -23,7 +24,7 @@ def physical_spec(spec: str) -> str:
     name = spec.removeprefix(_PREFIX).strip()
     if not is_plain_name(name):
         raise LeagueError(
-            f"{name!r} is not a car name: after 'physical:' give 1 to {MAX_NAME_LENGTH} "
+            f"{echoed(name)} is not a car name: after 'physical:' give 1 to {MAX_NAME_LENGTH} "
             "printable characters, or write just 'physical'."
         )
     return _PREFIX + name

@@ -25,7 +25,7 @@ from league.trust.keys import SigningKey, fingerprint
 from league.trust.roster import FOUNDER_ID, Roster, record_digest, same_racer
 from sim.ids import new_id
 from sim.plain_names import look_alike_key
-from sim.remedies import Fix, Note
+from sim.remedies import Fix, Note, echoed
 
 MIN_FINGERPRINT_DIGITS: Final = 8
 
@@ -140,13 +140,13 @@ def find_key(league: League, target: str) -> tuple[str, str | None]:
         keys = {k for k in (*known, *roster.organisers) if k.startswith(digits)}
     if not keys:
         raise LeagueError(
-            f"no key proposed for {target!r}; the racer syncs once to propose theirs "
+            f"no key proposed for {echoed(target)}; the racer syncs once to propose theirs "
             "(`racer-tui racer keys` lists the keys this league knows)."
         )
     if len(keys) > 1:
         listed = ", ".join(sorted(fingerprint(k) for k in keys))
         raise LeagueError(
-            f"{target!r} names {len(keys)} keys ({listed}); give the one you mean with --key."
+            f"{echoed(target)} names {len(keys)} keys ({listed}); give the one you mean with --key."
         )
     public = keys.pop()
     return public, known.get(public)
@@ -203,12 +203,12 @@ def _refuse_look_alike(league: League, roster: Roster, name: str) -> None:
         others.add(found)
     for other in sorted(others):
         if other and not same_racer(other, name) and look_alike_key(other) == wanted:
+            apart = f"{echoed(name)} cannot be told apart from racer {echoed(other)}"
             problem = (
-                f"{name!r} cannot be told apart from racer {other!r} on a leaderboard; ask the "
-                "racer to choose another name and sync again"
+                f"{apart} on a leaderboard; ask the racer to choose another name and sync again"
             )
             raise LeagueError(
-                f"{name!r} cannot be told apart from racer {other!r} on a leaderboard; ask the "
+                f"{apart} on a leaderboard; ask the "
                 "racer to choose another name (`racer-tui racer me NAME`, then sync), or admit "
                 "the key under another name with --racer.",
                 problem=problem,

@@ -57,7 +57,7 @@ from sim.garage.folder import (
 )
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
 from sim.race.physics import DEEPRACER as DEEPRACER_PHYSICS
-from sim.remedies import Fix, Note
+from sim.remedies import Fix, Note, echoed_path
 
 if TYPE_CHECKING:
     from sim.garage.frozen_graph import FolderWeights
@@ -80,19 +80,23 @@ def import_model(
     """A DeepRacer model folder, a `.racer-bundle` file or a DeepRacer car archive
     (`.tar.gz`), as a new garage model."""
     source = Path(path).expanduser()
-    if source.is_file() and is_car_archive_name(source):
+    try:
+        is_file, is_dir = source.is_file(), source.is_dir()
+    except OSError:  # a name no file can have (too long, say): there is none
+        is_file = is_dir = False
+    if is_file and is_car_archive_name(source):
         from sim.garage.car_archive_import import import_car_archive
 
         return import_car_archive(source, name=name, track=track)
-    if source.is_file():
+    if is_file:
         from sim.garage.bundle import install_bundle_report
 
         return install_bundle_report(source, name=name, track=track)
-    if source.is_dir():
+    if is_dir:
         return import_deepracer_folder(source, name=name, track=track, untrained=untrained)
     raise ModelError(
-        f"{source} does not exist; give a DeepRacer model folder, a {BUNDLE_SUFFIX} file or a "
-        "car archive (.tar.gz)."
+        f"{echoed_path(source)} does not exist; give a DeepRacer model folder, a "
+        f"{BUNDLE_SUFFIX} file or a car archive (.tar.gz)."
     )
 
 

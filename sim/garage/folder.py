@@ -69,7 +69,7 @@ from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
 from sim.home import data_home
 from sim.ids import canonical_json
 from sim.names import NAME_RULE, is_valid_name
-from sim.remedies import Fix, RemedyError
+from sim.remedies import Fix, RemedyError, echoed
 from sim.track import Track, TrackError
 
 if TYPE_CHECKING:
@@ -503,7 +503,7 @@ def _checked(reader: Callable[[Path], _T], path: Path) -> _T:
 
 def check_model_name(name: str) -> None:
     if not is_valid_name(name):
-        raise ModelError(f"{name!r} cannot be a model name; use {NAME_RULE}.")
+        raise ModelError(f"{echoed(name)} cannot be a model name; use {NAME_RULE}.")
 
 
 def is_model_folder(path: Path) -> bool:
@@ -536,9 +536,13 @@ def open_model(name_or_path: str) -> ModelFolder:
                 "incomplete; copy the model in again, or delete the folder."
             )
     path = Path(name_or_path).expanduser()
-    if path.is_dir() and (is_model_folder(path) or needs_migration(path)):
+    try:
+        is_folder = path.is_dir()
+    except OSError:  # no folder can have that name (too long, say): a name not found
+        is_folder = False
+    if is_folder and (is_model_folder(path) or needs_migration(path)):
         return _opened(path)
-    if path.is_dir():
+    if is_folder:
         problem = (
             f"{path / MODEL_METADATA_PATH} does not exist, so {name_or_path} is not a model folder"
         )
@@ -548,7 +552,7 @@ def open_model(name_or_path: str) -> ModelFolder:
             problem=problem,
             fix=Fix.IMPORT_MODEL,
         )
-    problem = f"there is no model named {name_or_path!r}"
+    problem = f"there is no model named {echoed(name_or_path)}"
     raise ModelError(
         f"{problem}; `racer-tui model list` shows your models and `racer-tui model new NAME` "
         "creates one.",
