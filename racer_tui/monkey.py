@@ -56,8 +56,8 @@ NAVIGATION = (
     "tab", "shift+tab", "enter", "escape", "space", "backspace", "delete",
 )  # fmt: skip
 APP_KEYS = ("question_mark", "ctrl+p", "escape", "enter", "f1")
-# Typed text: no `/` or `~` (see the module's note), no quit key on its own.
-PRINTABLE = string.ascii_letters + string.digits + " -_.,:=+"
+# Typed text: no `/` or `~` (see the module's note), no q (it quits from a section).
+PRINTABLE = string.ascii_letters.replace("q", "") + string.digits + " -_.,:=+"
 TEXT_PIECES = ("5", "10", "abc", "my-model", "0.5", "reinvent_base", "on", "light,noise=0.5")
 MIN_SIZE = (60, 20)
 MAX_SIZE = (200, 60)

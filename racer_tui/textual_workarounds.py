@@ -7,6 +7,10 @@ crash with the workaround taken out).
 
 from __future__ import annotations
 
+from typing import Any
+
+from textual.await_complete import AwaitComplete
+from textual.screen import Screen
 from textual.widgets import OptionList
 
 PATCHED = "_racer_tui_workaround"  # marks a patched method, so no patch is applied twice
@@ -16,6 +20,8 @@ def apply_workarounds() -> None:
     """Patch what must be patched; idempotent (every app built in a test calls it)."""
     if not getattr(OptionList._move_page, PATCHED, False):
         _page_keys_wait_for_lines()
+    if not getattr(Screen.dismiss, PATCHED, False):
+        _a_screen_is_dismissed_once()
 
 
 def _page_keys_wait_for_lines() -> None:
@@ -42,3 +48,23 @@ def _page_keys_wait_for_lines() -> None:
 
     setattr(move_page, PATCHED, True)
     OptionList._move_page = move_page  # type: ignore[method-assign]
+
+
+def _a_screen_is_dismissed_once() -> None:
+    """Textual 8.2.8: `Screen.dismiss` pops whatever screen is on top, and calls the result
+    callback, even when the screen dismissed is already gone. Two ways out of one dialog
+    queued together (Enter, whose Submitted or OptionSelected message is handled later,
+    then Esc) dismissed it twice: the second took the screen below with it, or raised
+    ScreenStackError when that was a section's own screen. The monkey found it in the
+    command palette (issue 42), and every form dialog had the same race. A screen no longer
+    on the stack is not dismissed again."""
+    original = Screen.dismiss
+
+    def dismiss(self: Screen[Any], result: Any = None) -> AwaitComplete:
+        if self not in self.app.screen_stack:
+            gone: AwaitComplete = AwaitComplete.nothing()  # type: ignore[no-untyped-call]
+            return gone
+        return original(self, result)
+
+    setattr(dismiss, PATCHED, True)
+    Screen.dismiss = dismiss  # type: ignore[method-assign]

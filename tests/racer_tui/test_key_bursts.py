@@ -79,3 +79,18 @@ async def test_a_page_key_before_layout_goes_to_the_end_it_points_at() -> None:
         assert unshown.highlighted == 2
         unshown._move_page(-1)
         assert unshown.highlighted == 0
+
+
+async def test_enter_then_escape_in_the_palette_closes_it_once() -> None:
+    # Found by the monkey: Enter on a command, then Esc before the selection was handled,
+    # dismissed the palette twice; the second pop found only the section's own screen
+    # (ScreenStackError: Can't pop screen).
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        burst(app, ["ctrl+p", *"go to tracks"])
+        await drain(pilot)
+        burst(app, ["enter", "escape"])
+        await drain(pilot)
+        assert app._exception is None
+        assert len(app.screen_stack) == 1
