@@ -68,26 +68,31 @@ SORT_BY_TITLE: dict[str, Column] = {
     **{title: Column.SCORE for title in SCORE_TITLES.values()},
 }
 # How each column gives way in a narrow terminal (see table_fill.Col): the submission date
-# first, then the average, the model and the track (the entry's detail shows them); a long
-# racer name loses its end only after those; rank, score and best lap always stay.
+# first, then the average, off-tracks and laps (the entry's detail shows them). The board
+# (the track column names it, "(physical)" and all), the model and the racer lose the end
+# of their names but are never dropped: two rank 1s on one screen must say which board each
+# leads. Rank, score and best lap always stay.
 GIVE_WAY: dict[str, Col] = {
     "submitted": Col("", keep=1),
     "average": Col("", keep=2),
-    "model": Col("", keep=3, shrink_to=10),
-    "track": Col("", keep=4, shrink_to=10),
-    "racer": Col("", keep=5, shrink_to=16, collapses=False),
-    "laps": Col("", keep=6),
-    "off-tracks": Col("", keep=7),
+    "off-tracks": Col("", keep=3),
+    "laps": Col("", keep=4),
+    "racer": Col("", keep=5, shrink_to=10, collapses=False),
+    "model": Col("", keep=6, shrink_to=8, collapses=False),
+    "track": Col("", keep=7, shrink_to=8, collapses=False, keeps_tail=True),
 }
 
 
-def export_text(rows: list[LeaderboardRow], query: BoardQuery, kind: str) -> str:
-    """The file contents, through the same formatters as `racer-tui leaderboard`."""
+def export_text(
+    rows: list[LeaderboardRow], query: BoardQuery, kind: str, show_track: bool | None = None
+) -> str:
+    """The file contents, through the same formatters as `racer-tui leaderboard`;
+    `show_track` as the table shows it (the dialog promises "the table as shown"), by
+    default only when the rows span several boards."""
     if kind == "json":
         return json.dumps(leaderboard_json(rows, query.method), indent=2) + "\n"
-    columns = leaderboard_columns(
-        query.method, show_track=several_boards(rows), iso_times=kind == "csv"
-    )
+    track = several_boards(rows) if show_track is None else show_track
+    columns = leaderboard_columns(query.method, show_track=track, iso_times=kind == "csv")
     return to_csv(columns, rows) if kind == "csv" else to_markdown(columns, rows)
 
 
@@ -408,11 +413,19 @@ class LeagueScreen(RacerScreen[None]):
         if path is not None:
             target = Path(path).expanduser()
             kind = EXPORT_FORMATS[target.suffix.lower()]
-            self._export(list(self.rows), self.shown_query, target, kind)
+            show_track = "track" in self.titles
+            self._export(list(self.rows), self.shown_query, target, kind, show_track)
 
     @work(thread=True, group="league-export", exit_on_error=False)
-    def _export(self, rows: list[LeaderboardRow], query: BoardQuery, path: Path, kind: str) -> None:
-        write_text_atomic(path, export_text(rows, query, kind))
+    def _export(
+        self,
+        rows: list[LeaderboardRow],
+        query: BoardQuery,
+        path: Path,
+        kind: str,
+        show_track: bool,
+    ) -> None:
+        write_text_atomic(path, export_text(rows, query, kind, show_track))
         self.post_message(BoardExported(path, len(rows)))
 
     def on_board_exported(self, message: BoardExported) -> None:

@@ -50,10 +50,13 @@ class SectionHeader(Horizontal):
     SectionHeader > HelpHint { width: auto; padding: 0 1; }
     SectionHeader > HelpHint:hover { background: $boost; color: $text; }
     SectionHeader.-narrow > #context { display: none; }
+    SectionHeader.-tiny > #brand { display: none; }
     """
     # Below this width the tabs and the full hint do not fit on one line (80 columns is the
     # classic terminal): the context note goes and the hint keeps just its two keys.
     NARROW_WIDTH = 100
+    # Below this the app's name goes too, so every tab reads whole ("5 League", not "5 Leagu").
+    TINY_WIDTH = 70
     HINT = "? help  ^p commands"
     SHORT_HINT = "? ^p"
 
@@ -76,6 +79,7 @@ class SectionHeader(Horizontal):
     def on_resize(self, event: events.Resize) -> None:
         narrow = event.size.width < self.NARROW_WIDTH
         self.set_class(narrow, "-narrow")
+        self.set_class(event.size.width < self.TINY_WIDTH, "-tiny")
         self.query_one(HelpHint).update(self.SHORT_HINT if narrow else self.HINT)
 
     def set_context(self, text: str) -> None:

@@ -42,6 +42,10 @@ class Col:
     keep: int | None = None
     shrink_to: int | None = None
     collapses: bool = True
+    # A name whose last words in brackets tell it from another ("beginner-oval" and
+    # "beginner-oval (physical)") loses the end of what comes before them instead
+    # ("begin… (physical)"): two boards never look alike.
+    keeps_tail: bool = False
 
 
 ColumnSpec = str | Col
@@ -52,7 +56,11 @@ def _width(cell: Cell) -> int:
 
 
 def fit_widths(
-    natural: Sequence[int], columns: Sequence[Col], room: int, padding: int
+    natural: Sequence[int],
+    columns: Sequence[Col],
+    room: int,
+    padding: int,
+    least: Sequence[int] | None = None,
 ) -> list[int | None]:
     """Each column's width in the table (None: collapsed) so the whole fits in `room`
     cells, each column also taking `padding` cells on either side. When even the
@@ -63,6 +71,11 @@ def fit_widths(
         max(_width(col.label), min(col.shrink_to, width)) if col.shrink_to else width
         for col, width in zip(columns, natural, strict=True)
     ]
+    if least is not None:  # what a column needs whatever its shrink_to (a kept tail)
+        floors = [
+            min(width, max(floor, need))
+            for floor, need, width in zip(floors, least, natural, strict=True)
+        ]
 
     def total() -> int:
         return sum(width + 2 * padding for width in widths if width is not None)
@@ -93,10 +106,26 @@ def fit_widths(
     return widths
 
 
-def _shortened(cell: Cell, width: int) -> Cell:
+def tail_of(cell: Cell) -> str:
+    """The words in brackets that end a name, with the space before them ("" if none)."""
+    plain = cell.plain if isinstance(cell, Text) else cell
+    start = plain.rfind(" (")
+    return plain[start:] if start > 0 and plain.endswith(")") else ""
+
+
+HEAD_LEAST = 3  # what a kept tail leaves before it at least: two letters and "…"
+
+
+def _shortened(cell: Cell, width: int, keeps_tail: bool = False) -> Cell:
     if _width(cell) <= width:
         return cell
     text = cell.copy() if isinstance(cell, Text) else Text(cell)
+    tail = tail_of(text) if keeps_tail else ""
+    if tail and width >= len(tail) + HEAD_LEAST:
+        cut = len(text.plain) - len(tail)
+        head, end = text[:cut], text[cut:]
+        head.truncate(width - len(tail), overflow="ellipsis")
+        return Text.assemble(head, end, justify=text.justify)
     text.truncate(width, overflow="ellipsis")
     return text
 
@@ -161,11 +190,17 @@ def _lay_out(table: DataTable[object], filling: _Filling) -> None:
         max([_width(col.label), *(_width(row[index]) for row in filling.rows)])
         for index, col in enumerate(filling.columns)
     ]
+    least = [
+        max((len(tail_of(row[index])) + HEAD_LEAST for row in filling.rows), default=0)
+        if col.keeps_tail
+        else 0
+        for index, col in enumerate(filling.columns)
+    ]
     room = _room(table, len(filling.rows))
     widths: list[int | None] = (
         list(natural)
         if room is None
-        else fit_widths(natural, filling.columns, room, table.cell_padding)
+        else fit_widths(natural, filling.columns, room, table.cell_padding, least)
     )
     content = (
         tuple(widths),
@@ -183,7 +218,10 @@ def _lay_out(table: DataTable[object], filling: _Filling) -> None:
         table.add_column(filling.columns[index].label, width=width, key=str(index))
     for number, row in enumerate(filling.rows):
         table.add_row(
-            *(_shortened(row[index], widths[index] or 0) for index in shown),
+            *(
+                _shortened(row[index], widths[index] or 0, filling.columns[index].keeps_tail)
+                for index in shown
+            ),
             key=filling.keys[number] if filling.keys is not None else None,
         )
 

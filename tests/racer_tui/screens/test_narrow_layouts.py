@@ -1,0 +1,82 @@
+"""Issue 42, points 8 and 9: at 80x24 and 60x20 the columns that matter (the board, the
+car's kind, the model) stay, a board's name keeps what tells it from another, and the
+header's tabs read whole."""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from textual.widgets import DataTable, Input
+
+from league.races import record_race
+from league.store import open_league
+from racer_tui.app import create_app
+from racer_tui.screens.league import LeagueScreen
+from racer_tui.widgets.section_header import SectionHeader
+from racer_tui.widgets.table_fill import Col, _shortened, fit_widths
+from sim.home import data_home
+from sim.race.physics import PHYSICAL
+from tests.league.helpers import race_result
+from tests.racer_tui.screens.tui_helpers import painted, settle
+
+
+def a_league_with_a_physical_board() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        record_race(
+            league,
+            race_result("Alexandra Montgomery-Fitzgerald", [12.0, 11.5], model="reinvent_base"),
+        )
+        physical = race_result("dana", [6.35, 6.5], model="reinvent_base")
+        record_race(league, replace(physical, physics=PHYSICAL, model_name="reinvent_base"))
+
+
+@pytest.mark.parametrize("size", [(80, 24), (60, 20)], ids=["80x24", "60x20"])
+async def test_the_league_table_keeps_board_and_model_when_narrow(size: tuple[int, int]) -> None:
+    a_league_with_a_physical_board()
+    app = create_app(start="league")
+    async with app.run_test(size=size) as pilot:
+        await settle(pilot)
+        table = app.screen.query_one("#board", DataTable)
+        headers = [str(column.label) for column in table.columns.values()]
+        assert any(h.startswith("model") for h in headers)
+        assert any(h.startswith("track") for h in headers)
+        shown = painted(table)
+        assert "(physical)" in shown  # the second rank 1 says which board it leads
+        assert table.virtual_size.width <= table.scrollable_content_region.width
+        assert "5 League" in painted(app.screen.query_one(SectionHeader))
+
+
+def test_a_name_loses_its_middle_never_the_words_that_tell_two_boards_apart() -> None:
+    cut = _shortened("beginner-oval (physical)", 18, keeps_tail=True)
+    assert str(cut) == "beginn… (physical)"
+    assert str(_shortened("beginner-oval", 10, keeps_tail=True)) == "beginner-…"
+    # The column's floor leaves room for its tail.
+    natural, room = [24, 30], 30
+    columns = [Col("track", keep=2, shrink_to=8, collapses=False, keeps_tail=True), Col("x", 1)]
+    widths = fit_widths(natural, columns, room, 1, least=[14, 0])
+    assert widths[0] is not None and widths[0] >= 14
+
+
+async def test_an_export_of_one_board_has_the_track_column_the_table_shows(
+    tmp_path: Path,
+) -> None:
+    """Point 9: the dialog says "the table as shown"; with one board the table shows its
+    track, and so does the file."""
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        record_race(league, race_result("ada", [11.0]))
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, LeagueScreen) and "track" in screen.titles
+        await pilot.press("x")
+        app.screen.query_one("#answer", Input).value = str(tmp_path / "board.csv")
+        await pilot.press("enter")
+        await settle(pilot)
+    rows = list(csv.DictReader((tmp_path / "board.csv").open()))
+    assert rows[0]["track"] == "beginner-oval"
