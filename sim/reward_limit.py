@@ -91,6 +91,7 @@ class CallLimit:
 
 
 _ACTIVE: CallLimit | None = None
+WATCHDOG_NAME = "reward-call-limit"
 
 
 def install(seconds: float = DEFAULT_SECONDS) -> CallLimit:
@@ -103,7 +104,7 @@ def install(seconds: float = DEFAULT_SECONDS) -> CallLimit:
         return _ACTIVE
     limit = CallLimit(seconds)
     signal.signal(signal.SIGALRM, limit._on_signal)
-    threading.Thread(target=limit._watch, name="reward-call-limit", daemon=True).start()
+    threading.Thread(target=limit._watch, name=WATCHDOG_NAME, daemon=True).start()
     _ACTIVE = limit
     return limit
 

@@ -9,15 +9,15 @@ contains it:
 - **memory**: the process may hold only `memory_mb` more than it did when the reward was
   loaded (RLIMIT_DATA); an allocation past that raises MemoryError inside the reward and is
   reported as "used more than N MB of memory" with its line;
-- **no process, thread, signal or C call**: while a reward call runs (and while its file
-  loads), an audit hook refuses starting a process (subprocess, os.fork, os.system,
-  os.posix_spawn, os.exec*), starting a thread, sending a signal, calling C through ctypes
-  and ending the process (os._exit, os.abort); the refusal is an exception at the racer's
-  line, reported in one sentence. What escapes the hook (a multiprocessing "spawn" start
-  makes no audit event) is caught by the leftovers: the check fails on a call after which
-  the process has a child, and every process that runs reward code is a child subreaper
-  that kills all its descendants when it ends, inside a process session its parent kills
-  as a whole;
+- **no process, signal or C call**: while a reward call runs (and while its file loads),
+  and in any thread racer code started, an audit hook refuses starting a process
+  (subprocess, os.fork, os.system, os.posix_spawn, os.exec*), sending a signal, calling C
+  through ctypes and ending the process (os._exit, os.abort); the refusal is an exception
+  at the racer's line, reported in one sentence. What escapes the hook (a multiprocessing
+  "spawn" start makes no audit event; Landlock, where there is one, refuses it the
+  program) is caught by the leftovers: the check fails on a call after which the process
+  has a child, and every process that runs reward code is a child subreaper that kills all
+  its descendants when it ends, inside a process session its parent kills as a whole;
 - **files** (sim.landlock, where Linux has Landlock): the process may read only Python's
   own files, racer-tui's, the system's libraries, the reward file's folder, /proc/self and
   /dev/null, /dev/urandom, and write nowhere (the trainer's own process: only its model's
@@ -131,7 +131,6 @@ _FORBIDDEN = {
     "os.exec": "starts a process",
     "subprocess.Popen": "starts a process",
     "os.startfile": "starts a process",
-    "_thread.start_new_thread": "starts a thread",
     "os.kill": "sends a signal",
     "os.killpg": "sends a signal",
     "signal.pthread_kill": "sends a signal",
@@ -143,15 +142,19 @@ _FORBIDDEN = {
 _refused: ForbiddenInReward | None = None
 _guarded = False
 _real_exit = os._exit
+# racer-tui's own threads in a guarded process (the watchdog); any other Python thread
+# was started by racer code, and is refused what a reward call is.
+_own_threads: set[int] = set()
 
 
 def _in_reward_call() -> bool:
     limit = reward_limit._ACTIVE
-    return (
-        limit is not None
-        and bool(limit.started)
-        and threading.get_ident() == threading.main_thread().ident
-    )
+    if limit is None:
+        return False
+    ident = threading.get_ident()
+    if ident == threading.main_thread().ident:
+        return bool(limit.started)
+    return ident not in _own_threads
 
 
 def _refuse(action: str) -> None:
@@ -186,6 +189,7 @@ def guard_reward_calls() -> None:
     global _guarded  # noqa: PLW0603
     if _guarded:
         return
+    _own_threads.update(thread.ident for thread in threading.enumerate() if thread.ident)
     sys.addaudithook(_audit)
     guarded_exit = _exit_guard("os._exit", _real_exit)
     os._exit = guarded_exit
@@ -364,7 +368,11 @@ def install_call_limit(
     """Time every reward call in this process; a call that cannot be interrupted is reported
     through `report` (from the watchdog thread) and ends the process."""
     limit = reward_limit.install(seconds)
-
+    _own_threads.update(  # the watchdog, started by the line above before any racer code
+        thread.ident
+        for thread in threading.enumerate()
+        if thread.name == reward_limit.WATCHDOG_NAME and thread.ident
+    )
     names = {str(reward_file), os.path.abspath(reward_file)}  # as it may have been compiled
 
     def stuck(limit_seconds: float) -> None:

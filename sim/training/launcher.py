@@ -249,12 +249,11 @@ class AsyncTrainingProcess:
         self._process = process
         self._stderr = stderr
         self.ended: events.Ended | None = None
-        # asyncio reaps the child itself: its session is killed once it has exited.
-        self._session_ender = asyncio.ensure_future(self._end_session_when_done())
-
-    async def _end_session_when_done(self) -> None:
-        await self._process.wait()
-        kill_session(self._process.pid)
+        # Not `process.wait()`: asyncio's waits for the child's pipes to close too, which
+        # is what an orphan holding them prevents.
+        self._session_ender = asyncio.ensure_future(
+            asyncio.to_thread(_end_session_when_done, process.pid)
+        )
 
     @classmethod
     async def start(

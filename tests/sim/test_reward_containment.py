@@ -1,0 +1,183 @@
+"""A reward function is contained at run time (sim.reward_sandbox): it cannot leave a
+process behind, allocate without bound, end its process unnamed or (where Linux has
+Landlock) read a racer's secrets or write outside; each is said in one sentence naming
+the file and line, and no process of the check outlives it."""
+
+from __future__ import annotations
+
+import sys
+import textwrap
+import uuid
+from pathlib import Path
+
+import psutil
+import pytest
+
+from sim import landlock
+from sim.reward_function import RewardFunctionError
+from sim.reward_probe import check_reward_source
+
+LIMIT = 1.0
+
+
+def failure(source: str, name: str = "reward.py", memory_mb: int = 2048) -> str:
+    with pytest.raises(RewardFunctionError) as caught:
+        check_reward_source(textwrap.dedent(source), name, seconds=LIMIT, memory_mb=memory_mb)
+    return str(caught.value)
+
+
+def processes_with(marker: str) -> list[psutil.Process]:
+    found = []
+    for process in psutil.process_iter(["cmdline", "status"]):
+        cmdline = process.info["cmdline"] or []
+        if process.info["status"] != psutil.STATUS_ZOMBIE and any(marker in a for a in cmdline):
+            found.append(process)
+    return found
+
+
+def sleep_seconds() -> str:
+    """A `sleep` argument no other process has: how the test finds what was left."""
+    return f"1000.{uuid.uuid4().int % 10**9}"
+
+
+def test_a_function_that_starts_a_process_fails_and_leaves_none() -> None:
+    marker = sleep_seconds()
+    source = f"""\
+        import subprocess
+        def reward_function(params):
+            subprocess.Popen(["sleep", "{marker}"])
+            return 1.0
+        """
+    message = failure(source)
+    assert message.startswith("reward.py line 3: reward_function starts a process")
+    assert processes_with(marker) == []
+
+
+def test_forking_and_c_calls_are_refused_at_their_line() -> None:
+    fork = "import os\ndef reward_function(params):\n    os.fork()\n    return 1.0\n"
+    assert failure(fork).startswith("reward.py line 3: reward_function starts a process (os.fork)")
+    through_c = (
+        "import ctypes\n"
+        "def reward_function(params):\n"
+        "    ctypes.CDLL(None).fork()\n"
+        "    return 1.0\n"
+    )
+    assert "line 3: reward_function calls C code through ctypes" in failure(through_c)
+
+
+def test_a_refusal_the_function_swallows_still_fails_it() -> None:
+    marker = sleep_seconds()
+    source = f"""\
+        import subprocess
+        def reward_function(params):
+            try:
+                subprocess.Popen(["sleep", "{marker}"])
+            except BaseException:
+                pass
+            return 1.0
+        """
+    assert failure(source).startswith("reward.py line 4: reward_function starts a process")
+    assert processes_with(marker) == []
+
+
+def test_a_process_started_where_no_audit_event_sees_it_fails_the_check() -> None:
+    # multiprocessing's "spawn" makes no audit event: the look after the call finds it.
+    source = """\
+        import multiprocessing, time
+        def reward_function(params):
+            multiprocessing.get_context("spawn").Process(target=time.sleep, args=(1000,)).start()
+            return 1.0
+        """
+    message = failure(source)
+    assert "reward_function starts a process" in message, message
+
+
+def test_an_allocation_over_the_limit_is_said_as_memory_with_its_line() -> None:
+    source = "def reward_function(params):\n    data = bytearray(8 * 10**9)\n    return 1.0\n"
+    message = failure(source, memory_mb=64)
+    assert message.startswith("reward.py line 2: reward_function used more than 64 MB of memory")
+    assert "catch every exception" not in message
+    # Many small allocations fill the limit too, and loading the file is held to it.
+    growing = "kept = [bytearray(2**20) for _ in range(200)]\ndef reward_function(params):\n"
+    message = failure(growing + "    return 1.0\n", memory_mb=64)
+    assert message.startswith("reward.py line 1: loading the file used more than 64 MB of memory")
+
+
+def test_a_thread_the_function_starts_is_refused_a_process_too() -> None:
+    marker = sleep_seconds()
+    source = f"""\
+        import subprocess, threading
+        def start():
+            subprocess.Popen(["sleep", "{marker}"])
+        def reward_function(params):
+            thread = threading.Thread(target=start)
+            thread.start()
+            thread.join()
+            return 1.0
+        """
+    assert failure(source).startswith("reward.py line 3: reward_function starts a process")
+    assert processes_with(marker) == []
+
+
+needs_landlock = pytest.mark.skipif(
+    landlock.abi_version() < 1,
+    reason="this kernel has no Landlock: a reward's files are not closed off here",
+)
+
+
+@needs_landlock
+def test_a_function_cannot_read_a_secret_or_write_outside(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    home = tmp_path / "home"
+    (home / ".ssh").mkdir(parents=True)
+    (home / ".ssh" / "id_ed25519").write_text("secret")
+    monkeypatch.setenv("HOME", str(home))
+    racer = tmp_path / "racer"
+    racer.mkdir()
+    (racer / "weights.txt").write_text("2.5")
+    reward = racer / "reward.py"
+    reward.write_text("def reward_function(params):\n    return 1.0\n")  # its folder is read
+    reads = """\
+        import os
+        def reward_function(params):
+            return float(len(open(os.path.expanduser("~/.ssh/id_ed25519")).read()))
+        """
+    message = failure(reads, str(reward))
+    assert message.startswith(f"{reward} line 3: reward_function raised PermissionError")
+    assert "may read only Python's files and its own folder" in message
+    outside = tmp_path / "written.txt"
+    writes = f"""\
+        def reward_function(params):
+            open({str(outside)!r}, "w").write("x")
+            return 1.0
+        """
+    assert "line 2: reward_function raised PermissionError" in failure(writes, str(reward))
+    assert not outside.exists()
+    beside = f"""\
+        def reward_function(params):
+            return float(open({str(racer / "weights.txt")!r}).read())
+        """
+    assert check_reward_source(textwrap.dedent(beside), str(reward)).sample_reward == 2.5
+
+
+def test_what_a_reward_may_import_still_imports() -> None:
+    source = """\
+        import math, random
+        import numpy as np
+        def reward_function(params):
+            from scipy import spatial
+            from shapely.geometry import Point
+            import scipy.interpolate
+            return float(np.clip(math.cos(0) * random.random() + Point(0, 0).x, 0, 1))
+        """
+    report = check_reward_source(textwrap.dedent(source), "reward.py")
+    assert 0.0 <= report.sample_reward <= 1.0
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux process sessions")
+def test_the_check_leaves_no_process_of_its_own() -> None:
+    before = {child.pid for child in psutil.Process().children(recursive=True)}
+    check_reward_source("def reward_function(params):\n    return 1.0\n", "reward.py")
+    after = {child.pid for child in psutil.Process().children(recursive=True)}
+    assert after <= before

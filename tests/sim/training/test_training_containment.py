@@ -1,0 +1,113 @@
+"""A training always returns and leaves no process behind, whatever its reward function
+does: the launcher kills the training's whole session once the training process exits, and
+a reward that starts a process fails the run in one sentence naming its line."""
+
+from __future__ import annotations
+
+import asyncio
+import subprocess
+import sys
+import tempfile
+import textwrap
+import uuid
+
+import psutil
+import pytest
+
+from racer_tui.cli import main
+from sim.garage.options import new_model
+from sim.training import events
+from sim.training.launcher import AsyncTrainingProcess, TrainingProcess
+
+pytestmark = pytest.mark.skipif(
+    not sys.platform.startswith("linux"), reason="process sessions and subreapers are Linux's"
+)
+
+
+def processes_with(marker: str) -> list[psutil.Process]:
+    found = []
+    for process in psutil.process_iter(["cmdline", "status"]):
+        cmdline = process.info["cmdline"] or []
+        if process.info["status"] != psutil.STATUS_ZOMBIE and any(marker in a for a in cmdline):
+            found.append(process)
+    return found
+
+
+def _ended_line() -> str:
+    ended = events.Ended(
+        elapsed=1.0,
+        kind="finished",
+        message="the time limit was reached",
+        total_steps=1,
+        episodes=1,
+        best_progress=0.0,
+        best_lap=None,
+    )
+    return events.encode(ended)
+
+
+def _orphaning_child(marker: str) -> list[str]:
+    """A stand-in for the training process: it leaves an endless grandchild that holds its
+    stdout (the event pipe), says it finished, and exits."""
+    script = textwrap.dedent(
+        f"""\
+        import subprocess, sys
+        subprocess.Popen([sys.executable, "-c", "while True: pass", {marker!r}])
+        print({_ended_line()!r}, flush=True)
+        """
+    )
+    return [sys.executable, "-c", script]
+
+
+def test_an_orphan_holding_the_event_pipe_does_not_hang_the_launcher() -> None:
+    marker = f"orphan-{uuid.uuid4()}"
+    stderr = tempfile.TemporaryFile()  # noqa: SIM115 - the launcher closes it
+    popen = subprocess.Popen(
+        _orphaning_child(marker),
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=stderr,
+        start_new_session=True,
+    )
+    process = TrainingProcess(popen, stderr)
+    stream = list(process.events())  # returns: the orphan went with the session
+    assert isinstance(stream[-1], events.Ended) and stream[-1].kind == "finished"
+    assert processes_with(marker) == []
+
+
+@pytest.mark.asyncio
+async def test_the_async_launcher_ends_the_session_too() -> None:
+    marker = f"orphan-{uuid.uuid4()}"
+    stderr = tempfile.TemporaryFile()  # noqa: SIM115 - the launcher closes it
+    command = _orphaning_child(marker)
+    child = await asyncio.create_subprocess_exec(
+        *command,
+        stdin=asyncio.subprocess.DEVNULL,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=stderr,
+        start_new_session=True,
+    )
+    process = AsyncTrainingProcess(child, stderr)
+    stream = [event async for event in process.events()]
+    assert isinstance(stream[-1], events.Ended)
+    assert processes_with(marker) == []
+
+
+@pytest.mark.slow
+def test_a_reward_that_starts_a_process_fails_the_training_and_leaves_none(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    model = new_model("forks")
+    marker = f"1000.{uuid.uuid4().int % 10**9}"
+    model.reward_file.write_text(
+        "import subprocess\n"
+        "def reward_function(params):\n"
+        f"    subprocess.Popen(['sleep', '{marker}'])\n"
+        "    return 1.0\n"
+    )
+    code = main(["train", "forks", "--minutes", "0.02", "--json"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "reward_function.py line 3: reward_function starts a process" in err
+    assert processes_with(marker) == []
+    assert psutil.Process().children(recursive=True) == []
