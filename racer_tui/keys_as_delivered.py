@@ -10,6 +10,7 @@ not on a clock) until everything queued has been handled.
 
 from __future__ import annotations
 
+import asyncio
 import unicodedata
 from collections.abc import Iterable
 from typing import Any
@@ -62,12 +63,20 @@ def _queues_empty(app: App[Any]) -> bool:
 
 
 async def drain(pilot: Pilot[Any]) -> None:
-    """Wait until the app has handled what was queued (and what that queued in turn)."""
+    """Wait until the app has handled what was queued (and what that queued in turn).
+
+    Event-driven: each round waits until every node of the screen has handled what was in
+    its queue when the round began (Pilot's `_wait_for_screen`). `Pilot.pause` also waits
+    for the process to be idle, which a screen that animates (a race, the welcome demo)
+    never is: it then waits its whole second."""
+    app = pilot.app
     quiet_rounds = 0
     for _ in range(MAX_DRAIN_ROUNDS):
-        await pilot.pause()
-        if not pilot.app.is_running:
+        if not app.is_running:
             return
-        quiet_rounds = quiet_rounds + 1 if _queues_empty(pilot.app) else 0
+        await pilot._wait_for_screen()
+        await asyncio.sleep(0)
+        settled = _queues_empty(app) and not getattr(app, "_held_input", None)
+        quiet_rounds = quiet_rounds + 1 if settled else 0
         if quiet_rounds >= 2:  # twice: a handler may post once more after the queue emptied
             return

@@ -118,9 +118,10 @@ def scratch_home(real_training: bool = False) -> Iterator[Path]:
     """A temporary data home (and working folder) with the monkey's models, the training
     worker swapped for a stand-in unless `real_training`; children it started are stopped
     and everything is removed at the end."""
-    from sim.home import home_at
+    from sim.home import LEAGUE_ENV, home_at
 
     before = {child.pid for child in psutil.Process().children(recursive=True)}
+    league = os.environ.pop(LEAGUE_ENV, None)  # the league of the scratch home, not another
     with tempfile.TemporaryDirectory(prefix="racer-monkey-") as folder:
         root = Path(folder)
         cwd = Path.cwd()
@@ -132,6 +133,8 @@ def scratch_home(real_training: bool = False) -> Iterator[Path]:
         finally:
             os.chdir(cwd)
             _stop_children_started_since(before)
+            if league is not None:
+                os.environ[LEAGUE_ENV] = league
 
 
 def _fill_garage() -> None:

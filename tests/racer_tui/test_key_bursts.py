@@ -94,3 +94,17 @@ async def test_enter_then_escape_in_the_palette_closes_it_once() -> None:
         await drain(pilot)
         assert app._exception is None
         assert len(app.screen_stack) == 1
+
+
+async def test_the_editor_form_reads_its_choices_before_the_selects_mount() -> None:
+    # The root of point 1: a Select's value is Select.NULL until it mounts, whatever it was
+    # built with; the form reads what it was built with until then.
+    from textual.widgets import Select
+
+    from racer_tui.screens.form_select import FormSelect, choice_of
+
+    levels = FormSelect([("3", 3), ("5", 5)], value=5, id="steering-levels")
+    assert levels.value == Select.NULL  # Textual's, before mounting
+    assert levels.chosen == 5
+    assert choice_of(levels, 3) == 5
+    assert choice_of(Select([("a", "a")], prompt="pick"), "b") == "b"
