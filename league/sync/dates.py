@@ -24,16 +24,19 @@ must have
 
 from __future__ import annotations
 
+import json
 import time
 from datetime import UTC, datetime
 from typing import Final
 
+from league.entries import refresh_entries
 from league.store import League, now_iso
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import BUNDLE_KIND, MODEL_KIND, PROFILE_KIND
 from league.sync.record import SyncRecord
 from league.trust.roster import FOUNDER_ID, ROSTER_KIND, Roster
 from sim.ids import id_time_ms
+from sim.race.rules import RankingMethod
 
 # How far apart two clocks, or two stamps of one save, may honestly be. A record's id and
 # its date are taken by one clock a few milliseconds apart; the maker's clock and this
@@ -119,6 +122,12 @@ def check_dates(record: SyncRecord, now_ms: int | None = None) -> None:
         )
 
 
+def iso_text(ms: int) -> str:
+    """`ms` as the league writes times (league.store.now_iso): they sort as text."""
+    stamp = datetime.fromtimestamp(ms / 1000, UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")
+    return stamp[:-3] + "Z"
+
+
 def founded_ms(roster: Roster) -> int | None:
     """When this league was founded (its founding act's league id), None before it is known."""
     return None if roster.league is None else id_time_ms(roster.league)
@@ -145,48 +154,56 @@ def founding_refusal(record: SyncRecord, roster: Roster) -> str | None:
 
 
 class Arrivals:
-    """Ties go to the result the league saw first. A pulled result that claims to be older
-    than a result on its track already here ranks from the time it arrived
-    (`sync_first_seen`, which the leaderboard cache reads): a racer who syncs late loses a
-    tie they would have won, but nobody wins one by writing an early date. The latest time
-    on each track is read once per page and kept up to date as the page's results go in."""
+    """Ties go to the result the league saw first. A pulled result dated more than
+    DATE_TOLERANCE_MS before it arrived, that would win a tie (the same score, off-tracks
+    and valid laps on the same board) by that date against another racer's result this
+    league held before the page it came in, ranks from the time it arrived instead
+    (`sync_first_seen`, which the leaderboard cache reads): nobody wins a tie by writing
+    an early date. Results synced within the tolerance of being made, and results that
+    arrive together, rank by their dates, as on the machines they came from, so every
+    machine shows the same board; a racer who syncs later than that loses such a tie."""
 
     def __init__(self) -> None:
-        self._latest: dict[str, float] = {}
+        self._inserted: list[str] = []
 
-    def note(self, league: League, record: SyncRecord) -> None:
+    def note(self, record: SyncRecord) -> None:
         """Call when a pulled submission or race was just inserted."""
-        track, claimed = (
-            str(record.body["track_hash"]),
-            iso_ms(str(record.body[DATE_FIELD[record.kind]])),
-        )
-        now = time.time() * 1000
-        latest = self._latest.get(track)
-        if latest is None:
-            latest = _latest_on_track(league, track, record.record_id)
-        ranked_at = float(claimed)
-        if claimed < latest and claimed < now:
-            ranked_at = now
-            league.conn.execute(
-                "INSERT OR IGNORE INTO sync_first_seen (entry_id, seen_at) VALUES (?, ?)",
-                (record.record_id, now_iso()),
-            )
-        self._latest[track] = max(latest, ranked_at)
+        self._inserted.append(record.record_id)
+
+    def settle(self, league: League) -> None:
+        """Call once the leaderboard cache holds this page's results."""
+        arrived = set(self._inserted)
+        moved: list[str] = []
+        late = iso_text(int(time.time() * 1000) - DATE_TOLERANCE_MS)
+        for entry_id in self._inserted:
+            if _wins_tie_by_date(league, entry_id, arrived, late):
+                league.conn.execute(
+                    "INSERT OR IGNORE INTO sync_first_seen (entry_id, seen_at) VALUES (?, ?)",
+                    (entry_id, now_iso()),
+                )
+                moved.append(entry_id)
+        self._inserted.clear()
+        if moved:
+            refresh_entries(league.conn, moved)
 
 
-def _latest_on_track(league: League, track: str, but: str) -> float:
-    """The latest time any result here on `track` ranks by, in ms (-inf for none)."""
+_SAME_SCORE: Final = " OR ".join(
+    f"(o.score_{method.value} = e.score_{method.value} "
+    f"AND o.offtracks_{method.value} = e.offtracks_{method.value})"
+    for method in RankingMethod
+)
+
+
+def _wins_tie_by_date(league: League, entry_id: str, arrived: set[str], late: str) -> bool:
+    """Whether `entry_id`, dated before `late`, ties another racer's result held before
+    (not in `arrived`) on its board under some ranking method, and ranks ahead of it by
+    its earlier date."""
     row = league.query_one(
-        "SELECT max(t) FROM (SELECT julianday(coalesce(f.seen_at, r.started_at)) AS t "
-        "FROM races r LEFT JOIN sync_first_seen f ON f.entry_id = r.id "
-        "WHERE r.track_hash = ?1 AND r.id <> ?2 UNION ALL "
-        "SELECT julianday(coalesce(f.seen_at, s.submitted_at)) FROM submissions s "
-        "LEFT JOIN sync_first_seen f ON f.entry_id = s.id WHERE s.track_hash = ?1 AND s.id <> ?2)",
-        (track, but),
+        "SELECT 1 FROM entries e JOIN entries o ON o.track_hash = e.track_hash "
+        "AND o.race_type = e.race_type AND o.physics = e.physics AND o.racer <> e.racer "
+        "AND o.valid_laps = e.valid_laps AND o.recorded_at > e.recorded_at "
+        f"WHERE e.entry_id = ? AND e.recorded_at < ? AND ({_SAME_SCORE}) "
+        "AND o.entry_id NOT IN (SELECT value FROM json_each(?)) LIMIT 1",
+        (entry_id, late, json.dumps(sorted(arrived))),
     )
-    if row is None or row[0] is None:
-        return float("-inf")
-    return (float(row[0]) - _UNIX_EPOCH_JULIAN_DAY) * 86_400_000
-
-
-_UNIX_EPOCH_JULIAN_DAY: Final = 2440587.5
+    return row is not None

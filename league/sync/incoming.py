@@ -135,9 +135,10 @@ def apply_page(league: League, store: str, records: Sequence[SyncRecord]) -> Pag
     if trust.changed:
         _retry_held(league, result, touched, trust)
     if result.inserted or result.aliased:
-        _retry_pending(league, store, result, touched)
+        _retry_pending(league, store, result, touched, trust.arrivals)
     if touched:
         refresh_entries(league.conn, touched)
+        trust.arrivals.settle(league)
     return result
 
 
@@ -147,10 +148,12 @@ def retry_waiting(league: League, store: str) -> PageResult:
     record refers to may have been made here (a racer added locally, say)."""
     result = PageResult()
     touched: list[str] = []
-    _retry_held(league, result, touched, _Trust(Roster.load(league), changed=True))
-    _retry_pending(league, store, result, touched)
+    trust = _Trust(Roster.load(league), changed=True)
+    _retry_held(league, result, touched, trust)
+    _retry_pending(league, store, result, touched, trust.arrivals)
     if touched:
         refresh_entries(league.conn, touched)
+        trust.arrivals.settle(league)
     return result
 
 
@@ -159,9 +162,11 @@ def retry_held(league: League) -> PageResult:
     after the roster changed here: an organiser admitted a key on this machine)."""
     result = PageResult()
     touched: list[str] = []
-    _retry_held(league, result, touched, _Trust(Roster.load(league), changed=True))
+    trust = _Trust(Roster.load(league), changed=True)
+    _retry_held(league, result, touched, trust)
     if touched:
         refresh_entries(league.conn, touched)
+        trust.arrivals.settle(league)
     return result
 
 
@@ -349,10 +354,12 @@ def _count(result: PageResult, record: SyncRecord, outcome: Outcome) -> None:
         result.conflicts.append(f"{record.kind} {record.record_id}")
 
 
-def _retry_pending(league: League, store: str, result: PageResult, touched: list[str]) -> None:
+def _retry_pending(
+    league: League, store: str, result: PageResult, touched: list[str], arrivals: Arrivals
+) -> None:
     """Insert waiting records whose references have arrived, until nothing more moves."""
     progress = True
-    roster, arrivals = Roster.load(league), Arrivals()
+    roster = Roster.load(league)
     while progress:
         progress = False
         waiting = sorted(pending_records(league), key=lambda r: (INSERT_ORDER[r.kind], r.record_id))
@@ -424,7 +431,7 @@ def _apply(
     store_record(league, table, record.record_id, record.body, refresh=False)
     if record.kind in _RESULT_KINDS:
         touched.append(record.record_id)
-        arrivals.note(league, record)  # a tie is not won by a date written early
+        arrivals.note(record)  # a tie is not won by a date written early
     elif record.kind == "correction" and record.body["kind"] == "disqualify_lap":
         touched.append(str(record.body["target"]))
     return "inserted"

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from typing import Any, Final, Literal
 
 from league.local_racer import RACER_SETTING
@@ -101,14 +102,19 @@ def is_here(league: League, record_id: str, content_hash: str) -> bool:
     return row is not None
 
 
-def models(league: League, model_hash: str) -> list[ModelInfo]:
-    """The model records for `model_hash`, in the order this league first held them."""
+def models(
+    league: League, model_hash: str, revoked: frozenset[str] = frozenset()
+) -> list[ModelInfo]:
+    """The model records for `model_hash`, in the order this league first held them, but
+    those signed by a `revoked` key (they count for nothing, as everything it signed)."""
     return [
         ModelInfo(*row)
         for row in league.query(
-            "SELECT record_id, racer, model_name, model_hash, registered_at FROM sync_models "
-            "WHERE model_hash = ? ORDER BY seen",
-            (model_hash,),
+            "SELECT record_id, racer, model_name, model_hash, registered_at FROM sync_models m "
+            "WHERE model_hash = ? AND NOT EXISTS (SELECT 1 FROM sync_seals s WHERE s.kind = ? "
+            "AND s.record_id = m.record_id AND s.signer IN (SELECT value FROM json_each(?))) "
+            "ORDER BY seen",
+            (model_hash, MODEL_KIND, json.dumps(sorted(revoked))),
         )
     ]
 
@@ -203,7 +209,7 @@ def endorse_owners(league: League, signer: str) -> int:
     when pushed, of the first model record this machine saw for each model hash. A machine
     pulling the store afresh sees every claim at once and cannot tell which came first; it
     takes an organiser's record over any racer's (`owner`)."""
-    made = 0
+    made, roster = 0, Roster.load(league)
     with league.transaction():
         rows = league.query(
             "SELECT m.model_hash FROM sync_models m GROUP BY m.model_hash HAVING NOT EXISTS "
@@ -212,7 +218,7 @@ def endorse_owners(league: League, signer: str) -> int:
             (MODEL_KIND, signer),
         )
         for (model_hash,) in rows:
-            first = owner(league, model_hash, frozenset({signer}))
+            first = owner(league, model_hash, roster)
             if first is None or _unsealed_here(league, model_hash):
                 continue
             body = {
@@ -237,10 +243,11 @@ def _unsealed_here(league: League, model_hash: str) -> bool:
     return row is not None
 
 
-def owner(league: League, model_hash: str, organisers: frozenset[str]) -> ModelInfo | None:
+def owner(league: League, model_hash: str, roster: Roster) -> ModelInfo | None:
     """Whose `model_hash` is: the first model record an organiser signed, else the first
     this league saw (any racer's)."""
-    claims = models(league, model_hash)
+    claims = models(league, model_hash, frozenset(roster.revoked))
+    organisers = roster.organisers
     if not claims:
         return None
     signed = {
@@ -265,8 +272,6 @@ def _sealed_by_other(league: League, kind: str, record_id: str, signer: str) -> 
 
 
 def _iso(ms: int) -> str:
-    from datetime import UTC, datetime
-
     return datetime.fromtimestamp(ms / 1000, UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-3] + "Z"
 
 
@@ -292,8 +297,8 @@ def verdict(league: League, record: SyncRecord, roster: Roster) -> Verdict | Non
     copied = _copied(league, record)
     if copied is not None:
         return Verdict("refuse", copied)
-    claims = models(league, model_hash)
-    first = owner(league, model_hash, frozenset(roster.organisers))
+    claims = models(league, model_hash, frozenset(roster.revoked))
+    first = owner(league, model_hash, roster)
     if first is not None and not same_racer(first.racer, racer):
         return Verdict(
             "refuse",
