@@ -102,7 +102,22 @@ from sim.track_catalog import DEFAULT_TRACK, resolve_track
 # In the narrow panes the optional columns (keep 1 and 2) give way before a name loses its end.
 NAME = Col("", keep=3, shrink_to=10, collapses=False)
 NIGHT_COLUMNS = (replace(NAME, label="night"), Col("track", keep=1, shrink_to=8), Col("state"))
-HEAT_COLUMNS = ("#", replace(NAME, label="racer"), Col("car", keep=1, shrink_to=8), "result")
+# The car says who is physical: it loses the end of its name, never its column.
+HEAT_COLUMNS = (
+    "#",
+    replace(NAME, label="racer"),
+    Col("car", keep=2, shrink_to=8, collapses=False),
+    Col("result", keep=1, shrink_to=8, collapses=False),
+)
+PHYSICAL_RULES_NOTE = (
+    "A physical car is timed by hand: the physical rules (no time added per reset) are "
+    "how DeepRacer's own events time one; this night keeps the rules it opened with."
+)
+TRAINING_NOTE = "{model} is still training: its heat races the policy it has when the heat runs."
+MIXED_STANDINGS_NOTE = (
+    "physical and simulated laps ranked together here; the League keeps physical laps "
+    "on a board of their own"
+)
 RACER = replace(NAME, label="racer")
 
 
@@ -201,8 +216,9 @@ class NewNightDialog(FormDialog[NightRequest]):
             )
             yield Static(
                 Text(
-                    "The rules are frozen when the night opens. Enter moves to the next "
-                    "field; Ctrl+S opens the night."
+                    "The rules are frozen when the night opens; for real cars timed by "
+                    "hand, choose the physical rules. Enter moves to the next field; "
+                    "Ctrl+S opens the night."
                 ),
                 classes="dialog-body",
             )
@@ -287,12 +303,23 @@ class AddEntrantDialog(FormDialog[str]):
     """A racer and what they race: `reference`, a garage model, a bundle file or a physical
     car."""
 
-    def __init__(self, models: list[str], add: Callable[[EntrantRequest], str]) -> None:
+    def __init__(
+        self,
+        models: list[str],
+        add: Callable[[EntrantRequest], str],
+        *,
+        training: frozenset[str] = frozenset(),
+        physical_rules: bool = True,
+    ) -> None:
         """`add` enters the racer (blocking, in this dialog's worker) and says so, or raises
-        what the league refuses: the dialog stays open with what was typed and says why."""
+        what the league refuses: the dialog stays open with what was typed and says why.
+        `training`: the models training now (entered with a warning); `physical_rules`:
+        the night races under the physical preset (else a physical car gets a note)."""
         super().__init__()
         self._models = models
         self._add = add
+        self._training = training
+        self._physical_rules = physical_rules
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
@@ -309,7 +336,19 @@ class AddEntrantDialog(FormDialog[str]):
                 suggester=NameOrPathSuggester([REFERENCE_NAME, PHYSICAL, *self._models]),
                 id="entrant-model",
             )
+            yield Static("", id="entrant-note", classes="dialog-body")
             yield from self.form_buttons("Add")
+
+    @on(Input.Changed, "#entrant-model")
+    def _note(self, event: Input.Changed) -> None:
+        """What a host should know about this car before entering it (it is still allowed)."""
+        model = event.value.strip()
+        note = ""
+        if model in self._training:
+            note = TRAINING_NOTE.format(model=model)
+        elif is_physical(model) and not self._physical_rules:
+            note = PHYSICAL_RULES_NOTE
+        self.query_one("#entrant-note", Static).update(Text(note, style="yellow"))
 
     def on_mount(self) -> None:
         self.query_one("#entrant-racer", Input).focus()
@@ -554,6 +593,8 @@ class NightsScreen(RacerScreen[None]):
     DEFAULT_CSS = """
     NightsScreen #nights-body { height: 1fr; }
     NightsScreen #nights-list { width: 30; padding: 0 1; }
+    NightsScreen.-narrow #nights-list { width: 20; }
+    NightsScreen #standings-note { height: auto; color: $warning; }
     NightsScreen #nights { height: 1fr; }
     NightsScreen #night-view { width: 1fr; padding: 0 1; }
     NightsScreen #night-rules { height: auto; }
@@ -587,6 +628,7 @@ class NightsScreen(RacerScreen[None]):
                 yield Label("Entrants and heats, in running order", classes="field-label")
                 yield FittedTable(id="heats", cursor_type="row", zebra_stripes=True)
                 yield Label("Standings", id="standings-title", classes="field-label")
+                yield Static("", id="standings-note", classes="-hidden")
                 yield FittedTable(id="standings", cursor_type="row", zebra_stripes=True)
                 # A closed night of a season: where it left the season, under its own.
                 yield Label("", id="season-title", classes="field-label -hidden")
@@ -595,6 +637,10 @@ class NightsScreen(RacerScreen[None]):
 
     def on_mount(self) -> None:
         self.reload()
+
+    def on_resize(self) -> None:
+        # Below 80 columns the night's own tables need the room more than the list does.
+        self.set_class(self.size.width < 80, "-narrow")
 
     # --- loading -----------------------------------------------------------------------
 
@@ -723,6 +769,10 @@ class NightsScreen(RacerScreen[None]):
         title = self.query_one("#standings-title", Label)
         closed = "final " if state.night.closed else ""
         title.update(Text(f"Night standings ({closed}with points)"))
+        kinds = {s.entry.physics for s in state.standings}  # each its own League board
+        note = self.query_one("#standings-note", Static)
+        note.update(Text(MIXED_STANDINGS_NOTE[:1].upper() + MIXED_STANDINGS_NOTE[1:] + "."))
+        note.set_class(len(kinds) < 2, "-hidden")
         score_title = SCORE_TITLES[state.night.rules.ranking]
         rows: list[list[str | Text]] = [
             [
@@ -825,8 +875,16 @@ class NightsScreen(RacerScreen[None]):
     def action_add_entrant(self) -> None:
         night = self._current("add entrants")
         if night is not None:
-            models = [folder.name for folder in list_models() if folder.has_policy()]
-            dialog = AddEntrantDialog(models, partial(self._add_entrant, night))
+            folders = [folder for folder in list_models() if folder.has_policy()]
+            models = [folder.name for folder in folders]
+            training = frozenset(folder.name for folder in folders if folder.is_training())
+            physical = night.rules == preset_rules(PHYSICAL)
+            dialog = AddEntrantDialog(
+                models,
+                partial(self._add_entrant, night),
+                training=training,
+                physical_rules=physical,
+            )
             self.app.push_screen(dialog, partial(self._entrant_added, night))
 
     def _entrant_added(self, night: Night, said: str | None) -> None:
