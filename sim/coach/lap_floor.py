@@ -22,8 +22,9 @@ able than any DeepRacer simulator's, on a road widened by what DeepRacer lets a 
   slip, understeer or steering lag (every simulator's car turns wider and later).
 - The coach's line is the fastest line it finds, not a proven fastest one: the floor is
   `SLACK` under that line's flying lap, so a line a little better than the one found
-  still clears it. A line the generous car cannot drive either (a road the optimiser found
-  no line through) gives no floor here: the caller falls back to the infield's hull.
+  still clears it; where the line turns tighter than even this car can, it is let round
+  at its tightest turn's speed. A road the solver finds no line through at all gives no
+  floor here: the caller falls back to the infield's hull.
 
 On re:Invent 2018 (reinvent_base) the floor is about 4.2 s: the coach's flying limit lap
 for racer-tui's car is 4.87 s, a trained model's best about 5.3 s, DeepRacer's real
@@ -45,12 +46,13 @@ from sim.atomic import write_text_atomic
 from sim.car import DEEPRACER_CAR, CarSpec
 from sim.coach.limits import CarLimits, SpeedLevel
 from sim.coach.racing_line import SPACING, RoadFrame, optimise_line, tightest_turn
+from sim.coach.speed_profile import driven_corner_speeds, flying_profile
 from sim.home import data_home
 from sim.reference_driver import loop_curvature
 from sim.track import Track
 
 # Bump with any change that moves a floor: cached floors of another version are not read.
-FLOOR_FORMAT: Final = 1
+FLOOR_FORMAT: Final = 2
 SLACK: Final = 0.95
 GRIP: Final = 10.0  # m/s^2 sideways
 ACCELERATION: Final = 15.0  # m/s^2, speeding up and braking alike
@@ -95,16 +97,20 @@ def widened_frame(track: Track, reach: float) -> RoadFrame:
 
 
 def compute_floor(track: Track, car: CarSpec = DEEPRACER_CAR) -> float | None:
-    """The floor worked out afresh (`lap_floor` caches it); None when no line the able car
-    can drive was found."""
+    """The floor worked out afresh (`lap_floor` caches it); None when the solver found no
+    line at all. Where the line found turns tighter than the able car can (a hairpin the
+    optimiser did not quite open up), the car is let round it at its tightest turn's speed
+    rather than at a crawl: a floor errs low, never high."""
     limits = floor_limits(car)
     try:
         fit = optimise_line(track, limits, frame=widened_frame(track, cutting_reach(car)))
     except (ValueError, ArithmeticError):  # numpy's and the solver's: no line either
         return None
-    seconds = fit.profile.lap_seconds
-    drivable = float(np.max(np.abs(fit.curvature))) <= tightest_turn(limits)
-    if not drivable or not math.isfinite(seconds) or seconds <= 0.0:
+    cap = tightest_turn(limits)
+    steps = fit.profile.steps
+    corner = driven_corner_speeds(np.clip(fit.curvature[:-1], -cap, cap), steps, limits)
+    seconds = flying_profile(corner, steps, limits).lap_seconds
+    if not math.isfinite(seconds) or seconds <= 0.0:
         return None
     return SLACK * seconds
 
