@@ -17,7 +17,11 @@ Tables (migration 3 in league.migrations):
 - `sync_pending`: valid pulled records waiting for a record they refer to (a submission
   that arrived before its racer); retried after every page.
 - `sync_aliases`: shared records that lost the identity rule (see identity.py).
-- `sync_profiles`, `sync_bundles`: the sync-level kinds (profiles.py, bundle_sync.py).
+- `sync_profiles`, `sync_bundles`, `sync_models`: the sync-level kinds (profiles.py,
+  bundle_sync.py, models.py; a model record's `seen` is the order this league first
+  held it in).
+- `sync_first_seen`: when this league first saw a pulled result that would have won a
+  tie by an early date; it ranks from then (dates.py).
 
 Every function here runs inside the caller's transaction.
 """
