@@ -5,15 +5,17 @@ a night's heats), by the track's content hash (`fastest_possible_lap_by_hash`):
 
 - Laps of a simulator (racer-tui's physics or DeepRacer's): the limit lap of a car more
   able than any DeepRacer car, under DeepRacer's rules (the road widened by what a car
-  may cut, 4 m/s), `sim.coach.lap_floor`. Where the coach finds no line for a track, the
-  hull floor below.
+  may cut, 4 m/s), `sim.coach.lap_floor`. Where the solver finds no line for a track at
+  all, the hull floor below.
 - Laps of a physical car, timed by hand or by a timer on a real track: the shortest loop
   round the track's infield (the perimeter of the infield's convex hull: any closed path
   around it is at least that long) at `PHYSICAL_TOP_SPEED`.
 - A track this machine does not have: no floor can be said (None).
 
 The hull floor is the shortest loop at DeepRacer's top speed (4 m/s): generous, so a fast
-honest lap is never refused, and it still catches a forged "3.000 s" on a 17.8 m track.
+honest lap is never refused (a car cutting the infield by what it may, 0.115 m, saves at
+most 0.7 m of that loop, far less than its corners cost it), and it still catches a
+forged "3.000 s" on a 17.8 m track.
 """
 
 from __future__ import annotations
