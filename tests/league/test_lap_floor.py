@@ -21,6 +21,7 @@ from league.sync.record import make_record
 from league.sync.validate import check_record
 from league.timekeeper.heat import TimekeeperError, TimekeptHeat, physical_floor
 from racer_tui.cli import main
+from sim.ids import new_id
 from sim.race.engine import run_race
 from sim.race.physics import PHYSICAL
 from sim.race.plausible import fastest_possible_lap
@@ -132,7 +133,7 @@ def test_a_physical_heat_has_a_floor_of_its_own(league: League, floor: float) ->
     record_race(league, result)
     # A lap that counts under a real car's floor is refused, as any other lap is.
     laps = (replace(result.laps[0], time_seconds=2.0, raw_seconds=2.0), *result.laps[1:])
-    forged = replace(result, result_id=race_result("ana", [12.0]).result_id, laps=laps)
+    forged = replace(result, result_id=new_id(), laps=laps)
     with pytest.raises(LeagueError, match=r"lap 1 of 2\.000 s is faster than a real car can"):
         record_race(league, forged)
 
