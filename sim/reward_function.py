@@ -572,7 +572,7 @@ def _failure(error: BaseException, display: str, filename: str, who: str) -> Rew
         problem = f"{who} calls sys.exit() ({_describe_exception(error)}), which ends a process"
         return RewardFunctionError(display, problem, line, "remove the exit() call")
     problem = f"{who} raised {_describe_exception(error)}"
-    if isinstance(error, PermissionError) and reward_sandbox.landlock_status() == "applied":
+    if isinstance(error, PermissionError) and reward_sandbox.files_guarded():
         advice = (
             "a reward function may read only Python's files and its own folder, and write nowhere"
         )

@@ -27,6 +27,7 @@ contains it:
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import resource
 import signal
@@ -167,11 +168,56 @@ def _refuse(action: str) -> None:
     raise refusal
 
 
+# Events that change files; "open" is judged by its mode, listing a folder by its place.
+_FILE_CHANGES = frozenset(
+    {
+        "os.remove",
+        "os.rename",
+        "os.mkdir",
+        "os.rmdir",
+        "os.truncate",
+        "os.chmod",
+        "os.chown",
+        "os.link",
+        "os.symlink",
+        "os.utime",
+    }
+)
+_WRITE_FLAGS = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_TRUNC | os.O_APPEND
+_readable: tuple[str, ...] | None = None  # where a reward may read; None: not guarded
+
+
 def _audit(event: str, args: tuple[Any, ...]) -> None:
-    del args
     what = _FORBIDDEN.get(event)
-    if what is not None and _in_reward_call():
-        _refuse(f"{what} ({event})")
+    if what is not None:
+        if _in_reward_call():
+            _refuse(f"{what} ({event})")
+    elif (
+        _readable is not None
+        and (event in ("open", "os.listdir", "os.scandir") or event in _FILE_CHANGES)
+        and _in_reward_call()
+    ):
+        _judge_file(event, args)
+
+
+def _judge_file(event: str, args: tuple[Any, ...]) -> None:
+    """A PermissionError, as the system gives one, for a file a reward may not touch (the
+    same files Landlock closes off, for systems and moments it does not cover)."""
+    path = args[0] if args else None
+    if isinstance(path, int) or path is None:
+        return  # an open descriptor, or the working folder: nothing new is reached
+    real = os.path.realpath(os.fsdecode(path))
+    if real == os.devnull:
+        return
+    writing = event in _FILE_CHANGES
+    if event == "open":
+        mode, flags = (args[1], args[2]) if len(args) >= 3 else (None, 0)
+        writing = bool(isinstance(mode, str) and set(mode) & set("wax+")) or bool(
+            isinstance(flags, int) and flags & _WRITE_FLAGS
+        )
+    assert _readable is not None
+    if writing or not any(real == root or real.startswith(root + os.sep) for root in _readable):
+        raise PermissionError(errno.EACCES, "a reward function may not reach this file", path)
 
 
 def _exit_guard(name: str, real: Callable[..., Any]) -> Callable[..., Any]:
@@ -181,6 +227,21 @@ def _exit_guard(name: str, real: Callable[..., Any]) -> Callable[..., Any]:
         return real(*args)
 
     return guarded
+
+
+def guard_files(reward_file: str | Path | None) -> None:
+    """From now on, a reward call may read only where `close_off_files` lets it, and write
+    nowhere (by the audit hook: the file guard that holds where Landlock does not)."""
+    global _readable  # noqa: PLW0603
+    reads = [*python_tree(), *(Path(path) for path in SYSTEM_READS)]
+    if reward_file is not None and Path(reward_file).is_file():
+        reads.append(Path(os.path.realpath(reward_file)).parent)
+    _readable = tuple(os.path.realpath(path) for path in reads)
+
+
+def files_guarded() -> bool:
+    """Whether a reward in this process is kept from files (Landlock or the file guard)."""
+    return _readable is not None or _landlock_status == "applied"
 
 
 def guard_reward_calls() -> None:
@@ -299,11 +360,16 @@ def landlock_status() -> str:
 
 
 def python_tree() -> list[Path]:
-    """Where Python, its libraries and racer-tui are: a reward's lazy imports read there."""
+    """Where Python, its libraries and racer-tui are: a reward's lazy imports read there.
+    Not every sys.path entry: `python -m` puts the working folder there, which may be the
+    racer's home."""
+    import site
+
     roots = {sys.prefix, sys.exec_prefix, sys.base_prefix, sys.base_exec_prefix}
-    roots.update(entry for entry in sys.path if entry and os.path.isdir(entry))
+    roots.update(site.getsitepackages())
+    roots.add(site.getusersitepackages())
     roots.add(str(Path(__file__).resolve().parent.parent))  # racer-tui's own packages
-    return sorted({Path(os.path.realpath(root)) for root in roots})
+    return sorted({Path(os.path.realpath(root)) for root in roots if os.path.isdir(root)})
 
 
 SYSTEM_READS = (
@@ -368,6 +434,7 @@ def install_call_limit(
     """Time every reward call in this process; a call that cannot be interrupted is reported
     through `report` (from the watchdog thread) and ends the process."""
     limit = reward_limit.install(seconds)
+    guard_files(reward_file)
     _own_threads.update(  # the watchdog, started by the line above before any racer code
         thread.ident
         for thread in threading.enumerate()

@@ -5,6 +5,7 @@ the file and line, and no process of the check outlives it."""
 
 from __future__ import annotations
 
+import subprocess
 import sys
 import textwrap
 import uuid
@@ -181,3 +182,63 @@ def test_the_check_leaves_no_process_of_its_own() -> None:
     check_reward_source("def reward_function(params):\n    return 1.0\n", "reward.py")
     after = {child.pid for child in psutil.Process().children(recursive=True)}
     assert after <= before
+
+
+GUARDED_CALL = """\
+import subprocess
+import sys
+from sim import reward_sandbox
+from sim.reward_function import RewardFunctionError, load_reward_function
+reward_sandbox.install_call_limit(5.0, sys.argv[1], lambda error: None)
+reward_sandbox.guard_reward_calls()
+try:
+    print(load_reward_function(sys.argv[1])({}))
+except RewardFunctionError as error:
+    print(error)
+"""
+
+
+def guarded_call(reward: Path, source: str) -> str:
+    """What calling `source` says in a process with the audit guard and no Landlock (as
+    on a system without it, or while a training loads the file)."""
+    reward.write_text(textwrap.dedent(source))
+    done = subprocess.run(
+        [sys.executable, "-c", GUARDED_CALL, str(reward)],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=60,
+    )
+    return done.stdout.strip()
+
+
+def test_the_file_guard_holds_where_landlock_does_not(tmp_path: Path) -> None:
+    secret = tmp_path / "home" / ".ssh" / "id_ed25519"
+    secret.parent.mkdir(parents=True)
+    secret.write_text("secret")
+    racer = tmp_path / "racer"
+    racer.mkdir()
+    (racer / "weights.txt").write_text("2.5")
+    reward = racer / "reward.py"
+    reads = f"def reward_function(params):\n    return float(len(open({str(secret)!r}).read()))\n"
+    said = guarded_call(reward, reads)
+    assert said.startswith(f"{reward} line 2: reward_function raised PermissionError"), said
+    outside = tmp_path / "written.txt"
+    for writes in (
+        f"def reward_function(params):\n    open({str(outside)!r}, 'w')\n",
+        f"import os\ndef reward_function(params):\n    os.mkdir({str(outside)!r})\n",
+    ):
+        assert "raised PermissionError" in guarded_call(reward, writes)
+    assert not outside.exists()
+    listing = (
+        "import os\n"
+        "def reward_function(params):\n"
+        f"    return len(os.listdir({str(secret.parent)!r}))\n"
+    )
+    assert "raised PermissionError" in guarded_call(reward, listing)
+    beside = (
+        "import numpy, scipy.interpolate\n"
+        "def reward_function(params):\n"
+        f"    return float(open({str(racer / 'weights.txt')!r}).read())\n"
+    )
+    assert guarded_call(reward, beside) == "2.5"
