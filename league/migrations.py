@@ -557,6 +557,14 @@ CREATE TABLE sync_first_seen (
 ) WITHOUT ROWID
 """
 
+# Version 14: a pulled result is checked against every other racer's result with its model
+# and seed (a race) or its evaluation files (a submission), so it is not a copy
+# (league.sync.models): found through an index each, not by reading every result.
+COPY_LOOKUPS = """
+CREATE INDEX races_model ON races(model_hash, seed);
+CREATE INDEX submissions_fingerprint ON submissions(fingerprint)
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -571,6 +579,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("race types of submissions", _script(SUBMISSION_RACE_TYPES)),
     Migration("unverifiable replays", _script(UNVERIFIABLE_REPLAYS)),
     Migration("model records", _script(MODEL_RECORDS)),
+    Migration("copy lookups", _script(COPY_LOOKUPS)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -187,23 +187,29 @@ class Arrivals:
             refresh_entries(league.conn, moved)
 
 
-_SAME_SCORE: Final = " OR ".join(
-    f"(o.score_{method.value} = e.score_{method.value} "
-    f"AND o.offtracks_{method.value} = e.offtracks_{method.value})"
+# Another racer's row on the same board (league.entries: each racer's best per ranking
+# method, track, race type and physics) with the same score, off-tracks and valid laps and
+# a later date: the board's index finds it by its exact score.
+_TIE_ON_BOARD: Final = " UNION ALL ".join(
+    "SELECT 1 FROM entries e JOIN board o "
+    f"ON o.method = '{method.value}' AND o.track_hash = e.track_hash "
+    "AND o.race_type = e.race_type AND o.physics = e.physics AND o.unscored = 0 "
+    f"AND o.score = e.score_{method.value} "
+    f"AND o.scoring_offtracks = e.offtracks_{method.value} "
+    "AND o.valid_laps = e.valid_laps AND o.recorded_at > e.recorded_at "
+    "AND o.racer <> e.racer "
+    "WHERE e.entry_id = ?1 AND e.recorded_at < ?2 "
+    "AND o.entry_id NOT IN (SELECT value FROM json_each(?3))"
     for method in RankingMethod
 )
 
 
 def _wins_tie_by_date(league: League, entry_id: str, arrived: set[str], late: str) -> bool:
-    """Whether `entry_id`, dated before `late`, ties another racer's result held before
-    (not in `arrived`) on its board under some ranking method, and ranks ahead of it by
-    its earlier date."""
+    """Whether `entry_id`, dated before `late`, ties another racer's best result held
+    before (not in `arrived`) on its board under some ranking method, and would rank
+    ahead of it by its earlier date."""
     row = league.query_one(
-        "SELECT 1 FROM entries e JOIN entries o ON o.track_hash = e.track_hash "
-        "AND o.race_type = e.race_type AND o.physics = e.physics AND o.racer <> e.racer "
-        "AND o.valid_laps = e.valid_laps AND o.recorded_at > e.recorded_at "
-        f"WHERE e.entry_id = ? AND e.recorded_at < ? AND ({_SAME_SCORE}) "
-        "AND o.entry_id NOT IN (SELECT value FROM json_each(?)) LIMIT 1",
+        f"SELECT 1 FROM ({_TIE_ON_BOARD}) LIMIT 1",
         (entry_id, late, json.dumps(sorted(arrived))),
     )
     return row is not None
