@@ -12,7 +12,7 @@ import pytest
 
 import sim.coach.lap_floor as floor_module
 from sim.car import DEEPRACER_CAR
-from sim.coach.lap_floor import cutting_reach, lap_floor, widened_frame
+from sim.coach.lap_floor import cut_loop_metres, cutting_reach, lap_floor, widened_frame
 from sim.coach.limit_lap import limit_lap
 from sim.coach.racing_line import road_frame
 from sim.race.physics import PHYSICAL
@@ -58,12 +58,15 @@ def test_the_floor_on_reinvent_2018_refuses_the_issues_forgeries_and_no_honest_l
     assert floor < reference_lap(track).lap_time
 
 
-@pytest.mark.parametrize("name", ["hairpin-circuit", "beginner-oval", "bowtie-chicane"])
+@pytest.mark.parametrize("name", ["hairpin-circuit", "beginner-oval", "bowtie-chicane", "speedway"])
 def test_honest_laps_clear_the_floor_on_tracks_of_every_shape(name: str) -> None:
     track = resolve_track(name)
     floor = fastest_possible_lap(track)
     assert 0.0 < floor < limit_lap(track).flying_seconds
     assert floor < reference_lap(track).lap_time
+    # Never under the shortest loop round the infield less the cut, at 4.08 m/s.
+    assert floor >= cut_loop_metres(track, cutting_reach()) / 4.08 - 1e-9
+    assert cut_loop_metres(track, cutting_reach()) < shortest_loop_metres(track)
 
 
 def test_the_floor_is_worked_out_once_then_read_from_memory_and_from_disk(
