@@ -107,7 +107,7 @@ class ImpossibleLap:
 
     def sentence(self, track: str) -> str:
         """ "lap 1 of 3.900 s is faster than any DeepRacer car can drive reinvent_base (no
-        lap under 4.220 s is possible there: under DeepRacer's rules at 4 m/s)"."""
+        lap under 4.149 s is possible there: under DeepRacer's rules at 4 m/s)"."""
         who = "a real car" if self.physical else "any DeepRacer car"
         return (
             f"lap {self.number} of {self.seconds:.3f} s is faster than {who} can drive {track} "
@@ -118,8 +118,9 @@ class ImpossibleLap:
 def first_impossible_lap(
     track_hash: str, physics: str, laps: Iterable[tuple[int, float]]
 ) -> ImpossibleLap | None:
-    """The first of `laps` (number, seconds as driven, penalties left out) quicker than
-    the track's floor for `physics`; None when none is, or the track is not known here."""
+    """The first of `laps` (number, seconds: as driven, or with penalties, which only add)
+    quicker than the track's floor for `physics`; None when none is, or the track is not
+    known here."""
     laps = list(laps)
     if not laps:
         return None
