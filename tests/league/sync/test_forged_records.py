@@ -9,8 +9,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
+from league.sync import restore
 from league.sync.aws import dynamodb_client
 from league.sync.dynamodb_table import record_item
+from league.sync.engine import store_key
 from league.sync.protocol import SPARE_SLOTS
 from league.sync.record import SyncRecord, encode_envelope, make_record
 from league.sync.urls import DynamoDbUrl, parse_store_url
@@ -159,3 +163,27 @@ def test_a_forger_who_fills_every_spare_place_is_named_to_the_maker(
     viewer.sync()
     assert laps_of(viewer, race_id) == []
     assert "signature does not match" in viewer.quarantine()[f"race {race_id}"]
+
+
+def test_a_host_with_many_records_checks_older_ones_in_turn(
+    machines: dict[str, Machine],  # noqa: F811
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    ana, viewer = machines["ana"], machines["viewer"]
+    races = [ana.race("ana", [12.0 + index / 10, 12.5]) for index in range(6)]
+    ana.sync()
+    monkeypatch.setattr(restore, "CHECKS_PER_SYNC", 4)  # the newest 2, and 2 older in turn
+    oldest = races[0]
+    overwrite(ana.url, forgery_of(honest_race(ana, oldest), ana))
+
+    syncs = 0
+    while not laps_of(viewer, oldest) and syncs < 5:
+        ana.sync()
+        viewer.sync()
+        syncs += 1
+
+    own = len(restore._own_records(ana.league, store_key(ana.url), ana.key.public_hex))
+    assert own > 4
+    assert laps_of(viewer, oldest) == [12.0, 12.5]
+    # The 2 newest every sync, the older ones 2 at a time: each within this many syncs.
+    assert syncs <= -(-(own - 2) // 2)
