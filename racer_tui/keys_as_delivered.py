@@ -16,6 +16,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from textual import events
+from textual._xterm_parser import XTermParser
 from textual.app import App
 from textual.keys import REPLACED_KEYS, _character_to_key, _get_unicode_name_from_key
 from textual.pilot import Pilot
@@ -47,6 +48,15 @@ def burst(app: App[Any], keys: Iterable[str]) -> None:
     """Queue every key at once, without letting the app handle any in between."""
     for key in keys:
         _deliver(app, key_event(key))
+
+
+def typed(app: App[Any], text: str) -> None:
+    """Queue `text` as typed on a terminal: read by Textual's own terminal parser, so each
+    character becomes the Key event a terminal driver posts for it (U+202E included, which
+    arrives as key `right_to_left_override` with the character itself)."""
+    for event in XTermParser().feed(text):
+        if isinstance(event, events.Key):
+            _deliver(app, event)
 
 
 def paste(app: App[Any], text: str) -> None:

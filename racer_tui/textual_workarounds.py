@@ -14,6 +14,7 @@ from textual.screen import Screen
 from textual.widgets import OptionList
 
 PATCHED = "_racer_tui_workaround"  # marks a patched method, so no patch is applied twice
+LEAVING = "_racer_tui_leaving"  # a screen whose dismissal waits for the screens above it
 
 
 def apply_workarounds() -> None:
@@ -51,19 +52,36 @@ def _page_keys_wait_for_lines() -> None:
 
 
 def _a_screen_is_dismissed_once() -> None:
-    """Textual 8.2.8: `Screen.dismiss` pops whatever screen is on top, and calls the result
-    callback, even when the screen dismissed is already gone. Two ways out of one dialog
-    queued together (Enter, whose Submitted or OptionSelected message is handled later,
-    then Esc) dismissed it twice: the second took the screen below with it, or raised
-    ScreenStackError when that was a section's own screen. The monkey found it in the
-    command palette (issue 42), and every form dialog had the same race. A screen no longer
-    on the stack is not dismissed again."""
+    """Textual 8.2.8: `Screen.dismiss` pops whatever screen is on top and calls the result
+    callback, whether or not the screen dismissed is the one on top, or still there at all.
+    Two ways out of one dialog queued together (Enter, whose Submitted or OptionSelected
+    message is handled later, then Esc) dismissed it twice: the second took the screen
+    below with it, or raised ScreenStackError when that was a section's own screen (the
+    command palette, found by the monkey in issue 42). And a screen that closes itself
+    while a dialog of its own is open over it (the editor's save finishing while "Discard
+    your changes?" is asked) popped that dialog instead and stayed, its result already
+    given: closing it later raised InvalidStateError. So: a screen no longer on the stack,
+    or already on its way out, is not dismissed again; one under others first closes them
+    (they answer None, as if cancelled), then itself."""
     original = Screen.dismiss
 
     def dismiss(self: Screen[Any], result: Any = None) -> AwaitComplete:
-        if self not in self.app.screen_stack:
+        stack = self.app.screen_stack
+        if self not in stack or getattr(self, LEAVING, False):
             gone: AwaitComplete = AwaitComplete.nothing()  # type: ignore[no-untyped-call]
             return gone
+        if stack[-1] is not self:
+            setattr(self, LEAVING, True)
+            self.pop_until_active()  # queued: the screens above close first
+
+            def close() -> None:
+                setattr(self, LEAVING, False)
+                if self in self.app.screen_stack:
+                    dismiss(self, result)
+
+            self.app.call_later(close)
+            later: AwaitComplete = AwaitComplete.nothing()  # type: ignore[no-untyped-call]
+            return later
         return original(self, result)
 
     setattr(dismiss, PATCHED, True)

@@ -8,21 +8,24 @@ library checks again when the real work runs.
 from __future__ import annotations
 
 import os
+import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar, TypeVar
 
 from rich.text import Text
-from textual import on
+from textual import events, on, work
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
+from textual.message import Message
 from textual.suggester import Suggester
 from textual.widgets import Button, Checkbox, Input, Label, Static
 
-from racer_tui.screens.base import RacerModal, kept_screen
+from racer_tui.screens.base import RacerModal, error_message, kept_screen
 from sim.names import NAME_RULE, is_valid_name
+from sim.remedies import echoed, echoed_path
 
 MAX_PATH_SUGGESTIONS = 200  # a huge folder is not listed in full while typing
 
@@ -32,6 +35,28 @@ def show_problem(line: Static, problem: str) -> None:
     line.set_class(bool(problem), "-shown")
     if problem:  # a long form scrolls at 80x24: bring the sentence into view, once drawn
         line.call_after_refresh(line.scroll_visible, animate=False)
+
+
+class NameInput(Input):
+    """An Input that keeps the invisible characters typed into it (U+202E and the other
+    bidi and format controls), so the field's check refuses them in the same sentence as
+    the command line. Textual's Input drops a typed character that is not printable
+    without a word: `abc<U+202E>def` became `abcdef` in the app while the command line
+    refused it (issue 42). A paste keeps them already."""
+
+    async def _on_key(self, event: events.Key) -> None:
+        character = event.character
+        if character is None or event.is_printable or len(character) != 1:
+            return  # Input's own handler, next in line, does what it always does
+        if unicodedata.category(character) != "Cf":
+            return  # control keys (Esc, Tab, ctrl+…) are keys, not text
+        event.stop()
+        event.prevent_default()  # Input's handler would drop it
+        selection = self.selection
+        if selection.is_empty:
+            self.insert_text_at_cursor(character)
+        else:
+            self.replace(character, *selection)
 
 
 class PathSuggester(Suggester):
@@ -215,7 +240,7 @@ class InputDialog(FormDialog[str]):
         with Vertical(classes="dialog"):
             yield Label(Text(self._title), classes="dialog-title")
             yield Static(Text(self._message), classes="dialog-body")
-            yield Input(
+            yield NameInput(
                 self._value,
                 placeholder=self._placeholder,
                 suggester=PathSuggester() if self._paths else None,
@@ -247,46 +272,83 @@ class ImportRequest:
     untrained: bool = False  # a DeepRacer folder's own weights are left behind
 
 
-class PathNameDialog(FormDialog[ImportRequest]):
-    """A path (→ completes it) and an optional new name, checked by `problem` before the
-    dialog closes: a name that is taken or a file that cannot be used is said under the
-    fields, with what was typed still there to change."""
+WorkT = TypeVar("WorkT")
+
+
+class WorkDone(Message):
+    """A dialog's work (an import) is done: the dialog closes with its result."""
+
+    def __init__(self, result: object) -> None:
+        super().__init__()
+        self.result = result
+
+
+class WorkFailed(Message):
+    """A dialog's work failed: the dialog stays open and says why."""
+
+    def __init__(self, error: BaseException) -> None:
+        super().__init__()
+        self.error = error
+
+
+class PathNameDialog(FormDialog[WorkT]):
+    """A path (→ completes it) and an optional new name, then the work itself (an import)
+    run from the dialog: what stops it (a name that is taken, a file that cannot be used,
+    a folder that is no DeepRacer model) is said under the fields, with what was typed still
+    there to change. The dialog closes with the work's result once it is done.
+
+    `work` runs in a thread; `ask_first`, when given, may ask a question before it runs
+    (`go` runs it; not calling it leaves the dialog open as it was)."""
 
     TITLE = ""
     BODY = ""
     PATH_PLACEHOLDER = ""
     NAME_PLACEHOLDER = ""
     UNTRAINED_LABEL = ""  # a box to leave a model's own weights behind, when not empty
+    CONFIRM_LABEL = "Import"
+    WORKING_LABEL = "Importing…"
 
-    def __init__(self, path: str = "") -> None:
+    def __init__(
+        self,
+        work: Callable[[ImportRequest], WorkT],
+        path: str = "",
+        *,
+        ask_first: Callable[[ImportRequest, Callable[[ImportRequest], None]], None] | None = None,
+    ) -> None:
         super().__init__()
+        self._work = work
         self._path = path
+        self._ask_first = ask_first
+        self.working = False
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
             yield Label(self.TITLE, classes="dialog-title")
             yield Static(self.BODY, classes="dialog-body")
-            yield Input(
+            yield NameInput(
                 self._path,
                 placeholder=self.PATH_PLACEHOLDER,
                 suggester=PathSuggester(),
                 id="path",
             )
-            yield Input(placeholder=self.NAME_PLACEHOLDER, id="name")
+            yield NameInput(placeholder=self.NAME_PLACEHOLDER, id="name")
             if self.UNTRAINED_LABEL:
                 yield Checkbox(self.UNTRAINED_LABEL, id="untrained", compact=True)
-            yield from self.form_buttons("Import")
+            yield from self.form_buttons(self.CONFIRM_LABEL)
 
     def on_mount(self) -> None:
         self.query_one("#path", Input).focus()
 
     def problem(self, path: str, name: str | None) -> str | None:
-        """What is wrong with the path or the name, or None."""
+        """What is wrong with the path or the name, or None (the cheap checks, before the
+        work runs)."""
         raise NotImplementedError
 
     @on(Input.Submitted)
     @on(Button.Pressed, "#confirm")
     def _confirm(self) -> None:
+        if self.working:
+            return
         path = self.query_one("#path", Input).value.strip()
         name = self.query_one("#name", Input).value.strip() or None
         problem = self.problem(path, name)
@@ -294,11 +356,46 @@ class PathNameDialog(FormDialog[ImportRequest]):
             show_problem(self.query_one("#problem", Static), problem)
             return
         boxes = self.query("#untrained").results(Checkbox)
-        untrained = any(box.value for box in boxes)
-        self.dismiss(ImportRequest(path, name, untrained))
+        request = ImportRequest(path, name, any(box.value for box in boxes))
+        if self._ask_first is not None:
+            self._ask_first(request, self._start)
+        else:
+            self._start(request)
+
+    def _start(self, request: ImportRequest) -> None:
+        self._set_working(True)
+        self._run(request)
+
+    def _set_working(self, working: bool) -> None:
+        self.working = working
+        confirm = self.query_one("#confirm", Button)
+        confirm.label = self.WORKING_LABEL if working else self.CONFIRM_LABEL
+        confirm.disabled = working
+        self.query_one("#cancel", Button).disabled = working
+
+    @work(thread=True, exclusive=True, group="dialog-work", exit_on_error=False)
+    def _run(self, request: ImportRequest) -> None:
+        try:
+            result: object = self._work(request)
+        except Exception as error:  # every failure is said in the dialog, in one sentence
+            self.post_message(WorkFailed(error))
+            return
+        self.post_message(WorkDone(result))
+
+    def on_work_done(self, message: WorkDone) -> None:
+        self.dismiss(message.result)  # type: ignore[arg-type]
+
+    def on_work_failed(self, message: WorkFailed) -> None:
+        self._set_working(False)
+        show_problem(self.query_one("#problem", Static), error_message(message.error))
+        self.query_one("#path", Input).focus()
+
+    def action_cancel(self) -> None:
+        if not self.working:  # an import half done is not left behind unseen
+            super().action_cancel()
 
 
-class ImportDialog(PathNameDialog):
+class ImportDialog(PathNameDialog[WorkT]):
     """A DeepRacer model folder, a .racer-bundle or a car archive, and optionally a name."""
 
     TITLE = "Import a model"
@@ -315,9 +412,12 @@ class ImportDialog(PathNameDialog):
         if not path:
             return "Give the path of a DeepRacer model folder, a .racer-bundle or a .tar.gz file."
         if not _exists(path):
-            return f"{path} does not exist or cannot be read; check the path (→ completes it)."
+            return (
+                f"{echoed_path(path)} does not exist or cannot be read; check the path "
+                "(→ completes it)."
+            )
         if name and not is_valid_name(name):
-            return f"{name!r} cannot be a model name; use {NAME_RULE}."
+            return f"{echoed(name)} cannot be a model name; use {NAME_RULE}."
         return None
 
 

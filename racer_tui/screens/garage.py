@@ -179,6 +179,15 @@ def confirm_someone_elses_code(
     )
 
 
+def import_model_dialog(screen: Screen[Any]) -> ImportDialog[ModelImported]:
+    """The model import dialog, which imports before it closes (asking first about a
+    folder's reward code): what stops an import is said in it, the path kept."""
+    return ImportDialog(
+        import_into_garage,
+        ask_first=lambda request, go: confirm_someone_elses_code(screen, request, go),
+    )
+
+
 def notify_imported(screen: Screen[Any], message: ModelImported) -> None:
     notes = "".join(f"\n• {in_app_words(note)}" for note in message.notes)
     what = "track or reward function" if message.trains else "track"
@@ -483,24 +492,13 @@ class GarageScreen(RacerScreen[None]):
     def action_import_model(self) -> None:
         if self.jobs.busy():
             return
-        self.app.push_screen(ImportDialog(), self._import_requested)
+        self.app.push_screen(import_model_dialog(self), self._imported)
 
-    def _import_requested(self, request: ImportRequest | None) -> None:
-        if request is not None:
-            confirm_someone_elses_code(self, request, self._begin_import)
-
-    def _begin_import(self, request: ImportRequest) -> None:
-        self.jobs.begin(f"Importing {Path(request.path).expanduser().name}", "i")
-        self._import(request)
-
-    @work(thread=True, group="garage-change", exit_on_error=False)
-    def _import(self, request: ImportRequest) -> None:
-        self.post_message(import_into_garage(request))
-
-    def on_model_imported(self, message: ModelImported) -> None:
-        self.jobs.finish(f"Imported {message.name}.")
-        notify_imported(self, message)
-        self.reload(select=message.name)
+    def _imported(self, message: ModelImported | None) -> None:
+        if message is not None:
+            self.jobs.finish(f"Imported {message.name}.")
+            notify_imported(self, message)
+            self.reload(select=message.name)
 
     def action_export_model(self) -> None:
         if self.jobs.busy():

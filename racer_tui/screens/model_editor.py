@@ -59,7 +59,7 @@ from racer_tui.model_form import (
 )
 from racer_tui.reward_map_text import map_text
 from racer_tui.screens.base import RacerScreen
-from racer_tui.screens.dialogs import ask
+from racer_tui.screens.dialogs import NameInput, ask
 from racer_tui.screens.form_select import FormSelect
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from racer_tui.widgets.footer import RacerFooter
@@ -270,7 +270,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
             sensors.append((values.sensor, values.sensor))
         with Horizontal(classes="editor-columns"):
             with VerticalScroll(classes="editor-form"):
-                name = Input(
+                name = NameInput(  # keeps U+202E typed, for the name check to refuse
                     values.name,
                     placeholder="e.g. fast-lap-1",
                     id="name",

@@ -55,12 +55,6 @@ class ReferenceLapTimed(Message):
         self.text = text
 
 
-class TrackImported(Message):
-    def __init__(self, info: TrackInfo) -> None:
-        super().__init__()
-        self.info = info
-
-
 class TracksScreen(RacerScreen[None]):
     """Browse tracks: facts, a map, and the reference driver's lap time."""
 
@@ -162,18 +156,13 @@ class TracksScreen(RacerScreen[None]):
         self.app.push_screen(ModelEditorScreen(track=track.name), self._model_created)
 
     def action_import_track(self) -> None:
-        self.app.push_screen(TrackImportDialog(), self._import_chosen)
+        self.app.push_screen(TrackImportDialog(_import_requested), self._imported)
 
-    def _import_chosen(self, request: ImportRequest | None) -> None:
-        if request is not None:
-            self._import(Path(request.path).expanduser(), request.name)
+    def _imported(self, info: TrackInfo | None) -> None:
+        if info is not None:
+            self.show_imported(info)
 
-    @work(thread=True, exclusive=True, group="track-import", exit_on_error=False)
-    def _import(self, path: Path, name: str | None) -> None:
-        self.post_message(TrackImported(import_track(path, name)))
-
-    def on_track_imported(self, message: TrackImported) -> None:
-        info = message.info
+    def show_imported(self, info: TrackInfo) -> None:
         self.notify(
             f"Imported {info.name}."
             if info.kind == "imported"
@@ -254,7 +243,12 @@ def _raceable_tracks() -> list[TrackInfo]:
     return [info for info in list_tracks() if info.lappable]
 
 
-class TrackImportDialog(PathNameDialog):
+def _import_requested(request: ImportRequest) -> TrackInfo:
+    """Run by the import dialog, in its thread: the file is copied in under its name."""
+    return import_track(Path(request.path).expanduser(), request.name)
+
+
+class TrackImportDialog(PathNameDialog[TrackInfo]):
     """A DeepRacer .npy track file and optionally the name to keep it under; the file is
     read and checked, and the name too, before the dialog closes."""
 

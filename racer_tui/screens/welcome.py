@@ -6,23 +6,19 @@ training track, so there is something moving on screen before anything has been 
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import ClassVar
 
 from rich.text import Text
-from textual import on, work
+from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.widgets import Button, Static
-from textual.worker import Worker
 
 from racer_tui.screens.base import ModelAdded, RacerScreen, ScreenJobs
-from racer_tui.screens.dialogs import ImportDialog, ImportRequest
 from racer_tui.screens.garage import (
     ModelImported,
-    confirm_someone_elses_code,
-    import_into_garage,
+    import_model_dialog,
     notify_imported,
 )
 from racer_tui.screens.model_editor import ModelEditorScreen
@@ -89,29 +85,13 @@ class WelcomeScreen(RacerScreen[None]):
     def action_import_model(self) -> None:
         if self.jobs.busy():
             return
-        self.app.push_screen(ImportDialog(), self._import_requested)
+        self.app.push_screen(import_model_dialog(self), self._imported)
 
-    def _import_requested(self, request: ImportRequest | None) -> None:
-        if request is not None:
-            confirm_someone_elses_code(self, request, self._begin_import)
-
-    def _begin_import(self, request: ImportRequest) -> None:
-        # A DeepRacer folder can take a few seconds: the line says it is running, and
-        # keeps a failure after its notification fades.
-        self.jobs.begin(f"Importing {Path(request.path).expanduser().name}", "i")
-        self._import(request)
-
-    @work(thread=True, group="welcome-import", exit_on_error=False)
-    def _import(self, request: ImportRequest) -> None:
-        self.post_message(import_into_garage(request))
-
-    def on_model_imported(self, message: ModelImported) -> None:
-        self.jobs.finish(f"Imported {message.name}.")
-        notify_imported(self, message)
-        self._model_ready(message.name)
-
-    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
-        self.jobs.worker_changed(event.worker)  # RacerScreen's handler then notifies
+    def _imported(self, message: ModelImported | None) -> None:
+        if message is not None:
+            self.jobs.finish(f"Imported {message.name}.")
+            notify_imported(self, message)
+            self._model_ready(message.name)
 
     def _model_ready(self, name: str | None) -> None:
         if name is not None:

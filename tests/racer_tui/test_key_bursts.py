@@ -4,7 +4,7 @@ between keys), which `Pilot.press` (idle after every key) never reproduced."""
 
 from __future__ import annotations
 
-from textual.widgets import OptionList
+from textual.widgets import Input, OptionList
 
 from racer_tui.app import create_app
 from racer_tui.keys_as_delivered import burst, drain
@@ -108,3 +108,34 @@ async def test_the_editor_form_reads_its_choices_before_the_selects_mount() -> N
     assert levels.chosen == 5
     assert choice_of(levels, 3) == 5
     assert choice_of(Select([("a", "a")], prompt="pick"), "b") == "b"
+
+
+async def test_a_save_that_ends_while_discard_is_asked_closes_the_editor_and_its_question() -> None:
+    # Found by the monkey: ctrl+s, then Esc while the save ran. The save's end closed the
+    # editor, but Textual popped the screen on top (the "Discard your changes?" question)
+    # and left the editor open with its result given; its Discard then raised
+    # InvalidStateError.
+    from racer_tui.screens.dialogs import ConfirmDialog
+    from racer_tui.screens.model_editor import ModelSaved
+
+    new_model("one")
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        await pilot.press("e")
+        await drain(pilot)
+        editor = app.screen
+        assert isinstance(editor, ModelEditorScreen)
+        editor.query_one("#max-minutes", Input).value = "12"  # a change, so that Esc asks
+        await pilot.press("escape")
+        await drain(pilot)
+        assert isinstance(app.screen, ConfirmDialog)
+        editor.post_message(ModelSaved("one", created=False))  # the save ends now
+        await drain(pilot)
+        assert app._exception is None
+        assert isinstance(app.screen, GarageScreen)
+        assert editor not in app.screen_stack
+        burst(app, ["y", "escape"])  # what the racer pressed next reaches the Garage
+        await drain(pilot)
+        assert app._exception is None
+        assert isinstance(app.screen, GarageScreen)

@@ -221,22 +221,33 @@ async def test_import_of_a_missing_path_is_refused_in_the_dialog(tmp_path: Path)
         assert "does not exist" in painted(app.screen.query_one("#problem"))
 
 
-async def test_a_bad_import_is_an_error_notification_not_a_crash(tmp_path: Path) -> None:
+async def test_a_bad_import_is_said_in_the_dialog_with_the_path_kept(tmp_path: Path) -> None:
+    # Issue 42, point 10: the dialog closed on Enter and the failure was a toast; the typed
+    # path was lost and a second Enter opened the editor of the highlighted model.
     (tmp_path / "empty").mkdir()
+    new_model("kept")
     app = create_app(start="garage")
     notes = Notifications(app)
     async with app.run_test(size=(120, 36)) as pilot:
         await settle(pilot)
         await pilot.press("i")
-        app.screen.query_one("#path", Input).value = str(tmp_path / "empty")
+        dialog = app.screen
+        assert isinstance(dialog, ImportDialog)
+        dialog.query_one("#path", Input).value = str(tmp_path / "empty")
         await pilot.press("enter")
         await settle(pilot)
-        assert "has no model_metadata.json" in notes.text("error")
-        assert app.is_running and _names() == []
-        job = " ".join(painted(app.screen.query_one("#garage-job")).split())  # as read
-        assert "Failed at" in job and "has no model_metadata.json" in job
-        assert "Press i to try again." in job
-        assert len([m for m, severity in notes.messages if severity == "error"]) == 1
+        assert app.screen is dialog  # still open, the path still there to correct
+        assert dialog.query_one("#path", Input).value == str(tmp_path / "empty")
+        said = " ".join(painted(dialog.query_one("#problem")).split())
+        assert "has no model_metadata.json" in said
+        assert notes.text("error") == ""
+        await pilot.press("enter")  # a second Enter tries again, in the dialog
+        await settle(pilot)
+        assert app.screen is dialog
+        assert app.is_running and _names() == ["kept"]
+        await pilot.press("escape")
+        await settle(pilot)
+        assert isinstance(app.screen, GarageScreen)
 
 
 async def test_a_second_garage_job_waits_for_the_first() -> None:
