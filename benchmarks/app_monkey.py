@@ -30,7 +30,8 @@ PROGRESS_EVERY = 1_000
 
 
 def report_of(run: MonkeyRun, real_training: bool) -> dict[str, Any]:
-    growth = (run.rss_end_mb - run.rss_start_mb) / max(run.actions, 1) * 1000.0
+    measured = max(run.actions - run.warmup_actions, 1)
+    growth = (run.rss_end_mb - run.rss_after_warmup_mb) / measured * 1000.0
     return {
         "seed": run.seed,
         "actions": run.actions,
@@ -40,7 +41,7 @@ def report_of(run: MonkeyRun, real_training: bool) -> dict[str, Any]:
                 "after_action": crash.action_number,
                 "error": crash.error,
                 "last_actions": crash.recent_actions,
-                "report": str(crash.report) if crash.report else None,
+                "report": crash.report_text or None,
                 "traceback": crash.traceback,
             }
             for crash in run.crashes
@@ -50,6 +51,8 @@ def report_of(run: MonkeyRun, real_training: bool) -> dict[str, Any]:
         "slowest_action": {"action": run.slowest_action, "ms": round(run.slowest_ms, 1)},
         "rss_mb": {
             "start": round(run.rss_start_mb, 1),
+            "after_warmup": round(run.rss_after_warmup_mb, 1),
+            "warmup_actions": run.warmup_actions,
             "end": round(run.rss_end_mb, 1),
             "growth_per_1000_actions": round(growth, 2),
         },
@@ -69,8 +72,16 @@ def print_report(report: dict[str, Any]) -> None:
         ("actions", f"{report['actions']:,}", f"{TARGET_ACTIONS:,}"),
         ("crashes", str(len(crashes)), str(TARGET_CRASHES)),
         ("slowest action", f"{slowest['ms']:,.0f} ms  ({slowest['action']})", ""),
-        ("RSS start / end", f"{rss['start']:.0f} / {rss['end']:.0f} MB", "flat"),
-        ("RSS growth per 1,000 actions", f"{rss['growth_per_1000_actions']:+.2f} MB", "flat"),
+        (
+            f"RSS start / after {rss['warmup_actions']} actions / end",
+            f"{rss['start']:.0f} / {rss['after_warmup']:.0f} / {rss['end']:.0f} MB",
+            "flat",
+        ),
+        (
+            "RSS growth per 1,000 actions after",
+            f"{rss['growth_per_1000_actions']:+.2f} MB",
+            "flat (soak: < 1 MB)",
+        ),
         ("apps started (after a quit or crash)", str(report["apps_started"]), ""),
         ("wall time", f"{report['wall_seconds']:,.0f} s", ""),
     ]
@@ -82,8 +93,7 @@ def print_report(report: dict[str, Any]) -> None:
     for crash in crashes:
         print(f"\ncrash after action {crash['after_action']}: {crash['error']}")
         print("  last actions: " + " | ".join(crash["last_actions"]))
-        if crash["report"]:
-            print(f"  the app's report: {crash['report']}")
+        print("  " + crash["traceback"].rstrip().replace("\n", "\n  "))
 
 
 def main(argv: list[str] | None = None) -> int:

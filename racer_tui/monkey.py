@@ -80,6 +80,7 @@ KEY_SOURCES: dict[str, int] = {
     "printable": 14,
 }
 MODELS = ("monkey-a", "monkey-b")
+WARMUP_ACTIONS = 200  # memory is compared from here (5% of a shorter run)
 
 
 @dataclass
@@ -90,7 +91,8 @@ class Crash:
     error: str  # the exception's last line
     traceback: str
     recent_actions: list[str]
-    report: Path | None  # the app's own crash report
+    report: Path | None  # the app's own crash report (in the scratch home: gone after)
+    report_text: str  # what it said, kept
 
 
 @dataclass
@@ -105,6 +107,8 @@ class MonkeyRun:
     slowest_action: str = ""
     slowest_ms: float = 0.0
     rss_start_mb: float = 0.0
+    rss_after_warmup_mb: float = 0.0  # the app built and its screens seen once or so
+    warmup_actions: int = 0
     rss_end_mb: float = 0.0
     seconds: float = 0.0
 
@@ -282,6 +286,7 @@ async def run_monkey(
     from racer_tui.app import create_app
 
     run = MonkeyRun(seed=seed, rss_start_mb=rss_mb())
+    run.warmup_actions = min(WARMUP_ACTIONS, max(actions // 20, 1))
     rng = random.Random(seed)
     started = time.perf_counter()
     recent: list[str] = []
@@ -302,6 +307,8 @@ async def run_monkey(
                     recent = [*recent[-19:], said]
                     if app.is_running:
                         run.screens[type(app.screen).__name__] += 1
+                    if run.actions == run.warmup_actions:
+                        run.rss_after_warmup_mb = rss_mb()
                     if took > run.slowest_ms:
                         run.slowest_ms, run.slowest_action = took, said
                     crash = monkey.problem(run.actions % screenshot_every == 0)
@@ -314,13 +321,15 @@ async def run_monkey(
         except Exception as error:  # Pilot re-raises the app's error here
             crash = crash or error
         if crash is not None:
+            report = app.crash_report
             run.crashes.append(
                 Crash(
                     run.actions,
                     f"{type(crash).__name__}: {crash}",
                     "".join(traceback.format_exception(crash)),
                     list(recent),
-                    app.crash_report,
+                    report,
+                    report.read_text(encoding="utf-8") if report is not None else "",
                 )
             )
             if stop_at_first_crash:
