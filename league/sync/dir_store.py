@@ -7,7 +7,7 @@ Layout::
     PATH/records/<kind>/<shard>/<id>.json           an immutable record
     PATH/records/<kind>/<shard>/<id>.spare<n>.json  a spare copy of it (n = 1..8, see below)
     PATH/records/racer_profile/<shard>/<id>.v<version, 10 digits>.json
-    PATH/tmp/.tmp-<host>-<pid>-<random>             a record being written
+    PATH/tmp/.tmp-<host>-<boot>-<pid>-<random>     a record being written
 
 `<shard>` is the id's last character (32 folders per kind, filled evenly), which keeps
 every folder small enough for FAT32 USB sticks. Names are built only from the fixed kind
@@ -119,11 +119,17 @@ _NO_LINKS: Final = frozenset(
         errno.EXDEV,
     }
 )
-# `.tmp-<host>-<pid>-<random>`: who wrote a temporary file, so that a machine can tell
-# its own dead writers' files at once (older names, `.tmp-<pid>-<random>`, age out).
-_TEMP_NAME: Final = re.compile(r"\.tmp-(?P<host>[A-Za-z0-9]{1,32})-(?P<pid>\d{1,10})-[0-9a-f]+")
-# This machine as temporary names give it: letters and digits of its host name.
-_HOST: Final = re.sub(r"[^A-Za-z0-9]", "", socket.gethostname())[:32] or "host"
+# `.tmp-<host>-<boot>-<pid>-<random>`: who wrote a temporary file, so that a machine can
+# tell its own dead writers' files at once (older names, `.tmp-<pid>-<random>`, age out).
+_TEMP_NAME: Final = re.compile(
+    r"\.tmp-(?P<writer>[A-Za-z0-9]{1,32}-\d{1,12})-(?P<pid>\d{1,10})-[0-9a-f]+"
+)
+# This machine since it started, as temporary names give it: letters and digits of its
+# host name, and when it booted (a process id means something only on one machine, until
+# it restarts; two Raspberry Pis are both "raspberrypi", but seldom booted the same second).
+_MACHINE: Final = (
+    f"{re.sub(r'[^A-Za-z0-9]', '', socket.gethostname())[:32] or 'host'}-{int(psutil.boot_time())}"
+)
 _O_NOFOLLOW: Final = getattr(os, "O_NOFOLLOW", 0)
 _O_NONBLOCK: Final = getattr(os, "O_NONBLOCK", 0)
 _O_BINARY: Final = getattr(os, "O_BINARY", 0)
@@ -252,7 +258,7 @@ class DirStore:
         undecided: list[os.DirEntry[str]] = []
         for entry in entries:
             match = _TEMP_NAME.fullmatch(entry.name)
-            if match and match["host"] == _HOST and not psutil.pid_exists(int(match["pid"])):
+            if match and match["writer"] == _MACHINE and not psutil.pid_exists(int(match["pid"])):
                 with contextlib.suppress(OSError):
                     os.unlink(entry.path)
             else:
@@ -279,7 +285,7 @@ class DirStore:
     def _temp_path(self) -> Path:
         folder = self.root / TEMP_DIR
         folder.mkdir(exist_ok=True)
-        return folder / f"{_TEMP_PREFIX}{_HOST}-{os.getpid()}-{secrets.token_hex(8)}"
+        return folder / f"{_TEMP_PREFIX}{_MACHINE}-{os.getpid()}-{secrets.token_hex(8)}"
 
     # -- push ---------------------------------------------------------------------------
 

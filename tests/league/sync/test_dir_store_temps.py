@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from league.sync.dir_store import _HOST, TEMP_DIR, DirStore
+from league.sync.dir_store import _MACHINE, TEMP_DIR, DirStore
 from tests.league.sync.records import submission, submissions
 
 TEN_MINUTES = 600.0
@@ -57,8 +57,10 @@ def _temps(store: DirStore) -> set[str]:
 
 def test_a_killed_writers_temporary_file_is_gone_after_the_next_push(tmp_path: Path) -> None:
     store = _store(tmp_path)
-    other_machine = _temp(store, ".tmp-laptop2-4242-0a1b2c3d4e5f6071", age=TEN_MINUTES + 60)
-    this_machine = _temp(store, f".tmp-{_HOST}-{_dead_pid()}-1a2b3c4d5e6f7081")
+    other_machine = _temp(
+        store, ".tmp-laptop2-1764300000-4242-0a1b2c3d4e5f6071", age=TEN_MINUTES + 60
+    )
+    this_machine = _temp(store, f".tmp-{_MACHINE}-{_dead_pid()}-1a2b3c4d5e6f7081")
 
     report = store.push(submissions(2))
 
@@ -71,19 +73,23 @@ def test_a_killed_writers_temporary_file_is_gone_after_the_next_push(tmp_path: P
 def test_a_live_writers_temporary_file_is_kept(tmp_path: Path) -> None:
     store = _store(tmp_path)
     # Another machine writing right now, and a writer of this machine that is alive.
-    other_machine = _temp(store, ".tmp-laptop2-4242-0a1b2c3d4e5f6071", age=5.0)
-    this_machine = _temp(store, f".tmp-{_HOST}-{os.getpid()}-1a2b3c4d5e6f7081")
+    other_machine = _temp(store, ".tmp-laptop2-1764300000-4242-0a1b2c3d4e5f6071", age=5.0)
+    this_machine = _temp(store, f".tmp-{_MACHINE}-{os.getpid()}-1a2b3c4d5e6f7081")
+    # A machine with this one's host name (two Raspberry Pis are both "raspberrypi"), booted
+    # at another time: its process ids mean nothing here.
+    host = _MACHINE.rpartition("-")[0]
+    namesake = _temp(store, f".tmp-{host}-1234567-{_dead_pid()}-2a2b3c4d5e6f7081")
 
     store.push([submission(1)])
     store.pull()
 
-    assert other_machine.exists() and this_machine.exists()
+    assert other_machine.exists() and this_machine.exists() and namesake.exists()
 
 
 def test_a_pull_removes_dead_temporary_files_too(tmp_path: Path) -> None:
     store = _store(tmp_path)
     store.push([submission(1)])
-    dead = _temp(store, ".tmp-laptop2-4242-0a1b2c3d4e5f6071", age=TEN_MINUTES + 60)
+    dead = _temp(store, ".tmp-laptop2-1764300000-4242-0a1b2c3d4e5f6071", age=TEN_MINUTES + 60)
     # Left beside the records by a racer-tui from before tmp/ (a push killed then).
     shard = next((store.root / "records" / "submission").iterdir())
     legacy = shard / ".tmp-4242-0a1b2c3d4e5f6071"
@@ -98,7 +104,9 @@ def test_a_pull_removes_dead_temporary_files_too(tmp_path: Path) -> None:
 def test_a_read_only_share_is_still_pulled(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     store = _store(tmp_path)
     store.push(submissions(3))
-    _temp(store, ".tmp-laptop2-4242-0a1b2c3d4e5f6071", age=5.0)  # needs the server's clock
+    _temp(
+        store, ".tmp-laptop2-1764300000-4242-0a1b2c3d4e5f6071", age=5.0
+    )  # needs the server's clock
 
     def read_only(self: DirStore, path: Path, data: bytes, *, durable: bool = True) -> None:
         raise OSError(errno.EROFS, "Read-only file system")
