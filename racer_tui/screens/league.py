@@ -78,7 +78,7 @@ GIVE_WAY: dict[str, Col] = {
     "off-tracks": Col("", keep=3),
     "laps": Col("", keep=4),
     "racer": Col("", keep=5, shrink_to=10, collapses=False),
-    "model": Col("", keep=6, shrink_to=8, collapses=False),
+    "model": Col("", keep=6, shrink_to=8, collapses=False, cuts_middle=True),
     "track": Col("", keep=7, shrink_to=8, collapses=False, keeps_tail=True),
 }
 

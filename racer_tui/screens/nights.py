@@ -106,7 +106,7 @@ NIGHT_COLUMNS = (replace(NAME, label="night"), Col("track", keep=1, shrink_to=8)
 HEAT_COLUMNS = (
     "#",
     replace(NAME, label="racer"),
-    Col("car", keep=2, shrink_to=8, collapses=False),
+    Col("car", keep=2, shrink_to=8, collapses=False, keeps_tail=True),
     Col("result", keep=1, shrink_to=8, collapses=False),
 )
 PHYSICAL_RULES_NOTE = (

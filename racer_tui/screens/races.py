@@ -61,7 +61,7 @@ from sim.track_catalog import DEFAULT_TRACK, resolve_track
 REFERENCE = "reference driver"
 RESULT_COLUMNS = (
     "#",
-    Col("driver", keep=4, shrink_to=10, collapses=False),
+    Col("driver", keep=4, shrink_to=10, collapses=False, cuts_middle=True),
     Col("track", keep=1, shrink_to=8),
     "best lap",
     Col("laps", keep=2),
@@ -74,7 +74,7 @@ RECORDED_COLUMNS = (
     "best lap",
     Col("laps", keep=4),
     Col("track", keep=3, shrink_to=8),
-    Col("model", keep=2, shrink_to=8),
+    Col("model", keep=2, shrink_to=8, cuts_middle=True),
     Col("night", keep=1, shrink_to=8),
 )
 RECORDED_LIMIT = 200

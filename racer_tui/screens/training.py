@@ -90,7 +90,7 @@ TAIL_SECONDS = 0.25  # how often the log is read while a run is live
 TICK_SECONDS = 2.0  # run status, adopted runs and the agent's-eye view
 READ_CHUNK = 256_000
 METRICS_SECONDS = 1.0  # how often a live run's TrainingMetrics.json is read for new rows
-COLUMNS = (Col("model", keep=1, shrink_to=10, collapses=False), Col("state"))
+COLUMNS = (Col("model", keep=1, shrink_to=10, collapses=False, cuts_middle=True), Col("state"))
 NARROW = 110  # below this width the agent's-eye view is hidden
 
 

@@ -129,9 +129,24 @@ class DemoRace(Vertical):
         text = Text(no_wrap=True, overflow="ellipsis")
         text.append("reference driver", style="bold")
         text.append(f" on {self.track.name}\n")
-        # Two spaces between figures: the line fits the 40 columns the demo has at 80x24.
-        text.append(f"lap {tick.lap}  {lap_clock(tick.lap_time)}  {tick.speed:.1f} m/s")
-        best = min((lap.time_seconds for lap in tick.laps if lap.valid), default=None)
-        if best is not None:
-            text.append(f"  best {lap_clock(best)}")
+        text.append(figures_line(tick, self.size.width or 80))
         return text
+
+
+def figures_line(tick: RaceTick, width: int) -> str:
+    """The lap, its clock, the speed and the best lap in the widest wording that fits
+    `width`: the demo has about 40 columns at 80x24, and a figure cut in the middle
+    ("best 0:06.3…") reads as another figure. The speed goes first, then the spacing,
+    then all but the best lap."""
+    lap, clock = f"lap {tick.lap}", lap_clock(tick.lap_time)
+    speed = f"{tick.speed:.1f} m/s"
+    best_time = min((lap.time_seconds for lap in tick.laps if lap.valid), default=None)
+    best = f"best {lap_clock(best_time)}" if best_time is not None else ""
+    wordings = (
+        "  ".join(part for part in (lap, clock, speed, best) if part),
+        " ".join(part for part in (lap, clock, speed, best) if part),
+        "  ".join(part for part in (lap, clock, best) if part),
+        " ".join(part for part in (lap, clock, best) if part),
+        best or f"{lap} {clock}",  # a narrow demo: the one figure worth its room
+    )
+    return next((wording for wording in wordings if len(wording) <= width), wordings[-1])

@@ -46,6 +46,9 @@ class Col:
     # "beginner-oval (physical)") loses the end of what comes before them instead
     # ("begin… (physical)"): two boards never look alike.
     keeps_tail: bool = False
+    # A model name tells itself from its siblings at either end ("reinvent-2018-v2" and
+    # "reinvent-2018-v3"): it loses its middle ("reinv…8-v3"), never its end.
+    cuts_middle: bool = False
 
 
 ColumnSpec = str | Col
@@ -116,10 +119,14 @@ def tail_of(cell: Cell) -> str:
 HEAD_LEAST = 3  # what a kept tail leaves before it at least: two letters and "…"
 
 
-def _shortened(cell: Cell, width: int, keeps_tail: bool = False) -> Cell:
+def _shortened(cell: Cell, width: int, keeps_tail: bool = False, middle: bool = False) -> Cell:
     if _width(cell) <= width:
         return cell
     text = cell.copy() if isinstance(cell, Text) else Text(cell)
+    if middle and width >= 5 and len(text.plain) == _width(text):
+        kept_end = (width - 1) // 2  # the end keeps as much as the start, or one less
+        kept_start = width - 1 - kept_end
+        return Text.assemble(text[:kept_start], "…", text[len(text.plain) - kept_end :])
     tail = tail_of(text) if keeps_tail else ""
     if tail and width >= len(tail) + HEAD_LEAST:
         cut = len(text.plain) - len(tail)
@@ -219,7 +226,12 @@ def _lay_out(table: DataTable[object], filling: _Filling) -> None:
     for number, row in enumerate(filling.rows):
         table.add_row(
             *(
-                _shortened(row[index], widths[index] or 0, filling.columns[index].keeps_tail)
+                _shortened(
+                    row[index],
+                    widths[index] or 0,
+                    filling.columns[index].keeps_tail,
+                    filling.columns[index].cuts_middle,
+                )
                 for index in shown
             ),
             key=filling.keys[number] if filling.keys is not None else None,

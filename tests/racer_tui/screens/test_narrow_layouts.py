@@ -5,6 +5,7 @@ header's tabs read whole."""
 from __future__ import annotations
 
 import csv
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -80,3 +81,26 @@ async def test_an_export_of_one_board_has_the_track_column_the_table_shows(
         await settle(pilot)
     rows = list(csv.DictReader((tmp_path / "board.csv").open()))
     assert rows[0]["track"] == "beginner-oval"
+
+
+def test_a_model_name_loses_its_middle_so_siblings_stay_apart() -> None:
+    v2 = _shortened("reinvent-2018-centerline-v2", 11, middle=True)
+    v3 = _shortened("reinvent-2018-centerline-v3", 11, middle=True)
+    assert str(v2) == "reinv…ne-v2" and str(v3) == "reinv…ne-v3"
+
+
+def test_the_demo_caption_never_cuts_a_figure_in_the_middle() -> None:
+    """Point 8: the welcome screen's demo said `best 0:06.3…` at 80x24."""
+    from racer_tui.widgets.demo_race import figures_line
+    from sim.race.engine import race_ticks
+    from sim.race.rules import RaceRules
+    from sim.track_catalog import resolve_track
+
+    tick = next(
+        t
+        for t in race_ticks(resolve_track("reinvent_base"), RaceRules(window_seconds=30.0))
+        if t.laps
+    )
+    for width in (40, 36, 30, 19):
+        line = figures_line(tick, width)
+        assert len(line) <= width and re.search(r"best \d:\d\d\.\d\d\d\b", line)
