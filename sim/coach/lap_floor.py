@@ -17,9 +17,10 @@ able than any DeepRacer simulator's, on a road widened by what DeepRacer lets a 
   gives a line with a kink no car could drive).
 - How fast. DeepRacer's action space tops at 4 m/s, which its simulator drives 2 % faster
   (`CarSpec.speed_gain`): 4.08 m/s. The floor's car holds 10 m/s^2 sideways (DeepRacer's
-  traces stay under about 7, racer-tui's car holds 7), speeds up and brakes at 15 m/s^2
-  (racer-tui's car: 10 and 15), turns 30 degrees on its geometric wheelbase with no tyre
-  slip, understeer or steering lag (every simulator's car turns wider and later).
+  traces stay under about 7, racer-tui's car holds 7), speeds up at 15 m/s^2 and brakes
+  at 20 (racer-tui's car: 10 and 15; its simapp 4 car: 4.4 and 18), turns 30 degrees on
+  its geometric wheelbase with no tyre slip, understeer or steering lag (every
+  simulator's car turns wider and later).
 - Which line. The coach's own search (`optimise_line`), and beside it shorter lines
   (more weight on length, `LENGTH_SEARCH`): a car this able is held back more by its top
   speed than by its corners. The fastest of them is a line found, not a proven fastest
@@ -32,7 +33,7 @@ able than any DeepRacer simulator's, on a road widened by what DeepRacer lets a 
 Checked against the best line found the same way for racer-tui's car (without its
 steering lag and understeer, so faster than it can drive): the floor is 8 to 18 % under
 it on re:Invent 2018, A to Z Speedway, racer-tui's speedway, the ovals, the hairpin and
-the long Albert and Belille. On re:Invent 2018 (reinvent_base) the floor is 4.149 s: the
+the long Albert and Belille. On re:Invent 2018 (reinvent_base) the floor is 4.140 s: the
 coach's flying limit lap for racer-tui's car is 4.866 s, its best line found this way
 4.73 s, a trained model's best 5.342 s, DeepRacer's real evaluations 16 s. Computed once
 per track content and floor version, kept in memory and in the data folder
@@ -68,10 +69,11 @@ from sim.reference_driver import loop_curvature
 from sim.track import Track
 
 # Bump with any change that moves a floor: cached floors of another version are not read.
-FLOOR_FORMAT: Final = 3
+FLOOR_FORMAT: Final = 4
 SLACK: Final = 0.95
 GRIP: Final = 10.0  # m/s^2 sideways
-ACCELERATION: Final = 15.0  # m/s^2, speeding up and braking alike
+ACCELERATION: Final = 15.0  # m/s^2 speeding up
+BRAKING: Final = 20.0  # m/s^2
 # The road is widened no further than this share of the centre line's radius on the
 # inside of a bend (measured over FOLD_SPAN metres each side), where its normals cross.
 FOLD_SHARE: Final = 0.8
@@ -91,7 +93,7 @@ def floor_limits(car: CarSpec = DEEPRACER_CAR) -> CarLimits:
     return CarLimits(
         grip=GRIP,
         acceleration=ACCELERATION,
-        braking=ACCELERATION,
+        braking=BRAKING,
         effective_wheelbase=car.wheelbase,
         understeer=0.0,
         steering_lag=0.0,

@@ -107,7 +107,7 @@ class ImpossibleLap:
 
     def sentence(self, track: str) -> str:
         """ "lap 1 of 3.900 s is faster than any DeepRacer car can drive reinvent_base (no
-        lap under 4.149 s is possible there: under DeepRacer's rules at 4 m/s)"."""
+        lap under 4.140 s is possible there: under DeepRacer's rules at 4 m/s)"."""
         who = "a real car" if self.physical else "any DeepRacer car"
         return (
             f"lap {self.number} of {self.seconds:.3f} s is faster than {who} can drive {track} "

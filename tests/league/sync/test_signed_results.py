@@ -130,7 +130,7 @@ def test_the_issues_forgery_reaches_nobody_and_is_listed_with_its_reason(
     race_id = ana.race("ana", [12.5, 12.4])
     ana.sync()
     honest = _stored_race(ana, race_id)
-    # Every lap made 5.0 s (still over the hairpin's floor, 4.54 s), the content
+    # Every lap made 5.0 s (still over the hairpin's floor, 4.5 s), the content
     # hash recomputed so the record looks whole, ana's seal left on it.
     forged_body = _five_second_laps(honest)
     forged = make_record("race", race_id, forged_body)

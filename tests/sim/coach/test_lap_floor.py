@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import sim.coach.lap_floor as floor_module
-from sim.car import DEEPRACER_CAR
+from sim.car import DEEPRACER_CAR, SIMAPP4_CAR
 from sim.coach.lap_floor import cut_loop_metres, cutting_reach, lap_floor, widened_frame
 from sim.coach.limit_lap import limit_lap
 from sim.coach.racing_line import road_frame
@@ -122,3 +122,14 @@ def test_physical_laps_have_a_floor_of_their_own() -> None:
         f"{physical:.3f} s is possible there: its shortest loop at 6 m/s, a real car's top "
         "speed)"
     )
+
+
+def test_the_floors_car_is_more_able_than_every_car_racer_tui_simulates() -> None:
+    # A car made faster than the floor's would have honest laps refused: bump the floor.
+    able = floor_module.floor_limits()
+    for car in (DEEPRACER_CAR, SIMAPP4_CAR):
+        assert car.grip <= able.grip
+        assert car.max_acceleration <= able.acceleration and car.max_braking <= able.braking
+        assert car.max_speed * car.speed_gain <= able.top_speed
+        assert car.max_steering_deg <= able.levels[-1].steering_deg
+        assert car.effective_wheelbase >= able.effective_wheelbase  # turns no tighter
