@@ -412,6 +412,30 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
 
     module = types.ModuleType(_MODULE_NAME)
     module.__file__ = filename
+    # The memory limit goes on before the timing begins: during the racer's code, changing
+    # a limit is refused (sim.reward_sandbox), racer-tui's own change included.
+    with reward_sandbox.loading_limit():
+        _run_module(code, module, display, filename)
+
+    function = module.__dict__.get("reward_function")
+    if function is None:
+        raise RewardFunctionError(
+            display, "no reward_function found", advice=f"the file must define {DEFINE_HINT}"
+        )
+    if not callable(function):
+        raise RewardFunctionError(
+            display,
+            f"reward_function is {_a(type(function).__name__)}, not a function",
+            advice=f"the file must define {DEFINE_HINT}",
+        )
+    _check_takes_params(function, display, filename)
+    return RewardFunction(function, source=source, name=display, filename=filename)
+
+
+def _run_module(
+    code: types.CodeType, module: types.ModuleType, display: str, filename: str
+) -> None:
+    """Run the racer's module-level code, timed; `RewardFunctionError` for what goes wrong."""
     limit = reward_limit._ACTIVE  # module-level code is the racer's too
     began = 0.0
     if limit is not None:
@@ -441,20 +465,6 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
             f"loading the file did not finish within {limit.seconds:g} s",
             advice="fix the file and try again",
         )
-
-    function = module.__dict__.get("reward_function")
-    if function is None:
-        raise RewardFunctionError(
-            display, "no reward_function found", advice=f"the file must define {DEFINE_HINT}"
-        )
-    if not callable(function):
-        raise RewardFunctionError(
-            display,
-            f"reward_function is {_a(type(function).__name__)}, not a function",
-            advice=f"the file must define {DEFINE_HINT}",
-        )
-    _check_takes_params(function, display, filename)
-    return RewardFunction(function, source=source, name=display, filename=filename)
 
 
 def _check_takes_params(function: Callable[..., object], display: str, filename: str) -> None:

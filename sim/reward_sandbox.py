@@ -34,7 +34,7 @@ import signal
 import sys
 import threading
 import traceback
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING, Any
@@ -78,8 +78,34 @@ _memory_mb: int | None = None
 
 
 def memory_limit_mb() -> int | None:
-    """The limit `limit_memory` set in this process, if any."""
+    """The reward's memory in this process (`limit_memory`, `set_memory_budget`), if any."""
     return _memory_mb
+
+
+def set_memory_budget(megabytes: int) -> None:
+    """The memory a reward may use in this process, held to while its file loads (see
+    `loading_limit`) before `limit_memory` holds the whole process to it."""
+    global _memory_mb  # noqa: PLW0603
+    _memory_mb = megabytes
+
+
+@contextlib.contextmanager
+def loading_limit() -> Iterator[None]:
+    """While a reward file's module-level code runs: the process may grow by the reward's
+    memory and no more (the soft RLIMIT_DATA, put back after; the code may not change it,
+    see `_FORBIDDEN`). Nothing when no budget is set."""
+    if _memory_mb is None:
+        yield
+        return
+    soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
+    limit = data_bytes() + _memory_mb * 1024 * 1024
+    if hard != resource.RLIM_INFINITY:
+        limit = min(limit, hard)
+    resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_DATA, (soft, hard))
 
 
 def check_memory_mb(value: float) -> int:
@@ -139,6 +165,8 @@ _FORBIDDEN = {
     "ctypes.dlsym": "calls C code through ctypes",
     "ctypes.dlsym/handle": "calls C code through ctypes",
     "ctypes.call_function": "calls C code through ctypes",
+    "resource.setrlimit": "changes its process's limits",
+    "resource.prlimit": "changes its process's limits",
 }
 _refused: ForbiddenInReward | None = None
 _guarded = False

@@ -123,11 +123,13 @@ def serve_part(connection: Connection, setup: PartSetup) -> None:
     sys.stdout = sys.stderr
     reward_sandbox.become_subreaper()
     reward_sandbox.guard_reward_calls()
+    memory_mb = reward_sandbox.memory_from_environment()
+    reward_sandbox.set_memory_budget(memory_mb)  # held to while the file loads
     try:
         try:
             batch, recorder = _build_part(connection, setup)
             reward_sandbox.close_off_files(ModelFolder(Path(setup.folder)).reward_file)
-            reward_sandbox.limit_memory(reward_sandbox.memory_from_environment())
+            reward_sandbox.limit_memory(memory_mb)
             connection.send(("ready", None))
         except BaseException as error:
             _send_error(connection, error)

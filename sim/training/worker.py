@@ -167,6 +167,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USER_ERROR
     # The simulation processes (started by "spawn") read the memory limit from here.
     os.environ[reward_sandbox.MEMORY_ENV] = str(memory_mb)
+    reward_sandbox.set_memory_budget(memory_mb)  # held to while the file loads, here too
     reward_sandbox.become_subreaper()
     reward_sandbox.guard_reward_calls()
     warnings.filterwarnings("ignore")  # library chatter must not reach the racer

@@ -111,3 +111,33 @@ def test_a_reward_that_starts_a_process_fails_the_training_and_leaves_none(
     assert "reward_function.py line 3: reward_function starts a process" in err
     assert processes_with(marker) == []
     assert psutil.Process().children(recursive=True) == []
+
+
+@pytest.mark.slow
+def test_a_reward_file_that_allocates_without_bound_fails_as_it_loads(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    model = new_model("hoards")
+    model.reward_file.write_text(
+        "kept = bytearray(8 * 10**9)\ndef reward_function(params):\n    return 1.0\n"
+    )
+    code = main(["train", "hoards", "--minutes", "0.02", "--reward-memory-mb", "64"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "reward_function.py line 1: loading the file used more than 64 MB of memory" in err
+
+
+@pytest.mark.slow
+def test_a_reward_that_allocates_in_a_simulation_process_fails_in_a_sentence(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    model = new_model("grows")
+    model.reward_file.write_text(
+        "def reward_function(params):\n    return float(len(bytearray(8 * 10**9)))\n"
+    )
+    command = ["train", "grows", "--minutes", "0.02", "--processes", "2"]
+    code = main([*command, "--reward-memory-mb", "256"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "reward_function.py line 2: reward_function used more than 256 MB of memory" in err
+    assert psutil.Process().children(recursive=True) == []
