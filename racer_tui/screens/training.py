@@ -91,7 +91,7 @@ TICK_SECONDS = 2.0  # run status, adopted runs and the agent's-eye view
 READ_CHUNK = 256_000
 METRICS_SECONDS = 1.0  # how often a live run's TrainingMetrics.json is read for new rows
 COLUMNS = (Col("model", keep=1, shrink_to=10, collapses=False, cuts_middle=True), Col("state"))
-NARROW = 110  # below this width the agent's-eye view is hidden
+NARROW = 110  # below this width the agent's-eye view takes the charts' place on `v`
 
 
 @dataclass(frozen=True)
@@ -348,6 +348,12 @@ class TrainingScreen(RacerScreen[None]):
         Binding("t", "train", "Train", tooltip="Train the highlighted model (queued if busy)"),
         Binding("s", "stop", "Stop", tooltip="Stop the training (it saves a checkpoint)"),
         Binding("e", "evaluate", "Evaluate", tooltip="Time-trial trials of the trained policy"),
+        Binding(
+            "v",
+            "toggle_eye",
+            "Agent's view",
+            tooltip="What the car sees, in the charts' place (a narrow terminal)",
+        ),
         Binding("ctrl+r", "reload", "Reload", tooltip="Read the model folders again", show=False),
     ]
     DEFAULT_CSS = """
@@ -356,6 +362,8 @@ class TrainingScreen(RacerScreen[None]):
     TrainingScreen #training-side { width: 34; height: 1fr; padding: 0 1; }
     TrainingScreen #agent-title { text-style: bold; color: $accent; }
     TrainingScreen.-narrow #training-side { display: none; }
+    TrainingScreen.-narrow.-eye #training-side { display: block; width: 1fr; }
+    TrainingScreen.-narrow.-eye #training-charts { display: none; }
     """
     # Extra worker options (tests use a tiny budget); the child's own defaults otherwise.
     worker_options: ClassVar[tuple[str, ...]] = ()
@@ -384,7 +392,26 @@ class TrainingScreen(RacerScreen[None]):
         self.set_interval(TICK_SECONDS, self._tick)
 
     def on_resize(self) -> None:
-        self.set_class(self.size.width < NARROW, "-narrow")
+        narrow = self.size.width < NARROW
+        if narrow != self.has_class("-narrow"):
+            self.set_class(narrow, "-narrow")
+            self.refresh_bindings()  # v is for a terminal too narrow for both
+
+    @property
+    def eye_shown(self) -> bool:
+        """The agent's-eye view is on screen (beside the charts, or in their place)."""
+        return not self.has_class("-narrow") or self.has_class("-eye")
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action == "toggle_eye":
+            return self.has_class("-narrow")
+        return True
+
+    def action_toggle_eye(self) -> None:
+        """The agent's-eye view in the charts' place, or the charts back."""
+        self.toggle_class("-eye")
+        if self.eye_shown and self.watched is not None:
+            self._observe(self.watched)
 
     # --- the model list --------------------------------------------------------------------
 
@@ -506,7 +533,7 @@ class TrainingScreen(RacerScreen[None]):
             # A training started outside the app (`racer-tui train`, the host's usual case
             # on a league night) is picked up within a tick, without a key press.
             self._read_models(None)
-        if live is not None and live.model == self.watched and not self.has_class("-narrow"):
+        if live is not None and live.model == self.watched and self.eye_shown:
             self._observe(live.model)
 
     def _enforce_budget(self) -> None:

@@ -220,3 +220,33 @@ async def test_a_failed_training_says_so_in_its_charts_place() -> None:
         text = painted(charts)
         assert "waiting for data" not in text
         assert text.count("the training failed") == 6
+
+
+async def test_the_agents_eye_view_has_a_place_at_80x24() -> None:
+    """Point 8: below wide sizes the view never appeared; `v` puts it in the charts'
+    place, and back."""
+    from racer_tui.widgets.agent_view import AgentView
+    from racer_tui.widgets.footer import screen_keys
+
+    new_model("ada")
+    app = create_app(start="training")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, TrainingScreen)
+        view, charts = screen.query_one(AgentView), screen.query_one(TrainingCharts)
+        assert not view.region.width and charts.region.width
+        assert "Agent's view" in [key.description for key in screen_keys(screen)[0]]
+        await pilot.press("v")
+        await pilot.pause()
+        assert view.region.width > 40 and not charts.region.width
+        await pilot.press("v")
+        await pilot.pause()
+        assert not view.region.width and charts.region.width
+    wide = create_app(start="training")
+    async with wide.run_test(size=(200, 60)) as pilot:
+        await settle(pilot)
+        screen = wide.screen
+        assert isinstance(screen, TrainingScreen)
+        assert screen.query_one(AgentView).region.width  # beside the charts already
+        assert "Agent's view" not in [key.description for key in screen_keys(screen)[0]]
