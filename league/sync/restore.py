@@ -21,14 +21,14 @@ checked within a few syncs and a sync stays quick.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Final
+from dataclasses import dataclass, field
+from typing import Any, Final
 
 from league.records import SHARED_TABLES, record_body
 from league.store import League
 from league.sync import local
 from league.sync.errors import RecordInvalidError
-from league.sync.kinds import KIND_OF_TABLE
+from league.sync.kinds import KIND_OF_TABLE, MODEL_KIND
 from league.sync.protocol import RecordStore
 from league.sync.record import Seal, SyncRecord
 
@@ -39,13 +39,15 @@ CHECKS_PER_SYNC: Final = 1000
 
 @dataclass(frozen=True)
 class _Own:
-    """A record this machine signed and the store is known to hold."""
+    """A record this machine signed and the store is known to hold: a row of a shared
+    league `table`, or a model record (league.sync.models) whose `body` is kept here."""
 
-    table: str
+    table: str | None
     kind: str
     record_id: str
     content_hash: str
     seal: Seal
+    body: dict[str, Any] = field(default_factory=dict, compare=False)
 
     @property
     def key(self) -> tuple[str, str]:
@@ -86,7 +88,7 @@ def _write_back(league: League, store: RecordStore, lost: Sequence[_Own]) -> lis
             continue  # written back by an earlier sync
         what = f"{own.kind} {own.record_id}"
         try:
-            body = record_body(league, own.table, own.record_id)
+            body = record_body(league, own.table, own.record_id) if own.table else own.body
             record = SyncRecord(own.kind, own.record_id, own.content_hash, body).sealed(own.seal)
         except RecordInvalidError:
             notes.append(
@@ -139,4 +141,34 @@ def _own_records(league: League, store_key: str, signer: str) -> list[_Own]:
             (kind, signer, store_key),
         )
         own.extend(_Own(table, kind, row[0], row[1], Seal(signer, row[2])) for row in rows)
-    return own
+    return own + _own_models(league, store_key, signer)
+
+
+def _own_models(league: League, store_key: str, signer: str) -> list[_Own]:
+    """This machine's model records: without them, a fresh machine would hold its racer's
+    results back, waiting for the model they name. The body is league.sync.models'."""
+    rows = league.query(
+        "SELECT m.record_id, m.content_hash, s.signature, m.racer, m.model_name, m.model_hash, "
+        "m.registered_at FROM sync_models m "
+        "JOIN sync_seals s ON s.kind = ?1 AND s.record_id = m.record_id AND s.version = 0 "
+        "AND s.content_hash = m.content_hash AND s.signer = ?2 "
+        "JOIN sync_in_store i ON i.store = ?3 AND i.kind = ?1 AND i.record_id = m.record_id "
+        "AND i.content_hash = m.content_hash ORDER BY m.record_id",
+        (MODEL_KIND, signer, store_key),
+    )
+    return [
+        _Own(
+            None,
+            MODEL_KIND,
+            record_id,
+            digest,
+            Seal(signer, signature),
+            {
+                "racer": racer,
+                "model_name": model_name,
+                "model_hash": model_hash,
+                "registered_at": registered_at,
+            },
+        )
+        for record_id, digest, signature, racer, model_name, model_hash, registered_at in rows
+    ]

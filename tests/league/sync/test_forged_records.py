@@ -71,12 +71,13 @@ def overwrite(url: str, record: SyncRecord, spare: int = 0) -> None:
     client.put_item(TableName=table, Item=item)  # type: ignore[attr-defined]
 
 
-def delete(url: str, record_id: str) -> None:
+def delete(url: str, record_id: str, kind: str = "race") -> None:
     if url.startswith("dir:"):
-        _file(url, record_id).unlink()
+        path = _file(url, record_id)
+        (path.parent.parent.parent / kind / path.parent.name / path.name).unlink()
         return
     client, table = _table(url)
-    client.delete_item(TableName=table, Key={"pk": {"S": f"race#{record_id}"}})  # type: ignore[attr-defined]
+    client.delete_item(TableName=table, Key={"pk": {"S": f"{kind}#{record_id}"}})  # type: ignore[attr-defined]
 
 
 def laps_of(machine: Machine, race_id: str) -> list[float]:
@@ -187,3 +188,28 @@ def test_a_host_with_many_records_checks_older_ones_in_turn(
     assert laps_of(viewer, oldest) == [12.0, 12.5]
     # The 2 newest every sync, the older ones 2 at a time: each within this many syncs.
     assert syncs <= -(-(own - 2) // 2)
+
+
+def test_a_deleted_model_record_is_written_back_so_its_races_do_not_wait(
+    machines: dict[str, Machine],  # noqa: F811
+) -> None:
+    ana, viewer = machines["ana"], machines["viewer"]
+    race_id = ana.race("ana", [12.5, 12.4])
+    ana.sync()
+    models = [
+        row[0]
+        for row in ana.league.query(
+            "SELECT m.record_id FROM sync_models m JOIN sync_seals s ON s.kind = 'model' "
+            "AND s.record_id = m.record_id WHERE s.signer = ?",
+            (ana.key.public_hex,),
+        )
+    ]
+    assert models  # ana's sync registered the model she raced
+    for model_id in models:
+        delete(ana.url, model_id, "model")
+
+    notes = ana.sync().notes
+
+    assert all(any(model_id in note for note in notes) for model_id in models)
+    viewer.sync()
+    assert laps_of(viewer, race_id) == [12.5, 12.4]
