@@ -146,18 +146,20 @@ def _list(infos: list[TrackInfo], as_json: bool) -> int:
     for kind, heading in _GROUPS:
         group = [info for info in infos if info.kind == kind]
         if group:
-            print_table(_kind_table(f"{heading} ({len(group)})", group))
+            print_table(_kind_table(f"{heading} ({len(group)})", group, kind))
     print("Give a track by its name or console name, e.g. --track reinvent_base.")
     return 0
 
 
-def _kind_table(title: str, infos: list[TrackInfo]) -> Table:
+def _kind_table(title: str, infos: list[TrackInfo], kind: str) -> Table:
     table = Table(
         title=title, title_justify="left", box=None, pad_edge=False, header_style="bold underline"
     )
     table.add_column("name", no_wrap=True, min_width=max(len(info.name) for info in infos))
-    # What the console calls it; for racer-tui's and your own tracks, their description.
-    table.add_column("console name", no_wrap=True, overflow="ellipsis", max_width=22)
+    # What the console calls it; racer-tui's and your own tracks are not in the console,
+    # and the column says what it holds for them: their description.
+    second = "console name" if kind == "official" else "description"
+    table.add_column(second, no_wrap=True, overflow="ellipsis", max_width=22)
     table.add_column("len m", justify="right", no_wrap=True)
     table.add_column("wide", justify="right", no_wrap=True)
     table.add_column("dir", no_wrap=True)
