@@ -136,7 +136,7 @@ class ModelDetail(VerticalScroll):
                 "training",
                 _plain(f"{metadata['training_algorithm']}, at most {details['max_minutes']:g} min"),
             )
-        table.add_row("network", _plain(metadata["neural_network"]))
+        table.add_row("network", _plain(network_text(metadata)))
         table.add_row("car hash", _plain(str(details["content_hash"])[:16]))
         table.add_row("folder", _plain(details["path"]))
         for key, value in details["notes"].items():
@@ -228,3 +228,21 @@ class ModelDetail(VerticalScroll):
                 Text(str(trial.get("episode_status", ""))),
             )
         return Group(table, Text(""), Text("latest trials", style="dim"), trials)
+
+
+_NETWORK_SIZES = {
+    "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW": "shallow",
+    "DEEP_CONVOLUTIONAL_NETWORK": "standard",
+    "DEEP_CONVOLUTIONAL_NETWORK_DEEP": "deep",
+}
+
+
+def network_text(metadata: Mapping[str, Any]) -> str:
+    """The network the model really has. DeepRacer's files name a convolutional network
+    whatever the sensor; a model without a camera has no image to convolve, and racer-tui
+    trains dense layers only, of the size the name says."""
+    name = str(metadata.get("neural_network") or "-")
+    sensors = metadata.get("sensor") or []
+    if any("CAMERA" in str(sensor) for sensor in sensors) or name not in _NETWORK_SIZES:
+        return name
+    return f"dense, {_NETWORK_SIZES[name]} (no camera)"

@@ -104,3 +104,14 @@ def test_the_demo_caption_never_cuts_a_figure_in_the_middle() -> None:
     for width in (40, 36, 30, 19):
         line = figures_line(tick, width)
         assert len(line) <= width and re.search(r"best \d:\d\d\.\d\d\d\b", line)
+
+
+def test_a_model_without_a_camera_is_not_called_convolutional() -> None:
+    """Point 13: vector models were labelled DEEP_CONVOLUTIONAL_NETWORK_SHALLOW."""
+    from racer_tui.widgets.model_detail import network_text
+
+    shallow = "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW"
+    vector = network_text({"neural_network": shallow, "sensor": ["VECTOR"]})
+    assert vector == "dense, shallow (no camera)"
+    camera = network_text({"neural_network": shallow, "sensor": ["FRONT_FACING_CAMERA"]})
+    assert camera == shallow
