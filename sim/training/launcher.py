@@ -49,7 +49,9 @@ def worker_command(
     model: str, minutes: float | None = None, extra: Sequence[str] = ()
 ) -> list[str]:
     """The child's command line (the same interpreter as this process)."""
-    command = [sys.executable, "-m", "sim.training.worker", model, "--parent-pid", str(os.getpid())]
+    command = [sys.executable, "-m", "sim.training.worker", model]
+    if "--parent-pid" not in extra:  # the app names its own: no parent, so it may outlive it
+        command += ["--parent-pid", str(os.getpid())]
     if minutes is not None:
         command += ["--minutes", repr(float(minutes))]
     return command + list(extra)

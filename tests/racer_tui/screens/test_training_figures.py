@@ -250,3 +250,13 @@ async def test_the_agents_eye_view_has_a_place_at_80x24() -> None:
         assert isinstance(screen, TrainingScreen)
         assert screen.query_one(AgentView).region.width  # beside the charts already
         assert "Agent's view" not in [key.description for key in screen_keys(screen)[0]]
+
+
+def test_the_apps_worker_command_names_one_parent() -> None:
+    """Point 13: the worker's command line said `--parent-pid` twice (a real PID, then 0)."""
+    from sim.training.launcher import worker_command
+
+    command = worker_command("ada", 5.0, TrainingScreen()._options())
+    assert command.count("--parent-pid") == 1
+    assert command[command.index("--parent-pid") + 1] == "0"
+    assert worker_command("ada", 5.0).count("--parent-pid") == 1  # the command line's own
