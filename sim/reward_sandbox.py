@@ -321,11 +321,33 @@ def become_subreaper() -> bool:
 
 def has_child_process() -> bool:
     """Whether this process has a child, living or not yet reaped (one system call)."""
+    if not hasattr(os, "waitid"):  # macOS: ask psutil
+        return bool(_child_pids())
     try:
         os.waitid(os.P_ALL, 0, os.WEXITED | os.WNOHANG | os.WNOWAIT)
     except ChildProcessError:
         return False
     return True
+
+
+def wait_for_exit(pid: int) -> None:
+    """Wait until child `pid` has exited, without reaping it (its exit status stays for
+    whoever waits for it, and its id stays its own until then)."""
+    if hasattr(os, "waitid"):
+        with contextlib.suppress(ChildProcessError, OSError):
+            os.waitid(os.P_PID, pid, os.WEXITED | os.WNOWAIT)
+        return
+    import time
+
+    import psutil
+
+    while True:  # no waitid (macOS): look twice a second
+        try:
+            if psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
+                return
+        except psutil.Error:
+            return
+        time.sleep(0.5)
 
 
 def _child_pids() -> set[int]:

@@ -30,7 +30,7 @@ import threading
 from collections.abc import AsyncIterator, Iterator, Sequence
 from typing import IO
 
-from sim.reward_sandbox import kill_session
+from sim.reward_sandbox import kill_session, wait_for_exit
 from sim.training import events
 
 STOP_TIMEOUT = 60.0  # seconds to wait for a checkpoint after SIGTERM before SIGKILL
@@ -113,8 +113,7 @@ def overran(ended: events.Ended, budget_seconds: float) -> events.Ended:
 def _end_session_when_done(pid: int) -> None:
     """Wait (without reaping) for the child to exit, then kill its session: whatever still
     holds the event pipe goes with it."""
-    with contextlib.suppress(ChildProcessError, OSError):
-        os.waitid(os.P_PID, pid, os.WEXITED | os.WNOWAIT)
+    wait_for_exit(pid)
     kill_session(pid)
 
 
