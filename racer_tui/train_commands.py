@@ -299,6 +299,8 @@ def _stream_json(
 
 def _show_live(stream: Iterator[events.Event], name: str, interrupts: _Interrupts) -> events.Ended:
     console = Console(stderr=False)
+    if not console.is_terminal:  # piped: a live view draws only its last frame, at the end
+        return _show_lines(console, stream, name)
     figures = Figures(model=name)
     progress = Progress(
         TextColumn("{task.description}"),
@@ -330,12 +332,32 @@ def _show_live(stream: Iterator[events.Event], name: str, interrupts: _Interrupt
     return ended
 
 
+def _show_lines(console: Console, stream: Iterator[events.Event], name: str) -> events.Ended:
+    """One line per policy update, each flushed as it is printed, for a program reading
+    the output as the run goes (`racer-tui train ada | tee train.txt`)."""
+    figures = Figures(model=name)
+    ended: events.Ended | None = None
+    for event in stream:
+        figures.fold(event)
+        if isinstance(event, events.Ended):
+            ended = event
+        elif isinstance(event, events.Update):
+            print(
+                f"{name} {figures.elapsed:.0f} s of {figures.minutes * 60:.0f} s: iteration "
+                f"{event.iteration}, {event.total_steps:,} steps, {event.episodes:,} episodes, "
+                f"mean progress {event.mean_progress:.1f} %, best evaluation "
+                f"{figures.best_progress:.1f} %",
+                flush=True,
+            )
+    assert ended is not None
+    _print_ending(console, ended)
+    return ended
+
+
 def _print_ending(console: Console, ended: events.Ended) -> None:
     if ended.kind == "failed":
         return  # the CLI prints the failure as one sentence on stderr
     lap = "-" if ended.best_lap is None else f"{ended.best_lap:.3f} s"
-    if not console.is_terminal:
-        console.line()  # the live view's last frame ends without a newline when piped
     line = Text(
         f"{ended.kind}: {ended.message}. {ended.total_steps:,} steps, {ended.episodes:,} "
         f"episodes, best evaluation progress {ended.best_progress:.1f} %, best mean lap {lap}."
