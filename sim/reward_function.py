@@ -31,9 +31,9 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from sim import reward_limit, reward_sandbox
+from sim import reward_guard, reward_limit, reward_sandbox
+from sim.reward_guard import ForbiddenInReward
 from sim.reward_limit import RewardTimeout
-from sim.reward_sandbox import ForbiddenInReward
 
 if TYPE_CHECKING:  # gymnasium's import is not needed to load a reward function
     from sim.action_space import ActionSpace
@@ -149,7 +149,7 @@ class RewardFunction:
             limit.started = 0.0
             raise self._timed_out(late) from None
         if limit.fired == started:  # it swallowed the interruption and returned later
-            refused = reward_sandbox.take_refusal(started)
+            refused = reward_guard.take_refusal(started)
             if refused is not None:
                 raise self._raised_error(refused)
             raise self._timed_out(RewardTimeout(limit.seconds))
@@ -456,7 +456,7 @@ def _run_module(
     finally:
         if limit is not None:
             limit.end()
-    refused = reward_sandbox.take_refusal(began) if limit is not None else None
+    refused = reward_guard.take_refusal(began) if limit is not None else None
     if refused is not None:  # it swallowed the refusal
         raise _failure(refused, display, filename, "loading the file")
     if limit is not None and limit.overran(began):  # it swallowed the interruption

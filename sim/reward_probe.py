@@ -25,7 +25,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from sim import reward_sandbox
+from sim import reward_guard, reward_sandbox
 from sim.reward_function import RewardFunction, RewardFunctionError
 from sim.reward_lap import LINES, LapPay
 from sim.reward_limit import DEFAULT_SECONDS
@@ -350,7 +350,7 @@ def main() -> int:
 
     reward_sandbox.become_subreaper()  # orphans of the function stay ours to end
     reward_sandbox.install_call_limit(float(request.get("seconds", DEFAULT_SECONDS)), name, stuck)
-    reward_sandbox.guard_reward_calls()
+    reward_guard.guard_reward_calls()
     try:
         track = _prepare(request)
         reward_sandbox.close_off_files(name)

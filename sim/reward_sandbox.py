@@ -6,40 +6,47 @@ container; here it runs on the racer's (or a league host's) machine, so every pr
 runs it (the check's child, sim.reward_probe; the training's processes, sim.training)
 contains it:
 
-- **memory**: the process may hold only `memory_mb` more than it did when the reward was
-  loaded (RLIMIT_DATA); an allocation past that raises MemoryError inside the reward and is
-  reported as "used more than N MB of memory" with its line;
-- **no process, signal or C call**: while a reward call runs (and while its file loads),
-  and in any thread racer code started, an audit hook refuses starting a process
-  (subprocess, os.fork, os.system, os.posix_spawn, os.exec*), sending a signal, calling C
-  through ctypes and ending the process (os._exit, os.abort); the refusal is an exception
-  at the racer's line, reported in one sentence. What escapes the hook (a multiprocessing
-  "spawn" start makes no audit event; Landlock, where there is one, refuses it the
-  program) is caught by the leftovers: the check fails on a call after which the process
-  has a child, and every process that runs reward code is a child subreaper that kills all
-  its descendants when it ends, inside a process session its parent kills as a whole;
-- **files** (sim.landlock, where Linux has Landlock): the process may read only Python's
-  own files, racer-tui's, the system's libraries, the reward file's folder, /proc/self and
-  /dev/null, /dev/urandom, and write nowhere (the trainer's own process: only its model's
-  folder); no TCP. `landlock_status()` says whether it was applied and, if not, why.
+- **memory**: while the file loads, and from the first call on, the process may grow by
+  only `memory_mb` (RLIMIT_DATA; the trainer's own process keeps room for its learner
+  besides); an allocation past that raises MemoryError inside the reward, reported as
+  "used more than N MB of memory" with its line;
+- **processes**: the audit guard (sim.reward_guard) refuses a process, a signal, a C call
+  or an exit at the racer's line. What gets past it (a multiprocessing "spawn" start
+  makes no audit event; where there is Landlock, the kernel refuses it the program) is
+  caught by the leftovers: the check fails a call after which the process has a child;
+  every process that runs reward code is the subreaper of everything under it and kills
+  it all when it ends (`end_descendants`); and its parent kills its whole process session
+  (`kill_session`) once it has exited;
+- **files**: where Linux has Landlock (sim.landlock), once its own reading is done the
+  process may read only Python's files, racer-tui's, the system's libraries, the reward
+  file's folder, /proc/self, /dev/urandom and /dev/null, and write nowhere but /dev/null
+  (the trainer's own process: its model's folder too); no TCP, no program run.
+  `landlock_status()` says whether it was applied and, if not, why. The audit guard
+  holds reward calls to the same files where Landlock does not (`files_guarded`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import errno
 import os
 import resource
 import signal
 import sys
 import threading
-import traceback
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from types import FrameType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from sim import landlock, reward_limit
+from sim.reward_guard import (
+    SYSTEM_READS,
+    exit_now,
+    files_judged,
+    guard_files,
+    own_thread,
+    python_tree,
+)
 
 if TYPE_CHECKING:
     from sim.reward_function import RewardFunctionError
@@ -53,24 +60,6 @@ MEMORY_ENV = "RACER_TUI_REWARD_MEMORY_MB"
 # What DeepRacer lets a reward function import: imported before the files are closed off,
 # so a reward's `import` finds them loaded (the Python tree stays readable for the rest).
 DEEPRACER_MODULES = ("math", "random", "numpy", "scipy", "scipy.spatial", "shapely.geometry")
-
-
-class ForbiddenInReward(BaseException):
-    """Raised inside a reward call at a thing a reward may not do. A BaseException, so a
-    racer's `except Exception:` does not swallow it (a bare `except:` that does is caught
-    when the call returns)."""
-
-    def __init__(self, action: str) -> None:
-        super().__init__(action)
-        self.action = action  # e.g. "starts a process (subprocess.Popen)"
-        self.frames = [
-            (frame.filename, frame.lineno) for frame in traceback.extract_stack(sys._getframe(1))
-        ]
-
-    def line_in(self, filename: str) -> int | None:
-        """The innermost line of `filename` that was running when it was refused."""
-        lines = [line for name, line in self.frames if name == filename and line is not None]
-        return lines[-1] if lines else None
 
 
 # --- memory ------------------------------------------------------------------------------
@@ -146,163 +135,6 @@ def memory_from_environment() -> int:
         return check_memory_mb(float(os.environ.get(MEMORY_ENV, DEFAULT_MEMORY_MB)))
     except ValueError:
         return DEFAULT_MEMORY_MB
-
-
-# --- the audit guard ---------------------------------------------------------------------
-_FORBIDDEN = {
-    "os.fork": "starts a process",
-    "os.forkpty": "starts a process",
-    "os.system": "starts a process",
-    "os.posix_spawn": "starts a process",
-    "os.spawn": "starts a process",
-    "os.exec": "starts a process",
-    "subprocess.Popen": "starts a process",
-    "os.startfile": "starts a process",
-    "os.kill": "sends a signal",
-    "os.killpg": "sends a signal",
-    "signal.pthread_kill": "sends a signal",
-    "ctypes.dlopen": "calls C code through ctypes",
-    "ctypes.dlsym": "calls C code through ctypes",
-    "ctypes.dlsym/handle": "calls C code through ctypes",
-    "ctypes.call_function": "calls C code through ctypes",
-    "resource.setrlimit": "changes its process's limits",
-    "resource.prlimit": "changes its process's limits",
-}
-_refused: ForbiddenInReward | None = None
-_guarded = False
-_real_exit = os._exit
-# racer-tui's own threads in a guarded process (the watchdog); any other Python thread
-# was started by racer code, and is refused what a reward call is.
-_own_threads: set[int] = set()
-
-
-def _in_reward_call() -> bool:
-    limit = reward_limit._ACTIVE
-    if limit is None:
-        return False
-    ident = threading.get_ident()
-    if ident == threading.main_thread().ident:
-        return bool(limit.started)
-    return ident not in _own_threads
-
-
-def _refuse(action: str) -> None:
-    global _refused  # noqa: PLW0603 - read by the call that was running
-    limit = reward_limit._ACTIVE
-    assert limit is not None
-    refusal = ForbiddenInReward(action)
-    _refused = refusal
-    limit.fired = limit.started  # the call fails when it returns, even if it swallows this
-    raise refusal
-
-
-# Events that change files; "open" is judged by its mode, listing a folder by its place.
-_FILE_CHANGES = frozenset(
-    {
-        "os.remove",
-        "os.rename",
-        "os.mkdir",
-        "os.rmdir",
-        "os.truncate",
-        "os.chmod",
-        "os.chown",
-        "os.link",
-        "os.symlink",
-        "os.utime",
-    }
-)
-_WRITE_FLAGS = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_TRUNC | os.O_APPEND
-_readable: tuple[str, ...] | None = None  # where a reward may read; None: not guarded
-
-
-def _audit(event: str, args: tuple[Any, ...]) -> None:
-    what = _FORBIDDEN.get(event)
-    if what is not None:
-        if _in_reward_call():
-            _refuse(f"{what} ({event})")
-    elif (
-        _readable is not None
-        and (event in ("open", "os.listdir", "os.scandir") or event in _FILE_CHANGES)
-        and _in_reward_call()
-    ):
-        _judge_file(event, args)
-
-
-def _judge_file(event: str, args: tuple[Any, ...]) -> None:
-    """A PermissionError, as the system gives one, for a file a reward may not touch (the
-    same files Landlock closes off, for systems and moments it does not cover)."""
-    path = args[0] if args else None
-    if isinstance(path, int) or path is None:
-        return  # an open descriptor, or the working folder: nothing new is reached
-    real = os.path.realpath(os.fsdecode(path))
-    if real == os.devnull:
-        return
-    writing = event in _FILE_CHANGES
-    if event == "open":
-        mode, flags = (args[1], args[2]) if len(args) >= 3 else (None, 0)
-        writing = bool(isinstance(mode, str) and set(mode) & set("wax+")) or bool(
-            isinstance(flags, int) and flags & _WRITE_FLAGS
-        )
-    assert _readable is not None
-    if writing or not any(real == root or real.startswith(root + os.sep) for root in _readable):
-        raise PermissionError(errno.EACCES, "a reward function may not reach this file", path)
-
-
-def _exit_guard(name: str, real: Callable[..., Any]) -> Callable[..., Any]:
-    def guarded(*args: Any) -> Any:
-        if _in_reward_call():
-            _refuse(f"ends its process ({name})")
-        return real(*args)
-
-    return guarded
-
-
-def guard_files(reward_file: str | Path | None) -> None:
-    """From now on, a reward call may read only where `close_off_files` lets it, and write
-    nowhere (by the audit hook: the file guard that holds where Landlock does not)."""
-    global _readable  # noqa: PLW0603
-    reads = [*python_tree(), *(Path(path) for path in SYSTEM_READS)]
-    if reward_file is not None and Path(reward_file).is_file():
-        reads.append(Path(os.path.realpath(reward_file)).parent)
-    _readable = tuple(os.path.realpath(path) for path in reads)
-
-
-def files_guarded() -> bool:
-    """Whether a reward in this process is kept from files (Landlock or the file guard)."""
-    return _readable is not None or _landlock_status == "applied"
-
-
-def guard_reward_calls() -> None:
-    """Refuse, during reward calls, what a reward may not do (see the module docstring).
-    Once per process: an audit hook cannot be removed."""
-    global _guarded  # noqa: PLW0603
-    if _guarded:
-        return
-    _own_threads.update(thread.ident for thread in threading.enumerate() if thread.ident)
-    sys.addaudithook(_audit)
-    guarded_exit = _exit_guard("os._exit", _real_exit)
-    os._exit = guarded_exit
-    with contextlib.suppress(ImportError):
-        import posix
-
-        posix._exit = guarded_exit
-    os.abort = _exit_guard("os.abort", os.abort)
-    _guarded = True
-
-
-def take_refusal(started: float) -> ForbiddenInReward | None:
-    """The refusal of the call that began at `started`, if any (and forget it)."""
-    global _refused
-    refused, _refused = _refused, None
-    limit = reward_limit._ACTIVE
-    if refused is None or limit is None or limit.fired != started:
-        return None
-    return refused
-
-
-def exit_now(code: int) -> None:
-    """End this process at once (racer-tui's own `os._exit`, never refused)."""
-    _real_exit(code)
 
 
 # --- processes ---------------------------------------------------------------------------
@@ -404,37 +236,14 @@ def kill_session(leader_pid: int) -> None:
 _landlock_status = "not applied"
 
 
+def files_guarded() -> bool:
+    """Whether a reward in this process is kept from files (Landlock or the file guard)."""
+    return files_judged() or _landlock_status == "applied"
+
+
 def landlock_status() -> str:
     """ "applied", or why this process's files are not closed off."""
     return _landlock_status
-
-
-def python_tree() -> list[Path]:
-    """Where Python, its libraries and racer-tui are: a reward's lazy imports read there.
-    Not every sys.path entry: `python -m` puts the working folder there, which may be the
-    racer's home."""
-    import site
-
-    roots = {sys.prefix, sys.exec_prefix, sys.base_prefix, sys.base_exec_prefix}
-    roots.update(site.getsitepackages())
-    roots.add(site.getusersitepackages())
-    roots.add(str(Path(__file__).resolve().parent.parent))  # racer-tui's own packages
-    return sorted({Path(os.path.realpath(root)) for root in roots if os.path.isdir(root)})
-
-
-SYSTEM_READS = (
-    "/usr/lib",
-    "/usr/lib64",
-    "/usr/local/lib",
-    "/lib",
-    "/lib64",
-    "/etc/ld.so.cache",
-    "/etc/localtime",
-    "/usr/share/zoneinfo",
-    "/dev/urandom",
-    "/dev/random",
-    "/proc/self",
-)
 
 
 def preimport() -> None:
@@ -485,11 +294,7 @@ def install_call_limit(
     through `report` (from the watchdog thread) and ends the process."""
     limit = reward_limit.install(seconds)
     guard_files(reward_file)
-    _own_threads.update(  # the watchdog, started by the line above before any racer code
-        thread.ident
-        for thread in threading.enumerate()
-        if thread.name == reward_limit.WATCHDOG_NAME and thread.ident
-    )
+    own_thread(reward_limit.WATCHDOG_NAME)  # started by the line above, before racer code
     names = {str(reward_file), os.path.abspath(reward_file)}  # as it may have been compiled
 
     def stuck(limit_seconds: float) -> None:

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from sim import reward_sandbox
+from sim import reward_guard, reward_sandbox
 from sim.env import BatchedDeepRacer, StepInfo
 from sim.garage.folder import ModelFolder
 from sim.training.step_record import EndedEpisode, StepRecorder
@@ -122,7 +122,7 @@ def serve_part(connection: Connection, setup: PartSetup) -> None:
     os.dup2(2, 1)
     sys.stdout = sys.stderr
     reward_sandbox.become_subreaper()
-    reward_sandbox.guard_reward_calls()
+    reward_guard.guard_reward_calls()
     memory_mb = reward_sandbox.memory_from_environment()
     reward_sandbox.set_memory_budget(memory_mb)  # held to while the file loads
     try:

@@ -27,7 +27,7 @@ from pathlib import Path
 from types import FrameType
 from typing import TextIO
 
-from sim import reward_sandbox
+from sim import reward_guard, reward_sandbox
 from sim.reward_limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward_sandbox import DEFAULT_MEMORY_MB
 from sim.training import events
@@ -169,7 +169,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     os.environ[reward_sandbox.MEMORY_ENV] = str(memory_mb)
     reward_sandbox.set_memory_budget(memory_mb)  # held to while the file loads, here too
     reward_sandbox.become_subreaper()
-    reward_sandbox.guard_reward_calls()
+    reward_guard.guard_reward_calls()
     warnings.filterwarnings("ignore")  # library chatter must not reach the racer
     try:
         return _train(args, emit, stop, seconds, memory_mb)

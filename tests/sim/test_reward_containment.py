@@ -187,10 +187,10 @@ def test_the_check_leaves_no_process_of_its_own() -> None:
 GUARDED_CALL = """\
 import subprocess
 import sys
-from sim import reward_sandbox
+from sim import reward_guard, reward_sandbox
 from sim.reward_function import RewardFunctionError, load_reward_function
 reward_sandbox.install_call_limit(5.0, sys.argv[1], lambda error: None)
-reward_sandbox.guard_reward_calls()
+reward_guard.guard_reward_calls()
 try:
     print(load_reward_function(sys.argv[1])({}))
 except RewardFunctionError as error:
