@@ -1,0 +1,67 @@
+"""`reward check` and `train` as a racer meets the reward's containment: one sentence and
+exit code 2, for a function that starts a process and for a memory setting out of range."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import psutil
+import pytest
+
+from racer_tui.cli import main
+from sim.garage.options import new_model
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str]:
+    code = main(list(args))
+    return code, capsys.readouterr().err
+
+
+def test_reward_check_fails_a_function_that_starts_a_process(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    reward = tmp_path / "reward.py"
+    reward.write_text(
+        "import subprocess\n"
+        "def reward_function(params):\n"
+        "    subprocess.Popen(['sleep', '1000'])\n"
+        "    return 1.0\n"
+    )
+    code, err = run_cli(capsys, "reward", "check", str(reward), "--track", "hairpin-circuit")
+    assert code == 2
+    assert err.strip() == (
+        f"racer-tui: {reward} line 3: reward_function starts a process (subprocess.Popen), "
+        "which a reward function may not do; remove it."
+    )
+    assert psutil.Process().children(recursive=True) == []
+
+
+def test_reward_check_holds_the_function_to_the_memory_asked_for(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    reward = tmp_path / "reward.py"
+    reward.write_text("def reward_function(params):\n    return len(bytearray(10**8)) / 1e8\n")
+    code, err = run_cli(capsys, "reward", "check", str(reward), "--reward-memory-mb", "32")
+    assert code == 2
+    assert f"{reward} line 2: reward_function used more than 32 MB of memory" in err
+    code, _ = run_cli(capsys, "reward", "check", str(reward), "--reward-memory-mb", "200")
+    assert code == 0
+
+
+@pytest.mark.parametrize("command", ["check", "train"])
+def test_a_memory_setting_out_of_range_is_one_sentence(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, command: str
+) -> None:
+    if command == "check":
+        reward = tmp_path / "reward.py"
+        reward.write_text("def reward_function(params):\n    return 1.0\n")
+        args = ["reward", "check", str(reward)]
+    else:
+        new_model("tiny")
+        args = ["train", "tiny", "--minutes", "0.01"]
+    code, err = run_cli(capsys, *args, "--reward-memory-mb", "1.5")
+    assert code == 2
+    assert err.strip() == (
+        "racer-tui: --reward-memory-mb: the reward memory limit must be a whole number of MB "
+        "from 16 to 1048576, not 1.5."
+    )
