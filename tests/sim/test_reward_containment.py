@@ -242,3 +242,49 @@ def test_the_file_guard_holds_where_landlock_does_not(tmp_path: Path) -> None:
         f"    return float(open({str(racer / 'weights.txt')!r}).read())\n"
     )
     assert guarded_call(reward, beside) == "2.5"
+
+
+# Code that means to can get past the audit guard (it is Python reaching racer-tui's own
+# modules); what it starts is still found and ended, by the kernel's means.
+PAST_THE_GUARD = """\
+import os
+import sim.reward_limit
+forked = []
+def reward_function(params):
+    sim.reward_limit._ACTIVE = None  # the guard now sees no call running
+    if not forked:
+        forked.append(1)
+        if os.fork() == 0:
+            os.setsid()  # out of the check's session, too
+            try:  # where it may write (a training's model folder), it says it ran
+                open(os.path.join(os.path.dirname(__file__), "spinning"), "w").close()
+            except OSError:
+                pass
+            while True:
+                pass
+    return 1.0
+"""
+
+
+def processes_marked(marker: str) -> list[psutil.Process]:
+    """Living processes whose environment holds `marker` (the test's children inherit it)."""
+    found = []
+    for process in psutil.process_iter(["status"]):
+        try:
+            if process.info["status"] == psutil.STATUS_ZOMBIE:
+                continue
+            if process.environ().get("REWARD_CONTAINMENT_MARKER") == marker:
+                found.append(process)
+        except psutil.Error:
+            continue
+    return found
+
+
+def test_a_fork_that_gets_past_the_guard_fails_the_check_and_is_ended(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    marker = str(uuid.uuid4())
+    monkeypatch.setenv("REWARD_CONTAINMENT_MARKER", marker)
+    message = failure(PAST_THE_GUARD)
+    assert message.startswith("reward.py line 4: reward_function starts a process that outlives")
+    assert processes_marked(marker) == []

@@ -141,3 +141,22 @@ def test_a_reward_that_allocates_in_a_simulation_process_fails_in_a_sentence(
     assert code == 2
     assert "reward_function.py line 2: reward_function used more than 256 MB of memory" in err
     assert psutil.Process().children(recursive=True) == []
+
+
+@pytest.mark.slow
+def test_an_endless_child_that_gets_past_the_guard_ends_with_the_training(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from tests.sim.test_reward_containment import PAST_THE_GUARD, processes_marked
+
+    marker = str(uuid.uuid4())
+    monkeypatch.setenv("REWARD_CONTAINMENT_MARKER", marker)
+    model = new_model("spins")
+    model.reward_file.write_text(PAST_THE_GUARD)
+    code = main(["train", "spins", "--minutes", "0.02", "--json"])
+    out = capsys.readouterr().out
+    assert code == 0  # the child was not seen: the training runs its course, and returns
+    assert events.type_of(events.decode(out.splitlines()[-1])) == "finished"
+    assert (model.path / "spinning").exists()  # the child did run
+    assert processes_marked(marker) == []
+    assert psutil.Process().children(recursive=True) == []
