@@ -593,7 +593,7 @@ class NightsScreen(RacerScreen[None]):
     DEFAULT_CSS = """
     NightsScreen #nights-body { height: 1fr; }
     NightsScreen #nights-list { width: 30; padding: 0 1; }
-    NightsScreen.-narrow #nights-list { width: 20; }
+    NightsScreen.-narrow #nights-list { width: 22; }
     NightsScreen #standings-note { height: auto; color: $warning; }
     NightsScreen #nights { height: 1fr; }
     NightsScreen #night-view { width: 1fr; padding: 0 1; }

@@ -70,7 +70,7 @@ RESULT_COLUMNS = (
 # What tells races apart first, so a narrow terminal still shows it; the rest gives way.
 RECORDED_COLUMNS = (
     "when",
-    Col("racer", keep=5, shrink_to=10, collapses=False),
+    Col("racer", keep=5, shrink_to=8, collapses=False),
     "best lap",
     Col("laps", keep=4),
     Col("track", keep=3, shrink_to=8),
@@ -126,10 +126,16 @@ class RecordedRacesLoaded(Message):
         self.generation = generation
 
 
-def recorded_row(race: RecordedRace) -> list[str | Text]:
-    """A recorded race's cells; dim when it has no trace here to replay."""
+NARROW = 80  # below this the setup column narrows and dates lose their year
+NARROW_SETUP = 24
+
+
+def recorded_row(race: RecordedRace, *, short: bool = False) -> list[str | Text]:
+    """A recorded race's cells; dim when it has no trace here to replay. `short`: the
+    date without its year (a narrow terminal: "05-04 19:00", never a cut time)."""
+    when = race.started_at[:16].replace("T", " ")
     cells: list[str | Text] = [
-        race.started_at[:16].replace("T", " "),
+        when[5:] if short else when,
         Text(race.display_name),
         seconds_text(race.best_lap),
         str(race.valid_laps),
@@ -190,6 +196,9 @@ class RacesScreen(RacerScreen[None]):
         ),
         Binding("ctrl+r", "reload", "Reload", tooltip="Find newly trained models and races"),
     ]
+    DEFAULT_CSS = """
+    RacesScreen #race-history > Label { width: 100%; text-wrap: nowrap; text-overflow: ellipsis; }
+    """
 
     def __init__(self, *, db_path: Path | None = None) -> None:
         """`db_path` None is the league in the data folder."""
@@ -276,10 +285,24 @@ class RacesScreen(RacerScreen[None]):
         table = self.query_one("#recorded-races", DataTable)
         chosen = self.highlighted_recorded
         self.recorded = message.races
-        fill_table(table, RECORDED_COLUMNS, [recorded_row(race) for race in message.races])
+        self._fill_recorded()
         ids = [race.race_id for race in message.races]
         if chosen is not None and chosen.race_id in ids:
             table.move_cursor(row=ids.index(chosen.race_id))
+
+    def _fill_recorded(self) -> None:
+        short = self.has_class("-narrow")
+        rows = [recorded_row(race, short=short) for race in self.recorded]
+        fill_table(self.query_one("#recorded-races", DataTable), RECORDED_COLUMNS, rows)
+
+    def on_resize(self) -> None:
+        narrow = self.size.width < NARROW
+        if narrow != self.has_class("-narrow"):
+            # The history needs the room: the setup narrows (its own style, over the app
+            # stylesheet's width) and dates lose their year.
+            self.set_class(narrow, "-narrow")
+            self.query_one("#race-setup").styles.width = NARROW_SETUP if narrow else None
+            self._fill_recorded()
 
     @property
     def highlighted_recorded(self) -> RecordedRace | None:
@@ -298,7 +321,8 @@ class RacesScreen(RacerScreen[None]):
             [Text(driver.label, style="italic" if driver.folder is None else "")]
             for driver in message.drivers
         ]
-        fill_table(table, [Col("driver", keep=0, shrink_to=12, collapses=False)], rows)
+        column = Col("driver", keep=0, shrink_to=12, collapses=False, cuts_middle=True)
+        fill_table(table, [column], rows)
         labels = [driver.label for driver in self.drivers]
         if chosen is not None and chosen.label in labels:
             table.move_cursor(row=labels.index(chosen.label))

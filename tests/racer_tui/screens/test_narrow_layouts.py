@@ -115,3 +115,27 @@ def test_a_model_without_a_camera_is_not_called_convolutional() -> None:
     assert vector == "dense, shallow (no camera)"
     camera = network_text({"neural_network": shallow, "sensor": ["FRONT_FACING_CAMERA"]})
     assert camera == shallow
+
+
+@pytest.mark.parametrize("section", ["races", "league", "training"])
+async def test_nothing_is_cut_at_60x20(section: str) -> None:
+    """Legible at 60x20: no table scrolls sideways, nothing reaches past the edge."""
+    from tests.racer_tui.test_fits_80x24 import a_busy_league, cut_off
+
+    a_busy_league()
+    app = create_app(start=section)
+    async with app.run_test(size=(60, 20)) as pilot:
+        await settle(pilot)
+        assert cut_off(app) == []
+
+
+async def test_the_nights_screen_fits_60x20() -> None:
+    from tests.racer_tui.test_fits_80x24 import a_busy_league, cut_off
+
+    a_busy_league()
+    app = create_app(start="league")
+    async with app.run_test(size=(60, 20)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        await settle(pilot)
+        assert cut_off(app) == []
