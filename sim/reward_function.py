@@ -574,12 +574,12 @@ def _failure(error: BaseException, display: str, filename: str, who: str) -> Rew
         return RewardFunctionError(display, problem, error.line_in(filename) or line, "remove it")
     megabytes = reward_sandbox.memory_limit_mb()
     if isinstance(error, MemoryError) and megabytes is not None:
-        problem = reward_sandbox.memory_problem(megabytes).replace("reward_function", who, 1)
+        problem = reward_sandbox.memory_problem(megabytes, who)
         return RewardFunctionError(
             display, problem, line, "keep less in memory (smaller lists and arrays)"
         )
     if isinstance(error, SystemExit):
-        problem = f"{who} calls sys.exit() ({_describe_exception(error)}), which ends a process"
+        problem = f"{who} calls sys.exit(), which would end its process"
         return RewardFunctionError(display, problem, line, "remove the exit() call")
     problem = f"{who} raised {_describe_exception(error)}"
     if isinstance(error, PermissionError) and reward_sandbox.files_guarded():

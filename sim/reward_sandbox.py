@@ -283,8 +283,8 @@ def stuck_problem(seconds: float) -> str:
     )
 
 
-def memory_problem(megabytes: int) -> str:
-    return f"reward_function used more than {megabytes} MB of memory"
+def memory_problem(megabytes: int, who: str = "reward_function") -> str:
+    return f"{who} used more than {megabytes} MB of memory"
 
 
 def install_call_limit(
