@@ -558,11 +558,11 @@ CREATE TABLE sync_first_seen (
 """
 
 # Version 14: a pulled result is checked against every other racer's result with its model
-# and seed (a race) or its evaluation files (a submission), so it is not a copy
+# and seed (a race) or its model and track (a submission), so it is not a copy
 # (league.sync.models): found through an index each, not by reading every result.
 COPY_LOOKUPS = """
 CREATE INDEX races_model ON races(model_hash, seed);
-CREATE INDEX submissions_fingerprint ON submissions(fingerprint)
+CREATE INDEX submissions_model ON submissions(model_hash, track_hash)
 """
 
 MIGRATIONS: tuple[Migration, ...] = (

@@ -63,8 +63,16 @@ def submit(league: League, submission: Submission) -> Submitted:
         )
         if existing is not None:
             return Submitted(str(existing["id"]), duplicate=True)
-        ensure_track(league, submission.track_hash, submission.track_name)
+        # Imported here: the league.sync package reads this module's lap columns.
+        from league.sync.models import local_refusal
+
         laps = [lap_row(lap) for lap in submission.laps]
+        borrowed = local_refusal(league, racer, submission.model_hash)
+        if borrowed is not None:
+            raise LeagueError(
+                f"{submission.evaluation_file}: {borrowed}, so it cannot be submitted."
+            )
+        ensure_track(league, submission.track_hash, submission.track_name)
         submission_id = league.insert_record(
             "submissions",
             {

@@ -275,6 +275,18 @@ def _iso(ms: int) -> str:
     return datetime.fromtimestamp(ms / 1000, UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-3] + "Z"
 
 
+def local_refusal(league: League, racer: str, model_hash: str) -> str | None:
+    """Why `racer` may not submit with this model here (the rule for a pulled submission:
+    another racer registered it first, as a model record pulled from the league says), or
+    None. The same evaluation under two names on one machine is the host's own doing."""
+    if model_hash.startswith(REFERENCE_PREFIX):
+        return None
+    first = owner(league, model_hash, Roster.load(league))
+    if first is not None and not same_racer(first.racer, racer):
+        return f"its model {model_hash[:12]} is racer {first.racer}'s (they registered it first)"
+    return None
+
+
 # --- the rule for pulled results ----------------------------------------------------------
 
 
@@ -337,16 +349,19 @@ def _copied(league: League, record: SyncRecord) -> str | None:
     """Why `record` is a copy of another racer's result here, or None."""
     body = record.body
     if record.kind == "submission":
-        row = league.query_one(
-            "SELECT id, racer FROM submissions WHERE fingerprint = ? AND racer <> ? AND id <> ? "
-            "ORDER BY id LIMIT 1",
-            (body["fingerprint"], body["racer"], record.record_id),
+        found = _copied_submission(
+            league,
+            str(body["racer"]),
+            str(body["model_hash"]),
+            str(body["track_hash"]),
+            body["laps"],
+            but=record.record_id,
         )
-        if row is None:
+        if found is None:
             return None
         return (
-            f"it copies racer {row[1]}'s submission {row[0]} (the same evaluation files under "
-            "another name)"
+            f"it copies racer {found[1]}'s submission {found[0]} (the same model, track and "
+            "laps under another name)"
         )
     rows = league.query(
         "SELECT id, racer FROM races WHERE model_hash = ? AND seed = ? AND track_hash = ? "
@@ -366,4 +381,25 @@ def _copied(league: League, record: SyncRecord) -> str | None:
                 f"it copies racer {other}'s race {race_id} (the same model, track, rules, seed "
                 "and laps under another name)"
             )
+    return None
+
+
+def _copied_submission(
+    league: League,
+    racer: str,
+    model_hash: str,
+    track_hash: str,
+    laps: Any,
+    *,
+    but: str = "",
+) -> tuple[str, str] | None:
+    """(id, racer) of another racer's submission here with this model, track and laps."""
+    rows = league.query(
+        "SELECT id, racer FROM submissions WHERE model_hash = ? AND track_hash = ? "
+        "AND racer <> ? AND id <> ? ORDER BY id",
+        (model_hash, track_hash, racer, but),
+    )
+    for submission_id, other in rows:
+        if record_body(league, "submissions", submission_id)["laps"] == laps:
+            return str(submission_id), str(other)
     return None

@@ -7,6 +7,7 @@ loopback server). No forged lap, date or borrowed race reaches any board.
 from __future__ import annotations
 
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -233,3 +234,51 @@ def test_a_records_date_must_agree_with_its_id() -> None:
     moved = make_record(MODEL_KIND, model.record_id, {**model.body, "registered_at": iso(0)})
     with pytest.raises(RecordInvalidError, match=r"its registered_at .* disagree"):
         check_dates(moved)
+
+
+# --- on this machine ---------------------------------------------------------------------
+
+
+def test_submitting_a_model_another_racer_registered_is_refused_here_too(
+    machines: dict[str, Machine],  # noqa: F811
+    tmp_path: Path,
+) -> None:
+    from league.assembler import assemble
+    from league.errors import LeagueError
+    from league.submissions import submit
+    from tests.league.helpers import model_folder
+
+    ana, bob = machines["ana"], machines["bob"]
+    folder = model_folder(tmp_path / "ana-car", laps=(12.4, 12.1, 12.9))
+    submit(ana.league, assemble(str(folder), "ana"))
+    ana.sync()
+    bob.sync()  # ana's model record is here now
+    borrowed = model_folder(tmp_path / "borrowed", laps=(12.0, 11.9, 12.2))  # the same car
+    with pytest.raises(LeagueError, match="is racer ana's \\(they registered it first\\)"):
+        submit(bob.league, assemble(str(borrowed), "bob"))
+    assert bob.league.query_one("SELECT count(*) FROM submissions WHERE racer = 'bob'")[0] == 0
+
+
+def test_a_copied_submission_is_refused_as_a_copy(
+    machines: dict[str, Machine],  # noqa: F811
+    tmp_path: Path,
+) -> None:
+    from league.assembler import assemble
+    from league.submissions import submit
+    from tests.league.helpers import model_folder
+
+    organiser, ana, bob, viewer = (machines[n] for n in ("organiser", "ana", "bob", "viewer"))
+    folder = model_folder(tmp_path / "ana-car", laps=(11.4, 11.6, 11.9))
+    original = submit(ana.league, assemble(str(folder), "ana")).submission_id
+    ana.sync()
+    body = {**record_body(ana.league, "submissions", original), "racer": "bob"}
+    copy = make_record("submission", new_id(), {**body, "submitted_at": now_iso()})
+    push_signed(bob, copy)
+    for machine in (organiser, viewer):
+        machine.sync()
+        stored = machine.league.query(
+            "SELECT racer FROM submissions WHERE id = ?", (copy.record_id,)
+        )
+        assert list(stored) == []
+        reason = machine.quarantine()[f"submission {copy.record_id}"]
+        assert f"it copies racer ana's submission {original}" in reason
