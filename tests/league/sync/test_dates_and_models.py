@@ -94,6 +94,24 @@ def test_a_race_with_a_made_up_model_waits_and_then_is_refused(
         assert summary.waiting == 0
 
 
+def test_a_race_whose_model_record_comes_later_waits_for_it_and_then_counts(
+    machines: dict[str, Machine],  # noqa: F811
+) -> None:
+    organiser, bob = machines["organiser"], machines["bob"]
+    honest = bob.race("bob", [12.0, 11.9])
+    now = int(datetime.now(UTC).timestamp() * 1000)
+    # Pushed before its model record (a push cut short between the two, say).
+    race = race_as_laps(race_as(bob, honest, model_hash="hash-new-car", started_at=iso(now)), 11.1)
+    push_signed(bob, race)
+    organiser.sync()
+    assert organiser.board()["bob"] == pytest.approx(11.8)
+    assert f"race {race.record_id}" in pending_reasons(organiser)
+    push_signed(bob, model_record("bob", "hash-new-car", now - 1000))
+    summary = organiser.sync()
+    assert organiser.board()["bob"] == pytest.approx(11.1)
+    assert pending_reasons(organiser) == {} and summary.waiting == 0
+
+
 def race_as_laps(record: SyncRecord, seconds: float) -> SyncRecord:
     laps = [
         {**lap, "time_seconds": seconds, "raw_seconds": seconds, "penalty_seconds": 0.0}
