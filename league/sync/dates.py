@@ -14,9 +14,10 @@ must have
   a result file imported later, say), never before;
 - when a racer (not an organiser) signed it, neither its id nor its date before the
   league's founding (the founding act's league id is made when the organiser founds it),
-  so a result cannot rank first in a tie by a date older than the league. Racers and tracks may
-  be older: they are names, made on a racer's laptop before they joined, and keep the rule
-  of identity kinds (the first made wins; validate.py keeps them after 2024).
+  so a result cannot rank first in a tie by a date older than the league. Racers and tracks
+  may be older: they are names, made on a racer's laptop before they joined, and keep the
+  rule of identity kinds (the first made wins; check_dates keeps them after 2024); so may
+  a racer's proposal of their key.
 
 `check_dates` needs nothing but the record (validate.py calls it for every kind);
 `founding_refusal` needs the roster (incoming.py calls it once the signer is known).
@@ -64,8 +65,12 @@ DATE_FIELD: Final[dict[str, str]] = {
     "race": "started_at",
     MODEL_KIND: "registered_at",
 }
-# Names rather than results: made on a racer's laptop before they joined the league.
-_OLDER_THAN_THE_LEAGUE: Final = frozenset({"racer", "track", PROFILE_KIND, BUNDLE_KIND})
+# Names rather than results, made on a racer's laptop before they joined the league, and a
+# racer's proposal of their key (it grants nothing, and a laptop that was in another league
+# proposed its key then: refused, its racer could never be admitted here).
+_OLDER_THAN_THE_LEAGUE: Final = frozenset(
+    {"racer", "track", PROFILE_KIND, BUNDLE_KIND, ROSTER_KIND}
+)
 IDENTITY_KINDS: Final = frozenset({"racer", "track", "season"})
 
 

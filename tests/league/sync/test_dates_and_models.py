@@ -300,3 +300,34 @@ def test_a_copied_submission_is_refused_as_a_copy(
         assert list(stored) == []
         reason = machine.quarantine()[f"submission {copy.record_id}"]
         assert f"it copies racer ana's submission {original}" in reason
+
+
+def test_a_key_proposed_before_the_league_was_founded_can_still_be_admitted(
+    machines: dict[str, Machine],  # noqa: F811
+    store_url: str,
+    tmp_path: Path,
+) -> None:
+    from league.records import store_record
+    from league.trust import membership
+
+    organiser = machines["organiser"]
+    dee = Machine(tmp_path, "dee", store_url)
+    # dee's laptop proposed its key when it was in another league, before this one began.
+    before = _founded_ms(organiser) - 2 * DATE_TOLERANCE_MS
+    act = {
+        "action": "propose",
+        "public_key": dee.key.public_hex,
+        "racer": "dee",
+        "role": "racer",
+        "signed_by": dee.key.public_hex,
+        "kept": None,
+        "league": None,
+        "created_at": iso(before),
+    }
+    store_record(dee.league, "roster", new_id(now_ms=before), act)
+    dee.sync()
+    organiser.sync()
+    keys = {row.racer: row.status for row in membership.key_rows(organiser.league, organiser.key)}
+    assert keys["dee"] == "proposed"
+    membership.admit(organiser.league, organiser.key, "dee")
+    dee.league.close()
