@@ -17,7 +17,7 @@ must have
   so a result cannot rank first in a tie by a date older than the league. Racers and tracks
   may be older: they are names, made on a racer's laptop before they joined, and keep the
   rule of identity kinds (the first made wins; check_dates keeps them after 2024); so may
-  a racer's proposal of their key.
+  a racer's proposal of their key, and their model records.
 
 `check_dates` needs nothing but the record (validate.py calls it for every kind);
 `founding_refusal` needs the roster (incoming.py calls it once the signer is known).
@@ -65,11 +65,14 @@ DATE_FIELD: Final[dict[str, str]] = {
     "race": "started_at",
     MODEL_KIND: "registered_at",
 }
-# Names rather than results, made on a racer's laptop before they joined the league, and a
+# Names rather than results, made on a racer's laptop before they joined the league; a
 # racer's proposal of their key (it grants nothing, and a laptop that was in another league
-# proposed its key then: refused, its racer could never be admitted here).
+# proposed its key then: refused, its racer could never be admitted here); and a model
+# record, made at a racer's first push, before their machine knows when the league began,
+# and dated by their first result with the model (whose model is whose goes by which
+# record was seen first, never by its date).
 _OLDER_THAN_THE_LEAGUE: Final = frozenset(
-    {"racer", "track", PROFILE_KIND, BUNDLE_KIND, ROSTER_KIND}
+    {"racer", "track", PROFILE_KIND, BUNDLE_KIND, ROSTER_KIND, MODEL_KIND}
 )
 IDENTITY_KINDS: Final = frozenset({"racer", "track", "season"})
 

@@ -331,3 +331,35 @@ def test_a_key_proposed_before_the_league_was_founded_can_still_be_admitted(
     assert keys["dee"] == "proposed"
     membership.admit(organiser.league, organiser.key, "dee")
     dee.league.close()
+
+
+def test_a_new_racers_old_results_stay_out_and_their_new_ones_count(
+    machines: dict[str, Machine],  # noqa: F811
+    store_url: str,
+    tmp_path: Path,
+) -> None:
+    from dataclasses import replace
+
+    from league.races import record_race
+    from league.trust import membership
+    from sim.track_catalog import resolve_track
+    from tests.league.helpers import race_result
+    from tests.league.sync.test_signed_results import HAIRPIN
+
+    organiser, viewer = machines["organiser"], machines["viewer"]
+    dee = Machine(tmp_path, "dee", store_url)
+    # dee raced her car at home before the league began, and again since.
+    before = _founded_ms(organiser) - 2 * DATE_TOLERANCE_MS
+    track = resolve_track(HAIRPIN)
+    old = race_result("dee", [10.0, 10.1], track=track, model="car-dee", started_at=iso(before))
+    old_id = record_race(dee.league, replace(old, result_id=new_id(now_ms=before + 60_000)))
+    dee.race("dee", [11.0, 10.9])
+    dee.sync()  # her first: her model is registered as of her first race with it
+    organiser.sync()
+    membership.admit(organiser.league, organiser.key, "dee")
+    organiser.sync()
+    viewer.sync()
+    assert viewer.board()["dee"] == pytest.approx(10.9)
+    assert "before this league was founded" in viewer.quarantine()[f"race {old_id}"]
+    assert pending_reasons(viewer) == {}
+    dee.league.close()
