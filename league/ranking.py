@@ -4,6 +4,11 @@ results with `rank`, so every racer computes the same order from the same record
 The order is total, so a tie never depends on row order: the ranking score (lower is
 better; no score ranks last), then fewer off-tracks in the scoring lap(s), then more valid
 laps, then the earlier result, then the racer's name, and finally the record id.
+
+"The earlier result" is the time a result claims (`recorded_at`), which a pull keeps from
+being forged: dated no earlier than the league's founding, agreeing with its id, and for a
+result that arrives more than a few minutes after its date and would win a tie by it, the
+time this league first saw it (league.sync.dates; the cache's recorded_at is that time).
 """
 
 from __future__ import annotations
