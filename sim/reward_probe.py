@@ -353,6 +353,7 @@ def main() -> int:
     reward_guard.guard_reward_calls()
     try:
         track = _prepare(request)
+        reward_sandbox.preimport(str(request["source"]))
         reward_sandbox.close_off_files(name)
         reward_sandbox.limit_memory(int(request.get("memory_mb", DEFAULT_MEMORY_MB)))
         answer = _probe(request, track)

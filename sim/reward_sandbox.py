@@ -27,6 +27,7 @@ contains it:
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import os
 import resource
@@ -57,9 +58,10 @@ MAX_MEMORY_MB = 1 << 20
 # How the training's simulation processes (started by multiprocessing "spawn", which hands
 # them nothing but their setup) learn the limit the racer asked for.
 MEMORY_ENV = "RACER_TUI_REWARD_MEMORY_MB"
-# What DeepRacer lets a reward function import: imported before the files are closed off,
-# so a reward's `import` finds them loaded (the Python tree stays readable for the rest).
-DEEPRACER_MODULES = ("math", "random", "numpy", "scipy", "scipy.spatial", "shapely.geometry")
+# What DeepRacer lets a reward function import. Those a reward's code names are imported
+# before its file loads, so the import costs none of its time and memory limits (scipy's
+# modules take a second); the Python tree stays readable for any other.
+DEEPRACER_PACKAGES = frozenset({"math", "random", "numpy", "scipy", "shapely"})
 
 
 # --- memory ------------------------------------------------------------------------------
@@ -246,12 +248,30 @@ def landlock_status() -> str:
     return _landlock_status
 
 
-def preimport() -> None:
-    """Import what DeepRacer lets a reward import (skipping any not installed)."""
+def named_imports(source: str) -> list[str]:
+    """The modules of DEEPRACER_PACKAGES that `source` imports, anywhere in it (`from
+    scipy import spatial` names scipy.spatial too: it may be a module)."""
+    try:
+        tree = ast.parse(source)
+    except (SyntaxError, ValueError):
+        return []
+    names: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            names.add(node.module)
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
+    return sorted(name for name in names if name.split(".")[0] in DEEPRACER_PACKAGES)
+
+
+def preimport(source: str) -> None:
+    """Import the modules DeepRacer allows that `source` names (what is not a module, or
+    not installed, is left to the reward's own import to say)."""
     import importlib
 
-    for name in DEEPRACER_MODULES:
-        with contextlib.suppress(ImportError):
+    for name in named_imports(source):
+        with contextlib.suppress(Exception):
             importlib.import_module(name)
 
 
@@ -264,9 +284,9 @@ def close_off_files(
 ) -> str:
     """Landlock this process: read only the Python tree, the system's libraries, the reward
     file's folder, /proc/self and `reads`; write only to /dev/null and `writable`. Call
-    after every import the process needs. Returns (and records) "applied" or why not."""
+    after every file the process itself needs is read. Returns (and records) "applied" or
+    why not."""
     global _landlock_status  # noqa: PLW0603
-    preimport()
     reads = [*python_tree(), *(Path(path) for path in SYSTEM_READS), *reads]
     if reward_file is not None and Path(reward_file).is_file():
         reads.append(Path(os.path.realpath(reward_file)).parent)

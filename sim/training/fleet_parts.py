@@ -163,15 +163,18 @@ def _build_part(
 ) -> tuple[BatchedDeepRacer, StepRecorder | None]:
     from sim.realworld.training import folder_training_config
 
+    folder = ModelFolder(Path(setup.folder))
     if setup.reward_seconds is not None:
         # From the watchdog thread while the main thread is stuck in racer code: said as
         # the trainer's own process says it (sim.reward_sandbox.install_call_limit).
         reward_sandbox.install_call_limit(
             setup.reward_seconds,
-            ModelFolder(Path(setup.folder)).reward_file,
+            folder.reward_file,
             lambda error: _send_error(connection, error),
         )
-    config = folder_training_config(ModelFolder(Path(setup.folder)))
+    # What the reward imports is imported first: its load and first call are timed.
+    reward_sandbox.preimport(folder.reward_source())
+    config = folder_training_config(folder)
     part = setup.part
     batch = BatchedDeepRacer(
         config, part.cars, setup.seed, first_car=part.first_car, fleet_cars=setup.fleet_cars

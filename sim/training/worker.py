@@ -239,6 +239,8 @@ def _train(
         # Every call of the racer's reward function (and loading its file) is timed: one
         # that hangs fails the training in a sentence naming its line.
         reward_sandbox.install_call_limit(seconds, folder.reward_file, stuck)
+        # What the reward imports is imported first: its load and first call are timed.
+        reward_sandbox.preimport(folder.reward_source())
         if folder.is_training() or not _lock_for_training(folder.training_lock_file):
             raise ModelError(
                 f"model {folder.name!r} is already training in another process; "

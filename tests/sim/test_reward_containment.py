@@ -14,7 +14,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from sim import landlock
+from sim import landlock, reward_sandbox
 from sim.reward_function import RewardFunctionError
 from sim.reward_probe import check_reward_source
 
@@ -288,3 +288,27 @@ def test_a_fork_that_gets_past_the_guard_fails_the_check_and_is_ended(
     message = failure(PAST_THE_GUARD)
     assert message.startswith("reward.py line 4: reward_function starts a process that outlives")
     assert processes_marked(marker) == []
+
+
+def test_the_modules_a_reward_names_are_imported_before_it_is_timed() -> None:
+    source = (
+        "import math, os\n"
+        "from scipy import spatial\n"
+        "def reward_function(params):\n"
+        "    from shapely.geometry import Point\n"
+        "    import numpy as np\n"
+        "    return 1.0\n"
+    )
+    assert reward_sandbox.named_imports(source) == [
+        "math",
+        "numpy",
+        "scipy",
+        "scipy.spatial",
+        "shapely.geometry",
+        "shapely.geometry.Point",
+    ]
+    assert reward_sandbox.named_imports("def broken(:\n") == []
+    # scipy.spatial takes about a second to import: loaded beforehand, it is not the
+    # file's, and a short limit on loading holds.
+    report = check_reward_source(source, "reward.py", seconds=0.25)
+    assert report.sample_reward == 1.0
