@@ -171,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
         "lap_reward_mean": float(np.mean(lap_rewards)),
         "lap_reward_max": float(np.max(lap_rewards)),
         "lap_reward_total": float(np.sum(probe.lap_rewards)),
+        "files_closed_off": probe.landlock == "applied",
     }
     if args.json:
         print_json(report)
@@ -184,6 +185,13 @@ def run(args: argparse.Namespace) -> int:
         table.add_row(f"  reward {key}", f"{report['lap_reward_' + key]:.4f}")
     print_table(table)
     print("OK: the function ran on every step without an error.")
+    if probe.landlock != "applied":
+        # Said, not failed: the racer learns that this system cannot keep the code from
+        # their files (the audit guard still holds what it can: sim.reward_guard).
+        print(
+            f"Note: {probe.landlock}, so only Python's audit hooks kept this function from "
+            "your files; read a function you did not write before you run it."
+        )
     return 0
 
 

@@ -43,6 +43,8 @@ class ProbeReport:
     sample_reward: float
     track: str | None  # the track the reference lap was scored on, if any
     lap_rewards: tuple[float, ...]
+    # "applied" when Landlock closed off the files, else why not (sim.reward_sandbox)
+    landlock: str = ""
 
 
 def check_reward_source(
@@ -57,7 +59,12 @@ def check_reward_source(
     """Run the code named `name` (a file path or a template's file name) in a child
     process; raise `RewardFunctionError` for anything wrong with it."""
     ok = _ask_child("check", source, name, seconds, deadline, track=track, memory_mb=memory_mb)
-    return ProbeReport(float(ok["sample_reward"]), ok["track"], tuple(ok["lap_rewards"]))
+    return ProbeReport(
+        float(ok["sample_reward"]),
+        ok["track"],
+        tuple(ok["lap_rewards"]),
+        str(ok.get("landlock", "")),
+    )
 
 
 @dataclass(frozen=True)
@@ -267,7 +274,8 @@ def _probe(request: dict[str, Any], track: Any) -> dict[str, Any]:
         # The lap runs on the file loaded afresh, as a DeepRacer worker starts with it:
         # state the sample call left in the module does not leak into the lap.
         lap = _reference_lap_rewards(reward.fresh(), track)
-    return {"ok": {"sample_reward": sample, "track": shown_track, "lap_rewards": list(lap)}}
+    answer = {"sample_reward": sample, "track": shown_track, "lap_rewards": list(lap)}
+    return {"ok": {**answer, "landlock": reward_sandbox.landlock_status()}}
 
 
 def _lap_answer(reward: Any, track: Any, request: dict[str, Any]) -> list[dict[str, Any]]:

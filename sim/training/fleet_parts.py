@@ -128,7 +128,9 @@ def serve_part(connection: Connection, setup: PartSetup) -> None:
     try:
         try:
             batch, recorder = _build_part(connection, setup)
-            reward_sandbox.close_off_files(ModelFolder(Path(setup.folder)).reward_file)
+            status = reward_sandbox.close_off_files(ModelFolder(Path(setup.folder)).reward_file)
+            if status != "applied":  # recorded in the training's log
+                print(f"reward function's files not closed off: {status}", file=sys.stderr)
             reward_sandbox.limit_memory(memory_mb)
             connection.send(("ready", None))
         except BaseException as error:

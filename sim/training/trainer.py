@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -243,9 +244,11 @@ class Trainer:
         reward_sandbox.limit_memory(megabytes, learner_mb=self._learner_mb())
         figures = [Path(f"/proc/{process.pid}") for process in self._processes[1:]]
         # Signals stay allowed: the trainer ends its simulation processes.
-        reward_sandbox.close_off_files(
+        status = reward_sandbox.close_off_files(
             self.folder.reward_file, [self.folder.path], reads=figures, scope_signals=False
         )
+        if status != "applied":  # recorded in the training's log, where its faults go
+            print(f"reward function's files not closed off: {status}", file=sys.stderr)
 
     def _learner_mb(self) -> int:
         """Room for the learner beyond the reward's: its rollout of float32 observations,

@@ -3,12 +3,14 @@ exit code 2, for a function that starts a process and for a memory setting out o
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import psutil
 import pytest
 
 from racer_tui.cli import main
+from sim import landlock
 from sim.garage.options import new_model
 
 
@@ -65,3 +67,13 @@ def test_a_memory_setting_out_of_range_is_one_sentence(
         "racer-tui: --reward-memory-mb: the reward memory limit must be a whole number of MB "
         "from 16 to 1048576, not 1.5."
     )
+
+
+def test_reward_check_says_whether_the_files_were_closed_off(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    reward = tmp_path / "reward.py"
+    reward.write_text("def reward_function(params):\n    return 1.0\n")
+    assert main(["reward", "check", str(reward), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["files_closed_off"] is (landlock.abi_version() >= 1)
