@@ -353,7 +353,6 @@ def main() -> int:
         answer_stream.flush()
 
     def stuck(error: RewardFunctionError) -> None:
-        reward_sandbox.end_descendants()
         say(_error_answer(error.display, error.problem, error.advice, error.line))
 
     reward_sandbox.become_subreaper()  # orphans of the function stay ours to end

@@ -329,6 +329,7 @@ def install_call_limit(
                 advice="make it return faster",
             )
         )
+        end_descendants()  # what the racer's code may have left goes with the process
         exit_now(1)
 
     limit.on_stuck = stuck
