@@ -117,6 +117,11 @@ def _end_session_when_done(pid: int) -> None:
     kill_session(pid)
 
 
+def _settle(future: asyncio.Future[None]) -> None:
+    if not future.done():
+        future.set_result(None)
+
+
 def _tail(handle: IO[bytes]) -> str:
     handle.seek(0, os.SEEK_END)
     size = handle.tell()
@@ -251,10 +256,18 @@ class AsyncTrainingProcess:
         self._stderr = stderr
         self.ended: events.Ended | None = None
         # Not `process.wait()`: asyncio's waits for the child's pipes to close too, which
-        # is what an orphan holding them prevents.
-        self._session_ender = asyncio.ensure_future(
-            asyncio.to_thread(_end_session_when_done, process.pid)
-        )
+        # is what an orphan holding them prevents. Nor `asyncio.to_thread`: the loop waits
+        # for its executor's threads as it closes, and an app that leaves a training running
+        # would then wait for the training.
+        loop = asyncio.get_running_loop()
+        self._session_ended: asyncio.Future[None] = loop.create_future()
+
+        def end_session() -> None:
+            _end_session_when_done(process.pid)
+            with contextlib.suppress(RuntimeError):  # the loop has closed: nobody waits
+                loop.call_soon_threadsafe(_settle, self._session_ended)
+
+        threading.Thread(target=end_session, name="training-session", daemon=True).start()
 
     @classmethod
     async def start(
@@ -290,8 +303,8 @@ class AsyncTrainingProcess:
             if isinstance(event, events.Ended):
                 self.ended = event
             yield event
+        await self._session_ended  # the child has exited and its session is ended
         code = await self._process.wait()
-        await self._session_ender
         if self.ended is None:
             self.ended = failure_from_stderr(code, _tail(self._stderr), elapsed=elapsed)
             yield self.ended
