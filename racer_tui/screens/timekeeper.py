@@ -26,7 +26,7 @@ from textual.widgets import Digits, Label, Static
 
 from league.live_heat import LiveHeatWriter
 from league.timekeeper.feed import TIMER_ENV, FeedError, Trigger, follow, parse_trigger
-from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat
+from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat, physical_floor
 from league.timekeeper.journal import HeatJournal, Resumed, resume_heat, take_input
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.dialogs import ask
@@ -107,7 +107,10 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
     def __init__(self, setup: TimekeeperSetup) -> None:
         super().__init__()
         self.setup = setup
-        self.heat = TimekeptHeat(setup.rules)
+        # No lap under what a real car could drive is captured (the hull at a real car's
+        # top speed): a double press mid-lap is said at once, not when the heat is recorded.
+        self.floor_seconds = physical_floor(setup.track)
+        self.heat = TimekeptHeat(setup.rules, floor_seconds=self.floor_seconds)
         self.clock: Callable[[], float] = time.monotonic  # a test may drive its own clock
         self.said = Text("Space starts the race when the car leaves the line.", style="dim")
         self._stop_feed = threading.Event()
@@ -144,7 +147,9 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             self._follow_timer(timer)
         journal = self._journal
         if journal is not None:
-            resumed = resume_heat(journal.path, journal.heat_id, self.setup.rules)
+            resumed = resume_heat(
+                journal.path, journal.heat_id, self.setup.rules, floor_seconds=self.floor_seconds
+            )
             if resumed is not None:
                 self._offer_to_resume(resumed)
 

@@ -300,3 +300,23 @@ async def test_a_lap_that_did_not_finish_is_not_struck_out_in_name_only() -> Non
         await pilot.press("x")  # the newest lap is selected
         assert str(keeper.said) == ("Lap 2 did not finish, so it never counts; nothing to strike.")
         assert [row[-1] for row in keeper.query_one(LapList).rows()][-1] == "not finished"
+
+
+async def test_a_lap_faster_than_a_real_car_can_drive_is_not_captured() -> None:
+    track = resolve_track("beginner-oval")
+    setup = TimekeeperSetup(track, RaceRules(), "eve", "red car")
+    keeper = TimekeeperScreen(setup)
+    watch = Stopwatch()
+    keeper.clock = watch
+    app = OneScreenApp(keeper)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.press("space")
+        floor = keeper.heat.floor_seconds
+        assert floor is not None and floor > 2.0  # the shortest loop at a real car's speed
+        watch.now += floor - 0.5  # a press mid-lap, past the double-press second
+        await pilot.press("l")
+        assert "faster than a real car can drive this track" in str(keeper.said)
+        assert keeper.query_one(LapList).rows() == []
+        watch.now += 10.0
+        await pilot.press("l")
+        assert len(keeper.query_one(LapList).rows()) == 1  # the lap goes on and is captured
