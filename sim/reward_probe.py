@@ -12,7 +12,8 @@ answers with one JSON line. `map_reward_source` asks the child for a reward map 
 its process, starts a process, allocates without bound, raises KeyboardInterrupt), the
 caller gets a `ProbeReport` or a `RewardFunctionError` in one sentence, its own process
 never ran a line of it, and no process of the check outlives it. What the function prints
-goes to /dev/null, never to a pipe the caller waits on.
+goes to /dev/null, never to a pipe the caller waits on. (Code that means to can get past
+the audit guard and write a false answer: the check is for the racer's own use.)
 """
 
 from __future__ import annotations
