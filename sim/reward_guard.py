@@ -39,14 +39,16 @@ class ForbiddenInReward(BaseException):
     def __init__(self, action: str) -> None:
         super().__init__(action)
         self.action = action  # e.g. "starts a process (subprocess.Popen)"
+        # Innermost first; file names and line numbers only: reading source lines would
+        # open files, inside the very hook that judges opening them.
         self.frames = [
-            (frame.filename, frame.lineno) for frame in traceback.extract_stack(sys._getframe(1))
+            (frame.f_code.co_filename, line)
+            for frame, line in traceback.walk_stack(sys._getframe(1))
         ]
 
     def line_in(self, filename: str) -> int | None:
         """The innermost line of `filename` that was running when it was refused."""
-        lines = [line for name, line in self.frames if name == filename and line is not None]
-        return lines[-1] if lines else None
+        return next((line for name, line in self.frames if name == filename), None)
 
 
 def python_tree() -> list[Path]:
