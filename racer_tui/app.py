@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 from textual import events
-from textual.app import App
+from textual.app import App, ScreenStackError
 from textual.binding import Binding, BindingType
 from textual.dom import DOMNode
 from textual.screen import Screen
@@ -249,7 +249,11 @@ class RacerTuiApp(App[int]):
     # app) or while the screen on top has not mounted; waiting keys keep their order.
 
     def _ready_for_input(self) -> bool:
-        if not self.screen.is_mounted:
+        try:
+            screen = self.screen
+        except ScreenStackError:  # starting or stopping: Textual's own handling says what
+            return True
+        if not screen.is_mounted:
             return False
         event = self._key_in_flight
         if event is None:
@@ -290,7 +294,7 @@ class RacerTuiApp(App[int]):
         for attempt in range(HELD_KEY_CHECKS):
             if self._ready_for_input():
                 break
-            screen = self.screen
+            screen = self.screen  # mounted or not: `_ready_for_input` read it
             if not screen.is_mounted:
                 await screen._mounted_event.wait()
             else:  # the widget the last key went to is still at it: let it run

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from textual import events
 from textual.await_complete import AwaitComplete
 from textual.screen import Screen
-from textual.widgets import OptionList
+from textual.widgets import DataTable, OptionList
 
 PATCHED = "_racer_tui_workaround"  # marks a patched method, so no patch is applied twice
 LEAVING = "_racer_tui_leaving"  # a screen whose dismissal waits for the screens above it
@@ -23,6 +24,8 @@ def apply_workarounds() -> None:
         _page_keys_wait_for_lines()
     if not getattr(Screen.dismiss, PATCHED, False):
         _a_screen_is_dismissed_once()
+    if not getattr(DataTable._on_click, PATCHED, False):
+        _clicks_on_a_table_without_columns()
 
 
 def _page_keys_wait_for_lines() -> None:
@@ -86,3 +89,25 @@ def _a_screen_is_dismissed_once() -> None:
 
     setattr(dismiss, PATCHED, True)
     Screen.dismiss = dismiss  # type: ignore[method-assign]
+
+
+def _clicks_on_a_table_without_columns() -> None:
+    """Textual 8.2.8: a click on a DataTable's header reads the column under it by index
+    (`ordered_columns[column]`) without checking there is one; a table with no columns yet
+    (a night with no heats, a board being refilled) draws its header row all the same, and
+    a click there raised IndexError (found by the monkey on the Nights screen, issue 42).
+    A click on a header or row label that is not there does nothing."""
+    original = DataTable._on_click
+
+    async def on_click(self: DataTable[Any], event: events.Click) -> None:
+        meta = event.style.meta
+        row, column = meta.get("row"), meta.get("column")
+        if isinstance(row, int) and isinstance(column, int):
+            if row == -1 and self.show_header and not 0 <= column < len(self.ordered_columns):
+                return
+            if column == -1 and self.show_row_labels and not 0 <= row < len(self.ordered_rows):
+                return
+        await original(self, event)
+
+    setattr(on_click, PATCHED, True)
+    DataTable._on_click = on_click  # type: ignore[method-assign]

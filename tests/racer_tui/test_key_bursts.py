@@ -139,3 +139,30 @@ async def test_a_save_that_ends_while_discard_is_asked_closes_the_editor_and_its
         await drain(pilot)
         assert app._exception is None
         assert isinstance(app.screen, GarageScreen)
+
+
+async def test_a_click_on_the_header_of_a_table_without_columns_does_nothing() -> None:
+    # Found by the monkey on the Nights screen (its heats table before a draw): Textual's
+    # DataTable read the clicked header's column by index and raised IndexError.
+    from textual.app import App, ComposeResult
+    from textual.widgets import DataTable
+
+    from racer_tui.textual_workarounds import apply_workarounds
+
+    class OneTable(App[None]):
+        def compose(self) -> ComposeResult:
+            yield DataTable(cursor_type="row")
+
+    apply_workarounds()
+    app = OneTable()
+    async with app.run_test(size=(40, 10)) as pilot:
+        table = app.query_one(DataTable)
+        await pilot.click(DataTable, offset=(3, 0))
+        table.add_columns("heat", "car")
+        table.add_row("1", "ada")
+        await pilot.pause()
+        table.clear(columns=True)
+        await pilot.click(DataTable, offset=(3, 0))
+        await pilot.pause()
+        assert app._exception is None
+        assert app.is_running
