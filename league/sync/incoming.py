@@ -130,7 +130,9 @@ def apply_page(league: League, store: str, records: Sequence[SyncRecord]) -> Pag
     for record in sorted(records, key=_sort_key):
         outcome = _apply_trusted(league, store, record, touched=touched, trust=trust, result=result)
         _count(result, record, outcome)
-        if outcome not in ("conflict", "known"):
+        if outcome not in ("conflict", "known") and not (
+            outcome == "held" and _holds_another_copy(league, record)
+        ):
             result.in_store.append(RecordRef.of(record))
     if trust.changed:
         _retry_held(league, result, touched, trust)
@@ -294,6 +296,19 @@ def _apply_trusted(
         trust.roster = Roster.load(league)
         trust.changed = True
     return outcome
+
+
+def _holds_another_copy(league: League, record: SyncRecord) -> bool:
+    """Whether this league holds other content under the key of a record it holds back.
+    Then the store's copy is someone's forgery of a record here, and the bookkeeping keeps
+    saying the store holds the one here: a machine writes back only its own records that
+    it knows it put in the store (league.sync.restore), and would otherwise take the
+    forgery for what it had pushed."""
+    table = TABLE_OF_KIND.get(record.kind)
+    if table is None:
+        return False
+    row = league.query_one(f"SELECT content_hash FROM {table} WHERE id = ?", (record.record_id,))
+    return row is not None and row[0] != record.content_hash
 
 
 def _already_here(league: League, record: SyncRecord) -> bool:

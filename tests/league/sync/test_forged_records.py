@@ -25,7 +25,7 @@ from tests.league.sync.test_signed_results import (  # the league of machines th
     machines,  # noqa: F401 (a fixture)
 )
 
-FORGED_LAP = 3.5
+FORGED_LAP = 3.5  # under the floor: the forgeries here are refused on their laps or seal
 
 
 def honest_race(machine: Machine, race_id: str) -> SyncRecord:
@@ -112,6 +112,30 @@ def test_the_honest_result_reaches_a_fresh_machine_once_its_racer_syncs_again(
     assert FORGED_LAP not in viewer.board().values()
     # Writing it back happens once: the spare copy stays genuine.
     assert not any(race_id in note for note in ana.sync().notes)
+
+
+def test_a_forgery_signed_with_another_racers_key_is_written_back_too(
+    machines: dict[str, Machine],  # noqa: F811
+) -> None:
+    # Signed by bob, whose key is admitted: the seal checks out, and the roster holds it
+    # back as not ana's. ana's own sync pulls it (DynamoDB gives the re-written item again)
+    # and must still know that what she pushed is gone from the store.
+    ana, bob, viewer = machines["ana"], machines["bob"], machines["viewer"]
+    race_id = ana.race("ana", [12.5, 12.4])
+    ana.sync()
+    honest = honest_race(ana, race_id)
+    laps = [{**lap, "time_seconds": 12.0, "raw_seconds": 12.0} for lap in honest.body["laps"]]
+    body = {**honest.body, "laps": laps}
+    forged = make_record("race", race_id, body)  # possible laps: only the seal tells
+    overwrite(ana.url, forged.sealed(make_seal(forged, bob.key)))
+
+    restored = ana.sync()
+    assert any(race_id in note and "wrote it back" in note for note in restored.notes), (
+        restored.notes
+    )
+    viewer.sync()
+    assert laps_of(viewer, race_id) == [12.5, 12.4]
+    assert "signed with racer bob's key" in viewer.quarantine()[f"race {race_id}"]
 
 
 def test_a_machine_that_had_the_record_keeps_it_when_the_store_copy_is_forged(
