@@ -68,15 +68,22 @@ class NightRead(Message):
         self.state = state
 
 
-def standings_table(state: NightState, highlight: str | None, spaced: bool) -> Table:
+NARROW = 70  # below this many columns the gap goes: the names need the room
+
+
+def standings_table(
+    state: NightState, highlight: str | None, spaced: bool, narrow: bool = False
+) -> Table:
     """The night's standings in big, spaced rows: one rank per racer (a racer without a
-    counting lap is unplaced, '-'), the gap to the leader, and the points."""
+    counting lap is unplaced, '-'), the gap to the leader (not when `narrow`), and the
+    points."""
     table = Table(box=box.SIMPLE_HEAD, expand=True, padding=(0, 1), show_edge=False)
     table.add_column("#", justify="right", style="bold", width=3)
     table.add_column("racer", ratio=3, no_wrap=True, overflow="ellipsis")
     table.add_column("car", ratio=3, no_wrap=True, overflow="ellipsis")
     table.add_column(SCORE_TITLES[state.night.rules.ranking], justify="right", width=9)
-    table.add_column("gap", justify="right", width=8)
+    if not narrow:
+        table.add_column("gap", justify="right", width=8)
     table.add_column("laps", justify="right", width=4)
     table.add_column("pts", justify="right", width=4)
     leader = state.standings[0].entry.score if state.standings else None
@@ -93,16 +100,16 @@ def standings_table(state: NightState, highlight: str | None, spaced: bool) -> T
         style = "on grey15" if index % 2 else ""
         if highlight is not None and entry.racer == highlight:
             style = "bold black on yellow"
-        table.add_row(
+        cells = [
             Text(str(standing.position) if standing.position is not None else "-"),
             Text(entry.display_name, style="bold"),  # plain text, never markup
             Text(car),
             Text(clock_text(score) if score is not None else "-", style="bold"),
-            Text(gap),
+            *([] if narrow else [Text(gap)]),
             Text(str(entry.valid_laps)),
             Text(str(standing.points), style="bold"),
-            style=style,
-        )
+        ]
+        table.add_row(*cells, style=style)
         if spaced:
             table.add_row()  # readable from the back of the room
     return table
@@ -253,7 +260,8 @@ class NightProjectorScreen(KioskScreen):
             return
         room = panel.size.height
         spaced = room == 0 or 2 * len(state.standings) + 2 <= room
-        panel.update(standings_table(state, self.highlight, spaced))
+        narrow = 0 < panel.size.width < NARROW
+        panel.update(standings_table(state, self.highlight, spaced, narrow))
 
     def _draw_now(self) -> None:
         state, live = self.state, self.live

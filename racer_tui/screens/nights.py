@@ -105,9 +105,9 @@ NIGHT_COLUMNS = (replace(NAME, label="night"), Col("track", keep=1, shrink_to=8)
 # The car says who is physical: it loses the end of its name, never its column.
 HEAT_COLUMNS = (
     "#",
-    replace(NAME, label="racer"),
-    Col("car", keep=2, shrink_to=8, collapses=False, keeps_tail=True),
-    Col("result", keep=1, shrink_to=8, collapses=False),
+    replace(NAME, label="racer", shrink_to=8),
+    Col("car", keep=2, shrink_to=9, collapses=False),
+    Col("result", keep=1, shrink_to=10, collapses=False),  # "best 5.900" is never cut
 )
 PHYSICAL_RULES_NOTE = (
     "A physical car is timed by hand: the physical rules (no time added per reset) are "
@@ -291,6 +291,15 @@ class NewNightDialog(FormDialog[NightRequest]):
                 held_on=held_on,
             )
         )
+
+
+def car_cell(entrant: Entrant) -> Text:
+    """The car in the heats table, its kind first for a physical one ("physical: blue
+    car"): a narrow table cuts the end, and who is physical must stay readable."""
+    if is_physical(entrant.model):
+        name = car_name(entrant.model)
+        return Text(name if name == "physical car" else f"physical: {name}")
+    return Text(entrant.car)
 
 
 @dataclass(frozen=True)
@@ -734,11 +743,11 @@ class NightsScreen(RacerScreen[None]):
             else:
                 result = Text("waiting", style="dim")
             rows.append(
-                [str(number), Text(heat.entrant.display_name), Text(heat.entrant.car), result]
+                [str(number), Text(heat.entrant.display_name), car_cell(heat.entrant), result]
             )
         for entrant in state.undrawn:  # listed as they are added, before any draw
-            waiting = Text("entered (d draws)", style="dim")
-            rows.append(["", Text(entrant.display_name), Text(entrant.car), waiting])
+            waiting = Text("to draw (d)", style="dim")
+            rows.append(["", Text(entrant.display_name), car_cell(entrant), waiting])
         table = self.query_one("#heats", DataTable)
         fill_table(table, HEAT_COLUMNS, rows)
         follow, self._follow = self._follow, None

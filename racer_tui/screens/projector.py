@@ -40,15 +40,22 @@ class ProjectorLoaded(Message):
         self.title = title
 
 
-def projector_table(rows: Sequence[LeaderboardRow], show_track: bool) -> Table:
-    """Big rows: one blank line between racers, bold names, times right-aligned."""
+NARROW = 70  # below this many columns the gap goes: the names need the room
+
+
+def projector_table(
+    rows: Sequence[LeaderboardRow], show_track: bool, narrow: bool = False
+) -> Table:
+    """Big rows: one blank line between racers, bold names, times right-aligned; no gap
+    column when `narrow`."""
     table = Table(box=box.SIMPLE_HEAD, expand=True, padding=(0, 2), show_edge=False)
     table.add_column("#", justify="right", style="bold", width=3)
     table.add_column("racer", ratio=3, no_wrap=True, overflow="ellipsis")
     if show_track:
         table.add_column("track", ratio=2, no_wrap=True, overflow="ellipsis")
     table.add_column("time", justify="right", width=9)
-    table.add_column("gap", justify="right", width=8)
+    if not narrow:
+        table.add_column("gap", justify="right", width=8)
     table.add_column("laps", justify="right", width=4)
     leaders: dict[tuple[str, str, str], float | None] = {}
     for row in rows:  # ranked board by board: the first row of a board leads it
@@ -68,7 +75,7 @@ def projector_table(rows: Sequence[LeaderboardRow], show_track: bool) -> Table:
             cells.append(Text(row.track_name))
         cells += [
             Text(clock_text(row.score) if row.score is not None else "-", style="bold"),
-            Text(gap, style="dim"),
+            *([] if narrow else [Text(gap, style="dim")]),
             Text(str(row.valid_laps)),
         ]
         table.add_row(*cells, style="on grey15" if index % 2 else "", end_section=False)
@@ -141,4 +148,6 @@ class ProjectorScreen(KioskScreen):
             digits.update("-:--.---")
             name.update(Text("No results yet" if not message.rows else "No valid lap yet"))
         show_track = several_boards(message.rows)
-        self.query_one("#projector-rows", Static).update(projector_table(message.rows, show_track))
+        rows = self.query_one("#projector-rows", Static)
+        narrow = 0 < rows.size.width < NARROW
+        rows.update(projector_table(message.rows, show_track, narrow))

@@ -92,6 +92,7 @@ READ_CHUNK = 256_000
 METRICS_SECONDS = 1.0  # how often a live run's TrainingMetrics.json is read for new rows
 COLUMNS = (Col("model", keep=1, shrink_to=10, collapses=False, cuts_middle=True), Col("state"))
 NARROW = 110  # below this width the agent's-eye view takes the charts' place on `v`
+TINY = 70  # below this width the model list narrows
 
 
 @dataclass(frozen=True)
@@ -362,6 +363,7 @@ class TrainingScreen(RacerScreen[None]):
     TrainingScreen #training-side { width: 34; height: 1fr; padding: 0 1; }
     TrainingScreen #agent-title { text-style: bold; color: $accent; }
     TrainingScreen.-narrow #training-side { display: none; }
+    TrainingScreen.-tiny #training-models { width: 24; }
     TrainingScreen.-narrow.-eye #training-side { display: block; width: 1fr; }
     TrainingScreen.-narrow.-eye #training-charts { display: none; }
     """
@@ -392,6 +394,7 @@ class TrainingScreen(RacerScreen[None]):
         self.set_interval(TICK_SECONDS, self._tick)
 
     def on_resize(self) -> None:
+        self.set_class(self.size.width < TINY, "-tiny")  # the charts need the room
         narrow = self.size.width < NARROW
         if narrow != self.has_class("-narrow"):
             self.set_class(narrow, "-narrow")
