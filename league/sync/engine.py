@@ -132,7 +132,11 @@ def sync(
         proposed, note = propose_key(league, signing)
         if note is not None:
             summary.notes.append(note)
-        if proposed:
+        # An organiser's word on whose each model is goes out in the same sync as the
+        # claims it settles: a machine pulling afresh before the organiser's next sync
+        # would otherwise see only the racers' claims, whose ids and dates can be forged.
+        endorsed = models.endorse_if_organiser(league, signing.public_hex)
+        if proposed or endorsed:
             summary = summary.merged(push(league, store, key, signing_key=signing))
     return summary
 

@@ -164,7 +164,7 @@ def register_models(league: League, signer: str) -> int:
     founding (a result older than that does not count in it anyway). On an organiser's
     machine, also endorse each model's first owner seen here (`endorse_owners`)."""
     roster = Roster.load(league)
-    made = endorse_owners(league, signer) if signer in roster.organisers else 0
+    made = endorse_if_organiser(league, signer, roster)
     racer = get_setting(league, RACER_SETTING)
     if not racer:
         return made
@@ -202,6 +202,12 @@ def register_models(league: League, signer: str) -> int:
             add_model(league, make_record(MODEL_KIND, new_id(now_ms=ms), body))
             made += 1
     return made
+
+
+def endorse_if_organiser(league: League, signer: str, roster: Roster | None = None) -> int:
+    """`endorse_owners` when `signer` is one of the league's organisers, else nothing."""
+    organisers = (roster or Roster.load(league)).organisers
+    return endorse_owners(league, signer) if signer in organisers else 0
 
 
 def endorse_owners(league: League, signer: str) -> int:

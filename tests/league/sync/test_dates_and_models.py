@@ -6,12 +6,14 @@ loopback server). No forged lap, date or borrowed race reaches any board.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from league.races import record_race
 from league.records import record_body
 from league.store import now_iso
 from league.sync.dates import DATE_TOLERANCE_MS, check_dates
@@ -21,8 +23,11 @@ from league.sync.record import SyncRecord, make_record
 from league.sync.stores import open_store
 from league.trust.seals import make_seal
 from sim.ids import new_id
+from sim.track_catalog import resolve_track
+from tests.league.helpers import race_result
 from tests.league.sync.conftest import QUICK_RETRY
 from tests.league.sync.test_signed_results import (  # the league of machines these tests share
+    HAIRPIN,
     Machine,
     machines,  # noqa: F401 (a fixture)
 )
@@ -177,6 +182,31 @@ def test_a_model_another_racer_registered_first_is_theirs(
         assert "bob" not in machine.board() or machine.board()["bob"] > 11.0
         reason = machine.quarantine()[f"race {borrowed.record_id}"]
         assert f"it names model {model_hash[:12]}, which racer ana registered first" in reason
+
+
+def test_the_organisers_word_on_a_model_goes_out_in_the_sync_that_first_sees_it(
+    machines: dict[str, Machine],  # noqa: F811
+    tmp_path: Any,
+    store_url: str,
+) -> None:
+    organiser, ana, bob = machines["organiser"], machines["ana"], machines["bob"]
+    # ana's new model, first raced now: her claim on it is dated now.
+    result = race_result("ana", [11.5, 11.4], track=resolve_track(HAIRPIN), model="new-car")
+    original = record_race(ana.league, replace(result, started_at=now_iso()))
+    ana.sync()
+    organiser.sync()  # sees ana's claim on her model: its word on it goes out now
+    model_hash = str(record_body(ana.league, "races", original)["model_hash"])
+    # Later, bob claims ana's model with a record dated just after the founding, and races
+    # it. A machine that pulls everything at once sees his claim first in id order.
+    founded = _founded_ms(organiser) + 1000
+    borrowed = race_as(ana, original, racer="bob", seed=99, started_at=now_iso())
+    push_signed(bob, model_record("bob", model_hash, founded), race_as_laps(borrowed, 11.0))
+    fresh = Machine(tmp_path, "fresh", store_url)
+    fresh.sync()  # before the organiser's next sync
+    assert "bob" not in fresh.board() or fresh.board()["bob"] > 11.0
+    reason = fresh.quarantine()[f"race {borrowed.record_id}"]
+    assert "racer ana registered first" in reason
+    fresh.league.close()
 
 
 def test_a_racers_results_from_before_the_league_do_not_count_in_it(
