@@ -236,6 +236,8 @@ class RacerTuiApp(App[int]):
             await self._deliver(event)
             return
         await super().on_event(event)
+        if event is self._key_in_flight:  # back up at the app, its bindings checked: done
+            self._key_in_flight = None
 
     # --- one key at a time --------------------------------------------------------------------
 
@@ -271,15 +273,6 @@ class RacerTuiApp(App[int]):
         await super().on_event(event)
         if not event.is_forwarded and event is self._key_in_flight:
             self._key_in_flight = None  # a priority binding used it here and then
-
-    async def _on_key(self, event: events.Key) -> None:
-        # App's own handler (the bindings of the focus chain) is called here, not after.
-        event.prevent_default()
-        try:
-            await super()._on_key(event)
-        finally:
-            if event is self._key_in_flight:
-                self._key_in_flight = None
 
     def _hold(self, event: events.Key | events.Paste) -> None:
         self._held_input.append(event)
