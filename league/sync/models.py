@@ -52,6 +52,15 @@ class ModelInfo:
     registered_at: str
 
 
+# A model record's body, in the order of sync_models' columns.
+BODY_FIELDS: Final = ("racer", "model_name", "model_hash", "registered_at")
+
+
+def model_body(racer: str, model_name: str, model_hash: str, registered_at: str) -> dict[str, Any]:
+    """The body of a model record: the one shape every maker of one writes."""
+    return dict(zip(BODY_FIELDS, (racer, model_name, model_hash, registered_at), strict=True))
+
+
 def add_model(league: League, record: SyncRecord) -> None:
     body = record.body
     league.conn.execute(
@@ -81,7 +90,7 @@ def apply_pulled_model(
         return "inserted"
     if row[0] == record.content_hash:
         return "already"
-    local = dict(zip(("racer", "model_name", "model_hash", "registered_at"), row[1:], strict=True))
+    local = model_body(*row[1:])
     new = add_conflict(
         league,
         store,
@@ -130,16 +139,7 @@ def unsent_models(league: League, store: str) -> list[tuple[str, str, dict[str, 
         (store, MODEL_KIND),
     )
     return [
-        (
-            record_id,
-            digest,
-            {
-                "racer": racer,
-                "model_name": model_name,
-                "model_hash": model_hash,
-                "registered_at": registered_at,
-            },
-        )
+        (record_id, digest, model_body(racer, model_name, model_hash, registered_at))
         for record_id, digest, racer, model_name, model_hash, registered_at in rows
     ]
 
@@ -193,12 +193,7 @@ def register_models(league: League, signer: str) -> int:
         for model_hash, (ms, dated, model_name) in sorted(first.items()):
             if any(same_racer(info.racer, racer) for info in models(league, model_hash)):
                 continue
-            body = {
-                "racer": racer,
-                "model_name": model_name,
-                "model_hash": model_hash,
-                "registered_at": dated,
-            }
+            body = model_body(racer, model_name, model_hash, dated)
             add_model(league, make_record(MODEL_KIND, new_id(now_ms=ms), body))
             made += 1
     return made
@@ -227,12 +222,7 @@ def endorse_owners(league: League, signer: str) -> int:
             first = owner(league, model_hash, roster)
             if first is None or _unsealed_here(league, model_hash):
                 continue
-            body = {
-                "racer": first.racer,
-                "model_name": first.model_name,
-                "model_hash": model_hash,
-                "registered_at": first.registered_at,
-            }
+            body = model_body(first.racer, first.model_name, model_hash, first.registered_at)
             when = iso_ms(first.registered_at)
             add_model(league, make_record(MODEL_KIND, new_id(now_ms=when), body))
             made += 1

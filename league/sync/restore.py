@@ -29,6 +29,7 @@ from league.store import League
 from league.sync import local
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import KIND_OF_TABLE, MODEL_KIND
+from league.sync.models import model_body
 from league.sync.protocol import RecordStore
 from league.sync.record import Seal, SyncRecord
 
@@ -163,12 +164,7 @@ def _own_models(league: League, store_key: str, signer: str) -> list[_Own]:
             record_id,
             digest,
             Seal(signer, signature),
-            {
-                "racer": racer,
-                "model_name": model_name,
-                "model_hash": model_hash,
-                "registered_at": registered_at,
-            },
+            model_body(racer, model_name, model_hash, registered_at),
         )
         for record_id, digest, signature, racer, model_name, model_hash, registered_at in rows
     ]
