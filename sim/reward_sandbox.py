@@ -84,19 +84,34 @@ def set_memory_budget(megabytes: int) -> None:
 def loading_limit() -> Iterator[None]:
     """While a reward file's module-level code runs: the process may grow by the reward's
     memory and no more (the soft RLIMIT_DATA, put back after; the code may not change it,
-    see `_FORBIDDEN`). Nothing when no budget is set."""
-    if _memory_mb is None:
+    see sim.reward_guard). Nothing when no budget is set."""
+    soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
+    limit = None if _memory_mb is None else _data_limit(_memory_mb, hard)
+    if limit is None or not _set_data_limit(limit, hard):
         yield
         return
-    soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
-    limit = data_bytes() + _memory_mb * 1024 * 1024
-    if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
-    resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
     try:
         yield
     finally:
+        _set_data_limit(soft, hard)
+
+
+def _data_limit(megabytes: int, hard: int) -> int | None:
+    """What the process holds now plus `megabytes`, within `hard`; None when what it holds
+    cannot be read (no /proc): a limit then could be below it."""
+    held = data_bytes()
+    if not held:
+        return None
+    limit = held + megabytes * 1024 * 1024
+    return limit if hard == resource.RLIM_INFINITY else min(limit, hard)
+
+
+def _set_data_limit(soft: int, hard: int) -> bool:
+    try:
         resource.setrlimit(resource.RLIMIT_DATA, (soft, hard))
+    except (OSError, ValueError):  # a system that will not have it: no limit, not a crash
+        return False
+    return True
 
 
 def check_memory_mb(value: float) -> int:
@@ -118,17 +133,15 @@ def data_bytes() -> int:
     return 0
 
 
-def limit_memory(megabytes: int, *, learner_mb: int = 0) -> None:
+def limit_memory(megabytes: int, *, learner_mb: int = 0) -> bool:
     """Let this process grow by at most `megabytes` (and `learner_mb` for racer-tui's own
     work in it) from now on (RLIMIT_DATA, soft and hard: the racer's code cannot raise it
-    again)."""
+    again). False when this system cannot say or set it."""
     global _memory_mb  # noqa: PLW0603 - one limit per process, read by error messages
-    limit = data_bytes() + (megabytes + learner_mb) * 1024 * 1024
-    _soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
-    if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
-    resource.setrlimit(resource.RLIMIT_DATA, (limit, limit))
     _memory_mb = megabytes
+    _soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
+    limit = _data_limit(megabytes + learner_mb, hard)
+    return limit is not None and _set_data_limit(limit, limit)
 
 
 def memory_from_environment() -> int:
