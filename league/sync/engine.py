@@ -266,6 +266,7 @@ def pull(
         summary.withdrawn.extend(incoming.withdraw_refused(league, key))
     summary.pulled += late.inserted
     summary.aliased += late.aliased
+    summary.quarantined.extend(late.held)  # refused now that what they waited for came
     summary.released += late.released
     summary.conflicts.extend(
         f"{what}: differs here and in the store (both kept)" for what in late.conflicts

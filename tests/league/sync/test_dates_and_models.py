@@ -96,6 +96,7 @@ def test_a_race_with_a_made_up_model_waits_and_then_is_refused(
         assert f"race {forged.record_id}" not in pending_reasons(machine)
         reason = machine.quarantine()[f"race {forged.record_id}"]
         assert "registered its model ffffffffffff only after this result" in reason
+        assert any(forged.record_id in line for line in summary.quarantined)  # and said so
         assert summary.waiting == 0
 
 
