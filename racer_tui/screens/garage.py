@@ -172,7 +172,8 @@ def confirm_someone_elses_code(
         screen.app,
         f"Import {source.name} with its reward function?",
         "The folder's reward_function.py is code someone wrote. Importing only reads it; "
-        "training this model, or Check (ctrl+r) in the editor, runs it with your rights. If "
+        "training this model, or Check (ctrl+r) in the editor, runs it, held to a time and "
+        "memory limit and kept from starting programs (on Linux also from your files). If "
         "it is not yours, read it first (e, Reward function tab) before you run it.",
         answered,
         confirm_label="Import",

@@ -265,8 +265,9 @@ def _reward_source(files: DeepRacerFiles, notes: list[str]) -> str:
     source = read_reward_file(files.reward_function)
     check_reward_code(source, str(files.reward_function))  # names the file and line
     notes.append(
-        "its reward_function.py was checked but not run: it runs with your rights when you "
-        "train this model (or check it), so read it first if it is not yours."
+        "its reward_function.py was checked but not run: it runs, contained (time, memory, "
+        "no programs; on Linux none of your files), when you train this model (or check "
+        "it), so read it first if it is not yours."
     )
     return source
 

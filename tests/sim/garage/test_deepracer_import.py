@@ -89,7 +89,7 @@ def test_a_reward_function_in_the_folder_is_used(drfc_copy: Path) -> None:
     assert result.folder.reward_source() == source
     notes = " ".join(result.notes)
     assert "template" not in notes
-    assert "reward_function.py was checked but not run: it runs with your rights" in notes
+    assert "reward_function.py was checked but not run: it runs, contained" in notes
 
 
 def test_importing_never_runs_the_folders_reward_code(drfc_copy: Path, tmp_path: Path) -> None:
