@@ -38,7 +38,8 @@ from tests.racer_tui.screens.tui_helpers import (
 
 
 async def projector_shows(pilot: Pilot[Any], nights: NightsScreen) -> str:
-    """Open the night's projector (p), read what it shows, and come back (Esc)."""
+    """Open the night's projector (p), read what it shows, and come back (q, y: a kiosk
+    asks before it lets anyone leave)."""
     await pilot.press("p")
     await settle(pilot)
     projector = pilot.app.screen
@@ -47,7 +48,7 @@ async def projector_shows(pilot: Pilot[Any], nights: NightsScreen) -> str:
         painted(projector.query_one(selector))
         for selector in ("#np-title", "#np-heat", "#np-standings", "#np-hint")
     )
-    await pilot.press("escape")
+    await pilot.press("q", "y")
     await settle(pilot)
     assert pilot.app.screen is nights
     return shown

@@ -75,7 +75,7 @@ async def test_a_physical_cars_heat_is_timed_by_hand_and_recorded_on_the_night()
         await settle(pilot)
         await pilot.press("d")
         await settle(pilot)
-        assert table_rows(nights, "#heats")[0][2] == "blue car (physical)"
+        assert table_rows(nights, "#heats")[0][2] == "physical: blue car"  # kind first
 
         await pilot.press("r")
         await settle(pilot)
