@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from itertools import groupby
 from operator import attrgetter
-from typing import Any
+from typing import Any, Final
 
 from league.entries import BOARD_GROUPS, best_entries_sql, score_column
 from league.errors import LeagueError
@@ -357,6 +357,11 @@ class Column(StrEnum):
     LAPS = "laps"
     OFFTRACKS = "offtracks"
     SUBMITTED = "submitted"
+    VERIFICATION = "verification"
+
+
+# Most trusted first: replayed here, then verifiable, then unverifiable, then not worked out.
+_STANDING_ORDER: Final = {"replayed": 0, "verifiable": 1, "unverifiable": 2}
 
 
 def _missing_last(value: float | None) -> tuple[bool, float]:
@@ -374,6 +379,7 @@ SORT_KEYS: dict[Column, Callable[[LeaderboardRow], Any]] = {
     Column.LAPS: lambda row: row.valid_laps,
     Column.OFFTRACKS: lambda row: row.offtracks,
     Column.SUBMITTED: lambda row: row.recorded_at,
+    Column.VERIFICATION: lambda row: _STANDING_ORDER.get(row.verification, 3),
 }
 
 

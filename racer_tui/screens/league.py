@@ -26,7 +26,13 @@ from textual.containers import Container, VerticalScroll
 from textual.message import Message
 from textual.widgets import DataTable, Static
 
-from league.leaderboard import Column, LeaderboardRow, several_boards, sort_rows
+from league.leaderboard import (
+    Column,
+    LeaderboardRow,
+    mark_verification,
+    several_boards,
+    sort_rows,
+)
 from league.race_types import TIME_TRIAL, board_name, words
 from league.report import (
     SCORE_TITLES,
@@ -65,6 +71,7 @@ SORT_BY_TITLE: dict[str, Column] = {
     "laps": Column.LAPS,
     "off-tracks": Column.OFFTRACKS,
     "submitted": Column.SUBMITTED,
+    "verification": Column.VERIFICATION,
     **{title: Column.SCORE for title in SCORE_TITLES.values()},
 }
 # How each column gives way in a narrow terminal (see table_fill.Col): the submission date
@@ -77,9 +84,11 @@ GIVE_WAY: dict[str, Col] = {
     "average": Col("", keep=2),
     "off-tracks": Col("", keep=3),
     "laps": Col("", keep=4),
-    "racer": Col("", keep=5, shrink_to=10, collapses=False),
-    "model": Col("", keep=6, shrink_to=8, collapses=False, cuts_middle=True),
-    "track": Col("", keep=7, shrink_to=8, collapses=False, keeps_tail=True),
+    # Whether a result was replayed here outlasts the counts: the entry's detail says it too.
+    "verification": Col("", keep=5),
+    "racer": Col("", keep=6, shrink_to=10, collapses=False),
+    "model": Col("", keep=7, shrink_to=8, collapses=False, cuts_middle=True),
+    "track": Col("", keep=8, shrink_to=8, collapses=False, keeps_tail=True),
 }
 
 
@@ -92,7 +101,9 @@ def export_text(
     if kind == "json":
         return json.dumps(leaderboard_json(rows, query.method), indent=2) + "\n"
     track = several_boards(rows) if show_track is None else show_track
-    columns = leaderboard_columns(query.method, show_track=track, iso_times=kind == "csv")
+    columns = leaderboard_columns(
+        query.method, show_track=track, iso_times=kind == "csv", verification=True
+    )
     return to_csv(columns, rows) if kind == "csv" else to_markdown(columns, rows)
 
 
@@ -195,6 +206,7 @@ class LeagueScreen(RacerScreen[None]):
         self.track_names: dict[str, str] = {}  # the league's tracks by hash
         self.loaded = False
         self._generation = 0
+        self._garage_hashes: frozenset[str] | None = None  # see _models_here
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league")
@@ -216,6 +228,7 @@ class LeagueScreen(RacerScreen[None]):
 
     def on_screen_resume(self) -> None:
         if self.loaded:  # a night may have run heats since, or a sync pulled results
+            self._garage_hashes = None  # and a model may have been trained or imported
             self.reload()
             self.query_one(SyncStatusLine).read(self.db_path)
 
@@ -227,6 +240,7 @@ class LeagueScreen(RacerScreen[None]):
         self._load(query, self._generation)
 
     def action_reload(self) -> None:
+        self._garage_hashes = None  # models trained or imported since count
         self.reload()
         self.query_one(SyncStatusLine).read(self.db_path)
 
@@ -240,9 +254,19 @@ class LeagueScreen(RacerScreen[None]):
 
         with open_league(self.db_path) as league:
             view = board_view(league, query)
+            mark_verification(league, view.rows, self._models_here())
             options = filter_options(league)
         shown = replace(query, race_type=view.race_type)
         self.post_message(BoardLoaded(view, options, shown, generation))
+
+    def _models_here(self) -> frozenset[str]:
+        """The garage's model hashes (their results are verifiable here), hashed once per
+        visit in the loading worker: hashing every model is too slow for each reload."""
+        if self._garage_hashes is None:
+            from racer_tui.race_commands import DriversByHash
+
+            self._garage_hashes = DriversByHash().models_here()
+        return self._garage_hashes
 
     def on_board_loaded(self, message: BoardLoaded) -> None:
         if message.generation != self._generation:
@@ -265,7 +289,7 @@ class LeagueScreen(RacerScreen[None]):
         # With a track chosen, still a track column when its laps of other physics than
         # today's are on boards of their own (the column names each board).
         show_track = query.track_hash is None or several_boards(self.ranked)
-        columns = leaderboard_columns(query.method, show_track=show_track)
+        columns = leaderboard_columns(query.method, show_track=show_track, verification=True)
         if query.race_type == TIME_TRIAL:
             return columns
         # One race type's boards: the line above the table names it, so the track column

@@ -108,6 +108,15 @@ def _race(breakdown: EntryBreakdown, text: Text) -> None:
         text.append("✓\n" if lap.valid else "✗ too many off-tracks\n")
 
 
+# What each standing here (league.trust.standing) means, in the detail of a row.
+STANDING_WORDS: dict[str, str] = {
+    "replayed": "replayed here: re-run from its model, its laps came out the same",
+    "verifiable": "verifiable: its model is here, not replayed yet (racer-tui sync verify)",
+    "unverifiable": "unverifiable here: nothing here can re-run it (no model, a DeepRacer "
+    "evaluation, or laps timed by hand)",
+}
+
+
 def render_entry(row: LeaderboardRow, breakdown: EntryBreakdown) -> Text:
     """The detail text of one leaderboard row from what the league says it is made of."""
     text = Text()
@@ -119,6 +128,9 @@ def render_entry(row: LeaderboardRow, breakdown: EntryBreakdown) -> Text:
         f"{counted(row.valid_laps, 'lap')} · {counted(row.offtracks, 'off-track')}\n",
         style="dim",
     )
+    standing = STANDING_WORDS.get(row.verification)
+    if standing is not None:
+        text.append(f"{standing}\n", style="dim")
     if breakdown.has_trace:
         text.append("v replays this race\n", style="italic")
     if not breakdown.found:

@@ -12,14 +12,18 @@ from league.assembler import assemble
 from league.races import record_race
 from league.store import open_league
 from league.submissions import submit
+from league.trust.replay import verify_races
 from racer_tui.app import create_app
+from racer_tui.race_commands import DriversByHash
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.projector import ProjectorScreen
 from racer_tui.widgets.entry_detail import EntryDetail
 from sim.home import data_home
+from sim.race.engine import run_race
+from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 from tests.league.helpers import model_folder, race_result
-from tests.racer_tui.screens.tui_helpers import painted, settle
+from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for
 
 
 def three_racers() -> None:
@@ -192,3 +196,36 @@ async def test_the_projector_shows_the_leader_and_picks_up_new_results() -> None
         assert app.screen is projector
         await pilot.press("q", "y")  # leaving asks first, then goes back
         assert isinstance(app.screen, LeagueScreen)
+
+
+async def test_each_row_says_whether_it_was_replayed_here_is_verifiable_or_not() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    oval = resolve_track("beginner-oval")
+    with open_league() as league:
+        # The reference driver is on every machine: its race can be re-run here.
+        reference = run_race(oval, RaceRules(window_seconds=30.0), racer="ada", keep_trace=False)
+        record_race(league, reference)
+        # A car nobody here has: nothing can re-run bob's race.
+        record_race(league, race_result("bob", [13.0, 12.5], model="bobs-car"))
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, LeagueScreen)
+        assert "verification" in headers(screen)
+        standing = {row.racer: row.verification for row in screen.rows}
+        assert standing == {"ada": "verifiable", "bob": "unverifiable"}
+        await wait_for(pilot, lambda: "verifiable: its model is here" in painted(detail(screen)))
+    with open_league() as league:
+        verify_races(league, DriversByHash())  # `racer-tui sync verify`
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, LeagueScreen)
+        assert {row.racer: row.verification for row in screen.rows}["ada"] == "replayed"
+        await wait_for(pilot, lambda: "replayed here" in painted(detail(screen)))
+
+
+def detail(screen: LeagueScreen) -> EntryDetail:
+    return screen.query_one(EntryDetail)
