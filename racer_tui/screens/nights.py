@@ -30,6 +30,7 @@ from league.live_heat import LiveHeatWriter, live_heat_path
 from league.local_racer import HOST_NAME, local_racer_name
 from league.night_report import night_export
 from league.night_state import NightState, read_night
+from league.night_verification import replay_heats, uncounted_heats
 from league.nights import (
     Entrant,
     Heat,
@@ -61,7 +62,7 @@ from league.seasons import (
 from league.store import League, default_db_path, open_league
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from league.timekeeper.journal import HeatJournal, journal_path
-from racer_tui.race_commands import resolve_driver
+from racer_tui.race_commands import DriversByHash, resolve_driver
 from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.screens.dialogs import (
     FormDialog,
@@ -991,6 +992,11 @@ class NightsScreen(RacerScreen[None]):
             if waiting
             else ""
         )
+        if night.rules.verification.requires:
+            extra += (
+                f" Its rules count {night.rules.verification.words}, so its simulated heats "
+                "are raced again here first."
+            )
         ask(
             self.app,
             f"Close {night.name}?",
@@ -1006,16 +1012,25 @@ class NightsScreen(RacerScreen[None]):
 
     @work(thread=True, group="nights-change", exit_on_error=False)
     def _close(self, night: Night, force: bool) -> None:
+        # Under a verification rule the night's simulated heats are raced again here first,
+        # as `racer-tui night close` does: a heat that differs is withdrawn, and one the
+        # rule does not count is said, each in a sentence.
+        drivers = DriversByHash() if night.rules.verification.requires else None
         with open_league(self.db_path) as league:
             closer = local_racer_name(league) or HOST_NAME
+            withdrawn = [] if drivers is None else replay_heats(league, night, drivers)
             try:
                 close_night(league, night, closer, force=force)
             except LeagueError:
-                # Heats drawn elsewhere since the night was shown: show them, so the next
-                # c asks about them and closes anyway (the error says so).
-                self.post_message(NightChanged(night.id, ""))
+                # Heats drawn elsewhere since the night was shown, or withdrawn just now:
+                # show them, so the next c asks about them (the error says so).
+                self.post_message(NightChanged(night.id, " ".join(withdrawn)))
                 raise
-        self.post_message(NightChanged(night.id, f"Closed {night.name}; the standings are final."))
+            left_out = (
+                [] if drivers is None else uncounted_heats(league, night, drivers.models_here())
+            )
+        said = " ".join([f"Closed {night.name}; the standings are final.", *withdrawn, *left_out])
+        self.post_message(NightChanged(night.id, said))
 
     def _highlighted_entrant(self, doing: str) -> tuple[Heat | None, Entrant] | None:
         """The row under the heats table's cursor; the first press only moves there."""

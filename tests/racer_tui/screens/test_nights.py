@@ -394,3 +394,38 @@ async def test_a_nights_date_is_kept_as_typed_and_said_back_when_wrong() -> None
     with open_league() as league:
         (night,) = list_nights(league)
     assert (night.name, night.held_on) == ("friday", "2026-11-27")
+
+
+async def test_closing_a_night_that_counts_only_replayed_results_races_its_heats_again() -> None:
+    from league.nights import run_heats
+    from racer_tui.race_commands import resolve_driver
+    from sim.race.rules import RaceRules, Verification
+
+    oval = resolve_track("beginner-oval")
+    rules = RaceRules(window_seconds=12.0, verification=Verification.REPLAYED)
+    with open_league() as league:
+        night = new_night(league, oval, rules=rules, name="friday")
+        add_entrant(league, night, "ada", "reference")
+        draw_heats(league, night, seed=3)
+        run_heats(league, night, oval, resolve_driver)
+        (heat_race,) = [row[0] for row in league.query("SELECT id FROM races")]
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 40)) as pilot:
+        notes = Notifications(app)
+        await the_nights_screen(pilot)
+        await pilot.press("c")
+        await settle(pilot)
+        dialog = app.screen
+        assert isinstance(dialog, ConfirmDialog)
+        assert "only results verified by replay" in " ".join(painted(dialog).split())
+        await pilot.press("y")
+        await settle(pilot)
+        assert "Closed friday; the standings are final." in notes.text()
+    with open_league() as league:
+        assert list_nights(league)[0].closed
+        verdict = league.query_one(
+            "SELECT outcome FROM sync_replays WHERE race_id = ?", (heat_race,)
+        )
+        assert verdict is not None and verdict[0] == "same"  # raced again before closing
+        (standing,) = standings(league, list_nights(league)[0])
+        assert standing.entry.racer == "ada"  # replayed here: it counts
