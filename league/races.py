@@ -40,7 +40,7 @@ LAP_COLUMNS = (
 )
 
 
-def _lap_rows(result: RaceResult) -> list[dict[str, Any]]:
+def lap_rows(result: RaceResult) -> list[dict[str, Any]]:
     return [
         {
             "number": lap.number,
@@ -70,7 +70,7 @@ def record_race(
     if not is_valid_id(result.result_id):
         raise LeagueError(f"race result id {result.result_id!r} is not a valid record id.")
     check_possible_laps(result)  # before the transaction: a floor may take a second to work out
-    laps = _lap_rows(result)
+    laps = lap_rows(result)
     with league.transaction():
         racer = ensure_racer(league, result.racer)
         fields_ = {

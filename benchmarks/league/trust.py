@@ -38,8 +38,8 @@ from league.errors import LeagueError
 from league.leaderboard import Filters, leaderboard
 from league.local_racer import save_local_racer_name
 from league.racers import ensure_racer
+from league.races import LAP_COLUMNS, lap_rows, record_race
 from league.races import race_result as stored_race
-from league.races import record_race
 from league.records import record_body
 from league.store import League, now_iso, open_league
 from league.submissions import insert_laps, lap_row, submit_model
@@ -202,18 +202,7 @@ def forged_race(world: World, racer: str, times: Sequence[float], **changes: Any
 def insert_bypassing_checks(league: League, result: RaceResult) -> str:
     """What a script does when `record_race` refuses: the row written as record_race
     writes it, without any of its checks."""
-    laps = [
-        {
-            "number": lap.number,
-            "time_seconds": lap.time_seconds,
-            "raw_seconds": lap.raw_seconds,
-            "penalty_seconds": lap.penalty_seconds,
-            "offtracks": lap.offtracks,
-            "valid": int(lap.valid),
-            "started_at": lap.started_at,
-        }
-        for lap in result.laps
-    ]
+    laps = lap_rows(result)
     with league.transaction():
         ensure_racer(league, result.racer)
         ensure_track(league, result.track_hash, result.track_name)
@@ -236,9 +225,9 @@ def insert_bypassing_checks(league: League, result: RaceResult) -> str:
             children={"laps": laps},
         )
         league.conn.executemany(
-            "INSERT INTO race_laps (race_id, number, time_seconds, raw_seconds, "
-            "penalty_seconds, offtracks, valid, started_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-            [(result.result_id, *lap.values()) for lap in laps],
+            f"INSERT INTO race_laps (race_id, {', '.join(LAP_COLUMNS)}) "
+            f"VALUES (?, {', '.join('?' for _ in LAP_COLUMNS)})",
+            [(result.result_id, *(lap[column] for column in LAP_COLUMNS)) for lap in laps],
         )
     refresh_entries(league.conn, [result.result_id])
     return result.result_id
