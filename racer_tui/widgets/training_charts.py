@@ -261,7 +261,10 @@ def training_job(figures: TrainingFigures, model: str = "") -> Job:
     return Job(what, JobState.RUNNING, done=figures.elapsed, total=budget if budget > 0 else None)
 
 
-def run_line(figures: TrainingFigures, model: str = "") -> RenderableType:
+BAR_WIDTH = 48  # below this the run's clock reads as words: the bar would cut its figures
+
+
+def run_line(figures: TrainingFigures, model: str = "", width: int = 0) -> RenderableType:
     """Whose figures these are, and where the run is: its clock against the time budget
     (DeepRacer's stop condition, so the time left is exact), or how it ended."""
     job = training_job(figures, model)
@@ -281,6 +284,9 @@ def run_line(figures: TrainingFigures, model: str = "") -> RenderableType:
         return name + Text("starting…", style="dim")
     if job.total is None:
         return name + Text(f"training {clock(job.done)}")
+    if 0 < width < BAR_WIDTH:  # wraps whole words instead of cutting a time
+        left = clock(job.total - job.done)
+        return name + Text(f"training {clock(job.done)} of {clock(job.total)}, {left} left")
     line = Table.grid(expand=True)
     line.add_column(no_wrap=True)
     line.add_column(ratio=1)
@@ -293,10 +299,10 @@ def run_line(figures: TrainingFigures, model: str = "") -> RenderableType:
     return line
 
 
-def figures_lines(figures: TrainingFigures, model: str = "") -> Group:
+def figures_lines(figures: TrainingFigures, model: str = "", width: int = 0) -> Group:
     """The model and its run's clock, then the counters above the charts: run,
     evaluation, process, and how episodes ended."""
-    return Group(run_line(figures, model), counters(figures))
+    return Group(run_line(figures, model, width), counters(figures))
 
 
 def counters(figures: TrainingFigures) -> Text:
@@ -379,6 +385,10 @@ class TrainingCharts(Vertical):
         self.set_interval(1.0 / STATUS_REFRESH_HZ, self.sync)
         self.sync()
 
+    def on_resize(self) -> None:
+        self._shown_version = -1  # the run line's wording follows the width
+        self.sync()
+
     def show(self, figures: TrainingFigures, model: str) -> None:
         """Watch `model`'s figures (its charts are redrawn from the start)."""
         self.figures = figures
@@ -413,7 +423,9 @@ class TrainingCharts(Vertical):
                 chart.extend(values[known:])
             self._lengths[chart_id] = len(values)
             chart.say_when_empty(empty_reason(self.figures, chart_id))
-        self.query_one("#figures", Static).update(figures_lines(self.figures, self.model))
+        self.query_one("#figures", Static).update(
+            figures_lines(self.figures, self.model, self.size.width)
+        )
 
     def redraw_now(self) -> None:
         """Sync and repaint at once, off the calm tick (snapshots and tests)."""

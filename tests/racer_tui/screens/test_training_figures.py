@@ -260,3 +260,13 @@ def test_the_apps_worker_command_names_one_parent() -> None:
     assert command.count("--parent-pid") == 1
     assert command[command.index("--parent-pid") + 1] == "0"
     assert worker_command("ada", 5.0).count("--parent-pid") == 1  # the command line's own
+
+
+def test_a_narrow_run_line_says_its_clock_in_words_never_cut() -> None:
+    from racer_tui.widgets.training_charts import run_line
+
+    figures = TrainingFigures()
+    figures.fold(events.Started(0.0, "ada", "hairpin", ("vector",), 8, "scratch", 0, 10.0, 1))
+    figures.heard_at(60.0)
+    line = run_line(figures, "hairpin-hero", width=40)
+    assert str(line) == "hairpin-hero: training 1:00 of 10:00, 9:00 left"
