@@ -282,7 +282,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _night_projector(args: argparse.Namespace) -> int:
     """The app, straight on a night's projector: for the venue's screen, in a terminal of
-    its own beside the host's racer-tui (Esc leaves it for the rest of the app)."""
+    its own beside the host's racer-tui. A kiosk: only q then y leaves, and it ends the
+    program rather than open the rest of the app on the venue's screen."""
     from league.nights import get_night
     from league.store import open_league
     from racer_tui.app import create_app
