@@ -7,10 +7,13 @@ crash with the workaround taken out).
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
-from textual import events
+from textual import events, work
 from textual.await_complete import AwaitComplete
+from textual.command import CommandPalette
+from textual.css.query import NoMatches
 from textual.screen import Screen
 from textual.widgets import DataTable, OptionList
 
@@ -26,6 +29,8 @@ def apply_workarounds() -> None:
         _a_screen_is_dismissed_once()
     if not getattr(DataTable._on_click, PATCHED, False):
         _clicks_on_a_table_without_columns()
+    if not getattr(CommandPalette._gather_commands, PATCHED, False):
+        _a_closed_palette_stops_searching()
 
 
 def _page_keys_wait_for_lines() -> None:
@@ -111,3 +116,25 @@ def _clicks_on_a_table_without_columns() -> None:
 
     setattr(on_click, PATCHED, True)
     DataTable._on_click = on_click  # type: ignore[method-assign]
+
+
+def _a_closed_palette_stops_searching() -> None:
+    """Textual 8.2.8: the command palette searches in a worker that looks up its result
+    list when it starts; a palette closed before that (ctrl+p and Esc in one burst, or a
+    palette typed into while it closes) has no list any more, and the worker's NoMatches
+    stopped the app (found by the monkey, issue 42). A search whose palette has closed
+    ends quietly; in an open palette it still fails as before."""
+    search = inspect.unwrap(CommandPalette._gather_commands)  # the method under its @work
+
+    async def gather_commands(self: CommandPalette, search_value: str) -> None:
+        try:
+            await search(self, search_value)
+        except NoMatches:
+            if self.is_attached and self in self.app.screen_stack:
+                raise
+            # Closed while it searched: there is nothing to show the commands in.
+
+    setattr(gather_commands, PATCHED, True)
+    patched = work(exclusive=True, group=CommandPalette._GATHER_COMMANDS_GROUP)(gather_commands)
+    setattr(patched, PATCHED, True)
+    CommandPalette._gather_commands = patched  # type: ignore[method-assign]

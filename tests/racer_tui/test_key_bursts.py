@@ -166,3 +166,24 @@ async def test_a_click_on_the_header_of_a_table_without_columns_does_nothing() -
         await pilot.pause()
         assert app._exception is None
         assert app.is_running
+
+
+async def test_a_palette_search_that_starts_after_the_palette_closed_ends_quietly() -> None:
+    # Found by the monkey: the palette's search worker looked up its result list after
+    # the palette had closed (ctrl+p and Esc in one burst), and its NoMatches stopped the
+    # app. The search is started here on a palette already closed, as the race left it.
+    from textual.command import CommandPalette
+
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        burst(app, ["ctrl+p"])
+        await drain(pilot)
+        palette = app.screen
+        assert isinstance(palette, CommandPalette)
+        burst(app, ["escape"])
+        await drain(pilot)
+        palette._gather_commands("go")
+        await drain(pilot)
+        assert app._exception is None
+        assert app.is_running and isinstance(app.screen, GarageScreen)
