@@ -16,7 +16,6 @@ from racer_tui.screens.races import RacesScreen
 from racer_tui.screens.tracks import TracksScreen
 from racer_tui.screens.welcome import WelcomeScreen
 from racer_tui.widgets.demo_race import DemoRace
-from racer_tui.widgets.job_line import JobLine, job_text
 from racer_tui.widgets.section_header import HelpHint, SectionTab
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for
@@ -260,9 +259,9 @@ async def test_importing_from_the_welcome_screen_opens_the_garage(deepracer_dir:
         assert app.screen.highlighted_name == "drfc-model"
 
 
-async def test_a_failed_import_on_the_welcome_screen_stays_said_there(tmp_path: Path) -> None:
-    # A folder that is not a DeepRacer model: the welcome screen keeps the failure, with
-    # the key that tries again, after the notification fades.
+async def test_a_failed_import_on_the_welcome_screen_is_said_in_the_dialog(tmp_path: Path) -> None:
+    # A folder that is not a DeepRacer model: as in the Garage (issue 42, point 10), the
+    # import dialog stays open with the path and says what stopped it, in place.
     (tmp_path / "not-a-model").mkdir()
     app = create_app()
     async with app.run_test(size=(80, 24)) as pilot:
@@ -270,12 +269,14 @@ async def test_a_failed_import_on_the_welcome_screen_stays_said_there(tmp_path: 
         welcome = app.screen
         assert isinstance(welcome, WelcomeScreen)
         await pilot.press("i")
-        app.screen.query_one("#path", Input).value = str(tmp_path / "not-a-model")
+        dialog = app.screen
+        dialog.query_one("#path", Input).value = str(tmp_path / "not-a-model")
         await pilot.press("enter")
         await settle(pilot)
+        assert app.screen is dialog
+        assert dialog.query_one("#path", Input).value == str(tmp_path / "not-a-model")
+        said = " ".join(painted(dialog.query_one("#problem")).split())
+        assert "has no model_metadata.json" in said
+        await pilot.press("escape")
+        await settle(pilot)
         assert app.screen is welcome
-        shown = welcome.query_one("#welcome-job", JobLine)
-        assert shown.display and shown.job is welcome.jobs.job
-        line = job_text(shown.job).plain  # the whole line (the column scrolls to it)
-        assert line.startswith("Failed at") and "has no model_metadata.json" in line
-        assert line.endswith("Press i to try again.")
