@@ -286,15 +286,15 @@ def _night_projector(args: argparse.Namespace) -> int:
     program rather than open the rest of the app on the venue's screen."""
     from league.nights import get_night
     from league.store import open_league
-    from racer_tui.app import create_app
+    from racer_tui.app import run_app
     from sim.home import LEAGUE_ENV
 
     with open_league(args.db) as league:
         night = get_night(league, args.night)  # a wrong name is one sentence, before the app
     if args.db:  # the whole app, not only the projector, on that league (as --db does)
         os.environ[LEAGUE_ENV] = str(args.db)
-    create_app(long_running=True, projector_night=night.id, db_path=args.db).run()
-    return 0
+    # run_app: a crash on the venue's screen is reported and ends non-zero, as the app's.
+    return run_app(projector_night=night.id, db_path=args.db)
 
 
 def _table(title: str) -> Table:

@@ -96,3 +96,27 @@ def test_unread_keys_are_dropped_only_from_a_terminal(monkeypatch: pytest.Monkey
     import termios
 
     assert flushed == [(7, termios.TCIFLUSH)]
+
+
+def test_the_night_projector_command_ends_with_the_apps_status(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The venue's screen runs the app as `racer-tui` does: a crash there ends non-zero.
+    from league.nights import new_night
+    from league.store import open_league
+    from racer_tui.cli import main
+    from sim.home import data_home
+    from sim.track_catalog import resolve_track
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+    ran: list[str | None] = []
+
+    def crashed(*, projector_night: str | None = None, db_path: Path | None = None) -> int:
+        ran.append(projector_night)
+        return 1
+
+    monkeypatch.setattr(app_module, "run_app", crashed)
+    assert main(["night", "projector", "friday"]) == 1
+    assert ran == [night.id]
