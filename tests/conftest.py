@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -26,3 +27,23 @@ def deepracer_dir() -> Path:
             "../shared/deepracer is not beside this checkout; real DeepRacer files unavailable"
         )
     return SHARED_DEEPRACER
+
+
+@pytest.fixture
+def no_leftover_processes() -> Iterator[None]:
+    """After a test that makes reward code start processes: end any it left behind, so a
+    test that fails (and cannot check for them) never leaves an endless loop eating a core
+    for the rest of the run. Those are the tests' endless loops and sleeps reparented to
+    init since the test began (another worker's processes are none of these)."""
+    import time
+
+    import psutil
+
+    began = time.time() - 1.0
+    yield
+    for process in psutil.process_iter(["ppid", "create_time", "cmdline"]):
+        command = " ".join(process.info["cmdline"] or [])
+        left = "while True" in command or command.startswith("sleep ")
+        if left and process.info["ppid"] == 1 and process.info["create_time"] >= began:
+            with contextlib.suppress(psutil.Error):
+                process.kill()

@@ -13,6 +13,8 @@ from racer_tui.cli import main
 from sim import landlock
 from sim.garage.options import new_model
 
+pytestmark = pytest.mark.usefixtures("no_leftover_processes")
+
 
 def descendants() -> set[int]:
     """This process's descendants now (a test session may hold some of its own, such as

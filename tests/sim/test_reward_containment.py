@@ -18,6 +18,8 @@ from sim import landlock, reward_sandbox
 from sim.reward_function import RewardFunctionError
 from sim.reward_probe import check_reward_source
 
+pytestmark = pytest.mark.usefixtures("no_leftover_processes")
+
 LIMIT = 1.0
 
 

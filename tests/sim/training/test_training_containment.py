@@ -19,9 +19,12 @@ from sim.garage.options import new_model
 from sim.training import events
 from sim.training.launcher import AsyncTrainingProcess, TrainingProcess
 
-pytestmark = pytest.mark.skipif(
-    not sys.platform.startswith("linux"), reason="process sessions and subreapers are Linux's"
-)
+pytestmark = [
+    pytest.mark.skipif(
+        not sys.platform.startswith("linux"), reason="process sessions and subreapers are Linux's"
+    ),
+    pytest.mark.usefixtures("no_leftover_processes"),
+]
 
 
 def descendants() -> set[int]:
