@@ -17,6 +17,7 @@ import pytest
 from sim import landlock, reward_sandbox
 from sim.reward_function import RewardFunctionError
 from sim.reward_probe import check_reward_source
+from tests.leftover_processes import processes_with
 
 pytestmark = pytest.mark.usefixtures("no_leftover_processes")
 
@@ -27,15 +28,6 @@ def failure(source: str, name: str = "reward.py", memory_mb: int = 2048) -> str:
     with pytest.raises(RewardFunctionError) as caught:
         check_reward_source(textwrap.dedent(source), name, seconds=LIMIT, memory_mb=memory_mb)
     return str(caught.value)
-
-
-def processes_with(marker: str) -> list[psutil.Process]:
-    found = []
-    for process in psutil.process_iter(["cmdline", "status"]):
-        cmdline = process.info["cmdline"] or []
-        if process.info["status"] != psutil.STATUS_ZOMBIE and any(marker in a for a in cmdline):
-            found.append(process)
-    return found
 
 
 def sleep_seconds() -> str:

@@ -18,6 +18,7 @@ from racer_tui.cli import main
 from sim.garage.options import new_model
 from sim.training import events
 from sim.training.launcher import AsyncTrainingProcess, TrainingProcess
+from tests.leftover_processes import processes_with
 
 pytestmark = [
     pytest.mark.skipif(
@@ -31,15 +32,6 @@ def descendants() -> set[int]:
     """This process's descendants now (a test session may hold some of its own, such as
     multiprocessing's resource tracker: compare before and after)."""
     return {child.pid for child in psutil.Process().children(recursive=True)}
-
-
-def processes_with(marker: str) -> list[psutil.Process]:
-    found = []
-    for process in psutil.process_iter(["cmdline", "status"]):
-        cmdline = process.info["cmdline"] or []
-        if process.info["status"] != psutil.STATUS_ZOMBIE and any(marker in a for a in cmdline):
-            found.append(process)
-    return found
 
 
 def _ended_line() -> str:
