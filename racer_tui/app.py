@@ -20,6 +20,7 @@ from textual import events
 from textual.app import App, ScreenStackError
 from textual.binding import Binding, BindingType
 from textual.dom import DOMNode
+from textual.message_pump import MessagePump
 from textual.screen import Screen
 from textual.widget import AwaitMount
 from textual.widgets import DataTable
@@ -102,7 +103,8 @@ EVERYWHERE = "Everywhere"
 # widgets at work, then by polling; a key lost on its way stops holding the next after:
 HELD_KEY_YIELDS = 200
 HELD_KEY_POLL_SECONDS = 0.002
-KEY_FLIGHT_SECONDS = 1.0
+KEY_FLIGHT_SECONDS = 5.0  # a key neither stopped nor back at the app by then was lost
+FIRST_CONTENTS_SECONDS = 3.0  # keys wait this long at most for a section's first list
 HELD_KEY_CHECKS = HELD_KEY_YIELDS + int(KEY_FLIGHT_SECONDS / HELD_KEY_POLL_SECONDS) + 1
 HELP_SCREEN = "help"  # the installed help screen's name
 
@@ -173,7 +175,9 @@ class RacerTuiApp(App[int]):
         self.recent_keys = RecentKeys()
         self._held_input: deque[events.Key | events.Paste] = deque()  # one key at a time
         self._key_in_flight: events.Key | None = None
+        self._key_sent_to: MessagePump | None = None  # the widget the key in flight went to
         self._key_sent_at = 0.0
+        self._contents_awaited: tuple[Screen[Any], float] | None = None  # since when
         self._release_task: asyncio.Task[None] | None = None
         self.crash_report: Path | None = None  # written on the first unexpected error
         self.crash_report_problem: str | None = None  # why it could not be written
@@ -248,31 +252,62 @@ class RacerTuiApp(App[int]):
     # focused, and were lost (issue 42: `t`, Backspace Backspace 5 left the Train dialog's
     # field empty; a paste the same). The app hands over one key at a time instead: the
     # next waits while the last is in flight (not yet stopped by a widget or handled by the
-    # app) or while the screen on top has not mounted; waiting keys keep their order.
+    # app), while the screen on top has not mounted, or while its first list has not landed
+    # (`t` before the Garage's models are read found none); waiting keys keep their order.
+
+    def input_settled(self) -> bool:
+        """Every key and paste received has been handled, bindings included (for `drain`)."""
+        return not self._held_input and self._ready_for_input()
 
     def _ready_for_input(self) -> bool:
         try:
             screen = self.screen
         except ScreenStackError:  # starting or stopping: Textual's own handling says what
             return True
-        if not screen.is_mounted:
+        if not screen.is_mounted or not self._first_contents_arrived(screen):
             return False
         event = self._key_in_flight
         if event is None:
             return True
-        if event._stop_propagation or time.monotonic() - self._key_sent_at > KEY_FLIGHT_SECONDS:
-            # Stopped by the widget that used it, or lost on the way (a widget removed
-            # with the key in its queue): the next key may go.
-            self._key_in_flight = None
+        if event._stop_propagation or self._key_lost():
+            self._key_in_flight = None  # used by a widget, or lost: the next key may go
             return True
         return False
+
+    def _first_contents_arrived(self, screen: Screen[Any]) -> bool:
+        """A section whose list comes from a worker has it (`t` typed as the Garage opens
+        trains the model under the cursor instead of finding none), or has been given
+        `FIRST_CONTENTS_SECONDS` to: a list that cannot be read must not hold keys back."""
+        if getattr(screen, "first_contents_arrived", True):
+            return True
+        now = time.monotonic()
+        if self._contents_awaited is None or self._contents_awaited[0] is not screen:
+            self._contents_awaited = (screen, now)
+        return now - self._contents_awaited[1] > FIRST_CONTENTS_SECONDS
+
+    def _key_lost(self) -> bool:
+        """The key in flight will never come back: the widget it went to was removed with
+        the key in its queue. A clock is the last resort, and a long one: on a busy laptop a
+        key can take over a second to come back up through a screen at work, and a key let
+        go too early could reach the screen below the dialog it opens."""
+        target = self._key_sent_to
+        if target is not None and not target.is_attached:
+            return True
+        return time.monotonic() - self._key_sent_at > KEY_FLIGHT_SECONDS
 
     async def _deliver(self, event: events.Key | events.Paste) -> None:
         if isinstance(event, events.Key):
             self._key_in_flight, self._key_sent_at = event, time.monotonic()
+            self._key_sent_to = self._input_target()
         await super().on_event(event)
         if not event.is_forwarded and event is self._key_in_flight:
             self._key_in_flight = None  # a priority binding used it here and then
+
+    def _input_target(self) -> MessagePump | None:
+        try:
+            return self.focused or self.screen  # where Textual forwards a key
+        except ScreenStackError:
+            return None
 
     def _hold(self, event: events.Key | events.Paste) -> None:
         self._held_input.append(event)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import asyncio
 import unicodedata
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from textual import events
@@ -22,6 +22,8 @@ from textual.keys import REPLACED_KEYS, _character_to_key, _get_unicode_name_fro
 from textual.pilot import Pilot
 
 MAX_DRAIN_ROUNDS = 200  # a burst of a few hundred keys settles in a few rounds
+INPUT_POLL_SECONDS = 0.005
+INPUT_WAIT_SECONDS = 30.0  # far beyond the app's own limit for a key in flight
 
 
 def key_event(key: str) -> events.Key:
@@ -72,6 +74,13 @@ def _queues_empty(app: App[Any]) -> bool:
     return all(node._message_queue.empty() for node in nodes)
 
 
+async def _until(settled: Callable[[], bool]) -> None:
+    loop = asyncio.get_running_loop()
+    deadline = loop.time() + INPUT_WAIT_SECONDS
+    while not settled() and loop.time() < deadline:
+        await asyncio.sleep(INPUT_POLL_SECONDS)
+
+
 async def drain(pilot: Pilot[Any]) -> None:
     """Wait until the app has handled what was queued (and what that queued in turn).
 
@@ -86,7 +95,14 @@ async def drain(pilot: Pilot[Any]) -> None:
             return
         await pilot._wait_for_screen()
         await asyncio.sleep(0)
-        settled = _queues_empty(app) and not getattr(app, "_held_input", None)
+        input_settled = getattr(app, "input_settled", None)
+        if input_settled is not None and not input_settled():
+            # a key's binding is still running (a section being composed): its next keys
+            # wait for it, so this waits too (on a short poll: an action can take seconds)
+            quiet_rounds = 0
+            await _until(input_settled)
+            continue
+        settled = _queues_empty(app)
         quiet_rounds = quiet_rounds + 1 if settled else 0
         if quiet_rounds >= 2:  # twice: a handler may post once more after the queue emptied
             return

@@ -265,6 +265,11 @@ class GarageScreen(RacerScreen[None]):
         self.reload()
         self.set_interval(WATCH_SECONDS, self._watch)
 
+    @property
+    def first_contents_arrived(self) -> bool:
+        """The app holds keys typed before the list has landed (racer_tui.app)."""
+        return self.loaded
+
     def on_resize(self) -> None:
         self.set_class(self.size.width < NARROW, "-narrow")
 
@@ -382,6 +387,13 @@ class GarageScreen(RacerScreen[None]):
 
     def _highlighted_folder(self, doing: str) -> ModelFolder | None:
         name = self.highlighted_name
+        if name is None and not self.loaded:  # the app waited for the list: it cannot be read
+            self.notify(
+                f"The garage's models have not been read, so there is none to {doing} yet; "
+                "press ctrl+r to read them again.",
+                severity="warning",
+            )
+            return None
         if name is None:
             self.notify(f"There is no model to {doing}; press n to create one.", severity="warning")
             return None

@@ -223,6 +223,11 @@ class LeagueScreen(RacerScreen[None]):
         self.reload()
         self.query_one(SyncStatusLine).read(self.db_path)
 
+    @property
+    def first_contents_arrived(self) -> bool:
+        """The app holds keys typed before the list has landed (racer_tui.app)."""
+        return self.loaded
+
     def on_resize(self) -> None:
         self.set_class(self.size.width < NARROW, "-narrow")
 

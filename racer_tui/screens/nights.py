@@ -618,6 +618,7 @@ class NightsScreen(RacerScreen[None]):
         super().__init__()
         self.db_path = db_path
         self.nights: list[Night] = []
+        self.first_contents_arrived = False  # the app holds keys typed before the list lands
         self.state: NightState | None = None
         # The night the pane shows or is loading: the list's cursor decides it, never the
         # order in which loads come back.
@@ -665,6 +666,7 @@ class NightsScreen(RacerScreen[None]):
 
     def on_nights_loaded(self, message: NightsLoaded) -> None:
         self.nights = message.nights
+        self.first_contents_arrived = True
         rows = [
             [Text(n.name), Text(n.track_name), "closed" if n.closed else "open"]
             for n in message.nights

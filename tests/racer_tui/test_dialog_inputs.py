@@ -4,6 +4,8 @@ a terminal delivers them (`burst`: all at once), not pressed one by one as Pilot
 
 from __future__ import annotations
 
+import asyncio
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -11,10 +13,14 @@ import pytest
 from textual.screen import Screen
 from textual.widgets import Input
 
+import racer_tui.app as app_module
+import racer_tui.screens.garage as garage_module
 from racer_tui.app import create_app
 from racer_tui.keys_as_delivered import burst, drain, paste
 from racer_tui.screens.dialogs import ImportDialog, InputDialog
+from racer_tui.screens.garage import GarageScreen
 from racer_tui.screens.tracks import TrackImportDialog
+from sim.garage.folder import ModelError, ModelFolder, list_models
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import trained_model
 
@@ -81,3 +87,72 @@ async def test_the_train_budget_typed_in_the_burst_that_opened_it_is_kept(
         field = app.focused
         assert isinstance(field, Input)
         assert field.value == kept
+
+
+async def test_a_key_whose_binding_takes_long_holds_the_keys_after_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Opening the Training section for the first time can take seconds on a busy machine,
+    # longer than the app's last-resort clock for a key in flight: the keys after `t` still
+    # wait for its binding (the app runs it before it reads its next key) and its dialog.
+    monkeypatch.setattr(app_module, "KEY_FLIGHT_SECONDS", 0.05)
+    opening = GarageScreen.action_train_model
+
+    async def slow_opening(screen: GarageScreen) -> None:
+        await asyncio.sleep(0.5)
+        await opening(screen)
+
+    monkeypatch.setattr(GarageScreen, "action_train_model", slow_opening)
+    new_model("one")
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        burst(app, ["t", *CLEAR, "1", "2"])
+        await drain(pilot)
+        assert isinstance(app.screen, InputDialog)
+        field = app.focused
+        assert isinstance(field, Input)
+        assert field.value == "12"
+
+
+def _slow_listing(monkeypatch: pytest.MonkeyPatch, seconds: float, fails: bool = False) -> None:
+    listing = list_models
+
+    def slow() -> list[ModelFolder]:
+        time.sleep(seconds)
+        if fails:
+            raise ModelError("the models folder cannot be read")
+        return listing()
+
+    monkeypatch.setattr(garage_module, "list_models", slow)
+
+
+async def test_a_key_typed_as_the_garage_opens_waits_for_its_models(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    _slow_listing(monkeypatch, 0.5)
+    new_model("one")
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        burst(app, ["t", *CLEAR, "7"])  # before the list has been read
+        await drain(pilot)
+        assert isinstance(app.screen, InputDialog)
+        assert app.screen._title == "Train one"
+        field = app.focused
+        assert isinstance(field, Input)
+        assert field.value == "7"
+
+
+async def test_a_list_that_cannot_be_read_holds_keys_only_for_a_moment(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(app_module, "FIRST_CONTENTS_SECONDS", 0.2)
+    _slow_listing(monkeypatch, 0.05, fails=True)
+    new_model("one")
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        burst(app, ["t"])
+        await drain(pilot)
+        assert isinstance(app.screen, GarageScreen)
+        said = [notification.message for notification in app._notifications]
+        assert any("have not been read" in message and "ctrl+r" in message for message in said)
