@@ -33,7 +33,7 @@ test: lint
 	$(BIN)/pytest -n 2 -q
 
 bench: $(APP_STAMP)
-	$(BIN)/python -m sim.bench
+	$(BIN)/python -m benchmarks.sim.simulator
 
 clean:
 	rm -rf $(VENV) .mypy_cache .ruff_cache .pytest_cache

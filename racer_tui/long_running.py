@@ -5,7 +5,7 @@ those are mostly Textual's: the sections' widgets and, above all, the lines each
 last rendered (every `Strip` carries seven small caches: about 100,000 objects once every
 section has been seen). At Python's default settings a full collection came every dozen
 key presses and took 140-260 ms on an idle machine and up to 600 ms beside a training, so
-one key in twelve waited that long (`python -m racer_tui.bench_soak` measures it).
+one key in twelve waited that long (`python -m benchmarks.app.soak` measures it).
 
 So, in the long-running app only:
 - What lives as long as the app (modules, Textual, each section once it has been shown) is
@@ -124,7 +124,7 @@ def limit_malloc_arenas(arenas: int = MALLOC_ARENAS) -> bool:
 # How long a thread holds the interpreter before another may run (Python's default: 5 ms).
 # A heat simulated in a worker thread holds it for whole slices; the key that waits behind
 # them waits a slice per hand-over. At 1 ms the timekeeper's keys beside a simulated heat
-# answered at p95 35 ms instead of 55 (python -m racer_tui.bench_timekeeper).
+# answered at p95 35 ms instead of 55 (python -m benchmarks.app.timekeeper).
 SWITCH_INTERVAL_SECONDS = 0.001
 
 

@@ -21,7 +21,7 @@ budgets are still whatever was typed). Heats run in the app's threads as they do
 racer. Typed text never holds `/` or `~`, so a path typed into an export dialog is relative
 and lands in the scratch folder the monkey works in, never elsewhere.
 
-`python -m benchmarks.app_monkey` is the long run; tests/racer_tui/test_monkey.py the short.
+`python -m benchmarks.app.monkey` is the long run; tests/racer_tui/test_monkey.py the short.
 """
 
 from __future__ import annotations

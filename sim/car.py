@@ -5,7 +5,7 @@ as in deepracer-simapp's URDF; those wheel centres decide on-track and off-track
 car *turns* is calibrated separately, on DeepRacer's own sim-traces: its simulated front
 tyres slip, so a steering angle gives the curvature of a 0.27 m wheelbase, answering with a
 quick share and a first-order lag (see `CarSpec` for each number and where it came from, and
-`python -m sim.bench_calibration` for the replay that checks them). The rear axle does not
+`python -m benchmarks.sim.calibration` for the replay that checks them). The rear axle does not
 slip sideways, so the body turns about it.
 
 Actions are targets: the steering approaches its target with a lag and the motor the
@@ -69,7 +69,7 @@ class CarSpec:
     simapp are from aws-deepracer-community/deepracer-simapp at 01f5f015 (`bundle/`). The
     handling constants were fitted by
     replaying the commands of DeepRacer sim-traces open-loop through this car (see
-    `sim.bench_calibration`): a DeepRacer-on-AWS continuous-action training run (simapp 6.0,
+    `benchmarks.sim.calibration`): a DeepRacer-on-AWS continuous-action training run (simapp 6.0,
     15 iterations, 10,700 rows) and a DRoA training run, both from the public test data of
     aws-deepracer-community/deepracer-utils (`tests/deepracer/logs/`); checked on a DRoA
     evaluation (3 laps, simapp 6.0) that was not fitted.

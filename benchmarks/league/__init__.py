@@ -1,1 +1,2 @@
-"""League benchmarks: trust in shared results."""
+"""League benchmarks: a big league's queries, sync through each store, the fuzzed doors
+untrusted input comes through, and the attacks a league's trust must hold against."""

@@ -530,7 +530,7 @@ def _aws_env() -> Iterator[None]:
 
 
 def run(stores: Sequence[str], window: float, only: Sequence[str] = ()) -> list[dict[str, Any]]:
-    from league.bench_sync import moto_server
+    from benchmarks.league.sync import moto_server
 
     rows: list[dict[str, Any]] = []
     with tempfile.TemporaryDirectory(prefix="racer-tui-trust-") as tmp:

@@ -3,7 +3,7 @@
 Textual's DataTable renders every visible cell again whenever a row is added (its render
 caches are keyed by an update count that each `add_row` moves on), and by a 4-minute
 heat's last laps that made Capture Lap take up to 56 ms; with this list it takes 9-17 ms
-(`python -m racer_tui.bench_timekeeper`). A heat has a few dozen laps at most, so this
+(`python -m benchmarks.app.timekeeper`). A heat has a few dozen laps at most, so this
 list keeps each lap's line as text and draws the lines that fit: a new lap costs one line,
 and a change of selection never touches the clocks' layout.
 """

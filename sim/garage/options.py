@@ -54,7 +54,7 @@ DEFAULT_REWARD = "follow_center_line"
 DEFAULT_MINUTES = 60.0
 # DeepRacer's defaults except two, both inside its ranges: batch 64 x 10 epochs spends most of a
 # 2-core CPU on gradient steps (1-3k env steps/s); 512 x 4 trains at 5k+ steps/s and reaches
-# 5/5 laps as quickly (measured by sim.bench_train).
+# 5/5 laps as quickly (measured by benchmarks.training.train).
 DEFAULT_HYPERPARAMETER_CHANGES: dict[str, float | int | str] = {"batch_size": 512, "num_epochs": 4}
 
 

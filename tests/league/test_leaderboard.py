@@ -162,7 +162,7 @@ def test_a_csv_export_never_hands_a_spreadsheet_a_formula(league: League) -> Non
 
 def test_a_tracks_leaderboard_is_read_in_order_from_one_index(league: League) -> None:
     # At a million laps sorting a track's board, or looking each row up, is most of the
-    # query's time (league.bench): the plan must read one covering index in its order.
+    # query's time (benchmarks.league.board): the plan must read one covering index in its order.
     sql, params = board_sql(Filters(track_hash="0" * 64), RankingMethod.BEST_LAP)
     plan = " ".join(str(row[3]) for row in league.conn.execute(f"EXPLAIN QUERY PLAN {sql}", params))
     assert "COVERING INDEX board_in_order" in plan

@@ -1,5 +1,5 @@
 """The monkey, short (issue 42): random keys, bursts, pastes, clicks and resizes against the
-real app with fixed seeds never crash it. The long run is `python -m benchmarks.app_monkey`.
+real app with fixed seeds never crash it. The long run is `python -m benchmarks.app.monkey`.
 A crash found here fails with the actions that led to it; each one fixed has its own test
 (tests/racer_tui/test_key_bursts.py)."""
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim import bench_calibration
+from benchmarks.sim import calibration as bench_calibration
 from sim.calibration import (
     CURVATURE_TOLERANCE,
     GAP_TARGETS,

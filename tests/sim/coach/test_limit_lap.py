@@ -128,7 +128,7 @@ def test_limit_laps_are_cached_in_memory_and_on_disk(monkeypatch: pytest.MonkeyP
 def test_the_benchmark_prints_its_figures(capsys: pytest.CaptureFixture[str]) -> None:
     import json
 
-    from sim.coach import bench_limit
+    from benchmarks.sim import limit_lap as bench_limit
 
     assert bench_limit.main(["hairpin-circuit", "--json"]) == 0
     (row,) = json.loads(capsys.readouterr().out)["tracks"]
