@@ -44,12 +44,12 @@ from sim.deepracer_files import (
     read_training_metrics,
     read_training_params,
 )
+from sim.foundation.ids import canonical_json, content_hash
+from sim.foundation.names import is_valid_name
+from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelFolder
-from sim.ids import canonical_json, content_hash
-from sim.names import is_valid_name
 from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
-from sim.remedies import Fix
 from sim.track import Track, TrackError
 from sim.track_catalog import resolve_track
 

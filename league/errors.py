@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sim.remedies import RemedyError
+from sim.foundation.remedies import RemedyError
 
 
 class LeagueError(RemedyError):

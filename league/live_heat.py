@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from sim.atomic import write_text_atomic
+from sim.foundation.atomic import write_text_atomic
 
 FOLDER = "live-heats"
 HEARTBEAT_SECONDS = 0.5

@@ -26,10 +26,10 @@ from league.seasons import DEFAULT_POINTS, get_season, night_results
 from league.store import League, now_iso
 from league.timekeeper.car import car_name, is_physical, physical_spec
 from league.tracks import ensure_track
-from sim.ids import new_id
-from sim.plural import counted
+from sim.foundation.ids import new_id
+from sim.foundation.plural import counted
+from sim.foundation.remedies import Fix
 from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
-from sim.remedies import Fix
 from sim.track import Track
 
 if TYPE_CHECKING:

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 from league.errors import LeagueError
 from league.store import League, now_iso
-from sim.plain_names import MAX_NAME_LENGTH, is_plain_name, look_alike_key, normalised
-from sim.remedies import echoed
+from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name, look_alike_key, normalised
+from sim.foundation.remedies import echoed
 
 # Distinct, readable on dark and light terminals; a racer's default is picked by name.
 PALETTE = (
@@ -44,7 +44,7 @@ class Racer:
 
 
 def check_name(text: str, what: str = "racer name") -> str:
-    """`text` as kept (NFKC, stripped: see sim.plain_names), or LeagueError saying what a
+    """`text` as kept (NFKC, stripped: see sim.foundation.plain_names), or LeagueError saying what a
     name may contain."""
     name = normalised(text)
     if not is_plain_name(name):

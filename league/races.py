@@ -19,12 +19,12 @@ from league.race_types import TIME_TRIAL, words
 from league.racers import check_name, display_names_overrides, ensure_racer
 from league.store import League, record_body
 from league.tracks import ensure_track, track_names
-from sim.ids import content_hash, is_valid_id
+from sim.foundation.ids import content_hash, is_valid_id
+from sim.foundation.remedies import Fix
 from sim.race.physics import PHYSICAL
 from sim.race.plausible import first_impossible_lap
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
-from sim.remedies import Fix
 from sim.track import Track, TrackError
 from sim.track_catalog import find_track_by_hash, resolve_track
 

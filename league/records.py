@@ -4,7 +4,7 @@ A record is one row of a shared table: its id, and its body = every column excep
 and `content_hash`, plus the child laps of submissions and races (as the row's `laps`
 list, in lap order). A column added after records were first shared (OPTIONAL_COLUMNS)
 is in the body only when it holds a value, so older records keep their content hash.
-`content_hash == sim.ids.content_hash(body)` for every row; the league computes it when
+`content_hash == sim.foundation.ids.content_hash(body)` for every row; the league computes it when
 it inserts a row, and `record_body` rebuilds the body from the database so anyone can
 check it.
 
@@ -23,7 +23,7 @@ from league.errors import LeagueError
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
 from league.store import League
 from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
-from sim.ids import content_hash
+from sim.foundation.ids import content_hash
 
 
 @dataclass(frozen=True)

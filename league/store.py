@@ -6,8 +6,8 @@ the pending migrations. Every multi-row change goes through `League.transaction(
 `BEGIN IMMEDIATE` transaction, so a failure or a Ctrl+C leaves no partial rows.
 
 Shared rows (racers, tracks, submissions, races, nights, entrants, heats, seasons,
-corrections) are immutable: each has a 26-character time-sortable `id` (sim.ids.new_id)
-and a `content_hash` = sim.ids.content_hash(record body), where the body is every shared
+corrections) are immutable: each has a 26-character time-sortable `id` (sim.foundation.ids.new_id)
+and a `content_hash` = sim.foundation.ids.content_hash(record body), where the body is every shared
 column except `id` and `content_hash` (plus the laps for submissions and races). Sync can
 therefore push and pull rows as they are; a change is always a new row (a correction).
 """
@@ -26,8 +26,8 @@ from typing import Any
 import sqlite_utils
 
 from league.errors import LeagueError
-from sim.home import league_db_file
-from sim.ids import content_hash, new_id
+from sim.foundation.home import league_db_file
+from sim.foundation.ids import content_hash, new_id
 
 BUSY_TIMEOUT_MS = 10_000
 

@@ -68,8 +68,8 @@ from racer_tui.screens.training import LeaveWhileTraining, TrainingScreen
 from racer_tui.screens.welcome import WelcomeScreen
 from racer_tui.sections import SECTIONS, WELCOME_MODE, section_for
 from racer_tui.textual_workarounds import apply_workarounds
+from sim.foundation.home import data_home
 from sim.garage.folder import list_models
-from sim.home import data_home
 
 SECTION_SCREENS: dict[str, type[Screen[Any]]] = {
     "garage": GarageScreen,

@@ -1,10 +1,10 @@
 """The app's own words for a remedy: a library's sentence ends in what to do, written for
 the command line (`racer-tui tracks import FILE`); where the app does the same with a key,
-it says the key instead (`sim.remedies`)."""
+it says the key instead (`sim.foundation.remedies`)."""
 
 from __future__ import annotations
 
-from sim.remedies import Fix, Note
+from sim.foundation.remedies import Fix, Note
 
 # Remedies the app offers itself, in its words: its keys, not the command line's commands.
 APP_FIXES = {

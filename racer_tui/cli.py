@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from sim.home import LEAGUE_ENV
+from sim.foundation.home import LEAGUE_ENV
 
 EXIT_USER_ERROR = 2
 _NEGATIVE_VALUE = re.compile(r"-\d[\d.]*(,\s*-?\d[\d.]*)+")  # "-30,30", "-1.5,-0.5"

@@ -20,8 +20,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import TextIO
 
-from sim.atomic import write_text_atomic
-from sim.home import data_home
+from sim.foundation.atomic import write_text_atomic
+from sim.foundation.home import data_home
 
 CRASHES_DIR = "crashes"
 KEYS_KEPT = 40  # the last keys a report lists: enough to replay the burst that crashed

@@ -25,7 +25,7 @@ from racer_tui.output import print_json, print_table
 from racer_tui.rules_option import HELP as RULES_HELP
 from racer_tui.rules_option import rules_option
 from sim.deepracer_files import DeepRacerFileError
-from sim.plural import counted
+from sim.foundation.plural import counted
 from sim.race.rules import (
     DEFAULT_RULES,
     RULE_PRESETS,
@@ -287,7 +287,7 @@ def _night_projector(args: argparse.Namespace) -> int:
     from league.nights import get_night
     from league.store import open_league
     from racer_tui.app import run_app
-    from sim.home import LEAGUE_ENV
+    from sim.foundation.home import LEAGUE_ENV
 
     with open_league(args.db) as league:
         night = get_night(league, args.night)  # a wrong name is one sentence, before the app

@@ -22,7 +22,6 @@ from sim.action_space import (
     ActionSpaceError,
     discrete_grid,
 )
-from sim.atomic import write_bytes_atomic
 from sim.deepracer_files import (
     HYPERPARAMETER_SPECS,
     DeepRacerFileError,
@@ -31,6 +30,9 @@ from sim.deepracer_files import (
     write_model_metadata,
     write_training_params,
 )
+from sim.foundation.atomic import write_bytes_atomic
+from sim.foundation.names import NAME_RULE, is_valid_name
+from sim.foundation.remedies import Note, RemedyError, echoed
 from sim.garage.clone import incompatibility
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, list_models
 from sim.garage.options import (
@@ -49,7 +51,6 @@ from sim.garage.options import (
     racing_line_followed,
     with_race,
 )
-from sim.names import NAME_RULE, is_valid_name
 from sim.observations import SensorError, normalise_sensors
 from sim.realworld.settings import (
     CameraRandomisation,
@@ -57,7 +58,6 @@ from sim.realworld.settings import (
     settings_text,
     with_camera_randomisation_keys,
 )
-from sim.remedies import Note, RemedyError, echoed
 from sim.reward_function import RewardFunctionError, check_reward_code
 from sim.track import TrackError
 

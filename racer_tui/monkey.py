@@ -122,7 +122,7 @@ def scratch_home(real_training: bool = False) -> Iterator[Path]:
     """A temporary data home (and working folder) with the monkey's models, the training
     worker swapped for a stand-in unless `real_training`; children it started are stopped
     and everything is removed at the end."""
-    from sim.home import LEAGUE_ENV, home_at
+    from sim.foundation.home import LEAGUE_ENV, home_at
 
     before = {child.pid for child in psutil.Process().children(recursive=True)}
     league = os.environ.pop(LEAGUE_ENV, None)  # the league of the scratch home, not another

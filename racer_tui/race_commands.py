@@ -30,14 +30,14 @@ from racer_tui.output import print_json
 from racer_tui.rules_option import HELP as RULES_HELP
 from racer_tui.rules_option import rules_option
 from sim.deepracer_files import DeepRacerFileError
+from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
+from sim.foundation.plural import counted
+from sim.foundation.remedies import RemedyError, echoed
 from sim.objects.settings import RaceType
-from sim.plain_names import MAX_NAME_LENGTH, is_plain_name
-from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, rules_from_mapping
-from sim.remedies import RemedyError, echoed
 from sim.track import Track, TrackError
 from sim.track_catalog import DEFAULT_TRACK, resolve_track
 

@@ -28,8 +28,8 @@ from rich.text import Text
 from league.errors import LeagueError
 from league.sync.errors import SyncError
 from racer_tui.output import print_json, print_table
+from sim.foundation.plural import counted
 from sim.garage.folder import ModelError
-from sim.plural import counted
 
 if TYPE_CHECKING:
     from league.store import League

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from sim import camera_scene as scene
-from sim.plural import counted
+from sim.foundation.plural import counted
 from sim.raster import TrackRaster
 from sim.track import Track
 

@@ -38,7 +38,7 @@ import yaml
 from numpy.typing import NDArray
 
 from sim.action_space import ActionSpace, ActionSpaceError, parse_action_space
-from sim.atomic import write_text_atomic
+from sim.foundation.atomic import write_text_atomic
 from sim.observations import SensorError, normalise_sensors
 from sim.simulation import EpisodeStatus
 

@@ -23,9 +23,9 @@ import shapely
 from numpy.lib import format as npy_format
 from shapely.geometry import LinearRing, Polygon
 
-from sim.atomic import write_bytes_atomic
+from sim.foundation.atomic import write_bytes_atomic
+from sim.foundation.remedies import echoed, echoed_path
 from sim.geometry import FloatArray, PolylineProjector, segment_lengths, signed_area
-from sim.remedies import echoed, echoed_path
 from sim.track_errors import TrackError as TrackError  # noqa: PLC0414 (re-exported for callers)
 
 Direction = Literal["counter-clockwise", "clockwise"]

@@ -5,7 +5,7 @@ Three kinds of track, listed in this order:
 - official: AWS DeepRacer's 127 track files in `tracks/official/` with their catalog
   (`sim.official_tracks`), found by the simulator's world name (`reinvent_base`) or by the
   console's name (`re:Invent 2018`, any case);
-- imported: a racer's own tracks in `sim.home.user_tracks_dir()` as `<name>.npy` with an
+- imported: a racer's own tracks in `sim.foundation.home.user_tracks_dir()` as `<name>.npy` with an
   optional `<name>.yaml` sidecar (description and the facts `list_tracks` shows).
 Listing never loads an array, and importing this module loads no geometry library, so
 `racer-tui tracks list` starts fast. The .npy file is what makes an imported track exist:
@@ -26,11 +26,11 @@ from typing import TYPE_CHECKING, Any, Literal
 import yaml
 
 import tracks
-from sim.atomic import write_text_atomic
-from sim.home import user_tracks_dir
-from sim.names import NAME_PATTERN, NAME_RULE
+from sim.foundation.atomic import write_text_atomic
+from sim.foundation.home import user_tracks_dir
+from sim.foundation.names import NAME_PATTERN, NAME_RULE
+from sim.foundation.remedies import Fix, Note, echoed
 from sim.official_tracks import OfficialTrack, official_tracks
-from sim.remedies import Fix, Note, echoed
 from sim.track_errors import TrackError
 
 if TYPE_CHECKING:

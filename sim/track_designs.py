@@ -14,7 +14,7 @@ from pathlib import Path
 import yaml
 
 import tracks
-from sim.atomic import write_text_atomic
+from sim.foundation.atomic import write_text_atomic
 from sim.track import Track
 from sim.track_builder import Arc, Segment, Straight, build_from_segments
 

@@ -3,7 +3,7 @@ reporting a bad name) never pays for importing the geometry libraries that check
 
 from __future__ import annotations
 
-from sim.remedies import RemedyError
+from sim.foundation.remedies import RemedyError
 
 
 class TrackError(RemedyError):

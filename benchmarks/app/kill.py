@@ -38,7 +38,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
-from sim.home import home_at
+from sim.foundation.home import home_at
 
 _KILL_WINDOW_S: Final = 4.0  # a push or pull of the default league takes about this long
 # After the training child starts: it writes a checkpoint every 10 s of training, so kills
@@ -192,7 +192,7 @@ import sys
 from dataclasses import replace
 from league.races import record_race
 from league.store import open_league
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules

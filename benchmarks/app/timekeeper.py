@@ -84,7 +84,7 @@ async def press_keys(keys: int) -> list[float]:
     from league.timekeeper.journal import HeatJournal, journal_path
     from racer_tui.app import create_app
     from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
-    from sim.ids import new_id
+    from sim.foundation.ids import new_id
     from sim.race.rules import RaceRules
     from sim.track_catalog import DEFAULT_TRACK, resolve_track
 

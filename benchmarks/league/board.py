@@ -58,7 +58,7 @@ from sim.deepracer_files import (
     write_training_metrics,
     write_training_params,
 )
-from sim.ids import content_hash, new_id
+from sim.foundation.ids import content_hash, new_id
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.race.rules import DEFAULT_RULES
 from sim.track_catalog import resolve_track

@@ -47,8 +47,8 @@ from league.errors import LeagueError
 from league.store import League, open_league
 from league.sync.errors import RecordInvalidError
 from league.sync.record import Quarantined, decode_envelope, encode_envelope, make_record
-from sim.home import home_at
-from sim.ids import canonical_json
+from sim.foundation.home import home_at
+from sim.foundation.ids import canonical_json
 
 FAMILIES: Final = ("record", "rules", "track", "reward", "bundle")
 MARKER_NAME: Final = "fuzz-executed"

@@ -65,7 +65,7 @@ from sim.deepracer_files import (
     write_model_metadata,
     write_training_params,
 )
-from sim.ids import canonical_json, new_id
+from sim.foundation.ids import canonical_json, new_id
 from sim.race.engine import run_race
 from sim.race.physics import DEEPRACER
 from sim.race.result import LapRecord, RaceResult

@@ -31,7 +31,7 @@ from typing import Any
 from sim.calibration import CURVATURE_TOLERANCE, GAP_TARGETS, Calibration, calibrate
 from sim.car import DEEPRACER_CAR, SIMAPP4_CAR, CarSpec
 from sim.deepracer_files import DeepRacerFileError, SimTraceRow, read_sim_trace
-from sim.plural import counted
+from sim.foundation.plural import counted
 
 SHARED_TRACE = (
     Path(__file__).resolve().parents[3]  # beside the repository: benchmarks/sim/ is two deep

@@ -27,8 +27,8 @@ from league.sync.errors import BundleError
 from league.sync.kinds import BUNDLE_KIND
 from league.sync.record import make_record
 from league.sync.s3_bundles import BUNDLE_SUFFIX, S3BundleStore
-from sim.home import data_home
-from sim.ids import new_id
+from sim.foundation.home import data_home
+from sim.foundation.ids import new_id
 
 CACHE_DIR = "sync-bundles"
 
@@ -95,9 +95,9 @@ def _candidates(league: League) -> list[_Candidate]:
 
 def _bundle_file(candidate: _Candidate) -> tuple[Path, str, str] | None:
     """(bundle file, model hash, model name) for a model on this machine, else None."""
+    from sim.foundation.names import is_valid_name
     from sim.garage.bundle import export_bundle, read_bundle
     from sim.garage.folder import ModelError, open_model
-    from sim.names import is_valid_name
 
     spec = candidate.spec
     if spec.endswith(BUNDLE_SUFFIX):

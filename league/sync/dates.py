@@ -1,6 +1,6 @@
 """Dates and ids that agree: a record may not claim to be older (or newer) than it can be.
 
-A record's id carries the time it was made (sim.ids: 48 bits of milliseconds), and its
+A record's id carries the time it was made (sim.foundation.ids: 48 bits of milliseconds), and its
 body carries its own date (`created_at`, a submission's `submitted_at`, a race's
 `started_at`, a model record's `registered_at`); both come from the maker's clock in the
 same save. Ties on a board go to the earlier result, and the first model record seen for
@@ -36,7 +36,7 @@ from league.sync.errors import RecordInvalidError
 from league.sync.kinds import BUNDLE_KIND, MODEL_KIND, PROFILE_KIND
 from league.sync.record import SyncRecord
 from league.trust.roster import FOUNDER_ID, ROSTER_KIND, Roster
-from sim.ids import id_time_ms
+from sim.foundation.ids import id_time_ms
 from sim.race.rules import RankingMethod
 
 # How far apart two clocks, or two stamps of one save, may honestly be. A record's id and

@@ -46,7 +46,7 @@ from league.sync.sealing import seal_all
 from league.sync.urls import parse_store_url
 from league.trust.keys import SigningKey, load_or_create_key
 from league.trust.membership import propose_key
-from sim.ids import ID_PATTERN
+from sim.foundation.ids import ID_PATTERN
 
 # Called as progress(direction, done, total) with direction "push" or "pull"; a pull's
 # total is unknown (None) until its last page.

@@ -36,7 +36,7 @@ from typing import Any, Final
 from league.store import League, now_iso
 from league.sync.protocol import RecordRef
 from league.sync.record import Quarantined, Seal, SyncRecord, quarantine
-from sim.ids import canonical_json
+from sim.foundation.ids import canonical_json
 
 STORE_SETTING: Final = "store"
 BUNDLES_SETTING: Final = "bundles"

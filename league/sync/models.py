@@ -38,7 +38,7 @@ from league.sync.kinds import MODEL_KIND
 from league.sync.local import add_conflict, body_text, get_setting
 from league.sync.record import SyncRecord, make_record
 from league.trust.roster import Roster, same_racer
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 
 REFERENCE_PREFIX: Final = "reference:"
 

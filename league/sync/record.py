@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Final
 
 from league.sync.errors import RecordInvalidError
-from sim.ids import canonical_json, is_valid_id
+from sim.foundation.ids import canonical_json, is_valid_id
 
 # The fixed list of what may be shared. Nothing else is ever accepted from a store.
 # One kind per shared league table (league.sync.kinds maps them), then the sync-level

@@ -25,7 +25,7 @@ from league.sync.urls import DirUrl, DynamoDbUrl, S3Url, parse_store_url
 from league.trust.keys import fingerprint, load_or_create_key
 from league.trust.membership import found_league
 from league.trust.roster import FOUNDER_ID, PIN_SETTING, Roster
-from sim.plural import counted
+from sim.foundation.plural import counted
 
 PIN_DIGITS = 16  # the whole fingerprint: 8 digits are 32 bits, which a forger can grind
 

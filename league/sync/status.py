@@ -21,7 +21,7 @@ from league.sync.bundle_records import BundleInfo, bundles
 from league.sync.engine import SyncSummary, store_key
 from league.sync.errors import StoreUrlError
 from league.sync.outgoing import count_unsent
-from sim.plural import counted
+from sim.foundation.plural import counted
 
 EXCERPT: Final = 60  # characters of a value shown for one side of a conflict
 

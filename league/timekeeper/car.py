@@ -6,8 +6,8 @@ from __future__ import annotations
 from typing import Final
 
 from league.errors import LeagueError
-from sim.plain_names import MAX_NAME_LENGTH, is_plain_name
-from sim.remedies import echoed
+from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
+from sim.foundation.remedies import echoed
 
 PHYSICAL: Final = "physical"
 _PREFIX: Final = f"{PHYSICAL}:"

@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from enum import StrEnum
 
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.physics import PHYSICAL
 from sim.race.plausible import fastest_possible_lap
 from sim.race.result import LapRecord, RaceResult, now_iso

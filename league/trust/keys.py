@@ -28,7 +28,7 @@ from cryptography.hazmat.primitives.asymmetric.ed25519 import (
 )
 
 from league.errors import LeagueError
-from sim.home import data_home
+from sim.foundation.home import data_home
 
 KEY_DIR: Final = "keys"
 KEY_FILE: Final = "league-signing.pem"

@@ -23,9 +23,9 @@ from league.sync.local import STORE_SETTING, get_setting
 from league.sync.validate import MAX_KEPT
 from league.trust.keys import SigningKey, fingerprint
 from league.trust.roster import FOUNDER_ID, Roster, record_digest, same_racer
-from sim.ids import new_id
-from sim.plain_names import look_alike_key
-from sim.remedies import Fix, Note, echoed
+from sim.foundation.ids import new_id
+from sim.foundation.plain_names import look_alike_key
+from sim.foundation.remedies import Fix, Note, echoed
 
 MIN_FINGERPRINT_DIGITS: Final = 8
 

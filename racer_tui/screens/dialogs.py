@@ -24,8 +24,8 @@ from textual.suggester import Suggester
 from textual.widgets import Button, Checkbox, Input, Label, Static
 
 from racer_tui.screens.base import RacerModal, error_message, kept_screen
-from sim.names import NAME_RULE, is_valid_name
-from sim.remedies import echoed, echoed_path
+from sim.foundation.names import NAME_RULE, is_valid_name
+from sim.foundation.remedies import echoed, echoed_path
 
 MAX_PATH_SUGGESTIONS = 200  # a huge folder is not listed in full while typing
 

@@ -27,8 +27,8 @@ from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.model_detail import seconds_text
+from sim.foundation.plural import counted
 from sim.garage.folder import open_model
-from sim.plural import counted
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
 
 COLUMNS = ("trial", "time", "% completed", "status")

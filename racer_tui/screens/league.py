@@ -56,8 +56,8 @@ from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.sync_status import SyncStatusLine
 from racer_tui.widgets.table_fill import Col, FittedTable, column_index, fill_table, shown_columns
-from sim.atomic import write_text_atomic
-from sim.plural import counted
+from sim.foundation.atomic import write_text_atomic
+from sim.foundation.plural import counted
 
 NARROW = 120  # below this many columns the detail panel goes under the table
 # Table titles (league.report's) -> the sort keys league.leaderboard knows.

@@ -29,7 +29,7 @@ from league.submissions import submit_model
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.session import remember_racer, session_racer
 from racer_tui.widgets.model_detail import seconds_text
-from sim.plural import counted
+from sim.foundation.plural import counted
 from sim.race.result import RaceResult
 
 

@@ -80,10 +80,10 @@ from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
-from sim.atomic import write_text_atomic
+from sim.foundation.atomic import write_text_atomic
+from sim.foundation.plural import counted
 from sim.garage.folder import list_models
 from sim.objects.settings import RaceType
-from sim.plural import counted
 from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult

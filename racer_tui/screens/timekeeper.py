@@ -33,7 +33,7 @@ from racer_tui.screens.dialogs import ask
 from racer_tui.screens.race_screen import clock_text, countdown_text
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.lap_list import LapList
-from sim.plural import counted
+from sim.foundation.plural import counted
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, lap_counts
 from sim.track import Track

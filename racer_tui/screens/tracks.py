@@ -31,7 +31,7 @@ from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_label
 from racer_tui.widgets.track_map import TrackMap
 from sim.coach.limit_lap import limit_lap
-from sim.plural import counted
+from sim.foundation.plural import counted
 from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
 from sim.track import Track, TrackError

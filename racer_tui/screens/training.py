@@ -63,6 +63,7 @@ from sim.deepracer_files import (
     last_sim_trace_row,
     training_metrics_rows_after,
 )
+from sim.foundation.remedies import fix_named
 from sim.garage.folder import (
     MAX_MINUTES,
     MIN_MINUTES,
@@ -72,7 +73,6 @@ from sim.garage.folder import (
     open_model,
 )
 from sim.objects.field import ObjectField
-from sim.remedies import fix_named
 from sim.simulation import LOOK_AHEAD
 from sim.track import Track
 from sim.training import events

@@ -18,7 +18,7 @@ from textual.widgets import Static
 from league.entries import EntryBreakdown, SubmissionFiles, entry_breakdown
 from league.leaderboard import LeaderboardRow
 from league.store import League
-from sim.plural import counted
+from sim.foundation.plural import counted
 
 # The hyperparameters a racer tunes most, in the console's order; the rest follow.
 MAIN_HYPERPARAMETERS = (

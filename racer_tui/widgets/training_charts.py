@@ -33,7 +33,7 @@ from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.chart import MAX_POINTS, LineChart
 from racer_tui.widgets.job_line import local_clock
 from sim.deepracer_files import TrainingEpisode, TrainingMetrics
-from sim.plural import counted
+from sim.foundation.plural import counted
 from sim.training import events
 
 MEAN_WINDOW = 20  # episodes in the running means, like the DeepRacer console's

@@ -25,9 +25,9 @@ from numpy.typing import NDArray
 from sim.coach.limit_lap import LimitLap
 from sim.coach.sectors import Sector, centre_positions, unwrapped
 from sim.deepracer_files import SimTraceRow
+from sim.foundation.remedies import RemedyError
 from sim.geometry import FloatArray, PolylineProjector
 from sim.race.trace import RaceTrace
-from sim.remedies import RemedyError
 from sim.simulation import LOOK_AHEAD
 from sim.track import Track
 

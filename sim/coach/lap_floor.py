@@ -51,7 +51,6 @@ from typing import Final
 import numpy as np
 from shapely.geometry import Polygon
 
-from sim.atomic import write_text_atomic
 from sim.car import DEEPRACER_CAR, CarSpec
 from sim.coach.limits import CarLimits, SpeedLevel
 from sim.coach.racing_line import (
@@ -64,7 +63,8 @@ from sim.coach.racing_line import (
     tightest_turn,
 )
 from sim.coach.speed_profile import driven_corner_speeds, flying_profile
-from sim.home import data_home
+from sim.foundation.atomic import write_text_atomic
+from sim.foundation.home import data_home
 from sim.reference_driver import loop_curvature
 from sim.track import Track
 

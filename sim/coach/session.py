@@ -27,9 +27,9 @@ from sim.deepracer_files import (
     read_sim_trace,
     stamp_in,
 )
+from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelError, ModelFolder, open_model
 from sim.race.result import RaceResult
-from sim.remedies import Fix
 from sim.track import Track
 
 BEST = "best"

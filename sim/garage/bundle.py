@@ -28,7 +28,6 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, TypeVar
 
-from sim.atomic import write_bytes_atomic
 from sim.deepracer_files import (
     HYPERPARAMETERS,
     MODEL_METADATA,
@@ -50,6 +49,9 @@ from sim.deepracer_files import (
     read_evaluation_physics,
     stamp_in,
 )
+from sim.foundation.atomic import write_bytes_atomic
+from sim.foundation.names import is_valid_name
+from sim.foundation.remedies import Fix, Note
 from sim.garage.deepracer_import import BUNDLE_SUFFIX, ImportResult
 from sim.garage.folder import (
     POLICY_FILE,
@@ -67,8 +69,6 @@ from sim.garage.summary import (
     summary_text,
     training_summary,
 )
-from sim.names import is_valid_name
-from sim.remedies import Fix, Note
 
 BUNDLE_FORMAT = "racer-tui-bundle"
 BUNDLE_VERSION = 1

@@ -24,7 +24,6 @@ from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
-from sim.atomic import write_bytes_atomic
 from sim.car_export.file_names import is_car_archive_name
 from sim.deepracer_files import (
     MAX_METRICS_BYTES,
@@ -48,6 +47,8 @@ from sim.deepracer_files import (
     write_evaluation_metrics,
     write_training_metrics,
 )
+from sim.foundation.atomic import write_bytes_atomic
+from sim.foundation.remedies import Fix, Note, echoed_path
 from sim.garage.folder import (
     POLICY_FILE,
     ModelError,
@@ -57,7 +58,6 @@ from sim.garage.folder import (
 )
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
 from sim.race.physics import DEEPRACER as DEEPRACER_PHYSICS
-from sim.remedies import Fix, Note, echoed_path
 
 if TYPE_CHECKING:
     from sim.garage.frozen_graph import FolderWeights

@@ -37,7 +37,6 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import psutil
 
-from sim.atomic import write_bytes_atomic
 from sim.deepracer_files import (
     EVALUATION_METRICS_GLOB,
     HYPERPARAMETERS_PATH,
@@ -65,11 +64,12 @@ from sim.deepracer_files import (
     write_model_metadata,
     write_training_params,
 )
+from sim.foundation.atomic import write_bytes_atomic
+from sim.foundation.home import data_home
+from sim.foundation.ids import canonical_json
+from sim.foundation.names import NAME_RULE, is_valid_name
+from sim.foundation.remedies import Fix, RemedyError, echoed
 from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
-from sim.home import data_home
-from sim.ids import canonical_json
-from sim.names import NAME_RULE, is_valid_name
-from sim.remedies import Fix, RemedyError, echoed
 from sim.track import Track, TrackError
 
 if TYPE_CHECKING:
@@ -216,7 +216,7 @@ class ModelFolder:
         """Written atomically by the trainer: {"state", "pid", "started_at", "updated_at",
         "elapsed_seconds", "steps", "episodes", "best_progress", "message", "problem", "fix",
         "physics", "budget_minutes"}: `problem` and `fix` are a failure's message without
-        its remedy and the remedy's name (`sim.remedies.Fix`), or empty."""
+        its remedy and the remedy's name (`sim.foundation.remedies.Fix`), or empty."""
         return self.path / TRAINING_STATE_FILE
 
     # --- the DeepRacer files -----------------------------------------------------------

@@ -26,7 +26,6 @@ from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any
 
-from sim.atomic import write_text_atomic
 from sim.deepracer_files import (
     HYPERPARAMETERS,
     HYPERPARAMETERS_PATH,
@@ -46,6 +45,7 @@ from sim.deepracer_files import (
     stamp_in,
     training_metrics_text,
 )
+from sim.foundation.atomic import write_text_atomic
 
 JOURNAL = ".migration.json"
 OLD_LAYOUT_DIR = "old-layout"

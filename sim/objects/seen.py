@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.atomic import write_text_atomic
+from sim.foundation.atomic import write_text_atomic
 from sim.objects.field import BOT_CAR_SHAPE, BOX_SHAPE, StandingField
 from sim.track import Track
 

@@ -43,7 +43,7 @@ from collections.abc import Generator
 from dataclasses import dataclass, replace
 
 from sim.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.driver import Driver
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps

@@ -14,8 +14,8 @@ from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from typing import Any
 
-from sim.ids import is_valid_id
-from sim.plain_names import MAX_NAME_LENGTH, is_plain_name
+from sim.foundation.ids import is_valid_id
+from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.race.physics import BEFORE_VERSIONING, CURRENT, is_physics
 from sim.race.rules import RaceRules, RulesError, Score, rules_from_mapping, score_laps
 from sim.race.trace import RaceTrace
@@ -86,7 +86,7 @@ def now_iso() -> str:
 class RaceResult:
     """One entrant's time trial. Compared by identity: two runs are two results."""
 
-    result_id: str  # sim.ids.new_id()
+    result_id: str  # sim.foundation.ids.new_id()
     racer: str  # the person
     model_name: str  # the car ("reference" for the reference driver)
     model_hash: str  # the driver's content hash

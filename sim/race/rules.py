@@ -20,6 +20,8 @@ from typing import Any, Protocol
 
 import yaml
 
+from sim.foundation.plural import counted
+from sim.foundation.strict_yaml import DuplicateKeyError, load_data
 from sim.objects.settings import (
     MAX_BOT_CARS,
     MAX_BOT_SPEED,
@@ -29,8 +31,6 @@ from sim.objects.settings import (
     RaceSettings,
     RaceType,
 )
-from sim.plural import counted
-from sim.strict_yaml import DuplicateKeyError, load_data
 
 
 class RulesError(ValueError):

@@ -18,7 +18,7 @@ from typing import Any
 
 import torch
 
-from sim.atomic import write_bytes_atomic
+from sim.foundation.atomic import write_bytes_atomic
 from sim.training.errors import PolicyError
 from sim.training.policy import (
     PolicyNetwork,

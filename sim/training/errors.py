@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sim.remedies import Fix, RemedyError
+from sim.foundation.remedies import Fix, RemedyError
 
 
 class PolicyError(RemedyError):

@@ -30,7 +30,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.atomic import write_text_atomic
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
 from sim.deepracer_files import (
     PREPARE_STATUS,
@@ -43,6 +42,7 @@ from sim.deepracer_files import (
     trace_status,
     write_evaluation_metrics,
 )
+from sim.foundation.atomic import write_text_atomic
 from sim.objects.settings import RaceSettings
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.resets import ResetRules

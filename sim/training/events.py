@@ -25,7 +25,7 @@ import types
 from dataclasses import MISSING, asdict, dataclass, fields
 from typing import Any, ClassVar, Union, get_args, get_origin, get_type_hints
 
-from sim.remedies import Fix
+from sim.foundation.remedies import Fix
 
 MAX_LINE_BYTES = 64_000
 
@@ -127,8 +127,8 @@ class Ended:
     best_progress: float
     best_lap: float | None
     # A failure whose message ends in a remedy a front end may offer its own way: the
-    # message without it, and the remedy's name (`sim.remedies.Fix`). Empty otherwise, and
-    # in the lines of older racer-tuis.
+    # message without it, and the remedy's name (`sim.foundation.remedies.Fix`). Empty
+    # otherwise, and in the lines of older racer-tuis.
     problem: str = ""
     fix: str = ""
 

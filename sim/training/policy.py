@@ -28,11 +28,11 @@ import torch
 from numpy.typing import NDArray
 from torch import nn
 
-from sim.atomic import write_bytes_atomic
 from sim.deepracer_files import NEURAL_NETWORKS, ModelMetadata
+from sim.foundation.atomic import write_bytes_atomic
+from sim.foundation.remedies import Fix
 from sim.observations import VECTOR_SIZE, Observer, SensorOptions
 from sim.race.driver import Driver, DriverAction
-from sim.remedies import Fix
 from sim.simulation import TrackSimulation
 from sim.training.errors import PolicyError
 

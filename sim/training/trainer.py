@@ -30,7 +30,7 @@ import psutil
 import torch
 
 from sim import reward_limit, reward_sandbox
-from sim.atomic import write_text_atomic
+from sim.foundation.atomic import write_text_atomic
 from sim.garage.folder import ModelError, ModelFolder
 from sim.observations import SensorOptions
 from sim.race.physics import CURRENT as CURRENT_PHYSICS

@@ -24,7 +24,7 @@ from sim.deepracer_files import (
     write_training_metrics,
     write_training_params,
 )
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.physics import CURRENT
 from sim.race.result import LapRecord, RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps

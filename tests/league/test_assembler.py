@@ -15,8 +15,8 @@ from league.store import League
 from league.submissions import submit
 from sim.action_space import discrete_grid
 from sim.deepracer_files import ModelMetadata, write_evaluation_metrics, write_training_metrics
+from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelFolder, create_model
-from sim.remedies import Fix
 from sim.track_catalog import resolve_track
 from tests.league.helpers import REWARD, TRACK, model_folder, training_metrics, trials
 
@@ -150,7 +150,7 @@ def test_no_evaluation_says_to_evaluate_first(tmp_path: Path) -> None:
         path.unlink()
     with pytest.raises(LeagueError, match="no evaluation metrics") as raised:
         assemble(str(folder), "ana")
-    # The command line's remedy names --evaluation; the app says its own (sim.remedies).
+    # The command line's remedy names --evaluation; the app says its own (sim.foundation.remedies).
     assert raised.value.fix is Fix.EVALUATE_MODEL and "--evaluation" not in raised.value.problem
 
 

@@ -9,7 +9,7 @@ import pytest
 from league.errors import LeagueError
 from league.racers import add_racer, ensure_racer
 from league.store import League
-from sim.plain_names import look_alike_key
+from sim.foundation.plain_names import look_alike_key
 
 ARMENIAN_VO = "\u0578"  # ո, drawn as n
 GREEK_ETA = "\u03b7"  # η, drawn as n with a longer right leg

@@ -21,7 +21,7 @@ from league.sync.record import make_record
 from league.sync.validate import check_record
 from league.timekeeper.heat import TimekeeperError, TimekeptHeat, physical_floor
 from racer_tui.cli import main
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.engine import run_race
 from sim.race.physics import PHYSICAL
 from sim.race.plausible import fastest_possible_lap

@@ -22,7 +22,7 @@ from sim.deepracer_files import (
     read_evaluation_physics,
     write_evaluation_metrics,
 )
-from sim.ids import content_hash, new_id
+from sim.foundation.ids import content_hash, new_id
 from sim.race.physics import BEFORE_VERSIONING, CURRENT, DEEPRACER, board_suffix
 from sim.race.result import RaceResult
 from tests.league.helpers import TRACK, model_folder, race_result, trials

@@ -26,7 +26,7 @@ from league.races import best_lap_race, record_race
 from league.records import record_body
 from league.store import League, open_league
 from league.submissions import submit
-from sim.ids import content_hash
+from sim.foundation.ids import content_hash
 from sim.race.physics import CURRENT
 from sim.race.rules import preset_rules
 from tests.league.helpers import TRACK, model_folder, race_result

@@ -8,7 +8,7 @@ import pytest
 from league.errors import LeagueError
 from league.racers import add_racer, check_name, ensure_racer
 from league.store import League
-from sim.plain_names import is_plain_name, look_alike_key
+from sim.foundation.plain_names import is_plain_name, look_alike_key
 from sim.race.result import RaceResult, ResultError
 from tests.league.helpers import race_result
 

@@ -17,7 +17,7 @@ from league.records import SHARED_TABLES, record_body, records, store_record
 from league.seasons import new_season
 from league.store import League, open_league
 from league.submissions import submit
-from sim.ids import content_hash
+from sim.foundation.ids import content_hash
 from sim.race.rules import DEFAULT_RULES
 from sim.track_catalog import resolve_track
 from tests.league.helpers import TRACK, model_folder, race_result

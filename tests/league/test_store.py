@@ -12,7 +12,7 @@ from league.errors import LeagueError
 from league.leaderboard import Filters, leaderboard
 from league.migrations import MIGRATIONS, SCHEMA_VERSION
 from league.store import League, default_db_path, open_league
-from sim.ids import content_hash, new_id
+from sim.foundation.ids import content_hash, new_id
 from sim.track_catalog import resolve_track
 from tests.league.helpers import TRACK
 

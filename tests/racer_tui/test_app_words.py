@@ -19,10 +19,10 @@ from racer_tui.app_words import APP_FIXES, in_app_words
 from racer_tui.model_form import field_message
 from racer_tui.race_commands import RaceSetupError, resolve_driver
 from racer_tui.screens.base import error_message
+from sim.foundation.remedies import Fix, Note
 from sim.garage.clone import clone_model
 from sim.garage.folder import ModelError, open_model
 from sim.garage.options import new_model
-from sim.remedies import Fix, Note
 from sim.track_catalog import resolve_track
 from sim.track_errors import TrackError
 from tests.league.helpers import race_result

@@ -105,7 +105,7 @@ def test_the_night_projector_command_ends_with_the_apps_status(
     from league.nights import new_night
     from league.store import open_league
     from racer_tui.cli import main
-    from sim.home import data_home
+    from sim.foundation.home import data_home
     from sim.track_catalog import resolve_track
 
     data_home().mkdir(parents=True, exist_ok=True)

@@ -24,8 +24,8 @@ from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.race_commands import resolve_driver
 from racer_tui.widgets.footer import RacerFooter
+from sim.foundation.home import data_home
 from sim.garage.options import new_model
-from sim.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track

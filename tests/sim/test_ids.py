@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sim.ids import content_hash, id_time_ms, is_valid_id, new_id
+from sim.foundation.ids import content_hash, id_time_ms, is_valid_id, new_id
 
 
 def test_ids_made_in_a_burst_are_unique_and_sorted_by_creation() -> None:

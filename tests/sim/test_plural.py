@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sim.plural import counted
+from sim.foundation.plural import counted
 
 
 def test_one_is_singular_and_the_rest_plural() -> None:

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import yaml
 
-from sim.home import user_tracks_dir
-from sim.remedies import Fix, Note
+from sim.foundation.home import user_tracks_dir
+from sim.foundation.remedies import Fix, Note
 from sim.track import TrackError, load_track
 from sim.track_catalog import (
     TrackInfo,

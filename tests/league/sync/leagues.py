@@ -18,7 +18,7 @@ from league.store import League
 from league.submissions import submit
 from league.sync.record import SyncRecord
 from racer_tui.cli import main
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod
 from sim.track import Track

@@ -22,7 +22,7 @@ from league.sync.kinds import MODEL_KIND
 from league.sync.record import SyncRecord, make_record
 from league.sync.stores import open_store
 from league.trust.seals import make_seal
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.track_catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.league.sync.conftest import QUICK_RETRY

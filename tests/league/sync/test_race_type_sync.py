@@ -22,7 +22,7 @@ from league.sync.record import make_record
 from league.sync.stores import open_store
 from league.sync.validate import check_record
 from league.trust import membership
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.rules import preset_rules
 from sim.track_catalog import resolve_track
 from tests.league.helpers import race_result

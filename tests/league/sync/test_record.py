@@ -16,7 +16,7 @@ from league.sync.record import (
     encode_envelope,
     make_record,
 )
-from sim.ids import canonical_json, content_hash, new_id
+from sim.foundation.ids import canonical_json, content_hash, new_id
 from tests.league.sync.records import submission
 
 

@@ -249,7 +249,7 @@ def test_an_unsigned_record_is_quarantined_as_unsigned(
         "colour": "#123456",
         "created_at": "2026-11-01T00:00:00.000Z",
     }
-    from sim.ids import new_id
+    from sim.foundation.ids import new_id
 
     record = make_record("racer", new_id(), body)
     open_racer_store().push([record])  # written without a seal
@@ -263,7 +263,7 @@ def test_a_forged_admission_counts_for_nothing(machines: dict[str, Machine]) -> 
     mallory, viewer = machines["mallory"], machines["viewer"]
     # mallory writes an admission of her own key, naming herself as the signer.
     from league.records import store_record
-    from sim.ids import new_id
+    from sim.foundation.ids import new_id
 
     body = {
         "action": "admit",
@@ -325,7 +325,7 @@ def test_a_co_host_runs_nights_but_changes_nobodys_key(machines: dict[str, Machi
 def test_a_retired_key_cannot_backdate_a_new_result(machines: dict[str, Machine]) -> None:
     from dataclasses import replace
 
-    from sim.ids import new_id
+    from sim.foundation.ids import new_id
 
     organiser, ana, viewer = machines["organiser"], machines["ana"], machines["viewer"]
     membership.retire(organiser.league, organiser.key, "ana")
@@ -471,7 +471,7 @@ def test_an_admission_in_one_league_means_nothing_in_another(
         membership.found_league(other, organiser.key)
         with other.transaction():
             from league.records import store_record
-            from sim.ids import new_id
+            from sim.foundation.ids import new_id
 
             act = {
                 "action": "propose",
@@ -507,7 +507,7 @@ def test_an_admitted_racer_cannot_show_as_someone_else(
     machines: dict[str, Machine], store_url: str, tmp_path: Path
 ) -> None:
     from league.records import store_record
-    from sim.ids import new_id
+    from sim.foundation.ids import new_id
 
     organiser, viewer = machines["organiser"], machines["viewer"]
     carl = Machine(tmp_path, "carl", store_url)

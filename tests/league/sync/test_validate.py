@@ -20,7 +20,7 @@ from league.sync.record import SyncRecord, make_record
 from league.sync.validate import FIELDS, LAP_FIELDS, check_record
 from league.trust.keys import load_or_create_key
 from league.trust.membership import found_league
-from sim.ids import is_valid_id
+from sim.foundation.ids import is_valid_id
 from tests.league.sync.leagues import add_submissions, host_league
 
 

@@ -23,7 +23,7 @@ from league.trust.replay import verify_races
 from league.trust.standing import Standing, result_standings
 from racer_tui.cli import main
 from racer_tui.race_commands import DriversByHash
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race
 from sim.race.physics import PHYSICAL

@@ -15,7 +15,7 @@ from racer_tui.screens.kiosk import LeaveKiosk
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.projector import ProjectorScreen
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track
 from tests.league.helpers import race_result

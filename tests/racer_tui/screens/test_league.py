@@ -18,7 +18,7 @@ from racer_tui.race_commands import DriversByHash
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.projector import ProjectorScreen
 from racer_tui.widgets.entry_detail import EntryDetail
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track

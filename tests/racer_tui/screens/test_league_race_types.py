@@ -16,7 +16,7 @@ from racer_tui.app import create_app
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.widgets.footer import RacerFooter
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.race.rules import preset_rules
 from sim.track_catalog import resolve_track
 from tests.league.helpers import TRACK, race_result

@@ -24,7 +24,7 @@ from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
 from racer_tui.screens.race_screen import RaceScreen
 from racer_tui.screens.timekeeper import TimekeeperScreen
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.race.physics import PHYSICAL
 from tests.racer_tui.screens.test_nights import table_rows, the_nights_screen
 from tests.racer_tui.screens.test_timekeeper_screen import Stopwatch

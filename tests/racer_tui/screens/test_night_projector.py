@@ -23,7 +23,7 @@ from league.races import record_race
 from league.store import default_db_path, open_league
 from racer_tui.app import create_app
 from racer_tui.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen, ordinal
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.race.physics import PHYSICAL
 from sim.race.rules import RaceRules
 from sim.track_catalog import resolve_track

@@ -16,7 +16,7 @@ from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.nights import AddEntrantDialog, NightsScreen
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.race.rules import RankingMethod, preset_rules
 from sim.track_catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle

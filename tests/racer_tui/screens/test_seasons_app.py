@@ -14,7 +14,7 @@ from league.seasons import get_season, list_seasons, new_season
 from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.nights import NewNightDialog, NewSeasonDialog, season_problem
-from sim.home import data_home
+from sim.foundation.home import data_home
 from tests.racer_tui.screens.test_nights import the_nights_screen
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 

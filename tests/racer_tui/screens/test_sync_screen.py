@@ -27,7 +27,7 @@ from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.sync import SyncScreen
 from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.sync_status import NO_STORE, SyncStatusLine
-from sim.home import data_home
+from sim.foundation.home import data_home
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 
@@ -448,7 +448,7 @@ async def test_a_league_refusal_during_a_sync_names_the_apps_key(
     in the toast and on the job line, never as the command line's command."""
     import racer_tui.screens.sync as sync_screen
     from league.errors import LeagueError
-    from sim.remedies import Fix
+    from sim.foundation.remedies import Fix
 
     found_here(store_url)
 

@@ -14,7 +14,7 @@ from textual.pilot import Pilot
 from league.races import record_race
 from league.store import open_league
 from racer_tui.app import create_app
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.track_catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle

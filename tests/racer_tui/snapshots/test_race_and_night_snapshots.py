@@ -20,7 +20,7 @@ from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules

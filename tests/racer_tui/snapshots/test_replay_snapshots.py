@@ -16,7 +16,7 @@ from league.nights import new_night
 from league.races import record_race
 from league.store import open_league
 from racer_tui.app import create_app
-from sim.home import data_home
+from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import DEFAULT_RULES, RaceRules
 from sim.track_catalog import resolve_track

@@ -16,7 +16,7 @@ from league.sync import local
 from league.sync.record import Quarantined
 from league.sync.session import save_store
 from racer_tui.app import create_app
-from sim.home import data_home
+from sim.foundation.home import data_home
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES

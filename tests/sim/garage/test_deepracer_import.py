@@ -12,12 +12,12 @@ from deepracer.logs import AnalysisUtils, DeepRacerLog
 from deepracer.logs.metrics import TrainingMetrics
 
 from sim.deepracer_files import read_evaluation_metrics, read_training_metrics
+from sim.foundation.remedies import Fix, Note
 from sim.garage.bundle import BundleError
 from sim.garage.deepracer_import import import_deepracer_folder, import_model
 from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
 from sim.garage.options import DEFAULT_TRACK
 from sim.garage.summary import training_summary
-from sim.remedies import Fix, Note
 from sim.reward_function import RewardFunctionError, template_source
 
 

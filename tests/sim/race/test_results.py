@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from league.ranking import rank
-from sim.ids import new_id
+from sim.foundation.ids import new_id
 from sim.race.engine import run_race
 from sim.race.result import LapRecord, RaceResult, ResultError, now_iso
 from sim.race.rules import (
@@ -293,7 +293,7 @@ def test_no_lap_can_beat_the_shortest_loop_at_top_speed() -> None:
 def test_a_rules_file_may_merge_an_anchor(tmp_path: Path) -> None:
     merged = tmp_path / "merged.yaml"
     merged.write_text("base: &base\n  penalty_seconds: 3\nrules:\n  <<: *base\n")
-    from sim.strict_yaml import load_data
+    from sim.foundation.strict_yaml import load_data
 
     assert load_data(merged.read_text())["rules"] == {"penalty_seconds": 3}
 

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from sim.remedies import Fix
+from sim.foundation.remedies import Fix
 from sim.training import events
 
 SAMPLES: list[events.Event] = [

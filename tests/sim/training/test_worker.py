@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 
 from sim.deepracer_files import read_sim_trace, read_training_metrics
+from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelFolder, ModelStatus
-from sim.remedies import Fix
 from sim.training import events
 from sim.training.checkpoint import LATEST
 from sim.training.launcher import TrainingProcess
