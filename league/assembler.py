@@ -50,8 +50,8 @@ from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelFolder
 from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
-from sim.track import Track, TrackError
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track, TrackError
 
 RACER_TUI = "racer-tui"
 DRFC = "deepracer-for-cloud"

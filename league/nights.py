@@ -30,7 +30,7 @@ from sim.foundation.ids import new_id
 from sim.foundation.plural import counted
 from sim.foundation.remedies import Fix
 from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
-from sim.track import Track
+from sim.tracks.track import Track
 
 if TYPE_CHECKING:
     from league.trust.replay import DriverFor

@@ -25,8 +25,8 @@ from sim.race.physics import PHYSICAL
 from sim.race.plausible import first_impossible_lap
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
-from sim.track import Track, TrackError
-from sim.track_catalog import find_track_by_hash, resolve_track
+from sim.tracks.catalog import find_track_by_hash, resolve_track
+from sim.tracks.track import Track, TrackError
 
 TRACE_FORMAT = "npz-v1"
 LAP_COLUMNS = (

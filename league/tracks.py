@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 from league.errors import LeagueError
 from league.store import League, now_iso
-from sim.track import Track, TrackError
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track, TrackError
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ def _user_errors() -> tuple[type[Exception], ...]:
     from sim.action_space import ActionSpaceError
     from sim.observations import SensorError
     from sim.reward_function import RewardFunctionError
-    from sim.track_errors import TrackError
+    from sim.tracks.errors import TrackError
 
     errors: list[type[Exception]] = [
         TrackError,

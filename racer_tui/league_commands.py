@@ -35,7 +35,7 @@ from sim.race.rules import (
     preset_rules,
     rules_from_mapping,
 )
-from sim.track_catalog import DEFAULT_TRACK
+from sim.tracks.catalog import DEFAULT_TRACK
 
 if TYPE_CHECKING:
     from league.leaderboard import LeaderboardRow
@@ -535,7 +535,7 @@ def _night(league: League, args: argparse.Namespace) -> int:
 
     action = args.night_command
     if action == "new":
-        from sim.track_catalog import resolve_track
+        from sim.tracks.catalog import resolve_track
 
         rules = rules_option(args.rules) if args.rules else DEFAULT_RULES
         if args.preset is not None:

@@ -59,7 +59,7 @@ from sim.realworld.settings import (
     with_camera_randomisation_keys,
 )
 from sim.reward_function import RewardFunctionError, check_reward_code
-from sim.track import TrackError
+from sim.tracks.track import TrackError
 
 REWARD_FILE_NAME = "reward_function.py"
 # The sensor choices the console offers, in racer-tui's names.
@@ -359,7 +359,7 @@ def spec_of_form(
 
     `base` supplies what the form does not show (the non-tunable hyperparameters, the
     network); `new_name_taken` is given when the name is new and must be free."""
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     problems: list[FieldProblem] = []
     if new_name_taken is not None:
@@ -468,7 +468,7 @@ def save_edit(folder: ModelFolder, spec: ModelSpec) -> ModelFolder:
     A trained policy is kept, so its network's shape must not change (the same check as a
     clone); while a trainer runs, the files are left alone. Each file is replaced
     atomically, so the folder always holds a readable model."""
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     if folder.is_training():
         raise ModelError(

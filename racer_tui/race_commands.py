@@ -38,8 +38,8 @@ from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, rules_from_mapping
-from sim.track import Track, TrackError
-from sim.track_catalog import DEFAULT_TRACK, resolve_track
+from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
+from sim.tracks.track import Track, TrackError
 
 EXIT_OK = 0
 EXIT_FAILURE = 1

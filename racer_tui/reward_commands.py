@@ -35,7 +35,7 @@ from sim.reward_map import (
 )
 from sim.reward_probe import check_reward_source, lap_pay_of_source, map_reward_source
 from sim.reward_sandbox import DEFAULT_MEMORY_MB, check_memory_mb
-from sim.track_catalog import DEFAULT_TRACK, resolve_track
+from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 
 NAMES = ("reward",)
 

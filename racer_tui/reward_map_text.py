@@ -24,7 +24,7 @@ from sim.reward_map import (
     polyline_samples,
     start_line,
 )
-from sim.track import Track
+from sim.tracks.track import Track
 
 # What is drawn over the colours, later ones over earlier ones where they cross a cell.
 _EDGE = ("•", BORDER_COLOUR)

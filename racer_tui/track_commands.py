@@ -15,7 +15,7 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json, print_table
-from sim.track_catalog import (
+from sim.tracks.catalog import (
     TrackInfo,
     find_track_info,
     import_track,
@@ -296,7 +296,7 @@ def _a(kind: str) -> str:
 
 
 def _generate(seed: int, width: float, save: bool, as_json: bool) -> int:
-    from sim.track_generator import generate_track
+    from sim.tracks.generator import generate_track
 
     track = generate_track(seed, width=width)
     saved_as = save_user_track(track).name if save else None

@@ -369,7 +369,7 @@ def _print_ending(console: Console, ended: events.Ended) -> None:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
     from sim.training.evaluation import evaluate_model
 
     if not 1 <= args.trials <= MAX_TRIALS:

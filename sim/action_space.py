@@ -15,7 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 from sim.car import DEEPRACER_CAR
-from sim.geometry import FloatArray
+from sim.tracks.geometry import FloatArray
 
 MAX_STEERING = DEEPRACER_CAR.max_steering_deg
 MIN_SPEED = DEEPRACER_CAR.min_speed

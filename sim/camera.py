@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from sim import camera_scene as scene
 from sim.foundation.plural import counted
 from sim.raster import TrackRaster
-from sim.track import Track
+from sim.tracks.track import Track
 
 UInt8Array = NDArray[np.uint8]
 Float32Array = NDArray[np.float32]

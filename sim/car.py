@@ -32,7 +32,7 @@ import pymunk
 import pymunk.batch as pmb
 from numpy.typing import NDArray
 
-from sim.geometry import FloatArray
+from sim.tracks.geometry import FloatArray
 
 STEP_HZ = 15  # DeepRacer's camera and control rate
 STEP_SECONDS = 1.0 / STEP_HZ

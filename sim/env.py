@@ -31,7 +31,7 @@ from sim.observations import Observer, SensorOptions, normalise_sensors
 from sim.realworld.perturbation import draw_perturbation
 from sim.realworld.settings import CameraRandomisation
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
-from sim.track import Track
+from sim.tracks.track import Track
 
 ENV_ID = "RacerTui/DeepRacer-v0"
 RewardCallable = Callable[[Mapping[str, Any]], float]
@@ -65,7 +65,7 @@ class EnvConfig:
     ) -> EnvConfig:
         """Accept the loose forms people write: names, metadata dicts, file paths."""
         if isinstance(track, str):
-            from sim.track_catalog import resolve_track
+            from sim.tracks.catalog import resolve_track
 
             track = resolve_track(track)
         if action_space is None:

@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 import numpy as np
 
-from sim.geometry import FloatArray
 from sim.simulation import TrackSimulation
+from sim.tracks.geometry import FloatArray
 
 if TYPE_CHECKING:
     from sim.realworld.perturbation import CameraPerturbation

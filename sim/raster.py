@@ -22,8 +22,8 @@ from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
 
 from sim import camera_scene as scene
-from sim.geometry import FloatArray
-from sim.track import Track
+from sim.tracks.geometry import FloatArray
+from sim.tracks.track import Track
 
 RESOLUTION = 0.01  # metres per cell: the camera's near rows sample the ground at ~2 mm
 # Metres around the borders' bounding box: the field up to the walls, and a ring beyond.

@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
-from sim.geometry import FloatArray, PolylineProjector
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.track import Track
+from sim.tracks.geometry import FloatArray, PolylineProjector
+from sim.tracks.track import Track
 
 _SPACING = 0.05  # racing-line resolution, metres
 _EDGE_MARGIN = 0.13  # keep the car centre this far inside the border lines

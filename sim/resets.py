@@ -18,9 +18,9 @@ import math
 import weakref
 from dataclasses import dataclass
 
-from sim.geometry import PointProjector
 from sim.simulation import EpisodeStatus
-from sim.track import Track
+from sim.tracks.geometry import PointProjector
+from sim.tracks.track import Track
 
 # simapp's evaluation worker defaults (`bundle/markov/evaluation_worker.py`):
 # OFF_TRACK_PENALTY 2.0 s, COLLISION_PENALTY 5.0 s; a reversed car costs the off-track

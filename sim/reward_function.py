@@ -366,7 +366,7 @@ def template_source(name: str, track: str | None = None, space: ActionSpace | No
     if name != RACING_LINE_TEMPLATE:
         return text
     from sim.coach.reward_line import with_track_line  # the coach's numpy and osqp, only here
-    from sim.track_catalog import DEFAULT_TRACK, resolve_track
+    from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 
     return with_track_line(text, resolve_track(track or DEFAULT_TRACK), space)
 

@@ -22,10 +22,10 @@ from typing import Any
 import numpy as np
 
 from sim.car import STEP_HZ
-from sim.geometry import PolylineProjector
 from sim.reward_function import RewardFunction
 from sim.simulation import TrackSimulation
-from sim.track import Track
+from sim.tracks.geometry import PolylineProjector
+from sim.tracks.track import Track
 
 DEFAULT_SPEEDS = (1.0, 2.0, 3.0, 4.0)
 CENTRE_LINE = "centre line"

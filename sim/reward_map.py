@@ -23,7 +23,7 @@ import numpy as np
 
 from sim.reward_function import RewardFunction, RewardFunctionError
 from sim.simulation import TrackSimulation
-from sim.track import Track
+from sim.tracks.track import Track
 
 DEFAULT_SPACING = 0.1  # metres
 DEFAULT_SPEED = 2.0  # m/s

@@ -335,7 +335,7 @@ def _prepare(request: dict[str, Any]) -> Any:
     track_name = request.get("track")
     if not track_name:
         return None
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     return resolve_track(str(track_name))
 

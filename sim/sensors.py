@@ -33,7 +33,7 @@ from sim.camera import (
     poses,
 )
 from sim.raster import TrackRaster
-from sim.track import Track
+from sim.tracks.track import Track
 
 __all__ = [
     "DEEPRACER_CAMERA",

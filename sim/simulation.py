@@ -38,11 +38,11 @@ import shapely
 from numpy.typing import NDArray
 
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
-from sim.geometry import FloatArray, PointProjector
 from sim.objects.settings import RaceSettings
 from sim.objects.world import object_field
 from sim.reward_sample_params import no_objects
-from sim.track import Track
+from sim.tracks.geometry import FloatArray, PointProjector
+from sim.tracks.track import Track
 
 #: DeepRacer measures the car at this point ahead of its centre.
 LOOK_AHEAD = 0.14

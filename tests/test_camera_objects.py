@@ -10,8 +10,8 @@ import pytest
 
 from sim import camera_scene as scene
 from sim.camera import Camera, CameraSpec, Solids
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 
 # DeepRacer's box obstacle and car body, in metres: length, width, height.
 BOX = (0.4, 0.3, 0.25)

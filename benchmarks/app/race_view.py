@@ -23,8 +23,8 @@ from racer_tui.widgets.race_map import CarMarker, RaceMap
 from sim.car import STEP_HZ
 from sim.reference_driver import ReferenceDriver
 from sim.simulation import TrackSimulation
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 
 TRAIL_STEPS = 45  # three seconds of trail at 15 Hz
 

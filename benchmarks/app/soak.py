@@ -233,7 +233,7 @@ def prepare_home(home: Path) -> str:
     from league.sync.stores import open_store
     from sim.garage.options import new_model
     from sim.race.engine import run_race
-    from sim.track_catalog import DEFAULT_TRACK, resolve_track
+    from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 
     new_model(GARAGE_MODEL)
     new_model(TRAIN_MODEL, sensors=["vector"])  # a vector training is the light one

@@ -61,7 +61,7 @@ class BusyHeat:
 
     def _race(self) -> None:
         from sim.race.engine import run_race
-        from sim.track_catalog import DEFAULT_TRACK, resolve_track
+        from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 
         track = resolve_track(DEFAULT_TRACK)
         while not self._stop.is_set():
@@ -86,7 +86,7 @@ async def press_keys(keys: int) -> list[float]:
     from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
     from sim.foundation.ids import new_id
     from sim.race.rules import RaceRules
-    from sim.track_catalog import DEFAULT_TRACK, resolve_track
+    from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 
     app = create_app(long_running=True)
     latencies: list[float] = []

@@ -61,7 +61,7 @@ from sim.deepracer_files import (
 from sim.foundation.ids import content_hash, new_id
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.race.rules import DEFAULT_RULES
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 TARGETS_MS = {"leaderboard": 50.0, "standings": 100.0, "submit": 20.0}
 BENCH_TRACK = "beginner-oval"

@@ -12,7 +12,7 @@ Five families, each fed to the same function the app and the commands use:
 - rules: rules files (YAML) with wrong types, out-of-range numbers, duplicate keys,
   Python tags, random bytes (sim.race.rules.load_rules).
 - track: DeepRacer .npy track files with NaN, wrong shapes, pickled objects, too many
-  points, truncated or random bytes (sim.track.load_track).
+  points, truncated or random bytes (sim.tracks.track.load_track).
 - reward: values a reward function returns: any type and size (a RewardFunction call).
 - bundle: .racer-bundle files truncated, with `../` paths, zip bombs, pickles, broken
   manifests (sim.garage.bundle.read_bundle).
@@ -136,7 +136,7 @@ def _make_scratch(root: Path, seed: int) -> Scratch:
     from sim.race.driver import reference_driver
     from sim.race.engine import run_race
     from sim.race.rules import RaceRules
-    from sim.track_catalog import find_track_info, resolve_track
+    from sim.tracks.catalog import find_track_info, resolve_track
 
     organiser = SigningKey.generate()
     with open_league(root / "source.db") as source:
@@ -277,8 +277,8 @@ def _rules_case(scratch: Scratch) -> bool:
 
 
 def _track_case(scratch: Scratch) -> bool:
-    from sim.track import load_track
-    from sim.track_errors import TrackError
+    from sim.tracks.errors import TrackError
+    from sim.tracks.track import load_track
 
     rng = scratch.rng
     rows = scratch.track_rows.copy()

@@ -70,8 +70,8 @@ from sim.race.engine import run_race
 from sim.race.physics import DEEPRACER
 from sim.race.result import LapRecord, RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 
 TRACK = "reinvent_base"  # re:Invent 2018: the coach's flying limit lap is 4.866 s
 TARGET = "every attack held: on no board and in no league; every honest result kept"

@@ -26,7 +26,7 @@ from sim.coach.limit_lap import compute_limit_lap
 from sim.coach.limits import car_limits
 from sim.coach.tracking import drive_line
 from sim.reference_driver import reference_lap
-from sim.track_catalog import list_tracks, resolve_track
+from sim.tracks.catalog import list_tracks, resolve_track
 
 OFFICIAL = ("reinvent_base", "Spain_track", "reInvent2019_track")
 TARGET_SECONDS_PER_60_M = 5.0

@@ -27,8 +27,8 @@ from typing import Any
 from sim.race.driver import Driver, reference_driver
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 
 POLICY_SENSORS = ("vector", "lidar", "camera")
 TARGET_SECONDS: dict[str, float | None] = {

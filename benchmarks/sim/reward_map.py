@@ -15,7 +15,7 @@ import time
 from sim.reward_function import TEMPLATES, load_template, template_source
 from sim.reward_map import MapOptions, compute_map
 from sim.reward_probe import map_reward_source
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 TARGET_SECONDS = 2.0
 TEMPLATE = "follow_center_line"

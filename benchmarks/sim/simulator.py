@@ -25,8 +25,8 @@ from sim.env import BatchedDeepRacer, DeepRacerEnv, EnvConfig
 from sim.objects.settings import BotSettings, ObstacleSettings, RaceSettings, RaceType
 from sim.observations import SensorOptions
 from sim.reference_driver import reference_lap
-from sim.track import Track, load_track
-from sim.track_catalog import list_tracks, resolve_track
+from sim.tracks.catalog import list_tracks, resolve_track
+from sim.tracks.track import Track, load_track
 
 TARGETS = {"vector": 30_000, "lidar": 12_000, "camera": 6_000}
 # The race types timed for every sensor (the goal: objects cost at most 30 %).

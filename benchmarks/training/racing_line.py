@@ -78,7 +78,7 @@ def _evaluate(run: Run) -> None:
 def run(track_name: str, minutes: float) -> dict[str, Any]:
     from sim.coach.limit_lap import limit_lap
     from sim.garage.options import new_model
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     track = resolve_track(track_name)
     new_model("bench-default", track=track_name, minutes=minutes)

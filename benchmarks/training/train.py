@@ -173,7 +173,7 @@ def run(
     from sim.action_space import FULL_RANGE_CONTINUOUS
     from sim.garage.options import create_from_spec, default_model_spec
     from sim.reference_driver import reference_lap
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     base = default_model_spec()
     hp = {**base.hyperparameters, **hyperparameters}

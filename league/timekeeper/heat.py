@@ -23,7 +23,7 @@ from sim.race.physics import PHYSICAL
 from sim.race.plausible import fastest_possible_lap
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import RaceRules, lap_counts, score_laps
-from sim.track import Track
+from sim.tracks.track import Track
 
 # A capture this soon after the lap started is a double press or a timer's bounce, not a
 # lap: no DeepRacer track is driven in under a second.

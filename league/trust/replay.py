@@ -29,8 +29,8 @@ from sim.race.driver import Driver
 from sim.race.engine import run_race
 from sim.race.physics import BEFORE_VERSIONING, CURRENT, PHYSICAL
 from sim.race.rules import RulesError, rules_from_mapping
-from sim.track import Track
-from sim.track_catalog import find_track_by_hash, resolve_track
+from sim.tracks.catalog import find_track_by_hash, resolve_track
+from sim.tracks.track import Track
 
 # The model hash -> a driver of that exact model on `track`, or None when it is not here;
 # ValueError (one sentence) when it is here but cannot drive.

@@ -24,7 +24,7 @@ from typing import Final
 from league.store import League
 from sim.race.driver import REFERENCE_NAME
 from sim.race.physics import BEFORE_VERSIONING, CURRENT, PHYSICAL
-from sim.track_catalog import find_track_by_hash
+from sim.tracks.catalog import find_track_by_hash
 
 
 class Standing(StrEnum):

@@ -72,8 +72,8 @@ from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default
 from sim.reward_function import TEMPLATES, RewardFunctionError, template_name, template_source
 from sim.reward_lap import LapPay, verdict
 from sim.reward_map import MapOptions, RewardMap
-from sim.track import Track, TrackError
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track, TrackError
 
 ACTION_COLUMNS = ("#", "steering °", "speed m/s", "turn")
 EDITOR_MAP_SPACING = 0.15  # metres: fine enough for a map 40 characters wide

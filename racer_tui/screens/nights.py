@@ -97,8 +97,8 @@ from sim.race.rules import (
     preset_rules,
     rules_from_mapping,
 )
-from sim.track import Track
-from sim.track_catalog import DEFAULT_TRACK, resolve_track
+from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
+from sim.tracks.track import Track
 
 # In the narrow panes the optional columns (keep 1 and 2) give way before a name loses its end.
 NAME = Col("", keep=3, shrink_to=10, collapses=False)

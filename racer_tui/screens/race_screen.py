@@ -34,7 +34,7 @@ from sim.race.engine import RaceTick, race_ticks
 from sim.race.replay import GhostLap, replay_ticks
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules
-from sim.track import Track
+from sim.tracks.track import Track
 
 FRAME_HZ = 30.0
 PANEL_HZ = 10.0

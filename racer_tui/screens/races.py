@@ -55,8 +55,8 @@ from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, preset_rules
-from sim.track import Track
-from sim.track_catalog import DEFAULT_TRACK, resolve_track
+from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
+from sim.tracks.track import Track
 
 REFERENCE = "reference driver"
 RESULT_COLUMNS = (

@@ -36,7 +36,7 @@ from racer_tui.widgets.lap_list import LapList
 from sim.foundation.plural import counted
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, lap_counts
-from sim.track import Track
+from sim.tracks.track import Track
 
 CLOCK_HZ = 10.0
 # Once the race is over: nothing is on the night until the timekeeper says so.

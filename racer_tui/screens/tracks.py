@@ -34,14 +34,14 @@ from sim.coach.limit_lap import limit_lap
 from sim.foundation.plural import counted
 from sim.race.rules import DEFAULT_RULES
 from sim.reference_driver import reference_lap
-from sim.track import Track, TrackError
-from sim.track_catalog import (
+from sim.tracks.catalog import (
     TrackInfo,
     import_problem,
     import_track,
     list_tracks,
     resolve_track,
 )
+from sim.tracks.track import Track, TrackError
 
 # Room for a console name in the list at 80 columns; the facts pane shows it whole.
 _LABEL_CELLS = 23

@@ -74,7 +74,7 @@ from sim.garage.folder import (
 )
 from sim.objects.field import ObjectField
 from sim.simulation import LOOK_AHEAD
-from sim.track import Track
+from sim.tracks.track import Track
 from sim.training import events
 from sim.training.launcher import (
     STOP_TIMEOUT,

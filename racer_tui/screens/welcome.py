@@ -27,7 +27,7 @@ from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.section_header import SectionHeader
 from sim.garage.options import DEFAULT_TRACK
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 INTRO = (
     "Build a car model the way the AWS DeepRacer console does, train it on your own "

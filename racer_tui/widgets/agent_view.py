@@ -27,7 +27,7 @@ from textual.widget import Widget
 from racer_tui.widgets.braille import braille_char, set_dots, styled_runs
 from sim.objects.field import ObjectField
 from sim.sensors import Camera, Lidar, LidarSpec
-from sim.track import Track
+from sim.tracks.track import Track
 
 
 @dataclass(frozen=True)

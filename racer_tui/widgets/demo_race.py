@@ -23,7 +23,7 @@ from textual.worker import Worker, WorkerState
 from racer_tui.widgets.race_map import CarMarker, RaceMap
 from sim.race.engine import RaceTick, race_ticks
 from sim.race.rules import RaceRules
-from sim.track import Track
+from sim.tracks.track import Track
 
 DEMO_SECONDS = 45.0
 FRAME_HZ = 20.0

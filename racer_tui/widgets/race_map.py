@@ -20,7 +20,7 @@ from textual.strip import Strip
 from textual.widget import Widget
 
 from racer_tui.widgets.braille import braille_char, set_dots, styled_runs
-from sim.track import Track
+from sim.tracks.track import Track
 
 FloatArray = NDArray[np.float64]
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from rich.text import Text
 
-from sim.track_catalog import TrackInfo, list_tracks
+from sim.tracks.catalog import TrackInfo, list_tracks
 
 # A chooser's current value stays on one line in the 36-column setup panes.
 CHOOSER_CELLS = 26

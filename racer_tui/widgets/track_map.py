@@ -7,7 +7,7 @@ from textual.reactive import reactive
 from textual.widget import Widget
 
 from racer_tui.widgets.braille import braille_lines
-from sim.track import Track
+from sim.tracks.track import Track
 
 
 class TrackMap(Widget):

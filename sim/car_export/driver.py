@@ -19,7 +19,7 @@ from sim.car_export.policy import CarPolicy
 from sim.race.driver import DriverAction
 from sim.sensors import Camera, CameraSpec
 from sim.simulation import TrackSimulation
-from sim.track import Track
+from sim.tracks.track import Track
 
 
 class CarArchiveDriver:

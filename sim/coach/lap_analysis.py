@@ -26,10 +26,10 @@ from sim.coach.limit_lap import LimitLap
 from sim.coach.sectors import Sector, centre_positions, unwrapped
 from sim.deepracer_files import SimTraceRow
 from sim.foundation.remedies import RemedyError
-from sim.geometry import FloatArray, PolylineProjector
 from sim.race.trace import RaceTrace
 from sim.simulation import LOOK_AHEAD
-from sim.track import Track
+from sim.tracks.geometry import FloatArray, PolylineProjector
+from sim.tracks.track import Track
 
 _OFF_LINE = 0.10  # metres from the line worth a word
 _SLOWER = 0.15  # m/s under the limit's speed worth a word

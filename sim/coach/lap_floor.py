@@ -66,7 +66,7 @@ from sim.coach.speed_profile import driven_corner_speeds, flying_profile
 from sim.foundation.atomic import write_text_atomic
 from sim.foundation.home import data_home
 from sim.reference_driver import loop_curvature
-from sim.track import Track
+from sim.tracks.track import Track
 
 # Bump with any change that moves a floor: cached floors of another version are not read.
 FLOOR_FORMAT: Final = 4

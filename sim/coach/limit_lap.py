@@ -24,8 +24,8 @@ from sim.coach.racing_line import EDGE_MARGIN, SPACING, optimise_line
 from sim.coach.speed_profile import driven_corner_speeds, standing_profile
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.home import data_home
-from sim.geometry import FloatArray
-from sim.track import Track
+from sim.tracks.geometry import FloatArray
+from sim.tracks.track import Track
 
 CACHE_FORMAT: Final = 1
 _ARRAYS: Final = ("points", "curvature", "speeds", "standing_speeds")

@@ -19,7 +19,7 @@ import numpy as np
 
 from sim.action_space import ActionSpace
 from sim.car import DEEPRACER_CAR, CarSpec
-from sim.geometry import FloatArray
+from sim.tracks.geometry import FloatArray
 
 
 @dataclass(frozen=True)

@@ -20,8 +20,8 @@ from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, Action, ActionS
 from sim.car import DEEPRACER_CAR, CarSpec
 from sim.coach.limit_lap import limit_lap
 from sim.coach.limits import car_limits
-from sim.geometry import FloatArray
-from sim.track import Track
+from sim.tracks.geometry import FloatArray
+from sim.tracks.track import Track
 
 MIN_COUNT: Final = 3
 MAX_COUNT: Final = 30

@@ -30,9 +30,9 @@ from scipy import sparse
 from sim.car import DEEPRACER_CAR
 from sim.coach.limits import CarLimits
 from sim.coach.speed_profile import SpeedProfile, driven_corner_speeds, flying_profile
-from sim.geometry import FloatArray
 from sim.reference_driver import loop_curvature
-from sim.track import Track
+from sim.tracks.geometry import FloatArray
+from sim.tracks.track import Track
 
 SPACING = 0.05  # metres between the line's points
 # The car's centre keeps half the car's width, and this much more, inside the borders.

@@ -18,7 +18,7 @@ from sim.action_space import ActionSpace
 from sim.car import DEEPRACER_CAR, CarSpec
 from sim.coach.limit_lap import LimitLap, limit_lap
 from sim.reward_function import EMPTY_LINE
-from sim.track import Track
+from sim.tracks.track import Track
 
 # Metres between the points written into a reward function: a scan of a lap's points runs on
 # every step, and the function measures the distance to the segment between points, so 0.2 m
@@ -75,7 +75,7 @@ def line_followed(
     """`source` with its line redrawn for track and actions `now`, when it is the racing_line
     template exactly as written for `was` (a line the racer changed is theirs, and kept)."""
     from sim.reward_function import RACING_LINE_TEMPLATE, template_name, template_source
-    from sim.track import TrackError
+    from sim.tracks.track import TrackError
 
     if was == now or template_name(source) != RACING_LINE_TEMPLATE:
         return source

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.coach.limit_lap import LimitLap
-from sim.geometry import FloatArray
-from sim.track import Track
+from sim.tracks.geometry import FloatArray
+from sim.tracks.track import Track
 
 CORNER_CURVATURE = 0.4  # 1/m
 SHORTEST = 0.75  # metres

@@ -30,7 +30,7 @@ from sim.deepracer_files import (
 from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelError, ModelFolder, open_model
 from sim.race.result import RaceResult
-from sim.track import Track
+from sim.tracks.track import Track
 
 BEST = "best"
 # A sim-trace whose track_len is within this share of the model's track's length was driven

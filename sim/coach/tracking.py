@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
-from sim.geometry import FloatArray, PointProjector, PolylineProjector
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.track import Track
+from sim.tracks.geometry import FloatArray, PointProjector, PolylineProjector
+from sim.tracks.track import Track
 
 # Steering angles tried each step (0.5 degree apart) and control steps they are tried over.
 CANDIDATES = 121

@@ -530,7 +530,7 @@ def install_bundle_report(
 
 
 def _known_track(params: TrainingParams, notes: list[str]) -> str:
-    from sim.track_catalog import list_tracks
+    from sim.tracks.catalog import list_tracks
 
     known = {info.name for info in list_tracks()}
     if params.world_name in known:

@@ -233,7 +233,7 @@ def _hyperparameters(files: DeepRacerFiles, notes: list[str]) -> dict[str, float
 
 
 def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]) -> str:
-    from sim.track_catalog import list_tracks
+    from sim.tracks.catalog import list_tracks
 
     if explicit is not None:
         return explicit  # create_model checks it before anything is written

@@ -70,7 +70,7 @@ from sim.foundation.ids import canonical_json
 from sim.foundation.names import NAME_RULE, is_valid_name
 from sim.foundation.remedies import Fix, RemedyError, echoed
 from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
-from sim.track import Track, TrackError
+from sim.tracks.track import Track, TrackError
 
 if TYPE_CHECKING:
     from sim.env import EnvConfig
@@ -254,7 +254,7 @@ class ModelFolder:
 
     def track(self) -> Track:
         """The track the model trains on (training_params.yaml's WORLD_NAME)."""
-        from sim.track_catalog import resolve_track
+        from sim.tracks.catalog import resolve_track
 
         world = self.training_params().world_name
         try:
@@ -680,7 +680,7 @@ def create_model(
 
 def _catalog_track(track: str) -> Track:
     """A track the catalog knows by name: a model must find its track again later."""
-    from sim.track_catalog import list_tracks, resolve_track
+    from sim.tracks.catalog import list_tracks, resolve_track
 
     if track not in {info.name for info in list_tracks()} and Path(track).expanduser().is_file():
         raise ModelError(

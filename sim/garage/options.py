@@ -37,11 +37,11 @@ from sim.realworld.settings import (
     camera_randomisation_keys,
     model_camera_randomisation,
 )
-from sim.track import TrackError
-from sim.track_catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
+from sim.tracks.catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
+from sim.tracks.track import TrackError
 
 # --- the defaults of `racer-tui model new` (the Training helper benchmarks these) --------
-# re:Invent 2018, the track of the league rule (sim.track_catalog says why).
+# re:Invent 2018, the track of the league rule (sim.tracks.catalog says why).
 DEFAULT_TRACK = CATALOG_DEFAULT_TRACK
 # How many actions --actions-from-line clusters by default: the console's default grid has 10.
 LINE_ACTIONS = 10
@@ -242,7 +242,7 @@ def with_camera_randomisation(spec: ModelSpec, chosen: CameraRandomisation | Non
 
 
 def _checked_track(track: str) -> str:
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     try:
         resolve_track(track)
@@ -482,7 +482,7 @@ def _grid(
 
 def _line_actions(track: str, count: int) -> ActionSpace:
     from sim.coach.line_actions import LineActionsError, actions_from_line
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     try:
         return actions_from_line(resolve_track(track), count)

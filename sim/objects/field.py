@@ -28,7 +28,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.car import CarSpec
-from sim.geometry import FloatArray
 from sim.objects.placement import (
     BOT_CAR_HEIGHT,
     BOT_CAR_LENGTH,
@@ -43,7 +42,8 @@ from sim.objects.placement import (
     obstacle_poses,
 )
 from sim.objects.settings import Lane, ObstacleSettings
-from sim.track import Track
+from sim.tracks.geometry import FloatArray
+from sim.tracks.track import Track
 
 if TYPE_CHECKING:
     from sim.camera import Solids

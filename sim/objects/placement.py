@@ -21,9 +21,9 @@ from typing import Final
 
 import numpy as np
 
-from sim.geometry import FloatArray, PolylineProjector
 from sim.objects.settings import Lane, ObstacleSettings
-from sim.track import Track
+from sim.tracks.geometry import FloatArray, PolylineProjector
+from sim.tracks.track import Track
 
 # Metres kept free before the start line (simapp's end of the evenly spaced range).
 CLEAR_BEFORE_LINE: Final = 1.0

@@ -18,7 +18,7 @@ import numpy as np
 
 from sim.foundation.atomic import write_text_atomic
 from sim.objects.field import BOT_CAR_SHAPE, BOX_SHAPE, StandingField
-from sim.track import Track
+from sim.tracks.track import Track
 
 SEEN_FILE = "training-objects.json"
 MAX_SEEN_BYTES = 64 * 1024

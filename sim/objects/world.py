@@ -5,7 +5,7 @@ from __future__ import annotations
 from sim.objects.bots import BotField
 from sim.objects.field import ObjectField, ObstacleField
 from sim.objects.settings import RaceSettings, RaceType
-from sim.track import Track
+from sim.tracks.track import Track
 
 
 def object_field(

@@ -17,10 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.car import DEEPRACER_CAR, CarSpec
-from sim.geometry import PointProjector
 from sim.reference_driver import GRIP_USE, ReferenceDriver
 from sim.simulation import TrackSimulation
-from sim.track import Track
+from sim.tracks.geometry import PointProjector
+from sim.tracks.track import Track
 
 REFERENCE_NAME = "reference"
 

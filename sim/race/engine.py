@@ -55,7 +55,7 @@ from sim.simulation import (
     TrackSimulation,
     let_other_threads_run,
 )
-from sim.track import Track
+from sim.tracks.track import Track
 
 # DeepRacer's reversed rule stays; immobilized and the step limit are switched off (the
 # window ends a race). 2**62 steps is longer than any window.

@@ -28,7 +28,7 @@ from shapely.geometry import Polygon
 
 from sim.action_space import MAX_SPEED
 from sim.race.physics import PHYSICAL
-from sim.track import Track
+from sim.tracks.track import Track
 
 # A real DeepRacer car's top speed, for the floor of physical laps. Its action space tops
 # at 4 m/s, but a host calibrates the real car's throttle by hand, and nobody publishes
@@ -67,8 +67,8 @@ _tracks: dict[str, Track] = {}
 
 
 def _track_by_hash(track_hash: str) -> Track | None:
-    from sim.track import TrackError, load_track
-    from sim.track_catalog import find_track_by_hash
+    from sim.tracks.catalog import find_track_by_hash
+    from sim.tracks.track import TrackError, load_track
 
     if track_hash in _tracks:
         return _tracks[track_hash]

@@ -24,7 +24,7 @@ from sim.race.engine import RaceTick
 from sim.race.result import LapRecord, RaceResult
 from sim.race.trace import PAUSE_STATUS, STATUS_CODE
 from sim.simulation import LOOK_AHEAD
-from sim.track import Track
+from sim.tracks.track import Track
 
 _EPS = 1e-6
 

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from sim.camera import Camera, Solids, UInt8Array
 from sim.realworld.frames import Float32Array, SensorNoise, perturb_frames, tone_table
 from sim.realworld.perturbation import PLAIN, CameraPerturbation
-from sim.track import Track
+from sim.tracks.track import Track
 
 # Cameras of other geometries kept at once (pose strength 1 draws 9 heights x 13 pitches;
 # a camera holds a few hundred kB besides its track's shared texture).

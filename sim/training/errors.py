@@ -15,7 +15,7 @@ def describe_failure(error: BaseException) -> str:
     from sim.deepracer_files import DeepRacerFileError
     from sim.garage.folder import ModelError
     from sim.reward_function import RewardFunctionError
-    from sim.track_errors import TrackError
+    from sim.tracks.errors import TrackError
     from sim.training.fleet_parts import PartError
 
     racers_words = (

@@ -47,7 +47,7 @@ from sim.objects.settings import RaceSettings
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.resets import ResetRules
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation, let_other_threads_run
-from sim.track import Track
+from sim.tracks.track import Track
 from sim.training.logbook import closest_waypoint
 from sim.training.trace_pose import RowPoses
 from sim.training.trial_resets import EVALUATION_RESETS, TRAINING_RESETS, TrialResets

@@ -36,7 +36,7 @@ from sim.observations import SensorOptions
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.realworld.training import folder_training_config
 from sim.simulation import reversed_track
-from sim.track import Track
+from sim.tracks.track import Track
 from sim.training import events
 from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint

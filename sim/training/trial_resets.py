@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 
 from sim.car import STEP_SECONDS
-from sim.geometry import FloatArray
 from sim.resets import MAX_RESETS, RESETTABLE, ResetRules, reset_pose
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.track import Track
+from sim.tracks.geometry import FloatArray
+from sim.tracks.track import Track
 
 # Training's own evaluations end a trial at the first off-track, as DeepRacer training does
 # (NUMBER_OF_RESETS 0 in simapp's rollout worker).

@@ -222,7 +222,7 @@ def _train(
     from sim.deepracer_files import DeepRacerFileError
     from sim.garage.folder import ModelError, open_model
     from sim.reward_function import RewardFunctionError
-    from sim.track import TrackError
+    from sim.tracks.track import TrackError
     from sim.training.fleet_parts import default_processes
     from sim.training.policy import PolicyError
     from sim.training.trainer import RunOptions, Trainer

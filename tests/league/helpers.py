@@ -28,8 +28,8 @@ from sim.foundation.ids import new_id
 from sim.race.physics import CURRENT
 from sim.race.result import LapRecord, RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 
 TRACK = "beginner-oval"
 REWARD = "def reward_function(params):\n    return 1.0\n"

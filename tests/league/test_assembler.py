@@ -17,7 +17,7 @@ from sim.action_space import discrete_grid
 from sim.deepracer_files import ModelMetadata, write_evaluation_metrics, write_training_metrics
 from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelFolder, create_model
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import REWARD, TRACK, model_folder, training_metrics, trials
 
 

@@ -17,7 +17,7 @@ from league.races import record_race
 from league.store import League
 from league.submissions import submit
 from sim.race.rules import DEFAULT_RULES
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK, model_folder, race_result
 
 

@@ -26,7 +26,7 @@ from sim.race.engine import run_race
 from sim.race.physics import PHYSICAL
 from sim.race.plausible import fastest_possible_lap
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import model_folder, race_result
 
 REINVENT = "reinvent_base"

@@ -18,7 +18,7 @@ from league.report import leaderboard_columns, markdown_escape, to_csv, to_markd
 from league.store import League
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, score_laps
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 
 

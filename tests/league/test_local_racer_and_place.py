@@ -15,7 +15,7 @@ from league.races import race_result as stored_race
 from league.races import record_race_as
 from league.store import League
 from league.submissions import submit_model
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK, model_folder, race_result
 
 

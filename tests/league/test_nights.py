@@ -18,8 +18,8 @@ from league.store import League
 from sim.race.driver import reference_driver
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 from tests.league.helpers import TRACK, model_folder, race_result
 
 LAPS = {  # racer -> lap times of their heat

@@ -66,7 +66,7 @@ def test_a_time_trial_and_an_object_avoidance_race_rank_on_separate_boards(
 
 
 def test_every_track_of_one_race_type_is_read_in_order(league: League) -> None:
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     hairpin = resolve_track("hairpin-circuit")
     record_race(league, race_result("ana", [10.0], rules=BOXES))
@@ -104,7 +104,7 @@ def test_a_racer_is_placed_on_the_board_of_their_entrys_race_type(league: League
 def test_a_ghost_for_a_time_trial_is_never_a_lap_among_boxes(league: League) -> None:
     from sim.race.engine import run_race
     from sim.race.rules import RaceRules
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     trace = run_race(resolve_track(TRACK), RaceRules(window_seconds=10.0), keep_trace=True).trace
     trial = race_result("ana", [12.0]).with_trace(trace)
@@ -119,7 +119,7 @@ def test_a_ghost_for_a_time_trial_is_never_a_lap_among_boxes(league: League) -> 
 def _set_up_for(folder: Path, race_type: str) -> Path:
     """The model folder, its training_params.yaml saying RACE_TYPE: `race_type`."""
     from sim.deepracer_files import TRAINING_PARAMS, TrainingParams, write_training_params
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     track = resolve_track(TRACK)
     params = TrainingParams(world_name=track.name, track_hash=track.content_hash)

@@ -12,7 +12,7 @@ from league.races import race_result, race_trace, record_race
 from league.store import League
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK
 from tests.league.helpers import race_result as make_result
 

@@ -18,7 +18,7 @@ from league.store import League
 from league.submissions import submit
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import model_folder, race_result
 
 SHORT = RaceRules(window_seconds=20.0)

@@ -19,7 +19,7 @@ from league.store import League, open_league
 from league.submissions import submit
 from sim.foundation.ids import content_hash
 from sim.race.rules import DEFAULT_RULES
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK, model_folder, race_result
 
 

@@ -13,7 +13,7 @@ from league.leaderboard import Filters, leaderboard
 from league.migrations import MIGRATIONS, SCHEMA_VERSION
 from league.store import League, default_db_path, open_league
 from sim.foundation.ids import content_hash, new_id
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK
 
 

@@ -177,7 +177,7 @@ def test_a_physical_car_enters_a_night_but_only_the_timekeeper_runs_its_heat() -
         timekept_heats,
     )
     from sim.race.driver import reference_driver
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     track = resolve_track("beginner-oval")
     with open_league() as league:

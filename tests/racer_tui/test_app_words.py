@@ -23,8 +23,8 @@ from sim.foundation.remedies import Fix, Note
 from sim.garage.clone import clone_model
 from sim.garage.folder import ModelError, open_model
 from sim.garage.options import new_model
-from sim.track_catalog import resolve_track
-from sim.track_errors import TrackError
+from sim.tracks.catalog import resolve_track
+from sim.tracks.errors import TrackError
 from tests.league.helpers import race_result
 
 

@@ -16,7 +16,7 @@ from sim.garage.folder import ModelFolder, open_model
 from sim.garage.options import new_model
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
 from sim.training.policy import driver_for_model
 from tests.conftest import SHARED_DEEPRACER

@@ -219,7 +219,7 @@ def test_tracks_list_loads_no_simulator_and_no_array() -> None:
         "from racer_tui.cli import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    main(['tracks', 'list'])\n"
-        "print(sorted(m for m in ('numpy', 'scipy', 'shapely', 'sim.track', 'torch') "
+        "print(sorted(m for m in ('numpy', 'scipy', 'shapely', 'sim.tracks.track', 'torch') "
         "if m in sys.modules))\n"
     )
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)

@@ -106,7 +106,7 @@ def test_the_night_projector_command_ends_with_the_apps_status(
     from league.store import open_league
     from racer_tui.cli import main
     from sim.foundation.home import data_home
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     data_home().mkdir(parents=True, exist_ok=True)
     with open_league() as league:

@@ -28,7 +28,7 @@ from sim.foundation.home import data_home
 from sim.garage.options import new_model
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import painted, settle, trained_model
 

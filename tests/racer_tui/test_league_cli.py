@@ -332,7 +332,7 @@ def test_a_night_run_killed_mid_way_keeps_its_heats_and_runs_the_rest(tmp_path: 
 
     from league.nights import add_entrant, draw_heats, get_night, heats, new_night, pending_heats
     from league.store import open_league
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     db = str(tmp_path / "kill.db")
     env = {**os.environ, "RACER_TUI_HOME": str(tmp_path / "home")}

@@ -13,7 +13,7 @@ from racer_tui import race_commands
 from racer_tui.cli import main
 from sim.race.trace import RaceTrace
 from sim.reference_driver import reference_lap
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 SHORT = ("--track", "hairpin-circuit", "--window", "20")
 

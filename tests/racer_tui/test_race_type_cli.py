@@ -169,7 +169,7 @@ def test_an_object_avoidance_models_evaluation_is_submitted_to_that_board(
     capsys: pytest.CaptureFixture[str], tmp_path: Path, db: str
 ) -> None:
     from sim.deepracer_files import TRAINING_PARAMS, TrainingParams, write_training_params
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
     from tests.league.helpers import model_folder
 
     folder = model_folder(tmp_path / "models", "box-car", laps=(8.5,))

@@ -8,7 +8,7 @@ from racer_tui.app import create_app
 from racer_tui.session import TRACES_KEPT, keep_race, session_races
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 
 def test_a_long_session_keeps_every_race_but_only_the_newest_traces() -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim.track import Track
+from sim.tracks.track import Track
 
 HALF = 0.38  # half of a 0.76 m road
 

@@ -10,8 +10,7 @@ import pytest
 import yaml
 from shapely.geometry import LinearRing, Polygon
 
-from sim.track import Track, TrackError
-from sim.track_builder import (
+from sim.tracks.builder import (
     Arc,
     Segment,
     Straight,
@@ -20,8 +19,9 @@ from sim.track_builder import (
     build_from_segments,
     close_loop,
 )
-from sim.track_catalog import builtin_dir, resolve_track
-from sim.track_designs import DESIGNS, write_builtin_tracks
+from sim.tracks.catalog import builtin_dir, resolve_track
+from sim.tracks.designs import DESIGNS, write_builtin_tracks
+from sim.tracks.track import Track, TrackError
 
 WIDTHS = (0.76, 1.07)
 EXPECTED = {

@@ -9,16 +9,16 @@ from pathlib import Path
 import pytest
 
 from sim.car import DEEPRACER_CAR
-from sim.official_tracks import (
+from sim.reference_driver import reference_lap
+from sim.tracks.catalog import resolve_track
+from sim.tracks.official import (
     CATALOG_FILE,
     LICENSE_FILE,
     official_dir,
     official_tracks,
     rebuild_catalog,
 )
-from sim.reference_driver import reference_lap
-from sim.track import load_track
-from sim.track_catalog import resolve_track
+from sim.tracks.track import load_track
 
 LOOPS = [track.world_name for track in official_tracks() if track.closed]
 

@@ -17,8 +17,8 @@ from sim.reference_driver import (
     speed_profile,
 )
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.track import load_track
-from sim.track_catalog import list_tracks, resolve_track
+from sim.tracks.catalog import list_tracks, resolve_track
+from sim.tracks.track import load_track
 
 BUILTIN = [info.name for info in list_tracks() if info.builtin]
 

@@ -11,7 +11,7 @@ from racer_tui.cli import main
 from sim.action_space import parse_action_space
 from sim.reward_function import load_reward_source, load_template
 from sim.reward_lap import CENTRE_LINE, LINES, REFERENCE_LINE, lap_rewards, line_verdict, verdict
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 HAIRPIN = resolve_track("hairpin-circuit")
 SPEEDS = (1.0, 2.0, 4.0)

@@ -21,7 +21,7 @@ from sim.reward_map import (
     compute_map,
     png_bytes,
 )
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 HAIRPIN = resolve_track("hairpin-circuit")
 COARSE = MapOptions(spacing=0.2)

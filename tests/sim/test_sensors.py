@@ -28,7 +28,7 @@ from sim.sensors import (
     sector_lidar_space,
     sectors,
 )
-from sim.track import Track, load_track
+from sim.tracks.track import Track, load_track
 
 CENTRE_RADIUS, INNER_RADIUS, OUTER_RADIUS = 2.0, 1.62, 2.38
 HALF_WIDTH = 0.38

@@ -16,8 +16,8 @@ import pytest
 from shapely.geometry import LinearRing, Point
 
 from sim.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 from tests.sim.shapes import rectangle_track
 
 

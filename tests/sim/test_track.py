@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.track import Track, TrackError, load_track
+from sim.tracks.track import Track, TrackError, load_track
 
 REAL_TRACKS = {
     # file stem: (centre line length m, width m)
@@ -222,8 +222,8 @@ def resampled(track: Track, count: int) -> np.ndarray:
 def test_a_track_resampled_finely_loads_and_its_road_check_stays_exact(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from sim import track as track_module
-    from sim.track_builder import build_from_segments
+    from sim.tracks import track as track_module
+    from sim.tracks.builder import build_from_segments
     from tests.sim.test_builtin_tracks import pocketed_box
 
     roomy = build_from_segments("roomy", pocketed_box(1.7), width=0.76)

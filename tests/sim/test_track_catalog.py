@@ -11,8 +11,7 @@ import yaml
 
 from sim.foundation.home import user_tracks_dir
 from sim.foundation.remedies import Fix, Note
-from sim.track import TrackError, load_track
-from sim.track_catalog import (
+from sim.tracks.catalog import (
     TrackInfo,
     find_track_by_hash,
     find_track_info,
@@ -22,7 +21,8 @@ from sim.track_catalog import (
     resolve_track,
     save_user_track,
 )
-from sim.track_generator import generate_track
+from sim.tracks.generator import generate_track
+from sim.tracks.track import TrackError, load_track
 
 BUILTIN = ["beginner-oval", "hairpin-circuit", "bowtie-chicane", "speedway", "grand-prix"]
 REAL = ["Bowtie_track", "Oval_track", "reInvent2019_wide", "reinvent_base"]

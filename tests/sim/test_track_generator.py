@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim import track_generator
-from sim.track import Track, TrackError
-from sim.track_generator import MAX_LENGTH, MIN_LENGTH, generate_track
+from sim.tracks import generator as track_generator
+from sim.tracks.generator import MAX_LENGTH, MIN_LENGTH, generate_track
+from sim.tracks.track import Track, TrackError
 
 SEEDS = range(50)
 

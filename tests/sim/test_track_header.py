@@ -11,7 +11,7 @@ import pytest
 from numpy.lib import format as npy_format
 
 from racer_tui.cli import main
-from sim.track import TrackError, load_track
+from sim.tracks.track import TrackError, load_track
 
 
 def forged(path: Path, shape: tuple[int, ...], descr: str = "<f8", rows_held: int = 5) -> Path:

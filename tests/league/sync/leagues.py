@@ -21,8 +21,8 @@ from racer_tui.cli import main
 from sim.foundation.ids import new_id
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 from tests.league.helpers import TRACK, model_folder, race_result
 
 NIGHT_LAPS = {"ana": [11.0, 10.6, 10.9], "bob": [10.8, 10.7], "cy": [12.0, 12.0]}

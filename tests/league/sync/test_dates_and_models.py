@@ -23,7 +23,7 @@ from league.sync.record import SyncRecord, make_record
 from league.sync.stores import open_store
 from league.trust.seals import make_seal
 from sim.foundation.ids import new_id
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.league.sync.conftest import QUICK_RETRY
 from tests.league.sync.test_signed_results import (  # the league of machines these tests share
@@ -373,7 +373,7 @@ def test_a_new_racers_old_results_stay_out_and_their_new_ones_count(
 
     from league.races import record_race
     from league.trust import membership
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
     from tests.league.helpers import race_result
     from tests.league.sync.test_signed_results import HAIRPIN
 

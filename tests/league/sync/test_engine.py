@@ -22,7 +22,7 @@ from league.sync.outgoing import count_unsent, unsent_batches
 from league.sync.record import SyncRecord, make_record
 from league.sync.stores import open_store
 from sim.foundation.ids import new_id
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.conftest import REPO_ROOT
 from tests.league.helpers import race_result
 from tests.league.sync.conftest import QUICK_RETRY, StoreFactory

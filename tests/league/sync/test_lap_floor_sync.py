@@ -19,7 +19,7 @@ from league.trust import membership
 from league.trust.seals import make_seal
 from sim.foundation.ids import new_id
 from sim.race.plausible import fastest_possible_lap
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import model_folder
 from tests.league.sync.conftest import QUICK_RETRY, StoreFactory
 from tests.league.sync.test_signed_results import Machine

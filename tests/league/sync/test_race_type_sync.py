@@ -24,7 +24,7 @@ from league.sync.validate import check_record
 from league.trust import membership
 from sim.foundation.ids import new_id
 from sim.race.rules import preset_rules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.league.sync.test_signed_results import HAIRPIN, Machine
 

@@ -24,7 +24,7 @@ from league.sync.stores import open_store
 from league.trust import membership
 from league.trust.keys import SigningKey
 from league.trust.seals import make_seal
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.league.sync.conftest import QUICK_RETRY, StoreFactory
 

@@ -19,7 +19,7 @@ from sim.foundation.ids import new_id
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 RULES = RaceRules(window_seconds=40.0)
 

@@ -29,8 +29,8 @@ from sim.race.engine import run_race
 from sim.race.physics import PHYSICAL
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, Verification
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.track import Track
 
 TRACK = "hairpin-circuit"
 RULES = RaceRules(window_seconds=40.0)

@@ -15,7 +15,7 @@ from league.sync.errors import RecordInvalidError
 from league.sync.record import make_record
 from league.sync.validate import check_record
 from sim.race.rules import DEFAULT_RULES, RulesError, Verification, rules_from_mapping
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 
 def test_any_is_the_default_and_leaves_the_stored_form_unchanged() -> None:

@@ -14,7 +14,7 @@ from sim.garage.folder import open_model
 from sim.garage.options import new_model
 from sim.race.driver import ReferenceRaceDriver
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import evaluate_model
 from tests.racer_tui.screens.test_race_screen import worked_out
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle

@@ -17,7 +17,7 @@ from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.projector import ProjectorScreen
 from sim.foundation.home import data_home
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
 

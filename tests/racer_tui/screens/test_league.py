@@ -21,7 +21,7 @@ from racer_tui.widgets.entry_detail import EntryDetail
 from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import model_folder, race_result
 from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for
 

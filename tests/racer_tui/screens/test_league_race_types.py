@@ -18,7 +18,7 @@ from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.widgets.footer import RacerFooter
 from sim.foundation.home import data_home
 from sim.race.rules import preset_rules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK, race_result
 from tests.racer_tui.screens.test_nights import the_nights_screen
 from tests.racer_tui.screens.tui_helpers import painted, settle

@@ -94,7 +94,7 @@ def test_the_demo_caption_never_cuts_a_figure_in_the_middle() -> None:
     from racer_tui.widgets.demo_race import figures_line
     from sim.race.engine import race_ticks
     from sim.race.rules import RaceRules
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     tick = next(
         t

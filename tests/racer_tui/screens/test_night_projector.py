@@ -26,7 +26,7 @@ from racer_tui.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorS
 from sim.foundation.home import data_home
 from sim.race.physics import PHYSICAL
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 

@@ -18,7 +18,7 @@ from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.nights import AddEntrantDialog, NightsScreen
 from sim.foundation.home import data_home
 from sim.race.rules import RankingMethod, preset_rules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
 
 

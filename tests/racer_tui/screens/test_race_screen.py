@@ -24,7 +24,7 @@ from sim.garage.options import new_model
 from sim.race.engine import RaceTick, run_race
 from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.policy import driver_for_model
 
 SHORT = RaceRules(window_seconds=20.0)

@@ -17,7 +17,7 @@ from racer_tui.widgets.model_detail import seconds_text
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
 

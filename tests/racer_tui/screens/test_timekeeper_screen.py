@@ -22,7 +22,7 @@ from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup, lap_
 from racer_tui.widgets.lap_list import LapList
 from sim.race.physics import PHYSICAL
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.racer_tui.screens.test_nights import table_rows, the_nights_screen
 from tests.racer_tui.screens.tui_helpers import (
     Notifications,

@@ -17,7 +17,7 @@ from racer_tui.screens.races import RacesScreen
 from racer_tui.screens.tracks import TrackImportDialog, TracksScreen
 from sim.garage.folder import open_model
 from sim.race.rules import DEFAULT_RULES
-from sim.track_catalog import list_tracks
+from sim.tracks.catalog import list_tracks
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
 
 

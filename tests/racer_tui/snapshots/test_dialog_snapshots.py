@@ -20,7 +20,7 @@ from racer_tui.app import create_app
 from racer_tui.screens import sync
 from racer_tui.screens.training import LeaveWhileTraining
 from racer_tui.widgets import job_line
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES
 from tests.racer_tui.snapshots.test_snapshots import Compare, prepared, two_models

@@ -15,7 +15,7 @@ from league.races import record_race
 from league.store import open_league
 from racer_tui.app import create_app
 from sim.foundation.home import data_home
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES

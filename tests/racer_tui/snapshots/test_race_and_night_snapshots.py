@@ -24,7 +24,7 @@ from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import OneScreenApp, settle
 from tests.racer_tui.snapshots.sizes import SIZES
 

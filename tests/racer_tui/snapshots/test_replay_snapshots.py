@@ -19,7 +19,7 @@ from racer_tui.app import create_app
 from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import DEFAULT_RULES, RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES

@@ -6,7 +6,7 @@ import numpy as np
 from textual.app import App, ComposeResult
 
 from racer_tui.widgets.race_map import CarMarker, MapProjection, RaceMap
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 
 class MapApp(App[None]):

@@ -13,7 +13,7 @@ from sim.car_export.driver import CarArchiveDriver
 from sim.car_export.errors import CarModelError
 from sim.car_export.policy import CarPolicy
 from sim.simulation import TrackSimulation
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
 from sim.training.trial_resets import EVALUATION_RESETS
 from tests.sim.car_export.graphs import (

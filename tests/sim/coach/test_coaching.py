@@ -18,7 +18,7 @@ from sim.garage.options import new_model
 from sim.race.driver import ReferenceRaceDriver
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import evaluate_model
 
 

@@ -25,7 +25,7 @@ from sim.race.plausible import (
     shortest_loop_metres,
 )
 from sim.reference_driver import reference_lap
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 # README: a trained model's best lap on re:Invent 2018 (racer-tui's car, physics 4).
 TRAINED_MODEL_LAP = 5.342

@@ -18,7 +18,7 @@ from sim.coach.racing_line import fit_of, road_frame, tightest_turn
 from sim.coach.speed_profile import flying_profile, standing_profile
 from sim.coach.tracking import drive_line
 from sim.reference_driver import reference_lap
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 LIMITS = car_limits()
 

@@ -23,7 +23,7 @@ from sim.reward_function import (
     template_source,
 )
 from sim.reward_sample_params import sample_params
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 TRACK = "reinvent_base"
 

@@ -14,7 +14,7 @@ from sim.car_export.graph_def import read_graph
 from sim.car_export.graph_runner import GraphRunner
 from sim.garage.deepracer_import import import_model
 from sim.garage.frozen_graph import frozen_graph
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
 from sim.training.policy import driver_for_model
 from tests.sim.car_export.graphs import METADATA, camera_policy_graph

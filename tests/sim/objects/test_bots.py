@@ -15,7 +15,7 @@ from sim.race.engine import race_ticks, run_race
 from sim.race.result import RaceResult
 from sim.race.rules import preset_rules
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
 
 TRACK = "reinvent_base"

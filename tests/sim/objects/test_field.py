@@ -10,7 +10,7 @@ import pytest
 
 from sim.objects.settings import Lane, ObstacleSettings, RaceSettings, RaceType
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 TRACK = "reinvent_base"
 # Two boxes on the first straight of re:Invent 2018: one in the inner lane, one in the outer.

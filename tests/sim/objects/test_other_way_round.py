@@ -12,7 +12,7 @@ import pytest
 from sim.objects.field import ObjectField
 from sim.objects.settings import BotSettings, Lane, ObstacleSettings, RaceSettings, RaceType
 from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 TRACK = resolve_track("reinvent_base")
 ALTERNATE = EpisodeRules(alternate_direction=True)

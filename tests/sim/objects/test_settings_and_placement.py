@@ -12,7 +12,7 @@ from sim.deepracer_files import DeepRacerFileError, TrainingParams, parse_traini
 from sim.objects.placement import CLEAR_BEFORE_LINE, Lanes, obstacle_distances, obstacle_poses
 from sim.objects.reading import race_settings
 from sim.objects.settings import Lane, ObstacleSettings, RaceType
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 
 def settings_of(yaml_text: str):  # type: ignore[no-untyped-def]

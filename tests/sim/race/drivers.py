@@ -9,7 +9,7 @@ import numpy as np
 from sim.car import DEEPRACER_CAR
 from sim.race.driver import DriverAction, reference_driver
 from sim.simulation import TrackSimulation
-from sim.track import Track
+from sim.tracks.track import Track
 
 
 class HardLeft:

@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 
 from sim.car import STEP_SECONDS
-from sim.geometry import PointProjector, PolylineProjector
 from sim.race.driver import reference_driver
 from sim.race.engine import RaceTick, race_ticks, run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules
 from sim.reference_driver import reference_lap
-from sim.track import Track
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
+from sim.tracks.geometry import PointProjector, PolylineProjector
+from sim.tracks.track import Track
 from tests.sim.race.drivers import ReversingDriver, ScriptedDriver
 from tests.sim.shapes import ring_track
 

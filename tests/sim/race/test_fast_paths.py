@@ -13,7 +13,7 @@ from sim.race.driver import reference_driver
 from sim.reference_driver import ReferenceDriver
 from sim.sensors import Lidar
 from sim.simulation import TrackSimulation
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 TRACKS = ["hairpin-circuit", "bowtie-chicane"]
 

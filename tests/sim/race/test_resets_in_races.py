@@ -9,7 +9,7 @@ import pytest
 
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.sim.race.drivers import ScriptedDriver
 
 

@@ -21,7 +21,7 @@ from sim.race.rules import (
     rules_from_mapping,
     score_laps,
 )
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 
 
 def laps_of(times: Sequence[float], offtracks: Sequence[int] = (), penalty: float = 3.0):
@@ -281,7 +281,7 @@ def test_a_rules_file_of_random_bytes_or_with_a_key_twice_is_refused(tmp_path: P
 def test_no_lap_can_beat_the_shortest_loop_at_top_speed() -> None:
     from sim.race.plausible import fastest_possible_lap, hull_floor, shortest_loop_metres
     from sim.reference_driver import reference_lap
-    from sim.track_catalog import resolve_track
+    from sim.tracks.catalog import resolve_track
 
     for name in ("reinvent_base", "hairpin-circuit", "beginner-oval"):
         track = resolve_track(name)

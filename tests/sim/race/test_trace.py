@@ -11,7 +11,7 @@ from sim.deepracer_files import SIM_TRACE_COLUMNS, DeepRacerFileError, read_sim_
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.race.trace import RaceTrace, TraceError
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from tests.sim.race.drivers import ScriptedDriver
 
 

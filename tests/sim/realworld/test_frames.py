@@ -24,7 +24,7 @@ from sim.realworld.perturbation import (
 from sim.realworld.render import PerturbedCamera
 from sim.realworld.settings import CameraRandomisation
 from sim.simulation import TrackSimulation
-from sim.track import Track
+from sim.tracks.track import Track
 from tests.sim.realworld.helpers import CARS, plain_frames
 
 WALLS = (scene.WALL_LOW_X, scene.WALL_HIGH_X, scene.WALL_LOW_Y, scene.WALL_HIGH_Y)

@@ -12,7 +12,7 @@ from sim.garage.options import new_model
 from sim.observations import Observer
 from sim.realworld.perturbation import CameraPerturbation
 from sim.realworld.settings import CameraRandomisation
-from sim.track import Track
+from sim.tracks.track import Track
 from sim.training import events
 from sim.training.trainer import RunOptions, Trainer
 

@@ -11,7 +11,7 @@ from sim.garage.folder import ModelFolder
 from sim.race.driver import reference_driver
 from sim.reference_driver import reference_lap
 from sim.simulation import EpisodeStatus, TrackSimulation
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import (
     EvaluationReport,
     TrialResult,

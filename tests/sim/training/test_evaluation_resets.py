@@ -8,7 +8,7 @@ import pytest
 
 from sim.race.driver import reference_driver
 from sim.resets import ResetRules
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import TrialResult, evaluate_model, evaluation_trials, run_trials
 from sim.training.trial_resets import EVALUATION_RESETS, TRAINING_RESETS
 from tests.sim.race.drivers import HardLeft, ScriptedDriver

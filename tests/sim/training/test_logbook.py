@@ -18,7 +18,7 @@ from sim.car import STEP_SECONDS
 from sim.deepracer_files import read_training_metrics
 from sim.env import BatchedDeepRacer, EnvConfig, StepInfo
 from sim.simulation import TrackSimulation
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.logbook import TRACE_RULE, Logbook
 
 PER_ITERATION = 5

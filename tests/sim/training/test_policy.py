@@ -16,7 +16,7 @@ from sim.deepracer_files import ModelMetadata
 from sim.garage.folder import ModelFolder
 from sim.observations import SensorOptions
 from sim.simulation import TrackSimulation
-from sim.track_catalog import resolve_track
+from sim.tracks.catalog import resolve_track
 from sim.training.policy import (
     PolicyDriver,
     PolicyError,

@@ -15,9 +15,7 @@ import math
 
 import numpy as np
 
-from sim.geometry import FloatArray
-from sim.track import Track, TrackError
-from sim.track_builder import (
+from sim.tracks.builder import (
     Arc,
     Straight,
     TrackDesignError,
@@ -25,6 +23,8 @@ from sim.track_builder import (
     centre_line_from_control_points,
     track_from_centre_line,
 )
+from sim.tracks.geometry import FloatArray
+from sim.tracks.track import Track, TrackError
 
 MIN_LENGTH = 12.0
 MAX_LENGTH = 40.0

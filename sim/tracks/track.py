@@ -25,8 +25,8 @@ from shapely.geometry import LinearRing, Polygon
 
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.remedies import echoed, echoed_path
-from sim.geometry import FloatArray, PolylineProjector, segment_lengths, signed_area
-from sim.track_errors import TrackError as TrackError  # noqa: PLC0414 (re-exported for callers)
+from sim.tracks.errors import TrackError as TrackError  # noqa: PLC0414 (re-exported for callers)
+from sim.tracks.geometry import FloatArray, PolylineProjector, segment_lengths, signed_area
 
 Direction = Literal["counter-clockwise", "clockwise"]
 
@@ -443,7 +443,7 @@ def _check_road_gaps(points: FloatArray, label: str) -> None:
     along = np.append(along[:-1][kept], along[-1])
     lap = float(along[-1])
     reach = float(widths.max()) + MIN_ROAD_GAP  # no closer pair can be a gap violation
-    from scipy.spatial import cKDTree  # see sim.geometry: a slow import, needed here only
+    from scipy.spatial import cKDTree  # see sim.tracks.geometry: a slow import, needed here only
 
     pairs = cKDTree(centre).query_pairs(reach, output_type="ndarray")
     if not len(pairs):

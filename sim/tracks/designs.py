@@ -1,6 +1,6 @@
 """The built-in tracks: this project's own circuits, drawn as straights and arcs.
 
-Run `python -m sim.track_designs` to (re)write `tracks/<name>.npy` and `tracks/index.yaml`;
+Run `python -m sim.tracks.designs` to (re)write `tracks/<name>.npy` and `tracks/index.yaml`;
 the output is deterministic, so a re-run changes no bytes unless a design changed.
 Every design turns counter-clockwise and starts half-way along its first straight.
 """
@@ -15,8 +15,8 @@ import yaml
 
 import tracks
 from sim.foundation.atomic import write_text_atomic
-from sim.track import Track
-from sim.track_builder import Arc, Segment, Straight, build_from_segments
+from sim.tracks.builder import Arc, Segment, Straight, build_from_segments
+from sim.tracks.track import Track
 
 # DeepRacer's two road widths: the classic 30-inch and the later wide 42-inch tracks.
 NARROW = 0.76

@@ -3,7 +3,7 @@
 Three kinds of track, listed in this order:
 - built-in: racer-tui's own designs, in the `tracks` package with an `index.yaml`;
 - official: AWS DeepRacer's 127 track files in `tracks/official/` with their catalog
-  (`sim.official_tracks`), found by the simulator's world name (`reinvent_base`) or by the
+  (`sim.tracks.official`), found by the simulator's world name (`reinvent_base`) or by the
   console's name (`re:Invent 2018`, any case);
 - imported: a racer's own tracks in `sim.foundation.home.user_tracks_dir()` as `<name>.npy` with an
   optional `<name>.yaml` sidecar (description and the facts `list_tracks` shows).
@@ -30,11 +30,11 @@ from sim.foundation.atomic import write_text_atomic
 from sim.foundation.home import user_tracks_dir
 from sim.foundation.names import NAME_PATTERN, NAME_RULE
 from sim.foundation.remedies import Fix, Note, echoed
-from sim.official_tracks import OfficialTrack, official_tracks
-from sim.track_errors import TrackError
+from sim.tracks.errors import TrackError
+from sim.tracks.official import OfficialTrack, official_tracks
 
 if TYPE_CHECKING:
-    from sim.track import Track
+    from sim.tracks.track import Track
 
 INDEX_FILE = "index.yaml"
 _SAFE_LOADER: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -138,7 +138,7 @@ def find_track_info(name: str) -> TrackInfo:
 
 def resolve_track(name_or_path: str) -> Track:
     """A track by name (see `find_track_info`), or the path of a DeepRacer .npy file."""
-    from sim.track import load_track
+    from sim.tracks.track import load_track
 
     path = Path(name_or_path).expanduser()
     if not _NAME.fullmatch(name_or_path) and (path.suffix == ".npy" or _is_file(path)):
@@ -172,7 +172,7 @@ def find_track_by_hash(content_hash: str) -> TrackInfo | None:
     Official and sidecar'd tracks know their hash without loading; only imported files
     copied in by hand (no sidecar hash) are loaded to compare.
     """
-    from sim.track import load_track
+    from sim.tracks.track import load_track
 
     unknown: list[TrackInfo] = []
     for info in list_tracks():
@@ -197,7 +197,7 @@ def import_track(
     A file that is already shipped under that name (an official track's own file, imported
     by habit) is not copied again: the shipped track is returned, and `kind` says so.
     """
-    from sim.track import load_track
+    from sim.tracks.track import load_track
 
     source = Path(path).expanduser()
     chosen = name if name is not None else source.stem
@@ -212,7 +212,7 @@ def import_track(
 
 def save_user_track(track: Track) -> TrackInfo:
     """Keep a built or generated track; saving the very same track again is a no-op."""
-    from sim.track import load_track
+    from sim.tracks.track import load_track
 
     _check_name(track.name)
     existing = _user_path(track.name)
@@ -300,7 +300,7 @@ def import_problem(path: Path, name: str | None = None) -> str | None:
     """What would stop `import_track(path, name)`, or None when it would work: the file is
     read and checked, nothing is kept. A front end asks this while the racer can still
     change the path or the name; a name's problem is a Note whose fix is Fix.RENAME."""
-    from sim.track import load_track
+    from sim.tracks.track import load_track
 
     source = Path(path).expanduser()
     chosen = name if name is not None else source.stem
@@ -369,7 +369,7 @@ def _has_facts(meta: dict[str, Any]) -> bool:
 
 def _facts_from_file(npy: Path, meta: dict[str, Any]) -> dict[str, Any]:
     """Facts for a track copied in by hand, without a sidecar; unreadable files still list."""
-    from sim.track import load_track
+    from sim.tracks.track import load_track
 
     description = str(meta.get("description", ""))
     try:

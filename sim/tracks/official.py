@@ -4,7 +4,7 @@ The 127 `.npy` files are the DeepRacer simulator's own track files (Apache-2.0, 
 beside them). `catalog.csv` names each one the way racers know it: the simulator's world
 name (`reinvent_base`, the file's stem), the console's name (`re:Invent 2018`) and track id,
 and the release date; the facts (length, width, direction, waypoints, content hash) are
-computed from the files by `rebuild_catalog`, with the same arithmetic as `sim.track`, so
+computed from the files by `rebuild_catalog`, with the same arithmetic as `sim.tracks.track`, so
 listing shows exactly what loading the track gives without loading a single array.
 
 Reading the catalog uses only the standard library: `racer-tui tracks list` stays fast.
@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import tracks
-from sim.track_errors import TrackError
+from sim.tracks.errors import TrackError
 
 OFFICIAL_DIR = "official"
 CATALOG_FILE = "catalog.csv"
@@ -102,7 +102,7 @@ def rebuild_catalog(source_catalog: Path, directory: Path | None = None) -> str:
     (the shared DeepRacer catalog), every fact recomputed here from the file itself."""
     import numpy as np
 
-    from sim.track import load_track
+    from sim.tracks.track import load_track
 
     folder = directory or official_dir()
     out = io.StringIO()
@@ -142,8 +142,8 @@ def rebuild_catalog(source_catalog: Path, directory: Path | None = None) -> str:
 if __name__ == "__main__":
     import sys
 
-    # Maintainers: python -m sim.official_tracks ../shared/deepracer/tracks/catalog.csv
+    # Maintainers: python -m sim.tracks.official ../shared/deepracer/tracks/catalog.csv
     if len(sys.argv) != 2:
-        raise SystemExit("usage: python -m sim.official_tracks SOURCE_CATALOG.csv")
+        raise SystemExit("usage: python -m sim.tracks.official SOURCE_CATALOG.csv")
     text = rebuild_catalog(Path(sys.argv[1]))
     (official_dir() / CATALOG_FILE).write_text(text, encoding="utf-8")
