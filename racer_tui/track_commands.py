@@ -206,8 +206,8 @@ def _model_space(model: str | None) -> ActionSpace | None:
 
 def _facts(track_name: str, model: str | None) -> dict[str, object]:
     from sim.coach.limit_lap import limit_lap
+    from sim.physics.reference_driver import reference_lap
     from sim.race.plausible import fastest_possible_lap
-    from sim.reference_driver import reference_lap
 
     track = resolve_track(track_name)
     space = _model_space(model)

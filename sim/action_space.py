@@ -14,7 +14,7 @@ from typing import Any, Literal
 import gymnasium as gym
 import numpy as np
 
-from sim.car import DEEPRACER_CAR
+from sim.physics.car import DEEPRACER_CAR
 from sim.tracks.geometry import FloatArray
 
 MAX_STEERING = DEEPRACER_CAR.max_steering_deg

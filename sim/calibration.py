@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.car import CarSpec, Fleet
 from sim.deepracer_files import SimTraceRow
-from sim.simulation import LOOK_AHEAD
+from sim.physics.car import CarSpec, Fleet
+from sim.physics.simulation import LOOK_AHEAD
 from sim.tracks.geometry import FloatArray
 
 CURVATURE_TOLERANCE = 0.10  # racer-tui's curvature within 10 % of DeepRacer's, every bin

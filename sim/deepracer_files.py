@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from sim.action_space import ActionSpace, ActionSpaceError, parse_action_space
 from sim.foundation.atomic import write_text_atomic
 from sim.observations import SensorError, normalise_sensors
-from sim.simulation import EpisodeStatus
+from sim.physics.simulation import EpisodeStatus
 
 MODEL_METADATA = "model_metadata.json"
 HYPERPARAMETERS = "hyperparameters.json"
@@ -217,7 +217,7 @@ class ModelMetadata:
     def simapp_version(self) -> float:
         """The simulator version DeepRacer runs this model in: simapp reads `version` as a
         number, and a file without one as 1.0 or 2.0 (both older than any version racer-tui
-        tells apart: `sim.car.car_for_simapp_version`)."""
+        tells apart: `sim.physics.car.car_for_simapp_version`)."""
         try:
             return float(self.version)
         except ValueError:

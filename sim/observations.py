@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import gymnasium as gym
 import numpy as np
 
-from sim.simulation import TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.geometry import FloatArray
 
 if TYPE_CHECKING:

@@ -21,15 +21,16 @@ from typing import Any
 
 import numpy as np
 
-from sim.car import STEP_HZ
+from sim.physics.car import STEP_HZ
+from sim.physics.simulation import TrackSimulation
 from sim.reward_function import RewardFunction
-from sim.simulation import TrackSimulation
 from sim.tracks.geometry import PolylineProjector
 from sim.tracks.track import Track
 
 DEFAULT_SPEEDS = (1.0, 2.0, 3.0, 4.0)
 CENTRE_LINE = "centre line"
-REFERENCE_LINE = "reference line"  # as the reference driver drives it (sim.reference_driver)
+# as the reference driver drives it (sim.physics.reference_driver)
+REFERENCE_LINE = "reference line"
 LINES = (CENTRE_LINE, REFERENCE_LINE)
 
 
@@ -74,7 +75,7 @@ def line_path(track: Track, line: str) -> PolylineProjector:
     if line == CENTRE_LINE:
         return track.centerline
     if line == REFERENCE_LINE:
-        from sim.reference_driver import reference_lap
+        from sim.physics.reference_driver import reference_lap
 
         lap = reference_lap(track)
         if not lap.completed:

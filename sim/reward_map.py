@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from sim.physics.simulation import TrackSimulation
 from sim.reward_function import RewardFunction, RewardFunctionError
-from sim.simulation import TrackSimulation
 from sim.tracks.track import Track
 
 DEFAULT_SPACING = 0.1  # metres

@@ -301,8 +301,8 @@ def _map_answer(reward: Any, track: Any, request: dict[str, Any]) -> dict[str, A
 
 
 def _reference_lap_rewards(reward: Any, track: Any) -> list[float]:
-    from sim.reference_driver import ReferenceDriver
-    from sim.simulation import EpisodeStatus, TrackSimulation
+    from sim.physics.reference_driver import ReferenceDriver
+    from sim.physics.simulation import EpisodeStatus, TrackSimulation
 
     sim = TrackSimulation(track, 1)
     driver = ReferenceDriver(track)
@@ -326,11 +326,6 @@ def _error_answer(
 def _prepare(request: dict[str, Any]) -> Any:
     """Everything the check reads, read before the files are closed off: its modules and
     the track (a .npy path may be anywhere)."""
-    import sim.reference_driver
-    import sim.reward_lap
-    import sim.reward_map
-    import sim.reward_sample_params
-    import sim.simulation  # noqa: F401 - imported for what follows, not used here
 
     track_name = request.get("track")
     if not track_name:

@@ -20,9 +20,9 @@ import numpy as np
 from textual.app import App, ComposeResult
 
 from racer_tui.widgets.race_map import CarMarker, RaceMap
-from sim.car import STEP_HZ
-from sim.reference_driver import ReferenceDriver
-from sim.simulation import TrackSimulation
+from sim.physics.car import STEP_HZ
+from sim.physics.reference_driver import ReferenceDriver
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
 

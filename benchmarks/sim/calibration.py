@@ -13,7 +13,7 @@ by the exit code.
 A TRACE is a sim-trace CSV or a folder searched for them; several are pooled. Without one,
 the console evaluation trace in `../shared/deepracer/` is used when it is there.
 
-DeepRacer's simulator has two cars (`sim.car`): models of metadata version 5 or more run
+DeepRacer's simulator has two cars (`sim.physics.car`): models of metadata version 5 or more run
 on the kinematics car racer-tui drives ("default"); older ones (the shared console trace,
 simapp 4.0) on a slower-steering car ("simapp4"). Both are replayed unless `--car` says.
 """
@@ -29,9 +29,9 @@ from pathlib import Path
 from typing import Any
 
 from sim.calibration import CURVATURE_TOLERANCE, GAP_TARGETS, Calibration, calibrate
-from sim.car import DEEPRACER_CAR, SIMAPP4_CAR, CarSpec
 from sim.deepracer_files import DeepRacerFileError, SimTraceRow, read_sim_trace
 from sim.foundation.plural import counted
+from sim.physics.car import DEEPRACER_CAR, SIMAPP4_CAR, CarSpec
 
 SHARED_TRACE = (
     Path(__file__).resolve().parents[3]  # beside the repository: benchmarks/sim/ is two deep

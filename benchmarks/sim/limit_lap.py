@@ -21,11 +21,11 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
-from sim.car import DEEPRACER_CAR
 from sim.coach.limit_lap import compute_limit_lap
 from sim.coach.limits import car_limits
 from sim.coach.tracking import drive_line
-from sim.reference_driver import reference_lap
+from sim.physics.car import DEEPRACER_CAR
+from sim.physics.reference_driver import reference_lap
 from sim.tracks.catalog import list_tracks, resolve_track
 
 OFFICIAL = ("reinvent_base", "Spain_track", "reInvent2019_track")

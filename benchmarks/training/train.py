@@ -172,7 +172,7 @@ def run(
 ) -> dict[str, Any]:
     from sim.action_space import FULL_RANGE_CONTINUOUS
     from sim.garage.options import create_from_spec, default_model_spec
-    from sim.reference_driver import reference_lap
+    from sim.physics.reference_driver import reference_lap
     from sim.tracks.catalog import resolve_track
 
     base = default_model_spec()

@@ -32,8 +32,8 @@ from racer_tui.widgets.track_label import track_label
 from racer_tui.widgets.track_map import TrackMap
 from sim.coach.limit_lap import limit_lap
 from sim.foundation.plural import counted
+from sim.physics.reference_driver import reference_lap
 from sim.race.rules import DEFAULT_RULES
-from sim.reference_driver import reference_lap
 from sim.tracks.catalog import (
     TrackInfo,
     import_problem,

@@ -73,7 +73,7 @@ from sim.garage.folder import (
     open_model,
 )
 from sim.objects.field import ObjectField
-from sim.simulation import LOOK_AHEAD
+from sim.physics.simulation import LOOK_AHEAD
 from sim.tracks.track import Track
 from sim.training import events
 from sim.training.launcher import (

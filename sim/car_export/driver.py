@@ -13,12 +13,12 @@ from dataclasses import replace
 import numpy as np
 import torch
 
-from sim.car import car_for_simapp_version
 from sim.car_export.archive import CarArchive
 from sim.car_export.policy import CarPolicy
+from sim.physics.car import car_for_simapp_version
+from sim.physics.simulation import TrackSimulation
 from sim.race.driver import DriverAction
 from sim.sensors import Camera, CameraSpec
-from sim.simulation import TrackSimulation
 from sim.tracks.track import Track
 
 

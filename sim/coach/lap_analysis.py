@@ -26,8 +26,8 @@ from sim.coach.limit_lap import LimitLap
 from sim.coach.sectors import Sector, centre_positions, unwrapped
 from sim.deepracer_files import SimTraceRow
 from sim.foundation.remedies import RemedyError
+from sim.physics.simulation import LOOK_AHEAD
 from sim.race.trace import RaceTrace
-from sim.simulation import LOOK_AHEAD
 from sim.tracks.geometry import FloatArray, PolylineProjector
 from sim.tracks.track import Track
 

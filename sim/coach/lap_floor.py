@@ -51,7 +51,6 @@ from typing import Final
 import numpy as np
 from shapely.geometry import Polygon
 
-from sim.car import DEEPRACER_CAR, CarSpec
 from sim.coach.limits import CarLimits, SpeedLevel
 from sim.coach.racing_line import (
     SPACING,
@@ -65,7 +64,8 @@ from sim.coach.racing_line import (
 from sim.coach.speed_profile import driven_corner_speeds, flying_profile
 from sim.foundation.atomic import write_text_atomic
 from sim.foundation.home import data_home
-from sim.reference_driver import loop_curvature
+from sim.physics.car import DEEPRACER_CAR, CarSpec
+from sim.physics.reference_driver import loop_curvature
 from sim.tracks.track import Track
 
 # Bump with any change that moves a floor: cached floors of another version are not read.

@@ -1,7 +1,7 @@
 """What the simulated car can do, as a limit lap needs it: the fastest steady speed for each
 curvature, and how quickly the speed can change.
 
-The numbers are the simulator's own (`sim.car.CarSpec`): the tyres hold at most `grip`
+The numbers are the simulator's own (`sim.physics.car.CarSpec`): the tyres hold at most `grip`
 m/s^2 sideways; the steering turns no tighter than its largest angle allows at each speed
 (curvature = tan(angle) / (effective wheelbase x (1 + understeer x v^2))); the motor
 accelerates and brakes at its limits and settles at `speed_gain` times the commanded
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.action_space import ActionSpace
-from sim.car import DEEPRACER_CAR, CarSpec
+from sim.physics.car import DEEPRACER_CAR, CarSpec
 from sim.tracks.geometry import FloatArray
 
 

@@ -17,9 +17,9 @@ from typing import Final
 import numpy as np
 
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, Action, ActionSpace
-from sim.car import DEEPRACER_CAR, CarSpec
 from sim.coach.limit_lap import limit_lap
 from sim.coach.limits import car_limits
+from sim.physics.car import DEEPRACER_CAR, CarSpec
 from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 

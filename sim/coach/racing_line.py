@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import sparse
 
-from sim.car import DEEPRACER_CAR
 from sim.coach.limits import CarLimits
 from sim.coach.speed_profile import SpeedProfile, driven_corner_speeds, flying_profile
-from sim.reference_driver import loop_curvature
+from sim.physics.car import DEEPRACER_CAR
+from sim.physics.reference_driver import loop_curvature
 from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 

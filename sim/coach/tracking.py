@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
-from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
+from sim.physics.simulation import EpisodeStatus, TrackSimulation
 from sim.tracks.geometry import FloatArray, PointProjector, PolylineProjector
 from sim.tracks.track import Track
 

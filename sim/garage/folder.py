@@ -271,7 +271,7 @@ class ModelFolder:
         """Track, action space, sensors and reward function: what training and evaluation run,
         with training_params.yaml's start position and driving direction settings."""
         from sim.env import EnvConfig
-        from sim.simulation import EpisodeRules
+        from sim.physics.simulation import EpisodeRules
 
         metadata = self.metadata()
         params = self.training_params()

@@ -27,7 +27,6 @@ from typing import TYPE_CHECKING, Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car import CarSpec
 from sim.objects.placement import (
     BOT_CAR_HEIGHT,
     BOT_CAR_LENGTH,
@@ -42,6 +41,7 @@ from sim.objects.placement import (
     obstacle_poses,
 )
 from sim.objects.settings import Lane, ObstacleSettings
+from sim.physics.car import CarSpec
 from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 

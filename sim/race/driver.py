@@ -16,9 +16,9 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car import DEEPRACER_CAR, CarSpec
-from sim.reference_driver import GRIP_USE, ReferenceDriver
-from sim.simulation import TrackSimulation
+from sim.physics.car import DEEPRACER_CAR, CarSpec
+from sim.physics.reference_driver import GRIP_USE, ReferenceDriver
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.geometry import PointProjector
 from sim.tracks.track import Track
 

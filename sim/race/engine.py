@@ -1,7 +1,7 @@
 """The race engine: one car's time trial under league rules, on the simulation clock.
 
 A race is one car on a `TrackSimulation` stepped at 15 Hz. It starts from a standstill on
-the start line (waypoint 0, like `sim.reference_driver.reference_lap`) and drives laps
+the start line (waypoint 0, like `sim.physics.reference_driver.reference_lap`) and drives laps
 continuously until the window closes (or, in a lap-count race, until it has completed its
 laps). The race clock is the simulation clock, plus the
 penalty holds (a hold lasts exactly its penalty, so a 2.5 s penalty costs 2.5 s, not
@@ -11,7 +11,7 @@ What happens when DeepRacer's episode rules trigger (a race never ends on them):
 - Lap complete: the crossing time is interpolated inside the step, so lap times are not
   quantised to 1/15 s. The next lap starts at that instant; the car drives on.
 - Off track (all four wheels off): the car is put back where DeepRacer puts it
-  (`sim.resets.reset_pose`: as far along the track as it had got one step before it left,
+  (`sim.physics.resets.reset_pose`: as far along the track as it had got one step before it left,
   on the lane nearer to where it was, pointing along the track, at speed zero) and held
   still for `penalty_seconds` while the race clock runs. The penalty is inside the lap
   time; the raw time (without it) is kept beside it. If a line crossing and an off-track
@@ -42,19 +42,19 @@ import math
 from collections.abc import Generator
 from dataclasses import dataclass, replace
 
-from sim.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
 from sim.foundation.ids import new_id
-from sim.race.driver import Driver
-from sim.race.result import LapRecord, RaceResult, now_iso
-from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps
-from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
-from sim.resets import reset_pose
-from sim.simulation import (
+from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
+from sim.physics.resets import reset_pose
+from sim.physics.simulation import (
     EpisodeRules,
     EpisodeStatus,
     TrackSimulation,
     let_other_threads_run,
 )
+from sim.race.driver import Driver
+from sim.race.result import LapRecord, RaceResult, now_iso
+from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps
+from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
 from sim.tracks.track import Track
 
 # DeepRacer's reversed rule stays; immobilized and the step limit are switched off (the

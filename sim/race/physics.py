@@ -1,7 +1,7 @@
 """Which simulator's physics produced a lap: lap times of different physics never meet on
 one leaderboard.
 
-racer-tui's own physics is versioned by `sim.car.PHYSICS_VERSION` ("racer-tui/4"); laps
+racer-tui's own physics is versioned by `sim.physics.car.PHYSICS_VERSION` ("racer-tui/4"); laps
 timed by AWS DeepRacer's own simulator (console and DeepRacer-for-Cloud evaluations) are
 "deepracer". Laps of a physical car, timed by a league's timekeeper, are "physical": a real
 track, not a simulator, so they too are ranked apart. Results recorded before physics was
@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 from typing import Final
 
-from sim.car import PHYSICS_VERSION
+from sim.physics.car import PHYSICS_VERSION
 
 CURRENT: Final = f"racer-tui/{PHYSICS_VERSION}"
 BEFORE_VERSIONING: Final = "racer-tui/1"

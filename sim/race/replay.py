@@ -17,13 +17,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car import DEEPRACER_CAR, STEP_SECONDS
 from sim.objects.settings import RaceType
 from sim.objects.world import object_field
+from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS
+from sim.physics.simulation import LOOK_AHEAD
 from sim.race.engine import RaceTick
 from sim.race.result import LapRecord, RaceResult
 from sim.race.trace import PAUSE_STATUS, STATUS_CODE
-from sim.simulation import LOOK_AHEAD
 from sim.tracks.track import Track
 
 _EPS = 1e-6

@@ -33,7 +33,7 @@ from sim.deepracer_files import (
     trace_status,
     write_sim_trace,
 )
-from sim.simulation import EpisodeStatus
+from sim.physics.simulation import EpisodeStatus
 
 PAUSE_STATUS: Final = "pause"
 # Row statuses in sim-trace spelling; the trace stores each as its index here.

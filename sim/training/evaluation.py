@@ -11,7 +11,7 @@ others start a few centimetres and degrees off it (seeded): five identical trial
 say nothing about how robust a policy is, and a real car is never placed exactly.
 
 Off-tracks: a racer's evaluation (`evaluate_model`) puts the car back and adds DeepRacer's
-penalty (2 s for an off-track, `sim.resets`) to the trial's time, as many times as the trial
+penalty (2 s for an off-track, `sim.physics.resets`) to the trial's time, as many times as the trial
 needs; training's own evaluations end a trial at its first off-track, as DeepRacer training
 does (`sim.training.trial_resets`).
 
@@ -30,7 +30,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
 from sim.deepracer_files import (
     PREPARE_STATUS,
     SIM_TRACE_COLUMNS,
@@ -44,9 +43,15 @@ from sim.deepracer_files import (
 )
 from sim.foundation.atomic import write_text_atomic
 from sim.objects.settings import RaceSettings
+from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
+from sim.physics.resets import ResetRules
+from sim.physics.simulation import (
+    EpisodeRules,
+    EpisodeStatus,
+    TrackSimulation,
+    let_other_threads_run,
+)
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
-from sim.resets import ResetRules
-from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation, let_other_threads_run
 from sim.tracks.track import Track
 from sim.training.logbook import closest_waypoint
 from sim.training.trace_pose import RowPoses

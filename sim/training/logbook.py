@@ -37,7 +37,6 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car import STEP_SECONDS
 from sim.deepracer_files import (
     PREPARE_STATUS,
     TRAINING_METRICS_PATH,
@@ -56,7 +55,8 @@ from sim.deepracer_files import (
     training_trace_path,
 )
 from sim.objects.seen import SeenObjects, write_seen
-from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.car import STEP_SECONDS
+from sim.physics.simulation import EpisodeStatus, TrackSimulation
 from sim.training.step_record import (
     ACTION,
     PROGRESS,

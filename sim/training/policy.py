@@ -32,8 +32,8 @@ from sim.deepracer_files import NEURAL_NETWORKS, ModelMetadata
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.remedies import Fix
 from sim.observations import VECTOR_SIZE, Observer, SensorOptions
+from sim.physics.simulation import TrackSimulation
 from sim.race.driver import Driver, DriverAction
-from sim.simulation import TrackSimulation
 from sim.training.errors import PolicyError
 
 if TYPE_CHECKING:

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.simulation import TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.training.trace_pose import RowPoses
 
 # Columns of a row (the segment becomes the closest waypoint only for the rows written).

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.simulation import EpisodeStatus, TrackSimulation
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """Resets inside evaluation trials: put back, penalised, and counted as DeepRacer does.
 
 An evaluation trial survives up to `ResetRules.number_of_resets` off-tracks, crashes,
-reversals and stops: each puts the car back (`sim.resets.reset_pose`; after hitting one of
+reversals and stops: each puts the car back (`sim.physics.resets.reset_pose`; after hitting one of
 an object-avoidance race's boxes, 1 m behind it in the other lane) and adds its penalty to
 the trial's clock, during which DeepRacer holds the car still (simapp
 `rollout_agent_ctrl.py`, `_judge_action_at_run_phase`); the next one ends the trial. The
@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim.car import STEP_SECONDS
-from sim.resets import MAX_RESETS, RESETTABLE, ResetRules, reset_pose
-from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.car import STEP_SECONDS
+from sim.physics.resets import MAX_RESETS, RESETTABLE, ResetRules, reset_pose
+from sim.physics.simulation import EpisodeStatus, TrackSimulation
 from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 

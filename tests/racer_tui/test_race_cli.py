@@ -11,8 +11,8 @@ import pytest
 
 from racer_tui import race_commands
 from racer_tui.cli import main
+from sim.physics.reference_driver import reference_lap
 from sim.race.trace import RaceTrace
-from sim.reference_driver import reference_lap
 from sim.tracks.catalog import resolve_track
 
 SHORT = ("--track", "hairpin-circuit", "--window", "20")

@@ -24,8 +24,8 @@ from sim.calibration import (
     replay_runs,
     trace_runs,
 )
-from sim.car import DEEPRACER_CAR, SIMAPP4_CAR, CarSpec, Fleet, car_for_simapp_version
 from sim.deepracer_files import SimTraceRow, read_sim_trace
+from sim.physics.car import DEEPRACER_CAR, SIMAPP4_CAR, CarSpec, Fleet, car_for_simapp_version
 from tests.conftest import SHARED_DEEPRACER
 
 SIMAPP6_TRACE = Path(__file__).parent / "data" / "deepracer-simapp6-evaluation" / "0-iteration.csv"

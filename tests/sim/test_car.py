@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from sim.car import DEEPRACER_CAR, SIMAPP4_CAR, STEP_HZ, STEP_SECONDS, Fleet
+from sim.physics.car import DEEPRACER_CAR, SIMAPP4_CAR, STEP_HZ, STEP_SECONDS, Fleet
 
 
 def drive(fleet: Fleet, steering: float, speed: float, steps: int) -> None:

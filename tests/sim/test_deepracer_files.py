@@ -57,7 +57,7 @@ from sim.deepracer_files import (
     write_training_metrics,
     write_training_params,
 )
-from sim.simulation import EpisodeStatus
+from sim.physics.simulation import EpisodeStatus
 
 # --- round trips ---------------------------------------------------------------------------
 

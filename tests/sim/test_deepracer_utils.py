@@ -16,12 +16,12 @@ from deepracer.logs import AnalysisUtils, DeepRacerLog
 from deepracer.logs.metrics import TrainingMetrics
 from deepracer.logs.misc import LogFolderType
 
-from sim.car import STEP_SECONDS
 from sim.deepracer_files import read_evaluation_metrics, read_training_metrics
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
+from sim.physics.car import STEP_SECONDS
+from sim.physics.simulation import TrackSimulation
 from sim.race.driver import DriverAction, reference_driver
-from sim.simulation import TrackSimulation
 from sim.training import events
 from sim.training.evaluation import evaluate_model
 from sim.training.trainer import RunOptions, Trainer

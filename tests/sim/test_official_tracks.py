@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from sim.car import DEEPRACER_CAR
-from sim.reference_driver import reference_lap
+from sim.physics.car import DEEPRACER_CAR
+from sim.physics.reference_driver import reference_lap
 from sim.tracks.catalog import resolve_track
 from sim.tracks.official import (
     CATALOG_FILE,

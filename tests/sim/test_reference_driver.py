@@ -8,15 +8,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.car import DEEPRACER_CAR, CarSpec
-from sim.reference_driver import (
+from sim.physics.car import DEEPRACER_CAR, CarSpec
+from sim.physics.reference_driver import (
     ReferenceDriver,
     loop_curvature,
     plan_racing_line,
     reference_lap,
     speed_profile,
 )
-from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.simulation import EpisodeStatus, TrackSimulation
 from sim.tracks.catalog import list_tracks, resolve_track
 from sim.tracks.track import load_track
 

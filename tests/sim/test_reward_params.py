@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from sim.physics.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.reward_sample_params import PARAM_KEYS
-from sim.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
 from tests.sim.shapes import rectangle_track
 
 
@@ -145,7 +145,7 @@ def test_a_car_that_barely_moves_is_immobilized() -> None:
 
 
 def test_a_completed_lap_ends_at_progress_100() -> None:
-    from sim.reference_driver import ReferenceDriver
+    from sim.physics.reference_driver import ReferenceDriver
     from tests.sim.shapes import ring_track
 
     track = ring_track()

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from shapely.geometry import LinearRing, Point
 
-from sim.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.physics.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
 from tests.sim.shapes import rectangle_track

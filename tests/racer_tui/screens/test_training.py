@@ -421,7 +421,7 @@ def test_the_agents_eye_view_comes_from_the_newest_traced_step(
 
     from racer_tui.screens import training
     from sim.deepracer_files import SimTraceRow, sim_trace_text
-    from sim.simulation import LOOK_AHEAD
+    from sim.physics.simulation import LOOK_AHEAD
 
     folder = new_model("ada")
     folder.training_trace_dir.mkdir()
@@ -590,7 +590,7 @@ def test_the_agents_eye_view_shows_boxes_that_stand_still_and_says_when_it_canno
     from sim import camera_scene as scene
     from sim.deepracer_files import SimTraceRow, sim_trace_text, write_training_params
     from sim.objects.seen import SeenObjects, write_seen
-    from sim.simulation import LOOK_AHEAD
+    from sim.physics.simulation import LOOK_AHEAD
 
     folder = new_model("dodger", sensors=["camera"])
     params = folder.training_params()

@@ -7,12 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.car import SIMAPP4_CAR
 from sim.car_export.archive import CarArchive, read_car_archive
 from sim.car_export.driver import CarArchiveDriver
 from sim.car_export.errors import CarModelError
 from sim.car_export.policy import CarPolicy
-from sim.simulation import TrackSimulation
+from sim.physics.car import SIMAPP4_CAR
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
 from sim.training.trial_resets import EVALUATION_RESETS

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from sim.objects.settings import BotSettings, RaceSettings, RaceType
+from sim.physics.simulation import EpisodeStatus, TrackSimulation
 from sim.race.driver import reference_driver
 from sim.race.engine import race_ticks, run_race
 from sim.race.result import RaceResult
 from sim.race.rules import preset_rules
-from sim.simulation import EpisodeStatus, TrackSimulation
 from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
 
@@ -247,7 +247,7 @@ def test_each_laps_crashes_are_counted_live_and_in_the_replay() -> None:
 
 
 def test_an_evaluation_reset_lets_the_bots_drive_on_while_the_car_is_held() -> None:
-    from sim.resets import ResetRules
+    from sim.physics.resets import ResetRules
     from sim.training.trial_resets import TrialResets
 
     track = resolve_track(TRACK)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sim.objects.settings import Lane, ObstacleSettings, RaceSettings, RaceType
-from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.simulation import EpisodeStatus, TrackSimulation
 from sim.tracks.catalog import resolve_track
 
 TRACK = "reinvent_base"

@@ -11,7 +11,7 @@ import pytest
 
 from sim.objects.field import ObjectField
 from sim.objects.settings import BotSettings, Lane, ObstacleSettings, RaceSettings, RaceType
-from sim.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.physics.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.tracks.catalog import resolve_track
 
 TRACK = resolve_track("reinvent_base")

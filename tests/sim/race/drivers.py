@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 
-from sim.car import DEEPRACER_CAR
+from sim.physics.car import DEEPRACER_CAR
+from sim.physics.simulation import TrackSimulation
 from sim.race.driver import DriverAction, reference_driver
-from sim.simulation import TrackSimulation
 from sim.tracks.track import Track
 
 

@@ -12,12 +12,12 @@ from functools import cache
 import numpy as np
 import pytest
 
-from sim.car import STEP_SECONDS
+from sim.physics.car import STEP_SECONDS
+from sim.physics.reference_driver import reference_lap
 from sim.race.driver import reference_driver
 from sim.race.engine import RaceTick, race_ticks, run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules
-from sim.reference_driver import reference_lap
 from sim.tracks.catalog import resolve_track
 from sim.tracks.geometry import PointProjector, PolylineProjector
 from sim.tracks.track import Track

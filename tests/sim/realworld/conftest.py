@@ -7,7 +7,7 @@ import pytest
 
 from sim.camera import Camera
 from sim.env import EnvConfig
-from sim.simulation import TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
 from tests.sim.realworld.helpers import CARS

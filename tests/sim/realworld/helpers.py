@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from sim.camera import Camera
-from sim.simulation import TrackSimulation
+from sim.physics.simulation import TrackSimulation
 
 CARS = 6
 

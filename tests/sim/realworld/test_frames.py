@@ -12,6 +12,7 @@ from sim import camera_scene as scene
 from sim.camera import Camera, Solids
 from sim.env import BatchedDeepRacer, DeepRacerEnv, EnvConfig
 from sim.observations import Observer
+from sim.physics.simulation import TrackSimulation
 from sim.realworld import perturbation as drawn
 from sim.realworld.frames import SURFACE_OF_LEVEL, SURFACES
 from sim.realworld.perturbation import (
@@ -23,7 +24,6 @@ from sim.realworld.perturbation import (
 )
 from sim.realworld.render import PerturbedCamera
 from sim.realworld.settings import CameraRandomisation
-from sim.simulation import TrackSimulation
 from sim.tracks.track import Track
 from tests.sim.realworld.helpers import CARS, plain_frames
 

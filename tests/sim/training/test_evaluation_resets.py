@@ -6,8 +6,8 @@ import inspect
 
 import pytest
 
+from sim.physics.resets import ResetRules
 from sim.race.driver import reference_driver
-from sim.resets import ResetRules
 from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import TrialResult, evaluate_model, evaluation_trials, run_trials
 from sim.training.trial_resets import EVALUATION_RESETS, TRAINING_RESETS

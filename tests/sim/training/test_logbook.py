@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from sim.action_space import discrete_grid
-from sim.car import STEP_SECONDS
 from sim.deepracer_files import read_training_metrics
 from sim.env import BatchedDeepRacer, EnvConfig, StepInfo
-from sim.simulation import TrackSimulation
+from sim.physics.car import STEP_SECONDS
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import resolve_track
 from sim.training.logbook import TRACE_RULE, Logbook
 

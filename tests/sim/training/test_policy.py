@@ -15,7 +15,7 @@ from sim.action_space import FULL_RANGE_CONTINUOUS, discrete_grid
 from sim.deepracer_files import ModelMetadata
 from sim.garage.folder import ModelFolder
 from sim.observations import SensorOptions
-from sim.simulation import TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import resolve_track
 from sim.training.policy import (
     PolicyDriver,

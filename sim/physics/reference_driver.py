@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sim.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
-from sim.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
+from sim.physics.simulation import EpisodeStatus, TrackSimulation
 from sim.tracks.geometry import FloatArray, PolylineProjector
 from sim.tracks.track import Track
 
