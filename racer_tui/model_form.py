@@ -51,7 +51,6 @@ from sim.garage.options import (
     racing_line_followed,
     with_race,
 )
-from sim.observations import SensorError, normalise_sensors
 from sim.realworld.settings import (
     CameraRandomisation,
     parse_camera_randomisation,
@@ -59,6 +58,7 @@ from sim.realworld.settings import (
     with_camera_randomisation_keys,
 )
 from sim.reward_function import RewardFunctionError, check_reward_code
+from sim.sensors.observations import SensorError, normalise_sensors
 from sim.tracks.track import TrackError
 
 REWARD_FILE_NAME = "reward_function.py"

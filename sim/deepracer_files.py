@@ -39,8 +39,8 @@ from numpy.typing import NDArray
 
 from sim.action_space import ActionSpace, ActionSpaceError, parse_action_space
 from sim.foundation.atomic import write_text_atomic
-from sim.observations import SensorError, normalise_sensors
 from sim.physics.simulation import EpisodeStatus
+from sim.sensors.observations import SensorError, normalise_sensors
 
 MODEL_METADATA = "model_metadata.json"
 HYPERPARAMETERS = "hyperparameters.json"

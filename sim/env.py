@@ -26,11 +26,11 @@ import numpy as np
 
 from sim.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
 from sim.objects.settings import RaceSettings
-from sim.observations import Observer, SensorOptions, normalise_sensors
 from sim.physics.car import DEEPRACER_CAR, CarSpec
 from sim.physics.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
 from sim.realworld.perturbation import draw_perturbation
 from sim.realworld.settings import CameraRandomisation
+from sim.sensors.observations import Observer, SensorOptions, normalise_sensors
 from sim.tracks.track import Track
 
 ENV_ID = "RacerTui/DeepRacer-v0"

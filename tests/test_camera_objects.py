@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from sim import camera_scene as scene
-from sim.camera import Camera, CameraSpec, Solids
+from sim.sensors import camera_scene as scene
+from sim.sensors.camera import Camera, CameraSpec, Solids
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
 

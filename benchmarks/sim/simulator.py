@@ -23,8 +23,8 @@ import numpy as np
 
 from sim.env import BatchedDeepRacer, DeepRacerEnv, EnvConfig
 from sim.objects.settings import BotSettings, ObstacleSettings, RaceSettings, RaceType
-from sim.observations import SensorOptions
 from sim.physics.reference_driver import reference_lap
+from sim.sensors.observations import SensorOptions
 from sim.tracks.catalog import list_tracks, resolve_track
 from sim.tracks.track import Track, load_track
 

@@ -4,7 +4,7 @@ The training child does not stream observations (they would swamp the pipe), so 
 is rebuilt here from the latest sim-trace row (where the reported car was): the camera
 frame at that pose as half-block characters (two grey pixels per cell), or the lidar
 ranges as a polar plot with the car at the centre, heading up. The frame is the model's
-own camera, DeepRacer's simulated one (`sim.camera`, docs/camera.md): the dark road and
+own camera, DeepRacer's simulated one (`sim.sensors.camera`, docs/camera.md): the dark road and
 its white bands, the orange dashes, the green field and the dark walls a model trained
 in DeepRacer's simulator learnt from. `observe_at` does the
 sensor work and belongs in a thread worker; the widget only draws what it is given.
@@ -26,7 +26,7 @@ from textual.widget import Widget
 
 from racer_tui.widgets.braille import braille_char, set_dots, styled_runs
 from sim.objects.field import ObjectField
-from sim.sensors import Camera, Lidar, LidarSpec
+from sim.sensors.batched import Camera, Lidar, LidarSpec
 from sim.tracks.track import Track
 
 

@@ -1,6 +1,6 @@
 """A car archive as a race `Driver`: it drives racer-tui's car from racer-tui's camera.
 
-Each step renders every car's front camera (`sim.sensors.Camera`, uint8 0..255, the range
+Each step renders every car's front camera (`sim.sensors.batched.Camera`, uint8 0..255, the range
 the car's own camera gives its graph) at the size the graph's input asks for, runs the
 graph once for all cars and applies each car's action. It fits wherever a `Driver` does:
 `run_trials`, `evaluate_model(..., driver=...)` and the race engine.
@@ -18,7 +18,7 @@ from sim.car_export.policy import CarPolicy
 from sim.physics.car import car_for_simapp_version
 from sim.physics.simulation import TrackSimulation
 from sim.race.driver import DriverAction
-from sim.sensors import Camera, CameraSpec
+from sim.sensors.batched import Camera, CameraSpec
 from sim.tracks.track import Track
 
 

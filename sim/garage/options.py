@@ -31,12 +31,12 @@ from sim.deepracer_files import (
     default_hyperparameters,
 )
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, create_model
-from sim.observations import SensorError, normalise_sensors
 from sim.realworld.settings import (
     CameraRandomisation,
     camera_randomisation_keys,
     model_camera_randomisation,
 )
+from sim.sensors.observations import SensorError, normalise_sensors
 from sim.tracks.catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
 from sim.tracks.track import TrackError
 

@@ -46,7 +46,7 @@ from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 
 if TYPE_CHECKING:
-    from sim.camera import Solids
+    from sim.sensors.camera import Solids
 
 # The DeepRacer camera's horizontal field of view and near plane (simapp `frustum.py`).
 CAMERA_FIELD_OF_VIEW: Final = 1.13  # radians
@@ -175,8 +175,8 @@ class ObjectField:
 
     def solids(self, cars: NDArray[np.intp]) -> Solids:
         """`cars`' objects as the camera draws them (rows in `cars`' order)."""
-        from sim import camera_scene as scene
-        from sim.camera import Solids
+        from sim.sensors import camera_scene as scene
+        from sim.sensors.camera import Solids
 
         key = (self.placed, np.asarray(cars, dtype=np.intp).tobytes())
         if self._solids is not None and self._solids[0] == key:

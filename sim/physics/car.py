@@ -45,7 +45,7 @@ PHYSICS_SUBSTEPS = 4
 # share of each command at once and the rest with a slower lag, as DeepRacer's traces
 # show once they are replayed at their own command times. 4: the camera sits as it does on
 # DeepRacer's car at rest, whose chassis tips 1.39 degrees nose-up on its wheels: it looks
-# less far down, from a little higher (`sim.camera`).
+# less far down, from a little higher (`sim.sensors.camera`).
 PHYSICS_VERSION = 4
 
 # Collision categories: cars never collide with each other unless a race asks for it

@@ -13,9 +13,9 @@ from typing import TYPE_CHECKING, Any
 
 from numpy.typing import NDArray
 
-from sim.observations import Observer
 from sim.physics.simulation import TrackSimulation
 from sim.realworld.perturbation import CameraPerturbation
+from sim.sensors.observations import Observer
 
 if TYPE_CHECKING:
     from sim.garage.folder import ModelFolder

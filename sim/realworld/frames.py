@@ -1,8 +1,8 @@
 """A perturbation's light, colours, blur and noise, applied to rendered frames.
 
 Colours go through the scene's tones. The camera samples the ground's texture without
-blending (`sim.camera`), so every pixel of a plain frame is one of the scene's tones
-(`sim.camera_scene`) plus its fixed grain: the level alone says which surface a pixel
+blending (`sim.sensors.camera`), so every pixel of a plain frame is one of the scene's tones
+(`sim.sensors.camera_scene`) plus its fixed grain: the level alone says which surface a pixel
 shows. Recolouring the scene is therefore one lookup per grey level, with each surface's
 grain kept: a level moves by its surface's change of tone. Light and contrast are a map of
 levels too, so both fold into one lookup table per car; blur and noise come after it, in
@@ -22,8 +22,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from sim import camera_scene as scene
 from sim.realworld.perturbation import CameraPerturbation
+from sim.sensors import camera_scene as scene
 
 UInt8Array = NDArray[np.uint8]
 Float32Array = NDArray[np.float32]

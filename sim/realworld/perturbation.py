@@ -25,8 +25,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from sim import camera_scene as scene
 from sim.realworld.settings import CameraRandomisation
+from sim.sensors import camera_scene as scene
 
 # Ranges at strength 1.
 LIGHT_GAIN = 1.5  # brightness gain within [1/1.5, 1.5]
@@ -52,7 +52,7 @@ _TRIES = 50
 
 @dataclass(frozen=True)
 class Palette:
-    """The scene's grey tones (`sim.camera_scene`): road, edge bands, centre dashes,
+    """The scene's grey tones (`sim.sensors.camera_scene`): road, edge bands, centre dashes,
     field, background over the walls, and a shift of every wall's tone."""
 
     road: int = scene.ROAD

@@ -31,9 +31,9 @@ from torch import nn
 from sim.deepracer_files import NEURAL_NETWORKS, ModelMetadata
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.remedies import Fix
-from sim.observations import VECTOR_SIZE, Observer, SensorOptions
 from sim.physics.simulation import TrackSimulation
 from sim.race.driver import Driver, DriverAction
+from sim.sensors.observations import VECTOR_SIZE, Observer, SensorOptions
 from sim.training.errors import PolicyError
 
 if TYPE_CHECKING:

@@ -32,10 +32,10 @@ import torch
 from sim import reward_limit, reward_sandbox
 from sim.foundation.atomic import write_text_atomic
 from sim.garage.folder import ModelError, ModelFolder
-from sim.observations import SensorOptions
 from sim.physics.simulation import reversed_track
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.realworld.training import folder_training_config
+from sim.sensors.observations import SensorOptions
 from sim.tracks.track import Track
 from sim.training import events
 from sim.training.algorithms import check_trainable

@@ -12,7 +12,7 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 
 from sim.action_space import discrete_grid
 from sim.env import ENV_ID, BatchedDeepRacer, DeepRacerEnv, EnvConfig
-from sim.observations import SensorOptions
+from sim.sensors.observations import SensorOptions
 from tests.sim.shapes import ring_track
 
 SMALL_CAMERA = SensorOptions(camera_width=40, camera_height=30)

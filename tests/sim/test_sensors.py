@@ -11,9 +11,8 @@ import pytest
 import shapely
 from shapely.geometry import LineString, MultiLineString
 
-from sim import camera_scene as scene
-from sim.raster import TrackRaster
-from sim.sensors import (
+from sim.sensors import camera_scene as scene
+from sim.sensors.batched import (
     DEEPRACER_CAMERA,
     PHYSICAL_CAR_CAMERA,
     Camera,
@@ -28,6 +27,7 @@ from sim.sensors import (
     sector_lidar_space,
     sectors,
 )
+from sim.sensors.raster import TrackRaster
 from sim.tracks.track import Track, load_track
 
 CENTRE_RADIUS, INNER_RADIUS, OUTER_RADIUS = 2.0, 1.62, 2.38

@@ -217,7 +217,7 @@ def test_a_reversed_track_is_driven_against_its_row_order() -> None:
 
 @pytest.mark.parametrize("cars", [1, 2])
 def test_a_car_turned_round_sees_what_a_car_on_the_reversed_track_sees(cars: int) -> None:
-    from sim.observations import vector_state
+    from sim.sensors.observations import vector_state
 
     track = resolve_track("hairpin-circuit")
     rules = EpisodeRules(alternate_direction=True, change_start=False)

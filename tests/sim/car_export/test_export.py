@@ -29,7 +29,7 @@ from sim.car_export.graph_def import SUPPORTED_OPS, read_graph
 from sim.car_export.policy import CarPolicy
 from sim.garage.folder import ModelError, ModelFolder
 from sim.garage.options import new_model
-from sim.sensors import Camera, CameraSpec
+from sim.sensors.batched import Camera, CameraSpec
 from sim.tracks.catalog import resolve_track
 from sim.training import events
 from sim.training.policy import build_network, load_policy, observation_tensors, save_policy

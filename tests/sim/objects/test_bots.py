@@ -105,7 +105,7 @@ def test_running_into_a_bot_is_a_crash_but_being_run_into_is_not() -> None:
 
 
 def test_the_lidar_sees_a_bot_ahead() -> None:
-    from sim.observations import Observer, SensorOptions
+    from sim.sensors.observations import Observer, SensorOptions
 
     track = resolve_track(TRACK)
     sim = TrackSimulation(track, 1, race=bots(count=1, speed=0.0))
@@ -194,9 +194,9 @@ def test_a_replay_shows_the_objects_where_the_race_had_them(preset: str) -> None
 
 
 def test_the_camera_sees_each_cars_own_objects() -> None:
-    from sim import camera_scene as scene
     from sim.objects.settings import Lane, ObstacleSettings
-    from sim.observations import Observer
+    from sim.sensors import camera_scene as scene
+    from sim.sensors.observations import Observer
 
     track = resolve_track(TRACK)
     boxes = RaceSettings(

@@ -105,7 +105,7 @@ def test_one_car_crashes_into_a_box_as_a_fleet_car_does() -> None:
 
 
 def test_the_lidar_sees_a_cars_own_boxes() -> None:
-    from sim.observations import Observer
+    from sim.sensors.observations import Observer
 
     track = resolve_track(TRACK)
     settings = ObstacleSettings(positions=((0.1, Lane.INNER),))

@@ -7,12 +7,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim.observations import Observer
 from sim.physics.car import Fleet
 from sim.physics.reference_driver import ReferenceDriver
 from sim.physics.simulation import TrackSimulation
 from sim.race.driver import reference_driver
-from sim.sensors import Lidar
+from sim.sensors.batched import Lidar
+from sim.sensors.observations import Observer
 from sim.tracks.catalog import resolve_track
 
 TRACKS = ["hairpin-circuit", "bowtie-chicane"]

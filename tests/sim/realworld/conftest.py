@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim.camera import Camera
 from sim.env import EnvConfig
 from sim.physics.simulation import TrackSimulation
+from sim.sensors.camera import Camera
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
 from tests.sim.realworld.helpers import CARS

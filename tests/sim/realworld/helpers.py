@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from sim.camera import Camera
 from sim.physics.simulation import TrackSimulation
+from sim.sensors.camera import Camera
 
 CARS = 6
 

@@ -8,10 +8,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from sim import camera_scene as scene
-from sim.camera import Camera, Solids
 from sim.env import BatchedDeepRacer, DeepRacerEnv, EnvConfig
-from sim.observations import Observer
 from sim.physics.simulation import TrackSimulation
 from sim.realworld import perturbation as drawn
 from sim.realworld.frames import SURFACE_OF_LEVEL, SURFACES
@@ -24,6 +21,9 @@ from sim.realworld.perturbation import (
 )
 from sim.realworld.render import PerturbedCamera
 from sim.realworld.settings import CameraRandomisation
+from sim.sensors import camera_scene as scene
+from sim.sensors.camera import Camera, Solids
+from sim.sensors.observations import Observer
 from sim.tracks.track import Track
 from tests.sim.realworld.helpers import CARS, plain_frames
 

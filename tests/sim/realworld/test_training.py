@@ -7,11 +7,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-from sim.camera import Camera
 from sim.garage.options import new_model
-from sim.observations import Observer
 from sim.realworld.perturbation import CameraPerturbation
 from sim.realworld.settings import CameraRandomisation
+from sim.sensors.camera import Camera
+from sim.sensors.observations import Observer
 from sim.tracks.track import Track
 from sim.training import events
 from sim.training.trainer import RunOptions, Trainer

@@ -14,8 +14,8 @@ from safetensors.torch import save
 from sim.action_space import FULL_RANGE_CONTINUOUS, discrete_grid
 from sim.deepracer_files import ModelMetadata
 from sim.garage.folder import ModelFolder
-from sim.observations import SensorOptions
 from sim.physics.simulation import TrackSimulation
+from sim.sensors.observations import SensorOptions
 from sim.tracks.catalog import resolve_track
 from sim.training.policy import (
     PolicyDriver,

@@ -1,7 +1,7 @@
 """A top-down picture of a track, rasterised once and shared by every sensor.
 
 The camera gathers pixels from `texture` (DeepRacer's scene in greyscale, see
-`sim.camera_scene`: a grainy dark road, white bands along its edges, an orange dashed
+`sim.sensors.camera_scene`: a grainy dark road, white bands along its edges, an orange dashed
 centre line, a green field and, past the field's edge, the walls). The lidar sphere-traces
 through `signed_distance` (the distance to the nearest border line, negative off the
 road) and finishes on exact geometry with the border segment `border_segment` names for
@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
 
-from sim import camera_scene as scene
+from sim.sensors import camera_scene as scene
 from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 
@@ -103,7 +103,7 @@ class TrackRaster:
 
     @cached_property
     def texture(self) -> NDArray[np.uint8]:
-        """The ground in DeepRacer's greyscale tones, one per cell (`sim.camera_scene`);
+        """The ground in DeepRacer's greyscale tones, one per cell (`sim.sensors.camera_scene`);
         cells past the walls, and the outermost ring, hold `BEYOND_WALLS`."""
         shape = self.shape
         texture = _grainy_tiles(scene.GRASS, scene.GRASS_GRAIN, 1, shape)

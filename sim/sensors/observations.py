@@ -81,13 +81,13 @@ class Observer:
         self._lidar: Any = None
         opts = self.options
         if "camera" in sensors:
-            from sim.sensors import Camera, CameraSpec, camera_space
+            from sim.sensors.batched import Camera, CameraSpec, camera_space
 
             spec = CameraSpec(width=opts.camera_width, height=opts.camera_height)
             self._camera = Camera(sim.track, spec)
             spaces["camera"] = camera_space(spec)
         if "lidar" in sensors or "sector_lidar" in sensors:
-            from sim.sensors import Lidar, LidarSpec, lidar_space, sector_lidar_space
+            from sim.sensors.batched import Lidar, LidarSpec, lidar_space, sector_lidar_space
 
             lidar_spec = LidarSpec(rays=opts.lidar_rays, max_range=opts.lidar_range)
             self._lidar = Lidar(sim.track, lidar_spec)
@@ -156,7 +156,7 @@ class Observer:
             if "lidar" in self.spaces:
                 parts["lidar"] = scan
             else:
-                from sim.sensors import sectors
+                from sim.sensors.batched import sectors
 
                 parts["sector_lidar"] = sectors(scan)
         if "vector" in self.spaces:

@@ -3,7 +3,7 @@
 Both sensors read a `TrackRaster` (built once per track) instead of the track geometry,
 so one call for a whole batch of cars is a handful of vectorised NumPy passes:
 
-* the camera (`sim.camera`, re-exported here) is a pinhole looking at a flat ground
+* the camera (`sim.sensors.camera`, re-exported here) is a pinhole looking at a flat ground
   plane, with DeepRacer's walls around the field.
 * the lidar sphere-traces the signed border distance: it steps along each ray by the
   distance to the nearest border until it crosses one (the sign changes) or comes close,
@@ -23,7 +23,7 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sim.camera import (
+from sim.sensors.camera import (
     DEEPRACER_CAMERA,
     PHYSICAL_CAR_CAMERA,
     Camera,
@@ -32,7 +32,7 @@ from sim.camera import (
     channels_last,
     poses,
 )
-from sim.raster import TrackRaster
+from sim.sensors.raster import TrackRaster
 from sim.tracks.track import Track
 
 __all__ = [

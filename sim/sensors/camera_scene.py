@@ -47,7 +47,7 @@ WALL_HIGH_Y = 6
 BEYOND_WALLS = 0
 GROUND_FLOOR = max(WALL_LOW_X, WALL_HIGH_X, WALL_LOW_Y, WALL_HIGH_Y) + 1
 
-# Solid objects standing on the track (`sim.camera.Solids`), drawn as upright boxes in
+# Solid objects standing on the track (`sim.sensors.camera.Solids`), drawn as upright boxes in
 # flat tones: their sides in one tone, their top in a slightly lighter one, so the edge
 # between the two shows wherever a camera looks down on an object. The tones are
 # racer-tui's choice, not read off DeepRacer frames: what a model needs is that an object

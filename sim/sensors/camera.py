@@ -4,7 +4,7 @@ For a pitched camera without roll every image row below the horizon sees one lin
 the ground at a fixed distance ahead, so the ground point of pixel (row r, column c) in
 the car's frame is (forward[r], lateral[r, c]); per call only the car's rotation and
 translation are applied before gathering cells of the track raster's texture (what the
-camera sees there is `sim.camera_scene`). Above the horizon each column sees the wall it
+camera sees there is `sim.sensors.camera_scene`). Above the horizon each column sees the wall it
 faces, up to the wall's top, and the background over it. Solid objects on the track
 (`Solids`: DeepRacer's boxes, head-to-bot's bot cars) are drawn last, over the ground and
 the walls, as upright boxes through the same pinhole.
@@ -27,9 +27,9 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sim import camera_scene as scene
 from sim.foundation.plural import counted
-from sim.raster import TrackRaster
+from sim.sensors import camera_scene as scene
+from sim.sensors.raster import TrackRaster
 from sim.tracks.track import Track
 
 UInt8Array = NDArray[np.uint8]
