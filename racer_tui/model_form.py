@@ -57,7 +57,7 @@ from sim.realworld.settings import (
     settings_text,
     with_camera_randomisation_keys,
 )
-from sim.reward_function import RewardFunctionError, check_reward_code
+from sim.reward.function import RewardFunctionError, check_reward_code
 from sim.sensors.observations import SensorError, normalise_sensors
 from sim.tracks.track import TrackError
 

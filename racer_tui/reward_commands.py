@@ -2,7 +2,7 @@
 
 It runs the function on DeepRacer-complete sample params, then scores every step of the
 reference driver's lap on a track, so a racer sees real values before training. The
-function runs in a child process with a time limit (sim.reward_probe).
+function runs in a child process with a time limit (sim.reward.probe).
 """
 
 from __future__ import annotations
@@ -25,16 +25,16 @@ from racer_tui.reward_lap_text import lap_chart
 from racer_tui.reward_map_text import map_text
 from sim.action_space import MAX_SPEED, ActionSpace
 from sim.foundation.atomic import write_bytes_atomic
-from sim.reward_function import TEMPLATES, read_reward_file, template_source
-from sim.reward_lap import DEFAULT_SPEEDS, LINES, REFERENCE_LINE, line_verdict, verdict
-from sim.reward_map import (
+from sim.reward.function import TEMPLATES, read_reward_file, template_source
+from sim.reward.lap import DEFAULT_SPEEDS, LINES, REFERENCE_LINE, line_verdict, verdict
+from sim.reward.map import (
     DEFAULT_SPACING,
     DEFAULT_SPEED,
     MapOptions,
     png_bytes,
 )
-from sim.reward_probe import check_reward_source, lap_pay_of_source, map_reward_source
-from sim.reward_sandbox import DEFAULT_MEMORY_MB, check_memory_mb
+from sim.reward.probe import check_reward_source, lap_pay_of_source, map_reward_source
+from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 
 NAMES = ("reward",)
@@ -157,7 +157,7 @@ def run(args: argparse.Namespace) -> int:
     track_name = args.track or DEFAULT_TRACK
     resolve_track(track_name)  # an unknown track is the racer's typo, said before any run
     # In a child process of its own session, with a time limit on every call and a memory
-    # limit (sim.reward_sandbox): a function that loops, sleeps, exits its process, starts
+    # limit (sim.reward.sandbox): a function that loops, sleeps, exits its process, starts
     # one or allocates without bound is reported in one sentence, never hangs this
     # command, and leaves no process behind.
     probe = check_reward_source(source, str(args.file), track=track_name, memory_mb=memory_mb)
@@ -187,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
     print("OK: the function ran on every step without an error.")
     if probe.landlock != "applied":
         # Said, not failed: the racer learns that this system cannot keep the code from
-        # their files (the audit guard still holds what it can: sim.reward_guard).
+        # their files (the audit guard still holds what it can: sim.reward.guard).
         print(
             f"Note: {probe.landlock}, so only Python's audit hooks kept this function from "
             "your files; read a function you did not write before you run it."

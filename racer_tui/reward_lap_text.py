@@ -1,4 +1,4 @@
-"""What a reward function pays along a lap (sim.reward_lap) as a terminal chart: a row per
+"""What a reward function pays along a lap (sim.reward.lap) as a terminal chart: a row per
 line and speed, each step's reward drawn as a bar from start to finish on one shared scale,
 and the lap's total at its end. Rich only, so the headless CLI and the app can both draw it."""
 
@@ -9,7 +9,7 @@ import math
 
 from rich.text import Text
 
-from sim.reward_lap import CENTRE_LINE, LapPay
+from sim.reward.lap import CENTRE_LINE, LapPay
 
 _BARS = " ▁▂▃▄▅▆▇█"  # nothing, then eighths of a cell
 _LINE_STYLES = {CENTRE_LINE: "cyan"}

@@ -1,4 +1,4 @@
-"""A reward map (sim.reward_map) as terminal text: two map rows per character line (the
+"""A reward map (sim.reward.map) as terminal text: two map rows per character line (the
 upper half block takes one row's colour, its background the next), thinned to fit a
 width, with a legend. Given the track, its edges, centre line and start line are drawn
 over the colours as dots on the cells they cross, so the colours stay visible behind them.
@@ -13,7 +13,7 @@ from rich.color import Color
 from rich.style import Style
 from rich.text import Text
 
-from sim.reward_map import (
+from sim.reward.map import (
     BORDER_COLOUR,
     CENTRE_COLOUR,
     FAILED_COLOUR,

@@ -31,8 +31,8 @@ from rich.text import Text
 from racer_tui.output import print_json, print_table
 from sim.deepracer_files import DeepRacerFileError
 from sim.garage.folder import ModelError, open_model
-from sim.reward_limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
-from sim.reward_sandbox import DEFAULT_MEMORY_MB, check_memory_mb
+from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
+from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb
 from sim.training import events
 from sim.training.errors import PolicyError
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport

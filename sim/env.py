@@ -75,7 +75,7 @@ class EnvConfig:
         else:
             space = parse_action_space(action_space)
         if isinstance(reward, str):
-            from sim.reward_function import load_reward_function
+            from sim.reward.function import load_reward_function
 
             reward = load_reward_function(reward)
         return cls(
@@ -89,7 +89,7 @@ class EnvConfig:
     def reward_function(self) -> RewardCallable:
         if self.reward is not None:
             return self.reward
-        from sim.reward_function import load_template
+        from sim.reward.function import load_template
 
         return load_template("follow_center_line")
 

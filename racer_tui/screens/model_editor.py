@@ -6,7 +6,7 @@ a picture of it), the hyperparameters (each with its allowed range beside it, fr
 `sim.deepracer_files.HYPERPARAMETER_SPECS`) and the reward function (a Python editor with
 the four templates and a Check that runs it on sample params, maps what it pays on the
 model's track beside the code, and says whether it pays for speed; all in a child process
-with time limits, `sim.reward_probe`).
+with time limits, `sim.reward.probe`).
 
 Problems are shown under the field they belong to and never clear the form; nothing is
 written until every field checks out (see `racer_tui.model_form`). The screen returns the
@@ -69,9 +69,9 @@ from racer_tui.widgets.track_map import TrackMap
 from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder
 from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
-from sim.reward_function import TEMPLATES, RewardFunctionError, template_name, template_source
-from sim.reward_lap import LapPay, verdict
-from sim.reward_map import MapOptions, RewardMap
+from sim.reward.function import TEMPLATES, RewardFunctionError, template_name, template_source
+from sim.reward.lap import LapPay, verdict
+from sim.reward.map import MapOptions, RewardMap
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track, TrackError
 
@@ -153,7 +153,7 @@ def check_reward(source: str, track: str | None = None, top_speed: float = 2.0) 
     """Call the function with DeepRacer-complete sample params and, given the model's
     track, map what it pays there at its top speed and compare a slow and a fast lap: in
     a child process with a time limit (the racer's code never runs in the app's process)."""
-    from sim.reward_probe import check_reward_source, editor_check
+    from sim.reward.probe import check_reward_source, editor_check
 
     try:
         if track is None:

@@ -17,7 +17,7 @@ import numpy as np
 from sim.action_space import ActionSpace
 from sim.coach.limit_lap import LimitLap, limit_lap
 from sim.physics.car import DEEPRACER_CAR, CarSpec
-from sim.reward_function import EMPTY_LINE
+from sim.reward.function import EMPTY_LINE
 from sim.tracks.track import Track
 
 # Metres between the points written into a reward function: a scan of a lap's points runs on
@@ -74,7 +74,7 @@ def line_followed(
 ) -> str:
     """`source` with its line redrawn for track and actions `now`, when it is the racing_line
     template exactly as written for `was` (a line the racer changed is theirs, and kept)."""
-    from sim.reward_function import RACING_LINE_TEMPLATE, template_name, template_source
+    from sim.reward.function import RACING_LINE_TEMPLATE, template_name, template_source
     from sim.tracks.track import TrackError
 
     if was == now or template_name(source) != RACING_LINE_TEMPLATE:

@@ -75,7 +75,7 @@ from sim.tracks.track import Track, TrackError
 if TYPE_CHECKING:
     from sim.env import EnvConfig
     from sim.objects.settings import RaceSettings
-    from sim.reward_function import RewardFunction
+    from sim.reward.function import RewardFunction
 
 MODELS_DIR = "models"
 POLICY_FILE = "policy.safetensors"
@@ -247,7 +247,7 @@ class ModelFolder:
 
     def reward_function(self) -> RewardFunction:
         """The loaded reward function (RewardFunctionError names the file and line)."""
-        from sim.reward_function import load_reward_function
+        from sim.reward.function import load_reward_function
 
         self.reward_source()  # the same clear errors for a missing or huge file
         return load_reward_function(self.reward_file)
@@ -637,7 +637,7 @@ def create_model(
     example where the model came from). `race_type` and `race_keys` are DeepRacer's race
     type and its settings' keys (`sim.objects.settings.race_keys`).
     """
-    from sim.reward_function import check_reward_code
+    from sim.reward.function import check_reward_code
 
     final = check_new_model_name(name)
     try:

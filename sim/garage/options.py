@@ -93,7 +93,7 @@ def default_action_space() -> ActionSpace:
 
 def default_model_spec() -> ModelSpec:
     """The model `racer-tui model new NAME` makes without options."""
-    from sim.reward_function import template_source
+    from sim.reward.function import template_source
 
     return ModelSpec(
         track=DEFAULT_TRACK,
@@ -362,7 +362,7 @@ def reward_choice(
     """(source, origin) for a template name (racing_line with the line of `track` within
     `space`'s actions) or a reward function file, checked without running it (it runs when
     the racer trains or checks it)."""
-    from sim.reward_function import (
+    from sim.reward.function import (
         TEMPLATES,
         check_reward_code,
         read_reward_file,

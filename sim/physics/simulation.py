@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from sim.objects.settings import RaceSettings
 from sim.objects.world import object_field
 from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
-from sim.reward_sample_params import no_objects
+from sim.reward.sample_params import no_objects
 from sim.tracks.geometry import FloatArray, PointProjector
 from sim.tracks.track import Track
 

@@ -21,9 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from sim import reward_guard, reward_sandbox
 from sim.env import BatchedDeepRacer, StepInfo
 from sim.garage.folder import ModelFolder
+from sim.reward import guard as reward_guard
+from sim.reward import sandbox as reward_sandbox
 from sim.training.step_record import EndedEpisode, StepRecorder
 
 
@@ -111,7 +112,7 @@ class PartError(RuntimeError):
 def serve_part(connection: Connection, setup: PartSetup) -> None:
     """A simulation process's life: build the part, then answer reset and step until told
     to close or until the trainer's end of the pipe closes. It runs the racer's reward
-    function, contained (sim.reward_sandbox): a memory limit, no process, thread or signal
+    function, contained (sim.reward.sandbox): a memory limit, no process, thread or signal
     from a reward call, Landlock (read Python's files and the model's folder, write
     nowhere), and whatever is left under it ends with it."""
     # Ctrl+C in a terminal reaches the whole process group: the trainer decides when its
@@ -168,7 +169,7 @@ def _build_part(
     folder = ModelFolder(Path(setup.folder))
     if setup.reward_seconds is not None:
         # From the watchdog thread while the main thread is stuck in racer code: said as
-        # the trainer's own process says it (sim.reward_sandbox.install_call_limit).
+        # the trainer's own process says it (sim.reward.sandbox.install_call_limit).
         reward_sandbox.install_call_limit(
             setup.reward_seconds,
             folder.reward_file,

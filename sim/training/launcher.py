@@ -30,7 +30,7 @@ import threading
 from collections.abc import AsyncIterator, Iterator, Sequence
 from typing import IO
 
-from sim.reward_sandbox import kill_session, wait_for_exit
+from sim.reward.sandbox import kill_session, wait_for_exit
 from sim.training import events
 
 STOP_TIMEOUT = 60.0  # seconds to wait for a checkpoint after SIGTERM before SIGKILL

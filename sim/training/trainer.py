@@ -29,12 +29,13 @@ import numpy as np
 import psutil
 import torch
 
-from sim import reward_limit, reward_sandbox
 from sim.foundation.atomic import write_text_atomic
 from sim.garage.folder import ModelError, ModelFolder
 from sim.physics.simulation import reversed_track
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.realworld.training import folder_training_config
+from sim.reward import limit as reward_limit
+from sim.reward import sandbox as reward_sandbox
 from sim.sensors.observations import SensorOptions
 from sim.tracks.track import Track
 from sim.training import events

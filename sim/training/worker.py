@@ -8,7 +8,7 @@ closed. A user error (unknown model, bad files, another training of the same mod
 running) is a `failed` event with one sentence and exit code 2.
 
 It runs the racer's reward function (in its own part of the fleet, and in the simulation
-processes it starts), so it contains it (sim.reward_sandbox): the events go out on a
+processes it starts), so it contains it (sim.reward.sandbox): the events go out on a
 descriptor of their own, and the process's stdout, where the function's prints land, is
 the training's stderr log, never the pipe its parent reads; it is the subreaper of every
 process under it and ends them all before it exits, so nothing the function might leave
@@ -27,9 +27,10 @@ from pathlib import Path
 from types import FrameType
 from typing import TextIO
 
-from sim import reward_guard, reward_sandbox
-from sim.reward_limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
-from sim.reward_sandbox import DEFAULT_MEMORY_MB
+from sim.reward import guard as reward_guard
+from sim.reward import sandbox as reward_sandbox
+from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
+from sim.reward.sandbox import DEFAULT_MEMORY_MB
 from sim.training import events
 from sim.training.errors import describe_failure, failure_remedy
 
@@ -221,7 +222,7 @@ def _train(
 ) -> int:
     from sim.deepracer_files import DeepRacerFileError
     from sim.garage.folder import ModelError, open_model
-    from sim.reward_function import RewardFunctionError
+    from sim.reward.function import RewardFunctionError
     from sim.tracks.track import TrackError
     from sim.training.fleet_parts import default_processes
     from sim.training.policy import PolicyError

@@ -10,8 +10,8 @@ import psutil
 import pytest
 
 from racer_tui.cli import main
-from sim import landlock
 from sim.garage.options import new_model
+from sim.reward import landlock
 
 pytestmark = pytest.mark.usefixtures("no_leftover_processes")
 

@@ -1,4 +1,4 @@
-"""A reward function is contained at run time (sim.reward_sandbox): it cannot leave a
+"""A reward function is contained at run time (sim.reward.sandbox): it cannot leave a
 process behind, allocate without bound, end its process unnamed or (where Linux has
 Landlock) read a racer's secrets or write outside; each is said in one sentence naming
 the file and line, and no process of the check outlives it."""
@@ -14,9 +14,10 @@ from pathlib import Path
 import psutil
 import pytest
 
-from sim import landlock, reward_sandbox
-from sim.reward_function import RewardFunctionError
-from sim.reward_probe import check_reward_source
+from sim.reward import landlock
+from sim.reward import sandbox as reward_sandbox
+from sim.reward.function import RewardFunctionError
+from sim.reward.probe import check_reward_source
 from tests.leftover_processes import processes_with
 
 pytestmark = pytest.mark.usefixtures("no_leftover_processes")
@@ -181,8 +182,9 @@ def test_the_check_leaves_no_process_of_its_own() -> None:
 GUARDED_CALL = """\
 import subprocess
 import sys
-from sim import reward_guard, reward_sandbox
-from sim.reward_function import RewardFunctionError, load_reward_function
+from sim.reward import guard as reward_guard
+from sim.reward import sandbox as reward_sandbox
+from sim.reward.function import RewardFunctionError, load_reward_function
 reward_sandbox.install_call_limit(5.0, sys.argv[1], lambda error: None)
 reward_guard.guard_reward_calls()
 try:
@@ -242,10 +244,10 @@ def test_the_file_guard_holds_where_landlock_does_not(tmp_path: Path) -> None:
 # modules); what it starts is still found and ended, by the kernel's means.
 PAST_THE_GUARD = """\
 import os
-import sim.reward_limit
+import sim.reward.limit
 forked = []
 def reward_function(params):
-    sim.reward_limit._ACTIVE = None  # the guard now sees no call running
+    sim.reward.limit._ACTIVE = None  # the guard now sees no call running
     if not forked:
         forked.append(1)
         if os.fork() == 0:

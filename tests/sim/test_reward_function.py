@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.reward_function import (
+from sim.reward.function import (
     TEMPLATES,
     RewardFunction,
     RewardFunctionError,
@@ -22,7 +22,7 @@ from sim.reward_function import (
     load_template,
     template_source,
 )
-from sim.reward_sample_params import PARAM_KEYS, TRACK_WIDTH, sample_params
+from sim.reward.sample_params import PARAM_KEYS, TRACK_WIDTH, sample_params
 
 LANE = TRACK_WIDTH / 4
 

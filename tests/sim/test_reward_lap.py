@@ -9,8 +9,8 @@ import pytest
 
 from racer_tui.cli import main
 from sim.action_space import parse_action_space
-from sim.reward_function import load_reward_source, load_template
-from sim.reward_lap import CENTRE_LINE, LINES, REFERENCE_LINE, lap_rewards, line_verdict, verdict
+from sim.reward.function import load_reward_source, load_template
+from sim.reward.lap import CENTRE_LINE, LINES, REFERENCE_LINE, lap_rewards, line_verdict, verdict
 from sim.tracks.catalog import resolve_track
 
 HAIRPIN = resolve_track("hairpin-circuit")
@@ -64,7 +64,7 @@ def test_the_command_prints_the_laps_and_refuses_bad_speeds(
 
 
 def test_a_function_that_only_costs_is_judged_by_its_totals_sign_and_all() -> None:
-    from sim.reward_lap import LapPay
+    from sim.reward.lap import LapPay
 
     costlier_fast = [LapPay(1.0, 100, -10.0), LapPay(4.0, 25, -10.5)]
     assert "pays more for a slower lap" in verdict(costlier_fast)

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from racer_tui.cli import main
-from sim.reward_function import load_reward_source, load_template
-from sim.reward_map import (
+from sim.reward.function import load_reward_source, load_template
+from sim.reward.map import (
     BORDER_COLOUR,
     CENTRE_COLOUR,
     START_COLOUR,

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sim.physics.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
-from sim.reward_sample_params import PARAM_KEYS
+from sim.reward.sample_params import PARAM_KEYS
 from tests.sim.shapes import rectangle_track
 
 

@@ -9,8 +9,8 @@ from typing import Any
 
 import pytest
 
-from sim.reward_function import RewardFunctionError, check_reward_code, template_source
-from sim.reward_probe import check_reward_source
+from sim.reward.function import RewardFunctionError, check_reward_code, template_source
+from sim.reward.probe import check_reward_source
 
 LIMIT = 0.5  # seconds per call in these tests
 

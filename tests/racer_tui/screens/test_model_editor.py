@@ -12,7 +12,7 @@ from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
 from sim.garage.folder import list_models, open_model
 from sim.garage.options import new_model
-from sim.reward_function import template_name, template_source
+from sim.reward.function import template_name, template_source
 from tests.racer_tui.screens.tui_helpers import (
     Notifications,
     painted,

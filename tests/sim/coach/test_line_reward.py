@@ -16,13 +16,13 @@ from sim.coach.reward_line import REWARD_SPACING, command_rows
 from sim.garage.folder import ModelError, open_model
 from sim.garage.options import model_spec, new_model
 from sim.garage.overview import reward_origin
-from sim.reward_function import (
+from sim.reward.function import (
     RewardFunctionError,
     load_reward_source,
     template_name,
     template_source,
 )
-from sim.reward_sample_params import sample_params
+from sim.reward.sample_params import sample_params
 from sim.tracks.catalog import resolve_track
 
 TRACK = "reinvent_base"
@@ -84,7 +84,7 @@ def test_the_line_is_the_models_track_and_is_recognised_on_any_track() -> None:
 def test_the_template_pasted_without_a_line_says_where_to_get_one() -> None:
     from importlib import resources
 
-    bare = resources.files("sim.reward_templates").joinpath("racing_line.py").read_text()
+    bare = resources.files("sim.reward.templates").joinpath("racing_line.py").read_text()
     reward = load_reward_source(bare, "racing_line.py")
     with pytest.raises(RewardFunctionError, match="racer-tui tracks line TRACK --python"):
         reward(sample_params())

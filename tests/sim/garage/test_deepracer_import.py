@@ -18,7 +18,7 @@ from sim.garage.deepracer_import import import_deepracer_folder, import_model
 from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
 from sim.garage.options import DEFAULT_TRACK
 from sim.garage.summary import training_summary
-from sim.reward_function import RewardFunctionError, template_source
+from sim.reward.function import RewardFunctionError, template_source
 
 
 @pytest.fixture

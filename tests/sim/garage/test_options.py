@@ -19,7 +19,7 @@ from sim.garage.options import (
     parse_range,
     read_actions_file,
 )
-from sim.reward_function import RewardFunctionError, template_source
+from sim.reward.function import RewardFunctionError, template_source
 
 
 def test_the_default_model() -> None:

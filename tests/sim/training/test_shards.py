@@ -13,7 +13,7 @@ import pytest
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
 from sim.realworld.training import folder_training_config
-from sim.reward_function import RewardFunctionError
+from sim.reward.function import RewardFunctionError
 from sim.training import events
 from sim.training.errors import describe_failure
 from sim.training.fleet_parts import FleetPart, PartError, split_fleet

@@ -1,23 +1,23 @@
 """What a process that runs a racer's reward function does to contain it, beyond the time
-limit on each call (sim.reward_limit).
+limit on each call (sim.reward.limit).
 
 A reward function is the racer's own Python. DeepRacer runs it inside AWS's simulation
 container; here it runs on the racer's (or a league host's) machine, so every process that
-runs it (the check's child, sim.reward_probe; the training's processes, sim.training)
+runs it (the check's child, sim.reward.probe; the training's processes, sim.training)
 contains it:
 
 - **memory**: while the file loads, and from the first call on, the process may grow by
   only `memory_mb` (RLIMIT_DATA; the trainer's own process keeps room for its learner
   besides); an allocation past that raises MemoryError inside the reward, reported as
   "used more than N MB of memory" with its line;
-- **processes**: the audit guard (sim.reward_guard) refuses a process, a signal, a C call
+- **processes**: the audit guard (sim.reward.guard) refuses a process, a signal, a C call
   or an exit at the racer's line. What gets past it (a multiprocessing "spawn" start
   makes no audit event; where there is Landlock, the kernel refuses it the program) is
   caught by the leftovers: the check fails a call after which the process has a child;
   every process that runs reward code is the subreaper of everything under it and kills
   it all when it ends (`end_descendants`); and its parent kills its whole process session
   (`kill_session`) once it has exited;
-- **files**: where Linux has Landlock (sim.landlock), once its own reading is done the
+- **files**: where Linux has Landlock (sim.reward.landlock), once its own reading is done the
   process may read only Python's files, racer-tui's, the system's libraries, the reward
   file's folder, /proc/self, /dev/urandom and /dev/null, and write nowhere but /dev/null
   (the trainer's own process: its model's folder too); no TCP, no program run.
@@ -39,8 +39,9 @@ from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
 
-from sim import landlock, reward_limit
-from sim.reward_guard import (
+from sim.reward import landlock
+from sim.reward import limit as reward_limit
+from sim.reward.guard import (
     SYSTEM_READS,
     exit_now,
     files_judged,
@@ -50,7 +51,7 @@ from sim.reward_guard import (
 )
 
 if TYPE_CHECKING:
-    from sim.reward_function import RewardFunctionError
+    from sim.reward.function import RewardFunctionError
 
 DEFAULT_MEMORY_MB = 2048  # DeepRacer's reward code never needs more than a few MB
 MIN_MEMORY_MB = 16
@@ -84,7 +85,7 @@ def set_memory_budget(megabytes: int) -> None:
 def loading_limit() -> Iterator[None]:
     """While a reward file's module-level code runs: the process may grow by the reward's
     memory and no more (the soft RLIMIT_DATA, put back after; the code may not change it,
-    see sim.reward_guard). Nothing when no budget is set."""
+    see sim.reward.guard). Nothing when no budget is set."""
     soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
     limit = None if _memory_mb is None else _data_limit(_memory_mb, hard)
     if limit is None or not _set_data_limit(limit, hard):
@@ -331,7 +332,7 @@ def install_call_limit(
     names = {str(reward_file), os.path.abspath(reward_file)}  # as it may have been compiled
 
     def stuck(limit_seconds: float) -> None:
-        from sim.reward_function import RewardFunctionError
+        from sim.reward.function import RewardFunctionError
 
         main = sys._current_frames().get(threading.main_thread().ident or 0)
         report(

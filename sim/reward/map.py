@@ -7,7 +7,7 @@ reward function is called with DeepRacer's params for that pose. Cells where it 
 marked, and the first failure is kept in one sentence with its position.
 
 `compute_map` runs the racer's code, so it runs only in the reward probe's child process
-(`sim.reward_probe`), under a time limit per call. Numpy throughout; no Textual.
+(`sim.reward.probe`), under a time limit per call. Numpy throughout; no Textual.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from sim.physics.simulation import TrackSimulation
-from sim.reward_function import RewardFunction, RewardFunctionError
+from sim.reward.function import RewardFunction, RewardFunctionError
 from sim.tracks.track import Track
 
 DEFAULT_SPACING = 0.1  # metres

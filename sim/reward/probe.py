@@ -1,14 +1,14 @@
 """Run a racer's reward function away from the caller: in a child process of its own
 session, with a time limit on every call, a deadline on the whole check, a memory limit,
 no process left behind and (where Linux has Landlock) no file outside Python's and its own
-folder to read and none to write (sim.reward_sandbox). It keeps the caller's process from
+folder to read and none to write (sim.reward.sandbox). It keeps the caller's process from
 running, hanging on or crashing with the code.
 
 `racer-tui reward check` and the model editor's Check ask `check_reward_source`: the
-child (`python -m sim.reward_probe`) loads the code, calls it on DeepRacer-complete sample
+child (`python -m sim.reward.probe`) loads the code, calls it on DeepRacer-complete sample
 params and, when a track is given, on every step of the reference driver's lap, and
 answers with one JSON line. `map_reward_source` asks the child for a reward map instead
-(`sim.reward_map`). Whatever the code does (loops forever, sleeps, prints, exits
+(`sim.reward.map`). Whatever the code does (loops forever, sleeps, prints, exits
 its process, starts a process, allocates without bound, raises KeyboardInterrupt), the
 caller gets a `ProbeReport` or a `RewardFunctionError` in one sentence, its own process
 never ran a line of it, and no process of the check outlives it. What the function prints
@@ -26,12 +26,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from sim import reward_guard, reward_sandbox
-from sim.reward_function import RewardFunction, RewardFunctionError
-from sim.reward_lap import LINES, LapPay
-from sim.reward_limit import DEFAULT_SECONDS
-from sim.reward_map import MapOptions, RewardMap
-from sim.reward_sandbox import DEFAULT_MEMORY_MB
+from sim.reward import guard as reward_guard
+from sim.reward import sandbox as reward_sandbox
+from sim.reward.function import RewardFunction, RewardFunctionError
+from sim.reward.lap import LINES, LapPay
+from sim.reward.limit import DEFAULT_SECONDS
+from sim.reward.map import MapOptions, RewardMap
+from sim.reward.sandbox import DEFAULT_MEMORY_MB
 
 # The whole check (interpreter start, imports, the reference lap) must end within this;
 # a function slow enough to miss it would make training crawl anyway.
@@ -44,7 +45,7 @@ class ProbeReport:
     sample_reward: float
     track: str | None  # the track the reference lap was scored on, if any
     lap_rewards: tuple[float, ...]
-    # "applied" when Landlock closed off the files, else why not (sim.reward_sandbox)
+    # "applied" when Landlock closed off the files, else why not (sim.reward.sandbox)
     landlock: str = ""
 
 
@@ -116,7 +117,7 @@ def map_reward_source(
     seconds: float = DEFAULT_SECONDS,
     deadline: float = CHECK_DEADLINE_SECONDS,
 ) -> RewardMap:
-    """What the code pays over `track` (see sim.reward_map), computed in a child process."""
+    """What the code pays over `track` (see sim.reward.map), computed in a child process."""
     ok = _ask_child("map", source, name, seconds, deadline, **_map_request(track, options))
     return RewardMap.from_json(ok["map"])
 
@@ -131,7 +132,7 @@ def lap_pay_of_source(
     seconds: float = DEFAULT_SECONDS,
     deadline: float = CHECK_DEADLINE_SECONDS,
 ) -> list[LapPay]:
-    """What the code pays for one lap of each line at each speed (sim.reward_lap),
+    """What the code pays for one lap of each line at each speed (sim.reward.lap),
     computed in a child process."""
     ok = _ask_child(
         "lap", source, name, seconds, deadline, track=track, speeds=list(speeds), lines=list(lines)
@@ -146,7 +147,7 @@ def _ask_child(
     request = {"mode": mode, "source": source, "name": name, "seconds": seconds, **extra}
     child = subprocess.Popen(
         # -P: a `sim` folder in the working directory must not stand in for ours.
-        [sys.executable, "-P", "-m", "sim.reward_probe"],
+        [sys.executable, "-P", "-m", "sim.reward.probe"],
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         stderr=subprocess.DEVNULL,  # the function's prints: unbounded, and not ours
@@ -252,8 +253,8 @@ class _Watched:
 
 
 def _probe(request: dict[str, Any], track: Any) -> dict[str, Any]:
-    from sim.reward_function import load_reward_source
-    from sim.reward_sample_params import sample_params
+    from sim.reward.function import load_reward_source
+    from sim.reward.sample_params import sample_params
 
     name = str(request["name"])
     reward = _Watched(load_reward_source(str(request["source"]), name))
@@ -280,7 +281,7 @@ def _probe(request: dict[str, Any], track: Any) -> dict[str, Any]:
 
 
 def _lap_answer(reward: Any, track: Any, request: dict[str, Any]) -> list[dict[str, Any]]:
-    from sim.reward_lap import CENTRE_LINE, lap_rewards
+    from sim.reward.lap import CENTRE_LINE, lap_rewards
 
     speeds = tuple(float(speed) for speed in request["speeds"])
     lines = tuple(str(line) for line in request.get("lines", (CENTRE_LINE,)))
@@ -289,7 +290,7 @@ def _lap_answer(reward: Any, track: Any, request: dict[str, Any]) -> list[dict[s
 
 
 def _map_answer(reward: Any, track: Any, request: dict[str, Any]) -> dict[str, Any]:
-    from sim.reward_map import compute_map
+    from sim.reward.map import compute_map
 
     heading = request.get("heading")
     options = MapOptions(

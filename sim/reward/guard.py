@@ -1,5 +1,5 @@
 """The audit guard: what a racer's reward function may not do while it runs, refused at
-its line (sim.reward_sandbox says how this fits with the rest of the containment).
+its line (sim.reward.sandbox says how this fits with the rest of the containment).
 
 Python calls an audit hook at each sensitive operation (PEP 578). In a process that runs
 reward code, `guard_reward_calls` installs one that, while a reward call runs (and while
@@ -28,7 +28,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from sim import reward_limit
+from sim.reward import limit as reward_limit
 
 
 class ForbiddenInReward(BaseException):
@@ -189,7 +189,7 @@ def _exit_guard(name: str, real: Callable[..., Any]) -> Callable[..., Any]:
 
 def guard_files(reward_file: str | Path | None) -> None:
     """From now on, a reward call may read only where Landlock would let it
-    (sim.reward_sandbox.close_off_files), and write nowhere: the file guard that holds
+    (sim.reward.sandbox.close_off_files), and write nowhere: the file guard that holds
     where Landlock does not."""
     global _readable  # noqa: PLW0603
     reads = [*python_tree(), *(Path(path) for path in SYSTEM_READS)]

@@ -23,7 +23,7 @@ import numpy as np
 
 from sim.physics.car import STEP_HZ
 from sim.physics.simulation import TrackSimulation
-from sim.reward_function import RewardFunction
+from sim.reward.function import RewardFunction
 from sim.tracks.geometry import PolylineProjector
 from sim.tracks.track import Track
 

@@ -7,7 +7,7 @@ the line in *their* file to look at. Training calls the function ~30,000 times a
 happy path of `RewardFunction.__call__` is one dict copy, one call and one type check.
 
 The reward templates (racer-tui's own code, paying what the DeepRacer console's templates
-of the same names pay) ship as plain files in `sim/reward_templates/` and load through the
+of the same names pay) ship as plain files in `sim/reward/templates/` and load through the
 same path as a racer's file.
 """
 
@@ -31,9 +31,11 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
-from sim import reward_guard, reward_limit, reward_sandbox
-from sim.reward_guard import ForbiddenInReward
-from sim.reward_limit import RewardTimeout
+from sim.reward import guard as reward_guard
+from sim.reward import limit as reward_limit
+from sim.reward import sandbox as reward_sandbox
+from sim.reward.guard import ForbiddenInReward
+from sim.reward.limit import RewardTimeout
 
 if TYPE_CHECKING:  # gymnasium's import is not needed to load a reward function
     from sim.action_space import ActionSpace
@@ -238,7 +240,7 @@ class RewardFunction:
 
 def load_reward_function(path: Path | str) -> RewardFunction:
     """Load a racer's reward function file (this runs its code: only where the racer
-    trains or checks it, under `sim.reward_limit`).
+    trains or checks it, under `sim.reward.limit`).
 
     Raises `RewardFunctionError` when the file is missing, unreadable, not UTF-8, not valid
     Python, fails while importing, or does not define `reward_function(params)`.
@@ -375,7 +377,7 @@ def template_source(name: str, track: str | None = None, space: ActionSpace | No
 def _template_text(file_name: str) -> str:
     """A template file as shipped (read once: the garage compares every model's reward
     function with all of them)."""
-    return resources.files("sim.reward_templates").joinpath(file_name).read_text(encoding="utf-8")
+    return resources.files("sim.reward.templates").joinpath(file_name).read_text(encoding="utf-8")
 
 
 def template_name(source: str) -> str | None:
@@ -413,7 +415,7 @@ def _load(source: str, display: str, filename: str) -> RewardFunction:
     module = types.ModuleType(_MODULE_NAME)
     module.__file__ = filename
     # The memory limit goes on before the timing begins: during the racer's code, changing
-    # a limit is refused (sim.reward_sandbox), racer-tui's own change included.
+    # a limit is refused (sim.reward.sandbox), racer-tui's own change included.
     with reward_sandbox.loading_limit():
         _run_module(code, module, display, filename)
 

@@ -3,7 +3,7 @@
 A reward function is the racer's own Python; one that loops forever or waits on something
 that never comes would hang a training, a `reward check` or a league night. A process
 that runs racer code installs a `CallLimit` once, from its main thread; from then on each
-call `sim.reward_function` makes is timed by a watchdog thread, which interrupts the main
+call `sim.reward.function` makes is timed by a watchdog thread, which interrupts the main
 thread with a signal when a call runs longer than the limit. The interrupted call raises
 `RewardTimeout` from inside the racer's code, so the error names the line it was running.
 
@@ -13,7 +13,7 @@ per limit. A call that swallows the interruption (`except:`) is interrupted agai
 look and failed when it returns; one still running STUCK_AFTER_LIMITS limits on, or that
 blocks signals or spins inside C code, ends its process through `on_stuck`; and the
 processes that run racer code are children with a hard deadline of their own (see
-`sim.reward_probe` and the training launcher), so nothing hangs for good.
+`sim.reward.probe` and the training launcher), so nothing hangs for good.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 Landlock (Linux 5.13 and later) lets an unprivileged process restrict itself and every
 process it starts: after `restrict`, opening a file is allowed only beneath the folders (or
 for the files) given, with the rights given, and nothing else; files already open stay
-usable. racer-tui uses it around a racer's reward function (sim.reward_sandbox). No
+usable. racer-tui uses it around a racer's reward function (sim.reward.sandbox). No
 library wraps it for Python in the standard library, so the three system calls are made
 directly (their numbers are the same on every Linux architecture).
 
