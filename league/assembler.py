@@ -1,6 +1,6 @@
 """The submission assembler: one league submission from a model's DeepRacer files.
 
-The seed project's five files are read through sim.deepracer_files (the one place that
+The seed project's five files are read through sim.deepracer.files (the one place that
 knows their formats): model metadata, hyperparameters, training params, training metrics
 and evaluation metrics (the latest, unless one is named). Three kinds of folder work:
 
@@ -26,7 +26,7 @@ from typing import Any
 from league.errors import LeagueError
 from league.race_types import RACE_TYPES, TIME_TRIAL
 from league.racers import check_name
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     HYPERPARAMETERS_PATH,
     MODEL_METADATA_PATH,
     TRAINING_PARAMS,

@@ -11,7 +11,7 @@ from rich.text import Text
 
 from racer_tui.output import print_json, print_table
 from sim.coach.lap_analysis import LapAnalysisError
-from sim.deepracer_files import DeepRacerFileError
+from sim.deepracer.files import DeepRacerFileError
 from sim.garage.folder import ModelError
 
 NAMES = ("coach",)

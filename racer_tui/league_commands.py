@@ -24,7 +24,7 @@ from racer_tui import key_commands
 from racer_tui.output import print_json, print_table
 from racer_tui.rules_option import HELP as RULES_HELP
 from racer_tui.rules_option import rules_option
-from sim.deepracer_files import DeepRacerFileError
+from sim.deepracer.files import DeepRacerFileError
 from sim.foundation.plural import counted
 from sim.race.rules import (
     DEFAULT_RULES,

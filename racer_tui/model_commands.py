@@ -15,9 +15,9 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json, print_table
-from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.car_export.errors import CarModelError
-from sim.deepracer_files import DeepRacerFileError
+from sim.deepracer.files import DeepRacerFileError
+from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.folder import (
     ModelError,
     ModelFolder,

@@ -14,21 +14,21 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
-from sim.action_space import (
-    MAX_SPEED,
-    MAX_STEERING,
-    MIN_SPEED,
-    ActionSpace,
-    ActionSpaceError,
-    discrete_grid,
-)
-from sim.deepracer_files import (
+from sim.deepracer.action_space import ActionSpace, ActionSpaceError, discrete_grid
+from sim.deepracer.files import (
     HYPERPARAMETER_SPECS,
     DeepRacerFileError,
     check_hyperparameters,
     write_hyperparameters,
     write_model_metadata,
     write_training_params,
+)
+from sim.deepracer.vocabulary import (
+    MAX_SPEED,
+    MAX_STEERING,
+    MIN_SPEED,
+    SensorError,
+    normalise_sensors,
 )
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.names import NAME_RULE, is_valid_name
@@ -58,7 +58,6 @@ from sim.realworld.settings import (
     with_camera_randomisation_keys,
 )
 from sim.reward.function import RewardFunctionError, check_reward_code
-from sim.sensors.observations import SensorError, normalise_sensors
 from sim.tracks.track import TrackError
 
 REWARD_FILE_NAME = "reward_function.py"

@@ -29,7 +29,7 @@ from rich.text import Text
 from racer_tui.output import print_json
 from racer_tui.rules_option import HELP as RULES_HELP
 from racer_tui.rules_option import rules_option
-from sim.deepracer_files import DeepRacerFileError
+from sim.deepracer.files import DeepRacerFileError
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.foundation.plural import counted
 from sim.foundation.remedies import RemedyError, echoed

@@ -23,7 +23,8 @@ from rich.text import Text
 from racer_tui.output import print_json, print_table
 from racer_tui.reward_lap_text import lap_chart
 from racer_tui.reward_map_text import map_text
-from sim.action_space import MAX_SPEED, ActionSpace
+from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.vocabulary import MAX_SPEED
 from sim.foundation.atomic import write_bytes_atomic
 from sim.reward.function import TEMPLATES, read_reward_file, template_source
 from sim.reward.lap import DEFAULT_SPEEDS, LINES, REFERENCE_LINE, line_verdict, verdict

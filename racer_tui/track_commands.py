@@ -25,7 +25,7 @@ from sim.tracks.catalog import (
 )
 
 if TYPE_CHECKING:  # `tracks list` imports no simulator
-    from sim.action_space import ActionSpace
+    from sim.deepracer.action_space import ActionSpace
 
 NAMES = ("tracks",)
 

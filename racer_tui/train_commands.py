@@ -29,7 +29,7 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.output import print_json, print_table
-from sim.deepracer_files import DeepRacerFileError
+from sim.deepracer.files import DeepRacerFileError
 from sim.garage.folder import ModelError, open_model
 from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb

@@ -26,10 +26,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.deepracer_files import SimTraceRow
+from sim.deepracer.files import SimTraceRow
+from sim.foundation.arrays import FloatArray
 from sim.physics.car import CarSpec, Fleet
 from sim.physics.simulation import LOOK_AHEAD
-from sim.tracks.geometry import FloatArray
 
 CURVATURE_TOLERANCE = 0.10  # racer-tui's curvature within 10 % of DeepRacer's, every bin
 GAP_TARGETS = {1.0: 0.2, 2.0: 0.5}  # seconds after the start -> median gap, metres

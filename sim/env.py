@@ -24,13 +24,14 @@ from typing import Any, Protocol
 import gymnasium as gym
 import numpy as np
 
-from sim.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
+from sim.deepracer.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
+from sim.deepracer.vocabulary import EpisodeStatus, normalise_sensors
 from sim.objects.settings import RaceSettings
 from sim.physics.car import DEEPRACER_CAR, CarSpec
-from sim.physics.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.physics.simulation import EpisodeRules, TrackSimulation
 from sim.realworld.perturbation import draw_perturbation
 from sim.realworld.settings import CameraRandomisation
-from sim.sensors.observations import Observer, SensorOptions, normalise_sensors
+from sim.sensors.observations import Observer, SensorOptions
 from sim.tracks.track import Track
 
 ENV_ID = "RacerTui/DeepRacer-v0"

@@ -39,8 +39,8 @@ from league.seasons import get_season, season_standings
 from league.store import League, now_iso, open_league, record_body
 from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.submissions import submit
-from sim.action_space import discrete_grid
-from sim.deepracer_files import (
+from sim.deepracer.action_space import discrete_grid
+from sim.deepracer.files import (
     HYPERPARAMETERS_PATH,
     MODEL_METADATA_PATH,
     TRAINING_METRICS_PATH,

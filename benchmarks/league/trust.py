@@ -50,8 +50,8 @@ from league.tracks import ensure_track
 from league.trust import membership
 from league.trust.keys import SigningKey
 from league.trust.seals import make_seal
-from sim.action_space import discrete_grid
-from sim.deepracer_files import (
+from sim.deepracer.action_space import discrete_grid
+from sim.deepracer.files import (
     HYPERPARAMETERS_PATH,
     MODEL_METADATA_PATH,
     TRAINING_PARAMS,

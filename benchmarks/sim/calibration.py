@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from sim.calibration import CURVATURE_TOLERANCE, GAP_TARGETS, Calibration, calibrate
-from sim.deepracer_files import DeepRacerFileError, SimTraceRow, read_sim_trace
+from sim.deepracer.files import DeepRacerFileError, SimTraceRow, read_sim_trace
 from sim.foundation.plural import counted
 from sim.physics.car import DEEPRACER_CAR, SIMAPP4_CAR, CarSpec
 

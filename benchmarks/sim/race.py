@@ -69,7 +69,7 @@ def policy_driver(track: Track, sensor: str) -> Driver | None:
     try:
         import torch
 
-        from sim.deepracer_files import ModelMetadata
+        from sim.deepracer.files import ModelMetadata
         from sim.training.policy import PolicyDriver, build_network
     except ImportError:
         return None
@@ -87,7 +87,7 @@ def _default_action_space() -> Any:
 
         return default_action_space()
     except ImportError:
-        from sim.action_space import discrete_grid
+        from sim.deepracer.action_space import discrete_grid
 
         return discrete_grid(30.0, 5, 3.0, 2)
 

@@ -81,7 +81,7 @@ class RunFigures:
 
 def largest_step_gain(name: str) -> float:
     """Evaluate model `name` once more and measure its largest one-step progress gain."""
-    from sim.deepracer_files import read_sim_trace
+    from sim.deepracer.files import read_sim_trace
     from sim.garage.folder import open_model
     from sim.training.evaluation import evaluate_model
 
@@ -170,7 +170,7 @@ def run(
     hyperparameters: dict[str, object],
     measure_seconds: float = 30.0,
 ) -> dict[str, Any]:
-    from sim.action_space import FULL_RANGE_CONTINUOUS
+    from sim.deepracer.action_space import FULL_RANGE_CONTINUOUS
     from sim.garage.options import create_from_spec, default_model_spec
     from sim.physics.reference_driver import reference_lap
     from sim.tracks.catalog import resolve_track

@@ -41,9 +41,9 @@ from racer_tui.widgets.job_line import JobLine
 from racer_tui.widgets.model_detail import ModelDetail, seconds_text, status_text
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
-from sim.action_space import ActionSpace
 from sim.car_export.file_names import CAR_ARCHIVE_SUFFIX, car_archive_path, is_car_archive_name
-from sim.deepracer_files import locate_files
+from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.files import locate_files
 from sim.garage.bundle import bundle_path, export_bundle
 from sim.garage.clone import clone_model
 from sim.garage.deepracer_import import BUNDLE_SUFFIX, import_model

@@ -3,7 +3,7 @@
 Four tabs: the car (name, track with a preview, sensor, training time limit), its action
 space (the console's discrete generator with a per-action table, or continuous ranges, and
 a picture of it), the hyperparameters (each with its allowed range beside it, from
-`sim.deepracer_files.HYPERPARAMETER_SPECS`) and the reward function (a Python editor with
+`sim.deepracer.files.HYPERPARAMETER_SPECS`) and the reward function (a Python editor with
 the four templates and a Check that runs it on sample params, maps what it pays on the
 model's track beside the code, and says whether it pays for speed; all in a child process
 with time limits, `sim.reward.probe`).
@@ -66,7 +66,8 @@ from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.table_fill import FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
 from racer_tui.widgets.track_map import TrackMap
-from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, ActionSpace
+from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder
 from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
 from sim.reward.function import TEMPLATES, RewardFunctionError, template_name, template_source

@@ -57,7 +57,7 @@ from racer_tui.widgets.training_charts import (
     TrainingFigures,
     clock,
 )
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     DeepRacerFileError,
     TrainingEpisode,
     last_sim_trace_row,
@@ -243,7 +243,7 @@ def _objects_seen(
     bot cars are where the trainer saw them at its last traced row (`sim.objects.seen`).
     When that is not this row, the caption says they are left out rather than drawing
     them elsewhere."""
-    from sim.deepracer_files import DeepRacerFileError
+    from sim.deepracer.files import DeepRacerFileError
     from sim.objects.reading import race_settings
     from sim.objects.seen import read_seen
     from sim.objects.settings import RaceType

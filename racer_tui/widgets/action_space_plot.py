@@ -11,7 +11,8 @@ from rich.text import Text
 from textual.reactive import reactive
 from textual.widget import Widget
 
-from sim.action_space import MAX_SPEED, MAX_STEERING, ActionSpace
+from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING
 
 _AXIS = 5  # "4.0 ┤"
 _DOT = "●"

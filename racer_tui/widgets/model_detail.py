@@ -19,8 +19,8 @@ from textual.widgets import Static
 
 from racer_tui.app_words import said_in_app
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
-from sim.action_space import ActionSpace
-from sim.deepracer_files import HYPERPARAMETER_SPECS
+from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.files import HYPERPARAMETER_SPECS
 from sim.foundation.remedies import fix_named
 
 STATUS_STYLES = {

@@ -32,7 +32,7 @@ from racer_tui.app_words import said_in_app
 from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.chart import MAX_POINTS, LineChart
 from racer_tui.widgets.job_line import local_clock
-from sim.deepracer_files import TrainingEpisode, TrainingMetrics
+from sim.deepracer.files import TrainingEpisode, TrainingMetrics
 from sim.foundation.plural import counted
 from sim.training import events
 

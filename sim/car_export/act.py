@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.action_space import ActionSpace
 from sim.car_export.car_mapping import CarAction, CarMapping, car_actions
 from sim.car_export.frame import car_frame
+from sim.deepracer.action_space import ActionSpace
 
 
 @dataclass(frozen=True)

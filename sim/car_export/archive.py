@@ -12,7 +12,7 @@ file); racer-tui's own export holds nothing else. Archives come from anyone, so 
   files (by extension, testing `ext in ".pb"`, so a file with no extension counts too) and
   refuses it unless it finds exactly one. Other plain files (deepracer-for-cloud's car
   upload tars a whole model folder) are skipped unread, as the car ignores them;
-- reads the metadata with `sim.deepracer_files` (the one home of DeepRacer's formats) and
+- reads the metadata with `sim.deepracer.files` (the one home of DeepRacer's formats) and
   the graph with `sim.car_export.graph_def` (known ops only);
 - checks the graph has the input and output names the car uses for the metadata's sensor.
 
@@ -34,7 +34,7 @@ from pathlib import Path, PurePosixPath
 from sim.car_export.errors import CarModelError
 from sim.car_export.file_names import CAR_ARCHIVE_SUFFIXES
 from sim.car_export.graph_def import FrozenGraph, read_graph
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     MAX_METADATA_BYTES,
     MODEL_METADATA,
     SENSOR_FILE_NAMES,

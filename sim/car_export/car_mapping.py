@@ -18,8 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sim.action_space import ActionSpace
-from sim.deepracer_files import ModelMetadata
+from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.files import ModelMetadata
 
 # The navigation node's DEFAULT_SPEED_SCALES: throttle at the top speed and at half of it.
 THROTTLE_AT_TOP = 1.0

@@ -40,7 +40,7 @@ from sim.car_export.car_mapping import CarAction, car_actions, car_export_notes,
 from sim.car_export.errors import CarModelError
 from sim.car_export.file_names import car_archive_path
 from sim.car_export.graph_writer import GraphWriter, attr_b, attr_i, attr_ints, attr_s, attr_type
-from sim.deepracer_files import SENSOR_FILE_NAMES, ModelMetadata
+from sim.deepracer.files import SENSOR_FILE_NAMES, ModelMetadata
 from sim.garage.folder import ModelError, ModelFolder, write_export
 from sim.training.policy import CAMERA_POOL, PolicyNetwork, load_policy
 

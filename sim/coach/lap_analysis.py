@@ -24,11 +24,12 @@ from numpy.typing import NDArray
 
 from sim.coach.limit_lap import LimitLap
 from sim.coach.sectors import Sector, centre_positions, unwrapped
-from sim.deepracer_files import SimTraceRow
+from sim.deepracer.files import SimTraceRow
+from sim.foundation.arrays import FloatArray
 from sim.foundation.remedies import RemedyError
 from sim.physics.simulation import LOOK_AHEAD
 from sim.race.trace import RaceTrace
-from sim.tracks.geometry import FloatArray, PolylineProjector
+from sim.tracks.geometry import PolylineProjector
 from sim.tracks.track import Track
 
 _OFF_LINE = 0.10  # metres from the line worth a word

@@ -17,14 +17,14 @@ from typing import Final
 
 import numpy as np
 
-from sim.action_space import ActionSpace
 from sim.coach.limits import CarLimits, car_limits
 from sim.coach.racing_line import EDGE_MARGIN, SPACING, optimise_line
 from sim.coach.speed_profile import driven_corner_speeds, standing_profile
+from sim.deepracer.action_space import ActionSpace
+from sim.foundation.arrays import FloatArray
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.home import data_home
 from sim.physics.car import DEEPRACER_CAR, CarSpec
-from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 
 CACHE_FORMAT: Final = 1

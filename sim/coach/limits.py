@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.action_space import ActionSpace
+from sim.deepracer.action_space import ActionSpace
+from sim.foundation.arrays import FloatArray
 from sim.physics.car import DEEPRACER_CAR, CarSpec
-from sim.tracks.geometry import FloatArray
 
 
 @dataclass(frozen=True)

@@ -16,11 +16,12 @@ from typing import Final
 
 import numpy as np
 
-from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED, Action, ActionSpace
 from sim.coach.limit_lap import limit_lap
 from sim.coach.limits import car_limits
+from sim.deepracer.action_space import Action, ActionSpace
+from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
+from sim.foundation.arrays import FloatArray
 from sim.physics.car import DEEPRACER_CAR, CarSpec
-from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 
 MIN_COUNT: Final = 3

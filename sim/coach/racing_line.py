@@ -29,9 +29,9 @@ from scipy import sparse
 
 from sim.coach.limits import CarLimits
 from sim.coach.speed_profile import SpeedProfile, driven_corner_speeds, flying_profile
+from sim.foundation.arrays import FloatArray
 from sim.physics.car import DEEPRACER_CAR
 from sim.physics.reference_driver import loop_curvature
-from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 
 SPACING = 0.05  # metres between the line's points

@@ -14,8 +14,8 @@ from typing import Final
 
 import numpy as np
 
-from sim.action_space import ActionSpace
 from sim.coach.limit_lap import LimitLap, limit_lap
+from sim.deepracer.action_space import ActionSpace
 from sim.physics.car import DEEPRACER_CAR, CarSpec
 from sim.reward.function import EMPTY_LINE
 from sim.tracks.track import Track

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.coach.limit_lap import LimitLap
-from sim.tracks.geometry import FloatArray
+from sim.foundation.arrays import FloatArray
 from sim.tracks.track import Track
 
 CORNER_CURVATURE = 0.4  # 1/m

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from sim.action_space import ActionSpace
 from sim.coach.lap_analysis import (
     DrivenPath,
     LapAnalysisError,
@@ -21,7 +20,8 @@ from sim.coach.lap_analysis import (
 )
 from sim.coach.limit_lap import LimitLap, limit_lap
 from sim.coach.sectors import Sector, track_sectors
-from sim.deepracer_files import (
+from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.files import (
     DeepRacerFileError,
     read_evaluation_metrics,
     read_sim_trace,

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.coach.limits import CarLimits
-from sim.tracks.geometry import FloatArray
+from sim.foundation.arrays import FloatArray
 
 
 @dataclass(frozen=True)

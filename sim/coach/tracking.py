@@ -15,9 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.foundation.arrays import FloatArray
 from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
-from sim.tracks.geometry import FloatArray, PointProjector, PolylineProjector
+from sim.physics.simulation import TrackSimulation
+from sim.tracks.geometry import PointProjector, PolylineProjector
 from sim.tracks.track import Track
 
 # Steering angles tried each step (0.5 degree apart) and control steps they are tried over.

@@ -7,7 +7,7 @@ summary, the latest evaluation, `reward_function.py` and `policy.safetensors`.
 
 A bundle may come from anyone, so reading one runs no code and trusts nothing: only the
 expected member names, size limits per member and in total (zip bombs), sha256s that match
-the manifest, JSON and YAML through the safe readers of `sim.deepracer_files`, and policy
+the manifest, JSON and YAML through the safe readers of `sim.deepracer.files`, and policy
 weights that are a well-formed safetensors file (a JSON header plus raw tensor bytes,
 checked here by hand, then by the safetensors library). Never pickle, never torch.load.
 The reward function travels for information only: it is never executed on import or in
@@ -28,7 +28,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, TypeVar
 
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     HYPERPARAMETERS,
     MODEL_METADATA,
     REWARD_FUNCTION,

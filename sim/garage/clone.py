@@ -12,7 +12,7 @@ import shutil
 from collections.abc import Callable
 from typing import Any
 
-from sim.deepracer_files import ModelMetadata
+from sim.deepracer.files import ModelMetadata
 from sim.garage.folder import POLICY_FILE, ModelError, ModelFolder
 from sim.garage.options import create_from_spec, model_spec, spec_of
 

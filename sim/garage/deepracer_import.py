@@ -1,7 +1,7 @@
 """`racer-tui model import PATH`: a DeepRacer model folder (or a bundle) into the garage.
 
 Community tools (DeepRacer for Cloud, deepracer-utils) and the AWS console's downloads
-lay the same files out differently; `sim.deepracer_files.locate_files` finds them. What a
+lay the same files out differently; `sim.deepracer.files.locate_files` finds them. What a
 DeepRacer folder lacks is filled in and said out loud: no reward function -> the
 follow-the-centre-line template; a track racer-tui does not know -> the default track;
 no hyperparameters -> DeepRacer's defaults. A folder with DeepRacer's own frozen weights
@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
 from sim.car_export.file_names import is_car_archive_name
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     MAX_METRICS_BYTES,
     SIM_TRACE_COLUMNS,
     DeepRacerFileError,

@@ -9,7 +9,7 @@ racer-tui's own sensor. The export says so, rather than hand out a file that loo
 
 from __future__ import annotations
 
-from sim.deepracer_files import ModelMetadata
+from sim.deepracer.files import ModelMetadata
 
 # The camera sensor names simapp accepts in model_metadata.json.
 DEEPRACER_CAMERAS = frozenset({"FRONT_FACING_CAMERA", "STEREO_CAMERAS", "LEFT_CAMERA"})

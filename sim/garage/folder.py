@@ -11,7 +11,7 @@ deepracer-utils' `DeepRacerLog(folder)` reads it unchanged:
 
 with racer-tui's own files beside them: the trainer's `policy.safetensors`,
 `checkpoints/`, `training-state.json` and the `.training.lock` a training holds. Formats
-and DeepRacer's names are in `sim.deepracer_files`; this module knows the folder and what
+and DeepRacer's names are in `sim.deepracer.files`; this module knows the folder and what
 state the model is in.
 Folders of racer-tui's older flat layout are moved into this one when first opened
 (`sim.garage.migrate`).
@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import psutil
 
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     EVALUATION_METRICS_GLOB,
     HYPERPARAMETERS_PATH,
     MODEL_METADATA,
@@ -410,7 +410,8 @@ class ModelFolder:
     def trained_physics(self) -> str | None:
         """The physics (sim.race.physics) the policy learnt to drive, or None untrained. A
         policy whose trainer did not say was trained before physics was recorded."""
-        from sim.race.physics import BEFORE_VERSIONING, DEEPRACER, is_physics
+        from sim.deepracer.vocabulary import is_physics
+        from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
 
         if not self.has_policy():
             return None

@@ -26,7 +26,7 @@ from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any
 
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     HYPERPARAMETERS,
     HYPERPARAMETERS_PATH,
     LEGACY_EVALUATION_GLOB,

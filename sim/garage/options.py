@@ -14,21 +14,25 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from sim.action_space import (
-    MAX_SPEED,
-    MAX_STEERING,
-    MIN_SPEED,
+from sim.deepracer.action_space import (
     ActionSpace,
     ActionSpaceError,
     discrete_grid,
     parse_action_space,
 )
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     HYPERPARAMETER_SPECS,
     DeepRacerFileError,
     ModelMetadata,
     check_hyperparameters,
     default_hyperparameters,
+)
+from sim.deepracer.vocabulary import (
+    MAX_SPEED,
+    MAX_STEERING,
+    MIN_SPEED,
+    SensorError,
+    normalise_sensors,
 )
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, create_model
 from sim.realworld.settings import (
@@ -36,7 +40,6 @@ from sim.realworld.settings import (
     camera_randomisation_keys,
     model_camera_randomisation,
 )
-from sim.sensors.observations import SensorError, normalise_sensors
 from sim.tracks.catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
 from sim.tracks.track import TrackError
 

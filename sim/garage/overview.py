@@ -10,9 +10,9 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from sim.action_space import ActionSpace
 from sim.car_export.car_mapping import car_actions, car_refusal
-from sim.deepracer_files import (
+from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.files import (
     DeepRacerFileError,
     EvaluationTrial,
     TrainingParams,

@@ -13,7 +13,7 @@ from pathlib import Path
 from statistics import fmean
 from typing import Any
 
-from sim.deepracer_files import DeepRacerFileError, parse_json_object
+from sim.deepracer.files import DeepRacerFileError, parse_json_object
 from sim.garage.folder import ModelError, ModelFolder
 
 TRAINING_SUMMARY_FILE = "training-summary.json"

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
+from sim.foundation.arrays import FloatArray
 from sim.objects.placement import (
     BOT_CAR_HEIGHT,
     BOT_CAR_LENGTH,
@@ -42,7 +43,6 @@ from sim.objects.placement import (
 )
 from sim.objects.settings import Lane, ObstacleSettings
 from sim.physics.car import CarSpec
-from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 
 if TYPE_CHECKING:

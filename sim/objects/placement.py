@@ -21,8 +21,9 @@ from typing import Final
 
 import numpy as np
 
+from sim.foundation.arrays import FloatArray
 from sim.objects.settings import Lane, ObstacleSettings
-from sim.tracks.geometry import FloatArray, PolylineProjector
+from sim.tracks.geometry import PolylineProjector
 from sim.tracks.track import Track
 
 # Metres kept free before the start line (simapp's end of the evenly spaced range).

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from sim.deepracer_files import DeepRacerFileError, TrainingParams, read_flag
+from sim.deepracer.files import DeepRacerFileError, TrainingParams, read_flag
 from sim.objects.settings import (
     MAX_BOT_CARS,
     MAX_BOT_SPEED,

@@ -32,7 +32,8 @@ import pymunk
 import pymunk.batch as pmb
 from numpy.typing import NDArray
 
-from sim.tracks.geometry import FloatArray
+from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
+from sim.foundation.arrays import FloatArray
 
 STEP_HZ = 15  # DeepRacer's camera and control rate
 STEP_SECONDS = 1.0 / STEP_HZ
@@ -65,7 +66,7 @@ class CarSpec:
     "deepracer_kinematics" car (steering hinges and wheels set by position and velocity
     controllers, `config/racecar_control_kinematics.yaml`) for models whose
     `model_metadata.json` version is 5 or more (`launch/racetrack_with_racecar.launch.py`),
-    which is what racer-tui writes (`sim.deepracer_files.METADATA_VERSION`). Facts about
+    which is what racer-tui writes (`sim.deepracer.files.METADATA_VERSION`). Facts about
     simapp are from aws-deepracer-community/deepracer-simapp at 01f5f015 (`bundle/`). The
     handling constants were fitted by
     replaying the commands of DeepRacer sim-traces open-loop through this car (see
@@ -84,9 +85,9 @@ class CarSpec:
     wheelbase: float = 0.164
     wheel_track: float = 0.160  # distance between left and right wheel centres
     mass: float = 1.5
-    max_steering_deg: float = 30.0
-    min_speed: float = 0.1
-    max_speed: float = 4.0
+    max_steering_deg: float = MAX_STEERING  # DeepRacer's limits (sim.deepracer.vocabulary)
+    min_speed: float = MIN_SPEED
+    max_speed: float = MAX_SPEED
     # Curvature = tan(steering) / (effective_wheelbase * (1 + understeer * v^2)). simapp sends
     # one angle to both steering hinges (no Ackermann: `send_action` in
     # `markov/agent_ctrl/utils.py`) and drives all four wheels at one speed, and its tyres

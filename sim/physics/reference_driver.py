@@ -20,9 +20,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.foundation.arrays import FloatArray
 from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
-from sim.tracks.geometry import FloatArray, PolylineProjector
+from sim.physics.simulation import TrackSimulation
+from sim.tracks.geometry import PolylineProjector
 from sim.tracks.track import Track
 
 _SPACING = 0.05  # racing-line resolution, metres

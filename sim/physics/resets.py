@@ -18,7 +18,7 @@ import math
 import weakref
 from dataclasses import dataclass
 
-from sim.physics.simulation import EpisodeStatus
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.tracks.geometry import PointProjector
 from sim.tracks.track import Track
 

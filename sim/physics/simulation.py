@@ -30,34 +30,23 @@ import time
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
-from enum import StrEnum
 from typing import Any
 
 import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.foundation.arrays import FloatArray
 from sim.objects.settings import RaceSettings
 from sim.objects.world import object_field
 from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
 from sim.reward.sample_params import no_objects
-from sim.tracks.geometry import FloatArray, PointProjector
+from sim.tracks.geometry import PointProjector
 from sim.tracks.track import Track
 
 #: DeepRacer measures the car at this point ahead of its centre.
 LOOK_AHEAD = 0.14
-
-
-class EpisodeStatus(StrEnum):
-    """DeepRacer's episode status labels, as they appear in metrics and sim-trace files."""
-
-    IN_PROGRESS = "In progress"
-    LAP_COMPLETE = "Lap complete"
-    OFF_TRACK = "Off track"
-    CRASHED = "Crashed"
-    REVERSED = "Reversed"
-    IMMOBILIZED = "Immobilized"
-    TIME_UP = "Time Up"
 
 
 # One reversed copy per track: its projectors and lookup grids take a moment to build.

@@ -42,15 +42,11 @@ import math
 from collections.abc import Generator
 from dataclasses import dataclass, replace
 
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.ids import new_id
 from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
 from sim.physics.resets import reset_pose
-from sim.physics.simulation import (
-    EpisodeRules,
-    EpisodeStatus,
-    TrackSimulation,
-    let_other_threads_run,
-)
+from sim.physics.simulation import EpisodeRules, TrackSimulation, let_other_threads_run
 from sim.race.driver import Driver
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps

@@ -5,12 +5,12 @@ racer-tui's own physics is versioned by `sim.physics.car.PHYSICS_VERSION` ("race
 timed by AWS DeepRacer's own simulator (console and DeepRacer-for-Cloud evaluations) are
 "deepracer". Laps of a physical car, timed by a league's timekeeper, are "physical": a real
 track, not a simulator, so they too are ranked apart. Results recorded before physics was
-recorded are racer-tui's version 1, or DeepRacer's when they came from its files.
+recorded are racer-tui's version 1, or DeepRacer's when they came from its files. Whether a
+string is a label at all is DeepRacer-file vocabulary (`sim.deepracer.vocabulary.is_physics`).
 """
 
 from __future__ import annotations
 
-import re
 from typing import Final
 
 from sim.physics.car import PHYSICS_VERSION
@@ -19,11 +19,6 @@ CURRENT: Final = f"racer-tui/{PHYSICS_VERSION}"
 BEFORE_VERSIONING: Final = "racer-tui/1"
 DEEPRACER: Final = "deepracer"
 PHYSICAL: Final = "physical"
-PATTERN: Final = re.compile(r"racer-tui/[1-9][0-9]{0,5}|deepracer|physical")
-
-
-def is_physics(value: object) -> bool:
-    return isinstance(value, str) and PATTERN.fullmatch(value) is not None
 
 
 def describe(physics: str) -> str:

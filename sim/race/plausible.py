@@ -26,7 +26,7 @@ from typing import Final
 
 from shapely.geometry import Polygon
 
-from sim.action_space import MAX_SPEED
+from sim.deepracer.vocabulary import MAX_SPEED
 from sim.race.physics import PHYSICAL
 from sim.tracks.track import Track
 

@@ -14,9 +14,10 @@ from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from typing import Any
 
+from sim.deepracer.vocabulary import is_physics
 from sim.foundation.ids import is_valid_id
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
-from sim.race.physics import BEFORE_VERSIONING, CURRENT, is_physics
+from sim.race.physics import BEFORE_VERSIONING, CURRENT
 from sim.race.rules import RaceRules, RulesError, Score, rules_from_mapping, score_laps
 from sim.race.trace import RaceTrace
 

@@ -4,7 +4,7 @@ One row per race tick (a 1/15 s physics step, or a tick of a penalty hold), plus
 "prepare" row with the car on the start line at t = 0. A viewer replays it; a ghost
 comparison reads two of them side by side.
 
-Sim-trace mapping (columns as DeepRacer writes them, via `sim.deepracer_files`):
+Sim-trace mapping (columns as DeepRacer writes them, via `sim.deepracer.files`):
 episode = lap number - 1 (the lap in progress), steps = row number from 1, X/Y = car centre,
 yaw = heading in degrees, steer/throttle = the commanded action, action = its index (-1 for
 continuous spaces and for rows where nothing drove), reward = 0 (a race has no reward),
@@ -26,14 +26,14 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     PREPARE_STATUS,
     SimTraceRow,
     read_sim_trace,
     trace_status,
     write_sim_trace,
 )
-from sim.physics.simulation import EpisodeStatus
+from sim.deepracer.vocabulary import EpisodeStatus
 
 PAUSE_STATUS: Final = "pause"
 # Row statuses in sim-trace spelling; the trace stores each as its index here.

@@ -23,7 +23,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any, ClassVar
 
-from sim.deepracer_files import DeepRacerFileError, TrainingParams
+from sim.deepracer.files import DeepRacerFileError, TrainingParams
 
 MAX_STRENGTH = 2.0
 KEY_PREFIX = "CAMERA_RANDOMISATION_"

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from sim.deepracer_files import TrainingParams
+from sim.deepracer.files import TrainingParams
 from sim.env import EnvConfig
 from sim.realworld.settings import model_camera_randomisation
 

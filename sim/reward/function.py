@@ -38,7 +38,7 @@ from sim.reward.guard import ForbiddenInReward
 from sim.reward.limit import RewardTimeout
 
 if TYPE_CHECKING:  # gymnasium's import is not needed to load a reward function
-    from sim.action_space import ActionSpace
+    from sim.deepracer.action_space import ActionSpace
 
 # DeepRacer rejects rewards outside this range (and NaN or inf).
 MAX_ABS_REWARD = 1e5

@@ -302,8 +302,9 @@ def _map_answer(reward: Any, track: Any, request: dict[str, Any]) -> dict[str, A
 
 
 def _reference_lap_rewards(reward: Any, track: Any) -> list[float]:
+    from sim.deepracer.vocabulary import EpisodeStatus
     from sim.physics.reference_driver import ReferenceDriver
-    from sim.physics.simulation import EpisodeStatus, TrackSimulation
+    from sim.physics.simulation import TrackSimulation
 
     sim = TrackSimulation(track, 1)
     driver = ReferenceDriver(track)

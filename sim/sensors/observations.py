@@ -10,52 +10,24 @@ line and look-ahead points of the centre line in the car's frame.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
+from sim.foundation.arrays import FloatArray
 from sim.physics.simulation import TrackSimulation
-from sim.tracks.geometry import FloatArray
 
 if TYPE_CHECKING:
     from sim.realworld.perturbation import CameraPerturbation
     from sim.realworld.render import PerturbedCamera
 
-SENSOR_NAMES = ("camera", "lidar", "sector_lidar", "vector")
-DEEPRACER_SENSORS = {
-    "FRONT_FACING_CAMERA": "camera",
-    "STEREO_CAMERAS": "camera",
-    "LIDAR": "lidar",
-    "SECTOR_LIDAR": "sector_lidar",
-}
 # Metres ahead along the centre line at which the vector sensor reports the track.
 LOOK_AHEAD_DISTANCES = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0)
 _LOOK_AHEAD_SCALE = 3.0
 VECTOR_SIZE = 5 + 2 * len(LOOK_AHEAD_DISTANCES)
-
-
-class SensorError(ValueError):
-    """An unknown or badly combined sensor; the message lists the valid names."""
-
-
-def normalise_sensors(names: str | Iterable[str]) -> tuple[str, ...]:
-    """Our sensor names for DeepRacer's or ours, deduplicated, in a stable order."""
-    items = [names] if isinstance(names, str) else list(names)
-    if not items:
-        raise SensorError("no sensor given; choose camera, lidar, sector_lidar or vector.")
-    chosen: set[str] = set()
-    for item in items:
-        key = DEEPRACER_SENSORS.get(str(item).upper(), str(item).lower())
-        if key not in SENSOR_NAMES:
-            valid = ", ".join([*SENSOR_NAMES, *DEEPRACER_SENSORS])
-            raise SensorError(f"unknown sensor {item!r}; choose from {valid}.")
-        chosen.add(key)
-    if {"lidar", "sector_lidar"} <= chosen:
-        raise SensorError("choose either LIDAR or SECTOR_LIDAR, not both.")
-    return tuple(name for name in SENSOR_NAMES if name in chosen)
 
 
 @dataclass(frozen=True)

@@ -21,8 +21,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
 
+from sim.foundation.arrays import FloatArray
 from sim.sensors import camera_scene as scene
-from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track
 
 RESOLUTION = 0.01  # metres per cell: the camera's near rows sample the ground at ~2 mm

@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from sim.tracks.geometry import FloatArray, signed_area
+from sim.foundation.arrays import FloatArray
+from sim.tracks.geometry import signed_area
 from sim.tracks.track import MIN_WIDTH, Track, TrackError
 
 # DeepRacer's own track files space their waypoints about 0.15 m apart.

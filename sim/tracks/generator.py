@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from sim.foundation.arrays import FloatArray
 from sim.tracks.builder import (
     Arc,
     Straight,
@@ -23,7 +24,6 @@ from sim.tracks.builder import (
     centre_line_from_control_points,
     track_from_centre_line,
 )
-from sim.tracks.geometry import FloatArray
 from sim.tracks.track import Track, TrackError
 
 MIN_LENGTH = 12.0

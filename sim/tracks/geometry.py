@@ -15,10 +15,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from sim.foundation.arrays import FloatArray
+
 if TYPE_CHECKING:
     from scipy.spatial import cKDTree
 
-FloatArray = NDArray[np.float64]
 
 # Resampling step for the KD-tree. Any step works for exactness as long as segments are
 # longer than it; 1 cm keeps the tree small even for a 60 m track.

@@ -23,10 +23,11 @@ import shapely
 from numpy.lib import format as npy_format
 from shapely.geometry import LinearRing, Polygon
 
+from sim.foundation.arrays import FloatArray
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.remedies import echoed, echoed_path
 from sim.tracks.errors import TrackError as TrackError  # noqa: PLC0414 (re-exported for callers)
-from sim.tracks.geometry import FloatArray, PolylineProjector, segment_lengths, signed_area
+from sim.tracks.geometry import PolylineProjector, segment_lengths, signed_area
 
 Direction = Literal["counter-clockwise", "clockwise"]
 

@@ -8,7 +8,7 @@ refused with a sentence that says what to change, never quietly trained as PPO.
 
 from __future__ import annotations
 
-from sim.deepracer_files import ModelMetadata
+from sim.deepracer.files import ModelMetadata
 from sim.garage.folder import ModelError
 
 TRAINED_ALGORITHMS = ("clipped_ppo",)

@@ -12,7 +12,7 @@ class PolicyError(RemedyError):
 def describe_failure(error: BaseException) -> str:
     """A training failure in the racer's words: racer-tui's own errors are already one
     sentence; anything else is a fault of racer-tui, said as such (the type helps a report)."""
-    from sim.deepracer_files import DeepRacerFileError
+    from sim.deepracer.files import DeepRacerFileError
     from sim.garage.folder import ModelError
     from sim.reward.function import RewardFunctionError
     from sim.tracks.errors import TrackError

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     PREPARE_STATUS,
     SIM_TRACE_COLUMNS,
     DeepRacerFileError,
@@ -41,16 +41,12 @@ from sim.deepracer_files import (
     trace_status,
     write_evaluation_metrics,
 )
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.atomic import write_text_atomic
 from sim.objects.settings import RaceSettings
 from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
 from sim.physics.resets import ResetRules
-from sim.physics.simulation import (
-    EpisodeRules,
-    EpisodeStatus,
-    TrackSimulation,
-    let_other_threads_run,
-)
+from sim.physics.simulation import EpisodeRules, TrackSimulation, let_other_threads_run
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.tracks.track import Track
 from sim.training.logbook import closest_waypoint

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     PREPARE_STATUS,
     TRAINING_METRICS_PATH,
     TRAINING_SIMTRACE_DIR,
@@ -54,9 +54,10 @@ from sim.deepracer_files import (
     training_metrics_end,
     training_trace_path,
 )
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.objects.seen import SeenObjects, write_seen
 from sim.physics.car import STEP_SECONDS
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.training.step_record import (
     ACTION,
     PROGRESS,

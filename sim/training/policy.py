@@ -28,7 +28,7 @@ import torch
 from numpy.typing import NDArray
 from torch import nn
 
-from sim.deepracer_files import NEURAL_NETWORKS, ModelMetadata
+from sim.deepracer.files import NEURAL_NETWORKS, ModelMetadata
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.remedies import Fix
 from sim.physics.simulation import TrackSimulation

@@ -34,7 +34,7 @@ from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import ActorCriticPolicy
 from torch.nn import functional
 
-from sim.deepracer_files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_TYPE
+from sim.deepracer.files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_TYPE
 from sim.training.logbook import FinishedEpisode
 from sim.training.policy import NetworkSpec, PolicyNetwork, init_weights, observation_tensors
 from sim.training.vec_env import FleetVecEnv

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.physics.simulation import TrackSimulation
 
 
 @dataclass(frozen=True)

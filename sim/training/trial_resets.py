@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.foundation.arrays import FloatArray
 from sim.physics.car import STEP_SECONDS
 from sim.physics.resets import MAX_RESETS, RESETTABLE, ResetRules, reset_pose
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
-from sim.tracks.geometry import FloatArray
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.track import Track
 
 # Training's own evaluations end a trial at the first off-track, as DeepRacer training does

@@ -220,7 +220,7 @@ def _lock_for_training(path: Path) -> bool:
 def _train(
     args: argparse.Namespace, emit: EventWriter, stop: StopFlag, seconds: float, memory_mb: int
 ) -> int:
-    from sim.deepracer_files import DeepRacerFileError
+    from sim.deepracer.files import DeepRacerFileError
     from sim.garage.folder import ModelError, open_model
     from sim.reward.function import RewardFunctionError
     from sim.tracks.track import TrackError

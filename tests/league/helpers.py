@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from sim.action_space import discrete_grid
-from sim.deepracer_files import (
+from sim.deepracer.action_space import discrete_grid
+from sim.deepracer.files import (
     HYPERPARAMETERS_PATH,
     MODEL_METADATA_PATH,
     TRAINING_METRICS_PATH,

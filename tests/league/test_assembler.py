@@ -13,8 +13,8 @@ from league.assembler import CONSOLE, DRFC, RACER_TUI, assemble
 from league.errors import LeagueError
 from league.store import League
 from league.submissions import submit
-from sim.action_space import discrete_grid
-from sim.deepracer_files import ModelMetadata, write_evaluation_metrics, write_training_metrics
+from sim.deepracer.action_space import discrete_grid
+from sim.deepracer.files import ModelMetadata, write_evaluation_metrics, write_training_metrics
 from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelFolder, create_model
 from sim.tracks.catalog import resolve_track

@@ -17,7 +17,7 @@ from league.submissions import submit
 from league.sync.errors import RecordInvalidError
 from league.sync.record import make_record
 from league.sync.validate import check_record
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     evaluation_metrics_path,
     read_evaluation_physics,
     write_evaluation_metrics,

@@ -118,7 +118,7 @@ def test_a_ghost_for_a_time_trial_is_never_a_lap_among_boxes(league: League) -> 
 
 def _set_up_for(folder: Path, race_type: str) -> Path:
     """The model folder, its training_params.yaml saying RACE_TYPE: `race_type`."""
-    from sim.deepracer_files import TRAINING_PARAMS, TrainingParams, write_training_params
+    from sim.deepracer.files import TRAINING_PARAMS, TrainingParams, write_training_params
     from sim.tracks.catalog import resolve_track
 
     track = resolve_track(TRACK)

@@ -224,7 +224,7 @@ def test_an_archive_model_keeps_the_archive_s_car_when_edited(
     from dataclasses import replace
 
     from racer_tui.model_form import save_edit
-    from sim.action_space import discrete_grid
+    from sim.deepracer.action_space import discrete_grid
     from sim.garage.folder import ModelError
     from sim.garage.options import spec_of
 

@@ -16,7 +16,7 @@ from racer_tui.model_form import (
     spec_of_form,
     values_of,
 )
-from sim.action_space import Action, ActionSpace, discrete_grid
+from sim.deepracer.action_space import Action, ActionSpace, discrete_grid
 from sim.garage.folder import ModelError, open_model
 from sim.garage.options import default_model_spec, new_model
 from tests.racer_tui.screens.tui_helpers import trained_model

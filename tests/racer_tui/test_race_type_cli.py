@@ -168,7 +168,7 @@ def test_a_night_opened_with_the_object_avoidance_preset_keeps_it(
 def test_an_object_avoidance_models_evaluation_is_submitted_to_that_board(
     capsys: pytest.CaptureFixture[str], tmp_path: Path, db: str
 ) -> None:
-    from sim.deepracer_files import TRAINING_PARAMS, TrainingParams, write_training_params
+    from sim.deepracer.files import TRAINING_PARAMS, TrainingParams, write_training_params
     from sim.tracks.catalog import resolve_track
     from tests.league.helpers import model_folder
 

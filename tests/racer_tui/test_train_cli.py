@@ -12,7 +12,7 @@ import time
 import pytest
 
 from racer_tui.cli import main
-from sim.deepracer_files import read_evaluation_metrics
+from sim.deepracer.files import read_evaluation_metrics
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
 from sim.training import events

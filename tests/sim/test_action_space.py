@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim.action_space import ActionSpaceError, discrete_grid, parse_action_space
+from sim.deepracer.action_space import ActionSpaceError, discrete_grid, parse_action_space
 
 
 def test_discrete_list_maps_indices_to_targets() -> None:

@@ -24,7 +24,7 @@ from sim.calibration import (
     replay_runs,
     trace_runs,
 )
-from sim.deepracer_files import SimTraceRow, read_sim_trace
+from sim.deepracer.files import SimTraceRow, read_sim_trace
 from sim.physics.car import DEEPRACER_CAR, SIMAPP4_CAR, CarSpec, Fleet, car_for_simapp_version
 from tests.conftest import SHARED_DEEPRACER
 

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.action_space import discrete_grid
-from sim.deepracer_files import (
+from sim.deepracer.action_space import discrete_grid
+from sim.deepracer.files import (
     HYPERPARAMETER_SPECS,
     SIM_TRACE_COLUMNS,
     DeepRacerFileError,
@@ -57,7 +57,7 @@ from sim.deepracer_files import (
     write_training_metrics,
     write_training_params,
 )
-from sim.physics.simulation import EpisodeStatus
+from sim.deepracer.vocabulary import EpisodeStatus
 
 # --- round trips ---------------------------------------------------------------------------
 

@@ -16,7 +16,7 @@ from deepracer.logs import AnalysisUtils, DeepRacerLog
 from deepracer.logs.metrics import TrainingMetrics
 from deepracer.logs.misc import LogFolderType
 
-from sim.deepracer_files import read_evaluation_metrics, read_training_metrics
+from sim.deepracer.files import read_evaluation_metrics, read_training_metrics
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
 from sim.physics.car import STEP_SECONDS

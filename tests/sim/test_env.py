@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env as gym_check_env
 
-from sim.action_space import discrete_grid
+from sim.deepracer.action_space import discrete_grid
 from sim.env import ENV_ID, BatchedDeepRacer, DeepRacerEnv, EnvConfig
 from sim.sensors.observations import SensorOptions
 from tests.sim.shapes import ring_track

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.physics.car import DEEPRACER_CAR, CarSpec
 from sim.physics.reference_driver import (
     ReferenceDriver,
@@ -16,7 +17,7 @@ from sim.physics.reference_driver import (
     reference_lap,
     speed_profile,
 )
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import list_tracks, resolve_track
 from sim.tracks.track import load_track
 

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.physics.resets import ResetRules, ResetRulesError, reset_pose
-from sim.physics.simulation import EpisodeStatus
 from tests.sim.shapes import HALF, rectangle_track
 
 

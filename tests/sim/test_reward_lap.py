@@ -8,7 +8,7 @@ import json
 import pytest
 
 from racer_tui.cli import main
-from sim.action_space import parse_action_space
+from sim.deepracer.action_space import parse_action_space
 from sim.reward.function import load_reward_source, load_template
 from sim.reward.lap import CENTRE_LINE, LINES, REFERENCE_LINE, lap_rewards, line_verdict, verdict
 from sim.tracks.catalog import resolve_track

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from sim.physics.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.physics.simulation import LOOK_AHEAD, EpisodeRules, TrackSimulation
 from sim.reward.sample_params import PARAM_KEYS
 from tests.sim.shapes import rectangle_track
 

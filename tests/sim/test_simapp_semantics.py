@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 from shapely.geometry import LinearRing, Point
 
-from sim.physics.simulation import LOOK_AHEAD, EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.physics.simulation import LOOK_AHEAD, EpisodeRules, TrackSimulation
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
 from tests.sim.shapes import rectangle_track

@@ -87,7 +87,7 @@ def test_a_synced_object_avoidance_submission_lands_on_its_own_board(
 ) -> None:
     from league.assembler import assemble
     from league.submissions import submit
-    from sim.deepracer_files import TRAINING_PARAMS, TrainingParams, write_training_params
+    from sim.deepracer.files import TRAINING_PARAMS, TrainingParams, write_training_params
     from tests.league.helpers import TRACK, model_folder
 
     ana, viewer = machines["ana"], machines["viewer"]

@@ -31,7 +31,7 @@ from racer_tui.widgets.training_charts import (
     run_line,
     training_job,
 )
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     TrainingEpisode,
     TrainingMetrics,
     append_training_metrics,
@@ -420,7 +420,7 @@ def test_the_agents_eye_view_comes_from_the_newest_traced_step(
     from dataclasses import replace
 
     from racer_tui.screens import training
-    from sim.deepracer_files import SimTraceRow, sim_trace_text
+    from sim.deepracer.files import SimTraceRow, sim_trace_text
     from sim.physics.simulation import LOOK_AHEAD
 
     folder = new_model("ada")
@@ -587,7 +587,7 @@ def test_the_agents_eye_view_shows_boxes_that_stand_still_and_says_when_it_canno
     import numpy as np
 
     from racer_tui.screens import training
-    from sim.deepracer_files import SimTraceRow, sim_trace_text, write_training_params
+    from sim.deepracer.files import SimTraceRow, sim_trace_text, write_training_params
     from sim.objects.seen import SeenObjects, write_seen
     from sim.physics.simulation import LOOK_AHEAD
     from sim.sensors import camera_scene as scene

@@ -18,7 +18,7 @@ from racer_tui.widgets.training_charts import (
     TrainingFigures,
     empty_reason,
 )
-from sim.deepracer_files import TrainingEpisode, TrainingMetrics, append_training_metrics
+from sim.deepracer.files import TrainingEpisode, TrainingMetrics, append_training_metrics
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
 from sim.training import events

@@ -18,7 +18,7 @@ from racer_tui.screens.training import TrainingScreen
 from racer_tui.widgets.agent_view import AgentView
 from racer_tui.widgets.chart import LineChart
 from racer_tui.widgets.training_charts import TrainingCharts
-from sim.deepracer_files import read_training_metrics
+from sim.deepracer.files import read_training_metrics
 from sim.garage.options import new_model
 from sim.training.checkpoint import LATEST
 from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for

@@ -13,7 +13,7 @@ from textual.widgets import Input
 from racer_tui.app import create_app
 from racer_tui.screens.training import TrainingScreen
 from racer_tui.widgets.training_charts import TrainingCharts
-from sim.deepracer_files import TrainingEpisode, TrainingMetrics, append_training_metrics
+from sim.deepracer.files import TrainingEpisode, TrainingMetrics, append_training_metrics
 from sim.garage.folder import open_model
 from sim.garage.options import new_model
 from sim.training import events

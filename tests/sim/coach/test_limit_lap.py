@@ -10,12 +10,12 @@ import pytest
 from shapely.geometry import Point
 
 import sim.coach.limit_lap as limit_module
-from sim.action_space import Action, ActionSpace
 from sim.coach.limit_lap import limit_lap
 from sim.coach.limits import car_limits
 from sim.coach.racing_line import fit_of, road_frame, tightest_turn
 from sim.coach.speed_profile import flying_profile, standing_profile
 from sim.coach.tracking import drive_line
+from sim.deepracer.action_space import Action, ActionSpace
 from sim.physics.car import DEEPRACER_CAR
 from sim.physics.reference_driver import reference_lap
 from sim.tracks.catalog import resolve_track

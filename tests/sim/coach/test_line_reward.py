@@ -9,10 +9,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from sim.action_space import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.coach.limit_lap import limit_lap
 from sim.coach.line_actions import LineActionsError, actions_from_line
 from sim.coach.reward_line import REWARD_SPACING, command_rows
+from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.folder import ModelError, open_model
 from sim.garage.options import model_spec, new_model
 from sim.garage.overview import reward_origin

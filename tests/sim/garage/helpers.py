@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from safetensors.numpy import save
 
-from sim.deepracer_files import EvaluationTrial, evaluation_metrics_text
+from sim.deepracer.files import EvaluationTrial, evaluation_metrics_text
 from sim.garage.folder import ModelFolder
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.deepracer_files import parse_model_metadata
+from sim.deepracer.files import parse_model_metadata
 from sim.garage.bundle import (
     BUNDLE_REWARD_FILE,
     BundleError,

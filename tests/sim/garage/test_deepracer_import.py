@@ -11,7 +11,7 @@ import pytest
 from deepracer.logs import AnalysisUtils, DeepRacerLog
 from deepracer.logs.metrics import TrainingMetrics
 
-from sim.deepracer_files import read_evaluation_metrics, read_training_metrics
+from sim.deepracer.files import read_evaluation_metrics, read_training_metrics
 from sim.foundation.remedies import Fix, Note
 from sim.garage.bundle import BundleError
 from sim.garage.deepracer_import import import_deepracer_folder, import_model

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.deepracer_files import MODEL_METADATA
+from sim.deepracer.files import MODEL_METADATA
 from sim.garage.bundle import export_bundle
 from sim.garage.deepracer_notes import export_notes
 from sim.garage.folder import ModelFolder

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     read_hyperparameters,
     read_model_metadata,
     read_training_params,

@@ -16,7 +16,7 @@ import pytest
 from deepracer.logs import DeepRacerLog
 
 from racer_tui.cli import main
-from sim.deepracer_files import read_training_metrics
+from sim.deepracer.files import read_training_metrics
 from sim.garage import migrate
 from sim.garage.folder import ModelError, ModelStatus, list_models, models_dir, open_model
 from sim.garage.options import new_model

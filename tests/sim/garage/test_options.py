@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.deepracer_files import default_hyperparameters
+from sim.deepracer.files import default_hyperparameters
 from sim.garage.folder import ModelError, models_dir
 from sim.garage.options import (
     DEFAULT_MINUTES,

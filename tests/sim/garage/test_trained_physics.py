@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from sim.deepracer_files import (
+from sim.deepracer.files import (
     EvaluationTrial,
     read_evaluation_physics,
     write_evaluation_metrics,

@@ -9,8 +9,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.objects.settings import BotSettings, RaceSettings, RaceType
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.race.driver import reference_driver
 from sim.race.engine import race_ticks, run_race
 from sim.race.result import RaceResult

@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.objects.settings import Lane, ObstacleSettings, RaceSettings, RaceType
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import resolve_track
 
 TRACK = "reinvent_base"

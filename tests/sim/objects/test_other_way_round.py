@@ -9,9 +9,10 @@ import math
 import numpy as np
 import pytest
 
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.objects.field import ObjectField
 from sim.objects.settings import BotSettings, Lane, ObstacleSettings, RaceSettings, RaceType
-from sim.physics.simulation import EpisodeRules, EpisodeStatus, TrackSimulation
+from sim.physics.simulation import EpisodeRules, TrackSimulation
 from sim.tracks.catalog import resolve_track
 
 TRACK = resolve_track("reinvent_base")

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from sim.deepracer_files import DeepRacerFileError, TrainingParams, parse_training_params
+from sim.deepracer.files import DeepRacerFileError, TrainingParams, parse_training_params
 from sim.objects.placement import CLEAR_BEFORE_LINE, Lanes, obstacle_distances, obstacle_poses
 from sim.objects.reading import race_settings
 from sim.objects.settings import Lane, ObstacleSettings, RaceType

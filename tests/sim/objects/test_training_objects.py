@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from sim.deepracer_files import write_training_params
+from sim.deepracer.files import write_training_params
 from sim.env import BatchedDeepRacer
 from sim.garage.folder import ModelError, ModelFolder
 from sim.garage.options import new_model
@@ -71,7 +71,7 @@ def test_a_head_to_bot_model_trains_among_its_bots_and_a_blind_one_is_refused() 
 def test_training_keeps_where_the_bots_stood_at_its_last_traced_row() -> None:
     """The sim-trace has no object columns: the logbook keeps the objects of its last row
     beside it (sim.objects.seen), for the app's agent's-eye view."""
-    from sim.deepracer_files import last_sim_trace_row
+    from sim.deepracer.files import last_sim_trace_row
     from sim.objects.seen import read_seen
     from sim.training.logbook import Logbook
 

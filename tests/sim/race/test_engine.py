@@ -189,8 +189,8 @@ def test_races_are_deterministic() -> None:
 
 def test_policy_races_are_deterministic() -> None:
     pytest.importorskip("torch")
-    from sim.action_space import discrete_grid
-    from sim.deepracer_files import ModelMetadata
+    from sim.deepracer.action_space import discrete_grid
+    from sim.deepracer.files import ModelMetadata
     from sim.training.policy import PolicyDriver, build_network
 
     metadata = ModelMetadata(discrete_grid(30.0, 5, 3.0, 2), ("vector",))

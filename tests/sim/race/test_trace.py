@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.deepracer_files import SIM_TRACE_COLUMNS, DeepRacerFileError, read_sim_trace
+from sim.deepracer.files import SIM_TRACE_COLUMNS, DeepRacerFileError, read_sim_trace
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.race.trace import RaceTrace, TraceError

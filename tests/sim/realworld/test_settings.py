@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 import yaml
 
-from sim.deepracer_files import DeepRacerFileError, TrainingParams
+from sim.deepracer.files import DeepRacerFileError, TrainingParams
 from sim.garage.clone import clone_model
 from sim.garage.folder import ModelError
 from sim.garage.options import model_spec, new_model, spec_of

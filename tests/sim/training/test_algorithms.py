@@ -6,8 +6,8 @@ from dataclasses import replace
 
 import pytest
 
-from sim.action_space import FULL_RANGE_CONTINUOUS, parse_action_space
-from sim.deepracer_files import (
+from sim.deepracer.action_space import FULL_RANGE_CONTINUOUS, parse_action_space
+from sim.deepracer.files import (
     default_hyperparameters,
     parse_hyperparameters,
     write_model_metadata,

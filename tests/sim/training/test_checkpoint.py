@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 import torch
 
-from sim.action_space import discrete_grid
-from sim.deepracer_files import ModelMetadata
+from sim.deepracer.action_space import discrete_grid
+from sim.deepracer.files import ModelMetadata
 from sim.training.checkpoint import Progress, load_checkpoint, save_checkpoint
 from sim.training.policy import PolicyError, build_network, save_policy
 

@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim.deepracer_files import read_evaluation_metrics, read_sim_trace
+from sim.deepracer.files import read_evaluation_metrics, read_sim_trace
+from sim.deepracer.vocabulary import EpisodeStatus
 from sim.garage.folder import ModelFolder
 from sim.physics.car import STEP_HZ, STEP_SECONDS
 from sim.physics.reference_driver import reference_lap
-from sim.physics.simulation import EpisodeStatus, TrackSimulation
+from sim.physics.simulation import TrackSimulation
 from sim.race.driver import reference_driver
 from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import (

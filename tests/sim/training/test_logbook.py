@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.action_space import discrete_grid
-from sim.deepracer_files import read_training_metrics
+from sim.deepracer.action_space import discrete_grid
+from sim.deepracer.files import read_training_metrics
 from sim.env import BatchedDeepRacer, EnvConfig, StepInfo
 from sim.physics.car import STEP_SECONDS
 from sim.physics.simulation import TrackSimulation

@@ -11,8 +11,8 @@ import pytest
 import torch
 from safetensors.torch import save
 
-from sim.action_space import FULL_RANGE_CONTINUOUS, discrete_grid
-from sim.deepracer_files import ModelMetadata
+from sim.deepracer.action_space import FULL_RANGE_CONTINUOUS, discrete_grid
+from sim.deepracer.files import ModelMetadata
 from sim.garage.folder import ModelFolder
 from sim.physics.simulation import TrackSimulation
 from sim.sensors.observations import SensorOptions

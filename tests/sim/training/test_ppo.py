@@ -10,8 +10,8 @@ import pytest
 import torch
 from torch.nn import functional
 
-from sim.action_space import discrete_grid
-from sim.deepracer_files import ModelMetadata, default_hyperparameters
+from sim.deepracer.action_space import discrete_grid
+from sim.deepracer.files import ModelMetadata, default_hyperparameters
 from sim.env import EnvConfig
 from sim.training import ppo
 from sim.training.policy import network_spec

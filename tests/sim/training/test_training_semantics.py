@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import pytest
 
-from sim.deepracer_files import DeepRacerFileError, parse_training_params, write_training_params
+from sim.deepracer.files import DeepRacerFileError, parse_training_params, write_training_params
 from sim.env import BatchedDeepRacer
 from sim.garage.folder import ModelFolder
 from sim.training import events

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from sim.deepracer_files import read_sim_trace, read_training_metrics
+from sim.deepracer.files import read_sim_trace, read_training_metrics
 from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelFolder, ModelStatus
 from sim.training import events

@@ -14,12 +14,8 @@ from typing import Any, Literal
 import gymnasium as gym
 import numpy as np
 
-from sim.physics.car import DEEPRACER_CAR
-from sim.tracks.geometry import FloatArray
-
-MAX_STEERING = DEEPRACER_CAR.max_steering_deg
-MIN_SPEED = DEEPRACER_CAR.min_speed
-MAX_SPEED = DEEPRACER_CAR.max_speed
+from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
+from sim.foundation.arrays import FloatArray
 
 
 class ActionSpaceError(ValueError):

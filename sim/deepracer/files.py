@@ -37,10 +37,9 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from sim.action_space import ActionSpace, ActionSpaceError, parse_action_space
+from sim.deepracer.action_space import ActionSpace, ActionSpaceError, parse_action_space
+from sim.deepracer.vocabulary import EpisodeStatus, SensorError, is_physics, normalise_sensors
 from sim.foundation.atomic import write_text_atomic
-from sim.physics.simulation import EpisodeStatus
-from sim.sensors.observations import SensorError, normalise_sensors
 
 MODEL_METADATA = "model_metadata.json"
 HYPERPARAMETERS = "hyperparameters.json"
@@ -662,8 +661,6 @@ def read_evaluation_physics(path: Path) -> str | None:
 
 
 def parse_evaluation_physics(text: str, where: str) -> str | None:
-    from sim.race.physics import is_physics
-
     physics = parse_json_object(text, where).get("physics")
     if physics is None:
         return None
