@@ -55,6 +55,7 @@ from sim.foundation.remedies import Fix, Note
 from sim.garage.deepracer_import import BUNDLE_SUFFIX, ImportResult
 from sim.garage.folder import (
     POLICY_FILE,
+    TRAINING_SUMMARY_FILE,
     ModelError,
     ModelFolder,
     check_model_name,
@@ -63,12 +64,7 @@ from sim.garage.folder import (
     write_export,
 )
 from sim.garage.options import DEFAULT_REWARD, DEFAULT_TRACK
-from sim.garage.summary import (
-    TRAINING_SUMMARY_FILE,
-    read_summary_text,
-    summary_text,
-    training_summary,
-)
+from sim.garage.summary import read_summary_text, summary_text, training_summary
 
 BUNDLE_FORMAT = "racer-tui-bundle"
 BUNDLE_VERSION = 1

@@ -70,14 +70,14 @@ from sim.foundation.ids import canonical_json
 from sim.foundation.names import NAME_RULE, is_valid_name
 from sim.foundation.remedies import Fix, RemedyError, echoed
 from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
+from sim.realworld.settings import CameraRandomisation, read_camera_randomisation
 from sim.tracks.track import Track, TrackError
 
 if TYPE_CHECKING:
-    from sim.env import EnvConfig
-    from sim.objects.settings import RaceSettings
     from sim.reward.function import RewardFunction
 
 MODELS_DIR = "models"
+TRAINING_SUMMARY_FILE = "training-summary.json"  # a bundle's training, kept when installed
 POLICY_FILE = "policy.safetensors"
 # An imported DeepRacer car archive, kept whole (sim.car_export reads it).
 CAR_ARCHIVE_FILE = "car-model.tar.gz"
@@ -267,46 +267,13 @@ class ModelFolder:
                 fix=Fix.CHOOSE_TRACK if error.fix is not None else None,
             ) from None
 
-    def env_config(self) -> EnvConfig:
-        """Track, action space, sensors and reward function: what training and evaluation run,
-        with training_params.yaml's start position and driving direction settings."""
-        from sim.env import EnvConfig
-        from sim.physics.simulation import EpisodeRules
-
-        metadata = self.metadata()
-        params = self.training_params()
-        race = self._race(params)
-        return EnvConfig(
-            track=self.track(),
-            action_space=metadata.action_space,
-            sensors=metadata.sensors,
-            reward=self.reward_function(),
-            rules=EpisodeRules(
-                change_start=params.change_start_position,
-                alternate_direction=params.alternate_driving_direction,
-            ),
-            is_reversed=params.reverse_direction,
-            race=race,
-        )
-
-    def _race(self, params: TrainingParams) -> RaceSettings | None:
-        """An object-avoidance model's boxes or a head-to-bot model's bot cars (None for a
-        time trial); a model whose sensors cannot see them is refused in one sentence."""
-        from sim.objects.reading import race_settings
-        from sim.objects.settings import RaceType
-
+    def camera_randomisation(self) -> CameraRandomisation:
+        """The camera randomisation its training params ask for (off without keys); a bad
+        key is a ModelError naming it."""
         try:
-            settings = race_settings(params, str(self.training_params_file))
+            return read_camera_randomisation(self.training_params(), str(self.training_params_file))
         except DeepRacerFileError as error:
             raise ModelError(str(error)) from None
-        if settings.race_type is RaceType.TIME_TRIAL:
-            return None
-        from sim.garage.options import blind_to_objects
-
-        blind = blind_to_objects(settings.race_type, self.metadata().sensors)
-        if blind is not None:
-            raise ModelError(f"{self.name} races {settings.race_type.words}, but {blind}")
-        return settings
 
     # --- metrics -------------------------------------------------------------------------
 
@@ -424,8 +391,6 @@ class ModelFolder:
         return str(physics) if is_physics(physics) else BEFORE_VERSIONING
 
     def _kept_summary_physics(self) -> object:
-        from sim.garage.summary import TRAINING_SUMMARY_FILE
-
         kept = self.path / TRAINING_SUMMARY_FILE
         try:
             if kept.stat().st_size > MAX_TRAINING_STATE_BYTES:

@@ -35,11 +35,7 @@ from sim.deepracer.vocabulary import (
     normalise_sensors,
 )
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, create_model
-from sim.realworld.settings import (
-    CameraRandomisation,
-    camera_randomisation_keys,
-    model_camera_randomisation,
-)
+from sim.realworld.settings import CameraRandomisation, camera_randomisation_keys
 from sim.tracks.catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
 from sim.tracks.track import TrackError
 
@@ -222,7 +218,7 @@ def spec_of(folder: ModelFolder) -> ModelSpec:
         max_minutes=params.max_minutes,
         race_type=params.race_type,
         race_keys={key: value for key, value in params.extra.items() if key in RACE_KEYS},
-        camera_randomisation=model_camera_randomisation(params, str(folder.training_params_file)),
+        camera_randomisation=folder.camera_randomisation(),
     )
 
 

@@ -14,9 +14,8 @@ from statistics import fmean
 from typing import Any
 
 from sim.deepracer.files import DeepRacerFileError, parse_json_object
-from sim.garage.folder import ModelError, ModelFolder
+from sim.garage.folder import TRAINING_SUMMARY_FILE, ModelError, ModelFolder
 
-TRAINING_SUMMARY_FILE = "training-summary.json"
 RECENT_EPISODES = 20
 MAX_SUMMARY_BYTES = 64_000
 MAX_SUMMARY_KEYS = 40

@@ -13,7 +13,6 @@ drawn afresh within bounds, so its policy cannot lean on one exact picture.
   rendered frames.
 * `render`: `PerturbedCamera`, which renders each car through its own perturbation (the
   pose through the camera's geometry) for `sim.sensors.observations.Observer`.
-* `training`: the trainer's env config with the model's setting (`training_config`).
 * `driver`: a trained policy driving through a chosen perturbation (the sim-to-real
   benchmark's evaluations); torch is imported only when it runs.
 

@@ -138,16 +138,6 @@ def read_camera_randomisation(
     return CameraRandomisation(**values)
 
 
-def model_camera_randomisation(params: TrainingParams, where: str) -> CameraRandomisation:
-    """The camera randomisation stored in a model's training params (off without keys)."""
-    from sim.garage.folder import ModelError  # the garage's error, for the garage's callers
-
-    try:
-        return read_camera_randomisation(params, where)
-    except DeepRacerFileError as error:
-        raise ModelError(str(error)) from None
-
-
 def parse_camera_randomisation(text: str) -> CameraRandomisation:
     """A racer's words for a setting, as a command-line option takes them:
 

@@ -164,7 +164,7 @@ def _serve(connection: Connection, batch: BatchedDeepRacer, recorder: StepRecord
 def _build_part(
     connection: Connection, setup: PartSetup
 ) -> tuple[BatchedDeepRacer, StepRecorder | None]:
-    from sim.realworld.training import folder_training_config
+    from sim.training.config import training_env_config
 
     folder = ModelFolder(Path(setup.folder))
     if setup.reward_seconds is not None:
@@ -177,7 +177,7 @@ def _build_part(
         )
     # What the reward imports is imported first: its load and first call are timed.
     reward_sandbox.preimport(folder.reward_source())
-    config = folder_training_config(folder)
+    config = training_env_config(folder)
     part = setup.part
     batch = BatchedDeepRacer(
         config, part.cars, setup.seed, first_car=part.first_car, fleet_cars=setup.fleet_cars

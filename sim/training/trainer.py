@@ -33,7 +33,6 @@ from sim.foundation.atomic import write_text_atomic
 from sim.garage.folder import ModelError, ModelFolder
 from sim.physics.simulation import reversed_track
 from sim.race.physics import CURRENT as CURRENT_PHYSICS
-from sim.realworld.training import folder_training_config
 from sim.reward import limit as reward_limit
 from sim.reward import sandbox as reward_sandbox
 from sim.sensors.observations import SensorOptions
@@ -41,6 +40,7 @@ from sim.tracks.track import Track
 from sim.training import events
 from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
+from sim.training.config import training_env_config
 from sim.training.errors import describe_failure, failure_remedy
 from sim.training.evaluation import EvaluationReport, run_trials
 from sim.training.fleet_parts import PartError, usable_cores
@@ -137,7 +137,7 @@ class Trainer:
             self.settings = PPOSettings.from_hyperparameters(self.hyperparameters)
         except ValueError as error:
             raise ModelError(f"{folder.hyperparameters_file}: {error}") from None
-        self.config = folder_training_config(folder)
+        self.config = training_env_config(folder)
         self.processes = self.options.processes
         if self.processes < 1:
             raise ModelError(f"a training needs at least 1 process, not {self.processes}.")

@@ -10,6 +10,7 @@ import pytest
 
 from racer_tui.cli import main
 from sim.garage.folder import models_dir, open_model
+from sim.training.config import model_env_config
 from tests.sim.garage.helpers import add_evaluation, add_policy, write_training_state
 from tests.test_architecture import _import_report
 
@@ -228,7 +229,7 @@ def test_a_model_for_object_avoidance_is_made_with_deepracers_keys(
     assert params.extra["OBSTACLE_TYPE"] == "box_obstacle"
     code, out, _ = run_cli(capsys, "model", "show", "dodger")
     assert "object avoidance, 4 boxes (random)" in out
-    assert open_model("dodger").env_config().race is not None  # it trains among them
+    assert model_env_config(open_model("dodger")).race is not None  # it trains among them
     code, _, _ = run_cli(
         capsys, "model", "new", "chaser", "--sensor", "lidar", "--bots", "2", "--bot-lane-change"
     )

@@ -28,6 +28,7 @@ from sim.garage.folder import (
 from sim.garage.options import default_model_spec, new_model
 from sim.reward.function import RewardFunctionError
 from sim.tracks.catalog import resolve_track
+from sim.training.config import model_env_config
 from tests.sim.garage.helpers import add_evaluation, add_policy, write_training_state
 
 
@@ -71,7 +72,7 @@ def test_the_folder_knows_where_the_trainer_writes(model: ModelFolder) -> None:
 
 
 def test_env_config_is_what_training_runs(model: ModelFolder) -> None:
-    config = model.env_config()
+    config = model_env_config(model)
     assert config.track.name == "reinvent_base"
     assert config.sensors == ("vector",)
     assert config.action_space == model.metadata().action_space

@@ -12,6 +12,7 @@ from sim.deepracer.files import write_training_params
 from sim.env import BatchedDeepRacer
 from sim.garage.folder import ModelError, ModelFolder
 from sim.garage.options import new_model
+from sim.training.config import model_env_config
 
 
 def with_race(folder: ModelFolder, race_type: str, **keys: object) -> None:
@@ -23,7 +24,7 @@ def with_race(folder: ModelFolder, race_type: str, **keys: object) -> None:
 def test_an_object_avoidance_model_trains_among_its_boxes() -> None:
     folder = new_model("dodger", sensors=["lidar"], reward="object_avoidance")
     with_race(folder, "OBJECT_AVOIDANCE", NUMBER_OF_OBSTACLES=3, RANDOMIZE_OBSTACLE_LOCATIONS=True)
-    config = folder.env_config()
+    config = model_env_config(folder)
     assert config.race is not None and config.race.obstacles.boxes == 3
     env = BatchedDeepRacer(config, 4)
     env.reset()
@@ -38,13 +39,13 @@ def test_an_object_avoidance_model_trains_among_its_boxes() -> None:
 
 def test_a_time_trial_model_trains_without_boxes() -> None:
     folder = new_model("plain")
-    assert folder.env_config().race is None
+    assert model_env_config(folder).race is None
 
 
 def test_a_head_to_bot_model_trains_among_its_bots_and_a_blind_one_is_refused() -> None:
     folder = new_model("chaser", sensors=["lidar"])
     with_race(folder, "HEAD_TO_BOT", NUMBER_OF_BOT_CARS=2, BOT_CAR_SPEED=0.5)
-    config = folder.env_config()
+    config = model_env_config(folder)
     assert config.race is not None and config.race.bots.count == 2
     env = BatchedDeepRacer(config, 2)
     env.reset()
@@ -62,10 +63,10 @@ def test_a_head_to_bot_model_trains_among_its_bots_and_a_blind_one_is_refused() 
     blind = new_model("blind", sensors=["vector"])
     with_race(blind, "HEAD_TO_BOT", NUMBER_OF_BOT_CARS=2)
     with pytest.raises(ModelError, match="needs a camera or a lidar"):
-        blind.env_config()
+        model_env_config(blind)
     with_race(folder, "OBJECT_AVOIDANCE", NUMBER_OF_OBSTACLES=99)
     with pytest.raises(ModelError, match="NUMBER_OF_OBSTACLES must be a whole number from 0"):
-        folder.env_config()
+        model_env_config(folder)
 
 
 def test_training_keeps_where_the_bots_stood_at_its_last_traced_row() -> None:
@@ -77,7 +78,7 @@ def test_training_keeps_where_the_bots_stood_at_its_last_traced_row() -> None:
 
     folder = new_model("chaser", sensors=["lidar"])
     with_race(folder, "HEAD_TO_BOT", NUMBER_OF_BOT_CARS=3, BOT_CAR_SPEED=0.5)
-    env = BatchedDeepRacer(folder.env_config(), 2)
+    env = BatchedDeepRacer(model_env_config(folder), 2)
     logbook = Logbook(
         folder.path,
         cars=2,

@@ -18,7 +18,7 @@ from sim.realworld.settings import (
     read_camera_randomisation,
     with_camera_randomisation_keys,
 )
-from sim.realworld.training import training_config
+from sim.training.config import model_env_config, training_config
 from sim.training.trainer import RunOptions, Trainer
 
 CAMERA = ["FRONT_FACING_CAMERA"]
@@ -45,7 +45,7 @@ def test_settings_round_trip_through_a_model_folders_training_params() -> None:
     # The trainer's environments get it; the folder's own env config (evaluations) not.
     trainer = Trainer(folder, lambda event: None, lambda: True, RunOptions(cars=2))
     assert trainer.config.camera_randomisation == chosen
-    assert folder.env_config().camera_randomisation == CameraRandomisation.OFF
+    assert model_env_config(folder).camera_randomisation == CameraRandomisation.OFF
 
 
 def test_a_model_without_the_keys_reads_as_off_and_writes_none() -> None:
@@ -108,7 +108,7 @@ def test_a_bad_stored_value_stops_training_with_a_model_error() -> None:
         {**yaml.safe_load(params.to_yaml()), "CAMERA_RANDOMISATION_NOISE": 9}, "x"
     )
     with pytest.raises(ModelError, match="CAMERA_RANDOMISATION_NOISE must be a number"):
-        training_config(folder.env_config(), bad, "training_params.yaml")
+        training_config(model_env_config(folder), bad, "training_params.yaml")
 
 
 def test_strengths_are_checked() -> None:

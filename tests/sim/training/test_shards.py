@@ -12,9 +12,9 @@ import pytest
 
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
-from sim.realworld.training import folder_training_config
 from sim.reward.function import RewardFunctionError
 from sim.training import events
+from sim.training.config import training_env_config
 from sim.training.errors import describe_failure
 from sim.training.fleet_parts import FleetPart, PartError, split_fleet
 from sim.training.launcher import TrainingProcess
@@ -58,13 +58,13 @@ def test_a_fleet_split_over_three_processes_steps_and_logs_as_the_whole_fleet(
 ) -> None:
     whole_model = new_model("whole", sensors=[sensor])
     split_model = new_model("split", sensors=[sensor])
-    config = folder_training_config(whole_model)
+    config = training_env_config(whole_model)
     whole = BatchedVecEnv(config, CARS)
     whole_log = _logbook(whole_model, whole)
     whole.batch.watcher = whole_log
     split_log = _logbook(split_model, whole)
     split = ShardedVecEnv(
-        folder_training_config(split_model), split_model.path, CARS, 3, on_step=split_log.add_step
+        training_env_config(split_model), split_model.path, CARS, 3, on_step=split_log.add_step
     )
     try:
         assert split.processes == 3 and len(split.pids) == 2
@@ -102,7 +102,7 @@ def test_a_fleet_split_over_three_processes_steps_and_logs_as_the_whole_fleet(
 
 def test_a_simulation_process_that_fails_raises_its_own_error_in_the_trainer() -> None:
     model = new_model("broken")
-    good_config = folder_training_config(model)  # read before the file breaks
+    good_config = training_env_config(model)  # read before the file breaks
     model.reward_file.write_text(
         "def reward_function(params):\n    return params['no such key']\n", encoding="utf-8"
     )
@@ -174,7 +174,7 @@ def test_killing_the_trainer_ends_its_simulation_processes(model: ModelFolder) -
 
 def test_a_simulation_process_that_dies_is_one_sentence_in_the_trainer() -> None:
     model = new_model("killed")
-    split = ShardedVecEnv(folder_training_config(model), model.path, 4, 2)
+    split = ShardedVecEnv(training_env_config(model), model.path, 4, 2)
     try:
         split.reset()
         psutil.Process(split.pids[0]).kill()
@@ -187,7 +187,7 @@ def test_a_simulation_process_that_dies_is_one_sentence_in_the_trainer() -> None
 
 def test_a_reward_call_stuck_in_a_simulation_process_is_the_racers_sentence() -> None:
     model = new_model("stuck")
-    good_config = folder_training_config(model)
+    good_config = training_env_config(model)
     model.reward_file.write_text(
         "import time\n"
         "def reward_function(params):\n"
@@ -220,7 +220,7 @@ def test_what_a_reward_function_prints_in_a_simulation_process_stays_out_of_stdo
     capfd: pytest.CaptureFixture[str],
 ) -> None:
     model = new_model("chatty")
-    good_config = folder_training_config(model)
+    good_config = training_env_config(model)
     model.reward_file.write_text(
         "def reward_function(params):\n    print('REWARD-CHATTER')\n    return 1.0\n",
         encoding="utf-8",

@@ -11,6 +11,7 @@ from sim.deepracer.files import DeepRacerFileError, parse_training_params, write
 from sim.env import BatchedDeepRacer
 from sim.garage.folder import ModelFolder
 from sim.training import events
+from sim.training.config import model_env_config
 from sim.training.trainer import RunOptions, Trainer
 from tests.sim.test_reward_per_car import STATEFUL
 
@@ -48,7 +49,7 @@ def test_training_params_choose_start_positions_and_directions(model: ModelFolde
         alternate_driving_direction=True,
         reverse_direction=True,
     )
-    config = model.env_config()
+    config = model_env_config(model)
     assert config.is_reversed
     assert not config.rules.change_start and config.rules.alternate_direction
     env = BatchedDeepRacer(config, 2)
