@@ -41,7 +41,7 @@ def _user_errors() -> tuple[type[Exception], ...]:
     # Imported only when an error is being handled: importing them costs a simulator.
     from sim.deepracer.action_space import ActionSpaceError
     from sim.deepracer.vocabulary import SensorError
-    from sim.reward.function import RewardFunctionError
+    from sim.reward.errors import RewardFunctionError
     from sim.tracks.errors import TrackError
 
     errors: list[type[Exception]] = [

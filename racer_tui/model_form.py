@@ -57,7 +57,8 @@ from sim.realworld.settings import (
     settings_text,
     with_camera_randomisation_keys,
 )
-from sim.reward.function import RewardFunctionError, check_reward_code
+from sim.reward.errors import RewardFunctionError
+from sim.reward.function import check_reward_code
 from sim.tracks.track import TrackError
 
 REWARD_FILE_NAME = "reward_function.py"

@@ -23,10 +23,11 @@ from rich.text import Text
 from racer_tui.output import print_json, print_table
 from racer_tui.reward_lap_text import lap_chart
 from racer_tui.reward_map_text import map_text
+from sim.coach.reward_line import template_source
 from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.vocabulary import MAX_SPEED
 from sim.foundation.atomic import write_bytes_atomic
-from sim.reward.function import TEMPLATES, read_reward_file, template_source
+from sim.reward.function import read_reward_file
 from sim.reward.lap import DEFAULT_SPEEDS, LINES, REFERENCE_LINE, line_verdict, verdict
 from sim.reward.map import (
     DEFAULT_SPACING,
@@ -36,6 +37,7 @@ from sim.reward.map import (
 )
 from sim.reward.probe import check_reward_source, lap_pay_of_source, map_reward_source
 from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb
+from sim.reward.template_files import TEMPLATES
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 
 NAMES = ("reward",)

@@ -31,8 +31,12 @@ from sim.physics.car import DEEPRACER_CAR, CarSpec
 from sim.physics.simulation import EpisodeRules, TrackSimulation
 from sim.realworld.perturbation import draw_perturbation
 from sim.realworld.settings import CameraRandomisation
+from sim.reward.function import load_reward_source
+from sim.reward.template_files import shipped_template
 from sim.sensors.observations import Observer, SensorOptions
 from sim.tracks.track import Track
+
+DEFAULT_TEMPLATE = "follow_center_line"  # DeepRacer's default reward function
 
 ENV_ID = "RacerTui/DeepRacer-v0"
 RewardCallable = Callable[[Mapping[str, Any]], float]
@@ -90,9 +94,7 @@ class EnvConfig:
     def reward_function(self) -> RewardCallable:
         if self.reward is not None:
             return self.reward
-        from sim.reward.function import load_template
-
-        return load_template("follow_center_line")
+        return load_reward_source(shipped_template(DEFAULT_TEMPLATE), DEFAULT_TEMPLATE)
 
     def reward_functions(self, n_cars: int) -> list[RewardCallable]:
         """One reward function per car, each in a module of its own when it was loaded from

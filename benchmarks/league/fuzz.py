@@ -318,7 +318,8 @@ def _reward_case(scratch: Scratch) -> bool:
     from decimal import Decimal
     from fractions import Fraction
 
-    from sim.reward.function import RewardFunctionError, load_reward_source
+    from sim.reward.errors import RewardFunctionError
+    from sim.reward.function import load_reward_source
 
     rng = scratch.rng
     function = load_reward_source(_REWARD_SOURCE, "fuzz_reward.py")

@@ -12,9 +12,10 @@ import argparse
 import json
 import time
 
-from sim.reward.function import TEMPLATES, load_template, template_source
+from sim.coach.reward_line import load_template, template_source
 from sim.reward.map import MapOptions, compute_map
 from sim.reward.probe import map_reward_source
+from sim.reward.template_files import TEMPLATES
 from sim.tracks.catalog import resolve_track
 
 TARGET_SECONDS = 2.0

@@ -23,7 +23,7 @@ from racer_tui.app_words import with_app_fix
 from racer_tui.jobs import Job, JobState, sentence
 from racer_tui.widgets.job_line import JobLine
 from sim.foundation.remedies import RemedyError
-from sim.reward.function import RewardFunctionError
+from sim.reward.errors import RewardFunctionError
 
 # The libraries' error types are ValueErrors whose text is written for the racer.
 USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, RewardFunctionError)

@@ -66,13 +66,15 @@ from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.table_fill import FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
 from racer_tui.widgets.track_map import TrackMap
+from sim.coach.reward_line import template_source
 from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder
 from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
-from sim.reward.function import TEMPLATES, RewardFunctionError, template_name, template_source
+from sim.reward.errors import RewardFunctionError
 from sim.reward.lap import LapPay, verdict
 from sim.reward.map import MapOptions, RewardMap
+from sim.reward.template_files import TEMPLATES, template_name
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track, TrackError
 

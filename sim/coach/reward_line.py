@@ -17,7 +17,15 @@ import numpy as np
 from sim.coach.limit_lap import LimitLap, limit_lap
 from sim.deepracer.action_space import ActionSpace
 from sim.physics.car import DEEPRACER_CAR, CarSpec
-from sim.reward.function import EMPTY_LINE
+from sim.reward.function import RewardFunction, load_reward_source
+from sim.reward.template_files import (
+    EMPTY_LINE,
+    RACING_LINE_TEMPLATE,
+    TEMPLATES,
+    shipped_template,
+    template_name,
+)
+from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 from sim.tracks.track import Track
 
 # Metres between the points written into a reward function: a scan of a lap's points runs on
@@ -74,7 +82,6 @@ def line_followed(
 ) -> str:
     """`source` with its line redrawn for track and actions `now`, when it is the racing_line
     template exactly as written for `was` (a line the racer changed is theirs, and kept)."""
-    from sim.reward.function import RACING_LINE_TEMPLATE, template_name, template_source
     from sim.tracks.track import TrackError
 
     if was == now or template_name(source) != RACING_LINE_TEMPLATE:
@@ -85,3 +92,17 @@ def line_followed(
         return template_source(RACING_LINE_TEMPLATE, *now)
     except TrackError:
         return source  # a track that no longer resolves: the function stays as it was
+
+
+def template_source(name: str, track: str | None = None, space: ActionSpace | None = None) -> str:
+    """The text of one of the reward templates (see `TEMPLATES`). The racing_line template
+    comes with the line of `track` (default: reinvent_base) within `space`'s actions."""
+    text = shipped_template(name)
+    if name != RACING_LINE_TEMPLATE:
+        return text
+    return with_track_line(text, resolve_track(track or DEFAULT_TRACK), space)
+
+
+def load_template(name: str) -> RewardFunction:
+    """Load one of AWS DeepRacer's sample reward functions, named like its file."""
+    return load_reward_source(template_source(name), TEMPLATES[name])

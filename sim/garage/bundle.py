@@ -483,7 +483,7 @@ def install_bundle_report(
     ever runs. The track is `track`, else the bundle's if this garage knows it, else the
     default track (said in the notes).
     """
-    from sim.reward.function import template_source
+    from sim.coach.reward_line import template_source
 
     bundle = read_bundle(path)
     chosen = name if name is not None else bundle.name

@@ -29,7 +29,7 @@ def import_car_archive(
 ) -> ImportResult:
     """A new garage model that drives with the car archive at `path`."""
     from sim.car_export.policy import CarPolicy  # runs the graph: torch, only now
-    from sim.reward.function import template_source
+    from sim.coach.reward_line import template_source
 
     source = Path(path).expanduser()
     try:

@@ -254,7 +254,8 @@ def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]
 
 
 def _reward_source(files: DeepRacerFiles, notes: list[str]) -> str:
-    from sim.reward.function import check_reward_code, read_reward_file, template_source
+    from sim.coach.reward_line import template_source
+    from sim.reward.function import check_reward_code, read_reward_file
 
     if files.reward_function is None:
         notes.append(

@@ -92,7 +92,7 @@ def default_action_space() -> ActionSpace:
 
 def default_model_spec() -> ModelSpec:
     """The model `racer-tui model new NAME` makes without options."""
-    from sim.reward.function import template_source
+    from sim.coach.reward_line import template_source
 
     return ModelSpec(
         track=DEFAULT_TRACK,
@@ -361,12 +361,9 @@ def reward_choice(
     """(source, origin) for a template name (racing_line with the line of `track` within
     `space`'s actions) or a reward function file, checked without running it (it runs when
     the racer trains or checks it)."""
-    from sim.reward.function import (
-        TEMPLATES,
-        check_reward_code,
-        read_reward_file,
-        template_source,
-    )
+    from sim.coach.reward_line import template_source
+    from sim.reward.function import check_reward_code, read_reward_file
+    from sim.reward.template_files import TEMPLATES
 
     if reward in TEMPLATES:
         return template_source(reward, track, space), reward

@@ -192,7 +192,7 @@ def folder_evaluation(folder: ModelFolder, file_name: str) -> tuple[EvaluationTr
 
 def reward_origin(folder: ModelFolder) -> str:
     """Which template the reward function is, or "custom"."""
-    from sim.reward.function import template_name
+    from sim.reward.template_files import template_name
 
     name = template_name(folder.reward_source())
     return "custom" if name is None else f"template {name}"

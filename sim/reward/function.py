@@ -14,18 +14,15 @@ same path as a racer's file.
 from __future__ import annotations
 
 import ast
-import functools
 import inspect
 import linecache
 import math
 import numbers
 import os
-import re
 import sys
 import time
 import types
 from collections.abc import Callable, Mapping
-from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -34,36 +31,18 @@ import numpy as np
 from sim.reward import guard as reward_guard
 from sim.reward import limit as reward_limit
 from sim.reward import sandbox as reward_sandbox
+from sim.reward.errors import FIX_ADVICE, RewardFunctionError
 from sim.reward.guard import ForbiddenInReward
 from sim.reward.limit import RewardTimeout
 
 if TYPE_CHECKING:  # gymnasium's import is not needed to load a reward function
-    from sim.deepracer.action_space import ActionSpace
+    pass
 
 # DeepRacer rejects rewards outside this range (and NaN or inf).
 MAX_ABS_REWARD = 1e5
 
-FIX_ADVICE = "fix the function and try again"
 RETURN_ADVICE = "make it return a number, for example `return float(reward)`"
 DEFINE_HINT = "`def reward_function(params):`"
-
-TEMPLATES: dict[str, str] = {
-    "follow_center_line": "follow_center_line.py",
-    "stay_inside_borders": "stay_inside_borders.py",
-    "prevent_zigzag": "prevent_zigzag.py",
-    "object_avoidance": "object_avoidance.py",
-    "racing_line": "racing_line.py",
-}
-# The template whose copy in a model holds the line of the model's track (sim.coach): the
-# shipped file's empty list is replaced by the comment and list `sim.coach.reward_line`
-# writes, matched exactly by `_WRITTEN_LINE` (a line of any other shape is the racer's).
-RACING_LINE_TEMPLATE = "racing_line"
-EMPTY_LINE = "RACING_LINE = []"
-_WRITTEN_LINE = re.compile(
-    r"^# The limit lap's line on [^\n]*\n(?:# [^\n]*\n)?"
-    r"RACING_LINE = \[\n(?:    \[[^\n]*\],\n)*\]$",
-    re.M,
-)
 
 # The racer's module gets its own name so `if __name__ == "__main__":` test code in their file
 # does not run, and it is never put in sys.modules so two loaded files cannot see each other.
@@ -72,32 +51,6 @@ _MODULE_NAME = "deepracer_reward_function"
 _MAX_DETAIL = 200
 
 RewardParams = Mapping[str, object]
-
-
-class RewardFunctionError(Exception):
-    """A reward function that cannot be loaded or run; `str()` is one sentence for the racer."""
-
-    def __init__(
-        self,
-        path: Path | str,
-        problem: str,
-        line: int | None = None,
-        advice: str = FIX_ADVICE,
-    ) -> None:
-        self.display = str(path)
-        self.path = Path(path)
-        self.problem = problem
-        self.line = line
-        self.advice = advice
-        super().__init__(str(self))
-
-    def __str__(self) -> str:
-        where = self.display if self.line is None else f"{self.display} line {self.line}"
-        return f"{where}: {self.problem}; {self.advice}."
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        # The training worker may hand the error across a process boundary.
-        return (type(self), (self.display, self.problem, self.line, self.advice))
 
 
 class RewardFunction:
@@ -353,52 +306,9 @@ def load_reward_source(source: str, name: str) -> RewardFunction:
     return _load(source, name, name)
 
 
-def template_source(name: str, track: str | None = None, space: ActionSpace | None = None) -> str:
-    """The text of one of the reward templates (see `TEMPLATES`). The racing_line template
-    comes with the line of `track` (default: reinvent_base) within `space`'s actions."""
-    try:
-        file_name = TEMPLATES[name]
-    except KeyError:
-        raise RewardFunctionError(
-            name,
-            "is not a reward function template",
-            advice=f"choose one of {', '.join(TEMPLATES)}",
-        ) from None
-    text = _template_text(file_name)
-    if name != RACING_LINE_TEMPLATE:
-        return text
-    from sim.coach.reward_line import with_track_line  # the coach's numpy and osqp, only here
-    from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
-
-    return with_track_line(text, resolve_track(track or DEFAULT_TRACK), space)
-
-
-@functools.cache
-def _template_text(file_name: str) -> str:
-    """A template file as shipped (read once: the garage compares every model's reward
-    function with all of them)."""
-    return resources.files("sim.reward.templates").joinpath(file_name).read_text(encoding="utf-8")
-
-
-def template_name(source: str) -> str | None:
-    """Which template `source` is, unchanged (racing_line with a line racer-tui wrote for
-    any track), or None."""
-    for name, file_name in TEMPLATES.items():
-        text = _template_text(file_name)
-        compared = source
-        if name == RACING_LINE_TEMPLATE:
-            compared = _WRITTEN_LINE.sub(EMPTY_LINE, source, count=1)
-        if compared == text:
-            return name
-    return None
-
-
-def load_template(name: str) -> RewardFunction:
-    """Load one of AWS DeepRacer's sample reward functions, named like its file."""
-    return load_reward_source(template_source(name), TEMPLATES[name])
-
-
 # --- loading -----------------------------------------------------------------------------
+
+
 def _rebuild(source: str, name: str, filename: str) -> RewardFunction:
     return _load(source, name, filename)
 

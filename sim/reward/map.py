@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 
 from sim.physics.simulation import TrackSimulation
-from sim.reward.function import RewardFunction, RewardFunctionError
+from sim.reward.errors import RewardFunctionError
+from sim.reward.function import RewardFunction
 from sim.tracks.track import Track
 
 DEFAULT_SPACING = 0.1  # metres

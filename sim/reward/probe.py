@@ -28,7 +28,8 @@ from typing import Any
 
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
-from sim.reward.function import RewardFunction, RewardFunctionError
+from sim.reward.errors import RewardFunctionError
+from sim.reward.function import RewardFunction
 from sim.reward.lap import LINES, LapPay
 from sim.reward.limit import DEFAULT_SECONDS
 from sim.reward.map import MapOptions, RewardMap

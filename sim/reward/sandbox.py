@@ -51,7 +51,7 @@ from sim.reward.guard import (
 )
 
 if TYPE_CHECKING:
-    from sim.reward.function import RewardFunctionError
+    from sim.reward.errors import RewardFunctionError
 
 DEFAULT_MEMORY_MB = 2048  # DeepRacer's reward code never needs more than a few MB
 MIN_MEMORY_MB = 16
@@ -332,7 +332,7 @@ def install_call_limit(
     names = {str(reward_file), os.path.abspath(reward_file)}  # as it may have been compiled
 
     def stuck(limit_seconds: float) -> None:
-        from sim.reward.function import RewardFunctionError
+        from sim.reward.errors import RewardFunctionError
 
         main = sys._current_frames().get(threading.main_thread().ident or 0)
         report(

@@ -14,7 +14,7 @@ def describe_failure(error: BaseException) -> str:
     sentence; anything else is a fault of racer-tui, said as such (the type helps a report)."""
     from sim.deepracer.files import DeepRacerFileError
     from sim.garage.folder import ModelError
-    from sim.reward.function import RewardFunctionError
+    from sim.reward.errors import RewardFunctionError
     from sim.tracks.errors import TrackError
     from sim.training.fleet_parts import PartError
 

@@ -222,7 +222,7 @@ def _train(
 ) -> int:
     from sim.deepracer.files import DeepRacerFileError
     from sim.garage.folder import ModelError, open_model
-    from sim.reward.function import RewardFunctionError
+    from sim.reward.errors import RewardFunctionError
     from sim.tracks.track import TrackError
     from sim.training.fleet_parts import default_processes
     from sim.training.policy import PolicyError

@@ -149,7 +149,8 @@ def test_restarted_cars_observe_what_a_fresh_observation_shows(sensors: tuple[st
 
 
 def test_reward_errors_reach_the_caller() -> None:
-    from sim.reward.function import RewardFunctionError, load_reward_source
+    from sim.reward.errors import RewardFunctionError
+    from sim.reward.function import load_reward_source
 
     bad = load_reward_source("def reward_function(params):\n    return params['nope']\n", "bad.py")
     env = make_env(reward=bad)

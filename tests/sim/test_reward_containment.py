@@ -16,7 +16,7 @@ import pytest
 
 from sim.reward import landlock
 from sim.reward import sandbox as reward_sandbox
-from sim.reward.function import RewardFunctionError
+from sim.reward.errors import RewardFunctionError
 from sim.reward.probe import check_reward_source
 from tests.leftover_processes import processes_with
 
@@ -184,7 +184,8 @@ import subprocess
 import sys
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
-from sim.reward.function import RewardFunctionError, load_reward_function
+from sim.reward.function import load_reward_function
+from sim.reward.errors import RewardFunctionError
 reward_sandbox.install_call_limit(5.0, sys.argv[1], lambda error: None)
 reward_guard.guard_reward_calls()
 try:

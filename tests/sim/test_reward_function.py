@@ -13,16 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.reward.function import (
-    TEMPLATES,
-    RewardFunction,
-    RewardFunctionError,
-    load_reward_function,
-    load_reward_source,
-    load_template,
-    template_source,
-)
+from sim.coach.reward_line import load_template, template_source
+from sim.reward.errors import RewardFunctionError
+from sim.reward.function import RewardFunction, load_reward_function, load_reward_source
 from sim.reward.sample_params import PARAM_KEYS, TRACK_WIDTH, sample_params
+from sim.reward.template_files import TEMPLATES
 
 LANE = TRACK_WIDTH / 4
 

@@ -8,8 +8,9 @@ import json
 import pytest
 
 from racer_tui.cli import main
+from sim.coach.reward_line import load_template
 from sim.deepracer.action_space import parse_action_space
-from sim.reward.function import load_reward_source, load_template
+from sim.reward.function import load_reward_source
 from sim.reward.lap import CENTRE_LINE, LINES, REFERENCE_LINE, lap_rewards, line_verdict, verdict
 from sim.tracks.catalog import resolve_track
 

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from racer_tui.cli import main
-from sim.reward.function import load_reward_source, load_template
+from sim.coach.reward_line import load_template
+from sim.reward.function import load_reward_source
 from sim.reward.map import (
     BORDER_COLOUR,
     CENTRE_COLOUR,

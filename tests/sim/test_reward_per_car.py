@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from sim.env import BatchedDeepRacer, DeepRacerEnv, EnvConfig
-from sim.reward.function import RewardFunctionError, load_reward_function
+from sim.reward.errors import RewardFunctionError
+from sim.reward.function import load_reward_function
 from tests.sim.shapes import rectangle_track
 
 # Module-level state, as many community reward functions keep it: the previous call's steps.

@@ -9,7 +9,9 @@ from typing import Any
 
 import pytest
 
-from sim.reward.function import RewardFunctionError, check_reward_code, template_source
+from sim.coach.reward_line import template_source
+from sim.reward.errors import RewardFunctionError
+from sim.reward.function import check_reward_code
 from sim.reward.probe import check_reward_source
 
 LIMIT = 0.5  # seconds per call in these tests

@@ -10,9 +10,10 @@ from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.garage import GarageScreen
 from racer_tui.screens.model_editor import ModelEditorScreen
 from racer_tui.widgets.action_space_plot import ActionSpacePlot
+from sim.coach.reward_line import template_source
 from sim.garage.folder import list_models, open_model
 from sim.garage.options import new_model
-from sim.reward.function import template_name, template_source
+from sim.reward.template_files import template_name
 from tests.racer_tui.screens.tui_helpers import (
     Notifications,
     painted,

@@ -11,18 +11,15 @@ import pytest
 
 from sim.coach.limit_lap import limit_lap
 from sim.coach.line_actions import LineActionsError, actions_from_line
-from sim.coach.reward_line import REWARD_SPACING, command_rows
+from sim.coach.reward_line import REWARD_SPACING, command_rows, template_source
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.folder import ModelError, open_model
 from sim.garage.options import model_spec, new_model
 from sim.garage.overview import reward_origin
-from sim.reward.function import (
-    RewardFunctionError,
-    load_reward_source,
-    template_name,
-    template_source,
-)
+from sim.reward.errors import RewardFunctionError
+from sim.reward.function import load_reward_source
 from sim.reward.sample_params import sample_params
+from sim.reward.template_files import template_name
 from sim.tracks.catalog import resolve_track
 
 TRACK = "reinvent_base"

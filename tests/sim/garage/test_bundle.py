@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from sim.coach.reward_line import template_source
 from sim.deepracer.files import parse_model_metadata
 from sim.garage.bundle import (
     BUNDLE_REWARD_FILE,
@@ -24,7 +25,6 @@ from sim.garage.bundle import (
 from sim.garage.deepracer_import import import_model
 from sim.garage.folder import ModelError, ModelFolder, model_content_hash, models_dir
 from sim.garage.options import new_model
-from sim.reward.function import template_source
 from tests.sim.garage.helpers import policy_bytes, write_training_state
 
 CUSTOM_REWARD = "def reward_function(params):\n    return float(params['progress'])\n"

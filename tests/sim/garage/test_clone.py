@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from sim.coach.reward_line import template_source
 from sim.garage.clone import clone_model
 from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
-from sim.reward.function import template_source
 
 
 def test_a_clone_carries_the_trained_policy(trained_model: ModelFolder) -> None:

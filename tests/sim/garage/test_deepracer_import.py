@@ -11,6 +11,7 @@ import pytest
 from deepracer.logs import AnalysisUtils, DeepRacerLog
 from deepracer.logs.metrics import TrainingMetrics
 
+from sim.coach.reward_line import template_source
 from sim.deepracer.files import read_evaluation_metrics, read_training_metrics
 from sim.foundation.remedies import Fix, Note
 from sim.garage.bundle import BundleError
@@ -18,7 +19,7 @@ from sim.garage.deepracer_import import import_deepracer_folder, import_model
 from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
 from sim.garage.options import DEFAULT_TRACK
 from sim.garage.summary import training_summary
-from sim.reward.function import RewardFunctionError, template_source
+from sim.reward.errors import RewardFunctionError
 
 
 @pytest.fixture

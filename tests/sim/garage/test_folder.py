@@ -26,7 +26,7 @@ from sim.garage.folder import (
     open_model,
 )
 from sim.garage.options import default_model_spec, new_model
-from sim.reward.function import RewardFunctionError
+from sim.reward.errors import RewardFunctionError
 from sim.tracks.catalog import resolve_track
 from sim.training.config import model_env_config
 from tests.sim.garage.helpers import add_evaluation, add_policy, write_training_state

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from sim.coach.reward_line import template_source
 from sim.deepracer.files import default_hyperparameters
 from sim.garage.folder import ModelError, models_dir
 from sim.garage.options import (
@@ -19,7 +20,7 @@ from sim.garage.options import (
     parse_range,
     read_actions_file,
 )
-from sim.reward.function import RewardFunctionError, template_source
+from sim.reward.errors import RewardFunctionError
 
 
 def test_the_default_model() -> None:

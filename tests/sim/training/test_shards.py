@@ -12,7 +12,7 @@ import pytest
 
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
-from sim.reward.function import RewardFunctionError
+from sim.reward.errors import RewardFunctionError
 from sim.training import events
 from sim.training.config import training_env_config
 from sim.training.errors import describe_failure
