@@ -338,8 +338,8 @@ def model_spec(model: str) -> str:
     """What an entrant races, checked now rather than when the heat starts: `reference`, a
     garage model name, the absolute path of a bundle or model folder (so `night run`
     finds it from any working directory), or a physical car (`league.timekeeper.car`)."""
-    from sim.garage.deepracer_import import BUNDLE_SUFFIX
     from sim.garage.folder import ModelError, models_dir, open_model
+    from sim.garage.imported import BUNDLE_SUFFIX
     from sim.race.driver import REFERENCE_NAME
 
     spec = model.strip()

@@ -527,7 +527,7 @@ def _delete(name: str, yes: bool) -> int:
 
 
 def _import(args: argparse.Namespace) -> int:
-    from sim.garage.deepracer_import import import_model
+    from sim.garage.importing import import_model
 
     result = import_model(
         Path(args.path), name=args.name, track=args.track, untrained=args.untrained

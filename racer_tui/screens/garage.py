@@ -46,9 +46,10 @@ from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.files import locate_files
 from sim.garage.bundle import bundle_path, export_bundle
 from sim.garage.clone import clone_model
-from sim.garage.deepracer_import import BUNDLE_SUFFIX, import_model
 from sim.garage.deepracer_notes import export_notes
 from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
+from sim.garage.imported import BUNDLE_SUFFIX
+from sim.garage.importing import import_model
 from sim.garage.options import spec_of
 from sim.garage.overview import listing_signature, model_details, model_row
 from sim.race.driver import Driver

@@ -52,7 +52,6 @@ from sim.deepracer.files import (
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.names import is_valid_name
 from sim.foundation.remedies import Fix, Note
-from sim.garage.deepracer_import import BUNDLE_SUFFIX, ImportResult
 from sim.garage.folder import (
     POLICY_FILE,
     TRAINING_SUMMARY_FILE,
@@ -63,6 +62,7 @@ from sim.garage.folder import (
     model_content_hash,
     write_export,
 )
+from sim.garage.imported import BUNDLE_SUFFIX, ImportResult
 from sim.garage.options import DEFAULT_REWARD, DEFAULT_TRACK
 from sim.garage.summary import read_summary_text, summary_text, training_summary
 

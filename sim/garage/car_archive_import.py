@@ -19,8 +19,8 @@ from sim.car_export.archive import read_car_archive
 from sim.car_export.errors import CarModelError
 from sim.deepracer.files import default_hyperparameters
 from sim.foundation.remedies import Fix, Note
-from sim.garage.deepracer_import import ImportResult
 from sim.garage.folder import ModelError, ModelFolder, check_model_name, create_model
+from sim.garage.imported import ImportResult
 from sim.garage.options import DEFAULT_REWARD, DEFAULT_TRACK
 
 

@@ -24,7 +24,6 @@ from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
-from sim.car_export.file_names import is_car_archive_name
 from sim.deepracer.files import (
     MAX_METRICS_BYTES,
     SIM_TRACE_COLUMNS,
@@ -48,7 +47,8 @@ from sim.deepracer.files import (
     write_training_metrics,
 )
 from sim.foundation.atomic import write_bytes_atomic
-from sim.foundation.remedies import Fix, Note, echoed_path
+from sim.foundation.remedies import Fix, Note
+from sim.garage.bundle import MEMBER_LIMITS, check_safetensors
 from sim.garage.folder import (
     POLICY_FILE,
     ModelError,
@@ -56,48 +56,14 @@ from sim.garage.folder import (
     check_model_name,
     create_model,
 )
+from sim.garage.imported import ImportResult
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
 from sim.race.physics import DEEPRACER as DEEPRACER_PHYSICS
 
 if TYPE_CHECKING:
     from sim.garage.frozen_graph import FolderWeights
 
-BUNDLE_SUFFIX = ".racer-bundle"
 _T = TypeVar("_T")
-
-
-@dataclass(frozen=True)
-class ImportResult:
-    """The new model and what the racer should know about how it was filled in."""
-
-    folder: ModelFolder
-    notes: tuple[str, ...] = ()
-
-
-def import_model(
-    path: Path, name: str | None = None, track: str | None = None, *, untrained: bool = False
-) -> ImportResult:
-    """A DeepRacer model folder, a `.racer-bundle` file or a DeepRacer car archive
-    (`.tar.gz`), as a new garage model."""
-    source = Path(path).expanduser()
-    try:
-        is_file, is_dir = source.is_file(), source.is_dir()
-    except OSError:  # a name no file can have (too long, say): there is none
-        is_file = is_dir = False
-    if is_file and is_car_archive_name(source):
-        from sim.garage.car_archive_import import import_car_archive
-
-        return import_car_archive(source, name=name, track=track)
-    if is_file:
-        from sim.garage.bundle import install_bundle_report
-
-        return install_bundle_report(source, name=name, track=track)
-    if is_dir:
-        return import_deepracer_folder(source, name=name, track=track, untrained=untrained)
-    raise ModelError(
-        f"{echoed_path(source)} does not exist; give a DeepRacer model folder, a "
-        f"{BUNDLE_SUFFIX} file or a car archive (.tar.gz)."
-    )
 
 
 def import_deepracer_folder(
@@ -197,8 +163,6 @@ def _deepracer_weights(root: Path, files: DeepRacerFiles, notes: list[str]) -> F
 
 def _racer_tui_policy(root: Path) -> bytes | None:
     """The trained weights of a copied racer-tui model folder, checked to be plain tensors."""
-    from sim.garage.bundle import MEMBER_LIMITS, check_safetensors
-
     path = root / POLICY_FILE
     if not path.is_file() or path.is_symlink():
         return None

@@ -22,8 +22,8 @@ from sim.garage.bundle import (
     install_bundle_report,
     read_bundle,
 )
-from sim.garage.deepracer_import import import_model
 from sim.garage.folder import ModelError, ModelFolder, model_content_hash, models_dir
+from sim.garage.importing import import_model
 from sim.garage.options import new_model
 from tests.sim.garage.helpers import policy_bytes, write_training_state
 

@@ -15,8 +15,9 @@ from sim.coach.reward_line import template_source
 from sim.deepracer.files import read_evaluation_metrics, read_training_metrics
 from sim.foundation.remedies import Fix, Note
 from sim.garage.bundle import BundleError
-from sim.garage.deepracer_import import import_deepracer_folder, import_model
+from sim.garage.deepracer_import import import_deepracer_folder
 from sim.garage.folder import ModelError, ModelFolder, ModelStatus, models_dir
+from sim.garage.importing import import_model
 from sim.garage.options import DEFAULT_TRACK
 from sim.garage.summary import training_summary
 from sim.reward.errors import RewardFunctionError

@@ -12,8 +12,8 @@ import numpy as np
 from sim.car_export.archive import read_car_archive
 from sim.car_export.graph_def import read_graph
 from sim.car_export.graph_runner import GraphRunner
-from sim.garage.deepracer_import import import_model
 from sim.garage.frozen_graph import frozen_graph
+from sim.garage.importing import import_model
 from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
 from sim.training.policy import driver_for_model

@@ -1,0 +1,39 @@
+"""`racer-tui model import PATH`: whichever kind of model PATH is, into the garage.
+
+A car archive (`.tar.gz`) goes to `car_archive_import`, a `.racer-bundle` to `bundle`, a
+folder to `deepracer_import`; each says what it filled in.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from sim.car_export.file_names import is_car_archive_name
+from sim.foundation.remedies import echoed_path
+from sim.garage.bundle import install_bundle_report
+from sim.garage.car_archive_import import import_car_archive
+from sim.garage.deepracer_import import import_deepracer_folder
+from sim.garage.folder import ModelError
+from sim.garage.imported import BUNDLE_SUFFIX, ImportResult
+
+
+def import_model(
+    path: Path, name: str | None = None, track: str | None = None, *, untrained: bool = False
+) -> ImportResult:
+    """A DeepRacer model folder, a `.racer-bundle` file or a DeepRacer car archive
+    (`.tar.gz`), as a new garage model."""
+    source = Path(path).expanduser()
+    try:
+        is_file, is_dir = source.is_file(), source.is_dir()
+    except OSError:  # a name no file can have (too long, say): there is none
+        is_file = is_dir = False
+    if is_file and is_car_archive_name(source):
+        return import_car_archive(source, name=name, track=track)
+    if is_file:
+        return install_bundle_report(source, name=name, track=track)
+    if is_dir:
+        return import_deepracer_folder(source, name=name, track=track, untrained=untrained)
+    raise ModelError(
+        f"{echoed_path(source)} does not exist; give a DeepRacer model folder, a "
+        f"{BUNDLE_SUFFIX} file or a car archive (.tar.gz)."
+    )
