@@ -6,7 +6,9 @@ database whose version is newer than this code knows is refused, never modified.
 
 Append new migrations to MIGRATIONS; never edit one that has shipped. A migration that
 changes what the local leaderboard cache holds sets `rebuilds_cache`: the cache is then
-rebuilt once, from the shared rows, after the last migration.
+rebuilt once, from the shared rows, after the last migration and in the same transaction,
+by the function the opener passes (league.opening: the cache is built by modules that
+stand on this one's schema, so this module does not import them).
 """
 
 from __future__ import annotations
@@ -610,8 +612,12 @@ def check_version(conn: sqlite3.Connection, path: Path) -> None:
         )
 
 
-def migrate(conn: sqlite3.Connection) -> int:
-    """Bring the database to SCHEMA_VERSION; returns how many migrations ran."""
+def migrate(conn: sqlite3.Connection, rebuild_cache: Callable[[sqlite3.Connection], None]) -> int:
+    """Bring the database to SCHEMA_VERSION; returns how many migrations ran.
+
+    `rebuild_cache` (league.opening passes league.entries.rebuild_entries) runs once after
+    the last migration when one of them `rebuilds_cache`, in the same transaction.
+    """
     if user_version(conn) == SCHEMA_VERSION:
         return 0
     conn.execute("BEGIN IMMEDIATE")
@@ -621,9 +627,7 @@ def migrate(conn: sqlite3.Connection) -> int:
         for migration in pending:
             migration.apply(conn)
         if any(migration.rebuilds_cache for migration in pending):
-            from league.entries import rebuild_entries
-
-            rebuild_entries(conn)
+            rebuild_cache(conn)
         conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
     except BaseException:
         if conn.in_transaction:

@@ -1,9 +1,8 @@
-"""The league database: one SQLite file, opened the same way by every command.
+"""The league database: one SQLite file, and the League every command reads and writes it by.
 
-`open_league()` connects, refuses a database written by a newer racer-tui (before
-touching it: not even the journal mode changes), turns on WAL and foreign keys, and runs
-the pending migrations. Every multi-row change goes through `League.transaction()`, one
-`BEGIN IMMEDIATE` transaction, so a failure or a Ctrl+C leaves no partial rows.
+league.opening.open_league() opens it. Every multi-row change goes through
+`League.transaction()`, one `BEGIN IMMEDIATE` transaction, so a failure or a Ctrl+C leaves
+no partial rows.
 
 Shared rows (racers, tracks, submissions, races, nights, entrants, heats, seasons,
 corrections) are immutable: each has a 26-character time-sortable `id` (sim.foundation.ids.new_id)
@@ -15,7 +14,6 @@ therefore push and pull rows as they are; a change is always a new row (a correc
 from __future__ import annotations
 
 import sqlite3
-import time
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from datetime import UTC, datetime
@@ -29,9 +27,7 @@ from league.errors import LeagueError
 from sim.foundation.home import league_db_file
 from sim.foundation.ids import content_hash, new_id
 
-BUSY_TIMEOUT_MS = 10_000
-
-__all__ = ["League", "LeagueError", "default_db_path", "now_iso", "open_league", "record_body"]
+__all__ = ["League", "LeagueError", "default_db_path", "now_iso", "record_body"]
 
 
 def default_db_path() -> Path:
@@ -124,61 +120,3 @@ def record_body(
     if children:
         body.update(children)
     return body
-
-
-def _use_wal(conn: sqlite3.Connection) -> None:
-    """Put the database in WAL mode, waiting for any other racer-tui switching it too.
-
-    SQLite answers a journal-mode change that meets another connection's lock with "database
-    is locked" at once, without its busy handler: several workers opening a new league
-    together would otherwise refuse it.
-    """
-    deadline = time.monotonic() + BUSY_TIMEOUT_MS / 1000
-    while True:
-        try:
-            conn.execute("PRAGMA journal_mode = WAL")
-            return
-        except sqlite3.OperationalError as error:
-            if "locked" not in str(error) or time.monotonic() > deadline:
-                raise
-            time.sleep(0.01)
-
-
-def open_league(db_path: Path | None = None) -> League:
-    """Open (creating and migrating as needed) the league database at `db_path`.
-
-    The default is `default_db_path()`: league.db in the data folder, or RACER_TUI_LEAGUE.
-    Raises LeagueError for a file that is not a league database or was written by a newer
-    racer-tui; such files are left untouched.
-    """
-    from league.migrations import check_version, migrate
-
-    path = Path(db_path) if db_path is not None else default_db_path()
-    if not path.parent.is_dir():
-        raise LeagueError(
-            f"cannot create league database {path}: folder {path.parent} does not exist; "
-            "create it or choose another --db path."
-        )
-    if path.is_dir():
-        raise LeagueError(f"{path} is a folder, not a league database file; give a file path.")
-    try:
-        conn = sqlite3.connect(path, isolation_level=None, timeout=BUSY_TIMEOUT_MS / 1000)
-    except sqlite3.Error as error:
-        raise LeagueError(f"cannot open league database {path}: {error}.") from None
-    conn.row_factory = sqlite3.Row
-    try:
-        check_version(conn, path)  # before any statement that could write
-        conn.execute(f"PRAGMA busy_timeout = {BUSY_TIMEOUT_MS}")
-        _use_wal(conn)
-        conn.execute("PRAGMA synchronous = NORMAL")
-        conn.execute("PRAGMA foreign_keys = ON")
-        migrate(conn)
-    except sqlite3.DatabaseError as error:
-        conn.close()
-        raise LeagueError(
-            f"{path} is not a usable league database ({error}); choose another --db file."
-        ) from None
-    except BaseException:
-        conn.close()
-        raise
-    return League(path, conn)

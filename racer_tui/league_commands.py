@@ -264,7 +264,7 @@ def _register_correct(commands: Parsers, db: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from league.store import open_league
+    from league.opening import open_league
 
     handlers: dict[str, Callable[[League, argparse.Namespace], int]] = {
         "submit": _submit,
@@ -285,7 +285,7 @@ def _night_projector(args: argparse.Namespace) -> int:
     its own beside the host's racer-tui. A kiosk: only q then y leaves, and it ends the
     program rather than open the rest of the app on the venue's screen."""
     from league.nights import get_night
-    from league.store import open_league
+    from league.opening import open_league
     from racer_tui.app import run_app
     from sim.foundation.home import LEAGUE_ENV
 

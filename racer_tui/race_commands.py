@@ -339,8 +339,8 @@ def _write_trace(result: RaceResult, folder: Path) -> Path:
 def _record(results: Sequence[RaceResult], db_path: Path | None) -> list[str]:
     try:
         from league.errors import LeagueError
+        from league.opening import open_league
         from league.races import record_race
-        from league.store import open_league
     except ImportError:  # pragma: no cover - the league ships with racer-tui
         raise RaceSetupError(
             "--record is not available: this racer-tui has no league database yet."

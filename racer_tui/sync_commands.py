@@ -151,7 +151,7 @@ def _common(
 
 def run(args: argparse.Namespace) -> int:
     action = getattr(args, "sync_command", None)
-    from league.store import open_league
+    from league.opening import open_league
 
     handlers: dict[str | None, Callable[[League, argparse.Namespace], int]] = {
         None: _sync,

@@ -107,7 +107,7 @@ def _store_records(url: str) -> tuple[dict[tuple[str, str], str], int]:
 
 
 def _league_records(db: Path) -> dict[tuple[str, str], str]:
-    from league.store import open_league
+    from league.opening import open_league
     from league.sync.outgoing import unsent_batches
 
     with open_league(db) as league:
@@ -127,7 +127,7 @@ def _compare(
 
 def push_kills(root: Path, kills: int, records: int, rng: random.Random) -> Part:
     from benchmarks.league.board import fill
-    from league.store import open_league
+    from league.opening import open_league
     from league.sync.engine import store_key
     from league.sync.outgoing import count_unsent
     from league.sync.stores import open_store
@@ -191,7 +191,7 @@ _WRITER: Final = """
 import sys
 from dataclasses import replace
 from league.races import record_race
-from league.store import open_league
+from league.opening import open_league
 from sim.foundation.ids import new_id
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race
@@ -211,7 +211,7 @@ with open_league(db) as league:
 
 
 def concurrent_writers(root: Path, writers: int, races_each: int) -> Part:
-    from league.store import open_league
+    from league.opening import open_league
 
     db = root / "writers.db"
     with open_league(db):

@@ -227,8 +227,8 @@ class DisplayClock:
 
 def prepare_home(home: Path) -> str:
     """Models, league races and a shared-folder store in `home`; returns the store's URL."""
+    from league.opening import open_league
     from league.races import record_race
-    from league.store import open_league
     from league.sync.session import save_store
     from league.sync.stores import open_store
     from sim.garage.options import new_model

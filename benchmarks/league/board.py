@@ -33,10 +33,11 @@ from league.entries import (
     store_entries,
 )
 from league.leaderboard import Filters, leaderboard
+from league.opening import open_league
 from league.racers import default_colour
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
 from league.seasons import get_season, season_standings
-from league.store import League, now_iso, open_league, record_body
+from league.store import League, now_iso, record_body
 from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.submissions import submit
 from sim.deepracer.action_space import discrete_grid

@@ -44,7 +44,8 @@ from typing import Any, Final
 import numpy as np
 
 from league.errors import LeagueError
-from league.store import League, open_league
+from league.opening import open_league
+from league.store import League
 from league.sync.errors import RecordInvalidError
 from league.sync.record import Quarantined, decode_envelope, encode_envelope, make_record
 from sim.foundation.home import home_at

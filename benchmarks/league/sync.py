@@ -34,8 +34,9 @@ import psutil
 
 from benchmarks.league.board import fill
 from league.leaderboard import Filters, leaderboard
+from league.opening import open_league
 from league.records import SHARED_TABLES
-from league.store import League, open_league
+from league.store import League
 from league.sync.engine import pull, push, store_key
 from league.sync.outgoing import count_unsent
 from league.sync.stores import open_store

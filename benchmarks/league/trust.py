@@ -37,11 +37,12 @@ from league.entries import refresh_entries
 from league.errors import LeagueError
 from league.leaderboard import Filters, leaderboard
 from league.local_racer import save_local_racer_name
+from league.opening import open_league
 from league.racers import ensure_racer
 from league.races import LAP_COLUMNS, lap_rows, record_race
 from league.races import race_result as stored_race
 from league.records import record_body
-from league.store import League, now_iso, open_league
+from league.store import League, now_iso
 from league.submissions import insert_laps, lap_row, submit_model
 from league.sync.engine import store_key, sync
 from league.sync.record import SyncRecord, encode_envelope, make_record

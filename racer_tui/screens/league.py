@@ -33,6 +33,7 @@ from league.leaderboard import (
     several_boards,
     sort_rows,
 )
+from league.opening import open_league
 from league.race_types import TIME_TRIAL, board_name, words
 from league.report import (
     SCORE_TITLES,
@@ -42,7 +43,6 @@ from league.report import (
     to_markdown,
 )
 from league.report import Column as ReportColumn
-from league.store import open_league
 from racer_tui.screens.base import RacerScreen, push_kept
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.screens.export_path import EXPORT_FORMATS, check_export_path

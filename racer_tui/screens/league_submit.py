@@ -21,10 +21,10 @@ from textual.screen import Screen
 from league.board_place import board_place, place_sentence
 from league.errors import LeagueError
 from league.local_racer import local_racer_name, save_local_racer_name
+from league.opening import open_league
 from league.race_types import race_type_of
 from league.racers import check_name
 from league.races import record_race_as
-from league.store import open_league
 from league.submissions import submit_model
 from racer_tui.screens.dialogs import InputDialog
 from racer_tui.session import remember_racer, session_racer

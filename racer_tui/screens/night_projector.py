@@ -29,8 +29,9 @@ from textual.widgets import Digits, Label, Static
 from league.errors import LeagueError
 from league.live_heat import LiveHeat, live_heat_path, read_live_heat
 from league.night_state import NightState, read_night
+from league.opening import open_league
 from league.report import SCORE_TITLES
-from league.store import default_db_path, open_league
+from league.store import default_db_path
 from racer_tui.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
 from racer_tui.screens.race_screen import clock_text, countdown_text
 from racer_tui.screens.timekeeper import lap_clock_text

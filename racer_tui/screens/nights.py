@@ -50,6 +50,7 @@ from league.nights import (
     standings,
     withdraw_entrant,
 )
+from league.opening import open_league
 from league.racers import check_name
 from league.races import race_result, record_race
 from league.report import SCORE_TITLES, seconds
@@ -59,7 +60,7 @@ from league.seasons import (
     new_season,
     parse_points,
 )
-from league.store import League, default_db_path, open_league
+from league.store import League, default_db_path
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from league.timekeeper.journal import HeatJournal, journal_path
 from racer_tui.race_commands import DriversByHash, resolve_driver

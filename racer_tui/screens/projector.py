@@ -23,8 +23,8 @@ from textual.message import Message
 from textual.widgets import Digits, Static
 
 from league.leaderboard import LeaderboardRow, board_of, several_boards
+from league.opening import open_league
 from league.report import SCORE_TITLES
-from league.store import open_league
 from racer_tui.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
 from racer_tui.screens.race_screen import clock_text
 from racer_tui.widgets.board_filters import BoardQuery, board_rows

@@ -29,6 +29,7 @@ from textual.screen import Screen
 from textual.widgets import Button, DataTable, Label, Select, Static
 
 from league.errors import LeagueError
+from league.opening import open_league
 from league.races import (
     RaceReplay,
     RecordedRace,
@@ -38,7 +39,6 @@ from league.races import (
     recent_races,
 )
 from league.ranking import rank
-from league.store import open_league
 from racer_tui.screens.base import RacerScreen
 from racer_tui.screens.garage import policy_driver
 from racer_tui.screens.league_submit import RacerPrompt, RaceSubmitted, submit_race

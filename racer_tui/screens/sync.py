@@ -31,7 +31,8 @@ from textual.widgets import Button, DataTable, Input, Label, Static
 from textual.worker import Worker, WorkerState
 
 from league.errors import LeagueError
-from league.store import League, open_league
+from league.opening import open_league
+from league.store import League
 from league.sync import open_store
 from league.sync.engine import SyncSummary
 from league.sync.errors import (

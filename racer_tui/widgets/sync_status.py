@@ -21,7 +21,7 @@ from textual.message import Message
 from textual.widgets import Static
 
 from league.errors import LeagueError
-from league.store import open_league
+from league.opening import open_league
 from league.sync.status import SyncOverview, sync_overview
 
 NO_STORE = "No shared store: press y to set one up"

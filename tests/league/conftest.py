@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from league.store import League, open_league
+from league.opening import open_league
+from league.store import League
 
 
 @pytest.fixture

@@ -15,6 +15,7 @@ from league.board_place import board_place
 from league.errors import LeagueError
 from league.leaderboard import Filters, leaderboard, race_types_on
 from league.migrations import MIGRATIONS
+from league.opening import open_league
 from league.race_types import (
     HEAD_TO_BOT,
     OBJECT_AVOIDANCE,
@@ -24,7 +25,7 @@ from league.race_types import (
 )
 from league.races import best_lap_race, record_race
 from league.records import record_body
-from league.store import League, open_league
+from league.store import League
 from league.submissions import submit
 from sim.foundation.ids import content_hash
 from sim.race.physics import CURRENT

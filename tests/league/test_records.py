@@ -12,10 +12,11 @@ from league.assembler import assemble
 from league.corrections import disqualify_lap, rename_racer
 from league.errors import LeagueError
 from league.leaderboard import Filters, leaderboard
+from league.opening import open_league
 from league.races import record_race
 from league.records import SHARED_TABLES, record_body, records, store_record
 from league.seasons import new_season
-from league.store import League, open_league
+from league.store import League
 from league.submissions import submit
 from sim.foundation.ids import content_hash
 from sim.race.rules import DEFAULT_RULES

@@ -11,7 +11,8 @@ import pytest
 from league.errors import LeagueError
 from league.leaderboard import Filters, leaderboard
 from league.migrations import MIGRATIONS, SCHEMA_VERSION
-from league.store import League, default_db_path, open_league
+from league.opening import open_league
+from league.store import League, default_db_path
 from sim.foundation.ids import content_hash, new_id
 from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from league.leaderboard import Filters, leaderboard
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat
 from sim.race.physics import PHYSICAL
 from sim.race.result import RaceResult

@@ -13,8 +13,8 @@ import pytest
 
 from league.errors import LeagueError
 from league.nights import add_entrant, close_night, draw_heats, new_night
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from racer_tui.app_words import APP_FIXES, in_app_words
 from racer_tui.model_form import field_message
 from racer_tui.race_commands import RaceSetupError, resolve_driver

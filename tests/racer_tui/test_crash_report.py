@@ -103,7 +103,7 @@ def test_the_night_projector_command_ends_with_the_apps_status(
 ) -> None:
     # The venue's screen runs the app as `racer-tui` does: a crash there ends non-zero.
     from league.nights import new_night
-    from league.store import open_league
+    from league.opening import open_league
     from racer_tui.cli import main
     from sim.foundation.home import data_home
     from sim.tracks.catalog import resolve_track

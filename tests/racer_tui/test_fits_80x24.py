@@ -19,8 +19,8 @@ from textual.widget import Widget
 from textual.widgets import DataTable, Input, TextArea
 
 from league.nights import add_entrant, draw_heats, new_night, run_heats
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.race_commands import resolve_driver
 from racer_tui.widgets.footer import RacerFooter

@@ -331,7 +331,7 @@ def test_a_night_run_killed_mid_way_keeps_its_heats_and_runs_the_rest(tmp_path: 
     import sys
 
     from league.nights import add_entrant, draw_heats, get_night, heats, new_night, pending_heats
-    from league.store import open_league
+    from league.opening import open_league
     from sim.tracks.catalog import resolve_track
 
     db = str(tmp_path / "kill.db")

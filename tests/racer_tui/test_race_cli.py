@@ -150,8 +150,8 @@ def test_record_stores_the_results_in_the_league(capsys: pytest.CaptureFixture[s
     document = json.loads(out)
     race_id = document["races"][0]["result_id"]
     assert document["recorded"] == [race_id]
+    from league.opening import open_league
     from league.races import race_result, race_trace
-    from league.store import open_league
 
     with open_league() as league:
         stored = race_result(league, race_id)

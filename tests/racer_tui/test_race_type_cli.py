@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from league.nights import get_night
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from racer_tui.cli import main
 from sim.race.rules import preset_rules
 from tests.league.helpers import TRACK, race_result

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from league.store import open_league
+from league.opening import open_league
 from racer_tui.cli import main
 from tests.league.helpers import model_folder
 

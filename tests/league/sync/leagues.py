@@ -74,7 +74,7 @@ def found_store(url: str, root: Path) -> None:
     """What the organiser's `racer-tui sync init` does: found the league on this machine's
     key and push the founding record. Every league in a test shares one data directory,
     so one key: the organiser's, whose records every league accepts."""
-    from league.store import open_league
+    from league.opening import open_league
     from league.sync.engine import push, store_key
     from league.sync.stores import open_store
     from league.trust.keys import load_or_create_key

@@ -15,7 +15,7 @@ import json
 import sys
 from pathlib import Path
 
-from league.store import open_league
+from league.opening import open_league
 from league.sync.engine import push, store_key
 from league.sync.retry import RetryPolicy
 from league.sync.stores import open_store

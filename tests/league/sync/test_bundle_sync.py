@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from league.assembler import assemble
-from league.store import open_league
+from league.opening import open_league
 from league.submissions import submit
 from league.sync.bundle_sync import push_bundles
 from league.sync.s3_bundles import S3BundleStore

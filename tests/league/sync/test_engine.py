@@ -14,9 +14,10 @@ from pathlib import Path
 
 import pytest
 
+from league.opening import open_league
 from league.races import record_race
 from league.records import record_body, store_record
-from league.store import League, open_league
+from league.store import League
 from league.sync.engine import SyncSummary, push, store_key, sync
 from league.sync.outgoing import count_unsent, unsent_batches
 from league.sync.record import SyncRecord, make_record

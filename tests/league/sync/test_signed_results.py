@@ -16,8 +16,9 @@ from pathlib import Path
 import pytest
 
 from league.local_racer import save_local_racer_name
+from league.opening import open_league
 from league.races import record_race
-from league.store import League, now_iso, open_league
+from league.store import League, now_iso
 from league.sync.engine import SyncSummary, store_key, sync
 from league.sync.record import SyncRecord, canonical_json, make_record
 from league.sync.stores import open_store

@@ -11,8 +11,9 @@ from typing import Any
 
 import pytest
 
+from league.opening import open_league
 from league.records import SHARED_TABLES
-from league.store import League, open_league
+from league.store import League
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import KIND_OF_TABLE, LEAGUE_KINDS, TABLE_OF_KIND, profile_id
 from league.sync.outgoing import unsent_batches

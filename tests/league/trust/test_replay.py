@@ -10,8 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from league.opening import open_league
 from league.races import record_race
-from league.store import League, open_league
+from league.store import League
 from league.trust.replay import verify_races
 from racer_tui.cli import main
 from racer_tui.race_commands import DriversByHash

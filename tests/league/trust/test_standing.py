@@ -209,7 +209,7 @@ def test_night_close_says_each_heat_withdrawn_or_left_out(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setenv("COLUMNS", "200")
-    from league.store import open_league
+    from league.opening import open_league
 
     db = tmp_path / "league.db"
     with open_league(db) as league:
@@ -247,7 +247,7 @@ def test_night_new_sets_the_rule_and_the_leaderboard_shows_and_filters_by_it(
     out = capsys.readouterr().out
     assert "(only results verified or verifiable by replay)." in out
 
-    from league.store import open_league
+    from league.opening import open_league
 
     with open_league(Path(db)) as league:
         record_race(league, _reference("ana", seed=1))

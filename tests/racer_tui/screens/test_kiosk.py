@@ -8,8 +8,8 @@ from __future__ import annotations
 import pytest
 
 from league.nights import add_entrant, new_night
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.kiosk import LeaveKiosk
 from racer_tui.screens.league import LeagueScreen

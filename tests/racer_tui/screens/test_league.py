@@ -9,8 +9,8 @@ from pathlib import Path
 from textual.widgets import DataTable, Digits, Input, Select
 
 from league.assembler import assemble
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from league.submissions import submit
 from league.trust.replay import verify_races
 from racer_tui.app import create_app

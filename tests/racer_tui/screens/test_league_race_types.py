@@ -10,8 +10,8 @@ from pathlib import Path
 from textual.widgets import Input, Select
 
 from league.nights import add_entrant, draw_heats, new_night
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.night_projector import NightProjectorScreen

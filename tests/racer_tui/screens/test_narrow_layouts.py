@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 from textual.widgets import DataTable, Input
 
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.widgets.section_header import SectionHeader

@@ -15,9 +15,10 @@ from textual.widgets import Input, Select
 
 from league.live_heat import live_heat_path, read_live_heat
 from league.nights import list_nights, standings
+from league.opening import open_league
 from league.races import race_result
 from league.seasons import new_season
-from league.store import default_db_path, open_league
+from league.store import default_db_path
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.night_projector import NightProjectorScreen

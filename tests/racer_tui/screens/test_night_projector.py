@@ -19,8 +19,9 @@ from league.nights import (
     heats,
     new_night,
 )
+from league.opening import open_league
 from league.races import record_race
-from league.store import default_db_path, open_league
+from league.store import default_db_path
 from racer_tui.app import create_app
 from racer_tui.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen, ordinal
 from sim.foundation.home import data_home

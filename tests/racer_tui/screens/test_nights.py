@@ -12,7 +12,7 @@ from textual.screen import Screen
 from textual.widgets import DataTable, Input, Select, Static
 
 from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
-from league.store import open_league
+from league.opening import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.nights import AddEntrantDialog, NightsScreen

@@ -9,7 +9,7 @@ from typing import Any
 from textual.app import App, ComposeResult
 from textual.widgets import DataTable, Input, Static
 
-from league.store import open_league
+from league.opening import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.nights import (
     MIXED_STANDINGS_NOTE,

@@ -7,8 +7,8 @@ from dataclasses import replace
 
 from textual.widgets import DataTable, Select
 
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.race_screen import RaceScreen, clock_text

@@ -10,8 +10,8 @@ from textual.screen import Screen
 from textual.widgets import Input, Select
 
 from league.nights import list_nights
+from league.opening import open_league
 from league.seasons import get_season, list_seasons, new_season
-from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.nights import NewNightDialog, NewSeasonDialog, season_problem
 from sim.foundation.home import data_home

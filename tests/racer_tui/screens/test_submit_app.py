@@ -7,8 +7,8 @@ import json
 
 from textual.widgets import DataTable, Input, Select
 
+from league.opening import open_league
 from league.races import race_replay, recent_races
-from league.store import open_league
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog, InputDialog
 from racer_tui.screens.garage import GarageScreen

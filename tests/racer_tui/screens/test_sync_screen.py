@@ -14,8 +14,9 @@ from textual.pilot import Pilot
 from textual.widgets import DataTable, Input
 
 from league.local_racer import save_local_racer_name
+from league.opening import open_league
 from league.races import record_race
-from league.store import now_iso, open_league
+from league.store import now_iso
 from league.sync import local, open_store
 from league.sync.dir_store import MARKER_NAME
 from league.sync.session import save_store, sync_league

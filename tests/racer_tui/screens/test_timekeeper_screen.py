@@ -12,8 +12,9 @@ from textual.pilot import Pilot
 from textual.widgets import Digits
 
 from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
+from league.opening import open_league
 from league.races import race_result
-from league.store import default_db_path, open_league
+from league.store import default_db_path
 from league.timekeeper.journal import HeatJournal, journal_path
 from racer_tui.app import create_app
 from racer_tui.screens.dialogs import ConfirmDialog

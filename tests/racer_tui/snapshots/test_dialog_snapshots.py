@@ -15,7 +15,7 @@ from textual.pilot import Pilot
 from textual.widgets import Input
 
 from league.nights import new_night
-from league.store import open_league
+from league.opening import open_league
 from racer_tui.app import create_app
 from racer_tui.screens import sync
 from racer_tui.screens.training import LeaveWhileTraining

@@ -11,8 +11,8 @@ from typing import Any
 
 from textual.pilot import Pilot
 
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from racer_tui.app import create_app
 from sim.foundation.home import data_home
 from sim.tracks.catalog import resolve_track

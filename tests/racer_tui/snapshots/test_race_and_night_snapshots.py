@@ -14,7 +14,7 @@ from typing import Any
 from textual.pilot import Pilot
 
 from league.nights import add_entrant, draw_heats, new_night, run_heats
-from league.store import open_league
+from league.opening import open_league
 from racer_tui.app import create_app
 from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.night_projector import NightProjectorScreen

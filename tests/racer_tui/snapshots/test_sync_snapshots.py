@@ -10,8 +10,8 @@ from typing import Any
 
 from textual.pilot import Pilot
 
+from league.opening import open_league
 from league.races import record_race
-from league.store import open_league
 from league.sync import local
 from league.sync.record import Quarantined
 from league.sync.session import save_store
