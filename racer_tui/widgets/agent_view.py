@@ -27,6 +27,7 @@ from textual.widget import Widget
 from racer_tui.widgets.braille import braille_char, set_dots, styled_runs
 from sim.objects.field import ObjectField
 from sim.sensors.batched import Camera, Lidar, LidarSpec
+from sim.sensors.objects_drawn import object_solids
 from sim.tracks.track import Track
 
 
@@ -94,7 +95,7 @@ def observe_at(
             angles_deg=np.asarray(spec.angles_deg),
             max_range=spec.max_range,
         )
-    solids = None if objects is None else objects.solids(np.array([0]))
+    solids = None if objects is None else object_solids(objects, np.array([0]))
     frame = _camera(track).render([x], [y], [yaw], solids=solids)[0]
     label = "camera" if "camera" in sensors else "camera (the model sees the vector state)"
     return Observation(f"{label} · {caption}", frame=frame)

@@ -64,6 +64,23 @@ def normalise_sensors(names: str | Iterable[str]) -> tuple[str, ...]:
     return tuple(name for name in SENSOR_NAMES if name in chosen)
 
 
+# --- the reward params' object keys ------------------------------------------------------
+
+
+def no_objects() -> dict[str, object]:
+    """DeepRacer's object keys when a race has no objects (fresh lists every call)."""
+    return {
+        "closest_objects": [0, 0],
+        "objects_location": [],
+        "objects_left_of_center": [],
+        "objects_speed": [],
+        "objects_heading": [],
+        "objects_distance": [],
+        "objects_distance_from_center": [],
+        "object_in_camera": False,
+    }
+
+
 # --- the physics that timed a lap (racer-tui's field in DeepRacer's evaluation files) ----
 
 PHYSICS_LABEL: Final = re.compile(r"racer-tui/[1-9][0-9]{0,5}|deepracer|physical")

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,9 +44,6 @@ from sim.objects.placement import (
 from sim.objects.settings import Lane, ObstacleSettings
 from sim.physics.car import CarSpec
 from sim.tracks.track import Track
-
-if TYPE_CHECKING:
-    from sim.sensors.camera import Solids
 
 # The DeepRacer camera's horizontal field of view and near plane (simapp `frustum.py`).
 CAMERA_FIELD_OF_VIEW: Final = 1.13  # radians
@@ -118,9 +115,9 @@ class ObjectField:
         self.from_centre = np.zeros((cars, k))
         self.drawn = np.zeros(cars, dtype=bool)
         # Objects that stand still are handed to the camera as one Solids until they move
-        # (it keeps its geometry between frames); `placed` counts the placings.
+        # (it keeps its geometry between frames); `placed` counts the placings
+        # (sim.sensors.objects_drawn keys its drawing on it).
         self.placed = 0
-        self._solids: tuple[tuple[int, bytes], Solids] | None = None
 
     # --- what subclasses do ------------------------------------------------------------
     def draw(self, car: int, backwards: bool = False) -> None:
@@ -172,33 +169,6 @@ class ObjectField:
         self.backwards[car] = backwards
         self.any_backwards = bool(self.backwards.any())
         return changed
-
-    def solids(self, cars: NDArray[np.intp]) -> Solids:
-        """`cars`' objects as the camera draws them (rows in `cars`' order)."""
-        from sim.sensors import camera_scene as scene
-        from sim.sensors.camera import Solids
-
-        key = (self.placed, np.asarray(cars, dtype=np.intp).tobytes())
-        if self._solids is not None and self._solids[0] == key:
-            return self._solids[1]
-        shape, k = self.shape, self.count
-        side, top = (
-            (scene.BOT_CAR_SIDE, scene.BOT_CAR_TOP)
-            if shape.is_car
-            else (scene.BOX_SIDE, scene.BOX_TOP)
-        )
-        solids = Solids(
-            x=self.x[cars],
-            y=self.y[cars],
-            heading=self.heading[cars],
-            length=np.full(k, shape.length),
-            width=np.full(k, shape.width),
-            height=np.full(k, shape.height),
-            side_tone=np.full(k, side, dtype=np.uint8),
-            top_tone=np.full(k, top, dtype=np.uint8),
-        )
-        self._solids = (key, solids)
-        return solids
 
     def _set(self, car: int, i: int, pose: ObjectPose) -> None:
         self.x[car, i], self.y[car, i] = pose.x, pose.y

@@ -16,6 +16,8 @@ import itertools
 import math
 from collections.abc import Sequence
 
+from sim.deepracer.vocabulary import no_objects
+
 PARAM_KEYS: tuple[str, ...] = (
     "all_wheels_on_track",
     "x",
@@ -45,20 +47,6 @@ PARAM_KEYS: tuple[str, ...] = (
     "objects_distance_from_center",
     "object_in_camera",
 )
-
-
-def no_objects() -> dict[str, object]:
-    """DeepRacer's object keys when a race has no objects (fresh lists every call)."""
-    return {
-        "closest_objects": [0, 0],
-        "objects_location": [],
-        "objects_left_of_center": [],
-        "objects_speed": [],
-        "objects_heading": [],
-        "objects_distance": [],
-        "objects_distance_from_center": [],
-        "object_in_camera": False,
-    }
 
 
 STRAIGHT_LENGTH = 6.0

@@ -19,6 +19,7 @@ import numpy as np
 
 from sim.foundation.arrays import FloatArray
 from sim.physics.simulation import TrackSimulation
+from sim.sensors.objects_drawn import object_solids
 
 if TYPE_CHECKING:
     from sim.realworld.perturbation import CameraPerturbation
@@ -107,7 +108,9 @@ class Observer:
         x, y, yaw = fleet.x[pick], fleet.y[pick], fleet.yaw[pick]
         if self._camera is not None:
             objects = self.sim.objects  # each car's own boxes or bot cars, drawn in its view
-            solids = None if objects is None else objects.solids(np.arange(self.sim.n)[pick])
+            solids = (
+                None if objects is None else object_solids(objects, np.arange(self.sim.n)[pick])
+            )
             if self._perturbed is None:
                 frames = self._camera.render(x, y, yaw, solids=solids)
             else:  # camera randomisation (sim.realworld): each car through its own camera
