@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import Final
 
 from league.errors import LeagueError
-from sim.objects.settings import RaceType
+from sim.physics.objects.settings import RaceType
 from sim.race.rules import RaceRules
 
 TIME_TRIAL: Final = RaceType.TIME_TRIAL.value.lower()

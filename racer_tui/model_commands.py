@@ -296,7 +296,7 @@ def _spec_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.hp:
         options["hyperparameters"] = parse_hp_assignments(args.hp)
     if args.camera_randomisation is not None:
-        from sim.realworld.settings import parse_camera_randomisation
+        from sim.sensors.randomisation.settings import parse_camera_randomisation
 
         try:
             chosen = parse_camera_randomisation(args.camera_randomisation)

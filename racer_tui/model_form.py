@@ -51,14 +51,14 @@ from sim.garage.options import (
     racing_line_followed,
     with_race,
 )
-from sim.realworld.settings import (
+from sim.reward.errors import RewardFunctionError
+from sim.reward.function import check_reward_code
+from sim.sensors.randomisation.settings import (
     CameraRandomisation,
     parse_camera_randomisation,
     settings_text,
     with_camera_randomisation_keys,
 )
-from sim.reward.errors import RewardFunctionError
-from sim.reward.function import check_reward_code
 from sim.tracks.track import TrackError
 
 REWARD_FILE_NAME = "reward_function.py"

@@ -33,7 +33,7 @@ from sim.deepracer.files import DeepRacerFileError
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.foundation.plural import counted
 from sim.foundation.remedies import RemedyError, echoed
-from sim.objects.settings import RaceType
+from sim.physics.objects.settings import RaceType
 from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.race.engine import run_race
 from sim.race.result import RaceResult

@@ -26,14 +26,14 @@ import numpy as np
 
 from sim.deepracer.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
 from sim.deepracer.vocabulary import EpisodeStatus, normalise_sensors
-from sim.objects.settings import RaceSettings
 from sim.physics.car import DEEPRACER_CAR, CarSpec
+from sim.physics.objects.settings import RaceSettings
 from sim.physics.simulation import EpisodeRules, TrackSimulation
-from sim.realworld.perturbation import draw_perturbation
-from sim.realworld.settings import CameraRandomisation
 from sim.reward.function import load_reward_source
 from sim.reward.template_files import shipped_template
 from sim.sensors.observations import Observer, SensorOptions
+from sim.sensors.randomisation.perturbation import draw_perturbation
+from sim.sensors.randomisation.settings import CameraRandomisation
 from sim.tracks.track import Track
 
 DEFAULT_TEMPLATE = "follow_center_line"  # DeepRacer's default reward function
@@ -55,7 +55,7 @@ class EnvConfig:
     car: CarSpec = DEEPRACER_CAR
     is_reversed: bool = False  # DeepRacer's REVERSE_DIR: drive the track the other way round
     race: RaceSettings | None = None  # boxes or bot cars: None for a time trial
-    # A camera model's training draws each car a camera every episode (sim.realworld);
+    # A camera model's training draws each car a camera every episode (sim.sensors.randomisation);
     # off (the plain render) unless the model asks for it. Only camera models see it.
     camera_randomisation: CameraRandomisation = CameraRandomisation.OFF
 

@@ -7,7 +7,7 @@ trained on?
 Two fresh camera models (FRONT_FACING_CAMERA, `racer-tui model new`'s defaults otherwise)
 train for the same time on the track, each in its own training child process on one core
 (side by side when the machine has two cores or more): one on the plain render, one with
-camera randomisation at its default strengths (`sim.realworld`). Each is then evaluated,
+camera randomisation at its default strengths (`sim.sensors.randomisation`). Each is then evaluated,
 `--trials` one-lap trials from the start line ending at the first off-track (as training's
 own evaluations), on the plain render and on pictures outside what either saw in training:
 
@@ -28,13 +28,13 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from benchmarks.training.runs import bench_home, print_result, train_model, train_side_by_side
-from sim.realworld.perturbation import PLAIN, CameraPerturbation, Palette
+from sim.sensors.randomisation.perturbation import PLAIN, CameraPerturbation, Palette
 
 DEFAULT_MINUTES = 20.0
 DEFAULT_TRIALS = 10
 TRIAL_SECONDS = 60.0  # a trial still running after this is "Time Up"
 # Pictures neither model trained on (the randomised model's default ranges are in
-# sim.realworld.perturbation; every one of these lies outside them).
+# sim.sensors.randomisation.perturbation; every one of these lies outside them).
 CONDITIONS: dict[str, CameraPerturbation] = {
     "plain": PLAIN,
     "darker": CameraPerturbation(gain=0.45),
@@ -63,8 +63,8 @@ def _train(run: Run, minutes: float) -> Run:
 
 
 def _evaluate(run: Run, trials: int) -> None:
+    from benchmarks.sim.perturbed_driver import perturbed_driver
     from sim.garage.folder import open_model
-    from sim.realworld.driver import perturbed_driver
     from sim.training.evaluation import run_trials
 
     folder = open_model(run.model)
@@ -83,7 +83,7 @@ def _evaluate(run: Run, trials: int) -> None:
 def run(track_name: str, minutes: float, trials: int) -> dict[str, Any]:
     from sim.garage.folder import MIN_MINUTES
     from sim.garage.options import new_model
-    from sim.realworld.settings import CameraRandomisation
+    from sim.sensors.randomisation.settings import CameraRandomisation
 
     runs = [
         Run("plain", "sim-to-real-plain", randomised=False),

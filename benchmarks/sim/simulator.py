@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from sim.env import BatchedDeepRacer, DeepRacerEnv, EnvConfig
-from sim.objects.settings import BotSettings, ObstacleSettings, RaceSettings, RaceType
+from sim.physics.objects.settings import BotSettings, ObstacleSettings, RaceSettings, RaceType
 from sim.physics.reference_driver import reference_lap
 from sim.sensors.observations import SensorOptions
 from sim.tracks.catalog import list_tracks, resolve_track

@@ -36,7 +36,7 @@ from racer_tui.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
 from racer_tui.screens.race_screen import clock_text, countdown_text
 from racer_tui.screens.timekeeper import lap_clock_text
 from sim.foundation.plural import counted
-from sim.objects.settings import RaceType
+from sim.physics.objects.settings import RaceType
 from sim.race.physics import PHYSICAL
 
 POLL_SECONDS = 2.0  # the standings, from the database

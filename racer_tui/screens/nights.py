@@ -84,7 +84,7 @@ from racer_tui.widgets.track_label import track_options
 from sim.foundation.atomic import write_text_atomic
 from sim.foundation.plural import counted
 from sim.garage.folder import list_models
-from sim.objects.settings import RaceType
+from sim.physics.objects.settings import RaceType
 from sim.race.driver import REFERENCE_NAME
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult

@@ -28,7 +28,7 @@ from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.screens.dialogs import ask
 from racer_tui.widgets.footer import RacerFooter
 from racer_tui.widgets.race_map import CarMarker, RaceMap
-from sim.objects.settings import RaceType
+from sim.physics.objects.settings import RaceType
 from sim.race.driver import Driver
 from sim.race.engine import RaceTick, race_ticks
 from sim.race.replay import GhostLap, replay_ticks

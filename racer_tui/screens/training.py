@@ -72,7 +72,7 @@ from sim.garage.folder import (
     list_models,
     open_model,
 )
-from sim.objects.field import ObjectField
+from sim.physics.objects.field import ObjectField
 from sim.physics.simulation import LOOK_AHEAD
 from sim.tracks.track import Track
 from sim.training import events
@@ -240,14 +240,14 @@ def _objects_seen(
 ) -> tuple[ObjectField | None, str]:
     """The model's boxes or bots where they stood at the trace row `at` (episode, step):
     boxes that are not shuffled stand in the same places every episode; shuffled boxes and
-    bot cars are where the trainer saw them at its last traced row (`sim.objects.seen`).
+    bot cars are where the trainer saw them at its last traced row (`sim.physics.objects.seen`).
     When that is not this row, the caption says they are left out rather than drawing
     them elsewhere."""
     from sim.deepracer.files import DeepRacerFileError
-    from sim.objects.reading import race_settings
-    from sim.objects.seen import read_seen
-    from sim.objects.settings import RaceType
-    from sim.objects.world import object_field
+    from sim.physics.objects.reading import race_settings
+    from sim.physics.objects.seen import read_seen
+    from sim.physics.objects.settings import RaceType
+    from sim.physics.objects.world import object_field
 
     try:
         race = race_settings(folder.training_params())

@@ -25,7 +25,7 @@ from textual.strip import Strip
 from textual.widget import Widget
 
 from racer_tui.widgets.braille import braille_char, set_dots, styled_runs
-from sim.objects.field import ObjectField
+from sim.physics.objects.field import ObjectField
 from sim.sensors.batched import Camera, Lidar, LidarSpec
 from sim.sensors.objects_drawn import object_solids
 from sim.tracks.track import Track

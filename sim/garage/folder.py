@@ -70,7 +70,7 @@ from sim.foundation.ids import canonical_json
 from sim.foundation.names import NAME_RULE, is_valid_name
 from sim.foundation.remedies import Fix, RemedyError, echoed
 from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
-from sim.realworld.settings import CameraRandomisation, read_camera_randomisation
+from sim.sensors.randomisation.settings import CameraRandomisation, read_camera_randomisation
 from sim.tracks.track import Track, TrackError
 
 if TYPE_CHECKING:
@@ -601,7 +601,7 @@ def create_model(
     `populate` may add more files (a policy, metrics) to the folder before it appears: it is
     called with the temporary folder. `notes` are kept in training_params.yaml (for
     example where the model came from). `race_type` and `race_keys` are DeepRacer's race
-    type and its settings' keys (`sim.objects.settings.race_keys`).
+    type and its settings' keys (`sim.physics.objects.settings.race_keys`).
     """
     from sim.reward.function import check_reward_code
 

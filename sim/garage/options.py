@@ -35,7 +35,7 @@ from sim.deepracer.vocabulary import (
     normalise_sensors,
 )
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, create_model
-from sim.realworld.settings import CameraRandomisation, camera_randomisation_keys
+from sim.sensors.randomisation.settings import CameraRandomisation, camera_randomisation_keys
 from sim.tracks.catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
 from sim.tracks.track import TrackError
 
@@ -80,7 +80,7 @@ class ModelSpec:
     max_minutes: float = DEFAULT_MINUTES
     race_type: str = "TIME_TRIAL"  # DeepRacer's RACE_TYPE
     race_keys: Mapping[str, object] = field(default_factory=dict)  # its settings' keys
-    # Camera randomisation while training (sim.realworld): camera models only.
+    # Camera randomisation while training (sim.sensors.randomisation): camera models only.
     camera_randomisation: CameraRandomisation = CameraRandomisation.OFF
 
 
@@ -319,7 +319,7 @@ class RaceOptions:
 def with_race(spec: ModelSpec, race_type: str | None, options: RaceOptions) -> ModelSpec:
     """`spec` racing `race_type` (a name of RACE_TYPES; without one, the type the object
     options belong to)."""
-    from sim.objects.settings import (
+    from sim.physics.objects.settings import (
         MAX_BOT_CARS,
         MAX_BOT_SPEED,
         BotSettings,

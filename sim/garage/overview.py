@@ -157,7 +157,7 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
 
 def _camera_randomisation_words(folder: ModelFolder, params: TrainingParams) -> str:
     """What the model's training randomises of its camera, in words ("off" when nothing)."""
-    from sim.realworld.settings import read_camera_randomisation
+    from sim.sensors.randomisation.settings import read_camera_randomisation
 
     try:
         return read_camera_randomisation(params, str(folder.training_params_file)).describe()

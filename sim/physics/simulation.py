@@ -38,9 +38,9 @@ from numpy.typing import NDArray
 
 from sim.deepracer.vocabulary import EpisodeStatus, no_objects
 from sim.foundation.arrays import FloatArray
-from sim.objects.settings import RaceSettings
-from sim.objects.world import object_field
 from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec, Fleet
+from sim.physics.objects.settings import RaceSettings
+from sim.physics.objects.world import object_field
 from sim.tracks.geometry import PointProjector
 from sim.tracks.track import Track
 

@@ -21,7 +21,7 @@ What happens when DeepRacer's episode rules trigger (a race never ends on them):
   along the track, and held for `penalty_seconds` like an off-track: someone has to pick it
   up. It counts as a reset, not an off-track, so it does not invalidate the lap; the
   driving the wrong way already cost time.
-- Crashed (object avoidance and head-to-bot, `sim.objects`): held for
+- Crashed (object avoidance and head-to-bot, `sim.physics.objects`): held for
   `collision_penalty_seconds` and counted in the lap's crashes. After hitting a box the car
   is put back 1 m behind it in the other lane, as DeepRacer does; after running into a bot
   from behind, put back like an off-track. The bots drive on while the car is held (simapp's

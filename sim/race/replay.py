@@ -17,9 +17,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.objects.settings import RaceType
-from sim.objects.world import object_field
 from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS
+from sim.physics.objects.settings import RaceType
+from sim.physics.objects.world import object_field
 from sim.physics.simulation import LOOK_AHEAD
 from sim.race.engine import RaceTick
 from sim.race.result import LapRecord, RaceResult

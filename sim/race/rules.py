@@ -22,7 +22,7 @@ import yaml
 
 from sim.foundation.plural import counted
 from sim.foundation.strict_yaml import DuplicateKeyError, load_data
-from sim.objects.settings import (
+from sim.physics.objects.settings import (
     MAX_BOT_CARS,
     MAX_BOT_SPEED,
     MAX_OBSTACLES,

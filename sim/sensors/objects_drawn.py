@@ -12,7 +12,7 @@ import weakref
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.objects.field import ObjectField
+from sim.physics.objects.field import ObjectField
 from sim.sensors import camera_scene as scene
 from sim.sensors.camera import Solids
 

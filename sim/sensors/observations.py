@@ -22,8 +22,8 @@ from sim.physics.simulation import TrackSimulation
 from sim.sensors.objects_drawn import object_solids
 
 if TYPE_CHECKING:
-    from sim.realworld.perturbation import CameraPerturbation
-    from sim.realworld.render import PerturbedCamera
+    from sim.sensors.randomisation.perturbation import CameraPerturbation
+    from sim.sensors.randomisation.render import PerturbedCamera
 
 # Metres ahead along the centre line at which the vector sensor reports the track.
 LOOK_AHEAD_DISTANCES = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0)
@@ -83,13 +83,13 @@ class Observer:
         noise_seed: int | None = None,
     ) -> None:
         """From now on car `cars[i]`'s camera sees through `perturbations[i]`
-        (`sim.realworld`); the others keep theirs, the plain camera until given one.
+        (`sim.sensors.randomisation`); the others keep theirs, the plain camera until given one.
         `noise_seed` seeds the sensor noise (on the first call only). Nothing changes for a
         model without a camera."""
         if self._camera is None:
             return
         if self._perturbed is None:
-            from sim.realworld.render import PerturbedCamera
+            from sim.sensors.randomisation.render import PerturbedCamera
 
             self._perturbed = PerturbedCamera(self.sim.track, self._camera, self.sim.n, noise_seed)
         self._perturbed.set(cars, perturbations)
@@ -113,7 +113,7 @@ class Observer:
             )
             if self._perturbed is None:
                 frames = self._camera.render(x, y, yaw, solids=solids)
-            else:  # camera randomisation (sim.realworld): each car through its own camera
+            else:  # camera randomisation: each car through its own camera
                 which = np.arange(self.sim.n)[pick]
                 frames = self._perturbed.render(which, x, y, yaw, solids=solids)
             parts["camera"] = frames[..., None]

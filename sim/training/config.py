@@ -15,10 +15,10 @@ from sim.deepracer.files import DeepRacerFileError, TrainingParams
 from sim.env import EnvConfig
 from sim.garage.folder import ModelError, ModelFolder
 from sim.garage.options import blind_to_objects
-from sim.objects.reading import race_settings
-from sim.objects.settings import RaceSettings, RaceType
+from sim.physics.objects.reading import race_settings
+from sim.physics.objects.settings import RaceSettings, RaceType
 from sim.physics.simulation import EpisodeRules
-from sim.realworld.settings import read_camera_randomisation
+from sim.sensors.randomisation.settings import read_camera_randomisation
 
 
 def model_env_config(folder: ModelFolder) -> EnvConfig:

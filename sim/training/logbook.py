@@ -55,8 +55,8 @@ from sim.deepracer.files import (
     training_trace_path,
 )
 from sim.deepracer.vocabulary import EpisodeStatus
-from sim.objects.seen import SeenObjects, write_seen
 from sim.physics.car import STEP_SECONDS
+from sim.physics.objects.seen import SeenObjects, write_seen
 from sim.physics.simulation import TrackSimulation
 from sim.training.step_record import (
     ACTION,
@@ -136,7 +136,7 @@ class Logbook:
         self._pending_trace: dict[int, list[_TracedEpisode]] = {}
         self._traced_iterations: dict[int, bool] = {}
         self._run_trace_bytes = 0
-        # The objects at the end of the last traced episode (sim.objects.seen).
+        # The objects at the end of the last traced episode (sim.physics.objects.seen).
         self._seen: SeenObjects | None = None
         self.finished: list[FinishedEpisode] = []  # since the trainer last took them
         self.episodes = 0

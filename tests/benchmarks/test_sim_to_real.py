@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 import torch
 
+from benchmarks.sim.perturbed_driver import perturbed_driver
 from benchmarks.sim.sim_to_real import CONDITIONS
 from sim.garage.options import new_model
 from sim.physics.simulation import TrackSimulation
-from sim.realworld.driver import perturbed_driver
-from sim.realworld.perturbation import PLAIN, CameraPerturbation, draw_perturbation
-from sim.realworld.settings import CameraRandomisation
 from sim.sensors import camera_scene as scene
 from sim.sensors.camera import Camera
 from sim.sensors.observations import Observer
+from sim.sensors.randomisation.perturbation import PLAIN, CameraPerturbation, draw_perturbation
+from sim.sensors.randomisation.settings import CameraRandomisation
 from sim.training.evaluation import run_trials
 from sim.training.policy import build_network, driver_for_model, save_policy
 

@@ -318,7 +318,7 @@ async def test_the_race_type_is_chosen_in_the_editor_and_kept_when_edited() -> N
 
 
 async def test_camera_randomisation_is_chosen_in_the_editor_for_camera_models() -> None:
-    from sim.realworld.settings import CameraRandomisation, read_camera_randomisation
+    from sim.sensors.randomisation.settings import CameraRandomisation, read_camera_randomisation
 
     app = create_app(start="garage")
     async with app.run_test(size=(80, 24)) as pilot:

@@ -210,7 +210,7 @@ async def _start_a_minute_race(pilot: Pilot[Any], race_type: str) -> RaceScreen:
 
 async def test_a_race_among_boxes_is_chosen_in_the_races_screen_and_drawn() -> None:
     from racer_tui.widgets.race_map import RaceMap
-    from sim.objects.settings import RaceType
+    from sim.physics.objects.settings import RaceType
 
     app = create_app(start="races")
     async with app.run_test(size=(80, 24)) as pilot:
@@ -226,7 +226,7 @@ async def test_a_race_among_boxes_is_chosen_in_the_races_screen_and_drawn() -> N
 
 async def test_a_head_to_bot_race_draws_its_bot_cars_pointing_where_they_drive() -> None:
     from racer_tui.widgets.race_map import RaceMap
-    from sim.objects.settings import RaceType
+    from sim.physics.objects.settings import RaceType
 
     app = create_app(start="races")
     async with app.run_test(size=(80, 24)) as pilot:

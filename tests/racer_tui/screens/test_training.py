@@ -588,7 +588,7 @@ def test_the_agents_eye_view_shows_boxes_that_stand_still_and_says_when_it_canno
 
     from racer_tui.screens import training
     from sim.deepracer.files import SimTraceRow, sim_trace_text, write_training_params
-    from sim.objects.seen import SeenObjects, write_seen
+    from sim.physics.objects.seen import SeenObjects, write_seen
     from sim.physics.simulation import LOOK_AHEAD
     from sim.sensors import camera_scene as scene
 

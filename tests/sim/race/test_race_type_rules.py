@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from sim.objects.settings import RaceType
+from sim.physics.objects.settings import RaceType
 from sim.race.rules import (
     DEFAULT_RULES,
     RaceRules,

@@ -1,5 +1,5 @@
 """A race type's settings, with DeepRacer's own defaults (deepracer-simapp
-`obstacles_agent_ctrl.py`, `bot_cars_agent_ctrl.py`); `sim.objects.reading` reads them from
+`obstacles_agent_ctrl.py`, `bot_cars_agent_ctrl.py`); `sim.physics.objects.reading` reads them from
 `training_params.yaml`."""
 
 from __future__ import annotations

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from sim.deepracer.vocabulary import EpisodeStatus
-from sim.objects.field import ObjectField
-from sim.objects.settings import BotSettings, Lane, ObstacleSettings, RaceSettings, RaceType
+from sim.physics.objects.field import ObjectField
+from sim.physics.objects.settings import BotSettings, Lane, ObstacleSettings, RaceSettings, RaceType
 from sim.physics.simulation import EpisodeRules, TrackSimulation
 from sim.tracks.catalog import resolve_track
 

@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING, Any
 from numpy.typing import NDArray
 
 from sim.physics.simulation import TrackSimulation
-from sim.realworld.perturbation import CameraPerturbation
 from sim.sensors.observations import Observer
+from sim.sensors.randomisation.perturbation import CameraPerturbation
 
 if TYPE_CHECKING:
     from sim.garage.folder import ModelFolder

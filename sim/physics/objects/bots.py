@@ -31,10 +31,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.foundation.arrays import FloatArray
-from sim.objects.field import BOT_CAR_SHAPE, ObjectField
-from sim.objects.placement import CLEAR_BEFORE_LINE, Lanes
-from sim.objects.settings import BotSettings
 from sim.physics.car import CarSpec
+from sim.physics.objects.field import BOT_CAR_SHAPE, ObjectField
+from sim.physics.objects.placement import CLEAR_BEFORE_LINE, Lanes
+from sim.physics.objects.settings import BotSettings
 from sim.tracks.track import Track
 
 # A bot's look-ahead point, like a racecar's: its progress is measured there (simapp).

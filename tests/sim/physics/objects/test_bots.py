@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from sim.deepracer.vocabulary import EpisodeStatus
-from sim.objects.settings import BotSettings, RaceSettings, RaceType
+from sim.physics.objects.settings import BotSettings, RaceSettings, RaceType
 from sim.physics.simulation import TrackSimulation
 from sim.race.driver import reference_driver
 from sim.race.engine import race_ticks, run_race
@@ -195,7 +195,7 @@ def test_a_replay_shows_the_objects_where_the_race_had_them(preset: str) -> None
 
 
 def test_the_camera_sees_each_cars_own_objects() -> None:
-    from sim.objects.settings import Lane, ObstacleSettings
+    from sim.physics.objects.settings import Lane, ObstacleSettings
     from sim.sensors import camera_scene as scene
     from sim.sensors.observations import Observer
 

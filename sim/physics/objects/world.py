@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from sim.objects.bots import BotField
-from sim.objects.field import ObjectField, ObstacleField
-from sim.objects.settings import RaceSettings, RaceType
+from sim.physics.objects.bots import BotField
+from sim.physics.objects.field import ObjectField, ObstacleField
+from sim.physics.objects.settings import RaceSettings, RaceType
 from sim.tracks.track import Track
 
 

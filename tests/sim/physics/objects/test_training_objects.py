@@ -71,9 +71,9 @@ def test_a_head_to_bot_model_trains_among_its_bots_and_a_blind_one_is_refused() 
 
 def test_training_keeps_where_the_bots_stood_at_its_last_traced_row() -> None:
     """The sim-trace has no object columns: the logbook keeps the objects of its last row
-    beside it (sim.objects.seen), for the app's agent's-eye view."""
+    beside it (sim.physics.objects.seen), for the app's agent's-eye view."""
     from sim.deepracer.files import last_sim_trace_row
-    from sim.objects.seen import read_seen
+    from sim.physics.objects.seen import read_seen
     from sim.training.logbook import Logbook
 
     folder = new_model("chaser", sensors=["lidar"])

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from sim.foundation.atomic import write_text_atomic
-from sim.objects.field import BOT_CAR_SHAPE, BOX_SHAPE, StandingField
+from sim.physics.objects.field import BOT_CAR_SHAPE, BOX_SHAPE, StandingField
 from sim.tracks.track import Track
 
 SEEN_FILE = "training-objects.json"

@@ -1,4 +1,4 @@
-"""Training for the real world: camera randomisation (issue 22, part 4).
+"""Camera randomisation: training for the real world (issue 22, part 4).
 
 A real car's camera never shows the clean picture racer-tui renders: the light changes,
 the sensor is noisy, the lens blurs, the camera sits a little higher or lower and looks a
@@ -13,35 +13,6 @@ drawn afresh within bounds, so its policy cannot lean on one exact picture.
   rendered frames.
 * `render`: `PerturbedCamera`, which renders each car through its own perturbation (the
   pose through the camera's geometry) for `sim.sensors.observations.Observer`.
-* `driver`: a trained policy driving through a chosen perturbation (the sim-to-real
-  benchmark's evaluations); torch is imported only when it runs.
 
 Evaluations and races keep the plain render; only training draws perturbations.
 """
-
-from sim.realworld.perturbation import PLAIN, CameraPerturbation, Palette, draw_perturbation
-from sim.realworld.settings import (
-    CAMERA_RANDOMISATION_KEYS,
-    FAMILIES,
-    MAX_STRENGTH,
-    CameraRandomisation,
-    camera_randomisation_keys,
-    parse_camera_randomisation,
-    read_camera_randomisation,
-    with_camera_randomisation_keys,
-)
-
-__all__ = [
-    "CAMERA_RANDOMISATION_KEYS",
-    "FAMILIES",
-    "MAX_STRENGTH",
-    "PLAIN",
-    "CameraPerturbation",
-    "CameraRandomisation",
-    "Palette",
-    "camera_randomisation_keys",
-    "draw_perturbation",
-    "parse_camera_randomisation",
-    "read_camera_randomisation",
-    "with_camera_randomisation_keys",
-]

@@ -1,7 +1,7 @@
 """The objects of a simulation, car by car, and what DeepRacer makes of them: crashes, what
 sensors see and the reward `params`' object keys (docs/deepracer-objects.md). `ObjectField`
 is what boxes and bot cars share; `ObstacleField` stands an object-avoidance race's boxes,
-`sim.objects.bots.BotField` drives a head-to-bot race's bot cars.
+`sim.physics.objects.bots.BotField` drives a head-to-bot race's bot cars.
 
 Each car of a simulation drives its own episode, so each has its own objects, placed again
 when its episode starts. A crash is DeepRacer's: a corner of the car's footprint inside an
@@ -28,7 +28,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from sim.foundation.arrays import FloatArray
-from sim.objects.placement import (
+from sim.physics.car import CarSpec
+from sim.physics.objects.placement import (
     BOT_CAR_HEIGHT,
     BOT_CAR_LENGTH,
     BOT_CAR_WIDTH,
@@ -41,8 +42,7 @@ from sim.objects.placement import (
     ObjectPose,
     obstacle_poses,
 )
-from sim.objects.settings import Lane, ObstacleSettings
-from sim.physics.car import CarSpec
+from sim.physics.objects.settings import Lane, ObstacleSettings
 from sim.tracks.track import Track
 
 # The DeepRacer camera's horizontal field of view and near plane (simapp `frustum.py`).
@@ -353,7 +353,7 @@ class ObjectField:
 
 
 class StandingField(ObjectField):
-    """One car's objects standing where a training trace saw them (`sim.objects.seen`): what
+    """One car's objects standing where a training trace saw them (`sim.physics.objects.seen`): what
     the app's agent's-eye view draws for shuffled boxes and bot cars."""
 
     def __init__(self, track: Track, shape: ObjectShape, poses: FloatArray) -> None:

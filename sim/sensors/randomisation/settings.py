@@ -1,7 +1,7 @@
 """What a camera model's training randomises, and how a model folder keeps it.
 
 Five families, each with a strength from 0 (off) to `MAX_STRENGTH`; 1 is racer-tui's
-default range (`sim.realworld.perturbation` says what each strength draws):
+default range (`sim.sensors.randomisation.perturbation` says what each strength draws):
 
 * light: brightness and contrast;
 * noise: sensor noise, fresh in every frame;

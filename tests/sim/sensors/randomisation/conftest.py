@@ -10,7 +10,7 @@ from sim.physics.simulation import TrackSimulation
 from sim.sensors.camera import Camera
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
-from tests.sim.realworld.helpers import CARS
+from tests.sim.sensors.randomisation.helpers import CARS
 
 
 @pytest.fixture(scope="module")

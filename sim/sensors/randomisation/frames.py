@@ -22,8 +22,8 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.realworld.perturbation import CameraPerturbation
 from sim.sensors import camera_scene as scene
+from sim.sensors.randomisation.perturbation import CameraPerturbation
 
 UInt8Array = NDArray[np.uint8]
 Float32Array = NDArray[np.float32]

@@ -1,5 +1,5 @@
 """A race type's settings read from `training_params.yaml` under DeepRacer's own keys
-(`sim.objects.settings` has them and their defaults).
+(`sim.physics.objects.settings` has them and their defaults).
 
 The file is untrusted: every key is checked, and what is wrong is one sentence naming the
 key and what it takes. Keys of another race type are kept but do not apply.
@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from sim.deepracer.files import DeepRacerFileError, TrainingParams, read_flag
-from sim.objects.settings import (
+from sim.physics.objects.settings import (
     MAX_BOT_CARS,
     MAX_BOT_SPEED,
     MAX_OBSTACLES,

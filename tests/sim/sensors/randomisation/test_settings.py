@@ -9,7 +9,7 @@ from sim.deepracer.files import DeepRacerFileError, TrainingParams
 from sim.garage.clone import clone_model
 from sim.garage.folder import ModelError
 from sim.garage.options import model_spec, new_model, spec_of
-from sim.realworld.settings import (
+from sim.sensors.randomisation.settings import (
     CAMERA_RANDOMISATION_KEYS,
     MAX_STRENGTH,
     CameraRandomisation,

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sim.deepracer.vocabulary import EpisodeStatus
-from sim.objects.settings import Lane, ObstacleSettings, RaceSettings, RaceType
+from sim.physics.objects.settings import Lane, ObstacleSettings, RaceSettings, RaceType
 from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import resolve_track
 

@@ -25,8 +25,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from sim.realworld.settings import CameraRandomisation
 from sim.sensors import camera_scene as scene
+from sim.sensors.randomisation.settings import CameraRandomisation
 
 # Ranges at strength 1.
 LIGHT_GAIN = 1.5  # brightness gain within [1/1.5, 1.5]

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from sim.garage.options import new_model
-from sim.realworld.perturbation import CameraPerturbation
-from sim.realworld.settings import CameraRandomisation
 from sim.sensors.camera import Camera
 from sim.sensors.observations import Observer
+from sim.sensors.randomisation.perturbation import CameraPerturbation
+from sim.sensors.randomisation.settings import CameraRandomisation
 from sim.tracks.track import Track
 from sim.training import events
 from sim.training.trainer import RunOptions, Trainer

@@ -22,7 +22,7 @@ from typing import Final
 import numpy as np
 
 from sim.foundation.arrays import FloatArray
-from sim.objects.settings import Lane, ObstacleSettings
+from sim.physics.objects.settings import Lane, ObstacleSettings
 from sim.tracks.geometry import PolylineProjector
 from sim.tracks.track import Track
 

@@ -3,7 +3,7 @@
 A car's pose jitter is a camera of its own geometry (the model's `CameraSpec` moved up and
 tilted), built on first use and kept: cars drawn the same height and pitch share it, and
 every camera of a track shares one texture (`sim.sensors.camera`). Light, colours, blur and noise
-are applied to the rendered frames (`sim.realworld.frames`). A car whose perturbation is
+are applied to the rendered frames (`sim.sensors.randomisation.frames`). A car whose perturbation is
 `PLAIN` gets exactly the plain camera's frame.
 """
 
@@ -16,9 +16,9 @@ from dataclasses import replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from sim.realworld.frames import Float32Array, SensorNoise, perturb_frames, tone_table
-from sim.realworld.perturbation import PLAIN, CameraPerturbation
 from sim.sensors.camera import Camera, Solids, UInt8Array
+from sim.sensors.randomisation.frames import Float32Array, SensorNoise, perturb_frames, tone_table
+from sim.sensors.randomisation.perturbation import PLAIN, CameraPerturbation
 from sim.tracks.track import Track
 
 # Cameras of other geometries kept at once (pose strength 1 draws 9 heights x 13 pitches;

@@ -9,9 +9,14 @@ import numpy as np
 import pytest
 
 from sim.deepracer.files import DeepRacerFileError, TrainingParams, parse_training_params
-from sim.objects.placement import CLEAR_BEFORE_LINE, Lanes, obstacle_distances, obstacle_poses
-from sim.objects.reading import race_settings
-from sim.objects.settings import Lane, ObstacleSettings, RaceType
+from sim.physics.objects.placement import (
+    CLEAR_BEFORE_LINE,
+    Lanes,
+    obstacle_distances,
+    obstacle_poses,
+)
+from sim.physics.objects.reading import race_settings
+from sim.physics.objects.settings import Lane, ObstacleSettings, RaceType
 from sim.tracks.catalog import resolve_track
 
 

@@ -10,22 +10,22 @@ import pytest
 
 from sim.env import BatchedDeepRacer, DeepRacerEnv, EnvConfig
 from sim.physics.simulation import TrackSimulation
-from sim.realworld import perturbation as drawn
-from sim.realworld.frames import SURFACE_OF_LEVEL, SURFACES
-from sim.realworld.perturbation import (
+from sim.sensors import camera_scene as scene
+from sim.sensors.camera import Camera, Solids
+from sim.sensors.observations import Observer
+from sim.sensors.randomisation import perturbation as drawn
+from sim.sensors.randomisation.frames import SURFACE_OF_LEVEL, SURFACES
+from sim.sensors.randomisation.perturbation import (
     PLAIN,
     CameraPerturbation,
     Palette,
     draw_perturbation,
     drivable,
 )
-from sim.realworld.render import PerturbedCamera
-from sim.realworld.settings import CameraRandomisation
-from sim.sensors import camera_scene as scene
-from sim.sensors.camera import Camera, Solids
-from sim.sensors.observations import Observer
+from sim.sensors.randomisation.render import PerturbedCamera
+from sim.sensors.randomisation.settings import CameraRandomisation
 from sim.tracks.track import Track
-from tests.sim.realworld.helpers import CARS, plain_frames
+from tests.sim.sensors.randomisation.helpers import CARS, plain_frames
 
 WALLS = (scene.WALL_LOW_X, scene.WALL_HIGH_X, scene.WALL_LOW_Y, scene.WALL_HIGH_Y)
 
