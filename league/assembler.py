@@ -48,8 +48,8 @@ from sim.foundation.ids import canonical_json, content_hash
 from sim.foundation.names import is_valid_name
 from sim.foundation.remedies import Fix
 from sim.garage.folder import ModelFolder
-from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
-from sim.race.physics import CURRENT as CURRENT_PHYSICS
+from sim.physics.labels import BEFORE_VERSIONING, DEEPRACER
+from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track, TrackError
 
@@ -57,6 +57,18 @@ RACER_TUI = "racer-tui"
 DRFC = "deepracer-for-cloud"
 CONSOLE = "console-logs"
 MAX_TRIALS = 1000
+# The columns of a stored submission lap (`submission_laps`), one per EvaluationLap field:
+# what each lap of a submission record holds. Here, below the modules that store and sync
+# submissions, so that league.records can read them without importing those.
+LAP_COLUMNS = (
+    "number",
+    "time_seconds",
+    "completion",
+    "status",
+    "offtracks",
+    "crashes",
+    "completed",
+)
 
 
 @dataclass(frozen=True)
@@ -106,7 +118,7 @@ class Submission:
     training: dict[str, Any] | None
     evaluation_file: str
     laps: tuple[EvaluationLap, ...]
-    physics: str = CURRENT_PHYSICS  # which simulator timed the laps (sim.race.physics)
+    physics: str = CURRENT_PHYSICS  # which simulator timed the laps (sim.physics.labels)
     race_type: str = TIME_TRIAL  # league.race_types: which board its laps are ranked on
     stale: str | None = None  # why the evaluation is older than the policy, if it is
 

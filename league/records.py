@@ -18,11 +18,11 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from league.assembler import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.entries import refresh_entries
 from league.errors import LeagueError
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
 from league.store import League
-from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from sim.foundation.ids import content_hash
 
 

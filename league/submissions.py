@@ -1,5 +1,10 @@
 """Storing assembled submissions: the submission row, its laps and its cache row, in one
-transaction, so an interrupted submit leaves nothing behind."""
+transaction, so an interrupted submit leaves nothing behind.
+
+A submission is refused when another racer registered its model first
+(league.sync.models), so this module stands above sync and league.records; the columns
+of a submission's laps, which league.records reads too, are league.assembler's.
+"""
 
 from __future__ import annotations
 
@@ -8,24 +13,15 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from league.assembler import EvaluationLap, Submission, assemble
+from league.assembler import LAP_COLUMNS, EvaluationLap, Submission, assemble
 from league.entries import refresh_entries
 from league.errors import LeagueError
 from league.race_types import TIME_TRIAL
 from league.racers import check_name, ensure_racer
 from league.store import League, now_iso
+from league.sync.models import local_refusal
 from league.tracks import ensure_track
-from sim.race.plausible import first_impossible_lap
-
-LAP_COLUMNS = (
-    "number",
-    "time_seconds",
-    "completion",
-    "status",
-    "offtracks",
-    "crashes",
-    "completed",
-)
+from sim.coach.plausible import first_impossible_lap
 
 
 @dataclass(frozen=True)
@@ -63,9 +59,6 @@ def submit(league: League, submission: Submission) -> Submitted:
         )
         if existing is not None:
             return Submitted(str(existing["id"]), duplicate=True)
-        # Imported here: the league.sync package reads this module's lap columns.
-        from league.sync.models import local_refusal
-
         laps = [lap_row(lap) for lap in submission.laps]
         borrowed = local_refusal(league, racer, submission.model_hash)
         if borrowed is not None:
@@ -108,7 +101,7 @@ def submit(league: League, submission: Submission) -> Submitted:
 
 def check_possible_laps(submission: Submission) -> None:
     """LeagueError unless every completed lap is one a car could drive on the track: no
-    quicker than the track's floor for the physics that timed it (`sim.race.plausible`)."""
+    quicker than the track's floor for the physics that timed it (`sim.coach.plausible`)."""
     driven = [(lap.number, lap.time_seconds) for lap in submission.completed_laps]
     impossible = first_impossible_lap(submission.track_hash, submission.physics, driven)
     if impossible is not None:

@@ -23,6 +23,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+from league.assembler import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.assembler import assemble
 from league.entries import (
     SUBMISSION_RULES,
@@ -38,7 +39,6 @@ from league.racers import default_colour
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
 from league.seasons import get_season, season_standings
 from league.store import League, now_iso, record_body
-from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.submissions import submit
 from sim.deepracer.action_space import discrete_grid
 from sim.deepracer.files import (
@@ -60,7 +60,7 @@ from sim.deepracer.files import (
     write_training_params,
 )
 from sim.foundation.ids import content_hash, new_id
-from sim.race.physics import CURRENT as CURRENT_PHYSICS
+from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.race.rules import DEFAULT_RULES
 from sim.tracks.catalog import resolve_track
 

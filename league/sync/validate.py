@@ -21,13 +21,13 @@ from datetime import date, datetime
 from typing import Any, Final
 
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
+from league.assembler import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.errors import LeagueError
 from league.nights import NIGHT_CHANGES
 from league.race_types import HEAD_TO_BOT, OBJECT_AVOIDANCE, race_type_of, words
 from league.racers import HEX_COLOUR, check_name
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
 from league.seasons import check_points
-from league.submissions import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.sync.dates import check_dates
 from league.sync.errors import RecordInvalidError
 from league.sync.kinds import BUNDLE_KIND, MODEL_KIND, PROFILE_KIND, profile_id
@@ -37,8 +37,8 @@ from league.trust.roster import ACTIONS, FOUNDER_ID, ROLES
 from sim.deepracer.vocabulary import is_physics
 from sim.foundation.ids import is_valid_id
 from sim.foundation.names import NAME_RULE, is_valid_name
-from sim.race.physics import PHYSICAL
-from sim.race.plausible import first_impossible_lap
+from sim.physics.labels import PHYSICAL
+from sim.coach.plausible import first_impossible_lap
 from sim.race.result import RaceResult, ResultError
 from sim.race.rules import RulesError, rules_from_mapping
 
@@ -220,7 +220,7 @@ def physics(value: Any, field: str) -> None:
         raise _bad(field, "is not 'racer-tui/<version>' or 'deepracer'")
 
 
-# Which simulator timed the laps (sim.race.physics); absent in records made before.
+# Which simulator timed the laps (sim.physics.labels); absent in records made before.
 _PHYSICS = Field("TEXT", physics, nullable=True, optional=True)
 # A submission's race type when it is not a time trial (league.race_types); absent in time
 # trials, as in every submission made before race types.
@@ -403,7 +403,7 @@ def _check_laps(laps: Any, kind: str) -> None:
 
 def _check_possible_laps(record: SyncRecord) -> None:
     """No lap quicker than any car could drive the track (when this machine knows it), by
-    the floor for the physics that timed it (`sim.race.plausible`)."""
+    the floor for the physics that timed it (`sim.coach.plausible`)."""
     timed_by = str(record.body.get("physics") or "")
     driven = [
         (lap["number"], lap.get("raw_seconds", lap["time_seconds"]))
