@@ -8,7 +8,7 @@ SQL `ORDER BY` on the cached columns agrees with `rank()` within one racer.
 
 The `board` table keeps each racer's best entry per track, race type and physics under
 every method, clustered by (method, track), so the leaderboard of a track is one range
-scan. Laps of different physics (sim.race.physics) or race types (league.race_types: a
+scan. Laps of different physics (sim.physics.labels) or race types (league.race_types: a
 time trial, object avoidance, head-to-bot) are never ranked together: each has its own
 board.
 
@@ -29,7 +29,7 @@ from typing import Any
 from league.assembler import CONSOLE, DRFC
 from league.race_types import TIME_TRIAL, race_type_of
 from league.store import League
-from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
+from sim.physics.labels import BEFORE_VERSIONING, DEEPRACER
 from sim.race.rules import (
     DEFAULT_RULES,
     RaceRules,

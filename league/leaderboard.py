@@ -3,7 +3,7 @@
 Entries are submissions (evaluations) and races. The cached `entries` table (see
 league.entries) holds every entry's score under every ranking method with corrections
 applied, and `board` each racer's best entry per board and method. A board is a track
-under one race type (league.race_types) and one physics (sim.race.physics): a track's
+under one race type (league.race_types) and one physics (sim.physics.labels): a track's
 leaderboard of one race type is one range of the `board_in_order` index, already in the
 league's one total order but for the last tie-breaks, which `in_ranking_order` settles with
 `rank()`. Filtered boards (a night, a season) pick each racer's best straight from
@@ -63,7 +63,7 @@ class LeaderboardRow:
     average_lap: float | None
     offtracks: int
     laps_driven: int
-    physics: str  # which simulator timed the laps (sim.race.physics): each its own board
+    physics: str  # which simulator timed the laps (sim.physics.labels): each its own board
     race_type: str  # league.race_types: "time_trial", "object_avoidance"...: each its own board
     rank: int = 0
     # Its standing here (league.trust.standing: replayed, verifiable, unverifiable), once

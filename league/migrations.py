@@ -325,7 +325,7 @@ CREATE INDEX races_track_started ON races(track_hash, started_at, id)
 """
 
 # Version 5: which simulator's physics produced a submission's or race's laps (see
-# sim.race.physics). NULL in rows recorded before: racer-tui's physics 1, or DeepRacer's
+# sim.physics.labels). NULL in rows recorded before: racer-tui's physics 1, or DeepRacer's
 # for its own evaluation files. The leaderboard cache is keyed by physics too, so it is
 # made again (it is rebuilt from the shared rows).
 PHYSICS = """

@@ -11,7 +11,7 @@ from typing import Any
 from league.nights import Entrant, Heat, Night, Standing
 from league.race_types import race_type_of
 from league.report import SCORE_TITLES, Column, markdown_escape, seconds, to_csv, to_markdown
-from sim.race.physics import PHYSICAL
+from sim.physics.labels import PHYSICAL
 from sim.race.rules import RankingMethod
 
 

@@ -19,10 +19,10 @@ from league.race_types import TIME_TRIAL, words
 from league.racers import check_name, display_names_overrides, ensure_racer
 from league.store import League, record_body
 from league.tracks import ensure_track, track_names
+from sim.coach.plausible import first_impossible_lap
 from sim.foundation.ids import content_hash, is_valid_id
 from sim.foundation.remedies import Fix
-from sim.race.physics import PHYSICAL
-from sim.race.plausible import first_impossible_lap
+from sim.physics.labels import PHYSICAL
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
 from sim.tracks.catalog import find_track_by_hash, resolve_track
@@ -119,7 +119,7 @@ def record_race(
 
 def check_possible_laps(result: RaceResult) -> None:
     """LeagueError unless every lap of `result` is one a car could drive on its track: no
-    quicker than the track's floor for its physics (`sim.race.plausible`)."""
+    quicker than the track's floor for its physics (`sim.coach.plausible`)."""
     driven = [
         (lap.number, lap.raw_seconds)  # as driven: penalties only ever add time
         for lap in result.laps

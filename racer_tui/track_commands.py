@@ -206,8 +206,8 @@ def _model_space(model: str | None) -> ActionSpace | None:
 
 def _facts(track_name: str, model: str | None) -> dict[str, object]:
     from sim.coach.limit_lap import limit_lap
+    from sim.coach.plausible import fastest_possible_lap
     from sim.physics.reference_driver import reference_lap
-    from sim.race.plausible import fastest_possible_lap
 
     track = resolve_track(track_name)
     space = _model_space(model)
@@ -221,7 +221,7 @@ def _facts(track_name: str, model: str | None) -> dict[str, object]:
     limit = limit_lap(track)
     facts["limit_flying_lap_s"] = round(limit.flying_seconds, 3)
     facts["limit_standing_lap_s"] = round(limit.standing_seconds, 3)
-    # The league's floor: no lap under it is accepted anywhere (sim.race.plausible).
+    # The league's floor: no lap under it is accepted anywhere (sim.coach.plausible).
     facts["lap_floor_s"] = round(fastest_possible_lap(track), 3)
     if space is not None:
         within = limit_lap(track, space=space)

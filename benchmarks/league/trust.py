@@ -67,8 +67,8 @@ from sim.deepracer.files import (
     write_training_params,
 )
 from sim.foundation.ids import canonical_json, new_id
+from sim.physics.labels import DEEPRACER
 from sim.race.engine import run_race
-from sim.race.physics import DEEPRACER
 from sim.race.result import LapRecord, RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps
 from sim.tracks.catalog import resolve_track

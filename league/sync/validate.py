@@ -34,11 +34,11 @@ from league.sync.kinds import BUNDLE_KIND, MODEL_KIND, PROFILE_KIND, profile_id
 from league.sync.record import HASH_PATTERN, SyncRecord, parse_json
 from league.trust.keys import is_public_hex
 from league.trust.roster import ACTIONS, FOUNDER_ID, ROLES
+from sim.coach.plausible import first_impossible_lap
 from sim.deepracer.vocabulary import is_physics
 from sim.foundation.ids import is_valid_id
 from sim.foundation.names import NAME_RULE, is_valid_name
 from sim.physics.labels import PHYSICAL
-from sim.coach.plausible import first_impossible_lap
 from sim.race.result import RaceResult, ResultError
 from sim.race.rules import RulesError, rules_from_mapping
 

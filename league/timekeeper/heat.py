@@ -18,9 +18,9 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from enum import StrEnum
 
+from sim.coach.plausible import fastest_possible_lap
 from sim.foundation.ids import new_id
-from sim.race.physics import PHYSICAL
-from sim.race.plausible import fastest_possible_lap
+from sim.physics.labels import PHYSICAL
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import RaceRules, lap_counts, score_laps
 from sim.tracks.track import Track
@@ -32,7 +32,7 @@ MIN_LAP_SECONDS = 1.0
 
 def physical_floor(track: Track) -> float:
     """Seconds no real car's lap of `track` is under: its shortest loop at a real car's top
-    speed (`sim.race.plausible.PHYSICAL_TOP_SPEED`, which says why it is so generous), the
+    speed (`sim.coach.plausible.PHYSICAL_TOP_SPEED`, which says why it is so generous), the
     floor a physical heat's result is checked against when it is recorded."""
     return fastest_possible_lap(track, PHYSICAL)
 
@@ -234,7 +234,7 @@ class TimekeptHeat:
     def result(
         self, *, racer: str, car: str, car_hash: str, track_name: str, track_hash: str
     ) -> RaceResult:
-        """The heat as a league result, timed on a physical track (`sim.race.physics`)."""
+        """The heat as a league result, timed on a physical track (`sim.physics.labels`)."""
         if self.phase is not Phase.OVER:
             raise TimekeeperError("The race is still on; end it first.")
         laps = self.lap_records()

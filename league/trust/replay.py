@@ -25,9 +25,9 @@ from league.store import League, now_iso
 from league.sync import incoming
 from league.sync.local import STORE_SETTING, get_setting
 from league.sync.record import Seal, SyncRecord
+from sim.physics.labels import BEFORE_VERSIONING, CURRENT, PHYSICAL
 from sim.race.driver import Driver
 from sim.race.engine import run_race
-from sim.race.physics import BEFORE_VERSIONING, CURRENT, PHYSICAL
 from sim.race.rules import RulesError, rules_from_mapping
 from sim.tracks.catalog import find_track_by_hash, resolve_track
 from sim.tracks.track import Track

@@ -22,8 +22,8 @@ from enum import StrEnum
 from typing import Final
 
 from league.store import League
+from sim.physics.labels import BEFORE_VERSIONING, CURRENT, PHYSICAL
 from sim.race.driver import REFERENCE_NAME
-from sim.race.physics import BEFORE_VERSIONING, CURRENT, PHYSICAL
 from sim.tracks.catalog import find_track_by_hash
 
 

@@ -36,8 +36,8 @@ from racer_tui.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
 from racer_tui.screens.race_screen import clock_text, countdown_text
 from racer_tui.screens.timekeeper import lap_clock_text
 from sim.foundation.plural import counted
+from sim.physics.labels import PHYSICAL
 from sim.physics.objects.settings import RaceType
-from sim.race.physics import PHYSICAL
 
 POLL_SECONDS = 2.0  # the standings, from the database
 LIVE_SECONDS = 0.5  # the heat in progress, from its file

@@ -50,8 +50,8 @@ from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.widgets.track_label import track_options
 from sim.garage.folder import ModelFolder, list_models
+from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.race.driver import REFERENCE_NAME
-from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, preset_rules

@@ -8,7 +8,7 @@
 - `limit_lap`: the two together for a track, cached by the track's content.
 - `tracking`: the simulator driven along a limit lap, to check that it can be driven.
 - `lap_floor`: the fastest lap any DeepRacer car could drive on a track under DeepRacer's
-  rules, the floor under which a league accepts no lap (`sim.race.plausible`).
+  rules, the floor under which a league accepts no lap (`sim.coach.plausible`).
 
 No Textual, no torch: the command line and the app both read these.
 """

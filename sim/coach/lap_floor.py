@@ -1,5 +1,5 @@
 """The fastest lap any DeepRacer car could drive on a track, under DeepRacer's rules: the
-floor under which a league accepts no lap (`sim.race.plausible` says where it applies).
+floor under which a league accepts no lap (`sim.coach.plausible` says where it applies).
 
 It is the coach's limit lap (`racing_line.optimise_line`, `speed_profile`) for a car more
 able than any DeepRacer simulator's, on a road widened by what DeepRacer lets a car cut:

@@ -27,7 +27,7 @@ from typing import Final
 from shapely.geometry import Polygon
 
 from sim.deepracer.vocabulary import MAX_SPEED
-from sim.race.physics import PHYSICAL
+from sim.physics.labels import PHYSICAL
 from sim.tracks.track import Track
 
 # A real DeepRacer car's top speed, for the floor of physical laps. Its action space tops
@@ -52,7 +52,7 @@ def hull_floor(track: Track, top_speed: float = MAX_SPEED) -> float:
 
 
 def fastest_possible_lap(track: Track, physics: str = "") -> float:
-    """Seconds: no lap of `physics` (`sim.race.physics`) on `track` can be quicker."""
+    """Seconds: no lap of `physics` (`sim.physics.labels`) on `track` can be quicker."""
     if physics == PHYSICAL:
         return hull_floor(track, PHYSICAL_TOP_SPEED)
     from sim.coach.lap_floor import lap_floor

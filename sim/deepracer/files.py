@@ -647,7 +647,7 @@ def write_evaluation_metrics(
 
 def evaluation_metrics_text(trials: Sequence[EvaluationTrial], physics: str | None = None) -> str:
     """DeepRacer's EvaluationMetrics; with `physics`, racer-tui's own top-level key saying
-    which simulator timed the laps (sim.race.physics; DeepRacer's readers ignore it)."""
+    which simulator timed the laps (sim.physics.labels; DeepRacer's readers ignore it)."""
     document: dict[str, Any] = {"metrics": [_metric_dict(t) for t in trials]}
     if physics is not None:
         document["physics"] = physics

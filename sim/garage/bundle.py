@@ -166,7 +166,7 @@ def export_bundle(folder: ModelFolder, out: Path, *, replace: bool = False) -> P
     )
     if evaluations:
         trials = _from_deepracer(read_evaluation_metrics, evaluations[-1])
-        # The physics that timed the laps travels with them (sim.race.physics).
+        # The physics that timed the laps travels with them (sim.physics.labels).
         timed_by = _from_deepracer(read_evaluation_physics, evaluations[-1])
         members[EVALUATION] = evaluation_metrics_text(trials, timed_by).encode("utf-8")
     for member, data in members.items():

@@ -58,7 +58,7 @@ from sim.garage.folder import (
 )
 from sim.garage.imported import ImportResult
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
-from sim.race.physics import DEEPRACER as DEEPRACER_PHYSICS
+from sim.physics.labels import DEEPRACER as DEEPRACER_PHYSICS
 
 if TYPE_CHECKING:
     from sim.garage.frozen_graph import FolderWeights

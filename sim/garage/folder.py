@@ -375,10 +375,10 @@ class ModelFolder:
         return None
 
     def trained_physics(self) -> str | None:
-        """The physics (sim.race.physics) the policy learnt to drive, or None untrained. A
+        """The physics (sim.physics.labels) the policy learnt to drive, or None untrained. A
         policy whose trainer did not say was trained before physics was recorded."""
         from sim.deepracer.vocabulary import is_physics
-        from sim.race.physics import BEFORE_VERSIONING, DEEPRACER
+        from sim.physics.labels import BEFORE_VERSIONING, DEEPRACER
 
         if not self.has_policy():
             return None

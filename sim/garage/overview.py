@@ -167,7 +167,7 @@ def _camera_randomisation_words(folder: ModelFolder, params: TrainingParams) -> 
 
 def physics_note(trained: str | None) -> str | None:
     """One sentence when the policy learnt another car than today's, else None."""
-    from sim.race.physics import CURRENT, DEEPRACER, describe
+    from sim.physics.labels import CURRENT, DEEPRACER, describe
 
     if trained is None or trained == CURRENT:
         return None

@@ -46,7 +46,7 @@ def training_summary(folder: ModelFolder) -> dict[str, Any]:
         "message": None,
         "problem": None,  # a failure's message without its remedy, and the remedy's name
         "fix": None,
-        # The car the policy learnt (sim.race.physics); travels with a bundle's summary.
+        # The car the policy learnt (sim.physics.labels); travels with a bundle's summary.
         "physics": folder.trained_physics(),
     }
     if state is not None:

@@ -17,7 +17,7 @@ from typing import Any
 from sim.deepracer.vocabulary import is_physics
 from sim.foundation.ids import is_valid_id
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
-from sim.race.physics import BEFORE_VERSIONING, CURRENT
+from sim.physics.labels import BEFORE_VERSIONING, CURRENT
 from sim.race.rules import RaceRules, RulesError, Score, rules_from_mapping, score_laps
 from sim.race.trace import RaceTrace
 
@@ -100,7 +100,7 @@ class RaceResult:
     total_offtracks: int  # including off-tracks in a lap the window cut
     started_at: str  # ISO-8601 UTC
     trace: RaceTrace | None = None
-    physics: str = CURRENT  # the simulator's physics (sim.race.physics): lap times of
+    physics: str = CURRENT  # the simulator's physics (sim.physics.labels): lap times of
     # different physics are never ranked together
 
     # --- league.ranking.Rankable ---------------------------------------------------------

@@ -44,10 +44,10 @@ from sim.deepracer.files import (
 from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.atomic import write_text_atomic
 from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
+from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.physics.objects.settings import RaceSettings
 from sim.physics.resets import ResetRules
 from sim.physics.simulation import EpisodeRules, TrackSimulation, let_other_threads_run
-from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.tracks.track import Track
 from sim.training.logbook import closest_waypoint
 from sim.training.trace_pose import RowPoses

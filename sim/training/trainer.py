@@ -31,8 +31,8 @@ import torch
 
 from sim.foundation.atomic import write_text_atomic
 from sim.garage.folder import ModelError, ModelFolder
+from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.physics.simulation import reversed_track
-from sim.race.physics import CURRENT as CURRENT_PHYSICS
 from sim.reward import limit as reward_limit
 from sim.reward import sandbox as reward_sandbox
 from sim.sensors.observations import SensorOptions

@@ -25,7 +25,7 @@ from sim.deepracer.files import (
     write_training_params,
 )
 from sim.foundation.ids import new_id
-from sim.race.physics import CURRENT
+from sim.physics.labels import CURRENT
 from sim.race.result import LapRecord, RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps
 from sim.tracks.catalog import resolve_track

@@ -21,10 +21,10 @@ from league.sync.record import make_record
 from league.sync.validate import check_record
 from league.timekeeper.heat import TimekeeperError, TimekeptHeat, physical_floor
 from racer_tui.cli import main
+from sim.coach.plausible import fastest_possible_lap
 from sim.foundation.ids import new_id
+from sim.physics.labels import PHYSICAL
 from sim.race.engine import run_race
-from sim.race.physics import PHYSICAL
-from sim.race.plausible import fastest_possible_lap
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
 from tests.league.helpers import model_folder, race_result

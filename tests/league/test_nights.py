@@ -211,7 +211,7 @@ def test_a_night_of_simulated_and_physical_cars_is_one_ranking(league: League) -
     from dataclasses import replace
 
     from league.leaderboard import Filters, leaderboard
-    from sim.race.physics import PHYSICAL
+    from sim.physics.labels import PHYSICAL
 
     new_season(league, "mixed", parse_points("10,6,4"))
     rules = RaceRules(window_seconds=60.0)

@@ -23,7 +23,7 @@ from sim.deepracer.files import (
     write_evaluation_metrics,
 )
 from sim.foundation.ids import content_hash, new_id
-from sim.race.physics import BEFORE_VERSIONING, CURRENT, DEEPRACER, board_suffix
+from sim.physics.labels import BEFORE_VERSIONING, CURRENT, DEEPRACER, board_suffix
 from sim.race.result import RaceResult
 from tests.league.helpers import TRACK, model_folder, race_result, trials
 

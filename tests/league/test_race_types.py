@@ -28,7 +28,7 @@ from league.records import record_body
 from league.store import League
 from league.submissions import submit
 from sim.foundation.ids import content_hash
-from sim.race.physics import CURRENT
+from sim.physics.labels import CURRENT
 from sim.race.rules import preset_rules
 from tests.league.helpers import TRACK, model_folder, race_result
 

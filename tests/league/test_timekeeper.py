@@ -8,7 +8,7 @@ from league.leaderboard import Filters, leaderboard
 from league.opening import open_league
 from league.races import record_race
 from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat
-from sim.race.physics import PHYSICAL
+from sim.physics.labels import PHYSICAL
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules
 

@@ -17,8 +17,8 @@ from league.sync.record import make_record
 from league.sync.stores import open_store
 from league.trust import membership
 from league.trust.seals import make_seal
+from sim.coach.plausible import fastest_possible_lap
 from sim.foundation.ids import new_id
-from sim.race.plausible import fastest_possible_lap
 from sim.tracks.catalog import resolve_track
 from tests.league.helpers import model_folder
 from tests.league.sync.conftest import QUICK_RETRY, StoreFactory

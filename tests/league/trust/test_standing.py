@@ -24,9 +24,9 @@ from league.trust.standing import Standing, result_standings
 from racer_tui.cli import main
 from racer_tui.race_commands import DriversByHash
 from sim.foundation.ids import new_id
+from sim.physics.labels import PHYSICAL
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race
-from sim.race.physics import PHYSICAL
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, Verification
 from sim.tracks.catalog import resolve_track

@@ -19,7 +19,7 @@ from racer_tui.screens.league import LeagueScreen
 from racer_tui.widgets.section_header import SectionHeader
 from racer_tui.widgets.table_fill import Col, _shortened, fit_widths
 from sim.foundation.home import data_home
-from sim.race.physics import PHYSICAL
+from sim.physics.labels import PHYSICAL
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import painted, settle
 

@@ -26,7 +26,7 @@ from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScr
 from racer_tui.screens.race_screen import RaceScreen
 from racer_tui.screens.timekeeper import TimekeeperScreen
 from sim.foundation.home import data_home
-from sim.race.physics import PHYSICAL
+from sim.physics.labels import PHYSICAL
 from tests.racer_tui.screens.test_nights import table_rows, the_nights_screen
 from tests.racer_tui.screens.test_timekeeper_screen import Stopwatch
 from tests.racer_tui.screens.tui_helpers import (

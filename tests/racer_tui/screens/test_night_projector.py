@@ -25,7 +25,7 @@ from league.store import default_db_path
 from racer_tui.app import create_app
 from racer_tui.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen, ordinal
 from sim.foundation.home import data_home
-from sim.race.physics import PHYSICAL
+from sim.physics.labels import PHYSICAL
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result

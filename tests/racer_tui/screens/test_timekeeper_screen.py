@@ -21,7 +21,7 @@ from racer_tui.screens.dialogs import ConfirmDialog
 from racer_tui.screens.nights import AddEntrantDialog
 from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup, lap_clock_text
 from racer_tui.widgets.lap_list import LapList
-from sim.race.physics import PHYSICAL
+from sim.physics.labels import PHYSICAL
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
 from tests.racer_tui.screens.test_nights import table_rows, the_nights_screen

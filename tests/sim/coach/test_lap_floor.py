@@ -13,11 +13,7 @@ import pytest
 import sim.coach.lap_floor as floor_module
 from sim.coach.lap_floor import cut_loop_metres, cutting_reach, lap_floor, widened_frame
 from sim.coach.limit_lap import limit_lap
-from sim.coach.racing_line import road_frame
-from sim.physics.car import DEEPRACER_CAR, SIMAPP4_CAR
-from sim.physics.reference_driver import reference_lap
-from sim.race.physics import PHYSICAL
-from sim.race.plausible import (
+from sim.coach.plausible import (
     PHYSICAL_TOP_SPEED,
     fastest_possible_lap,
     fastest_possible_lap_by_hash,
@@ -25,6 +21,10 @@ from sim.race.plausible import (
     hull_floor,
     shortest_loop_metres,
 )
+from sim.coach.racing_line import road_frame
+from sim.physics.car import DEEPRACER_CAR, SIMAPP4_CAR
+from sim.physics.labels import PHYSICAL
+from sim.physics.reference_driver import reference_lap
 from sim.tracks.catalog import resolve_track
 
 # README: a trained model's best lap on re:Invent 2018 (racer-tui's car, physics 4).

@@ -13,7 +13,7 @@ from sim.deepracer.files import (
 from sim.garage.bundle import export_bundle, install_bundle_report
 from sim.garage.options import new_model
 from sim.garage.overview import model_details
-from sim.race.physics import BEFORE_VERSIONING, CURRENT
+from sim.physics.labels import BEFORE_VERSIONING, CURRENT
 from tests.sim.garage.helpers import add_policy, write_training_state
 
 OTHER = "racer-tui/7" if CURRENT != "racer-tui/7" else "racer-tui/8"

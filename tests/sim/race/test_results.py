@@ -279,8 +279,8 @@ def test_a_rules_file_of_random_bytes_or_with_a_key_twice_is_refused(tmp_path: P
 
 
 def test_no_lap_can_beat_the_shortest_loop_at_top_speed() -> None:
+    from sim.coach.plausible import fastest_possible_lap, hull_floor, shortest_loop_metres
     from sim.physics.reference_driver import reference_lap
-    from sim.race.plausible import fastest_possible_lap, hull_floor, shortest_loop_metres
     from sim.tracks.catalog import resolve_track
 
     for name in ("reinvent_base", "hairpin-circuit", "beginner-oval"):
