@@ -1,9 +1,8 @@
-"""A league night under a `verification` rule (sim.race.rules.Verification): its simulated
-heats raced again on the host's machine before the standings are final, and which heats
-the rule leaves out of them, one sentence each.
+"""A league night under a `verification` rule (sim.race.rules.Verification): which heats
+the rule leaves out of its standings, one sentence each.
 
-The driver comes from the caller, as for league.trust.replay: racing a trained model
-needs torch, which the league package never imports.
+Racing the simulated heats again before the standings are final is the night's own step
+(league.nights.replay_heats): closing a night does it.
 """
 
 from __future__ import annotations
@@ -13,27 +12,7 @@ from collections.abc import Collection
 from league.nights import Night, heats
 from league.ranking import counts_under
 from league.store import League
-from league.timekeeper.car import is_physical
-from league.trust.replay import DriverFor, Verdict, verify_races
 from league.trust.standing import result_standings
-
-
-def replay_heats(league: League, night: Night, driver_for: DriverFor) -> list[str]:
-    """Race the night's simulated heats again here (those not verified before) and say,
-    one sentence each, which were withdrawn because their laps came out differently."""
-    raced = {
-        heat.race_id: f"heat {heat.position} ({heat.entrant.display_name}, {heat.entrant.car})"
-        for heat in heats(league, night)
-        if heat.race_id is not None and not is_physical(heat.entrant.model)
-    }
-    if not raced:
-        return []
-    verdicts: list[Verdict] = verify_races(league, driver_for, race_ids=list(raced))
-    return [
-        f"{raced[verdict.race_id]} is withdrawn: {verdict.detail}."
-        for verdict in verdicts
-        if verdict.outcome == "differs"
-    ]
 
 
 def uncounted_heats(league: League, night: Night, local_models: Collection[str] = ()) -> list[str]:

@@ -3,7 +3,8 @@ one race per entrant, and standings with season points when the night closes.
 
 Every step is a new shared row (night, entrant, heats of a draw, closure): nothing is
 edited in place. A redraw adds heats with a newer draw id; the latest draw orders the
-entrants that have not raced yet.
+entrants that have not raced yet. Under a `verification` rule, closing the night first
+races its simulated heats again (`replay_heats`, through league.trust.replay).
 """
 
 from __future__ import annotations
@@ -20,12 +21,14 @@ from typing import TYPE_CHECKING
 
 from league.errors import LeagueError
 from league.leaderboard import LeaderboardRow
+from league.night_changes import DELETE, WITHDRAW
 from league.racers import check_name, display_names, ensure_racer
 from league.races import find_local_track, record_race
 from league.seasons import DEFAULT_POINTS, get_season, night_results
 from league.store import League, now_iso
 from league.timekeeper.car import car_name, is_physical, physical_spec
 from league.tracks import ensure_track
+from league.trust.replay import DriverFor, verify_races
 from sim.foundation.ids import new_id
 from sim.foundation.plural import counted
 from sim.foundation.remedies import Fix
@@ -33,16 +36,10 @@ from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
 from sim.tracks.track import Track
 
 if TYPE_CHECKING:
-    from league.trust.replay import DriverFor
     from sim.race.driver import Driver
     from sim.race.result import RaceResult
 
 MAX_MODEL_SPEC = 500
-# A host's changes to a night, each a row of `night_changes`: an entrant withdrawn before
-# their heat (target: the entrant), the night deleted before any heat (target: the night).
-WITHDRAW = "withdraw"
-DELETE = "delete"
-NIGHT_CHANGES = (WITHDRAW, DELETE)
 _ID_PREFIX = re.compile(r"[0-9A-HJKMNP-TV-Z]{8,26}")  # the start of a record id
 
 
@@ -597,14 +594,12 @@ def close_night(
 
     Heats still waiting are refused unless `force` (a car that cannot run must not hold the
     night open): those entrants simply have no result. Under a `verification` rule the
-    night's simulated heats are first raced again here with `driver_for` (the caller's, as
-    for league.trust.replay): a heat whose laps differ is withdrawn, and the standings count
-    only what the rule allows (league.night_verification says which heats do not).
+    night's simulated heats are first raced again here with `driver_for` (`replay_heats`):
+    a heat whose laps differ is withdrawn, and the standings count only what the rule
+    allows (league.night_verification says which heats do not).
     """
     who = check_name(closed_by, "name")
     if driver_for is not None and night.rules.verification.requires:
-        from league.night_verification import replay_heats  # it imports this module
-
         _open(league, night)  # before racing heats again for a night that cannot close
         replay_heats(league, night, driver_for)
     with league.transaction():
@@ -621,6 +616,28 @@ def close_night(
             "night_closures", {"night_id": night.id, "closed_by": who, "created_at": now_iso()}
         )
     return standings(league, get_night(league, night.id))
+
+
+def replay_heats(league: League, night: Night, driver_for: DriverFor) -> list[str]:
+    """Race the night's simulated heats again here (those not verified before) and say,
+    one sentence each, which were withdrawn because their laps came out differently.
+
+    The driver comes from the caller, as for league.trust.replay: racing a trained model
+    needs torch, which the league package never imports.
+    """
+    raced = {
+        heat.race_id: f"heat {heat.position} ({heat.entrant.display_name}, {heat.entrant.car})"
+        for heat in heats(league, night)
+        if heat.race_id is not None and not is_physical(heat.entrant.model)
+    }
+    if not raced:
+        return []
+    verdicts = verify_races(league, driver_for, race_ids=list(raced))
+    return [
+        f"{raced[verdict.race_id]} is withdrawn: {verdict.detail}."
+        for verdict in verdicts
+        if verdict.outcome == "differs"
+    ]
 
 
 def find_night_track(night: Night) -> Track:

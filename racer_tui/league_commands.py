@@ -600,7 +600,8 @@ def _night_close(league: League, night: Any, args: argparse.Namespace) -> int:
     beside --json, which stays the standings alone)."""
     from league import nights
     from league.local_racer import HOST_NAME, local_racer_name
-    from league.night_verification import replay_heats, uncounted_heats
+    from league.night_verification import uncounted_heats
+    from league.nights import replay_heats
     from racer_tui.race_commands import DriversByHash
 
     who = args.by or local_racer_name(league) or HOST_NAME

@@ -23,7 +23,7 @@ from typing import Any, Final
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
 from league.assembler import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
 from league.errors import LeagueError
-from league.nights import NIGHT_CHANGES
+from league.night_changes import NIGHT_CHANGES
 from league.race_types import HEAD_TO_BOT, OBJECT_AVOIDANCE, race_type_of, words
 from league.racers import HEX_COLOUR, check_name
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS

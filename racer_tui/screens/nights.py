@@ -30,7 +30,7 @@ from league.live_heat import LiveHeatWriter, live_heat_path
 from league.local_racer import HOST_NAME, local_racer_name
 from league.night_report import night_export
 from league.night_state import NightState, read_night
-from league.night_verification import replay_heats, uncounted_heats
+from league.night_verification import uncounted_heats
 from league.nights import (
     Entrant,
     Heat,
@@ -47,6 +47,7 @@ from league.nights import (
     new_night,
     night_date,
     pending_heats,
+    replay_heats,
     standings,
     withdraw_entrant,
 )
