@@ -521,7 +521,7 @@ def _night_method(league: League, night_ids: Sequence[str] | None) -> RankingMet
 
 def _models_here() -> frozenset[str]:
     """The garage's model hashes: their results are verifiable here."""
-    from racer_tui.race_commands import DriversByHash
+    from sim.training.drivers import DriversByHash
 
     return DriversByHash().models_here()
 
@@ -602,7 +602,7 @@ def _night_close(league: League, night: Any, args: argparse.Namespace) -> int:
     from league.local_racer import HOST_NAME, local_racer_name
     from league.night_verification import uncounted_heats
     from league.nights import replay_heats
-    from racer_tui.race_commands import DriversByHash
+    from sim.training.drivers import DriversByHash
 
     who = args.by or local_racer_name(league) or HOST_NAME
     drivers = DriversByHash()

@@ -16,10 +16,9 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 from rich.console import Console
@@ -29,34 +28,22 @@ from rich.text import Text
 from racer_tui.output import print_json
 from racer_tui.rules_option import HELP as RULES_HELP
 from racer_tui.rules_option import rules_option
-from sim.deepracer.files import DeepRacerFileError
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.foundation.plural import counted
-from sim.foundation.remedies import RemedyError, echoed
+from sim.foundation.remedies import echoed
+from sim.garage.imported import BUNDLE_SUFFIX
 from sim.physics.objects.settings import RaceType
-from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
+from sim.race.driver import Driver
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, rules_from_mapping
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 from sim.tracks.track import Track, TrackError
+from sim.training.drivers import RaceSetupError, resolve_driver
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_USER_ERROR = 2
-BUNDLE_SUFFIX = ".racer-bundle"
-
-
-class RaceSetupError(RemedyError):
-    """An entrant, option or output folder the race cannot use; one sentence to stderr
-    (a library error's remedy kept, so the app's race view offers its own key)."""
-
-    @classmethod
-    def about(cls, error: Exception, prefix: str = "") -> RaceSetupError:
-        """`error`, after `prefix`, with its remedy when it has one."""
-        problem = error.problem if isinstance(error, RemedyError) else str(error)
-        fix = error.fix if isinstance(error, RemedyError) else None
-        return cls(f"{prefix}{error}", problem=f"{prefix}{problem}", fix=fix)
 
 
 USER_ERRORS: tuple[type[Exception], ...] = (RaceSetupError, RulesError, TrackError)
@@ -248,74 +235,6 @@ def _racer_name(text: str) -> str:
             "characters (no line breaks or control characters)."
         )
     return name
-
-
-def resolve_driver(spec: str, track: Track) -> Driver:
-    """The driver for MODEL: `reference`, a `.racer-bundle` file, or a garage model name
-    (or model folder path). Any problem is a RaceSetupError naming the entrant."""
-    if spec == REFERENCE_NAME:
-        return reference_driver(track)
-    from sim.garage.folder import ModelError
-
-    try:
-        if spec.endswith(BUNDLE_SUFFIX):
-            from sim.garage.bundle import read_bundle
-
-            bundle = read_bundle(Path(spec))
-            return _policy_driver(spec, lambda policy: policy.driver_for_bundle(bundle))
-        from sim.garage.folder import open_model
-
-        folder = open_model(spec)
-        return _policy_driver(spec, lambda policy: policy.driver_for_model(folder))
-    except (ModelError, DeepRacerFileError) as error:
-        raise RaceSetupError.about(error) from None
-
-
-class DriversByHash:
-    """Drivers found by the hash of the exact car (what race records name): the reference
-    driver of a track, or the garage model whose content hash it is. The garage is hashed
-    once, on the first trained model asked for."""
-
-    def __init__(self) -> None:
-        self._garage: dict[str, str] | None = None
-
-    def __call__(self, model_hash: str, track: Track) -> Driver | None:
-        if model_hash == f"{REFERENCE_NAME}:{track.content_hash}":
-            return reference_driver(track)
-        path = self._hashed().get(model_hash)
-        return None if path is None else resolve_driver(path, track)
-
-    def models_here(self) -> frozenset[str]:
-        """The content hashes of the garage's models: their races are verifiable here
-        (league.trust.standing)."""
-        return frozenset(self._hashed())
-
-    def _hashed(self) -> dict[str, str]:
-        if self._garage is None:
-            from sim.garage.folder import ModelError, list_models
-
-            self._garage = {}
-            for folder in list_models():
-                try:
-                    self._garage.setdefault(folder.content_hash(), str(folder.path))
-                except (ModelError, OSError):
-                    continue  # a damaged model is no one's race
-        return self._garage
-
-
-def _policy_driver(spec: str, build: Callable[[ModuleType], Driver]) -> Driver:
-    """Load torch and the policy only now: the reference path never pays for them."""
-    try:
-        from sim.training import policy  # imports torch
-        from sim.training.errors import PolicyError
-    except ImportError as error:
-        raise RaceSetupError(
-            f"cannot race {spec!r}: running a trained policy needs torch ({error})."
-        ) from None
-    try:
-        return build(policy)
-    except PolicyError as error:
-        raise RaceSetupError.about(error, f"cannot race {spec!r}: ") from None
 
 
 # --- outputs ------------------------------------------------------------------------------------

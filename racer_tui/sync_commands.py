@@ -383,7 +383,7 @@ def _verify(league: League, args: argparse.Namespace) -> int:
 
 def _verdicts(league: League, *, again: bool) -> list[Verdict]:
     from league.trust.replay import verify_races
-    from racer_tui.race_commands import DriversByHash
+    from sim.training.drivers import DriversByHash
 
     return verify_races(league, DriversByHash(), again=again)
 

@@ -268,7 +268,7 @@ class LeagueScreen(RacerScreen[None]):
         """The garage's model hashes (their results are verifiable here), hashed once per
         visit in the loading worker: hashing every model is too slow for each reload."""
         if self._garage_hashes is None:
-            from racer_tui.race_commands import DriversByHash
+            from sim.training.drivers import DriversByHash
 
             self._garage_hashes = DriversByHash().models_here()
         return self._garage_hashes

@@ -64,7 +64,6 @@ from league.seasons import (
 from league.store import League, default_db_path
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from league.timekeeper.journal import HeatJournal, journal_path
-from racer_tui.race_commands import DriversByHash, resolve_driver
 from racer_tui.screens.base import RacerScreen, error_message
 from racer_tui.screens.dialogs import (
     FormDialog,
@@ -101,6 +100,7 @@ from sim.race.rules import (
 )
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 from sim.tracks.track import Track
+from sim.training.drivers import DriversByHash, resolve_driver
 
 # In the narrow panes the optional columns (keep 1 and 2) give way before a name loses its end.
 NAME = Col("", keep=3, shrink_to=10, collapses=False)

@@ -17,7 +17,6 @@ from league.opening import open_league
 from league.races import record_race
 from racer_tui.app_words import APP_FIXES, in_app_words
 from racer_tui.model_form import field_message
-from racer_tui.race_commands import RaceSetupError, resolve_driver
 from racer_tui.screens.base import error_message
 from sim.foundation.remedies import Fix, Note
 from sim.garage.clone import clone_model
@@ -25,6 +24,7 @@ from sim.garage.folder import ModelError, open_model
 from sim.garage.options import new_model
 from sim.tracks.catalog import resolve_track
 from sim.tracks.errors import TrackError
+from sim.training.drivers import RaceSetupError, resolve_driver
 from tests.league.helpers import race_result
 
 

@@ -22,13 +22,13 @@ from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.opening import open_league
 from league.races import record_race
 from racer_tui.app import create_app
-from racer_tui.race_commands import resolve_driver
 from racer_tui.widgets.footer import RacerFooter
 from sim.foundation.home import data_home
 from sim.garage.options import new_model
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
+from sim.training.drivers import resolve_driver
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import painted, settle, trained_model
 

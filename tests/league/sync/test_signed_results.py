@@ -367,10 +367,10 @@ def test_a_race_disproved_by_replay_never_comes_back(machines: dict[str, Machine
 
     from league.sync.local import save_cursor
     from league.trust.replay import verify_races
-    from racer_tui.race_commands import DriversByHash
     from sim.race.driver import reference_driver
     from sim.race.engine import run_race
     from sim.race.rules import RaceRules
+    from sim.training.drivers import DriversByHash
 
     organiser, viewer = machines["organiser"], machines["viewer"]
     track = resolve_track(HAIRPIN)

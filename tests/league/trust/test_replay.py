@@ -15,12 +15,12 @@ from league.races import record_race
 from league.store import League
 from league.trust.replay import verify_races
 from racer_tui.cli import main
-from racer_tui.race_commands import DriversByHash
 from sim.foundation.ids import new_id
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
+from sim.training.drivers import DriversByHash
 
 RULES = RaceRules(window_seconds=40.0)
 

@@ -22,7 +22,6 @@ from league.submissions import submit
 from league.trust.replay import verify_races
 from league.trust.standing import Standing, result_standings
 from racer_tui.cli import main
-from racer_tui.race_commands import DriversByHash
 from sim.foundation.ids import new_id
 from sim.physics.labels import PHYSICAL
 from sim.race.driver import reference_driver
@@ -31,6 +30,7 @@ from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, Verification
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
+from sim.training.drivers import DriversByHash
 
 TRACK = "hairpin-circuit"
 RULES = RaceRules(window_seconds=40.0)

@@ -14,7 +14,6 @@ from league.races import record_race
 from league.submissions import submit
 from league.trust.replay import verify_races
 from racer_tui.app import create_app
-from racer_tui.race_commands import DriversByHash
 from racer_tui.screens.league import LeagueScreen
 from racer_tui.screens.projector import ProjectorScreen
 from racer_tui.widgets.entry_detail import EntryDetail
@@ -22,6 +21,7 @@ from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
+from sim.training.drivers import DriversByHash
 from tests.league.helpers import model_folder, race_result
 from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for
 

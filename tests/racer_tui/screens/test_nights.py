@@ -42,10 +42,10 @@ def test_a_heat_races_against_the_nights_leader_so_far() -> None:
     heat has a counting lap, its best lap as the ghost and its score as the gap to beat.
     (The whole night from the app is tests/racer_tui/screens/test_night_end_to_end.py.)"""
     from league.nights import run_heats
-    from racer_tui.race_commands import resolve_driver
     from racer_tui.screens.nights import heat_setup
     from racer_tui.screens.race_screen import RaceSetup
     from sim.race.rules import RaceRules
+    from sim.training.drivers import resolve_driver
 
     data_home().mkdir(parents=True, exist_ok=True)
     oval = resolve_track("beginner-oval")
@@ -256,8 +256,8 @@ async def test_the_night_shown_is_the_one_under_the_cursor_after_it_changes() ->
 
 async def test_every_raced_heat_shows_its_own_best_lap() -> None:
     from league.nights import run_heats
-    from racer_tui.race_commands import resolve_driver
     from sim.race.rules import RaceRules
+    from sim.training.drivers import resolve_driver
     from tests.racer_tui.screens.tui_helpers import trained_model
 
     trained_model("wobbly")  # untrained weights: it may count no lap at all
@@ -398,8 +398,8 @@ async def test_a_nights_date_is_kept_as_typed_and_said_back_when_wrong() -> None
 
 async def test_closing_a_night_that_counts_only_replayed_results_races_its_heats_again() -> None:
     from league.nights import run_heats
-    from racer_tui.race_commands import resolve_driver
     from sim.race.rules import RaceRules, Verification
+    from sim.training.drivers import resolve_driver
 
     oval = resolve_track("beginner-oval")
     rules = RaceRules(window_seconds=12.0, verification=Verification.REPLAYED)

@@ -16,7 +16,6 @@ from textual.pilot import Pilot
 from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.opening import open_league
 from racer_tui.app import create_app
-from racer_tui.race_commands import resolve_driver
 from racer_tui.screens.night_projector import NightProjectorScreen
 from racer_tui.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
@@ -25,6 +24,7 @@ from sim.race.engine import run_race
 from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
+from sim.training.drivers import resolve_driver
 from tests.racer_tui.screens.tui_helpers import OneScreenApp, settle
 from tests.racer_tui.snapshots.sizes import SIZES
 
