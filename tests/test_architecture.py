@@ -64,21 +64,21 @@ def test_sim_and_league_never_import_textual_or_torch_outside_policy_modules() -
 
 def test_headless_cli_does_not_import_textual_or_torch() -> None:
     report = _import_report(
-        ["racer_tui.cli", "racer_tui.track_commands", "racer_tui.reward_commands"]
+        ["racer_tui.cli.main", "racer_tui.cli.track_commands", "racer_tui.cli.reward_commands"]
     )
     assert all(heavy == [] for heavy in report.values()), report
 
 
 def test_the_app_module_is_the_one_that_imports_textual() -> None:
-    report = _import_report(["racer_tui.app"])
-    assert "textual" in report["racer_tui.app"]
+    report = _import_report(["racer_tui.app.application"])
+    assert "textual" in report["racer_tui.app.application"]
 
 
 def test_every_screen_uses_the_compact_aware_footer() -> None:
     # Textual's own Footer cuts a section's keys off at 80 columns; RacerFooter does not.
-    import racer_tui.screens
+    import racer_tui.app.screens
 
-    screens = Path(racer_tui.screens.__file__).parent
+    screens = Path(racer_tui.app.screens.__file__).parent
     plain = [
         path.name for path in sorted(screens.glob("*.py")) if "yield Footer(" in path.read_text()
     ]
@@ -89,7 +89,7 @@ def test_the_cli_knows_which_module_owns_each_subcommand() -> None:
     """`racer-tui CMD` imports only CMD's module, found in cli.COMMAND_MODULES."""
     import importlib
 
-    from racer_tui.cli import COMMAND_MODULES
+    from racer_tui.cli.main import COMMAND_MODULES
 
     for name, owned in COMMAND_MODULES.items():
         assert tuple(importlib.import_module(name).NAMES) == owned, name

@@ -60,7 +60,7 @@ class Part:
 def _cli(*args: str) -> subprocess.Popen[bytes]:
     """A racer-tui command in the scratch data directory (inherited from `run`)."""
     return subprocess.Popen(
-        [sys.executable, "-m", "racer_tui.cli", *args],
+        [sys.executable, "-m", "racer_tui.cli.main", *args],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
@@ -256,7 +256,7 @@ def train_kills(
     folder = new_model("kill-target")
     part = Part()
     for _ in range(kills):
-        command = [sys.executable, "-m", "racer_tui.cli", "train", folder.name, "--json"]
+        command = [sys.executable, "-m", "racer_tui.cli.main", "train", folder.name, "--json"]
         command += ["--minutes", "1"]
         cli = subprocess.Popen(
             command,
@@ -287,7 +287,16 @@ def train_kills(
         part.corrupt += _corrupt_files(folder.name, part.problems)
     before = _steps(folder.name)
     last = subprocess.run(
-        [sys.executable, "-m", "racer_tui.cli", "train", folder.name, "--minutes", "0.1", "--json"],
+        [
+            sys.executable,
+            "-m",
+            "racer_tui.cli.main",
+            "train",
+            folder.name,
+            "--minutes",
+            "0.1",
+            "--json",
+        ],
         capture_output=True,
         text=True,
         timeout=600,

@@ -2,7 +2,7 @@
 
 `python -m benchmarks.app.monkey [--actions 100000] [--seed 1] [--json]`
 
-Runs `racer_tui.monkey` (keys from a weighted alphabet, bursts queued as a terminal
+Runs `racer_tui.app.monkey` (keys from a weighted alphabet, bursts queued as a terminal
 delivers them, pastes, clicks at random cells, resizes between 60x20 and 200x60; after each
 action: nothing raised, the app runs, the screen renders) in a scratch data home, and prints
 the actions, the crashes (each with the actions that led to it and the app's crash report),
@@ -22,7 +22,7 @@ import sys
 import time
 from typing import Any
 
-from racer_tui.monkey import MonkeyRun, run_monkey, scratch_home
+from racer_tui.app.monkey import MonkeyRun, run_monkey, scratch_home
 
 DEFAULT_ACTIONS = 100_000
 TARGET_CRASHES = 0
@@ -143,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
             )
     except Exception as error:
         print(
-            f"app_monkey: the benchmark could not run: {type(error).__name__}: {error}",
+            f"benchmarks.app.monkey: the benchmark could not run: {type(error).__name__}: {error}",
             file=sys.stderr,
         )
         return 1

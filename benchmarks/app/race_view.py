@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from textual.app import App, ComposeResult
 
-from racer_tui.widgets.race_map import CarMarker, RaceMap
+from racer_tui.app.widgets.race_map import CarMarker, RaceMap
 from sim.physics.car import STEP_HZ
 from sim.physics.reference_driver import ReferenceDriver
 from sim.physics.simulation import TrackSimulation

@@ -21,7 +21,7 @@ actions and at least 50):
   per 1,000 actions over the measured part and over its second half (a cache filling up
   flattens out in the second half; a leak does not);
 - RSS at rest at the same points: right after giving free memory back to the system, as
-  the long-running app does at every pause in input (`racer_tui.long_running`, at most every
+  the long-running app does at every pause in input (`racer_tui.app.long_running`, at most every
   10 s). RSS taken at any other moment also counts what the C allocator holds free since
   the last pause, 0 to 15 MB here, which makes a growth figure over 10,000 actions mostly
   noise; the issue's growth target is judged on both, and both are printed;
@@ -70,7 +70,7 @@ if TYPE_CHECKING:
     from textual.pilot import Pilot
     from textual.screen import Screen
 
-    from racer_tui.app import RacerTuiApp
+    from racer_tui.app.application import RacerTuiApp
 
 DEFAULT_ACTIONS = 10_000
 MIN_WARMUP = 50
@@ -144,7 +144,7 @@ def rss_mb() -> float:
 def rss_at_rest_mb() -> float:
     """RSS once free memory has gone back to the system, as the app does when input
     pauses (the raw RSS where the C library cannot: not glibc)."""
-    from racer_tui.long_running import malloc_trim
+    from racer_tui.app.long_running import malloc_trim
 
     trim = malloc_trim()
     if trim is not None:
@@ -267,7 +267,7 @@ def start_training(home: Path, minutes: float) -> TrainingChild:
     command = [
         sys.executable,
         "-m",
-        "racer_tui.cli",
+        "racer_tui.cli.main",
         "train",
         TRAIN_MODEL,
         "--minutes",
@@ -429,7 +429,7 @@ class Soak:
         return True
 
     def on_section(self) -> bool:
-        from racer_tui.sections import section_for
+        from racer_tui.app.sections import section_for
 
         app = self.app
         return len(app.screen_stack) == 1 and section_for(app.current_mode) is not None
@@ -454,8 +454,8 @@ class Soak:
     # --- actions ---------------------------------------------------------------------------
 
     async def switch(self, mode: str | None = None) -> None:
-        from racer_tui.app import SECTION_SCREENS
-        from racer_tui.sections import SECTIONS
+        from racer_tui.app.application import SECTION_SCREENS
+        from racer_tui.app.sections import SECTIONS
 
         if mode is None:
             mode = self.rng.choice([s.mode for s in SECTIONS if s.mode != self.app.current_mode])
@@ -472,13 +472,13 @@ class Soak:
         await self.key("escape", f"{label}: close", self.back_on_section)
 
     async def help(self) -> None:
-        from racer_tui.screens.help import HelpScreen
+        from racer_tui.app.screens.help import HelpScreen
 
         await self.dialog("question_mark", "help", HelpScreen)
 
     async def delete_question(self) -> None:
-        from racer_tui.screens.dialogs import ConfirmDialog
-        from racer_tui.screens.garage import GarageScreen
+        from racer_tui.app.screens.dialogs import ConfirmDialog
+        from racer_tui.app.screens.garage import GarageScreen
 
         garage = self.app.section_base
         assert isinstance(garage, GarageScreen)
@@ -487,8 +487,8 @@ class Soak:
         await self.dialog("d", "delete question", ConfirmDialog)
 
     async def projector(self) -> None:
-        from racer_tui.screens.kiosk import LeaveKiosk
-        from racer_tui.screens.projector import ProjectorScreen
+        from racer_tui.app.screens.kiosk import LeaveKiosk
+        from racer_tui.app.screens.projector import ProjectorScreen
 
         # A kiosk: Esc does nothing there; q asks, y leaves.
         await self.key("p", "projector: open", lambda screen: isinstance(screen, ProjectorScreen))
@@ -496,7 +496,7 @@ class Soak:
         await self.key("y", "projector: close", self.back_on_section)
 
     async def sort(self) -> None:
-        from racer_tui.screens.league import LeagueScreen
+        from racer_tui.app.screens.league import LeagueScreen
 
         base = self.app.section_base
         assert isinstance(base, LeagueScreen)
@@ -508,7 +508,7 @@ class Soak:
         await self.key(key, label, lambda screen: screen is league and league.order != before)
 
     async def sync(self) -> None:
-        from racer_tui.screens.sync import SyncScreen
+        from racer_tui.app.screens.sync import SyncScreen
 
         await self.key("y", "sync: open", lambda screen: isinstance(screen, SyncScreen))
         opened = self.app.screen
@@ -529,8 +529,8 @@ class Soak:
         await self.key("escape", "sync: close", self.back_on_section)
 
     async def heat(self) -> None:
-        from racer_tui.screens.race_screen import RaceScreen
-        from racer_tui.screens.races import RacesScreen
+        from racer_tui.app.screens.race_screen import RaceScreen
+        from racer_tui.app.screens.races import RacesScreen
 
         races = self.app.section_base
         assert isinstance(races, RacesScreen)
@@ -607,7 +607,7 @@ def growth(
 
 async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
     """Drive the app for `actions` actions; the figures of the part after `warmup`."""
-    from racer_tui.app import create_app
+    from racer_tui.app.application import create_app
 
     app = create_app(long_running=True)
     gc_watch = GcWatch()

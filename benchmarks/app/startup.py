@@ -49,7 +49,7 @@ class Startup:
 
 
 def _script(args: Sequence[str]) -> str:
-    return f"from racer_tui.cli import main\nraise SystemExit(main({list(args)!r}))\n"
+    return f"from racer_tui.cli.main import main\nraise SystemExit(main({list(args)!r}))\n"
 
 
 def _run(args: Sequence[str], env: dict[str, str], importtime: bool = False) -> tuple[float, str]:

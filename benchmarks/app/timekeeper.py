@@ -82,8 +82,8 @@ async def press_keys(keys: int) -> list[float]:
     for each, started with space, as a night's physical heats follow one another)."""
     from league.store import default_db_path
     from league.timekeeper.journal import HeatJournal, journal_path
-    from racer_tui.app import create_app
-    from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
+    from racer_tui.app.application import create_app
+    from racer_tui.app.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
     from sim.foundation.ids import new_id
     from sim.race.rules import RaceRules
     from sim.tracks.catalog import DEFAULT_TRACK, resolve_track

@@ -1,7 +1,7 @@
 """Remedies that a sentence for the user ends with, named so that each front end can say
 them its own way: the library writes the command line's words (`racer-tui tracks import
 FILE`), and the app, which does the same with a key, says that instead
-(`racer_tui.screens.base`)."""
+(`racer_tui.app.screens.base`)."""
 
 from __future__ import annotations
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from sim.training import events
 
-# Enough for every chart point (racer_tui.widgets.chart.MAX_POINTS is 5,000) of both kinds.
+# Enough for every chart point (racer_tui.app.widgets.chart.MAX_POINTS is 5,000) of both kinds.
 MAX_EVENTS = 20_000
 HISTORY_KINDS = (events.Update, events.System)
 

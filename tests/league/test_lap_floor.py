@@ -20,7 +20,7 @@ from league.sync.errors import RecordInvalidError
 from league.sync.record import make_record
 from league.sync.validate import check_record
 from league.timekeeper.heat import TimekeeperError, TimekeptHeat, physical_floor
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.coach.plausible import fastest_possible_lap
 from sim.foundation.ids import new_id
 from sim.physics.labels import PHYSICAL

@@ -119,7 +119,7 @@ def test_a_record_naming_an_unknown_physics_is_refused(league: League, bad: str)
 def test_the_command_line_prints_each_board_on_its_own(
     league: League, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from racer_tui.cli import main
+    from racer_tui.cli.main import main
 
     record_race(league, race_result("ana", [10.0]))
     record_race(league, dataclasses.replace(race_result("cy", [8.0]), physics=OTHER))

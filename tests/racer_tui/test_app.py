@@ -8,15 +8,15 @@ from typing import Any
 from textual.command import CommandPalette
 from textual.widgets import DataTable, Input
 
-from racer_tui.app import OTHER_SCREENS, SECTION_SCREENS, RacerTuiApp, create_app
-from racer_tui.screens.garage import GarageScreen
-from racer_tui.screens.help import HelpScreen, declared_bindings
-from racer_tui.screens.model_editor import ModelEditorScreen
-from racer_tui.screens.races import RacesScreen
-from racer_tui.screens.tracks import TracksScreen
-from racer_tui.screens.welcome import WelcomeScreen
-from racer_tui.widgets.demo_race import DemoRace
-from racer_tui.widgets.section_header import HelpHint, SectionTab
+from racer_tui.app.application import OTHER_SCREENS, SECTION_SCREENS, RacerTuiApp, create_app
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.help import HelpScreen, declared_bindings
+from racer_tui.app.screens.model_editor import ModelEditorScreen
+from racer_tui.app.screens.races import RacesScreen
+from racer_tui.app.screens.tracks import TracksScreen
+from racer_tui.app.screens.welcome import WelcomeScreen
+from racer_tui.app.widgets.demo_race import DemoRace
+from racer_tui.app.widgets.section_header import HelpHint, SectionTab
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for
 

@@ -15,9 +15,9 @@ from league.errors import LeagueError
 from league.nights import add_entrant, close_night, draw_heats, new_night
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.app_words import APP_FIXES, in_app_words
-from racer_tui.model_form import field_message
-from racer_tui.screens.base import error_message
+from racer_tui.app.model_form import field_message
+from racer_tui.app.screens.base import error_message
+from racer_tui.app.words import APP_FIXES, in_app_words
 from sim.foundation.remedies import Fix, Note
 from sim.garage.clone import clone_model
 from sim.garage.folder import ModelError, open_model
@@ -223,7 +223,7 @@ def test_the_garage_says_a_failed_runs_remedy_the_apps_way() -> None:
     say it with the app's key, and a file naming no known remedy keeps its message."""
     from rich.console import Console
 
-    from racer_tui.widgets.model_detail import ModelDetail
+    from racer_tui.app.widgets.model_detail import ModelDetail
     from sim.garage.summary import training_summary
 
     folder = new_model("rookie")

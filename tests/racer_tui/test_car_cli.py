@@ -223,7 +223,7 @@ def test_an_archive_model_keeps_the_archive_s_car_when_edited(
     show one car and race another, so it is refused; its track may change."""
     from dataclasses import replace
 
-    from racer_tui.model_form import save_edit
+    from racer_tui.app.model_form import save_edit
     from sim.deepracer.action_space import discrete_grid
     from sim.garage.folder import ModelError
     from sim.garage.options import spec_of

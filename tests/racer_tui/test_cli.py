@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 
 
 def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
@@ -216,7 +216,7 @@ def test_importing_an_official_file_says_it_is_already_here(
 def test_tracks_list_loads_no_simulator_and_no_array() -> None:
     script = (
         "import contextlib, io, sys\n"
-        "from racer_tui.cli import main\n"
+        "from racer_tui.cli.main import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    main(['tracks', 'list'])\n"
         "print(sorted(m for m in ('numpy', 'scipy', 'shapely', 'sim.tracks.track', 'torch') "
@@ -258,7 +258,7 @@ def test_reward_check_names_file_and_line_of_a_failure(
 
 def test_console_script_runs_without_a_terminal(tmp_path: Path) -> None:
     result = subprocess.run(
-        [sys.executable, "-m", "racer_tui.cli", "tracks", "list", "--json"],
+        [sys.executable, "-m", "racer_tui.cli.main", "tracks", "list", "--json"],
         capture_output=True,
         text=True,
         stdin=subprocess.DEVNULL,

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from racer_tui import app as app_module
-from racer_tui.app import create_app, exit_status
-from racer_tui.crash_report import CRASHES_DIR, crash_sentence, drop_unread_keys
-from racer_tui.screens.garage import GarageScreen
+from racer_tui.app import application as app_module
+from racer_tui.app.application import create_app, exit_status
+from racer_tui.app.crash_report import CRASHES_DIR, crash_sentence, drop_unread_keys
+from racer_tui.app.screens.garage import GarageScreen
 from sim.garage.options import new_model
 
 
@@ -80,7 +80,7 @@ async def test_a_quit_exits_zero_and_says_nothing(capsys: pytest.CaptureFixture[
 def test_unread_keys_are_dropped_only_from_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
     flushed: list[tuple[int, int]] = []
     monkeypatch.setattr(
-        "racer_tui.crash_report.termios.tcflush", lambda fd, which: flushed.append((fd, which))
+        "racer_tui.app.crash_report.termios.tcflush", lambda fd, which: flushed.append((fd, which))
     )
     drop_unread_keys(io.StringIO("keys"))  # not a terminal: nothing to flush
     assert flushed == []
@@ -104,7 +104,7 @@ def test_the_night_projector_command_ends_with_the_apps_status(
     # The venue's screen runs the app as `racer-tui` does: a crash there ends non-zero.
     from league.nights import new_night
     from league.opening import open_league
-    from racer_tui.cli import main
+    from racer_tui.cli.main import main
     from sim.foundation.home import data_home
     from sim.tracks.catalog import resolve_track
 

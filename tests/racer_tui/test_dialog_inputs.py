@@ -13,13 +13,13 @@ import pytest
 from textual.screen import Screen
 from textual.widgets import Input
 
-import racer_tui.app as app_module
-import racer_tui.screens.garage as garage_module
-from racer_tui.app import create_app
-from racer_tui.keys_as_delivered import burst, drain, paste
-from racer_tui.screens.dialogs import ImportDialog, InputDialog
-from racer_tui.screens.garage import GarageScreen
-from racer_tui.screens.tracks import TrackImportDialog
+import racer_tui.app.application as app_module
+import racer_tui.app.screens.garage as garage_module
+from racer_tui.app.application import create_app
+from racer_tui.app.keys_as_delivered import burst, drain, paste
+from racer_tui.app.screens.dialogs import ImportDialog, InputDialog
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.tracks import TrackImportDialog
 from sim.garage.folder import ModelError, ModelFolder, list_models
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import trained_model

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.garage.options import new_model
 from sim.training.policy import build_network, save_policy
 

@@ -21,8 +21,8 @@ from textual.widgets import DataTable, Input, TextArea
 from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.app import create_app
-from racer_tui.widgets.footer import RacerFooter
+from racer_tui.app.application import create_app
+from racer_tui.app.widgets.footer import RacerFooter
 from sim.foundation.home import data_home
 from sim.garage.options import new_model
 from sim.race.engine import run_race
@@ -117,7 +117,7 @@ def keys(*pressed: str) -> Steps:
 
 async def a_timed_heat(pilot: Pilot[Any]) -> None:
     """A physical car's heat with laps captured, one of them over the resets limit."""
-    from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
+    from racer_tui.app.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
 
     setup = TimekeeperSetup(resolve_track("reinvent_base"), SHORT, LONG_RACER, LONG_MODEL)
     keeper = TimekeeperScreen(setup)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from racer_tui.jobs import Job, JobState
+from racer_tui.app.jobs import Job, JobState
 
 
 def test_a_running_job_estimates_what_is_left_at_its_pace_so_far() -> None:

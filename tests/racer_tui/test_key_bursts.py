@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from textual.widgets import Input, OptionList
 
-from racer_tui.app import create_app
-from racer_tui.keys_as_delivered import burst, drain
-from racer_tui.screens.garage import GarageScreen
-from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.app.application import create_app
+from racer_tui.app.keys_as_delivered import burst, drain
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.model_editor import ModelEditorScreen
 from sim.garage.options import new_model
 
 EDITOR_BURST = "down down up pagedown home end tab shift+tab enter escape question_mark escape"
@@ -101,7 +101,7 @@ async def test_the_editor_form_reads_its_choices_before_the_selects_mount() -> N
     # built with; the form reads what it was built with until then.
     from textual.widgets import Select
 
-    from racer_tui.screens.form_select import FormSelect, choice_of
+    from racer_tui.app.screens.form_select import FormSelect, choice_of
 
     levels = FormSelect([("3", 3), ("5", 5)], value=5, id="steering-levels")
     assert levels.value == Select.NULL  # Textual's, before mounting
@@ -115,8 +115,8 @@ async def test_a_save_that_ends_while_discard_is_asked_closes_the_editor_and_its
     # editor, but Textual popped the screen on top (the "Discard your changes?" question)
     # and left the editor open with its result given; its Discard then raised
     # InvalidStateError.
-    from racer_tui.screens.dialogs import ConfirmDialog
-    from racer_tui.screens.model_editor import ModelSaved
+    from racer_tui.app.screens.dialogs import ConfirmDialog
+    from racer_tui.app.screens.model_editor import ModelSaved
 
     new_model("one")
     app = create_app(start="garage")
@@ -147,7 +147,7 @@ async def test_a_click_on_the_header_of_a_table_without_columns_does_nothing() -
     from textual.app import App, ComposeResult
     from textual.widgets import DataTable
 
-    from racer_tui.textual_workarounds import apply_workarounds
+    from racer_tui.app.textual_workarounds import apply_workarounds
 
     class OneTable(App[None]):
         def compose(self) -> ComposeResult:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 
 
 def run(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:

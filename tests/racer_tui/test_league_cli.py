@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from league.migrations import SCHEMA_VERSION
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from tests.league.helpers import model_folder
 
 MARKUP_NAME = "[bold red]x[/]"
@@ -336,7 +336,7 @@ def test_a_night_run_killed_mid_way_keeps_its_heats_and_runs_the_rest(tmp_path: 
 
     db = str(tmp_path / "kill.db")
     env = {**os.environ, "RACER_TUI_HOME": str(tmp_path / "home")}
-    command = [sys.executable, "-m", "racer_tui.cli", "night", "run", "Fri", "--db", db]
+    command = [sys.executable, "-m", "racer_tui.cli.main", "night", "run", "Fri", "--db", db]
     with open_league(Path(db)) as league:
         night = new_night(league, resolve_track("reInvent2019_track"), name="Fri")
         for number in range(8):

@@ -16,7 +16,7 @@ from textual.color import Color
 from textual.containers import Vertical
 from textual.widgets import Label
 
-from racer_tui.long_running import (
+from racer_tui.app.long_running import (
     AUTOMATIC_FULL_AFTER,
     BUSY_COLLECT_SECONDS,
     CALM_SECONDS,
@@ -287,8 +287,8 @@ async def test_removed_widgets_rendered_lines_are_let_go() -> None:
 def test_only_the_long_running_app_hands_the_interpreter_to_its_interface_sooner() -> None:
     import sys
 
-    from racer_tui.app import create_app
-    from racer_tui.long_running import SWITCH_INTERVAL_SECONDS
+    from racer_tui.app.application import create_app
+    from racer_tui.app.long_running import SWITCH_INTERVAL_SECONDS
 
     before = sys.getswitchinterval()
     try:
@@ -306,9 +306,9 @@ async def test_a_sweep_waits_for_calm_before_it_freezes_what_survives() -> None:
     followed for hours does not keep the app from ever being calm."""
     import threading
 
-    from racer_tui.app import create_app
-    from racer_tui.screens.help import HelpScreen
-    from racer_tui.screens.training import RUN_GROUP
+    from racer_tui.app.application import create_app
+    from racer_tui.app.screens.help import HelpScreen
+    from racer_tui.app.screens.training import RUN_GROUP
     from tests.racer_tui.screens.tui_helpers import settle
 
     now = [0.0]

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.garage.folder import models_dir, open_model
 from sim.training.config import model_env_config
 from tests.sim.garage.helpers import add_evaluation, add_policy, write_training_state
@@ -210,8 +210,8 @@ def test_export_and_import_a_bundle(
 
 
 def test_the_model_commands_stay_headless() -> None:
-    report = _import_report(["racer_tui.model_commands"])
-    assert report["racer_tui.model_commands"] == []
+    report = _import_report(["racer_tui.cli.model_commands"])
+    assert report["racer_tui.cli.model_commands"] == []
 
 
 def test_a_model_for_object_avoidance_is_made_with_deepracers_keys(

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import pytest
 
-from racer_tui.model_form import (
+from racer_tui.app.model_form import (
     CONTINUOUS,
     KEPT,
     FormError,

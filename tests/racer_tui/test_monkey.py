@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from racer_tui.monkey import run_monkey, scratch_home
+from racer_tui.app.monkey import run_monkey, scratch_home
 
 SEEDS = (1, 2, 3)
 ACTIONS = 60  # per seed: the three take about a minute on one free core (5 min at load 7 on 2)

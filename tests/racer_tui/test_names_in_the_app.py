@@ -8,11 +8,11 @@ from pathlib import Path
 
 from textual.widgets import Input, Static
 
-from racer_tui.app import create_app
-from racer_tui.keys_as_delivered import drain, typed
-from racer_tui.model_form import check_name
-from racer_tui.screens.dialogs import ImportDialog, InputDialog
-from racer_tui.screens.model_editor import ModelEditorScreen
+from racer_tui.app.application import create_app
+from racer_tui.app.keys_as_delivered import drain, typed
+from racer_tui.app.model_form import check_name
+from racer_tui.app.screens.dialogs import ImportDialog, InputDialog
+from racer_tui.app.screens.model_editor import ModelEditorScreen
 from sim.garage.folder import ModelError, check_model_name, list_models
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import painted, settle

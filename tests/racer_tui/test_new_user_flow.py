@@ -20,19 +20,19 @@ from textual.app import App
 from textual.screen import Screen
 from textual.widgets import Input, Select
 
-from racer_tui.app import create_app
-from racer_tui.screens.dialogs import InputDialog
-from racer_tui.screens.evaluation import EvaluationScreen
-from racer_tui.screens.garage import GarageScreen
-from racer_tui.screens.league import LeagueScreen
-from racer_tui.screens.model_editor import ModelEditorScreen
-from racer_tui.screens.race_screen import RaceScreen
-from racer_tui.screens.races import RacesScreen
-from racer_tui.screens.training import TrainingScreen
-from racer_tui.screens.welcome import WelcomeScreen
-from racer_tui.widgets.chart import LineChart
-from racer_tui.widgets.demo_race import DemoRace
-from racer_tui.widgets.training_charts import TrainingCharts
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import InputDialog
+from racer_tui.app.screens.evaluation import EvaluationScreen
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.screens.model_editor import ModelEditorScreen
+from racer_tui.app.screens.race_screen import RaceScreen
+from racer_tui.app.screens.races import RacesScreen
+from racer_tui.app.screens.training import TrainingScreen
+from racer_tui.app.screens.welcome import WelcomeScreen
+from racer_tui.app.widgets.chart import LineChart
+from racer_tui.app.widgets.demo_race import DemoRace
+from racer_tui.app.widgets.training_charts import TrainingCharts
 from sim.garage.folder import open_model
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from racer_tui import race_commands
-from racer_tui.cli import main
+from racer_tui.cli import race_commands
+from racer_tui.cli.main import main
 from sim.physics.reference_driver import reference_lap
 from sim.race.trace import RaceTrace
 from sim.tracks.catalog import resolve_track
@@ -243,7 +243,7 @@ def test_an_unexpected_failure_exits_1(
 def test_the_race_path_imports_neither_textual_nor_torch() -> None:
     script = (
         "import sys\n"
-        "from racer_tui.cli import main\n"
+        "from racer_tui.cli.main import main\n"
         "code = main(['--race', 'reference', '--track', 'hairpin-circuit', '--window', '10',"
         " '--json'])\n"
         "heavy = sorted(m for m in ('textual', 'torch') if m in sys.modules)\n"

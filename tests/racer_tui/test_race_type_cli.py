@@ -13,7 +13,7 @@ import pytest
 from league.nights import get_night
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.race.rules import preset_rules
 from tests.league.helpers import TRACK, race_result
 from tests.racer_tui.test_league_cli import run_cli, wide_terminal  # noqa: F401 (autouse)

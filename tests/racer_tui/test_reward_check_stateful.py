@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from tests.sim.test_reward_per_car import STATEFUL
 
 COUNTING = """

@@ -9,7 +9,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.garage.options import new_model
 from sim.reward import landlock
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from racer_tui.app import create_app
-from racer_tui.session import TRACES_KEPT, keep_race, session_races
+from racer_tui.app.application import create_app
+from racer_tui.app.session import TRACES_KEPT, keep_race, session_races
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track

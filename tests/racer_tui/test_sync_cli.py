@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from league.opening import open_league
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from tests.league.helpers import model_folder
 
 MARKUP_NAME = "[bold red]x"
@@ -147,7 +147,7 @@ def test_a_store_that_is_down_is_one_sentence_and_changes_nothing(
 
 
 def test_the_progress_bars_take_both_directions(capsys: pytest.CaptureFixture[str]) -> None:
-    from racer_tui.sync_commands import _progress
+    from racer_tui.cli.sync_commands import _progress
 
     with _progress(True) as update:
         assert update is not None

@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.deepracer.action_space import parse_action_space
 from sim.deepracer.files import write_model_metadata
 from sim.garage.options import new_model

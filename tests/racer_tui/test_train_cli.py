@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.deepracer.files import read_evaluation_metrics
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
@@ -60,7 +60,16 @@ def test_train_json_streams_valid_events_from_start_to_finish(
 
 @pytest.mark.slow
 def test_ctrl_c_stops_the_training_cleanly(model: ModelFolder) -> None:
-    command = [sys.executable, "-m", "racer_tui.cli", "train", "tiny", "--minutes", "5", "--json"]
+    command = [
+        sys.executable,
+        "-m",
+        "racer_tui.cli.main",
+        "train",
+        "tiny",
+        "--minutes",
+        "5",
+        "--json",
+    ]
     cli = subprocess.Popen(command, stdout=subprocess.PIPE, text=True, env=dict(os.environ))
     assert cli.stdout is not None
     for line in cli.stdout:
@@ -83,7 +92,16 @@ def test_a_killed_train_command_leaves_no_training_behind(model: ModelFolder) ->
         "import time\ndef reward_function(params):\n    time.sleep(0.2)\n    return 1.0\n",
         encoding="utf-8",
     )
-    command = [sys.executable, "-m", "racer_tui.cli", "train", "tiny", "--minutes", "5", "--json"]
+    command = [
+        sys.executable,
+        "-m",
+        "racer_tui.cli.main",
+        "train",
+        "tiny",
+        "--minutes",
+        "5",
+        "--json",
+    ]
     cli = subprocess.Popen(command, stdout=subprocess.PIPE, text=True, env=dict(os.environ))
     assert cli.stdout is not None
     child = 0
@@ -175,5 +193,5 @@ def test_a_model_training_elsewhere_keeps_its_log(
 
 
 def test_the_commands_do_not_import_torch_in_the_cli_process() -> None:
-    report = _import_report(["racer_tui.train_commands", "sim.training.launcher"])
+    report = _import_report(["racer_tui.cli.train_commands", "sim.training.launcher"])
     assert all(heavy == [] for heavy in report.values()), report

@@ -10,7 +10,7 @@ from collections.abc import Iterator
 import pytest
 from rich.console import Console
 
-from racer_tui.train_commands import _show_live
+from racer_tui.cli.train_commands import _show_live
 from sim.training import events
 
 

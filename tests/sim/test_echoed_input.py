@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.foundation.remedies import ECHO_CHARS, PATH_ECHO_CHARS, echoed, echoed_path
 
 LONG = "a" * 10_000

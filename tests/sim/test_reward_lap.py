@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.coach.reward_line import load_template
 from sim.deepracer.action_space import parse_action_space
 from sim.reward.function import load_reward_source
@@ -148,7 +148,7 @@ def test_the_command_charts_both_lines_at_a_models_own_speeds(
 def test_a_track_the_reference_driver_cannot_finish_is_charted_on_its_centre_line(
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import racer_tui.reward_commands
+    import racer_tui.cli.reward_commands
     import sim.physics.reference_driver
     from sim.physics.reference_driver import ReferenceLap
 
@@ -160,7 +160,7 @@ def test_a_track_the_reference_driver_cannot_finish_is_charted_on_its_centre_lin
     assert [pay.line for pay in pays] == [CENTRE_LINE, CENTRE_LINE]
     assert line_verdict(pays) is None
     # The command (whose child process this test cannot reach) says why a line is missing.
-    monkeypatch.setattr(racer_tui.reward_commands, "lap_pay_of_source", lambda *a, **k: pays)
+    monkeypatch.setattr(racer_tui.cli.reward_commands, "lap_pay_of_source", lambda *a, **k: pays)
     assert main(["reward", "lap", "follow_center_line", "--track", "hairpin-circuit"]) == 0
     out = " ".join(capsys.readouterr().out.split())  # as read, whatever the terminal's width
     assert "does not finish a lap of hairpin-circuit, so only the centre line is charted" in out

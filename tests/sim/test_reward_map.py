@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.coach.reward_line import load_template
 from sim.reward.function import load_reward_source
 from sim.reward.map import (
@@ -149,7 +149,7 @@ def test_the_command_draws_writes_json_and_png_and_refuses_bad_input(
 def test_the_terminal_map_draws_the_road_its_centre_line_and_its_start_over_the_colours() -> None:
     from rich.console import Console
 
-    from racer_tui.reward_map_text import map_text
+    from racer_tui.text.reward_map import map_text
 
     reward_map = compute_map(load_template("follow_center_line"), HAIRPIN, COARSE)
     bare = map_text(reward_map, 200, legend=False)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from numpy.lib import format as npy_format
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.tracks.track import TrackError, load_track
 
 

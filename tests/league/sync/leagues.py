@@ -17,7 +17,7 @@ from league.seasons import new_season, parse_points
 from league.store import League
 from league.submissions import submit
 from league.sync.record import SyncRecord
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.foundation.ids import new_id
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod

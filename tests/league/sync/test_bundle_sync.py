@@ -16,7 +16,7 @@ from league.sync.bundle_sync import push_bundles
 from league.sync.s3_bundles import S3BundleStore
 from league.sync.stores import open_bundle_store
 from league.sync.urls import S3Url
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.garage.folder import open_model
 from sim.garage.options import new_model
 from tests.league.sync.conftest import QUICK_RETRY

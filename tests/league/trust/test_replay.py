@@ -14,7 +14,7 @@ from league.opening import open_league
 from league.races import record_race
 from league.store import League
 from league.trust.replay import verify_races
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.foundation.ids import new_id
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race

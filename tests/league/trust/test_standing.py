@@ -21,7 +21,7 @@ from league.store import League
 from league.submissions import submit
 from league.trust.replay import verify_races
 from league.trust.standing import Standing, result_standings
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.foundation.ids import new_id
 from sim.physics.labels import PHYSICAL
 from sim.race.driver import reference_driver

@@ -6,10 +6,10 @@ from __future__ import annotations
 from textual.app import App
 from textual.widgets import DataTable, Static
 
-from racer_tui.app import create_app
-from racer_tui.screens.coach import CoachScreen
-from racer_tui.screens.race_screen import RaceScreen, RaceSetup
-from racer_tui.widgets.coach_map import CoachMap
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.coach import CoachScreen
+from racer_tui.app.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.app.widgets.coach_map import CoachMap
 from sim.garage.folder import open_model
 from sim.garage.options import new_model
 from sim.race.driver import ReferenceRaceDriver

@@ -7,10 +7,10 @@ from typing import Any
 from textual.pilot import Pilot
 from textual.widgets import DataTable, Input
 
-from racer_tui.app import create_app
-from racer_tui.jobs import Job, JobState
-from racer_tui.screens.evaluation import EvaluationScreen, trials_problem
-from racer_tui.widgets.job_line import JobLine
+from racer_tui.app.application import create_app
+from racer_tui.app.jobs import Job, JobState
+from racer_tui.app.screens.evaluation import EvaluationScreen, trials_problem
+from racer_tui.app.widgets.job_line import JobLine
 from sim.garage.folder import open_model
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
 

@@ -10,11 +10,11 @@ from pathlib import Path
 
 from textual.widgets import DataTable, Input
 
-from racer_tui.app import create_app
-from racer_tui.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
-from racer_tui.screens.garage import GarageScreen
-from racer_tui.screens.race_screen import RaceScreen
-from racer_tui.widgets.model_detail import ModelDetail
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.race_screen import RaceScreen
+from racer_tui.app.widgets.model_detail import ModelDetail
 from sim.garage.bundle import read_bundle
 from sim.garage.folder import list_models, open_model
 from sim.garage.options import new_model

@@ -11,8 +11,8 @@ from textual.binding import Binding, BindingType
 from textual.screen import Screen
 from textual.widgets import Button, Static
 
-from racer_tui.screens.dialogs import ConfirmDialog, PathSuggester, ask
-from racer_tui.screens.help import binding_topics, declared_bindings, key_rows, topic_table
+from racer_tui.app.screens.dialogs import ConfirmDialog, PathSuggester, ask
+from racer_tui.app.screens.help import binding_topics, declared_bindings, key_rows, topic_table
 from tests.racer_tui.screens.tui_helpers import painted, settle
 
 
@@ -69,8 +69,8 @@ async def test_path_suggester_completes_the_last_part(tmp_path: Path) -> None:
 async def test_a_forms_problem_goes_once_a_field_changes() -> None:
     """A problem is about what was typed: changing a field takes it away (the next confirm
     checks again), so a fixed date is not still called wrong."""
-    from racer_tui.app import create_app
-    from racer_tui.screens.nights import NewNightDialog
+    from racer_tui.app.application import create_app
+    from racer_tui.app.screens.nights import NewNightDialog
 
     app = create_app(start="league")
     async with app.run_test(size=(100, 40)) as pilot:

@@ -10,11 +10,11 @@ import pytest
 from league.nights import add_entrant, new_night
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.app import create_app
-from racer_tui.screens.kiosk import LeaveKiosk
-from racer_tui.screens.league import LeagueScreen
-from racer_tui.screens.night_projector import NightProjectorScreen
-from racer_tui.screens.projector import ProjectorScreen
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.kiosk import LeaveKiosk
+from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.screens.night_projector import NightProjectorScreen
+from racer_tui.app.screens.projector import ProjectorScreen
 from sim.foundation.home import data_home
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track

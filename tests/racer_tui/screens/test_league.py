@@ -13,10 +13,10 @@ from league.opening import open_league
 from league.races import record_race
 from league.submissions import submit
 from league.trust.replay import verify_races
-from racer_tui.app import create_app
-from racer_tui.screens.league import LeagueScreen
-from racer_tui.screens.projector import ProjectorScreen
-from racer_tui.widgets.entry_detail import EntryDetail
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.screens.projector import ProjectorScreen
+from racer_tui.app.widgets.entry_detail import EntryDetail
 from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules

@@ -12,10 +12,10 @@ from textual.widgets import Input, Select
 from league.nights import add_entrant, draw_heats, new_night
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.app import create_app
-from racer_tui.screens.league import LeagueScreen
-from racer_tui.screens.night_projector import NightProjectorScreen
-from racer_tui.widgets.footer import RacerFooter
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.screens.night_projector import NightProjectorScreen
+from racer_tui.app.widgets.footer import RacerFooter
 from sim.foundation.home import data_home
 from sim.race.rules import preset_rules
 from sim.tracks.catalog import resolve_track

@@ -5,11 +5,11 @@ from __future__ import annotations
 import pytest
 from textual.widgets import DataTable, Input, Select, TabbedContent, TextArea
 
-from racer_tui.app import create_app
-from racer_tui.screens.dialogs import ConfirmDialog
-from racer_tui.screens.garage import GarageScreen
-from racer_tui.screens.model_editor import ModelEditorScreen
-from racer_tui.widgets.action_space_plot import ActionSpacePlot
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.model_editor import ModelEditorScreen
+from racer_tui.app.widgets.action_space_plot import ActionSpacePlot
 from sim.coach.reward_line import template_source
 from sim.garage.folder import list_models, open_model
 from sim.garage.options import new_model

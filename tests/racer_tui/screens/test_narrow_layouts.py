@@ -14,10 +14,10 @@ from textual.widgets import DataTable, Input
 
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.app import create_app
-from racer_tui.screens.league import LeagueScreen
-from racer_tui.widgets.section_header import SectionHeader
-from racer_tui.widgets.table_fill import Col, _shortened, fit_widths
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.widgets.section_header import SectionHeader
+from racer_tui.app.widgets.table_fill import Col, _shortened, fit_widths
 from sim.foundation.home import data_home
 from sim.physics.labels import PHYSICAL
 from tests.league.helpers import race_result
@@ -91,7 +91,7 @@ def test_a_model_name_loses_its_middle_so_siblings_stay_apart() -> None:
 
 def test_the_demo_caption_never_cuts_a_figure_in_the_middle() -> None:
     """Point 8: the welcome screen's demo said `best 0:06.3…` at 80x24."""
-    from racer_tui.widgets.demo_race import figures_line
+    from racer_tui.app.widgets.demo_race import figures_line
     from sim.race.engine import race_ticks
     from sim.race.rules import RaceRules
     from sim.tracks.catalog import resolve_track
@@ -108,7 +108,7 @@ def test_the_demo_caption_never_cuts_a_figure_in_the_middle() -> None:
 
 def test_a_model_without_a_camera_is_not_called_convolutional() -> None:
     """Point 13: vector models were labelled DEEP_CONVOLUTIONAL_NETWORK_SHALLOW."""
-    from racer_tui.widgets.model_detail import network_text
+    from racer_tui.app.widgets.model_detail import network_text
 
     shallow = "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW"
     vector = network_text({"neural_network": shallow, "sensor": ["VECTOR"]})

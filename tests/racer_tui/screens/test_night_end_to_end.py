@@ -19,12 +19,12 @@ from league.opening import open_league
 from league.races import race_result
 from league.seasons import new_season
 from league.store import default_db_path
-from racer_tui.app import create_app
-from racer_tui.screens.dialogs import ConfirmDialog
-from racer_tui.screens.night_projector import NightProjectorScreen
-from racer_tui.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
-from racer_tui.screens.race_screen import RaceScreen
-from racer_tui.screens.timekeeper import TimekeeperScreen
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog
+from racer_tui.app.screens.night_projector import NightProjectorScreen
+from racer_tui.app.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
+from racer_tui.app.screens.race_screen import RaceScreen
+from racer_tui.app.screens.timekeeper import TimekeeperScreen
 from sim.foundation.home import data_home
 from sim.physics.labels import PHYSICAL
 from tests.racer_tui.screens.test_nights import table_rows, the_nights_screen

@@ -22,8 +22,8 @@ from league.nights import (
 from league.opening import open_league
 from league.races import record_race
 from league.store import default_db_path
-from racer_tui.app import create_app
-from racer_tui.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen, ordinal
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen, ordinal
 from sim.foundation.home import data_home
 from sim.physics.labels import PHYSICAL
 from sim.race.rules import RaceRules

@@ -13,9 +13,9 @@ from textual.widgets import DataTable, Input, Select, Static
 
 from league.nights import add_entrant, draw_heats, list_nights, new_night, standings
 from league.opening import open_league
-from racer_tui.app import create_app
-from racer_tui.screens.dialogs import ConfirmDialog
-from racer_tui.screens.nights import AddEntrantDialog, NightsScreen
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog
+from racer_tui.app.screens.nights import AddEntrantDialog, NightsScreen
 from sim.foundation.home import data_home
 from sim.race.rules import RankingMethod, preset_rules
 from sim.tracks.catalog import resolve_track
@@ -40,10 +40,10 @@ def table_rows(screen: Screen[Any], table_id: str) -> list[list[str]]:
 def test_a_heat_races_against_the_nights_leader_so_far() -> None:
     """The race view's setup for a heat: the night's rules and the heat's seed, and once a
     heat has a counting lap, its best lap as the ghost and its score as the gap to beat.
-    (The whole night from the app is tests/racer_tui/screens/test_night_end_to_end.py.)"""
+    (The whole night from the app is tests/racer_tui/app/screens/test_night_end_to_end.py.)"""
     from league.nights import run_heats
-    from racer_tui.screens.nights import heat_setup
-    from racer_tui.screens.race_screen import RaceSetup
+    from racer_tui.app.screens.nights import heat_setup
+    from racer_tui.app.screens.race_screen import RaceSetup
     from sim.race.rules import RaceRules
     from sim.training.drivers import resolve_driver
 
@@ -321,7 +321,7 @@ async def test_a_heat_is_recorded_as_its_finish_shows_and_never_left_silently() 
     once (the projector and `night show` see it before anyone presses Esc), and leaving
     after it records nothing twice."""
     from league.night_state import read_night
-    from racer_tui.screens.race_screen import RECORDED, RaceScreen
+    from racer_tui.app.screens.race_screen import RECORDED, RaceScreen
 
     data_home().mkdir(parents=True, exist_ok=True)
     with open_league() as league:
@@ -372,7 +372,7 @@ async def test_a_heat_is_recorded_as_its_finish_shows_and_never_left_silently() 
 async def test_a_nights_date_is_kept_as_typed_and_said_back_when_wrong() -> None:
     """Nothing typed into the date is dropped: a date with slashes opens the night on that
     day, and a date that is not one is said back as the host wrote it."""
-    from racer_tui.screens.nights import NewNightDialog
+    from racer_tui.app.screens.nights import NewNightDialog
 
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:

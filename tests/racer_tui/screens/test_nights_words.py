@@ -10,8 +10,8 @@ from textual.app import App, ComposeResult
 from textual.widgets import DataTable, Input, Static
 
 from league.opening import open_league
-from racer_tui.app import create_app
-from racer_tui.screens.nights import (
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.nights import (
     MIXED_STANDINGS_NOTE,
     PHYSICAL_RULES_NOTE,
     AddEntrantDialog,

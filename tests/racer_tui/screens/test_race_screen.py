@@ -11,8 +11,8 @@ from textual.app import App
 from textual.pilot import Pilot
 from textual.widgets import DataTable, Static
 
-from racer_tui.jobs import JobState
-from racer_tui.screens.race_screen import (
+from racer_tui.app.jobs import JobState
+from racer_tui.app.screens.race_screen import (
     LEAVE,
     RaceScreen,
     RaceSetup,
@@ -159,7 +159,7 @@ def test_off_tracks_past_the_limit_say_the_lap_is_lost() -> None:
 
 async def test_space_says_resume_in_the_footer_while_the_race_is_paused() -> None:
     """Issue 42, point 6: the footer says what space does now."""
-    from racer_tui.widgets.footer import screen_keys
+    from racer_tui.app.widgets.footer import screen_keys
 
     track = resolve_track("beginner-oval")
     screen = RaceScreen(RaceSetup(track=track, rules=SHORT, racer="Ada"))
@@ -186,7 +186,7 @@ async def test_e_keeps_to_the_end_while_a_slow_machine_still_works_the_race_out(
     then played on at 1x (and said so). It now follows the simulation to the finish."""
     import threading
 
-    from racer_tui.screens import race_screen
+    from racer_tui.app.screens import race_screen
     from sim.race import engine as race_engine
 
     release = threading.Event()

@@ -9,11 +9,11 @@ from textual.widgets import DataTable, Select
 
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.app import create_app
-from racer_tui.screens.league import LeagueScreen
-from racer_tui.screens.race_screen import RaceScreen, clock_text
-from racer_tui.screens.races import RacesScreen
-from racer_tui.widgets.model_detail import seconds_text
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.screens.race_screen import RaceScreen, clock_text
+from racer_tui.app.screens.races import RacesScreen
+from racer_tui.app.widgets.model_detail import seconds_text
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules

@@ -12,8 +12,8 @@ from textual.widgets import Input, Select
 from league.nights import list_nights
 from league.opening import open_league
 from league.seasons import get_season, list_seasons, new_season
-from racer_tui.app import create_app
-from racer_tui.screens.nights import NewNightDialog, NewSeasonDialog, season_problem
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.nights import NewNightDialog, NewSeasonDialog, season_problem
 from sim.foundation.home import data_home
 from tests.racer_tui.screens.test_nights import the_nights_screen
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle

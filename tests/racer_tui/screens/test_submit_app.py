@@ -9,12 +9,12 @@ from textual.widgets import DataTable, Input, Select
 
 from league.opening import open_league
 from league.races import race_replay, recent_races
-from racer_tui.app import create_app
-from racer_tui.screens.dialogs import ConfirmDialog, InputDialog
-from racer_tui.screens.garage import GarageScreen
-from racer_tui.screens.race_screen import RaceScreen
-from racer_tui.screens.races import RacesScreen
-from racer_tui.widgets.footer import RacerFooter
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog, InputDialog
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.race_screen import RaceScreen
+from racer_tui.app.screens.races import RacesScreen
+from racer_tui.app.widgets.footer import RacerFooter
 from sim.training.evaluation import evaluate_model
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, trained_model
 

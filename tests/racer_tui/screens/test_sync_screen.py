@@ -22,12 +22,12 @@ from league.sync.dir_store import MARKER_NAME
 from league.sync.session import save_store, sync_league
 from league.trust.keys import load_or_create_key
 from league.trust.membership import found_league
-from racer_tui.app import RacerTuiApp, create_app
-from racer_tui.screens.dialogs import ConfirmDialog
-from racer_tui.screens.league import LeagueScreen
-from racer_tui.screens.sync import SyncScreen
-from racer_tui.widgets.job_line import JobLine
-from racer_tui.widgets.sync_status import NO_STORE, SyncStatusLine
+from racer_tui.app.application import RacerTuiApp, create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog
+from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.screens.sync import SyncScreen
+from racer_tui.app.widgets.job_line import JobLine
+from racer_tui.app.widgets.sync_status import NO_STORE, SyncStatusLine
 from sim.foundation.home import data_home
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
@@ -447,7 +447,7 @@ async def test_a_league_refusal_during_a_sync_names_the_apps_key(
 ) -> None:
     """A league error that ends in a remedy the app offers with a key is said with that key,
     in the toast and on the job line, never as the command line's command."""
-    import racer_tui.screens.sync as sync_screen
+    import racer_tui.app.screens.sync as sync_screen
     from league.errors import LeagueError
     from sim.foundation.remedies import Fix
 

@@ -16,11 +16,11 @@ from league.opening import open_league
 from league.races import race_result
 from league.store import default_db_path
 from league.timekeeper.journal import HeatJournal, journal_path
-from racer_tui.app import create_app
-from racer_tui.screens.dialogs import ConfirmDialog
-from racer_tui.screens.nights import AddEntrantDialog
-from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup, lap_clock_text
-from racer_tui.widgets.lap_list import LapList
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog
+from racer_tui.app.screens.nights import AddEntrantDialog
+from racer_tui.app.screens.timekeeper import TimekeeperScreen, TimekeeperSetup, lap_clock_text
+from racer_tui.app.widgets.lap_list import LapList
 from sim.physics.labels import PHYSICAL
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
@@ -255,7 +255,7 @@ async def test_a_journal_the_disk_refuses_is_said_once_and_the_timing_goes_on(
 async def test_an_automatic_timers_lines_start_the_race_and_capture_laps(
     tmp_path: Path,
 ) -> None:
-    from racer_tui.screens.timekeeper import TimekeeperSetup
+    from racer_tui.app.screens.timekeeper import TimekeeperSetup
 
     controller, device = os.openpty()
     setup = TimekeeperSetup(

@@ -9,12 +9,12 @@ from typing import Any
 from textual.pilot import Pilot
 from textual.widgets import DataTable, Input, Select
 
-from racer_tui.app import create_app
-from racer_tui.screens.garage import GarageScreen
-from racer_tui.screens.model_editor import ModelEditorScreen
-from racer_tui.screens.race_screen import RaceScreen
-from racer_tui.screens.races import RacesScreen
-from racer_tui.screens.tracks import TrackImportDialog, TracksScreen
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.model_editor import ModelEditorScreen
+from racer_tui.app.screens.race_screen import RaceScreen
+from racer_tui.app.screens.races import RacesScreen
+from racer_tui.app.screens.tracks import TrackImportDialog, TracksScreen
 from sim.garage.folder import open_model
 from sim.race.rules import DEFAULT_RULES
 from sim.tracks.catalog import list_tracks
@@ -209,7 +209,7 @@ async def _start_a_minute_race(pilot: Pilot[Any], race_type: str) -> RaceScreen:
 
 
 async def test_a_race_among_boxes_is_chosen_in_the_races_screen_and_drawn() -> None:
-    from racer_tui.widgets.race_map import RaceMap
+    from racer_tui.app.widgets.race_map import RaceMap
     from sim.physics.objects.settings import RaceType
 
     app = create_app(start="races")
@@ -225,7 +225,7 @@ async def test_a_race_among_boxes_is_chosen_in_the_races_screen_and_drawn() -> N
 
 
 async def test_a_head_to_bot_race_draws_its_bot_cars_pointing_where_they_drive() -> None:
-    from racer_tui.widgets.race_map import RaceMap
+    from racer_tui.app.widgets.race_map import RaceMap
     from sim.physics.objects.settings import RaceType
 
     app = create_app(start="races")

@@ -20,12 +20,12 @@ import pytest
 from rich.text import Text
 from textual.pilot import Pilot
 
-from racer_tui.app import create_app
-from racer_tui.jobs import JobState
-from racer_tui.screens.training import LeaveWhileTraining, LiveRun, TrainingScreen
-from racer_tui.widgets.agent_view import Observation
-from racer_tui.widgets.chart import LineChart
-from racer_tui.widgets.training_charts import (
+from racer_tui.app.application import create_app
+from racer_tui.app.jobs import JobState
+from racer_tui.app.screens.training import LeaveWhileTraining, LiveRun, TrainingScreen
+from racer_tui.app.widgets.agent_view import Observation
+from racer_tui.app.widgets.chart import LineChart
+from racer_tui.app.widgets.training_charts import (
     TrainingCharts,
     TrainingFigures,
     run_line,
@@ -370,7 +370,7 @@ async def test_an_adopted_training_that_is_killed_says_so_instead_of_running_on(
 def test_the_agents_eye_view_draws_camera_and_lidar() -> None:
     import numpy as np
 
-    from racer_tui.widgets.agent_view import half_block_lines, observe_at, polar_lines
+    from racer_tui.app.widgets.agent_view import half_block_lines, observe_at, polar_lines
 
     track = new_model("ada").track()
     x, y = (float(v) for v in track.points[0, :2])
@@ -395,7 +395,7 @@ async def test_the_agents_eye_views_caption_wraps_instead_of_being_cut() -> None
     import numpy as np
     from textual.app import App, ComposeResult
 
-    from racer_tui.widgets.agent_view import AgentView, observe_at
+    from racer_tui.app.widgets.agent_view import AgentView, observe_at
 
     track = new_model("ada").track()
     x, y = (float(v) for v in track.points[0, :2])
@@ -419,7 +419,7 @@ def test_the_agents_eye_view_comes_from_the_newest_traced_step(
 ) -> None:
     from dataclasses import replace
 
-    from racer_tui.screens import training
+    from racer_tui.app.screens import training
     from sim.deepracer.files import SimTraceRow, sim_trace_text
     from sim.physics.simulation import LOOK_AHEAD
 
@@ -557,7 +557,7 @@ async def test_a_failed_training_says_the_apps_remedy_live_and_after_a_restart()
         assert "last run failed" in painted(charts)
     # A state file naming a remedy this racer-tui does not know keeps the message as is.
     folder.training_state_file.write_text(json.dumps({**state, "fix": "WIPE_DISK"}))
-    from racer_tui.screens.training import last_ending
+    from racer_tui.app.screens.training import last_ending
 
     ended, _ = last_ending(folder)
     assert ended is not None and ended.remedy is None and ended.message == MISSING_TRACK.message
@@ -566,7 +566,7 @@ async def test_a_failed_training_says_the_apps_remedy_live_and_after_a_restart()
 def test_the_counters_count_every_cars_episodes() -> None:
     """The metrics file holds every car's episodes; the trainer's own count in its updates
     runs a write ahead of the file: the larger is shown, never the stream's one-car share."""
-    from racer_tui.widgets.training_charts import counters
+    from racer_tui.app.widgets.training_charts import counters
 
     figures = TrainingFigures()
     figures.fold_rows(sample_rows())
@@ -586,7 +586,7 @@ def test_the_agents_eye_view_shows_boxes_that_stand_still_and_says_when_it_canno
 
     import numpy as np
 
-    from racer_tui.screens import training
+    from racer_tui.app.screens import training
     from sim.deepracer.files import SimTraceRow, sim_trace_text, write_training_params
     from sim.physics.objects.seen import SeenObjects, write_seen
     from sim.physics.simulation import LOOK_AHEAD

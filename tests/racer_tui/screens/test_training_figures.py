@@ -10,10 +10,10 @@ import json
 import os
 from datetime import UTC, datetime, timedelta
 
-from racer_tui.app import create_app
-from racer_tui.screens.training import TrainingScreen
-from racer_tui.widgets.chart import LineChart
-from racer_tui.widgets.training_charts import (
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.training import TrainingScreen
+from racer_tui.app.widgets.chart import LineChart
+from racer_tui.app.widgets.training_charts import (
     TrainingCharts,
     TrainingFigures,
     empty_reason,
@@ -175,7 +175,7 @@ async def test_figures_shown_live_are_the_figures_shown_after_a_restart() -> Non
 def test_metrics_rows_are_read_once_as_the_file_grows(tmp_path: object) -> None:
     """The live reader continues where it stopped, so a three-hour log is never read
     again whole; a file replaced whole is read again from its first row."""
-    from racer_tui.screens.training import read_new_rows
+    from racer_tui.app.screens.training import read_new_rows
 
     folder = new_model("ada")
     figures = TrainingFigures()
@@ -225,8 +225,8 @@ async def test_a_failed_training_says_so_in_its_charts_place() -> None:
 async def test_the_agents_eye_view_has_a_place_at_80x24() -> None:
     """Point 8: below wide sizes the view never appeared; `v` puts it in the charts'
     place, and back."""
-    from racer_tui.widgets.agent_view import AgentView
-    from racer_tui.widgets.footer import screen_keys
+    from racer_tui.app.widgets.agent_view import AgentView
+    from racer_tui.app.widgets.footer import screen_keys
 
     new_model("ada")
     app = create_app(start="training")
@@ -263,7 +263,7 @@ def test_the_apps_worker_command_names_one_parent() -> None:
 
 
 def test_a_narrow_run_line_says_its_clock_in_words_never_cut() -> None:
-    from racer_tui.widgets.training_charts import run_line
+    from racer_tui.app.widgets.training_charts import run_line
 
     figures = TrainingFigures()
     figures.fold(events.Started(0.0, "ada", "hairpin", ("vector",), 8, "scratch", 0, 10.0, 1))

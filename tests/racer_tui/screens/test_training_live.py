@@ -13,11 +13,11 @@ from typing import Any
 
 import pytest
 
-from racer_tui.app import create_app
-from racer_tui.screens.training import TrainingScreen
-from racer_tui.widgets.agent_view import AgentView
-from racer_tui.widgets.chart import LineChart
-from racer_tui.widgets.training_charts import TrainingCharts
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.training import TrainingScreen
+from racer_tui.app.widgets.agent_view import AgentView
+from racer_tui.app.widgets.chart import LineChart
+from racer_tui.app.widgets.training_charts import TrainingCharts
 from sim.deepracer.files import read_training_metrics
 from sim.garage.options import new_model
 from sim.training.checkpoint import LATEST

@@ -9,7 +9,7 @@ from typing import Any
 
 from textual.pilot import Pilot
 
-from racer_tui.app import create_app
+from racer_tui.app.application import create_app
 from tests.racer_tui.screens.test_coach import evaluated_model
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES

@@ -16,10 +16,10 @@ from textual.widgets import Input
 
 from league.nights import new_night
 from league.opening import open_league
-from racer_tui.app import create_app
-from racer_tui.screens import sync
-from racer_tui.screens.training import LeaveWhileTraining
-from racer_tui.widgets import job_line
+from racer_tui.app.application import create_app
+from racer_tui.app.screens import sync
+from racer_tui.app.screens.training import LeaveWhileTraining
+from racer_tui.app.widgets import job_line
 from sim.tracks.catalog import resolve_track
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES

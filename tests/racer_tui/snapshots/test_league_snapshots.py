@@ -13,7 +13,7 @@ from textual.pilot import Pilot
 
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.app import create_app
+from racer_tui.app.application import create_app
 from sim.foundation.home import data_home
 from sim.tracks.catalog import resolve_track
 from tests.league.helpers import race_result

@@ -15,10 +15,10 @@ from textual.pilot import Pilot
 
 from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.opening import open_league
-from racer_tui.app import create_app
-from racer_tui.screens.night_projector import NightProjectorScreen
-from racer_tui.screens.race_screen import RaceScreen, RaceSetup
-from racer_tui.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.night_projector import NightProjectorScreen
+from racer_tui.app.screens.race_screen import RaceScreen, RaceSetup
+from racer_tui.app.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
 from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.replay import ghost_lap

@@ -15,7 +15,7 @@ from textual.pilot import Pilot
 from league.nights import new_night
 from league.opening import open_league
 from league.races import record_race
-from racer_tui.app import create_app
+from racer_tui.app.application import create_app
 from sim.foundation.home import data_home
 from sim.race.engine import run_race
 from sim.race.rules import DEFAULT_RULES, RaceRules

@@ -15,8 +15,8 @@ from typing import Any
 from textual.pilot import Pilot
 from textual.widgets import Input, Select, TextArea
 
-from racer_tui.app import create_app
-from racer_tui.widgets.demo_race import DemoRace
+from racer_tui.app.application import create_app
+from racer_tui.app.widgets.demo_race import DemoRace
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import settle
 from tests.racer_tui.snapshots.sizes import SIZES

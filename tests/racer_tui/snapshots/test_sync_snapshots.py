@@ -15,7 +15,7 @@ from league.races import record_race
 from league.sync import local
 from league.sync.record import Quarantined
 from league.sync.session import save_store
-from racer_tui.app import create_app
+from racer_tui.app.application import create_app
 from sim.foundation.home import data_home
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import settle

@@ -10,9 +10,9 @@ from typing import Any
 from textual.pilot import Pilot
 from textual.widgets import Input
 
-from racer_tui.app import create_app
-from racer_tui.screens.training import TrainingScreen
-from racer_tui.widgets.training_charts import TrainingCharts
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.training import TrainingScreen
+from racer_tui.app.widgets.training_charts import TrainingCharts
 from sim.deepracer.files import TrainingEpisode, TrainingMetrics, append_training_metrics
 from sim.garage.folder import open_model
 from sim.garage.options import new_model

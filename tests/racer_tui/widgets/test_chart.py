@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from textual.app import App, ComposeResult
 
-from racer_tui.widgets.chart import LineChart, format_value, running_mean
+from racer_tui.app.widgets.chart import LineChart, format_value, running_mean
 
 
 def test_running_mean_averages_the_last_window_values() -> None:

@@ -3,7 +3,7 @@ of keys; and the app keeps nothing per section switch.
 
 The object counts never time anything. They guard against Textual's footer, which builds
 a widget per key at every change of keys and holds every key it ever showed (see
-`racer_tui.widgets.footer`).
+`racer_tui.app.widgets.footer`).
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from textual.widget import Widget
 from textual.widgets import Footer, Label
 from textual.widgets._footer import FooterKey
 
-from racer_tui.app import create_app
-from racer_tui.screens.dialogs import ConfirmDialog
-from racer_tui.screens.help import HelpScreen
-from racer_tui.widgets.footer import RacerFooter
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog
+from racer_tui.app.screens.help import HelpScreen
+from racer_tui.app.widgets.footer import RacerFooter
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import painted, settle
 

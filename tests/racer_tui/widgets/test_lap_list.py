@@ -6,7 +6,7 @@ from __future__ import annotations
 from rich.text import Text
 from textual.app import App, ComposeResult
 
-from racer_tui.widgets.lap_list import LapList
+from racer_tui.app.widgets.lap_list import LapList
 from tests.racer_tui.screens.tui_helpers import painted
 
 

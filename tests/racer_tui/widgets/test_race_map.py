@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from textual.app import App, ComposeResult
 
-from racer_tui.widgets.race_map import CarMarker, MapProjection, RaceMap
+from racer_tui.app.widgets.race_map import CarMarker, MapProjection, RaceMap
 from sim.tracks.catalog import resolve_track
 
 

@@ -7,7 +7,7 @@ from typing import Any
 
 from textual.app import App, ComposeResult
 
-from racer_tui.widgets.table_fill import Col, FittedTable, fill_table, fit_widths
+from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table, fit_widths
 from tests.racer_tui.screens.tui_helpers import painted
 
 COLUMNS = (

@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.coach.lap_analysis import analyse_lap, coach_sentence, path_of_race_lap
 from sim.coach.limit_lap import limit_lap
 from sim.coach.sectors import track_sectors

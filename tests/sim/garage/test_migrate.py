@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from deepracer.logs import DeepRacerLog
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.deepracer.files import read_training_metrics
 from sim.garage import migrate
 from sim.garage.folder import ModelError, ModelStatus, list_models, models_dir, open_model

@@ -14,7 +14,7 @@ import uuid
 import psutil
 import pytest
 
-from racer_tui.cli import main
+from racer_tui.cli.main import main
 from sim.garage.options import new_model
 from sim.training import events
 from sim.training.launcher import AsyncTrainingProcess, TrainingProcess

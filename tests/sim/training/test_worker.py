@@ -130,7 +130,7 @@ def test_an_unknown_model_fails_with_one_sentence() -> None:
 
 def test_a_model_whose_track_is_gone_fails_with_the_remedy_apart(model: ModelFolder) -> None:
     """The command line's sentence names a command; the app needs the problem and the
-    remedy apart to offer its own key instead (`racer_tui.app_words`)."""
+    remedy apart to offer its own key instead (`racer_tui.app.words`)."""
     params = model.training_params_file
     params.write_text(params.read_text().replace("reinvent_base", "zzqxw"))
     process = TrainingProcess.start(model.name, minutes=1, extra=TINY)

@@ -1,0 +1,600 @@
+"""The racer-tui Textual app: sections (garage, tracks, races) as Textual modes, a first-run
+welcome with a live demo race, a help screen and a command palette built from BINDINGS.
+
+`create_app()` is the one factory: the CLI (`run_app`), the Pilot tests and the snapshot
+tests all build the app through it. This is the module that imports Textual; the headless
+CLI never imports it (tests/test_architecture.py checks both).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections import deque
+from collections.abc import Callable
+from functools import partial
+from pathlib import Path
+from typing import Any, ClassVar
+
+from textual import events
+from textual.app import App, ScreenStackError
+from textual.binding import Binding, BindingType
+from textual.dom import DOMNode
+from textual.message_pump import MessagePump
+from textual.screen import Screen
+from textual.widget import AwaitMount
+from textual.widgets import DataTable
+from textual.worker import WorkerState
+
+from racer_tui.app.crash_report import (
+    EXIT_CRASH,
+    RecentKeys,
+    drop_unread_keys,
+    now,
+    report_text,
+    say_crash,
+    write_report,
+)
+from racer_tui.app.long_running import (
+    CALM_SECONDS,
+    CHECK_SECONDS,
+    FREEZE_AFTER_SECONDS,
+    IdleCollector,
+    favour_the_interface,
+    freeze_long_lived,
+    limit_malloc_arenas,
+    malloc_trim,
+    memoise_background_styles_by_colour,
+)
+from racer_tui.app.palette import PaletteCommand, RacerCommands
+from racer_tui.app.screens.base import ModelAdded, push_kept
+from racer_tui.app.screens.coach import CoachScreen
+from racer_tui.app.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
+from racer_tui.app.screens.evaluation import EvaluationScreen
+from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.help import HelpScreen, HelpTopic, binding_topics, declared_bindings
+from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.screens.model_editor import ModelEditorScreen
+from racer_tui.app.screens.night_projector import NightProjectorScreen
+from racer_tui.app.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
+from racer_tui.app.screens.projector import ProjectorScreen
+from racer_tui.app.screens.race_screen import RaceScreen
+from racer_tui.app.screens.races import RacesScreen
+from racer_tui.app.screens.sync import SyncScreen
+from racer_tui.app.screens.timekeeper import TimekeeperScreen
+from racer_tui.app.screens.tracks import TracksScreen
+from racer_tui.app.screens.training import RUN_GROUP as TRAINING_RUN_GROUP
+from racer_tui.app.screens.training import LeaveWhileTraining, TrainingScreen
+from racer_tui.app.screens.welcome import WelcomeScreen
+from racer_tui.app.sections import SECTIONS, WELCOME_MODE, section_for
+from racer_tui.app.textual_workarounds import apply_workarounds
+from sim.foundation.home import data_home
+from sim.garage.folder import list_models
+
+SECTION_SCREENS: dict[str, type[Screen[Any]]] = {
+    "garage": GarageScreen,
+    "tracks": TracksScreen,
+    "races": RacesScreen,
+    "training": TrainingScreen,
+    "league": LeagueScreen,
+}
+# Screens that are not sections but have keys of their own, for the help screen.
+OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
+    ("Welcome", WelcomeScreen),
+    ("Model editor", ModelEditorScreen),
+    ("Race view", RaceScreen),
+    ("League nights", NightsScreen),
+    ("Timekeeper (a physical car's heat)", TimekeeperScreen),
+    ("Night projector", NightProjectorScreen),
+    ("Evaluation", EvaluationScreen),
+    ("Coach (a lap against the limit lap)", CoachScreen),
+    ("Projector", ProjectorScreen),
+    ("Shared store (sync)", SyncScreen),
+    ("League night dialogs", NewNightDialog),
+    ("Add entrant dialog", AddEntrantDialog),
+    ("Confirm dialog", ConfirmDialog),
+    ("Input dialogs", InputDialog),
+    ("Import dialog", ImportDialog),
+    ("Help", HelpScreen),
+    ("Tables", DataTable),
+)
+EVERYWHERE = "Everywhere"
+# A key waits for the one before it (see `_ready_for_input`): first by yielding to the
+# widgets at work, then by polling; a key lost on its way stops holding the next after:
+HELD_KEY_YIELDS = 200
+HELD_KEY_POLL_SECONDS = 0.002
+KEY_FLIGHT_SECONDS = 5.0  # a key neither stopped nor back at the app by then was lost
+FIRST_CONTENTS_SECONDS = 3.0  # keys wait this long at most for a section's first list
+HELD_KEY_CHECKS = HELD_KEY_YIELDS + int(KEY_FLIGHT_SECONDS / HELD_KEY_POLL_SECONDS) + 1
+HELP_SCREEN = "help"  # the installed help screen's name
+
+
+def _section_bindings() -> list[BindingType]:
+    return [
+        Binding(
+            section.key,
+            f"switch_section({section.mode!r})",
+            section.title,
+            tooltip=section.summary,
+            show=False,
+        )
+        for section in SECTIONS
+    ]
+
+
+class RacerTuiApp(App[int]):
+    """The whole app. Each section is a mode with its own screen stack, so leaving the
+    garage for the tracks and coming back finds the garage as it was left."""
+
+    TITLE = "racer-tui"
+    CSS_PATH = "app.tcss"
+    COMMANDS: ClassVar[set[type[Any] | Callable[[], type[Any]]]] = {
+        *App.COMMANDS,
+        RacerCommands,
+    }
+    MODES: ClassVar[dict[str, str | Callable[[], Screen[Any]]]] = {
+        WELCOME_MODE: WelcomeScreen,
+        **SECTION_SCREENS,
+    }
+    BINDINGS: ClassVar[list[BindingType]] = [
+        *_section_bindings(),
+        Binding("question_mark,f1", "help", "Help", tooltip="Every key of every screen"),
+        Binding("q", "quit", "Quit", tooltip="From a section's own screen"),
+        # Textual binds ctrl+q to "quit", which `check_action` allows only on a section's
+        # screen (so a stray q never leaves an editor or a heat): ctrl+q quits from any.
+        Binding(
+            "ctrl+q", "quit_anywhere", "Quit", tooltip="From any screen", show=False, priority=True
+        ),
+    ]
+
+    def __init__(
+        self,
+        *,
+        start: str | None = None,
+        long_running: bool = False,
+        projector_night: str | None = None,
+        db_path: Path | None = None,
+    ) -> None:
+        """`start` forces the first mode (tests); by default the garage, or the welcome
+        screen when the garage is empty. `long_running` is the app a racer or host keeps
+        open for hours: it tunes garbage collection for that (`racer_tui.app.long_running`);
+        tests build many apps in one process and leave it off. `projector_night` opens
+        on that night's projector (`racer-tui night projector`), in league `db_path`."""
+        apply_workarounds()
+        super().__init__()
+        self.start_mode = start
+        self.projector_night = projector_night
+        self.db_path = db_path
+        self.long_running = long_running
+        self._frozen_modes: set[str] = set()
+        self._stacks_seen: tuple[int, ...] = ()  # the screens open at the last idle check
+        self._stacks_changed_at = 0.0
+        self.calm_clock: Callable[[], float] = time.monotonic  # a test moves its own
+        self._switching_to_shown_mode = False
+        self.collector = IdleCollector(trim=malloc_trim())
+        self.recent_keys = RecentKeys()
+        self._held_input: deque[events.Key | events.Paste] = deque()  # one key at a time
+        self._key_in_flight: events.Key | None = None
+        self._key_sent_to: MessagePump | None = None  # the widget the key in flight went to
+        self._key_sent_at = 0.0
+        self._contents_awaited: tuple[Screen[Any], float] | None = None  # since when
+        self._release_task: asyncio.Task[None] | None = None
+        self.crash_report: Path | None = None  # written on the first unexpected error
+        self.crash_report_problem: str | None = None  # why it could not be written
+        memoise_background_styles_by_colour()  # for every app: tests keep many in one process
+        if long_running:
+            limit_malloc_arenas()  # before the app starts its worker threads
+            favour_the_interface()
+
+    def on_mount(self) -> None:
+        first = self.start_mode or self._first_mode()
+        self.switch_mode(first)
+        self._freeze_after_first_visit(first)
+        if self.projector_night is not None:
+            from racer_tui.app.screens.night_projector import NightProjectorScreen
+
+            self.push_screen(NightProjectorScreen(self.projector_night, db_path=self.db_path))
+        if self.long_running:
+            self.collector.start()
+            self.set_interval(CHECK_SECONDS, self._collect_when_idle, name="idle-collector")
+
+    def _collect_when_idle(self) -> None:
+        # Calm (only the sections open, no work in a thread, no screen come or gone for a
+        # few seconds): what survives a sweep lives on, so it may be frozen. A key the
+        # driver has posted but the app has not handled yet would wait for the collection:
+        # the timer runs outside the app's queue, so it looks there first.
+        self.collector.tick(quiet=self._calm(), keys_waiting=not self._message_queue.empty())
+
+    def _calm(self) -> bool:
+        """Nothing transient is alive to be frozen by a sweep: only the sections are open,
+        no worker runs (a heat, a sync, a reload; following a training is no transient
+        work), and no screen has come or gone for `CALM_SECONDS` (what a closed dialog or
+        race view built is still being let go)."""
+        now = self.calm_clock()
+        stacks = tuple(id(screen) for stack in self._screen_stacks.values() for screen in stack)
+        if stacks != self._stacks_seen:
+            self._stacks_seen, self._stacks_changed_at = stacks, now
+        if now - self._stacks_changed_at < CALM_SECONDS or not self._quiet():
+            return False
+        return not any(
+            worker.state is WorkerState.RUNNING and worker.group != TRAINING_RUN_GROUP
+            for worker in self.workers
+        )
+
+    def on_unmount(self) -> None:
+        self.collector.stop()
+        if self._release_task is not None:
+            self._release_task.cancel()
+
+    async def on_event(self, event: events.Event) -> None:
+        if isinstance(event, events.InputEvent):
+            self.collector.input_seen()
+        if isinstance(event, events.Key | events.Paste) and not event.is_forwarded:
+            if isinstance(event, events.Key):
+                self.recent_keys.key(event.key)
+            else:
+                self.recent_keys.paste(event.text)
+            if self._held_input or not self._ready_for_input():
+                self._hold(event)
+                return
+            await self._deliver(event)
+            return
+        await super().on_event(event)
+        if event is self._key_in_flight:  # back up at the app, its bindings checked: done
+            self._key_in_flight = None
+
+    # --- one key at a time --------------------------------------------------------------------
+
+    # Keys typed quickly arrive in one read from the terminal, and Textual hands each to the
+    # focused widget as soon as it comes, before the keys ahead of it have been handled. A
+    # key's binding runs only once the key has bubbled back up to the app, so the keys after
+    # one that opens a dialog went to the screen below, or to a dialog not yet mounted and
+    # focused, and were lost (issue 42: `t`, Backspace Backspace 5 left the Train dialog's
+    # field empty; a paste the same). The app hands over one key at a time instead: the
+    # next waits while the last is in flight (not yet stopped by a widget or handled by the
+    # app), while the screen on top has not mounted, or while its first list has not landed
+    # (`t` before the Garage's models are read found none); waiting keys keep their order.
+
+    def input_settled(self) -> bool:
+        """Every key and paste received has been handled, bindings included (for `drain`)."""
+        return not self._held_input and self._ready_for_input()
+
+    def _ready_for_input(self) -> bool:
+        try:
+            screen = self.screen
+        except ScreenStackError:  # starting or stopping: Textual's own handling says what
+            return True
+        if not screen.is_mounted or not self._first_contents_arrived(screen):
+            return False
+        event = self._key_in_flight
+        if event is None:
+            return True
+        if event._stop_propagation or self._key_lost():
+            self._key_in_flight = None  # used by a widget, or lost: the next key may go
+            return True
+        return False
+
+    def _first_contents_arrived(self, screen: Screen[Any]) -> bool:
+        """A section whose list comes from a worker has it (`t` typed as the Garage opens
+        trains the model under the cursor instead of finding none), or has been given
+        `FIRST_CONTENTS_SECONDS` to: a list that cannot be read must not hold keys back."""
+        if getattr(screen, "first_contents_arrived", True):
+            return True
+        now = time.monotonic()
+        if self._contents_awaited is None or self._contents_awaited[0] is not screen:
+            self._contents_awaited = (screen, now)
+        return now - self._contents_awaited[1] > FIRST_CONTENTS_SECONDS
+
+    def _key_lost(self) -> bool:
+        """The key in flight will never come back: the widget it went to was removed with
+        the key in its queue. A clock is the last resort, and a long one: on a busy laptop a
+        key can take over a second to come back up through a screen at work, and a key let
+        go too early could reach the screen below the dialog it opens."""
+        target = self._key_sent_to
+        if target is not None and not target.is_attached:
+            return True
+        return time.monotonic() - self._key_sent_at > KEY_FLIGHT_SECONDS
+
+    async def _deliver(self, event: events.Key | events.Paste) -> None:
+        if isinstance(event, events.Key):
+            self._key_in_flight, self._key_sent_at = event, time.monotonic()
+            self._key_sent_to = self._input_target()
+        await super().on_event(event)
+        if not event.is_forwarded and event is self._key_in_flight:
+            self._key_in_flight = None  # a priority binding used it here and then
+
+    def _input_target(self) -> MessagePump | None:
+        try:
+            return self.focused or self.screen  # where Textual forwards a key
+        except ScreenStackError:
+            return None
+
+    def _hold(self, event: events.Key | events.Paste) -> None:
+        self._held_input.append(event)
+        self._release_when_ready()
+
+    def _release_when_ready(self) -> None:
+        if self._release_task is not None and not self._release_task.done():
+            return
+        self._release_task = asyncio.create_task(self._wait_then_release(), name="held keys")
+
+    async def _wait_then_release(self) -> None:
+        for attempt in range(HELD_KEY_CHECKS):
+            if self._ready_for_input():
+                break
+            screen = self.screen  # mounted or not: `_ready_for_input` read it
+            if not screen.is_mounted:
+                await screen._mounted_event.wait()
+            else:  # the widget the last key went to is still at it: let it run
+                await asyncio.sleep(0 if attempt < HELD_KEY_YIELDS else HELD_KEY_POLL_SECONDS)
+        # Through the app's queue, behind the focus a screen set as it mounted.
+        self.call_later(self._release_held)
+
+    async def _release_held(self) -> None:
+        while self._held_input:
+            if not self._ready_for_input():  # a key just let go is in flight
+                self._release_when_ready()
+                return
+            await self._deliver(self._held_input.popleft())
+
+    # --- a crash is never silent -------------------------------------------------------------
+
+    def _handle_exception(self, error: Exception) -> None:
+        """An error no handler caught: Textual stops the app (restoring the terminal and
+        printing the traceback); first, the report of the first such error is written, while
+        the screen it happened on is still there to be read. Writing it can never stand in
+        the way of the exit."""
+        if self._exception is None and self.crash_report is None:
+            try:
+                when = now()
+                text = report_text(
+                    error,
+                    screen=type(self.screen).__name__ if self._screen_stacks else "(none)",
+                    screen_text=self._screen_text(),
+                    keys=self.recent_keys.listed(),
+                    when=when,
+                )
+                self.crash_report = write_report(text, when)
+            except Exception as failure:  # the app is going down either way
+                self.crash_report_problem = str(failure) or type(failure).__name__
+        super()._handle_exception(error)
+
+    def _screen_text(self) -> str:
+        """The screen as text, line by line, as the racer last saw it."""
+        try:
+            strips = self.screen._compositor.render_strips()
+            return "\n".join(strip.text.rstrip() for strip in strips)
+        except Exception as failure:  # a broken screen may be why it crashed
+            return f"(could not be read: {failure!r})"
+
+    def _freeze_after_first_visit(self, mode: str) -> None:
+        """In the long-running app, once a section has been shown the first time (and its
+        data read), keep what that built out of later garbage collections: modules, Textual
+        and the sections live as long as the app, and every full collection walked them
+        all (about 220,000 objects once every section has been seen). Measured on a short
+        run right after start-up, full-collection pauses went from 160-225 ms to 26-66 ms."""
+        if not self.long_running or mode in self._frozen_modes:
+            return
+        self._frozen_modes.add(mode)
+        self.set_timer(FREEZE_AFTER_SECONDS, self._freeze_if_quiet)
+
+    def _quiet(self) -> bool:
+        """Only the sections are open: nothing that will close soon (a dialog, a race view)
+        would be frozen with them."""
+        return all(len(stack) <= 1 for stack in self._screen_stacks.values())
+
+    def _freeze_if_quiet(self) -> None:
+        # With a dialog open, the next sweep freezes the section instead.
+        if self._quiet():
+            freeze_long_lived()
+
+    def _first_mode(self) -> str:
+        try:
+            return "garage" if list_models() else WELCOME_MODE
+        except OSError as error:
+            self.notify(
+                f"Cannot read the garage in {data_home()}: {error.strerror}.",
+                severity="error",
+                markup=False,
+            )
+            return WELCOME_MODE
+
+    # --- sections ------------------------------------------------------------------------
+
+    @property
+    def section_base(self) -> Screen[Any]:
+        """The current mode's own screen (under any editor or race pushed on it)."""
+        return self.screen_stack[0]
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        if action in ("switch_section", "quit"):
+            # Only from a section's own screen: in an editor or a race, a stray digit or q
+            # must not leave it (ctrl+q still quits from anywhere).
+            return len(self.screen_stack) <= 1
+        if action == "quit_anywhere":
+            return True
+        if action == "help":
+            return not isinstance(self.screen, HelpScreen)
+        return True
+
+    def switch_mode(self, mode: str) -> AwaitMount:
+        stack = self._screen_stacks.get(mode) or []
+        self._switching_to_shown_mode = bool(stack) and stack[0].is_mounted
+        try:
+            return super().switch_mode(mode)
+        finally:
+            self._switching_to_shown_mode = False
+
+    def delay_update(self, delay: float = 0.05) -> None:
+        # Textual's switch_mode holds every screen update back for 50 ms, to hide a screen
+        # being composed for the first time. A section shown before is composed already, and
+        # switch_mode lays it out and paints it at once, so the hold was only latency: 50 of
+        # the 65 ms a section switch took. It still holds for a section's first visit.
+        if not self._switching_to_shown_mode:
+            super().delay_update(delay)
+
+    async def action_switch_section(self, mode: str) -> None:
+        if mode in self.MODES and mode != self.current_mode:
+            await self.switch_mode(mode)
+            self._freeze_after_first_visit(mode)
+
+    async def run_section_action(self, mode: str, action: str) -> None:
+        """A palette command of another section: go there, then run it on its screen."""
+        await self.switch_mode(mode)
+        await self.section_base.run_action(action)
+
+    # --- leaving while a training runs ---------------------------------------------------------
+
+    def training_screen(self) -> TrainingScreen | None:
+        """The Training section's screen, if it was opened in this session."""
+        try:
+            stack = self.get_screen_stack("training")
+        except KeyError:  # never opened
+            return None
+        return stack[0] if stack and isinstance(stack[0], TrainingScreen) else None
+
+    async def action_quit_anywhere(self) -> None:
+        await self.action_quit()
+
+    async def action_quit(self) -> None:
+        """Quit; with a training running, first ask whether to stop it or keep it running."""
+        training = self.training_screen()
+        model = training.training_here if training is not None else None
+        if training is None or model is None:
+            self.exit()
+            return
+
+        def answered(answer: str | None) -> None:
+            if answer == "stop":
+                training.stop_training()
+            if answer in ("stop", "keep"):
+                self.exit()
+
+        self.push_screen(LeaveWhileTraining(model), answered)
+
+    async def on_model_added(self, message: ModelAdded) -> None:
+        await self.show_model(message.name)
+
+    async def show_model(self, name: str) -> None:
+        """Open the garage with `name` highlighted (after creating or importing it)."""
+        await self.switch_mode("garage")
+        garage = self.section_base
+        if isinstance(garage, GarageScreen):
+            garage.reload(select=name)
+
+    # --- help and palette ------------------------------------------------------------------
+
+    def help_topics(self) -> list[HelpTopic]:
+        classes: list[tuple[str, type[DOMNode]]] = [(EVERYWHERE, type(self))]
+        classes += [(s.title, SECTION_SCREENS[s.mode]) for s in SECTIONS]
+        classes += list(OTHER_SCREENS)
+        palette = Binding(self.COMMAND_PALETTE_BINDING, "command_palette", "Command palette")
+        return binding_topics(
+            classes,
+            self.get_key_display,
+            extra=[
+                (EVERYWHERE, palette),
+                (EVERYWHERE, Binding("tab", "focus_next", "Next field")),
+                (EVERYWHERE, Binding("shift+tab", "focus_previous", "Previous field")),
+            ],
+        )
+
+    def action_help(self) -> None:
+        if isinstance(self.screen, HelpScreen):
+            return
+        push_kept(self, HELP_SCREEN, self._new_help)  # the same help for every screen
+
+    def _new_help(self) -> HelpScreen:
+        notes = (
+            f"Your models, tracks and league live in {data_home()} "
+            "(set RACER_TUI_HOME to use another folder)."
+        )
+        return HelpScreen(self.help_topics(), notes)
+
+    def palette_commands(self, screen: Screen[object]) -> list[PaletteCommand]:
+        """Every section's keys as commands, plus the keys of the screen the palette was
+        opened on when that is not a section (the editor, a race, the welcome screen)."""
+        commands: list[PaletteCommand] = []
+        for section in SECTIONS:
+            commands.append(
+                PaletteCommand(
+                    f"Go to {section.title}",
+                    section.summary,
+                    partial(self.action_switch_section, section.mode),
+                )
+            )
+        for section in SECTIONS:
+            for binding in self._described(SECTION_SCREENS[section.mode]):
+                commands.append(
+                    PaletteCommand(
+                        f"{section.title}: {binding.description}",
+                        binding.tooltip or f"key {self.get_key_display(binding)}",
+                        partial(self.run_section_action, section.mode, binding.action),
+                    )
+                )
+        if section_for(self.current_mode) is None or screen is not self.section_base:
+            name = "Welcome" if isinstance(screen, WelcomeScreen) else "This screen"
+            for binding in self._described(type(screen)):
+                commands.append(
+                    PaletteCommand(
+                        f"{name}: {binding.description}",
+                        binding.tooltip or f"key {self.get_key_display(binding)}",
+                        partial(screen.run_action, binding.action),
+                    )
+                )
+        commands.append(
+            PaletteCommand(
+                "Help: every key", "the key reference, generated from the screens", self.action_help
+            )
+        )
+        if self.current_mode != WELCOME_MODE:
+            commands.append(
+                PaletteCommand(
+                    "Welcome: demo race",
+                    "the first-run screen with the reference driver lapping",
+                    partial(self.switch_mode, WELCOME_MODE),
+                )
+            )
+        return commands
+
+    @staticmethod
+    def _described(screen_class: type[DOMNode]) -> list[Binding]:
+        seen: set[str] = set()
+        described = []
+        for binding in declared_bindings(screen_class):
+            if binding.description and binding.action not in seen:
+                seen.add(binding.action)
+                described.append(binding)
+        return described
+
+
+def create_app(
+    *,
+    start: str | None = None,
+    long_running: bool = False,
+    projector_night: str | None = None,
+    db_path: Path | None = None,
+) -> RacerTuiApp:
+    """The app, as the CLI, the tests and the snapshots build it."""
+    return RacerTuiApp(
+        start=start, long_running=long_running, projector_night=projector_night, db_path=db_path
+    )
+
+
+def run_app(*, projector_night: str | None = None, db_path: Path | None = None) -> int:
+    """Run the app in the terminal; the exit status for the shell (non-zero after a crash)."""
+    app = create_app(long_running=True, projector_night=projector_night, db_path=db_path)
+    app.run()
+    return exit_status(app)
+
+
+def exit_status(app: RacerTuiApp) -> int:
+    """Once the app has stopped and the terminal is back: after a crash, the keys typed for
+    the app that it never read are thrown away (they would run in the shell), one sentence
+    on stderr says where the report is, and the status is non-zero."""
+    code = app.return_code or 0
+    if code == 0 and app._exception is None:
+        return 0
+    drop_unread_keys()
+    say_crash(app.crash_report, app.crash_report_problem)
+    return code or EXIT_CRASH

@@ -1,0 +1,333 @@
+"""A league night on the venue's big screen: the night and its track, the heat running
+now, and the night's standings with points, the newest result highlighted for a while.
+
+The standings come from the league database, read again every few seconds (heats end
+in this racer-tui or in another one beside it); the heat in progress comes from the
+small file its screen writes (`league.live_heat`), read twice a second. Nothing here
+needs a key: a host opens it, on the venue's screen, and leaves it. A kiosk
+(`racer_tui.app.screens.kiosk`): Esc does nothing, q asks and then leaves, and no other
+screen opens from it.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import ClassVar
+
+from rich import box
+from rich.table import Table
+from rich.text import Text
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Horizontal, Vertical
+from textual.message import Message
+from textual.widgets import Digits, Label, Static
+
+from league.errors import LeagueError
+from league.live_heat import LiveHeat, live_heat_path, read_live_heat
+from league.night_state import NightState, read_night
+from league.opening import open_league
+from league.report import SCORE_TITLES
+from league.store import default_db_path
+from racer_tui.app.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
+from racer_tui.app.screens.race_screen import clock_text, countdown_text
+from racer_tui.app.screens.timekeeper import lap_clock_text
+from sim.foundation.plural import counted
+from sim.physics.labels import PHYSICAL
+from sim.physics.objects.settings import RaceType
+
+POLL_SECONDS = 2.0  # the standings, from the database
+LIVE_SECONDS = 0.5  # the heat in progress, from its file
+HIGHLIGHT_SECONDS = 12.0  # how long a new result stands out
+SUFFIXES = {1: "st", 2: "nd", 3: "rd"}
+
+
+def ordinal(place: int) -> str:
+    """1st, 2nd, 3rd, 4th ... 11th, 12th, 13th ... 21st, 22nd."""
+    teens = place % 100 in (11, 12, 13)
+    return f"{place}{'th' if teens else SUFFIXES.get(place % 10, 'th')}"
+
+
+class NightGone(Message):
+    def __init__(self, reason: str) -> None:
+        super().__init__()
+        self.reason = reason
+
+
+# What the last line says: the view updates itself while the night runs; once it is
+# closed its standings are final.
+OPEN_HINT = f"{LEAVE_HINT} · updates by itself as heats run and end"
+CLOSED_HINT = f"{LEAVE_HINT} · the night is closed: its standings are final"
+
+
+class NightRead(Message):
+    def __init__(self, state: NightState) -> None:
+        super().__init__()
+        self.state = state
+
+
+NARROW = 70  # below this many columns the gap goes: the names need the room
+
+
+def standings_table(
+    state: NightState, highlight: str | None, spaced: bool, narrow: bool = False
+) -> Table:
+    """The night's standings in big, spaced rows: one rank per racer (a racer without a
+    counting lap is unplaced, '-'), the gap to the leader (not when `narrow`), and the
+    points."""
+    table = Table(box=box.SIMPLE_HEAD, expand=True, padding=(0, 1), show_edge=False)
+    table.add_column("#", justify="right", style="bold", width=3)
+    table.add_column("racer", ratio=3, no_wrap=True, overflow="ellipsis")
+    table.add_column("car", ratio=3, no_wrap=True, overflow="ellipsis")
+    table.add_column(SCORE_TITLES[state.night.rules.ranking], justify="right", width=9)
+    if not narrow:
+        table.add_column("gap", justify="right", width=8)
+    table.add_column("laps", justify="right", width=4)
+    table.add_column("pts", justify="right", width=4)
+    leader = state.standings[0].entry.score if state.standings else None
+    # A night of physical cars only needs no "(physical)" on every row: the mark is for a
+    # night that mixes them with simulated ones (and it cut the car's name at 80 columns).
+    mixed = len({s.entry.physics == PHYSICAL for s in state.standings}) > 1
+    for index, standing in enumerate(state.standings):
+        entry = standing.entry
+        score = entry.score
+        gap = "" if score is None or leader is None or index == 0 else f"+{score - leader:.3f}"
+        car = entry.model
+        if mixed and entry.physics == PHYSICAL and PHYSICAL not in car.casefold():
+            car += f" ({PHYSICAL})"
+        style = "on grey15" if index % 2 else ""
+        if highlight is not None and entry.racer == highlight:
+            style = "bold black on yellow"
+        cells = [
+            Text(str(standing.position) if standing.position is not None else "-"),
+            Text(entry.display_name, style="bold"),  # plain text, never markup
+            Text(car),
+            Text(clock_text(score) if score is not None else "-", style="bold"),
+            *([] if narrow else [Text(gap)]),
+            Text(str(entry.valid_laps)),
+            Text(str(standing.points), style="bold"),
+        ]
+        table.add_row(*cells, style=style)
+        if spaced:
+            table.add_row()  # readable from the back of the room
+    return table
+
+
+class NightProjectorScreen(KioskScreen):
+    """Full-screen view of one league night for the venue; `db_path` None is the default
+    league."""
+
+    BINDINGS: ClassVar[list[BindingType]] = kiosk_bindings(
+        Binding("ctrl+r", "refresh_now", "Refresh", show=False),
+    )
+    what = "night projector"
+    DEFAULT_CSS = """
+    NightProjectorScreen { background: $background; }
+    NightProjectorScreen #np-title {
+        height: auto; max-height: 2; padding: 0 2; text-style: bold; color: $accent;
+    }
+    NightProjectorScreen #np-now { height: 5; padding: 0 2; }
+    NightProjectorScreen #np-heat { width: 1fr; height: 5; padding: 1 0 0 0; }
+    NightProjectorScreen #np-clock-box { width: auto; height: 5; }
+    NightProjectorScreen #np-clock-label { width: 100%; text-align: right; color: $text-muted; }
+    NightProjectorScreen #np-clock { width: auto; }
+    NightProjectorScreen #np-news { height: 1; padding: 0 2; }
+    NightProjectorScreen #np-standings { height: 1fr; padding: 0 2; max-width: 120; }
+    NightProjectorScreen #np-hint { height: 1; color: $text-muted; padding: 0 2; }
+    """
+
+    def __init__(self, night_id: str, *, db_path: Path | None = None) -> None:
+        super().__init__()
+        self.night_id = night_id
+        self.db_path = db_path
+        self.clock: Callable[[], float] = time.time  # a test may drive its own
+        self.state: NightState | None = None
+        self.live: LiveHeat | None = None
+        self.reads = 0
+        self.news: Text | None = None
+        self.highlight: str | None = None  # the racer of the newest result
+        self._highlight_until = 0.0
+        self._seen_races: set[str] | None = None  # None: nothing read yet, nothing is new
+        self.gone: str | None = None  # why the night cannot be read (deleted since)
+        self._live_path = live_heat_path(db_path or default_db_path(), night_id)
+
+    def compose(self) -> ComposeResult:
+        yield Static(Text("League night"), id="np-title")
+        with Horizontal(id="np-now"):
+            yield Static("", id="np-heat")
+            with Vertical(id="np-clock-box"):
+                yield Label("", id="np-clock-label")
+                yield Digits("-:--", id="np-clock")
+        yield Static("", id="np-news")
+        yield Static("", id="np-standings")
+        yield Static(OPEN_HINT, id="np-hint")
+
+    def on_mount(self) -> None:
+        self.action_refresh_now()
+        self.set_interval(POLL_SECONDS, self.action_refresh_now)
+        self.set_interval(LIVE_SECONDS, self._read_live)
+
+    def on_resize(self) -> None:
+        self._draw_standings()  # spaced rows only where they fit
+
+    def action_refresh_now(self) -> None:
+        self._read_night()
+
+    # --- reading ---------------------------------------------------------------------------
+
+    @work(thread=True, exclusive=True, group="night-projector", exit_on_error=False)
+    def _read_night(self) -> None:
+        try:
+            with open_league(self.db_path) as league:
+                state = read_night(league, self.night_id)
+        except LeagueError:  # deleted since: said on the screen, not every 2 s
+            self.post_message(
+                NightGone("the night is no longer in the league (deleted, here or elsewhere).")
+            )
+            return
+        self.post_message(NightRead(state))
+
+    def on_night_gone(self, message: NightGone) -> None:
+        self.gone = message.reason
+        self.state = None
+        self.query_one("#np-standings", Static).update("")
+        self.query_one("#np-news", Static).update("")
+        self._draw_now()
+
+    def _read_live(self) -> None:
+        live = read_live_heat(self._live_path, self.night_id, self.clock())
+        ended = self.live is not None and (live is None or live.heat_id != self.live.heat_id)
+        finished = live is not None and live.state == "over"
+        if ended or (finished and (self.live is None or self.live.state != "over")):
+            self.action_refresh_now()  # its result is in the database now, or soon
+        self.live = live
+        if self.highlight is not None and self.clock() >= self._highlight_until:
+            self.highlight = None
+            self.news = None
+            self._draw_standings()
+        self._draw_now()
+
+    def on_night_read(self, message: NightRead) -> None:
+        self.reads += 1
+        self.gone = None
+        state = self.state = message.state
+        races = {heat.race_id: heat for heat in state.heats if heat.race_id is not None}
+        new = sorted(set(races) - self._seen_races) if self._seen_races is not None else []
+        self._seen_races = set(races)
+        if new:
+            self._announce(state, races[new[-1]].entrant.racer, new[-1])
+        night = state.night
+        title = Text(f"{night.name} · {night.track_name} · ")
+        if night.rules.race_type is not RaceType.TIME_TRIAL:
+            title.append(night.rules.race_words, style="bold")  # what the cars race among
+            title.append(" · ")
+        if night.rules.lap_count is not None:
+            title.append(f"{night.rules.lap_count}-lap race · ")
+        title.append(f"ranked by {SCORE_TITLES[night.rules.ranking]}")
+        if night.closed:
+            title.append(" · final standings")
+        self.query_one("#np-title", Static).update(title)
+        self.query_one("#np-hint", Static).update(CLOSED_HINT if night.closed else OPEN_HINT)
+        self._draw_standings()
+        self._draw_now()
+
+    def _announce(self, state: NightState, racer: str, race_id: str) -> None:
+        """Highlight the newest result: its racer's row, and one line saying what it was."""
+        standing = next((s for s in state.standings if s.entry.racer == racer), None)
+        name = standing.entry.display_name if standing is not None else racer
+        best = state.best_laps.get(race_id)
+        news = Text("New result: ", style="bold black on yellow")
+        news.append(f"{name}, ", style="bold")  # a name is plain text, never markup
+        news.append(f"best lap {clock_text(best)}" if best is not None else "no lap counted")
+        if standing is not None and standing.position is not None:
+            news.append(f", {ordinal(standing.position)} tonight")
+        self.news = news
+        self.highlight = racer
+        self._highlight_until = self.clock() + HIGHLIGHT_SECONDS
+
+    # --- drawing ---------------------------------------------------------------------------
+
+    def _draw_standings(self) -> None:
+        state = self.state
+        if state is None:
+            return
+        self.query_one("#np-news", Static).update(self.news or "")
+        panel = self.query_one("#np-standings", Static)
+        if not state.standings:
+            panel.update(Text("No results yet: the standings fill in as heats end.", style="dim"))
+            return
+        room = panel.size.height
+        spaced = room == 0 or 2 * len(state.standings) + 2 <= room
+        narrow = 0 < panel.size.width < NARROW
+        panel.update(standings_table(state, self.highlight, spaced, narrow))
+
+    def _draw_now(self) -> None:
+        state, live = self.state, self.live
+        heat = self.query_one("#np-heat", Static)
+        label = self.query_one("#np-clock-label", Label)
+        digits = self.query_one("#np-clock", Digits)
+        if state is None:
+            if self.gone is not None:
+                text = Text("This night cannot be shown: ", style="bold red")
+                text.append(f"{self.gone} q leaves.")
+                heat.update(text)
+            else:
+                heat.update(Text("Reading the night…", style="dim"))
+            return
+        if live is not None:
+            heat.update(self._heat_on_air(state, live))
+            label.update("Time left" if live.state != "over" else "Best lap")
+            value = countdown_text(live.time_left)
+            if live.state == "over":
+                value = clock_text(live.best_lap) if live.best_lap is not None else "-:--"
+        else:
+            heat.update(self._between_heats(state))
+            leader = state.standings[0].entry if state.standings else None
+            label.update("Leader" if leader is not None and leader.score is not None else "")
+            value = clock_text(leader.score) if leader and leader.score is not None else "-:--"
+        if digits.value != value:
+            digits.update(value)
+
+    def _heat_on_air(self, state: NightState, live: LiveHeat) -> Text:
+        text = Text()
+        word = {"ready": "On the line", "running": "Racing now", "paused": "Paused"}
+        total = len(state.heats)
+        text.append(f"{word.get(live.state, 'Just finished')}: ", style="bold green")
+        text.append(f"heat {live.heat_number}" + (f" of {total}" if total else ""))
+        text.append("\n")
+        text.append(live.racer, style="bold")  # plain text, never markup
+        text.append(f"  {live.car}\n", style="dim")
+        if live.state != "over":
+            text.append(f"{state.night.rules.lap_of(live.lap)}  ", style="bold")
+            text.append(lap_clock_text(live.lap_time))
+            limit = "" if live.limit is None else f"/{live.limit}"
+            over = live.limit is not None and live.offtracks > live.limit
+            text.append(f"   off {live.offtracks}{limit}", style="red" if over else "")
+        text.append("   best ")
+        text.append(clock_text(live.best_lap) if live.best_lap is not None else "-", style="bold")
+        return text
+
+    def _between_heats(self, state: NightState) -> Text:
+        text = Text()
+        raced = sum(1 for heat in state.heats if heat.race_id is not None)
+        waiting = [heat for heat in state.heats if heat.race_id is None]
+        if state.night.closed:
+            text.append("The night is over.", style="bold")
+            text.append(f"\n{counted(raced, 'heat')} raced · final standings and points below")
+            return text
+        if waiting:
+            after = waiting[0]
+            text.append("Next up: ", style="bold green")
+            text.append(f"heat {raced + 1} of {len(state.heats)}\n")
+            text.append(after.entrant.display_name, style="bold")
+            text.append(f"  {after.entrant.car}", style="dim")
+            return text
+        if state.undrawn:
+            text.append("Entrants are coming in", style="bold")
+            text.append(f"\n{len(state.undrawn)} entered · the running order is drawn next")
+            return text
+        text.append(f"{counted(raced, 'heat')} raced" if raced else "No heats yet", style="bold")
+        return text
