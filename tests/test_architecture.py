@@ -18,11 +18,11 @@ import sim
 # Modules that train or run a policy may import torch; nothing else may.
 TORCH_ALLOWED = {
     # A DeepRacer car archive's frozen graph, run with torch (the readers stay torch-free).
-    "sim.car_export.driver",
+    "sim.car_archive.driver",
     # Writes a trained policy's tensors as the car's graph.
     "sim.car_export.export",
-    "sim.car_export.graph_runner",
-    "sim.car_export.policy",
+    "sim.car_archive.graph_runner",
+    "sim.car_archive.policy",
     "sim.training.checkpoint",
     "sim.training.policy",
     "sim.training.ppo",

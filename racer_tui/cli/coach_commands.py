@@ -35,7 +35,7 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
 
 def run(args: argparse.Namespace) -> int:
     from sim.coach.lap_analysis import coach_sentence
-    from sim.coach.session import coach_model
+    from sim.garage.coach_session import coach_model
     from sim.garage.folder import open_model
 
     coaching = coach_model(open_model(args.model), args.lap)

@@ -15,7 +15,7 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.cli.output import print_json, print_table
-from sim.car_export.errors import CarModelError
+from sim.car_archive.errors import CarModelError
 from sim.deepracer.files import DeepRacerFileError
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.folder import (
@@ -562,8 +562,8 @@ def _export(name: str, output: str | None, *, replace: bool, as_json: bool) -> i
 def _act(name: str, picture: Path, *, as_json: bool) -> int:
     from dataclasses import asdict
 
+    from sim.car_archive.file_names import is_car_archive_name
     from sim.car_export.act import archive_answer, model_answer
-    from sim.car_export.file_names import is_car_archive_name
     from sim.car_export.frame import read_picture
 
     rgb = read_picture(picture)
@@ -637,7 +637,7 @@ def _export_car(name: str, output: str | None, *, replace: bool, as_json: bool) 
 
 
 def car_table(kind: str, rows: list[dict[str, Any]]) -> Table:
-    """The action space as a DeepRacer car drives it (`sim.car_export.car_mapping`)."""
+    """The action space as a DeepRacer car drives it (`sim.car_archive.car_mapping`)."""
     table = Table(title="On a DeepRacer car")
     columns = ("#", "steering (deg)", "speed (m/s)", "car steering", "car throttle")
     for column in columns if kind == "discrete" else columns[1:]:

@@ -1,6 +1,5 @@
-"""DeepRacer car archives: reading the `.tar.gz` the physical car loads (model_metadata.json
-and a frozen TensorFlow graph, agent/model.pb) and running that graph without TensorFlow.
-
-The archive, protobuf and graph readers never import torch; only the graph runner and the
-driver built on it do, since they run a policy.
+"""The car export: a trained policy written as the car's archive (`export`: the frozen
+graph the physical car loads, with its model_metadata.json), and what the car would do on a
+picture (`act`). Above the training, whose policies it writes; the archive's format and its
+readers are `sim.car_archive`.
 """

@@ -4,7 +4,7 @@ The picture is prepared as the car prepares its frames (`sim.car_export.frame`) 
 the model: a car archive's graph (imported or a file), or racer-tui's own policy, whose
 deterministic actor is exactly what the car archive export writes. The answer is the action
 probabilities (discrete) or the mean (continuous), and the action the car takes, with its
-servo and throttle (`sim.car_export.car_mapping`).
+servo and throttle (`sim.car_archive.car_mapping`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car_export.car_mapping import CarAction, CarMapping, car_actions
+from sim.car_archive.car_mapping import CarAction, CarMapping, car_actions
 from sim.car_export.frame import car_frame
 from sim.deepracer.action_space import ActionSpace
 
@@ -48,8 +48,8 @@ def answer(outputs: NDArray[np.float32], space: ActionSpace, size: tuple[int, in
 
 def archive_answer(path: Path, rgb: NDArray[np.uint8]) -> ModelAnswer:
     """What the car archive at `path` does with the picture."""
-    from sim.car_export.archive import read_car_archive
-    from sim.car_export.policy import CarPolicy
+    from sim.car_archive.archive import read_car_archive
+    from sim.car_archive.policy import CarPolicy
 
     policy = CarPolicy(read_car_archive(path))
     frame = car_frame(rgb, policy.width, policy.height)

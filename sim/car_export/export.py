@@ -29,16 +29,16 @@ import numpy as np
 import torch
 from torch import nn
 
-from sim.car_export.archive import (
+from sim.car_archive.archive import (
     AGENT_SCOPES,
     INPUT_NODE,
     OUTPUT_NODES,
     car_archive_bytes,
     read_car_archive,
 )
-from sim.car_export.car_mapping import CarAction, car_actions, car_export_notes, car_refusal
-from sim.car_export.errors import CarModelError
-from sim.car_export.file_names import car_archive_path
+from sim.car_archive.car_mapping import CarAction, car_actions, car_export_notes, car_refusal
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.file_names import car_archive_path
 from sim.car_export.graph_writer import GraphWriter, attr_b, attr_i, attr_ints, attr_s, attr_type
 from sim.deepracer.files import SENSOR_FILE_NAMES, ModelMetadata
 from sim.garage.folder import ModelError, ModelFolder, write_export

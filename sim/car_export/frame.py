@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car_export.errors import CarModelError
+from sim.car_archive.errors import CarModelError
 
 FRAME_WIDTH = 160
 FRAME_HEIGHT = 120

@@ -1,5 +1,5 @@
 """Writing a frozen TensorFlow graph (`GraphDef`) without TensorFlow: protobuf's wire format
-by hand, with the field numbers `sim.car_export.graph_def` reads (TensorFlow's public .proto
+by hand, with the field numbers `sim.car_archive.graph_def` reads (TensorFlow's public .proto
 files). The export for the car builds its graph with `GraphWriter`; the tests build graphs
 of any shape (and any corruption) with the same pieces.
 

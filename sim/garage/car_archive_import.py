@@ -3,7 +3,7 @@
 The archive is what a physical DeepRacer loads (racer-tui's own car export, the DeepRacer
 console's or DeepRacer on AWS's physical-model download, deepracer-for-cloud's car upload):
 `model_metadata.json` and one frozen TensorFlow graph. It is read as untrusted input by
-`sim.car_export.archive` (size limits, plain members only, an op allow-list; nothing in it is
+`sim.car_archive.archive` (size limits, plain members only, an op allow-list; nothing in it is
 executed), its graph is run once on a blank frame to prove racer-tui can drive with it, and
 the archive is kept whole in the model folder (`car-model.tar.gz`). The model then
 evaluates, races and exports for the car like any other; it cannot be trained or cloned,
@@ -15,8 +15,8 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from sim.car_export.archive import read_car_archive
-from sim.car_export.errors import CarModelError
+from sim.car_archive.archive import read_car_archive
+from sim.car_archive.errors import CarModelError
 from sim.deepracer.files import default_hyperparameters
 from sim.foundation.remedies import Fix, Note
 from sim.garage.folder import ModelError, ModelFolder, check_model_name, create_model
@@ -28,7 +28,7 @@ def import_car_archive(
     path: Path, name: str | None = None, track: str | None = None
 ) -> ImportResult:
     """A new garage model that drives with the car archive at `path`."""
-    from sim.car_export.policy import CarPolicy  # runs the graph: torch, only now
+    from sim.car_archive.policy import CarPolicy  # runs the graph: torch, only now
     from sim.coach.reward_line import template_source
 
     source = Path(path).expanduser()

@@ -142,7 +142,7 @@ def import_deepracer_folder(
 
 def _deepracer_weights(root: Path, files: DeepRacerFiles, notes: list[str]) -> FolderWeights | None:
     """DeepRacer's own frozen weights, when the folder has them and they can drive here."""
-    from sim.car_export.errors import CarModelError
+    from sim.car_archive.errors import CarModelError
     from sim.garage.frozen_graph import folder_weights
 
     assert files.model_metadata is not None

@@ -20,8 +20,8 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from sim.car_export.archive import MAX_GRAPH_BYTES, car_archive_bytes, read_car_archive
-from sim.car_export.errors import CarModelError
+from sim.car_archive.archive import MAX_GRAPH_BYTES, car_archive_bytes, read_car_archive
+from sim.car_archive.errors import CarModelError
 
 CHECKPOINTS_FILE = "deepracer_checkpoints.json"
 MAX_CHECKPOINTS_BYTES = 64 * 1024
@@ -78,7 +78,7 @@ def _best_checkpoint(path: Path) -> int | None:
 def folder_weights(root: Path, metadata_file: Path) -> FolderWeights | None:
     """The folder's frozen graph as a car archive that racer-tui can drive with, or None
     when it has none. CarModelError (one sentence) when it has one that cannot drive."""
-    from sim.car_export.policy import CarPolicy  # runs the graph: torch, only now
+    from sim.car_archive.policy import CarPolicy  # runs the graph: torch, only now
 
     graph = frozen_graph(root)
     if graph is None:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from sim.car_export.file_names import is_car_archive_name
+from sim.car_archive.file_names import is_car_archive_name
 from sim.foundation.remedies import echoed_path
 from sim.garage.bundle import install_bundle_report
 from sim.garage.car_archive_import import import_car_archive

@@ -10,7 +10,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from sim.car_export.car_mapping import car_actions, car_refusal
+from sim.car_archive.car_mapping import car_actions, car_refusal
 from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.files import (
     DeepRacerFileError,

@@ -502,9 +502,9 @@ def driver_for_model(folder: ModelFolder) -> Driver:
     """The driver for a garage model's `policy.safetensors`, or for the car archive it was
     imported from (`sim.car_export`)."""
     if folder.drives_with_car_archive():
-        from sim.car_export.archive import read_car_archive
-        from sim.car_export.driver import CarArchiveDriver
-        from sim.car_export.errors import CarModelError
+        from sim.car_archive.archive import read_car_archive
+        from sim.car_archive.driver import CarArchiveDriver
+        from sim.car_archive.errors import CarModelError
         from sim.garage.folder import ModelError
 
         try:

@@ -29,7 +29,7 @@ from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.speed_trace import SpeedTraceChart
 
 if TYPE_CHECKING:  # the coach's numpy and osqp load when a lap is coached, not with the app
-    from sim.coach.session import Coaching
+    from sim.garage.coach_session import Coaching
 
 
 COLUMNS = ("sector", "lost", "time", "limit")

@@ -41,7 +41,7 @@ from racer_tui.app.widgets.model_detail import ModelDetail, seconds_text, status
 from racer_tui.app.widgets.section_header import SectionHeader
 from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.app.words import in_app_words
-from sim.car_export.file_names import CAR_ARCHIVE_SUFFIX, car_archive_path, is_car_archive_name
+from sim.car_archive.file_names import CAR_ARCHIVE_SUFFIX, car_archive_path, is_car_archive_name
 from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.files import locate_files
 from sim.garage.bundle import bundle_path, export_bundle
@@ -526,7 +526,7 @@ class GarageScreen(RacerScreen[None]):
                 severity="warning",
             )
             return
-        from sim.car_export.car_mapping import car_refusal
+        from sim.car_archive.car_mapping import car_refusal
 
         refusal = car_refusal(folder.metadata())
         if folder.has_car_archive():
@@ -645,7 +645,7 @@ class GarageScreen(RacerScreen[None]):
                 markup=False,
             )
             return
-        from sim.coach.session import coach_model  # the coach's numpy and osqp, when used
+        from sim.garage.coach_session import coach_model  # the coach's numpy and osqp, when used
 
         load = partial(coach_model, folder)
         self.app.push_screen(CoachScreen(folder.name, "latest evaluation", load))

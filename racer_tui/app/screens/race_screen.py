@@ -483,7 +483,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             self.notify("No lap of this race counted, so there is no lap to coach.", markup=False)
             return
         from racer_tui.app.screens.coach import CoachScreen
-        from sim.coach.session import coach_race
+        from sim.garage.coach_session import coach_race
 
         load = partial(coach_race, self.setup.track, result)
         self.app.push_screen(CoachScreen(self.setup.racer, f"lap {best.number}", load))

@@ -20,7 +20,7 @@ from racer_tui.app.widgets.race_map import MapProjection
 
 if TYPE_CHECKING:  # the coach's numpy and osqp load when a lap is coached, not with the app
     from sim.coach.lap_analysis import SectorReport
-    from sim.coach.session import Coaching
+    from sim.garage.coach_session import Coaching
 
 
 # A sector's loss, as a share of the limit lap's time through it, that turns its colour.

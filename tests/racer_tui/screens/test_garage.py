@@ -375,7 +375,7 @@ async def test_the_train_dialog_offers_the_last_budget_and_refuses_less_than_a_m
 async def test_export_for_a_deepracer_car_and_import_it_back(tmp_path: Path) -> None:
     """x with a .tar.gz name writes the car's archive; i imports it as a model that races
     but is never trained (t says why)."""
-    from sim.car_export.archive import read_car_archive
+    from sim.car_archive.archive import read_car_archive
 
     trained_model("cam", sensors=["camera"])
     app = create_app(start="garage")

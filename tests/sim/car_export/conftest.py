@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.car_export.archive import CarArchive, read_car_archive
+from sim.car_archive.archive import CarArchive, read_car_archive
 from tests.conftest import SHARED_DEEPRACER
 
 

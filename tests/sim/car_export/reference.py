@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from sim.car_export.graph_def import FrozenGraph, GraphNode, node_name
+from sim.car_archive.graph_def import FrozenGraph, GraphNode, node_name
 
 
 def run_reference(graph: FrozenGraph, output: str, feeds: Mapping[str, np.ndarray]) -> np.ndarray:

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-import sim.car_export.archive as archive_module
-from sim.car_export.archive import CarArchive, read_car_archive
-from sim.car_export.errors import CarModelError
+import sim.car_archive.archive as archive_module
+from sim.car_archive.archive import CarArchive, read_car_archive
+from sim.car_archive.errors import CarModelError
 from tests.sim.car_export.graphs import (
     METADATA,
     GraphWriter,

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.car_export.archive import CarArchive, read_car_archive
-from sim.car_export.driver import CarArchiveDriver
-from sim.car_export.errors import CarModelError
-from sim.car_export.policy import CarPolicy
+from sim.car_archive.archive import CarArchive, read_car_archive
+from sim.car_archive.driver import CarArchiveDriver
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.policy import CarPolicy
 from sim.physics.car import SIMAPP4_CAR
 from sim.physics.simulation import TrackSimulation
 from sim.tracks.catalog import resolve_track

@@ -22,11 +22,11 @@ import numpy as np
 import pytest
 import torch
 
-from sim.car_export.archive import read_car_archive
-from sim.car_export.car_mapping import CarMapping, car_actions
+from sim.car_archive.archive import read_car_archive
+from sim.car_archive.car_mapping import CarMapping, car_actions
+from sim.car_archive.graph_def import SUPPORTED_OPS, read_graph
+from sim.car_archive.policy import CarPolicy
 from sim.car_export.export import GRAPH_OPS, car_refusal, export_car_archive
-from sim.car_export.graph_def import SUPPORTED_OPS, read_graph
-from sim.car_export.policy import CarPolicy
 from sim.garage.folder import ModelError, ModelFolder
 from sim.garage.options import new_model
 from sim.sensors.batched import Camera, CameraSpec

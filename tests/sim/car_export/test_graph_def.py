@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sim.car_export.errors import CarModelError
-from sim.car_export.graph_def import read_graph
-from sim.car_export.protobuf_wire import fields, read_varint, signed64
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.graph_def import read_graph
+from sim.car_archive.protobuf_wire import fields, read_varint, signed64
 from tests.sim.car_export.graphs import (
     CAMERA_INPUT,
     POLICY_OUTPUT,

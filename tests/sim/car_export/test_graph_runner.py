@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 import torch
 
-from sim.car_export.archive import CarArchive
-from sim.car_export.errors import CarModelError
-from sim.car_export.graph_def import SUPPORTED_OPS, read_graph
-from sim.car_export.graph_runner import RUNNER_OPS, GraphRunner
+from sim.car_archive.archive import CarArchive
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.graph_def import SUPPORTED_OPS, read_graph
+from sim.car_archive.graph_runner import RUNNER_OPS, GraphRunner
 from tests.sim.car_export.graphs import (
     CAMERA_INPUT,
     POLICY_OUTPUT,

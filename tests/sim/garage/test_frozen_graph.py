@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.car_export.archive import read_car_archive
-from sim.car_export.graph_def import read_graph
-from sim.car_export.graph_runner import GraphRunner
+from sim.car_archive.archive import read_car_archive
+from sim.car_archive.graph_def import read_graph
+from sim.car_archive.graph_runner import GraphRunner
 from sim.garage.frozen_graph import frozen_graph
 from sim.garage.importing import import_model
 from sim.tracks.catalog import resolve_track

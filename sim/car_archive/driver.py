@@ -13,8 +13,8 @@ from dataclasses import replace
 import numpy as np
 import torch
 
-from sim.car_export.archive import CarArchive
-from sim.car_export.policy import CarPolicy
+from sim.car_archive.archive import CarArchive
+from sim.car_archive.policy import CarPolicy
 from sim.physics.car import car_for_simapp_version
 from sim.physics.simulation import TrackSimulation
 from sim.race.driver import DriverAction

@@ -3,7 +3,7 @@
 Field numbers follow TensorFlow's public .proto files (tensorflow/core/framework/):
 GraphDef.node = 1; NodeDef name = 1, op = 2, input = 3, attr = 5 (a map: entries of key = 1,
 value = 2); AttrValue list = 1, s = 2, i = 3, f = 4, b = 5, type = 6, shape = 7, tensor = 8
-(tensors and shapes as `sim.car_export.tensor_proto` reads them). Fields a frozen inference
+(tensors and shapes as `sim.car_archive.tensor_proto` reads them). Fields a frozen inference
 graph does not need (devices, debug info, function libraries) are skipped, as protobuf skips
 unknown fields.
 
@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car_export.errors import CarModelError
-from sim.car_export.protobuf_wire import (
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.protobuf_wire import (
     WireFormatError,
     as_bytes,
     as_float32,
@@ -30,7 +30,7 @@ from sim.car_export.protobuf_wire import (
     fields,
     packed_varints,
 )
-from sim.car_export.tensor_proto import (
+from sim.car_archive.tensor_proto import (
     DTYPES,
     ExpansionBudget,
     read_floats,
@@ -38,7 +38,7 @@ from sim.car_export.tensor_proto import (
     read_tensor,
 )
 
-# The ops `sim.car_export.graph_runner` implements (a test keeps the two lists equal): those
+# The ops `sim.car_archive.graph_runner` implements (a test keeps the two lists equal): those
 # DeepRacer's networks use, plus the plain arithmetic and shape ops other exporters emit for
 # the same layers.
 SUPPORTED_OPS = frozenset(

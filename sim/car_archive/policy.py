@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car_export.archive import CarArchive
-from sim.car_export.errors import CarModelError
-from sim.car_export.graph_runner import GraphRunner
+from sim.car_archive.archive import CarArchive
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.graph_runner import GraphRunner
 
 
 class CarPolicy:

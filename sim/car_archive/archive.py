@@ -13,11 +13,11 @@ file); racer-tui's own export holds nothing else. Archives come from anyone, so 
   refuses it unless it finds exactly one. Other plain files (deepracer-for-cloud's car
   upload tars a whole model folder) are skipped unread, as the car ignores them;
 - reads the metadata with `sim.deepracer.files` (the one home of DeepRacer's formats) and
-  the graph with `sim.car_export.graph_def` (known ops only);
+  the graph with `sim.car_archive.graph_def` (known ops only);
 - checks the graph has the input and output names the car uses for the metadata's sensor.
 
 `car_archive_bytes` writes the container (the export and the model folder import use it).
-No torch here: running the graph is `sim.car_export.graph_runner`'s job.
+No torch here: running the graph is `sim.car_archive.graph_runner`'s job.
 """
 
 from __future__ import annotations
@@ -31,9 +31,9 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
-from sim.car_export.errors import CarModelError
-from sim.car_export.file_names import CAR_ARCHIVE_SUFFIXES
-from sim.car_export.graph_def import FrozenGraph, read_graph
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.file_names import CAR_ARCHIVE_SUFFIXES
+from sim.car_archive.graph_def import FrozenGraph, read_graph
 from sim.deepracer.files import (
     MAX_METADATA_BYTES,
     MODEL_METADATA,

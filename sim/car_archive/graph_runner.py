@@ -1,4 +1,4 @@
-"""Runs a frozen TensorFlow graph (`sim.car_export.graph_def`) with torch on the CPU.
+"""Runs a frozen TensorFlow graph (`sim.car_archive.graph_def`) with torch on the CPU.
 
 Tensors keep TensorFlow's layout (NHWC) between ops, so Reshape and Flatten see the
 element order TensorFlow would; only Conv2D and the pools turn to torch's NCHW and back.
@@ -18,8 +18,8 @@ import torch
 from numpy.typing import NDArray
 from torch.nn import functional
 
-from sim.car_export.errors import CarModelError
-from sim.car_export.graph_def import FrozenGraph, GraphNode, node_name, output_index
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.graph_def import FrozenGraph, GraphNode, node_name, output_index
 
 Tensor = torch.Tensor
 OpFunction = Callable[[GraphNode, list[Tensor]], Tensor]

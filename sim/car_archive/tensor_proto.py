@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from sim.car_export.errors import CarModelError
-from sim.car_export.protobuf_wire import (
+from sim.car_archive.errors import CarModelError
+from sim.car_archive.protobuf_wire import (
     FIXED32,
     FIXED64,
     LENGTH_DELIMITED,

@@ -12,7 +12,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Iterator
 
-from sim.car_export.errors import CarModelError
+from sim.car_archive.errors import CarModelError
 
 VARINT = 0
 FIXED64 = 1
