@@ -47,7 +47,14 @@ from sim.deepracer.files import (
 from sim.foundation.ids import canonical_json, content_hash
 from sim.foundation.names import is_valid_name
 from sim.foundation.remedies import Fix
-from sim.garage.folder import ModelFolder
+from sim.garage.folder import (
+    ModelError,
+    ModelFolder,
+    is_model_folder,
+    is_racer_tui_folder,
+    models_dir,
+    open_model,
+)
 from sim.physics.labels import BEFORE_VERSIONING, DEEPRACER
 from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.tracks.catalog import resolve_track
@@ -212,13 +219,6 @@ def assemble(
 
 def _model_folder(model: str) -> tuple[Path, str | None]:
     """The folder to read, and the garage name when `model` named a garage model."""
-    from sim.garage.folder import (
-        ModelError,
-        is_model_folder,
-        is_racer_tui_folder,
-        models_dir,
-        open_model,
-    )
 
     path = Path(model).expanduser()
     try:
@@ -237,7 +237,6 @@ def _model_folder(model: str) -> tuple[Path, str | None]:
 
 
 def _layout(files: DeepRacerFiles, folder: Path, garage_name: str | None) -> str:
-    from sim.garage.folder import is_racer_tui_folder
 
     if garage_name is not None or is_racer_tui_folder(folder):
         return RACER_TUI
@@ -387,7 +386,6 @@ def _training_summary(
 
 
 def _trained_minutes(folder: Path, fallback: float) -> float:
-    from sim.garage.folder import ModelFolder
 
     state = ModelFolder(folder).training_state() or {}
     seconds = state.get("elapsed_seconds")
@@ -408,8 +406,6 @@ def _model_hash(
     """What identifies the car: for our folders the garage's hash (metadata + weights), the
     same as the model's bundle; for DeepRacer downloads, what the files say about it."""
     if source == RACER_TUI:
-        from sim.garage.folder import ModelFolder
-
         return ModelFolder(folder).content_hash()
     digest = hashlib.sha256(
         canonical_json(

@@ -32,6 +32,10 @@ from league.trust.replay import DriverFor, verify_races
 from sim.foundation.ids import new_id
 from sim.foundation.plural import counted
 from sim.foundation.remedies import Fix
+from sim.garage.folder import ModelError, models_dir, open_model
+from sim.garage.imported import BUNDLE_SUFFIX
+from sim.race.driver import REFERENCE_NAME
+from sim.race.engine import run_race as engine_run_race
 from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
 from sim.tracks.track import Track
 
@@ -335,9 +339,6 @@ def model_spec(model: str) -> str:
     """What an entrant races, checked now rather than when the heat starts: `reference`, a
     garage model name, the absolute path of a bundle or model folder (so `night run`
     finds it from any working directory), or a physical car (`league.timekeeper.car`)."""
-    from sim.garage.folder import ModelError, models_dir, open_model
-    from sim.garage.imported import BUNDLE_SUFFIX
-    from sim.race.driver import REFERENCE_NAME
 
     spec = model.strip()
     if not spec or len(spec) > MAX_MODEL_SPEC:
@@ -516,8 +517,6 @@ def run_heats(
     if track.content_hash != night.track_hash:
         raise LeagueError(f"that is not league night {night.name!r}'s track.")
     if run_race is None:
-        from sim.race.engine import run_race as engine_run_race
-
         run_race = engine_run_race
     todo = pending_heats(league, night)
     if not todo:

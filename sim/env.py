@@ -29,11 +29,12 @@ from sim.deepracer.vocabulary import EpisodeStatus, normalise_sensors
 from sim.physics.car import DEEPRACER_CAR, CarSpec
 from sim.physics.objects.settings import RaceSettings
 from sim.physics.simulation import EpisodeRules, TrackSimulation
-from sim.reward.function import load_reward_source
+from sim.reward.function import load_reward_function, load_reward_source
 from sim.reward.template_files import shipped_template
 from sim.sensors.observations import Observer, SensorOptions
 from sim.sensors.randomisation.perturbation import draw_perturbation
 from sim.sensors.randomisation.settings import CameraRandomisation
+from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
 
 DEFAULT_TEMPLATE = "follow_center_line"  # DeepRacer's default reward function
@@ -70,8 +71,6 @@ class EnvConfig:
     ) -> EnvConfig:
         """Accept the loose forms people write: names, metadata dicts, file paths."""
         if isinstance(track, str):
-            from sim.tracks.catalog import resolve_track
-
             track = resolve_track(track)
         if action_space is None:
             space = FULL_RANGE_CONTINUOUS
@@ -80,8 +79,6 @@ class EnvConfig:
         else:
             space = parse_action_space(action_space)
         if isinstance(reward, str):
-            from sim.reward.function import load_reward_function
-
             reward = load_reward_function(reward)
         return cls(
             track=track,

@@ -15,9 +15,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from sim.car_archive.archive import read_car_archive
 from sim.car_archive.car_mapping import CarAction, CarMapping, car_actions
 from sim.car_export.frame import car_frame
 from sim.deepracer.action_space import ActionSpace
+from sim.garage.folder import ModelError, ModelFolder
 
 
 @dataclass(frozen=True)
@@ -48,7 +50,6 @@ def answer(outputs: NDArray[np.float32], space: ActionSpace, size: tuple[int, in
 
 def archive_answer(path: Path, rgb: NDArray[np.uint8]) -> ModelAnswer:
     """What the car archive at `path` does with the picture."""
-    from sim.car_archive.archive import read_car_archive
     from sim.car_archive.policy import CarPolicy
 
     policy = CarPolicy(read_car_archive(path))
@@ -61,7 +62,6 @@ def model_answer(folder_path: Path, rgb: NDArray[np.uint8]) -> ModelAnswer:
     """What the garage model in `folder_path` does with the picture."""
     import torch
 
-    from sim.garage.folder import ModelError, ModelFolder
     from sim.training.policy import load_policy
 
     folder = ModelFolder(folder_path)

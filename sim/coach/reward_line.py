@@ -26,7 +26,7 @@ from sim.reward.template_files import (
     template_name,
 )
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
-from sim.tracks.track import Track
+from sim.tracks.track import Track, TrackError
 
 # Metres between the points written into a reward function: a scan of a lap's points runs on
 # every step, and the function measures the distance to the segment between points, so 0.2 m
@@ -82,7 +82,6 @@ def line_followed(
 ) -> str:
     """`source` with its line redrawn for track and actions `now`, when it is the racing_line
     template exactly as written for `was` (a line the racer changed is theirs, and kept)."""
-    from sim.tracks.track import TrackError
 
     if was == now or template_name(source) != RACING_LINE_TEMPLATE:
         return source

@@ -64,13 +64,17 @@ from sim.deepracer.files import (
     write_model_metadata,
     write_training_params,
 )
+from sim.deepracer.vocabulary import is_physics
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.home import data_home
 from sim.foundation.ids import canonical_json
 from sim.foundation.names import NAME_RULE, is_valid_name
 from sim.foundation.remedies import Fix, RemedyError, echoed
 from sim.garage.migrate import MigrationError, migrate_folder, needs_migration
+from sim.physics.labels import BEFORE_VERSIONING, DEEPRACER
+from sim.reward.function import check_reward_code, load_reward_function
 from sim.sensors.randomisation.settings import CameraRandomisation, read_camera_randomisation
+from sim.tracks.catalog import list_tracks, resolve_track
 from sim.tracks.track import Track, TrackError
 
 if TYPE_CHECKING:
@@ -247,14 +251,12 @@ class ModelFolder:
 
     def reward_function(self) -> RewardFunction:
         """The loaded reward function (RewardFunctionError names the file and line)."""
-        from sim.reward.function import load_reward_function
 
         self.reward_source()  # the same clear errors for a missing or huge file
         return load_reward_function(self.reward_file)
 
     def track(self) -> Track:
         """The track the model trains on (training_params.yaml's WORLD_NAME)."""
-        from sim.tracks.catalog import resolve_track
 
         world = self.training_params().world_name
         try:
@@ -377,8 +379,6 @@ class ModelFolder:
     def trained_physics(self) -> str | None:
         """The physics (sim.physics.labels) the policy learnt to drive, or None untrained. A
         policy whose trainer did not say was trained before physics was recorded."""
-        from sim.deepracer.vocabulary import is_physics
-        from sim.physics.labels import BEFORE_VERSIONING, DEEPRACER
 
         if not self.has_policy():
             return None
@@ -603,7 +603,6 @@ def create_model(
     example where the model came from). `race_type` and `race_keys` are DeepRacer's race
     type and its settings' keys (`sim.physics.objects.settings.race_keys`).
     """
-    from sim.reward.function import check_reward_code
 
     final = check_new_model_name(name)
     try:
@@ -646,7 +645,6 @@ def create_model(
 
 def _catalog_track(track: str) -> Track:
     """A track the catalog knows by name: a model must find its track again later."""
-    from sim.tracks.catalog import list_tracks, resolve_track
 
     if track not in {info.name for info in list_tracks()} and Path(track).expanduser().is_file():
         raise ModelError(

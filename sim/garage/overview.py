@@ -20,6 +20,9 @@ from sim.deepracer.files import (
 )
 from sim.garage.folder import ModelError, ModelFolder, model_folders
 from sim.garage.summary import training_summary
+from sim.physics.labels import CURRENT, DEEPRACER, describe
+from sim.reward.template_files import template_name
+from sim.sensors.randomisation.settings import read_camera_randomisation
 
 
 def describe_actions(space: ActionSpace) -> str:
@@ -157,7 +160,6 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
 
 def _camera_randomisation_words(folder: ModelFolder, params: TrainingParams) -> str:
     """What the model's training randomises of its camera, in words ("off" when nothing)."""
-    from sim.sensors.randomisation.settings import read_camera_randomisation
 
     try:
         return read_camera_randomisation(params, str(folder.training_params_file)).describe()
@@ -167,7 +169,6 @@ def _camera_randomisation_words(folder: ModelFolder, params: TrainingParams) -> 
 
 def physics_note(trained: str | None) -> str | None:
     """One sentence when the policy learnt another car than today's, else None."""
-    from sim.physics.labels import CURRENT, DEEPRACER, describe
 
     if trained is None or trained == CURRENT:
         return None
@@ -192,7 +193,6 @@ def folder_evaluation(folder: ModelFolder, file_name: str) -> tuple[EvaluationTr
 
 def reward_origin(folder: ModelFolder) -> str:
     """Which template the reward function is, or "custom"."""
-    from sim.reward.template_files import template_name
 
     name = template_name(folder.reward_source())
     return "custom" if name is None else f"template {name}"

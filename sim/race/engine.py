@@ -47,7 +47,7 @@ from sim.foundation.ids import new_id
 from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
 from sim.physics.resets import reset_pose
 from sim.physics.simulation import EpisodeRules, TrackSimulation, let_other_threads_run
-from sim.race.driver import Driver
+from sim.race.driver import Driver, reference_driver
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps
 from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
@@ -423,8 +423,6 @@ def _start(
     keep_trace: bool,
 ) -> _Race:
     if driver is None:
-        from sim.race.driver import reference_driver
-
         driver = reference_driver(track, car)
     return _Race(
         track,

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from sim.physics.car import STEP_HZ
+from sim.physics.reference_driver import reference_lap
 from sim.physics.simulation import TrackSimulation
 from sim.reward.function import RewardFunction
 from sim.tracks.geometry import PolylineProjector
@@ -75,8 +76,6 @@ def line_path(track: Track, line: str) -> PolylineProjector:
     if line == CENTRE_LINE:
         return track.centerline
     if line == REFERENCE_LINE:
-        from sim.physics.reference_driver import reference_lap
-
         lap = reference_lap(track)
         if not lap.completed:
             raise NoLapError(f"the reference driver does not finish a lap of {track.name}")

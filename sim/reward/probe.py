@@ -26,14 +26,19 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.physics.reference_driver import ReferenceDriver
+from sim.physics.simulation import TrackSimulation
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
 from sim.reward.errors import RewardFunctionError
-from sim.reward.function import RewardFunction
-from sim.reward.lap import LINES, LapPay
+from sim.reward.function import RewardFunction, load_reward_source
+from sim.reward.lap import CENTRE_LINE, LINES, LapPay, lap_rewards
 from sim.reward.limit import DEFAULT_SECONDS
-from sim.reward.map import MapOptions, RewardMap
+from sim.reward.map import MapOptions, RewardMap, compute_map
+from sim.reward.sample_params import sample_params
 from sim.reward.sandbox import DEFAULT_MEMORY_MB
+from sim.tracks.catalog import resolve_track
 
 # The whole check (interpreter start, imports, the reference lap) must end within this;
 # a function slow enough to miss it would make training crawl anyway.
@@ -254,8 +259,6 @@ class _Watched:
 
 
 def _probe(request: dict[str, Any], track: Any) -> dict[str, Any]:
-    from sim.reward.function import load_reward_source
-    from sim.reward.sample_params import sample_params
 
     name = str(request["name"])
     reward = _Watched(load_reward_source(str(request["source"]), name))
@@ -282,7 +285,6 @@ def _probe(request: dict[str, Any], track: Any) -> dict[str, Any]:
 
 
 def _lap_answer(reward: Any, track: Any, request: dict[str, Any]) -> list[dict[str, Any]]:
-    from sim.reward.lap import CENTRE_LINE, lap_rewards
 
     speeds = tuple(float(speed) for speed in request["speeds"])
     lines = tuple(str(line) for line in request.get("lines", (CENTRE_LINE,)))
@@ -291,7 +293,6 @@ def _lap_answer(reward: Any, track: Any, request: dict[str, Any]) -> list[dict[s
 
 
 def _map_answer(reward: Any, track: Any, request: dict[str, Any]) -> dict[str, Any]:
-    from sim.reward.map import compute_map
 
     heading = request.get("heading")
     options = MapOptions(
@@ -303,9 +304,6 @@ def _map_answer(reward: Any, track: Any, request: dict[str, Any]) -> dict[str, A
 
 
 def _reference_lap_rewards(reward: Any, track: Any) -> list[float]:
-    from sim.deepracer.vocabulary import EpisodeStatus
-    from sim.physics.reference_driver import ReferenceDriver
-    from sim.physics.simulation import TrackSimulation
 
     sim = TrackSimulation(track, 1)
     driver = ReferenceDriver(track)
@@ -333,7 +331,6 @@ def _prepare(request: dict[str, Any]) -> Any:
     track_name = request.get("track")
     if not track_name:
         return None
-    from sim.tracks.catalog import resolve_track
 
     return resolve_track(str(track_name))
 

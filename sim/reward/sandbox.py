@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING
 
 from sim.reward import landlock
 from sim.reward import limit as reward_limit
+from sim.reward.errors import RewardFunctionError
 from sim.reward.guard import (
     SYSTEM_READS,
     exit_now,
@@ -332,7 +333,6 @@ def install_call_limit(
     names = {str(reward_file), os.path.abspath(reward_file)}  # as it may have been compiled
 
     def stuck(limit_seconds: float) -> None:
-        from sim.reward.errors import RewardFunctionError
 
         main = sys._current_frames().get(threading.main_thread().ident or 0)
         report(

@@ -19,7 +19,18 @@ import numpy as np
 
 from sim.foundation.arrays import FloatArray
 from sim.physics.simulation import TrackSimulation
+from sim.sensors.batched import (
+    Camera,
+    CameraSpec,
+    Lidar,
+    LidarSpec,
+    camera_space,
+    lidar_space,
+    sector_lidar_space,
+    sectors,
+)
 from sim.sensors.objects_drawn import object_solids
+from sim.sensors.randomisation.render import PerturbedCamera
 
 if TYPE_CHECKING:
     from sim.sensors.randomisation.perturbation import CameraPerturbation
@@ -54,14 +65,10 @@ class Observer:
         self._lidar: Any = None
         opts = self.options
         if "camera" in sensors:
-            from sim.sensors.batched import Camera, CameraSpec, camera_space
-
             spec = CameraSpec(width=opts.camera_width, height=opts.camera_height)
             self._camera = Camera(sim.track, spec)
             spaces["camera"] = camera_space(spec)
         if "lidar" in sensors or "sector_lidar" in sensors:
-            from sim.sensors.batched import Lidar, LidarSpec, lidar_space, sector_lidar_space
-
             lidar_spec = LidarSpec(rays=opts.lidar_rays, max_range=opts.lidar_range)
             self._lidar = Lidar(sim.track, lidar_spec)
             if "lidar" in sensors:
@@ -89,8 +96,6 @@ class Observer:
         if self._camera is None:
             return
         if self._perturbed is None:
-            from sim.sensors.randomisation.render import PerturbedCamera
-
             self._perturbed = PerturbedCamera(self.sim.track, self._camera, self.sim.n, noise_seed)
         self._perturbed.set(cars, perturbations)
 
@@ -131,8 +136,6 @@ class Observer:
             if "lidar" in self.spaces:
                 parts["lidar"] = scan
             else:
-                from sim.sensors.batched import sectors
-
                 parts["sector_lidar"] = sectors(scan)
         if "vector" in self.spaces:
             parts["vector"] = vector_state(self.sim)[pick]

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+from sim.deepracer.files import DeepRacerFileError
 from sim.foundation.remedies import Fix, RemedyError
+from sim.garage.folder import ModelError
+from sim.reward.errors import RewardFunctionError
+from sim.tracks.errors import TrackError
 
 
 class PolicyError(RemedyError):
@@ -12,10 +16,6 @@ class PolicyError(RemedyError):
 def describe_failure(error: BaseException) -> str:
     """A training failure in the racer's words: racer-tui's own errors are already one
     sentence; anything else is a fault of racer-tui, said as such (the type helps a report)."""
-    from sim.deepracer.files import DeepRacerFileError
-    from sim.garage.folder import ModelError
-    from sim.reward.errors import RewardFunctionError
-    from sim.tracks.errors import TrackError
     from sim.training.fleet_parts import PartError
 
     racers_words = (

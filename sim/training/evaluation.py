@@ -43,9 +43,11 @@ from sim.deepracer.files import (
 )
 from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.atomic import write_text_atomic
+from sim.garage.folder import ModelError
 from sim.physics.car import DEEPRACER_CAR, STEP_HZ, STEP_SECONDS, CarSpec
 from sim.physics.labels import CURRENT as CURRENT_PHYSICS
-from sim.physics.objects.settings import RaceSettings
+from sim.physics.objects.reading import race_settings
+from sim.physics.objects.settings import RaceSettings, RaceType
 from sim.physics.resets import ResetRules
 from sim.physics.simulation import EpisodeRules, TrackSimulation, let_other_threads_run
 from sim.tracks.track import Track
@@ -403,9 +405,6 @@ def evaluate_model(
 
 def _race_settings(folder: ModelFolder) -> RaceSettings | None:
     """A model's boxes or bot cars, evaluated as it trains (None for a time trial)."""
-    from sim.garage.folder import ModelError
-    from sim.physics.objects.reading import race_settings
-    from sim.physics.objects.settings import RaceType
 
     try:
         settings = race_settings(folder.training_params())

@@ -28,9 +28,12 @@ import torch
 from numpy.typing import NDArray
 from torch import nn
 
+from sim.car_archive.archive import read_car_archive
+from sim.car_archive.errors import CarModelError
 from sim.deepracer.files import NEURAL_NETWORKS, ModelMetadata
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.remedies import Fix
+from sim.garage.folder import ModelError
 from sim.physics.simulation import TrackSimulation
 from sim.race.driver import Driver, DriverAction
 from sim.sensors.observations import VECTOR_SIZE, Observer, SensorOptions
@@ -502,10 +505,7 @@ def driver_for_model(folder: ModelFolder) -> Driver:
     """The driver for a garage model's `policy.safetensors`, or for the car archive it was
     imported from (`sim.car_export`)."""
     if folder.drives_with_car_archive():
-        from sim.car_archive.archive import read_car_archive
         from sim.car_archive.driver import CarArchiveDriver
-        from sim.car_archive.errors import CarModelError
-        from sim.garage.folder import ModelError
 
         try:
             archive = read_car_archive(folder.car_archive_file)

@@ -27,10 +27,14 @@ from pathlib import Path
 from types import FrameType
 from typing import TextIO
 
+from sim.deepracer.files import DeepRacerFileError
+from sim.garage.folder import ModelError, open_model
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
+from sim.reward.errors import RewardFunctionError
 from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB
+from sim.tracks.track import TrackError
 from sim.training import events
 from sim.training.errors import describe_failure, failure_remedy
 
@@ -220,10 +224,6 @@ def _lock_for_training(path: Path) -> bool:
 def _train(
     args: argparse.Namespace, emit: EventWriter, stop: StopFlag, seconds: float, memory_mb: int
 ) -> int:
-    from sim.deepracer.files import DeepRacerFileError
-    from sim.garage.folder import ModelError, open_model
-    from sim.reward.errors import RewardFunctionError
-    from sim.tracks.track import TrackError
     from sim.training.fleet_parts import default_processes
     from sim.training.policy import PolicyError
     from sim.training.trainer import RunOptions, Trainer
