@@ -191,8 +191,6 @@ class RacerTuiApp(App[int]):
         self.switch_mode(first)
         self._freeze_after_first_visit(first)
         if self.projector_night is not None:
-            from racer_tui.app.screens.night_projector import NightProjectorScreen
-
             self.push_screen(NightProjectorScreen(self.projector_night, db_path=self.db_path))
         if self.long_running:
             self.collector.start()

@@ -59,6 +59,7 @@ from sim.sensors.randomisation.settings import (
     settings_text,
     with_camera_randomisation_keys,
 )
+from sim.tracks.catalog import resolve_track
 from sim.tracks.track import TrackError
 
 REWARD_FILE_NAME = "reward_function.py"
@@ -359,7 +360,6 @@ def spec_of_form(
 
     `base` supplies what the form does not show (the non-tunable hyperparameters, the
     network); `new_name_taken` is given when the name is new and must be free."""
-    from sim.tracks.catalog import resolve_track
 
     problems: list[FieldProblem] = []
     if new_name_taken is not None:
@@ -468,7 +468,6 @@ def save_edit(folder: ModelFolder, spec: ModelSpec) -> ModelFolder:
     A trained policy is kept, so its network's shape must not change (the same check as a
     clone); while a trainer runs, the files are left alone. Each file is replaced
     atomically, so the folder always holds a readable model."""
-    from sim.tracks.catalog import resolve_track
 
     if folder.is_training():
         raise ModelError(

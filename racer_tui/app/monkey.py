@@ -42,7 +42,12 @@ from typing import TYPE_CHECKING, Any
 
 import psutil
 
+from racer_tui.app.application import create_app
 from racer_tui.app.keys_as_delivered import burst, drain, paste
+from racer_tui.app.screens import training
+from racer_tui.app.screens.kiosk import KioskScreen, LeaveKiosk
+from sim.foundation.home import LEAGUE_ENV, home_at
+from sim.garage.options import new_model
 
 if TYPE_CHECKING:
     from textual.pilot import Pilot
@@ -122,7 +127,6 @@ def scratch_home(real_training: bool = False) -> Iterator[Path]:
     """A temporary data home (and working folder) with the monkey's models, the training
     worker swapped for a stand-in unless `real_training`; children it started are stopped
     and everything is removed at the end."""
-    from sim.foundation.home import LEAGUE_ENV, home_at
 
     before = {child.pid for child in psutil.Process().children(recursive=True)}
     league = os.environ.pop(LEAGUE_ENV, None)  # the league of the scratch home, not another
@@ -142,7 +146,6 @@ def scratch_home(real_training: bool = False) -> Iterator[Path]:
 
 
 def _fill_garage() -> None:
-    from sim.garage.options import new_model
 
     for name in MODELS:
         new_model(name)
@@ -154,7 +157,6 @@ def _training_stand_in(active: bool) -> Iterator[None]:
     if not active:
         yield
         return
-    from racer_tui.app.screens import training
 
     real = training.__dict__["worker_command"]
 
@@ -212,7 +214,6 @@ class Monkey:
         return self.rng.choices(list(weights), weights=list(weights.values()))[0]
 
     def _on_kiosk(self) -> bool:
-        from racer_tui.app.screens.kiosk import KioskScreen, LeaveKiosk
 
         return isinstance(self.app.screen, KioskScreen | LeaveKiosk)
 
@@ -283,7 +284,6 @@ async def run_monkey(
 ) -> MonkeyRun:
     """Drive apps (a new one after each quit or crash) for `actions` actions in all; the
     caller provides the scratch home (`scratch_home`)."""
-    from racer_tui.app.application import create_app
 
     run = MonkeyRun(seed=seed, rss_start_mb=rss_mb())
     run.warmup_actions = min(WARMUP_ACTIONS, max(actions // 20, 1))

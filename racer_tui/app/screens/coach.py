@@ -27,6 +27,7 @@ from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.widgets.coach_map import CoachMap
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.speed_trace import SpeedTraceChart
+from sim.coach.lap_analysis import coach_sentence
 
 if TYPE_CHECKING:  # the coach's numpy and osqp load when a lap is coached, not with the app
     from sim.garage.coach_session import Coaching
@@ -162,7 +163,6 @@ class CoachScreen(RacerScreen[None]):
     def _choose(self, row: int) -> None:
         if self.coaching is None or not 0 <= row < len(self._order):
             return
-        from sim.coach.lap_analysis import coach_sentence
 
         index = self._order[row]
         self.query_one(CoachMap).choose(index)

@@ -41,6 +41,7 @@ from racer_tui.app.widgets.model_detail import ModelDetail, seconds_text, status
 from racer_tui.app.widgets.section_header import SectionHeader
 from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.app.words import in_app_words
+from sim.car_archive.car_mapping import car_refusal
 from sim.car_archive.file_names import CAR_ARCHIVE_SUFFIX, car_archive_path, is_car_archive_name
 from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.files import locate_files
@@ -526,7 +527,6 @@ class GarageScreen(RacerScreen[None]):
                 severity="warning",
             )
             return
-        from sim.car_archive.car_mapping import car_refusal
 
         refusal = car_refusal(folder.metadata())
         if folder.has_car_archive():

@@ -50,7 +50,14 @@ from racer_tui.app.screens.nights import NightsScreen
 from racer_tui.app.screens.projector import ProjectorScreen
 from racer_tui.app.screens.races import replay_recorded_race
 from racer_tui.app.screens.sync import SyncScreen
-from racer_tui.app.widgets.board_filters import BoardFilters, BoardQuery, BoardView, FilterOptions
+from racer_tui.app.widgets.board_filters import (
+    BoardFilters,
+    BoardQuery,
+    BoardView,
+    FilterOptions,
+    board_view,
+    filter_options,
+)
 from racer_tui.app.widgets.entry_detail import EntryDetail, describe_entry
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.section_header import SectionHeader
@@ -261,7 +268,6 @@ class LeagueScreen(RacerScreen[None]):
 
     @work(thread=True, exclusive=True, group="league-board", exit_on_error=False)
     def _load(self, query: BoardQuery, generation: int) -> None:
-        from racer_tui.app.widgets.board_filters import board_view, filter_options
 
         with open_league(self.db_path) as league:
             view = board_view(league, query)

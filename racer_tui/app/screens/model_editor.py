@@ -74,6 +74,7 @@ from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default
 from sim.reward.errors import RewardFunctionError
 from sim.reward.lap import LapPay, verdict
 from sim.reward.map import MapOptions, RewardMap
+from sim.reward.probe import check_reward_source, editor_check
 from sim.reward.template_files import TEMPLATES, template_name
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track, TrackError
@@ -156,7 +157,6 @@ def check_reward(source: str, track: str | None = None, top_speed: float = 2.0) 
     """Call the function with DeepRacer-complete sample params and, given the model's
     track, map what it pays there at its top speed and compare a slow and a fast lap: in
     a child process with a time limit (the racer's code never runs in the app's process)."""
-    from sim.reward.probe import check_reward_source, editor_check
 
     try:
         if track is None:

@@ -25,9 +25,11 @@ from textual.widgets import DataTable, Digits, Static
 from league.live_heat import LiveHeatWriter
 from racer_tui.app.jobs import Job, JobState
 from racer_tui.app.screens.base import RacerScreen, error_message
+from racer_tui.app.screens.coach import CoachScreen
 from racer_tui.app.screens.dialogs import ask
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.race_map import CarMarker, RaceMap
+from sim.garage.coach_session import coach_race
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import Driver
 from sim.race.engine import RaceTick, race_ticks
@@ -482,8 +484,6 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         if best is None:
             self.notify("No lap of this race counted, so there is no lap to coach.", markup=False)
             return
-        from racer_tui.app.screens.coach import CoachScreen
-        from sim.garage.coach_session import coach_race
 
         load = partial(coach_race, self.setup.track, result)
         self.app.push_screen(CoachScreen(self.setup.racer, f"lap {best.number}", load))

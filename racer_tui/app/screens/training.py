@@ -73,6 +73,10 @@ from sim.garage.folder import (
     open_model,
 )
 from sim.physics.objects.field import ObjectField
+from sim.physics.objects.reading import race_settings
+from sim.physics.objects.seen import read_seen
+from sim.physics.objects.settings import RaceType
+from sim.physics.objects.world import object_field
 from sim.physics.simulation import LOOK_AHEAD
 from sim.tracks.track import Track
 from sim.training import events
@@ -243,11 +247,6 @@ def _objects_seen(
     bot cars are where the trainer saw them at its last traced row (`sim.physics.objects.seen`).
     When that is not this row, the caption says they are left out rather than drawing
     them elsewhere."""
-    from sim.deepracer.files import DeepRacerFileError
-    from sim.physics.objects.reading import race_settings
-    from sim.physics.objects.seen import read_seen
-    from sim.physics.objects.settings import RaceType
-    from sim.physics.objects.world import object_field
 
     try:
         race = race_settings(folder.training_params())
