@@ -16,8 +16,12 @@ from rich.text import Text
 
 from racer_tui.cli.output import print_json, print_table
 from sim.car_archive.errors import CarModelError
+from sim.car_archive.file_names import is_car_archive_name
 from sim.deepracer.files import DeepRacerFileError
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
+from sim.garage.bundle import export_bundle
+from sim.garage.clone import clone_model
+from sim.garage.deepracer_notes import export_notes
 from sim.garage.folder import (
     ModelError,
     ModelFolder,
@@ -26,6 +30,7 @@ from sim.garage.folder import (
     list_models,
     open_model,
 )
+from sim.garage.importing import import_model
 from sim.garage.options import (
     DEFAULT_BOT_SPEED,
     DEFAULT_BOTS,
@@ -39,10 +44,12 @@ from sim.garage.options import (
     DEFAULT_STEERING_LEVELS,
     DEFAULT_TRACK,
     LINE_ACTIONS,
+    new_model,
     parse_hp_assignments,
     parse_range,
 )
 from sim.garage.overview import model_details, model_row
+from sim.sensors.randomisation.settings import parse_camera_randomisation
 
 NAMES = ("model",)
 USER_ERRORS: tuple[type[Exception], ...] = (ModelError, DeepRacerFileError, CarModelError)
@@ -296,8 +303,6 @@ def _spec_options(args: argparse.Namespace) -> dict[str, Any]:
     if args.hp:
         options["hyperparameters"] = parse_hp_assignments(args.hp)
     if args.camera_randomisation is not None:
-        from sim.sensors.randomisation.settings import parse_camera_randomisation
-
         try:
             chosen = parse_camera_randomisation(args.camera_randomisation)
         except ValueError as error:
@@ -319,14 +324,12 @@ def _spec_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _new(args: argparse.Namespace) -> int:
-    from sim.garage.options import new_model
 
     folder = new_model(args.name, **_spec_options(args))
     return _created(folder, f"Created model {folder.name}", args.json, [])
 
 
 def _clone(args: argparse.Namespace) -> int:
-    from sim.garage.clone import clone_model
 
     source = open_model(args.source)
     folder = clone_model(source, args.name, **_spec_options(args))
@@ -527,7 +530,6 @@ def _delete(name: str, yes: bool) -> int:
 
 
 def _import(args: argparse.Namespace) -> int:
-    from sim.garage.importing import import_model
 
     result = import_model(
         Path(args.path), name=args.name, track=args.track, untrained=args.untrained
@@ -543,8 +545,6 @@ def _import(args: argparse.Namespace) -> int:
 
 
 def _export(name: str, output: str | None, *, replace: bool, as_json: bool) -> int:
-    from sim.garage.bundle import export_bundle
-    from sim.garage.deepracer_notes import export_notes
 
     folder = open_model(name)
     out = export_target(Path(output), folder.name) if output else Path(folder.name)
@@ -562,7 +562,6 @@ def _export(name: str, output: str | None, *, replace: bool, as_json: bool) -> i
 def _act(name: str, picture: Path, *, as_json: bool) -> int:
     from dataclasses import asdict
 
-    from sim.car_archive.file_names import is_car_archive_name
     from sim.car_export.act import archive_answer, model_answer
     from sim.car_export.frame import read_picture
 

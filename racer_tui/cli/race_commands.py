@@ -25,6 +25,7 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
+from league.ranking import rank
 from racer_tui.cli.output import print_json
 from racer_tui.cli.rules_option import HELP as RULES_HELP
 from racer_tui.cli.rules_option import rules_option
@@ -160,7 +161,6 @@ def _run(args: argparse.Namespace) -> int:
             console.print(race_table(result, track))
             console.print(Text(race_summary(result)))
     recorded = _record(results, args.db) if args.record else []
-    from league.ranking import rank
 
     standings = rank(results)
     if args.json:

@@ -23,10 +23,11 @@ from rich.text import Text
 from racer_tui.cli.output import print_json, print_table
 from racer_tui.text.reward_lap import lap_chart
 from racer_tui.text.reward_map import map_text
-from sim.coach.reward_line import template_source
+from sim.coach.reward_line import line_followed, template_source
 from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.vocabulary import MAX_SPEED
 from sim.foundation.atomic import write_bytes_atomic
+from sim.garage.folder import open_model
 from sim.reward.function import read_reward_file
 from sim.reward.lap import DEFAULT_SPEEDS, LINES, REFERENCE_LINE, line_verdict, verdict
 from sim.reward.map import (
@@ -129,7 +130,6 @@ def _subject(args: argparse.Namespace) -> _Subject:
         track_name = args.track or DEFAULT_TRACK
         source, name = _function(args.function, track_name, None)
         return _Subject(source, name, track_name, None, args.function)
-    from sim.garage.folder import open_model
 
     folder = open_model(args.model)
     space = folder.metadata().action_space
@@ -141,8 +141,6 @@ def _subject(args: argparse.Namespace) -> _Subject:
     title = f"{folder.name}'s reward function"
     source = folder.reward_source()
     if track_name != own_track:  # a racing_line reward pays for the line of the track mapped
-        from sim.coach.reward_line import line_followed
-
         source = line_followed(source, (own_track, space), (track_name, space))
     return _Subject(source, str(folder.reward_file), track_name, space, title)
 

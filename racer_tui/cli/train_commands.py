@@ -33,6 +33,7 @@ from sim.deepracer.files import DeepRacerFileError
 from sim.garage.folder import ModelError, open_model
 from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb
+from sim.tracks.catalog import resolve_track
 from sim.training import events
 from sim.training.errors import PolicyError
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
@@ -369,7 +370,6 @@ def _print_ending(console: Console, ended: events.Ended) -> None:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from sim.tracks.catalog import resolve_track
     from sim.training.evaluation import evaluate_model
 
     if not 1 <= args.trials <= MAX_TRIALS:
