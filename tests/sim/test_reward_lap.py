@@ -149,13 +149,13 @@ def test_a_track_the_reference_driver_cannot_finish_is_charted_on_its_centre_lin
     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     import racer_tui.cli.reward_commands
-    import sim.physics.reference_driver
+    import sim.reward.lap
     from sim.physics.reference_driver import ReferenceLap
 
     def off_the_road(track: object, *args: object, **kwargs: object) -> ReferenceLap:
         return ReferenceLap("hairpin-circuit", float("nan"), "off_track", 10.0)
 
-    monkeypatch.setattr(sim.physics.reference_driver, "reference_lap", off_the_road)
+    monkeypatch.setattr(sim.reward.lap, "reference_lap", off_the_road)
     pays = lap_rewards(load_template("follow_center_line"), HAIRPIN, (1.0, 2.0), LINES)
     assert [pay.line for pay in pays] == [CENTRE_LINE, CENTRE_LINE]
     assert line_verdict(pays) is None
