@@ -104,7 +104,7 @@ EVERYWHERE = "Everywhere"
 HELD_KEY_YIELDS = 200
 HELD_KEY_POLL_SECONDS = 0.002
 KEY_FLIGHT_SECONDS = 5.0  # a key neither stopped nor back at the app by then was lost
-FIRST_CONTENTS_SECONDS = 3.0  # keys wait this long at most for a section's first list
+READY_WAIT_SECONDS = 3.0  # keys wait this long at most for a screen to be ready for them
 HELD_KEY_CHECKS = HELD_KEY_YIELDS + int(KEY_FLIGHT_SECONDS / HELD_KEY_POLL_SECONDS) + 1
 HELP_SCREEN = "help"  # the installed help screen's name
 
@@ -177,7 +177,7 @@ class RacerTuiApp(App[int]):
         self._key_in_flight: events.Key | None = None
         self._key_sent_to: MessagePump | None = None  # the widget the key in flight went to
         self._key_sent_at = 0.0
-        self._contents_awaited: tuple[Screen[Any], float] | None = None  # since when
+        self._unready_since: tuple[Screen[Any], float] | None = None  # the screen, since when
         self._release_task: asyncio.Task[None] | None = None
         self.crash_report: Path | None = None  # written on the first unexpected error
         self.crash_report_problem: str | None = None  # why it could not be written
@@ -262,7 +262,7 @@ class RacerTuiApp(App[int]):
             screen = self.screen
         except ScreenStackError:  # starting or stopping: Textual's own handling says what
             return True
-        if not screen.is_mounted or not self._first_contents_arrived(screen):
+        if not screen.is_mounted or not self._screen_ready(screen):
             return False
         event = self._key_in_flight
         if event is None:
@@ -272,16 +272,19 @@ class RacerTuiApp(App[int]):
             return True
         return False
 
-    def _first_contents_arrived(self, screen: Screen[Any]) -> bool:
-        """A section whose list comes from a worker has it (`t` typed as the Garage opens
-        trains the model under the cursor instead of finding none), or has been given
-        `FIRST_CONTENTS_SECONDS` to: a list that cannot be read must not hold keys back."""
-        if getattr(screen, "first_contents_arrived", True):
+    def _screen_ready(self, screen: Screen[Any]) -> bool:
+        """The screen on top is ready for keys (`ready_for_keys`): a section whose list
+        comes from a worker has it (`t` typed as the Garage opens trains the model under the
+        cursor instead of finding none), and a dialog a worker is preparing is open (keys
+        typed after `o` on the Nights screen go into the new night's dialog). Each wait is
+        cut at `READY_WAIT_SECONDS`: a list that cannot be read must not hold keys back."""
+        if getattr(screen, "ready_for_keys", True):
+            self._unready_since = None
             return True
         now = time.monotonic()
-        if self._contents_awaited is None or self._contents_awaited[0] is not screen:
-            self._contents_awaited = (screen, now)
-        return now - self._contents_awaited[1] > FIRST_CONTENTS_SECONDS
+        if self._unready_since is None or self._unready_since[0] is not screen:
+            self._unready_since = (screen, now)
+        return now - self._unready_since[1] > READY_WAIT_SECONDS
 
     def _key_lost(self) -> bool:
         """The key in flight will never come back: the widget it went to was removed with

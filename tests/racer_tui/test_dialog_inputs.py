@@ -19,6 +19,7 @@ from racer_tui.app.application import create_app
 from racer_tui.app.keys_as_delivered import burst, drain, paste
 from racer_tui.app.screens.dialogs import ImportDialog, InputDialog
 from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.nights import NewNightDialog, NewSeasonDialog, NightsScreen
 from racer_tui.app.screens.tracks import TrackImportDialog
 from sim.garage.folder import ModelError, ModelFolder, list_models
 from sim.garage.options import new_model
@@ -146,7 +147,7 @@ async def test_a_key_typed_as_the_garage_opens_waits_for_its_models(
 async def test_a_list_that_cannot_be_read_holds_keys_only_for_a_moment(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    monkeypatch.setattr(app_module, "FIRST_CONTENTS_SECONDS", 0.2)
+    monkeypatch.setattr(app_module, "READY_WAIT_SECONDS", 0.2)
     _slow_listing(monkeypatch, 0.05, fails=True)
     new_model("one")
     app = create_app(start="garage")
@@ -156,3 +157,23 @@ async def test_a_list_that_cannot_be_read_holds_keys_only_for_a_moment(
         assert isinstance(app.screen, GarageScreen)
         said = [notification.message for notification in app._notifications]
         assert any("have not been read" in message and "ctrl+r" in message for message in said)
+
+
+@pytest.mark.parametrize(("key", "dialog"), [("o", NewNightDialog), ("s", NewSeasonDialog)])
+async def test_keys_typed_after_a_nights_dialog_key_arrive_in_its_dialog(
+    key: str, dialog: type[Screen[Any]]
+) -> None:
+    # The Nights screen reads the seasons in a worker before its dialog opens: the keys
+    # typed right after `o` or `s` went to the Nights screen (issue 42's last known gap).
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        burst(app, ["n"])
+        await drain(pilot)
+        assert isinstance(app.screen, NightsScreen)
+        burst(app, [key, *"friday"])
+        await drain(pilot)
+        assert isinstance(app.screen, dialog)
+        field = app.focused
+        assert isinstance(field, Input)
+        assert field.value == "friday"

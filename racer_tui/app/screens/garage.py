@@ -268,7 +268,7 @@ class GarageScreen(RacerScreen[None]):
         self.set_interval(WATCH_SECONDS, self._watch)
 
     @property
-    def first_contents_arrived(self) -> bool:
+    def ready_for_keys(self) -> bool:
         """The app holds keys typed before the list has landed (racer_tui.app.application)."""
         return self.loaded
 

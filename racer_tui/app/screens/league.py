@@ -237,7 +237,7 @@ class LeagueScreen(RacerScreen[None]):
         self.query_one(SyncStatusLine).read(self.db_path)
 
     @property
-    def first_contents_arrived(self) -> bool:
+    def ready_for_keys(self) -> bool:
         """The app holds keys typed before the list has landed (racer_tui.app.application)."""
         return self.loaded
 

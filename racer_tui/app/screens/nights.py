@@ -24,6 +24,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import Button, DataTable, Input, Label, Select, Static
+from textual.worker import Worker, WorkerState
 
 from league.errors import LeagueError
 from league.live_heat import LiveHeatWriter, live_heat_path
@@ -549,6 +550,10 @@ def heat_setup(
     )
 
 
+# A dialog-preparing worker that ended without posting its dialog.
+STOPPED_WITHOUT_RESULT = (WorkerState.ERROR, WorkerState.CANCELLED)
+
+
 class NightsScreen(RacerScreen[None]):
     """The nights on the left; the highlighted night's rules, heats and standings."""
 
@@ -620,7 +625,8 @@ class NightsScreen(RacerScreen[None]):
         super().__init__()
         self.db_path = db_path
         self.nights: list[Night] = []
-        self.first_contents_arrived = False  # the app holds keys typed before the list lands
+        self._listed = False  # the nights list has landed
+        self._dialog_coming = False  # a worker prepares the dialog the last key asked for
         self.state: NightState | None = None
         # The night the pane shows or is loading: the list's cursor decides it, never the
         # order in which loads come back.
@@ -668,7 +674,7 @@ class NightsScreen(RacerScreen[None]):
 
     def on_nights_loaded(self, message: NightsLoaded) -> None:
         self.nights = message.nights
-        self.first_contents_arrived = True
+        self._listed = True
         rows = [
             [Text(n.name), Text(n.track_name), "closed" if n.closed else "open"]
             for n in message.nights
@@ -826,7 +832,14 @@ class NightsScreen(RacerScreen[None]):
             return None
         return self.state.night
 
+    @property
+    def ready_for_keys(self) -> bool:
+        """The app holds keys typed before the list has landed, and those typed after `o` or
+        `s` until their dialog is open (racer_tui.app.application)."""
+        return self._listed and not self._dialog_coming
+
     def action_open_night(self) -> None:
+        self._dialog_coming = True
         self._load_seasons()
 
     @work(thread=True, exclusive=True, group="nights-dialog", exit_on_error=False)
@@ -836,6 +849,7 @@ class NightsScreen(RacerScreen[None]):
         self.post_message(SeasonsLoaded(seasons, purpose))
 
     def on_seasons_loaded(self, message: SeasonsLoaded) -> None:
+        self._dialog_coming = False  # the dialog is on top now: keys wait for it to mount
         if message.purpose == "season":
             taken = [name for name, _ in message.seasons]
             self.app.push_screen(NewSeasonDialog(taken), self._season_requested)
@@ -847,7 +861,13 @@ class NightsScreen(RacerScreen[None]):
         self.app.push_screen(dialog, self._night_requested)
 
     def action_new_season(self) -> None:
+        self._dialog_coming = True
         self._load_seasons("season")
+
+    def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
+        super().on_worker_state_changed(event)
+        if event.worker.group == "nights-dialog" and event.state in STOPPED_WITHOUT_RESULT:
+            self._dialog_coming = False  # its failure is said; keys go to the screen again
 
     def _season_requested(self, request: SeasonRequest | None) -> None:
         if request is not None:

@@ -372,7 +372,7 @@ class TrainingScreen(RacerScreen[None]):
     def __init__(self) -> None:
         super().__init__()
         self.rows: list[tuple[str, str, int | None]] = []
-        self.first_contents_arrived = False  # the app holds keys typed before the list lands
+        self.ready_for_keys = False  # the app holds keys typed before the list lands
         self.queue: list[TrainingRequest] = []
         self.live: LiveRun | None = None
         self.figures: dict[str, TrainingFigures] = {}
@@ -431,7 +431,7 @@ class TrainingScreen(RacerScreen[None]):
 
     def on_training_models_read(self, message: TrainingModelsRead) -> None:
         self.rows = message.rows
-        self.first_contents_arrived = True
+        self.ready_for_keys = True
         if self.live is None:
             elsewhere = next(((n, pid) for n, _, pid in self.rows if pid is not None), None)
             if elsewhere is not None:
