@@ -30,6 +30,7 @@ import time
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import IntEnum
 from typing import Any
 
 import numpy as np
@@ -60,8 +61,21 @@ def reversed_track(track: Track) -> Track:
     return found
 
 
-# Outcome codes used by `TrackSimulation.terminal` (0 = still running).
-_OUTCOMES = (
+class Outcome(IntEnum):
+    """How a car's episode ended, as `TrackSimulation.terminal` holds it (an integer array,
+    so a whole fleet is judged at once); RUNNING while it goes on."""
+
+    RUNNING = 0
+    CRASHED = 1
+    OFF_TRACK = 2
+    LAP_COMPLETE = 3
+    REVERSED = 4
+    IMMOBILIZED = 5
+    TIME_UP = 6
+
+
+# The episode status DeepRacer writes for each outcome, indexed by the outcome.
+_STATUS = (
     EpisodeStatus.IN_PROGRESS,
     EpisodeStatus.CRASHED,
     EpisodeStatus.OFF_TRACK,
@@ -70,7 +84,6 @@ _OUTCOMES = (
     EpisodeStatus.IMMOBILIZED,
     EpisodeStatus.TIME_UP,
 )
-_TIME_UP_CODE = _OUTCOMES.index(EpisodeStatus.TIME_UP)
 
 
 @dataclass(frozen=True)
@@ -388,12 +401,19 @@ class TrackSimulation:
                 self._falling >= rules.reversed_steps,
                 self.steps >= rules.max_steps,
             ],
-            [3, 1, 2, 5, 4, 6],
-            default=0,
+            [
+                Outcome.LAP_COMPLETE,
+                Outcome.CRASHED,
+                Outcome.OFF_TRACK,
+                Outcome.IMMOBILIZED,
+                Outcome.REVERSED,
+                Outcome.TIME_UP,
+            ],
+            default=Outcome.RUNNING,
         )
         ended = np.flatnonzero(running & (outcomes > 0))
         for car in ended.tolist():
-            self.status[car] = _OUTCOMES[outcomes[car]]
+            self.status[car] = _STATUS[outcomes[car]]
         self.terminal[ended] = outcomes[ended]
 
     # --- one car: the same steps in plain floats ---------------------------------------------
@@ -454,20 +474,20 @@ class TrackSimulation:
     def _judge_one(self) -> None:
         rules = self.rules
         if self.travelled[0] >= self._length:
-            outcome = 3
+            outcome = Outcome.LAP_COMPLETE
         elif self.fleet.crashed[0] or self.hit_object[0]:
-            outcome = 1
+            outcome = Outcome.CRASHED
         elif not self.wheels_on[0].any():
-            outcome = 2
+            outcome = Outcome.OFF_TRACK
         elif self._still[0] >= rules.immobilized_steps:
-            outcome = 5
+            outcome = Outcome.IMMOBILIZED
         elif self._falling[0] >= rules.reversed_steps:
-            outcome = 4
+            outcome = Outcome.REVERSED
         elif self.steps[0] >= rules.max_steps:
-            outcome = 6
+            outcome = Outcome.TIME_UP
         else:
             return
-        self.status[0] = _OUTCOMES[outcome]
+        self.status[0] = _STATUS[outcome]
         self.terminal[0] = outcome
 
     # --- what the reward function and observers see ----------------------------------------
@@ -545,7 +565,7 @@ class TrackSimulation:
     @property
     def timed_out(self) -> NDArray[np.bool_]:
         """Cars whose episode was cut by the step limit (truncated, not terminated)."""
-        return np.asarray(self.terminal == _TIME_UP_CODE)
+        return np.asarray(self.terminal == Outcome.TIME_UP)
 
     def all_params(self) -> list[dict[str, Any]]:
         """DeepRacer's reward `params` for every car, every key present."""

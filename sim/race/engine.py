@@ -46,7 +46,7 @@ from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.ids import new_id
 from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
 from sim.physics.resets import reset_pose
-from sim.physics.simulation import EpisodeRules, TrackSimulation, let_other_threads_run
+from sim.physics.simulation import EpisodeRules, Outcome, TrackSimulation, let_other_threads_run
 from sim.race.driver import Driver, reference_driver
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps
@@ -190,7 +190,7 @@ class _Race:
         outcome = sim.terminal[0]
         self.offtrack = False
         pause = 0.0
-        if outcome == 0:
+        if outcome == Outcome.RUNNING:
             self.status = _IN_PROGRESS
         else:
             status = sim.status[0]
