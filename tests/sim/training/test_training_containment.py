@@ -28,6 +28,21 @@ pytestmark = [
 ]
 
 
+# A training of 8 cars that updates after 64 to 256 steps and skips its evaluations.
+SMALL_FLEET = [
+    "--cars",
+    "8",
+    "--min-samples",
+    "64",
+    "--max-samples",
+    "256",
+    "--evaluation-seconds",
+    "0",
+    "--checkpoint-seconds",
+    "0",
+]
+
+
 def descendants() -> set[int]:
     """This process's descendants now (a test session may hold some of its own, such as
     multiprocessing's resource tracker: compare before and after)."""
@@ -148,7 +163,7 @@ def test_a_reward_that_allocates_in_a_simulation_process_fails_in_a_sentence(
 
 @pytest.mark.slow
 def test_an_endless_child_that_gets_past_the_guard_ends_with_the_training(
-    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     from tests.sim.test_reward_containment import PAST_THE_GUARD, processes_marked
 
@@ -157,10 +172,12 @@ def test_an_endless_child_that_gets_past_the_guard_ends_with_the_training(
     model = new_model("spins")
     model.reward_file.write_text(PAST_THE_GUARD)
     before = descendants()
-    code = main(["train", "spins", "--minutes", "0.02", "--json"])
-    out = capsys.readouterr().out
-    assert code == 0  # the child was not seen: the training runs its course, and returns
-    assert events.type_of(events.decode(out.splitlines()[-1])) == "finished"
+    # A small fleet and batch: the spinning child takes a core from the first step, and a
+    # default training's first 2,048 steps then take half a minute on two cores.
+    training = TrainingProcess.start("spins", minutes=0.02, extra=SMALL_FLEET)
+    ended = list(training.events())[-1]
+    assert training.wait() == 0  # the child was not seen: the training runs its course
+    assert isinstance(ended, events.Ended) and ended.kind == "finished"
     assert (model.path / "spinning").exists()  # the child did run
     assert processes_marked(marker) == []
     assert descendants() <= before
