@@ -269,14 +269,6 @@ class ModelFolder:
                 fix=Fix.CHOOSE_TRACK if error.fix is not None else None,
             ) from None
 
-    def camera_randomisation(self) -> CameraRandomisation:
-        """The camera randomisation its training params ask for (off without keys); a bad
-        key is a ModelError naming it."""
-        try:
-            return read_camera_randomisation(self.training_params(), str(self.training_params_file))
-        except DeepRacerFileError as error:
-            raise ModelError(str(error)) from None
-
     # --- metrics -------------------------------------------------------------------------
 
     def training_metrics(self) -> TrainingMetrics | None:
@@ -429,6 +421,15 @@ class ModelFolder:
         else:
             policy = b""
         return model_content_hash(self.metadata(), policy)
+
+
+def camera_randomisation_of(params: TrainingParams, where: str) -> CameraRandomisation:
+    """The camera randomisation a model's training params ask for (off without keys); a bad
+    key is a ModelError naming it (`where`: the params file)."""
+    try:
+        return read_camera_randomisation(params, where)
+    except DeepRacerFileError as error:
+        raise ModelError(str(error)) from None
 
 
 def write_export(target: Path, data: bytes) -> None:

@@ -34,7 +34,14 @@ from sim.deepracer.vocabulary import (
     SensorError,
     normalise_sensors,
 )
-from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder, create_model
+from sim.garage.folder import (
+    MAX_MINUTES,
+    MIN_MINUTES,
+    ModelError,
+    ModelFolder,
+    camera_randomisation_of,
+    create_model,
+)
 from sim.sensors.randomisation.settings import CameraRandomisation, camera_randomisation_keys
 from sim.tracks.catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
 from sim.tracks.track import TrackError
@@ -218,7 +225,7 @@ def spec_of(folder: ModelFolder) -> ModelSpec:
         max_minutes=params.max_minutes,
         race_type=params.race_type,
         race_keys={key: value for key, value in params.extra.items() if key in RACE_KEYS},
-        camera_randomisation=folder.camera_randomisation(),
+        camera_randomisation=camera_randomisation_of(params, str(folder.training_params_file)),
     )
 
 

@@ -13,18 +13,28 @@ from dataclasses import replace
 
 from sim.deepracer.files import DeepRacerFileError, TrainingParams
 from sim.env import EnvConfig
-from sim.garage.folder import ModelError, ModelFolder
+from sim.garage.folder import ModelError, ModelFolder, camera_randomisation_of
 from sim.garage.options import blind_to_objects
 from sim.physics.objects.reading import race_settings
 from sim.physics.objects.settings import RaceSettings, RaceType
 from sim.physics.simulation import EpisodeRules
-from sim.sensors.randomisation.settings import read_camera_randomisation
 
 
 def model_env_config(folder: ModelFolder) -> EnvConfig:
     """What a model's evaluations and races drive (the plain render)."""
+    return _env_config(folder, folder.training_params())
+
+
+def training_env_config(folder: ModelFolder) -> EnvConfig:
+    """What a training of `folder` drives: the trainer's and each of its simulation
+    processes' (sim.training.shards)."""
+    params = folder.training_params()  # read once for both
+    config = _env_config(folder, params)
+    return training_config(config, params, str(folder.training_params_file))
+
+
+def _env_config(folder: ModelFolder, params: TrainingParams) -> EnvConfig:
     metadata = folder.metadata()
-    params = folder.training_params()
     return EnvConfig(
         track=folder.track(),
         action_space=metadata.action_space,
@@ -39,23 +49,12 @@ def model_env_config(folder: ModelFolder) -> EnvConfig:
     )
 
 
-def training_env_config(folder: ModelFolder) -> EnvConfig:
-    """What a training of `folder` drives: the trainer's and each of its simulation
-    processes' (sim.training.shards)."""
-    return training_config(
-        model_env_config(folder), folder.training_params(), str(folder.training_params_file)
-    )
-
-
 def training_config(
     config: EnvConfig, params: TrainingParams, where: str = "training_params.yaml"
 ) -> EnvConfig:
     """`config` with the camera randomisation `params` ask for; a bad key is a ModelError
     naming it."""
-    try:
-        settings = read_camera_randomisation(params, where)
-    except DeepRacerFileError as error:
-        raise ModelError(str(error)) from None
+    settings = camera_randomisation_of(params, where)
     if settings == config.camera_randomisation:
         return config
     return replace(config, camera_randomisation=settings)
