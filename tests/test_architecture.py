@@ -3,6 +3,8 @@ policy is trained or run, so the headless paths start fast."""
 
 from __future__ import annotations
 
+import ast
+import importlib
 import json
 import pkgutil
 import subprocess
@@ -161,3 +163,32 @@ def test_the_circle_finder_finds_a_circle() -> None:
     graph.add_import(importer="a.three", imported="a.one")
     graph.add_import(importer="a.alone", imported="a.one")
     assert _import_circles(graph) == [["a.one", "a.three", "a.two"]]
+
+
+# Errors that never reach a person: a malformed line between the training worker and the
+# app, and YAML's own error type that strict YAML extends (its caller words the sentence).
+NOT_FOR_PEOPLE = {"sim.training.events.EventError", "sim.foundation.strict_yaml.DuplicateKeyError"}
+
+
+def _error_classes() -> Iterator[tuple[str, str]]:
+    """(module, class) for every class of the product named like an error."""
+    for root in ("racer_tui", "sim", "league"):
+        for path in sorted(Path(root).rglob("*.py")):
+            module = ".".join(path.with_suffix("").parts).removesuffix(".__init__")
+            for node in ast.parse(path.read_text(encoding="utf-8")).body:
+                if isinstance(node, ast.ClassDef) and node.name.endswith(("Error", "Unavailable")):
+                    yield module, node.name
+
+
+def test_every_user_error_derives_from_the_one_root() -> None:
+    from sim.foundation.remedies import RemedyError
+
+    found = list(_error_classes())
+    assert len(found) > 30  # the walk found the product's errors
+    strays = [
+        f"{module}.{name}"
+        for module, name in found
+        if f"{module}.{name}" not in NOT_FOR_PEOPLE
+        and not issubclass(getattr(importlib.import_module(module), name), RemedyError)
+    ]
+    assert strays == []

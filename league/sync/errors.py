@@ -8,8 +8,10 @@ builds a record locally, where a bad body is a programming or input error.
 
 from __future__ import annotations
 
+from sim.foundation.remedies import RemedyError
 
-class SyncError(Exception):
+
+class SyncError(RemedyError):
     """Base of every sync error; the message is a sentence for the user."""
 
 

@@ -15,6 +15,8 @@ from collections.abc import Callable, Iterator
 from enum import StrEnum
 from pathlib import Path
 
+from sim.foundation.remedies import RemedyError
+
 TIMER_ENV = "RACER_TUI_TIMER"  # the timer's path for the app, set by `racer-tui --timer PATH`
 POLL_SECONDS = 0.2  # how soon a stopped feed notices it has been stopped
 MAX_LINE = 200  # longer is not a timer talking: the rest of the line is dropped
@@ -25,7 +27,7 @@ class Trigger(StrEnum):
     RESET = "reset"
 
 
-class FeedError(ValueError):
+class FeedError(RemedyError):
     """A timer path that cannot be read, or a line that is not a trigger."""
 
 

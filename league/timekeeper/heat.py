@@ -20,6 +20,7 @@ from enum import StrEnum
 
 from sim.coach.plausible import fastest_possible_lap
 from sim.foundation.ids import new_id
+from sim.foundation.remedies import RemedyError
 from sim.physics.labels import PHYSICAL
 from sim.race.result import LapRecord, RaceResult, now_iso
 from sim.race.rules import RaceRules, lap_counts, score_laps
@@ -44,7 +45,7 @@ class Phase(StrEnum):
     OVER = "over"
 
 
-class TimekeeperError(ValueError):
+class TimekeeperError(RemedyError):
     """An input that the heat's phase does not allow; the message says what to do."""
 
 

@@ -95,7 +95,7 @@ def field_message(error: RemedyError) -> str:
     return Note(str(error), problem=error.problem, fix=error.fix)
 
 
-class FormError(ValueError):
+class FormError(RemedyError):
     """The form cannot be saved yet; `problems` says where and why."""
 
     def __init__(self, problems: list[FieldProblem]) -> None:

@@ -10,13 +10,11 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.cli.output import print_json, print_table
-from sim.coach.lap_analysis import LapAnalysisError, coach_sentence
-from sim.deepracer.files import DeepRacerFileError
+from sim.coach.lap_analysis import coach_sentence
 from sim.garage.coach_session import coach_model
-from sim.garage.folder import ModelError, open_model
+from sim.garage.folder import open_model
 
 NAMES = ("coach",)
-USER_ERRORS: tuple[type[Exception], ...] = (LapAnalysisError, ModelError, DeepRacerFileError)
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

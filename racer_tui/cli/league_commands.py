@@ -25,8 +25,8 @@ from racer_tui.cli.app_launch import AppLaunch
 from racer_tui.cli.output import print_json, print_table
 from racer_tui.cli.rules_option import HELP as RULES_HELP
 from racer_tui.cli.rules_option import rules_option
-from sim.deepracer.files import DeepRacerFileError
 from sim.foundation.plural import counted
+from sim.foundation.remedies import RemedyError
 from sim.race.rules import (
     DEFAULT_RULES,
     RULE_PRESETS,
@@ -46,7 +46,6 @@ if TYPE_CHECKING:
     Parsers = argparse._SubParsersAction[argparse.ArgumentParser]
 
 NAMES = ("submit", "leaderboard", "night", "season", "racer", "correct")
-USER_ERRORS: tuple[type[Exception], ...] = (LeagueError, RulesError, DeepRacerFileError)
 FORMATS = ("table", "json", "csv", "markdown")
 
 
@@ -695,12 +694,11 @@ def _night_run(league: League, night: Any, limit: int | None) -> int:
             "this racer-tui cannot load drivers for heats (racer_tui.cli.race_commands."
             "resolve_driver is missing); update racer-tui."
         ) from None
-    setup_errors: tuple[type[Exception], ...] = getattr(race_commands, "USER_ERRORS", ())
 
     def resolve_driver(spec: str, track: Any) -> Any:
         try:
             return load_driver(spec, track)
-        except setup_errors as error:  # one sentence, with the night's context
+        except RemedyError as error:  # one sentence, with the night's context
             raise LeagueError(f"cannot run the heat with {spec!r}: {error}") from None
 
     track = find_night_track(night)

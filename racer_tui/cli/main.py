@@ -18,6 +18,7 @@ from typing import Any
 
 from racer_tui.cli.app_launch import AppLaunch
 from sim.foundation.home import LEAGUE_ENV
+from sim.foundation.remedies import RemedyError
 
 EXIT_USER_ERROR = 2
 _NEGATIVE_VALUE = re.compile(r"-\d[\d.]*(,\s*-?\d[\d.]*)+")  # "-30,30", "-1.5,-0.5"
@@ -41,27 +42,8 @@ COMMAND_MODULES: dict[str, tuple[str, ...]] = {
 }
 
 
-class UsageError(Exception):
+class UsageError(RemedyError):
     """A wrong command line; the message says what to type instead."""
-
-
-def _user_errors() -> tuple[type[Exception], ...]:
-    # Imported only when an error is being handled: importing them costs a simulator.
-    from sim.deepracer.action_space import ActionSpaceError
-    from sim.deepracer.vocabulary import SensorError
-    from sim.reward.errors import RewardFunctionError
-    from sim.tracks.errors import TrackError
-
-    errors: list[type[Exception]] = [
-        TrackError,
-        ActionSpaceError,
-        SensorError,
-        RewardFunctionError,
-        UsageError,
-    ]
-    for module in _command_modules():
-        errors.extend(getattr(module, "USER_ERRORS", ()))
-    return tuple(errors)
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -92,8 +74,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def _command_modules(command: str | None = None) -> list[Any]:
-    """Each command module has `NAMES` (its subcommands), `register(commands)` and `run(args)`,
-    and may list its own user-error types in `USER_ERRORS`. Given a subcommand, only its
+    """Each command module has `NAMES` (its subcommands), `register(commands)` and `run(args)`.
+    Given a subcommand, only its
     module; otherwise (help, the app, an unknown word) all of them."""
     names = [name for name, owns in COMMAND_MODULES.items() if command in owns]
     return [importlib.import_module(name) for name in names or COMMAND_MODULES]
@@ -155,7 +137,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _open_app()
     try:
         return _dispatch(args)
-    except _user_errors() as exc:
+    except RemedyError as exc:  # every user error: one sentence
         # Plain print: one unwrapped sentence, and no markup interpretation of user text.
         print(f"racer-tui: {exc}", file=sys.stderr)
         return EXIT_USER_ERROR

@@ -17,7 +17,6 @@ from rich.text import Text
 from racer_tui.cli.output import print_json, print_table
 from sim.car_archive.errors import CarModelError
 from sim.car_archive.file_names import is_car_archive_name
-from sim.deepracer.files import DeepRacerFileError
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.bundle import export_bundle
 from sim.garage.clone import clone_model
@@ -52,7 +51,6 @@ from sim.garage.overview import model_details, model_row
 from sim.sensors.randomisation.settings import parse_camera_randomisation
 
 NAMES = ("model",)
-USER_ERRORS: tuple[type[Exception], ...] = (ModelError, DeepRacerFileError, CarModelError)
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -31,7 +31,7 @@ from racer_tui.cli.rules_option import HELP as RULES_HELP
 from racer_tui.cli.rules_option import rules_option
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.foundation.plural import counted
-from sim.foundation.remedies import echoed
+from sim.foundation.remedies import RemedyError, echoed
 from sim.garage.imported import BUNDLE_SUFFIX
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import Driver
@@ -39,15 +39,12 @@ from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, rules_from_mapping
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
-from sim.tracks.track import Track, TrackError
+from sim.tracks.track import Track
 from sim.training.drivers import RaceSetupError, resolve_driver
 
 EXIT_OK = 0
 EXIT_FAILURE = 1
 EXIT_USER_ERROR = 2
-
-
-USER_ERRORS: tuple[type[Exception], ...] = (RaceSetupError, RulesError, TrackError)
 
 
 @dataclass(frozen=True)
@@ -120,7 +117,7 @@ def main(argv: Sequence[str]) -> int:
         return int(exit_.code) if isinstance(exit_.code, int) else EXIT_USER_ERROR
     try:
         return _run(args)
-    except USER_ERRORS as error:
+    except RemedyError as error:
         print(f"racer-tui: {error}", file=sys.stderr)
         return EXIT_USER_ERROR
     except KeyboardInterrupt:

@@ -27,6 +27,7 @@ from sim.coach.reward_line import line_followed, template_source
 from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.vocabulary import MAX_SPEED
 from sim.foundation.atomic import write_bytes_atomic
+from sim.foundation.remedies import RemedyError
 from sim.garage.folder import open_model
 from sim.reward.function import read_reward_file
 from sim.reward.lap import DEFAULT_SPEEDS, LINES, REFERENCE_LINE, line_verdict, verdict
@@ -44,11 +45,8 @@ from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 NAMES = ("reward",)
 
 
-class MapOptionError(ValueError):
+class MapOptionError(RemedyError):
     """A `reward map` option out of range; the message is one sentence."""
-
-
-USER_ERRORS: tuple[type[Exception], ...] = (MapOptionError,)
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -25,11 +25,9 @@ from rich import box
 from rich.table import Table
 from rich.text import Text
 
-from league.errors import LeagueError
 from league.sync.errors import SyncError
 from racer_tui.cli.output import print_json, print_table
 from sim.foundation.plural import counted
-from sim.garage.folder import ModelError
 
 if TYPE_CHECKING:
     from league.store import League
@@ -39,7 +37,6 @@ if TYPE_CHECKING:
     Parsers = argparse._SubParsersAction[argparse.ArgumentParser]
 
 NAMES = ("sync",)
-USER_ERRORS: tuple[type[Exception], ...] = (SyncError, LeagueError, ModelError)
 _EXCERPT = 60
 _RUN_ORDER = (
     "pushed",

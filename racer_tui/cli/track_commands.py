@@ -15,6 +15,7 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.cli.output import print_json, print_table
+from sim.foundation.remedies import RemedyError
 from sim.tracks.catalog import (
     TrackInfo,
     find_track_info,
@@ -30,11 +31,8 @@ if TYPE_CHECKING:  # `tracks list` imports no simulator
 NAMES = ("tracks",)
 
 
-class TrackOptionError(ValueError):
+class TrackOptionError(RemedyError):
     """An option of a tracks command that cannot be used; the message says which and why."""
-
-
-USER_ERRORS: tuple[type[Exception], ...] = (TrackOptionError,)
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -29,28 +29,19 @@ from rich.table import Table
 from rich.text import Text
 
 from racer_tui.cli.output import print_json, print_table
-from sim.deepracer.files import DeepRacerFileError
+from sim.foundation.remedies import RemedyError
 from sim.garage.folder import ModelError, open_model
 from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb
 from sim.tracks.catalog import resolve_track
 from sim.training import events
-from sim.training.errors import PolicyError
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
 
 NAMES = ("train", "evaluate")
 
 
-class TrainingFailedError(Exception):
+class TrainingFailedError(RemedyError):
     """The training child ended with `failed`; the message is its sentence."""
-
-
-USER_ERRORS: tuple[type[Exception], ...] = (
-    ModelError,
-    DeepRacerFileError,
-    PolicyError,
-    TrainingFailedError,
-)
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -3,6 +3,8 @@ racer, naming the file or member and what is wrong."""
 
 from __future__ import annotations
 
+from sim.foundation.remedies import RemedyError
 
-class CarModelError(ValueError):
+
+class CarModelError(RemedyError):
     """A car archive, its metadata or its frozen graph cannot be used."""

@@ -21,6 +21,7 @@ from sim.coach.limits import car_limits
 from sim.deepracer.action_space import Action, ActionSpace
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.foundation.arrays import FloatArray
+from sim.foundation.remedies import RemedyError
 from sim.physics.car import DEEPRACER_CAR, CarSpec
 from sim.tracks.track import Track
 
@@ -33,7 +34,7 @@ CORRECTION_WEIGHT: Final = 0.2
 _ITERATIONS: Final = 60
 
 
-class LineActionsError(ValueError):
+class LineActionsError(RemedyError):
     """The count asked for cannot be made; `str()` is one sentence."""
 
 

@@ -16,9 +16,10 @@ import numpy as np
 
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.foundation.arrays import FloatArray
+from sim.foundation.remedies import RemedyError
 
 
-class ActionSpaceError(ValueError):
+class ActionSpaceError(RemedyError):
     """An action space that DeepRacer would reject; the message says what to change."""
 
 

@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 from sim.deepracer.action_space import ActionSpace, ActionSpaceError, parse_action_space
 from sim.deepracer.vocabulary import EpisodeStatus, SensorError, is_physics, normalise_sensors
 from sim.foundation.atomic import write_text_atomic
+from sim.foundation.remedies import RemedyError
 
 MODEL_METADATA = "model_metadata.json"
 HYPERPARAMETERS = "hyperparameters.json"
@@ -68,7 +69,7 @@ MAX_METRICS_BYTES = 64_000_000
 MAX_TRAINING_METRICS_BYTES = 512_000_000
 
 
-class DeepRacerFileError(ValueError):
+class DeepRacerFileError(RemedyError):
     """A DeepRacer file that is missing or malformed; the message names the file."""
 
 

@@ -12,6 +12,8 @@ from collections.abc import Iterable
 from enum import StrEnum
 from typing import Final
 
+from sim.foundation.remedies import RemedyError
+
 
 class EpisodeStatus(StrEnum):
     """DeepRacer's episode status labels, as they appear in metrics and sim-trace files."""
@@ -43,7 +45,7 @@ DEEPRACER_SENSORS = {
 }
 
 
-class SensorError(ValueError):
+class SensorError(RemedyError):
     """An unknown or badly combined sensor; the message lists the valid names."""
 
 

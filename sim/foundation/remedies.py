@@ -50,9 +50,10 @@ class Note(str):
 
 
 class RemedyError(ValueError):
-    """An error whose message is one sentence for the user. When the message ends in a
-    remedy that a front end may offer its own way, `problem` is the sentence without it
-    and `fix` names it (as for a Note)."""
+    """The one root of every error whose message is one sentence for the user: the command
+    line catches it in one place (exit 2), the app in one place (`error_message`). When the
+    message ends in a remedy that a front end may offer its own way, `problem` is the
+    sentence without it and `fix` names it (as for a Note)."""
 
     def __init__(self, message: str, *, problem: str = "", fix: Fix | None = None) -> None:
         super().__init__(message)

@@ -46,12 +46,13 @@ from sim.deepracer.files import (
     training_metrics_text,
 )
 from sim.foundation.atomic import write_text_atomic
+from sim.foundation.remedies import RemedyError
 
 JOURNAL = ".migration.json"
 OLD_LAYOUT_DIR = "old-layout"
 
 
-class MigrationError(Exception):
+class MigrationError(RemedyError):
     """A folder that could not be moved into the new layout; the message says what to do."""
 
 

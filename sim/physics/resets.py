@@ -19,6 +19,7 @@ import weakref
 from dataclasses import dataclass
 
 from sim.deepracer.vocabulary import EpisodeStatus
+from sim.foundation.remedies import RemedyError
 from sim.tracks.geometry import PointProjector
 from sim.tracks.track import Track
 
@@ -33,7 +34,7 @@ MIN_RESETS = 2
 MAX_RESETS = 10_000
 
 
-class ResetRulesError(ValueError):
+class ResetRulesError(RemedyError):
     """A reset setting that cannot be used; the message says which and why."""
 
 

@@ -17,6 +17,7 @@ from typing import Any
 from sim.deepracer.vocabulary import is_physics
 from sim.foundation.ids import is_valid_id
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
+from sim.foundation.remedies import RemedyError
 from sim.physics.labels import BEFORE_VERSIONING, CURRENT
 from sim.race.rules import RaceRules, RulesError, Score, rules_from_mapping, score_laps
 from sim.race.trace import RaceTrace
@@ -26,7 +27,7 @@ MAX_LAPS = 10_000
 _HASH = re.compile(r"[\w:.\-]{1,200}")
 
 
-class ResultError(ValueError):
+class ResultError(RemedyError):
     """A race result that cannot be trusted or read; the message names the field."""
 
 

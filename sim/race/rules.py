@@ -21,6 +21,7 @@ from typing import Any, Protocol
 import yaml
 
 from sim.foundation.plural import counted
+from sim.foundation.remedies import RemedyError
 from sim.foundation.strict_yaml import DuplicateKeyError, load_data
 from sim.physics.objects.settings import (
     MAX_BOT_CARS,
@@ -33,7 +34,7 @@ from sim.physics.objects.settings import (
 )
 
 
-class RulesError(ValueError):
+class RulesError(RemedyError):
     """A rules file or value that cannot be used; the message names the key."""
 
 

@@ -34,6 +34,7 @@ from sim.deepracer.files import (
     write_sim_trace,
 )
 from sim.deepracer.vocabulary import EpisodeStatus
+from sim.foundation.remedies import RemedyError
 
 PAUSE_STATUS: Final = "pause"
 # Row statuses in sim-trace spelling; the trace stores each as its index here.
@@ -50,7 +51,7 @@ TRACE_STATUSES: Final[tuple[str, ...]] = (
 STATUS_CODE: Final[dict[str, int]] = {name: code for code, name in enumerate(TRACE_STATUSES)}
 
 
-class TraceError(ValueError):
+class TraceError(RemedyError):
     """A sim-trace file that cannot be replayed as a race; the message says why."""
 
 

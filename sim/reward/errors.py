@@ -7,30 +7,30 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from sim.foundation.remedies import RemedyError
+
 FIX_ADVICE = "fix the function and try again"
 
 
-class RewardFunctionError(Exception):
-    """A reward function that cannot be loaded or run; `str()` is one sentence for the racer."""
+class RewardFunctionError(RemedyError):
+    """A reward function that cannot be loaded or run; `str()` is one sentence for the racer:
+    where (`display`, `line`), what is wrong (`reason`) and what to do (`advice`)."""
 
     def __init__(
         self,
         path: Path | str,
-        problem: str,
+        reason: str,
         line: int | None = None,
         advice: str = FIX_ADVICE,
     ) -> None:
         self.display = str(path)
         self.path = Path(path)
-        self.problem = problem
+        self.reason = reason
         self.line = line
         self.advice = advice
-        super().__init__(str(self))
-
-    def __str__(self) -> str:
-        where = self.display if self.line is None else f"{self.display} line {self.line}"
-        return f"{where}: {self.problem}; {self.advice}."
+        where = self.display if line is None else f"{self.display} line {line}"
+        super().__init__(f"{where}: {reason}; {advice}.")
 
     def __reduce__(self) -> tuple[Any, ...]:
         # The training worker may hand the error across a process boundary.
-        return (type(self), (self.display, self.problem, self.line, self.advice))
+        return (type(self), (self.display, self.reason, self.line, self.advice))

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from sim.foundation.remedies import RemedyError
 from sim.physics.car import STEP_HZ
 from sim.physics.reference_driver import reference_lap
 from sim.physics.simulation import TrackSimulation
@@ -67,7 +68,7 @@ class LapPay:
         )
 
 
-class NoLapError(ValueError):
+class NoLapError(RemedyError):
     """A line with no lap to drive on this track (the reference driver does not finish one)."""
 
 

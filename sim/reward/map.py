@@ -138,7 +138,7 @@ def compute_map(reward: RewardFunction, track: Track, options: MapOptions) -> Re
         try:
             flat_values[index] = reward(params)
         except RewardFunctionError as error:
-            if "did not return within" in error.problem:
+            if "did not return within" in error.reason:
                 raise  # a function this slow would take hours over the map
             failed[index] = True
             if first_failure is None:

@@ -198,13 +198,14 @@ def _ask_child(
     try:
         if "error" in answer:
             error = answer["error"]
-            raise RewardFunctionError(
+            failed = RewardFunctionError(
                 str(error["display"]),
                 str(error["problem"]),
                 error["line"] if isinstance(error["line"], int) else None,
                 str(error["advice"]),
             )
-        return dict(answer["ok"])
+        else:
+            return dict(answer["ok"])
     except (KeyError, TypeError, ValueError):
         raise RewardFunctionError(
             name,
@@ -212,6 +213,7 @@ def _ask_child(
             "to the process's outputs?)",
             advice="remove the code that writes there and try again",
         ) from None
+    raise failed  # outside the try: it is a ValueError too
 
 
 def _answer(stdout: bytes) -> dict[str, Any] | None:
@@ -349,7 +351,7 @@ def main() -> int:
         answer_stream.flush()
 
     def stuck(error: RewardFunctionError) -> None:
-        say(_error_answer(error.display, error.problem, error.advice, error.line))
+        say(_error_answer(error.display, error.reason, error.advice, error.line))
 
     reward_sandbox.become_subreaper()  # orphans of the function stay ours to end
     reward_sandbox.install_call_limit(float(request.get("seconds", DEFAULT_SECONDS)), name, stuck)
@@ -361,7 +363,7 @@ def main() -> int:
         reward_sandbox.limit_memory(int(request.get("memory_mb", DEFAULT_MEMORY_MB)))
         answer = _probe(request, track)
     except RewardFunctionError as error:
-        answer = _error_answer(error.display, error.problem, error.advice, error.line)
+        answer = _error_answer(error.display, error.reason, error.advice, error.line)
     except MemoryError:  # the function's memory, filled where racer-tui's code ran next
         megabytes = reward_sandbox.memory_limit_mb() or DEFAULT_MEMORY_MB
         answer = _error_answer(

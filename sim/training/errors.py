@@ -1,12 +1,8 @@
-"""Errors of the training package, importable without torch (the CLI lists them)."""
+"""Errors of the training package, importable without torch."""
 
 from __future__ import annotations
 
-from sim.deepracer.files import DeepRacerFileError
 from sim.foundation.remedies import Fix, RemedyError
-from sim.garage.folder import ModelError
-from sim.reward.errors import RewardFunctionError
-from sim.tracks.errors import TrackError
 
 
 class PolicyError(RemedyError):
@@ -14,14 +10,9 @@ class PolicyError(RemedyError):
 
 
 def describe_failure(error: BaseException) -> str:
-    """A training failure in the racer's words: racer-tui's own errors are already one
+    """A training failure in the racer's words: racer-tui's user errors are already one
     sentence; anything else is a fault of racer-tui, said as such (the type helps a report)."""
-    from sim.training.fleet_parts import PartError
-
-    racers_words = (
-        ModelError | PolicyError | DeepRacerFileError | RewardFunctionError | TrackError | PartError
-    )
-    if isinstance(error, racers_words):
+    if isinstance(error, RemedyError):
         return str(error)
     return f"racer-tui failed unexpectedly ({type(error).__name__}: {error}); please report it."
 

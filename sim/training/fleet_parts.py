@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from sim.env import BatchedDeepRacer, StepInfo
+from sim.foundation.remedies import RemedyError
 from sim.garage.folder import ModelFolder
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
@@ -104,7 +105,7 @@ class PartStep:
         return cls(obs, rewards, terminated, truncated, infos, finals, taken)
 
 
-class PartError(RuntimeError):
+class PartError(RemedyError):
     """A simulation process failed in a way that could not be sent as its own error, or
     ended; `str()` is one sentence for the racer."""
 

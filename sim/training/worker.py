@@ -27,14 +27,13 @@ from pathlib import Path
 from types import FrameType
 from typing import TextIO
 
-from sim.deepracer.files import DeepRacerFileError
+from sim.foundation.remedies import RemedyError
 from sim.garage.folder import ModelError, open_model
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
 from sim.reward.errors import RewardFunctionError
 from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB
-from sim.tracks.track import TrackError
 from sim.training import events
 from sim.training.errors import describe_failure, failure_remedy
 
@@ -225,10 +224,8 @@ def _train(
     args: argparse.Namespace, emit: EventWriter, stop: StopFlag, seconds: float, memory_mb: int
 ) -> int:
     from sim.training.fleet_parts import default_processes
-    from sim.training.policy import PolicyError
     from sim.training.trainer import RunOptions, Trainer
 
-    user_errors = (ModelError, PolicyError, DeepRacerFileError, RewardFunctionError, TrackError)
     try:
         folder = open_model(args.model)
 
@@ -262,7 +259,7 @@ def _train(
 
         torch.set_num_threads(1)
         trainer = Trainer(folder, emit, stop, options)
-    except user_errors as error:
+    except RemedyError as error:  # every user error: the racer's sentence
         emit(_failed(str(error), error))
         return EXIT_USER_ERROR
     ended = trainer.run()

@@ -23,10 +23,6 @@ from racer_tui.app.jobs import Job, JobState, sentence
 from racer_tui.app.widgets.job_line import JobLine
 from racer_tui.app.words import with_app_fix
 from sim.foundation.remedies import RemedyError
-from sim.reward.errors import RewardFunctionError
-
-# The libraries' error types are ValueErrors whose text is written for the racer.
-USER_ERRORS: tuple[type[BaseException], ...] = (ValueError, RewardFunctionError)
 
 
 def error_message(error: BaseException) -> str:
@@ -36,7 +32,7 @@ def error_message(error: BaseException) -> str:
         if text is None:
             return sentence(error.problem) if error.problem != str(error) else sentence(str(error))
         return text[:1].upper() + text[1:]
-    if isinstance(error, USER_ERRORS):
+    if isinstance(error, ValueError):  # a library's check of a value the racer gave
         text = str(error)
         return text[:1].upper() + text[1:]
     if isinstance(error, OSError):
