@@ -6,8 +6,10 @@ import json
 import sys
 from typing import Any
 
+from rich import box
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 
 def print_json(document: Any) -> None:
@@ -16,3 +18,14 @@ def print_json(document: Any) -> None:
 
 def print_table(table: Table) -> None:
     Console().print(table)
+
+
+def plain_table(title: str) -> Table:
+    """A table without vertical rules (a leaderboard's eight columns fit 80 characters).
+    Titles carry night and season names, so they are plain Text, never markup."""
+    return Table(
+        title=Text(title, style="table.title"),
+        box=box.SIMPLE_HEAD,
+        pad_edge=False,
+        collapse_padding=True,
+    )

@@ -1,33 +1,25 @@
-"""`racer-tui racer keys | admit | retire | revoke`: who signs for whom in the league.
-
-    racer-tui racer me [NAME]                            who races on this machine
-    racer-tui racer keys [--json]                        every key the league knows
-    racer-tui racer admit NAME [--key FP] [--organiser]  the organiser accepts a racer's key
-    racer-tui racer retire NAME|FP                       an old key: its past results stay
-    racer-tui racer revoke NAME|FP                       a lost key: all its results go
-
-Registered under `racer` by league_commands; names come from other racers' machines, so
-they are printed as plain text (Text cells), never as markup.
-"""
+"""`racer-tui racer me | keys | admit | retire | revoke` run: who races on this machine and
+who signs for whom in the league (the parsers are `key_parsers`). Names come from other
+racers' machines, so they are printed as plain text (Text cells), never as markup."""
 
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING, Final
+from typing import Final
 
 from rich import box
 from rich.table import Table
 from rich.text import Text
 
+from league.local_racer import RACER_SETTING, save_local_racer_name
+from league.store import League
+from league.sync.local import get_setting
+from league.trust import membership
+from league.trust.keys import load_or_create_key
+from league.trust.membership import KeyRow
+from league.trust.roster import Roster
 from racer_tui.cli.output import print_json, print_table
 
-if TYPE_CHECKING:
-    from league.store import League
-    from league.trust.membership import KeyRow
-
-    Actions = argparse._SubParsersAction[argparse.ArgumentParser]
-
-ACTIONS: Final = ("me", "keys", "admit", "retire", "revoke")
 _STATUS_WORDS: Final = {
     "founder": "organiser (founder)",
     "organiser": "organiser",
@@ -39,42 +31,7 @@ _STATUS_WORDS: Final = {
 }
 
 
-def register(actions: Actions, db: argparse.ArgumentParser) -> None:
-    me = actions.add_parser(
-        "me",
-        parents=[db],
-        help="this machine's racer name (the name its signing key is proposed under)",
-    )
-    me.add_argument("name", nargs="?", help="save this name (default: show the saved one)")
-    keys = actions.add_parser(
-        "keys", parents=[db], help="signing keys: whose they are, which are admitted"
-    )
-    keys.add_argument("--json", action="store_true")
-    admit = actions.add_parser(
-        "admit",
-        parents=[db],
-        help="accept a racer's key (the organiser)",
-        description="Accept the key a racer proposed when they first synced, so their "
-        "results reach every leaderboard. Compare its fingerprint with the racer's own "
-        "`racer-tui racer keys` before admitting it.",
-    )
-    admit.add_argument("target", metavar="NAME", help="the racer's name, or a key fingerprint")
-    admit.add_argument("--key", metavar="FP", help="the fingerprint, when NAME has several keys")
-    admit.add_argument("--racer", help="the racer the key belongs to (default: the proposed name)")
-    admit.add_argument(
-        "--organiser", action="store_true", help="admit it as a co-organiser who runs nights"
-    )
-    for name, what in (
-        ("retire", "stop accepting a key from now on; what it signed before stays"),
-        ("revoke", "stop accepting a key and everything it ever signed"),
-    ):
-        end = actions.add_parser(name, parents=[db], help=f"{what} (the organiser)")
-        end.add_argument("target", metavar="NAME|FP", help="the racer's name or a fingerprint")
-
-
 def run(league: League, args: argparse.Namespace) -> int:
-    from league.trust import membership
-    from league.trust.keys import load_or_create_key
 
     action = args.racer_command
     if action == "me":
@@ -102,16 +59,12 @@ def run(league: League, args: argparse.Namespace) -> int:
 
 
 def _me(league: League, name: str | None) -> int:
-    from league.local_racer import RACER_SETTING, save_local_racer_name
-    from league.sync.local import get_setting
 
     if name is None:
         saved = get_setting(league, RACER_SETTING)
         print(f"This machine races as {saved}." if saved else "No racer name is saved here.")
         return 0
     saved = save_local_racer_name(league, name)
-    from league.trust.keys import load_or_create_key
-    from league.trust.roster import Roster
 
     status = Roster.load(league).status(load_or_create_key().public_hex)
     if status == "unknown":
