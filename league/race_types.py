@@ -70,7 +70,7 @@ def board_name(track_name: str, physics: str, race_type: str) -> str:
     """A board's name: its track, then what sets it apart from today's time trials there
     ("beginner-oval", "beginner-oval (DeepRacer)", "beginner-oval (object avoidance)",
     "beginner-oval (object avoidance, physics 1)"), briefly enough for a table column."""
-    from sim.physics.labels import board_suffix  # the car's module: not for the CLI's start
+    from sim.physics.labels import board_suffix  # noqa: PLC0415 (numpy and pymunk: not for the CLI's start)
 
     suffix = board_suffix(physics)
     if race_type == TIME_TRIAL:

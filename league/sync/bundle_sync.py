@@ -29,6 +29,9 @@ from league.sync.record import make_record
 from league.sync.s3_bundles import BUNDLE_SUFFIX, S3BundleStore
 from sim.foundation.home import data_home
 from sim.foundation.ids import new_id
+from sim.foundation.names import is_valid_name
+from sim.garage.bundle import export_bundle, install_bundle_report, read_bundle
+from sim.garage.folder import ModelError, open_model
 
 CACHE_DIR = "sync-bundles"
 
@@ -48,8 +51,6 @@ class _Candidate:
 
 def push_bundles(league: League, store: S3BundleStore) -> BundlePush:
     """Upload the bundles of local models the league refers to and record where they are."""
-    from sim.garage.bundle import read_bundle
-    from sim.garage.folder import ModelError
 
     outcome = BundlePush()
     mapped = {row[0] for row in league.query("SELECT DISTINCT model_hash FROM sync_bundles")}
@@ -95,9 +96,6 @@ def _candidates(league: League) -> list[_Candidate]:
 
 def _bundle_file(candidate: _Candidate) -> tuple[Path, str, str] | None:
     """(bundle file, model hash, model name) for a model on this machine, else None."""
-    from sim.foundation.names import is_valid_name
-    from sim.garage.bundle import export_bundle, read_bundle
-    from sim.garage.folder import ModelError, open_model
 
     spec = candidate.spec
     if spec.endswith(BUNDLE_SUFFIX):
@@ -138,7 +136,6 @@ def fetch_bundle(
     league: League, store: S3BundleStore, spec: str, name: str | None = None
 ) -> Installed:
     """Download the bundle `spec` names and install it as a garage model."""
-    from sim.garage.bundle import install_bundle_report, read_bundle
 
     matches = find_bundles(league, spec)
     files = {match.sha256 for match in matches}

@@ -21,6 +21,7 @@ from league.sync.local import (
     set_setting,
 )
 from league.sync.protocol import RecordStore
+from league.sync.stores import open_bundle_store, open_store
 from league.sync.urls import DirUrl, DynamoDbUrl, S3Url, parse_store_url
 from league.trust.keys import fingerprint, load_or_create_key
 from league.trust.membership import found_league
@@ -170,14 +171,13 @@ def _sync_with(
     pull_records: bool,
     progress: Progress | None,
 ) -> tuple[SyncSummary, list[str]]:
-    from league.sync.stores import open_bundle_store, open_store
 
     bundles_url = bundles_url or get_setting(league, BUNDLES_SETTING)
     notes: list[str] = []
     with open_store(url) as store:
         if bundles_url and push_records:
             store.push([])  # the record store first: if it is down, nothing changes here
-            from league.sync.bundle_sync import push_bundles
+            from league.sync.bundle_sync import push_bundles  # noqa: PLC0415 (boto3: only when bundles are pushed)
 
             with open_bundle_store(bundles_url) as bundle_store:
                 sent = push_bundles(league, bundle_store)

@@ -24,7 +24,7 @@ def open_store(url: str | StoreUrl, *, retry: RetryPolicy | None = None) -> Reco
     if isinstance(parsed, DirUrl):
         return DirStore(parsed.path)
     if isinstance(parsed, DynamoDbUrl):
-        from league.sync.dynamodb_store import DynamoDbStore
+        from league.sync.dynamodb_store import DynamoDbStore  # noqa: PLC0415 (boto3: only for a DynamoDB store)
 
         return DynamoDbStore(parsed, retry=retry)
     raise StoreUrlError(
@@ -38,6 +38,6 @@ def open_bundle_store(url: str | StoreUrl, *, retry: RetryPolicy | None = None) 
     parsed = parse_store_url(url) if isinstance(url, str) else url
     if not isinstance(parsed, S3Url):
         raise StoreUrlError(f"{parsed} is not an s3://BUCKET/PREFIX URL: bundles live in S3")
-    from league.sync.s3_bundles import S3BundleStore
+    from league.sync.s3_bundles import S3BundleStore  # noqa: PLC0415 (boto3: only for an S3 bundle store)
 
     return S3BundleStore(parsed, retry=retry)

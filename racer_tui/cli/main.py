@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from league.timekeeper.feed import TIMER_ENV, check_timer_path
 from racer_tui.cli.app_launch import AppLaunch
 from sim.foundation.home import LEAGUE_ENV
 from sim.foundation.remedies import RemedyError
@@ -116,7 +117,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     arguments = list(sys.argv[1:] if argv is None else argv)
     if "--race" in arguments:
         # Headless time trials are a top-level mode with their own parser.
-        from racer_tui.cli.race_commands import main as race_main
+        from racer_tui.cli.race_commands import main as race_main  # noqa: PLC0415 (the simulator: only for --race)
 
         return race_main(arguments)
     arguments = _attach_negative_values(arguments)
@@ -127,8 +128,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.environ[LEAGUE_ENV] = args.league_db
     if args.command is None:
         if args.timer:
-            from league.timekeeper.feed import TIMER_ENV, check_timer_path
-
             problem = check_timer_path(args.timer)
             if problem is not None:
                 print(f"racer-tui: {problem}", file=sys.stderr)
@@ -163,7 +162,7 @@ def _dispatch(args: argparse.Namespace) -> int:
 def _open_app(launch: AppLaunch | None = None) -> int:
     """The app, as the command line or a command asked: the one place the command line
     opens it (textual is imported only now)."""
-    from racer_tui.app.application import run_app
+    from racer_tui.app.application import run_app  # noqa: PLC0415 (textual: only when the app opens)
 
     launch = launch or AppLaunch()
     return run_app(projector_night=launch.projector_night, db_path=launch.db_path)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,8 @@ from rich.text import Text
 from racer_tui.cli.output import print_json, print_table
 from sim.car_archive.errors import CarModelError
 from sim.car_archive.file_names import is_car_archive_name
+from sim.car_export.act import archive_answer, model_answer
+from sim.car_export.frame import read_picture
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.bundle import export_bundle
 from sim.garage.clone import clone_model
@@ -558,10 +561,6 @@ def _export(name: str, output: str | None, *, replace: bool, as_json: bool) -> i
 
 
 def _act(name: str, picture: Path, *, as_json: bool) -> int:
-    from dataclasses import asdict
-
-    from sim.car_export.act import archive_answer, model_answer
-    from sim.car_export.frame import read_picture
 
     rgb = read_picture(picture)
     archive = Path(name).expanduser()
@@ -603,9 +602,8 @@ def _act(name: str, picture: Path, *, as_json: bool) -> int:
 
 
 def _export_car(name: str, output: str | None, *, replace: bool, as_json: bool) -> int:
-    from dataclasses import asdict
 
-    from sim.car_export.export import export_car_archive
+    from sim.car_export.export import export_car_archive  # noqa: PLC0415 (torch: only for an export)
 
     folder = open_model(name)
     out = export_target(Path(output), folder.name) if output else Path(folder.name)

@@ -25,6 +25,7 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
+from league.errors import LeagueError
 from league.ranking import rank
 from racer_tui.cli.output import print_json
 from racer_tui.cli.rules_option import HELP as RULES_HELP
@@ -254,9 +255,8 @@ def _write_trace(result: RaceResult, folder: Path) -> Path:
 
 def _record(results: Sequence[RaceResult], db_path: Path | None) -> list[str]:
     try:
-        from league.errors import LeagueError
-        from league.opening import open_league
-        from league.races import record_race
+        from league.opening import open_league  # noqa: PLC0415 (the league's SQLite: only for --record)
+        from league.races import record_race  # noqa: PLC0415 (the league's SQLite: only for --record)
     except ImportError:  # pragma: no cover - the league ships with racer-tui
         raise RaceSetupError(
             "--record is not available: this racer-tui has no league database yet."

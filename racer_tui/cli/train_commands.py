@@ -35,7 +35,9 @@ from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb
 from sim.tracks.catalog import resolve_track
 from sim.training import events
-from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
+from sim.training.algorithms import check_trainable
+from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport, evaluate_model
+from sim.training.launcher import TrainingProcess
 
 NAMES = ("train", "evaluate")
 
@@ -222,8 +224,6 @@ class _Interrupts:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from sim.training.algorithms import check_trainable
-    from sim.training.launcher import TrainingProcess
 
     if args.minutes is not None and not (math.isfinite(args.minutes) and args.minutes > 0):
         raise ModelError(f"--minutes must be more than 0, not {args.minutes:g}.")
@@ -361,7 +361,6 @@ def _print_ending(console: Console, ended: events.Ended) -> None:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from sim.training.evaluation import evaluate_model
 
     if not 1 <= args.trials <= MAX_TRIALS:
         raise ModelError(f"--trials must be between 1 and {MAX_TRIALS}, not {args.trials}.")

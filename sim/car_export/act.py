@@ -50,7 +50,7 @@ def answer(outputs: NDArray[np.float32], space: ActionSpace, size: tuple[int, in
 
 def archive_answer(path: Path, rgb: NDArray[np.uint8]) -> ModelAnswer:
     """What the car archive at `path` does with the picture."""
-    from sim.car_archive.policy import CarPolicy
+    from sim.car_archive.policy import CarPolicy  # noqa: PLC0415 (torch: only when the car acts)
 
     policy = CarPolicy(read_car_archive(path))
     frame = car_frame(rgb, policy.width, policy.height)
@@ -60,9 +60,9 @@ def archive_answer(path: Path, rgb: NDArray[np.uint8]) -> ModelAnswer:
 
 def model_answer(folder_path: Path, rgb: NDArray[np.uint8]) -> ModelAnswer:
     """What the garage model in `folder_path` does with the picture."""
-    import torch
+    import torch  # noqa: PLC0415 (torch: only when the car acts)
 
-    from sim.training.policy import load_policy
+    from sim.training.policy import load_policy  # noqa: PLC0415 (torch: only when the car acts)
 
     folder = ModelFolder(folder_path)
     if folder.drives_with_car_archive():

@@ -30,7 +30,7 @@ GREY_WEIGHTS = np.array([0.299, 0.587, 0.114])  # OpenCV's RGB-to-grey (ITU-R BT
 
 def read_picture(path: Path) -> NDArray[np.uint8]:
     """The picture at `path` as (H, W, 3) RGB uint8; one sentence when it cannot be read."""
-    from PIL import Image, UnidentifiedImageError
+    from PIL import Image, UnidentifiedImageError  # noqa: PLC0415 (Pillow: only when a picture is read)
 
     try:
         with warnings.catch_warnings():

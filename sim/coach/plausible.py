@@ -28,7 +28,8 @@ from shapely.geometry import Polygon
 
 from sim.deepracer.vocabulary import MAX_SPEED
 from sim.physics.labels import PHYSICAL
-from sim.tracks.track import Track
+from sim.tracks.catalog import find_track_by_hash
+from sim.tracks.track import Track, TrackError, load_track
 
 # A real DeepRacer car's top speed, for the floor of physical laps. Its action space tops
 # at 4 m/s, but a host calibrates the real car's throttle by hand, and nobody publishes
@@ -55,7 +56,7 @@ def fastest_possible_lap(track: Track, physics: str = "") -> float:
     """Seconds: no lap of `physics` (`sim.physics.labels`) on `track` can be quicker."""
     if physics == PHYSICAL:
         return hull_floor(track, PHYSICAL_TOP_SPEED)
-    from sim.coach.lap_floor import lap_floor
+    from sim.coach.lap_floor import lap_floor  # noqa: PLC0415 (scipy: only for a simulated floor)
 
     floor = lap_floor(track)
     return hull_floor(track) if floor is None else floor
@@ -67,8 +68,6 @@ _tracks: dict[str, Track] = {}
 
 
 def _track_by_hash(track_hash: str) -> Track | None:
-    from sim.tracks.catalog import find_track_by_hash
-    from sim.tracks.track import TrackError, load_track
 
     if track_hash in _tracks:
         return _tracks[track_hash]

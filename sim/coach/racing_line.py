@@ -25,6 +25,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import osqp
 from scipy import sparse
 
 from sim.coach.limits import CarLimits
@@ -115,7 +116,6 @@ def box_qp(
     optimum, and its exact modes are dense (seconds for a 60 m track); OSQP solves the
     sparse problem to 1e-7 in a fraction of a second. The answer is clipped to the bounds.
     """
-    import osqp
 
     n = len(gradient)
     solver = osqp.OSQP()

@@ -98,7 +98,7 @@ def _prototypes() -> dict[str, str]:
     back: a character with one partner that has others is a source and its partner the
     prototype; a prototype of several characters or of a string is one itself; a pair
     that has only each other maps both to the smaller (either may stand for both)."""
-    from confusable_homoglyphs import confusables  # type: ignore[import-untyped]  # 9,600 pairs: load on first use
+    from confusable_homoglyphs import confusables  # type: ignore[import-untyped]  # noqa: PLC0415 (9,600 pairs: loaded on first use)
 
     partners: dict[str, list[str]] = {}
     for char, entries in confusables.confusables_data.items():

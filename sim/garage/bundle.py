@@ -28,6 +28,9 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, TypeVar
 
+from safetensors import SafetensorError
+from safetensors.numpy import load
+
 from sim.deepracer.files import (
     HYPERPARAMETERS,
     MODEL_METADATA,
@@ -65,6 +68,8 @@ from sim.garage.folder import (
 from sim.garage.imported import BUNDLE_SUFFIX, ImportResult
 from sim.garage.options import DEFAULT_REWARD, DEFAULT_TRACK
 from sim.garage.summary import read_summary_text, summary_text, training_summary
+from sim.reward.template_files import shipped_template
+from sim.tracks.catalog import list_tracks
 
 BUNDLE_FORMAT = "racer-tui-bundle"
 BUNDLE_VERSION = 1
@@ -456,8 +461,6 @@ def _is_count(value: object) -> bool:
 
 def _load_with_library(data: bytes, where: str) -> None:
     """A second opinion from the safetensors library itself (numpy, no code execution)."""
-    from safetensors import SafetensorError
-    from safetensors.numpy import load
 
     try:
         load(data)
@@ -483,8 +486,6 @@ def install_bundle_report(
     ever runs. The track is `track`, else the bundle's if this garage knows it, else the
     default track (said in the notes).
     """
-    from sim.coach.reward_line import template_source
-
     bundle = read_bundle(path)
     chosen = name if name is not None else bundle.name
     check_model_name(chosen)
@@ -517,7 +518,7 @@ def install_bundle_report(
         track=world,
         metadata=bundle.metadata,
         hyperparameters=bundle.hyperparameters,
-        reward_source=template_source(DEFAULT_REWARD),
+        reward_source=shipped_template(DEFAULT_REWARD),
         max_minutes=bundle.training_params.max_minutes,
         populate=populate,
         notes={"INSTALLED_FROM": str(Path(path).expanduser().resolve())},
@@ -526,7 +527,6 @@ def install_bundle_report(
 
 
 def _known_track(params: TrainingParams, notes: list[str]) -> str:
-    from sim.tracks.catalog import list_tracks
 
     known = {info.name for info in list_tracks()}
     if params.world_name in known:

@@ -22,14 +22,14 @@ from sim.foundation.remedies import Fix, Note
 from sim.garage.folder import ModelError, ModelFolder, check_model_name, create_model
 from sim.garage.imported import ImportResult
 from sim.garage.options import DEFAULT_REWARD, DEFAULT_TRACK
+from sim.reward.template_files import shipped_template
 
 
 def import_car_archive(
     path: Path, name: str | None = None, track: str | None = None
 ) -> ImportResult:
     """A new garage model that drives with the car archive at `path`."""
-    from sim.car_archive.policy import CarPolicy  # runs the graph: torch, only now
-    from sim.coach.reward_line import template_source
+    from sim.car_archive.policy import CarPolicy  # noqa: PLC0415 (torch: runs the graph, only now)
 
     source = Path(path).expanduser()
     try:
@@ -76,7 +76,7 @@ def import_car_archive(
         track=track or DEFAULT_TRACK,
         metadata=archive.metadata,
         hyperparameters=default_hyperparameters(),
-        reward_source=template_source(DEFAULT_REWARD),
+        reward_source=shipped_template(DEFAULT_REWARD),
         populate=populate,
         notes={"IMPORTED_FROM": str(source.resolve())},
     )

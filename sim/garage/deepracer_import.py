@@ -24,6 +24,7 @@ from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
+from sim.car_archive.errors import CarModelError
 from sim.deepracer.files import (
     MAX_METRICS_BYTES,
     SIM_TRACE_COLUMNS,
@@ -56,9 +57,13 @@ from sim.garage.folder import (
     check_model_name,
     create_model,
 )
+from sim.garage.frozen_graph import folder_weights
 from sim.garage.imported import ImportResult
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
 from sim.physics.labels import DEEPRACER as DEEPRACER_PHYSICS
+from sim.reward.function import check_reward_code, read_reward_file
+from sim.reward.template_files import shipped_template
+from sim.tracks.catalog import list_tracks
 
 if TYPE_CHECKING:
     from sim.garage.frozen_graph import FolderWeights
@@ -142,8 +147,6 @@ def import_deepracer_folder(
 
 def _deepracer_weights(root: Path, files: DeepRacerFiles, notes: list[str]) -> FolderWeights | None:
     """DeepRacer's own frozen weights, when the folder has them and they can drive here."""
-    from sim.car_archive.errors import CarModelError
-    from sim.garage.frozen_graph import folder_weights
 
     assert files.model_metadata is not None
     try:
@@ -197,7 +200,6 @@ def _hyperparameters(files: DeepRacerFiles, notes: list[str]) -> dict[str, float
 
 
 def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]) -> str:
-    from sim.tracks.catalog import list_tracks
 
     if explicit is not None:
         return explicit  # create_model checks it before anything is written
@@ -218,14 +220,11 @@ def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]
 
 
 def _reward_source(files: DeepRacerFiles, notes: list[str]) -> str:
-    from sim.coach.reward_line import template_source
-    from sim.reward.function import check_reward_code, read_reward_file
-
     if files.reward_function is None:
         notes.append(
             f"it has no reward_function.py: the {DEFAULT_REWARD} template is used instead."
         )
-        return template_source(DEFAULT_REWARD)
+        return shipped_template(DEFAULT_REWARD)
     # Someone else's code: checked, never run here; it runs when the racer trains.
     source = read_reward_file(files.reward_function)
     check_reward_code(source, str(files.reward_function))  # names the file and line

@@ -23,6 +23,7 @@ the final one, which is then renamed into place, so a crash never leaves half a 
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import hashlib
 import json
 import os
@@ -203,7 +204,6 @@ class ModelFolder:
     def training_locked(self) -> bool:
         """Whether a process holds the training lock now (the state file may lag behind:
         a training that has just started has the lock before it writes its state)."""
-        import fcntl
 
         try:
             with self.training_lock_file.open("a+b") as handle:

@@ -78,7 +78,7 @@ def _best_checkpoint(path: Path) -> int | None:
 def folder_weights(root: Path, metadata_file: Path) -> FolderWeights | None:
     """The folder's frozen graph as a car archive that racer-tui can drive with, or None
     when it has none. CarModelError (one sentence) when it has one that cannot drive."""
-    from sim.car_archive.policy import CarPolicy  # runs the graph: torch, only now
+    from sim.car_archive.policy import CarPolicy  # noqa: PLC0415 (torch: runs the graph, only now)
 
     graph = frozen_graph(root)
     if graph is None:

@@ -255,7 +255,7 @@ def _locked(folder: Path) -> Iterator[None]:
     """An exclusive lock on the folder itself while it migrates (released if the process
     dies); where the platform has no flock, migrations simply do not overlap in practice."""
     try:
-        import fcntl
+        import fcntl  # noqa: PLC0415 (not every platform has fcntl)
     except ImportError:  # pragma: no cover - Windows
         yield
         return

@@ -42,8 +42,18 @@ from sim.garage.folder import (
     camera_randomisation_of,
     create_model,
 )
+from sim.physics.objects.settings import (
+    MAX_BOT_CARS,
+    MAX_BOT_SPEED,
+    BotSettings,
+    ObstacleSettings,
+    race_keys,
+)
+from sim.reward.function import check_reward_code, read_reward_file
+from sim.reward.template_files import TEMPLATES, shipped_template
 from sim.sensors.randomisation.settings import CameraRandomisation, camera_randomisation_keys
 from sim.tracks.catalog import DEFAULT_TRACK as CATALOG_DEFAULT_TRACK
+from sim.tracks.catalog import resolve_track
 from sim.tracks.track import TrackError
 
 # --- the defaults of `racer-tui model new` (the Training helper benchmarks these) --------
@@ -99,12 +109,10 @@ def default_action_space() -> ActionSpace:
 
 def default_model_spec() -> ModelSpec:
     """The model `racer-tui model new NAME` makes without options."""
-    from sim.coach.reward_line import template_source
-
     return ModelSpec(
         track=DEFAULT_TRACK,
         metadata=ModelMetadata(default_action_space(), DEFAULT_SENSORS),
-        reward_source=template_source(DEFAULT_REWARD),
+        reward_source=shipped_template(DEFAULT_REWARD),
     )
 
 
@@ -248,7 +256,6 @@ def with_camera_randomisation(spec: ModelSpec, chosen: CameraRandomisation | Non
 
 
 def _checked_track(track: str) -> str:
-    from sim.tracks.catalog import resolve_track
 
     try:
         resolve_track(track)
@@ -326,13 +333,6 @@ class RaceOptions:
 def with_race(spec: ModelSpec, race_type: str | None, options: RaceOptions) -> ModelSpec:
     """`spec` racing `race_type` (a name of RACE_TYPES; without one, the type the object
     options belong to)."""
-    from sim.physics.objects.settings import (
-        MAX_BOT_CARS,
-        MAX_BOT_SPEED,
-        BotSettings,
-        ObstacleSettings,
-        race_keys,
-    )
 
     default = "head-to-bot" if options.for_bots else "object-avoidance"
     chosen = race_type if race_type is not None else default
@@ -368,9 +368,7 @@ def reward_choice(
     """(source, origin) for a template name (racing_line with the line of `track` within
     `space`'s actions) or a reward function file, checked without running it (it runs when
     the racer trains or checks it)."""
-    from sim.coach.reward_line import template_source
-    from sim.reward.function import check_reward_code, read_reward_file
-    from sim.reward.template_files import TEMPLATES
+    from sim.coach.reward_line import template_source  # noqa: PLC0415 (numpy, scipy: a template's line)
 
     if reward in TEMPLATES:
         return template_source(reward, track, space), reward
@@ -484,8 +482,7 @@ def _grid(
 
 
 def _line_actions(track: str, count: int) -> ActionSpace:
-    from sim.coach.line_actions import LineActionsError, actions_from_line
-    from sim.tracks.catalog import resolve_track
+    from sim.coach.line_actions import LineActionsError, actions_from_line  # noqa: PLC0415 (numpy and scipy: only for actions from a line)
 
     try:
         return actions_from_line(resolve_track(track), count)
@@ -500,7 +497,7 @@ def racing_line_followed(spec: ModelSpec, before: ModelSpec) -> ModelSpec:
     now = (spec.track, spec.metadata.action_space)
     if was == now:
         return spec  # before the coach's imports: most specs keep their track and actions
-    from sim.coach.reward_line import line_followed
+    from sim.coach.reward_line import line_followed  # noqa: PLC0415 (numpy and scipy: only when the line moves)
 
     source = line_followed(spec.reward_source, was, now)
     return spec if source == spec.reward_source else replace(spec, reward_source=source)

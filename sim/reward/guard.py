@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import site
 import sys
 import threading
 import traceback
@@ -55,7 +56,6 @@ def python_tree() -> list[Path]:
     """Where Python, its libraries and racer-tui are: a reward's lazy imports read there.
     Not every sys.path entry: `python -m` puts the working folder there, which may be the
     racer's home."""
-    import site
 
     roots = {sys.prefix, sys.exec_prefix, sys.base_prefix, sys.base_exec_prefix}
     roots.update(site.getsitepackages())
@@ -214,7 +214,7 @@ def guard_reward_calls() -> None:
     guarded_exit = _exit_guard("os._exit", _real_exit)
     os._exit = guarded_exit
     with contextlib.suppress(ImportError):
-        import posix
+        import posix  # noqa: PLC0415 (not every platform has posix)
 
         posix._exit = guarded_exit
     os.abort = _exit_guard("os.abort", os.abort)

@@ -29,15 +29,20 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import ctypes
+import importlib
 import os
 import resource
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from types import FrameType
 from typing import TYPE_CHECKING
+
+import psutil
 
 from sim.reward import landlock
 from sim.reward import limit as reward_limit
@@ -163,7 +168,6 @@ def become_subreaper() -> bool:
     slip out from under `end_descendants` by losing its parent."""
     if not sys.platform.startswith("linux"):
         return False
-    import ctypes
 
     return bool(ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0)
 
@@ -186,9 +190,6 @@ def wait_for_exit(pid: int) -> None:
         with contextlib.suppress(ChildProcessError, OSError):
             os.waitid(os.P_PID, pid, os.WEXITED | os.WNOWAIT)
         return
-    import time
-
-    import psutil
 
     while True:  # no waitid (macOS): look twice a second
         try:
@@ -212,8 +213,6 @@ def _child_pids() -> set[int]:
                 int(pid) for pid in Path(f"/proc/self/task/{task}/children").read_text().split()
             )
     if not tasks:  # no /proc: ask psutil
-        import psutil
-
         with contextlib.suppress(psutil.Error):
             pids.update(child.pid for child in psutil.Process().children())
     return pids
@@ -283,7 +282,6 @@ def named_imports(source: str) -> list[str]:
 def preimport(source: str) -> None:
     """Import the modules DeepRacer allows that `source` names (what is not a module, or
     not installed, is left to the reward's own import to say)."""
-    import importlib
 
     for name in named_imports(source):
         with contextlib.suppress(Exception):

@@ -136,25 +136,34 @@ def find_track_info(name: str) -> TrackInfo:
     raise _unknown_name(name, infos)
 
 
+def _load_track(
+    path: Path | str, name: str | None = None, *, description: str = "", reverse: bool = False
+) -> Track:
+    """`sim.tracks.track.load_track`, imported on the first read of a track file: it loads
+    numpy and shapely, which listing the catalogs (`tracks list`, the app's start) does not
+    need."""
+    from sim.tracks.track import load_track  # noqa: PLC0415 (start-up: see the docstring)
+
+    return load_track(path, name, description=description, reverse=reverse)
+
+
 def resolve_track(name_or_path: str) -> Track:
     """A track by name (see `find_track_info`), or the path of a DeepRacer .npy file."""
-    from sim.tracks.track import load_track
-
     path = Path(name_or_path).expanduser()
     if not _NAME.fullmatch(name_or_path) and (path.suffix == ".npy" or _is_file(path)):
-        return load_track(path)
+        return _load_track(path)
     try:
         info = find_track_info(name_or_path)
     except TrackError:
         if _is_file(path):
-            return load_track(path)
+            return _load_track(path)
         raise
     if not info.lappable:
         raise TrackError(
             f"{info.name} is a straight piece of road, not a loop; racer-tui races laps, "
             f"so choose a loop such as {DEFAULT_TRACK} (re:Invent 2018)."
         )
-    return load_track(info.path, info.name, description=info.description)
+    return _load_track(info.path, info.name, description=info.description)
 
 
 def _is_file(path: Path) -> bool:
@@ -172,8 +181,6 @@ def find_track_by_hash(content_hash: str) -> TrackInfo | None:
     Official and sidecar'd tracks know their hash without loading; only imported files
     copied in by hand (no sidecar hash) are loaded to compare.
     """
-    from sim.tracks.track import load_track
-
     unknown: list[TrackInfo] = []
     for info in list_tracks():
         if info.content_hash == content_hash:
@@ -182,7 +189,7 @@ def find_track_by_hash(content_hash: str) -> TrackInfo | None:
             unknown.append(info)
     for info in unknown:
         try:
-            if load_track(info.path, info.name).content_hash == content_hash:
+            if _load_track(info.path, info.name).content_hash == content_hash:
                 return info
         except TrackError:
             continue  # a damaged imported track: the tracks section says what is wrong
@@ -197,12 +204,10 @@ def import_track(
     A file that is already shipped under that name (an official track's own file, imported
     by habit) is not copied again: the shipped track is returned, and `kind` says so.
     """
-    from sim.tracks.track import load_track
-
     source = Path(path).expanduser()
     chosen = name if name is not None else source.stem
     _check_name(chosen)
-    track = load_track(source, chosen, description=description, reverse=reverse)
+    track = _load_track(source, chosen, description=description, reverse=reverse)
     shipped = _shipped_named(chosen)
     if shipped is not None and shipped.content_hash == track.content_hash:
         return shipped
@@ -212,11 +217,9 @@ def import_track(
 
 def save_user_track(track: Track) -> TrackInfo:
     """Keep a built or generated track; saving the very same track again is a no-op."""
-    from sim.tracks.track import load_track
-
     _check_name(track.name)
     existing = _user_path(track.name)
-    if existing.exists() and load_track(existing).content_hash == track.content_hash:
+    if existing.exists() and _load_track(existing).content_hash == track.content_hash:
         return _user_info(existing)
     _check_new_name(track.name)
     return _save(track, extra={})
@@ -300,14 +303,12 @@ def import_problem(path: Path, name: str | None = None) -> str | None:
     """What would stop `import_track(path, name)`, or None when it would work: the file is
     read and checked, nothing is kept. A front end asks this while the racer can still
     change the path or the name; a name's problem is a Note whose fix is Fix.RENAME."""
-    from sim.tracks.track import load_track
-
     source = Path(path).expanduser()
     chosen = name if name is not None else source.stem
     problem = _name_rule_problem(chosen)
     if problem is None:
         try:
-            track = load_track(source, chosen)
+            track = _load_track(source, chosen)
         except TrackError as error:
             return str(error)
         shipped = _shipped_named(chosen)
@@ -369,11 +370,9 @@ def _has_facts(meta: dict[str, Any]) -> bool:
 
 def _facts_from_file(npy: Path, meta: dict[str, Any]) -> dict[str, Any]:
     """Facts for a track copied in by hand, without a sidecar; unreadable files still list."""
-    from sim.tracks.track import load_track
-
     description = str(meta.get("description", ""))
     try:
-        summary = load_track(npy, npy.stem, description=description).summary()
+        summary = _load_track(npy, npy.stem, description=description).summary()
     except TrackError as exc:
         return {"description": f"cannot be used: {exc}", "length_m": 0.0, "width_m": 0.0}
     return summary

@@ -158,7 +158,7 @@ class PolylineProjector:
         samples, owners = self._resample()
         # Imported here: scipy.spatial takes about 0.1 s to import, which commands that
         # never build a polyline (help, model list, the league's) should not pay.
-        from scipy.spatial import cKDTree
+        from scipy.spatial import cKDTree  # noqa: PLC0415 (start-up: see the comment above)
 
         self._tree = cKDTree(samples)
         self._owners = owners

@@ -100,9 +100,9 @@ def _row(row: dict[str, str], path: Path) -> OfficialTrack:
 def rebuild_catalog(source_catalog: Path, directory: Path | None = None) -> str:
     """The catalog text for the files in `directory`: names and dates from `source_catalog`
     (the shared DeepRacer catalog), every fact recomputed here from the file itself."""
-    import numpy as np
+    import numpy as np  # noqa: PLC0415 (only when the catalog is rebuilt)
 
-    from sim.tracks.track import load_track
+    from sim.tracks.track import load_track  # noqa: PLC0415 (only when the catalog is rebuilt)
 
     folder = directory or official_dir()
     out = io.StringIO()

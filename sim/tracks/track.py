@@ -444,7 +444,7 @@ def _check_road_gaps(points: FloatArray, label: str) -> None:
     along = np.append(along[:-1][kept], along[-1])
     lap = float(along[-1])
     reach = float(widths.max()) + MIN_ROAD_GAP  # no closer pair can be a gap violation
-    from scipy.spatial import cKDTree  # see sim.tracks.geometry: a slow import, needed here only
+    from scipy.spatial import cKDTree  # noqa: PLC0415 (a slow import, see sim.tracks.geometry)
 
     pairs = cKDTree(centre).query_pairs(reach, output_type="ndarray")
     if not len(pairs):

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import torch
+from safetensors.torch import save
 
 from sim.foundation.atomic import write_bytes_atomic
 from sim.training.errors import PolicyError
@@ -79,7 +80,6 @@ class Progress:
 def checkpoint_bytes(
     network: PolicyNetwork, optimizer: torch.optim.Optimizer, progress: Progress
 ) -> bytes:
-    from safetensors.torch import save
 
     tensors: dict[str, torch.Tensor] = {
         _POLICY + name: tensor.detach().to(torch.float32).contiguous().clone()

@@ -82,7 +82,7 @@ class DriversByHash:
 def _policy_driver(spec: str, build: Callable[[ModuleType], Driver]) -> Driver:
     """Load torch and the policy only now: the reference path never pays for them."""
     try:
-        from sim.training import policy  # imports torch: only when a trained model races
+        from sim.training import policy  # noqa: PLC0415 (torch: only when a trained model races)
     except ImportError as error:
         raise RaceSetupError(
             f"cannot race {spec!r}: running a trained policy needs torch ({error})."

@@ -26,6 +26,7 @@ from sim.foundation.remedies import RemedyError
 from sim.garage.folder import ModelFolder
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
+from sim.training.config import training_env_config
 from sim.training.step_record import EndedEpisode, StepRecorder
 
 
@@ -165,7 +166,6 @@ def _serve(connection: Connection, batch: BatchedDeepRacer, recorder: StepRecord
 def _build_part(
     connection: Connection, setup: PartSetup
 ) -> tuple[BatchedDeepRacer, StepRecorder | None]:
-    from sim.training.config import training_env_config
 
     folder = ModelFolder(Path(setup.folder))
     if setup.reward_seconds is not None:

@@ -26,9 +26,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import torch
 from numpy.typing import NDArray
+from safetensors import SafetensorError
+from safetensors.torch import load, save
 from torch import nn
 
 from sim.car_archive.archive import read_car_archive
+from sim.car_archive.driver import CarArchiveDriver
 from sim.car_archive.errors import CarModelError
 from sim.deepracer.files import NEURAL_NETWORKS, ModelMetadata
 from sim.foundation.atomic import write_bytes_atomic
@@ -258,7 +261,6 @@ def build_network(
 
 def policy_bytes(network: PolicyNetwork) -> bytes:
     """The network as safetensors bytes, architecture facts in the metadata."""
-    from safetensors.torch import save
 
     tensors = {
         name: tensor.detach().to(torch.float32).contiguous().clone()
@@ -345,8 +347,6 @@ def policy_data(path_or_bytes: Path | bytes) -> tuple[bytes, str]:
 def open_tensors(data: bytes, where: str) -> tuple[dict[str, str], dict[str, torch.Tensor]]:
     """(architecture facts, tensors) of racer-tui safetensors data, or PolicyError."""
     facts = _facts(read_policy_header(data, where), where)
-    from safetensors import SafetensorError
-    from safetensors.torch import load
 
     try:
         tensors = load(data)
@@ -505,8 +505,6 @@ def driver_for_model(folder: ModelFolder) -> Driver:
     """The driver for a garage model's `policy.safetensors`, or for the car archive it was
     imported from (`sim.car_export`)."""
     if folder.drives_with_car_archive():
-        from sim.car_archive.driver import CarArchiveDriver
-
         try:
             archive = read_car_archive(folder.car_archive_file)
             return CarArchiveDriver(archive, name=folder.name, content_hash=folder.content_hash())

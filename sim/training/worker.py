@@ -18,6 +18,8 @@ running holds that pipe or a core.
 from __future__ import annotations
 
 import argparse
+import ctypes
+import fcntl
 import os
 import signal
 import sys
@@ -133,8 +135,6 @@ def _die_with_parent(parent_pid: int) -> None:
     """Be killed when the parent dies (Linux), so a killed command leaves no orphan
     training at full CPU; checkpoints are written atomically, so the last one is kept."""
     if sys.platform.startswith("linux"):
-        import ctypes
-
         pr_set_pdeathsig = 1
         ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, int(signal.SIGKILL))
     if os.getppid() != parent_pid:  # it died before the line above took effect
@@ -208,7 +208,6 @@ def _lock_for_training(path: Path) -> bool:
     """Take the model's training lock, or False when another process holds it. Two
     trainings started at the same moment both find no running state; only one gets the
     lock, so they never write over each other's checkpoints."""
-    import fcntl
 
     handle = path.open("a+b")
     try:
@@ -223,8 +222,8 @@ def _lock_for_training(path: Path) -> bool:
 def _train(
     args: argparse.Namespace, emit: EventWriter, stop: StopFlag, seconds: float, memory_mb: int
 ) -> int:
-    from sim.training.fleet_parts import default_processes
-    from sim.training.trainer import RunOptions, Trainer
+    from sim.training.fleet_parts import default_processes  # noqa: PLC0415 (torch: after the run's options are checked)
+    from sim.training.trainer import RunOptions, Trainer  # noqa: PLC0415 (torch: after the run's options are checked)
 
     try:
         folder = open_model(args.model)
@@ -255,7 +254,7 @@ def _train(
             max_samples=args.max_samples,
             reward_memory_mb=memory_mb,
         )
-        import torch
+        import torch  # noqa: PLC0415 (torch: after the run's options are checked)
 
         torch.set_num_threads(1)
         trainer = Trainer(folder, emit, stop, options)

@@ -147,7 +147,7 @@ def test_a_store_that_is_down_is_one_sentence_and_changes_nothing(
 
 
 def test_the_progress_bars_take_both_directions(capsys: pytest.CaptureFixture[str]) -> None:
-    from racer_tui.cli.sync_commands import _progress
+    from racer_tui.cli.sync_commands.running import _progress
 
     with _progress(True) as update:
         assert update is not None

@@ -29,7 +29,7 @@ from racer_tui.app.widgets.job_line import JobLine
 from racer_tui.app.widgets.model_detail import seconds_text
 from sim.foundation.plural import counted
 from sim.garage.folder import open_model
-from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport
+from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport, evaluate_model
 
 COLUMNS = ("trial", "time", "% completed", "status")
 STATUS_STYLES = {"Lap complete": "green", "In progress": "dim", "Time Up": "yellow"}
@@ -162,7 +162,6 @@ class EvaluationScreen(RacerScreen[None]):
 
     @work(thread=True, exclusive=True, group="evaluation", exit_on_error=False)
     def _evaluate(self, trials: int) -> None:
-        from sim.training.evaluation import evaluate_model  # imports torch when it runs
 
         report = evaluate_model(open_model(self.model), trials=trials, on_progress=self._progress)
         self.post_message(EvaluationDone(report))

@@ -47,6 +47,7 @@ from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.files import locate_files
 from sim.garage.bundle import bundle_path, export_bundle
 from sim.garage.clone import clone_model
+from sim.garage.coach_session import coach_model
 from sim.garage.deepracer_notes import export_notes
 from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
 from sim.garage.imported import BUNDLE_SUFFIX
@@ -200,7 +201,7 @@ def notify_imported(screen: Screen[Any], message: ModelImported) -> None:
 
 def policy_driver(folder: ModelFolder) -> Driver:
     """Built inside the race worker: loading a policy imports torch, which takes a moment."""
-    from sim.training.policy import driver_for_model
+    from sim.training.policy import driver_for_model  # noqa: PLC0415 (torch: only when a trained model races)
 
     return driver_for_model(folder)
 
@@ -585,7 +586,7 @@ class GarageScreen(RacerScreen[None]):
         self, folder: ModelFolder, path: Path, *, replace: bool = False, for_car: bool = False
     ) -> None:
         if for_car:
-            from sim.car_export.export import export_car_archive  # torch: only now
+            from sim.car_export.export import export_car_archive  # noqa: PLC0415 (torch: only for an export)
 
             exported = export_car_archive(folder, path, replace=replace)
             note = (
@@ -645,7 +646,6 @@ class GarageScreen(RacerScreen[None]):
                 markup=False,
             )
             return
-        from sim.garage.coach_session import coach_model  # the coach's numpy and osqp, when used
 
         load = partial(coach_model, folder)
         self.app.push_screen(CoachScreen(folder.name, "latest evaluation", load))

@@ -71,6 +71,7 @@ from racer_tui.app.widgets.table_fill import (
 )
 from sim.foundation.atomic import write_text_atomic
 from sim.foundation.plural import counted
+from sim.training.drivers import DriversByHash
 
 NARROW = 120  # below this many columns the detail panel goes under the table
 # Table titles (league.report's) -> the sort keys league.leaderboard knows.
@@ -280,8 +281,6 @@ class LeagueScreen(RacerScreen[None]):
         """The garage's model hashes (their results are verifiable here), hashed once per
         visit in the loading worker: hashing every model is too slow for each reload."""
         if self._garage_hashes is None:
-            from sim.training.drivers import DriversByHash
-
             self._garage_hashes = DriversByHash().models_here()
         return self._garage_hashes
 

@@ -83,7 +83,7 @@ def tone_table(perturbation: CameraPerturbation) -> Float32Array:
 def blur(frames: Float32Array, sigma: Float32Array) -> Float32Array:
     """(n, H, W) frames each blurred in place by a Gaussian of its own standard deviation
     `sigma` (n,) pixels, down and across (edges repeated); returns `frames`."""
-    from scipy.ndimage import gaussian_filter
+    from scipy.ndimage import gaussian_filter  # noqa: PLC0415 (scipy: only when frames are blurred)
 
     for frame, spread in zip(frames, sigma.tolist(), strict=True):
         if spread > 0.0:

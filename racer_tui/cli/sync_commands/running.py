@@ -1,15 +1,4 @@
-"""`racer-tui sync`: share the league through a store (a shared folder, or DynamoDB + S3).
-
-    racer-tui sync init STORE [--bundles s3://BUCKET/PREFIX]   the organiser, once
-    racer-tui sync set STORE [--bundles s3://BUCKET/PREFIX]    each racer, once per league
-    racer-tui sync [--push | --pull] [--store URL] [--json]    push what is new, pull the rest
-    racer-tui sync status [--json]                             what sync set aside, and why
-    racer-tui sync fetch-bundle HASH [--name NAME]             install a racer's model
-    racer-tui sync verify [--again] [--json]                   re-run races, compare laps
-
-Every command takes `--db FILE`. Text from other racers (names, reasons, excerpts) is
-printed as plain text: with print(), or in rich tables as Text cells, never as markup.
-"""
+"""`racer-tui sync` run: each action on the opened league (the parsers are the package's)."""
 
 from __future__ import annotations
 
@@ -18,25 +7,35 @@ import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from rich import box
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, TextColumn
+from rich.progress import Progress as ProgressBar
 from rich.table import Table
 from rich.text import Text
 
+from league.opening import open_league
+from league.store import League
+from league.sync import open_bundle_store, open_store
+from league.sync.bundle_sync import fetch_bundle
+from league.sync.engine import Progress, SyncSummary
 from league.sync.errors import SyncError
+from league.sync.local import BUNDLES_SETTING, get_setting
+from league.sync.session import found_store, save_store, saved_store, sync_league
+from league.sync.status import (
+    differences,
+    side_label,
+    summary_details,
+    summary_headline,
+    sync_status,
+)
+from league.trust.replay import OUTCOMES, Verdict, verify_races
 from racer_tui.cli.output import print_json, print_table
 from sim.foundation.plural import counted
+from sim.training.drivers import DriversByHash
 
-if TYPE_CHECKING:
-    from league.store import League
-    from league.sync.engine import Progress, SyncSummary
-    from league.trust.replay import Verdict
-
-    Parsers = argparse._SubParsersAction[argparse.ArgumentParser]
-
-NAMES = ("sync",)
 _EXCERPT = 60
 _RUN_ORDER = (
     "pushed",
@@ -51,104 +50,8 @@ _RUN_ORDER = (
 )
 
 
-def register(commands: Parsers) -> None:
-    sync = commands.add_parser(
-        "sync",
-        help="share the league through a shared folder or DynamoDB",
-        description="With no ACTION: push this league's new records to its store, then pull "
-        "everyone else's. Set the store once with `racer-tui sync set STORE`.",
-    )
-    direction = sync.add_mutually_exclusive_group()
-    direction.add_argument("--push", action="store_true", help="only push")
-    direction.add_argument("--pull", action="store_true", help="only pull")
-    sync.add_argument(
-        "--verify",
-        action="store_true",
-        help="then re-run the races not verified yet and withdraw any whose laps differ "
-        "(as `racer-tui sync verify`)",
-    )
-    sync.add_argument("--store", metavar="URL", help="this store instead of the saved one")
-    _common(sync, top=True, bundles=True, as_json=True)
-    actions = sync.add_subparsers(dest="sync_command", metavar="ACTION")
-    init = actions.add_parser(
-        "init", help="create a store (the organiser, once)", description=_INIT_HELP
-    )
-    init.add_argument("url", metavar="STORE", help="dir:PATH or dynamodb://TABLE?region=R")
-    init.add_argument("--bundles", metavar="S3URL", help="also create this bundle bucket")
-    _common(init)
-    use = actions.add_parser("set", help="save the store this league syncs with")
-    use.add_argument("url", metavar="STORE", help="dir:PATH or dynamodb://TABLE?region=R")
-    use.add_argument(
-        "--organiser",
-        metavar="FP",
-        help="the organiser's key fingerprint, as they read it out: a store founded by "
-        "any other key is refused",
-    )
-    _common(use, bundles=True)
-    status = actions.add_parser("status", help="last syncs, conflicts, quarantined records")
-    _common(status, as_json=True)
-    verify = actions.add_parser(
-        "verify",
-        help="re-run the league's races and withdraw any whose laps differ",
-        description="Run each race again from the model, track, rules and seed it names "
-        "(races are deterministic) and compare its laps. A race that comes out differently "
-        "leaves the leaderboard and is listed in quarantine; one that cannot be re-run here "
-        "(its model is not in this garage: fetch it with `racer-tui sync fetch-bundle`; or it "
-        "was timed by another physics or by hand) is unverifiable, and the leaderboard says "
-        "so. Races verified before are not run again unless --again.",
-    )
-    verify.add_argument("--again", action="store_true", help="re-run races verified before")
-    _common(verify, as_json=True)
-    fetch = actions.add_parser("fetch-bundle", help="install a racer's model from the bundle store")
-    fetch.add_argument("hash", metavar="HASH", help="model hash or bundle hash (8+ characters)")
-    fetch.add_argument("--name", help="garage name to install it under")
-    _common(fetch, bundles=True)
-
-
-_INIT_HELP = (
-    "Create the store: for dir:PATH the folder (its parent must exist) and its marker file; "
-    "for dynamodb:// the table and its index (needs credentials allowed to create tables). "
-    "This machine's signing key becomes the league's organiser key: only results signed by "
-    "keys it admits (`racer-tui racer admit NAME`) reach anyone's leaderboard. "
-    "Safe to run again."
-)
-
-
-def _common(
-    parser: argparse.ArgumentParser,
-    *,
-    top: bool = False,
-    bundles: bool = False,
-    as_json: bool = False,
-) -> None:
-    # On the actions, SUPPRESS keeps a value given before the action (sync --db F status).
-    default: Any = None if top else argparse.SUPPRESS
-    parser.add_argument(
-        "--db",
-        type=Path,
-        metavar="FILE",
-        default=default,
-        help="league database (default: league.db in the data dir)",
-    )
-    if bundles:
-        parser.add_argument(
-            "--bundles",
-            metavar="S3URL",
-            default=default,
-            help="model bundles in s3://BUCKET/PREFIX (default: the saved one)",
-        )
-    if as_json:
-        parser.add_argument(
-            "--json",
-            action="store_true",
-            default=False if top else argparse.SUPPRESS,
-            help="print JSON instead of text",
-        )
-
-
 def run(args: argparse.Namespace) -> int:
     action = getattr(args, "sync_command", None)
-    from league.opening import open_league
 
     handlers: dict[str | None, Callable[[League, argparse.Namespace], int]] = {
         None: _sync,
@@ -166,8 +69,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _init(league: League, args: argparse.Namespace) -> int:
-    from league.sync import open_bundle_store, open_store
-    from league.sync.session import found_store
 
     with open_store(args.url) as store:
         store.init()
@@ -185,7 +86,6 @@ def _init(league: League, args: argparse.Namespace) -> int:
 
 
 def _set(league: League, args: argparse.Namespace) -> int:
-    from league.sync.session import save_store
 
     store, bundles = save_store(league, args.url, args.bundles, organiser=args.organiser)
     print(f"This league syncs with {store}" + (f", bundles in {bundles}" if bundles else "") + ".")
@@ -197,7 +97,6 @@ def _set(league: League, args: argparse.Namespace) -> int:
 
 
 def _sync(league: League, args: argparse.Namespace) -> int:
-    from league.sync.session import saved_store, sync_league
 
     url = saved_store(league, args.store)
     with _progress(not args.json and sys.stderr.isatty()) as progress:
@@ -226,11 +125,9 @@ def _progress(enabled: bool) -> Iterator[Progress | None]:
     if not enabled:
         yield None
         return
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
-    with Progress(*columns, console=Console(stderr=True), transient=True) as bar:
+    with ProgressBar(*columns, console=Console(stderr=True), transient=True) as bar:
         tasks: dict[str, Any] = {}
 
         def update(direction: str, done: int, total: int | None) -> None:
@@ -242,7 +139,6 @@ def _progress(enabled: bool) -> Iterator[Progress | None]:
 
 
 def _print_summary(summary: SyncSummary, notes: list[str]) -> None:
-    from league.sync.status import summary_details, summary_headline
 
     print(summary_headline(summary))
     for line in summary_details(summary, notes):
@@ -257,7 +153,6 @@ def _print_summary(summary: SyncSummary, notes: list[str]) -> None:
 
 
 def _status(league: League, args: argparse.Namespace) -> int:
-    from league.sync.status import sync_status
 
     document = sync_status(league).to_json()
     if getattr(args, "json", False):
@@ -307,7 +202,6 @@ def _print_status(document: dict[str, Any]) -> None:
 
 
 def _conflict_table(rows: list[dict[str, Any]]) -> None:
-    from league.sync.status import differences, side_label
 
     if not rows:
         print("Conflicts: none.")
@@ -348,9 +242,6 @@ def _quarantine_table(rows: list[dict[str, Any]]) -> None:
 
 
 def _fetch(league: League, args: argparse.Namespace) -> int:
-    from league.sync import open_bundle_store
-    from league.sync.bundle_sync import fetch_bundle
-    from league.sync.local import BUNDLES_SETTING, get_setting
 
     url = getattr(args, "bundles", None) or get_setting(league, BUNDLES_SETTING)
     if url is None:
@@ -379,14 +270,11 @@ def _verify(league: League, args: argparse.Namespace) -> int:
 
 
 def _verdicts(league: League, *, again: bool) -> list[Verdict]:
-    from league.trust.replay import verify_races
-    from sim.training.drivers import DriversByHash
 
     return verify_races(league, DriversByHash(), again=again)
 
 
 def _print_verdicts(verdicts: list[Verdict]) -> None:
-    from league.trust.replay import OUTCOMES
 
     counts = {outcome: sum(v.outcome == outcome for v in verdicts) for outcome in OUTCOMES}
     print(
