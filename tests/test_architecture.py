@@ -192,3 +192,12 @@ def test_every_user_error_derives_from_the_one_root() -> None:
         and not issubclass(getattr(importlib.import_module(module), name), RemedyError)
     ]
     assert strays == []
+
+
+def test_every_league_command_has_a_handler_module_that_runs_it() -> None:
+    from racer_tui.cli import league_commands
+
+    assert set(league_commands.HANDLER_MODULES) == set(league_commands.NAMES)
+    for module in set(league_commands.HANDLER_MODULES.values()):
+        handlers = importlib.import_module(f"racer_tui.cli.league_commands.{module}")
+        assert callable(handlers.run)

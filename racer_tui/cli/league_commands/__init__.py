@@ -236,9 +236,20 @@ def _register_correct(commands: Parsers, db: argparse.ArgumentParser) -> None:
     listing.add_argument("--json", action="store_true")
 
 
+# The module that runs each command (its `run(args)`), imported when the command runs, not
+# for `--help` or the app's start: the league's modules load SQLite with sqlite-utils (and
+# pandas) and the simulator.
+HANDLER_MODULES = {
+    "submit": "board",
+    "leaderboard": "board",
+    "night": "nights",
+    "season": "people",
+    "racer": "people",
+    "correct": "people",
+}
+
+
 def run(args: argparse.Namespace) -> int | AppLaunch:
-    # Imported when a league command runs, not for `--help` or the app's start: the
-    # league's modules load SQLite with sqlite-utils (and pandas) and the simulator.
-    dispatch = importlib.import_module(f"{__name__}.dispatch")
-    result: int | AppLaunch = dispatch.run(args)
+    handlers = importlib.import_module(f"{__name__}.{HANDLER_MODULES[args.command]}")
+    result: int | AppLaunch = handlers.run(args)
     return result

@@ -21,6 +21,7 @@ from league.leaderboard import (
     sort_rows,
 )
 from league.nights import get_night, list_nights
+from league.opening import open_league
 from league.race_types import TIME_TRIAL, board_name, option_name, parse_race_type, words
 from league.racers import get_racer
 from league.report import SCORE_TITLES, leaderboard_columns, leaderboard_json, to_csv, to_markdown
@@ -32,6 +33,13 @@ from league.tracks import track_for
 from racer_tui.cli.output import plain_table, print_json, print_table
 from sim.race.rules import DEFAULT_RULES, RankingMethod, Verification
 from sim.training.drivers import DriversByHash
+
+
+def run(args: argparse.Namespace) -> int:
+    with open_league(args.db) as league:
+        if args.command == "submit":
+            return submit(league, args)
+        return show_leaderboard(league, args)
 
 
 def submit(league: League, args: argparse.Namespace) -> int:

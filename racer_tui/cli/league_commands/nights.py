@@ -40,6 +40,13 @@ from sim.tracks.catalog import resolve_track
 from sim.training.drivers import DriversByHash, resolve_driver
 
 
+def run(args: argparse.Namespace) -> int | AppLaunch:
+    if args.night_command == "projector":
+        return projector(args)
+    with open_league(args.db) as league:
+        return night_command(league, args)
+
+
 def projector(args: argparse.Namespace) -> AppLaunch:
     """The app, straight on a night's projector: for the venue's screen, in a terminal of
     its own beside the host's racer-tui. A kiosk: only q then y leaves, and it ends the

@@ -9,11 +9,21 @@ from rich.text import Text
 
 from league import racers, seasons
 from league.corrections import disqualify_lap, list_corrections, rename_racer
+from league.opening import open_league
 from league.racers import HEX_COLOUR
 from league.store import League
 from racer_tui.cli.league_commands import key_parsers, keys
 from racer_tui.cli.output import plain_table, print_json, print_table
 from sim.foundation.plural import counted
+
+
+def run(args: argparse.Namespace) -> int:
+    with open_league(args.db) as league:
+        if args.command == "season":
+            return season_command(league, args)
+        if args.command == "racer":
+            return racer_command(league, args)
+        return correct_command(league, args)
 
 
 def season_command(league: League, args: argparse.Namespace) -> int:
