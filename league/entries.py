@@ -243,63 +243,69 @@ def _ranked_at(alias: str, column: str) -> str:
 
 
 def _sources(conn: sqlite3.Connection, ids: Sequence[str] | None) -> Iterator[EntrySource]:
+    reader = conn.cursor()
+    reader.row_factory = sqlite3.Row  # read by column name
     where, params = _in_clause(ids, "s.id")
-    submissions = conn.execute(
-        f"SELECT s.id, s.racer, s.track_hash, s.model_name, {_ranked_at('s', 'submitted_at')}, "
-        "l.number, l.time_seconds, l.offtracks, l.completed, "
+    submissions = reader.execute(
+        f"SELECT s.id, s.racer, s.track_hash, s.model_name, "
+        f"{_ranked_at('s', 'submitted_at')} AS recorded_at, "
+        "l.number, l.time_seconds, l.offtracks, l.completed AS counts, "
         f"coalesce(s.physics, CASE WHEN s.source IN ('{DRFC}', '{CONSOLE}') "
-        f"THEN '{DEEPRACER}' ELSE '{BEFORE_VERSIONING}' END), s.race_type FROM submissions s "
-        f"LEFT JOIN submission_laps l ON l.submission_id = s.id {where} "
+        f"THEN '{DEEPRACER}' ELSE '{BEFORE_VERSIONING}' END) AS physics, s.race_type "
+        f"FROM submissions s LEFT JOIN submission_laps l ON l.submission_id = s.id {where} "
         "ORDER BY s.id, l.number",
         params,
     )
-    for entry_id, rows in groupby(submissions, key=lambda row: row[0]):
+    for entry_id, rows in groupby(submissions, key=lambda row: row["id"]):
         group = list(rows)
         first = group[0]
-        laps = tuple(
-            ScoredLap(row[5], row[6], row[7], bool(row[8])) for row in group if row[5] is not None
-        )
         yield EntrySource(
             entry_id=entry_id,
             kind="submission",
-            racer=first[1],
-            track_hash=first[2],
-            physics=first[9],
-            model_name=first[3],
+            racer=first["racer"],
+            track_hash=first["track_hash"],
+            physics=first["physics"],
+            model_name=first["model_name"],
             night_id=None,
-            recorded_at=first[4],
+            recorded_at=first["recorded_at"],
             rules=SUBMISSION_RULES,
-            laps=laps,
-            race_type=first[10] or TIME_TRIAL,
+            laps=_scored_laps(group),
+            race_type=first["race_type"] or TIME_TRIAL,
         )
     where, params = _in_clause(ids, "r.id")
-    races = conn.execute(
+    races = reader.execute(
         "SELECT r.id, r.racer, r.track_hash, r.model_name, r.night_id, "
-        f"{_ranked_at('r', 'started_at')}, r.rules, "
-        f"l.number, l.time_seconds, l.offtracks, l.valid, coalesce(r.physics, "
-        f"'{BEFORE_VERSIONING}') FROM races r "
+        f"{_ranked_at('r', 'started_at')} AS recorded_at, r.rules, "
+        "l.number, l.time_seconds, l.offtracks, l.valid AS counts, "
+        f"coalesce(r.physics, '{BEFORE_VERSIONING}') AS physics FROM races r "
         f"LEFT JOIN race_laps l ON l.race_id = r.id {where} ORDER BY r.id, l.number",
         params,
     )
     rules_cache: dict[str, RaceRules] = {}
-    for entry_id, rows in groupby(races, key=lambda row: row[0]):
+    for entry_id, rows in groupby(races, key=lambda row: row["id"]):
         group = list(rows)
         first = group[0]
-        laps = tuple(
-            ScoredLap(row[7], row[8], row[9], bool(row[10])) for row in group if row[7] is not None
-        )
         yield EntrySource(
             entry_id=entry_id,
             kind="race",
-            racer=first[1],
-            track_hash=first[2],
-            physics=first[11],
-            model_name=first[3],
-            night_id=first[4],
-            recorded_at=first[5],
-            rules=_rules(first[6], rules_cache),
-            laps=laps,
+            racer=first["racer"],
+            track_hash=first["track_hash"],
+            physics=first["physics"],
+            model_name=first["model_name"],
+            night_id=first["night_id"],
+            recorded_at=first["recorded_at"],
+            rules=_rules(first["rules"], rules_cache),
+            laps=_scored_laps(group),
         )
+
+
+def _scored_laps(rows: Sequence[sqlite3.Row]) -> tuple[ScoredLap, ...]:
+    """A result's laps from its joined rows (none when the result has no lap)."""
+    return tuple(
+        ScoredLap(row["number"], row["time_seconds"], row["offtracks"], bool(row["counts"]))
+        for row in rows
+        if row["number"] is not None
+    )
 
 
 def refresh_entries(conn: sqlite3.Connection, ids: Sequence[str]) -> None:
@@ -408,7 +414,16 @@ def entry_breakdown(league: League, kind: str, record_id: str) -> EntryBreakdown
         return EntryBreakdown(
             kind="race",
             found=race is not None,
-            race_laps=tuple(RaceLap(lap[0], lap[1], lap[2], lap[3], bool(lap[4])) for lap in laps),
+            race_laps=tuple(
+                RaceLap(
+                    lap["number"],
+                    lap["time_seconds"],
+                    lap["penalty_seconds"],
+                    lap["offtracks"],
+                    bool(lap["valid"]),
+                )
+                for lap in laps
+            ),
             has_trace=traced is not None,
         )
     data = league.conn.execute("SELECT * FROM submissions WHERE id = ?", (record_id,)).fetchone()
@@ -428,7 +443,15 @@ def entry_breakdown(league: League, kind: str, record_id: str) -> EntryBreakdown
         training=_parsed(data["training"], dict),
         evaluation_file=data["evaluation_file"],
         trials=tuple(
-            EvaluationTrial(row[0], row[1], row[2], row[3], row[4], bool(row[5])) for row in trials
+            EvaluationTrial(
+                row["number"],
+                row["time_seconds"],
+                row["completion"],
+                row["status"],
+                row["offtracks"],
+                bool(row["completed"]),
+            )
+            for row in trials
         ),
     )
     return EntryBreakdown(kind="submission", found=True, submission=files)

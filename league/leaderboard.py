@@ -27,6 +27,7 @@ from league.errors import LeagueError
 from league.race_types import RACE_TYPES, board_name
 from league.racers import display_names_overrides
 from league.ranking import counts_under, rank
+from league.rows import rows_as
 from league.store import League
 from league.tracks import track_names
 from league.trust.standing import result_standings
@@ -114,10 +115,13 @@ NATIVE_OFFTRACKS = (
 # them row by row costs more than the rest of the query). The track name's place holds ''
 # (Python's one empty string), not a copy of the 64-character track hash per row: that
 # copy cost about what the race type's column costs.
+# LeaderboardRow's fields by name (league.rows); the shown name and the track's name are
+# filled in from their own tables once the rows are read.
 _ROW_COLUMNS = """
-    b.entry_id, b.kind, b.racer, b.racer, b.model_name, b.track_hash, '',
-    b.night_id, {score}, b.scoring_offtracks, b.valid_laps, b.recorded_at, b.best_lap,
-    b.average_lap, b.offtracks, b.laps_driven, b.physics, b.race_type
+    b.entry_id AS record_id, b.kind, b.racer, b.racer AS display_name, b.model_name AS model,
+    b.track_hash, '' AS track_name, b.night_id, {score} AS score, b.scoring_offtracks,
+    b.valid_laps, b.recorded_at, b.best_lap, b.average_lap, b.offtracks, b.laps_driven,
+    b.physics, b.race_type
 """
 
 
@@ -285,8 +289,8 @@ def mark_verification(
 
 def _rows(league: League, sql: str, params: Sequence[Any]) -> list[LeaderboardRow]:
     cursor = league.conn.cursor()
-    cursor.row_factory = None  # plain tuples: thousands of rows, built positionally
-    rows = [LeaderboardRow(*values) for values in cursor.execute(sql, params)]
+    cursor.row_factory = None  # plain tuples: thousands of rows, matched by name once
+    rows = rows_as(LeaderboardRow, cursor.execute(sql, params))
     shown = display_names_overrides(league)
     tracks = track_names(league)
     named: dict[tuple[str, str, str], str] = {}  # a board's name, worked out once per board

@@ -32,6 +32,7 @@ from typing import Any, Final, Literal
 
 from league.local_racer import RACER_SETTING
 from league.records import record_body
+from league.rows import row_as
 from league.store import League
 from league.sync.dates import DATE_FIELD, DATE_TOLERANCE_MS, founded_ms, iso_ms
 from league.sync.kinds import MODEL_KIND
@@ -117,7 +118,7 @@ def models(
     """The model records for `model_hash`, in the order this league first held them, but
     those signed by a `revoked` key (they count for nothing, as everything it signed)."""
     return [
-        ModelInfo(*row)
+        row_as(ModelInfo, row)
         for row in league.query(
             "SELECT record_id, racer, model_name, model_hash, registered_at FROM sync_models m "
             "WHERE model_hash = ? AND NOT EXISTS (SELECT 1 FROM sync_seals s WHERE s.kind = ? "

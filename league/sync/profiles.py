@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from league.records import record_body
+from league.rows import row_as
 from league.store import League, now_iso
 from league.sync.kinds import PROFILE_KIND, profile_id
 from league.sync.local import add_conflict, body_text, mark_in_store
@@ -52,7 +53,12 @@ def known_profile(league: League, pid: str) -> KnownProfile | None:
     )
     if row is None:
         return None
-    return KnownProfile(int(row[0]), str(row[1]), dict(json.loads(row[2])), row[3])
+    return KnownProfile(
+        int(row["version"]),
+        str(row["content_hash"]),
+        dict(json.loads(row["body"])),
+        row["received_at"],
+    )
 
 
 def _save(league: League, record: SyncRecord, received_at: str | None) -> None:
@@ -129,7 +135,8 @@ def push_profiles(
     """
     outcome = ProfilePush()
     rows = league.query(
-        "SELECT c.id, c.target, c.new_value, c.created_at FROM corrections c "
+        "SELECT c.id AS correction_id, c.target AS racer, c.new_value AS new_name, c.created_at "
+        "FROM corrections c "
         "WHERE c.kind = 'rename_racer' AND NOT EXISTS (SELECT 1 FROM sync_in_store s "
         "WHERE s.store = ? AND s.kind = 'correction' AND s.record_id = c.id) "
         "AND NOT EXISTS (SELECT 1 FROM sync_conflicts k WHERE k.store = ? "
@@ -137,7 +144,7 @@ def push_profiles(
         (store_key, store_key),
     )
     for row in rows:
-        rename = _Rename(*row)
+        rename = row_as(_Rename, row)
         known = known_profile(league, profile_id(rename.racer))
         if known is not None and known.body.get("correction") == rename.correction_id:
             record = known.record(rename.racer)  # sent before; its bookkeeping may be lost

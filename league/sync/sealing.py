@@ -50,7 +50,12 @@ def known_seals(league: League, records: Sequence[SyncRecord]) -> dict[SealKey, 
         "AND s.content_hash = json_extract(w.value, '$[3]')",
         (wanted,),
     )
-    return {(row[0], row[1], int(row[2]), row[3]): Seal(row[4], row[5]) for row in rows}
+    return {
+        (row["kind"], row["record_id"], int(row["version"]), row["content_hash"]): Seal(
+            row["signer"], row["signature"]
+        )
+        for row in rows
+    }
 
 
 def seal_all(league: League, records: Sequence[SyncRecord], key: SigningKey) -> list[SyncRecord]:
