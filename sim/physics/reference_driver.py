@@ -11,6 +11,10 @@ it lets a new racer watch a race before training anything.
    has answered (one steering time constant ahead), turned into a steering angle by the
    car's calibrated steering response; speed target read a little ahead so the motor's
    lag is covered.
+
+Its line is its own, not the coach's minimum-time line (`sim.coach.racing_line`, the limit
+lap): reference laps are recorded in races and replayed to verify them, so this line stays
+as it was planned, and the coach's may improve without changing a single recorded lap.
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ from types import ModuleType
 from sim.deepracer.files import DeepRacerFileError
 from sim.foundation.remedies import RemedyError
 from sim.garage.bundle import read_bundle
-from sim.garage.folder import ModelError, list_models, open_model
+from sim.garage.folder import ModelError, ModelFolder, list_models, open_model
 from sim.garage.imported import BUNDLE_SUFFIX
 from sim.race.driver import REFERENCE_NAME, Driver, reference_driver
 from sim.tracks.track import Track
@@ -44,9 +44,15 @@ def resolve_driver(spec: str, track: Track) -> Driver:
             bundle = read_bundle(Path(spec))
             return _policy_driver(spec, lambda policy: policy.driver_for_bundle(bundle))
         folder = open_model(spec)
-        return _policy_driver(spec, lambda policy: policy.driver_for_model(folder))
+        return model_driver(folder)
     except (ModelError, DeepRacerFileError) as error:
         raise RaceSetupError.about(error) from None
+
+
+def model_driver(folder: ModelFolder) -> Driver:
+    """A garage model's trained policy as a driver (torch is imported now: the app builds
+    it inside a race's worker). A problem is a RaceSetupError naming the model."""
+    return _policy_driver(folder.name, lambda policy: policy.driver_for_model(folder))
 
 
 class DriversByHash:

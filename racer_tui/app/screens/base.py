@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar, runtime_checkable
 
 from textual import events
@@ -131,12 +132,11 @@ def push_kept(app: App[Any], name: str, make: Callable[[], Screen[Any]]) -> None
     app.push_screen(kept_screen(app, name, make))
 
 
+@dataclass
 class ModelAdded(Message):
     """A model was created or imported outside the garage: the app shows it there."""
 
-    def __init__(self, name: str) -> None:
-        super().__init__()
-        self.name = name
+    name: str
 
 
 def _app_style_context(screen: Screen[Any]) -> tuple[object, ...]:

@@ -12,6 +12,7 @@ target speed.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 from rich.text import Text
@@ -53,10 +54,9 @@ def summary_text(coaching: Coaching) -> Text:
     return text
 
 
+@dataclass
 class CoachingReady(Message):
-    def __init__(self, coaching: Coaching) -> None:
-        super().__init__()
-        self.coaching = coaching
+    coaching: Coaching
 
 
 class CoachScreen(RacerScreen[None]):

@@ -275,20 +275,18 @@ class ImportRequest:
 WorkT = TypeVar("WorkT")
 
 
+@dataclass
 class WorkDone(Message):
     """A dialog's work (an import) is done: the dialog closes with its result."""
 
-    def __init__(self, result: object) -> None:
-        super().__init__()
-        self.result = result
+    result: object
 
 
+@dataclass
 class WorkFailed(Message):
     """A dialog's work failed: the dialog stays open and says why."""
 
-    def __init__(self, error: BaseException) -> None:
-        super().__init__()
-        self.error = error
+    error: BaseException
 
 
 class PathNameDialog(FormDialog[WorkT]):

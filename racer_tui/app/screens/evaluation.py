@@ -11,6 +11,7 @@ failed with what to do) is one `Job`, drawn by a `JobLine`.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from typing import ClassVar
 
 from rich.text import Text
@@ -71,16 +72,14 @@ def summary_text(report: EvaluationReport) -> Text:
     return text
 
 
+@dataclass
 class EvaluationDone(Message):
-    def __init__(self, report: EvaluationReport) -> None:
-        super().__init__()
-        self.report = report
+    report: EvaluationReport
 
 
+@dataclass
 class EvaluationProgress(Message):
-    def __init__(self, fraction: float) -> None:
-        super().__init__()
-        self.fraction = fraction
+    fraction: float
 
 
 class EvaluationScreen(RacerScreen[None]):

@@ -11,6 +11,7 @@ failure stays readable after its notification fades.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
@@ -54,8 +55,8 @@ from sim.garage.imported import BUNDLE_SUFFIX
 from sim.garage.importing import import_model
 from sim.garage.options import spec_of
 from sim.garage.overview import listing_signature, model_details, model_row
-from sim.race.driver import Driver
 from sim.race.rules import DEFAULT_RULES
+from sim.training.drivers import model_driver
 
 # In a narrow terminal the sensor gives way first, then the action space (the detail panel
 # shows both), then a long model name loses its end, and only then does the track go.
@@ -82,69 +83,55 @@ def short_actions(row: dict[str, Any]) -> str:
 # --- messages from the workers --------------------------------------------------------------
 
 
+@dataclass
 class ModelsLoaded(Message):
-    def __init__(
-        self,
-        rows: list[dict[str, Any]],
-        select: str | None,
-        generation: int,
-        signature: tuple[tuple[object, ...], ...],
-    ) -> None:
-        super().__init__()
-        self.rows = rows
-        self.select = select
-        self.generation = generation  # a cancelled, slower read must not win
-        self.signature = signature  # what the rows were read from (`listing_signature`)
+    rows: list[dict[str, Any]]
+    select: str | None
+    generation: int  # a cancelled, slower read must not win
+    signature: tuple[tuple[object, ...], ...]  # what the rows were read from (`listing_signature`)
 
 
+@dataclass
 class ListingLooked(Message):
-    def __init__(self, signature: tuple[tuple[object, ...], ...]) -> None:
-        super().__init__()
-        self.signature = signature
+    signature: tuple[tuple[object, ...], ...]
 
 
+@dataclass
 class ModelDetailsLoaded(Message):
-    def __init__(self, name: str, details: dict[str, Any], space: ActionSpace) -> None:
-        super().__init__()
-        self.name = name
-        self.details = details
-        self.space = space
+    name: str
+    details: dict[str, Any]
+    space: ActionSpace
 
 
+@dataclass
 class ModelDetailsFailed(Message):
-    def __init__(self, name: str, problem: str) -> None:
-        super().__init__()
-        self.name = name
-        self.problem = problem
+    name: str
+    problem: str
 
 
+@dataclass
 class ModelDeleted(Message):
-    def __init__(self, name: str) -> None:
-        super().__init__()
-        self.name = name
+    name: str
 
 
+@dataclass
 class ModelCloned(Message):
-    def __init__(self, source: str, name: str) -> None:
-        super().__init__()
-        self.source = source
-        self.name = name
+    source: str
+    name: str
 
 
+@dataclass
 class ModelImported(Message):
-    def __init__(self, name: str, notes: tuple[str, ...], trains: bool = True) -> None:
-        super().__init__()
-        self.name = name
-        self.notes = notes
-        self.trains = trains  # False: it drives with a car archive, never trained here
+    name: str
+    notes: tuple[str, ...]
+    trains: bool = True  # False: it drives with a car archive, never trained here
 
 
+@dataclass
 class BundleExported(Message):
-    def __init__(self, name: str, path: Path, notes: tuple[str, ...] = ()) -> None:
-        super().__init__()
-        self.name = name
-        self.path = path
-        self.notes = notes
+    name: str
+    path: Path
+    notes: tuple[str, ...] = ()
 
 
 def import_into_garage(request: ImportRequest) -> ModelImported:
@@ -197,13 +184,6 @@ def notify_imported(screen: Screen[Any], message: ModelImported) -> None:
     what = "track or reward function" if message.trains else "track"
     advice = f"\nPress e in the garage to change its {what}." if notes else ""
     screen.notify(f"Imported {message.name}.{notes}{advice}", timeout=15, markup=False)
-
-
-def policy_driver(folder: ModelFolder) -> Driver:
-    """Built inside the race worker: loading a policy imports torch, which takes a moment."""
-    from sim.training.policy import driver_for_model  # noqa: PLC0415 (torch: only when a trained model races)
-
-    return driver_for_model(folder)
 
 
 class GarageScreen(RacerScreen[None]):
@@ -669,7 +649,7 @@ class GarageScreen(RacerScreen[None]):
             track=track,
             rules=DEFAULT_RULES,
             racer=folder.name,
-            driver=partial(policy_driver, folder),
+            driver=partial(model_driver, folder),
             title=f"{folder.name} on {track.name}",
         )
         # Kept with the app's races, so the Races section can replay or submit it.

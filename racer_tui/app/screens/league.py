@@ -124,15 +124,12 @@ def export_text(
 # --- messages from the workers --------------------------------------------------------------
 
 
+@dataclass
 class BoardLoaded(Message):
-    def __init__(
-        self, view: BoardView, options: FilterOptions, query: BoardQuery, generation: int
-    ) -> None:
-        super().__init__()
-        self.view = view
-        self.options = options
-        self.query = query  # as shown: its race type is the view's
-        self.generation = generation  # a slower, older read must not win
+    view: BoardView
+    options: FilterOptions
+    query: BoardQuery  # as shown: its race type is the view's
+    generation: int  # a slower, older read must not win
 
 
 def race_type_line(view: BoardView) -> Text:
@@ -152,18 +149,16 @@ def race_type_line(view: BoardView) -> Text:
     return text
 
 
+@dataclass
 class EntryDescribed(Message):
-    def __init__(self, record_id: str, text: Text) -> None:
-        super().__init__()
-        self.record_id = record_id
-        self.text = text
+    record_id: str
+    text: Text
 
 
+@dataclass
 class BoardExported(Message):
-    def __init__(self, path: Path, count: int) -> None:
-        super().__init__()
-        self.path = path
-        self.count = count
+    path: Path
+    count: int
 
 
 @dataclass(frozen=True)

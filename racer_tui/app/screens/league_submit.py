@@ -12,6 +12,7 @@ told by league.board_place in one sentence.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -94,14 +95,13 @@ class RacerPrompt:
 # --- a race of the Races section -----------------------------------------------------------
 
 
+@dataclass
 class RaceSubmitted(Message):
     """A race is in the league now; `sentence` says where it stands."""
 
-    def __init__(self, result_id: str, racer: str, sentence: str) -> None:
-        super().__init__()
-        self.result_id = result_id
-        self.racer = racer
-        self.sentence = sentence
+    result_id: str
+    racer: str
+    sentence: str
 
 
 def submit_race(result: RaceResult, racer: str, db_path: Path | None) -> RaceSubmitted:

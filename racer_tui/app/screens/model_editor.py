@@ -16,6 +16,7 @@ saved model's name, or None when cancelled.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import ClassVar
 
 from rich.text import Text
@@ -115,17 +116,15 @@ def tab_of(field_id: str) -> str:
 # --- messages from the workers -------------------------------------------------------------
 
 
+@dataclass
 class ModelSaved(Message):
-    def __init__(self, name: str, created: bool) -> None:
-        super().__init__()
-        self.name = name
-        self.created = created
+    name: str
+    created: bool
 
 
+@dataclass
 class FormRejected(Message):
-    def __init__(self, problems: tuple[FieldProblem, ...]) -> None:
-        super().__init__()
-        self.problems = problems
+    problems: tuple[FieldProblem, ...]
 
 
 class RewardChecked(Message):
@@ -147,10 +146,9 @@ class RewardChecked(Message):
         self.number = 0  # which Check this answers (a thread worker cannot be cancelled)
 
 
+@dataclass
 class TrackPreviewLoaded(Message):
-    def __init__(self, track: Track) -> None:
-        super().__init__()
-        self.track = track
+    track: Track
 
 
 def check_reward(source: str, track: str | None = None, top_speed: float = 2.0) -> RewardChecked:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
@@ -51,10 +52,9 @@ def ordinal(place: int) -> str:
     return f"{place}{'th' if teens else SUFFIXES.get(place % 10, 'th')}"
 
 
+@dataclass
 class NightGone(Message):
-    def __init__(self, reason: str) -> None:
-        super().__init__()
-        self.reason = reason
+    reason: str
 
 
 # What the last line says: the view updates itself while the night runs; once it is
@@ -63,10 +63,9 @@ OPEN_HINT = f"{LEAVE_HINT} · updates by itself as heats run and end"
 CLOSED_HINT = f"{LEAVE_HINT} · the night is closed: its standings are final"
 
 
+@dataclass
 class NightRead(Message):
-    def __init__(self, state: NightState) -> None:
-        super().__init__()
-        self.state = state
+    state: NightState
 
 
 NARROW = 70  # below this many columns the gap goes: the names need the room

@@ -462,49 +462,43 @@ class NewSeasonDialog(FormDialog[SeasonRequest]):
 # --- messages from the workers --------------------------------------------------------------
 
 
+@dataclass
 class NightsLoaded(Message):
-    def __init__(self, nights: list[Night], select: str | None) -> None:
-        super().__init__()
-        self.nights = nights
-        self.select = select
+    nights: list[Night]
+    select: str | None
 
 
+@dataclass
 class NightLoaded(Message):
-    def __init__(self, state: NightState) -> None:
-        super().__init__()
-        self.state = state
+    state: NightState
 
 
+@dataclass
 class NightChanged(Message):
     """Something was added to a night: say so, then read it again."""
 
-    def __init__(self, night_id: str, note: str, *, focus_entrant: str | None = None) -> None:
-        super().__init__()
-        self.night_id = night_id
-        self.note = note
-        self.focus_entrant = focus_entrant  # keep this entrant's row highlighted
+    night_id: str
+    note: str
+    focus_entrant: str | None = None  # keep this entrant's row highlighted
 
 
+@dataclass
 class SeasonsLoaded(Message):
-    def __init__(self, seasons: list[tuple[str, str]], purpose: str = "night") -> None:
-        super().__init__()
-        self.seasons = seasons  # (name, id)
-        self.purpose = purpose  # "night": for the new night dialog; "season": a new season
+    seasons: list[tuple[str, str]]  # (name, id)
+    purpose: str = "night"  # "night": for the new night dialog; "season": a new season
 
 
+@dataclass
 class SeasonCreated(Message):
-    def __init__(self, season_id: str, name: str) -> None:
-        super().__init__()
-        self.season_id = season_id
-        self.name = name
+    season_id: str
+    name: str
 
 
+@dataclass
 class HeatReady(Message):
-    def __init__(self, night: Night, heat: Heat, setup: RaceSetup | TimekeeperSetup) -> None:
-        super().__init__()
-        self.night = night
-        self.heat = heat
-        self.setup = setup
+    night: Night
+    heat: Heat
+    setup: RaceSetup | TimekeeperSetup
 
 
 def heat_setup(

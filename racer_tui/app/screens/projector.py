@@ -9,6 +9,7 @@ leaves; no other screen opens from it.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
@@ -33,11 +34,10 @@ POLL_SECONDS = 3.0
 MAX_ROWS = 20  # a projector shows the top of the table; the rest would not be readable
 
 
+@dataclass
 class ProjectorLoaded(Message):
-    def __init__(self, rows: list[LeaderboardRow], title: str) -> None:
-        super().__init__()
-        self.rows = rows
-        self.title = title
+    rows: list[LeaderboardRow]
+    title: str
 
 
 NARROW = 70  # below this many columns the gap goes: the names need the room

@@ -40,7 +40,6 @@ from league.races import (
 )
 from league.ranking import rank
 from racer_tui.app.screens.base import RacerScreen
-from racer_tui.app.screens.garage import policy_driver
 from racer_tui.app.screens.league_submit import RacerPrompt, RaceSubmitted, submit_race
 from racer_tui.app.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.app.session import keep_race, session_races
@@ -57,6 +56,7 @@ from sim.race.result import RaceResult
 from sim.race.rules import DEFAULT_RULES, preset_rules
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 from sim.tracks.track import Track
+from sim.training.drivers import model_driver
 
 REFERENCE = "reference driver"
 RESULT_COLUMNS = (
@@ -98,11 +98,10 @@ RACE_TYPE_CHOICES: tuple[tuple[str, str], ...] = (
 _PRESET_OF_TYPE = {"OBJECT_AVOIDANCE": "object-avoidance", "HEAD_TO_BOT": "head-to-bot"}
 
 
+@dataclass
 class DriversLoaded(Message):
-    def __init__(self, drivers: list[DriverChoice], generation: int) -> None:
-        super().__init__()
-        self.drivers = drivers
-        self.generation = generation  # a cancelled, slower read must not win
+    drivers: list[DriverChoice]
+    generation: int  # a cancelled, slower read must not win
 
 
 def trained_drivers() -> list[DriverChoice]:
@@ -119,11 +118,10 @@ def trained_drivers() -> list[DriverChoice]:
     return drivers
 
 
+@dataclass
 class RecordedRacesLoaded(Message):
-    def __init__(self, races: list[RecordedRace], generation: int) -> None:
-        super().__init__()
-        self.races = races
-        self.generation = generation
+    races: list[RecordedRace]
+    generation: int
 
 
 NARROW = 80  # below this the setup column narrows and dates lose their year
@@ -369,7 +367,7 @@ class RacesScreen(RacerScreen[None]):
             track=track,
             rules=rules,
             racer=driver.label,
-            driver=partial(policy_driver, driver.folder) if driver.folder is not None else None,
+            driver=partial(model_driver, driver.folder) if driver.folder is not None else None,
             ghost=ghost_lap(leader) if leader is not None else None,
             leader_seconds=leader.score if leader is not None else None,
             title=f"{driver.label} on {track.name}",

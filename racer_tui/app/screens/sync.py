@@ -119,24 +119,21 @@ def read_keys(league: League) -> Keys:
     return Keys(mine, waiting, mine.status in ("founder", "organiser"))
 
 
+@dataclass
 class SyncStatusRead(Message):
-    def __init__(self, status: SyncStatus, keys: Keys) -> None:
-        super().__init__()
-        self.status = status
-        self.keys = keys
+    status: SyncStatus
+    keys: Keys
 
 
+@dataclass
 class StoreSaved(Message):
-    def __init__(self, url: str) -> None:
-        super().__init__()
-        self.url = url
+    url: str
 
 
+@dataclass
 class SyncFinished(Message):
-    def __init__(self, summary: SyncSummary, notes: list[str]) -> None:
-        super().__init__()
-        self.summary = summary
-        self.notes = notes
+    summary: SyncSummary
+    notes: list[str]
 
 
 class SyncScreen(RacerScreen[bool]):

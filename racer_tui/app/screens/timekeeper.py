@@ -55,11 +55,10 @@ class TimekeeperSetup:
     journal: HeatJournal | None = None  # a night's heat: its inputs, to resume it
 
 
+@dataclass
 class TimerLine(Message):
-    def __init__(self, moment: float, text: str) -> None:
-        super().__init__()
-        self.moment = moment
-        self.text = text
+    moment: float
+    text: str
 
 
 def lap_clock_text(seconds: float) -> str:

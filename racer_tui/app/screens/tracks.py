@@ -8,6 +8,7 @@ through the list stays instant.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
 
@@ -48,11 +49,10 @@ _LABEL_CELLS = 23
 _HEADING = "group:"  # row keys of the group headings, which are not tracks
 
 
+@dataclass
 class ReferenceLapTimed(Message):
-    def __init__(self, track: Track, text: str) -> None:
-        super().__init__()
-        self.track = track
-        self.text = text
+    track: Track
+    text: str
 
 
 class TracksScreen(RacerScreen[None]):

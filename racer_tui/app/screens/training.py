@@ -273,30 +273,23 @@ def _pid_alive(pid: int) -> bool:
 # --- messages from the workers --------------------------------------------------------------
 
 
+@dataclass
 class TrainingModelsRead(Message):
-    def __init__(self, rows: list[tuple[str, str, int | None]], select: str | None) -> None:
-        super().__init__()
-        self.rows = rows  # (name, status, pid of a training running elsewhere)
-        self.select = select
+    rows: list[tuple[str, str, int | None]]  # (name, status, pid of a training running elsewhere)
+    select: str | None
 
 
+@dataclass
 class FiguresLoaded(Message):
-    def __init__(
-        self, name: str, figures: TrainingFigures, replaces: TrainingFigures | None = None
-    ) -> None:
-        super().__init__()
-        self.name = name
-        self.figures = figures
-        # A run's end read from its files: these figures take the place of `replaces`,
-        # the ones it was watched with live, unless something newer has since.
-        self.replaces = replaces
+    name: str
+    figures: TrainingFigures
+    replaces: TrainingFigures | None = None
 
 
+@dataclass
 class ObservationMade(Message):
-    def __init__(self, name: str, observation: Observation | None) -> None:
-        super().__init__()
-        self.name = name
-        self.observation = observation
+    name: str
+    observation: Observation | None
 
 
 class LeaveWhileTraining(RacerModal[str | None]):

@@ -110,10 +110,9 @@ class BoardFilters(Horizontal):
     BoardFilters > #filter-by { max-width: 24; }
     """
 
+    @dataclass
     class Changed(Message):
-        def __init__(self, query: BoardQuery) -> None:
-            super().__init__()
-            self.query = query
+        query: BoardQuery
 
     def compose(self) -> ComposeResult:
         yield Select[str]([], prompt="every track", id="filter-track")

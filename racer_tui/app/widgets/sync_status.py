@@ -10,6 +10,7 @@ figures come from league.sync.status.
 from __future__ import annotations
 
 import sqlite3
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 
@@ -83,11 +84,10 @@ def counts_text(overview: SyncOverview, *, compact: bool = False) -> Text:
     return Text(" · ").join(parts)
 
 
+@dataclass
 class SyncOverviewRead(Message):
-    def __init__(self, overview: SyncOverview | None, problem: str = "") -> None:
-        super().__init__()
-        self.overview = overview
-        self.problem = problem
+    overview: SyncOverview | None
+    problem: str = ""
 
 
 class SyncStatusLine(Horizontal):
