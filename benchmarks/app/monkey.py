@@ -6,9 +6,12 @@ Runs `racer_tui.app.monkey` (keys from a weighted alphabet, bursts queued as a t
 delivers them, pastes, clicks at random cells, resizes between 60x20 and 200x60; after each
 action: nothing raised, the app runs, the screen renders) in a scratch data home, and prints
 the actions, the crashes (each with the actions that led to it and the app's crash report),
-the slowest action, and this process's memory at the start, after a warm-up and at the end
-(torch, which the first race or evaluation imports, is imported before the start), each
-beside the issue's target. The exit code is 0 whenever the benchmark ran, crashes or not
+the slowest action, and this process's memory at the start, after a warm-up, halfway and
+at the end (torch, which the first race or evaluation imports, is imported before the
+start), each beside the issue's target. Textual's and rich's layout caches (LRU, at most
+4,096 entries each) fill over the first thousand or two actions, faster with random
+terminal sizes; a cache levels off, so the second half's growth is the one that shows a
+leak. The exit code is 0 whenever the benchmark ran, crashes or not
 (the figures say); 1 with one sentence on stderr when it could not run.
 """
 
@@ -22,7 +25,7 @@ import sys
 import time
 from typing import Any
 
-from racer_tui.app.monkey import MonkeyRun, run_monkey, scratch_home
+from racer_tui.app.monkey import MonkeyRun, rss_mb, run_monkey, scratch_home
 
 DEFAULT_ACTIONS = 100_000
 TARGET_CRASHES = 0
@@ -33,6 +36,8 @@ PROGRESS_EVERY = 1_000
 def report_of(run: MonkeyRun, real_training: bool) -> dict[str, Any]:
     measured = max(run.actions - run.warmup_actions, 1)
     growth = (run.rss_end_mb - run.rss_after_warmup_mb) / measured * 1000.0
+    second_half = max(run.actions - run.halfway_actions, 1)
+    growth_late = (run.rss_end_mb - run.rss_halfway_mb) / second_half * 1000.0
     return {
         "seed": run.seed,
         "actions": run.actions,
@@ -54,8 +59,11 @@ def report_of(run: MonkeyRun, real_training: bool) -> dict[str, Any]:
             "start": round(run.rss_start_mb, 1),
             "after_warmup": round(run.rss_after_warmup_mb, 1),
             "warmup_actions": run.warmup_actions,
+            "halfway": round(run.rss_halfway_mb, 1),
+            "halfway_actions": run.halfway_actions,
             "end": round(run.rss_end_mb, 1),
             "growth_per_1000_actions": round(growth, 2),
+            "growth_per_1000_actions_second_half": round(growth_late, 2),
         },
         "action_kinds": dict(run.kinds),
         "screens": dict(run.screens.most_common()),
@@ -74,14 +82,20 @@ def print_report(report: dict[str, Any]) -> None:
         ("crashes", str(len(crashes)), str(TARGET_CRASHES)),
         ("slowest action", f"{slowest['ms']:,.0f} ms  ({slowest['action']})", ""),
         (
-            f"RSS start / after {rss['warmup_actions']} actions / end",
-            f"{rss['start']:.0f} / {rss['after_warmup']:.0f} / {rss['end']:.0f} MB",
+            f"RSS start / after {rss['warmup_actions']} / {rss['halfway_actions']:,} actions / end",
+            f"{rss['start']:.0f} / {rss['after_warmup']:.0f} / {rss['halfway']:.0f} / "
+            f"{rss['end']:.0f} MB",
             "flat",
         ),
         (
             "RSS growth per 1,000 actions after",
             f"{rss['growth_per_1000_actions']:+.2f} MB",
             "flat (soak: < 1 MB)",
+        ),
+        (
+            "  in the second half",
+            f"{rss['growth_per_1000_actions_second_half']:+.2f} MB",
+            "flat: caches level off, a leak does not",
         ),
         ("apps started (after a quit or crash)", str(report["apps_started"]), ""),
         ("wall time", f"{report['wall_seconds']:,.0f} s", ""),
@@ -122,7 +136,7 @@ def main(argv: list[str] | None = None) -> int:
         if run.actions % PROGRESS_EVERY == 0:
             print(
                 f"  {run.actions:,} actions, {len(run.crashes)} crashes, "
-                f"{time.perf_counter() - started:,.0f} s",
+                f"{time.perf_counter() - started:,.0f} s, RSS {rss_mb():,.0f} MB",
                 file=sys.stderr,
                 flush=True,
             )

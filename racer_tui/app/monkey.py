@@ -114,6 +114,8 @@ class MonkeyRun:
     rss_start_mb: float = 0.0
     rss_after_warmup_mb: float = 0.0  # the app built and its screens seen once or so
     warmup_actions: int = 0
+    rss_halfway_mb: float = 0.0  # halfway through the actions after the warm-up
+    halfway_actions: int = 0
     rss_end_mb: float = 0.0
     seconds: float = 0.0
 
@@ -287,6 +289,7 @@ async def run_monkey(
 
     run = MonkeyRun(seed=seed, rss_start_mb=rss_mb())
     run.warmup_actions = min(WARMUP_ACTIONS, max(actions // 20, 1))
+    run.halfway_actions = run.warmup_actions + (actions - run.warmup_actions) // 2
     rng = random.Random(seed)
     started = time.perf_counter()
     recent: list[str] = []
@@ -309,6 +312,8 @@ async def run_monkey(
                         run.screens[type(app.screen).__name__] += 1
                     if run.actions == run.warmup_actions:
                         run.rss_after_warmup_mb = rss_mb()
+                    if run.actions == run.halfway_actions:
+                        run.rss_halfway_mb = rss_mb()
                     if took > run.slowest_ms:
                         run.slowest_ms, run.slowest_action = took, said
                     crash = monkey.problem(run.actions % screenshot_every == 0)
