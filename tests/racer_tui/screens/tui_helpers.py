@@ -40,8 +40,9 @@ async def settle(pilot: Pilot[Any]) -> None:
         await pilot.pause()
 
 
-async def wait_for(pilot: Pilot[Any], condition: Callable[[], bool], tries: int = 100) -> None:
-    """Let timers run until `condition()` holds (for the looping demo's playback clock)."""
+async def wait_for(pilot: Pilot[Any], condition: Callable[[], bool], tries: int = 300) -> None:
+    """Let timers run until `condition()` holds (for the looping demo's playback clock);
+    up to 15 s of pauses, as a loaded machine (CI's two cores) may need."""
     for _ in range(tries):
         if condition():
             return
