@@ -166,8 +166,13 @@ def test_the_circle_finder_finds_a_circle() -> None:
 
 
 # Errors that never reach a person: a malformed line between the training worker and the
-# app, and YAML's own error type that strict YAML extends (its caller words the sentence).
-NOT_FOR_PEOPLE = {"sim.training.events.EventError", "sim.foundation.strict_yaml.DuplicateKeyError"}
+# app, YAML's own error type that strict YAML extends (its caller words the sentence), and
+# what the monkey finds broken in the app (for the benchmark's report).
+NOT_FOR_PEOPLE = {
+    "sim.training.events.EventError",
+    "sim.foundation.strict_yaml.DuplicateKeyError",
+    "racer_tui.app.monkey.InvariantError",
+}
 
 
 def _error_classes() -> Iterator[tuple[str, str]]:

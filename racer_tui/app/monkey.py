@@ -10,7 +10,8 @@ picks at random (from a seed, so a run can be repeated):
   (`keys_as_delivered.burst`, not Pilot's one-key-then-idle `press`), or of typed text;
 - a paste, a mouse click at a random cell, or a resize between 60x20 and 200x60.
 After each action it checks that nothing raised (the app's first error, which also writes
-its crash report), that the app still runs, and that the screen renders. The quit keys (q,
+its crash report), that the app still runs, that the footer shows the keys its screen has
+now (`stale_footer`), and that the screen renders. The quit keys (q,
 ctrl+q, ctrl+c) are never pressed; when the app leaves anyway (the palette's Quit command,
 typed at random) a new one is started and the run goes on. A crash is recorded with the
 actions that led to it, and a new app goes on from there too.
@@ -46,6 +47,7 @@ from racer_tui.app.application import create_app
 from racer_tui.app.keys_as_delivered import burst, drain, paste
 from racer_tui.app.screens import training
 from racer_tui.app.screens.kiosk import KioskScreen, LeaveKiosk
+from racer_tui.app.widgets.footer import RacerFooter, screen_keys
 from sim.foundation.home import LEAGUE_ENV, home_at
 from sim.garage.options import new_model
 
@@ -263,17 +265,43 @@ class Monkey:
         return kind, f"{kind} {said}"
 
     def problem(self, screenshot: bool) -> BaseException | None:
-        """What went wrong with the app, if anything: its first error, or a screen that
-        cannot be drawn."""
+        """What went wrong with the app, if anything: its first error, a footer that shows
+        other keys than its screen has, or a screen that cannot be drawn."""
         app = self.app
         if app._exception is not None:
             return app._exception
+        stale = stale_footer(app)
+        if stale is not None:
+            return stale
         if app.is_running and screenshot:
             try:
                 app.export_screenshot()
             except Exception as error:  # the monkey reports any failure
                 return error
         return None
+
+
+class InvariantError(AssertionError):
+    """The app runs, but shows something untrue."""
+
+
+def stale_footer(app: RacerTuiApp) -> InvariantError | None:
+    """The footer must show the keys its screen has now (their enabled state too): a
+    footer that still says `space Pause` on a paused race tells the host a key that does
+    not do what it says. Checked once the app has handled its input."""
+    if not app.is_running or not app.input_settled():
+        return None
+    screen = app.screen
+    for footer in screen.query(RacerFooter):
+        shown = (footer.shown_keys, footer.shown_palette)
+        keys = screen_keys(screen)
+        if shown != keys:
+            said = ", ".join(f"{k.display} {k.description}" for k in shown[0])
+            has = ", ".join(f"{k.display} {k.description}" for k in keys[0])
+            return InvariantError(
+                f"the footer of {type(screen).__name__} shows [{said}] but the screen has [{has}]"
+            )
+    return None
 
 
 async def run_monkey(

@@ -26,3 +26,21 @@ async def test_random_input_never_crashes_the_app(seed: int) -> None:
     ]
     assert not found, "\n".join(found)
     assert len(run.screens) >= 3  # it went places, not only the screen it started on
+
+
+async def test_a_footer_showing_other_keys_than_its_screen_is_found() -> None:
+    from racer_tui.app.application import create_app
+    from racer_tui.app.keys_as_delivered import drain
+    from racer_tui.app.monkey import InvariantError, stale_footer
+    from racer_tui.app.widgets.footer import RacerFooter
+
+    with scratch_home():
+        app = create_app(start="garage")
+        async with app.run_test(size=(80, 24)) as pilot:
+            await drain(pilot)
+            assert stale_footer(app) is None  # as drawn: the garage's own keys
+            footer = app.screen.query_one(RacerFooter)
+            footer._keys = footer._keys[1:]  # as if a key had changed and it had not heard
+            found = stale_footer(app)
+    assert isinstance(found, InvariantError)
+    assert "GarageScreen" in str(found)

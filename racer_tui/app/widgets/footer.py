@@ -186,6 +186,15 @@ class RacerFooter(Widget, can_focus=False):
             self.refresh()
 
     @property
+    def shown_keys(self) -> tuple[ShownKey, ...]:
+        """The keys this footer shows (at its width, the first that fit)."""
+        return self._keys
+
+    @property
+    def shown_palette(self) -> ShownKey | None:
+        return self._palette
+
+    @property
     def compact(self) -> bool:
         return self.size.width < self.COMPACT_WIDTH
 
