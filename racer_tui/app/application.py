@@ -104,6 +104,10 @@ EVERYWHERE = "Everywhere"
 HELD_KEY_YIELDS = 200
 HELD_KEY_POLL_SECONDS = 0.002
 KEY_FLIGHT_SECONDS = 5.0  # a key neither stopped nor back at the app by then was lost
+# Once a key is used, the next waits for what it set off (messages on the way up from the
+# widget it went to: a field's Submitted that moves the focus), this long at most: a screen
+# whose timers keep it busy must not slow the keys.
+CONSEQUENCE_WAIT_SECONDS = 0.25
 READY_WAIT_SECONDS = 3.0  # keys wait this long at most for a screen to be ready for them
 HELD_KEY_CHECKS = HELD_KEY_YIELDS + int(KEY_FLIGHT_SECONDS / HELD_KEY_POLL_SECONDS) + 1
 HELP_SCREEN = "help"  # the installed help screen's name
@@ -120,6 +124,15 @@ def _section_bindings() -> list[BindingType]:
         )
         for section in SECTIONS
     ]
+
+
+def _busy(node: MessagePump) -> bool:
+    """`node` has messages waiting or one in hand, or callbacks for after it."""
+    return (
+        not node._message_queue.empty()
+        or node._pending_message is not None
+        or bool(node._next_callbacks)
+    )
 
 
 class RacerTuiApp(App[int]):
@@ -177,6 +190,7 @@ class RacerTuiApp(App[int]):
         self._key_in_flight: events.Key | None = None
         self._key_sent_to: MessagePump | None = None  # the widget the key in flight went to
         self._key_sent_at = 0.0
+        self._key_handled_at: float | None = None  # when the key in flight was used
         self._unready_since: tuple[Screen[Any], float] | None = None  # the screen, since when
         self._release_task: asyncio.Task[None] | None = None
         self.crash_report: Path | None = None  # written on the first unexpected error
@@ -232,14 +246,16 @@ class RacerTuiApp(App[int]):
                 self.recent_keys.key(event.key)
             else:
                 self.recent_keys.paste(event.text)
-            if self._held_input or not self._ready_for_input():
+            # After a key a widget used, the next goes through the app's queue: behind what
+            # that key set off there (a field's focus moves by a callback queued on the app).
+            if self._held_input or self._key_in_flight is not None or not self._ready_for_input():
                 self._hold(event)
                 return
             await self._deliver(event)
             return
         await super().on_event(event)
-        if event is self._key_in_flight:  # back up at the app, its bindings checked: done
-            self._key_in_flight = None
+        if event is self._key_in_flight:  # back up at the app, its bindings checked: used
+            self._key_used()
 
     # --- one key at a time --------------------------------------------------------------------
 
@@ -267,10 +283,32 @@ class RacerTuiApp(App[int]):
         event = self._key_in_flight
         if event is None:
             return True
-        if event._stop_propagation or self._key_lost():
-            self._key_in_flight = None  # used by a widget, or lost: the next key may go
+        if self._key_lost():
+            self._key_in_flight = None  # lost: the next key may go
             return True
-        return False
+        if event._stop_propagation:
+            self._key_used()  # by a widget
+        # Used, and what it set off done: the next may go. The key stays "in flight" until
+        # the next is sent, so that each check looks again (a binding's action may run a
+        # moment after its key was stopped, and post more).
+        return self._key_handled_at is not None and (
+            not self._key_consequences_pending()
+            or time.monotonic() - self._key_handled_at > CONSEQUENCE_WAIT_SECONDS
+        )
+
+    def _key_used(self) -> None:
+        if self._key_handled_at is None:
+            self._key_handled_at = time.monotonic()
+
+    def _key_consequences_pending(self) -> bool:
+        """Messages wait on the way from the widget the last key went to up to its screen:
+        what the key set off is not done yet. Enter in a field posts Submitted, and the
+        dialog moves the focus when it hears it; the keys typed right after Enter belong to
+        the field it moves to (issue 42: "cy Enter reference" gave racer "cyre")."""
+        target = self._key_sent_to
+        if not isinstance(target, DOMNode) or not target.is_attached:
+            return False
+        return any(_busy(node) for node in target.ancestors_with_self if node is not self)
 
     def _screen_ready(self, screen: Screen[Any]) -> bool:
         """The screen on top is ready for keys (`ready_for_keys`): a section whose list
@@ -300,9 +338,10 @@ class RacerTuiApp(App[int]):
         if isinstance(event, events.Key):
             self._key_in_flight, self._key_sent_at = event, time.monotonic()
             self._key_sent_to = self._input_target()
+            self._key_handled_at = None
         await super().on_event(event)
         if not event.is_forwarded and event is self._key_in_flight:
-            self._key_in_flight = None  # a priority binding used it here and then
+            self._key_used()  # by a priority binding, here and then
 
     def _input_target(self) -> MessagePump | None:
         try:

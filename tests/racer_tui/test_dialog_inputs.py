@@ -177,3 +177,19 @@ async def test_keys_typed_after_a_nights_dialog_key_arrive_in_its_dialog(
         field = app.focused
         assert isinstance(field, Input)
         assert field.value == "friday"
+
+
+async def test_keys_typed_right_after_enter_go_to_the_field_enter_moved_to() -> None:
+    # Enter in a field moves the focus when its dialog hears the field was submitted, a
+    # message after the key: the keys typed right after Enter went into the field left
+    # behind ("cy Enter reference" became racer "cyre", model "ference").
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        burst(app, ["n"])
+        await drain(pilot)
+        burst(app, ["s", *"spring", "enter", *"10,6,4"])
+        await drain(pilot)
+        assert isinstance(app.screen, NewSeasonDialog)
+        assert app.screen.query_one("#season-name", Input).value == "spring"
+        assert app.screen.query_one("#season-points", Input).value == "10,6,4"
