@@ -1,6 +1,6 @@
 """Sync errors. Every message is one sentence for the user: what is wrong, and what to do.
 
-They all derive from `SyncError`, so a front end lists one type in its USER_ERRORS.
+They all derive from `SyncError`, itself a `RemedyError` (the one root of user errors).
 A bad *record* is never an exception that stops a sync: decoding turns it into a
 `Quarantined` outcome (see record.py); `RecordInvalidError` is raised only to the code that
 builds a record locally, where a bad body is a programming or input error.
