@@ -153,6 +153,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self._wall_mark = time.monotonic()
         self._clock_mark = 0.0
         self._index = 0
+        self._bindings_at_end = False  # what the footer's space was last worked out for
         self._offtrack_xy: list[tuple[float, float]] = []
         self._laps_shown = 0
         self._last_panel = 0.0
@@ -239,6 +240,9 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self._draw(self.ticks[index])
         result = self.ticks[index].result
         if result is not None:
+            if self.at_end != self._bindings_at_end:  # space neither pauses nor resumes now
+                self._bindings_at_end = self.at_end
+                self.refresh_bindings()
             self._record_heat(result)
 
     def _record_heat(self, result: RaceResult) -> None:
@@ -403,17 +407,30 @@ class RaceScreen(RacerScreen[RaceResult | None]):
     @property
     def playback(self) -> str:
         """How the view plays the race now, as the panel says it."""
+        if self.at_end:
+            return "finished"
         if self.to_end and not self.finish_shown:
             return "to the end"
         return "paused" if self.paused else f"{self.speed}x"
 
+    @property
+    def at_end(self) -> bool:
+        """The view shows the race's last moment: nothing is left to play or pause (r
+        plays it again)."""
+        return (
+            bool(self.ticks)
+            and self._index == len(self.ticks) - 1
+            and self.ticks[-1].result is not None
+        )
+
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         # Space pauses or resumes: the footer shows the one word that says what it does
         # now (a binding whose check is False is hidden, and the key tries the other).
+        # At the end neither shows: there is nothing to pause, and r plays it again.
         if action == "pause":
-            return not self.paused
+            return not self.paused and not self.at_end
         if action == "resume":
-            return self.paused
+            return self.paused and not self.at_end
         return True
 
     def action_pause(self) -> None:
@@ -465,6 +482,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self._rebase()
         self.paused = False
         self.to_end = False
+        self._bindings_at_end = False
         self.refresh_bindings()
 
     def action_coach(self) -> None:

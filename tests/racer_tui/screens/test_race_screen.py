@@ -220,3 +220,29 @@ async def test_e_keeps_to_the_end_while_a_slow_machine_still_works_the_race_out(
                 break
             await pilot.pause(0.02)
         assert screen.finish_shown and screen.race_clock >= screen.ticks[-1].clock
+
+
+async def test_a_race_shown_to_its_end_neither_pauses_nor_says_it_plays() -> None:
+    # After e, the finished race said "2x" and its footer "space Pause"; space then paused
+    # a race with nothing left to play (a new host's walk).
+    from racer_tui.app.widgets.footer import screen_keys
+
+    track = resolve_track("beginner-oval")
+    screen = RaceScreen(RaceSetup(track=track, rules=SHORT, racer="Ada"))
+    app: App[None] = App()
+    async with app.run_test(size=(80, 24)) as pilot:
+        await app.push_screen(screen)
+        await worked_out(pilot, screen)
+        await pilot.press("2", "space")  # paused at 2x, then to the end
+        assert screen.paused
+        await pilot.press("e")
+        await pilot.pause()
+        assert screen.at_end and screen.playback == "finished"
+        shown = {key.description for key in screen_keys(screen)[0]}
+        assert "Pause" not in shown and "Resume" not in shown and "Replay" in shown
+        await pilot.press("space")
+        assert not screen.paused and screen.playback == "finished"
+        await pilot.press("r")  # plays it again: space pauses again
+        await pilot.pause()
+        assert not screen.at_end
+        assert "Pause" in {key.description for key in screen_keys(screen)[0]}
