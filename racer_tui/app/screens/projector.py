@@ -48,11 +48,15 @@ def projector_table(
 ) -> Table:
     """Big rows: one blank line between racers, bold names, times right-aligned; no gap
     column when `narrow`."""
-    table = Table(box=box.SIMPLE_HEAD, expand=True, padding=(0, 2), show_edge=False)
+    table = Table(
+        box=box.SIMPLE_HEAD, expand=True, padding=(0, 1 if narrow else 2), show_edge=False
+    )
     table.add_column("#", justify="right", style="bold", width=3)
     table.add_column("racer", ratio=3, no_wrap=True, overflow="ellipsis")
     if show_track:
-        table.add_column("track", ratio=2, no_wrap=True, overflow="ellipsis")
+        # Wrapped at its spaces, never cut: "reinvent_base (physical)" cut to "reinven…" made
+        # a physical car's board look like the simulated one, with two unexplained firsts.
+        table.add_column("track", overflow="fold", max_width=16)
     table.add_column("time", justify="right", width=9)
     if not narrow:
         table.add_column("gap", justify="right", width=8)
