@@ -11,6 +11,7 @@ from pathlib import Path
 from textual.widgets import DataTable, Input
 
 from racer_tui.app.application import create_app
+from racer_tui.app.keys_as_delivered import burst, drain
 from racer_tui.app.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
 from racer_tui.app.screens.garage import GarageScreen
 from racer_tui.app.screens.race_screen import RaceScreen
@@ -417,3 +418,22 @@ async def test_the_export_dialog_says_when_a_car_cannot_run_the_model() -> None:
         assert isinstance(app.screen, InputDialog)
         text = " ".join(painted(app.screen.query_one(".dialog-body")).split())
         assert "A DeepRacer car cannot run this model" in text and "VECTOR" in text
+
+
+async def test_y_typed_right_after_enter_answers_the_import_question(
+    deepracer_dir: Path, tmp_path: Path
+) -> None:
+    # A new host's walk at 60x20: the path, Enter and y in one burst left no question and
+    # the y at the end of the path; the question comes when Enter is heard.
+    folder = tmp_path / "from-a-friend"
+    shutil.copytree(deepracer_dir / "drfc-model", folder)
+    (folder / "reward_function.py").write_text(
+        "def reward_function(params):\n    return 1.0\n", encoding="utf-8"
+    )
+    app = create_app(start="garage")
+    async with app.run_test(size=(60, 20)) as pilot:
+        await settle(pilot)
+        burst(app, ["i", *str(folder), "enter", "y"])
+        await drain(pilot)
+        await settle(pilot)
+        assert _names() == ["from-a-friend"]
