@@ -1018,8 +1018,12 @@ class NightsScreen(RacerScreen[None]):
         ask(
             self.app,
             f"Close {night.name}?",
-            "Closing makes the standings final and adds the points to the season; no more "
-            f"entrants, draws or heats.{extra}",
+            (
+                "Closing makes the standings final and adds the points to the season; "
+                if night.season_id is not None
+                else "Closing makes the standings final; "
+            )
+            + f"no more entrants, draws or heats.{extra}",
             partial(self._close_confirmed, night, bool(waiting)),
             confirm_label="Close night",
         )

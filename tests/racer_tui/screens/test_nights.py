@@ -193,6 +193,9 @@ async def test_closing_a_night_drawn_elsewhere_names_the_keys_and_shows_the_heat
             draw_heats(league, night, seed=1)
         await pilot.press("c")
         assert isinstance(app.screen, ConfirmDialog)
+        # A night of no season: closing adds no points anywhere, and says none.
+        asked = " ".join(painted(app.screen).split())
+        assert "makes the standings final" in asked and "season" not in asked
         await pilot.press("y")
         await settle(pilot)
         errors = notes.text("error")
