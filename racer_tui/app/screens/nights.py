@@ -111,7 +111,7 @@ HEAT_COLUMNS = (
     "#",
     replace(NAME, label="racer", shrink_to=8),
     Col("car", keep=2, shrink_to=9, collapses=False),
-    Col("result", keep=1, shrink_to=10, collapses=False),  # "best 5.900" is never cut
+    Col("result", keep=1, shrink_to=11, collapses=False),  # "best 10.569" is never cut
 )
 PHYSICAL_RULES_NOTE = (
     "A physical car is timed by hand: the physical rules (no time added per reset) are "

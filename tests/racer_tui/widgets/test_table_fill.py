@@ -86,3 +86,13 @@ async def test_the_table_fits_again_when_the_terminal_changes_size() -> None:
         assert table.cursor_row == 17  # the racer's place in the list is kept, in view
         assert "racer number 17 with a long name" in painted(table)
         assert table.virtual_size.width <= table.scrollable_content_region.width
+
+
+def test_a_nights_result_of_ten_seconds_or_more_is_never_cut() -> None:
+    # A new host's walk at 60x20: "best 10.5…" (the column gave way to 10 characters).
+    from racer_tui.app.screens.nights import HEAT_COLUMNS
+
+    columns = [column if isinstance(column, Col) else Col(column) for column in HEAT_COLUMNS]
+    natural = [1, 12, 14, len("best 10.569")]
+    widths = fit_widths(natural, columns, room=30, padding=1)
+    assert widths[3] == len("best 10.569")
