@@ -188,14 +188,20 @@ async def test_import_the_shared_deepracer_folder(deepracer_dir: Path) -> None:
         assert "latest trials" in shown
 
 
-async def test_a_folder_with_someone_elses_reward_code_is_imported_only_when_confirmed(
-    deepracer_dir: Path, tmp_path: Path
-) -> None:
+def _friends_folder(deepracer_dir: Path, tmp_path: Path) -> Path:
+    """A DeepRacer folder that brings someone else's reward_function.py."""
     folder = tmp_path / "from-a-friend"
     shutil.copytree(deepracer_dir / "drfc-model", folder)
     (folder / "reward_function.py").write_text(
         "def reward_function(params):\n    return 1.0\n", encoding="utf-8"
     )
+    return folder
+
+
+async def test_a_folder_with_someone_elses_reward_code_is_imported_only_when_confirmed(
+    deepracer_dir: Path, tmp_path: Path
+) -> None:
+    folder = _friends_folder(deepracer_dir, tmp_path)
     app = create_app(start="garage")
     async with app.run_test(size=(120, 36)) as pilot:
         await settle(pilot)
@@ -425,11 +431,7 @@ async def test_y_typed_right_after_enter_answers_the_import_question(
 ) -> None:
     # A new host's walk at 60x20: the path, Enter and y in one burst left no question and
     # the y at the end of the path; the question comes when Enter is heard.
-    folder = tmp_path / "from-a-friend"
-    shutil.copytree(deepracer_dir / "drfc-model", folder)
-    (folder / "reward_function.py").write_text(
-        "def reward_function(params):\n    return 1.0\n", encoding="utf-8"
-    )
+    folder = _friends_folder(deepracer_dir, tmp_path)
     app = create_app(start="garage")
     async with app.run_test(size=(60, 20)) as pilot:
         await settle(pilot)
