@@ -6,15 +6,14 @@ from __future__ import annotations
 
 import dataclasses
 import sqlite3
-from collections.abc import Iterable
 from operator import itemgetter
-from typing import Any, TypeVar
+from typing import TypeVar
 
 T = TypeVar("T")
 
 
-def rows_as(cls: type[T], cursor: sqlite3.Cursor, rows: Iterable[Any] | None = None) -> list[T]:
-    """`rows` (default: the cursor's) as `cls` instances, each column to the field of its
+def rows_as(cls: type[T], cursor: sqlite3.Cursor) -> list[T]:
+    """The cursor's rows as `cls` instances, each column to the field of its
     name; fields no column names keep their defaults. The names are matched once per
     query, then each row is built from its plain values: boards read thousands of rows."""
     names = [column[0] for column in cursor.description]
@@ -24,12 +23,11 @@ def rows_as(cls: type[T], cursor: sqlite3.Cursor, rows: Iterable[Any] | None = N
         raise ValueError(f"{cls.__name__} has no field for the query's columns {unknown or names}")
     given = [name for name in fields if name in names]
     pick = itemgetter(*(names.index(name) for name in given))
-    source = cursor if rows is None else rows
     if len(given) == 1:
-        return [cls(**{given[0]: pick(values)}) for values in source]
+        return [cls(**{given[0]: pick(values)}) for values in cursor]
     if given == fields[: len(given)]:  # the leading fields: positional, the fastest
-        return [cls(*pick(values)) for values in source]
-    return [cls(**dict(zip(given, pick(values), strict=True))) for values in source]
+        return [cls(*pick(values)) for values in cursor]
+    return [cls(**dict(zip(given, pick(values), strict=True))) for values in cursor]
 
 
 def row_as(cls: type[T], row: sqlite3.Row) -> T:
