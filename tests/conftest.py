@@ -8,8 +8,13 @@ from pathlib import Path
 
 import pytest
 
+from tests import textual_idle
+
 REPO_ROOT = Path(__file__).resolve().parent.parent
 SHARED_DEEPRACER = REPO_ROOT.parent / "shared" / "deepracer"
+
+
+textual_idle.install()
 
 
 @pytest.fixture(autouse=True)

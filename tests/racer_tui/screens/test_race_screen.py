@@ -189,12 +189,13 @@ async def test_e_keeps_to_the_end_while_a_slow_machine_still_works_the_race_out(
     from racer_tui.app.screens import race_screen
     from sim.race import engine as race_engine
 
-    release = threading.Event()
+    holding, release = threading.Event(), threading.Event()
     real = race_engine.race_ticks
 
     def slow_ticks(*args: object, **kwargs: object) -> Iterator[RaceTick]:
         for tick in real(*args, **kwargs):  # type: ignore[arg-type]
             if tick.clock > 3.0:
+                holding.set()
                 release.wait(30)  # the machine is busy: the rest comes later
             yield tick
 
@@ -203,10 +204,11 @@ async def test_e_keeps_to_the_end_while_a_slow_machine_still_works_the_race_out(
     app: App[None] = App()
     async with app.run_test(size=(100, 30)) as pilot:
         await app.push_screen(screen)
-        for _ in range(500):
-            if screen.ticks and screen.ticks[-1].clock > 3.0:
+        for _ in range(500):  # until the first 3 s are worked out and the rest held back
+            if holding.is_set():
                 break
             await pilot.pause(0.02)
+        assert holding.is_set() and screen.ticks[-1].clock <= 3.0
         await pilot.press("e")
         assert screen.playback == "to the end"
         facts = str(screen.query_one("#race-facts", Static).render())

@@ -74,32 +74,38 @@ async def _switch(pilot: Pilot[Any], times: int) -> None:
         await pilot.press("12345"[press % 5])  # waits for the app to go idle
 
 
+# Section switches counted after a warm-up: Textual's footer keeps a key and builds about
+# 100 nodes per switch, so ten show it plainly (each of its switches costs a fifth of a
+# second of CSS work, which is why there are not more).
+SWITCHES = 10
+
+
 async def _keys_kept(footer: type[Widget]) -> int:
-    """Footer keys alive after 25 section switches, beyond those alive after 5."""
+    """Footer keys alive after SWITCHES section switches, beyond those alive after 5."""
     app = _modes(footer)()
     async with app.run_test(size=(80, 24)) as pilot:
         await _switch(pilot, 5)
         before = _alive(FooterKey)
-        await _switch(pilot, 25)
+        await _switch(pilot, SWITCHES)
         return _alive(FooterKey) - before
 
 
 async def test_textuals_own_footer_keeps_every_key_it_showed() -> None:
     # Upstream behaviour (Textual 8.2.8), kept to show why racer-tui draws its own footer:
     # when this fails, Textual's footer could be looked at again.
-    assert await _keys_kept(Footer) > 25
+    assert await _keys_kept(Footer) > SWITCHES
 
 
 async def _nodes_left_to_collect(footer: type[Widget]) -> int:
-    """Nodes (widgets and Textual's style nodes) that 25 section switches leave to the
-    cycle collector, after a warm-up."""
+    """Nodes (widgets and Textual's style nodes) that SWITCHES section switches leave to
+    the cycle collector, after a warm-up."""
     app = _modes(footer)()
     async with app.run_test(size=(80, 24)) as pilot:
-        await _switch(pilot, 10)
+        await _switch(pilot, 5)
         gc.collect()
         gc.disable()  # so that all of it is still there to count
         try:
-            await _switch(pilot, 25)
+            await _switch(pilot, SWITCHES)
             gc.set_debug(gc.DEBUG_SAVEALL)
             gc.collect()
         finally:
@@ -119,7 +125,7 @@ async def test_the_footer_builds_nothing_when_the_keys_change() -> None:
     # change of keys: about 100 nodes per switch here, each some forty objects in cycles
     # that only a full collection frees. RacerFooter repaints one line instead.
     without_a_footer = await _nodes_left_to_collect(NoFooter)
-    assert await _nodes_left_to_collect(Footer) > without_a_footer + 25 * 20
+    assert await _nodes_left_to_collect(Footer) > without_a_footer + SWITCHES * 20
     assert await _nodes_left_to_collect(RacerFooter) == without_a_footer
 
 
@@ -131,14 +137,13 @@ async def test_switching_sections_and_opening_dialogs_keeps_no_objects() -> None
         await _switch(pilot, 10)  # warm-up: every section shown twice
         await _dialogs(pilot, 5)
         widgets, objects = _alive(Widget), _objects()
-        # 125 actions: ample, since without the fix 60 already keep 26,600 objects; more
-        # only cost CI time (this was the suite's slowest test at 250).
-        await _switch(pilot, 100)
-        await _dialogs(pilot, 25)
+        # 60 actions: without the fix they keep 26,600 objects and 206 widgets; more only
+        # cost CI time (this was the suite's slowest test at 250).
+        await _switch(pilot, 45)
+        await _dialogs(pilot, 15)
         assert _alive(Widget) <= widgets
         # Textual's per-widget caches (bounded) still grow by about 1,000 objects whatever
-        # the number of actions (900 after 60, 1,250 after 250). Without the footer's fix,
-        # 60 of these actions already kept 26,600 objects and 206 widgets.
+        # the number of actions (900 after 60, 1,250 after 250).
         assert _objects() - objects < 2_500
 
 
