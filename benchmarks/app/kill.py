@@ -44,6 +44,7 @@ _KILL_WINDOW_S: Final = 4.0  # a push or pull of the default league takes about 
 # After the training child starts: it writes a checkpoint every 10 s of training, so kills
 # land before the first, around the first and second writes, and between them.
 _TRAIN_WINDOW_S: Final = (0.5, 25.0)
+_LAST_TRAINING_MINUTES: Final = 0.1  # the training after the kills, resumed to its end
 
 
 @dataclass
@@ -248,7 +249,10 @@ def concurrent_writers(root: Path, writers: int, races_each: int) -> Part:
 
 
 def train_kills(
-    kills: int, rng: random.Random, window: tuple[float, float] = _TRAIN_WINDOW_S
+    kills: int,
+    rng: random.Random,
+    window: tuple[float, float] = _TRAIN_WINDOW_S,
+    last_minutes: float = _LAST_TRAINING_MINUTES,
 ) -> Part:
     from sim.garage.options import new_model
     from sim.training import events
@@ -294,7 +298,7 @@ def train_kills(
             "train",
             folder.name,
             "--minutes",
-            "0.1",
+            str(last_minutes),
             "--json",
         ],
         capture_output=True,
@@ -367,7 +371,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                 parts["writers"] = concurrent_writers(root, args.writers, args.races_each)
             if args.train_kills:
                 window = (_TRAIN_WINDOW_S[0], args.train_window)
-                parts["train"] = train_kills(args.train_kills, rng, window)
+                parts["train"] = train_kills(args.train_kills, rng, window, args.last_minutes)
     return {
         "seconds": round(time.perf_counter() - started, 1),
         "parts": {name: asdict(part) for name, part in parts.items()},
@@ -387,6 +391,12 @@ def main(argv: list[str] | None = None) -> int:
         type=float,
         default=_TRAIN_WINDOW_S[1],
         help="kill a training at most this many seconds after it starts",
+    )
+    parser.add_argument(
+        "--last-minutes",
+        type=float,
+        default=_LAST_TRAINING_MINUTES,
+        help="the budget of the training that resumes after the kills and must finish",
     )
     parser.add_argument("--writers", type=int, default=8, help="processes recording at once")
     parser.add_argument("--races-each", type=int, default=25)

@@ -14,9 +14,9 @@ from benchmarks.app.kill import main
 def test_killed_pushes_pulls_and_trainings_lose_nothing(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    args = ["--sync-kills", "1", "--records", "300", "--writers", "3"]
-    args += ["--train-kills", "1", "--train-window", "6"]
-    assert main([*args, "--races-each", "4", "--seed", "3", "--json"]) == 0
+    args = ["--sync-kills", "1", "--records", "150", "--writers", "3"]
+    args += ["--train-kills", "1", "--train-window", "3", "--last-minutes", "0.03"]
+    assert main([*args, "--races-each", "3", "--seed", "3", "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["problems"] == []
     assert (report["lost"], report["duplicated"], report["corrupt"]) == (0, 0, 0)
