@@ -6,6 +6,7 @@ folder to `deepracer_import`; each says what it filled in.
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 from sim.car_archive.file_names import is_car_archive_name
@@ -29,6 +30,12 @@ def import_model(
         is_file = is_dir = False
     if is_file and is_car_archive_name(source):
         return import_car_archive(source, name=name, track=track)
+    if is_file and not _could_be_a_bundle(source):
+        raise ModelError(
+            f"{echoed_path(source)} is not a model racer-tui can import (neither a "
+            f"{BUNDLE_SUFFIX} file, which is a zip archive, nor a car archive); give a "
+            "DeepRacer model folder, a bundle exported by racer-tui or a car archive (.tar.gz)."
+        )
     if is_file:
         return install_bundle_report(source, name=name, track=track)
     if is_dir:
@@ -37,3 +44,14 @@ def import_model(
         f"{echoed_path(source)} does not exist; give a DeepRacer model folder, a "
         f"{BUNDLE_SUFFIX} file or a car archive (.tar.gz)."
     )
+
+
+def _could_be_a_bundle(source: Path) -> bool:
+    """Named as a bundle, or a zip archive (a bundle renamed): the bundle's reader then says
+    what is wrong with it. Anything else is some other file picked by mistake."""
+    if source.name.endswith(BUNDLE_SUFFIX):
+        return True
+    try:
+        return zipfile.is_zipfile(source)
+    except OSError:
+        return True  # unreadable: the bundle's reader says so in its words

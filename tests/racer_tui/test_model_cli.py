@@ -209,6 +209,24 @@ def test_export_and_import_a_bundle(
     assert code == 2 and "not a racer-tui bundle" in err
 
 
+def test_a_file_that_is_no_kind_of_model_is_named_as_such(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # Issue 42's walk: a notes file picked by mistake was called "a damaged or foreign file"
+    # and told to be exported again; it is neither, and the sentence says what would do.
+    notes = tmp_path / "notes.txt"
+    notes.write_text("lap times from friday\n")
+    code, _, err = run_cli(capsys, "model", "import", str(notes))
+    assert code == 2 and "is not a model racer-tui can import" in err
+    assert "damaged" not in err and "DeepRacer model folder" in err and ".tar.gz" in err
+    assert not models_dir().exists() or not any(models_dir().iterdir())
+    # A bundle renamed is still read as a bundle, and a broken one still says so.
+    renamed = tmp_path / "from-ana.zip"
+    renamed.write_bytes(b"PK\x05\x06" + bytes(18))  # an empty zip archive
+    code, _, err = run_cli(capsys, "model", "import", str(renamed))
+    assert code == 2 and "lacks" in err
+
+
 def test_the_model_commands_stay_headless() -> None:
     report = _import_report(["racer_tui.cli.model_commands"])
     assert report["racer_tui.cli.model_commands"] == []
