@@ -15,14 +15,14 @@ import numpy as np
 
 from league.entries import refresh_entries
 from league.errors import LeagueError
-from league.race_types import TIME_TRIAL, words
+from league.race_types import TIME_TRIAL, board_name
 from league.racers import check_name, display_names_overrides, ensure_racer
 from league.store import League, record_body
 from league.tracks import ensure_track, track_names
 from sim.coach.plausible import first_impossible_lap
 from sim.foundation.ids import content_hash, is_valid_id
 from sim.foundation.remedies import Fix
-from sim.physics.labels import PHYSICAL
+from sim.physics.labels import CURRENT, PHYSICAL
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
 from sim.tracks.catalog import find_track_by_hash, resolve_track
@@ -256,13 +256,13 @@ class RecordedRace:
     night_name: str | None
     has_trace: bool
     race_type: str = TIME_TRIAL  # league.race_types, from the race's rules
+    physics: str = CURRENT  # sim.physics.labels: a physical car's hand-timed laps too
 
     @property
     def track_label(self) -> str:
-        """Its track, and its race type when it is not a time trial."""
-        if self.race_type == TIME_TRIAL:
-            return self.track_name
-        return f"{self.track_name} ({words(self.race_type)})"
+        """Its board's name: the track, then its race type when not a time trial and its
+        physics when not today's ("reinvent_base (physical)")."""
+        return board_name(self.track_name, self.physics, self.race_type)
 
 
 def recent_races(
@@ -279,7 +279,8 @@ def recent_races(
     params: list[Any] = [track_hash] if track_hash is not None else []
     rows = league.query(
         "SELECT r.id, r.started_at, r.track_hash, r.racer, r.model_name, r.night_id, "
-        "e.best_lap, e.valid_laps, e.laps_driven, e.race_type, n.name AS night_name, "
+        "e.best_lap, e.valid_laps, e.laps_driven, e.race_type, e.physics, "
+        "n.name AS night_name, "
         "EXISTS (SELECT 1 FROM race_traces t WHERE t.race_id = r.id) AS has_trace "
         "FROM (SELECT id, started_at, track_hash, racer, model_name, night_id FROM races "
         f"{where} ORDER BY started_at DESC, id DESC LIMIT ?) r "
@@ -306,6 +307,7 @@ def recent_races(
             night_name=row["night_name"],
             has_trace=bool(row["has_trace"]),
             race_type=row["race_type"] or TIME_TRIAL,
+            physics=row["physics"] or CURRENT,
         )
         for row in rows
     ]

@@ -73,9 +73,16 @@ RECORDED_COLUMNS = (
     Col("racer", keep=5, shrink_to=8, collapses=False),
     "best lap",
     Col("laps", keep=4),
-    Col("track", keep=3, shrink_to=8),
+    # The board, "(physical)" and all: a hand-timed lap must not look like a simulated one.
+    Col("track", keep=3, shrink_to=8, collapses=False, keeps_tail=True),
     Col("model", keep=2, shrink_to=8, cuts_middle=True),
     Col("night", keep=1, shrink_to=8),
+)
+# Below VERY_NARROW there is room for when, who and the best lap only: the board goes too
+# (the League's boards say which laps are physical).
+RECORDED_COLUMNS_VERY_NARROW = tuple(
+    replace(col, collapses=True) if isinstance(col, Col) and col.label == "track" else col
+    for col in RECORDED_COLUMNS
 )
 RECORDED_LIMIT = 200
 WINDOWS = ((240.0, "4:00 (league rules)"), (120.0, "2:00"), (60.0, "1:00"))
@@ -124,8 +131,13 @@ class RecordedRacesLoaded(Message):
     generation: int
 
 
-NARROW = 80  # below this the setup column narrows and dates lose their year
-NARROW_SETUP = 24
+# Below NARROW columns the setup column narrows (to NARROW_SETUP, below VERY_NARROW to
+# VERY_NARROW_SETUP) and dates lose their year: at 80 the recorded races then keep their
+# board ("reinv… (physical)"), so a hand-timed lap never looks like a simulated one.
+NARROW = 100
+NARROW_SETUP = 29
+VERY_NARROW = 80
+VERY_NARROW_SETUP = 24
 
 
 def recorded_row(race: RecordedRace, *, short: bool = False) -> list[str | Text]:
@@ -290,16 +302,21 @@ class RacesScreen(RacerScreen[None]):
 
     def _fill_recorded(self) -> None:
         short = self.has_class("-narrow")
+        very_narrow = self.has_class("-very-narrow")
         rows = [recorded_row(race, short=short) for race in self.recorded]
-        fill_table(self.query_one("#recorded-races", DataTable), RECORDED_COLUMNS, rows)
+        columns = RECORDED_COLUMNS_VERY_NARROW if very_narrow else RECORDED_COLUMNS
+        fill_table(self.query_one("#recorded-races", DataTable), columns, rows)
 
     def on_resize(self) -> None:
-        narrow = self.size.width < NARROW
-        if narrow != self.has_class("-narrow"):
-            # The history needs the room: the setup narrows (its own style, over the app
-            # stylesheet's width) and dates lose their year.
+        width = self.size.width
+        narrow, very_narrow = width < NARROW, width < VERY_NARROW
+        # The history needs the room: the setup narrows (its own style, over the app
+        # stylesheet's width) and dates lose their year.
+        setup = VERY_NARROW_SETUP if very_narrow else NARROW_SETUP if narrow else None
+        self.query_one("#race-setup").styles.width = setup
+        if (narrow, very_narrow) != (self.has_class("-narrow"), self.has_class("-very-narrow")):
             self.set_class(narrow, "-narrow")
-            self.query_one("#race-setup").styles.width = NARROW_SETUP if narrow else None
+            self.set_class(very_narrow, "-very-narrow")
             self._fill_recorded()
 
     @property

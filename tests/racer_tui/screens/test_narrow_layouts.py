@@ -51,6 +51,21 @@ async def test_the_league_table_keeps_board_and_model_when_narrow(size: tuple[in
         assert "5 League" in painted(app.screen.query_one(SectionHeader))
 
 
+async def test_a_hand_timed_race_is_marked_physical_in_the_recorded_races_at_80x24() -> None:
+    # Issue 42's walk: at 80x24 the recorded races dropped the track column, and with it
+    # the only sign that a lap was a physical car's, timed by hand. (At 60x20 the list
+    # keeps when, who and the best lap only; the League's boards say it there.)
+    a_league_with_a_physical_board()
+    app = create_app(start="races")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        table = app.screen.query_one("#recorded-races", DataTable)
+        assert table.row_count == 2
+        shown = painted(table)
+        assert "(physical)" in shown and shown.count("(physical)") == 1
+        assert table.virtual_size.width <= table.scrollable_content_region.width
+
+
 def test_a_name_loses_its_middle_never_the_words_that_tell_two_boards_apart() -> None:
     cut = _shortened("beginner-oval (physical)", 18, keeps_tail=True)
     assert str(cut) == "beginn… (physical)"
