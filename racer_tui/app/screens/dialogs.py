@@ -143,8 +143,13 @@ class ConfirmDialog(RacerModal[bool]):
         if self.is_mounted:  # a kept dialog shows its new question; a new one composes it
             self.query_one("#question-title", Label).update(Text(title))
             self.query_one("#question-body", Static).update(Text(message))
-            self.query_one("#confirm", Button).label = f"{confirm_label} (y)"
-            self.query_one("#cancel", Button).label = f"{cancel_label} (n)"
+            labels = {"#confirm": f"{confirm_label} (y)", "#cancel": f"{cancel_label} (n)"}
+            for selector, label in labels.items():
+                button = self.query_one(selector, Button)
+                button.label = label
+                # A button keeps the width of its last label when only the label changes:
+                # "Close night (y)" after "Delete (y)" wrapped into "Close night".
+                button.refresh(layout=True)
 
     def on_screen_resume(self) -> None:
         self.query_one("#cancel", Button).focus()

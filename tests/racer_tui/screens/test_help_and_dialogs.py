@@ -124,3 +124,21 @@ async def test_the_kept_question_dialog_asks_each_question_afresh() -> None:
         await settle(pilot)
         assert answers[-1] == ("cy", True)
         assert not isinstance(app.screen, ConfirmDialog)
+
+
+async def test_a_longer_answer_after_a_shorter_one_is_shown_whole() -> None:
+    # Issue 42's walk: "Close night (y)" showed as "Close night" in a two-row button: the
+    # kept dialog had last asked "Delete (y)", and a button keeps its width when only its
+    # label changes.
+    app: App[None] = App()
+    async with app.run_test(size=(60, 20)) as pilot:
+        ask(app, "Delete ada?", "Gone for good.", lambda yes: None)
+        await settle(pilot)
+        await pilot.press("escape")
+        await settle(pilot)
+        ask(app, "Close friday?", "Final.", lambda yes: None, confirm_label="Close night")
+        await settle(pilot)
+        dialog = app.screen
+        assert isinstance(dialog, ConfirmDialog)
+        assert "Close night (y)" in painted(dialog.query_one("#confirm", Button))
+        assert "Cancel (n)" in painted(dialog.query_one("#cancel", Button))
