@@ -18,6 +18,7 @@ from textual import events
 from textual.app import App
 from textual.message import Message
 from textual.screen import ModalScreen, Screen
+from textual.widget import Widget
 from textual.worker import Worker, WorkerState
 
 from racer_tui.app.jobs import Job, JobState, sentence
@@ -179,7 +180,24 @@ class RacerScreen(_RestyledOnlyWhenNeeded, Screen[ResultT]):
 
 
 class RacerModal(_RestyledOnlyWhenNeeded, ModalScreen[ResultT]):
-    """A dialog whose failed workers become error notifications."""
+    """A dialog whose failed workers become error notifications; it opens at its top."""
 
     def on_worker_state_changed(self, event: Worker.StateChanged) -> None:
         notify_worker_failure(self, event.worker)
+
+    # Textual focuses a new screen's first field itself, and scrolls a newly focused widget
+    # to the centre when it cannot yet see all of it: a dialog not laid out yet, taller
+    # than the terminal (60x20), then opened scrolled past its title. Dialogs focus their
+    # field without that scroll instead (`focus_first`), the first focusable by default.
+    AUTO_FOCUS = ""  # none (None would mean the app's, which is the first focusable)
+
+    def on_mount(self) -> None:
+        if self.focused is None:  # the dialog focused none itself: Textual's choice
+            first = next((widget for widget in self.query("*") if widget.focusable), None)
+            if first is not None:
+                self.focus_first(first)
+
+    def focus_first(self, field: Widget) -> None:
+        """Focus `field` as the dialog opens (now, not after the queue), leaving the
+        dialog at its top."""
+        self.set_focus(field, scroll_visible=False)

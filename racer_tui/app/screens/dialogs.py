@@ -254,7 +254,7 @@ class InputDialog(FormDialog[str]):
             yield from self.form_buttons(self._confirm_label)
 
     def on_mount(self) -> None:
-        self.query_one("#answer", Input).focus()
+        self.focus_first(self.query_one("#answer", Input))
 
     @on(Input.Submitted)
     @on(Button.Pressed, "#confirm")
@@ -265,7 +265,7 @@ class InputDialog(FormDialog[str]):
             problem = self._check(answer)
         if problem is not None:
             show_problem(self.query_one("#problem", Static), problem)
-            self.query_one("#answer", Input).focus()
+            self.focus_first(self.query_one("#answer", Input))
             return
         self.dismiss(answer)
 
@@ -340,7 +340,7 @@ class PathNameDialog(FormDialog[WorkT]):
             yield from self.form_buttons(self.CONFIRM_LABEL)
 
     def on_mount(self) -> None:
-        self.query_one("#path", Input).focus()
+        self.focus_first(self.query_one("#path", Input))
 
     def problem(self, path: str, name: str | None) -> str | None:
         """What is wrong with the path or the name, or None (the cheap checks, before the
@@ -391,7 +391,7 @@ class PathNameDialog(FormDialog[WorkT]):
     def on_work_failed(self, message: WorkFailed) -> None:
         self._set_working(False)
         show_problem(self.query_one("#problem", Static), error_message(message.error))
-        self.query_one("#path", Input).focus()
+        self.focus_first(self.query_one("#path", Input))
 
     def action_cancel(self) -> None:
         if not self.working:  # an import half done is not left behind unseen
@@ -409,7 +409,7 @@ class ImportDialog(PathNameDialog[WorkT]):
     )
     PATH_PLACEHOLDER = "path, e.g. ~/Downloads/my-model"
     NAME_PLACEHOLDER = "model name (empty: the folder's name)"
-    UNTRAINED_LABEL = "Leave a folder's DeepRacer weights behind, to train it here"
+    UNTRAINED_LABEL = "Without its DeepRacer weights, to train it here"  # fits 60 columns
 
     def problem(self, path: str, name: str | None) -> str | None:
         if not path:

@@ -229,7 +229,7 @@ class NewNightDialog(FormDialog[NightRequest]):
             yield from self.form_buttons("Open night")
 
     def on_mount(self) -> None:
-        self.query_one("#night-name", Input).focus()
+        self.focus_first(self.query_one("#night-name", Input))
 
     def on_resize(self) -> None:
         # Six rows of fields, three rows each, do not fit 24 with the title and buttons:
@@ -364,7 +364,7 @@ class AddEntrantDialog(FormDialog[str]):
         self.query_one("#entrant-note", Static).update(Text(note, style="yellow"))
 
     def on_mount(self) -> None:
-        self.query_one("#entrant-racer", Input).focus()
+        self.focus_first(self.query_one("#entrant-racer", Input))
 
     @on(Input.Submitted, "#entrant-racer")
     def _next_field(self) -> None:
@@ -439,7 +439,7 @@ class NewSeasonDialog(FormDialog[SeasonRequest]):
             yield from self.form_buttons("Create season")
 
     def on_mount(self) -> None:
-        self.query_one("#season-name", Input).focus()
+        self.focus_first(self.query_one("#season-name", Input))
 
     @on(Input.Submitted, "#season-name")
     def _next_field(self) -> None:
@@ -453,7 +453,7 @@ class NewSeasonDialog(FormDialog[SeasonRequest]):
         problem = season_problem(name, points, self._taken)
         if problem is not None:
             show_problem(self.query_one("#problem", Static), problem)
-            self.query_one("#season-name", Input).focus()
+            self.focus_first(self.query_one("#season-name", Input))
             return
         table = parse_points(points) if points.strip() else DEFAULT_POINTS
         self.dismiss(SeasonRequest(name.strip(), table))

@@ -66,6 +66,21 @@ async def test_a_hand_timed_race_is_marked_physical_in_the_recorded_races_at_80x
         assert table.virtual_size.width <= table.scrollable_content_region.width
 
 
+async def test_a_dialog_taller_than_60x20_opens_at_its_title_with_its_field_focused() -> None:
+    # Issue 42's walk: the import dialog opened scrolled past its title at 60x20 (Textual
+    # centres a field it focuses before the dialog is laid out).
+    app = create_app(start="garage")
+    async with app.run_test(size=(60, 20)) as pilot:
+        await settle(pilot)
+        await pilot.press("i")
+        await settle(pilot)
+        dialog = app.screen
+        assert "Import a model" in painted(dialog)
+        assert dialog.focused is dialog.query_one("#path", Input)
+        await pilot.press(*"abc")
+        assert dialog.query_one("#path", Input).value == "abc"
+
+
 def test_a_name_loses_its_middle_never_the_words_that_tell_two_boards_apart() -> None:
     cut = _shortened("beginner-oval (physical)", 18, keeps_tail=True)
     assert str(cut) == "beginn… (physical)"
