@@ -354,7 +354,7 @@ class TrainingCharts(Vertical):
 
     DEFAULT_CSS = """
     TrainingCharts { height: 1fr; }
-    TrainingCharts > #figures { height: auto; max-height: 6; padding: 0 1; }
+    TrainingCharts > #figures { height: auto; max-height: 8; padding: 0 1; }
     TrainingCharts > Grid { grid-size: 2 3; grid-gutter: 0 1; height: 1fr; }
     TrainingCharts LineChart { min-height: 4; }
     """
