@@ -265,7 +265,7 @@ class InputDialog(FormDialog[str]):
             problem = self._check(answer)
         if problem is not None:
             show_problem(self.query_one("#problem", Static), problem)
-            self.focus_first(self.query_one("#answer", Input))
+            self.query_one("#answer", Input).focus()
             return
         self.dismiss(answer)
 
@@ -391,7 +391,7 @@ class PathNameDialog(FormDialog[WorkT]):
     def on_work_failed(self, message: WorkFailed) -> None:
         self._set_working(False)
         show_problem(self.query_one("#problem", Static), error_message(message.error))
-        self.focus_first(self.query_one("#path", Input))
+        self.query_one("#path", Input).focus()
 
     def action_cancel(self) -> None:
         if not self.working:  # an import half done is not left behind unseen

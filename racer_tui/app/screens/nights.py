@@ -453,7 +453,7 @@ class NewSeasonDialog(FormDialog[SeasonRequest]):
         problem = season_problem(name, points, self._taken)
         if problem is not None:
             show_problem(self.query_one("#problem", Static), problem)
-            self.focus_first(self.query_one("#season-name", Input))
+            self.query_one("#season-name", Input).focus()
             return
         table = parse_points(points) if points.strip() else DEFAULT_POINTS
         self.dismiss(SeasonRequest(name.strip(), table))
