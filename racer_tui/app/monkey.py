@@ -86,6 +86,7 @@ KEY_SOURCES: dict[str, int] = {
     "app": 10,
     "printable": 14,
 }
+NIGHTS_SHARE = 0.3  # of the "section" actions: to the League's nights
 MODELS = ("monkey-a", "monkey-b")
 WARMUP_ACTIONS = 200  # memory is compared from here (5% of a shorter run)
 
@@ -241,9 +242,14 @@ class Monkey:
             said = repr(typed)
         elif kind == "section":
             # Back to a section, as a racer finds the way: Esc, or the deliberate leave of
-            # a venue screen (which Esc does not leave), then a section's key.
+            # a venue screen (which Esc does not leave), then a section's key; now and
+            # then on to the League's nights, which random keys found a few times in
+            # 20,000 actions (their dialogs are a host's whole evening).
             keys = ["q", "y"] if self._on_kiosk() else ["escape", "escape"]
-            keys.append(self.rng.choice(SECTION_KEYS))
+            if self.rng.random() < NIGHTS_SHARE:
+                keys += ["5", "n"]
+            else:
+                keys.append(self.rng.choice(SECTION_KEYS))
             burst(app, keys)
             said = " ".join(keys)
         elif kind == "paste":
