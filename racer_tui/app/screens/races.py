@@ -138,6 +138,9 @@ NARROW = 100
 NARROW_SETUP = 29
 VERY_NARROW = 80
 VERY_NARROW_SETUP = 24
+# Pane titles, and the shorter ones that fit below VERY_NARROW.
+DRIVERS_TITLE = ("Driver (trained models)", "Driver (trained)")
+RECORDED_TITLE = ("Recorded races in the league, newest first", "Recorded races, newest first")
 
 
 def recorded_row(race: RecordedRace, *, short: bool = False) -> list[str | Text]:
@@ -225,7 +228,7 @@ class RacesScreen(RacerScreen[None]):
         yield SectionHeader("races")
         with Horizontal(id="races-body"):
             with Vertical(id="race-setup"):
-                yield Label("Driver (trained models)", classes="field-label")
+                yield Label(DRIVERS_TITLE[0], classes="field-label", id="drivers-title")
                 yield FittedTable(id="drivers", cursor_type="row", show_header=False)
                 yield Label("Track", classes="field-label")
                 yield Select(
@@ -249,7 +252,7 @@ class RacesScreen(RacerScreen[None]):
             with Vertical(id="race-history"):
                 yield Label("Races this session, best first", classes="field-label")
                 yield FittedTable(id="race-results", cursor_type="row", zebra_stripes=True)
-                yield Label("Recorded races in the league, newest first", classes="field-label")
+                yield Label(RECORDED_TITLE[0], classes="field-label", id="recorded-title")
                 yield FittedTable(id="recorded-races", cursor_type="row", zebra_stripes=True)
                 yield Static(
                     "p or Enter replays the highlighted race (dim: no trace here); u submits "
@@ -317,6 +320,8 @@ class RacesScreen(RacerScreen[None]):
         if (narrow, very_narrow) != (self.has_class("-narrow"), self.has_class("-very-narrow")):
             self.set_class(narrow, "-narrow")
             self.set_class(very_narrow, "-very-narrow")
+            self.query_one("#drivers-title", Label).update(DRIVERS_TITLE[very_narrow])
+            self.query_one("#recorded-title", Label).update(RECORDED_TITLE[very_narrow])
             self._fill_recorded()
 
     @property
