@@ -6,10 +6,9 @@ once more: Textual sleeps 20 ms at a time until a window passes with under 1 ms 
 That is at least 40 ms a key, and on a screen with a ticking clock often more; it was
 about half the time of the app's tests. Here the window is 4 ms (with the same 1 ms of
 CPU), and a window counts as idle only when every message queue of the app and of the
-screen on top is empty and that screen has drawn what changed: a window that short can
-fall wholly in a moment the process was not scheduled, and then only the queues tell
-whether work was still waiting. Threads (workers) are waited for by the tests themselves
-(`settle`), as before.
+screen on top is empty, that screen has drawn what changed, and no worker thread is at
+work: a window that short can fall wholly in a moment the process (or a starved thread)
+was not scheduled, and then only these tell whether work was still waiting.
 """
 
 from __future__ import annotations
@@ -20,17 +19,25 @@ from time import monotonic, process_time
 import textual.app
 import textual.pilot
 from textual._context import active_app
+from textual.worker import WorkerState
+
+from racer_tui.app.screens.training import RUN_GROUP as TRAINING_RUN_GROUP
 
 WINDOW_S = 0.004
 # Textual's own figure, 1 ms of CPU, now in a window of 4 ms: an event loop with a clock
 # ticking on screen uses 0.2-0.3 ms of each such window doing nothing, and a thread at work
 # (a heat being simulated) uses all of it.
 IDLE_CPU_S = 0.001
+BUSY = (WorkerState.PENDING, WorkerState.RUNNING)
+# Workers that run as long as their screen is open (following a training, or the
+# timekeeper's timer feed) are never waited for.
+FOLLOWING = frozenset({TRAINING_RUN_GROUP, "timer"})
 
 
 def _app_quiet() -> bool:
-    """Nothing queued for the app or its screen, and the screen drawn as it now is (tests
-    read what is painted: the screen repaints on its own timer, 60 times a second)."""
+    """Nothing queued for the app or its screen, no worker at work, and the screen drawn
+    as it now is (tests read what is painted: the screen repaints on its own timer, 60
+    times a second)."""
     try:
         app = active_app.get()
         screen = app.screen
@@ -38,6 +45,8 @@ def _app_quiet() -> bool:
         return True
     if not app._message_queue.empty():
         return False
+    if any(worker.state in BUSY and worker.group not in FOLLOWING for worker in app.workers):
+        return False  # a thread at work may be starved of CPU, so it looks idle
     if (
         screen._layout_required
         or screen._scroll_required
