@@ -21,6 +21,9 @@ textual_idle.install()
 def racer_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
     home = tmp_path / "racer-home"
     monkeypatch.setenv("RACER_TUI_HOME", str(home))
+    # `racer-tui --db FILE` sets RACER_TUI_LEAGUE for the rest of its process; a test that
+    # runs the CLI's main in-process must not leave it to the tests after it ("" is unset).
+    monkeypatch.setenv("RACER_TUI_LEAGUE", "")
     yield home
 
 
