@@ -313,11 +313,11 @@ class RacesScreen(RacerScreen[None]):
     def on_resize(self) -> None:
         width = self.size.width
         narrow, very_narrow = width < NARROW, width < VERY_NARROW
-        # The history needs the room: the setup narrows (its own style, over the app
-        # stylesheet's width) and dates lose their year.
-        setup = VERY_NARROW_SETUP if very_narrow else NARROW_SETUP if narrow else None
-        self.query_one("#race-setup").styles.width = setup
         if (narrow, very_narrow) != (self.has_class("-narrow"), self.has_class("-very-narrow")):
+            # The history needs the room: the setup narrows (its own style, over the app
+            # stylesheet's width) and dates lose their year.
+            setup = VERY_NARROW_SETUP if very_narrow else NARROW_SETUP if narrow else None
+            self.query_one("#race-setup").styles.width = setup
             self.set_class(narrow, "-narrow")
             self.set_class(very_narrow, "-very-narrow")
             self.query_one("#drivers-title", Label).update(DRIVERS_TITLE[very_narrow])
