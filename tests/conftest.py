@@ -8,13 +8,14 @@ from pathlib import Path
 
 import pytest
 
-from tests import textual_idle
+from tests import textual_css, textual_idle
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 SHARED_DEEPRACER = REPO_ROOT.parent / "shared" / "deepracer"
 
 
 textual_idle.install()
+textual_css.install()
 
 
 @pytest.fixture(autouse=True)
