@@ -132,7 +132,21 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--actions must be at least 1")
     started = time.perf_counter()
 
+    told = 0
+
     def progress(run: MonkeyRun) -> None:
+        # Each crash is told as it is found: a run of hours that is stopped early (or a
+        # crash whose cause is the machine, not the app) is read from the log, not the end.
+        nonlocal told
+        for crash in run.crashes[told:]:
+            print(
+                f"  crash at action {crash.action_number:,}: {crash.error}\n"
+                f"    after: {' | '.join(crash.recent_actions)}\n"
+                + "".join(f"    {line}\n" for line in crash.traceback.splitlines()),
+                file=sys.stderr,
+                flush=True,
+            )
+        told = len(run.crashes)
         if run.actions % PROGRESS_EVERY == 0:
             print(
                 f"  {run.actions:,} actions, {len(run.crashes)} crashes, "
