@@ -205,18 +205,22 @@ class LineChart(Widget):
 
     def _title_text(self, width: int) -> str:
         """The title with the latest value, and the running mean in the longest wording
-        that fits: a chart in a quarter of an 80-column terminal has ~30 columns."""
+        that fits: a chart in a quarter of an 80-column terminal has ~30 columns, at 60x20
+        18. The mean goes before the title or the latest value is cut."""
         values = self.series[0].values
-        latest = format_value(values[-1]) if values else "-"
-        text = f"{self.title}: {latest}{self.unit}"
-        if not (self.mean_window and len(self.series) > 1 and self.series[1].values):
-            return text
-        mean = format_value(self.series[1].values[-1])
-        wordings = (
-            f"{text}  (mean of {self.mean_window}: {mean})",
-            f"{text}  (mean {mean})",
-            f"{text} ~{mean}",
-        )
+        latest = f"{format_value(values[-1]) if values else '-'}{self.unit}"
+        text = f"{self.title}: {latest}"
+        bare = f"{self.title} {latest}"
+        wordings: tuple[str, ...] = (text, bare)
+        if self.mean_window and len(self.series) > 1 and self.series[1].values:
+            mean = format_value(self.series[1].values[-1])
+            wordings = (
+                f"{text}  (mean of {self.mean_window}: {mean})",
+                f"{text}  (mean {mean})",
+                f"{text} ~{mean}",
+                f"{bare} ~{mean}",
+                *wordings,
+            )
         return next((wording for wording in wordings if len(wording) <= width), wordings[-1])
 
     @staticmethod
