@@ -107,6 +107,7 @@ NEEDS_SECTION = {
     "sync": "league",
     "heat": "races",
 }
+LONGEST_PAUSES_KEPT = 5  # the longest collections listed, each with who ran it
 KEY_TIMEOUT = 10.0  # seconds to wait for a key's effect on screen before calling it unseen
 WORK_TIMEOUT = 120.0  # a heat's simulation, a sync
 RSS_SAMPLES = 10  # RSS (no collection, so no effect on the GC figures) along the measured part
@@ -162,13 +163,16 @@ def live_objects() -> int:
 
 @dataclass
 class GcWatch:
-    """Pauses of every collection while `measuring` (gc.callbacks: start -> stop)."""
+    """Pauses of every collection while `measuring` (gc.callbacks: start -> stop), and the
+    longest few with who ran them: the app's collector (busy, idle, sweep) or Python."""
 
     measuring: bool = False
     collections: int = 0
     full_collections: int = 0
     longest_ms: float = 0.0
     total_ms: float = 0.0
+    longest: list[tuple[float, int, str]] = field(default_factory=list)
+    runner: Callable[[], str | None] = lambda: None
     _started: float = 0.0
 
     def __call__(self, phase: str, info: dict[str, int]) -> None:
@@ -181,8 +185,12 @@ class GcWatch:
         self.collections += 1
         self.total_ms += pause
         self.longest_ms = max(self.longest_ms, pause)
-        if info.get("generation") == 2:
+        generation = int(info.get("generation", -1))
+        if generation == 2:
             self.full_collections += 1
+        self.longest.append((pause, generation, self.runner() or "python"))
+        self.longest.sort(reverse=True)
+        del self.longest[LONGEST_PAUSES_KEPT:]
 
 
 @dataclass
@@ -610,7 +618,7 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
     from racer_tui.app.application import create_app
 
     app = create_app(long_running=True)
-    gc_watch = GcWatch()
+    gc_watch = GcWatch(runner=lambda: app.collector.running)
     gc.callbacks.append(gc_watch)
     samples: list[tuple[int, float]] = []
     try:
@@ -697,6 +705,10 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
         },
         "gc": {
             "longest_pause_ms": round(gc_watch.longest_ms, 3),
+            "longest_pauses": [
+                {"ms": round(ms, 1), "generation": generation, "run_by": by}
+                for ms, generation, by in gc_watch.longest
+            ],
             "full_collections": gc_watch.full_collections,
             "collections": gc_watch.collections,
             "total_pause_ms": round(gc_watch.total_ms, 1),
@@ -785,6 +797,14 @@ def print_report(report: dict[str, Any]) -> None:
     )
     table.add_row("of them frozen at the end", f"{objects['frozen_at_end']:,}", "")
     table.add_row("longest GC pause", f"{gc_figures['longest_pause_ms']:.1f} ms", "")
+    table.add_row(
+        "  the longest, ms (generation, run by)",
+        ", ".join(
+            f"{pause['ms']:.0f} ({pause['generation']}, {pause['run_by']})"
+            for pause in gc_figures["longest_pauses"]
+        ),
+        "",
+    )
     table.add_row(
         "full (gen 2) / all collections",
         f"{gc_figures['full_collections']} / {gc_figures['collections']}",

@@ -216,8 +216,10 @@ class RacerTuiApp(App[int]):
         # Calm (only the sections open, no work in a thread, no screen come or gone for a
         # few seconds): what survives a sweep lives on, so it may be frozen. A key the
         # driver has posted but the app has not handled yet would wait for the collection:
-        # the timer runs outside the app's queue, so it looks there first.
-        self.collector.tick(quiet=self._calm(), keys_waiting=not self._message_queue.empty())
+        # the timer runs outside the app's queue, so it looks there first, and at the keys
+        # the app holds back until the one in flight is handled.
+        keys_waiting: bool = not self._message_queue.empty() or not self.input_settled()
+        self.collector.tick(quiet=self._calm(), keys_waiting=keys_waiting)
 
     def _calm(self) -> bool:
         """Nothing transient is alive to be frozen by a sweep: only the sections are open,
@@ -426,9 +428,14 @@ class RacerTuiApp(App[int]):
         return all(len(stack) <= 1 for stack in self._screen_stacks.values())
 
     def _freeze_if_quiet(self) -> None:
-        # With a dialog open, the next sweep freezes the section instead.
+        # With a dialog open, later: the section's own objects must not stay unfrozen until
+        # a sweep, which needs a calm that steady keys never give (a soak whose help opened
+        # within a second of a section's first visit kept 65,000 more objects unfrozen, and
+        # every full collection walked them: 130-170 ms each beside a training).
         if self._quiet():
             freeze_long_lived()
+        else:
+            self.set_timer(FREEZE_AFTER_SECONDS, self._freeze_if_quiet)
 
     def _first_mode(self) -> str:
         try:

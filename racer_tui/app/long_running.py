@@ -84,8 +84,15 @@ AUTOMATIC_FULL_AFTER = 1000
 # not to walking what lives unfrozen (20,000-25,000 objects, 2-3 ms). 20 s apart, one took
 # up to 446 ms beside a training; 5 s apart, once the footer stopped building a widget per
 # key, 12-20 ms on an idle machine, and a key that met one beside a training waited 94 ms;
-# 2 s apart, the soak's longest collection beside a training took 74 ms, its slowest key 60.
-BUSY_COLLECT_SECONDS = 2.0
+# 2 s apart, the soak's longest collection beside a training took 74 ms, its slowest key 60,
+# but in a later soak one took 102 ms and the key that met it 114. 1 s apart they took up
+# to 171 ms: the sections a dialog covered a second after their first visit had never
+# been frozen (98,000 objects walked by every collection). With those frozen once the
+# dialog closes (racer_tui.app.application), 43,000 objects stay unfrozen, the longest
+# collection beside a training took 95 ms and the slowest key 129 ms (a replay opening,
+# itself 52 ms, met one). On an idle machine such a collection takes 9-14 ms: beside a
+# training, walking the heap waits on memory the training's process keeps busy.
+BUSY_COLLECT_SECONDS = 1.0
 # A sweep is due this long after the last one; it waits for input to pause this long
 # (a sweep walks everything: about a second beside a training)...
 SWEEP_SECONDS = 300.0
@@ -186,6 +193,9 @@ class IdleCollector:
         self.busy_collections = 0  # of `collections`, those run while keys kept coming
         self.sweeps = 0
         self.trims = 0
+        # The kind of full collection this collector is running ("busy", "idle", "sweep"),
+        # None between them: a gc callback tells its own from Python's automatic ones.
+        self.running: str | None = None
 
     def start(self) -> None:
         """Make automatic full collections rare (undone by `stop`)."""
@@ -228,11 +238,18 @@ class IdleCollector:
             return False
         if gc.get_count()[2] < IDLE_COLLECT_AFTER:
             return False
-        gc.collect()
+        self._collect("busy")
         self._last_collection = now
         self.collections += 1
         self.busy_collections += 1
         return True
+
+    def _collect(self, kind: str) -> None:
+        self.running = kind
+        try:
+            gc.collect()
+        finally:
+            self.running = None
 
     def _collect_if_due(self, now: float, paused: float, *, quiet: bool) -> bool:
         since_sweep = now - self._last_sweep
@@ -246,7 +263,7 @@ class IdleCollector:
             gc.unfreeze()
             self._last_sweep = now
             self.sweeps += 1
-        gc.collect()
+        self._collect("sweep" if sweep else "idle")
         if sweep:
             gc.freeze()
         self._last_collection = now

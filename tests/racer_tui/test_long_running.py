@@ -341,3 +341,33 @@ async def test_a_sweep_waits_for_calm_before_it_freezes_what_survives() -> None:
         await pilot.pause(0.1)
         assert calm_after(CALM_SECONDS)  # following a training is no transient work
         follow.set()
+
+
+async def test_a_section_seen_first_under_a_dialog_is_frozen_once_the_dialog_closes(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The first visit's freeze waits for the dialog to close instead of being left to a
+    sweep: steady keys never give a sweep its calm, and every full collection walked the
+    section's objects instead (130-170 ms each in a soak beside a training)."""
+    import racer_tui.app.application as application
+    from racer_tui.app.application import create_app
+    from racer_tui.app.screens.help import HelpScreen
+    from tests.racer_tui.screens.tui_helpers import settle
+
+    monkeypatch.setattr(application, "FREEZE_AFTER_SECONDS", 3600.0)
+    app = create_app(start="garage", long_running=True)
+    try:
+        async with app.run_test(size=(80, 24)) as pilot:
+            await pilot.press("question_mark")  # before the first visit's freeze is due
+            await settle(pilot)
+            assert isinstance(app.screen, HelpScreen)
+            monkeypatch.setattr(application, "FREEZE_AFTER_SECONDS", 0.05)
+            app._freeze_if_quiet()  # the first visit's freeze comes due now
+            await pilot.pause(0.3)
+            assert gc.get_freeze_count() == 0  # not with the dialog's objects
+            await pilot.press("escape")
+            await settle(pilot)
+            await pilot.pause(0.3)
+            assert gc.get_freeze_count() > 0
+    finally:
+        gc.unfreeze()

@@ -21,7 +21,7 @@ from textual.binding import Binding, BindingType
 from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.suggester import Suggester
-from textual.widgets import Button, Checkbox, Input, Label, Static
+from textual.widgets import Button, Checkbox, Input, Label, Select, Static
 
 from racer_tui.app.screens.base import RacerModal, error_message, kept_screen
 from sim.foundation.names import NAME_RULE, is_valid_name
@@ -194,6 +194,15 @@ class FormDialog(RacerModal[RequestT | None]):
     """A dialog with fields, a problem line and Cancel/confirm buttons; Esc cancels."""
 
     BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+    # A form whose three-row fields do not fit a terminal shorter than this gets one-row
+    # fields there, so it shows whole, buttons included, without scrolling (0: never).
+    COMPACT_FIELDS_BELOW_ROWS: ClassVar[int] = 0
+
+    def on_resize(self) -> None:
+        short = self.app.size.height < self.COMPACT_FIELDS_BELOW_ROWS
+        for field in self.query("Input, Select").results():
+            if isinstance(field, Input | Select):
+                field.compact = short
 
     @on(Input.Changed)
     def _problem_answered(self) -> None:

@@ -161,10 +161,12 @@ def read_night_rules(path: str) -> tuple[RaceRules | None, str | None]:
 
 class NewNightDialog(FormDialog[NightRequest]):
     """Track, optional name, optional rules file and laps (a lap-count race), ranking and
-    season. Enter moves to the
-    next field; the button or Ctrl+S opens the night. The rules are read here, so a bad
-    file is said under the fields with nothing typed lost; they are frozen when the night
-    opens and shown (read-only) on the night afterwards."""
+    season. Enter moves to the next field; the button or Ctrl+S opens the night. The rules
+    are read here, so a bad file is said under the fields with nothing typed lost; they
+    are frozen when the night opens and shown (read-only) on the night afterwards."""
+
+    # Six rows of fields, three rows each, do not fit 24 with the title and buttons.
+    COMPACT_FIELDS_BELOW_ROWS = 34
 
     DEFAULT_CSS = """
     NewNightDialog #night-name-row { height: auto; }
@@ -230,14 +232,6 @@ class NewNightDialog(FormDialog[NightRequest]):
 
     def on_mount(self) -> None:
         self.focus_first(self.query_one("#night-name", Input))
-
-    def on_resize(self) -> None:
-        # Six rows of fields, three rows each, do not fit 24 with the title and buttons:
-        # a short terminal gets one-row fields, so the whole form shows without scrolling.
-        short = self.app.size.height < 34
-        for field in self.query("Input, Select").results():
-            if isinstance(field, Input | Select):
-                field.compact = short
 
     @on(Input.Submitted)
     def _next_field(self) -> None:
@@ -316,6 +310,10 @@ class AddEntrantDialog(FormDialog[str]):
     """A racer and what they race: `reference`, a garage model, a bundle file or a physical
     car."""
 
+    # At 24 rows the form fills the screen to its last row, and the note under the car
+    # (training, or a physical car under simulator rules) pushed the buttons below it.
+    COMPACT_FIELDS_BELOW_ROWS = 30
+
     def __init__(
         self,
         models: list[str],
@@ -338,9 +336,9 @@ class AddEntrantDialog(FormDialog[str]):
         with Vertical(classes="dialog"):
             yield Label("Add an entrant", classes="dialog-title")
             yield Static(
-                "The racer's name, and the car: `reference` (the reference driver), a garage "
-                "model name, the path of a .racer-bundle file, or `physical` for a real car "
-                "timed by hand (`physical:NAME` names it). → completes.",
+                "The racer, and the car: `reference` (the reference driver), a garage model, "
+                "a .racer-bundle file, or `physical` for a real car timed by hand "
+                "(`physical:NAME` names it); → completes.",
                 classes="dialog-body",
             )
             yield Input(placeholder="racer name", id="entrant-racer")
@@ -349,7 +347,9 @@ class AddEntrantDialog(FormDialog[str]):
                 suggester=NameOrPathSuggester([REFERENCE_NAME, PHYSICAL, *self._models]),
                 id="entrant-model",
             )
-            yield Static("", id="entrant-note", classes="dialog-body")
+            note = Static("", id="entrant-note", classes="dialog-body")
+            note.display = False
+            yield note
             yield from self.form_buttons("Add")
 
     @on(Input.Changed, "#entrant-model")
@@ -361,7 +361,9 @@ class AddEntrantDialog(FormDialog[str]):
             note = TRAINING_NOTE.format(model=model)
         elif is_physical(model) and not self._physical_rules:
             note = PHYSICAL_RULES_NOTE
-        self.query_one("#entrant-note", Static).update(Text(note, style="yellow"))
+        shown = self.query_one("#entrant-note", Static)
+        shown.update(Text(note, style="yellow"))
+        shown.display = bool(note)  # no empty rows pushing the buttons down when none
 
     def on_mount(self) -> None:
         self.focus_first(self.query_one("#entrant-racer", Input))

@@ -307,7 +307,7 @@ class LeaveWhileTraining(RacerModal[str | None]):
 
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
-            yield Label(Text(f"{self.model} is still training"), classes="dialog-title")
+            yield Label(Text(f"Quit? {self.model} is still training"), classes="dialog-title")
             yield Static(
                 Text(
                     "Stop it now (it saves a checkpoint, and training again resumes from it), "
@@ -316,8 +316,9 @@ class LeaveWhileTraining(RacerModal[str | None]):
                 ),
                 classes="dialog-body",
             )
-            with Horizontal(classes="dialog-buttons"):
-                yield Button("Stop and quit (s)", id="stop", variant="error")
+            # Three buttons fit 60 columns only this short and close together.
+            with Horizontal(classes="dialog-buttons -three"):
+                yield Button("Stop it (s)", id="stop", variant="error")
                 yield Button("Keep running (k)", id="keep", variant="primary")
                 yield Button("Stay (esc)", id="stay")
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from textual import on
+from textual import events, on
 from textual.app import ComposeResult
 from textual.containers import Horizontal
 from textual.message import Message
@@ -101,6 +101,10 @@ def _value(select: Select[str]) -> str | None:
     return None if value is Select.NULL else str(value)
 
 
+# Below this width each filter is too narrow for its label inside a border.
+COMPACT_BELOW_COLUMNS = 76
+
+
 class BoardFilters(Horizontal):
     """Four Selects; any change posts `BoardFilters.Changed` with the new query."""
 
@@ -113,6 +117,13 @@ class BoardFilters(Horizontal):
     @dataclass
     class Changed(Message):
         query: BoardQuery
+
+    def on_resize(self, event: events.Resize) -> None:
+        # Four bordered selects in fewer columns wrap their labels to two lines each: a
+        # filter row of four rows that the board, on a short terminal, needs more.
+        compact = event.size.width < COMPACT_BELOW_COLUMNS
+        for select in self.query(Select).results(Select):
+            select.compact = compact
 
     def compose(self) -> ComposeResult:
         yield Select[str]([], prompt="every track", id="filter-track")
