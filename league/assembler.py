@@ -58,6 +58,7 @@ from sim.garage.folder import (
 from sim.physics.labels import BEFORE_VERSIONING, DEEPRACER
 from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.tracks.catalog import resolve_track
+from sim.tracks.droa import DroaDirectionError, droa_direction_sentence, training_world
 from sim.tracks.track import Track, TrackError
 
 RACER_TUI = "racer-tui"
@@ -245,7 +246,8 @@ def _layout(files: DeepRacerFiles, folder: Path, garage_name: str | None) -> str
         for path in (*files.training_metrics, *files.evaluation_metrics)
         if len(path.relative_to(files.root).parts) > 2
     }
-    if metric_dirs & {"training", "evaluation"} and files.model_metadata is None:
+    # The console's log download, or DeepRacer on AWS's leaderboard submissions alone.
+    if metric_dirs & {"training", "evaluation", "submission"} and files.model_metadata is None:
         return CONSOLE
     return DRFC
 
@@ -320,7 +322,11 @@ def _track(
         )
     where = files.training_params
     try:
-        found = resolve_track(params.world_name)
+        world = training_world(params)  # DeepRacer on AWS's id and direction key too
+    except DroaDirectionError as error:
+        raise LeagueError(droa_direction_sentence(error)) from None
+    try:
+        found = resolve_track(world)
     except TrackError:
         problem = f"{where}: WORLD_NAME {params.world_name!r} is not a track racer-tui knows"
         raise LeagueError(

@@ -24,6 +24,7 @@ from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.bundle import export_bundle
 from sim.garage.clone import clone_model
 from sim.garage.deepracer_notes import export_notes
+from sim.garage.droa_export import refuse_droa_export
 from sim.garage.folder import (
     ModelError,
     ModelFolder,
@@ -112,9 +113,10 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     export.add_argument("name")
     export.add_argument(
         "--format",
-        choices=("bundle", "car"),
+        choices=("bundle", "car", "droa"),
         default="bundle",
-        help="bundle: racer-tui's own file (default); car: NAME.tar.gz for a physical DeepRacer",
+        help="bundle: racer-tui's own file (default); car: NAME.tar.gz for a physical DeepRacer; "
+        "droa: refused, with the reason (docs/deepracer/deepracer-on-aws.md)",
     )
     export.add_argument(
         "-o", "--output", help="file to write (default: NAME.racer-bundle, or NAME.tar.gz)"
@@ -263,6 +265,9 @@ def run(args: argparse.Namespace) -> int:
         return _import(args)
     if action == "act":
         return _act(args.name, Path(args.picture), as_json=args.json)
+    if args.format == "droa":
+        open_model(args.name)  # a typo in the name is said first
+        refuse_droa_export()
     if args.format == "car":
         return _export_car(args.name, args.output, replace=args.force, as_json=args.json)
     return _export(args.name, args.output, replace=args.force, as_json=args.json)
@@ -425,6 +430,7 @@ def _show(name: str, as_json: bool) -> int:
             if "camera" in details["sensor"].split("+")
             else []
         ),
+        *([("car", details["car_look"])] if details["car_look"] else []),
         ("time limit", f"{details['max_minutes']:g} min"),
         ("content hash", details["content_hash"][:16]),
         ("folder", details["path"]),

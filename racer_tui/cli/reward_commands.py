@@ -29,6 +29,7 @@ from sim.deepracer.vocabulary import MAX_SPEED
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.remedies import RemedyError
 from sim.garage.folder import open_model
+from sim.reward.droa_check import DroaVerdict, droa_verdict
 from sim.reward.function import read_reward_file
 from sim.reward.lap import DEFAULT_SPEEDS, LINES, REFERENCE_LINE, line_verdict, verdict
 from sim.reward.map import (
@@ -62,6 +63,11 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         type=float,
         default=DEFAULT_MEMORY_MB,
         help=f"memory the function may use (default {DEFAULT_MEMORY_MB} MB)",
+    )
+    check.add_argument(
+        "--strict",
+        action="store_true",
+        help="fail when DeepRacer on AWS's validator would refuse the function",
     )
     check.add_argument("--json", action="store_true")
     drawn = reward_commands.add_parser(
@@ -160,6 +166,9 @@ def run(args: argparse.Namespace) -> int:
     # one or allocates without bound is reported in one sentence, never hangs this
     # command, and leaves no process behind.
     probe = check_reward_source(source, str(args.file), track=track_name, memory_mb=memory_mb)
+    # DeepRacer on AWS's validator, on the same track's route: a function racer-tui takes
+    # may still be refused there (sim.reward.droa_rules).
+    droa = droa_verdict(source, str(args.file), track_name, memory_mb=memory_mb)
     lap_rewards = probe.lap_rewards or (0.0,)
     report: dict[str, Any] = {
         "file": str(args.file),
@@ -171,10 +180,11 @@ def run(args: argparse.Namespace) -> int:
         "lap_reward_max": float(np.max(lap_rewards)),
         "lap_reward_total": float(np.sum(probe.lap_rewards)),
         "files_closed_off": probe.landlock == "applied",
+        "deepracer_on_aws": droa.to_json(),
     }
     if args.json:
         print_json(report)
-        return 0
+        return _strict_exit(args, droa)
     table = Table(title=Text(f"Reward check: {args.file}"), show_header=False)
     table.add_column("what")
     table.add_column("value", justify="right")
@@ -184,6 +194,7 @@ def run(args: argparse.Namespace) -> int:
         table.add_row(f"  reward {key}", f"{report['lap_reward_' + key]:.4f}")
     print_table(table)
     print("OK: the function ran on every step without an error.")
+    _print_droa(droa)
     if probe.landlock != "applied":
         # Said, not failed: the racer learns that this system cannot keep the code from
         # their files (the audit guard still holds what it can: sim.reward.guard).
@@ -191,7 +202,40 @@ def run(args: argparse.Namespace) -> int:
             f"Note: {probe.landlock}, so only Python's audit hooks kept this function from "
             "your files; read a function you did not write before you run it."
         )
-    return 0
+    return _strict_exit(args, droa)
+
+
+class DroaRefusedError(RemedyError):
+    """`reward check --strict` on a function DeepRacer on AWS would refuse."""
+
+
+def _print_droa(droa: DroaVerdict) -> None:
+    where = f"its validator's rules, on {droa.track}"
+    if droa.accepted:
+        print(f"DeepRacer on AWS would accept it ({where}).")
+        return
+    table = Table(
+        title=Text(f"DeepRacer on AWS would refuse it ({where}); it says the first"),
+        show_header=True,
+    )
+    table.add_column("line", justify="right")
+    table.add_column("type")
+    table.add_column("DeepRacer on AWS says")
+    for reason in droa.reasons:
+        line = "" if reason.line is None else str(reason.line)
+        table.add_row(line, Text(reason.kind), Text(reason.message.strip()))
+    print_table(table)
+
+
+def _strict_exit(args: argparse.Namespace, droa: DroaVerdict) -> int:
+    if not args.strict or droa.accepted:
+        return 0
+    first = droa.reasons[0]
+    where = f" (line {first.line})" if first.line is not None else ""
+    raise DroaRefusedError(
+        f"{args.file}: DeepRacer on AWS would refuse it{where}: {first.message.strip()} "
+        "Fix it, or check without --strict."
+    )
 
 
 # --- map -----------------------------------------------------------------------------------

@@ -29,7 +29,7 @@ import posixpath
 import tarfile
 import zlib
 from dataclasses import dataclass
-from pathlib import Path, PurePosixPath
+from pathlib import Path
 
 from sim.car_archive.errors import CarModelError
 from sim.car_archive.file_names import CAR_ARCHIVE_SUFFIXES
@@ -42,6 +42,7 @@ from sim.deepracer.files import (
     ModelMetadata,
     parse_model_metadata,
 )
+from sim.foundation.untrusted_tar import CappedStream, Unsafe, UnsafeMemberError, member_name
 
 GRAPH_MEMBER = "agent/model.pb"
 MEMBERS = (MODEL_METADATA, GRAPH_MEMBER)
@@ -139,7 +140,7 @@ def _members(path: Path, where: str) -> dict[str, bytes]:
     found: dict[str, bytes] = {}
     try:
         with path.open("rb") as raw, gzip.GzipFile(fileobj=raw) as unzipped:
-            limited = _Limited(unzipped, MAX_UNPACKED_BYTES, where)
+            limited = CappedStream(unzipped, MAX_UNPACKED_BYTES, lambda: _unpacked_too_much(where))
             # Stream mode: tarfile reads forwards only, so nothing is seeked or cached.
             with tarfile.open(fileobj=limited, mode="r|") as tar:
                 for count, member in enumerate(tar, start=1):
@@ -166,21 +167,21 @@ def _members(path: Path, where: str) -> dict[str, bytes]:
 
 def _checked_name(member: tarfile.TarInfo, where: str) -> str | None:
     """The member's name without a leading './', or None for an allowed directory entry."""
-    raw = member.name
-    pure = PurePosixPath(raw)
-    if raw.startswith("/") or "\\" in raw or "\x00" in raw or ".." in pure.parts:
+    try:
+        name = member_name(member)
+    except UnsafeMemberError as unsafe:
+        if unsafe.why is Unsafe.OUTSIDE:
+            raise CarModelError(
+                f"{where}: the member {unsafe.name!r} points outside the archive; a car "
+                "archive holds only model_metadata.json and agent/model.pb."
+            ) from None
         raise CarModelError(
-            f"{where}: the member {raw!r} points outside the archive; a car archive holds "
-            "only model_metadata.json and agent/model.pb."
-        )
-    name = "/".join(part for part in pure.parts if part != ".")
-    if member.isdir():
+            f"{where}: the member {unsafe.name!r} is a link or special file; a car archive "
+            "holds only plain files (model_metadata.json and agent/model.pb)."
+        ) from None
+    if name is None:
         return None
-    if not member.isreg():
-        raise CarModelError(
-            f"{where}: the member {raw!r} is a link or special file; a car archive holds "
-            "only plain files (model_metadata.json and agent/model.pb)."
-        )
+    raw = member.name
     if name in MEMBERS:
         return name
     if is_model_file(name):
@@ -260,24 +261,8 @@ def _tensor_names(metadata: ModelMetadata, graph: FrozenGraph, where: str) -> tu
     )
 
 
-class _Limited(io.RawIOBase):
-    """A read-only stream that fails once more than `limit` bytes have been read from it."""
-
-    def __init__(self, stream: gzip.GzipFile, limit: int, where: str) -> None:
-        super().__init__()
-        self._stream = stream
-        self._left = limit
-        self._where = where
-
-    def readable(self) -> bool:
-        return True
-
-    def read(self, size: int = -1) -> bytes:
-        chunk = self._stream.read(self._left + 1 if size < 0 else min(size, self._left + 1))
-        self._left -= len(chunk)
-        if self._left < 0:
-            raise CarModelError(
-                f"{self._where}: the archive unpacks to more than {MAX_UNPACKED_BYTES:,} bytes; "
-                "a car archive holds one model of at most that size."
-            )
-        return chunk
+def _unpacked_too_much(where: str) -> None:
+    raise CarModelError(
+        f"{where}: the archive unpacks to more than {MAX_UNPACKED_BYTES:,} bytes; a car "
+        "archive holds one model of at most that size."
+    )

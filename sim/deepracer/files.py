@@ -21,6 +21,7 @@ problem is one `DeepRacerFileError` sentence that names the file.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -694,7 +695,14 @@ def training_trace_path(iteration: int) -> str:
 
 
 def stamp_in(name: str) -> str | None:
-    """The 14-digit evaluation timestamp in a file or folder name, if there is one."""
+    """The 14-digit evaluation timestamp in a file or folder name (DRfC's digits, or
+    DeepRacer on AWS's ISO time to the second), if there is one."""
+    iso = _ISO_TIME.search(name)
+    if iso is not None:
+        with contextlib.suppress(ValueError):  # a date no calendar has is no stamp
+            year, month, day, hour, minute, second = (int(part) for part in iso.groups())
+            datetime(year, month, day, hour, minute, second, tzinfo=UTC)
+            return "".join(iso.groups())
     match = _TIMESTAMP.search(name)
     return match.group(1) if match else None
 
@@ -1018,12 +1026,14 @@ class DeepRacerFiles:
 
 
 _TIMESTAMP = re.compile(r"(\d{14})")
+# DeepRacer on AWS names a job's files by JavaScript's toISOString(), in UTC:
+# `2026-07-24T15:06:12.345Z-deepracerindy-evaluation-<id>.json`.
+_ISO_TIME = re.compile(r"(\d{4})-(\d{2})-(\d{2})T(\d{2}):(\d{2}):(\d{2})(?:\.\d{1,9})?Z")
 
 
 def _by_timestamp(paths: Iterable[Path]) -> tuple[Path, ...]:
     def key(path: Path) -> tuple[str, str]:
-        match = _TIMESTAMP.search(path.name)
-        return (match.group(1) if match else "", path.name)
+        return (stamp_in(path.name) or "", path.name)
 
     return tuple(sorted(paths, key=key))
 
@@ -1084,6 +1094,8 @@ def locate_files(root: Path) -> DeepRacerFiles:
                 LEGACY_EVALUATION_GLOB,
                 "metrics/EvaluationMetrics*.json",
                 "metrics/evaluation/*.json",
+                # DeepRacer on AWS's leaderboard submissions: evaluations, as DRoA writes them
+                "metrics/submission/*.json",
             )
         ),
         sim_traces=tuple(sorted({*training_traces, *(path for _, path in evaluation_traces)})),

@@ -21,6 +21,7 @@ from sim.deepracer.files import default_hyperparameters
 from sim.foundation.remedies import Fix, Note
 from sim.garage.folder import ModelError, ModelFolder, check_model_name, create_model
 from sim.garage.imported import ImportResult
+from sim.garage.model_archive import download_name
 from sim.garage.options import DEFAULT_REWARD, DEFAULT_TRACK
 from sim.reward.template_files import shipped_template
 
@@ -37,7 +38,7 @@ def import_car_archive(
         CarPolicy(archive)  # the graph runs on a blank frame, with the outputs the space needs
     except CarModelError as error:
         raise ModelError(str(error)) from None
-    chosen = name if name is not None else archive.name
+    chosen = name if name is not None else download_name(source)
     try:
         check_model_name(chosen)
     except ModelError:

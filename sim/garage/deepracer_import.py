@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
 from sim.car_archive.errors import CarModelError
+from sim.deepracer.car_look import car_look
 from sim.deepracer.files import (
     MAX_METRICS_BYTES,
     SIM_TRACE_COLUMNS,
@@ -59,11 +60,13 @@ from sim.garage.folder import (
 )
 from sim.garage.frozen_graph import folder_weights
 from sim.garage.imported import ImportResult
+from sim.garage.model_archive import LOG_JOB_TYPES, MAX_LOG_BYTES, download_name
 from sim.garage.options import DEFAULT_MINUTES, DEFAULT_REWARD, DEFAULT_TRACK
 from sim.physics.labels import DEEPRACER as DEEPRACER_PHYSICS
 from sim.reward.function import check_reward_code, read_reward_file
 from sim.reward.template_files import shipped_template
 from sim.tracks.catalog import list_tracks
+from sim.tracks.droa import DroaDirectionError, droa_direction_sentence, training_world
 
 if TYPE_CHECKING:
     from sim.garage.frozen_graph import FolderWeights
@@ -72,21 +75,30 @@ _T = TypeVar("_T")
 
 
 def import_deepracer_folder(
-    path: Path, name: str | None = None, track: str | None = None, *, untrained: bool = False
+    path: Path,
+    name: str | None = None,
+    track: str | None = None,
+    *,
+    untrained: bool = False,
+    origin: Path | None = None,
 ) -> ImportResult:
-    """Import a DeepRacer model folder as community tools write it. A folder with
-    DeepRacer's own frozen weights (`sim.garage.frozen_graph`) drives with them unless
-    `untrained`, which starts it afresh so racer-tui can train it."""
+    """Import a DeepRacer model folder as community tools and DeepRacer on AWS write it. A
+    folder with DeepRacer's own frozen weights (`sim.garage.frozen_graph`) drives with them
+    unless `untrained`, which starts it afresh so racer-tui can train it. `origin`: the
+    archive the folder was unpacked from (`sim.garage.model_archive`), which names the
+    model and is what the model says it came from."""
     root = Path(path).expanduser()
+    source = origin if origin is not None else root
     files = locate_files(root)
     if files.model_metadata is None:
         raise ModelError(
-            f"{root} has no model_metadata.json (looked in the folder and in model/); "
+            f"{source} has no model_metadata.json (looked in the folder and in model/); "
             "give the folder of a DeepRacer model."
         )
-    chosen_name = name if name is not None else root.resolve().name
+    chosen_name = name if name is not None else _default_name(root, origin)
     if name is None and not _usable_name(chosen_name):
-        problem = f"the folder name {chosen_name!r} cannot be a model name"
+        kind = "file" if origin is not None else "folder"
+        problem = f"the {kind} name {chosen_name!r} cannot be a model name"
         raise ModelError(f"{problem}; give one with --name.", problem=problem, fix=Fix.RENAME)
     check_model_name(chosen_name)
     notes: list[str] = []
@@ -94,6 +106,8 @@ def import_deepracer_folder(
     hyperparameters = _hyperparameters(files, notes)
     params = _read(read_training_params, files.training_params) if files.training_params else None
     world = _track(track, params, notes)
+    look = car_look(params.extra) if params is not None else None
+    logs = _logs(root)
     reward_source = _reward_source(files, notes)
     training = _training_metrics(files)
     evaluations = _evaluations(files)
@@ -120,6 +134,10 @@ def import_deepracer_folder(
         for trace in training_traces:
             folder.training_trace_dir.mkdir(exist_ok=True)
             shutil.copyfile(trace, folder.path / training_trace_path(_iteration(trace)))
+        for log in logs:
+            target = folder.path / log.relative_to(root)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(log, target)
         for evaluation in evaluations:
             # Timed by DeepRacer's simulator: say so, so a submission of it is ranked apart.
             write_evaluation_metrics(
@@ -140,9 +158,29 @@ def import_deepracer_folder(
         reward_source=reward_source,
         max_minutes=params.max_minutes if params else DEFAULT_MINUTES,
         populate=populate,
-        notes={"IMPORTED_FROM": str(root.resolve())},
+        notes={"IMPORTED_FROM": str(source.resolve())},
+        car_look=look,
     )
     return ImportResult(folder, tuple(notes))
+
+
+def _default_name(root: Path, origin: Path | None) -> str:
+    return download_name(origin) if origin is not None else root.resolve().name
+
+
+def _logs(root: Path) -> list[Path]:
+    """DeepRacer on AWS's job logs (`logs/<job type>/*.log`), kept as they are: plain files
+    inside the folder, each of a size a log can have."""
+    found: list[Path] = []
+    for path in sorted(root.glob("logs/*/*.log")):
+        if path.is_symlink() or path.parent.is_symlink() or not path.is_file():
+            continue
+        if path.parent.name not in LOG_JOB_TYPES:
+            continue
+        if path.stat().st_size > MAX_LOG_BYTES:
+            raise ModelError(f"{path} is larger than a log can be; remove it and import again.")
+        found.append(path)
+    return found
 
 
 def _deepracer_weights(root: Path, files: DeepRacerFiles, notes: list[str]) -> FolderWeights | None:
@@ -204,6 +242,11 @@ def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]
     if explicit is not None:
         return explicit  # create_model checks it before anything is written
     world = params.world_name if params else None
+    if params is not None:
+        try:
+            world = training_world(params)  # DeepRacer on AWS's id and direction key too
+        except DroaDirectionError as error:
+            raise ModelError(droa_direction_sentence(error)) from None
     if world is not None and world in {info.name for info in list_tracks()}:
         return world
     where = f"it trained on {world!r}, which" if world else "its track"

@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import psutil
 
+from sim.deepracer.car_look import CarLook
 from sim.deepracer.files import (
     EVALUATION_METRICS_GLOB,
     HYPERPARAMETERS_PATH,
@@ -593,6 +594,7 @@ def create_model(
     notes: Mapping[str, str] | None = None,
     race_type: str = "TIME_TRIAL",
     race_keys: Mapping[str, object] | None = None,
+    car_look: CarLook | None = None,
 ) -> ModelFolder:
     """Create model `name` in the garage, all at once (temporary folder, then rename).
 
@@ -602,7 +604,8 @@ def create_model(
     `populate` may add more files (a policy, metrics) to the folder before it appears: it is
     called with the temporary folder. `notes` are kept in training_params.yaml (for
     example where the model came from). `race_type` and `race_keys` are DeepRacer's race
-    type and its settings' keys (`sim.physics.objects.settings.race_keys`).
+    type and its settings' keys (`sim.physics.objects.settings.race_keys`); `car_look` the
+    car's shell and colour as DeepRacer wrote them (`sim.deepracer.car_look`).
     """
 
     final = check_new_model_name(name)
@@ -622,7 +625,11 @@ def create_model(
         race_type=race_type,
         max_minutes=float(max_minutes),
         track_hash=resolved.content_hash,
-        extra={**dict(race_keys or {}), **dict(notes or {})},
+        extra={
+            **dict(race_keys or {}),
+            **(car_look.to_params() if car_look is not None else {}),
+            **dict(notes or {}),
+        },
     )
     temporary = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=models_dir()))
     try:

@@ -1,11 +1,14 @@
 """`racer-tui model import PATH`: whichever kind of model PATH is, into the garage.
 
-A car archive (`.tar.gz`) goes to `car_archive_import`, a `.racer-bundle` to `bundle`, a
-folder to `deepracer_import`; each says what it filled in.
+A `.tar.gz` is told by its contents (`model_archive`): a car archive goes to
+`car_archive_import`, DeepRacer on AWS's virtual model to `deepracer_import` once unpacked;
+a `.racer-bundle` goes to `bundle`, a folder to `deepracer_import`; each says what it
+filled in.
 """
 
 from __future__ import annotations
 
+import tempfile
 import zipfile
 from pathlib import Path
 
@@ -16,6 +19,7 @@ from sim.garage.car_archive_import import import_car_archive
 from sim.garage.deepracer_import import import_deepracer_folder
 from sim.garage.folder import ModelError
 from sim.garage.imported import BUNDLE_SUFFIX, ImportResult
+from sim.garage.model_archive import ArchiveKind, unpack_model_archive
 
 
 def import_model(
@@ -29,7 +33,7 @@ def import_model(
     except OSError:  # a name no file can have (too long, say): there is none
         is_file = is_dir = False
     if is_file and is_car_archive_name(source):
-        return import_car_archive(source, name=name, track=track)
+        return _import_archive(source, name, track, untrained=untrained)
     if is_file and not _could_be_a_bundle(source):
         raise ModelError(
             f"{echoed_path(source)} is not a model racer-tui can import (neither a "
@@ -44,6 +48,20 @@ def import_model(
         f"{echoed_path(source)} does not exist; give a DeepRacer model folder, a "
         f"{BUNDLE_SUFFIX} file or a car archive (.tar.gz)."
     )
+
+
+def _import_archive(
+    source: Path, name: str | None, track: str | None, *, untrained: bool
+) -> ImportResult:
+    """A `.tar.gz` by what it holds: a car archive, or DeepRacer on AWS's virtual model
+    (unpacked into a scratch folder, imported as a DeepRacer folder, then removed)."""
+    with tempfile.TemporaryDirectory(prefix="racer-import-") as scratch:
+        unpacked = unpack_model_archive(source, Path(scratch))
+        if unpacked.kind is ArchiveKind.VIRTUAL:
+            return import_deepracer_folder(
+                Path(scratch), name=name, track=track, untrained=untrained, origin=source
+            )
+    return import_car_archive(source, name=name, track=track)
 
 
 def _could_be_a_bundle(source: Path) -> bool:

@@ -12,6 +12,7 @@ from typing import Any
 
 from sim.car_archive.car_mapping import car_actions, car_refusal
 from sim.deepracer.action_space import ActionSpace
+from sim.deepracer.car_look import CAR_LOOK_KEYS, car_look
 from sim.deepracer.files import (
     DeepRacerFileError,
     EvaluationTrial,
@@ -153,7 +154,12 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         "reward_function": reward_origin(folder),
         "training": training_summary(folder),
         "evaluations": evaluations,
-        "notes": {key: str(value) for key, value in params.extra.items()},
+        # How the car looks in DeepRacer's simulator (DeepRacer on AWS keeps it): shown
+        # as one phrase, not as its two keys among the notes.
+        "car_look": look.describe() if (look := car_look(params.extra)) else None,
+        "notes": {
+            key: str(value) for key, value in params.extra.items() if key not in CAR_LOOK_KEYS
+        },
         "physics_note": physics_note(folder.trained_physics()),
     }
 

@@ -93,6 +93,9 @@ class RaceRules:
     bot_lane_change: bool = False
     # Which results count (a league night's standings): a setting of the organiser's.
     verification: Verification = Verification.ANY
+    # DeepRacer on AWS's minimumLaps: a race is ranked only once it has this many
+    # consecutive counting laps, whatever it is ranked by (its BEST_LAP_TIME races too).
+    min_laps: int = 1
 
     def __post_init__(self) -> None:
         if self.race_type is RaceType.OBJECT_AVOIDANCE and not 1 <= self.obstacles <= MAX_OBSTACLES:
@@ -128,6 +131,8 @@ class RaceRules:
             del data["verification"]  # likewise for every rules written before it existed
         else:
             data["verification"] = self.verification.value
+        if self.min_laps == 1:
+            del data["min_laps"]  # likewise
         return data
 
     def lap_of(self, lap: int) -> str:
@@ -188,6 +193,8 @@ class RaceRules:
             laps = "1 lap" if self.lap_count == 1 else f"{self.lap_count} laps"
             length = f"race of {laps} within {_clock(self.window_seconds)}"
         words = f"{length}, {self.penalty_seconds:g} s per off-track, {limit}, ranked by {ranking}"
+        if self.min_laps > 1:
+            words = f"{words} once {self.min_laps} laps in a row count"
         if self.verification is not Verification.ANY:
             words = f"{words} ({self.verification.words})"
         if self.race_type is RaceType.TIME_TRIAL:
@@ -197,6 +204,16 @@ class RaceRules:
 
 
 DEFAULT_RULES = RaceRules()
+DROA_RULES = RaceRules(
+    window_seconds=1200.0,
+    penalty_seconds=1.0,
+    collision_penalty_seconds=1.0,
+    max_offtracks_per_lap=None,
+    ranking=RankingMethod.TOTAL_TIME,
+    ranking_laps=3,
+    lap_count=3,
+    min_laps=3,
+)
 
 # Rules a host picks by name instead of writing a file: (name, what it is, the rules).
 # "physical" is how DeepRacer's own physical events time a car (DREM's defaults: 4
@@ -220,6 +237,10 @@ RULE_PRESETS: tuple[tuple[str, str, RaceRules], ...] = (
         "4:00 among 3 bots at 1 m/s, 5 s per crash",
         RaceRules(race_type=RaceType.HEAD_TO_BOT, bots=3, bot_lane_change=True),
     ),
+    # DeepRacer on AWS's community race as its console proposes one: total time of the
+    # laps run, 1 s per off-track and per collision, every reset allowed (it sends its
+    # simulator 10,000), 20 minutes at most for the whole run.
+    ("droa", "DeepRacer on AWS: total of 3 laps, 1 s per off-track, no limit", DROA_RULES),
 )
 
 
@@ -265,6 +286,7 @@ def rules_from_mapping(data: Mapping[str, Any], base: RaceRules = DEFAULT_RULES)
         collision_penalty_seconds=values["collision_penalty_seconds"],
         lap_count=_lap_count(values.get("lap_count")),
         verification=_verification(values.get("verification", Verification.ANY.value)),
+        min_laps=_whole(values.get("min_laps", 1), "min_laps", 1, 100),
         **_race_type_values(values),
     )
     for key in data:  # a key of another race type would be silently dropped: say so
@@ -275,6 +297,11 @@ def rules_from_mapping(data: Mapping[str, Any], base: RaceRules = DEFAULT_RULES)
                 f"{rules.race_type.words}'s; set race_type: {owner.value.lower()} or leave "
                 f"{key} out."
             )
+    if rules.lap_count is not None and rules.min_laps > rules.lap_count:
+        raise RulesError(
+            f"a race of {rules.lap_count} laps never has {rules.min_laps} laps in a row; "
+            f"make min_laps at most {rules.lap_count} or lap_count larger."
+        )
     if rules.lap_count is not None and rules.laps_scored > rules.lap_count:
         raise RulesError(
             f"a race of {rules.lap_count} laps cannot be ranked over {rules.laps_scored} "
@@ -450,6 +477,8 @@ def lap_counts(lap: TimedLap, rules: RaceRules) -> bool:
 def score_laps(laps: Sequence[TimedLap], rules: RaceRules) -> Score:
     """The ranking score of a race's completed laps (lap number = position + 1)."""
     valid = [i for i, lap in enumerate(laps) if lap_counts(lap, rules)]
+    if rules.min_laps > 1 and _longest_run(valid) < rules.min_laps:
+        return Score(None, (), 0, len(valid))
     n = rules.laps_scored
     candidates: list[list[int]]
     if rules.ranking is RankingMethod.BEST_LAP:
@@ -476,3 +505,14 @@ def score_laps(laps: Sequence[TimedLap], rules: RaceRules) -> Score:
     best = min(candidates, key=lambda idx: (round(total(idx), 6), offtracks(idx), idx))
     value = total(best) / n if rules.ranking is RankingMethod.BEST_AVERAGE else total(best)
     return Score(value, tuple(i + 1 for i in best), offtracks(best), len(valid))
+
+
+def _longest_run(indexes: Sequence[int]) -> int:
+    """The most consecutive lap numbers among `indexes` (ascending)."""
+    longest = run = 0
+    previous = None
+    for index in indexes:
+        run = run + 1 if previous is not None and index == previous + 1 else 1
+        longest = max(longest, run)
+        previous = index
+    return longest

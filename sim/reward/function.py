@@ -113,6 +113,12 @@ class RewardFunction:
     def __repr__(self) -> str:
         return f"RewardFunction({self.name!r})"
 
+    def raw(self) -> tuple[Callable[[dict[str, object]], object], str]:
+        """The racer's own function, uncalled and unchecked, and the file name its code was
+        compiled with: for a check that judges what it returns as another validator does
+        (`sim.reward.droa_rules`), in the contained child only."""
+        return self._function, self._filename
+
     def first_line(self) -> int | None:
         """The line of `def reward_function` in the racer's file, when it is there."""
         code = _own_code(self._function, self._filename)

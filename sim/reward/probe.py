@@ -29,12 +29,14 @@ from typing import Any
 from sim.deepracer.vocabulary import EpisodeStatus
 from sim.physics.reference_driver import ReferenceDriver
 from sim.physics.simulation import TrackSimulation
+from sim.reward import droa_rules
 from sim.reward import guard as reward_guard
+from sim.reward import limit as reward_limit
 from sim.reward import sandbox as reward_sandbox
 from sim.reward.errors import RewardFunctionError
 from sim.reward.function import RewardFunction, load_reward_source
 from sim.reward.lap import CENTRE_LINE, LINES, LapPay, lap_rewards
-from sim.reward.limit import DEFAULT_SECONDS
+from sim.reward.limit import DEFAULT_SECONDS, RewardTimeout
 from sim.reward.map import MapOptions, RewardMap, compute_map
 from sim.reward.sample_params import sample_params
 from sim.reward.sandbox import DEFAULT_MEMORY_MB
@@ -73,6 +75,19 @@ def check_reward_source(
         tuple(ok["lap_rewards"]),
         str(ok.get("landlock", "")),
     )
+
+
+def droa_runtime_reasons(
+    source: str, name: str, track: str, *, memory_mb: int = DEFAULT_MEMORY_MB
+) -> list[droa_rules.DroaReason]:
+    """DeepRacer on AWS's run of the code on `track`'s route, in a child process: what
+    it refuses (`sim.reward.droa_rules`), empty when it would accept the run."""
+    # Each of DRoA's up to six calls may take its 5 s; the deadline leaves the child room.
+    deadline = CHECK_DEADLINE_SECONDS + 6 * droa_rules.CALL_SECONDS
+    ok = _ask_child(
+        "droa", source, name, droa_rules.CALL_SECONDS, deadline, track=track, memory_mb=memory_mb
+    )
+    return [droa_rules.DroaReason.from_json(reason) for reason in ok["reasons"]]
 
 
 @dataclass(frozen=True)
@@ -263,8 +278,10 @@ class _Watched:
 def _probe(request: dict[str, Any], track: Any) -> dict[str, Any]:
 
     name = str(request["name"])
-    reward = _Watched(load_reward_source(str(request["source"]), name))
     mode = request.get("mode")
+    if mode == "droa":
+        return {"ok": {"reasons": _droa_reasons(request, track)}}
+    reward = _Watched(load_reward_source(str(request["source"]), name))
     if mode in ("lap", "map", "editor"):
         answer: dict[str, Any] = {}
         if mode == "editor":
@@ -284,6 +301,36 @@ def _probe(request: dict[str, Any], track: Any) -> dict[str, Any]:
         lap = _reference_lap_rewards(reward.fresh(), track)
     answer = {"sample_reward": sample, "track": shown_track, "lap_rewards": list(lap)}
     return {"ok": {**answer, "landlock": reward_sandbox.landlock_status()}}
+
+
+def _droa_reasons(request: dict[str, Any], route: Any) -> list[dict[str, Any]]:
+    """DeepRacer on AWS's run of the code (`sim.reward.droa_rules`): loaded as a module,
+    then called as its validator calls it, each call under DRoA's 5 s."""
+
+    name = str(request["name"])
+    try:
+        loaded = load_reward_source(str(request["source"]), name)
+    except RewardFunctionError as error:
+        # DRoA's module import fails the same way; its words are Python's.
+        return [droa_rules.DroaReason(droa_rules.TEST_FAILURE, error.reason, error.line).to_json()]
+    function, filename = loaded.raw()
+    limit = reward_limit.active()
+
+    def call(run: Any) -> droa_rules.Outcome:
+        assert limit is not None  # main() installs it before anything runs
+        limit.begin()
+        try:
+            value = run()
+        except RewardTimeout:
+            return droa_rules.Outcome(timed_out=True)
+        except BaseException as error:  # the racer's code may raise anything at all
+            return droa_rules.Outcome(error=error)
+        finally:
+            limit.end()
+        return droa_rules.Outcome(value)
+
+    states = droa_rules.synthetic_states(route)
+    return [r.to_json() for r in droa_rules.runtime_reasons(function, states, call, filename)]
 
 
 def _lap_answer(reward: Any, track: Any, request: dict[str, Any]) -> list[dict[str, Any]]:
@@ -331,6 +378,8 @@ def _prepare(request: dict[str, Any]) -> Any:
     the track (a .npy path may be anywhere)."""
 
     track_name = request.get("track")
+    if request.get("mode") == "droa":
+        return droa_rules.route_of(str(track_name))
     if not track_name:
         return None
 

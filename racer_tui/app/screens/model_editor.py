@@ -72,12 +72,13 @@ from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.vocabulary import MAX_SPEED, MAX_STEERING, MIN_SPEED
 from sim.garage.folder import MAX_MINUTES, MIN_MINUTES, ModelError, ModelFolder
 from sim.garage.options import SPEED_LEVELS, STEERING_LEVELS, ModelSpec, default_model_spec, spec_of
+from sim.reward.droa_check import DroaVerdict, droa_verdict
 from sim.reward.errors import RewardFunctionError
 from sim.reward.lap import LapPay, verdict
 from sim.reward.map import MapOptions, RewardMap
 from sim.reward.probe import check_reward_source, editor_check
 from sim.reward.template_files import TEMPLATES, template_name
-from sim.tracks.catalog import resolve_track
+from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 from sim.tracks.track import Track, TrackError
 
 ACTION_COLUMNS = ("#", "steering °", "speed m/s", "turn")
@@ -137,12 +138,14 @@ class RewardChecked(Message):
         error: RewardFunctionError | None,
         reward_map: RewardMap | None = None,
         laps: tuple[LapPay, ...] = (),
+        droa: DroaVerdict | None = None,
     ) -> None:
         super().__init__()
         self.value = value
         self.error = error
         self.reward_map = reward_map
         self.laps = laps
+        self.droa = droa  # DeepRacer on AWS's verdict, once racer-tui's own check passed
         self.number = 0  # which Check this answers (a thread worker cannot be cancelled)
 
 
@@ -159,7 +162,8 @@ def check_reward(source: str, track: str | None = None, top_speed: float = 2.0) 
     try:
         if track is None:
             report = check_reward_source(source, REWARD_FILE_NAME)
-            return RewardChecked(report.sample_reward, None)
+            droa = droa_verdict(source, REWARD_FILE_NAME, DEFAULT_TRACK)
+            return RewardChecked(report.sample_reward, None, droa=droa)
         checked = editor_check(
             source,
             REWARD_FILE_NAME,
@@ -167,9 +171,26 @@ def check_reward(source: str, track: str | None = None, top_speed: float = 2.0) 
             MapOptions(spacing=EDITOR_MAP_SPACING, speed=top_speed),
             (1.0, top_speed) if top_speed > 1.0 else (top_speed, 4.0),
         )
+        # DeepRacer on AWS's validator too: a racer may take this function there.
+        droa = droa_verdict(source, REWARD_FILE_NAME, track)
     except RewardFunctionError as error:
         return RewardChecked(None, error)
-    return RewardChecked(checked.sample_reward, None, checked.reward_map, checked.laps)
+    return RewardChecked(checked.sample_reward, None, checked.reward_map, checked.laps, droa)
+
+
+def droa_words(verdict: DroaVerdict) -> Text:
+    """One line: whether DeepRacer on AWS would take the function, and if not its first
+    reason with its line (and how many more)."""
+    if verdict.accepted:
+        return Text("DeepRacer on AWS would accept it too", style="dim")
+    first = verdict.reasons[0]
+    where = f"line {first.line}: " if first.line is not None else ""
+    text = Text("DeepRacer on AWS would refuse it: ", style="yellow")
+    text.append(f"{where}{first.message.strip()}")
+    more = len(verdict.reasons) - 1
+    if more:
+        text.append(f" (and {more} more: racer-tui reward check lists them)", style="dim")
+    return text
 
 
 def field(label: str, widget: Widget, allowed: str = "", field_id: str = "") -> Vertical:
@@ -723,6 +744,9 @@ class ModelEditorScreen(RacerScreen[str | None]):
             text.append("(a car on a straight at 2 m/s, near the centre line)", style="dim")
             if message.laps:
                 text.append(f"\n{verdict(list(message.laps))}")
+            if message.droa is not None:
+                text.append("\n")
+                text.append_text(droa_words(message.droa))
             self._show_reward_result(text)
             editor.set_class(False, "-problem")
             if message.reward_map is not None:

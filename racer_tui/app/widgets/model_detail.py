@@ -136,6 +136,8 @@ class ModelDetail(VerticalScroll):
                 "training",
                 _plain(f"{metadata['training_algorithm']}, at most {details['max_minutes']:g} min"),
             )
+        if details.get("car_look"):
+            table.add_row("car", _plain(details["car_look"]))
         table.add_row("network", _plain(network_text(metadata)))
         table.add_row("car hash", _plain(str(details["content_hash"])[:16]))
         table.add_row("folder", _plain(details["path"]))

@@ -23,6 +23,8 @@ if TYPE_CHECKING:
 
 NAMES = ("submit", "leaderboard", "night", "season", "racer", "correct")
 FORMATS = ("table", "json", "csv", "markdown")
+# The leaderboard's formats: the above, and DeepRacer on AWS's rankings (league.droa_rankings).
+BOARD_FORMATS = (*FORMATS, "droa")
 
 
 def _db_option() -> argparse.ArgumentParser:
@@ -105,7 +107,12 @@ def _register_leaderboard(commands: Parsers, db: argparse.ArgumentParser) -> Non
     )
     board.add_argument("--reverse", action="store_true", help="reverse the sort order")
     board.add_argument("--limit", type=int, metavar="N", help="show the first N rows")
-    board.add_argument("--format", choices=FORMATS, default="table")
+    board.add_argument(
+        "--format",
+        choices=BOARD_FORMATS,
+        default="table",
+        help="droa: the rankings as DeepRacer on AWS writes them (JSON, whole milliseconds)",
+    )
 
 
 def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:

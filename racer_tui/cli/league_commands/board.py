@@ -5,9 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
+from typing import Any
 
 from rich.text import Text
 
+from league.droa_rankings import DroaEntry, droa_laps, droa_rankings, droa_rules_for
 from league.errors import LeagueError
 from league.leaderboard import (
     Filters,
@@ -135,6 +138,9 @@ def show_leaderboard(league: League, args: argparse.Namespace) -> int:
     mark_verification(league, rows, models_here)
     shown_method = method if method is not None else _night_method(league, night_ids)
     show_track = several_boards(rows)
+    if args.format == "droa":
+        print_json(_droa_document(league, rows, method, night_ids))
+        return 0
     if args.format == "json":
         print_json(leaderboard_json(rows, shown_method))
         return 0
@@ -213,6 +219,42 @@ def _print_board(
 
 def _without_track(columns: Sequence[ReportColumn]) -> list[ReportColumn]:
     return [column for column in columns if column.title != "track"]
+
+
+def _droa_document(
+    league: League,
+    rows: Sequence[LeaderboardRow],
+    method: RankingMethod | None,
+    night_ids: Sequence[str] | None,
+) -> dict[str, Any]:
+    """Each board's rankings as DeepRacer on AWS would publish them: its timing method and
+    minimumLaps from the rules (a night's own, or --by's with 3 laps), its stats computed
+    from each racer's laps as it computes them from its metrics."""
+    rules = (
+        get_night(league, night_ids[0]).rules
+        if method is None and night_ids
+        else replace(DEFAULT_RULES, ranking=method or DEFAULT_RULES.ranking)
+    )
+    timing, minimum = droa_rules_for(rules)
+    boards: dict[tuple[str, str, str], list[LeaderboardRow]] = {}
+    for row in rows:
+        boards.setdefault(board_of(row), []).append(row)
+    leaderboards = []
+    for group in boards.values():
+        entries = [
+            DroaEntry(row.display_name, row.model, droa_laps(league, row.record_id, row.kind))
+            for row in group
+        ]
+        leaderboards.append(
+            {
+                "track": group[0].track_name,
+                "raceType": group[0].race_type.upper(),
+                "timingMethod": timing.value,
+                "minimumLaps": minimum,
+                "rankings": droa_rankings(entries, timing, minimum),
+            }
+        )
+    return {"leaderboards": leaderboards}
 
 
 def _night_method(league: League, night_ids: Sequence[str] | None) -> RankingMethod:

@@ -56,9 +56,14 @@ def across(params):
 
 
 def object_across(params, index):
-    """An object's offset from the centre line, left +."""
+    """An object's offset from the centre line, left +; None
+    where the params do not say it (DeepRacer on AWS checks
+    a reward function on states without that key)."""
+    distances = params.get("objects_distance_from_center")
+    if distances is None:
+        return None
     side = 1 if params["objects_left_of_center"][index] else -1
-    return side * params["objects_distance_from_center"][index]
+    return side * distances[index]
 
 
 def clearance_pay(params):
@@ -66,7 +71,8 @@ def clearance_pay(params):
     if not objects:
         return 1.0
     ahead = params["closest_objects"][1]
-    if abs(across(params) - object_across(params, ahead)) >= IN_THE_WAY:
+    offset = object_across(params, ahead)
+    if offset is not None and abs(across(params) - offset) >= IN_THE_WAY:
         return 1.0  # it passes beside the car
     object_x, object_y = objects[ahead]
     gap_x = params["x"] - object_x
