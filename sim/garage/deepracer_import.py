@@ -17,6 +17,7 @@ and the allowed range, so the racer decides.
 
 from __future__ import annotations
 
+import json
 import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -66,7 +67,12 @@ from sim.physics.labels import DEEPRACER as DEEPRACER_PHYSICS
 from sim.reward.function import check_reward_code, read_reward_file
 from sim.reward.template_files import shipped_template
 from sim.tracks.catalog import list_tracks
-from sim.tracks.droa import DroaDirectionError, droa_direction_sentence, training_world
+from sim.tracks.droa import (
+    DROA_DIRECTION_KEY,
+    DroaDirectionError,
+    droa_direction_sentence,
+    training_world,
+)
 
 if TYPE_CHECKING:
     from sim.garage.frozen_graph import FolderWeights
@@ -247,6 +253,13 @@ def _track(explicit: str | None, params: TrainingParams | None, notes: list[str]
             world = training_world(params)  # DeepRacer on AWS's id and direction key too
         except DroaDirectionError as error:
             raise ModelError(droa_direction_sentence(error)) from None
+        if world != params.world_name:
+            direction = "clockwise" if world.endswith("_cw") else "counter-clockwise"
+            said = json.dumps(params.extra[DROA_DIRECTION_KEY])  # as YAML writes it
+            notes.append(
+                f"DeepRacer on AWS trained it on {params.world_name} {direction} "
+                f"({DROA_DIRECTION_KEY}: {said}): it is set up on {world}."
+            )
     if world is not None and world in {info.name for info in list_tracks()}:
         return world
     where = f"it trained on {world!r}, which" if world else "its track"

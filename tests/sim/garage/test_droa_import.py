@@ -42,6 +42,10 @@ def test_a_virtual_model_imports_with_its_direction_weights_metrics_and_look(
     params = folder.training_params()
     # WORLD_NAME 2022_april_open with TRACK_DIRECTION_CLOCKWISE: true is the clockwise file.
     assert params.world_name == "2022_april_open_cw"
+    assert (
+        "DeepRacer on AWS trained it on 2022_april_open clockwise "
+        "(TRACK_DIRECTION_CLOCKWISE: true): it is set up on 2022_april_open_cw."
+    ) in [str(note) for note in result.notes]
     # It drives with the best checkpoint's frozen graph, byte for byte.
     car = read_car_archive(folder.car_archive_file)
     with tarfile.open(folder.car_archive_file) as tar:
