@@ -32,11 +32,15 @@ from league.trust.replay import DriverFor, verify_races
 from sim.foundation.ids import new_id
 from sim.foundation.plural import counted
 from sim.foundation.remedies import Fix
+from sim.garage.bundle import BundleError, read_bundle
 from sim.garage.folder import ModelError, models_dir, open_model
 from sim.garage.imported import BUNDLE_SUFFIX
 from sim.race.driver import REFERENCE_NAME
 from sim.race.engine import run_race as engine_run_race
-from sim.race.rules import DEFAULT_RULES, RaceRules, rules_from_mapping
+from sim.race.rules import DEFAULT_RULES, DROA_REWARD_RULES, RaceRules, rules_from_mapping
+from sim.reward.droa_check import droa_verdict
+from sim.reward.errors import RewardFunctionError
+from sim.tracks.catalog import DEFAULT_TRACK
 from sim.tracks.track import Track
 
 if TYPE_CHECKING:
@@ -258,6 +262,8 @@ def _open(league: League, night: Night) -> None:
 
 def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant:
     spec = model_spec(model)
+    if night.rules.reward_rules == DROA_REWARD_RULES:
+        _check_droa_reward(night, spec)
     with league.transaction():
         _open(league, night)
         name = ensure_racer(league, racer)
@@ -273,6 +279,41 @@ def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant
         )
     shown = display_names(league, name).get(name, name)
     return Entrant(entrant_id, name, shown, spec)
+
+
+def _check_droa_reward(night: Night, spec: str) -> None:
+    """A night under DeepRacer on AWS's reward rules takes a model only if DRoA's validator
+    would take its reward function (on the night's track). The reference driver, a
+    physical car and a model that drives with a DeepRacer graph have none to check; a
+    bundle's travels as text and is checked as it is."""
+    if spec == REFERENCE_NAME or is_physical(spec):
+        return
+    if spec.endswith(BUNDLE_SUFFIX):
+        try:
+            source, name = read_bundle(Path(spec)).reward_source, spec
+        except BundleError as error:
+            raise LeagueError(str(error)) from None
+    else:
+        folder = open_model(spec)
+        if folder.drives_with_car_archive():
+            return
+        source, name = folder.reward_source(), str(folder.reward_file)
+    # DRoA runs the function on its track's route: the night's, or where this machine has
+    # no copy of it, the default track's (the verdict then says which it used).
+    local = find_local_track(night.track_hash, night.track_name)
+    try:
+        verdict = droa_verdict(source, name, local.name if local else DEFAULT_TRACK)
+    except RewardFunctionError as error:
+        raise LeagueError(f"{spec}'s reward function could not be checked: {error}") from None
+    if verdict.accepted:
+        return
+    first = verdict.reasons[0]
+    where = f" (line {first.line})" if first.line is not None else ""
+    raise LeagueError(
+        f"{spec}'s reward function would be refused by DeepRacer on AWS{where}: "
+        f"{first.message.strip()} This night takes only functions DRoA takes: fix it, and "
+        "check it with `racer-tui reward check --strict`."
+    )
 
 
 def withdraw_entrant(league: League, night: Night, entrant_id: str, made_by: str) -> Entrant:

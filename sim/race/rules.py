@@ -44,6 +44,10 @@ class RankingMethod(StrEnum):
     TOTAL_TIME = "total_time"  # total time of the first N valid laps
 
 
+# `reward_rules` that hold a night's models to DeepRacer on AWS's reward validator.
+DROA_REWARD_RULES = "droa"
+
+
 class Verification(StrEnum):
     """Which results a board under these rules ranks, by each result's standing
     (league.trust.standing): every one, or only those a machine can vouch for by racing
@@ -96,6 +100,10 @@ class RaceRules:
     # DeepRacer on AWS's minimumLaps: a race is ranked only once it has this many
     # consecutive counting laps, whatever it is ranked by (its BEST_LAP_TIME races too).
     min_laps: int = 1
+    # "droa": a night takes only models whose reward function DeepRacer on AWS's validator
+    # would take (sim.reward.droa_rules), for a league that mirrors a DRoA event; "":
+    # racer-tui's own check only.
+    reward_rules: str = ""
 
     def __post_init__(self) -> None:
         if self.race_type is RaceType.OBJECT_AVOIDANCE and not 1 <= self.obstacles <= MAX_OBSTACLES:
@@ -133,6 +141,8 @@ class RaceRules:
             data["verification"] = self.verification.value
         if self.min_laps == 1:
             del data["min_laps"]  # likewise
+        if not self.reward_rules:
+            del data["reward_rules"]  # likewise
         return data
 
     def lap_of(self, lap: int) -> str:
@@ -195,6 +205,8 @@ class RaceRules:
         words = f"{length}, {self.penalty_seconds:g} s per off-track, {limit}, ranked by {ranking}"
         if self.min_laps > 1:
             words = f"{words} once {self.min_laps} laps in a row count"
+        if self.reward_rules == DROA_REWARD_RULES:
+            words = f"{words}, reward functions DeepRacer on AWS would take"
         if self.verification is not Verification.ANY:
             words = f"{words} ({self.verification.words})"
         if self.race_type is RaceType.TIME_TRIAL:
@@ -287,6 +299,7 @@ def rules_from_mapping(data: Mapping[str, Any], base: RaceRules = DEFAULT_RULES)
         lap_count=_lap_count(values.get("lap_count")),
         verification=_verification(values.get("verification", Verification.ANY.value)),
         min_laps=_whole(values.get("min_laps", 1), "min_laps", 1, 100),
+        reward_rules=_reward_rules(values.get("reward_rules", "")),
         **_race_type_values(values),
     )
     for key in data:  # a key of another race type would be silently dropped: say so
@@ -505,6 +518,17 @@ def score_laps(laps: Sequence[TimedLap], rules: RaceRules) -> Score:
     best = min(candidates, key=lambda idx: (round(total(idx), 6), offtracks(idx), idx))
     value = total(best) / n if rules.ranking is RankingMethod.BEST_AVERAGE else total(best)
     return Score(value, tuple(i + 1 for i in best), offtracks(best), len(valid))
+
+
+def _reward_rules(value: object) -> str:
+    if value in ("", None, "racer-tui"):
+        return ""
+    if value == DROA_REWARD_RULES:
+        return DROA_REWARD_RULES
+    raise RulesError(
+        f"reward_rules must be {DROA_REWARD_RULES} (DeepRacer on AWS's validator) or "
+        f"racer-tui, not {value!r}."
+    )
 
 
 def _longest_run(indexes: Sequence[int]) -> int:

@@ -148,3 +148,21 @@ def test_a_night_under_the_droa_preset_ranks_as_droa_would(
     # 1 s per off-track inside each lap's time, as DRoA's simulator adds it.
     assert droa_order[0] == ("cy", 31400)
     assert board["rankings"][1]["stats"]["offTrackCount"] in (1, 2)
+
+
+def test_a_night_under_droa_s_reward_rules_takes_only_what_droa_takes(league: League) -> None:
+    from league.errors import LeagueError
+    from sim.garage.options import new_model
+    from sim.race.rules import rules_from_mapping
+
+    rules = rules_from_mapping({"reward_rules": "droa"}, base=DROA_RULES)
+    assert "reward functions DeepRacer on AWS would take" in rules.describe()
+    night = nights.new_night(league, resolve_track(TRACK), rules=rules)
+    fine = new_model("fine")  # the default template passes DRoA's validator
+    nights.add_entrant(league, night, "ana", fine.name)
+    nights.add_entrant(league, night, "bob", "reference")
+    whole = new_model("whole")
+    whole.reward_file.write_text("def reward_function(params):\n    return 1\n")
+    with pytest.raises(LeagueError, match=r"refused by DeepRacer on AWS.*non-floating"):
+        nights.add_entrant(league, night, "cy", whole.name)
+    assert [entrant.racer for entrant in nights.entrants(league, night)] == ["ana", "bob"]
