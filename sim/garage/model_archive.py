@@ -159,6 +159,39 @@ def unpack_model_archive(path: Path, into: Path) -> UnpackedArchive:
     return UnpackedArchive(ArchiveKind.VIRTUAL, tuple(kept))
 
 
+# How far `may_hold_reward_code` reads before it answers "perhaps" (asking is harmless).
+SCAN_BYTES = 256 * 1024**2
+
+
+def may_hold_reward_code(path: Path) -> bool:
+    """Whether the archive may bring a reward function someone wrote (a DeepRacer on AWS
+    virtual model does; a car archive does not), read from its member names only, as far
+    as `SCAN_BYTES` in: quick enough to ask before importing."""
+    try:
+        with path.open("rb") as raw, gzip.GzipFile(fileobj=raw) as unzipped:
+            stream = CappedStream(unzipped, SCAN_BYTES, _scanned_enough)
+            with tarfile.open(fileobj=stream, mode="r|") as tar:
+                for member in tar:
+                    name = member.name.removeprefix("./")
+                    if name == GRAPH_MEMBER:
+                        return False
+                    if name == REWARD_FUNCTION:
+                        return True
+    except _ScannedEnoughError:
+        return True
+    except (tarfile.TarError, EOFError, zlib.error, OSError):
+        return False  # not an archive at all: the import says what it is
+    return False
+
+
+class _ScannedEnoughError(Exception):
+    pass
+
+
+def _scanned_enough() -> None:
+    raise _ScannedEnoughError
+
+
 def _limit(name: str) -> int | None:
     if name in _KEPT_EXACT:
         return _KEPT_EXACT[name]

@@ -53,6 +53,7 @@ from sim.garage.deepracer_notes import export_notes
 from sim.garage.folder import ModelError, ModelFolder, delete_model, list_models, open_model
 from sim.garage.imported import BUNDLE_SUFFIX
 from sim.garage.importing import import_model
+from sim.garage.model_archive import may_hold_reward_code
 from sim.garage.options import spec_of
 from sim.garage.overview import listing_signature, model_details, model_row
 from sim.race.rules import DEFAULT_RULES
@@ -150,7 +151,11 @@ def confirm_someone_elses_code(
     """A DeepRacer folder brings its author's reward_function.py: importing never runs it,
     but training will, with the racer's rights, so the racer says yes to that first."""
     source = Path(request.path).expanduser()
-    if not source.is_dir() or locate_files(source).reward_function is None:
+    if source.is_dir():
+        brings_code = locate_files(source).reward_function is not None
+    else:  # a DeepRacer on AWS model's archive brings one too
+        brings_code = is_car_archive_name(source) and may_hold_reward_code(source)
+    if not brings_code:
         then(request)
         return
 
@@ -158,10 +163,11 @@ def confirm_someone_elses_code(
         if yes:
             then(request)
 
+    kind = "folder" if source.is_dir() else "archive"
     ask(
         screen.app,
         f"Import {source.name} with its reward function?",
-        "The folder's reward_function.py is code someone wrote. Importing only reads it; "
+        f"The {kind}'s reward_function.py is code someone wrote. Importing only reads it; "
         "training this model, or Check (ctrl+r) in the editor, runs it, held to a time and "
         "memory limit and kept from starting programs (on Linux also from your files). If "
         "it is not yours, read it first (e, Reward function tab) before you run it.",

@@ -217,6 +217,32 @@ async def test_a_folder_with_someone_elses_reward_code_is_imported_only_when_con
             assert _names() == ([] if answer == "n" else ["from-a-friend"])
 
 
+async def test_a_droa_archive_brings_reward_code_and_is_asked_about_a_car_archive_not(
+    deepracer_dir: Path, tmp_path: Path
+) -> None:
+    from tests.sim.garage.droa_archives import physical_model_archive, virtual_model_archive
+
+    virtual = virtual_model_archive(deepracer_dir, tmp_path)
+    physical = physical_model_archive(deepracer_dir, tmp_path, name="car-one")
+    app = create_app(start="garage")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        await pilot.press("i")
+        app.screen.query_one("#path", Input).value = str(virtual)
+        await pilot.press("enter")
+        await settle(pilot)
+        assert isinstance(app.screen, ConfirmDialog)
+        assert "archive's reward_function.py is code someone wrote" in painted(app.screen)
+        await pilot.press("y")
+        await settle(pilot)
+        await pilot.press("i")
+        app.screen.query_one("#path", Input).value = str(physical)
+        await pilot.press("enter")
+        await settle(pilot)
+        assert not isinstance(app.screen, ConfirmDialog)  # a car archive has no reward code
+    assert sorted(_names()) == ["car-one", "sample-model"]
+
+
 async def test_import_of_a_missing_path_is_refused_in_the_dialog(tmp_path: Path) -> None:
     app = create_app(start="garage")
     async with app.run_test(size=(120, 36)) as pilot:
