@@ -310,9 +310,9 @@ def _check_droa_reward(night: Night, spec: str) -> None:
     first = verdict.reasons[0]
     where = f" (line {first.line})" if first.line is not None else ""
     raise LeagueError(
-        f"{spec}'s reward function would be refused by DeepRacer on AWS{where}: "
-        f"{first.message.strip()} This night takes only functions DRoA takes: fix it, and "
-        "check it with `racer-tui reward check --strict`."
+        f"{spec}'s reward function would be refused by DeepRacer on AWS{where}, saying "
+        f'"{first.message.strip()}"; this night takes only functions DRoA takes: fix it, '
+        "and check it with `racer-tui reward check --strict`."
     )
 
 

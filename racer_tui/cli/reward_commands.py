@@ -233,8 +233,8 @@ def _strict_exit(args: argparse.Namespace, droa: DroaVerdict) -> int:
     first = droa.reasons[0]
     where = f" (line {first.line})" if first.line is not None else ""
     raise DroaRefusedError(
-        f"{args.file}: DeepRacer on AWS would refuse it{where}: {first.message.strip()} "
-        "Fix it, or check without --strict."
+        f'{args.file}: DeepRacer on AWS would refuse it{where}, saying "'
+        f'{first.message.strip()}"; fix that, or check without --strict.'
     )
 
 
