@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from sim.reward.errors import RewardFunctionError
 from sim.tracks.catalog import find_track_info, resolve_track
 
 MAX_CHARACTERS = 140_000
@@ -146,7 +147,12 @@ def run_flake8(source: str) -> list[DroaReason]:
         except subprocess.TimeoutExpired:
             return [DroaReason(TEST_FAILURE, f"flake8 did not finish within {FLAKE8_SECONDS:g} s.")]
     if done.returncode not in (0, 1) or "No module named flake8" in done.stderr:
-        raise RuntimeError(f"flake8 could not run: {done.stderr.strip()[-300:]}")
+        last = (done.stderr.strip().splitlines() or ["no message"])[-1][:200]
+        raise RewardFunctionError(
+            "DeepRacer on AWS's check",
+            f"flake8, which it runs, could not run here ({last})",
+            advice="reinstall racer-tui (its dependencies include flake8 7.3.0)",
+        )
     return [_flake8_reason(line) for line in done.stdout.splitlines() if line.strip()]
 
 

@@ -162,7 +162,7 @@ def check_reward(source: str, track: str | None = None, top_speed: float = 2.0) 
     try:
         if track is None:
             report = check_reward_source(source, REWARD_FILE_NAME)
-            droa = droa_verdict(source, REWARD_FILE_NAME, DEFAULT_TRACK)
+            droa = _droa_verdict(source, DEFAULT_TRACK)
             return RewardChecked(report.sample_reward, None, droa=droa)
         checked = editor_check(
             source,
@@ -171,11 +171,19 @@ def check_reward(source: str, track: str | None = None, top_speed: float = 2.0) 
             MapOptions(spacing=EDITOR_MAP_SPACING, speed=top_speed),
             (1.0, top_speed) if top_speed > 1.0 else (top_speed, 4.0),
         )
-        # DeepRacer on AWS's validator too: a racer may take this function there.
-        droa = droa_verdict(source, REWARD_FILE_NAME, track)
     except RewardFunctionError as error:
         return RewardChecked(None, error)
+    droa = _droa_verdict(source, track)
     return RewardChecked(checked.sample_reward, None, checked.reward_map, checked.laps, droa)
+
+
+def _droa_verdict(source: str, track: str) -> DroaVerdict | None:
+    """DeepRacer on AWS's validator too, since a racer may take this function there; None
+    where it could not be run (racer-tui's own check has passed: that result stands)."""
+    try:
+        return droa_verdict(source, REWARD_FILE_NAME, track)
+    except RewardFunctionError:
+        return None
 
 
 def droa_words(verdict: DroaVerdict) -> Text:
