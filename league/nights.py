@@ -260,6 +260,25 @@ def _open(league: League, night: Night) -> None:
 # --- entrants and heats ------------------------------------------------------------------------
 
 
+# What a host should know about a car before entering it (it is still entered): the app's
+# add-entrant dialog says it as the car is typed, `night add` after entering it.
+PHYSICAL_RULES_NOTE = (
+    "A physical car is timed by hand: the physical rules (no time added per reset) are "
+    "how DeepRacer's own events time one; this night keeps the rules it opened with."
+)
+TRAINING_NOTE = "{model} is still training: its heat races the policy it has when the heat runs."
+
+
+def entrant_note(model: str, *, training: Collection[str], physical_rules: bool) -> str:
+    """The note on entering `model` ("" for none): `training` names the garage models
+    training now; `physical_rules`, whether the night races under the physical preset."""
+    if model in training:
+        return TRAINING_NOTE.format(model=model)
+    if is_physical(model) and not physical_rules:
+        return PHYSICAL_RULES_NOTE
+    return ""
+
+
 def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant:
     spec = model_spec(model)
     if night.rules.reward_rules == DROA_REWARD_RULES:

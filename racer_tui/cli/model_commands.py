@@ -51,7 +51,7 @@ from sim.garage.options import (
     parse_hp_assignments,
     parse_range,
 )
-from sim.garage.overview import model_details, model_row
+from sim.garage.overview import model_details, model_row, network_words
 from sim.sensors.randomisation.settings import parse_camera_randomisation
 
 NAMES = ("model",)
@@ -418,7 +418,7 @@ def _show(name: str, as_json: bool) -> int:
         ("race", details["race"]),
         ("sensor", details["sensor"]),
         ("actions", details["actions_summary"]),
-        ("network", metadata["neural_network"]),
+        ("network", network_words(metadata)),
         ("algorithm", metadata["training_algorithm"]),
         *(
             [("drives with", "a DeepRacer car archive, never trained here")]

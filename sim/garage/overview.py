@@ -6,6 +6,7 @@ wording of a model's state lives in one place.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -210,3 +211,21 @@ def _action_rows(space: ActionSpace) -> list[dict[str, Any]]:
         {"index": i, "steering_angle": a.steering_angle, "speed": a.speed}
         for i, a in enumerate(space.actions)
     ]
+
+
+_NETWORK_SIZES = {
+    "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW": "shallow",
+    "DEEP_CONVOLUTIONAL_NETWORK": "standard",
+    "DEEP_CONVOLUTIONAL_NETWORK_DEEP": "deep",
+}
+
+
+def network_words(metadata: Mapping[str, Any]) -> str:
+    """The network the model really has. DeepRacer's files name a convolutional network
+    whatever the sensor; a model without a camera has no image to convolve, and racer-tui
+    trains dense layers only, of the size the name says."""
+    name = str(metadata.get("neural_network") or "-")
+    sensors = metadata.get("sensor") or []
+    if any("CAMERA" in str(sensor) for sensor in sensors) or name not in _NETWORK_SIZES:
+        return name
+    return f"dense, {_NETWORK_SIZES[name]} (no camera)"

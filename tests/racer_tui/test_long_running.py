@@ -349,7 +349,7 @@ async def test_a_section_seen_first_under_a_dialog_is_frozen_once_the_dialog_clo
     """The first visit's freeze waits for the dialog to close instead of being left to a
     sweep: steady keys never give a sweep its calm, and every full collection walked the
     section's objects instead (130-170 ms each in a soak beside a training)."""
-    import racer_tui.app.application as application
+    from racer_tui.app import application
     from racer_tui.app.application import create_app
     from racer_tui.app.screens.help import HelpScreen
     from tests.racer_tui.screens.tui_helpers import settle

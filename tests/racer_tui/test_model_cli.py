@@ -268,3 +268,34 @@ def test_a_model_for_object_avoidance_is_made_with_deepracers_keys(
         capsys, "model", "new", "blind", "--race-type", "object-avoidance", "--sensor", "vector"
     )
     assert code == 2 and "needs a camera or a lidar" in err
+
+
+def test_show_names_the_network_a_vector_model_really_has(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # Issue 42, point 13: the command line said DEEP_CONVOLUTIONAL_NETWORK_SHALLOW.
+    run_cli(capsys, "model", "new", "vec", "--sensor", "vector")
+    code, out, _ = run_cli(capsys, "model", "show", "vec")
+    assert code == 0
+    assert "dense, shallow (no camera)" in out
+
+
+def test_entering_a_model_still_training_says_so_as_the_app_does(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    db = str(tmp_path / "league.db")
+    run_cli(capsys, "model", "new", "busy")
+    add_policy(open_model("busy"))
+    write_training_state(open_model("busy"), "running")
+    run_cli(capsys, "night", "new", "--db", db, "--name", "friday")
+    code, out, err = run_cli(
+        capsys, "night", "add", "friday", "--racer", "ana", "--model", "busy", "--db", db
+    )
+    assert code == 0, err
+    assert (
+        "Note: busy is still training: its heat races the policy it has when the heat runs." in out
+    )
+    code, out, _ = run_cli(
+        capsys, "night", "add", "friday", "--racer", "bo", "--model", "physical:car1", "--db", db
+    )
+    assert "Note: A physical car is timed by hand" in out

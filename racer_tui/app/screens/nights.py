@@ -40,6 +40,7 @@ from league.nights import (
     close_night,
     delete_night,
     draw_heats,
+    entrant_note,
     entrants,
     find_night_track,
     heats,
@@ -106,18 +107,14 @@ from sim.training.drivers import DriversByHash, resolve_driver
 # In the narrow panes the optional columns (keep 1 and 2) give way before a name loses its end.
 NAME = Col("", keep=3, shrink_to=10, collapses=False)
 NIGHT_COLUMNS = (replace(NAME, label="night"), Col("track", keep=1, shrink_to=8), Col("state"))
-# The car says who is physical: it loses the end of its name, never its column.
+# The car says who is physical and which car: it loses the middle of "physical: car1"
+# ("phys…car1"), never its column (cut at the end, two physical cars looked alike).
 HEAT_COLUMNS = (
     "#",
     replace(NAME, label="racer", shrink_to=8),
-    Col("car", keep=2, shrink_to=9, collapses=False),
+    Col("car", keep=2, shrink_to=9, collapses=False, cuts_middle=True),
     Col("result", keep=1, shrink_to=11, collapses=False),  # "best 10.569" is never cut
 )
-PHYSICAL_RULES_NOTE = (
-    "A physical car is timed by hand: the physical rules (no time added per reset) are "
-    "how DeepRacer's own events time one; this night keeps the rules it opened with."
-)
-TRAINING_NOTE = "{model} is still training: its heat races the policy it has when the heat runs."
 MIXED_STANDINGS_NOTE = (
     "physical and simulated laps ranked together here; the League keeps physical laps "
     "on a board of their own"
@@ -355,12 +352,9 @@ class AddEntrantDialog(FormDialog[str]):
     @on(Input.Changed, "#entrant-model")
     def _note(self, event: Input.Changed) -> None:
         """What a host should know about this car before entering it (it is still allowed)."""
-        model = event.value.strip()
-        note = ""
-        if model in self._training:
-            note = TRAINING_NOTE.format(model=model)
-        elif is_physical(model) and not self._physical_rules:
-            note = PHYSICAL_RULES_NOTE
+        note = entrant_note(
+            event.value.strip(), training=self._training, physical_rules=self._physical_rules
+        )
         shown = self.query_one("#entrant-note", Static)
         shown.update(Text(note, style="yellow"))
         shown.display = bool(note)  # no empty rows pushing the buttons down when none

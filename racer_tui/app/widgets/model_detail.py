@@ -22,6 +22,7 @@ from racer_tui.app.words import said_in_app
 from sim.deepracer.action_space import ActionSpace
 from sim.deepracer.files import HYPERPARAMETER_SPECS
 from sim.foundation.remedies import fix_named
+from sim.garage.overview import network_words
 
 STATUS_STYLES = {
     "untrained": "dim",
@@ -138,7 +139,7 @@ class ModelDetail(VerticalScroll):
             )
         if details.get("car_look"):
             table.add_row("car", _plain(details["car_look"]))
-        table.add_row("network", _plain(network_text(metadata)))
+        table.add_row("network", _plain(network_words(metadata)))
         table.add_row("car hash", _plain(str(details["content_hash"])[:16]))
         table.add_row("folder", _plain(details["path"]))
         for key, value in details["notes"].items():
@@ -230,21 +231,3 @@ class ModelDetail(VerticalScroll):
                 Text(str(trial.get("episode_status", ""))),
             )
         return Group(table, Text(""), Text("latest trials", style="dim"), trials)
-
-
-_NETWORK_SIZES = {
-    "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW": "shallow",
-    "DEEP_CONVOLUTIONAL_NETWORK": "standard",
-    "DEEP_CONVOLUTIONAL_NETWORK_DEEP": "deep",
-}
-
-
-def network_text(metadata: Mapping[str, Any]) -> str:
-    """The network the model really has. DeepRacer's files name a convolutional network
-    whatever the sensor; a model without a camera has no image to convolve, and racer-tui
-    trains dense layers only, of the size the name says."""
-    name = str(metadata.get("neural_network") or "-")
-    sensors = metadata.get("sensor") or []
-    if any("CAMERA" in str(sensor) for sensor in sensors) or name not in _NETWORK_SIZES:
-        return name
-    return f"dense, {_NETWORK_SIZES[name]} (no camera)"

@@ -28,6 +28,7 @@ from league.opening import open_league
 from league.race_types import race_type_of
 from league.report import SCORE_TITLES, seconds
 from league.store import League
+from league.timekeeper.car import PHYSICAL
 from racer_tui.cli.app_launch import AppLaunch
 from racer_tui.cli.league_commands.board import garage_model_hashes
 from racer_tui.cli.output import plain_table, print_json, print_table
@@ -35,6 +36,7 @@ from racer_tui.cli.rules_option import rules_option
 from sim.foundation.home import LEAGUE_ENV
 from sim.foundation.plural import counted
 from sim.foundation.remedies import RemedyError
+from sim.garage.folder import list_models
 from sim.race.rules import DEFAULT_RULES, RulesError, preset_rules, rules_from_mapping
 from sim.tracks.catalog import resolve_track
 from sim.training.drivers import DriversByHash, resolve_driver
@@ -95,6 +97,13 @@ def night_command(league: League, args: argparse.Namespace) -> int:
     if action == "add":
         entrant = nights.add_entrant(league, night, args.racer, args.model)
         print(f"Entered {entrant.racer} with {entrant.model} ({entrant.id}).")
+        note = nights.entrant_note(
+            entrant.model,
+            training={folder.name for folder in list_models() if folder.is_training()},
+            physical_rules=night.rules == preset_rules(PHYSICAL),
+        )
+        if note:
+            print(f"Note: {note}")
         return 0
     if action == "draw":
         order = nights.draw_heats(league, night, args.seed)

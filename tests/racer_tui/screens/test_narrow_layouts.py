@@ -138,12 +138,12 @@ def test_the_demo_caption_never_cuts_a_figure_in_the_middle() -> None:
 
 def test_a_model_without_a_camera_is_not_called_convolutional() -> None:
     """Point 13: vector models were labelled DEEP_CONVOLUTIONAL_NETWORK_SHALLOW."""
-    from racer_tui.app.widgets.model_detail import network_text
+    from sim.garage.overview import network_words
 
     shallow = "DEEP_CONVOLUTIONAL_NETWORK_SHALLOW"
-    vector = network_text({"neural_network": shallow, "sensor": ["VECTOR"]})
+    vector = network_words({"neural_network": shallow, "sensor": ["VECTOR"]})
     assert vector == "dense, shallow (no camera)"
-    camera = network_text({"neural_network": shallow, "sensor": ["FRONT_FACING_CAMERA"]})
+    camera = network_words({"neural_network": shallow, "sensor": ["FRONT_FACING_CAMERA"]})
     assert camera == shallow
 
 

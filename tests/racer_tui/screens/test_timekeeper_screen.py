@@ -321,3 +321,20 @@ async def test_a_lap_faster_than_a_real_car_can_drive_is_not_captured() -> None:
         watch.now += 10.0
         await pilot.press("l")
         assert len(keeper.query_one(LapList).rows()) == 1  # the lap goes on and is captured
+
+
+async def test_two_physical_cars_stay_apart_in_a_narrow_heats_table() -> None:
+    # Issue 42, point 8 (walk at 60x20): both cars were cut to "physical…".
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        add_entrant(league, night, "bartholomew", "physical:blue car 1")
+        add_entrant(league, night, "carolina", "physical:blue car 2")
+        draw_heats(league, night, seed=1)
+    app = create_app(start="league")
+    async with app.run_test(size=(60, 20)) as pilot:
+        nights = await the_nights_screen(pilot)
+        cars = [row[2] for row in table_rows(nights, "#heats")]
+        # "phys…ar 1": the kind at the front and the car's own end both stay.
+        assert len(set(cars)) == 2, cars
+        assert sorted(car[-1] for car in cars) == ["1", "2"]
+        assert all(car.startswith("phys") for car in cars)
