@@ -58,9 +58,9 @@ class NightGone(Message):
 
 
 # What the last line says: the view updates itself while the night runs; once it is
-# closed its standings are final.
-OPEN_HINT = f"{LEAVE_HINT} · updates by itself as heats run and end"
-CLOSED_HINT = f"{LEAVE_HINT} · the night is closed: its standings are final"
+# closed its standings are final. Short enough for 60 columns.
+OPEN_HINT = f"{LEAVE_HINT} · updates itself as heats run"
+CLOSED_HINT = f"{LEAVE_HINT} · closed: its standings are final"
 
 
 @dataclass

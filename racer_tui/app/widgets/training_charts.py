@@ -341,7 +341,7 @@ def counters(figures: TrainingFigures) -> Text:
 def empty_reason(figures: TrainingFigures, chart_id: str) -> str:
     """What an empty chart says in its plot's place: why it has nothing to draw."""
     if figures.ended is not None and figures.ended.kind == "failed":
-        return "the training failed (see above)"
+        return "training failed: see above"  # short: a chart at 60 columns is 28 wide
     if chart_id == "lap-time" and figures.episodes:
         return "no lap completed yet"
     if figures.ended is None and (figures.started is not None or figures.is_starting):

@@ -10,6 +10,8 @@ import json
 import os
 from datetime import UTC, datetime, timedelta
 
+import pytest
+
 from racer_tui.app.application import create_app
 from racer_tui.app.screens.training import TrainingScreen
 from racer_tui.app.widgets.chart import LineChart
@@ -205,10 +207,12 @@ def test_an_empty_chart_says_why_never_waiting_beside_data() -> None:
     assert "failed" in empty_reason(figures, "entropy")
 
 
-async def test_a_failed_training_says_so_in_its_charts_place() -> None:
+@pytest.mark.parametrize("size", [(120, 40), (80, 24)])
+async def test_a_failed_training_says_so_in_its_charts_place(size: tuple[int, int]) -> None:
+    # At 80x24 the walk read "the training failed (see a": each chart says it whole.
     new_model("ada")
     app = create_app(start="training")
-    async with app.run_test(size=(120, 40)) as pilot:
+    async with app.run_test(size=size) as pilot:
         await settle(pilot)
         screen = app.screen
         assert isinstance(screen, TrainingScreen)
@@ -219,7 +223,7 @@ async def test_a_failed_training_says_so_in_its_charts_place() -> None:
         await pilot.pause()
         text = painted(charts)
         assert "waiting for data" not in text
-        assert text.count("the training failed") == 6
+        assert text.count("training failed: see above") == 6
 
 
 async def test_the_agents_eye_view_has_a_place_at_80x24() -> None:
