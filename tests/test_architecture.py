@@ -172,6 +172,11 @@ NOT_FOR_PEOPLE = {
     "sim.training.events.EventError",
     "sim.foundation.strict_yaml.DuplicateKeyError",
     "racer_tui.app.monkey.InvariantError",
+    # Control flow inside one module, each caught there and said in its own words.
+    "sim.foundation.untrusted_tar.UnsafeMemberError",
+    "sim.garage.model_archive._ScannedEnoughError",
+    "sim.reward.droa_rules._ChainError",
+    "sim.reward.droa_rules._DroaImportError",
 }
 
 

@@ -34,6 +34,8 @@ syntax error here and not there.
 from __future__ import annotations
 
 import ast
+import builtins
+import inspect
 import json
 import math
 import subprocess
@@ -411,7 +413,6 @@ def runtime_reasons(
     """DRoA's run of the code (steps 6-7), with `call` running each call under its time
     limit. Stops where DRoA stops: after the import check fails, and at the first state
     that fails (the later ones fail the same way or say nothing new)."""
-    import builtins  # noqa: PLC0415 - the import hook is swapped only around one call
 
     def refuse_import(name: str, *_args: object, **_kwargs: object) -> object:
         message = "Import should be put at the top of file, module: " + name
@@ -473,8 +474,6 @@ class _DroaImportError(Exception):
 
 
 def _signature_parameters(function: Callable[..., object]) -> Mapping[str, object]:
-    import inspect  # noqa: PLC0415 - only the runtime check needs it
-
     return inspect.signature(function).parameters
 
 
