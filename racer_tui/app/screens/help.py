@@ -107,6 +107,12 @@ class HelpScreen(RacerScreen[None]):
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("escape", "close", "Close help"),
+        # The filter has the focus, and keys it does not use scroll the topics: a host
+        # who presses PageDown in help expects the page to move, not to Tab there first.
+        Binding("pagedown", "scroll('page_down')", "Page down", show=False),
+        Binding("pageup", "scroll('page_up')", "Page up", show=False),
+        Binding("down", "scroll('scroll_down')", "Scroll down", show=False),
+        Binding("up", "scroll('scroll_up')", "Scroll up", show=False),
     ]
 
     def __init__(self, topics: Sequence[HelpTopic], notes: str = "") -> None:
@@ -154,6 +160,10 @@ class HelpScreen(RacerScreen[None]):
             keys.display = table is not None
             if table is not None:
                 keys.update(table)
+
+    def action_scroll(self, how: str) -> None:
+        topics = self.query_one("#help-topics", VerticalScroll)
+        getattr(topics, f"action_{how}")()
 
     def action_close(self) -> None:
         self.dismiss(None)

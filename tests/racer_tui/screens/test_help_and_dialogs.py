@@ -142,3 +142,32 @@ async def test_a_longer_answer_after_a_shorter_one_is_shown_whole() -> None:
         assert isinstance(dialog, ConfirmDialog)
         assert "Close night (y)" in painted(dialog.query_one("#confirm", Button))
         assert "Cancel (n)" in painted(dialog.query_one("#cancel", Button))
+
+
+async def test_page_keys_scroll_the_help_while_its_filter_has_the_focus() -> None:
+    # The walk at 60x20: PageDown did nothing until Tab left the filter.
+    from textual.containers import VerticalScroll
+    from textual.widgets import Input
+
+    from racer_tui.app.application import create_app
+    from racer_tui.app.screens.help import HelpScreen
+
+    app = create_app(start="garage")
+    async with app.run_test(size=(60, 20)) as pilot:
+        await settle(pilot)
+        await pilot.press("question_mark")
+        await settle(pilot)
+        assert isinstance(app.screen, HelpScreen)
+        assert isinstance(app.focused, Input)
+        topics = app.screen.query_one("#help-topics", VerticalScroll)
+        await pilot.press("pagedown")
+        await pilot.pause()
+        paged = topics.scroll_target_y
+        assert paged > 0
+        await pilot.press("down")
+        await pilot.pause()
+        assert topics.scroll_target_y > paged
+        await pilot.press("pageup", "pageup")
+        await pilot.pause()
+        assert topics.scroll_target_y == 0
+        assert isinstance(app.focused, Input)  # typing still filters
