@@ -24,6 +24,8 @@ from tests.sim.garage.droa_archives import (
     write_archive,
 )
 
+NO_WEIGHTS = ("model/model_30.pb", "model/deepracer_checkpoints.json")
+
 
 def _graph_bytes(archive: Path) -> bytes:
     with tarfile.open(archive) as tar:
@@ -81,9 +83,10 @@ def test_a_virtual_model_imports_with_its_direction_weights_metrics_and_look(
 def test_the_direction_is_read_as_droa_reads_it(
     deepracer_dir: Path, tmp_path: Path, clockwise: object, world: str
 ) -> None:
-    # DRoA's import takes only the YAML boolean true as clockwise (`=== true`).
+    # DRoA's import takes only the YAML boolean true as clockwise (`=== true`). Without
+    # its weights: running the graph has nothing to do with the track.
     archive = virtual_model_archive(
-        deepracer_dir, tmp_path, params={"TRACK_DIRECTION_CLOCKWISE": clockwise}
+        deepracer_dir, tmp_path, params={"TRACK_DIRECTION_CLOCKWISE": clockwise}, drop=NO_WEIGHTS
     )
     assert import_model(archive).folder.training_params().world_name == world
 
@@ -93,6 +96,7 @@ def test_a_one_direction_track_has_no_direction_key(deepracer_dir: Path, tmp_pat
         deepracer_dir,
         tmp_path,
         params={"WORLD_NAME": "Albert", "TRACK_DIRECTION_CLOCKWISE": None},
+        drop=NO_WEIGHTS,
     )
     assert import_model(archive).folder.training_params().world_name == "Albert"
 
@@ -128,9 +132,7 @@ def test_a_physical_model_is_the_car_archive_named_as_its_model(
 def test_a_virtual_model_without_weights_starts_untrained(
     deepracer_dir: Path, tmp_path: Path
 ) -> None:
-    archive = virtual_model_archive(
-        deepracer_dir, tmp_path, drop=("model/model_30.pb", "model/deepracer_checkpoints.json")
-    )
+    archive = virtual_model_archive(deepracer_dir, tmp_path, drop=NO_WEIGHTS)
     result = import_model(archive)
     assert not result.folder.has_car_archive()
     assert any("untrained" in str(note) for note in result.notes)
@@ -198,7 +200,10 @@ def test_the_archive_s_training_params_keep_droa_s_keys(
     deepracer_dir: Path, tmp_path: Path
 ) -> None:
     archive = virtual_model_archive(
-        deepracer_dir, tmp_path, params={"BODY_SHELL_TYPE": "f1_car_tron_05", "CAR_COLOR": None}
+        deepracer_dir,
+        tmp_path,
+        params={"BODY_SHELL_TYPE": "f1_car_tron_05", "CAR_COLOR": None},
+        drop=NO_WEIGHTS,
     )
     folder = import_model(archive).folder
     written = yaml.safe_load(folder.training_params_file.read_text())
