@@ -109,10 +109,11 @@ class HelpScreen(RacerScreen[None]):
         Binding("escape", "close", "Close help"),
         # The filter has the focus, and keys it does not use scroll the topics: a host
         # who presses PageDown in help expects the page to move, not to Tab there first.
-        Binding("pagedown", "scroll('page_down')", "Page down", show=False),
-        Binding("pageup", "scroll('page_up')", "Page up", show=False),
-        Binding("down", "scroll('scroll_down')", "Scroll down", show=False),
-        Binding("up", "scroll('scroll_up')", "Scroll up", show=False),
+        # (No descriptions: what they do goes without saying.)
+        Binding("pagedown", "scroll('page_down')", show=False),
+        Binding("pageup", "scroll('page_up')", show=False),
+        Binding("down", "scroll('scroll_down')", show=False),
+        Binding("up", "scroll('scroll_up')", show=False),
     ]
 
     def __init__(self, topics: Sequence[HelpTopic], notes: str = "") -> None:
