@@ -126,8 +126,10 @@ def droa_rankings(
             scored.append((score, order, entry, stats))
     scored.sort(key=lambda item: (item[0], item[1]))
     rankings: list[dict[str, Any]] = []
-    for score, _, entry, stats in scored:
-        rank = 1 + sum(1 for other, *_ in scored if other < score)
+    rank, previous = 0, None
+    for place, (score, _, entry, stats) in enumerate(scored, start=1):
+        if score != previous:  # equal scores share the first one's rank
+            rank, previous = place, score
         rankings.append(
             {
                 "rank": rank,

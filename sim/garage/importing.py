@@ -56,8 +56,7 @@ def _import_archive(
     """A `.tar.gz` by what it holds: a car archive, or DeepRacer on AWS's virtual model
     (unpacked into a scratch folder, imported as a DeepRacer folder, then removed)."""
     with tempfile.TemporaryDirectory(prefix="racer-import-") as scratch:
-        unpacked = unpack_model_archive(source, Path(scratch))
-        if unpacked.kind is ArchiveKind.VIRTUAL:
+        if unpack_model_archive(source, Path(scratch)) is ArchiveKind.VIRTUAL:
             return import_deepracer_folder(
                 Path(scratch), name=name, track=track, untrained=untrained, origin=source
             )

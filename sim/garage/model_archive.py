@@ -25,7 +25,6 @@ import re
 import shutil
 import tarfile
 import zlib
-from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 
@@ -76,12 +75,6 @@ class ArchiveKind(StrEnum):
     VIRTUAL = "virtual"
 
 
-@dataclass(frozen=True)
-class UnpackedArchive:
-    kind: ArchiveKind
-    kept: tuple[str, ...]  # the names written out (a virtual model's), in archive order
-
-
 def download_name(path: Path) -> str:
     """The model's name as DRoA's download names it: `virtualmodel-my-car.tar.gz` and
     `physicalmodel-my-car.tar.gz` are `my-car`; any other archive is its name without
@@ -97,12 +90,11 @@ def download_name(path: Path) -> str:
     return name
 
 
-def unpack_model_archive(path: Path, into: Path) -> UnpackedArchive:
+def unpack_model_archive(path: Path, into: Path) -> ArchiveKind:
     """Say which kind of model `path` holds; for a virtual model, write the files its
     import uses into the folder `into`. `ModelError` (one sentence naming the file) when
     it is neither kind, or breaks a limit, or is not a complete `.tar.gz`."""
     where = path.name
-    kept: list[str] = []
     seen: set[str] = set()
     kept_bytes = 0
     has_car_graph = False
@@ -140,7 +132,6 @@ def unpack_model_archive(path: Path, into: Path) -> UnpackedArchive:
                             f"{MAX_KEPT_BYTES:,} bytes, DeepRacer on AWS's own limit."
                         )
                     _write_member(tar, member, into / name, where)
-                    kept.append(name)
     except ModelError:
         raise
     except (tarfile.TarError, EOFError, zlib.error, OSError):  # BadGzipFile is an OSError
@@ -149,14 +140,14 @@ def unpack_model_archive(path: Path, into: Path) -> UnpackedArchive:
             "download it again."
         ) from None
     if has_car_graph:
-        return UnpackedArchive(ArchiveKind.CAR, ())
+        return ArchiveKind.CAR
     if MODEL_METADATA not in seen:
         raise ModelError(
             f"{where} holds no model: neither a car model (model_metadata.json with "
             f"{GRAPH_MEMBER}) nor a DeepRacer on AWS virtual model (model_metadata.json with "
             f"{REWARD_FUNCTION} and {TRAINING_PARAMS}); give a model archive as downloaded."
         )
-    return UnpackedArchive(ArchiveKind.VIRTUAL, tuple(kept))
+    return ArchiveKind.VIRTUAL
 
 
 # How far `may_hold_reward_code` reads before it answers "perhaps" (asking is harmless).
