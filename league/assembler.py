@@ -19,7 +19,7 @@ error naming it, and `assemble` touches no database: a failure writes nothing.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -76,7 +76,12 @@ LAP_COLUMNS = (
     "offtracks",
     "crashes",
     "completed",
+    "immobilized",
+    "reversals",
 )
+# Counted since schema 15: NULL in the table and left out of a lap's record when none, so
+# laps stored before keep their content hash (league.records).
+OPTIONAL_LAP_COLUMNS = frozenset({"immobilized", "reversals"})
 
 
 @dataclass(frozen=True)
@@ -90,10 +95,26 @@ class EvaluationLap:
     offtracks: int
     crashes: int
     completed: bool  # a full lap: only these have a lap time
+    immobilized: int = 0
+    reversals: int = 0
 
     @property
     def valid(self) -> bool:
         return self.completed
+
+    @property
+    def resets(self) -> int:
+        """simapp's reset_count: every count that put the car back (or ended the trial)."""
+        return self.offtracks + self.crashes + self.immobilized + self.reversals
+
+    def record(self) -> dict[str, Any]:
+        """The lap as its submission record holds it: the optional counts only when some."""
+        row = asdict(self)
+        row["completed"] = int(self.completed)
+        for column in OPTIONAL_LAP_COLUMNS:
+            if not row[column]:
+                del row[column]
+        return row
 
     @classmethod
     def from_trial(cls, number: int, trial: EvaluationTrial) -> EvaluationLap:
@@ -105,6 +126,8 @@ class EvaluationLap:
             offtracks=trial.off_track_count,
             crashes=trial.crash_count,
             completed=trial.lap_time_seconds is not None,
+            immobilized=trial.immobilized_count,
+            reversals=trial.reversed_count,
         )
 
 
@@ -147,7 +170,16 @@ class Submission:
                 "racer": self.racer.casefold(),
                 "track_hash": self.track_hash,
                 "model_hash": self.model_hash,
-                "laps": [lap.__dict__ for lap in self.laps],
+                # The laps' fields from before their resets were kept: a file sent again
+                # since is still known as the same submission.
+                "laps": [
+                    {
+                        key: value
+                        for key, value in vars(lap).items()
+                        if key not in OPTIONAL_LAP_COLUMNS
+                    }
+                    for lap in self.laps
+                ],
             }
         )
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
@@ -153,10 +153,12 @@ def droa_rules_for(rules: RaceRules) -> tuple[TimingMethod, int]:
 
 
 def droa_laps(league: League, record_id: str, kind: str) -> tuple[DroaLap, ...]:
-    """A submission's or a race's laps as DRoA's metrics would hold them."""
+    """A submission's or a race's laps as DRoA's metrics would hold them: its resets are
+    simapp's reset_count, every count that put the car back."""
     if kind == "submission":
         rows = league.conn.execute(
-            "SELECT time_seconds, completion, completed, offtracks, crashes "
+            "SELECT time_seconds, completion, completed, offtracks, crashes, "
+            "COALESCE(immobilized, 0) + COALESCE(reversals, 0) AS others "
             "FROM submission_laps WHERE submission_id = ? ORDER BY number",
             (record_id,),
         ).fetchall()
@@ -166,34 +168,41 @@ def droa_laps(league: League, record_id: str, kind: str) -> tuple[DroaLap, ...]:
                 completed=bool(row["completed"]) and row["completion"] >= 100,
                 offtracks=row["offtracks"],
                 crashes=row["crashes"],
-                resets=row["offtracks"] + row["crashes"],
+                resets=row["offtracks"] + row["crashes"] + row["others"],
             )
             for row in rows
         )
     race = league.conn.execute("SELECT rules FROM races WHERE id = ?", (record_id,)).fetchone()
     rules = rules_from_mapping(json.loads(race["rules"])) if race is not None else DEFAULT_RULES
     rows = league.conn.execute(
-        "SELECT time_seconds, penalty_seconds, offtracks FROM race_laps "
+        "SELECT time_seconds, penalty_seconds, offtracks, crashes, reversals FROM race_laps "
         "WHERE race_id = ? ORDER BY number",
         (record_id,),
     ).fetchall()
     laps: list[DroaLap] = []
     for row in rows:
-        # A race keeps each lap's penalty seconds: what the off-tracks do not explain is
-        # its collisions' (object avoidance and head-to-bot).
-        collisions_s = row["penalty_seconds"] - row["offtracks"] * rules.penalty_seconds
-        crashes = (
-            round(collisions_s / rules.collision_penalty_seconds)
-            if rules.collision_penalty_seconds > 0 and collisions_s > 0
-            else 0
-        )
+        reversals = row["reversals"] or 0
+        crashes = row["crashes"] or _crashes_in_penalty(row, rules)
         laps.append(
             DroaLap(
                 elapsed_ms=round(row["time_seconds"] * 1000),
                 completed=True,  # a race keeps its completed laps
                 offtracks=row["offtracks"],
                 crashes=crashes,
-                resets=row["offtracks"] + crashes,
+                resets=row["offtracks"] + crashes + reversals,
             )
         )
     return tuple(laps)
+
+
+def _crashes_in_penalty(row: Mapping[str, Any], rules: RaceRules) -> int:
+    """A lap's crashes when its record does not count them: none since schema 15 (they
+    are counted then, NULL meaning none), and in a lap recorded before, what its penalty
+    seconds hold beyond its off-tracks' (a reversal then is taken for a crash: those
+    records kept neither)."""
+    if row["reversals"] is not None:
+        return 0
+    collisions_s: float = row["penalty_seconds"] - row["offtracks"] * rules.penalty_seconds
+    if rules.collision_penalty_seconds <= 0 or collisions_s <= 1e-9:
+        return 0
+    return round(collisions_s / rules.collision_penalty_seconds)

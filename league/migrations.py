@@ -567,6 +567,18 @@ CREATE INDEX races_model ON races(model_hash, seed);
 CREATE INDEX submissions_model ON submissions(model_hash, track_hash)
 """
 
+# Version 15: every reset DeepRacer counts in a lap (simapp's reset_count, which DeepRacer on
+# AWS's rankings add up): a race lap's crashes (before, only inside its penalty seconds) and
+# reversals, a submission lap's immobilized and reversed counts beside its off-tracks and
+# crashes. NULL when none, and left out of a record's laps then (league.records), so every
+# lap stored before keeps its content hash and most new laps look as they always did.
+LAP_RESETS = """
+ALTER TABLE race_laps ADD COLUMN crashes INTEGER;
+ALTER TABLE race_laps ADD COLUMN reversals INTEGER;
+ALTER TABLE submission_laps ADD COLUMN immobilized INTEGER;
+ALTER TABLE submission_laps ADD COLUMN reversals INTEGER
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -582,6 +594,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("unverifiable replays", _script(UNVERIFIABLE_REPLAYS)),
     Migration("model records", _script(MODEL_RECORDS)),
     Migration("copy lookups", _script(COPY_LOOKUPS)),
+    Migration("resets of laps", _script(LAP_RESETS)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -37,12 +37,19 @@ LAP_COLUMNS = (
     "offtracks",
     "valid",
     "started_at",
+    "crashes",
+    "reversals",
 )
+# Counted since schema 15: NULL in the table and left out of a lap's record when none, so
+# laps stored before keep their content hash (league.records).
+OPTIONAL_LAP_COLUMNS = frozenset({"crashes", "reversals"})
 
 
 def lap_rows(result: RaceResult) -> list[dict[str, Any]]:
-    return [
-        {
+    """Each lap as its record holds it: the optional counts only when there are some."""
+    rows: list[dict[str, Any]] = []
+    for lap in result.laps:
+        row: dict[str, Any] = {
             "number": lap.number,
             "time_seconds": lap.time_seconds,
             "raw_seconds": lap.raw_seconds,
@@ -51,8 +58,12 @@ def lap_rows(result: RaceResult) -> list[dict[str, Any]]:
             "valid": int(lap.valid),
             "started_at": lap.started_at,
         }
-        for lap in result.laps
-    ]
+        if lap.crashes:
+            row["crashes"] = lap.crashes
+        if lap.reversals:
+            row["reversals"] = lap.reversals
+        rows.append(row)
+    return rows
 
 
 def record_race(
@@ -106,7 +117,7 @@ def record_race(
         league.conn.executemany(
             f"INSERT INTO race_laps (race_id, {', '.join(LAP_COLUMNS)}) "
             f"VALUES (?, {', '.join('?' for _ in LAP_COLUMNS)})",
-            [(result.result_id, *(lap[c] for c in LAP_COLUMNS)) for lap in laps],
+            [(result.result_id, *(lap.get(c) for c in LAP_COLUMNS)) for lap in laps],
         )
         if result.trace is not None:
             league.conn.execute(
@@ -188,7 +199,7 @@ def race_result(league: League, race_id: str) -> RaceResult:
     if row is None:
         raise LeagueError(f"there is no race {race_id} in this league.")
     laps = [
-        {column: lap[column] for column in LAP_COLUMNS}
+        {column: lap[column] for column in LAP_COLUMNS if lap[column] is not None}
         for lap in league.query(
             "SELECT * FROM race_laps WHERE race_id = ? ORDER BY number", (race_id,)
         )

@@ -2,8 +2,9 @@
 
 A record is one row of a shared table: its id, and its body = every column except `id`
 and `content_hash`, plus the child laps of submissions and races (as the row's `laps`
-list, in lap order). A column added after records were first shared (OPTIONAL_COLUMNS)
-is in the body only when it holds a value, so older records keep their content hash.
+list, in lap order). A column added after records were first shared (OPTIONAL_COLUMNS, and
+a lap's `Children.optional`) is in the body only when it holds a value, so older records
+keep their content hash.
 `content_hash == sim.foundation.ids.content_hash(body)` for every row; the league computes it when
 it inserts a row, and `record_body` rebuilds the body from the database so anyone can
 check it.
@@ -14,14 +15,16 @@ laps, and refreshes the local caches it affects. Call it inside `league.transact
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from league.assembler import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
+from league.assembler import OPTIONAL_LAP_COLUMNS as OPTIONAL_SUBMISSION_LAP_COLUMNS
 from league.entries import refresh_entries
 from league.errors import LeagueError
 from league.races import LAP_COLUMNS as RACE_LAP_COLUMNS
+from league.races import OPTIONAL_LAP_COLUMNS as OPTIONAL_RACE_LAP_COLUMNS
 from league.store import League
 from sim.foundation.ids import content_hash
 
@@ -31,6 +34,21 @@ class Children:
     table: str
     parent_column: str
     columns: tuple[str, ...]
+    optional: frozenset[str]  # added later: in a child's body only when it holds a value
+
+    def body(self, values: Sequence[Any]) -> dict[str, Any]:
+        """A child's body from its stored values, in `columns` order."""
+        return {
+            column: value
+            for column, value in zip(self.columns, values, strict=True)
+            if not (column in self.optional and value is None)
+        }
+
+    def fits(self, lap: object) -> bool:
+        """Whether `lap` has every column a child needs and no other."""
+        return isinstance(lap, Mapping) and (
+            set(self.columns) - self.optional <= set(lap) <= set(self.columns)
+        )
 
 
 # Shared tables, parents before the rows that refer to them (the order to insert in).
@@ -44,8 +62,13 @@ SHARED_TABLES: dict[str, Children | None] = {
     "heats": None,
     "night_closures": None,
     "night_changes": None,
-    "submissions": Children("submission_laps", "submission_id", SUBMISSION_LAP_COLUMNS),
-    "races": Children("race_laps", "race_id", RACE_LAP_COLUMNS),
+    "submissions": Children(
+        "submission_laps",
+        "submission_id",
+        SUBMISSION_LAP_COLUMNS,
+        OPTIONAL_SUBMISSION_LAP_COLUMNS,
+    ),
+    "races": Children("race_laps", "race_id", RACE_LAP_COLUMNS, OPTIONAL_RACE_LAP_COLUMNS),
     "corrections": None,
 }
 
@@ -81,7 +104,7 @@ def record_body(league: League, table: str, record_id: str) -> dict[str, Any]:
             f"WHERE {children.parent_column} = ? ORDER BY number",
             (record_id,),
         )
-        body["laps"] = [dict(zip(children.columns, lap, strict=True)) for lap in laps]
+        body["laps"] = [children.body(tuple(lap)) for lap in laps]
     return body
 
 
@@ -138,15 +161,13 @@ def store_record(
         )
         if children is not None:
             laps = body["laps"]
-            if not isinstance(laps, list) or not all(
-                isinstance(lap, Mapping) and sorted(lap) == sorted(children.columns) for lap in laps
-            ):
+            if not isinstance(laps, list) or not all(children.fits(lap) for lap in laps):
                 raise LeagueError(f"{table} record {record_id} has malformed laps.")
             league.conn.executemany(
                 f"INSERT INTO {children.table} ({children.parent_column}, "
                 f"{', '.join(children.columns)}) "
                 f"VALUES (?, {', '.join('?' for _ in children.columns)})",
-                [(record_id, *(lap[c] for c in children.columns)) for lap in laps],
+                [(record_id, *(lap.get(c) for c in children.columns)) for lap in laps],
             )
             if refresh:
                 refresh_entries(league.conn, [record_id])

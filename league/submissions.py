@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from league.assembler import LAP_COLUMNS, EvaluationLap, Submission, assemble
+from league.assembler import LAP_COLUMNS, Submission, assemble
 from league.entries import refresh_entries
 from league.errors import LeagueError
 from league.race_types import TIME_TRIAL
@@ -34,18 +34,6 @@ def _json(value: Any) -> str | None:
     return None if value is None else json.dumps(value, sort_keys=True)
 
 
-def lap_row(lap: EvaluationLap) -> dict[str, Any]:
-    return {
-        "number": lap.number,
-        "time_seconds": lap.time_seconds,
-        "completion": lap.completion,
-        "status": lap.status,
-        "offtracks": lap.offtracks,
-        "crashes": lap.crashes,
-        "completed": int(lap.completed),
-    }
-
-
 def submit(league: League, submission: Submission) -> Submitted:
     """Add `submission` to the league; sending the same one again adds nothing. A lap no
     car could drive is refused (LeagueError), before anything is written."""
@@ -59,7 +47,7 @@ def submit(league: League, submission: Submission) -> Submitted:
         )
         if existing is not None:
             return Submitted(str(existing["id"]), duplicate=True)
-        laps = [lap_row(lap) for lap in submission.laps]
+        laps = [lap.record() for lap in submission.laps]
         borrowed = local_refusal(league, racer, submission.model_hash)
         if borrowed is not None:
             raise LeagueError(
@@ -115,7 +103,7 @@ def insert_laps(league: League, submission_id: str, laps: list[dict[str, Any]]) 
     league.conn.executemany(
         f"INSERT INTO submission_laps (submission_id, {', '.join(LAP_COLUMNS)}) "
         f"VALUES (?, {', '.join('?' for _ in LAP_COLUMNS)})",
-        [(submission_id, *(lap[column] for column in LAP_COLUMNS)) for lap in laps],
+        [(submission_id, *(lap.get(column) for column in LAP_COLUMNS)) for lap in laps],
     )
 
 

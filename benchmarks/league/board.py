@@ -195,7 +195,7 @@ def fill(
                 row = _record(fields, {"laps": lap_rows})
                 rows.append(row)
                 lap_values.extend(
-                    (row["id"], *(lap[c] for c in SUBMISSION_LAP_COLUMNS)) for lap in lap_rows
+                    (row["id"], *(lap.get(c) for c in SUBMISSION_LAP_COLUMNS)) for lap in lap_rows
                 )
                 source = EntrySource(
                     row["id"],
@@ -271,7 +271,9 @@ def fill(
                 }
                 race = _record(race_fields, {"laps": laps})
                 race_rows.append(race)
-                race_laps.extend((race["id"], *(lap[c] for c in RACE_LAP_COLUMNS)) for lap in laps)
+                race_laps.extend(
+                    (race["id"], *(lap.get(c) for c in RACE_LAP_COLUMNS)) for lap in laps
+                )
                 entries.append(
                     entry_values(
                         EntrySource(

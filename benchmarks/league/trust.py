@@ -43,7 +43,7 @@ from league.races import LAP_COLUMNS, lap_rows, record_race
 from league.races import race_result as stored_race
 from league.records import record_body
 from league.store import League, now_iso
-from league.submissions import insert_laps, lap_row, submit_model
+from league.submissions import insert_laps, submit_model
 from league.sync.engine import store_key, sync
 from league.sync.record import SyncRecord, encode_envelope, make_record
 from league.sync.stores import open_store
@@ -228,7 +228,7 @@ def insert_bypassing_checks(league: League, result: RaceResult) -> str:
         league.conn.executemany(
             f"INSERT INTO race_laps (race_id, {', '.join(LAP_COLUMNS)}) "
             f"VALUES (?, {', '.join('?' for _ in LAP_COLUMNS)})",
-            [(result.result_id, *(lap[column] for column in LAP_COLUMNS)) for lap in laps],
+            [(result.result_id, *(lap.get(column) for column in LAP_COLUMNS)) for lap in laps],
         )
     refresh_entries(league.conn, [result.result_id])
     return result.result_id
@@ -355,7 +355,7 @@ def submit_edited_evaluation(world: World, lap: float, bypass: bool) -> Mark:
 def insert_submission_bypassing_checks(league: League, submission: Submission) -> str:
     """What a script does when `submit` refuses: the rows written as `submit` writes
     them, without any of its checks."""
-    laps = [lap_row(lap) for lap in submission.laps]
+    laps = [lap.record() for lap in submission.laps]
     with league.transaction():
         ensure_racer(league, submission.racer)
         ensure_track(league, submission.track_hash, submission.track_name)

@@ -141,5 +141,5 @@ def _bodies(
             (id_list,),
         )
         for parent, *values in laps:
-            bodies[parent]["laps"].append(dict(zip(children.columns, values, strict=True)))
+            bodies[parent]["laps"].append(children.body(values))
     return bodies

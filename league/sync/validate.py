@@ -228,6 +228,10 @@ _SUBMISSION_RACE_TYPE = Field(
     "TEXT", one_of(OBJECT_AVOIDANCE, HEAD_TO_BOT), nullable=True, optional=True
 )
 
+# A lap's crashes or reversals (a race) or immobilized or reversed count (a submission),
+# counted since schema 15: absent when none, as in every lap recorded before.
+_COUNT_SINCE_RESETS = Field("INTEGER", integer(1, MAX_COUNT), nullable=True, optional=True)
+
 
 # Every shared table's columns except id and content_hash (a test holds these to the
 # schema in league.migrations, so the two cannot drift apart).
@@ -335,6 +339,8 @@ LAP_FIELDS: Final[dict[str, dict[str, Field]]] = {
         "offtracks": _i(integer(0, MAX_COUNT)),
         "crashes": _i(integer(0, MAX_COUNT)),
         "completed": _i(flag),
+        "immobilized": _COUNT_SINCE_RESETS,
+        "reversals": _COUNT_SINCE_RESETS,
     },
     "race": {
         "number": _i(integer(1, MAX_COUNT)),
@@ -344,6 +350,8 @@ LAP_FIELDS: Final[dict[str, dict[str, Field]]] = {
         "offtracks": _i(integer(0, MAX_COUNT)),
         "valid": _i(flag),
         "started_at": _r(real(0.0, MAX_SECONDS)),
+        "crashes": _COUNT_SINCE_RESETS,
+        "reversals": _COUNT_SINCE_RESETS,
     },
 }
 assert tuple(LAP_FIELDS["submission"]) == SUBMISSION_LAP_COLUMNS
@@ -386,6 +394,10 @@ def _check_fields(
         if value is None:
             if not spec.nullable:
                 raise _bad(column, "is missing")
+            if spec.optional and column in body:
+                # Its writer leaves it out instead: a null would give the record a second
+                # body, and another content hash, for the same row.
+                raise _bad(column, "is null instead of left out")
             continue
         spec.check(value, column)
 

@@ -133,6 +133,15 @@ def _compare(
                     f"re-run here, its lap {number} has {what} {actual:g}, not the "
                     f"{expected:g} it claims",
                 )
+        # Counted since schema 15, and left out when none: a lap recorded before says
+        # nothing of them, so they are held to what the lap says when it says it.
+        for field in ("crashes", "reversals"):
+            if field in said and said[field] != did.get(field, 0):
+                return (
+                    "differs",
+                    f"re-run here, its lap {number} has {did.get(field, 0)} {field}, not the "
+                    f"{said[field]} it claims",
+                )
     if len(claimed) != len(driven):
         return (
             "differs",

@@ -285,9 +285,12 @@ def race_table(result: RaceResult, track: Track) -> Table:
     table = Table(title=title, title_justify="left")
     # Crashes only where there is something to crash into.
     crashes = rules.race_type is not RaceType.TIME_TRIAL
-    names = ("lap", "time s", "raw s", "penalty s", "off-tracks", "crashes", "counts")
-    for name in names:
-        if name != "crashes" or crashes:
+    # Turned round only when it happened: it explains a penalty without an off-track.
+    reversals = any(lap.reversals for lap in result.laps)
+    shown = {"crashes": crashes, "turned round": reversals}
+    names = ("lap", "time s", "raw s", "penalty s", "off-tracks", "crashes", "turned round")
+    for name in (*names, "counts"):
+        if shown.get(name, True):
             table.add_column(name, justify="right" if name != "counts" else "center")
     scoring = set(result.scoring.lap_numbers)
     for lap in result.laps:
@@ -300,6 +303,8 @@ def race_table(result: RaceResult, track: Track) -> Table:
         ]
         if crashes:
             cells.append(str(lap.crashes))
+        if reversals:
+            cells.append(str(lap.reversals))
         table.add_row(*cells, "yes" if lap.valid else "no")
     return table
 

@@ -133,6 +133,7 @@ class _Race:
         self.lap_start = 0.0
         self.lap_offtracks = 0
         self.lap_crashes = 0
+        self.lap_reversals = 0
         self.lap_penalty = 0.0
         self.laps: list[LapRecord] = []
         self.laps_view: tuple[LapRecord, ...] = ()
@@ -208,6 +209,7 @@ class _Race:
                 self.status = _CRASHED
             elif status == EpisodeStatus.REVERSED:
                 pause = self.rules.penalty_seconds
+                self.lap_reversals += 1
                 self.status = _REVERSED
             else:  # nothing else is switched on; drive on rather than stall the race
                 sim.continue_episode(0, float(sim.travelled[0]))
@@ -247,6 +249,7 @@ class _Race:
             valid=True,
             started_at=self.lap_start,
             crashes=self.lap_crashes,
+            reversals=self.lap_reversals,
         )
         if not lap_counts(lap, self.rules):
             lap = replace(lap, valid=False)
@@ -256,6 +259,7 @@ class _Race:
         self.lap_start = crossing
         self.lap_offtracks = 0
         self.lap_crashes = 0
+        self.lap_reversals = 0
         self.lap_penalty = 0.0
 
     def _put_back(self, s_ahead: float, car_x: float, car_y: float, travelled: float) -> None:

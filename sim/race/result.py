@@ -45,6 +45,15 @@ class LapRecord:
     # Crashes into boxes or bot cars (object-avoidance and head-to-bot races): each cost
     # the rules' collision penalty, inside `penalty_seconds`.
     crashes: int = 0
+    # Times the car was put back after driving the wrong way (simapp's "reversed"): held
+    # for the off-track penalty, inside `penalty_seconds`, without making the lap invalid.
+    reversals: int = 0
+
+    @property
+    def resets(self) -> int:
+        """Times the car was put back on the track in this lap, whatever the reason: what
+        simapp's metrics call `reset_count` (immobilized is switched off in a race)."""
+        return self.offtracks + self.crashes + self.reversals
 
     def to_json(self) -> dict[str, Any]:
         data: dict[str, Any] = {
@@ -56,8 +65,11 @@ class LapRecord:
             "valid": self.valid,
             "started_at": self.started_at,
         }
-        if self.crashes:  # left out otherwise: a time trial's laps keep their stored form
+        # Left out when none: most laps keep the form they had before these were counted.
+        if self.crashes:
             data["crashes"] = self.crashes
+        if self.reversals:
+            data["reversals"] = self.reversals
         return data
 
     @classmethod
@@ -73,6 +85,7 @@ class LapRecord:
             valid=_flag(data, "valid", where),
             started_at=_seconds(data, "started_at", where),
             crashes=_whole(data, "crashes", where, 0) if "crashes" in data else 0,
+            reversals=_whole(data, "reversals", where, 0) if "reversals" in data else 0,
         )
         if abs(lap.raw_seconds + lap.penalty_seconds - lap.time_seconds) > 1e-3:
             raise ResultError(f"{where}.time_seconds is not raw_seconds plus penalty_seconds.")

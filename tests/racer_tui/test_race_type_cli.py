@@ -6,15 +6,19 @@ keeps each race type on a board of its own: a track's time trials by default,
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from rich.console import Console
 
 from league.nights import get_night
 from league.opening import open_league
 from league.races import record_race
 from racer_tui.cli.main import main
+from racer_tui.cli.race_commands import race_table
 from sim.race.rules import preset_rules
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK, race_result
 from tests.racer_tui.test_league_cli import run_cli, wide_terminal  # noqa: F401 (autouse)
 
@@ -216,3 +220,15 @@ def test_an_empty_leaderboard_says_how_laps_get_there(
     code, out, _ = run_cli(capsys, "leaderboard", "--db", str(tmp_path / "empty.db"))
     assert code == 0
     assert "No laps in this league yet: record a race with racer-tui --race" in out
+
+
+def test_a_lap_whose_car_was_turned_round_says_so() -> None:
+    plain = race_result("ana", [10.0, 10.5])
+    first = replace(plain.laps[0], reversals=1, penalty_seconds=3.0, time_seconds=13.0)
+    console = Console(width=100, record=True)
+    track = resolve_track(TRACK)
+    console.print(race_table(plain, track))
+    assert "turned round" not in console.export_text()
+    console.print(race_table(replace(plain, laps=(first, plain.laps[1])), track))
+    turned = [line for line in console.export_text().splitlines() if "13.000" in line]
+    assert turned and turned[0].split("│")[6].strip() == "1"

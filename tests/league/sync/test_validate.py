@@ -52,7 +52,7 @@ def test_every_shared_table_has_one_kind_with_its_exact_columns(league: League) 
         assert declared == columns, kind
     for kind, children in (("submission", "submission_laps"), ("race", "race_laps")):
         columns = {
-            row["name"]: (row["type"], False)
+            row["name"]: (row["type"], not row["notnull"])
             for row in league.query(f"PRAGMA table_info({children})")
             if row["name"] not in ("submission_id", "race_id")
         }

@@ -61,6 +61,17 @@ def test_a_true_race_verifies_and_a_forged_one_is_withdrawn(tmp_path: Path) -> N
         assert [v.outcome for v in verify_races(league, DriversByHash(), again=True)] == ["same"]
 
 
+def test_a_race_that_claims_a_reset_it_did_not_have_differs(tmp_path: Path) -> None:
+    track = resolve_track("hairpin-circuit")
+    result = run_race(track, RULES, reference_driver(track), racer="mallory", seed=3)
+    claimed = replace(result.laps[0], reversals=1)  # same times: only the count is made up
+    with open_league(tmp_path / "league.db") as league:
+        race_id = record_race(league, replace(result, laps=(claimed, *result.laps[1:])))
+        [verdict] = verify_races(league, DriversByHash())
+    assert (verdict.race_id, verdict.outcome) == (race_id, "differs")
+    assert "lap 1 has 0 reversals, not the 1 it claims" in verdict.detail
+
+
 def test_a_race_whose_model_is_not_here_is_unverifiable_with_how_to_fetch_it(
     tmp_path: Path,
 ) -> None:

@@ -172,6 +172,10 @@ def test_a_reversed_car_is_turned_round_and_races_on() -> None:
     assert result.laps, "the car should lap after being turned round"
     first = result.laps[0]
     assert first.valid and first.offtracks == 0 and first.penalty_seconds == 3.0
+    # Counted as simapp's metrics count it: one reset, a reversal.
+    assert (first.reversals, first.resets) == (1, 1)
+    assert first.to_json()["reversals"] == 1
+    assert all("reversals" not in lap.to_json() for lap in result.laps[1:])
 
 
 def test_races_are_deterministic() -> None:
