@@ -164,14 +164,16 @@ def live_objects() -> int:
 @dataclass
 class GcWatch:
     """Pauses of every collection while `measuring` (gc.callbacks: start -> stop), and the
-    longest few with who ran them: the app's collector (busy, idle, sweep) or Python."""
+    longest few with who ran them (the app's collector: busy, idle, sweep; or Python) and
+    how many objects each freed (a pause spent freeing a closed screen's garbage and one
+    spent walking what lives call for different cures)."""
 
     measuring: bool = False
     collections: int = 0
     full_collections: int = 0
     longest_ms: float = 0.0
     total_ms: float = 0.0
-    longest: list[tuple[float, int, str]] = field(default_factory=list)
+    longest: list[tuple[float, int, str, int]] = field(default_factory=list)
     runner: Callable[[], str | None] = lambda: None
     _started: float = 0.0
 
@@ -188,7 +190,8 @@ class GcWatch:
         generation = int(info.get("generation", -1))
         if generation == 2:
             self.full_collections += 1
-        self.longest.append((pause, generation, self.runner() or "python"))
+        freed = int(info.get("collected", 0))
+        self.longest.append((pause, generation, self.runner() or "python", freed))
         self.longest.sort(reverse=True)
         del self.longest[LONGEST_PAUSES_KEPT:]
 
@@ -706,8 +709,8 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
         "gc": {
             "longest_pause_ms": round(gc_watch.longest_ms, 3),
             "longest_pauses": [
-                {"ms": round(ms, 1), "generation": generation, "run_by": by}
-                for ms, generation, by in gc_watch.longest
+                {"ms": round(ms, 1), "generation": generation, "run_by": by, "freed": freed}
+                for ms, generation, by, freed in gc_watch.longest
             ],
             "full_collections": gc_watch.full_collections,
             "collections": gc_watch.collections,
@@ -798,9 +801,9 @@ def print_report(report: dict[str, Any]) -> None:
     table.add_row("of them frozen at the end", f"{objects['frozen_at_end']:,}", "")
     table.add_row("longest GC pause", f"{gc_figures['longest_pause_ms']:.1f} ms", "")
     table.add_row(
-        "  the longest, ms (generation, run by)",
+        "  the longest, ms (generation, run by, objects freed)",
         ", ".join(
-            f"{pause['ms']:.0f} ({pause['generation']}, {pause['run_by']})"
+            f"{pause['ms']:.0f} ({pause['generation']}, {pause['run_by']}, {pause['freed']:,})"
             for pause in gc_figures["longest_pauses"]
         ),
         "",
