@@ -40,6 +40,7 @@ COMMAND_MODULES: dict[str, tuple[str, ...]] = {
     "racer_tui.cli.train_commands": ("train", "evaluate"),
     "racer_tui.cli.sync_commands": ("sync",),
     "racer_tui.cli.coach_commands": ("coach",),
+    "racer_tui.cli.serve_commands": ("serve",),
 }
 
 
