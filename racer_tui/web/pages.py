@@ -61,7 +61,7 @@ class Leaderboard:
 
     @property
     def score_column(self) -> bool:
-        """Whether the score needs a column of its own: a best lap is already one."""
+        """Whether the score needs a column of its own: a best lap is one already."""
         return self.ranking is not RankingMethod.BEST_LAP
 
     def to_json(self) -> dict[str, Any]:

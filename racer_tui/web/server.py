@@ -23,6 +23,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from league.errors import LeagueError
 from league.opening import BUSY_TIMEOUT_MS, open_league
 from league.race_types import words as race_type_words
+from league.report import SCORE_TITLES
 from league.store import League
 from racer_tui.web.pages import (
     Leaderboard,
@@ -32,6 +33,7 @@ from racer_tui.web.pages import (
     shown_night,
 )
 from sim.physics.labels import describe as physics_words
+from sim.race.rules import RankingMethod
 from sim.training.drivers import DriversByHash
 
 # Only this server's own stylesheet: no script, no frame, no form, nothing from elsewhere.
@@ -149,8 +151,16 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
     def night_html(request: Request) -> Response:
         def page(league: League, here: frozenset[str]) -> Response:
             found = shown_night(league, request.query_params.get("id") or night)
-            document = None if found is None else night_document(league, found, here)
-            return render("night.html", night=document)
+            if found is None:
+                return render("night.html", night=None)
+            ranking = found.rules.ranking
+            return render(
+                "night.html",
+                night=night_document(league, found, here),
+                # A best lap is a column already: the score needs its own only otherwise.
+                score_column=ranking is not RankingMethod.BEST_LAP,
+                score_title=SCORE_TITLES[ranking],
+            )
 
         return answer(request, page)
 
