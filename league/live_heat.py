@@ -1,16 +1,20 @@
-"""The heat running now, for the venue's projector: a small JSON file beside the league.
+"""The heat running now, for the venue's projector and the web: a small JSON file beside the
+league.
 
 A heat runs in the host's racer-tui (the race view, or the timekeeper for a physical
 car); the night's projector is often another racer-tui, in another terminal on the
-venue's screen. Results reach it through the league database, but the heat in progress
-is not in the database until it ends. So the screen running it writes where it is (clock,
-lap, best lap) to `live-heats/<night id>.json` beside the league file a few times a
-second, atomically, and the projector reads it.
+venue's screen, and `racer-tui serve` shows it on the web (`/live`). Results reach them
+through the league database, but the heat in progress is not in the database until it
+ends. So the screen running it writes where it is (clock, lap, laps, best lap, and a
+simulated car's place) to `live-heats/<night id>.json` beside the league file,
+atomically, and the others read it.
 
-The writer touches the file at least every `HEARTBEAT_SECONDS`, even while a heat stands
-still; a file older than `STALE_SECONDS` belongs to a racer-tui that was closed or killed
-mid-heat, and the projector then shows no heat running. The file is untrusted input like
-any other: a reader that finds anything unexpected in it treats it as absent.
+The writer writes at once when the state, the lap, the laps, the off-tracks or the best
+lap change, every `MOVING_SECONDS` while a simulated car moves (for the web page's map),
+and at least every `HEARTBEAT_SECONDS` even while a heat stands still; a file older than
+`STALE_SECONDS` belongs to a racer-tui that was closed or killed mid-heat, and the readers
+then show no heat running. The file is untrusted input like any other: a reader that finds
+anything unexpected in it treats it as absent.
 """
 
 from __future__ import annotations
@@ -19,18 +23,34 @@ import contextlib
 import json
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from sim.foundation.atomic import write_text_atomic
+from sim.race.result import LapRecord
 
 FOLDER = "live-heats"
 HEARTBEAT_SECONDS = 0.5
+# A web viewer's map is to follow the race view within a quarter of a second: the car's
+# place is written this often while it moves.
+MOVING_SECONDS = 0.1
 STALE_SECONDS = 5.0
 MAX_TEXT = 200
-MAX_BYTES = 4096
+MAX_LAPS = 200  # a 4-minute heat drives 20-40 laps; a lap-count race at most its count
+MAX_BYTES = 32_768
 STATES = ("ready", "running", "paused", "over")
+
+
+@dataclass(frozen=True)
+class LiveLap:
+    """A lap the heat has completed, as the race view's lap table shows it."""
+
+    time_seconds: float  # penalties included
+    penalty_seconds: float
+    offtracks: int
+    counts: bool  # within the rules' off-track limit (and not struck out)
 
 
 @dataclass(frozen=True)
@@ -50,6 +70,15 @@ class LiveHeat:
     offtracks: int  # this lap's off-tracks (a physical car's resets)
     limit: int | None  # the rules' off-track limit per lap
     written_at: float = 0.0  # wall clock (time.time()) of the write
+    laps: tuple[LiveLap, ...] = ()  # completed laps (absent from files of earlier writers)
+    car_at: tuple[float, float] | None = None  # a simulated car's place, metres
+
+
+def live_laps(laps: Sequence[LapRecord]) -> tuple[LiveLap, ...]:
+    """A heat's completed laps as the file holds them."""
+    return tuple(
+        LiveLap(lap.time_seconds, lap.penalty_seconds, lap.offtracks, lap.valid) for lap in laps
+    )
 
 
 def live_heat_path(league_file: Path, night_id: str) -> Path:
@@ -90,8 +119,51 @@ def _parse(data: Any) -> LiveHeat | None:
     best, limit = data.get("best_lap"), data.get("limit")
     if not (best is None or _number(best)) or not (limit is None or _count(limit)):
         return None
+    laps = _laps(data.get("laps", []))
+    car_at = data.get("car_at")
+    if laps is None or not (car_at is None or _place(car_at)):
+        return None
     fields = {key: data[key] for key in (*texts, *counts, *numbers)}
-    return LiveHeat(best_lap=best, limit=limit, **fields)
+    return LiveHeat(
+        best_lap=best,
+        limit=limit,
+        laps=laps,
+        car_at=None if car_at is None else (float(car_at[0]), float(car_at[1])),
+        **fields,
+    )
+
+
+def _laps(value: Any) -> tuple[LiveLap, ...] | None:
+    if not isinstance(value, list) or len(value) > MAX_LAPS:
+        return None
+    laps = []
+    for lap in value:
+        if not (
+            isinstance(lap, dict)
+            and set(lap) == {"time_seconds", "penalty_seconds", "offtracks", "counts"}
+            and _number(lap["time_seconds"])
+            and _number(lap["penalty_seconds"])
+            and _count(lap["offtracks"])
+            and isinstance(lap["counts"], bool)
+        ):
+            return None
+        laps.append(LiveLap(**lap))
+    return tuple(laps)
+
+
+def _place(value: Any) -> bool:
+    """Metres on a track: finite, and within any track's reach."""
+    return (
+        isinstance(value, list)
+        and len(value) == 2
+        and all(
+            isinstance(v, int | float)
+            and not isinstance(v, bool)
+            and math.isfinite(v)
+            and abs(v) < 10_000
+            for v in value
+        )
+    )
 
 
 def _text(value: Any) -> bool:
@@ -150,18 +222,24 @@ class LiveHeatWriter:
         best_lap: float | None,
         offtracks: int,
         limit: int | None,
+        laps: tuple[LiveLap, ...] = (),
+        car_at: tuple[float, float] | None = None,
         now: float | None = None,
     ) -> bool:
-        """Write the heat's progress if it changed or the heartbeat is due; whether it did."""
+        """Write the heat's progress if it changed, its car moved and `MOVING_SECONDS` have
+        gone by, or the heartbeat is due; whether it did."""
         moment = time.time() if now is None else now
         last = self.heat
-        changed = not self._written or (last.state, last.lap, last.offtracks, last.best_lap) != (
-            state,
-            lap,
-            offtracks,
-            best_lap,
-        )
-        if not changed and moment - self._last_at < HEARTBEAT_SECONDS:
+        changed = not self._written or (
+            last.state,
+            last.lap,
+            last.offtracks,
+            last.best_lap,
+            len(last.laps),
+        ) != (state, lap, offtracks, best_lap, len(laps))
+        since = moment - self._last_at
+        moved = car_at != last.car_at and since >= MOVING_SECONDS
+        if not changed and not moved and since < HEARTBEAT_SECONDS:
             return False
         heat = replace(
             last,
@@ -173,6 +251,8 @@ class LiveHeatWriter:
             offtracks=offtracks,
             limit=limit,
             written_at=moment,
+            laps=laps[-MAX_LAPS:],
+            car_at=car_at,
         )
         try:
             # Not synced to disk: the file is worth a second of the heat, and a sync could

@@ -4,27 +4,31 @@
 from __future__ import annotations
 
 import ipaddress
+import json
 import socket
 import sqlite3
 from collections.abc import Callable, Mapping
 from contextlib import closing
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 from urllib.parse import quote
 
 import uvicorn
 from jinja2 import Environment, PackageLoader
 from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
 from starlette.requests import Request
-from starlette.responses import HTMLResponse, JSONResponse, Response
+from starlette.responses import HTMLResponse, JSONResponse, Response, StreamingResponse
 from starlette.routing import Route
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from league.errors import LeagueError
+from league.nights import Night
 from league.opening import BUSY_TIMEOUT_MS, open_league
 from league.race_types import words as race_type_words
 from league.report import SCORE_TITLES
 from league.store import League
+from racer_tui.web.live import Leader, LiveFeed, night_leader, track_map
 from racer_tui.web.pages import (
     Leaderboard,
     league_leaderboard,
@@ -36,10 +40,11 @@ from sim.physics.labels import describe as physics_words
 from sim.race.rules import RankingMethod
 from sim.training.drivers import DriversByHash
 
-# Only this server's own stylesheet: no script, no frame, no form, nothing from elsewhere.
+# Only this server's own stylesheet and script, and its own event stream: no inline
+# script, no frame, no form, nothing from elsewhere.
 CONTENT_SECURITY_POLICY = (
-    "default-src 'none'; style-src 'self'; img-src 'self'; base-uri 'none'; "
-    "form-action 'none'; frame-ancestors 'none'"
+    "default-src 'none'; style-src 'self'; script-src 'self'; connect-src 'self'; "
+    "img-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'"
 )
 SECURITY_HEADERS: Mapping[str, str] = {
     "content-security-policy": CONTENT_SECURITY_POLICY,
@@ -50,7 +55,9 @@ SECURITY_HEADERS: Mapping[str, str] = {
 # The leaderboard and night pages reload themselves this often (a projector has no one to
 # press F5); the live heat will be pushed instead.
 REFRESH_SECONDS = 10
+T = TypeVar("T")
 STYLESHEET = "site.css"
+SCRIPT = "live.js"  # the live page's only script: it fills the page from the event stream
 
 
 class SecurityHeaders:
@@ -109,8 +116,9 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
     newest open one)."""
     templates = _templates()
     stylesheet = (Path(__file__).parent / "static" / STYLESHEET).read_bytes()
+    live_script = (Path(__file__).parent / "static" / SCRIPT).read_bytes()
 
-    def answer(request: Request, work: Callable[[League, frozenset[str]], Response]) -> Response:
+    def answer(request: Request, work: Callable[[League, frozenset[str]], T]) -> T | Response:
         """`work` on the league opened read-only, with the garage's model hashes (their
         results are verifiable here); a bad request or an unreadable league in a sentence."""
         try:
@@ -128,9 +136,8 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
         return HTMLResponse(html, status_code=status)
 
     def render(name: str, **values: Any) -> HTMLResponse:
-        page = templates.get_template(name).render(
-            css=STYLESHEET, refresh=REFRESH_SECONDS, **values
-        )
+        values.setdefault("refresh", REFRESH_SECONDS)
+        page = templates.get_template(name).render(css=STYLESHEET, script=SCRIPT, **values)
         return HTMLResponse(page)
 
     def leaderboard(request: Request, respond: Callable[[Leaderboard], Response]) -> Response:
@@ -176,12 +183,71 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
     def css(request: Request) -> Response:
         return Response(stylesheet, media_type="text/css")
 
+    def script(request: Request) -> Response:
+        return Response(live_script, media_type="text/javascript")
+
+    feeds: dict[str, LiveFeed] = {}
+
+    def feed_for(found: Night) -> LiveFeed:
+        feed = feeds.get(found.id)
+        if feed is None:
+
+            def leader() -> Leader | None:
+                with closing(read_only_league(db_path)) as league:
+                    return night_leader(league, found, DriversByHash().models_here())
+
+            feed = LiveFeed(db_path, found, leader, track_map(found.track_hash))
+            feeds[found.id] = feed
+        return feed
+
+    async def live_feed(request: Request) -> LiveFeed | Response:
+        """The feed of the night `?id=` names (else the served one); a problem's answer."""
+
+        def find(league: League, here: frozenset[str]) -> Night:
+            found = shown_night(league, request.query_params.get("id") or night)
+            if found is None:
+                raise LeagueError("this league has no night yet.")
+            return found
+
+        answered = await run_in_threadpool(answer, request, find)
+        if isinstance(answered, Response):
+            return answered
+        feed = feed_for(answered)
+        await feed.refresh()
+        return feed
+
+    async def live_html(request: Request) -> Response:
+        feed = await live_feed(request)
+        if isinstance(feed, Response):
+            return feed
+        return render("live.html", live=json.loads(feed.payload), map=feed.drawing, refresh=0)
+
+    async def live_api(request: Request) -> Response:
+        feed = await live_feed(request)
+        if isinstance(feed, Response):
+            return feed
+        return Response(feed.payload, media_type="application/json")
+
+    async def live_stream(request: Request) -> Response:
+        feed = await live_feed(request)
+        if isinstance(feed, Response):
+            return feed
+        return StreamingResponse(
+            feed.events(),
+            media_type="text/event-stream",
+            headers={"x-accel-buffering": "no"},  # a proxy in front passes each event on
+        )
+
     routes = [
         Route("/", leaderboard_html, methods=["GET"]),
         Route("/night", night_html, methods=["GET"]),
         Route("/api/leaderboard", leaderboard_api, methods=["GET"]),
         Route("/api/night", night_api, methods=["GET"]),
+        Route("/live", live_html, methods=["GET"]),
+        Route("/api/live", live_api, methods=["GET"]),
+        Route("/api/live/stream", live_stream, methods=["GET"]),
         Route(f"/{STYLESHEET}", css, methods=["GET"]),
+        Route(f"/{SCRIPT}", script, methods=["GET"]),
     ]
     app = Starlette(routes=routes)
     app.add_middleware(SecurityHeaders)

@@ -118,3 +118,45 @@ def test_a_write_that_fails_never_stops_the_heat(tmp_path: Path) -> None:
     )
     assert not publish(live, 100.0)
     live.clear()  # nothing to remove, and no error either
+
+
+def test_the_laps_and_the_car_s_place_are_written_and_a_moving_car_often(tmp_path: Path) -> None:
+    from league.live_heat import MOVING_SECONDS, LiveLap
+
+    live = writer(tmp_path)
+    laps = (LiveLap(12.5, 0.0, 0, True), LiveLap(16.0, 3.0, 1, True))
+
+    def place(now: float, x: float) -> bool:
+        return live.publish(
+            state="running",
+            time_left=200.0,
+            lap=3,
+            lap_time=1.0,
+            best_lap=12.5,
+            offtracks=0,
+            limit=3,
+            laps=laps,
+            car_at=(x, -2.0),
+            now=now,
+        )
+
+    assert place(100.0, 1.0)
+    assert not place(100.0 + MOVING_SECONDS / 2, 1.5)  # moved, but not yet due
+    assert place(100.0 + MOVING_SECONDS * 1.01, 2.0)  # moved and due: well before a heartbeat
+    heat = read_live_heat(live.path, NIGHT, now=100.5)
+    assert heat is not None and (heat.laps, heat.car_at) == (laps, (2.0, -2.0))
+    # A file of an earlier writer (no laps, no place) still reads; a damaged lap does not.
+    data = json.loads(live.path.read_text())
+    del data["laps"], data["car_at"]
+    live.path.write_text(json.dumps(data))
+    earlier = read_live_heat(live.path, NIGHT, now=100.5)
+    assert earlier is not None and (earlier.laps, earlier.car_at) == ((), None)
+    for damage in (
+        [{"time_seconds": -1, "penalty_seconds": 0, "offtracks": 0, "counts": True}],
+        [{"time_seconds": 1}],
+        "laps",
+    ):
+        live.path.write_text(json.dumps({**data, "laps": damage}))
+        assert read_live_heat(live.path, NIGHT, now=100.5) is None
+    live.path.write_text(json.dumps({**data, "car_at": [1e300, 0]}))
+    assert read_live_heat(live.path, NIGHT, now=100.5) is None

@@ -22,7 +22,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import DataTable, Digits, Static
 
-from league.live_heat import LiveHeatWriter
+from league.live_heat import LiveHeatWriter, live_laps
 from racer_tui.app.jobs import Job, JobState
 from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.screens.coach import CoachScreen
@@ -315,6 +315,7 @@ class RaceScreen(RacerScreen[RaceResult | None]):
                 best_lap=best.time_seconds if best is not None else None,
                 offtracks=0,
                 limit=self.setup.rules.max_offtracks_per_lap,
+                laps=live_laps(self.result.laps),
             )
             return
         valid = [lap.time_seconds for lap in tick.laps if lap.valid] if tick else []
@@ -326,6 +327,8 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             best_lap=min(valid, default=None),
             offtracks=tick.lap_offtracks if tick else 0,
             limit=self.setup.rules.max_offtracks_per_lap,
+            laps=live_laps(tick.laps) if tick else (),
+            car_at=(tick.x, tick.y) if tick else None,
         )
 
     def on_unmount(self) -> None:

@@ -24,7 +24,7 @@ from textual.containers import Horizontal, Vertical
 from textual.message import Message
 from textual.widgets import Digits, Label, Static
 
-from league.live_heat import LiveHeatWriter
+from league.live_heat import LiveHeatWriter, live_laps
 from league.timekeeper.feed import TIMER_ENV, FeedError, Trigger, follow, parse_trigger
 from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat, physical_floor
 from league.timekeeper.journal import HeatJournal, Resumed, resume_heat, take_input
@@ -391,6 +391,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
                 best_lap=self.best_lap,
                 offtracks=heat.resets,
                 limit=self.setup.rules.max_offtracks_per_lap,
+                laps=live_laps(heat.lap_records()),
             )
 
     def _draw(self) -> None:

@@ -20,6 +20,7 @@ from pathlib import Path
 import pytest
 
 from league import nights
+from league.live_heat import LiveHeatWriter, LiveLap, live_heat_path
 from league.opening import open_league
 from league.races import record_race
 from racer_tui.web.server import CONTENT_SECURITY_POLICY, read_only_league
@@ -147,3 +148,74 @@ def test_a_port_in_use_is_one_sentence(served: Served, tmp_path: Path) -> None:
     assert finished.returncode == 2
     assert finished.stderr.startswith(f"racer-tui: cannot listen on 127.0.0.1 port {port}")
     assert "Traceback" not in finished.stderr
+
+
+def _night_writer(served: Served) -> LiveHeatWriter:
+    with open_league(served.db) as league:
+        [night] = nights.list_nights(league)
+    return LiveHeatWriter(
+        live_heat_path(served.db, night.id),
+        night_id=night.id,
+        heat_id="H4",
+        heat_number=4,
+        racer=IMAGE,
+        car="reference",
+    )
+
+
+def _publish(writer: LiveHeatWriter, laps: tuple[LiveLap, ...]) -> None:
+    assert writer.publish(
+        state="running",
+        time_left=180.0,
+        lap=len(laps) + 1,
+        lap_time=2.0,
+        best_lap=min((lap.time_seconds for lap in laps), default=None),
+        offtracks=1,
+        limit=3,
+        laps=laps,
+        car_at=(0.5, 0.5),
+    )
+
+
+def test_the_live_heat_is_served_and_pushed_as_it_changes(served: Served) -> None:
+    writer = _night_writer(served)
+    _publish(writer, (LiveLap(9.5, 0.0, 0, True),))
+    status, _, text = _get(served.url + "/api/live")
+    live = json.loads(text)
+    assert status == 200 and live["heat"]["racer"] == IMAGE
+    assert live["heat"]["laps"] == [
+        {"time_seconds": 9.5, "penalty_seconds": 0.0, "offtracks": 0, "counts": True}
+    ]
+    # The night's leader is the image racer's 9.9 s best lap: this heat is 0.4 s ahead.
+    assert live["leader"] == {"racer": IMAGE, "score": 9.9}
+    assert live["gap_to_leader"] == -0.4
+    assert live["heat"]["car_on_map"] is not None  # the night's track is drawn here
+    with urllib.request.urlopen(served.url + "/api/live/stream", timeout=10) as stream:
+        assert stream.headers["content-type"].startswith("text/event-stream")
+        first = json.loads(stream.readline().decode().removeprefix("data: "))
+        assert first["heat"]["lap"] == 2
+        _publish(writer, (LiveLap(9.5, 0.0, 0, True), LiveLap(9.2, 0.0, 0, True)))
+        lap = 2
+        while lap == 2:  # the stream's next events, until the new lap's arrives
+            line = stream.readline().decode()
+            if line.startswith("data: "):
+                lap = json.loads(line.removeprefix("data: "))["heat"]["lap"]
+        assert lap == 3
+    writer.clear()
+    assert json.loads(_get(served.url + "/api/live")[2])["heat"] is None
+
+
+def test_the_live_page_draws_the_track_and_runs_only_its_own_script(served: Served) -> None:
+    _publish(_night_writer(served), ())
+    status, headers, page = _get(served.url + "/live")
+    assert status == 200 and '<svg class="map"' in page
+    scripts = re.findall(r"<script[^>]*>", page)
+    assert scripts == [
+        '<script src="/live.js" defer>',
+        '<script id="live-now" type="application/json">',
+    ]
+    # Names inside the page's data are escaped for the markup they sit in.
+    assert "\\u003cimg src=x onerror=alert(1)\\u003e" in page and "<img" not in page
+    status, headers, script = _get(served.url + "/live.js")
+    assert status == 200 and headers["content-type"].startswith("text/javascript")
+    assert "innerHTML" not in script  # values are set as text
