@@ -222,6 +222,12 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
             return feed
         return render("live.html", live=json.loads(feed.payload), map=feed.drawing, refresh=0)
 
+    async def overlay_html(request: Request) -> Response:
+        feed = await live_feed(request)
+        if isinstance(feed, Response):
+            return feed
+        return render("overlay.html", live=json.loads(feed.payload), refresh=0)
+
     async def live_api(request: Request) -> Response:
         feed = await live_feed(request)
         if isinstance(feed, Response):
@@ -244,6 +250,7 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
         Route("/api/leaderboard", leaderboard_api, methods=["GET"]),
         Route("/api/night", night_api, methods=["GET"]),
         Route("/live", live_html, methods=["GET"]),
+        Route("/overlay", overlay_html, methods=["GET"]),
         Route("/api/live", live_api, methods=["GET"]),
         Route("/api/live/stream", live_stream, methods=["GET"]),
         Route(f"/{STYLESHEET}", css, methods=["GET"]),

@@ -61,6 +61,10 @@ function show(live) {
   text("gap", gap === null ? "-" : (gap > 0 ? "+" : "") + gap.toFixed(3));
   text("leader", live.leader ? live.leader.racer + "  " + seconds(live.leader.score) : "-");
   showLaps(heat ? heat.laps : []);
+  // The overlay's card at the end of a heat (elements the live page does not have).
+  text("card-racer", heat ? heat.racer : "");
+  text("card-best", heat ? seconds(heat.best_lap) : "");
+  text("card-place", gap === null ? "" : gap <= 0 ? "leads the night" : "behind the leader");
   const dot = document.getElementById("car-dot");
   if (dot !== null) {
     const place = heat ? heat.car_on_map : null;

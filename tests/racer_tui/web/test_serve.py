@@ -205,10 +205,13 @@ def test_the_live_heat_is_served_and_pushed_as_it_changes(served: Served) -> Non
     assert json.loads(_get(served.url + "/api/live")[2])["heat"] is None
 
 
-def test_the_live_page_draws_the_track_and_runs_only_its_own_script(served: Served) -> None:
+@pytest.mark.parametrize(
+    ("path", "part"), [("/live", '<svg class="map"'), ("/overlay", "lower-third")]
+)
+def test_the_live_pages_run_only_their_own_script(served: Served, path: str, part: str) -> None:
     _publish(_night_writer(served), ())
-    status, headers, page = _get(served.url + "/live")
-    assert status == 200 and '<svg class="map"' in page
+    status, headers, page = _get(served.url + path)
+    assert status == 200 and part in page
     scripts = re.findall(r"<script[^>]*>", page)
     assert scripts == [
         '<script src="/live.js" defer>',
