@@ -4,9 +4,12 @@
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 from pathlib import Path
 
 from league.store import default_db_path
+from sim.foundation.parent import die_with_parent
 from sim.foundation.remedies import RemedyError
 
 NAMES = ("serve",)
@@ -38,6 +41,8 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         help=f"the port (default {DEFAULT_PORT}; 0 picks a free one)",
     )
     serve.add_argument("--db", type=Path, help="the league database (default: the app's)")
+    # The app's own server: stopped (SIGTERM, so the requests in hand finish) with the app.
+    serve.add_argument("--die-with-parent", action="store_true", help=argparse.SUPPRESS)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -46,6 +51,8 @@ def run(args: argparse.Namespace) -> int:
 
     if not 0 <= args.port <= 65535:
         raise RemedyError(f"--port must be from 0 to 65535, not {args.port}.")
+    if args.die_with_parent:
+        die_with_parent(os.getppid(), signal.SIGTERM)
     db_path = args.db if args.db is not None else default_db_path()
     # uvicorn stops on Ctrl+C (or SIGTERM) itself, after the requests in hand.
     serve(db_path, args.host, args.port, args.night, say=lambda line: print(line, flush=True))

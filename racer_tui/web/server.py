@@ -56,6 +56,7 @@ SECURITY_HEADERS: Mapping[str, str] = {
 # press F5); the live heat will be pushed instead.
 REFRESH_SECONDS = 10
 T = TypeVar("T")
+GRACEFUL_SECONDS = 2
 STYLESHEET = "site.css"
 SCRIPT = "live.js"  # the live page's only script: it fills the page from the event stream
 
@@ -314,6 +315,13 @@ def serve(
         "Ctrl+C stops it."
     )
     config = uvicorn.Config(
-        app, log_level="warning", access_log=False, server_header=False, lifespan="off"
+        app,
+        log_level="warning",
+        access_log=False,
+        server_header=False,
+        lifespan="off",
+        # A live page's stream never ends by itself: on Ctrl+C (or when the app that
+        # started it quits) the server waits this long for the requests in hand, no more.
+        timeout_graceful_shutdown=GRACEFUL_SECONDS,
     )
     uvicorn.Server(config).run(sockets=[listener])

@@ -18,7 +18,6 @@ running holds that pipe or a core.
 from __future__ import annotations
 
 import argparse
-import ctypes
 import fcntl
 import os
 import signal
@@ -29,6 +28,7 @@ from pathlib import Path
 from types import FrameType
 from typing import TextIO
 
+from sim.foundation.parent import die_with_parent
 from sim.foundation.remedies import RemedyError
 from sim.garage.folder import ModelError, open_model
 from sim.reward import guard as reward_guard
@@ -131,16 +131,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _die_with_parent(parent_pid: int) -> None:
-    """Be killed when the parent dies (Linux), so a killed command leaves no orphan
-    training at full CPU; checkpoints are written atomically, so the last one is kept."""
-    if sys.platform.startswith("linux"):
-        pr_set_pdeathsig = 1
-        ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, int(signal.SIGKILL))
-    if os.getppid() != parent_pid:  # it died before the line above took effect
-        os._exit(EXIT_FAILED)
-
-
 def _event_stream() -> TextIO:
     """The events' own descriptor (not inherited by a program the process runs); stdout
     becomes stderr, so a print (the reward function's, a library's) never lands between
@@ -156,7 +146,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     parent = args.parent_pid if args.parent_pid is not None else os.getppid()
     if args.die_with_parent:
-        _die_with_parent(parent)
+        # Killed with it: checkpoints are written atomically, so the last one is kept.
+        die_with_parent(parent, exit_code=EXIT_FAILED)
     stop = StopFlag(parent)
     _install_signal_handlers(stop)
     emit = EventWriter(_event_stream(), stop)

@@ -79,6 +79,7 @@ from racer_tui.app.screens.export_path import EXPORT_FORMATS, check_export_path
 from racer_tui.app.screens.night_projector import NightProjectorScreen
 from racer_tui.app.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.app.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
+from racer_tui.app.web_pages import WebPages, WebPagesError
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.section_header import SectionHeader
 from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table
@@ -574,6 +575,13 @@ class NightsScreen(RacerScreen[None]):
             show=False,
         ),
         Binding(
+            "b",
+            "web_pages",
+            "Web pages",
+            tooltip="The leaderboard, the night and its live heat in any browser (b again stops)",
+            show=False,
+        ),
+        Binding(
             "left_square_bracket",
             "move_heat(-1)",
             "Heat earlier",
@@ -602,6 +610,7 @@ class NightsScreen(RacerScreen[None]):
     NightsScreen #nights-list { width: 30; padding: 0 1; }
     NightsScreen.-narrow #nights-list { width: 22; }
     NightsScreen #standings-note { height: auto; color: $warning; }
+    NightsScreen #web-note { height: auto; color: $success; }
     NightsScreen #nights { height: 1fr; }
     NightsScreen #night-view { width: 1fr; padding: 0 1; }
     NightsScreen #night-rules { height: auto; }
@@ -625,6 +634,7 @@ class NightsScreen(RacerScreen[None]):
         self.heat_rows: list[tuple[Heat | None, Entrant]] = []  # the heats table's rows
         self._follow: str | None = None  # an entrant whose row the cursor follows (a move)
         self._recorded_heats: set[str] = set()  # heats this screen has sent to the league
+        self.web_pages = WebPages()  # `racer-tui serve`, when the host starts it here (b)
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league", "league nights")
@@ -632,6 +642,7 @@ class NightsScreen(RacerScreen[None]):
             with Vertical(id="nights-list"):
                 yield Label("League nights", classes="field-label")
                 yield FittedTable(id="nights", cursor_type="row", zebra_stripes=True)
+                yield Static("", id="web-note", classes="-hidden")
             with Vertical(id="night-view"):
                 yield Static("", id="night-rules")
                 yield Label("Entrants and heats, in running order", classes="field-label")
@@ -1183,6 +1194,45 @@ class NightsScreen(RacerScreen[None]):
             )
             return
         self.app.push_screen(NightProjectorScreen(self.showing, db_path=self.db_path))
+
+    def action_web_pages(self) -> None:
+        """Start the league's web pages, or stop them if they run."""
+        if self.web_pages.running:
+            self._stop_web_pages()
+            return
+        self._start_web_pages()
+
+    @work(thread=True, exclusive=True, group="web-pages", exit_on_error=False)
+    def _start_web_pages(self) -> None:
+        try:
+            said = self.web_pages.start(self.db_path)
+        except WebPagesError as error:
+            self.app.call_from_thread(self.notify, str(error), severity="error")
+            return
+        self.app.call_from_thread(self._show_web_pages, said)
+
+    @work(thread=True, exclusive=True, group="web-pages", exit_on_error=False)
+    def _stop_web_pages(self) -> None:
+        self.web_pages.stop()
+        self.app.call_from_thread(self._show_web_pages, "")
+
+    def _show_web_pages(self, said: str) -> None:
+        note = self.query_one("#web-note", Static)
+        pages = self.web_pages
+        address = pages.address if said else ""
+        note.update(Text(f"Web: {address}" if address else ""))
+        note.set_class(not address, "-hidden")
+        if address:
+            self.notify(
+                f"Web pages at {address} ({pages.who}): the leaderboard, /night, /live and "
+                "/overlay for a stream. b stops them.",
+                timeout=10,
+            )
+        else:
+            self.notify("The web pages are stopped.")
+
+    def on_unmount(self) -> None:
+        self.web_pages.stop()
 
     def action_leave(self) -> None:
         self.dismiss(None)
