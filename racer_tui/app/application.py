@@ -19,10 +19,11 @@ from typing import Any, ClassVar
 from textual import events
 from textual.app import App, ScreenStackError
 from textual.binding import Binding, BindingType
+from textual.command import CommandPalette
 from textual.dom import DOMNode
 from textual.message_pump import MessagePump
 from textual.screen import Screen
-from textual.widget import AwaitMount
+from textual.widget import AwaitMount, Widget
 from textual.widgets import DataTable
 from textual.worker import WorkerState
 
@@ -112,6 +113,9 @@ CONSEQUENCE_WAIT_SECONDS = 0.25
 READY_WAIT_SECONDS = 3.0  # keys wait this long at most for a screen to be ready for them
 HELD_KEY_CHECKS = HELD_KEY_YIELDS + int(KEY_FLIGHT_SECONDS / HELD_KEY_POLL_SECONDS) + 1
 HELP_SCREEN = "help"  # the installed help screen's name
+# ctrl+p as a palette closes waits this long at most for it to be gone, looking this often.
+PALETTE_WAIT_SECONDS = 2.0
+PALETTE_RETRY_SECONDS = 0.02
 
 
 def _section_bindings() -> list[BindingType]:
@@ -312,7 +316,15 @@ class RacerTuiApp(App[int]):
         target = self._key_sent_to
         if not isinstance(target, DOMNode) or not target.is_attached:
             return False
-        return any(_busy(node) for node in target.ancestors_with_self if node is not self)
+        if any(_busy(node) for node in target.ancestors_with_self if node is not self):
+            return True
+        # The palette chooses a command in its list, beside the field the key went to:
+        # Enter there closes it a few messages later, and a ctrl+p typed right after met it
+        # still open (and was lost). Its few widgets are all looked at.
+        screen = target.screen if isinstance(target, Widget) else target
+        return isinstance(screen, CommandPalette) and any(
+            _busy(node) for node in screen.walk_children(with_self=True)
+        )
 
     def _screen_ready(self, screen: Screen[Any]) -> bool:
         """The screen on top is ready for keys (`ready_for_keys`): a section whose list
@@ -532,6 +544,34 @@ class RacerTuiApp(App[int]):
             garage.reload(select=name)
 
     # --- help and palette ------------------------------------------------------------------
+
+    def action_command_palette(self) -> None:
+        """Textual's palette, never lost nor doubled when ctrl+p comes as one closes.
+
+        Enter on a palette command closes the palette a few messages later: a ctrl+p typed
+        right after it met the palette still open and did nothing (the key was lost), or
+        met it taken off the screen but not yet removed, and Textual, which opens every
+        palette with one fixed id, crashed on a second one (DuplicateIds: the monkey, seed
+        401). So ctrl+p waits, up to `PALETTE_WAIT_SECONDS`, for the closing palette to be
+        gone."""
+        self._open_palette(time.monotonic() + PALETTE_WAIT_SECONDS)
+
+    def _open_palette(self, deadline: float) -> None:
+        try:
+            screen = self.screen
+        except ScreenStackError:  # quitting
+            return
+        # Textual 8.2.8's own fields: a command chosen (the palette is closing) and the
+        # screens the app holds, the one still being taken down among them.
+        closing = isinstance(screen, CommandPalette) and screen._selected_command is not None
+        leaving = any(
+            isinstance(node, CommandPalette) and node is not screen for node in self._nodes
+        )
+        if closing or leaving:
+            if time.monotonic() < deadline:
+                self.set_timer(PALETTE_RETRY_SECONDS, partial(self._open_palette, deadline))
+            return  # (past the deadline: no second palette, which would be a crash)
+        super().action_command_palette()
 
     def help_topics(self) -> list[HelpTopic]:
         classes: list[tuple[str, type[DOMNode]]] = [(EVERYWHERE, type(self))]

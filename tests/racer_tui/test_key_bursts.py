@@ -187,3 +187,22 @@ async def test_a_palette_search_that_starts_after_the_palette_closed_ends_quietl
         await drain(pilot)
         assert app._exception is None
         assert app.is_running and isinstance(app.screen, GarageScreen)
+
+
+async def test_the_palette_opened_again_as_the_last_one_closes_never_crashes() -> None:
+    # The monkey (seed 401): a palette command chosen with Enter and ctrl+p in the same
+    # burst opened a second palette while the first was still being taken down; Textual
+    # gives its palette one fixed id, so that was a DuplicateIds crash. Sooner, the ctrl+p
+    # met the first palette still open and was lost.
+    from textual.command import CommandPalette
+
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        for _ in range(3):
+            burst(app, ["ctrl+p", "enter", "ctrl+p"])
+            await drain(pilot)
+            assert app._exception is None
+            assert isinstance(app.screen, CommandPalette)  # the second one opened
+            burst(app, ["escape"])
+            await drain(pilot)
