@@ -27,6 +27,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -77,9 +78,19 @@ class BusyHeat:
         self._thread.join(timeout=60)
 
 
-async def press_keys(keys: int) -> list[float]:
+async def press_keys(
+    keys: int,
+    *,
+    night_id: str | None = None,
+    lap_captured: Callable[[int, float], None] | None = None,
+) -> list[float]:
     """Time `keys` alternating r and l presses, in heats of `HEAT_KEYS` (a new timekeeper
-    for each, started with space, as a night's physical heats follow one another)."""
+    for each, started with space, as a night's physical heats follow one another).
+
+    With `night_id`, each heat is also written for the night's projector and web pages
+    (`league.live_heat`), as a night's heat is; `lap_captured(laps, at)` hears each
+    captured lap: the heat's laps so far and the wall-clock time of the key."""
+    from league.live_heat import LiveHeatWriter, live_heat_path
     from league.store import default_db_path
     from league.timekeeper.journal import HeatJournal, journal_path
     from racer_tui.app.application import create_app
@@ -103,7 +114,19 @@ async def press_keys(keys: int) -> list[float]:
                 # As on a night: every input also goes to the heat's journal on disk.
                 heat_id = new_id()
                 journal = HeatJournal(journal_path(default_db_path(), heat_id), heat_id)
-                setup = TimekeeperSetup(track, rules, "bench", "bench car", journal=journal)
+                live = None
+                if night_id is not None:
+                    live = LiveHeatWriter(
+                        live_heat_path(default_db_path(), night_id),
+                        night_id=night_id,
+                        heat_id=heat_id,
+                        heat_number=press // HEAT_KEYS + 1,
+                        racer="bench",
+                        car="bench car",
+                    )
+                setup = TimekeeperSetup(
+                    track, rules, "bench", "bench car", journal=journal, live=live
+                )
                 keeper = TimekeeperScreen(setup)
                 keeper.clock = lambda: moment[0]
                 await app.push_screen(keeper)
@@ -122,6 +145,8 @@ async def press_keys(keys: int) -> list[float]:
             expectation = Expectation(key, answered, time.perf_counter())
             keeper.said = Text("")  # the next sentence is this key's
             clock.pending = expectation
+            if key == "l" and lap_captured is not None:
+                lap_captured(press % HEAT_KEYS // 2 + 1, time.time())
             await pilot.press(key)
             deadline = time.perf_counter() + KEY_TIMEOUT
             while expectation.seen_at is None and time.perf_counter() < deadline:

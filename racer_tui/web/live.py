@@ -30,6 +30,7 @@ POLL_SECONDS = 0.1
 # The night's leader changes only when a heat is recorded: looked up this often.
 LEADER_SECONDS = 2.0
 KEEP_ALIVE_SECONDS = 15.0
+KEEP_ALIVE = b": still here\n\n"  # an event-stream comment: no event, the line stays open
 # A drawing of the track: its borders as SVG paths in a box this many units wide.
 MAP_UNITS = 1000.0
 
@@ -146,6 +147,7 @@ class LiveFeed:
         self._leader_of = leader
         self.drawing = drawing
         self.payload = ""
+        self._event = b""  # the payload as one event, encoded once for every viewer
         self.version = 0
         self.viewers = 0
         self._changed = asyncio.Condition()
@@ -165,6 +167,7 @@ class LiveFeed:
         payload = json.dumps(live_json(self.night, heat, self._leader, self.drawing))
         if payload != self.payload:
             self.payload = payload
+            self._event = f"data: {payload}\n\n".encode()
             self.version += 1
             async with self._changed:
                 self._changed.notify_all()
@@ -174,7 +177,7 @@ class LiveFeed:
             await self.refresh()
             await asyncio.sleep(POLL_SECONDS)
 
-    async def events(self) -> AsyncIterator[str]:
+    async def events(self) -> AsyncIterator[bytes]:
         """One viewer's stream: the newest state whenever it changes."""
         self.viewers += 1
         try:
@@ -185,7 +188,7 @@ class LiveFeed:
             while True:
                 if self.version != seen:
                     seen = self.version
-                    yield f"data: {self.payload}\n\n"
+                    yield self._event
                     continue
                 quiet = False
                 async with self._changed:
@@ -195,6 +198,6 @@ class LiveFeed:
                         except TimeoutError:
                             quiet = True
                 if quiet:
-                    yield ": still here\n\n"
+                    yield KEEP_ALIVE
         finally:
             self.viewers -= 1
