@@ -12,6 +12,7 @@ import itertools
 import json
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from league.errors import LeagueError
 from league.leaderboard import Filters, LeaderboardRow, grouped_rows, rank_groups
@@ -159,3 +160,24 @@ def season_standings(league: League, season: Season) -> list[SeasonStanding]:
         )
         for i, racer in enumerate(order, start=1)
     ]
+
+
+def season_json(league: League, season: Season) -> dict[str, Any]:
+    """The season as `racer-tui season show --json` writes it (and the web's night page)."""
+    return {
+        "id": season.id,
+        "name": season.name,
+        "points": list(season.points),
+        "nights": len(closed_nights(league, season)),
+        "standings": [
+            {
+                "position": s.position,
+                "racer": s.display_name,
+                "racer_name": s.racer,
+                "points": s.points,
+                "nights": s.nights,
+                "wins": s.wins,
+            }
+            for s in season_standings(league, season)
+        ],
+    }

@@ -22,6 +22,7 @@ from league.leaderboard import (
 from league.night_report import night_json
 from league.nights import Night, entrants, get_night, heats, list_nights, standings
 from league.report import SCORE_TITLES, leaderboard_json
+from league.seasons import get_season, season_json
 from league.store import League
 from league.tracks import track_names
 from sim.race.rules import RankingMethod
@@ -123,4 +124,7 @@ def night_document(league: League, night: Night, local_models: frozenset[str]) -
     mark_verification(league, [standing.entry for standing in ranked], local_models)
     document = night_json(night, entrants(league, night), heats(league, night), ranked)
     document["rules_words"] = night.rules.describe()
+    # Its season's points so far, as `season show --json` gives them (none: null).
+    season = get_season(league, night.season_id) if night.season_id else None
+    document["season"] = season_json(league, season) if season is not None else None
     return document

@@ -23,6 +23,7 @@ from starlette.routing import Route
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from league.errors import LeagueError
+from league.live_heat import live_heat_path, read_live_heat
 from league.nights import Night
 from league.opening import BUSY_TIMEOUT_MS, open_league
 from league.race_types import words as race_type_words
@@ -162,9 +163,11 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
             if found is None:
                 return render("night.html", night=None)
             ranking = found.rules.ranking
+            running = read_live_heat(live_heat_path(db_path, found.id), found.id)
             return render(
                 "night.html",
                 night=night_document(league, found, here),
+                running_heat=running.heat_number if running is not None else None,
                 # A best lap is a column already: the score needs its own only otherwise.
                 score_column=ranking is not RankingMethod.BEST_LAP,
                 score_title=SCORE_TITLES[ranking],

@@ -52,28 +52,10 @@ def season_command(league: League, args: argparse.Namespace) -> int:
         print_table(table)
         return 0
     season = seasons.get_season(league, args.season)
-    standings = seasons.season_standings(league, season)
     if args.json:
-        print_json(
-            {
-                "id": season.id,
-                "name": season.name,
-                "points": list(season.points),
-                "nights": len(seasons.closed_nights(league, season)),
-                "standings": [
-                    {
-                        "position": s.position,
-                        "racer": s.display_name,
-                        "racer_name": s.racer,
-                        "points": s.points,
-                        "nights": s.nights,
-                        "wins": s.wins,
-                    }
-                    for s in standings
-                ],
-            }
-        )
+        print_json(seasons.season_json(league, season))
         return 0
+    standings = seasons.season_standings(league, season)
     nights_closed = len(seasons.closed_nights(league, season))
     table = plain_table(f"Season {season.name}: {counted(nights_closed, 'closed night')}")
     for title, right in (

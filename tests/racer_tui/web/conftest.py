@@ -11,6 +11,7 @@ import sys
 import urllib.error
 import urllib.request
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -43,16 +44,10 @@ class Served:
     db: Path
 
 
-@pytest.fixture(scope="module")
-def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
-    home = tmp_path_factory.mktemp("serve-home")
-    db = home / "league.db"
-    with open_league(db) as league:
-        night = nights.new_night(league, resolve_track(TRACK), name=f"Friday {SCRIPT}")
-        for racer, times in ((SCRIPT, [10.0, 10.4]), (IMAGE, [10.2, 9.9]), (LONG, [11.0])):
-            result = race_result(racer, times, model=f"car of {racer[:20]}")
-            record_race(league, result, night.id)
-        league.conn.commit()
+@contextmanager
+def serving(db: Path, home: Path) -> Iterator[Served]:
+    """`racer-tui serve --port 0` over `db`, with `home` as its data folder, until the end
+    of the block; then Ctrl+C, which must stop it as it stops any command."""
     env = {**os.environ, "RACER_TUI_HOME": str(home), "PYTHONUNBUFFERED": "1"}
     process = subprocess.Popen(
         [sys.executable, "-m", "racer_tui.cli.main", "serve", "--db", str(db), "--port", "0"],
@@ -69,6 +64,21 @@ def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
         yield Served(found.group(0).rstrip("/"), first, db)
     finally:
         process.send_signal(signal.SIGINT)
-        # Ctrl+C stops it as it stops any command: exit status 130, no traceback.
+        # Exit status 130, as for any command stopped by Ctrl+C, and no traceback.
         assert process.wait(timeout=10) == 130
         assert process.stderr is not None and "Traceback" not in process.stderr.read()
+
+
+@pytest.fixture(scope="module")
+def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
+    """One league for the module: a night whose three racers' names are hostile."""
+    home = tmp_path_factory.mktemp("serve-home")
+    db = home / "league.db"
+    with open_league(db) as league:
+        night = nights.new_night(league, resolve_track(TRACK), name=f"Friday {SCRIPT}")
+        for racer, times in ((SCRIPT, [10.0, 10.4]), (IMAGE, [10.2, 9.9]), (LONG, [11.0])):
+            result = race_result(racer, times, model=f"car of {racer[:20]}")
+            record_race(league, result, night.id)
+        league.conn.commit()
+    with serving(db, home) as server:
+        yield server

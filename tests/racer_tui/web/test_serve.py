@@ -19,9 +19,11 @@ import pytest
 from league import nights
 from league.live_heat import LiveHeatWriter, LiveLap, live_heat_path
 from league.opening import open_league
+from league.seasons import new_season
 from racer_tui.web.server import CONTENT_SECURITY_POLICY, read_only_league
+from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK
-from tests.racer_tui.web.conftest import IMAGE, LONG, SCRIPT, Served, get
+from tests.racer_tui.web.conftest import IMAGE, LONG, SCRIPT, Served, get, serving
 
 
 def test_it_says_where_it_listens_and_who_can_open_it(served: Served) -> None:
@@ -168,3 +170,39 @@ def test_the_live_pages_run_only_their_own_script(served: Served, path: str, par
     status, headers, script = get(served.url + "/live.js")
     assert status == 200 and headers["content-type"].startswith("text/javascript")
     assert "innerHTML" not in script  # values are set as text
+
+
+def test_a_season_s_night_shows_its_running_heat_and_the_season_s_points(
+    tmp_path: Path,
+) -> None:
+
+    db = tmp_path / "league.db"
+    with open_league(db) as league:
+        season = new_season(league, "Spring")
+        night = nights.new_night(league, resolve_track(TRACK), name="week 1", season=season.id)
+        for racer in ("ada", "bob"):
+            nights.add_entrant(league, night, racer, "reference")
+        _, second = nights.draw_heats(league, night, seed=1)
+        league.conn.commit()
+    writer = LiveHeatWriter(
+        live_heat_path(db, night.id),
+        night_id=night.id,
+        heat_id=second.id,
+        heat_number=second.position,
+        racer=second.entrant.display_name,
+        car="reference",
+    )
+    _publish(writer, ())
+    with serving(db, tmp_path) as server:
+        page = get(f"{server.url}/night?id={night.id}")[2]
+        document = json.loads(get(f"{server.url}/api/night?id={night.id}")[2])
+    # The heat on track is marked, the other waits; the season has no closed night yet.
+    assert page.count("running now") == 1 and page.count("waiting") == 1
+    assert document["season"] == {
+        "id": season.id,
+        "name": "Spring",
+        "points": list(season.points),
+        "nights": 0,
+        "standings": [],
+    }
+    assert "Season Spring: 0 closed nights" in page
