@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 from sim.foundation.remedies import RemedyError
@@ -34,6 +35,11 @@ class WebPages:
     def __init__(self) -> None:
         self.process: subprocess.Popen[str] | None = None
         self.announcement = ""  # its first line: where it listens, and who can open it
+        # Start runs in a worker thread while the screen may be left (and `stop` called):
+        # a server that comes up after its stop is stopped at once, never left running.
+        self._lock = threading.Lock()
+        self.starting = False
+        self._stop_asked = False
 
     @property
     def running(self) -> bool:
@@ -54,13 +60,24 @@ class WebPages:
 
     def start(self, db_path: Path | None) -> str:
         """Start the server (blocking until it says where it listens: call it from a worker
-        thread) and return that line. WebPagesError with its sentence if it cannot."""
-        for port in PORTS[:-1]:
-            try:
-                return self._start(db_path, port)
-            except WebPagesError:
-                pass  # the port is taken (or worse, which the last try says)
-        return self._start(db_path, PORTS[-1])
+        thread) and return that line, or "" if `stop` was called meanwhile. WebPagesError
+        with its sentence if it cannot start."""
+        with self._lock:
+            if self.starting or self.running:
+                return self.announcement
+            self.starting, self._stop_asked = True, False
+        try:
+            for port in PORTS[:-1]:
+                try:
+                    return self._start(db_path, port)
+                except WebPagesError:
+                    pass  # the port is taken (or worse, which the last try says)
+            return self._start(db_path, PORTS[-1])
+        finally:
+            with self._lock:
+                self.starting = False
+            if self._stop_asked:
+                self.stop()
 
     def _start(self, db_path: Path | None, port: int) -> str:
         command = [sys.executable, "-m", "racer_tui.cli.main", "serve", "--die-with-parent"]
@@ -88,13 +105,16 @@ class WebPages:
                 raise WebPagesError(
                     sentence or f"the web server stopped (exit status {process.returncode})."
                 )
-        self.process, self.announcement = process, line
-        return line
+        with self._lock:
+            self.process, self.announcement = process, line
+            return "" if self._stop_asked else line
 
     def stop(self) -> None:
         """Stop the server: its requests in hand finish, then it ends (killed if it will
         not)."""
-        process, self.process, self.announcement = self.process, None, ""
+        with self._lock:
+            self._stop_asked = self.starting
+            process, self.process, self.announcement = self.process, None, ""
         if process is None or process.poll() is not None:
             return
         os.killpg(process.pid, signal.SIGTERM)

@@ -1197,6 +1197,8 @@ class NightsScreen(RacerScreen[None]):
 
     def action_web_pages(self) -> None:
         """Start the league's web pages, or stop them if they run."""
+        if self.web_pages.starting:
+            return  # its address comes in a moment
         if self.web_pages.running:
             self._stop_web_pages()
             return
@@ -1209,7 +1211,9 @@ class NightsScreen(RacerScreen[None]):
         except WebPagesError as error:
             self.app.call_from_thread(self.notify, str(error), severity="error")
             return
-        self.app.call_from_thread(self._show_web_pages, said)
+        # Nothing to show if the screen was left while it started: it was stopped then.
+        if said and self.is_attached:
+            self.app.call_from_thread(self._show_web_pages, said)
 
     @work(thread=True, exclusive=True, group="web-pages", exit_on_error=False)
     def _stop_web_pages(self) -> None:

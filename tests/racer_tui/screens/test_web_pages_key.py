@@ -7,6 +7,7 @@ import asyncio
 import urllib.request
 from typing import Any
 
+import psutil
 from textual.pilot import Pilot
 from textual.widgets import Static
 
@@ -66,3 +67,29 @@ def _note(nights: NightsScreen) -> Static:
 def _read(url: str) -> str:
     with urllib.request.urlopen(url, timeout=10) as answer:
         return str(answer.read().decode())
+
+
+def test_a_server_stopped_while_it_starts_is_never_left_running() -> None:
+    # b and then Esc at once: the screen is gone (and its pages stopped) before the
+    # server has said where it listens. It must not stay up with nothing to stop it.
+    import threading
+
+    from racer_tui.app.web_pages import WebPages
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    open_league().close()
+    pages = WebPages()
+    said: list[str] = []
+    starting = threading.Thread(target=lambda: said.append(pages.start(None)))
+    starting.start()
+    while not pages.starting:
+        pass
+    pages.stop()  # while it starts
+    starting.join(60)
+    assert said == [""]  # it came up, was stopped, and says nothing to show
+    assert pages.process is None and not pages.running
+    assert not any(
+        "racer_tui.cli.main serve" in " ".join(child.cmdline())
+        for child in psutil.Process().children(recursive=True)
+        if child.is_running() and child.status() != psutil.STATUS_ZOMBIE
+    )
