@@ -18,7 +18,7 @@ import pytest
 from league import nights
 from league.live_heat import LiveHeatWriter, LiveLap, live_heat_path
 from league.opening import open_league
-from tests.racer_tui.web.conftest import IMAGE, SCRIPT, Served
+from tests.racer_tui.web.conftest import IMAGE, LONG, SCRIPT, Served
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 pytestmark = pytest.mark.skipif(
@@ -144,3 +144,21 @@ def test_the_live_page_follows_a_heat_from_start_to_finish(served: Served) -> No
     page = _rendered(served.url + "/live")
     assert page.state == "none"
     assert "No heat running" in "".join(page.text)
+
+
+def test_names_no_league_would_take_still_render_as_text(served: Served) -> None:
+    # A right-to-left override and 10,000 characters cannot be a racer's name (the league
+    # refuses them, here and on every pull), so they are written into the database behind
+    # its back: whatever a newer or broken racer-tui might let through stays text.
+    import sqlite3
+
+    hostile = "\u202eevil" + "x" * 10_000
+    with sqlite3.connect(served.db) as conn:
+        conn.execute("UPDATE racers SET display_name = ? WHERE name = ?", (hostile, LONG))
+    try:
+        page = _rendered(served.url + "/")
+        assert hostile in "".join(page.text)
+        assert not [tag for tag, _ in page.elements if tag in ("img", "iframe", "object")]
+    finally:
+        with sqlite3.connect(served.db) as conn:
+            conn.execute("UPDATE racers SET display_name = ? WHERE name = ?", (LONG, LONG))
