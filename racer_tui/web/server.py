@@ -7,6 +7,7 @@ import ipaddress
 import json
 import socket
 import sqlite3
+import time
 from collections.abc import Callable, Mapping
 from contextlib import closing
 from pathlib import Path
@@ -57,6 +58,7 @@ SECURITY_HEADERS: Mapping[str, str] = {
 # press F5); the live heat will be pushed instead.
 REFRESH_SECONDS = 10
 T = TypeVar("T")
+GARAGE_SECONDS = 30.0
 GRACEFUL_SECONDS = 2
 STYLESHEET = "site.css"
 SCRIPT = "live.js"  # the live page's only script: it fills the page from the event stream
@@ -120,12 +122,23 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
     stylesheet = (Path(__file__).parent / "static" / STYLESHEET).read_bytes()
     live_script = (Path(__file__).parent / "static" / SCRIPT).read_bytes()
 
+    garage: list[tuple[float, frozenset[str]]] = []  # (when, hashes): read at most so often
+
+    def models_here() -> frozenset[str]:
+        """The garage's model hashes (their results are verifiable here). Hashing every
+        model's files takes a while: a page a phone reloads every 10 s must not do it each
+        time, so they are read again at most every `GARAGE_SECONDS`."""
+        now = time.monotonic()
+        if not garage or now - garage[0][0] > GARAGE_SECONDS:
+            garage[:] = [(now, DriversByHash().models_here())]
+        return garage[0][1]
+
     def answer(request: Request, work: Callable[[League, frozenset[str]], T]) -> T | Response:
-        """`work` on the league opened read-only, with the garage's model hashes (their
-        results are verifiable here); a bad request or an unreadable league in a sentence."""
+        """`work` on the league opened read-only, with the garage's model hashes; a bad
+        request or an unreadable league in a sentence."""
         try:
             with closing(read_only_league(db_path)) as league:
-                return work(league, DriversByHash().models_here())
+                return work(league, models_here())
         except LeagueError as error:
             return _problem(request, str(error), 404)
         except sqlite3.Error as error:
@@ -198,7 +211,7 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
 
             def leader() -> Leader | None:
                 with closing(read_only_league(db_path)) as league:
-                    return night_leader(league, found, DriversByHash().models_here())
+                    return night_leader(league, found, models_here())
 
             feed = LiveFeed(db_path, found, leader, track_map(found.track_hash))
             feeds[found.id] = feed
