@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import psutil
+from textual.pilot import OutOfBounds
 
 from racer_tui.app.application import create_app
 from racer_tui.app.keys_as_delivered import burst, drain, paste
@@ -258,8 +259,15 @@ class Monkey:
             said = repr(pasted)
         elif kind == "click":
             x, y = self.rng.randrange(self.size[0]), self.rng.randrange(self.size[1])
-            await self.pilot.click(offset=(x, y))
-            said = f"({x}, {y})"
+            try:
+                await self.pilot.click(offset=(x, y))
+                said = f"({x}, {y})"
+            except OutOfBounds:
+                # Pilot's own refusal, before any event reaches the app: a screen pushed a
+                # moment ago has no size until its first layout (seed 405, action 738). A
+                # terminal would deliver the click; the next action will find it laid out.
+                width, height = app.screen.size
+                said = f"({x}, {y}) not sent: the screen was {width}x{height}"
         else:
             self.size = (
                 self.rng.randint(MIN_SIZE[0], MAX_SIZE[0]),

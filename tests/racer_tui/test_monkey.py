@@ -44,3 +44,28 @@ async def test_a_footer_showing_other_keys_than_its_screen_is_found() -> None:
             found = stale_footer(app)
     assert isinstance(found, InvariantError)
     assert "GarageScreen" in str(found)
+
+
+async def test_a_click_pilot_cannot_send_is_an_action_not_a_crash() -> None:
+    # Seed 405, action 738: Pilot refused a click outside the screen's region before any
+    # event reached the app (a screen a moment old has no size yet). That is the harness's
+    # limit, not a crash of the app.
+    import random
+
+    from racer_tui.app.application import create_app
+    from racer_tui.app.monkey import Monkey
+
+    class Clicks(random.Random):
+        def choices(self, population, weights=None, **_):  # type: ignore[no-untyped-def, override]
+            return ["click"]
+
+        def randrange(self, stop, *_):  # type: ignore[no-untyped-def, override]
+            return stop - 1  # the far corner of the size the monkey believes in
+
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        monkey = Monkey(app, pilot, Clicks(1))
+        monkey.size = (200, 60)  # as if a resize had not reached the screen
+        kind, said = await monkey.act()
+        assert (kind, said) == ("click", "click (199, 59) not sent: the screen was 80x24")
+        assert app.is_running and app._exception is None
