@@ -1224,7 +1224,10 @@ class NightsScreen(RacerScreen[None]):
         note = self.query_one("#web-note", Static)
         pages = self.web_pages
         address = pages.address if said else ""
-        note.update(Text(f"Web: {address}" if address else ""))
+        # Two short lines: the list is 20 columns wide below 80, and an address cut in
+        # two is no use to the host reading it out.
+        shown = address.removeprefix("http://").removesuffix("/")
+        note.update(Text(f"Web pages at\n{shown}" if address else ""))
         note.set_class(not address, "-hidden")
         if address:
             self.notify(

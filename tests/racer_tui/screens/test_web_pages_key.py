@@ -41,7 +41,7 @@ async def test_b_serves_the_league_shows_where_and_b_again_stops_it() -> None:
         assert isinstance(nights, NightsScreen)
         await pilot.press("b")
         pages = nights.web_pages
-        await _until(pilot, lambda: pages.running and "Web:" in str(_note(nights).render()))
+        await _until(pilot, lambda: pages.running and "Web pages at" in str(_note(nights).render()))
         address = pages.address
         assert address.startswith("http://127.0.0.1:")
         assert "only this machine can open them" in notes.text("information")
