@@ -36,23 +36,32 @@ MAP_UNITS = 1000.0
 
 
 @dataclass(frozen=True)
-class TrackMap:
-    """The night's track as an SVG drawing, and how a place on it maps into the drawing."""
+class Placing:
+    """How metres on a track map into the drawing's units (SVG's y grows downwards)."""
 
-    view_box: str
-    inner: str  # SVG path data
-    outer: str
     scale: float
     min_x: float
     max_y: float
     margin: float
 
     def place(self, x: float, y: float) -> tuple[float, float]:
-        """A point in metres as drawing units (SVG's y grows downwards)."""
         return (
             round((x - self.min_x) * self.scale + self.margin, 1),
             round((self.max_y - y) * self.scale + self.margin, 1),
         )
+
+
+@dataclass(frozen=True)
+class TrackMap:
+    """The night's track as an SVG drawing, and where a place on it is in the drawing."""
+
+    view_box: str
+    inner: str  # SVG path data
+    outer: str
+    placing: Placing
+
+    def place(self, x: float, y: float) -> tuple[float, float]:
+        return self.placing.place(x, y)
 
 
 def track_map(track_hash: str) -> TrackMap | None:
@@ -65,24 +74,15 @@ def track_map(track_hash: str) -> TrackMap | None:
     xs, ys = [float(p[0]) for p in points], [float(p[1]) for p in points]
     span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-6)
     margin = MAP_UNITS * 0.03
-    scale = (MAP_UNITS - 2 * margin) / span
-    drawing = TrackMap("", "", "", scale, min(xs), max(ys), margin)
+    placing = Placing((MAP_UNITS - 2 * margin) / span, min(xs), max(ys), margin)
 
     def path(border: Any) -> str:
-        placed = [drawing.place(float(x), float(y)) for x, y in border]
+        placed = [placing.place(float(x), float(y)) for x, y in border]
         return "M" + " L".join(f"{px:g},{py:g}" for px, py in placed) + " Z"
 
-    width = (max(xs) - min(xs)) * scale + 2 * margin
-    height = (max(ys) - min(ys)) * scale + 2 * margin
-    return TrackMap(
-        f"0 0 {width:.0f} {height:.0f}",
-        path(track.inner),
-        path(track.outer),
-        scale,
-        min(xs),
-        max(ys),
-        margin,
-    )
+    width = (max(xs) - min(xs)) * placing.scale + 2 * margin
+    height = (max(ys) - min(ys)) * placing.scale + 2 * margin
+    return TrackMap(f"0 0 {width:.0f} {height:.0f}", path(track.inner), path(track.outer), placing)
 
 
 @dataclass(frozen=True)
