@@ -192,16 +192,35 @@ class PolicyNetwork(nn.Module):
             if spec.action_kind == "continuous"
             else None
         )
+        # Camera observations come as `camera_frames` made them (the PPO update's), not as
+        # the Observer's uint8 frames.
+        self.frames_prepared = False
 
     # --- the forward pieces the trainer and the driver share --------------------------------
+    def camera_frames(self, frames: torch.Tensor) -> torch.Tensor:
+        """The camera network's weightless first steps: the stored uint8 frames (channels
+        last) as floats in [0, 1], channels first, pooled. `features` does them on every
+        call; the PPO update does them once for the whole rollout (`frames_prepared`),
+        since its epochs would otherwise redo them for every minibatch."""
+        assert self.camera is not None
+        image = frames.float().permute(0, 3, 1, 2) / 255.0
+        pooled: torch.Tensor = self.camera[0](image)
+        return pooled
+
     def features(self, obs: Observation) -> torch.Tensor:
         parts: list[torch.Tensor] = []
         for sensor in self.spec.sensors:
             value = obs[sensor] if isinstance(obs, Mapping) else obs
             if sensor == "camera":
                 assert self.camera is not None
-                image = value.float().permute(0, 3, 1, 2) / 255.0
-                parts.append(self.camera(image))
+                # Prepared frames are stored channels last, as pooling leaves them in
+                # memory: the convolution then takes the same path, to the bit.
+                pooled = (
+                    value.permute(0, 3, 1, 2) if self.frames_prepared else self.camera_frames(value)
+                )
+                for layer in list(self.camera)[1:]:
+                    pooled = layer(pooled)
+                parts.append(pooled)
             elif sensor == "lidar":
                 parts.append(value.float().flatten(1) / self.spec.lidar_range)
             else:

@@ -21,7 +21,8 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -199,6 +200,15 @@ class RacerPPO(PPO):
         discrete = isinstance(self.action_space, spaces.Discrete)
         totals = np.zeros(5)
         batches = 0
+        with _frames_prepared(self.network, self.rollout_buffer):
+            batches = self._epochs(clip, discrete, totals)
+        self._n_updates += self.n_epochs
+        means = totals / max(batches, 1)
+        self.last_update = UpdateStats(*(float(value) for value in means))
+
+    def _epochs(self, clip: float, discrete: bool, totals: np.ndarray) -> int:
+        """DeepRacer's epochs over the rollout; the number of minibatches."""
+        batches = 0
         for _ in range(self.n_epochs):
             for batch in self.rollout_buffer.get(self.batch_size):
                 actions = batch.actions.long().flatten() if discrete else batch.actions
@@ -234,9 +244,7 @@ class RacerPPO(PPO):
                     float(clip_fraction),
                 ]
                 batches += 1
-        self._n_updates += self.n_epochs
-        means = totals / max(batches, 1)
-        self.last_update = UpdateStats(*(float(value) for value in means))
+        return batches
 
     # --- gathering experience ----------------------------------------------------------------
     def start_rollouts(self) -> None:
@@ -312,6 +320,44 @@ class RacerPPO(PPO):
         buffer.compute_returns_and_advantage(last_values=last_values, dones=dones)
         self.num_timesteps += steps * n
         return Rollout(steps=steps * n, episodes=finished)
+
+
+# Frames prepared at a time for the update (floats before pooling take 4 bytes a pixel).
+PREPARE_FRAMES = 512
+
+
+@contextmanager
+def _frames_prepared(net: PolicyNetwork, buffer: RolloutBuffer) -> Iterator[None]:
+    """For the update, the buffer's camera frames as the camera network's weightless first
+    steps make them (`PolicyNetwork.camera_frames`), once for the whole rollout instead of
+    once per minibatch of every epoch (they were a quarter of a camera training's time:
+    docs/camera-learner-profile.md). The same operations on the same frames: the update is
+    the same to the bit (tests/sim/training/test_prepared_frames.py). The buffer keeps
+    them until the next rollout's `reset`."""
+    if net.camera is None:
+        yield
+        return
+    dict_obs = isinstance(buffer.observations, dict)
+    stored = buffer.observations["camera"] if dict_obs else buffer.observations
+    assert isinstance(stored, np.ndarray)
+    frames = torch.as_tensor(stored.reshape(-1, *stored.shape[-3:]))
+    with torch.no_grad():
+        prepared = torch.cat(
+            [  # channels last again, as pooling left them (see `PolicyNetwork.features`)
+                net.camera_frames(frames[start : start + PREPARE_FRAMES]).permute(0, 2, 3, 1)
+                for start in range(0, len(frames), PREPARE_FRAMES)
+            ]
+        ).numpy()
+    prepared = prepared.reshape(*stored.shape[:-3], *prepared.shape[1:])
+    if dict_obs:
+        buffer.observations["camera"] = prepared
+    else:
+        buffer.observations = prepared
+    net.frames_prepared = True
+    try:
+        yield
+    finally:
+        net.frames_prepared = False
 
 
 def _batch_of_one(obs: Any) -> Any:
