@@ -107,8 +107,8 @@ def viewers_child(url: str, count: int) -> int:
 # --- the benchmark ---------------------------------------------------------------------------
 
 
-def _prepare(home: Path) -> str:
-    """A league with one night; its id."""
+def _prepare() -> str:
+    """A league with one night, in the data home of RACER_TUI_HOME; its id."""
     from league.nights import new_night
     from league.opening import open_league
     from sim.garage.options import new_model
@@ -119,7 +119,7 @@ def _prepare(home: Path) -> str:
         return new_night(league, resolve_track(DEFAULT_TRACK), name="load night").id
 
 
-def _start_server(home: Path) -> tuple[subprocess.Popen[str], str]:
+def _start_server() -> tuple[subprocess.Popen[str], str]:
     server = subprocess.Popen(
         [sys.executable, "-m", "racer_tui.cli.main", "serve", "--port", "0"],
         stdout=subprocess.PIPE,
@@ -136,11 +136,11 @@ def _start_server(home: Path) -> tuple[subprocess.Popen[str], str]:
     return server, found.group(0).rstrip("/")
 
 
-def run(viewers: int, keys: int, home: Path) -> dict[str, Any]:
+def run(viewers: int, keys: int) -> dict[str, Any]:
     from benchmarks.app.timekeeper import press_keys
 
-    night_id = _prepare(home)
-    server, base = _start_server(home)
+    night_id = _prepare()
+    server, base = _start_server()
     crowd: subprocess.Popen[str] | None = None
     try:
         crowd = subprocess.Popen(
@@ -219,7 +219,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ["RACER_TUI_HOME"] = str(home)
     os.environ.pop("RACER_TUI_LEAGUE", None)
     try:
-        report = run(args.viewers, args.keys, home)
+        report = run(args.viewers, args.keys)
     except SoakError as error:
         print(f"benchmarks.web.live_load: {str(error).rstrip('.')}.", file=sys.stderr)
         return 1
