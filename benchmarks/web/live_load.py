@@ -36,6 +36,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +47,7 @@ from benchmarks.app.soak import SoakError, percentiles
 DEFAULT_VIEWERS = 200
 DEFAULT_KEYS = 240
 CONNECT_SECONDS = 60.0
+SEEN_SECONDS = 15.0  # for the viewers to see the last laps captured
 TARGET_KEY_P95_MS = 50.0
 TARGET_SERVER_CORE = 0.25
 TARGET_BEHIND_MS = 250.0
@@ -88,8 +90,15 @@ async def _viewers(host: str, port: int, path: str, count: int) -> dict[str, Any
     while sum(1 for seen in seens if seen) < count and time.monotonic() < deadline:
         await asyncio.sleep(0.05)  # every viewer has its first event
     print(json.dumps({"ready": sum(1 for seen in seens if seen)}), flush=True)
-    # Until the benchmark closes our stdin.
-    await asyncio.get_running_loop().run_in_executor(None, sys.stdin.read)
+    # Until the benchmark sends the laps it captured: then until every viewer has seen
+    # them (a lap captured by the last key is still on its way), for at most a while.
+    line = await asyncio.get_running_loop().run_in_executor(None, sys.stdin.readline)
+    captured = [(int(laps), float(at)) for laps, at in json.loads(line or "[]")]
+    deadline = time.monotonic() + SEEN_SECONDS
+    while time.monotonic() < deadline and not all(
+        len(_delays(captured, seen)) == len(captured) for seen in seens
+    ):
+        await asyncio.sleep(0.05)
     for task in tasks:
         task.cancel()
     events = await asyncio.gather(*tasks, return_exceptions=True)
@@ -170,6 +179,7 @@ def run(viewers: int, keys: int) -> dict[str, Any]:
         )
         cpu_after, wall = watched.cpu_times(), time.perf_counter() - wall_before
         rss_end = watched.memory_info().rss / 1e6
+        crowd.stdin.write(json.dumps(captured) + "\n")
         crowd.stdin.close()
         result = json.loads(crowd.stdout.readline() or "{}")
     finally:
@@ -191,16 +201,20 @@ def run(viewers: int, keys: int) -> dict[str, Any]:
 
 
 def _behind(captured: list[tuple[int, float]], seens: list[list[list[float]]]) -> list[float]:
-    """For each Capture Lap key and each viewer: how long until that viewer saw the lap.
-    A heat's lap counts start again at each new heat, so each key is matched with the
-    first sighting of its count after it."""
+    """For each Capture Lap key and each viewer: how long until that viewer saw the lap."""
+    return [delay for seen in seens for delay in _delays(captured, seen)]
+
+
+def _delays(captured: list[tuple[int, float]], seen: Sequence[Sequence[float]]) -> list[float]:
+    """For each Capture Lap key, how long until one viewer saw the lap. A heat's lap counts
+    start again at each new heat, so each key is matched with the first sighting of its
+    count after it."""
     delays: list[float] = []
-    for seen in seens:
-        sightings = sorted((at, int(laps)) for laps, at in seen)
-        for laps, pressed in captured:
-            shown = next((at for at, n in sightings if n == laps and at >= pressed), None)
-            if shown is not None:
-                delays.append((shown - pressed) * 1000.0)
+    sightings = sorted((at, int(laps)) for laps, at in seen)
+    for laps, pressed in captured:
+        shown = next((at for at, n in sightings if n == laps and at >= pressed), None)
+        if shown is not None:
+            delays.append((shown - pressed) * 1000.0)
     return delays
 
 

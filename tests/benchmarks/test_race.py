@@ -19,5 +19,5 @@ def test_bench_race_json_reports_every_driver(capsys: pytest.CaptureFixture[str]
     assert rows["reference"]["laps"] == 1 and rows["reference"]["target_seconds"] is None
     # Every tick of a benchmark race is a driven step (no penalty holds).
     assert all(row["driven_steps"] == 12 * 15 for row in rows.values())
-    assert rows["camera"]["target_seconds"] == 3.0
+    assert rows["camera"]["target_seconds"] == 1.0
     assert all(row["seconds_per_race"] > 0 for row in rows.values())
