@@ -35,6 +35,7 @@ from sim.foundation.remedies import Fix
 from sim.garage.bundle import BundleError, read_bundle
 from sim.garage.folder import ModelError, models_dir, open_model
 from sim.garage.imported import BUNDLE_SUFFIX
+from sim.physics.objects.settings import RaceType
 from sim.race.driver import REFERENCE_NAME
 from sim.race.engine import run_race as engine_run_race
 from sim.race.rules import DEFAULT_RULES, DROA_REWARD_RULES, RaceRules, rules_from_mapping
@@ -112,6 +113,12 @@ def new_night(
 ) -> Night:
     """Open a night on `track`, held on `held_on` (today by default); its rules are frozen
     in the row from now on."""
+    if rules.race_type is RaceType.HEAD_TO_MODEL:
+        raise LeagueError(
+            "a night's heats are time trials, one car at a time, so its rules cannot be "
+            "head-to-head; race models together with `racer-tui --race A B --rules "
+            "head-to-head`."
+        )
     day = (held_on or datetime.now().date()).isoformat()  # the host's own calendar day
     label = check_name(name, "night name") if name else f"{track.name} {day}"
     with league.transaction():

@@ -23,6 +23,7 @@ from sim.coach.plausible import first_impossible_lap
 from sim.foundation.ids import content_hash, is_valid_id
 from sim.foundation.remedies import Fix
 from sim.physics.labels import CURRENT, PHYSICAL
+from sim.physics.objects.settings import RaceType
 from sim.race.result import RaceResult
 from sim.race.trace import RaceTrace
 from sim.tracks.catalog import find_track_by_hash, resolve_track
@@ -80,6 +81,11 @@ def record_race(
     """
     if not is_valid_id(result.result_id):
         raise LeagueError(f"race result id {result.result_id!r} is not a valid record id.")
+    if result.rules.race_type is RaceType.HEAD_TO_MODEL:
+        raise LeagueError(
+            "a car's laps from a head-to-head race are not recorded in a league yet: its "
+            "boards rank time trials, and a lap among rivals does not compare with them."
+        )
     check_possible_laps(result)  # before the transaction: a floor may take a second to work out
     laps = lap_rows(result)
     with league.transaction():

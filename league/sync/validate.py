@@ -39,6 +39,7 @@ from sim.deepracer.vocabulary import is_physics
 from sim.foundation.ids import is_valid_id
 from sim.foundation.names import NAME_RULE, is_valid_name
 from sim.physics.labels import PHYSICAL
+from sim.physics.objects.settings import RaceType
 from sim.race.result import RaceResult, ResultError
 from sim.race.rules import RulesError, rules_from_mapping
 
@@ -471,6 +472,9 @@ def _rules(text_value: str) -> None:
     except RulesError as error:  # its own sentence, inside this one
         raise _bad("rules", f"are not race rules ({str(error).rstrip('.')})") from None
     kind = race_type_of(rules)
+    if rules.race_type is RaceType.HEAD_TO_MODEL:
+        # Head-to-head results are not recorded yet: none can have been made honestly.
+        raise _bad("rules", "are a head-to-head race's, which a league does not record yet")
     for key, owner in _RACE_TYPE_KEYS.items():
         if key in data and owner != kind:
             raise _bad(

@@ -27,9 +27,15 @@ from rich.text import Text
 
 from league.errors import LeagueError
 from league.ranking import rank
+from racer_tui.cli.head_to_head_output import (
+    head_to_head_document,
+    head_to_head_summary,
+    head_to_head_table,
+    incident_lines,
+)
 from racer_tui.cli.output import print_json
-from racer_tui.cli.rules_option import HELP as RULES_HELP
-from racer_tui.cli.rules_option import rules_option
+from racer_tui.cli.rules_option import RACE_HELP as RULES_HELP
+from racer_tui.cli.rules_option import RACE_PRESETS, rules_option
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.foundation.plural import counted
 from sim.foundation.remedies import RemedyError, echoed
@@ -37,6 +43,7 @@ from sim.garage.imported import BUNDLE_SUFFIX
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import Driver
 from sim.race.engine import run_race
+from sim.race.head_to_head import MAX_CARS, MIN_CARS, Entry, run_head_to_head
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, rules_from_mapping
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
@@ -137,6 +144,8 @@ def _run(args: argparse.Namespace) -> int:
     if args.seed < 0:
         raise RaceSetupError(f"--seed must be a whole number of at least 0, not {args.seed}.")
     track = resolve_track(args.track)
+    if rules.race_type is RaceType.HEAD_TO_MODEL:
+        return _run_head_to_head(args, rules, track)
     racer = _racer_name(args.racer) if args.racer is not None else None
     # Every entrant is checked before the first race starts: a typo fails fast.
     entrants = [
@@ -182,12 +191,45 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _run_head_to_head(args: argparse.Namespace, rules: RaceRules, track: Track) -> int:
+    """The models on the track together (sim.race.head_to_head), one race."""
+    if not MIN_CARS <= len(args.models) <= MAX_CARS:
+        raise RaceSetupError(
+            f"a head-to-head race takes {MIN_CARS} to {MAX_CARS} models, not "
+            f"{len(args.models)}; name them after --race, the first on the front of the grid."
+        )
+    refused = [
+        (args.record, "--record: a league does not record head-to-head races yet"),
+        (args.trace_dir is not None, "--trace-dir: head-to-head races write no traces yet"),
+        (args.racer is not None, "--racer: each car of a head-to-head race is its model's"),
+    ]
+    for given, why in refused:
+        if given:
+            raise RaceSetupError(f"{why}; race without it.")
+    # A model named twice is one driver: it acts for both its cars in one batch.
+    drivers: dict[str, Driver] = {}
+    for spec in args.models:
+        if spec not in drivers:
+            drivers[spec] = resolve_driver(spec, track)
+    entries = [Entry(drivers[spec].name, drivers[spec]) for spec in args.models]
+    result = run_head_to_head(track, rules, entries, seed=args.seed)
+    if args.json:
+        print_json(head_to_head_document(result, track))
+        return EXIT_OK
+    console = Console()
+    console.print(head_to_head_table(result, track))
+    for line in incident_lines(result):
+        console.print(Text(line))
+    console.print(Text(head_to_head_summary(result)))
+    return EXIT_OK
+
+
 # --- rules and entrants -----------------------------------------------------------------------
 
 
 def race_rules(args: argparse.Namespace) -> RaceRules:
     """The rules file (or the defaults), then each command-line override, validated."""
-    rules = rules_option(args.rules) if args.rules is not None else RaceRules()
+    rules = rules_option(args.rules, RACE_PRESETS) if args.rules is not None else RaceRules()
     overrides: list[tuple[str, str, object]] = [
         ("--window", "window_seconds", args.window),
         ("--penalty", "penalty_seconds", args.penalty),

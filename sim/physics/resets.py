@@ -17,11 +17,15 @@ from __future__ import annotations
 import math
 import weakref
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.remedies import RemedyError
 from sim.tracks.geometry import PointProjector
 from sim.tracks.track import Track
+
+if TYPE_CHECKING:
+    from sim.physics.simulation import TrackSimulation
 
 # simapp's evaluation worker defaults (`bundle/markov/evaluation_worker.py`):
 # OFF_TRACK_PENALTY 2.0 s, COLLISION_PENALTY 5.0 s; a reversed car costs the off-track
@@ -145,3 +149,23 @@ def reset_pose(track: Track, s: float, car_x: float, car_y: float) -> tuple[floa
 def _end(lane: PointProjector, seg: int) -> tuple[float, float]:
     (sx, sy), (vx, vy) = lane.starts[seg], lane.vectors[seg]
     return sx + vx, sy + vy
+
+
+def put_back(
+    sim: TrackSimulation,
+    car: int,
+    *,
+    s_ahead: float,
+    car_x: float,
+    car_y: float,
+    travelled: float,
+    pose: tuple[float, float, float] | None = None,
+) -> None:
+    """Put `car` back where DeepRacer would (`reset_pose`, from where its look-ahead point,
+    `s_ahead`, and its centre were a step before it left), or at `pose`; its progress
+    (`travelled` a step before) follows it, standing still."""
+    x, y, yaw = pose if pose is not None else reset_pose(sim.track, s_ahead, car_x, car_y)
+    sim.put(car, x, y, yaw, 0.0)
+    length = sim.track.length
+    moved = (float(sim.s[car]) - s_ahead + length / 2.0) % length - length / 2.0
+    sim.continue_episode(car, travelled + moved)

@@ -40,16 +40,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Generator
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.ids import new_id
 from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
-from sim.physics.resets import reset_pose
+from sim.physics.resets import put_back
 from sim.physics.simulation import EpisodeRules, Outcome, TrackSimulation, let_other_threads_run
 from sim.race.driver import Driver, reference_driver
-from sim.race.result import LapRecord, RaceResult, now_iso
-from sim.race.rules import DEFAULT_RULES, RaceRules, lap_counts, score_laps
+from sim.race.result import LapRecord, RaceResult, completed_lap, now_iso
+from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps
 from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
 from sim.tracks.track import Track
 
@@ -239,20 +239,16 @@ class _Race:
         self.status = _LAP_COMPLETE
         if crossing > self.window + _EPS:
             return  # the window closed before the line: the lap does not count
-        time = crossing - self.lap_start
-        lap = LapRecord(
+        lap = completed_lap(
+            self.rules,
             number=self.lap,
-            time_seconds=time,
-            raw_seconds=time - self.lap_penalty,
+            started_at=self.lap_start,
+            time_seconds=crossing - self.lap_start,
             penalty_seconds=self.lap_penalty,
             offtracks=self.lap_offtracks,
-            valid=True,
-            started_at=self.lap_start,
             crashes=self.lap_crashes,
             reversals=self.lap_reversals,
         )
-        if not lap_counts(lap, self.rules):
-            lap = replace(lap, valid=False)
         self.laps.append(lap)
         self.laps_view = tuple(self.laps)
         self.lap += 1
@@ -266,16 +262,12 @@ class _Race:
         """Put the car back where DeepRacer would, given where its look-ahead point
         (`s_ahead`) and its centre were a step before it left; progress follows it."""
         sim = self.sim
-        behind = None
+        pose = None
         if self.status == _CRASHED and sim.objects is not None:
             behind = sim.objects.reset_behind(0, float(sim.s[0]))
-        if behind is not None:  # DeepRacer: behind the box it hit, in the other lane
-            x, y, yaw = behind.x, behind.y, behind.heading
-        else:
-            x, y, yaw = reset_pose(self.track, s_ahead, car_x, car_y)
-        sim.put(0, x, y, yaw, 0.0)
-        moved = (float(sim.s[0]) - s_ahead + self.length / 2.0) % self.length - self.length / 2.0
-        sim.continue_episode(0, travelled + moved)
+            if behind is not None:  # DeepRacer: behind the box it hit, in the other lane
+                pose = (behind.x, behind.y, behind.heading)
+        put_back(sim, 0, s_ahead=s_ahead, car_x=car_x, car_y=car_y, travelled=travelled, pose=pose)
 
     def _record(
         self,

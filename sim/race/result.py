@@ -19,7 +19,14 @@ from sim.foundation.ids import is_valid_id
 from sim.foundation.plain_names import MAX_NAME_LENGTH, is_plain_name
 from sim.foundation.remedies import RemedyError
 from sim.physics.labels import BEFORE_VERSIONING, CURRENT
-from sim.race.rules import RaceRules, RulesError, Score, rules_from_mapping, score_laps
+from sim.race.rules import (
+    RaceRules,
+    RulesError,
+    Score,
+    lap_counts,
+    rules_from_mapping,
+    score_laps,
+)
 from sim.race.trace import RaceTrace
 
 RESULT_FORMAT = 1
@@ -90,6 +97,32 @@ class LapRecord:
         if abs(lap.raw_seconds + lap.penalty_seconds - lap.time_seconds) > 1e-3:
             raise ResultError(f"{where}.time_seconds is not raw_seconds plus penalty_seconds.")
         return lap
+
+
+def completed_lap(
+    rules: RaceRules,
+    *,
+    number: int,
+    started_at: float,
+    time_seconds: float,
+    penalty_seconds: float,
+    offtracks: int,
+    crashes: int,
+    reversals: int,
+) -> LapRecord:
+    """A lap the car has just completed, valid when it counts under `rules`."""
+    lap = LapRecord(
+        number=number,
+        time_seconds=time_seconds,
+        raw_seconds=time_seconds - penalty_seconds,
+        penalty_seconds=penalty_seconds,
+        offtracks=offtracks,
+        valid=True,
+        started_at=started_at,
+        crashes=crashes,
+        reversals=reversals,
+    )
+    return lap if lap_counts(lap, rules) else replace(lap, valid=False)
 
 
 def now_iso() -> str:

@@ -32,6 +32,7 @@ from sim.physics.objects.settings import (
     RaceSettings,
     RaceType,
 )
+from sim.physics.resets import COLLISION_PENALTY, OFF_TRACK_PENALTY
 
 
 class RulesError(RemedyError):
@@ -185,9 +186,13 @@ class RaceRules:
         if self.race_type is RaceType.HEAD_TO_BOT:
             lanes = ", changing lanes" if self.bot_lane_change else ""
             return f"head-to-bot ({counted(self.bots, 'bot')} at {self.bot_speed:g} m/s{lanes})"
+        if self.race_type is RaceType.HEAD_TO_MODEL:
+            return "head-to-head"
         return "time trial"
 
     def describe(self) -> str:
+        if self.race_type is RaceType.HEAD_TO_MODEL:
+            return self._describe_head_to_head()
         limit = (
             "unlimited off-tracks"
             if self.max_offtracks_per_lap is None
@@ -213,6 +218,18 @@ class RaceRules:
             return words
         crash = f"{self.collision_penalty_seconds:g} s per crash"
         return f"{self.race_words}: {words}, {crash}"
+
+    def _describe_head_to_head(self) -> str:
+        window = _clock(self.window_seconds)
+        if self.lap_count is None:
+            length = f"{window} window, most laps then the best lap"
+        else:
+            laps = "1 lap" if self.lap_count == 1 else f"{self.lap_count} laps"
+            length = f"{laps} within {window}, first past the line"
+        return (
+            f"head-to-head: {length}, {self.penalty_seconds:g} s per off-track, "
+            f"{self.collision_penalty_seconds:g} s per crash"
+        )
 
 
 DEFAULT_RULES = RaceRules()
@@ -253,6 +270,27 @@ RULE_PRESETS: tuple[tuple[str, str, RaceRules], ...] = (
     # laps run, 1 s per off-track and per collision, every reset allowed (it sends its
     # simulator 10,000), 20 minutes at most for the whole run.
     ("droa", "DeepRacer on AWS: total of 3 laps, 1 s per off-track, no limit", DROA_RULES),
+)
+
+
+# simapp's head-to-head evaluation as deepracer-for-cloud runs it: 3 laps, the race over
+# when the first car completes them; off-tracks hold a car 2 s and crashes 5 s
+# (evaluation_worker's defaults), every reset allowed. The window caps a race nobody
+# finishes.
+HEAD_TO_HEAD_RULES = RaceRules(
+    race_type=RaceType.HEAD_TO_MODEL,
+    lap_count=3,
+    penalty_seconds=OFF_TRACK_PENALTY,
+    collision_penalty_seconds=COLLISION_PENALTY,
+    max_offtracks_per_lap=None,
+)
+# Presets only `racer-tui --race` takes: a night's heats are one car at a time.
+RACE_ONLY_PRESETS: tuple[tuple[str, str, RaceRules], ...] = (
+    (
+        "head-to-head",
+        "2-6 models together: 3 laps, first past the line, 2 s per off-track, 5 s per crash",
+        HEAD_TO_HEAD_RULES,
+    ),
 )
 
 

@@ -132,7 +132,7 @@ def test_rules_name_a_preset_or_a_file(capsys: pytest.CaptureFixture[str]) -> No
     assert err == (
         "racer-tui: there is no rules file or preset called 'boxes-please'; give a rules YAML "
         "file or one of the presets: league, physical, practice, object-avoidance, "
-        "head-to-bot, droa.\n"
+        "head-to-bot, droa, head-to-head.\n"  # --race also races models together
     )
 
 

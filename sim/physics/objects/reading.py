@@ -33,6 +33,12 @@ def race_settings(params: TrainingParams, where: str = "training_params.yaml") -
         raise DeepRacerFileError(
             f"{where}: RACE_TYPE must be one of {choices}, not {params.race_type!r}."
         ) from None
+    if race_type is RaceType.HEAD_TO_MODEL:
+        raise DeepRacerFileError(
+            f"{where}: RACE_TYPE HEAD_TO_MODEL is a race between models, which DeepRacer "
+            "does not train; train the model as a TIME_TRIAL or HEAD_TO_BOT and race it "
+            "head-to-head with `racer-tui --race A B --rules head-to-head`."
+        )
     extra = params.extra
     if race_type is RaceType.OBJECT_AVOIDANCE:
         return RaceSettings(race_type, obstacles=_obstacles(extra, where))

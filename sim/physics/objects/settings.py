@@ -13,13 +13,17 @@ class RaceType(StrEnum):
     TIME_TRIAL = "TIME_TRIAL"
     OBJECT_AVOIDANCE = "OBJECT_AVOIDANCE"
     HEAD_TO_BOT = "HEAD_TO_BOT"
+    # Racers' models on the track together (simapp evaluates it; nobody trains it).
+    HEAD_TO_MODEL = "HEAD_TO_MODEL"
 
     @property
     def words(self) -> str:
         """As a racer says it: "time trial", "object avoidance", "head-to-bot"."""
-        return {"TIME_TRIAL": "time trial", "OBJECT_AVOIDANCE": "object avoidance"}.get(
-            self.value, "head-to-bot"
-        )
+        return {
+            "TIME_TRIAL": "time trial",
+            "OBJECT_AVOIDANCE": "object avoidance",
+            "HEAD_TO_BOT": "head-to-bot",
+        }.get(self.value, "head-to-head")
 
 
 class Lane(StrEnum):

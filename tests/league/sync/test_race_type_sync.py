@@ -169,3 +169,13 @@ def test_bad_race_type_values_are_refused_in_one_sentence(
     assert reason.startswith("its rules are ")
     assert key in reason
     assert ". " not in reason and ".)" not in reason  # one sentence, not one inside another
+
+
+def test_a_pulled_head_to_head_race_or_night_is_refused(league: League) -> None:
+    # No machine records head-to-head races yet (league.races refuses them), so a pulled
+    # one was made by hand: its laps among rivals must not reach a time trials' board.
+    body = copy.deepcopy(_race_body(league, preset_rules("league")))
+    rules = {**json.loads(body["rules"]), "race_type": "head_to_model", "lap_count": 3}
+    body["rules"] = json.dumps(rules)
+    with pytest.raises(RecordInvalidError, match="head-to-head race's, which a league does not"):
+        check_record(make_record("race", new_id(), body))

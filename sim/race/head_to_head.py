@@ -1,0 +1,436 @@
+"""A head-to-head race: two to six racers' cars on one track at once, each driven by its
+own model, as simapp races HEAD_TO_MODEL (docs/deepracer/head-to-head-simapp.md).
+
+- **The grid** is simapp's: car k starts 0.75 m behind car k-1 along the track
+  (`START_POS_OFFSET`), even cars in the outer lane and odd cars in the inner one, each
+  facing along its lane. A car behind the line drives its stagger on its first lap.
+- **Lockstep:** every step, each car's driver acts on what its car senses (its camera and
+  lidar see the other cars: `sim.physics.objects.rivals`), then every car moves 1/15 s.
+  A driver that drives several cars acts for them in one batch.
+- **Off track and reversed:** the car is put back on the track as in a time trial and held
+  for the rules' `penalty_seconds`. **Crashed:** only the car behind is judged to have
+  crashed; it is held for `collision_penalty_seconds` where it is (simapp does not move a
+  car after a crash with another car). A held car is frozen, while the race clock and the
+  other cars go on, and no car can run into it meanwhile.
+- **The end:** a race of N laps (`lap_count`) ends when the first car completes its N-th
+  lap (simapp's `DONE_CONDITION` "any"); the others are stopped where they are. Without
+  a lap count the race runs for the whole window. It ends at the window in any case.
+- **The order:** finished cars by the clock when they finished; then the others by how far
+  they had got (laps, then distance into the lap). In a race for the window: most laps,
+  then the best lap. simapp itself names no winner.
+
+Races are deterministic, as time trials are: the same drivers, track, rules and seed give
+the same race.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from sim.deepracer.vocabulary import EpisodeStatus
+from sim.foundation.ids import new_id
+from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
+from sim.physics.objects.placement import Lanes
+from sim.physics.objects.rivals import RivalField
+from sim.physics.objects.settings import Lane
+from sim.physics.resets import put_back
+from sim.physics.simulation import Outcome, TrackSimulation, let_other_threads_run
+from sim.race.driver import Driver, DriverAction
+from sim.race.engine import RACE_EPISODE_RULES
+from sim.race.result import LapRecord, RaceResult, completed_lap, now_iso
+from sim.race.rules import RaceRules, score_laps
+from sim.tracks.track import Track
+
+# simapp's START_POS_OFFSET: how far behind the car before it each car starts.
+GRID_GAP = 0.75
+MIN_CARS = 2
+MAX_CARS = 6
+_EPS = 1e-9
+
+
+class HeadToHeadError(ValueError):
+    """A head-to-head race that cannot be run as asked."""
+
+
+@dataclass(frozen=True)
+class Entry:
+    """A car on the grid: who races it and what drives it."""
+
+    racer: str
+    driver: Driver
+
+
+@dataclass(frozen=True)
+class Incident:
+    """Something the race view and the result tell: a crash or an overtake."""
+
+    clock: float  # race clock, seconds
+    kind: str  # "crash" (car ran into other from behind) or "overtake" (car passed other)
+    car: int  # grid index
+    other: int
+
+
+@dataclass(frozen=True)
+class CarFinish:
+    """One car's race: its place, its laps and how far behind the winner it ended."""
+
+    position: int  # 1-based
+    car: int  # grid index
+    finished_at: float | None  # race clock when it completed the race's laps
+    laps_completed: int
+    distance: float  # metres driven from the start line, laps included
+    gap_seconds: float | None  # behind the winner: when the winner was where it ended
+    result: RaceResult  # its laps, scored as a time trial's are
+
+
+@dataclass(frozen=True)
+class HeadToHeadResult:
+    """A head-to-head race: the cars in finishing order and what happened on the way."""
+
+    race_id: str
+    track_name: str
+    track_hash: str
+    rules: RaceRules
+    seed: int
+    clock: float  # when the race ended
+    cars: tuple[CarFinish, ...]  # in finishing order
+    incidents: tuple[Incident, ...]
+    started_at: str
+
+    @property
+    def winner(self) -> CarFinish:
+        return self.cars[0]
+
+
+@dataclass(frozen=True)
+class _Before:
+    """A car before the step: progress, look-ahead point along the track, centre."""
+
+    travelled: float
+    s: float
+    x: float
+    y: float
+
+
+@dataclass
+class _Car:
+    """One car's race so far."""
+
+    index: int
+    entry: Entry
+    lap_start: float = 0.0
+    laps: list[LapRecord] = field(default_factory=list)
+    lap_offtracks: int = 0
+    lap_crashes: int = 0
+    lap_reversals: int = 0
+    lap_penalty: float = 0.0
+    total_offtracks: int = 0
+    hold_left: float = 0.0
+    hold_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    hold_travelled: float = 0.0
+    finished_at: float | None = None
+
+
+class HeadToHeadRace:
+    """The race between ticks: `tick` moves every car one step."""
+
+    def __init__(
+        self,
+        track: Track,
+        rules: RaceRules,
+        entries: Sequence[Entry],
+        *,
+        seed: int = 0,
+        car: CarSpec = DEEPRACER_CAR,
+    ) -> None:
+        if not MIN_CARS <= len(entries) <= MAX_CARS:
+            raise HeadToHeadError(
+                f"a head-to-head race takes {MIN_CARS} to {MAX_CARS} cars, not {len(entries)}."
+            )
+        self.track = track
+        self.rules = rules
+        self.seed = seed
+        self.started_at = now_iso()
+        self.length = track.length
+        n = len(entries)
+        self.sim = sim = TrackSimulation(track, n, car=car, rules=RACE_EPISODE_RULES, seed=seed)
+        self.rivals = RivalField(track, n, sim.fleet)
+        sim.objects = self.rivals
+        self.cars = [_Car(index, entry) for index, entry in enumerate(entries)]
+        self._line_up()
+        # One call per driver a step: a driver racing several cars acts for them at once.
+        self.drivers: list[Driver] = []
+        for entry in entries:
+            if all(entry.driver is not known for known in self.drivers):
+                self.drivers.append(entry.driver)
+                entry.driver.reset(sim)
+        self.steps = 0
+        self.incidents: list[Incident] = []
+        self._order = self.running_order()
+        # (clock, distance) of every car at every step: for the gaps at the end.
+        self._distances: list[np.ndarray] = [self.distances()]
+        self._clocks: list[float] = [0.0]
+
+    def _line_up(self) -> None:
+        """simapp's grid (see the module docstring)."""
+        sim, lanes = self.sim, Lanes.of(self.track)
+        starts = [(-k * GRID_GAP) % self.length for k in range(len(self.cars))]
+        sim.reset_cars(range(len(self.cars)), starts)
+        for k, start in enumerate(starts):
+            pose = lanes.pose(start, Lane.OUTER if k % 2 == 0 else Lane.INNER)
+            sim.put(k, pose.x, pose.y, pose.heading, 0.0)
+        half = self.length / 2.0
+        for k in range(len(self.cars)):
+            # Progress from the start line itself: a car behind it starts below zero.
+            ahead = (float(sim.s[k]) + half) % self.length - half
+            sim.continue_episode(k, ahead)
+        self._update_standing()
+
+    # --- where the cars are ------------------------------------------------------------
+    @property
+    def clock(self) -> float:
+        return self.steps * STEP_SECONDS
+
+    def distances(self) -> np.ndarray:
+        """Metres each car has driven from the start line, its laps included."""
+        travelled = self.sim.travelled
+        return np.array([len(car.laps) * self.length + travelled[car.index] for car in self.cars])
+
+    def _update_standing(self) -> None:
+        self.rivals.standing = self.distances()
+
+    def running_order(self) -> list[int]:
+        """Grid indices, leader first: finished cars by when, then by distance."""
+        distances = self.distances()
+        return sorted(
+            range(len(self.cars)),
+            key=lambda k: (
+                self.cars[k].finished_at is None,
+                self.cars[k].finished_at or 0.0,
+                -distances[k],
+                k,
+            ),
+        )
+
+    @property
+    def finished(self) -> bool:
+        if self.clock >= self.rules.window_seconds - _EPS:
+            return True
+        return self.rules.lap_count is not None and any(
+            car.finished_at is not None for car in self.cars
+        )
+
+    # --- one step ------------------------------------------------------------------------
+    def tick(self) -> None:
+        sim, n = self.sim, len(self.cars)
+        steering, speed = np.zeros(n), np.zeros(n)
+        actions = {id(driver): driver.act(sim) for driver in self.drivers}
+        for car in self.cars:
+            if car.hold_left <= 0.0:
+                action: DriverAction = actions[id(car.entry.driver)]
+                steering[car.index] = action.steering_deg[car.index]
+                speed[car.index] = action.speed[car.index]
+        before_travelled = sim.travelled.copy()
+        before_s = sim.s.copy()
+        before_x, before_y = sim.fleet.x.copy(), sim.fleet.y.copy()
+        start = self.clock
+        sim.apply(steering, speed)
+        self.steps += 1
+        for car in self.cars:
+            if car.hold_left > 0.0:
+                self._hold(car)
+            else:
+                k = car.index
+                before = _Before(
+                    float(before_travelled[k]),
+                    float(before_s[k]),
+                    float(before_x[k]),
+                    float(before_y[k]),
+                )
+                self._judge(car, start, before)
+        self._update_standing()
+        self._note_overtakes()
+        self._distances.append(self.distances())
+        self._clocks.append(self.clock)
+
+    def _hold(self, car: _Car) -> None:
+        """A held car stays where it was frozen (simapp resets its pose every step)."""
+        x, y, yaw = car.hold_pose
+        self.sim.put(car.index, x, y, yaw, 0.0)
+        self.sim.continue_episode(car.index, car.hold_travelled)
+        car.hold_left -= STEP_SECONDS
+        if car.hold_left < _EPS:
+            car.hold_left = 0.0
+            self.rivals.ghost[car.index] = False
+
+    def _judge(self, car: _Car, start: float, before: _Before) -> None:
+        """What the step did to a car that was driving (see the module docstring)."""
+        sim, k = self.sim, car.index
+        if sim.terminal[k] == Outcome.RUNNING:
+            return
+        status = sim.status[k]
+        if status == EpisodeStatus.LAP_COMPLETE:
+            self._lap_complete(car, start, before.travelled)
+        elif status == EpisodeStatus.OFF_TRACK:
+            car.lap_offtracks += 1
+            car.total_offtracks += 1
+            self._put_back(car, before)
+            self._penalise(car, self.rules.penalty_seconds)
+        elif status == EpisodeStatus.REVERSED:
+            car.lap_reversals += 1
+            self._put_back(car, before)
+            self._penalise(car, self.rules.penalty_seconds)
+        elif status == EpisodeStatus.CRASHED:
+            car.lap_crashes += 1
+            fleet = sim.fleet
+            for other in self.rivals.rivals_hit(k, fleet.x, fleet.y, fleet.yaw, sim.car):
+                self.incidents.append(Incident(self.clock, "crash", k, other))
+            sim.continue_episode(k, float(sim.travelled[k]))
+            self._penalise(car, self.rules.collision_penalty_seconds)
+        else:  # nothing else is switched on in a race
+            sim.continue_episode(k, float(sim.travelled[k]))
+
+    def _lap_complete(self, car: _Car, start: float, before_travelled: float) -> None:
+        sim, k = self.sim, car.index
+        after = float(sim.travelled[k])
+        fraction = (self.length - before_travelled) / max(after - before_travelled, 1e-12)
+        crossing = start + min(max(fraction, 0.0), 1.0) * STEP_SECONDS
+        sim.continue_episode(k, after - self.length)
+        if crossing > self.rules.window_seconds + _EPS:
+            return
+        lap = completed_lap(
+            self.rules,
+            number=len(car.laps) + 1,
+            started_at=car.lap_start,
+            time_seconds=crossing - car.lap_start,
+            penalty_seconds=car.lap_penalty,
+            offtracks=car.lap_offtracks,
+            crashes=car.lap_crashes,
+            reversals=car.lap_reversals,
+        )
+        car.laps.append(lap)
+        car.lap_start = crossing
+        car.lap_offtracks = car.lap_crashes = car.lap_reversals = 0
+        car.lap_penalty = 0.0
+        if self.rules.lap_count is not None and len(car.laps) >= self.rules.lap_count:
+            car.finished_at = crossing
+
+    def _put_back(self, car: _Car, before: _Before) -> None:
+        """Where DeepRacer puts a car back after an off-track or reversing: as far along as
+        its look-ahead point was a step before, on the nearer lane."""
+        put_back(
+            self.sim,
+            car.index,
+            s_ahead=before.s,
+            car_x=before.x,
+            car_y=before.y,
+            travelled=before.travelled,
+        )
+
+    def _penalise(self, car: _Car, seconds: float) -> None:
+        fleet, k = self.sim.fleet, car.index
+        car.lap_penalty += seconds
+        car.hold_left = seconds
+        car.hold_pose = (float(fleet.x[k]), float(fleet.y[k]), float(fleet.yaw[k]))
+        car.hold_travelled = float(self.sim.travelled[k])
+        if seconds > 0.0:
+            self.rivals.ghost[k] = True
+
+    def _note_overtakes(self) -> None:
+        order = self.running_order()
+        before = {car: place for place, car in enumerate(self._order)}
+        for place, car in enumerate(order):
+            for passed in order[place + 1 :]:
+                if before[car] > before[passed]:
+                    self.incidents.append(Incident(self.clock, "overtake", car, passed))
+        self._order = order
+
+    # --- the end -------------------------------------------------------------------------
+    def result(self) -> HeadToHeadResult:
+        order = self._final_order()
+        distances = self.distances()
+        leader = order[0]
+        finishes = []
+        for position, k in enumerate(order, start=1):
+            car = self.cars[k]
+            finishes.append(
+                CarFinish(
+                    position=position,
+                    car=k,
+                    finished_at=car.finished_at,
+                    laps_completed=len(car.laps),
+                    distance=float(distances[k]),
+                    gap_seconds=self._gap(leader, k),
+                    result=self._car_result(car),
+                )
+            )
+        return HeadToHeadResult(
+            race_id=new_id(),
+            track_name=self.track.name,
+            track_hash=self.track.content_hash,
+            rules=self.rules,
+            seed=self.seed,
+            clock=min(self.clock, self.rules.window_seconds),
+            cars=tuple(finishes),
+            incidents=tuple(self.incidents),
+            started_at=self.started_at,
+        )
+
+    def _final_order(self) -> list[int]:
+        if self.rules.lap_count is not None:
+            return self.running_order()
+
+        def best(k: int) -> float:
+            times = [lap.time_seconds for lap in self.cars[k].laps if lap.valid]
+            return min(times, default=float("inf"))
+
+        return sorted(range(len(self.cars)), key=lambda k: (-len(self.cars[k].laps), best(k), k))
+
+    def _gap(self, leader: int, k: int) -> float | None:
+        """How long before car `k` ended the leader was where it ended: the gap a timing
+        screen shows. None when the leader never was there (it started behind)."""
+        if k == leader:
+            return 0.0
+        target = float(self.distances()[k])
+        ended = self.cars[k].finished_at
+        end = ended if ended is not None else min(self.clock, self.rules.window_seconds)
+        for clock, distances in zip(self._clocks, self._distances, strict=True):
+            if distances[leader] >= target:
+                return round(end - clock, 3)
+        return None
+
+    def _car_result(self, car: _Car) -> RaceResult:
+        laps = tuple(car.laps)
+        return RaceResult(
+            result_id=new_id(),
+            racer=car.entry.racer,
+            model_name=car.entry.driver.name,
+            model_hash=car.entry.driver.content_hash,
+            track_name=self.track.name,
+            track_hash=self.track.content_hash,
+            rules=self.rules,
+            seed=self.seed,
+            laps=laps,
+            scoring=score_laps(laps, self.rules),
+            total_offtracks=car.total_offtracks,
+            started_at=self.started_at,
+        )
+
+
+def run_head_to_head(
+    track: Track,
+    rules: RaceRules,
+    entries: Sequence[Entry],
+    *,
+    seed: int = 0,
+    car: CarSpec = DEEPRACER_CAR,
+) -> HeadToHeadResult:
+    """Run a whole head-to-head race as fast as the machine can."""
+    race = HeadToHeadRace(track, rules, entries, seed=seed, car=car)
+    while not race.finished:
+        race.tick()
+        let_other_threads_run(race.steps)
+    return race.result()
