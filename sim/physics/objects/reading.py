@@ -29,7 +29,8 @@ def race_settings(params: TrainingParams, where: str = "training_params.yaml") -
     try:
         race_type = RaceType(params.race_type.strip().upper())
     except ValueError:
-        choices = ", ".join(kind.value for kind in RaceType)
+        trained = (kind for kind in RaceType if kind is not RaceType.HEAD_TO_MODEL)
+        choices = ", ".join(kind.value for kind in trained)
         raise DeepRacerFileError(
             f"{where}: RACE_TYPE must be one of {choices}, not {params.race_type!r}."
         ) from None
