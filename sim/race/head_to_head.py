@@ -34,7 +34,7 @@ from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.ids import new_id
 from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
 from sim.physics.objects.placement import Lanes
-from sim.physics.objects.rivals import RivalField
+from sim.physics.objects.rivals import Grid, RivalField
 from sim.physics.objects.settings import Lane
 from sim.physics.resets import put_back
 from sim.physics.simulation import Outcome, TrackSimulation, let_other_threads_run
@@ -156,17 +156,20 @@ class HeadToHeadRace:
         self.started_at = now_iso()
         self.length = track.length
         n = len(entries)
-        self.sim = sim = TrackSimulation(track, n, car=car, rules=RACE_EPISODE_RULES, seed=seed)
-        self.rivals = RivalField(track, n, sim.fleet)
-        sim.objects = self.rivals
+        self.car_spec = car
+        # A simulation for each car, with the time trial's one-car physics: a car drives
+        # the laps it would drive alone. Its objects are the other cars (`RivalField`).
+        self.sims = [
+            TrackSimulation(track, 1, car=car, rules=RACE_EPISODE_RULES, seed=seed)
+            for _ in range(n)
+        ]
+        self.grid = Grid.of([sim.fleet for sim in self.sims])
         self.cars = [_Car(index, entry) for index, entry in enumerate(entries)]
         self._line_up()
-        # One call per driver a step: a driver racing several cars acts for them at once.
-        self.drivers: list[Driver] = []
-        for entry in entries:
-            if all(entry.driver is not known for known in self.drivers):
-                self.drivers.append(entry.driver)
-                entry.driver.reset(sim)
+        self.rivals = [RivalField(track, k, self.grid) for k in range(n)]
+        for sim, rivals, entry in zip(self.sims, self.rivals, entries, strict=True):
+            sim.objects = rivals
+            entry.driver.reset(sim)
         self.steps = 0
         self.incidents: list[Incident] = []
         self._order = self.running_order()
@@ -176,17 +179,15 @@ class HeadToHeadRace:
 
     def _line_up(self) -> None:
         """simapp's grid (see the module docstring)."""
-        sim, lanes = self.sim, Lanes.of(self.track)
-        starts = [(-k * GRID_GAP) % self.length for k in range(len(self.cars))]
-        sim.reset_cars(range(len(self.cars)), starts)
-        for k, start in enumerate(starts):
-            pose = lanes.pose(start, Lane.OUTER if k % 2 == 0 else Lane.INNER)
-            sim.put(k, pose.x, pose.y, pose.heading, 0.0)
+        lanes = Lanes.of(self.track)
         half = self.length / 2.0
-        for k in range(len(self.cars)):
+        for k, sim in enumerate(self.sims):
+            start = (-k * GRID_GAP) % self.length
+            sim.reset_car(0, start)
+            pose = lanes.pose(start, Lane.OUTER if k % 2 == 0 else Lane.INNER)
+            sim.put(0, pose.x, pose.y, pose.heading, 0.0)
             # Progress from the start line itself: a car behind it starts below zero.
-            ahead = (float(sim.s[k]) + half) % self.length - half
-            sim.continue_episode(k, ahead)
+            sim.continue_episode(0, (float(sim.s[0]) + half) % self.length - half)
         self._update_standing()
 
     # --- where the cars are ------------------------------------------------------------
@@ -196,11 +197,15 @@ class HeadToHeadRace:
 
     def distances(self) -> np.ndarray:
         """Metres each car has driven from the start line, its laps included."""
-        travelled = self.sim.travelled
-        return np.array([len(car.laps) * self.length + travelled[car.index] for car in self.cars])
+        return np.array(
+            [
+                len(car.laps) * self.length + float(sim.travelled[0])
+                for car, sim in zip(self.cars, self.sims, strict=True)
+            ]
+        )
 
     def _update_standing(self) -> None:
-        self.rivals.standing = self.distances()
+        self.grid.standing = self.distances()
 
     def running_order(self) -> list[int]:
         """Grid indices, leader first: finished cars by when, then by distance."""
@@ -225,55 +230,85 @@ class HeadToHeadRace:
 
     # --- one step ------------------------------------------------------------------------
     def tick(self) -> None:
-        sim, n = self.sim, len(self.cars)
-        steering, speed = np.zeros(n), np.zeros(n)
-        actions = {id(driver): driver.act(sim) for driver in self.drivers}
+        """Every car drives one step (each on what it sensed before any moved), then each
+        is judged where all of them are now."""
+        driving = [car for car in self.cars if car.hold_left <= 0.0]
+        actions = self._actions(driving)
+        before: dict[int, _Before] = {}
         for car in self.cars:
-            if car.hold_left <= 0.0:
-                action: DriverAction = actions[id(car.entry.driver)]
-                steering[car.index] = action.steering_deg[car.index]
-                speed[car.index] = action.speed[car.index]
-        before_travelled = sim.travelled.copy()
-        before_s = sim.s.copy()
-        before_x, before_y = sim.fleet.x.copy(), sim.fleet.y.copy()
+            sim = self.sims[car.index]
+            action = actions.get(car.index)
+            before[car.index] = _Before(
+                float(sim.travelled[0]),
+                float(sim.s[0]),
+                float(sim.fleet.x[0]),
+                float(sim.fleet.y[0]),
+            )
+            if action is None:  # held: it stands, and is put back where it was frozen
+                sim.apply(np.zeros(1), np.zeros(1))
+            else:
+                sim.apply(action.steering_deg[:1], action.speed[:1])
         start = self.clock
-        sim.apply(steering, speed)
         self.steps += 1
+        for rivals in self.rivals:
+            rivals.follow()
+        self._update_standing()
+        crashes = {car.index: self.rivals[car.index].crashed_into(self.car_spec) for car in driving}
         for car in self.cars:
             if car.hold_left > 0.0:
                 self._hold(car)
             else:
-                k = car.index
-                before = _Before(
-                    float(before_travelled[k]),
-                    float(before_s[k]),
-                    float(before_x[k]),
-                    float(before_y[k]),
-                )
-                self._judge(car, start, before)
+                self._judge(car, start, before[car.index], crashes[car.index])
+        for rivals in self.rivals:
+            rivals.follow()  # where the put-back cars stand now
         self._update_standing()
         self._note_overtakes()
         self._distances.append(self.distances())
         self._clocks.append(self.clock)
 
+    def _actions(self, driving: list[_Car]) -> dict[int, DriverAction]:
+        """Each driving car's action; a driver that can (`act_many`: a policy) acts for
+        all its cars in one batch."""
+        by_driver: dict[int, list[_Car]] = {}
+        for car in driving:
+            by_driver.setdefault(id(car.entry.driver), []).append(car)
+        actions: dict[int, DriverAction] = {}
+        for cars in by_driver.values():
+            driver = cars[0].entry.driver
+            sims = [self.sims[car.index] for car in cars]
+            act_many = getattr(driver, "act_many", None)
+            if act_many is not None and len(cars) > 1:
+                for car, action in zip(cars, act_many(sims), strict=True):
+                    actions[car.index] = action
+            else:
+                for car, sim in zip(cars, sims, strict=True):
+                    actions[car.index] = driver.act(sim)
+        return actions
+
     def _hold(self, car: _Car) -> None:
         """A held car stays where it was frozen (simapp resets its pose every step)."""
+        sim = self.sims[car.index]
         x, y, yaw = car.hold_pose
-        self.sim.put(car.index, x, y, yaw, 0.0)
-        self.sim.continue_episode(car.index, car.hold_travelled)
+        sim.put(0, x, y, yaw, 0.0)
+        sim.continue_episode(0, car.hold_travelled)
         car.hold_left -= STEP_SECONDS
         if car.hold_left < _EPS:
             car.hold_left = 0.0
-            self.rivals.ghost[car.index] = False
+            self.grid.ghost[car.index] = False
 
-    def _judge(self, car: _Car, start: float, before: _Before) -> None:
-        """What the step did to a car that was driving (see the module docstring)."""
-        sim, k = self.sim, car.index
-        if sim.terminal[k] == Outcome.RUNNING:
-            return
-        status = sim.status[k]
+    def _judge(self, car: _Car, start: float, before: _Before, crashed_into: list[int]) -> None:
+        """What the step did to a car that was driving, in DeepRacer's precedence: a lap
+        completed, then a crash, then off track, then turned round."""
+        sim = self.sims[car.index]
+        status = sim.status[0] if sim.terminal[0] != Outcome.RUNNING else None
         if status == EpisodeStatus.LAP_COMPLETE:
             self._lap_complete(car, start, before.travelled)
+        elif crashed_into:
+            car.lap_crashes += 1
+            for other in crashed_into:
+                self.incidents.append(Incident(self.clock, "crash", car.index, other))
+            sim.continue_episode(0, float(sim.travelled[0]))  # held where it is
+            self._penalise(car, self.rules.collision_penalty_seconds)
         elif status == EpisodeStatus.OFF_TRACK:
             car.lap_offtracks += 1
             car.total_offtracks += 1
@@ -283,22 +318,15 @@ class HeadToHeadRace:
             car.lap_reversals += 1
             self._put_back(car, before)
             self._penalise(car, self.rules.penalty_seconds)
-        elif status == EpisodeStatus.CRASHED:
-            car.lap_crashes += 1
-            fleet = sim.fleet
-            for other in self.rivals.rivals_hit(k, fleet.x, fleet.y, fleet.yaw, sim.car):
-                self.incidents.append(Incident(self.clock, "crash", k, other))
-            sim.continue_episode(k, float(sim.travelled[k]))
-            self._penalise(car, self.rules.collision_penalty_seconds)
-        else:  # nothing else is switched on in a race
-            sim.continue_episode(k, float(sim.travelled[k]))
+        elif status is not None:  # nothing else is switched on in a race
+            sim.continue_episode(0, float(sim.travelled[0]))
 
     def _lap_complete(self, car: _Car, start: float, before_travelled: float) -> None:
-        sim, k = self.sim, car.index
-        after = float(sim.travelled[k])
+        sim = self.sims[car.index]
+        after = float(sim.travelled[0])
         fraction = (self.length - before_travelled) / max(after - before_travelled, 1e-12)
         crossing = start + min(max(fraction, 0.0), 1.0) * STEP_SECONDS
-        sim.continue_episode(k, after - self.length)
+        sim.continue_episode(0, after - self.length)
         if crossing > self.rules.window_seconds + _EPS:
             return
         lap = completed_lap(
@@ -322,8 +350,8 @@ class HeadToHeadRace:
         """Where DeepRacer puts a car back after an off-track or reversing: as far along as
         its look-ahead point was a step before, on the nearer lane."""
         put_back(
-            self.sim,
-            car.index,
+            self.sims[car.index],
+            0,
             s_ahead=before.s,
             car_x=before.x,
             car_y=before.y,
@@ -331,13 +359,14 @@ class HeadToHeadRace:
         )
 
     def _penalise(self, car: _Car, seconds: float) -> None:
-        fleet, k = self.sim.fleet, car.index
+        sim = self.sims[car.index]
+        fleet = sim.fleet
         car.lap_penalty += seconds
         car.hold_left = seconds
-        car.hold_pose = (float(fleet.x[k]), float(fleet.y[k]), float(fleet.yaw[k]))
-        car.hold_travelled = float(self.sim.travelled[k])
+        car.hold_pose = (float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0]))
+        car.hold_travelled = float(sim.travelled[0])
         if seconds > 0.0:
-            self.rivals.ghost[k] = True
+            self.grid.ghost[car.index] = True
 
     def _note_overtakes(self) -> None:
         order = self.running_order()

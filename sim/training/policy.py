@@ -18,7 +18,8 @@ from __future__ import annotations
 import json
 import math
 import struct
-from collections.abc import Mapping
+import weakref
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -488,31 +489,57 @@ class PolicyDriver:
         self.name = name
         self.content_hash = content_hash
         self._options = sensor_options or SensorOptions()
-        self._observer: Observer | None = None
+        # One Observer per simulation it drives in: a head-to-head race gives each car a
+        # simulation of its own, and one model may drive several of them.
+        self._observers: weakref.WeakKeyDictionary[TrackSimulation, Observer] = (
+            weakref.WeakKeyDictionary()
+        )
 
     def reset(self, sim: TrackSimulation) -> None:
-        self._observer = Observer(sim, self.metadata.sensors, self._options)
+        self._observers[sim] = Observer(sim, self.metadata.sensors, self._options)
 
-    def actions(self, sim: TrackSimulation) -> NDArray[Any]:
-        """Raw policy actions for every car: indices, or (N, 2) normalised values."""
-        if self._observer is None or self._observer.sim is not sim:
+    def _observe(self, sim: TrackSimulation) -> Any:
+        observer = self._observers.get(sim)
+        if observer is None:
             self.reset(sim)
-        assert self._observer is not None
-        obs = self._observer.observe()
+            observer = self._observers[sim]
+        return observer.observe()
+
+    def _actions_of(self, obs: Any) -> NDArray[Any]:
         if self._fast is not None:
             return self._fast.act(obs)
         with torch.inference_mode():
             actions = self.network.act(observation_tensors(obs))
         return actions.numpy()
 
+    def actions(self, sim: TrackSimulation) -> NDArray[Any]:
+        """Raw policy actions for every car: indices, or (N, 2) normalised values."""
+        return self._actions_of(self._observe(sim))
+
     def act(self, sim: TrackSimulation) -> DriverAction:
-        actions = self.actions(sim)
+        return self._driver_action(self.actions(sim))
+
+    def act_many(self, sims: Sequence[TrackSimulation]) -> list[DriverAction]:
+        """`act` for several simulations (a head-to-head race's cars of this model), their
+        observations in one batch: one forward pass for all of them."""
+        observed = [self._observe(sim) for sim in sims]
+        if isinstance(observed[0], dict):
+            obs: Any = {
+                key: np.concatenate([part[key] for part in observed]) for key in observed[0]
+            }
+        else:
+            obs = np.concatenate(observed)
+        actions = self._actions_of(obs)
+        counts = np.cumsum([sim.n for sim in sims])[:-1]
+        return [self._driver_action(part) for part in np.split(actions, counts)]
+
+    def _driver_action(self, actions: NDArray[Any]) -> DriverAction:
         space = self.metadata.action_space
         steering, speed = space.targets(actions)
         if space.kind == "discrete":
             index = np.asarray(actions, dtype=np.int64).reshape(-1)
         else:
-            index = np.full(sim.n, -1, dtype=np.int64)
+            index = np.full(len(actions), -1, dtype=np.int64)
         return DriverAction(
             steering_deg=np.asarray(steering, dtype=np.float64),
             speed=np.asarray(speed, dtype=np.float64),

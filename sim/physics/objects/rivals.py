@@ -4,11 +4,16 @@ head-to-head-simapp.md).
 In simapp's HEAD_TO_MODEL every racing car is an object of every other: it is drawn in
 their cameras, seen by their lidar, listed in their reward params' object keys, and judged
 by the crash rule boxes and bot cars are judged by (a corner of one car's footprint inside
-the other's rectangle, 0.3235 x 0.1961 m, `BOT_CAR_DIMENSION`). So here: car i's objects are
-the other cars, in their race order (simapp registers the racing agents first, in index
-order, and leaves the car's own name out), moved to where those cars are after every step.
+the other's rectangle, 0.3235 x 0.1961 m, `BOT_CAR_DIMENSION`).
 
-What simapp does with a crash between two racing cars, and so this field:
+A head-to-head race drives each car in a simulation of its own, with the time trial's
+one-car physics (the same laps a car drives alone), and couples them here: car i's objects
+are the other cars, in grid order (simapp registers the racing agents first, in index
+order, and leaves the car's own name out), wherever those cars are. The race moves every
+car first and then judges crashes (`RivalField.crashed_into`), so no car is judged against
+where another was before the step; a simulation never judges a crash with a rival itself.
+
+What simapp does with a crash between two racing cars, and so the race:
 - only the car whose progress is lower (the car behind) crashed; the car in front drives on
   and is not counted;
 - a car serving a penalty cannot be run into (simapp's blink effect makes it
@@ -20,6 +25,10 @@ the grid, the car in front.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,63 +42,97 @@ from sim.tracks.track import Track
 RIVAL_SHAPE = BOT_CAR_SHAPE
 
 
-class RivalField(ObjectField):
-    """For each of a race's `cars` cars, the others, following `fleet` (the race's cars)."""
+@dataclass
+class Grid:
+    """What every car's field shares: the cars, where each is in the race, who is held."""
 
-    def __init__(self, track: Track, cars: int, fleet: Fleet) -> None:
+    fleets: Sequence[Fleet]  # one car each, in grid order
+    # Metres from the start line, laps included: the car with less of it crashed.
+    standing: FloatArray
+    # Cars serving a penalty: the others drive through them, and they are not judged.
+    ghost: NDArray[np.bool_]
+
+    @classmethod
+    def of(cls, fleets: Sequence[Fleet]) -> Grid:
+        count = len(fleets)
+        return cls(list(fleets), np.zeros(count), np.zeros(count, dtype=bool))
+
+
+class RivalField(ObjectField):
+    """Car `index`'s objects (its simulation has that one car): the grid's other cars."""
+
+    def __init__(self, track: Track, index: int, grid: Grid) -> None:
+        cars = len(grid.fleets)
         if cars < 2:
             raise ValueError("a head-to-head race needs at least two cars")
-        super().__init__(track, cars - 1, cars, RIVAL_SHAPE)
-        self._fleet = fleet
-        # (cars, cars - 1): car i's objects are the other cars, in race order.
-        self.others = np.array([[j for j in range(cars) if j != i] for i in range(cars)])
-        # Cars serving a penalty: the others drive through them, and they are not judged.
-        self.ghost = np.zeros(cars, dtype=bool)
-        # Where each car is in the race (laps and distance into the lap, metres): the
-        # engine keeps it, and the car with less of it crashed.
-        self.standing = np.zeros(cars)
+        super().__init__(track, cars - 1, 1, RIVAL_SHAPE)
+        self.index = index
+        self.grid = grid
+        self.others = np.array([j for j in range(cars) if j != index])
+        self._placed_at: tuple[float, ...] = ()
+        self._measured = False
         self.follow()
 
     def draw(self, car: int, backwards: bool = False) -> None:
         self.follow()
 
-    def advance(self, seconds: float) -> None:
-        self.follow()  # the cars have moved: their rivals' objects with them
-
     def follow(self) -> None:
-        """Every car's objects where the other cars are now."""
-        fleet, others = self._fleet, self.others
-        x, y, yaw = np.asarray(fleet.x), np.asarray(fleet.y), np.asarray(fleet.yaw)
+        """The objects where the other cars are now."""
+        fleets = [self.grid.fleets[j] for j in self.others.tolist()]
+        x = [float(fleet.x[0]) for fleet in fleets]
+        y = [float(fleet.y[0]) for fleet in fleets]
+        heading = [float(fleet.yaw[0]) for fleet in fleets]
+        poses = (*x, *y, *heading)
+        if poses == self._placed_at:
+            return  # nobody moved (every car held): the camera keeps its drawing
+        self._placed_at = poses
+        self.x, self.y, self.heading = np.array([x]), np.array([y]), np.array([heading])
+        self.placed += 1  # the camera draws them anew
+        self._measured = False
+
+    def _measure_rivals(self) -> None:
+        """Along and across the centre line: only the reward params read it."""
+        if self._measured:
+            return
         centre = self.lanes.centre
-        points = np.column_stack([x, y])
+        points = np.column_stack([self.x[0], self.y[0]])
         segment, t, foot = centre.project(points)
-        distance = centre.arc_length(segment, t)
-        vectors = centre.vectors[segment]
         relative = points - foot
+        vectors = centre.vectors[segment]
         cross = vectors[:, 0] * relative[:, 1] - vectors[:, 1] * relative[:, 0]
+        self.distance = centre.arc_length(segment, t)[None, :]
         # Left of the centre line, driving the track's way (simapp: inside the inner half,
         # flipped on a clockwise track, which is the same side).
-        left = cross > 0.0
-        from_centre = np.hypot(relative[:, 0], relative[:, 1])
-        self.x, self.y, self.heading = x[others], y[others], yaw[others]
-        self.distance, self.left, self.from_centre = (
-            distance[others],
-            left[others],
-            from_centre[others],
-        )
-        self.placed += 1  # the camera draws them anew
+        self.left = (cross > 0.0)[None, :]
+        self.from_centre = np.hypot(relative[:, 0], relative[:, 1])[None, :]
+        self._measured = True
+
+    def all_params(
+        self,
+        ahead_s: list[float],
+        ahead_x: list[float],
+        ahead_y: list[float],
+        heading_deg: list[float],
+    ) -> list[dict[str, Any]]:
+        self._measure_rivals()
+        return super().all_params(ahead_s, ahead_x, ahead_y, heading_deg)
 
     def crashed(
         self, x: FloatArray, y: FloatArray, yaw: FloatArray, s: FloatArray, car_spec: CarSpec
     ) -> NDArray[np.bool_]:
-        """Cars that ran into a rival this step and are behind it (see the docstring)."""
-        hits = self.hits(x, y, yaw, car_spec) & ~self.ghost[self.others]
-        behind = self.standing[:, None] < self.standing[self.others]
-        return np.asarray((hits & behind).any(axis=1) & ~self.ghost)
+        # The race judges crashes between its cars once all have moved (`crashed_into`).
+        return np.zeros(len(x), dtype=bool)
 
-    def rivals_hit(
-        self, car: int, x: FloatArray, y: FloatArray, yaw: FloatArray, car_spec: CarSpec
-    ) -> list[int]:
-        """The cars `car` is touching now (race indices), ghosts left out."""
-        row = self.hits(x, y, yaw, car_spec)[car] & ~self.ghost[self.others[car]]
-        return [int(other) for other in self.others[car][row]]
+    def crashed_into(self, car_spec: CarSpec) -> list[int]:
+        """The cars this car ran into from behind this step (grid indices): a corner of it
+        inside their rectangle, neither of them held, it behind them in the race."""
+        grid, me = self.grid, self.index
+        if grid.ghost[me]:
+            return []
+        fleet = grid.fleets[me]
+        hits = self.hits(fleet.x, fleet.y, fleet.yaw, car_spec)[0]
+        return [
+            int(other)
+            for other, hit in zip(self.others.tolist(), hits.tolist(), strict=True)
+            if hit and not grid.ghost[other] and grid.standing[me] < grid.standing[other]
+        ]

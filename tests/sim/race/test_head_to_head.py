@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from sim.physics.car import DEEPRACER_CAR
-from sim.physics.objects.rivals import RivalField
+from sim.physics.objects.rivals import Grid, RivalField
 from sim.physics.simulation import TrackSimulation
-from sim.race.driver import reference_driver
+from sim.race.driver import DriverAction, reference_driver
 from sim.race.head_to_head import (
     GRID_GAP,
     Entry,
@@ -53,14 +53,16 @@ def _summary(result: HeadToHeadResult) -> list[tuple[int, tuple[float, ...], int
 def test_the_grid_is_simapps_staggered_lanes(track: Track) -> None:
     driver = reference_driver(track)
     race = HeadToHeadRace(track, HEAD_TO_HEAD_RULES, [Entry("a", driver), Entry("b", driver)])
-    sim = race.sim
+    first, second = race.sims
     # Car 1 starts 0.75 m behind car 0, along the track; its lap starts below zero.
-    assert float(sim.travelled[1]) == pytest.approx(float(sim.travelled[0]) - GRID_GAP, abs=0.05)
+    assert float(second.travelled[0]) == pytest.approx(
+        float(first.travelled[0]) - GRID_GAP, abs=0.05
+    )
     # Even cars in the outer lane, odd in the inner: on reinvent_base (counter-clockwise)
     # the inner lane is on the left.
-    assert not bool(sim.left_of_center[0]) and bool(sim.left_of_center[1])
-    assert 0.1 < float(sim.distance_from_center[0]) < 0.4
-    assert 0.1 < float(sim.distance_from_center[1]) < 0.4
+    assert not bool(first.left_of_center[0]) and bool(second.left_of_center[0])
+    assert 0.1 < float(first.distance_from_center[0]) < 0.4
+    assert 0.1 < float(second.distance_from_center[0]) < 0.4
 
 
 def test_a_driver_against_itself_is_the_same_race_twice_and_the_front_car_wins(
@@ -78,65 +80,99 @@ def test_a_driver_against_itself_is_the_same_race_twice_and_the_front_car_wins(
     assert loser.gap_seconds is not None and loser.gap_seconds > 0
 
 
+class _Steady:
+    """Straight on at a steady speed, whatever is in the way."""
+
+    content_hash = "steady"
+
+    def __init__(self, speed: float) -> None:
+        self.speed = speed
+        self.name = f"steady {speed:g}"
+
+    def reset(self, sim: TrackSimulation) -> None:
+        del sim
+
+    def act(self, sim: TrackSimulation) -> DriverAction:
+        return DriverAction(
+            steering_deg=np.zeros(sim.n),
+            speed=np.full(sim.n, self.speed),
+            action_index=np.full(sim.n, -1, dtype=np.int64),
+        )
+
+
 def test_only_the_car_behind_is_held_after_a_crash(track: Track) -> None:
-    result = _race(track, 3)  # the third car closes on the second in the first turns
-    crashes = [incident for incident in result.incidents if incident.kind == "crash"]
-    assert crashes, "the three-car reference race has a crash to judge"
-    by_car = {finish.car: finish.result for finish in result.cars}
-    for crash in crashes:
-        crashed_laps = by_car[crash.car].laps
-        assert sum(lap.crashes for lap in crashed_laps) >= 1
-        # The crash's hold is inside the lap's time, as simapp's frozen time is.
-        assert any(lap.penalty_seconds >= 5.0 for lap in crashed_laps if lap.crashes)
-        # The car it ran into is not judged for that crash.
-        assert not any(other.car == crash.other and other.other == crash.car for other in crashes)
-    assert _summary(result) == _summary(_race(track, 3))
+    rules = HEAD_TO_HEAD_RULES
+    race = HeadToHeadRace(track, rules, [Entry("front", _Steady(0.0)), Entry("back", _Steady(1.0))])
+    front, back = race.sims
+    x, y, yaw = float(front.fleet.x[0]), float(front.fleet.y[0]), float(front.fleet.yaw[0])
+    back.put(0, x - 0.5 * math.cos(yaw), y - 0.5 * math.sin(yaw), yaw)  # right behind it
+    for _ in range(30):
+        race.tick()
+    crashes = [incident for incident in race.incidents if incident.kind == "crash"]
+    assert [(crash.car, crash.other) for crash in crashes] == [(1, 0)]
+    held = race.cars[1]
+    assert held.lap_crashes == 1 and held.lap_penalty == rules.collision_penalty_seconds
+    assert held.hold_left > 0 and bool(race.grid.ghost[1])
+    assert race.cars[0].lap_crashes == 0 and race.cars[0].hold_left == 0.0
+    # Held where it crashed: it does not move while the clock runs.
+    where = (float(back.fleet.x[0]), float(back.fleet.y[0]))
+    race.tick()
+    assert (float(back.fleet.x[0]), float(back.fleet.y[0])) == where
+    # After the hold it drives on, and runs into the car again: judged again (simapp).
+    for _ in range(round(rules.collision_penalty_seconds * 15) + 30):
+        race.tick()
+    assert len([i for i in race.incidents if i.kind == "crash"]) == 2
 
 
 def test_the_crash_rule_judges_the_car_behind_and_never_a_held_car(track: Track) -> None:
-    sim = TrackSimulation(track, 2)
-    field = RivalField(track, 2, sim.fleet)
-    sim.objects = field
-    sim.reset_cars([0, 1], [1.0, 1.0])
-    sim.put(1, float(sim.fleet.x[0]) - 0.2, float(sim.fleet.y[0]), float(sim.fleet.yaw[0]))
-    fleet = sim.fleet
-    field.follow()
-    field.standing = np.array([10.0, 9.8])  # car 1 is behind
-    hit = field.crashed(fleet.x, fleet.y, fleet.yaw, sim.s, DEEPRACER_CAR)
-    assert hit.tolist() == [False, True]
-    field.standing = np.array([9.8, 10.0])  # now car 0 is
-    assert field.crashed(fleet.x, fleet.y, fleet.yaw, sim.s, DEEPRACER_CAR).tolist() == [
-        True,
-        False,
-    ]
-    field.ghost[1] = True  # car 1 is serving a penalty: nobody runs into it, nor it
-    assert field.crashed(fleet.x, fleet.y, fleet.yaw, sim.s, DEEPRACER_CAR).tolist() == [
-        False,
-        False,
-    ]
+    sims = [TrackSimulation(track, 1) for _ in range(2)]
+    grid = Grid.of([sim.fleet for sim in sims])
+    sims[0].reset_car(0, 1.0)
+    x, y, yaw = float(sims[0].fleet.x[0]), float(sims[0].fleet.y[0]), float(sims[0].fleet.yaw[0])
+    sims[1].put(0, x - 0.2 * math.cos(yaw), y - 0.2 * math.sin(yaw), yaw)  # nose to tail
+    fields = [RivalField(track, k, grid) for k in range(2)]
+
+    def judged() -> list[list[int]]:
+        return [field.crashed_into(DEEPRACER_CAR) for field in fields]
+
+    grid.standing = np.array([10.0, 9.8])  # car 1 is behind
+    assert judged() == [[], [0]]
+    grid.standing = np.array([9.8, 10.0])  # now car 0 is
+    assert judged() == [[1], []]
+    grid.ghost[1] = True  # car 1 is serving a penalty: nobody runs into it, nor it
+    assert judged() == [[], []]
+    # A simulation never judges a crash with a rival itself: the race does, once all moved.
+    assert (
+        not fields[0]
+        .crashed(sims[0].fleet.x, sims[0].fleet.y, sims[0].fleet.yaw, sims[0].s, DEEPRACER_CAR)
+        .any()
+    )
 
 
 def test_each_car_senses_the_other_as_simapp_lists_it(track: Track) -> None:
     driver = reference_driver(track)
     race = HeadToHeadRace(track, HEAD_TO_HEAD_RULES, [Entry("a", driver), Entry("b", driver)])
-    sim = race.sim
+    front, behind = race.sims
     # Put car 1 right behind car 0, in the same lane, facing it.
-    x, y, yaw = float(sim.fleet.x[0]), float(sim.fleet.y[0]), float(sim.fleet.yaw[0])
-    sim.put(1, x - 0.6 * math.cos(yaw), y - 0.6 * math.sin(yaw), yaw)
-    race.rivals.follow()
-    lidar = Observer(sim, ("lidar",)).observe()
+    x, y, yaw = float(front.fleet.x[0]), float(front.fleet.y[0]), float(front.fleet.yaw[0])
+    behind.put(0, x - 0.6 * math.cos(yaw), y - 0.6 * math.sin(yaw), yaw)
+    for rivals in race.rivals:
+        rivals.follow()
     alone = TrackSimulation(track, 1)
-    alone.put(0, float(sim.fleet.x[1]), float(sim.fleet.y[1]), yaw)
+    alone.put(0, float(behind.fleet.x[0]), float(behind.fleet.y[0]), yaw)
+    lidar = Observer(behind, ("lidar",)).observe()
     lidar_alone = Observer(alone, ("lidar",)).observe()
     ahead = lidar.shape[1] // 2  # the middle ray points straight ahead
-    assert lidar[1][ahead] < 0.5 < lidar_alone[0][ahead]
-    camera = Observer(sim, ("camera",)).observe()
+    assert lidar[0][ahead] < 0.5 < lidar_alone[0][ahead]
+    camera = Observer(behind, ("camera",)).observe()
     camera_alone = Observer(alone, ("camera",)).observe()
-    assert not np.array_equal(camera[1], camera_alone[0])  # the car ahead is drawn
-    params = sim.all_params()
-    assert params[1]["objects_location"] == [[pytest.approx(x), pytest.approx(y)]]
-    assert params[1]["closest_objects"] == [0, 0]
-    assert params[0]["objects_location"][0][0] == pytest.approx(float(sim.fleet.x[1]))
+    assert not np.array_equal(camera[0], camera_alone[0])  # the car ahead is drawn
+    params = behind.all_params()[0]
+    assert params["objects_location"] == [[pytest.approx(x), pytest.approx(y)]]
+    assert params["closest_objects"] == [0, 0]
+    assert front.all_params()[0]["objects_location"][0][0] == pytest.approx(
+        float(behind.fleet.x[0])
+    )
 
 
 def test_a_race_takes_two_to_six_cars(track: Track) -> None:
