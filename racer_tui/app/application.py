@@ -193,6 +193,7 @@ class RacerTuiApp(App[int]):
         self.recent_keys = RecentKeys()
         self._held_input: deque[events.Key | events.Paste] = deque()  # one key at a time
         self._key_in_flight: events.Key | None = None
+        self._palette_due = False  # ctrl+p waits for a closing palette (`_open_palette`)
         self._key_sent_to: MessagePump | None = None  # the widget the key in flight went to
         self._key_sent_at = 0.0
         self._key_handled_at: float | None = None  # when the key in flight was used
@@ -282,6 +283,8 @@ class RacerTuiApp(App[int]):
         return not self._held_input and self._ready_for_input()
 
     def _ready_for_input(self) -> bool:
+        if self._palette_due:  # the keys after ctrl+p are for the palette about to open
+            return False
         try:
             screen = self.screen
         except ScreenStackError:  # starting or stopping: Textual's own handling says what
@@ -567,9 +570,11 @@ class RacerTuiApp(App[int]):
         leaving = any(
             isinstance(node, CommandPalette) and node is not screen for node in self._nodes
         )
+        # A palette still to open: the keys after ctrl+p are its own, and wait for it.
+        self._palette_due = (closing or leaving) and time.monotonic() < deadline
+        if self._palette_due:
+            self.set_timer(PALETTE_RETRY_SECONDS, partial(self._open_palette, deadline))
         if closing or leaving:
-            if time.monotonic() < deadline:
-                self.set_timer(PALETTE_RETRY_SECONDS, partial(self._open_palette, deadline))
             return  # (past the deadline: no second palette, which would be a crash)
         super().action_command_palette()
 

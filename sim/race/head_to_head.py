@@ -32,6 +32,7 @@ import numpy as np
 
 from sim.deepracer.vocabulary import EpisodeStatus
 from sim.foundation.ids import new_id
+from sim.foundation.remedies import RemedyError
 from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
 from sim.physics.objects.placement import Lanes
 from sim.physics.objects.rivals import Grid, RivalField
@@ -51,7 +52,7 @@ MAX_CARS = 6
 _EPS = 1e-9
 
 
-class HeadToHeadError(ValueError):
+class HeadToHeadError(RemedyError):
     """A head-to-head race that cannot be run as asked."""
 
 
