@@ -4,6 +4,8 @@ same as one JSON document with `--json`."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 from rich.table import Table
@@ -86,8 +88,11 @@ def head_to_head_summary(result: HeadToHeadResult) -> str:
     )
 
 
-def head_to_head_document(result: HeadToHeadResult, track: Track) -> dict[str, Any]:
-    """The `--json` document of a head-to-head race."""
+def head_to_head_document(
+    result: HeadToHeadResult, track: Track, trace_files: Mapping[int, Path] | None = None
+) -> dict[str, Any]:
+    """The `--json` document of a head-to-head race (`trace_files`: by grid index)."""
+    traces = trace_files or {}
     return {
         "race": "head-to-head",
         "race_id": result.race_id,
@@ -114,6 +119,7 @@ def head_to_head_document(result: HeadToHeadResult, track: Track) -> dict[str, A
                 "offtracks": finish.result.total_offtracks,
                 "resets": sum(lap.resets for lap in finish.result.laps),
                 "laps": [lap.to_json() for lap in finish.result.laps],
+                **({"trace_file": str(traces[finish.car])} if finish.car in traces else {}),
             }
             for finish in result.cars
         ],

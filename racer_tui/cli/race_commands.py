@@ -200,7 +200,6 @@ def _run_head_to_head(args: argparse.Namespace, rules: RaceRules, track: Track) 
         )
     refused = [
         (args.record, "--record: a league does not record head-to-head races yet"),
-        (args.trace_dir is not None, "--trace-dir: head-to-head races write no traces yet"),
         (args.racer is not None, "--racer: each car of a head-to-head race is its model's"),
     ]
     for given, why in refused:
@@ -212,15 +211,25 @@ def _run_head_to_head(args: argparse.Namespace, rules: RaceRules, track: Track) 
         if spec not in drivers:
             drivers[spec] = resolve_driver(spec, track)
     entries = [Entry(drivers[spec].name, drivers[spec]) for spec in args.models]
-    result = run_head_to_head(track, rules, entries, seed=args.seed)
+    keep_trace = args.trace_dir is not None
+    result = run_head_to_head(track, rules, entries, seed=args.seed, keep_trace=keep_trace)
+    # A sim-trace CSV for each car, as simapp writes one for each agent.
+    trace_files = {
+        finish.car: _write_trace(finish.result, args.trace_dir)
+        for finish in result.cars
+        if args.trace_dir is not None
+    }
     if args.json:
-        print_json(head_to_head_document(result, track))
+        print_json(head_to_head_document(result, track, trace_files))
         return EXIT_OK
     console = Console()
     console.print(head_to_head_table(result, track))
     for line in incident_lines(result):
         console.print(Text(line))
     console.print(Text(head_to_head_summary(result)))
+    for finish in result.cars:
+        if finish.car in trace_files:
+            console.print(Text(f"trace of car {finish.car + 1}: {trace_files[finish.car]}"))
     return EXIT_OK
 
 

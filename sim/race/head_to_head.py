@@ -25,6 +25,7 @@ the same race.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -43,6 +44,7 @@ from sim.race.driver import Driver, DriverAction
 from sim.race.engine import RACE_EPISODE_RULES
 from sim.race.result import LapRecord, RaceResult, completed_lap, now_iso
 from sim.race.rules import RaceRules, score_laps
+from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
 from sim.tracks.track import Track
 
 # simapp's START_POS_OFFSET: how far behind the car before it each car starts.
@@ -50,6 +52,15 @@ GRID_GAP = 0.75
 MIN_CARS = 2
 MAX_CARS = 6
 _EPS = 1e-9
+
+_PREPARE = STATUS_CODE[TRACE_STATUSES[0]]
+_IN_PROGRESS = STATUS_CODE["in_progress"]
+_OFF_TRACK = STATUS_CODE["off_track"]
+_PAUSE = STATUS_CODE[PAUSE_STATUS]
+_LAP_COMPLETE = STATUS_CODE["lap_complete"]
+_REVERSED = STATUS_CODE["reversed"]
+_CRASHED = STATUS_CODE["crashed"]
+_TIME_UP = STATUS_CODE["time_up"]
 
 
 class HeadToHeadError(RemedyError):
@@ -133,6 +144,13 @@ class _Car:
     hold_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
     hold_travelled: float = 0.0
     finished_at: float | None = None
+    trace: TraceRecorder | None = None
+    # This step, for its trace row: what the car did and what came of it.
+    status: int = _PREPARE
+    steering: float = 0.0
+    throttle: float = 0.0
+    action: int = -1
+    pause: float = 0.0
 
 
 class HeadToHeadRace:
@@ -146,6 +164,7 @@ class HeadToHeadRace:
         *,
         seed: int = 0,
         car: CarSpec = DEEPRACER_CAR,
+        keep_trace: bool = False,
     ) -> None:
         if not MIN_CARS <= len(entries) <= MAX_CARS:
             raise HeadToHeadError(
@@ -172,6 +191,11 @@ class HeadToHeadRace:
             sim.objects = rivals
             entry.driver.reset(sim)
         self.steps = 0
+        if keep_trace:  # a sim-trace for each car, as simapp writes one for each agent
+            rows = round(rules.window_seconds / STEP_SECONDS) + 64
+            for entered in self.cars:
+                entered.trace = TraceRecorder(rows, self.length)
+                self._record(entered)
         self.incidents: list[Incident] = []
         self._order = self.running_order()
         # (clock, distance) of every car at every step: for the gaps at the end.
@@ -245,9 +269,14 @@ class HeadToHeadRace:
                 float(sim.fleet.x[0]),
                 float(sim.fleet.y[0]),
             )
+            car.pause = 0.0
             if action is None:  # held: it stands, and is put back where it was frozen
+                car.steering = car.throttle = 0.0
+                car.action = -1
                 sim.apply(np.zeros(1), np.zeros(1))
             else:
+                car.steering, car.throttle = float(action.steering_deg[0]), float(action.speed[0])
+                car.action = int(action.action_index[0])
                 sim.apply(action.steering_deg[:1], action.speed[:1])
         start = self.clock
         self.steps += 1
@@ -263,6 +292,8 @@ class HeadToHeadRace:
         for rivals in self.rivals:
             rivals.follow()  # where the put-back cars stand now
         self._update_standing()
+        for car in self.cars:
+            self._record(car)
         self._note_overtakes()
         self._distances.append(self.distances())
         self._clocks.append(self.clock)
@@ -292,6 +323,7 @@ class HeadToHeadRace:
         x, y, yaw = car.hold_pose
         sim.put(0, x, y, yaw, 0.0)
         sim.continue_episode(0, car.hold_travelled)
+        car.status = _PAUSE
         car.hold_left -= STEP_SECONDS
         if car.hold_left < _EPS:
             car.hold_left = 0.0
@@ -302,25 +334,56 @@ class HeadToHeadRace:
         completed, then a crash, then off track, then turned round."""
         sim = self.sims[car.index]
         status = sim.status[0] if sim.terminal[0] != Outcome.RUNNING else None
+        car.status = _IN_PROGRESS
         if status == EpisodeStatus.LAP_COMPLETE:
+            car.status = _LAP_COMPLETE
             self._lap_complete(car, start, before.travelled)
         elif crashed_into:
+            car.status = _CRASHED
             car.lap_crashes += 1
             for other in crashed_into:
                 self.incidents.append(Incident(self.clock, "crash", car.index, other))
             sim.continue_episode(0, float(sim.travelled[0]))  # held where it is
             self._penalise(car, self.rules.collision_penalty_seconds)
         elif status == EpisodeStatus.OFF_TRACK:
+            car.status = _OFF_TRACK
             car.lap_offtracks += 1
             car.total_offtracks += 1
             self._put_back(car, before)
             self._penalise(car, self.rules.penalty_seconds)
         elif status == EpisodeStatus.REVERSED:
+            car.status = _REVERSED
             car.lap_reversals += 1
             self._put_back(car, before)
             self._penalise(car, self.rules.penalty_seconds)
         elif status is not None:  # nothing else is switched on in a race
             sim.continue_episode(0, float(sim.travelled[0]))
+
+    def _record(self, car: _Car) -> None:
+        """The car's sim-trace row for this step (the time trial's columns)."""
+        if car.trace is None:
+            return
+        sim = self.sims[car.index]
+        fleet = sim.fleet
+        heading = math.degrees(float(fleet.yaw[0]))
+        progress = float(sim.travelled[0]) / self.length * 100.0
+        car.trace.add(
+            t=min(self.clock, self.rules.window_seconds),
+            x=float(fleet.x[0]),
+            y=float(fleet.y[0]),
+            heading=180.0 - (180.0 - heading) % 360.0,
+            speed=0.0 if car.status == _PAUSE else float(fleet.speed[0]),
+            steering=car.steering,
+            throttle=car.throttle,
+            action=car.action,
+            status=car.status,
+            lap=len(car.laps) + (0 if car.status == _LAP_COMPLETE else 1),
+            offtrack=car.status == _OFF_TRACK,
+            all_wheels_on=bool(sim.wheels_on[0].all()),
+            progress=min(max(progress, 0.0), 100.0),
+            waypoint=int(sim.segment[0]),
+            pause=car.pause,
+        )
 
     def _lap_complete(self, car: _Car, start: float, before_travelled: float) -> None:
         sim = self.sims[car.index]
@@ -363,7 +426,7 @@ class HeadToHeadRace:
         sim = self.sims[car.index]
         fleet = sim.fleet
         car.lap_penalty += seconds
-        car.hold_left = seconds
+        car.hold_left = car.pause = seconds
         car.hold_pose = (float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0]))
         car.hold_travelled = float(sim.travelled[0])
         if seconds > 0.0:
@@ -434,6 +497,12 @@ class HeadToHeadRace:
 
     def _car_result(self, car: _Car) -> RaceResult:
         laps = tuple(car.laps)
+        trace = None
+        if car.trace is not None:
+            trace = car.trace.finish()
+            # The race ended with the car on track: DeepRacer's "time up".
+            if len(trace) > 1 and int(trace.status[-1]) in (_IN_PROGRESS, _PAUSE):
+                trace.status[-1] = _TIME_UP
         return RaceResult(
             result_id=new_id(),
             racer=car.entry.racer,
@@ -447,6 +516,7 @@ class HeadToHeadRace:
             scoring=score_laps(laps, self.rules),
             total_offtracks=car.total_offtracks,
             started_at=self.started_at,
+            trace=trace,
         )
 
 
@@ -457,9 +527,11 @@ def run_head_to_head(
     *,
     seed: int = 0,
     car: CarSpec = DEEPRACER_CAR,
+    keep_trace: bool = False,
 ) -> HeadToHeadResult:
-    """Run a whole head-to-head race as fast as the machine can."""
-    race = HeadToHeadRace(track, rules, entries, seed=seed, car=car)
+    """Run a whole head-to-head race as fast as the machine can; `keep_trace` keeps each
+    car's sim-trace with its result."""
+    race = HeadToHeadRace(track, rules, entries, seed=seed, car=car, keep_trace=keep_trace)
     while not race.finished:
         race.tick()
         let_other_threads_run(race.steps)

@@ -59,7 +59,6 @@ def test_json_gives_every_car_its_place_laps_and_gap(capsys: pytest.CaptureFixtu
         ((), "takes 2 to 6 models, not 1"),
         (("reference",) * 6, "takes 2 to 6 models, not 7"),
         (("reference", "--record"), "--record: a league does not record head-to-head races yet"),
-        (("reference", "--trace-dir", "traces"), "--trace-dir: head-to-head races write no"),
         (("reference", "--racer", "Ada"), "--racer: each car of a head-to-head race is its"),
     ],
 )
@@ -105,3 +104,41 @@ def test_a_car_of_a_head_to_head_race_is_not_recorded_as_a_time_trial() -> None:
     race = run_head_to_head(track, HEAD_TO_HEAD_RULES, [Entry("a", driver), Entry("b", driver)])
     with open_league() as league, pytest.raises(LeagueError, match="head-to-head race"):
         record_race(league, race.winner.result)
+
+
+def test_a_garage_model_races_itself_in_one_batch(capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("torch")
+    from sim.garage.options import new_model
+    from sim.training.policy import build_network, save_policy
+
+    folder = new_model("twin")
+    save_policy(folder.policy_file, build_network(folder.metadata()))
+    args = ("--race", "twin", "twin", *H2H, "--window", "20", "--json")
+    code, out, err = run_cli(capsys, *args)
+    assert code == 0, err
+    cars = json.loads(out)["cars"]
+    assert [car["model_name"] for car in cars] == ["twin", "twin"]
+    assert sorted(car["grid"] for car in cars) == [1, 2]
+    _, again, _ = run_cli(capsys, *args)
+    assert [car["distance_m"] for car in json.loads(again)["cars"]] == [
+        car["distance_m"] for car in cars
+    ]
+
+
+def test_trace_dir_writes_a_sim_trace_for_each_car(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    from sim.race.trace import STATUS_CODE, RaceTrace
+
+    folder = tmp_path / "traces"
+    args = ("--race", "reference", "reference", *H2H, "--trace-dir", str(folder), "--json")
+    code, out, err = run_cli(capsys, *args)
+    assert code == 0, err
+    cars = json.loads(out)["cars"]
+    for car in cars:
+        trace = RaceTrace.read_csv(Path(car["trace_file"]))
+        assert Path(car["trace_file"]).parent == folder
+        # One row on the grid and one a step until the winner's last lap ended the race.
+        assert len(trace) == round(json.loads(out)["clock_seconds"] * 15) + 1
+        laps_done = int((trace.status == STATUS_CODE["lap_complete"]).sum())
+        assert laps_done == car["laps_completed"]
