@@ -50,7 +50,18 @@ from sim.physics.simulation import EpisodeRules, Outcome, TrackSimulation, let_o
 from sim.race.driver import Driver, reference_driver
 from sim.race.result import LapRecord, RaceResult, completed_lap, now_iso
 from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps
-from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
+from sim.race.trace import (
+    CRASHED,
+    IN_PROGRESS,
+    LAP_COMPLETE,
+    OFF_TRACK,
+    PAUSE,
+    PREPARE,
+    REVERSED,
+    TIME_UP,
+    TRACE_STATUSES,
+    TraceRecorder,
+)
 from sim.tracks.track import Track
 
 # DeepRacer's reversed rule stays; immobilized and the step limit are switched off (the
@@ -58,15 +69,6 @@ from sim.tracks.track import Track
 RACE_EPISODE_RULES = EpisodeRules(immobilized_steps=2**62, max_steps=2**62)
 # Clock comparisons: far below a microsecond, far above float noise on a 1-hour clock.
 _EPS = 1e-9
-
-_PREPARE = STATUS_CODE[TRACE_STATUSES[0]]
-_IN_PROGRESS = STATUS_CODE["in_progress"]
-_OFF_TRACK = STATUS_CODE["off_track"]
-_PAUSE = STATUS_CODE[PAUSE_STATUS]
-_LAP_COMPLETE = STATUS_CODE["lap_complete"]
-_REVERSED = STATUS_CODE["reversed"]
-_CRASHED = STATUS_CODE["crashed"]
-_TIME_UP = STATUS_CODE["time_up"]
 
 
 @dataclass(frozen=True)
@@ -138,7 +140,7 @@ class _Race:
         self.laps: list[LapRecord] = []
         self.laps_view: tuple[LapRecord, ...] = ()
         self.total_offtracks = 0
-        self.status = _PREPARE
+        self.status = PREPARE
         self.offtrack = False
         self.trace = (
             TraceRecorder(round(self.window / STEP_SECONDS) + 64, self.length)
@@ -171,7 +173,7 @@ class _Race:
             self.sim.objects.pass_time(0, served)  # the bots drive on
         if self.hold_left < _EPS:
             self.hold_left = 0.0
-        self.status = _PAUSE
+        self.status = PAUSE
         self.offtrack = False
         self._record(self.lap)
 
@@ -192,7 +194,7 @@ class _Race:
         self.offtrack = False
         pause = 0.0
         if outcome == Outcome.RUNNING:
-            self.status = _IN_PROGRESS
+            self.status = IN_PROGRESS
         else:
             status = sim.status[0]
             if status == EpisodeStatus.LAP_COMPLETE:
@@ -202,18 +204,18 @@ class _Race:
                 self.lap_offtracks += 1
                 self.total_offtracks += 1
                 pause = self.rules.penalty_seconds
-                self.status = _OFF_TRACK
+                self.status = OFF_TRACK
             elif status == EpisodeStatus.CRASHED:
                 pause = self.rules.collision_penalty_seconds
                 self.lap_crashes += 1
-                self.status = _CRASHED
+                self.status = CRASHED
             elif status == EpisodeStatus.REVERSED:
                 pause = self.rules.penalty_seconds
                 self.lap_reversals += 1
-                self.status = _REVERSED
+                self.status = REVERSED
             else:  # nothing else is switched on; drive on rather than stall the race
                 sim.continue_episode(0, float(sim.travelled[0]))
-                self.status = _IN_PROGRESS
+                self.status = IN_PROGRESS
         self._record(
             lap,
             steering=steering,
@@ -222,7 +224,7 @@ class _Race:
             action=index,
             pause=pause,
         )
-        if self.status in (_OFF_TRACK, _CRASHED, _REVERSED):
+        if self.status in (OFF_TRACK, CRASHED, REVERSED):
             self._put_back(before_s, before_x, before_y, before_travelled)
             self._penalise(pause)
 
@@ -236,7 +238,7 @@ class _Race:
         fraction = (self.length - before_travelled) / max(after - before_travelled, 1e-12)
         crossing = start + min(max(fraction, 0.0), 1.0) * STEP_SECONDS
         sim.continue_episode(0, after - self.length)
-        self.status = _LAP_COMPLETE
+        self.status = LAP_COMPLETE
         if crossing > self.window + _EPS:
             return  # the window closed before the line: the lap does not count
         lap = completed_lap(
@@ -263,7 +265,7 @@ class _Race:
         (`s_ahead`) and its centre were a step before it left; progress follows it."""
         sim = self.sim
         pose = None
-        if self.status == _CRASHED and sim.objects is not None:
+        if self.status == CRASHED and sim.objects is not None:
             behind = sim.objects.reset_behind(0, float(sim.s[0]))
             if behind is not None:  # DeepRacer: behind the box it hit, in the other lane
                 pose = (behind.x, behind.y, behind.heading)
@@ -307,7 +309,7 @@ class _Race:
         sim = self.sim
         fleet = sim.fleet
         heading = math.degrees(float(fleet.yaw[0]))
-        held = self.status == _PAUSE or self.hold_left > 0.0
+        held = self.status == PAUSE or self.hold_left > 0.0
         return RaceTick(
             step=self.row,
             clock=min(self.clock, self.window),
@@ -345,8 +347,8 @@ class _Race:
         if self.trace is not None:
             trace = self.trace.finish()
             # The window closed on the last row: DeepRacer's "time up".
-            if len(trace) > 1 and int(trace.status[-1]) in (_IN_PROGRESS, _PAUSE):
-                trace.status[-1] = _TIME_UP
+            if len(trace) > 1 and int(trace.status[-1]) in (IN_PROGRESS, PAUSE):
+                trace.status[-1] = TIME_UP
         laps = tuple(self.laps)
         return RaceResult(
             result_id=new_id(),

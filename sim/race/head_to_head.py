@@ -44,7 +44,17 @@ from sim.race.driver import Driver, DriverAction
 from sim.race.engine import RACE_EPISODE_RULES
 from sim.race.result import LapRecord, RaceResult, completed_lap, now_iso
 from sim.race.rules import RaceRules, score_laps
-from sim.race.trace import PAUSE_STATUS, STATUS_CODE, TRACE_STATUSES, TraceRecorder
+from sim.race.trace import (
+    CRASHED,
+    IN_PROGRESS,
+    LAP_COMPLETE,
+    OFF_TRACK,
+    PAUSE,
+    PREPARE,
+    REVERSED,
+    TIME_UP,
+    TraceRecorder,
+)
 from sim.tracks.track import Track
 
 # simapp's START_POS_OFFSET: how far behind the car before it each car starts.
@@ -52,15 +62,6 @@ GRID_GAP = 0.75
 MIN_CARS = 2
 MAX_CARS = 6
 _EPS = 1e-9
-
-_PREPARE = STATUS_CODE[TRACE_STATUSES[0]]
-_IN_PROGRESS = STATUS_CODE["in_progress"]
-_OFF_TRACK = STATUS_CODE["off_track"]
-_PAUSE = STATUS_CODE[PAUSE_STATUS]
-_LAP_COMPLETE = STATUS_CODE["lap_complete"]
-_REVERSED = STATUS_CODE["reversed"]
-_CRASHED = STATUS_CODE["crashed"]
-_TIME_UP = STATUS_CODE["time_up"]
 
 
 class HeadToHeadError(RemedyError):
@@ -146,7 +147,7 @@ class _Car:
     finished_at: float | None = None
     trace: TraceRecorder | None = None
     # This step, for its trace row: what the car did and what came of it.
-    status: int = _PREPARE
+    status: int = PREPARE
     steering: float = 0.0
     throttle: float = 0.0
     action: int = -1
@@ -323,7 +324,7 @@ class HeadToHeadRace:
         x, y, yaw = car.hold_pose
         sim.put(0, x, y, yaw, 0.0)
         sim.continue_episode(0, car.hold_travelled)
-        car.status = _PAUSE
+        car.status = PAUSE
         car.hold_left -= STEP_SECONDS
         if car.hold_left < _EPS:
             car.hold_left = 0.0
@@ -334,25 +335,25 @@ class HeadToHeadRace:
         completed, then a crash, then off track, then turned round."""
         sim = self.sims[car.index]
         status = sim.status[0] if sim.terminal[0] != Outcome.RUNNING else None
-        car.status = _IN_PROGRESS
+        car.status = IN_PROGRESS
         if status == EpisodeStatus.LAP_COMPLETE:
-            car.status = _LAP_COMPLETE
+            car.status = LAP_COMPLETE
             self._lap_complete(car, start, before.travelled)
         elif crashed_into:
-            car.status = _CRASHED
+            car.status = CRASHED
             car.lap_crashes += 1
             for other in crashed_into:
                 self.incidents.append(Incident(self.clock, "crash", car.index, other))
             sim.continue_episode(0, float(sim.travelled[0]))  # held where it is
             self._penalise(car, self.rules.collision_penalty_seconds)
         elif status == EpisodeStatus.OFF_TRACK:
-            car.status = _OFF_TRACK
+            car.status = OFF_TRACK
             car.lap_offtracks += 1
             car.total_offtracks += 1
             self._put_back(car, before)
             self._penalise(car, self.rules.penalty_seconds)
         elif status == EpisodeStatus.REVERSED:
-            car.status = _REVERSED
+            car.status = REVERSED
             car.lap_reversals += 1
             self._put_back(car, before)
             self._penalise(car, self.rules.penalty_seconds)
@@ -372,13 +373,13 @@ class HeadToHeadRace:
             x=float(fleet.x[0]),
             y=float(fleet.y[0]),
             heading=180.0 - (180.0 - heading) % 360.0,
-            speed=0.0 if car.status == _PAUSE else float(fleet.speed[0]),
+            speed=0.0 if car.status == PAUSE else float(fleet.speed[0]),
             steering=car.steering,
             throttle=car.throttle,
             action=car.action,
             status=car.status,
-            lap=len(car.laps) + (0 if car.status == _LAP_COMPLETE else 1),
-            offtrack=car.status == _OFF_TRACK,
+            lap=len(car.laps) + (0 if car.status == LAP_COMPLETE else 1),
+            offtrack=car.status == OFF_TRACK,
             all_wheels_on=bool(sim.wheels_on[0].all()),
             progress=min(max(progress, 0.0), 100.0),
             waypoint=int(sim.segment[0]),
@@ -501,8 +502,8 @@ class HeadToHeadRace:
         if car.trace is not None:
             trace = car.trace.finish()
             # The race ended with the car on track: DeepRacer's "time up".
-            if len(trace) > 1 and int(trace.status[-1]) in (_IN_PROGRESS, _PAUSE):
-                trace.status[-1] = _TIME_UP
+            if len(trace) > 1 and int(trace.status[-1]) in (IN_PROGRESS, PAUSE):
+                trace.status[-1] = TIME_UP
         return RaceResult(
             result_id=new_id(),
             racer=car.entry.racer,

@@ -49,6 +49,15 @@ TRACE_STATUSES: Final[tuple[str, ...]] = (
     trace_status(EpisodeStatus.TIME_UP),
 )
 STATUS_CODE: Final[dict[str, int]] = {name: code for code, name in enumerate(TRACE_STATUSES)}
+# The codes the race engines write (`sim.race.engine`, `sim.race.head_to_head`).
+PREPARE: Final = STATUS_CODE[PREPARE_STATUS]
+IN_PROGRESS: Final = STATUS_CODE["in_progress"]
+OFF_TRACK: Final = STATUS_CODE["off_track"]
+PAUSE: Final = STATUS_CODE[PAUSE_STATUS]
+LAP_COMPLETE: Final = STATUS_CODE["lap_complete"]
+REVERSED: Final = STATUS_CODE["reversed"]
+CRASHED: Final = STATUS_CODE["crashed"]
+TIME_UP: Final = STATUS_CODE["time_up"]
 
 
 class TraceError(RemedyError):
