@@ -5,6 +5,7 @@ and the fixed points (a driver against itself, twice the same race)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -21,7 +22,7 @@ from sim.race.head_to_head import (
     HeadToHeadResult,
     run_head_to_head,
 )
-from sim.race.rules import HEAD_TO_HEAD_RULES
+from sim.race.rules import HEAD_TO_HEAD_RULES, RaceRules
 from sim.sensors.observations import Observer
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
@@ -32,11 +33,9 @@ def track() -> Track:
     return resolve_track("reinvent_base")
 
 
-def _race(track: Track, cars: int) -> HeadToHeadResult:
+def _race(track: Track, cars: int, rules: RaceRules = HEAD_TO_HEAD_RULES) -> HeadToHeadResult:
     driver = reference_driver(track)
-    return run_head_to_head(
-        track, HEAD_TO_HEAD_RULES, [Entry(f"r{i}", driver) for i in range(cars)]
-    )
+    return run_head_to_head(track, rules, [Entry(f"r{i}", driver) for i in range(cars)])
 
 
 def _summary(result: HeadToHeadResult) -> list[tuple[int, tuple[float, ...], int]]:
@@ -180,3 +179,22 @@ def test_a_race_takes_two_to_six_cars(track: Track) -> None:
     for count in (1, 7):
         with pytest.raises(HeadToHeadError, match="2 to 6 cars"):
             HeadToHeadRace(track, HEAD_TO_HEAD_RULES, [Entry("a", driver)] * count)
+
+
+def test_without_a_lap_count_the_window_decides_most_laps_then_best_lap(track: Track) -> None:
+    race = _race(track, 2, replace(HEAD_TO_HEAD_RULES, lap_count=None, window_seconds=30.0))
+    assert race.clock == pytest.approx(30.0)
+    assert all(finish.finished_at is None for finish in race.cars)
+    laps = [finish.laps_completed for finish in race.cars]
+    assert laps == sorted(laps, reverse=True) and laps[0] >= 4
+    if laps[0] == laps[1]:
+        best = [finish.result.best_lap for finish in race.cars]
+        assert best[0] is not None and best[1] is not None
+        assert best[0].time_seconds <= best[1].time_seconds
+
+
+def test_the_race_ends_when_the_first_car_completes_one_lap(track: Track) -> None:
+    race = _race(track, 3, replace(HEAD_TO_HEAD_RULES, lap_count=1))
+    assert race.winner.laps_completed == 1
+    assert [finish.laps_completed for finish in race.cars[1:]] == [0, 0]
+    assert race.clock < 10.0
