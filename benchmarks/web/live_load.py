@@ -14,7 +14,9 @@ Figures:
 - the timekeeper's key latency (p50 / p95 / max), from the press to the screen update
   showing its effect;
 - how far the viewers are behind: from each Capture Lap key to the moment each viewer's
-  stream shows the new lap (p50 / p95 / max over every viewer and lap);
+  stream shows the new lap (p50 / p95 / max over every viewer and lap), and how many laps
+  a viewer never saw because the next heat replaced the heat first (a heat's last lap,
+  when the next heat opens within one poll of the live file);
 - the server's CPU over the keys, as a share of one core, and its resident memory when
   the viewers had connected and at the end;
 - viewers connected and events each received.
@@ -96,7 +98,7 @@ async def _viewers(host: str, port: int, path: str, count: int) -> dict[str, Any
     captured = [(int(laps), float(at)) for laps, at in json.loads(line or "[]")]
     deadline = time.monotonic() + SEEN_SECONDS
     while time.monotonic() < deadline and not all(
-        len(_delays(captured, seen)) == len(captured) for seen in seens
+        _accounted(captured, seen) == len(captured) for seen in seens
     ):
         await asyncio.sleep(0.05)
     for task in tasks:
@@ -193,6 +195,9 @@ def run(viewers: int, keys: int) -> dict[str, Any]:
         "keys": keys,
         "key_latency_ms": percentiles(latencies),
         "viewers_behind_ms": percentiles(_behind(captured, result.get("seen", []))),
+        "laps_superseded": sum(
+            len(_sightings(captured, seen)[1]) for seen in result.get("seen", [])
+        ),
         "server_core_share": round(cpu / wall, 3),
         "server_rss_mb": {"viewers_connected": round(rss_connected, 1), "end": round(rss_end, 1)},
         "events_per_viewer": percentiles([float(e) for e in result.get("events", [])]),
@@ -202,20 +207,33 @@ def run(viewers: int, keys: int) -> dict[str, Any]:
 
 def _behind(captured: list[tuple[int, float]], seens: list[list[list[float]]]) -> list[float]:
     """For each Capture Lap key and each viewer: how long until that viewer saw the lap."""
-    return [delay for seen in seens for delay in _delays(captured, seen)]
+    return [delay for seen in seens for delay in _sightings(captured, seen)[0]]
 
 
-def _delays(captured: list[tuple[int, float]], seen: Sequence[Sequence[float]]) -> list[float]:
-    """For each Capture Lap key, how long until one viewer saw the lap. A heat's lap counts
-    start again at each new heat, so each key is matched with the first sighting of its
-    count after it."""
+def _accounted(captured: list[tuple[int, float]], seen: Sequence[Sequence[float]]) -> int:
+    """How many of the captured laps one viewer has seen or will never see."""
+    delays, superseded = _sightings(captured, seen)
+    return len(delays) + len(superseded)
+
+
+def _sightings(
+    captured: list[tuple[int, float]], seen: Sequence[Sequence[float]]
+) -> tuple[list[float], list[int]]:
+    """For one viewer: how long after each Capture Lap key it saw the lap, and the laps it
+    never saw because the stream had moved on to the next heat first (a heat's last lap,
+    ended and replaced by the next heat within one poll of the file: the night's standings
+    show it). A heat's lap counts start again at each new heat, so each key is matched
+    with the first sighting of its count after it."""
     delays: list[float] = []
+    superseded: list[int] = []
     sightings = sorted((at, int(laps)) for laps, at in seen)
     for laps, pressed in captured:
         shown = next((at for at, n in sightings if n == laps and at >= pressed), None)
         if shown is not None:
             delays.append((shown - pressed) * 1000.0)
-    return delays
+        elif any(n < laps and at >= pressed for at, n in sightings):
+            superseded.append(laps)
+    return delays, superseded
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -263,6 +281,10 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"  server memory       {rss['viewers_connected']:.1f} MB with the viewers "
         f"connected, {rss['end']:.1f} MB at the end (target: flat)"
+    )
+    print(
+        f"  laps superseded     {report['laps_superseded']} (a heat's last lap, replaced by "
+        "the next heat before a viewer's stream showed it)"
     )
     print(f"  events per viewer   p50 {report['events_per_viewer']['p50']:.0f}")
     return 0

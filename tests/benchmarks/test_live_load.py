@@ -26,8 +26,10 @@ def test_a_short_run_reports_every_figure(tmp_path: Path) -> None:
     assert run.returncode == 0, run.stderr
     report = json.loads(run.stdout)
     assert report["key_latency_ms"]["count"] == 6
-    # Three laps captured, each seen by all four viewers.
-    assert report["viewers_behind_ms"]["count"] == 12
+    # Three laps captured, each seen by all four viewers, unless the next heat replaced the
+    # heat before a stream showed its last lap (then for every viewer: they share polls).
+    seen, superseded = report["viewers_behind_ms"]["count"], report["laps_superseded"]
+    assert seen + superseded == 12 and superseded in (0, 4)
     assert report["viewers_behind_ms"]["max"] > 0
     assert 0 <= report["server_core_share"] < 2
     assert report["server_rss_mb"]["end"] > 0 and report["events_per_viewer"]["p50"] >= 3
