@@ -58,7 +58,6 @@ from sim.race.trace import (
     PAUSE,
     PREPARE,
     REVERSED,
-    TIME_UP,
     TRACE_STATUSES,
     TraceRecorder,
 )
@@ -343,12 +342,7 @@ class _Race:
         )
 
     def result(self) -> RaceResult:
-        trace = None
-        if self.trace is not None:
-            trace = self.trace.finish()
-            # The window closed on the last row: DeepRacer's "time up".
-            if len(trace) > 1 and int(trace.status[-1]) in (IN_PROGRESS, PAUSE):
-                trace.status[-1] = TIME_UP
+        trace = None if self.trace is None else self.trace.finish_race()
         laps = tuple(self.laps)
         return RaceResult(
             result_id=new_id(),

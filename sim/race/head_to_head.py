@@ -52,7 +52,6 @@ from sim.race.trace import (
     PAUSE,
     PREPARE,
     REVERSED,
-    TIME_UP,
     TraceRecorder,
 )
 from sim.tracks.track import Track
@@ -235,7 +234,7 @@ class HeadToHeadRace:
 
     def running_order(self) -> list[int]:
         """Grid indices, leader first: finished cars by when, then by distance."""
-        distances = self.distances()
+        distances = self.grid.standing  # `distances()`, kept current by every step
         return sorted(
             range(len(self.cars)),
             key=lambda k: (
@@ -296,7 +295,7 @@ class HeadToHeadRace:
         for car in self.cars:
             self._record(car)
         self._note_overtakes()
-        self._distances.append(self.distances())
+        self._distances.append(self.grid.standing)
         self._clocks.append(self.clock)
 
     def _actions(self, driving: list[_Car]) -> dict[int, DriverAction]:
@@ -498,12 +497,7 @@ class HeadToHeadRace:
 
     def _car_result(self, car: _Car) -> RaceResult:
         laps = tuple(car.laps)
-        trace = None
-        if car.trace is not None:
-            trace = car.trace.finish()
-            # The race ended with the car on track: DeepRacer's "time up".
-            if len(trace) > 1 and int(trace.status[-1]) in (IN_PROGRESS, PAUSE):
-                trace.status[-1] = TIME_UP
+        trace = None if car.trace is None else car.trace.finish_race()
         return RaceResult(
             result_id=new_id(),
             racer=car.entry.racer,

@@ -263,6 +263,14 @@ class TraceRecorder:
         self._waypoint[i] = waypoint
         self._n = i + 1
 
+    def finish_race(self) -> RaceTrace:
+        """The trace of a race that has ended: a last row with the car still on track (or
+        held) is DeepRacer's "time up"."""
+        trace = self.finish()
+        if len(trace) > 1 and int(trace.status[-1]) in (IN_PROGRESS, PAUSE):
+            trace.status[-1] = TIME_UP
+        return trace
+
     def finish(self) -> RaceTrace:
         n = self._n
         f32 = self._f32[:n]
