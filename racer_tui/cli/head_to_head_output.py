@@ -11,6 +11,8 @@ from typing import Any
 from rich.table import Table
 from rich.text import Text
 
+from racer_tui.text.clocks import clock_text
+from racer_tui.text.head_to_head import car_name, incident_sentence
 from sim.race.head_to_head import CarFinish, HeadToHeadResult
 from sim.tracks.track import Track
 
@@ -20,10 +22,7 @@ def _seconds(value: float | None) -> str:
 
 
 def _name(finish: CarFinish) -> str:
-    result = finish.result
-    if result.racer == result.model_name:
-        return result.racer
-    return f"{result.racer} ({result.model_name})"
+    return car_name(finish.result.racer, finish.result.model_name)
 
 
 def _crashes(finish: CarFinish) -> int:
@@ -65,15 +64,10 @@ def head_to_head_table(result: HeadToHeadResult, track: Track) -> Table:
 def incident_lines(result: HeadToHeadResult) -> list[str]:
     """Crashes and overtakes, in race order, as a commentator would say them."""
     names = {finish.car: f"#{finish.car + 1} {_name(finish)}" for finish in result.cars}
-    lines = []
-    for incident in result.incidents:
-        car, other = names[incident.car], names[incident.other]
-        clock = f"{int(incident.clock // 60)}:{incident.clock % 60:06.3f}"
-        if incident.kind == "crash":
-            lines.append(f"{clock}  {car} ran into {other} and is held")
-        else:
-            lines.append(f"{clock}  {car} passed {other}")
-    return lines
+    return [
+        f"{clock_text(incident.clock)}  {incident_sentence(incident, names)}"
+        for incident in result.incidents
+    ]
 
 
 def head_to_head_summary(result: HeadToHeadResult) -> str:

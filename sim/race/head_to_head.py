@@ -26,6 +26,7 @@ the same race.
 from __future__ import annotations
 
 import math
+from bisect import bisect_left
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -128,7 +129,7 @@ class _Before:
 
 
 @dataclass
-class _Car:
+class CarInRace:
     """One car's race so far."""
 
     index: int
@@ -184,7 +185,7 @@ class HeadToHeadRace:
             for _ in range(n)
         ]
         self.grid = Grid.of([sim.fleet for sim in self.sims])
-        self.cars = [_Car(index, entry) for index, entry in enumerate(entries)]
+        self.cars = [CarInRace(index, entry) for index, entry in enumerate(entries)]
         self._line_up()
         self.rivals = [RivalField(track, k, self.grid) for k in range(n)]
         for sim, rivals, entry in zip(self.sims, self.rivals, entries, strict=True):
@@ -198,9 +199,9 @@ class HeadToHeadRace:
                 self._record(entered)
         self.incidents: list[Incident] = []
         self._order = self.running_order()
-        # (clock, distance) of every car at every step: for the gaps at the end.
-        self._distances: list[np.ndarray] = [self.distances()]
-        self._clocks: list[float] = [0.0]
+        # The furthest each car had got by each step (a put-back car may lose ground):
+        # when a car first reached a distance, for the gaps.
+        self._reach: list[np.ndarray] = [self.distances()]
 
     def _line_up(self) -> None:
         """simapp's grid (see the module docstring)."""
@@ -295,13 +296,12 @@ class HeadToHeadRace:
         for car in self.cars:
             self._record(car)
         self._note_overtakes()
-        self._distances.append(self.grid.standing)
-        self._clocks.append(self.clock)
+        self._reach.append(np.maximum(self._reach[-1], self.grid.standing))
 
-    def _actions(self, driving: list[_Car]) -> dict[int, DriverAction]:
+    def _actions(self, driving: list[CarInRace]) -> dict[int, DriverAction]:
         """Each driving car's action; a driver that can (`act_many`: a policy) acts for
         all its cars in one batch."""
-        by_driver: dict[int, list[_Car]] = {}
+        by_driver: dict[int, list[CarInRace]] = {}
         for car in driving:
             by_driver.setdefault(id(car.entry.driver), []).append(car)
         actions: dict[int, DriverAction] = {}
@@ -317,7 +317,7 @@ class HeadToHeadRace:
                     actions[car.index] = driver.act(sim)
         return actions
 
-    def _hold(self, car: _Car) -> None:
+    def _hold(self, car: CarInRace) -> None:
         """A held car stays where it was frozen (simapp resets its pose every step)."""
         sim = self.sims[car.index]
         x, y, yaw = car.hold_pose
@@ -329,7 +329,9 @@ class HeadToHeadRace:
             car.hold_left = 0.0
             self.grid.ghost[car.index] = False
 
-    def _judge(self, car: _Car, start: float, before: _Before, crashed_into: list[int]) -> None:
+    def _judge(
+        self, car: CarInRace, start: float, before: _Before, crashed_into: list[int]
+    ) -> None:
         """What the step did to a car that was driving, in DeepRacer's precedence: a lap
         completed, then a crash, then off track, then turned round."""
         sim = self.sims[car.index]
@@ -359,7 +361,7 @@ class HeadToHeadRace:
         elif status is not None:  # nothing else is switched on in a race
             sim.continue_episode(0, float(sim.travelled[0]))
 
-    def _record(self, car: _Car) -> None:
+    def _record(self, car: CarInRace) -> None:
         """The car's sim-trace row for this step (the time trial's columns)."""
         if car.trace is None:
             return
@@ -385,7 +387,7 @@ class HeadToHeadRace:
             pause=car.pause,
         )
 
-    def _lap_complete(self, car: _Car, start: float, before_travelled: float) -> None:
+    def _lap_complete(self, car: CarInRace, start: float, before_travelled: float) -> None:
         sim = self.sims[car.index]
         after = float(sim.travelled[0])
         fraction = (self.length - before_travelled) / max(after - before_travelled, 1e-12)
@@ -410,7 +412,7 @@ class HeadToHeadRace:
         if self.rules.lap_count is not None and len(car.laps) >= self.rules.lap_count:
             car.finished_at = crossing
 
-    def _put_back(self, car: _Car, before: _Before) -> None:
+    def _put_back(self, car: CarInRace, before: _Before) -> None:
         """Where DeepRacer puts a car back after an off-track or reversing: as far along as
         its look-ahead point was a step before, on the nearer lane."""
         put_back(
@@ -422,7 +424,7 @@ class HeadToHeadRace:
             travelled=before.travelled,
         )
 
-    def _penalise(self, car: _Car, seconds: float) -> None:
+    def _penalise(self, car: CarInRace, seconds: float) -> None:
         sim = self.sims[car.index]
         fleet = sim.fleet
         car.lap_penalty += seconds
@@ -483,19 +485,24 @@ class HeadToHeadRace:
         return sorted(range(len(self.cars)), key=lambda k: (-len(self.cars[k].laps), best(k), k))
 
     def _gap(self, leader: int, k: int) -> float | None:
-        """How long before car `k` ended the leader was where it ended: the gap a timing
-        screen shows. None when the leader never was there (it started behind)."""
+        """The gap at the end (`gap_seconds`, to when car `k` finished or the race did)."""
+        ended = self.cars[k].finished_at
+        return self.gap_seconds(
+            leader, k, ended if ended is not None else min(self.clock, self.rules.window_seconds)
+        )
+
+    def gap_seconds(self, leader: int, k: int, at: float | None = None) -> float | None:
+        """How long before `at` (now by default) the leader was where car `k` is: the gap
+        a timing screen shows. None when the leader never was there (it started behind)."""
         if k == leader:
             return 0.0
-        target = float(self.distances()[k])
-        ended = self.cars[k].finished_at
-        end = ended if ended is not None else min(self.clock, self.rules.window_seconds)
-        for clock, distances in zip(self._clocks, self._distances, strict=True):
-            if distances[leader] >= target:
-                return round(end - clock, 3)
-        return None
+        target = float(self.grid.standing[k])
+        steps = bisect_left(self._reach, target, key=lambda reach: float(reach[leader]))
+        if steps == len(self._reach):
+            return None
+        return round((self.clock if at is None else at) - steps * STEP_SECONDS, 3)
 
-    def _car_result(self, car: _Car) -> RaceResult:
+    def _car_result(self, car: CarInRace) -> RaceResult:
         laps = tuple(car.laps)
         trace = None if car.trace is None else car.trace.finish_race()
         return RaceResult(

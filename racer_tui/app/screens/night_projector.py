@@ -34,8 +34,9 @@ from league.opening import open_league
 from league.report import SCORE_TITLES
 from league.store import default_db_path
 from racer_tui.app.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
-from racer_tui.app.screens.race_screen import clock_text, countdown_text
+from racer_tui.app.screens.race_screen import countdown_text
 from racer_tui.app.screens.timekeeper import lap_clock_text
+from racer_tui.text.clocks import clock_text
 from sim.foundation.plural import counted
 from sim.physics.labels import PHYSICAL
 from sim.physics.objects.settings import RaceType

@@ -27,8 +27,8 @@ from league.leaderboard import LeaderboardRow, board_of, several_boards
 from league.opening import open_league
 from league.report import SCORE_TITLES
 from racer_tui.app.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
-from racer_tui.app.screens.race_screen import clock_text
 from racer_tui.app.widgets.board_filters import BoardQuery, board_rows
+from racer_tui.text.clocks import clock_text
 
 POLL_SECONDS = 3.0
 MAX_ROWS = 20  # a projector shows the top of the table; the rest would not be readable

@@ -24,11 +24,13 @@ from textual.widgets import DataTable, Digits, Static
 
 from league.live_heat import LiveHeatWriter, live_laps
 from racer_tui.app.jobs import Job, JobState
+from racer_tui.app.playback import PLAYBACK_BINDINGS, PlaybackClock, PlaybackKeys
 from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.screens.coach import CoachScreen
 from racer_tui.app.screens.dialogs import ask
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.race_map import CarMarker, RaceMap
+from racer_tui.text.clocks import clock_text
 from sim.garage.coach_session import coach_race
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import Driver
@@ -41,7 +43,6 @@ from sim.tracks.track import Track
 FRAME_HZ = 30.0
 PANEL_HZ = 10.0
 TRAIL_SECONDS = 3.0
-SPEEDS = (1, 2, 4)
 
 
 @dataclass(frozen=True)
@@ -69,12 +70,6 @@ def race_title(setup: RaceSetup) -> str:
     title = setup.title or f"{setup.racer} on {setup.track.name}"
     rules = setup.rules
     return title if rules.race_type is RaceType.TIME_TRIAL else f"{title} · {rules.race_words}"
-
-
-def clock_text(seconds: float) -> str:
-    """m:ss.mmm for lap times."""
-    minutes, rest = divmod(max(seconds, 0.0), 60.0)
-    return f"{int(minutes)}:{rest:06.3f}"
 
 
 def countdown_text(seconds: float) -> str:
@@ -111,19 +106,13 @@ def race_job(setup: RaceSetup, tick: RaceTick | None, failure: str | None) -> Jo
     return Job(what, JobState.DONE, done=tick.clock, total=window, outcome=outcome)
 
 
-class RaceScreen(RacerScreen[RaceResult | None]):
+class RaceScreen(PlaybackKeys, RacerScreen[RaceResult | None]):
     """A time trial, live or replayed, with its laps table and countdown."""
 
     BINDINGS = [  # noqa: RUF012 - Textual's convention
-        # One key, two words: the footer says what space does now (check_action).
-        Binding("space", "pause", "Pause"),
-        Binding("space", "resume", "Resume"),
-        Binding("1", "speed(1)", "1x"),
-        Binding("2", "speed(2)", "2x"),
-        Binding("4", "speed(4)", "4x"),
+        *PLAYBACK_BINDINGS,
         Binding("g", "toggle_ghost", "Ghost"),
         Binding("r", "restart", "Replay"),
-        Binding("e", "skip_to_end", "End", show=False),
         Binding("o", "coach", "Coach", tooltip="Its best lap against the limit lap, by sector"),
         Binding("escape", "leave", "Back"),
     ]
@@ -143,15 +132,8 @@ class RaceScreen(RacerScreen[RaceResult | None]):
         self.ticks: list[RaceTick] = []
         self.result: RaceResult | None = None
         self.failure: str | None = None
-        self.speed = 1
-        self.paused = False
-        # After e: the view keeps to the newest simulated tick until the finish (a slow
-        # machine may still be working the race out), not back at the chosen speed.
-        self.to_end = False
+        self.clock = PlaybackClock()
         self.show_ghost = setup.ghost is not None
-        self.race_clock = 0.0
-        self._wall_mark = time.monotonic()
-        self._clock_mark = 0.0
         self._index = 0
         self._bindings_at_end = False  # what the footer's space was last worked out for
         self._offtrack_xy: list[tuple[float, float]] = []
@@ -220,18 +202,13 @@ class RaceScreen(RacerScreen[RaceResult | None]):
 
     def _frame(self) -> None:
         if not self.ticks:
-            self._wall_mark = time.monotonic()  # the clock starts with the first tick shown
+            self.clock.wait()
             self._update_panel()
             return
-        if self.to_end:
-            self.race_clock = max(self.race_clock, self.ticks[-1].clock)
-            self._rebase()
-        elif not self.paused:
-            now = time.monotonic()
-            self.race_clock = self._clock_mark + (now - self._wall_mark) * self.speed
+        race_clock = self.clock.advance(self.ticks[-1].clock)
         index = self._index
         last = len(self.ticks) - 1
-        while index < last and self.ticks[index + 1].clock <= self.race_clock:
+        while index < last and self.ticks[index + 1].clock <= race_clock:
             index += 1
             if self.ticks[index].offtrack and not self.ticks[index - 1].offtrack:
                 tick = self.ticks[index]
@@ -403,18 +380,18 @@ class RaceScreen(RacerScreen[RaceResult | None]):
 
     # --- actions ---------------------------------------------------------------------
 
-    def _rebase(self) -> None:
-        self._wall_mark = time.monotonic()
-        self._clock_mark = self.race_clock
+    @property
+    def paused(self) -> bool:
+        return self.clock.paused
+
+    @property
+    def race_clock(self) -> float:
+        return self.clock.race_clock
 
     @property
     def playback(self) -> str:
         """How the view plays the race now, as the panel says it."""
-        if self.at_end:
-            return "finished"
-        if self.to_end and not self.finish_shown:
-            return "to the end"
-        return "paused" if self.paused else f"{self.speed}x"
+        return self.clock.words(at_end=self.at_end, finish_shown=self.finish_shown)
 
     @property
     def at_end(self) -> bool:
@@ -425,35 +402,6 @@ class RaceScreen(RacerScreen[RaceResult | None]):
             and self._index == len(self.ticks) - 1
             and self.ticks[-1].result is not None
         )
-
-    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        # Space pauses or resumes: the footer shows the one word that says what it does
-        # now (a binding whose check is False is hidden, and the key tries the other).
-        # At the end neither shows: there is nothing to pause, and r plays it again.
-        if action == "pause":
-            return not self.paused and not self.at_end
-        if action == "resume":
-            return self.paused and not self.at_end
-        return True
-
-    def action_pause(self) -> None:
-        self.action_toggle_pause()
-
-    def action_resume(self) -> None:
-        self.action_toggle_pause()
-
-    def action_toggle_pause(self) -> None:
-        self._rebase()
-        self.paused = not self.paused
-        self.to_end = False
-        self._update_panel(force=True)
-        self.refresh_bindings()
-
-    def action_speed(self, speed: int) -> None:
-        self._rebase()
-        self.speed = speed if speed in SPEEDS else 1
-        self.to_end = False
-        self._update_panel(force=True)
 
     def action_toggle_ghost(self) -> None:
         if self.setup.ghost is None:
@@ -470,21 +418,12 @@ class RaceScreen(RacerScreen[RaceResult | None]):
 
     def action_restart(self) -> None:
         """Play the race again from the start (the simulation is not run again)."""
-        if not self.finish_shown:
-            self.notify(
-                "The race has not finished yet: e shows its end, then r replays it.",
-                severity="warning",
-                markup=False,
-            )
+        if not self.restart_playback():
             return
-        self.race_clock = 0.0
         self._index = 0
         self._offtrack_xy = []
         self._laps_shown = 0
         self.query_one("#laps", DataTable).clear()
-        self._rebase()
-        self.paused = False
-        self.to_end = False
         self._bindings_at_end = False
         self.refresh_bindings()
 
@@ -508,18 +447,6 @@ class RaceScreen(RacerScreen[RaceResult | None]):
 
         load = partial(coach_race, self.setup.track, result)
         self.app.push_screen(CoachScreen(self.setup.racer, f"lap {best.number}", load))
-
-    def action_skip_to_end(self) -> None:
-        """Jump to the end of the race: to the newest tick worked out, and on with each new
-        one until the finish, however long the simulation still takes (space or a speed key
-        goes back to playing it)."""
-        if self.ticks:
-            self.to_end = True
-            if self.paused:
-                self.paused = False
-                self.refresh_bindings()
-            self._frame()
-            self._update_panel(force=True)
 
     def action_leave(self) -> None:
         if self.recording == RECORDING:

@@ -40,6 +40,8 @@ from league.races import (
 )
 from league.ranking import rank
 from racer_tui.app.screens.base import RacerScreen
+from racer_tui.app.screens.head_to_head_dialog import HeadToHeadDialog, HeadToHeadRequest
+from racer_tui.app.screens.head_to_head_screen import HeadToHeadScreen, HeadToHeadSetup
 from racer_tui.app.screens.league_submit import RacerPrompt, RaceSubmitted, submit_race
 from racer_tui.app.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.app.session import keep_race, session_races
@@ -50,15 +52,17 @@ from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.app.widgets.track_label import track_options
 from sim.garage.folder import ModelFolder, list_models
 from sim.physics.labels import CURRENT as CURRENT_PHYSICS
-from sim.race.driver import REFERENCE_NAME
+from sim.race.driver import REFERENCE_NAME, reference_driver
+from sim.race.head_to_head import Entry
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
-from sim.race.rules import DEFAULT_RULES, preset_rules
+from sim.race.rules import DEFAULT_RULES, HEAD_TO_HEAD_RULES, preset_rules
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
 from sim.tracks.track import Track
 from sim.training.drivers import model_driver
 
 REFERENCE = "reference driver"
+HEAD_TO_HEAD = "head-to-head"  # the race type whose drivers are chosen in a dialog
 RESULT_COLUMNS = (
     "#",
     Col("driver", keep=4, shrink_to=10, collapses=False, cuts_middle=True),
@@ -101,6 +105,7 @@ RACE_TYPE_CHOICES: tuple[tuple[str, str], ...] = (
     ("time trial", ""),
     ("object avoidance, 3 boxes", "object-avoidance"),
     ("head-to-bot, 3 bots", "head-to-bot"),
+    ("head-to-head, 2-6 models", HEAD_TO_HEAD),
 )
 _PRESET_OF_TYPE = {"OBJECT_AVOIDANCE": "object-avoidance", "HEAD_TO_BOT": "head-to-bot"}
 
@@ -109,6 +114,18 @@ _PRESET_OF_TYPE = {"OBJECT_AVOIDANCE": "object-avoidance", "HEAD_TO_BOT": "head-
 class DriversLoaded(Message):
     drivers: list[DriverChoice]
     generation: int  # a cancelled, slower read must not win
+
+
+def head_to_head_entries(picks: list[DriverChoice], track: Track) -> list[Entry]:
+    """The chosen drivers as a head-to-head race's cars (policies load now: in the race
+    view's worker)."""
+    return [
+        Entry(
+            pick.label,
+            model_driver(pick.folder) if pick.folder is not None else reference_driver(track),
+        )
+        for pick in picks
+    ]
 
 
 def trained_drivers() -> list[DriverChoice]:
@@ -379,6 +396,9 @@ class RacesScreen(RacerScreen[None]):
         track = resolve_track(str(self.query_one("#race-track", Select).value))
         window = self.query_one("#race-window", Select).value
         preset = str(self.query_one("#race-type", Select).value)
+        if preset == HEAD_TO_HEAD:
+            self._ask_head_to_head(track, float(str(window)))
+            return
         base = preset_rules(preset) if preset else DEFAULT_RULES
         rules = replace(base, window_seconds=float(str(window)))
         same_track = [r for r in self.results if r.track_hash == track.content_hash]
@@ -395,6 +415,28 @@ class RacesScreen(RacerScreen[None]):
             title=f"{driver.label} on {track.name}",
         )
         self.app.push_screen(RaceScreen(setup), self._race_finished)
+
+    def _ask_head_to_head(self, track: Track, window: float) -> None:
+        """Who races, then the race: the highlighted driver is chosen already."""
+        drivers = list(self.drivers)
+        table = self.query_one("#drivers", DataTable)
+        first = table.cursor_row if 0 <= table.cursor_row < len(drivers) else None
+
+        def chosen(request: HeadToHeadRequest | None) -> None:
+            if request is None:
+                return
+            picks = [drivers[k] for k in request.drivers]
+            rules = replace(HEAD_TO_HEAD_RULES, window_seconds=window, lap_count=request.laps)
+            setup = HeadToHeadSetup(
+                track=track,
+                rules=rules,
+                names=tuple(pick.label for pick in picks),
+                entries=partial(head_to_head_entries, picks, track),
+            )
+            self.app.push_screen(HeadToHeadScreen(setup))
+
+        labels = [driver.label for driver in drivers]
+        self.app.push_screen(HeadToHeadDialog(labels, first, track.name), chosen)
 
     def _league_leader(self, track: Track) -> RaceResult | None:
         """The league's recorded race with the best lap on `track` (of this physics, with

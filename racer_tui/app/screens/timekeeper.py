@@ -30,9 +30,10 @@ from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat, physica
 from league.timekeeper.journal import HeatJournal, Resumed, resume_heat, take_input
 from racer_tui.app.screens.base import RacerScreen
 from racer_tui.app.screens.dialogs import ask
-from racer_tui.app.screens.race_screen import clock_text, countdown_text
+from racer_tui.app.screens.race_screen import countdown_text
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.lap_list import LapList
+from racer_tui.text.clocks import clock_text
 from sim.foundation.plural import counted
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, lap_counts

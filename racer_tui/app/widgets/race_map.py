@@ -41,6 +41,22 @@ class CarMarker:
     heading_deg: float
 
 
+@dataclass(frozen=True)
+class RacingCar:
+    """A car of a head-to-head race: drawn in its own colour (a Rich colour), dim while it
+    is held for a penalty."""
+
+    x: float
+    y: float
+    heading_deg: float
+    colour: str
+    held: bool = False
+
+
+# An overlay cell: its glyph, and a component class of the map or a style of its own.
+Mark = tuple[str, str | Style]
+
+
 class MapProjection:
     """World metres to braille dots for a map of `columns` x `rows` cells, aspect kept."""
 
@@ -77,6 +93,10 @@ class MapProjection:
             dx, dy = self.dots(dense)
             set_dots(grid, dx, dy)
         return grid
+
+
+def _arrow(heading_deg: float) -> str:
+    return _ARROWS[round((heading_deg % 360.0) / 45.0) % 8]
 
 
 def _densify(line: FloatArray, spacing: float) -> FloatArray:
@@ -130,7 +150,8 @@ class RaceMap(Widget):
         self._offtracks: FloatArray = np.zeros((0, 2))
         self._objects: tuple[tuple[float, float, float], ...] = ()
         self._objects_are_cars = False
-        self._marks: dict[tuple[int, int], tuple[str, str]] = {}  # (col,row) -> glyph, class
+        self._cars: tuple[RacingCar, ...] = ()
+        self._marks: dict[tuple[int, int], Mark] = {}  # (col, row) -> glyph, class or style
         self._rows: list[Strip | None] = []
         self.frames_drawn = 0  # rows of the car repainted: one per displayed frame
 
@@ -157,10 +178,13 @@ class RaceMap(Widget):
         objects: tuple[tuple[float, float, float], ...] = (),
         *,
         objects_are_cars: bool = False,
+        cars: tuple[RacingCar, ...] = (),
     ) -> None:
         """Move the car and overlays (`objects`: the race's boxes or, `objects_are_cars`,
-        bot cars: x, y and heading in degrees each); repaints only the rows that change."""
+        bot cars: x, y and heading in degrees each; `cars`: a head-to-head race's, the
+        first drawn on top); repaints only the rows that change."""
         self._car = car
+        self._cars = cars
         self._ghost = ghost
         self._objects = objects
         self._objects_are_cars = objects_are_cars
@@ -207,9 +231,9 @@ class RaceMap(Widget):
         self._rows = [None] * height
         self.refresh()
 
-    def _overlay_marks(self) -> dict[tuple[int, int], tuple[str, str]]:
+    def _overlay_marks(self) -> dict[tuple[int, int], Mark]:
         projection = self._projection
-        marks: dict[tuple[int, int], tuple[str, str]] = {}
+        marks: dict[tuple[int, int], Mark] = {}
         if projection is None:
             return marks
         for x, y in self._offtracks:
@@ -221,10 +245,12 @@ class RaceMap(Widget):
             marks[projection.cell(x, y)] = (glyph, "race-map--object")
         if self._ghost is not None:
             marks[projection.cell(*self._ghost)] = (_GHOST, "race-map--ghost")
+        for racing in reversed(self._cars):  # the leader last: on top where cars meet
+            style = Style(color=racing.colour, bold=not racing.held, dim=racing.held)
+            marks[projection.cell(racing.x, racing.y)] = (_arrow(racing.heading_deg), style)
         car = self._car
         if car is not None:
-            octant = round((car.heading_deg % 360.0) / 45.0) % 8
-            marks[projection.cell(car.x, car.y)] = (_ARROWS[octant], "race-map--car")
+            marks[projection.cell(car.x, car.y)] = (_arrow(car.heading_deg), "race-map--car")
         return marks
 
     def render_line(self, y: int) -> Strip:
@@ -250,7 +276,8 @@ class RaceMap(Widget):
         for x in range(projection.columns):
             mark = self._marks.get((x, y))
             if mark is not None:
-                cells.append((mark[0], styles[mark[1]]))
+                glyph, style = mark
+                cells.append((glyph, styles[style] if isinstance(style, str) else style))
             elif trail[x]:
                 cells.append((braille_char(int(trail[x] | border[x])), styles["race-map--trail"]))
             elif (x, y) in self._start_cells:

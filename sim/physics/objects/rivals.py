@@ -47,7 +47,8 @@ class Grid:
     """What every car's field shares: the cars, where each is in the race, who is held."""
 
     fleets: Sequence[Fleet]  # one car each, in grid order
-    # Metres from the start line, laps included: the car with less of it crashed.
+    # Metres from the start line, laps included (the running order; modulo the track's
+    # length, where each car is on it: which of two cars that touch is behind).
     standing: FloatArray
     # Cars serving a penalty: the others drive through them, and they are not judged.
     ghost: NDArray[np.bool_]
@@ -125,7 +126,7 @@ class RivalField(ObjectField):
 
     def crashed_into(self, car_spec: CarSpec) -> list[int]:
         """The cars this car ran into from behind this step (grid indices): a corner of it
-        inside their rectangle, neither of them held, it behind them in the race."""
+        inside their rectangle, neither of them held, it behind them on the track."""
         grid, me = self.grid, self.index
         if grid.ghost[me]:
             return []
@@ -134,5 +135,13 @@ class RivalField(ObjectField):
         return [
             int(other)
             for other, hit in zip(self.others.tolist(), hits.tolist(), strict=True)
-            if hit and not grid.ghost[other] and grid.standing[me] < grid.standing[other]
+            if hit and not grid.ghost[other] and self.behind(other)
         ]
+
+    def behind(self, other: int) -> bool:
+        """This car is behind car `other` on the track, the short way round: laps do not
+        count, so a car that runs into the one it is lapping is the car behind, and so is
+        a car just short of the line that runs into one just past it."""
+        length = self._track.length  # the race's standing is measured along it
+        ahead = (float(self.grid.standing[other]) - float(self.grid.standing[self.index])) % length
+        return 0.0 < ahead < length / 2.0

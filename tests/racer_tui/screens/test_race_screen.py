@@ -16,10 +16,10 @@ from racer_tui.app.screens.race_screen import (
     LEAVE,
     RaceScreen,
     RaceSetup,
-    clock_text,
     countdown_text,
     race_job,
 )
+from racer_tui.text.clocks import clock_text
 from sim.garage.options import new_model
 from sim.race.engine import RaceTick, run_race
 from sim.race.replay import ghost_lap

@@ -11,9 +11,10 @@ from league.opening import open_league
 from league.races import record_race
 from racer_tui.app.application import create_app
 from racer_tui.app.screens.league import LeagueScreen
-from racer_tui.app.screens.race_screen import RaceScreen, clock_text
+from racer_tui.app.screens.race_screen import RaceScreen
 from racer_tui.app.screens.races import RacesScreen
 from racer_tui.app.widgets.model_detail import seconds_text
+from racer_tui.text.clocks import clock_text
 from sim.race.engine import run_race
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules

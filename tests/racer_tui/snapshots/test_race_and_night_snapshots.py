@@ -8,24 +8,29 @@ Update after a deliberate change with
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from datetime import date
 from typing import Any
 
 from textual.pilot import Pilot
+from textual.widgets import Select
 
 from league.nights import add_entrant, draw_heats, new_night, run_heats
 from league.opening import open_league
 from racer_tui.app.application import create_app
+from racer_tui.app.screens.head_to_head_screen import HeadToHeadScreen, HeadToHeadSetup
 from racer_tui.app.screens.night_projector import NightProjectorScreen
 from racer_tui.app.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.app.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
 from sim.foundation.home import data_home
+from sim.race.driver import reference_driver
 from sim.race.engine import run_race
+from sim.race.head_to_head import Entry
 from sim.race.replay import ghost_lap
-from sim.race.rules import RaceRules
+from sim.race.rules import HEAD_TO_HEAD_RULES, RaceRules
 from sim.tracks.catalog import resolve_track
 from sim.training.drivers import resolve_driver
-from tests.racer_tui.screens.tui_helpers import OneScreenApp, settle
+from tests.racer_tui.screens.tui_helpers import OneScreenApp, settle, wait_for
 from tests.racer_tui.snapshots.sizes import SIZES
 
 FRIDAY = date(2026, 3, 6)  # a fixed day: the screens show it
@@ -123,3 +128,42 @@ def test_night_projector_with_a_heat_running(snap_compare: Compare, size: tuple[
 
     app = create_app(start="league", projector_night=night.id)
     assert snap_compare(app, terminal_size=size, run_before=a_result_then_a_heat)
+
+
+@SIZES
+def test_head_to_head_at_its_end(snap_compare: Compare, size: tuple[int, int]) -> None:
+    """Three reference drivers, two laps: the finish, the order with gaps, the incidents."""
+    track = resolve_track("reinvent_base")
+    names = ("[b]Ada[/b]", "bob", "cy")
+
+    def entries() -> list[Entry]:
+        driver = reference_driver(track)
+        return [Entry(name, driver) for name in names]
+
+    setup = HeadToHeadSetup(
+        track=track,
+        rules=replace(HEAD_TO_HEAD_RULES, lap_count=2),
+        names=names,
+        entries=entries,
+    )
+    view = HeadToHeadScreen(setup)
+
+    async def to_the_end(pilot: Pilot[Any]) -> None:
+        await settle(pilot)
+        await pilot.press("e")
+        await wait_for(pilot, lambda: view.at_end)
+        await settle(pilot)
+
+    assert snap_compare(OneScreenApp(view), terminal_size=size, run_before=to_the_end)
+
+
+@SIZES
+def test_head_to_head_dialog(snap_compare: Compare, size: tuple[int, int]) -> None:
+    async def ask(pilot: Pilot[Any]) -> None:
+        await settle(pilot)
+        pilot.app.screen.query_one("#race-type", Select).value = "head-to-head"
+        await pilot.pause()
+        await pilot.press("s")
+        await settle(pilot)
+
+    assert snap_compare(create_app(start="races"), terminal_size=size, run_before=ask)

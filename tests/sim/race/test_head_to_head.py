@@ -138,6 +138,12 @@ def test_the_crash_rule_judges_the_car_behind_and_never_a_held_car(track: Track)
     assert judged() == [[], [0]]
     grid.standing = np.array([9.8, 10.0])  # now car 0 is
     assert judged() == [[1], []]
+    # Laps do not count, where the cars are on the track does: car 1, a lap up, has run
+    # into car 0 from behind as it laps it; and across the line the car short of it is.
+    grid.standing = np.array([10.0, 9.8 + track.length])
+    assert judged() == [[], [0]]
+    grid.standing = np.array([0.1, track.length - 0.1])  # car 0 just past the line
+    assert judged() == [[], [0]]
     grid.ghost[1] = True  # car 1 is serving a penalty: nobody runs into it, nor it
     assert judged() == [[], []]
     # A simulation never judges a crash with a rival itself: the race does, once all moved.

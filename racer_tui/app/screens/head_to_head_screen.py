@@ -1,0 +1,261 @@
+"""The head-to-head race view: two to six cars on one track, each in its own colour with
+its racer's name, the running order with gaps in seconds, and crashes and overtakes as
+they happen; live, and played again (r) once it is over.
+
+The race runs in a thread worker as fast as the simulation allows
+(`sim.race.head_to_head_ticks`); the view plays its ticks against the wall clock at 1x,
+2x or 4x (`racer_tui.app.playback`), as the time trial's view does.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from rich.text import Text
+from textual import work
+from textual.app import ComposeResult
+from textual.binding import Binding
+from textual.containers import Horizontal, Vertical
+from textual.widgets import Digits, Static
+
+from racer_tui.app.playback import PLAYBACK_BINDINGS, PlaybackClock, PlaybackKeys
+from racer_tui.app.screens.base import RacerScreen, error_message
+from racer_tui.app.screens.race_screen import FRAME_HZ, PANEL_HZ, countdown_text
+from racer_tui.app.widgets.footer import RacerFooter
+from racer_tui.app.widgets.race_map import RaceMap, RacingCar
+from racer_tui.text.clocks import clock_text
+from racer_tui.text.head_to_head import incident_sentence
+from sim.race.head_to_head import Entry, HeadToHeadResult, Incident
+from sim.race.head_to_head_ticks import HeadToHeadTick, head_to_head_ticks
+from sim.race.rules import RaceRules
+from sim.tracks.track import Track
+
+# The cars' colours in grid order: deepracer-for-cloud's head-to-head cars are orange and
+# purple; the rest are told apart from them and from each other on dark and light themes.
+CAR_COLOURS = ("dark_orange", "medium_purple1", "deep_sky_blue1", "green3", "hot_pink", "gold1")
+CAR_GLYPH = "■"
+INCIDENTS_KEPT = 12  # the newest first: a short panel cuts the oldest
+
+
+@dataclass(frozen=True)
+class HeadToHeadSetup:
+    """What to race: the cars' names in grid order and how to build their entries (in
+    the view's worker: loading a model's policy takes a moment)."""
+
+    track: Track
+    rules: RaceRules
+    names: tuple[str, ...]
+    entries: Callable[[], Sequence[Entry]]
+    seed: int = 0
+
+
+def car_labels(names: Sequence[str]) -> list[str]:
+    """`#grid name` for each car: two cars of one model are told apart by their grid."""
+    return [f"#{k + 1} {name}" for k, name in enumerate(names)]
+
+
+def standings_text(tick: HeadToHeadTick, labels: Sequence[str], width: int) -> Text:
+    """The running order, a line per car: position, colour, name, lap and gap to the
+    leader (a car serving a penalty is dim and says so while the race runs; at the end
+    every car has its gap)."""
+    text = Text(no_wrap=True, overflow="ellipsis")
+    name_width = max(width - 14, 6)  # "1 ■ " and " L12" and a gap of six
+    for place, k in enumerate(tick.order, start=1):
+        car = tick.cars[k]
+        if place > 1:
+            text.append("\n")
+        text.append(f"{place} ")
+        text.append(CAR_GLYPH, style=f"bold {CAR_COLOURS[k % len(CAR_COLOURS)]}")
+        name = labels[k]
+        if len(name) > name_width:
+            name = name[: name_width - 1] + "…"
+        held = car.held > 0 and tick.result is None
+        text.append(f" {name:<{name_width}}", style="dim" if held else "")
+        text.append(f" {f'L{car.lap}':>3}")
+        gap = tick.gaps[k]
+        if held:
+            text.append(f"{'held':>6}", style="bold red")
+        elif place == 1:
+            text.append(f"{'✓' if car.finished else 'lead':>6}", style="bold")
+        else:
+            text.append(f"{'-' if gap is None else f'+{gap:.1f}':>6}")
+    return text
+
+
+def incident_lines(incidents: Sequence[Incident], labels: Sequence[str]) -> Text:
+    """Crashes and overtakes so far, newest first, each with its moment (m:ss)."""
+    names = dict(enumerate(labels))
+    text = Text()
+    for n, incident in enumerate(reversed(incidents[-INCIDENTS_KEPT:])):
+        if n:
+            text.append("\n")
+        clock = clock_text(incident.clock)[:-4]
+        style = "red" if incident.kind == "crash" else ""
+        text.append(f"{clock} ", style="dim")
+        text.append(incident_sentence(incident, names), style=style)
+    return text
+
+
+class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
+    """A head-to-head race, live, then played again as often as the racer likes."""
+
+    BINDINGS = [  # noqa: RUF012 - Textual's convention
+        *PLAYBACK_BINDINGS,
+        Binding("r", "restart", "Replay"),
+        Binding("escape", "leave", "Back"),
+    ]
+    DEFAULT_CSS = """
+    HeadToHeadScreen #h2h-body { height: 1fr; }
+    HeadToHeadScreen #h2h-map { width: 1fr; }
+    HeadToHeadScreen #h2h-side { width: 36; padding: 0 1; }
+    HeadToHeadScreen #h2h-title { text-style: bold; height: auto; max-height: 2; }
+    HeadToHeadScreen #h2h-countdown { width: auto; }
+    HeadToHeadScreen #h2h-facts { height: auto; }
+    HeadToHeadScreen #h2h-order { height: auto; margin: 1 0 0 0; }
+    HeadToHeadScreen #h2h-incidents { height: 1fr; margin: 1 0 0 0; }
+    HeadToHeadScreen.-narrow #h2h-side { width: 30; }
+    """
+    NARROW = 76  # below this many columns the side panel narrows and the map keeps room
+
+    def __init__(self, setup: HeadToHeadSetup) -> None:
+        super().__init__()
+        self.setup = setup
+        self.labels = car_labels(setup.names)
+        self.ticks: list[HeadToHeadTick] = []
+        self.result: HeadToHeadResult | None = None
+        self.failure: str | None = None
+        self.clock = PlaybackClock()
+        self.incidents: list[Incident] = []  # those up to the tick shown
+        self._index = 0
+        self._at_end_shown = False  # what the footer's space was last worked out for
+        self.finish_shown = False  # the view has shown the race's end at least once
+        self._last_panel = 0.0
+        self.frames = 0
+
+    def compose(self) -> ComposeResult:
+        setup = self.setup
+        with Horizontal(id="h2h-body"):
+            yield RaceMap(setup.track, id="h2h-map")
+            with Vertical(id="h2h-side"):
+                yield Static(Text(self.title_words), id="h2h-title")
+                yield Digits(countdown_text(setup.rules.window_seconds), id="h2h-countdown")
+                yield Static(id="h2h-facts")
+                yield Static(id="h2h-order")
+                yield Static(id="h2h-incidents")
+        yield RacerFooter()
+
+    @property
+    def title_words(self) -> str:
+        laps = self.setup.rules.lap_count
+        length = f"{laps} lap{'s' if laps != 1 else ''}" if laps is not None else "most laps"
+        return f"Head-to-head, {length}, on {self.setup.track.name}"
+
+    def on_mount(self) -> None:
+        self.set_interval(1.0 / FRAME_HZ, self._frame)
+        self._update_panel(force=True)
+        self.call_after_refresh(self._run_race)
+
+    def on_resize(self) -> None:
+        self.set_class(self.size.width < self.NARROW, "-narrow")
+
+    @work(thread=True, exclusive=True, group="head-to-head")
+    def _run_race(self) -> None:
+        setup = self.setup
+        try:
+            entries = setup.entries()
+            for tick in head_to_head_ticks(setup.track, setup.rules, entries, seed=setup.seed):
+                self.ticks.append(tick)  # list.append is atomic: the frame timer reads it
+                if tick.result is not None:
+                    self.result = tick.result
+        except Exception as error:  # shown to the racer; the app keeps running
+            self.failure = f"The race stopped. {error_message(error)}"
+
+    # --- playback --------------------------------------------------------------------
+
+    def _frame(self) -> None:
+        if not self.ticks:
+            self.clock.wait()
+            self._update_panel()
+            return
+        race_clock = self.clock.advance(self.ticks[-1].clock)
+        index = self._index
+        last = len(self.ticks) - 1
+        while index < last and self.ticks[index + 1].clock <= race_clock:
+            index += 1
+            self.incidents.extend(self.ticks[index].incidents)
+        self._index = index
+        tick = self.ticks[index]
+        self.query_one(RaceMap).show(None, cars=tuple(self._racing(tick, k) for k in tick.order))
+        self.frames += 1
+        self._update_panel()
+        if self.at_end != self._at_end_shown:  # space neither pauses nor resumes now
+            self._at_end_shown = self.at_end
+            self.finish_shown = self.finish_shown or self.at_end
+            self.refresh_bindings()
+
+    @staticmethod
+    def _racing(tick: HeadToHeadTick, k: int) -> RacingCar:
+        car = tick.cars[k]
+        return RacingCar(car.x, car.y, car.heading, CAR_COLOURS[k % len(CAR_COLOURS)], car.held > 0)
+
+    @property
+    def tick(self) -> HeadToHeadTick | None:
+        """The tick the view shows now."""
+        return self.ticks[self._index] if self.ticks else None
+
+    @property
+    def at_end(self) -> bool:
+        """The view shows the race's last moment (r plays it again)."""
+        return bool(self.ticks) and self._index == len(self.ticks) - 1 and self.result is not None
+
+    @property
+    def playback(self) -> str:
+        return self.clock.words(at_end=self.at_end, finish_shown=self.finish_shown)
+
+    def _update_panel(self, force: bool = False) -> None:
+        now = time.monotonic()
+        if not force and now - self._last_panel < 1.0 / PANEL_HZ:
+            return
+        self._last_panel = now
+        tick = self.tick
+        remaining = self.setup.rules.window_seconds - (tick.clock if tick else 0.0)
+        self.query_one("#h2h-countdown", Digits).update(countdown_text(remaining))
+        self.query_one("#h2h-facts", Static).update(self._facts(tick))
+        order = self.query_one("#h2h-order", Static)
+        width = order.size.width or 34
+        order.update(standings_text(tick, self.labels, width) if tick else Text())
+        self.query_one("#h2h-incidents", Static).update(incident_lines(self.incidents, self.labels))
+
+    def _facts(self, tick: HeadToHeadTick | None) -> Text:
+        if self.failure:
+            return Text(f"{self.failure} Esc goes back.", style="bold red")
+        if tick is None:
+            return Text("Lining the cars up on the grid…", style="dim")
+        text = Text()
+        leader = tick.cars[tick.order[0]]
+        laps = self.setup.rules.lap_count
+        text.append(f"Lap {leader.lap}" + (f" of {laps}" if laps is not None else ""), style="bold")
+        text.append(f"   {self.playback}")
+        if self.at_end and self.result is not None:
+            winner = self.labels[self.result.winner.car]
+            text.append("\n")
+            text.append(f"{winner} won.\n", style="bold green")
+            text.append("r replays, Esc goes back.", style="dim")
+        return text
+
+    # --- actions ---------------------------------------------------------------------
+
+    def action_restart(self) -> None:
+        """Play the race again from the grid (the simulation is not run again)."""
+        if not self.restart_playback():
+            return
+        self._index = 0
+        self.incidents = []
+        self._at_end_shown = False
+        self.refresh_bindings()
+        self._frame()
+
+    def action_leave(self) -> None:
+        self.dismiss(self.result)
