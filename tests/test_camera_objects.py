@@ -373,3 +373,41 @@ def test_solids_are_checked(camera: Camera, reinvent: Track) -> None:
     assert as_lists.x.dtype == np.float64 and as_lists.side_tone.dtype == np.uint8
     with pytest.raises(ValueError, match="1 car, not 2"):
         camera.render([0.0, 1.0], [0.0, 1.0], [0.0, 0.0], solids=good)
+
+
+def test_sees_none_only_when_the_frame_would_not_show_the_object(
+    camera: Camera, reinvent: Track
+) -> None:
+    """The cheap test a head-to-head car's frame takes before building its rival: when it
+    says no object can be seen, the frame with the object is the frame without it, to the
+    bit. Tried all round the car, near and far, low and high."""
+    rng = np.random.default_rng(5)
+    pose = start_pose(reinvent)
+    length, width, height = BOT_CAR
+    radius = math.sqrt(length**2 + width**2 + height**2) / 2
+    said_none = drawn = 0
+    for _ in range(400):
+        bearing, distance = rng.uniform(-math.pi, math.pi), rng.uniform(0.0, 4.0)
+        place = ahead_of(pose, distance * math.cos(bearing), distance * math.sin(bearing))
+        none = camera.sees_none(
+            [pose[0]],
+            [pose[1]],
+            [pose[2]],
+            objects=[(place[0], place[1])],
+            radius=radius,
+            middle_height=height / 2,
+        )
+        with_it = frame(camera, pose, solids(place, size=BOT_CAR))
+        if none:
+            said_none += 1
+            assert np.array_equal(with_it, frame(camera, pose))
+        else:
+            drawn += 1
+    # Behind and beside the car most of the time; in view the rest.
+    assert said_none > 100 and drawn > 50
+    # An object straight ahead is never ruled out, nor one across the lens.
+    for place in (ahead_of(pose, 1.0), ahead_of(pose, 0.1)):
+        spot = [(place[0], place[1])]
+        assert not camera.sees_none(
+            [pose[0]], [pose[1]], [pose[2]], objects=spot, radius=radius, middle_height=0.08
+        )

@@ -20,6 +20,7 @@ import functools
 import itertools
 import math
 import weakref
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -331,6 +332,9 @@ class Camera:
         # it or behind the lens, scaled to its distance from that side of the frustum.
         sides = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, width], [0.0, 0.0, 1.0]])
         self._frustum_sides = sides / np.linalg.norm(sides @ self._project, axis=1)[:, None]
+        # The same distances straight from a point (ahead, left, up) of the lens, as plain
+        # floats for `sees_none`.
+        self._side_rows = (self._frustum_sides @ self._project).tolist()
         # Turning world (x, y) by the car's yaw, then projecting: the cosine's part and the
         # sine's (ahead = x cos + y sin, left = y cos - x sin).
         self._turn_cos = self._project[:, :2]
@@ -380,6 +384,36 @@ class Camera:
                 self._draw_solids(table, solids, frames)
                 out[...] = frames
         return out
+
+    def sees_none(
+        self,
+        x: Sequence[float],
+        y: Sequence[float],
+        yaw: Sequence[float],
+        *,
+        objects: Sequence[tuple[float, float]],
+        radius: float,
+        middle_height: float,
+    ) -> bool:
+        """True when no car at (x, y, yaw) can see any of `objects` (x, y each, the same
+        for every car: spheres of `radius` whose middles stand `middle_height` above the
+        ground), by a margin: then `render` would draw none of them either, and a caller
+        may skip building them (a head-to-head car's rival is mostly behind or beside it).
+        False whenever in doubt. Plain floats: for a car or two and an object or two, numpy
+        would cost more than the test saves."""
+        forward = self.spec.mount_forward
+        up = middle_height - self.spec.mount_height
+        reach = -(radius + _CULL_MARGIN)
+        for car_x, car_y, car_yaw in zip(x, y, yaw, strict=True):
+            cos, sin = math.cos(car_yaw), math.sin(car_yaw)
+            lens_x, lens_y = car_x + forward * cos, car_y + forward * sin
+            for object_x, object_y in objects:
+                dx, dy = object_x - lens_x, object_y - lens_y
+                ahead, left = dx * cos + dy * sin, dy * cos - dx * sin
+                nearest = min(a * ahead + b * left + c * up for a, b, c in self._side_rows)
+                if not nearest < reach:
+                    return False
+        return True
 
     def _render_scene(self, table: NDArray[np.float64], out: UInt8Array) -> None:
         """The ground, the walls and the background over them, into `out`."""
@@ -783,6 +817,13 @@ def poses(
     """Car poses as three float64 arrays of one row per car; refuses anything else."""
     table = _pose_table(x, y, yaw)
     return table[0], table[1], table[2]
+
+
+# How far past a sphere's radius `sees_none` wants an object out of view: far above the
+# rounding of the two ways of working the distance out (about 1e-14 m at 30 m).
+_CULL_MARGIN = 1e-6
+# `sees_none` is tried for at most this many (car, object) pairs: beyond, numpy is quicker.
+CULL_PAIRS = 4
 
 
 def _pose_table(x: ArrayLike, y: ArrayLike, yaw: ArrayLike) -> NDArray[np.float64]:

@@ -29,10 +29,12 @@ from sim.sensors.batched import (
     sector_lidar_space,
     sectors,
 )
+from sim.sensors.camera import CULL_PAIRS
 from sim.sensors.objects_drawn import object_solids
 from sim.sensors.randomisation.render import PerturbedCamera
 
 if TYPE_CHECKING:
+    from sim.physics.objects.field import ObjectField
     from sim.sensors.randomisation.perturbation import CameraPerturbation
     from sim.sensors.randomisation.render import PerturbedCamera
 
@@ -104,6 +106,29 @@ class Observer:
         """Each car's camera perturbation, or None while every car has the plain camera."""
         return None if self._perturbed is None else self._perturbed.perturbations
 
+    def _out_of_view(self, objects: ObjectField, x: Any, y: Any, yaw: Any) -> bool:
+        """No car's camera can see any of its objects: a frame without them is the same
+        frame (`Camera.sees_none`), built and drawn for nothing. Tried only for a car or
+        two with an object or two each, the same for every car (a head-to-head race), and
+        the plain camera."""
+        camera = self._camera
+        if camera is None or self._perturbed is not None:
+            return False
+        if len(x) * objects.count > CULL_PAIRS or len(objects.x) != 1:
+            return False
+        shape = objects.shape
+        radius = math.sqrt(shape.length**2 + shape.width**2 + shape.height**2) / 2
+        spots = list(zip(objects.x[0].tolist(), objects.y[0].tolist(), strict=True))
+        unseen = camera.sees_none(
+            x.tolist(),
+            y.tolist(),
+            yaw.tolist(),
+            objects=spots,
+            radius=radius,
+            middle_height=shape.height / 2,
+        )
+        return bool(unseen)
+
     def observe(self, cars: Sequence[int] | None = None) -> Any:
         """Observations for all N cars, or for `cars` only (rows in that order): an
         (N, ...) array, or a dict of them."""
@@ -114,7 +139,9 @@ class Observer:
         if self._camera is not None:
             objects = self.sim.objects  # each car's own boxes or bot cars, drawn in its view
             solids = (
-                None if objects is None else object_solids(objects, np.arange(self.sim.n)[pick])
+                None
+                if objects is None or self._out_of_view(objects, x, y, yaw)
+                else object_solids(objects, np.arange(self.sim.n)[pick])
             )
             if self._perturbed is None:
                 frames = self._camera.render(x, y, yaw, solids=solids)

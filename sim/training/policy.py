@@ -460,6 +460,17 @@ class NumpyActor:
         return np.asarray(np.clip(out, -1.0, 1.0), dtype=np.float32)
 
 
+def _batched(parts: Sequence[NDArray[Any]]) -> NDArray[Any]:
+    """Several cars' observations as one batch, laid out as one car's is. A one-channel
+    camera's frames come with their channel axis added last (`Observer`: stride 0), which
+    torch pools as a plain NCHW image; concatenated whole, their channel axis had stride 1,
+    torch took the batch for channels-last and pooled it 8 times slower (0.34 ms against
+    0.04 ms a step in a two-car race)."""
+    if parts[0].ndim == 4 and parts[0].shape[-1] == 1:
+        return np.concatenate([part[..., 0] for part in parts])[..., None]
+    return np.concatenate(parts)
+
+
 class PolicyDriver:
     """A trained policy as a race `Driver`: deterministic, one action per car.
 
@@ -524,11 +535,9 @@ class PolicyDriver:
         observations in one batch: one forward pass for all of them."""
         observed = [self._observe(sim) for sim in sims]
         if isinstance(observed[0], dict):
-            obs: Any = {
-                key: np.concatenate([part[key] for part in observed]) for key in observed[0]
-            }
+            obs: Any = {key: _batched([part[key] for part in observed]) for key in observed[0]}
         else:
-            obs = np.concatenate(observed)
+            obs = _batched(observed)
         actions = self._actions_of(obs)
         counts = np.cumsum([sim.n for sim in sims])[:-1]
         return [self._driver_action(part) for part in np.split(actions, counts)]

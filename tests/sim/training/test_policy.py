@@ -20,6 +20,7 @@ from sim.tracks.catalog import resolve_track
 from sim.training.policy import (
     PolicyDriver,
     PolicyError,
+    _batched,
     build_network,
     driver_for_model,
     load_policy,
@@ -196,3 +197,27 @@ def test_the_numpy_actor_drives_exactly_like_the_network(metadata: ModelMetadata
         assert np.array_equal(got, expected)
     else:
         assert np.allclose(got, expected, atol=1e-5)
+
+
+def test_several_cars_act_in_one_batch_laid_out_as_one_cars_frames() -> None:
+    """A head-to-head model drives its cars in one forward pass: the batch keeps a single
+    car's frame layout (the channel axis added last), so torch takes the same plain path
+    for it, and each car gets the action it would get alone."""
+    track = resolve_track("reinvent_base")
+    metadata = ModelMetadata(discrete_grid(30.0, 5, 3.0, 2), ("camera",))
+    driver = PolicyDriver(
+        build_network(metadata), metadata, name="cam", content_hash="cam", live=False
+    )
+    sims = [TrackSimulation(track, 1, seed=k) for k in range(3)]
+    for k, sim in enumerate(sims):
+        sim.reset_car(0, 2.0 * k)
+        driver.reset(sim)
+    one = [driver._observe(sim) for sim in sims]
+    assert one[0].strides[-1] == 0  # one car's frames: the channel axis added last
+    batch = _batched(one)
+    assert batch.strides[-1] == 0 and np.array_equal(batch, np.concatenate(one))
+    together = driver.act_many(sims)
+    alone = [driver.act(sim) for sim in sims]
+    for many, single in zip(together, alone, strict=True):
+        assert np.array_equal(many.action_index, single.action_index)
+        assert np.array_equal(many.steering_deg, single.steering_deg)
