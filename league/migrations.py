@@ -579,6 +579,15 @@ ALTER TABLE submission_laps ADD COLUMN immobilized INTEGER;
 ALTER TABLE submission_laps ADD COLUMN reversals INTEGER
 """
 
+# Version 16: the policy runtime that drove a race (sim.training.policy.policy_runtime): a
+# race is judged by replay only where policies compute as they did. NULL for the reference
+# driver, a physical car and every race recorded before, and left out of their records
+# then. A replay's verdict keeps this machine's runtime when it had one to compare.
+POLICY_RUNTIME = """
+ALTER TABLE races ADD COLUMN runtime TEXT;
+ALTER TABLE sync_replays ADD COLUMN runtime TEXT
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -595,6 +604,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("model records", _script(MODEL_RECORDS)),
     Migration("copy lookups", _script(COPY_LOOKUPS)),
     Migration("resets of laps", _script(LAP_RESETS)),
+    Migration("policy runtimes of races", _script(POLICY_RUNTIME)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -102,6 +102,8 @@ def record_race(
             "started_at": result.started_at,
             "total_offtracks": result.total_offtracks,
             "physics": result.physics,
+            # Only a policy's races have one; the others' records stay as they always were.
+            **({"runtime": result.runtime} if result.runtime else {}),
         }
         existing = league.query_one(
             "SELECT content_hash FROM races WHERE id = ?", (result.result_id,)
@@ -228,6 +230,7 @@ def race_result(league: League, race_id: str) -> RaceResult:
             "total_offtracks": row["total_offtracks"],
             # NULL: recorded before physics was, which RaceResult reads as physics 1.
             **({"physics": row["physics"]} if row["physics"] is not None else {}),
+            **({"runtime": row["runtime"]} if row["runtime"] is not None else {}),
         }
     )
     return result.with_trace(race_trace(league, race_id))

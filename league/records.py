@@ -77,7 +77,7 @@ SHARED_TABLES: dict[str, Children | None] = {
 OPTIONAL_COLUMNS: dict[str, frozenset[str]] = {
     "nights": frozenset({"held_on"}),
     "submissions": frozenset({"physics", "race_type"}),
-    "races": frozenset({"physics"}),
+    "races": frozenset({"physics", "runtime"}),
 }
 
 

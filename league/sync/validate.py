@@ -40,7 +40,7 @@ from sim.foundation.ids import is_valid_id
 from sim.foundation.names import NAME_RULE, is_valid_name
 from sim.physics.labels import PHYSICAL
 from sim.physics.objects.settings import RaceType
-from sim.race.result import RaceResult, ResultError
+from sim.race.result import MAX_RUNTIME_LENGTH, RaceResult, ResultError
 from sim.race.rules import RulesError, rules_from_mapping
 
 Checker = Callable[[Any, str], None]  # raises RecordInvalidError naming the field
@@ -223,6 +223,9 @@ def physics(value: Any, field: str) -> None:
 
 # Which simulator timed the laps (sim.physics.labels); absent in records made before.
 _PHYSICS = Field("TEXT", physics, nullable=True, optional=True)
+# The policy runtime that drove a race (sim.training.runtime); absent for the reference
+# driver, a physical car and races recorded before.
+_RUNTIME = Field("TEXT", text(MAX_RUNTIME_LENGTH), nullable=True, optional=True)
 # A submission's race type when it is not a time trial (league.race_types); absent in time
 # trials, as in every submission made before race types.
 _SUBMISSION_RACE_TYPE = Field(
@@ -320,6 +323,7 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "started_at": _t(timestamp),
         "total_offtracks": _i(integer(0, MAX_COUNT)),
         "physics": _PHYSICS,
+        "runtime": _RUNTIME,
     },
     "correction": {
         "kind": _t(one_of(*CORRECTION_KINDS)),

@@ -4,9 +4,10 @@ deterministic, so any machine holding the model can run the race again and compa
 
 A race whose laps come out differently was not driven as it claims: it is taken out of
 the league and held in quarantine with the first lap that differs. A race that cannot
-be re-run here (its model or track is not on this machine, or it was timed by another
-version of the simulator) is unverifiable here and says why: nothing vouches for its
-laps but its racer's signature. Each verdict is remembered per race and content
+be re-run here (its model or track is not on this machine, it was timed by another
+version of the simulator, or its policy computed with another machine's numerics:
+`sim.training.policy.policy_runtime`) is unverifiable here and says why: nothing vouches
+for its laps but its racer's signature. Each verdict is remembered per race and content
 (`sync_replays`), so a second run re-races only what is new or was unverifiable.
 
 The driver comes from the caller (`DriverFor`): running a trained model needs torch,
@@ -17,7 +18,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Collection, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Final, Literal
 
 from league.records import record_body
@@ -25,6 +26,7 @@ from league.store import League, now_iso
 from league.sync import incoming
 from league.sync.local import STORE_SETTING, get_setting
 from league.sync.record import Seal, SyncRecord
+from league.trust.standing import other_numerics
 from sim.physics.labels import BEFORE_VERSIONING, CURRENT, PHYSICAL
 from sim.race.driver import Driver
 from sim.race.engine import run_race
@@ -47,6 +49,7 @@ class Verdict:
     racer: str
     outcome: Outcome
     detail: str  # one sentence: what differed, or why it is unverifiable ("" when the same)
+    runtime_here: str = ""  # this machine's policy runtime, when a policy was run or compared
 
 
 def verify_races(
@@ -72,11 +75,19 @@ def verify_races(
         verdict = _verify(league, str(row[0]), str(row[1]), driver_for)
         with league.transaction():
             league.conn.execute(
-                "INSERT INTO sync_replays (race_id, content_hash, outcome, detail, checked_at) "
-                "VALUES (?, ?, ?, ?, ?) ON CONFLICT (race_id) DO UPDATE SET "
+                "INSERT INTO sync_replays (race_id, content_hash, outcome, detail, checked_at, "
+                "runtime) VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (race_id) DO UPDATE SET "
                 "content_hash = excluded.content_hash, outcome = excluded.outcome, "
-                "detail = excluded.detail, checked_at = excluded.checked_at",
-                (verdict.race_id, row[2], verdict.outcome, verdict.detail, now_iso()),
+                "detail = excluded.detail, checked_at = excluded.checked_at, "
+                "runtime = excluded.runtime",
+                (
+                    verdict.race_id,
+                    row[2],
+                    verdict.outcome,
+                    verdict.detail,
+                    now_iso(),
+                    verdict.runtime_here or None,
+                ),
             )
             if verdict.outcome == "differs":
                 _withdraw(league, verdict, str(row[2]))
@@ -115,9 +126,16 @@ def _verify(league: League, race_id: str, racer: str, driver_for: DriverFor) -> 
             f"its model {str(body['model_hash'])[:12]} is not in this garage",
             " (racer-tui sync fetch-bundle installs it, if its racer shared it)",
         )
+    # Another CPU's kernels may turn a near tie between two actions the other way: a race
+    # is judged only under the policy runtime that drove it (races recorded before runtimes
+    # were are judged as they always were).
+    recorded, here = str(body.get("runtime") or ""), str(getattr(driver, "runtime", ""))
+    if recorded and recorded != here:
+        return replace(unverifiable(other_numerics(recorded, here)), runtime_here=here)
     result = run_race(track, rules, driver, racer=racer, seed=int(body["seed"]), keep_trace=False)
     claimed = body["laps"]
-    return Verdict(race_id, racer, *_compare(claimed, [lap.to_json() for lap in result.laps]))
+    outcome, detail = _compare(claimed, [lap.to_json() for lap in result.laps])
+    return Verdict(race_id, racer, outcome, detail, here)
 
 
 def _compare(

@@ -50,6 +50,11 @@ _BY_HAND: Final = ResultStanding(
 )
 
 
+def other_numerics(recorded: str, here: str) -> str:
+    """Why a race of another policy runtime is not judged here (league.trust.replay)."""
+    return f"its policy ran on the numerics of {recorded} and this machine's are {here or 'none'}"
+
+
 def result_standings(
     league: League, ids: Iterable[str], local_models: Collection[str] = ()
 ) -> dict[str, ResultStanding]:
@@ -60,8 +65,8 @@ def result_standings(
     if not wanted:
         return {}
     rows = league.query(
-        "SELECT r.id, r.model_hash, r.track_hash, coalesce(r.physics, ?), v.outcome "
-        "FROM races r LEFT JOIN sync_replays v "
+        "SELECT r.id, r.model_hash, r.track_hash, coalesce(r.physics, ?), v.outcome, "
+        "r.runtime, v.runtime FROM races r LEFT JOIN sync_replays v "
         "ON v.race_id = r.id AND v.content_hash = r.content_hash "
         "WHERE r.id IN (SELECT value FROM json_each(?))",
         (BEFORE_VERSIONING, json.dumps(wanted)),
@@ -69,9 +74,15 @@ def result_standings(
     shared = {str(row[0]) for row in league.query("SELECT DISTINCT model_hash FROM sync_bundles")}
     tracks_here: dict[str, bool] = {}
     found: dict[str, ResultStanding] = {}
-    for race_id, model_hash, track_hash, physics, outcome in rows:
+    for race_id, model_hash, track_hash, physics, outcome, runtime, runtime_here in rows:
         if track_hash not in tracks_here:
             tracks_here[track_hash] = find_track_by_hash(track_hash) is not None
+        if runtime and runtime_here and runtime != runtime_here and outcome != "same":
+            # A replay here found the policy's numerics are not this machine's.
+            found[race_id] = ResultStanding(
+                Standing.UNVERIFIABLE, other_numerics(str(runtime), str(runtime_here))
+            )
+            continue
         found[race_id] = _race_standing(
             str(model_hash),
             str(track_hash),

@@ -358,6 +358,7 @@ class _Race:
             total_offtracks=self.total_offtracks,
             started_at=self.started_at,
             trace=trace,
+            runtime=getattr(self.driver, "runtime", ""),
         )
 
 

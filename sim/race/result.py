@@ -31,6 +31,7 @@ from sim.race.trace import RaceTrace
 
 RESULT_FORMAT = 1
 MAX_LAPS = 10_000
+MAX_RUNTIME_LENGTH = 100  # a policy runtime's name (sim.training.runtime): about 35 now
 _HASH = re.compile(r"[\w:.\-]{1,200}")
 
 
@@ -149,6 +150,7 @@ class RaceResult:
     trace: RaceTrace | None = None
     physics: str = CURRENT  # the simulator's physics (sim.physics.labels): lap times of
     # different physics are never ranked together
+    runtime: str = ""  # the policy runtime that drove it (sim.training.runtime); "": none
 
     # --- league.ranking.Rankable ---------------------------------------------------------
     @property
@@ -213,6 +215,7 @@ class RaceResult:
             "best_lap_seconds": None if best is None else best.time_seconds,
             "total_offtracks": self.total_offtracks,
             "physics": self.physics,
+            **({"runtime": self.runtime} if self.runtime else {}),
         }
 
     @classmethod
@@ -275,6 +278,9 @@ class RaceResult:
         if not is_physics(physics):
             raise ResultError("physics must be 'racer-tui/<version>' or 'deepracer'.")
         assert isinstance(physics, str)
+        runtime = data.get("runtime", "")
+        if not isinstance(runtime, str) or len(runtime) > MAX_RUNTIME_LENGTH:
+            raise ResultError(f"runtime must be text of at most {MAX_RUNTIME_LENGTH} characters.")
         return cls(
             result_id=result_id,
             racer=_name(data, "racer"),
@@ -290,6 +296,7 @@ class RaceResult:
             started_at=_timestamp(data, "started_at"),
             trace=None,
             physics=physics,
+            runtime=runtime,
         )
 
 

@@ -15,8 +15,11 @@ continuous one) and the value function.
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import json
 import math
+import platform
 import struct
 import weakref
 from collections.abc import Mapping, Sequence
@@ -34,6 +37,7 @@ from torch import nn
 from sim.car_archive.archive import read_car_archive
 from sim.car_archive.driver import CarArchiveDriver
 from sim.car_archive.errors import CarModelError
+from sim.deepracer.action_space import discrete_grid
 from sim.deepracer.files import NEURAL_NETWORKS, ModelMetadata
 from sim.foundation.atomic import write_bytes_atomic
 from sim.foundation.remedies import Fix
@@ -500,6 +504,9 @@ class PolicyDriver:
         self.name = name
         self.content_hash = content_hash
         self._options = sensor_options or SensorOptions()
+        # The numerics it drives with: recorded on its races, which verification by replay
+        # judges only under the same (`policy_runtime`).
+        self.runtime = policy_runtime()
         # One Observer per simulation it drives in: a head-to-head race gives each car a
         # simulation of its own, and one model may drive several of them.
         self._observers: weakref.WeakKeyDictionary[TrackSimulation, Observer] = (
@@ -583,3 +590,79 @@ def driver_for_bundle(bundle: Bundle) -> PolicyDriver:
     return PolicyDriver(
         network, bundle.metadata, name=bundle.name, content_hash=bundle.content_hash
     )
+
+
+# --- the policy runtime ------------------------------------------------------------------
+# The policy runtime: the numerics this machine's policies compute with.
+#
+# A race replays exactly only where its policy computes exactly as it did. The libraries
+# pick their kernels by the CPU: oneDNN's convolutions by its instruction set, OpenBLAS's
+# matrix products by core type, numpy's ufuncs by its SIMD level, and an ARM machine takes
+# other kernels again. Their results differ in the last bits (measured on this project's
+# AMD EPYC: a camera network's outputs under oneDNN's SSE4.1 against AVX2, and a vector
+# network's under OpenBLAS's Prescott kernels against Haswell's, and under numpy without
+# AVX2), and a last bit can turn a near tie between two actions, and the race with it.
+# (Torch's own capability level, DEFAULT against AVX2, changed a fresh network's random
+# weights here, not a loaded network's outputs.)
+#
+# So the runtime is named by what it computes: a fixed camera network and a fixed vector
+# network (the paths races take: torch for a camera, numpy for the rest), run on fixed
+# inputs laid out as races lay them out, and the bits of their outputs hashed. Two machines
+# with the same name compute a race's policy the same; a race is recorded with the name,
+# and verification by replay judges a race only under the runtime that drove it.
+
+# The camera races use: some kernels are picked by the size of what they work on.
+_PROBE_CAMERA = SensorOptions()
+_PROBE_ACTIONS = discrete_grid(30.0, 5, 3.0, 2)
+
+
+def _fill(network: torch.nn.Module) -> None:
+    """Fixed weights, the same on every machine: numpy's PCG64 gives the same doubles
+    everywhere (torch's own generator does not: its CPU capability changes them)."""
+    rng = np.random.Generator(np.random.PCG64(47))
+    with torch.no_grad():
+        for parameter in network.parameters():
+            values = (rng.random(parameter.numel()) - 0.5) * 0.4
+            parameter.copy_(torch.from_numpy(values).reshape(parameter.shape).to(parameter.dtype))
+
+
+def _camera_bits() -> bytes:
+    network = build_network(ModelMetadata(_PROBE_ACTIONS, ("camera",)), _PROBE_CAMERA).eval()
+    _fill(network)
+    height, width = _PROBE_CAMERA.camera_height, _PROBE_CAMERA.camera_width
+    pattern = (np.arange(2 * height * width, dtype=np.int64) * 37 % 251).astype(np.uint8)
+    # As the Observer gives them: frames with their one channel added last (stride 0); one
+    # car's (a time trial) and two cars' (a head-to-head race's batch).
+    bits = b""
+    for cars in (1, 2):
+        frames = pattern[: cars * height * width].reshape(cars, height, width)[..., None]
+        with torch.inference_mode():
+            params, values = network(observation_tensors(frames))
+        bits += params.numpy().tobytes() + values.numpy().tobytes()
+    return bits
+
+
+def _vector_bits() -> bytes:
+    network = build_network(ModelMetadata(_PROBE_ACTIONS, ("vector",))).eval()
+    _fill(network)
+    actor = NumpyActor(network)
+    size = int(actor.layers[0][0].shape[0])
+    x = np.sin(np.arange(4 * size, dtype=np.float64)).reshape(4, size)
+    for weight, bias in actor.layers:
+        x = np.tanh(x @ weight + bias)
+    out = x @ actor.head[0] + actor.head[1]
+    return np.ascontiguousarray(out).tobytes()
+
+
+@functools.cache
+def policy_runtime() -> str:
+    """This machine's policy runtime: `torch 2.13.0 x86_64 <12 hex digits>`, the digits a
+    hash of the probe networks' output bits, worked out on one thread as policies drive
+    (`PolicyDriver`): the thread count is part of the numerics too."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        digest = hashlib.sha256(_camera_bits() + _vector_bits()).hexdigest()[:12]
+    finally:
+        torch.set_num_threads(threads)
+    return f"torch {torch.__version__.split('+')[0]} {platform.machine()} {digest}"

@@ -5,22 +5,30 @@ listed in quarantine, and one that cannot be re-run here is unverifiable with th
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from league.opening import open_league
-from league.races import record_race
+from league.races import race_result, record_race
+from league.records import record_body
 from league.store import League
 from league.trust.replay import verify_races
+from league.trust.standing import Standing, result_standings
 from racer_tui.cli.main import main
 from sim.foundation.ids import new_id
+from sim.garage.options import new_model
 from sim.race.driver import reference_driver
 from sim.race.engine import run_race
+from sim.race.result import RaceResult
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
 from sim.training.drivers import DriversByHash
+from sim.training.policy import build_network, policy_runtime, save_policy
 
 RULES = RaceRules(window_seconds=40.0)
 
@@ -145,3 +153,83 @@ def test_sync_verify_reports_in_text_and_json(
     assert main(["sync", "verify", "--again", "--db", str(db), "--json"]) == 0
     (again,) = json.loads(capsys.readouterr().out)
     assert again["outcome"] == "same"
+
+
+def _camera_model_race(racer: str) -> tuple[RaceResult, str]:
+    """A race of a garage camera model (an untrained policy: it drives all the same)."""
+    folder = new_model("cam", sensors=["camera"], track="hairpin-circuit")
+    save_policy(folder.policy_file, build_network(folder.metadata()))
+    track = resolve_track("hairpin-circuit")
+    driver = DriversByHash()(folder.content_hash(), track)
+    assert driver is not None
+    return run_race(track, RULES, driver, racer=racer, seed=5), policy_runtime()
+
+
+def test_a_race_is_judged_only_under_the_policy_runtime_that_drove_it(tmp_path: Path) -> None:
+    result, runtime = _camera_model_race("ana")
+    assert result.runtime == runtime and runtime.startswith("torch ")
+    other = replace(result, result_id=new_id(), runtime="torch 2.13.0 arm64 0123456789ab")
+    with open_league(tmp_path / "league.db") as league:
+        here = record_race(league, result)
+        elsewhere = record_race(league, other)
+        # The runtime travels with the race and comes back with it.
+        assert record_body(league, "races", here)["runtime"] == runtime
+        verdicts = {v.race_id: v for v in verify_races(league, DriversByHash())}
+        assert verdicts[here].outcome == "same"
+        assert verdicts[elsewhere].outcome == "unverifiable"
+        assert verdicts[elsewhere].detail == (
+            "its policy ran on the numerics of torch 2.13.0 arm64 0123456789ab and this "
+            f"machine's are {runtime}, so it cannot be re-run here"
+        )
+        assert len(league.query("SELECT id FROM races")) == 2  # nobody is withdrawn
+        # Every board says so too, though its model is here.
+        standing = result_standings(league, [here, elsewhere], {result.model_hash})
+        assert standing[here].standing is Standing.REPLAYED
+        assert standing[elsewhere].standing is Standing.UNVERIFIABLE
+        assert standing[elsewhere].why.startswith("its policy ran on the numerics of torch")
+
+
+def test_a_reference_race_has_no_runtime_and_keeps_its_record_as_before(tmp_path: Path) -> None:
+    with open_league(tmp_path / "league.db") as league:
+        race_id = _reference_race(league, "ana", seed=4)
+        assert "runtime" not in record_body(league, "races", race_id)
+        assert race_result(league, race_id).runtime == ""
+
+
+def _cli(*args: str, isa: str) -> str:
+    """racer-tui in a process of its own with oneDNN held to instruction set `isa`."""
+    done = subprocess.run(
+        [sys.executable, "-m", "racer_tui.cli.main", *args],
+        env={**os.environ, "ONEDNN_MAX_CPU_ISA": isa},
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+@pytest.mark.slow
+def test_a_camera_race_replays_exactly_under_the_kernels_that_drove_it(tmp_path: Path) -> None:
+    """Recorded under two of the kernel levels this machine offers (oneDNN's convolutions
+    on SSE4.1, and on the best it has): each replays the same under its own level, and is
+    unverifiable, never withdrawn, under the other."""
+    folder = new_model("cam", sensors=["camera"], track="hairpin-circuit")
+    save_policy(folder.policy_file, build_network(folder.metadata()))
+    db = str(tmp_path / "league.db")
+    race = ["--race", "cam", "--track", "hairpin-circuit", "--window", "20", "--record"]
+    for isa in ("SSE41", "ALL"):
+        _cli(*race, "--racer", f"ana-{isa.lower()}", "--db", db, isa=isa)
+    with open_league(Path(db)) as league:
+        rows = league.query("SELECT racer, runtime FROM races")
+    runtimes = {row["racer"]: row["runtime"] for row in rows}
+    assert runtimes["ana-sse41"] != runtimes["ana-all"]  # the level is in the runtime
+    for isa in ("SSE41", "ALL"):
+        verdicts = json.loads(_cli("sync", "verify", "--again", "--db", db, "--json", isa=isa))
+        outcomes = {verdict["racer"]: verdict["outcome"] for verdict in verdicts}
+        own = f"ana-{isa.lower()}"
+        other = "ana-all" if isa == "SSE41" else "ana-sse41"
+        assert outcomes == {own: "same", other: "unverifiable"}
+    with open_league(Path(db)) as league:
+        assert len(league.query("SELECT id FROM races")) == 2
