@@ -120,6 +120,8 @@ CASES: list[tuple[str, Change, str]] = [
     ("submission", _set("laps", {"number": 1}), "are not a list"),
     ("race", _lap("time_seconds", 99.0), "not a valid race result"),
     ("race", _set("total_offtracks", 10**12), "total_offtracks is not a whole number"),
+    ("race", _set("runtime", "x" * 101), "runtime is not"),
+    ("race", _set("runtime", 7), "runtime is not"),
     (
         "correction",
         lambda body: body.update(
@@ -159,3 +161,10 @@ def test_outgoing_bodies_are_the_leagues_own(tmp_path: Path, league: League) -> 
     for batch in unsent_batches(league, "nowhere", batch=3):
         for record in batch.records:
             assert record.body == record_body(league, TABLE_OF_KIND[record.kind], record.record_id)
+
+
+def test_a_race_with_its_policy_runtime_passes(made: dict[str, SyncRecord]) -> None:
+    original = made["race"]
+    body = copy.deepcopy(original.body)
+    body["runtime"] = "torch 2.13.0 x86_64 16caca443e89"
+    check_record(make_record("race", original.record_id, body))
