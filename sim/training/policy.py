@@ -662,7 +662,10 @@ def policy_runtime() -> str:
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        digest = hashlib.sha256(_camera_bits() + _vector_bits()).hexdigest()[:12]
+        # Building the probes draws torch's random weights: the generator is put back, so
+        # a seeded training draws the same numbers whether or not a probe ran first.
+        with torch.random.fork_rng(devices=[]):
+            digest = hashlib.sha256(_camera_bits() + _vector_bits()).hexdigest()[:12]
     finally:
         torch.set_num_threads(threads)
     return f"torch {torch.__version__.split('+')[0]} {platform.machine()} {digest}"

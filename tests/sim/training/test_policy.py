@@ -25,6 +25,7 @@ from sim.training.policy import (
     driver_for_model,
     load_policy,
     policy_bytes,
+    policy_runtime,
     save_policy,
 )
 
@@ -221,3 +222,15 @@ def test_several_cars_act_in_one_batch_laid_out_as_one_cars_frames() -> None:
     for many, single in zip(together, alone, strict=True):
         assert np.array_equal(many.action_index, single.action_index)
         assert np.array_equal(many.steering_deg, single.steering_deg)
+
+
+def test_the_policy_runtime_is_stable_and_leaves_torchs_generator_alone() -> None:
+    policy_runtime.cache_clear()
+    torch.manual_seed(3)
+    expected = torch.rand(4)
+    torch.manual_seed(3)
+    name = policy_runtime()
+    assert torch.equal(torch.rand(4), expected)  # a seeded training draws the same
+    assert name.startswith(f"torch {torch.__version__.split('+')[0]} ")
+    policy_runtime.cache_clear()
+    assert policy_runtime() == name  # the same numerics, the same name
