@@ -21,7 +21,12 @@ class Section:
 SECTIONS: tuple[Section, ...] = (
     Section("garage", "Garage", "1", "your models: create, edit, clone, import, race"),
     Section("tracks", "Tracks", "2", "the built-in and imported tracks, with reference laps"),
-    Section("races", "Races", "3", "time trials of any trained model or the reference driver"),
+    Section(
+        "races",
+        "Races",
+        "3",
+        "time trials of any trained model or the reference driver, and head-to-head races",
+    ),
     Section("training", "Training", "4", "train models in the background with live charts"),
     Section("league", "League", "5", "leaderboard, league nights and the projector"),
 )

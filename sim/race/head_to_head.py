@@ -142,6 +142,7 @@ class CarInRace:
     lap_penalty: float = 0.0
     total_offtracks: int = 0
     hold_left: float = 0.0
+    hold_for: str = ""  # why it is held: "crash", "off track" or "reversed"
     hold_pose: tuple[float, float, float] = (0.0, 0.0, 0.0)
     hold_travelled: float = 0.0
     finished_at: float | None = None
@@ -346,18 +347,18 @@ class HeadToHeadRace:
             for other in crashed_into:
                 self.incidents.append(Incident(self.clock, "crash", car.index, other))
             sim.continue_episode(0, float(sim.travelled[0]))  # held where it is
-            self._penalise(car, self.rules.collision_penalty_seconds)
+            self._penalise(car, self.rules.collision_penalty_seconds, "crash")
         elif status == EpisodeStatus.OFF_TRACK:
             car.status = OFF_TRACK
             car.lap_offtracks += 1
             car.total_offtracks += 1
             self._put_back(car, before)
-            self._penalise(car, self.rules.penalty_seconds)
+            self._penalise(car, self.rules.penalty_seconds, "off track")
         elif status == EpisodeStatus.REVERSED:
             car.status = REVERSED
             car.lap_reversals += 1
             self._put_back(car, before)
-            self._penalise(car, self.rules.penalty_seconds)
+            self._penalise(car, self.rules.penalty_seconds, "reversed")
         elif status is not None:  # nothing else is switched on in a race
             sim.continue_episode(0, float(sim.travelled[0]))
 
@@ -424,22 +425,29 @@ class HeadToHeadRace:
             travelled=before.travelled,
         )
 
-    def _penalise(self, car: CarInRace, seconds: float) -> None:
+    def _penalise(self, car: CarInRace, seconds: float, why: str) -> None:
         sim = self.sims[car.index]
         fleet = sim.fleet
         car.lap_penalty += seconds
         car.hold_left = car.pause = seconds
+        car.hold_for = why
         car.hold_pose = (float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0]))
         car.hold_travelled = float(sim.travelled[0])
         if seconds > 0.0:
             self.grid.ghost[car.index] = True
 
     def _note_overtakes(self) -> None:
+        """A car that drove past another this step overtook it. A change of order because
+        a car was put back behind another, or while the passing car stood held, is not an
+        overtake (two held cars put back in turn swapped places step after step)."""
         order = self.running_order()
         before = {car: place for place, car in enumerate(self._order)}
         for place, car in enumerate(order):
+            if self.cars[car].status not in (IN_PROGRESS, LAP_COMPLETE):
+                continue
             for passed in order[place + 1 :]:
-                if before[car] > before[passed]:
+                put_back = self.cars[passed].status in (OFF_TRACK, REVERSED)
+                if before[car] > before[passed] and not put_back:
                     self.incidents.append(Incident(self.clock, "overtake", car, passed))
         self._order = order
 

@@ -39,6 +39,7 @@ class CarTick:
     crashes: int  # into other cars, the whole race
     offtracks: int  # the whole race
     held: float  # seconds of penalty hold still to serve
+    held_for: str  # why: "crash", "off track" or "reversed" ("" when not held)
     finished: bool  # completed the race's laps
 
 
@@ -73,6 +74,7 @@ def _car_tick(race: HeadToHeadRace, car: CarInRace) -> CarTick:
         crashes=sum(lap.crashes for lap in car.laps) + car.lap_crashes,
         offtracks=car.total_offtracks,
         held=car.hold_left,
+        held_for=car.hold_for if held else "",
         finished=car.finished_at is not None,
     )
 

@@ -37,6 +37,8 @@ from sim.tracks.track import Track
 CAR_COLOURS = ("dark_orange", "medium_purple1", "deep_sky_blue1", "green3", "hot_pink", "gold1")
 CAR_GLYPH = "■"
 INCIDENTS_KEPT = 12  # the newest first: a short panel cuts the oldest
+# What a car serving a penalty is held for, in the running order's gap column.
+HELD_WORDS = {"crash": "crash", "off track": "off", "reversed": "turned"}
 
 
 @dataclass(frozen=True)
@@ -61,7 +63,7 @@ def standings_text(tick: HeadToHeadTick, labels: Sequence[str], width: int) -> T
     leader (a car serving a penalty is dim and says so while the race runs; at the end
     every car has its gap)."""
     text = Text(no_wrap=True, overflow="ellipsis")
-    name_width = max(width - 14, 6)  # "1 ■ " and " L12" and a gap of six
+    name_width = max(width - 15, 6)  # "1 ■ ", " L12" and " " and a gap of six
     for place, k in enumerate(tick.order, start=1):
         car = tick.cars[k]
         if place > 1:
@@ -76,12 +78,19 @@ def standings_text(tick: HeadToHeadTick, labels: Sequence[str], width: int) -> T
         text.append(f" {f'L{car.lap}':>3}")
         gap = tick.gaps[k]
         if held:
-            text.append(f"{'held':>6}", style="bold red")
+            text.append(f" {HELD_WORDS.get(car.held_for, 'held'):>6}", style="bold red")
         elif place == 1:
-            text.append(f"{'✓' if car.finished else 'lead':>6}", style="bold")
+            text.append(f" {'✓' if car.finished else 'lead':>6}", style="bold")
         else:
-            text.append(f"{'-' if gap is None else f'+{gap:.1f}':>6}")
+            text.append(f" {gap_text(gap):>6}")
     return text
+
+
+def gap_text(gap: float | None) -> str:
+    """A gap to the leader in at most six characters: tenths below 100 s."""
+    if gap is None:
+        return "-"
+    return f"+{gap:.1f}" if gap < 99.95 else f"+{gap:.0f}"
 
 
 def incident_lines(incidents: Sequence[Incident], labels: Sequence[str]) -> Text:
@@ -239,9 +248,11 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
         text.append(f"Lap {leader.lap}" + (f" of {laps}" if laps is not None else ""), style="bold")
         text.append(f"   {self.playback}")
         if self.at_end and self.result is not None:
-            winner = self.labels[self.result.winner.car]
+            winner = self.result.winner
             text.append("\n")
-            text.append(f"{winner} won.\n", style="bold green")
+            if laps is not None and winner.finished_at is None:  # nobody completed the laps
+                text.append("Time ran out: most laps won.\n", style="yellow")
+            text.append(f"{self.labels[winner.car]} won.\n", style="bold green")
             text.append("r replays, Esc goes back.", style="dim")
         return text
 

@@ -15,9 +15,11 @@ from racer_tui.app.application import create_app
 from racer_tui.app.screens.head_to_head_dialog import HeadToHeadDialog
 from racer_tui.app.screens.head_to_head_screen import (
     CAR_COLOURS,
+    HELD_WORDS,
     HeadToHeadScreen,
     HeadToHeadSetup,
     car_labels,
+    gap_text,
     standings_text,
 )
 from racer_tui.app.screens.races import RacesScreen
@@ -101,12 +103,13 @@ def test_the_standings_give_each_car_its_colour_lap_and_gap() -> None:
     assert len(lines) == 2 and all(len(line) <= 34 for line in lines)
     leader, second = mid.order
     assert lines[0].startswith(f"1 ■ {labels[leader]}")
-    assert lines[0].endswith("held" if mid.cars[leader].held > 0 else "lead")
+    leading = mid.cars[leader]
+    assert lines[0].endswith(HELD_WORDS[leading.held_for] if leading.held > 0 else "lead")
     gap = mid.gaps[second]
     if mid.cars[second].held > 0:
-        assert lines[1].endswith("held")
+        assert lines[1].endswith(HELD_WORDS[mid.cars[second].held_for])
     else:
-        assert lines[1].endswith("-" if gap is None else f"+{gap:.1f}")
+        assert lines[1].endswith(gap_text(gap))
     # Each car's square is in its grid colour.
     squares = [span.style for span in text.spans if "bold" in str(span.style)]
     assert f"bold {CAR_COLOURS[leader]}" in squares and f"bold {CAR_COLOURS[second]}" in squares
@@ -115,8 +118,9 @@ def test_the_standings_give_each_car_its_colour_lap_and_gap() -> None:
     assert last.result is not None
     end = standings_text(last, labels, 34).plain.split("\n")
     runner_up = last.result.cars[1]
-    expected = "-" if runner_up.gap_seconds is None else f"+{runner_up.gap_seconds:.1f}"
-    assert end[0].endswith("✓") and end[1].endswith(expected)
+    assert end[0].endswith("✓") and end[1].endswith(gap_text(runner_up.gap_seconds))
+    # A gap of 100 s or more keeps a space before it (it ran into the lap).
+    assert gap_text(198.46) == "+198" and gap_text(12.34) == "+12.3" and gap_text(None) == "-"
     # A long name is cut so the lap and the gap keep their place.
     long = standings_text(mid, ["#1 " + "x" * 60, "#2 " + "y" * 60], 30).plain.split("\n")
     assert all(len(line) <= 30 and "…" in line for line in long)

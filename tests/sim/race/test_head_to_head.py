@@ -23,6 +23,7 @@ from sim.race.head_to_head import (
     run_head_to_head,
 )
 from sim.race.rules import HEAD_TO_HEAD_RULES, RaceRules
+from sim.race.trace import IN_PROGRESS, LAP_COMPLETE, OFF_TRACK, PAUSE, REVERSED
 from sim.sensors.observations import Observer
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
@@ -204,3 +205,26 @@ def test_the_race_ends_when_the_first_car_completes_one_lap(track: Track) -> Non
     assert race.winner.laps_completed == 1
     assert [finish.laps_completed for finish in race.cars[1:]] == [0, 0]
     assert race.clock < 10.0
+
+
+def test_only_a_car_that_drove_past_another_overtook_it(track: Track) -> None:
+    """A change of order because a car was put back behind another, or while the car now
+    in front stood held, is no overtake: two untrained cars put back in turn swapped
+    places step after step, and the race view listed every swap."""
+    driver = reference_driver(track)
+    race = HeadToHeadRace(track, HEAD_TO_HEAD_RULES, [Entry("a", driver), Entry("b", driver)])
+    front, back = race.cars
+
+    def swap(front_status: int, back_status: int) -> list[tuple[str, int, int]]:
+        race._order = [0, 1]
+        race.grid.standing = np.array([1.0, 2.0])  # car 1 is ahead now
+        front.status, back.status = front_status, back_status
+        seen = len(race.incidents)
+        race._note_overtakes()
+        return [(i.kind, i.car, i.other) for i in race.incidents[seen:]]
+
+    assert swap(IN_PROGRESS, IN_PROGRESS) == [("overtake", 1, 0)]
+    assert swap(IN_PROGRESS, PAUSE) == []  # the car now in front stood held
+    assert swap(OFF_TRACK, IN_PROGRESS) == []  # the other was put back behind it
+    assert swap(REVERSED, IN_PROGRESS) == []
+    assert swap(IN_PROGRESS, LAP_COMPLETE) == [("overtake", 1, 0)]
