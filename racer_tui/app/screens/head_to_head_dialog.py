@@ -7,12 +7,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
+from rich.segment import Segment
 from rich.text import Text
 from textual import on
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Vertical
-from textual.widgets import Button, Label, Select, SelectionList, Static
+from textual.strip import Strip
+from textual.widgets import Button, Checkbox, Label, Select, SelectionList, Static
 
 from racer_tui.app.screens.dialogs import FormDialog, show_problem
 from sim.race.head_to_head import MAX_CARS, MIN_CARS
@@ -27,6 +29,7 @@ LAP_CHOICES: tuple[tuple[str, int | None], ...] = (
     ("most laps in the window", None),
 )
 WHOLE_WINDOW = 0  # the laps select's value for None (a Select cannot hold None)
+CHOSEN = "✓"
 
 
 @dataclass(frozen=True)
@@ -36,11 +39,25 @@ class HeadToHeadRequest:
 
 
 class ChosenDrivers(SelectionList[int]):
-    """The drivers to choose from: space chooses or lets go, Enter races."""
+    """The drivers to choose from: space chooses or lets go, Enter races. A chosen driver's
+    box holds a tick, an unchosen one's nothing: Textual draws an X in both and tells them
+    apart by colour alone."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("enter", "screen.confirm", "Race", show=False),
     ]
+
+    def render_line(self, y: int) -> Strip:
+        strip = super().render_line(y)
+        segments = list(strip)
+        if len(segments) < 2 or segments[1].text != Checkbox.BUTTON_INNER:
+            return strip
+        index = self.scroll_offset.y + y
+        chosen = index < self.option_count and self.get_option_at_index(index).value in (
+            self.selected
+        )
+        segments[1] = Segment(CHOSEN if chosen else " ", segments[1].style)
+        return Strip(segments, strip.cell_length)
 
 
 class HeadToHeadDialog(FormDialog[HeadToHeadRequest]):

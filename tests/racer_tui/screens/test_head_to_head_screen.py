@@ -62,7 +62,11 @@ async def test_a_head_to_head_is_chosen_on_the_races_screen_and_raced_live() -> 
         problem = str(dialog.query_one("#problem", Static).render())
         assert "Choose 2 to 6 drivers with space (1 chosen)." in problem
         assert app.screen is dialog
+        # Chosen and not chosen are told apart without colour: a tick or an empty box.
+        listed = painted(dialog.query_one(SelectionList))
+        assert "✓▌ reference driver" in listed and "▐ ▌ ada" in listed
         await pilot.press("down", "space")  # ada, second on the grid
+        assert "✓▌ ada" in painted(dialog.query_one(SelectionList))
         dialog.query_one("#h2h-laps", Select).value = 1
         await pilot.press("enter")
         view = app.screen
