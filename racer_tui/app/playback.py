@@ -91,11 +91,16 @@ PLAYBACK_BINDINGS: list[BindingType] = [
 ]
 
 
+class _Tick(Protocol):
+    @property
+    def clock(self) -> float: ...
+
+
 class _PlaybackView(Protocol):
     clock: PlaybackClock
 
     @property
-    def ticks(self) -> Sequence[object]: ...
+    def ticks(self) -> Sequence[_Tick]: ...
 
     @property
     def at_end(self) -> bool: ...
@@ -126,6 +131,18 @@ class PlaybackKeys:
         if action == "resume":
             return self.clock.paused and not self.at_end
         return True
+
+    def ticks_reached(self: _PlaybackView, index: int) -> list[int]:
+        """The ticks after `index` that the race clock has reached by now, in order (the
+        view draws the last; each may have something to note on the way). Call it only
+        once there are ticks."""
+        race_clock = self.clock.advance(self.ticks[-1].clock)
+        reached = []
+        last = len(self.ticks) - 1
+        while index < last and self.ticks[index + 1].clock <= race_clock:
+            index += 1
+            reached.append(index)
+        return reached
 
     def restart_playback(self: _PlaybackView) -> bool:
         """Back to the start, if the view has shown the race's end (r); False, with the

@@ -248,6 +248,12 @@ class HeadToHeadRace:
         )
 
     @property
+    def order(self) -> list[int]:
+        """The running order as the last step left it (`running_order`, kept by each
+        step for its overtakes)."""
+        return list(self._order)
+
+    @property
     def finished(self) -> bool:
         if self.clock >= self.rules.window_seconds - _EPS:
             return True

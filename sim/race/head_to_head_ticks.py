@@ -85,7 +85,7 @@ def live_tick(
     result: HeadToHeadResult | None = None,
 ) -> HeadToHeadTick:
     """The race as it stands now."""
-    order = race.running_order() if result is None else [finish.car for finish in result.cars]
+    order = race.order if result is None else [finish.car for finish in result.cars]
     leader = order[0]
     if result is None:
         gaps = tuple(race.gap_seconds(leader, k) for k in range(len(race.cars)))

@@ -188,14 +188,10 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
             self.clock.wait()
             self._update_panel()
             return
-        race_clock = self.clock.advance(self.ticks[-1].clock)
-        index = self._index
-        last = len(self.ticks) - 1
-        while index < last and self.ticks[index + 1].clock <= race_clock:
-            index += 1
+        for index in self.ticks_reached(self._index):
+            self._index = index
             self.incidents.extend(self.ticks[index].incidents)
-        self._index = index
-        tick = self.ticks[index]
+        tick = self.ticks[self._index]
         self.query_one(RaceMap).show(None, cars=tuple(self._racing(tick, k) for k in tick.order))
         self.frames += 1
         self._update_panel()

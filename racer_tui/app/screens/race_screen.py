@@ -205,17 +205,13 @@ class RaceScreen(PlaybackKeys, RacerScreen[RaceResult | None]):
             self.clock.wait()
             self._update_panel()
             return
-        race_clock = self.clock.advance(self.ticks[-1].clock)
-        index = self._index
-        last = len(self.ticks) - 1
-        while index < last and self.ticks[index + 1].clock <= race_clock:
-            index += 1
-            if self.ticks[index].offtrack and not self.ticks[index - 1].offtrack:
-                tick = self.ticks[index]
+        for index in self.ticks_reached(self._index):
+            self._index = index
+            tick = self.ticks[index]
+            if tick.offtrack and not self.ticks[index - 1].offtrack:
                 self._offtrack_xy.append((tick.x, tick.y))
-        self._index = index
-        self._draw(self.ticks[index])
-        result = self.ticks[index].result
+        self._draw(self.ticks[self._index])
+        result = self.ticks[self._index].result
         if result is not None:
             if self.at_end != self._bindings_at_end:  # space neither pauses nor resumes now
                 self._bindings_at_end = self.at_end

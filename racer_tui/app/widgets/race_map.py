@@ -95,8 +95,13 @@ class MapProjection:
         return grid
 
 
+def _octant(heading_deg: float) -> int:
+    """Which of eight 45-degree steps counter-clockwise from east a heading is nearest."""
+    return round((heading_deg % 360.0) / 45.0) % 8
+
+
 def _arrow(heading_deg: float) -> str:
-    return _ARROWS[round((heading_deg % 360.0) / 45.0) % 8]
+    return _ARROWS[_octant(heading_deg)]
 
 
 def _densify(line: FloatArray, spacing: float) -> FloatArray:
@@ -241,7 +246,7 @@ class RaceMap(Widget):
         for x, y, heading in self._objects:
             glyph = _OBJECT
             if self._objects_are_cars:
-                glyph = _BOT_CARS[round((heading % 360.0) / 45.0) % 8]
+                glyph = _BOT_CARS[_octant(heading)]
             marks[projection.cell(x, y)] = (glyph, "race-map--object")
         if self._ghost is not None:
             marks[projection.cell(*self._ghost)] = (_GHOST, "race-map--ghost")

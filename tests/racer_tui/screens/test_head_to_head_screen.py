@@ -83,7 +83,8 @@ async def test_a_head_to_head_is_chosen_on_the_races_screen_and_raced_live() -> 
         assert "#1 reference driver" in order and "#2 ada" in order
         await pilot.press("e")  # to the end
         await wait_for(pilot, lambda: view.at_end)
-        await pilot.pause(0.2)
+        # The panel redraws at its own pace: until it shows the finish.
+        await wait_for(pilot, lambda: "won." in painted(view.query_one("#h2h-facts")))
         facts = painted(view.query_one("#h2h-facts"))
         assert "#1 reference driver won." in facts  # an untrained policy does not lap
         assert "r replays, Esc goes back." in facts
@@ -149,7 +150,7 @@ async def test_the_view_fits_80x24_and_60x20_and_says_a_failed_race(size: tuple[
         view = HeadToHeadScreen(setup)
         await app.push_screen(view)
         await wait_for(pilot, lambda: view.failure is not None)
-        await pilot.pause(0.2)
+        await wait_for(pilot, lambda: "stopped" in painted(view.query_one("#h2h-facts")))
         facts = "".join(painted(view.query_one("#h2h-facts")).split())
         assert "Theracestopped.Thismodel'spolicyfileisdamaged" in facts
         assert "Escgoesback." in facts
