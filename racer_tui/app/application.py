@@ -49,6 +49,7 @@ from racer_tui.app.long_running import (
 )
 from racer_tui.app.palette import PaletteCommand, RacerCommands
 from racer_tui.app.removed_widget_clicks import ignore_clicks_on_removed_widgets
+from racer_tui.app.rendered_lines import let_removed_widgets_lines_go, make_strip_caches_lazy
 from racer_tui.app.screens.base import ModelAdded, push_kept
 from racer_tui.app.screens.coach import CoachScreen
 from racer_tui.app.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
@@ -202,6 +203,8 @@ class RacerTuiApp(App[int]):
         self.crash_report: Path | None = None  # written on the first unexpected error
         self.crash_report_problem: str | None = None  # why it could not be written
         memoise_background_styles_by_colour()  # for every app: tests keep many in one process
+        make_strip_caches_lazy()
+        let_removed_widgets_lines_go()
         ignore_clicks_on_removed_widgets()
         if long_running:
             limit_malloc_arenas()  # before the app starts its worker threads

@@ -169,6 +169,11 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
     def on_resize(self) -> None:
         self.set_class(self.size.width < self.NARROW, "-narrow")
 
+    def on_unmount(self) -> None:
+        # Freed now rather than with the removed screen's cycle, in a full collection's
+        # pause a key could meet (racer_tui.app.long_running).
+        self.ticks = []
+
     @work(thread=True, exclusive=True, group="head-to-head")
     def _run_race(self) -> None:
         setup = self.setup

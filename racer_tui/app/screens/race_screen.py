@@ -307,6 +307,10 @@ class RaceScreen(PlaybackKeys, RacerScreen[RaceResult | None]):
     def on_unmount(self) -> None:
         if self.setup.live is not None:
             self.setup.live.clear()  # the heat is no longer running here
+        # A removed screen is garbage in a reference cycle, freed only by a full collection;
+        # its 3,600 ticks let go now are freed at once, not in a pause a key could meet
+        # (racer_tui.app.long_running).
+        self.ticks = []
 
     @property
     def job(self) -> Job:

@@ -93,6 +93,9 @@ async def test_a_head_to_head_is_chosen_on_the_races_screen_and_raced_live() -> 
         assert not view.at_end and view.incidents == []
         await pilot.press("escape")
         assert isinstance(app.screen, RacesScreen)
+        await wait_for(pilot, lambda: not view.is_attached)
+        # Let go as the view is removed, not with its reference cycle in a full collection.
+        assert view.ticks == [] and view.result is not None
 
 
 def test_the_standings_give_each_car_its_colour_lap_and_gap() -> None:

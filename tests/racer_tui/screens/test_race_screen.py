@@ -26,6 +26,7 @@ from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
 from sim.training.policy import driver_for_model
+from tests.racer_tui.screens.tui_helpers import wait_for
 
 SHORT = RaceRules(window_seconds=20.0)
 
@@ -74,6 +75,10 @@ async def test_a_live_race_fills_the_laps_table_and_returns_its_result() -> None
         assert "[bold]Ada" in title  # a racer's name is plain text, not markup
         await pilot.press("escape")
         assert app.screen is not screen
+        await wait_for(pilot, lambda: not screen.is_attached)
+        # Its ticks are let go as it is removed, not with its reference cycle in a full
+        # collection (a pause a key could meet); the result stays.
+        assert screen.ticks == [] and screen.result is result
 
 
 async def test_a_recorded_race_replays_with_a_ghost() -> None:
