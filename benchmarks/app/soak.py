@@ -32,6 +32,11 @@ actions and at least 50):
   section switch: the new section's screen). Headless, `_display` returns before encoding
   and writing; the hook encodes each update to escape sequences as a terminal driver would
   (`render_segments`), so only the write itself is missing.
+- a key in a terminal, at worst: Pilot sends its keys from the app's own event loop, so it
+  never sends one while a collection holds the interpreter, and the latencies above never
+  include a whole collection. A terminal's key arrives at any moment: one arriving as the
+  longest collection starts waits for all of it, then is answered. Printed as the longest
+  collection plus the median key latency, beside the same target.
 Pauses and latencies are wall-clock times: on a machine with other work (the training
 child takes most of a core) they include waiting for a CPU; the load average is printed.
 
@@ -721,6 +726,9 @@ async def soak(actions: int, warmup: int, started: float) -> dict[str, Any]:
             "memory_returned_to_the_system": app.collector.trims,
         },
         "key_latency_ms": percentiles(all_keys),
+        "terminal_key_worst_ms": round(
+            gc_watch.longest_ms + float(percentiles(all_keys)["p50"]), 1
+        ),
         "section_switch_latency_ms": percentiles(runner.latencies.get("section switch", [])),
         "latency_by_key_ms": {
             label: percentiles(values) for label, values in sorted(runner.latencies.items())
@@ -830,6 +838,11 @@ def print_report(report: dict[str, Any]) -> None:
             f"{figures['p50']:.1f} / {figures['p95']:.1f} / {figures['max']:.1f} ms",
             f"p95 < {TARGET_P95_MS:g}, max < {TARGET_MAX_MS:g}",
         )
+    table.add_row(
+        "a key in a terminal, at worst (longest collection + key p50)",
+        f"{report['terminal_key_worst_ms']:.1f} ms",
+        f"max < {TARGET_MAX_MS:g}",
+    )
     console.print(table)
     by_key = Table(title="latency by key, ms (after warm-up)", title_justify="left")
     for column in ("key", "n", "p50", "p95", "max"):

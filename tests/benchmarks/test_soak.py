@@ -70,6 +70,9 @@ def test_a_short_soak_reports_every_figure(racer_home: Path, tmp_path: Path) -> 
     assert gc_figures["longest_pause_ms"] >= 0.0
     assert gc_figures["full_collections"] >= 0
     assert gc_figures["collections"] >= gc_figures["full_collections"]
+    # A terminal's key can meet a whole collection: the worst is that pause and an answer.
+    worst = gc_figures["longest_pause_ms"] + report["key_latency_ms"]["p50"]
+    assert abs(report["terminal_key_worst_ms"] - worst) <= 0.1
 
     assert_latencies(report["key_latency_ms"])
     assert_latencies(report["section_switch_latency_ms"])
