@@ -24,6 +24,7 @@ machine.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import Enum
@@ -65,6 +66,9 @@ class Match:
     a: Source
     b: Source
 
+
+# Every match id a bracket draws (`Match.id`), and no other: what a recorded race may name.
+MATCH_ID_PATTERN = re.compile(r"[WL][1-9][0-9]?-[1-9][0-9]{0,2}|GF2?")
 
 BYE = ""  # a side with nobody: its other side goes through without racing
 

@@ -588,6 +588,28 @@ ALTER TABLE races ADD COLUMN runtime TEXT;
 ALTER TABLE sync_replays ADD COLUMN runtime TEXT
 """
 
+# One shared row per head-to-head race (league.head_to_heads): its cars (in finishing
+# order, each with its laps) and incidents are JSON lists in the row, so the race is one
+# signed record and never half here.
+HEAD_TO_HEADS = """
+CREATE TABLE head_to_heads (
+    id TEXT PRIMARY KEY,
+    track_hash TEXT NOT NULL REFERENCES tracks(track_hash),
+    rules TEXT NOT NULL,
+    seed INTEGER NOT NULL,
+    started_at TEXT NOT NULL,
+    clock REAL NOT NULL,
+    cars TEXT NOT NULL,
+    incidents TEXT NOT NULL,
+    night_id TEXT REFERENCES nights(id),
+    match_id TEXT,
+    physics TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX head_to_heads_track ON head_to_heads(track_hash, started_at);
+CREATE INDEX head_to_heads_night ON head_to_heads(night_id)
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -605,6 +627,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("copy lookups", _script(COPY_LOOKUPS)),
     Migration("resets of laps", _script(LAP_RESETS)),
     Migration("policy runtimes of races", _script(POLICY_RUNTIME)),
+    Migration("head-to-head races", _script(HEAD_TO_HEADS)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

@@ -83,8 +83,9 @@ def record_race(
         raise LeagueError(f"race result id {result.result_id!r} is not a valid record id.")
     if result.rules.race_type is RaceType.HEAD_TO_MODEL:
         raise LeagueError(
-            "a car's laps from a head-to-head race are not recorded in a league yet: its "
-            "boards rank time trials, and a lap among rivals does not compare with them."
+            "a car's laps from a head-to-head race are not a race of their own: its boards "
+            "rank time trials, and a lap among rivals does not compare with them (record "
+            "the whole head-to-head race: league.head_to_heads)."
         )
     check_possible_laps(result)  # before the transaction: a floor may take a second to work out
     laps = lap_rows(result)

@@ -63,6 +63,7 @@ DATE_FIELD: Final[dict[str, str]] = {
     "correction": "created_at",
     "submission": "submitted_at",
     "race": "started_at",
+    "head_to_head": "started_at",
     MODEL_KIND: "registered_at",
 }
 # Names rather than results, made on a racer's laptop before they joined the league; a
@@ -121,7 +122,7 @@ def check_dates(record: SyncRecord, now_ms: int | None = None) -> None:
         return
     dated = iso_ms(str(record.body[field]))
     earliest, latest = dated - DATE_TOLERANCE_MS, dated + DATE_TOLERANCE_MS
-    if record.kind == "race":
+    if record.kind in ("race", "head_to_head"):
         latest = made  # saved when it ended: any time after it started
     if not earliest <= made <= latest:
         raise RecordInvalidError(

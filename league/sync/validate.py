@@ -22,7 +22,9 @@ from typing import Any, Final
 
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
 from league.assembler import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
+from league.brackets import MATCH_ID_PATTERN
 from league.errors import LeagueError
+from league.head_to_heads import MAX_INCIDENTS, lap_from_list
 from league.night_changes import NIGHT_CHANGES
 from league.race_types import HEAD_TO_BOT, OBJECT_AVOIDANCE, race_type_of, words
 from league.racers import HEX_COLOUR, check_name
@@ -40,6 +42,7 @@ from sim.foundation.ids import is_valid_id
 from sim.foundation.names import NAME_RULE, is_valid_name
 from sim.physics.labels import PHYSICAL
 from sim.physics.objects.settings import RaceType
+from sim.race.head_to_head import INCIDENT_KINDS, MAX_CARS, MIN_CARS
 from sim.race.result import MAX_RUNTIME_LENGTH, RaceResult, ResultError
 from sim.race.rules import RulesError, rules_from_mapping
 
@@ -237,6 +240,11 @@ _SUBMISSION_RACE_TYPE = Field(
 _COUNT_SINCE_RESETS = Field("INTEGER", integer(1, MAX_COUNT), nullable=True, optional=True)
 
 
+def match_id(value: Any, field: str) -> None:
+    if not isinstance(value, str) or not MATCH_ID_PATTERN.fullmatch(value):
+        raise _bad(field, "is not a bracket match (W1-1, L2-1, GF, GF2)")
+
+
 # Every shared table's columns except id and content_hash (a test holds these to the
 # schema in league.migrations, so the two cannot drift apart).
 FIELDS: Final[dict[str, dict[str, Field]]] = {
@@ -325,6 +333,18 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "physics": _PHYSICS,
         "runtime": _RUNTIME,
     },
+    "head_to_head": {
+        "track_hash": _t(sha256_hex),
+        "rules": _t(json_text),
+        "seed": _i(integer(0, 2**63 - 1)),
+        "started_at": _t(timestamp),
+        "clock": _r(real(0.0, MAX_SECONDS)),
+        "cars": _t(json_text),
+        "incidents": _t(json_text),
+        "night_id": _t(record_id, nullable=True),
+        "match_id": _t(match_id, nullable=True),
+        "physics": _t(physics),
+    },
     "correction": {
         "kind": _t(one_of(*CORRECTION_KINDS)),
         "target": _t(text(100)),
@@ -358,6 +378,26 @@ LAP_FIELDS: Final[dict[str, dict[str, Field]]] = {
         "crashes": _COUNT_SINCE_RESETS,
         "reversals": _COUNT_SINCE_RESETS,
     },
+}
+# One car of a head-to-head record (league.head_to_heads.car_body), with its laps as a
+# race's are.
+CAR_FIELDS: Final[dict[str, Field]] = {
+    "car": _i(integer(0, MAX_CARS - 1)),
+    "racer": _t(name),
+    "model_name": _t(name),
+    "model_hash": _t(model_hash),
+    "finished_at": Field("REAL", real(0.0, MAX_SECONDS), nullable=True),
+    "laps_completed": _i(integer(0, MAX_COUNT)),
+    "distance": _r(real(-MAX_SECONDS, MAX_SECONDS * 100)),
+    "gap_seconds": Field("REAL", real(0.0, MAX_SECONDS), nullable=True),
+    "total_offtracks": _i(integer(0, MAX_COUNT)),
+    "runtime": _RUNTIME,
+}
+INCIDENT_FIELDS: Final[dict[str, Field]] = {
+    "clock": _r(real(0.0, MAX_SECONDS)),
+    "kind": _t(one_of(*INCIDENT_KINDS)),
+    "car": _i(integer(0, MAX_CARS - 1)),
+    "other": _i(integer(0, MAX_CARS - 1)),
 }
 assert tuple(LAP_FIELDS["submission"]) == SUBMISSION_LAP_COLUMNS
 assert tuple(LAP_FIELDS["race"]) == RACE_LAP_COLUMNS
@@ -421,15 +461,20 @@ def _check_laps(laps: Any, kind: str) -> None:
 def _check_possible_laps(record: SyncRecord) -> None:
     """No lap quicker than any car could drive the track (when this machine knows it), by
     the floor for the physics that timed it (`sim.coach.plausible`)."""
-    timed_by = str(record.body.get("physics") or "")
+    _check_laps_possible(
+        str(record.body["track_hash"]), str(record.body.get("physics") or ""), record.body["laps"]
+    )
+
+
+def _check_laps_possible(track_hash: str, timed_by: str, laps: list[dict[str, Any]]) -> None:
     driven = [
         (lap["number"], lap.get("raw_seconds", lap["time_seconds"]))
-        for lap in record.body["laps"]
+        for lap in laps
         # A trial that stopped part-way is not a lap; a physical car's lap that does not
         # count may be one it never finished (its time is when it was given up).
         if lap.get("completed", True) and (timed_by != PHYSICAL or lap.get("valid", True))
     ]
-    impossible = first_impossible_lap(str(record.body["track_hash"]), timed_by, driven)
+    impossible = first_impossible_lap(track_hash, timed_by, driven)
     if impossible is not None:
         raise RecordInvalidError(
             f"its lap {impossible.number} of {impossible.seconds:.3f} s is faster than any "
@@ -477,8 +522,9 @@ def _rules(text_value: str) -> None:
         raise _bad("rules", f"are not race rules ({str(error).rstrip('.')})") from None
     kind = race_type_of(rules)
     if rules.race_type is RaceType.HEAD_TO_MODEL:
-        # Head-to-head results are not recorded yet: none can have been made honestly.
-        raise _bad("rules", "are a head-to-head race's, which a league does not record yet")
+        # A head-to-head race is one record of all its cars (league.head_to_heads), never a
+        # race or a night: none can have been made honestly.
+        raise _bad("rules", "are a head-to-head race's, which a league keeps as one record")
     for key, owner in _RACE_TYPE_KEYS.items():
         if key in data and owner != kind:
             raise _bad(
@@ -491,28 +537,89 @@ def _check_night(record: SyncRecord) -> None:
 
 
 def _check_race(record: SyncRecord) -> None:
-    body = record.body
-    _rules(body["rules"])
-    laps = [{**lap, "valid": bool(lap["valid"])} for lap in body["laps"]]
+    _rules(record.body["rules"])
+    _check_race_result(record.record_id, record.body, record.body)
+
+
+def _check_race_result(record_id: str, race: Mapping[str, Any], car: Mapping[str, Any]) -> None:
+    """The laps of one car (`car`: racer, model, laps, off-tracks) in a race (`race`: its
+    track, rules, seed, start, physics) make a valid race result: RaceResult.from_json
+    recomputes its score and holds every lap's time to its parts."""
+    laps = [{**lap, "valid": bool(lap["valid"])} for lap in car["laps"]]
     try:
         RaceResult.from_json(
             {
-                "result_id": record.record_id,
-                "racer": body["racer"],
-                "model_name": body["model_name"],
-                "model_hash": body["model_hash"],
-                "track_name": body["track_hash"][:12],
-                "track_hash": body["track_hash"],
-                "rules": json.loads(body["rules"]),
-                "seed": body["seed"],
-                "started_at": body["started_at"],
+                "result_id": record_id,
+                "racer": car["racer"],
+                "model_name": car["model_name"],
+                "model_hash": car["model_hash"],
+                "track_name": race["track_hash"][:12],
+                "track_hash": race["track_hash"],
+                "rules": json.loads(race["rules"]),
+                "seed": race["seed"],
+                "started_at": race["started_at"],
                 "laps": laps,
-                "total_offtracks": body["total_offtracks"],
-                **({"physics": body["physics"]} if body.get("physics") else {}),
+                "total_offtracks": car["total_offtracks"],
+                **({"physics": race["physics"]} if race.get("physics") else {}),
             }
         )
     except ResultError as error:
         raise RecordInvalidError(f"it is not a valid race result ({error})") from None
+
+
+def _check_head_to_head(record: SyncRecord) -> None:
+    """Rules of a head-to-head race; 2 to 6 cars, each a whole car with its race's laps,
+    none quicker than the track allows; incidents between the race's own cars."""
+    body = record.body
+    try:
+        rules = rules_from_mapping(json.loads(body["rules"]))
+    except (RulesError, AttributeError, TypeError) as error:
+        raise _bad("rules", f"are not race rules ({str(error).rstrip('.')})") from None
+    if rules.race_type is not RaceType.HEAD_TO_MODEL:
+        raise _bad("rules", "are not a head-to-head race's")
+    cars = json.loads(body["cars"])
+    if not isinstance(cars, list) or not MIN_CARS <= len(cars) <= MAX_CARS:
+        raise _bad("cars", f"are not a list of {MIN_CARS} to {MAX_CARS} cars")
+    grid: set[int] = set()
+    for position, car in enumerate(cars, start=1):
+        if not isinstance(car, dict):
+            raise _bad(f"car in place {position}", "is not an object")
+        try:
+            _check_fields(car, CAR_FIELDS, extra=("laps",))
+            laps = _car_laps(car["laps"])
+            _check_laps(laps, "race")
+        except RecordInvalidError as error:
+            raise RecordInvalidError(f"its car in place {position}: {error}") from None
+        if car["car"] in grid:
+            raise _bad("cars", f"hold grid slot {car['car'] + 1} twice")
+        grid.add(car["car"])
+        if car["laps_completed"] != len(car["laps"]):
+            raise _bad(f"car in place {position}", "counts other laps than it holds")
+        try:
+            _check_race_result(record.record_id, body, {**car, "laps": laps})
+            _check_laps_possible(body["track_hash"], body["physics"], laps)
+        except RecordInvalidError as error:
+            raise RecordInvalidError(f"its car in place {position}: {error}") from None
+    incidents = json.loads(body["incidents"])
+    if not isinstance(incidents, list) or len(incidents) > MAX_INCIDENTS:
+        raise _bad("incidents", f"are not a list of at most {MAX_INCIDENTS}")
+    for incident in incidents:
+        if not isinstance(incident, dict):
+            raise _bad("incidents", "hold one that is not an object")
+        _check_fields(incident, INCIDENT_FIELDS)
+        if not {incident["car"], incident["other"]} <= grid or incident["car"] == incident["other"]:
+            raise _bad("incidents", "name a car that is not in the race")
+
+
+def _car_laps(laps: Any) -> list[dict[str, Any]]:
+    """A head-to-head car's laps, each a list of a race lap's values
+    (league.head_to_heads.lap_list), as race laps' records."""
+    if not isinstance(laps, list) or len(laps) > MAX_LAPS["race"]:
+        raise _bad("laps", f"are not a list of at most {MAX_LAPS['race']} laps")
+    width = len(RACE_LAP_COLUMNS)
+    if not all(isinstance(lap, list) and len(lap) == width for lap in laps):
+        raise _bad("laps", f"are not lists of a lap's {width} values")
+    return [lap_from_list(lap) for lap in laps]
 
 
 def _check_correction(record: SyncRecord) -> None:
@@ -557,6 +664,7 @@ _SEMANTICS: Final[dict[str, Callable[[SyncRecord], None]]] = {
     "season": _check_season,
     "night": _check_night,
     "race": _check_race,
+    "head_to_head": _check_head_to_head,
     "correction": _check_correction,
 }
 

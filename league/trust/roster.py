@@ -45,10 +45,27 @@ ROSTER_KIND: Final = "roster"
 PIN_SETTING: Final = "organiser"  # sync_settings: the organiser's fingerprint, hex digits
 ACTIONS: Final = ("found", "propose", "admit", "retire", "revoke")
 ROLES: Final = ("organiser", "racer")
-# Kinds only an organiser signs: the running of nights and seasons, and corrections.
+# Kinds only an organiser signs: the running of nights and seasons, corrections, and
+# head-to-head races (each names several racers: no racer puts a result on another's
+# record).
 ORGANISER_KINDS: Final = frozenset(
-    {"season", "night", "entrant", "heat", "night_closure", "night_change", "correction"}
+    {
+        "season",
+        "night",
+        "entrant",
+        "heat",
+        "night_closure",
+        "night_change",
+        "correction",
+        "head_to_head",
+    }
 )
+# How a refusal names the kinds whose names are not words.
+_KIND_WORDS: Final = {
+    "night_closure": "night's closure",
+    "night_change": "change to a night",
+    "head_to_head": "head-to-head race",
+}
 # Kinds any admitted racer may sign, whoever they name: a track brought to the league,
 # the map from a model to its stored bundle.
 ANY_RACER_KINDS: Final = frozenset({"track", "bundle"})
@@ -249,7 +266,11 @@ class Roster:
         if record.kind in ORGANISER_KINDS or (
             record.kind == "race" and record.body.get("night_id")
         ):
-            made = "a league night's race" if record.kind == "race" else f"a {record.kind}"
+            made = (
+                "a league night's race"
+                if record.kind == "race"
+                else f"a {_KIND_WORDS.get(record.kind, record.kind)}"
+            )
             return f"it is signed by racer {racer}, but only an organiser makes {made}"
         if owner is not None and not same_racer(owner, racer):
             return f"it claims to be racer {owner}'s, but it is signed with racer {racer}'s key"

@@ -43,7 +43,7 @@ from sim.garage.imported import BUNDLE_SUFFIX
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import Driver
 from sim.race.engine import run_race
-from sim.race.head_to_head import MAX_CARS, MIN_CARS, Entry, run_head_to_head
+from sim.race.head_to_head import MAX_CARS, MIN_CARS, Entry, HeadToHeadResult, run_head_to_head
 from sim.race.result import RaceResult
 from sim.race.rules import RaceRules, RankingMethod, RulesError, rules_from_mapping
 from sim.tracks.catalog import DEFAULT_TRACK, resolve_track
@@ -198,13 +198,10 @@ def _run_head_to_head(args: argparse.Namespace, rules: RaceRules, track: Track) 
             f"a head-to-head race takes {MIN_CARS} to {MAX_CARS} models, not "
             f"{len(args.models)}; name them after --race, the first on the front of the grid."
         )
-    refused = [
-        (args.record, "--record: a league does not record head-to-head races yet"),
-        (args.racer is not None, "--racer: each car of a head-to-head race is its model's"),
-    ]
-    for given, why in refused:
-        if given:
-            raise RaceSetupError(f"{why}; race without it.")
+    if args.racer is not None:
+        raise RaceSetupError(
+            "--racer: each car of a head-to-head race is its model's; race without it."
+        )
     # A model named twice is one driver: it acts for both its cars in one batch.
     drivers: dict[str, Driver] = {}
     for spec in args.models:
@@ -219,8 +216,10 @@ def _run_head_to_head(args: argparse.Namespace, rules: RaceRules, track: Track) 
         for finish in result.cars
         if args.trace_dir is not None
     }
+    recorded = _record_head_to_head(result, args.db) if args.record else None
     if args.json:
-        print_json(head_to_head_document(result, track, trace_files))
+        document = head_to_head_document(result, track, trace_files)
+        print_json({**document, "recorded": [recorded] if recorded else []})
         return EXIT_OK
     console = Console()
     console.print(head_to_head_table(result, track))
@@ -230,7 +229,20 @@ def _run_head_to_head(args: argparse.Namespace, rules: RaceRules, track: Track) 
     for finish in result.cars:
         if finish.car in trace_files:
             console.print(Text(f"trace of car {finish.car + 1}: {trace_files[finish.car]}"))
+    if recorded:
+        console.print(Text("recorded the head-to-head race in the league."))
     return EXIT_OK
+
+
+def _record_head_to_head(result: HeadToHeadResult, db_path: Path | None) -> str:
+    from league.head_to_heads import record_head_to_head  # noqa: PLC0415 (only for --record)
+    from league.opening import open_league  # noqa: PLC0415 (only for --record)
+
+    try:
+        with open_league(db_path) as league:
+            return record_head_to_head(league, result)
+    except LeagueError as error:
+        raise RaceSetupError(f"cannot record the race: {error}") from None
 
 
 # --- rules and entrants -----------------------------------------------------------------------

@@ -61,6 +61,9 @@ from sim.tracks.track import Track
 GRID_GAP = 0.75
 MIN_CARS = 2
 MAX_CARS = 6
+# What an incident can be: a car ran into another from behind, or drove past it.
+CRASH, OVERTAKE = "crash", "overtake"
+INCIDENT_KINDS = (CRASH, OVERTAKE)
 _EPS = 1e-9
 
 
@@ -351,7 +354,7 @@ class HeadToHeadRace:
             car.status = CRASHED
             car.lap_crashes += 1
             for other in crashed_into:
-                self.incidents.append(Incident(self.clock, "crash", car.index, other))
+                self.incidents.append(Incident(self.clock, CRASH, car.index, other))
             sim.continue_episode(0, float(sim.travelled[0]))  # held where it is
             self._penalise(car, self.rules.collision_penalty_seconds, "crash")
         elif status == EpisodeStatus.OFF_TRACK:
@@ -454,7 +457,7 @@ class HeadToHeadRace:
             for passed in order[place + 1 :]:
                 put_back = self.cars[passed].status in (OFF_TRACK, REVERSED)
                 if before[car] > before[passed] and not put_back:
-                    self.incidents.append(Incident(self.clock, "overtake", car, passed))
+                    self.incidents.append(Incident(self.clock, OVERTAKE, car, passed))
         self._order = order
 
     # --- the end -------------------------------------------------------------------------
@@ -533,6 +536,8 @@ class HeadToHeadRace:
             total_offtracks=car.total_offtracks,
             started_at=self.started_at,
             trace=trace,
+            # The policy runtime that drove this car, as a time trial records it.
+            runtime=getattr(car.entry.driver, "runtime", ""),
         )
 
 

@@ -1,6 +1,7 @@
 """`racer-tui --race A B --rules head-to-head`: the models race together, the table or one
-JSON document says who won and what happened; what a league cannot take yet is refused in
-one sentence, everywhere a head-to-head race's rules could enter it."""
+JSON document says who won and what happened, and `--record` keeps it in the league; what a
+league cannot take is refused in one sentence, everywhere a head-to-head race's rules could
+enter it."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from league.errors import LeagueError
+from league.head_to_heads import head_to_head_races
 from league.nights import new_night
 from league.opening import open_league
 from racer_tui.cli.main import main
@@ -53,12 +55,31 @@ def test_json_gives_every_car_its_place_laps_and_gap(capsys: pytest.CaptureFixtu
     assert [car["laps"] for car in json.loads(again)["cars"]] == [first["laps"], second["laps"]]
 
 
+def test_record_keeps_the_race_in_the_league_as_one_record(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    db = tmp_path / "league.db"
+    args = ("--race", "reference", "reference", *H2H, "--record", "--db", str(db))
+    code, out, err = run_cli(capsys, *args, "--json")
+    assert code == 0, err
+    document = json.loads(out)
+    [race_id] = document["recorded"]
+    with open_league(db) as league:
+        [recorded] = head_to_head_races(league)
+    assert recorded.id == race_id
+    assert [place.laps_completed for place in recorded.places] == [
+        car["laps_completed"] for car in document["cars"]
+    ]
+    code, out, err = run_cli(capsys, *args)  # the table says so too
+    assert code == 0, err
+    assert out.rstrip().endswith("recorded the head-to-head race in the league.")
+
+
 @pytest.mark.parametrize(
     ("extra", "words"),
     [
         ((), "takes 2 to 6 models, not 1"),
         (("reference",) * 6, "takes 2 to 6 models, not 7"),
-        (("reference", "--record"), "--record: a league does not record head-to-head races yet"),
         (("reference", "--racer", "Ada"), "--racer: each car of a head-to-head race is its"),
     ],
 )

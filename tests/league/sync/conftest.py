@@ -7,6 +7,7 @@ import logging
 import uuid
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -100,3 +101,26 @@ def open_racer_store(store_url: str) -> Iterator[StoreFactory]:
     yield factory
     for store in opened:
         store.close()
+
+
+@pytest.fixture
+def organiser_ana_viewer(tmp_path: Path) -> Iterator[dict[str, Any]]:
+    """Three machines sharing a folder store: the organiser (who founded it), racer ana
+    (admitted) and a viewer."""
+    from league.trust import membership
+    from tests.league.sync.test_signed_results import Machine
+
+    url = f"dir:{tmp_path / 'shared-league'}"
+    with open_store(url) as store:
+        store.init()
+    made = {name: Machine(tmp_path, name, url) for name in ("organiser", "ana", "viewer")}
+    membership.found_league(made["organiser"].league, made["organiser"].key)
+    made["organiser"].sync()
+    made["ana"].race("ana", [12.0, 11.8])
+    made["ana"].sync()  # proposes ana's key
+    made["organiser"].sync()
+    membership.admit(made["organiser"].league, made["organiser"].key, "ana")
+    made["organiser"].sync()
+    yield made
+    for machine in made.values():
+        machine.league.close()

@@ -7,20 +7,24 @@ import io
 import json
 from collections.abc import Sequence
 from contextlib import redirect_stdout
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from league import nights
 from league.assembler import assemble
 from league.corrections import disqualify_lap, rename_racer
+from league.head_to_heads import record_head_to_head
 from league.seasons import new_season, parse_points
 from league.store import League
 from league.submissions import submit
 from league.sync.record import SyncRecord
 from racer_tui.cli.main import main
 from sim.foundation.ids import new_id
+from sim.race.driver import reference_driver
+from sim.race.head_to_head import Entry, HeadToHeadResult, run_head_to_head
 from sim.race.result import RaceResult
-from sim.race.rules import RaceRules, RankingMethod
+from sim.race.rules import HEAD_TO_HEAD_RULES, RaceRules, RankingMethod
 from sim.tracks.catalog import resolve_track
 from sim.tracks.track import Track
 from tests.league.helpers import TRACK, model_folder, race_result
@@ -68,6 +72,15 @@ def host_league(league: League, root: Path) -> None:
     submitted = add_submissions(league, root, [("ana", (12.0, 12.5)), ("bob", (11.9,))])
     disqualify_lap(league, submitted[1], 1, reason="wrong track", by="host")
     rename_racer(league, "cy", "Cyrus", by="host")
+    record_head_to_head(league, head_to_head("ana", "bob"))
+
+
+def head_to_head(*racers: str, seed: int = 1) -> HeadToHeadResult:
+    """A real one-lap head-to-head race of the reference driver against itself."""
+    track = resolve_track(TRACK)
+    driver = reference_driver(track)
+    rules = replace(HEAD_TO_HEAD_RULES, lap_count=1)
+    return run_head_to_head(track, rules, [Entry(racer, driver) for racer in racers], seed=seed)
 
 
 def found_store(url: str, root: Path) -> None:

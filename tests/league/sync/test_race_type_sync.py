@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import copy
 import json
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -19,9 +18,7 @@ from league.records import record_body
 from league.store import League, now_iso
 from league.sync.errors import RecordInvalidError
 from league.sync.record import make_record
-from league.sync.stores import open_store
 from league.sync.validate import check_record
-from league.trust import membership
 from sim.foundation.ids import new_id
 from sim.race.rules import preset_rules
 from sim.tracks.catalog import resolve_track
@@ -33,22 +30,9 @@ BOTS = preset_rules("head-to-bot")
 
 
 @pytest.fixture
-def machines(tmp_path: Path) -> Iterator[dict[str, Machine]]:
+def machines(organiser_ana_viewer: dict[str, Machine]) -> dict[str, Machine]:
     """The organiser, racer ana (admitted) and a viewer, sharing a folder store."""
-    url = f"dir:{tmp_path / 'shared-league'}"
-    with open_store(url) as store:
-        store.init()
-    made = {name: Machine(tmp_path, name, url) for name in ("organiser", "ana", "viewer")}
-    membership.found_league(made["organiser"].league, made["organiser"].key)
-    made["organiser"].sync()
-    made["ana"].race("ana", [12.0, 11.8])
-    made["ana"].sync()  # proposes ana's key
-    made["organiser"].sync()
-    membership.admit(made["organiser"].league, made["organiser"].key, "ana")
-    made["organiser"].sync()
-    yield made
-    for machine in made.values():
-        machine.league.close()
+    return organiser_ana_viewer
 
 
 def _boards(league: League) -> list[tuple[str, str, str, float | None]]:
@@ -172,10 +156,13 @@ def test_bad_race_type_values_are_refused_in_one_sentence(
 
 
 def test_a_pulled_head_to_head_race_or_night_is_refused(league: League) -> None:
-    # No machine records head-to-head races yet (league.races refuses them), so a pulled
-    # one was made by hand: its laps among rivals must not reach a time trials' board.
+    # A head-to-head race is one record of all its cars (league.head_to_heads); a race or
+    # night with its rules was made by hand: its laps among rivals must not reach a time
+    # trials' board.
     body = copy.deepcopy(_race_body(league, preset_rules("league")))
     rules = {**json.loads(body["rules"]), "race_type": "head_to_model", "lap_count": 3}
     body["rules"] = json.dumps(rules)
-    with pytest.raises(RecordInvalidError, match="head-to-head race's, which a league does not"):
+    with pytest.raises(
+        RecordInvalidError, match="head-to-head race's, which a league keeps as one record"
+    ):
         check_record(make_record("race", new_id(), body))

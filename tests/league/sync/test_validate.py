@@ -96,6 +96,23 @@ def _rules(change: dict[str, Any]) -> Change:
     return apply
 
 
+def _cars(change: Callable[[list[dict[str, Any]]], None]) -> Change:
+    def apply(body: dict[str, Any]) -> None:
+        cars = json.loads(body["cars"])
+        change(cars)
+        body["cars"] = json.dumps(cars)
+
+    return apply
+
+
+def _car(key: str, value: Any) -> Change:
+    return _cars(lambda cars: cars[1].__setitem__(key, value))
+
+
+def _incidents(incidents: list[dict[str, Any]]) -> Change:
+    return _set("incidents", json.dumps(incidents))
+
+
 CASES: list[tuple[str, Change, str]] = [
     ("racer", _set("name", " ana"), "its name is not a name"),
     ("racer", _set("display_name", "two\nlines"), "its display_name is not a name"),
@@ -122,6 +139,43 @@ CASES: list[tuple[str, Change, str]] = [
     ("race", _set("total_offtracks", 10**12), "total_offtracks is not a whole number"),
     ("race", _set("runtime", "x" * 101), "runtime is not"),
     ("race", _set("runtime", 7), "runtime is not"),
+    ("head_to_head", _rules({"race_type": "TIME_TRIAL"}), "are not a head-to-head race's"),
+    ("head_to_head", _cars(lambda cars: cars.pop()), "are not a list of 2 to 6 cars"),
+    ("head_to_head", _cars(lambda cars: cars.extend(cars * 3)), "are not a list of 2 to 6"),
+    ("head_to_head", _car("car", 0), "hold grid slot 1 twice"),
+    ("head_to_head", _car("racer", "two\nlines"), "car in place 2: its racer is not a name"),
+    ("head_to_head", _car("laps_completed", 7), "counts other laps than it holds"),
+    ("head_to_head", _car("gap_seconds", -3.0), "gap_seconds is not"),
+    ("head_to_head", _car("runtime", None), "runtime is null instead of left out"),
+    ("head_to_head", _car("pit_stops", 2), "has unknown pit_stops"),
+    (
+        "head_to_head",
+        _cars(lambda cars: cars[0]["laps"][0].__setitem__(1, 99.0)),
+        "not a valid race result",
+    ),
+    (
+        "head_to_head",
+        _cars(lambda cars: cars[0]["laps"][0].__setitem__(slice(1, 4), [0.5, 0.5, 0.0])),
+        "faster than any car can go round",
+    ),
+    (
+        "head_to_head",
+        _incidents([{"clock": 1.0, "kind": "crash", "car": 0, "other": 4}]),
+        "not in the race",
+    ),
+    (
+        "head_to_head",
+        _incidents([{"clock": 1.0, "kind": "bump", "car": 0, "other": 1}]),
+        "is not one of",
+    ),
+    (
+        "head_to_head",
+        _incidents([{"clock": 1.0, "kind": "crash", "car": 0, "other": 1}] * 401),
+        "incidents are not a list of at most 400",
+    ),
+    ("head_to_head", _set("match_id", "semi-final"), "is not a bracket match"),
+    ("head_to_head", _car("laps", [[1, 9.0]]), "are not lists of a lap's 9 values"),
+    ("head_to_head", _set("physics", None), "physics is missing"),
     (
         "correction",
         lambda body: body.update(
