@@ -179,6 +179,7 @@ def retry_held(league: League) -> PageResult:
 _WITHDRAWN_KINDS: Final = {
     "submission": "submissions",
     "race": "races",
+    "head_to_head": "head_to_heads",
     "correction": "corrections",
 }
 
@@ -226,9 +227,10 @@ def withdraw(
     rebuild: bool = True,
     final: bool = False,
 ) -> None:
-    """Take a result (a submission, race or lap disqualification) out of the league and
-    hold it in quarantine with `reason` (call inside a transaction); `final`: never let it
-    in again (a replay disproved it), else it is tried again when the roster changes."""
+    """Take a result (a submission, race, head-to-head race or lap disqualification) out of
+    the league and hold it in quarantine with `reason` (call inside a transaction); `final`:
+    never let it in again (a replay disproved it), else it is tried again when the roster
+    changes."""
     table = _WITHDRAWN_KINDS[record.kind]
     if final:
         item = quarantine(reason, f"{record.kind} {record.record_id}", record.canonical_body)

@@ -17,9 +17,9 @@ which the league package never imports.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Final, Literal
+from typing import Any, Final, Literal
 
 from league.records import record_body
 from league.store import League, now_iso
@@ -30,7 +30,7 @@ from league.trust.standing import other_numerics
 from sim.physics.labels import BEFORE_VERSIONING, CURRENT, PHYSICAL
 from sim.race.driver import Driver
 from sim.race.engine import run_race
-from sim.race.rules import RulesError, rules_from_mapping
+from sim.race.rules import RaceRules, RulesError, rules_from_mapping
 from sim.tracks.catalog import find_track_by_hash, resolve_track
 from sim.tracks.track import Track
 
@@ -62,61 +62,66 @@ def verify_races(
 ) -> list[Verdict]:
     """Re-run every race not verified before (`again`: every race; `race_ids`: only
     these) and judge it."""
-    rows = league.query(
-        "SELECT r.id, r.racer, r.content_hash FROM races r LEFT JOIN sync_replays v "
-        "ON v.race_id = r.id AND v.content_hash = r.content_hash "
-        "WHERE (? OR v.race_id IS NULL OR v.outcome = 'unverifiable') "
-        f"{'' if race_ids is None else 'AND r.id IN (SELECT value FROM json_each(?))'} "
-        "ORDER BY r.id",
-        (again,) if race_ids is None else (again, json.dumps(list(race_ids))),
-    )
+    rows = unverified(league, "races", again, race_ids)
     verdicts = []
-    for done, row in enumerate(rows, start=1):
-        verdict = _verify(league, str(row[0]), str(row[1]), driver_for)
+    for done, (race_id, digest) in enumerate(rows, start=1):
+        verdict = _verify(league, race_id, driver_for)
         with league.transaction():
-            league.conn.execute(
-                "INSERT INTO sync_replays (race_id, content_hash, outcome, detail, checked_at, "
-                "runtime) VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (race_id) DO UPDATE SET "
-                "content_hash = excluded.content_hash, outcome = excluded.outcome, "
-                "detail = excluded.detail, checked_at = excluded.checked_at, "
-                "runtime = excluded.runtime",
-                (
-                    verdict.race_id,
-                    row[2],
-                    verdict.outcome,
-                    verdict.detail,
-                    now_iso(),
-                    verdict.runtime_here or None,
-                ),
-            )
+            remember(league, verdict, digest)
             if verdict.outcome == "differs":
-                _withdraw(league, verdict, str(row[2]))
+                _withdraw(league, verdict, digest)
         verdicts.append(verdict)
         if progress is not None:
             progress(done, len(rows))
     return verdicts
 
 
-def _verify(league: League, race_id: str, racer: str, driver_for: DriverFor) -> Verdict:
+def unverified(
+    league: League, table: str, again: bool, ids: Collection[str] | None
+) -> list[tuple[str, str]]:
+    """(id, content hash) of each row of `table` (races or head-to-head races) not judged
+    before, or judged unverifiable (`again`: every row; `ids`: only these), in id order."""
+    rows = league.query(
+        f"SELECT r.id, r.content_hash FROM {table} r LEFT JOIN sync_replays v "
+        "ON v.race_id = r.id AND v.content_hash = r.content_hash "
+        "WHERE (? OR v.race_id IS NULL OR v.outcome = 'unverifiable') "
+        f"{'' if ids is None else 'AND r.id IN (SELECT value FROM json_each(?))'} "
+        "ORDER BY r.id",
+        (again,) if ids is None else (again, json.dumps(list(ids))),
+    )
+    return [(str(row[0]), str(row[1])) for row in rows]
+
+
+def remember(league: League, verdict: Verdict, digest: str) -> None:
+    """Keep `verdict` for the record's content `digest` (call inside a transaction)."""
+    league.conn.execute(
+        "INSERT INTO sync_replays (race_id, content_hash, outcome, detail, checked_at, "
+        "runtime) VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT (race_id) DO UPDATE SET "
+        "content_hash = excluded.content_hash, outcome = excluded.outcome, "
+        "detail = excluded.detail, checked_at = excluded.checked_at, "
+        "runtime = excluded.runtime",
+        (
+            verdict.race_id,
+            digest,
+            verdict.outcome,
+            verdict.detail,
+            now_iso(),
+            verdict.runtime_here or None,
+        ),
+    )
+
+
+def _verify(league: League, race_id: str, driver_for: DriverFor) -> Verdict:
     body = record_body(league, "races", race_id)
+    racer = str(body["racer"])
 
     def unverifiable(why: str, remedy: str = "") -> Verdict:
-        sentence = f"{why.rstrip('.')}, so it cannot be re-run here{remedy}"
-        return Verdict(race_id, racer, "unverifiable", sentence)
+        return cannot_rerun(race_id, racer, why, remedy)
 
-    physics = body.get("physics") or BEFORE_VERSIONING
-    if physics == PHYSICAL:
-        return unverifiable("its laps were timed by hand on a real track")
-    if physics != CURRENT:
-        return unverifiable(f"it was timed with {physics} and this racer-tui drives {CURRENT}")
-    info = find_track_by_hash(str(body["track_hash"]))
-    if info is None:
-        return unverifiable("its track is not on this machine")
-    try:
-        rules = rules_from_mapping(json.loads(body["rules"]))
-    except RulesError as error:
-        return unverifiable(f"its rules do not load here ({str(error).rstrip('.')})")
-    track = resolve_track(info.name)
+    setup = replay_setup(body)
+    if isinstance(setup, str):
+        return unverifiable(setup)
+    track, rules = setup
     try:
         driver = driver_for(str(body["model_hash"]), track)
     except ValueError as error:  # the model is here but cannot drive (its one sentence)
@@ -134,11 +139,36 @@ def _verify(league: League, race_id: str, racer: str, driver_for: DriverFor) -> 
         return replace(unverifiable(other_numerics(recorded, here)), runtime_here=here)
     result = run_race(track, rules, driver, racer=racer, seed=int(body["seed"]), keep_trace=False)
     claimed = body["laps"]
-    outcome, detail = _compare(claimed, [lap.to_json() for lap in result.laps])
+    outcome, detail = compare_laps(claimed, [lap.to_json() for lap in result.laps])
     return Verdict(race_id, racer, outcome, detail, here)
 
 
-def _compare(
+def cannot_rerun(race_id: str, racer: str, why: str, remedy: str = "") -> Verdict:
+    """An unverifiable verdict: `why` (a phrase) it cannot be re-run here, and what would
+    let it (`remedy`, a parenthesis)."""
+    sentence = f"{why.rstrip('.')}, so it cannot be re-run here{remedy}"
+    return Verdict(race_id, racer, "unverifiable", sentence)
+
+
+def replay_setup(body: Mapping[str, Any]) -> tuple[Track, RaceRules] | str:
+    """The track and rules to race a recorded race (or head-to-head race) again under, or
+    why it cannot be raced here (a phrase)."""
+    physics = body.get("physics") or BEFORE_VERSIONING
+    if physics == PHYSICAL:
+        return "its laps were timed by hand on a real track"
+    if physics != CURRENT:
+        return f"it was timed with {physics} and this racer-tui drives {CURRENT}"
+    info = find_track_by_hash(str(body["track_hash"]))
+    if info is None:
+        return "its track is not on this machine"
+    try:
+        rules = rules_from_mapping(json.loads(body["rules"]))
+    except RulesError as error:
+        return f"its rules do not load here ({str(error).rstrip('.')})"
+    return resolve_track(info.name), rules
+
+
+def compare_laps(
     claimed: Sequence[dict[str, object]], driven: Sequence[dict[str, object]]
 ) -> tuple[Outcome, str]:
     for number, (said, did) in enumerate(zip(claimed, driven, strict=False), start=1):

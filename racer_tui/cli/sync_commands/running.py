@@ -31,6 +31,7 @@ from league.sync.status import (
     summary_headline,
     sync_status,
 )
+from league.trust.head_to_head_replay import verify_head_to_heads
 from league.trust.replay import OUTCOMES, Verdict, verify_races
 from racer_tui.cli.output import print_json, print_table
 from sim.foundation.plural import counted
@@ -271,7 +272,11 @@ def _verify(league: League, args: argparse.Namespace) -> int:
 
 def _verdicts(league: League, *, again: bool) -> list[Verdict]:
 
-    return verify_races(league, DriversByHash(), again=again)
+    drivers = DriversByHash()  # one garage, hashed once, for both kinds of race
+    return [
+        *verify_races(league, drivers, again=again),
+        *verify_head_to_heads(league, drivers, again=again),
+    ]
 
 
 def _print_verdicts(verdicts: list[Verdict]) -> None:
