@@ -39,6 +39,9 @@ def option_name(race_type: str) -> str:
 
 
 OPTION_CHOICES: Final = tuple(option_name(race_type) for race_type in RACE_TYPES)
+# The board of head-to-head races (league.head_to_heads): wins and losses, not laps, so it
+# is no race type's lap board; `--race-type head-to-head` asks for it.
+HEAD_TO_HEAD_BOARD: Final = "head-to-head"
 
 
 def parse_race_type(text: str) -> str:

@@ -122,3 +122,43 @@ def _race_standing(
     return ResultStanding(
         Standing.UNVERIFIABLE, "its model is not in this garage and no racer shared it"
     )
+
+
+def head_to_head_standings(
+    league: League, ids: Iterable[str], local_models: Collection[str] = ()
+) -> dict[str, ResultStanding]:
+    """The standing of each head-to-head race in `ids` (league.head_to_heads): replayed when
+    a replay here found it the same; else verifiable only if every car could be raced again
+    here, and otherwise unverifiable for the first car that cannot."""
+    wanted = list(dict.fromkeys(ids))
+    if not wanted:
+        return {}
+    rows = league.query(
+        "SELECT h.id, h.cars, h.track_hash, h.physics, v.outcome FROM head_to_heads h "
+        "LEFT JOIN sync_replays v ON v.race_id = h.id AND v.content_hash = h.content_hash "
+        "WHERE h.id IN (SELECT value FROM json_each(?))",
+        (json.dumps(wanted),),
+    )
+    shared = {str(row[0]) for row in league.query("SELECT DISTINCT model_hash FROM sync_bundles")}
+    found: dict[str, ResultStanding] = {}
+    for race_id, cars, track_hash, physics, outcome in rows:
+        track_here = find_track_by_hash(track_hash) is not None
+        standing = _REPLAYED if outcome == "same" else None
+        for car in sorted(json.loads(cars), key=lambda car: int(car["car"])):
+            if standing is not None:
+                break
+            model_hash = str(car["model_hash"])
+            of_car = _race_standing(
+                model_hash,
+                str(track_hash),
+                str(physics),
+                outcome,
+                track_here=track_here,
+                model_here=model_hash in local_models or model_hash in shared,
+            )
+            if of_car.standing is Standing.UNVERIFIABLE:
+                standing = ResultStanding(of_car.standing, f"car {car['car'] + 1}: {of_car.why}")
+        found[race_id] = standing or ResultStanding(
+            Standing.VERIFIABLE, "every car's model is here, not raced again yet"
+        )
+    return {race_id: found[race_id] for race_id in wanted if race_id in found}

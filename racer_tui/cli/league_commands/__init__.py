@@ -11,7 +11,7 @@ import importlib
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from league.race_types import OPTION_CHOICES, option_name
+from league.race_types import HEAD_TO_HEAD_BOARD, OPTION_CHOICES, option_name
 from racer_tui.cli.app_launch import AppLaunch
 from racer_tui.cli.league_commands import key_parsers
 from racer_tui.cli.rules_option import HELP as RULES_HELP
@@ -79,9 +79,10 @@ def _register_leaderboard(commands: Parsers, db: argparse.ArgumentParser) -> Non
     board.add_argument(
         "--race-type",
         type=lambda text: option_name(text.strip().lower()),
-        choices=OPTION_CHOICES,
+        choices=(*OPTION_CHOICES, HEAD_TO_HEAD_BOARD),
         help="which of a track's boards: time-trial (the default with --track), "
-        "object-avoidance or head-to-bot; without --track, every race type's boards",
+        "object-avoidance or head-to-bot; without --track, every race type's boards; "
+        "head-to-head: wins and losses in recorded head-to-head races",
     )
     board.add_argument("--racer", help="only this racer")
     board.add_argument("--night", help="only races of this league night")

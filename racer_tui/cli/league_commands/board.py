@@ -25,7 +25,14 @@ from league.leaderboard import (
 )
 from league.nights import get_night, list_nights
 from league.opening import open_league
-from league.race_types import TIME_TRIAL, board_name, option_name, parse_race_type, words
+from league.race_types import (
+    HEAD_TO_HEAD_BOARD,
+    TIME_TRIAL,
+    board_name,
+    option_name,
+    parse_race_type,
+    words,
+)
 from league.racers import get_racer
 from league.report import SCORE_TITLES, leaderboard_columns, leaderboard_json, to_csv, to_markdown
 from league.report import Column as ReportColumn
@@ -33,6 +40,7 @@ from league.seasons import get_season
 from league.store import League
 from league.submissions import submit_model
 from league.tracks import track_for
+from racer_tui.cli.league_commands.head_to_head_board import show_head_to_head_board
 from racer_tui.cli.output import plain_table, print_json, print_table
 from sim.race.rules import DEFAULT_RULES, RankingMethod, Verification
 from sim.training.drivers import DriversByHash
@@ -91,6 +99,8 @@ def submit(league: League, args: argparse.Namespace) -> int:
 
 
 def show_leaderboard(league: League, args: argparse.Namespace) -> int:
+    if args.race_type == HEAD_TO_HEAD_BOARD:
+        return show_head_to_head_board(league, args, garage_model_hashes())
 
     night_ids: list[str] | None = None
     if args.night:
