@@ -21,6 +21,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from league.brackets import MATCH_ID_PATTERN
 from league.errors import LeagueError
 from league.racers import ensure_racer
 from league.races import LAP_COLUMNS, OPTIONAL_LAP_COLUMNS, check_possible_laps, lap_rows
@@ -101,6 +102,10 @@ def record_head_to_head(
         raise LeagueError(f"head-to-head race id {result.race_id!r} is not a valid record id.")
     if result.rules.race_type is not RaceType.HEAD_TO_MODEL:
         raise LeagueError("only a head-to-head race's result is recorded as one.")
+    if match_id is not None and (night_id is None or not MATCH_ID_PATTERN.fullmatch(match_id)):
+        raise LeagueError(
+            f"{match_id!r} is not a bracket match of a night (W1-1, L2-1, GF, GF2 with its night)."
+        )
     for finish in result.cars:
         check_possible_laps(finish.result)  # before the transaction: a floor takes a moment
     physics = {finish.result.physics for finish in result.cars}

@@ -577,6 +577,8 @@ def _check_head_to_head(record: SyncRecord) -> None:
         raise _bad("rules", f"are not race rules ({str(error).rstrip('.')})") from None
     if rules.race_type is not RaceType.HEAD_TO_MODEL:
         raise _bad("rules", "are not a head-to-head race's")
+    if body["match_id"] is not None and body["night_id"] is None:
+        raise _bad("match_id", "names a bracket match of no night")
     cars = json.loads(body["cars"])
     if not isinstance(cars, list) or not MIN_CARS <= len(cars) <= MAX_CARS:
         raise _bad("cars", f"are not a list of {MIN_CARS} to {MAX_CARS} cars")

@@ -87,6 +87,8 @@ def test_only_a_head_to_head_race_and_a_known_night(league: League, race: HeadTo
         record_head_to_head(league, replace(race, rules=DEFAULT_RULES))
     with pytest.raises(LeagueError, match="there is no league night"):
         record_head_to_head(league, race, night_id="01M8NYZGRM59PJDYMJKX91NMYP")
+    with pytest.raises(LeagueError, match="is not a bracket match of a night"):
+        record_head_to_head(league, race, match_id="W1-1")
     assert league.query_one("SELECT count(*) FROM head_to_heads")[0] == 0
 
 

@@ -174,6 +174,7 @@ CASES: list[tuple[str, Change, str]] = [
         "incidents are not a list of at most 400",
     ),
     ("head_to_head", _set("match_id", "semi-final"), "is not a bracket match"),
+    ("head_to_head", _set("match_id", "W1-1"), "names a bracket match of no night"),
     ("head_to_head", _car("laps", [[1, 9.0]]), "are not lists of a lap's 9 values"),
     ("head_to_head", _set("physics", None), "physics is missing"),
     (
