@@ -21,7 +21,7 @@ from rich.text import Text
 from textual import on, work
 from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
-from textual.containers import Horizontal, Vertical
+from textual.containers import Horizontal, Vertical, VerticalScroll
 from textual.message import Message
 from textual.widgets import Button, DataTable, Input, Label, Select, Static
 from textual.worker import Worker, WorkerState
@@ -107,7 +107,13 @@ from sim.training.drivers import DriversByHash, resolve_driver
 
 # In the narrow panes the optional columns (keep 1 and 2) give way before a name loses its end.
 NAME = Col("", keep=3, shrink_to=10, collapses=False)
-NIGHT_COLUMNS = (replace(NAME, label="night"), Col("track", keep=1, shrink_to=8), Col("state"))
+# A night's name loses its middle, never its end: "Walk night 2" and "Walk night 3" cut at
+# the end looked like one night ("Walk nigh…" twice at 60x20).
+NIGHT_COLUMNS = (
+    replace(NAME, label="night", cuts_middle=True),
+    Col("track", keep=1, shrink_to=8),
+    Col("state"),
+)
 # The car says who is physical and which car: it loses the middle of "physical: car1"
 # ("phys…car1"), never its column (cut at the end, two physical cars looked alike).
 HEAT_COLUMNS = (
@@ -618,6 +624,9 @@ class NightsScreen(RacerScreen[None]):
     NightsScreen #standings { height: 1fr; min-height: 4; }
     NightsScreen #season { height: 1fr; min-height: 4; }
     NightsScreen .-hidden { display: none; }
+    NightsScreen.-short #heats, NightsScreen.-short #standings, NightsScreen.-short #season {
+        height: auto;
+    }
     """
 
     def __init__(self, *, db_path: Path | None = None) -> None:
@@ -643,7 +652,9 @@ class NightsScreen(RacerScreen[None]):
                 yield Label("League nights", classes="field-label")
                 yield FittedTable(id="nights", cursor_type="row", zebra_stripes=True)
                 yield Static("", id="web-note", classes="-hidden")
-            with Vertical(id="night-view"):
+            # Scrolls where the night's rules, heats and standings do not all fit (60x20):
+            # Tab to the standings brings them into view.
+            with VerticalScroll(id="night-view", can_focus=False):
                 yield Static("", id="night-rules")
                 yield Label("Entrants and heats, in running order", classes="field-label")
                 yield FittedTable(id="heats", cursor_type="row", zebra_stripes=True)
@@ -661,6 +672,9 @@ class NightsScreen(RacerScreen[None]):
     def on_resize(self) -> None:
         # Below 80 columns the night's own tables need the room more than the list does.
         self.set_class(self.size.width < 80, "-narrow")
+        # Below 24 rows the rules, heats and standings do not all fit: each table is as tall
+        # as its rows and the pane scrolls, rather than each table getting a sliver.
+        self.set_class(self.size.height < 24, "-short")
 
     # --- loading -----------------------------------------------------------------------
 

@@ -52,6 +52,7 @@ from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table
 from racer_tui.app.widgets.track_label import track_options
 from sim.garage.folder import ModelFolder, list_models
 from sim.physics.labels import CURRENT as CURRENT_PHYSICS
+from sim.physics.labels import PHYSICAL
 from sim.race.driver import REFERENCE_NAME, reference_driver
 from sim.race.head_to_head import Entry
 from sim.race.replay import ghost_lap
@@ -82,8 +83,8 @@ RECORDED_COLUMNS = (
     Col("model", keep=2, shrink_to=8, cuts_middle=True),
     Col("night", keep=1, shrink_to=8),
 )
-# Below VERY_NARROW there is room for when, who and the best lap only: the board goes too
-# (the League's boards say which laps are physical).
+# Below VERY_NARROW there is room for when, who and the best lap only: the board goes too,
+# and a lap timed by hand is marked in its place (HAND_TIMED_MARK).
 RECORDED_COLUMNS_VERY_NARROW = tuple(
     replace(col, collapses=True) if isinstance(col, Col) and col.label == "track" else col
     for col in RECORDED_COLUMNS
@@ -158,16 +159,27 @@ VERY_NARROW_SETUP = 24
 # Pane titles, and the shorter ones that fit below VERY_NARROW.
 DRIVERS_TITLE = ("Driver (trained models)", "Driver (trained)")
 RECORDED_TITLE = ("Recorded races in the league, newest first", "Recorded races, newest first")
+# Below VERY_NARROW the track column, and "(physical)" with it, is gone: a hand-timed lap is
+# marked so it never looks like a simulated one, and the title says what the mark means.
+HAND_TIMED_MARK = "*"
+RECORDED_TITLE_HAND_TIMED = "Recorded races, newest (* by hand)"
 
 
-def recorded_row(race: RecordedRace, *, short: bool = False) -> list[str | Text]:
+def recorded_row(
+    race: RecordedRace, *, short: bool = False, mark_physical: bool = False
+) -> list[str | Text]:
     """A recorded race's cells; dim when it has no trace here to replay. `short`: the
-    date without its year (a narrow terminal: "05-04 19:00", never a cut time)."""
+    date without its year (a narrow terminal: "05-04 19:00", never a cut time).
+    `mark_physical`: the track column is gone, so a lap timed by hand carries
+    `HAND_TIMED_MARK` after its time (the title says what it means)."""
     when = race.started_at[:16].replace("T", " ")
+    best = seconds_text(race.best_lap)
+    if mark_physical and race.physics == PHYSICAL:
+        best = f"{best}{HAND_TIMED_MARK}"
     cells: list[str | Text] = [
         when[5:] if short else when,
         Text(race.display_name),
-        seconds_text(race.best_lap),
+        best,
         str(race.valid_laps),
         Text(race.track_label),
         Text(race.model_name),
@@ -323,9 +335,14 @@ class RacesScreen(RacerScreen[None]):
     def _fill_recorded(self) -> None:
         short = self.has_class("-narrow")
         very_narrow = self.has_class("-very-narrow")
-        rows = [recorded_row(race, short=short) for race in self.recorded]
+        rows = [
+            recorded_row(race, short=short, mark_physical=very_narrow) for race in self.recorded
+        ]
         columns = RECORDED_COLUMNS_VERY_NARROW if very_narrow else RECORDED_COLUMNS
         fill_table(self.query_one("#recorded-races", DataTable), columns, rows)
+        marked = very_narrow and any(race.physics == PHYSICAL for race in self.recorded)
+        title = RECORDED_TITLE_HAND_TIMED if marked else RECORDED_TITLE[very_narrow]
+        self.query_one("#recorded-title", Label).update(title)
 
     def on_resize(self) -> None:
         width = self.size.width
@@ -338,8 +355,7 @@ class RacesScreen(RacerScreen[None]):
             self.set_class(narrow, "-narrow")
             self.set_class(very_narrow, "-very-narrow")
             self.query_one("#drivers-title", Label).update(DRIVERS_TITLE[very_narrow])
-            self.query_one("#recorded-title", Label).update(RECORDED_TITLE[very_narrow])
-            self._fill_recorded()
+            self._fill_recorded()  # and its title
 
     @property
     def highlighted_recorded(self) -> RecordedRace | None:

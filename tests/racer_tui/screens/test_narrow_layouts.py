@@ -12,14 +12,19 @@ from pathlib import Path
 import pytest
 from textual.widgets import DataTable, Input
 
+from league.nights import add_entrant, close_night, draw_heats, new_night, run_heats
 from league.opening import open_league
 from league.races import record_race
+from league.seasons import new_season, parse_points
 from racer_tui.app.application import create_app
 from racer_tui.app.screens.league import LeagueScreen
 from racer_tui.app.widgets.section_header import SectionHeader
 from racer_tui.app.widgets.table_fill import Col, _shortened, fit_widths
 from sim.foundation.home import data_home
 from sim.physics.labels import PHYSICAL
+from sim.race.rules import RaceRules
+from sim.tracks.catalog import resolve_track
+from sim.training.drivers import resolve_driver
 from tests.league.helpers import race_result
 from tests.racer_tui.screens.tui_helpers import painted, settle
 
@@ -54,7 +59,7 @@ async def test_the_league_table_keeps_board_and_model_when_narrow(size: tuple[in
 async def test_a_hand_timed_race_is_marked_physical_in_the_recorded_races_at_80x24() -> None:
     # Issue 42's walk: at 80x24 the recorded races dropped the track column, and with it
     # the only sign that a lap was a physical car's, timed by hand. (At 60x20 the list
-    # keeps when, who and the best lap only; the League's boards say it there.)
+    # keeps when, who and the best lap only, and marks the lap: the test below.)
     a_league_with_a_physical_board()
     app = create_app(start="races")
     async with app.run_test(size=(80, 24)) as pilot:
@@ -64,6 +69,68 @@ async def test_a_hand_timed_race_is_marked_physical_in_the_recorded_races_at_80x
         shown = painted(table)
         assert "(physical)" in shown and shown.count("(physical)") == 1
         assert table.virtual_size.width <= table.scrollable_content_region.width
+
+
+async def test_a_hand_timed_race_is_marked_in_the_recorded_races_at_60x20() -> None:
+    # The walk at 60x20: the track column goes, and a hand-timed 6.35 s looked like a
+    # simulated lap. It carries a mark instead, and the title says what the mark means.
+    a_league_with_a_physical_board()
+    app = create_app(start="races")
+    async with app.run_test(size=(60, 20)) as pilot:
+        await settle(pilot)
+        table = app.screen.query_one("#recorded-races", DataTable)
+        rows = painted(table).splitlines()
+        [hand] = [row for row in rows if "dana" in row]
+        [simulated] = [row for row in rows if "Alexandra" in row or "Alexa" in row]
+        assert "6.350 s*" in hand and "*" not in simulated
+        assert "(* by hand)" in painted(app.screen.query_one("#recorded-title"))
+        assert table.virtual_size.width <= table.scrollable_content_region.width
+        await pilot.resize_terminal(100, 30)  # the track column is back: no mark, no note
+        await settle(pilot)
+        assert "*" not in painted(table) and "(physical)" in painted(table)
+        assert "by hand" not in painted(app.screen.query_one("#recorded-title"))
+
+
+def two_nights_of_a_season() -> None:
+    """A closed night of three heats in a season, and a second night whose name starts the
+    same."""
+    data_home().mkdir(parents=True, exist_ok=True)
+    oval = resolve_track("beginner-oval")
+    rules = RaceRules(window_seconds=20.0)
+    with open_league() as league:
+        new_season(league, "spring", parse_points("10,6,4"))
+        night = new_night(league, oval, rules=rules, name="Walk night 2", season="spring")
+        for racer in ("ana", "bob", "cy"):
+            add_entrant(league, night, racer, "reference")
+        draw_heats(league, night, seed=1)
+        run_heats(league, night, oval, resolve_driver)
+        close_night(league, night, "host")
+        new_night(league, oval, rules=rules, name="Walk night 3")
+
+
+async def test_a_night_at_60x20_tells_its_nights_apart_and_reaches_its_standings() -> None:
+    two_nights_of_a_season()
+    app = create_app(start="league")
+    async with app.run_test(size=(60, 20)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        await settle(pilot)
+        screen = app.screen
+        names = painted(screen.query_one("#nights", DataTable))
+        assert "ht 3" in names and "ht 2" in names  # the end that tells them apart
+        await pilot.press("down")  # the closed night
+        await settle(pilot)
+        season = screen.query_one("#season", DataTable)
+        for _ in range(4):  # Tab brings each of the night's tables into view in turn
+            if screen.focused is season:
+                break
+            await pilot.press("tab")
+            await settle(pilot)
+        assert screen.focused is season
+        shown = painted(season)
+        assert all(racer in shown for racer in ("ana", "bob", "cy")) and "10" in shown
+        standings = painted(screen.query_one("#standings", DataTable))
+        assert standings == "" or "points" in standings  # scrolled past, or still shown
 
 
 async def test_a_dialog_taller_than_60x20_opens_at_its_title_with_its_field_focused() -> None:
