@@ -578,7 +578,8 @@ def run_heats(
     `resolve_driver(model spec, track)` turns an entrant's model into a driver (the front
     end supplies it, so the league never imports policies). A heat that fails stops the
     run; the heats before it stay recorded. A physical car's heat is passed over and stays
-    waiting (`timekept_heats`): only the app's timekeeper can time it.
+    waiting (`timekept_heats`): only the app's timekeeper can time it; the heats raced
+    meanwhile go before it in the running order (`on_result` gets each heat numbered so).
     """
     _open(league, night)  # record_race checks again for each heat, inside its transaction
     if track.content_hash != night.track_hash:
@@ -603,7 +604,9 @@ def run_heats(
         result = run_race(track, night.rules, driver, racer=heat.entrant.racer, seed=heat.seed)
         recorded.append(record_race(league, result, night.id, heat_id=heat.id))
         if on_result is not None:
-            on_result(heat, result)
+            # Its number in the running order now: heats raced come first, so a physical
+            # car's heat passed over moves behind it, and every screen says this number.
+            on_result(next(h for h in heats(league, night) if h.id == heat.id), result)
     return recorded
 
 

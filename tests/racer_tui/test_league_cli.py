@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import re
 import sqlite3
 from pathlib import Path
 
@@ -368,3 +369,30 @@ def test_a_night_run_killed_mid_way_keeps_its_heats_and_runs_the_rest(tmp_path: 
         night = get_night(league, "Fri")
         assert pending_heats(league, night) == []
         assert len({heat.entrant.racer for heat in heats(league, night)}) == 8
+
+
+def test_a_physical_heat_passed_over_keeps_every_heat_number_true(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    # The host walk: `night run` said "heat 3" for two racers once a physical car's heat
+    # was passed over, and the draw's numbers no longer matched `night show`.
+    db = str(tmp_path / "league.db")
+    night = ("--db", db)
+    assert (
+        run_cli(capsys, "night", "new", "--track", "beginner-oval", "--name", "N", *night)[0] == 0
+    )
+    for racer, model in (("bob", "reference"), ("cara", "physical"), ("dave", "reference")):
+        code, _, err = run_cli(
+            capsys, "night", "add", "N", "--racer", racer, "--model", model, *night
+        )
+        assert code == 0, err
+    code, drawn, err = run_cli(capsys, "night", "draw", "N", "--seed", "2", *night)
+    assert code == 0, err
+    assert "A physical car's heat waits for its timekeeper" in drawn
+    code, ran, err = run_cli(capsys, "night", "run", "N", *night)
+    assert code == 0, err
+    said = {racer: number for number, racer in re.findall(r"^heat (\d+): (\w+)", ran, re.M)}
+    code, out, _ = run_cli(capsys, "night", "show", "N", "--json", *night)
+    shown = {heat["racer"]: str(heat["position"]) for heat in json.loads(out)["heats"]}
+    assert said == shown  # one number per racer, the running order's
+    assert len(set(said.values())) == 3 and said["cara"] == "3"

@@ -28,7 +28,7 @@ from league.opening import open_league
 from league.race_types import race_type_of
 from league.report import SCORE_TITLES, seconds
 from league.store import League
-from league.timekeeper.car import PHYSICAL
+from league.timekeeper.car import PHYSICAL, is_physical
 from racer_tui.cli.app_launch import AppLaunch
 from racer_tui.cli.league_commands.board import garage_model_hashes
 from racer_tui.cli.output import plain_table, print_json, print_table
@@ -110,6 +110,11 @@ def night_command(league: League, args: argparse.Namespace) -> int:
         for heat in order:
             if heat.race_id is None:
                 print(f"heat {heat.position}: {heat.entrant.display_name} ({heat.entrant.model})")
+        if any(heat.race_id is None and is_physical(heat.entrant.model) for heat in order):
+            print(
+                "A physical car's heat waits for its timekeeper (r on the Nights screen); "
+                "heats raced before it move ahead of it in the running order."
+            )
         return 0
     if action == "run":
         return _night_run(league, night, args.heats)
