@@ -173,10 +173,14 @@ TEXTUALS_ON_UNMOUNT = Widget._on_unmount
 
 def _on_unmount_letting_lines_go(self: Widget) -> None:
     TEXTUALS_ON_UNMOUNT(self)
+    # Textual's private caches, looked up rather than assumed: a Textual without them
+    # keeps its lines a little longer, and never fails to remove a widget for it.
     if isinstance(self, DataTable):
-        self._clear_caches()  # its styles cache and its row, cell and line caches
+        clear = getattr(self, "_clear_caches", None)  # styles, row, cell and line caches
     else:
-        self._styles_cache.clear()
+        clear = getattr(getattr(self, "_styles_cache", None), "clear", None)
+    if callable(clear):
+        clear()
 
 
 def let_removed_widgets_lines_go() -> None:
