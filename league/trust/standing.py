@@ -142,23 +142,33 @@ def head_to_head_standings(
     shared = {str(row[0]) for row in league.query("SELECT DISTINCT model_hash FROM sync_bundles")}
     found: dict[str, ResultStanding] = {}
     for race_id, cars, track_hash, physics, outcome in rows:
+        if outcome == "same":
+            found[race_id] = _REPLAYED
+            continue
         track_here = find_track_by_hash(track_hash) is not None
-        standing = _REPLAYED if outcome == "same" else None
-        for car in sorted(json.loads(cars), key=lambda car: int(car["car"])):
-            if standing is not None:
-                break
-            model_hash = str(car["model_hash"])
-            of_car = _race_standing(
-                model_hash,
-                str(track_hash),
-                str(physics),
-                outcome,
-                track_here=track_here,
-                model_here=model_hash in local_models or model_hash in shared,
+        by_car = (
+            (
+                car["car"] + 1,
+                _race_standing(
+                    str(car["model_hash"]),
+                    str(track_hash),
+                    str(physics),
+                    outcome,
+                    track_here=track_here,
+                    model_here=car["model_hash"] in local_models or car["model_hash"] in shared,
+                ),
             )
-            if of_car.standing is Standing.UNVERIFIABLE:
-                standing = ResultStanding(of_car.standing, f"car {car['car'] + 1}: {of_car.why}")
-        found[race_id] = standing or ResultStanding(
-            Standing.VERIFIABLE, "every car's model is here, not raced again yet"
+            for car in sorted(json.loads(cars), key=lambda car: int(car["car"]))
+        )
+        slot, first = next(
+            ((slot, of_car) for slot, of_car in by_car if of_car.standing is Standing.UNVERIFIABLE),
+            (0, None),
+        )
+        found[race_id] = (
+            ResultStanding(first.standing, f"car {slot}: {first.why}")
+            if first is not None
+            else ResultStanding(
+                Standing.VERIFIABLE, "every car's model is here, not raced again yet"
+            )
         )
     return {race_id: found[race_id] for race_id in wanted if race_id in found}

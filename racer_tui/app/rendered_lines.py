@@ -83,17 +83,18 @@ class _AbsentCache:
         return None
 
     def __setitem__(self, key: Hashable, value: Any) -> None:
-        if not _answers_itself(self._strip, value):
+        if not _answers_itself(id(self._strip), value):
             self._lazy.make(self._strip)[key] = value
 
     set = __setitem__
 
 
-def _answers_itself(strip: Strip, value: Any) -> bool:
-    """Whether a cached answer is `strip` itself, or a list of lines holding it."""
-    if value is strip:
+def _answers_itself(line_id: int, value: Any) -> bool:
+    """Whether a cached answer is the line whose id is `line_id`, or a list of lines
+    holding it (by id: a cache that kept a reference to its line would be the cycle)."""
+    if id(value) == line_id:
         return True
-    return isinstance(value, list) and any(line is strip for line in value)
+    return isinstance(value, list) and any(id(line) == line_id for line in value)
 
 
 class LineCache(FIFOCache[Any, Any]):
@@ -106,11 +107,8 @@ class LineCache(FIFOCache[Any, Any]):
         self._owner = id(owner)  # its id: a reference would be the cycle again
 
     def set(self, key: Any, value: Any) -> None:
-        if value is not None and id(value) == self._owner:
-            return
-        if isinstance(value, list) and any(id(line) == self._owner for line in value):
-            return
-        super().set(key, value)
+        if not _answers_itself(self._owner, value):
+            super().set(key, value)
 
     __setitem__ = set
 
