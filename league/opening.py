@@ -77,3 +77,23 @@ def open_league(db_path: Path | None = None) -> League:
         conn.close()
         raise
     return League(path, conn)
+
+
+FileStamp = tuple[int, int] | None  # a file's modification time and size; None: no file
+
+
+def league_stamp(db_path: Path | None = None) -> tuple[FileStamp, FileStamp]:
+    """The database and its write-ahead log as the file system last saw them: a screen that
+    shows the league compares stamps to notice, without a query, that another process (the
+    command line, a sync) wrote to it. In WAL mode every commit touches the log, and a
+    checkpoint that empties it touches the database."""
+    path = Path(db_path) if db_path is not None else default_db_path()
+    return _file_stamp(path), _file_stamp(path.with_name(path.name + "-wal"))
+
+
+def _file_stamp(path: Path) -> FileStamp:
+    try:
+        status = path.stat()
+    except OSError:
+        return None
+    return status.st_mtime_ns, status.st_size

@@ -125,7 +125,8 @@ def _section_bindings() -> list[BindingType]:
             section.key,
             f"switch_section({section.mode!r})",
             section.title,
-            tooltip=section.summary,
+            # Like q, from a section's own screen only (see `check_action`): Help says so.
+            tooltip=f"{section.summary}; from a section's own screen",
             show=False,
         )
         for section in SECTIONS

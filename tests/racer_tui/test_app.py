@@ -12,6 +12,7 @@ from racer_tui.app.application import OTHER_SCREENS, SECTION_SCREENS, RacerTuiAp
 from racer_tui.app.screens.garage import GarageScreen
 from racer_tui.app.screens.help import HelpScreen, declared_bindings
 from racer_tui.app.screens.model_editor import ModelEditorScreen
+from racer_tui.app.screens.nights import NightsScreen
 from racer_tui.app.screens.races import RacesScreen
 from racer_tui.app.screens.tracks import TracksScreen
 from racer_tui.app.screens.welcome import WelcomeScreen
@@ -136,8 +137,17 @@ async def test_ctrl_q_quits_from_a_screen_pushed_on_a_section() -> None:
         await pilot.press("n")  # the Nights screen, pushed on the League section
         await pilot.pause()
         assert len(app.screen_stack) > 1
-        await pilot.press("q")
-        assert app.is_running
+        await pilot.press("q", "1")
+        assert isinstance(app.screen, NightsScreen) and app.is_running
+        # Help says so, for the digits as for q (a host pressed 1 here and wondered).
+        await pilot.press("question_mark")
+        await pilot.pause()
+        assert isinstance(app.screen, HelpScreen)
+        help_lines = _help_text(app.screen).splitlines()
+        garage = next(i for i, line in enumerate(help_lines) if line.startswith("1 "))
+        garage_row = " ".join(" ".join(help_lines[garage : garage + 2]).split())
+        assert "race; from a section's own screen" in garage_row
+        await pilot.press("escape")
         await pilot.press("ctrl+q")
         await pilot.pause()
         assert not app.is_running

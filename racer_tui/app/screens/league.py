@@ -43,6 +43,7 @@ from league.report import (
     to_markdown,
 )
 from league.report import Column as ReportColumn
+from racer_tui.app.league_watch import LEAGUE_POLL_SECONDS, LeagueWatch
 from racer_tui.app.screens.base import RacerScreen, push_kept
 from racer_tui.app.screens.dialogs import InputDialog
 from racer_tui.app.screens.export_path import EXPORT_FORMATS, check_export_path
@@ -216,6 +217,7 @@ class LeagueScreen(RacerScreen[None]):
         self.loaded = False
         self._generation = 0
         self._garage_hashes: frozenset[str] | None = None  # see _models_here
+        self.league_watch = LeagueWatch(db_path)  # writes made elsewhere (the command line)
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league")
@@ -231,6 +233,14 @@ class LeagueScreen(RacerScreen[None]):
     def on_mount(self) -> None:
         self.reload()
         self.query_one(SyncStatusLine).read(self.db_path)
+        self.set_interval(LEAGUE_POLL_SECONDS, self._look_for_changes)
+
+    def _look_for_changes(self) -> None:
+        """Read the board again when another process wrote to the league (a submission from
+        the command line, a sync, a night's heat): only while the board is shown."""
+        if self.loaded and self.is_current and self.league_watch.changed():
+            self.reload()
+            self.query_one(SyncStatusLine).read(self.db_path)
 
     @property
     def ready_for_keys(self) -> bool:
@@ -249,6 +259,7 @@ class LeagueScreen(RacerScreen[None]):
     # --- loading -------------------------------------------------------------------------
 
     def reload(self) -> None:
+        self.league_watch.reading()
         self._generation += 1
         query = replace(self.query_one(BoardFilters).current, race_type=self.race_type)
         self._load(query, self._generation)

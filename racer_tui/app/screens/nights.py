@@ -66,6 +66,7 @@ from league.seasons import (
 from league.store import League, default_db_path
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from league.timekeeper.journal import HeatJournal, journal_path
+from racer_tui.app.league_watch import LEAGUE_POLL_SECONDS, LeagueWatch
 from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.screens.dialogs import (
     FormDialog,
@@ -644,6 +645,7 @@ class NightsScreen(RacerScreen[None]):
         self._follow: str | None = None  # an entrant whose row the cursor follows (a move)
         self._recorded_heats: set[str] = set()  # heats this screen has sent to the league
         self.web_pages = WebPages()  # `racer-tui serve`, when the host starts it here (b)
+        self.league_watch = LeagueWatch(db_path)  # writes made elsewhere (the command line)
 
     def compose(self) -> ComposeResult:
         yield SectionHeader("league", "league nights")
@@ -668,6 +670,22 @@ class NightsScreen(RacerScreen[None]):
 
     def on_mount(self) -> None:
         self.reload()
+        self.set_interval(LEAGUE_POLL_SECONDS, self._look_for_changes)
+
+    def on_screen_resume(self) -> None:
+        self._look_for_changes()  # back from a heat, a dialog or another section
+
+    def _look_for_changes(self) -> None:
+        """Read the league again when another process wrote to it (`racer-tui night ...`,
+        a sync): the screen shows what the league holds, not what it held when last read.
+        Only while the screen is shown; its return looks at once."""
+        if not self.is_current or not self.league_watch.changed():
+            return
+        if self.heat_rows and self.state is not None:  # the cursor stays on its entrant
+            row = self.query_one("#heats", DataTable).cursor_row
+            if 0 <= row < len(self.heat_rows):
+                self._follow = self.heat_rows[row][1].id
+        self.reload()
 
     def on_resize(self) -> None:
         # Below 80 columns the night's own tables need the room more than the list does.
@@ -679,6 +697,7 @@ class NightsScreen(RacerScreen[None]):
     # --- loading -----------------------------------------------------------------------
 
     def reload(self, select: str | None = None) -> None:
+        self.league_watch.reading()
         self._load_nights(select or (self.state.night.id if self.state else None))
 
     @work(thread=True, exclusive=True, group="nights-list", exit_on_error=False)

@@ -175,6 +175,25 @@ async def test_a_markup_looking_racer_name_is_shown_literally() -> None:
         assert name in painted(app.screen.query_one("#projector-rows"))
 
 
+async def test_the_board_shows_results_recorded_elsewhere_without_a_key() -> None:
+    """A result recorded by another process (the command line, a sync) lands on the board
+    shown within its poll, with the highlighted row kept."""
+    three_racers()
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 36)) as pilot:
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, LeagueScreen)
+        await pilot.press("down")  # ada
+        await settle(pilot)
+        assert screen.highlighted is not None and screen.highlighted.racer == "ada"
+        with open_league() as league:
+            record_race(league, race_result("fay", [10.5]))
+        await wait_for(pilot, lambda: "fay" in racers(screen))
+        assert racers(screen) == ["fay", "bob", "ada", "cy"]
+        assert screen.highlighted is not None and screen.highlighted.racer == "ada"
+
+
 async def test_the_projector_shows_the_leader_and_picks_up_new_results() -> None:
     three_racers()
     app = create_app(start="league")

@@ -19,7 +19,7 @@ from racer_tui.app.screens.nights import AddEntrantDialog, NightsScreen
 from sim.foundation.home import data_home
 from sim.race.rules import RankingMethod, preset_rules
 from sim.tracks.catalog import resolve_track
-from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
 
 
 async def the_nights_screen(pilot: Pilot[Any]) -> NightsScreen:
@@ -210,6 +210,32 @@ async def test_closing_a_night_drawn_elsewhere_names_the_keys_and_shows_the_heat
         await settle(pilot)
     with open_league() as league:
         assert list_nights(league)[0].closed
+
+
+async def test_what_the_command_line_changes_shows_without_a_key() -> None:
+    """A host who draws or opens a night with `racer-tui night ...` in another terminal sees
+    it land here within the screen's poll, the cursors where they were."""
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        for racer in ("ada", "bob", "cy"):
+            add_entrant(league, night, racer, "reference")
+    app = create_app(start="league")
+    async with app.run_test(size=(120, 40)) as pilot:
+        screen = await the_nights_screen(pilot)
+        await pilot.press("tab", "down")  # the heats table, on bob
+        await settle(pilot)
+        assert table_rows(screen, "#heats")[1][1] == "bob"
+        with open_league() as league:
+            draw_heats(league, night, seed=1)
+            new_night(league, resolve_track("beginner-oval"), name="saturday")
+        await wait_for(pilot, lambda: len(table_rows(screen, "#nights")) == 2)
+        await wait_for(pilot, lambda: table_rows(screen, "#heats")[0][0] == "1")
+        assert [row[0] for row in table_rows(screen, "#nights")] == ["saturday", "friday"]
+        assert screen.state is not None and screen.state.night.name == "friday"
+        heats = table_rows(screen, "#heats")
+        assert [row[0] for row in heats] == ["1", "2", "3"]
+        assert heats[screen.query_one("#heats", DataTable).cursor_row][1] == "bob"
 
 
 async def test_an_entrant_folder_that_is_not_a_model_names_the_garages_key(
