@@ -11,6 +11,7 @@ not on a clock) until everything queued has been handled.
 from __future__ import annotations
 
 import asyncio
+import time
 import unicodedata
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -18,6 +19,7 @@ from typing import Any
 from textual import events
 from textual._xterm_parser import XTermParser
 from textual.app import App
+from textual.constants import ESCAPE_DELAY
 from textual.keys import REPLACED_KEYS, _character_to_key, _get_unicode_name_from_key
 from textual.pilot import Pilot
 
@@ -55,8 +57,15 @@ def burst(app: App[Any], keys: Iterable[str]) -> None:
 def typed(app: App[Any], text: str) -> None:
     """Queue `text` as typed on a terminal: read by Textual's own terminal parser, so each
     character becomes the Key event a terminal driver posts for it (U+202E included, which
-    arrives as key `right_to_left_override` with the character itself)."""
-    for event in XTermParser().feed(text):
+    arrives as key `right_to_left_override` with the character itself). An Esc that could
+    begin a sequence is read as the parser reads it once the terminal's escape delay passes
+    with nothing more."""
+    parser = XTermParser()
+    read = list(parser.feed(text))
+    if "\x1b" in text:
+        time.sleep(ESCAPE_DELAY * 1.5)
+        read += parser.tick()
+    for event in read:
         if isinstance(event, events.Key):
             _deliver(app, event)
 

@@ -77,6 +77,16 @@ SENSOR_CHOICES: tuple[tuple[str, str], ...] = (
     ("camera", "camera"),
     ("camera+lidar", "camera + LIDAR"),
 )
+# Beside the sensor field, for the sensor chosen: what it is good for (a camera model's
+# editor once said "vector trains fastest").
+# Short: the select beside it keeps its room at 80 columns.
+SENSOR_HINTS: dict[str, str] = {
+    "vector": "fastest; sim only",
+    "lidar": "sees boxes and cars",
+    "sector_lidar": "LIDAR in sectors",
+    "camera": "as a real car sees",
+    "camera+lidar": "as a DeepRacer Evo",
+}
 DISCRETE, CONTINUOUS, KEPT = "discrete", "continuous", "kept"
 TUNABLE = tuple(spec for spec in HYPERPARAMETER_SPECS.values() if spec.tunable)
 

@@ -1,16 +1,19 @@
 """Workarounds for Textual bugs the app's users can reach, applied once for the whole app.
 
 Each one names the bug, the Textual version it was seen in, and how to tell it is no longer
-needed (its test in tests/racer_tui/test_textual_workarounds.py then fails to reproduce the
-crash with the workaround taken out).
+needed (its test in tests/racer_tui/test_key_bursts.py then fails to reproduce the fault
+with the workaround taken out).
 """
 
 from __future__ import annotations
 
 import inspect
+from collections.abc import Iterable
 from typing import Any
 
 from textual import events, work
+from textual._ansi_sequences import ANSI_SEQUENCES_KEYS
+from textual._xterm_parser import XTermParser
 from textual.await_complete import AwaitComplete
 from textual.command import CommandPalette
 from textual.css.query import NoMatches
@@ -31,6 +34,8 @@ def apply_workarounds() -> None:
         _clicks_on_a_table_without_columns()
     if not getattr(CommandPalette._gather_commands, PATCHED, False):
         _a_closed_palette_stops_searching()
+    if not getattr(XTermParser._sequence_to_key_events, PATCHED, False):
+        _escape_and_a_key_in_one_read_are_two_keys()
 
 
 def _page_keys_wait_for_lines() -> None:
@@ -138,3 +143,34 @@ def _a_closed_palette_stops_searching() -> None:
     patched = work(exclusive=True, group=CommandPalette._GATHER_COMMANDS_GROUP)(gather_commands)
     setattr(patched, PATCHED, True)
     CommandPalette._gather_commands = patched  # type: ignore[method-assign]
+
+
+def _escape_and_a_key_in_one_read_are_two_keys() -> None:
+    """Textual 8.2.8: Esc and a key that arrive in one read from the terminal (typed
+    quickly, or over a slow link) are read as Alt and that key, as terminals send Alt+key.
+    For a character with a name (`?`, space, `5`) the Alt is then dropped, and with it the
+    Esc: a host's Esc then `?` did not close the dialog, and `?` went to it (issue 42's
+    walk); a letter became `alt+q`, which nothing binds; a digit became a character of
+    macOS's Option row (`\x1b5` is "∞" for WezTerm). racer-tui binds no Alt key, so
+    such a pair is what was typed: Esc, then the key. (Alt and a named key, as an arrow,
+    come as a sequence of their own and are left as they are.) No longer needed when
+    `XTermParser().feed("\x1b?")` and a tick after the escape delay give two keys."""
+    original = XTermParser._sequence_to_key_events
+
+    def sequence_to_key_events(
+        self: XTermParser, sequence: str, alt: bool = False
+    ) -> Iterable[events.Key]:
+        if alt and len(sequence) == 1 and sequence.isprintable():
+            yield events.Key("escape", "\x1b")
+            yield from original(self, sequence)
+            return
+        if len(sequence) == 2 and isinstance(ANSI_SEQUENCES_KEYS.get(sequence), str):
+            # Esc and a digit, `-` or `=`: read whole as WezTerm's Option key of macOS
+            # ("\x1b5" as "∞"), so a host's Esc then 5 typed quickly went nowhere.
+            yield events.Key("escape", "\x1b")
+            yield from original(self, sequence[1])
+            return
+        yield from original(self, sequence, alt)
+
+    setattr(sequence_to_key_events, PATCHED, True)
+    XTermParser._sequence_to_key_events = sequence_to_key_events  # type: ignore[method-assign]

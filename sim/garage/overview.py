@@ -66,6 +66,8 @@ def model_row(folder: ModelFolder) -> dict[str, Any]:
         params = folder.training_params()
         track = params.world_name
         best = folder.best_evaluation_lap()
+        files = folder.evaluation_files()
+        stale = bool(files) and folder.stale_evaluation(files[-1]) is not None
         status = str(folder.status())
     except ModelError as error:
         return {
@@ -76,6 +78,7 @@ def model_row(folder: ModelFolder) -> dict[str, Any]:
             "sensor": None,
             "actions": None,
             "best_lap_s": None,
+            "evaluated_before_training": False,
             "race": None,
         }
     return {
@@ -86,6 +89,9 @@ def model_row(folder: ModelFolder) -> dict[str, Any]:
         "sensor": "+".join(metadata.sensors),
         "actions": describe_actions(metadata.action_space),
         "best_lap_s": best,
+        # The latest evaluation is of the policy before the last training: a retrained
+        # model's laps are not known until it is evaluated again.
+        "evaluated_before_training": stale,
     }
 
 
@@ -127,6 +133,7 @@ def model_details(folder: ModelFolder) -> dict[str, Any]:
         evaluations.append(
             {
                 "file": path.name,
+                "before_last_training": folder.stale_evaluation(path) is not None,
                 "laps_completed": len(laps),
                 "trials_run": len(trials),
                 "best_lap_s": min(laps) if laps else None,

@@ -7,8 +7,10 @@ from __future__ import annotations
 from textual.widgets import Input, OptionList
 
 from racer_tui.app.application import create_app
-from racer_tui.app.keys_as_delivered import burst, drain
+from racer_tui.app.keys_as_delivered import burst, drain, typed
 from racer_tui.app.screens.garage import GarageScreen
+from racer_tui.app.screens.help import HelpScreen
+from racer_tui.app.screens.league import LeagueScreen
 from racer_tui.app.screens.model_editor import ModelEditorScreen
 from sim.garage.options import new_model
 
@@ -206,3 +208,30 @@ async def test_the_palette_opened_again_as_the_last_one_closes_never_crashes() -
             assert isinstance(app.screen, CommandPalette)  # the second one opened
             burst(app, ["escape"])
             await drain(pilot)
+
+
+async def test_escape_and_a_key_read_together_are_both_keys() -> None:
+    """Esc, then `?` or a section's digit, typed quickly reach the app in one read, which
+    Textual took for Alt+key and then dropped the Esc (or, for a digit, read as a macOS
+    Option character): the host's help opened over the dialog, or nothing happened."""
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        await pilot.press("question_mark")
+        await drain(pilot)
+        assert isinstance(app.screen, HelpScreen)
+        typed(app, "\x1b5")  # close the help, then the League
+        await drain(pilot)
+        assert isinstance(app.screen, LeagueScreen)
+        await pilot.press("n")  # the Nights screen, whose Esc goes back to the League
+        await drain(pilot)
+        typed(app, "\x1b?")
+        await drain(pilot)
+        assert isinstance(app.screen, HelpScreen)
+        await pilot.press("escape")
+        await drain(pilot)
+        assert isinstance(app.screen, LeagueScreen)
+        # A real sequence that starts with Esc is still one key.
+        typed(app, "\x1b[B")
+        await drain(pilot)
+        assert isinstance(app.screen, LeagueScreen) and app.is_running

@@ -38,6 +38,7 @@ def test_new_list_and_show(capsys: pytest.CaptureFixture[str]) -> None:
             "sensor": "vector",
             "actions": "10 discrete, up to 4 m/s",
             "best_lap_s": None,
+            "evaluated_before_training": False,
         }
     ]
     code, out, _ = run_cli(capsys, "model", "show", "speedy", "--json")

@@ -28,6 +28,7 @@ from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.widgets.coach_map import CoachMap
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.speed_trace import SpeedTraceChart
+from racer_tui.app.widgets.table_fill import FittedTable
 from sim.coach.lap_analysis import coach_sentence
 
 if TYPE_CHECKING:  # the coach's numpy and osqp load when a lap is coached, not with the app
@@ -96,7 +97,7 @@ class CoachScreen(RacerScreen[None]):
             with Vertical(id="coach-left"):
                 yield CoachMap(id="coach-map")
                 yield Static("", id="coach-legend")
-            yield DataTable(id="coach-sectors", cursor_type="row", zebra_stripes=True)
+            yield FittedTable(id="coach-sectors", cursor_type="row", zebra_stripes=True)
         yield Static("", id="coach-sentence")
         yield SpeedTraceChart(id="coach-speed")
         yield RacerFooter()

@@ -193,7 +193,11 @@ RequestT = TypeVar("RequestT")
 class FormDialog(RacerModal[RequestT | None]):
     """A dialog with fields, a problem line and Cancel/confirm buttons; Esc cancels."""
 
-    BINDINGS: ClassVar[list[BindingType]] = [Binding("escape", "cancel", "Cancel")]
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("escape", "cancel", "Cancel"),
+        # As in the model editor and the night dialog: every form confirms on Ctrl+S.
+        Binding("ctrl+s", "confirm_form", "Confirm", show=False, priority=True),
+    ]
     # A form whose three-row fields do not fit a terminal shorter than this gets one-row
     # fields there, so it shows whole, buttons included, without scrolling (0: never).
     COMPACT_FIELDS_BELOW_ROWS: ClassVar[int] = 0
@@ -221,6 +225,12 @@ class FormDialog(RacerModal[RequestT | None]):
 
     def action_cancel(self) -> None:
         self.dismiss(None)
+
+    def action_confirm_form(self) -> None:
+        """Ctrl+S: what the confirm button does, from whichever field has the focus."""
+        confirm = self.query("#confirm")
+        if confirm:
+            confirm.first(Button).press()
 
     @on(Button.Pressed, "#cancel")
     def _cancel(self) -> None:

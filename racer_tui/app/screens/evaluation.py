@@ -28,6 +28,7 @@ from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.job_line import JobLine
 from racer_tui.app.widgets.model_detail import seconds_text
+from racer_tui.app.widgets.table_fill import FittedTable
 from sim.foundation.plural import counted
 from sim.garage.folder import open_model
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport, evaluate_model
@@ -124,7 +125,7 @@ class EvaluationScreen(RacerScreen[None]):
             id="evaluation-summary",
         )
         yield JobLine(id="evaluation-job")
-        yield DataTable(id="evaluation-results", cursor_type="row", zebra_stripes=True)
+        yield FittedTable(id="evaluation-results", cursor_type="row", zebra_stripes=True)
         yield RacerFooter()
 
     def on_mount(self) -> None:

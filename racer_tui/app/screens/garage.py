@@ -316,7 +316,7 @@ class GarageScreen(RacerScreen[None]):
                 Text(row["track"] or "-"),
                 Text(row["sensor"] or "-"),
                 Text(short_actions(row)),
-                Text(seconds_text(row["best_lap_s"]) if row["best_lap_s"] is not None else "-"),
+                best_eval_cell(row),
             )
             for row in message.rows
         ]
@@ -689,3 +689,14 @@ class GarageScreen(RacerScreen[None]):
             confirmed,
             confirm_label="Submit anyway",
         )
+
+
+def best_eval_cell(row: dict[str, Any]) -> Text:
+    """The best evaluation lap; "old" after it when the model trained since its latest
+    evaluation (the lap is not its policy's any more: v evaluates it again)."""
+    if row["best_lap_s"] is None:
+        return Text("-")
+    cell = Text(seconds_text(row["best_lap_s"]))
+    if row.get("evaluated_before_training"):
+        cell.append(" old", style="yellow")
+    return cell

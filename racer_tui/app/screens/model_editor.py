@@ -45,6 +45,7 @@ from racer_tui.app.model_form import (
     RACE_TYPE_CHOICES,
     REWARD_FILE_NAME,
     SENSOR_CHOICES,
+    SENSOR_HINTS,
     TUNABLE,
     FieldProblem,
     FormError,
@@ -201,16 +202,24 @@ def droa_words(verdict: DroaVerdict) -> Text:
     return text
 
 
-def field(label: str, widget: Widget, allowed: str = "", field_id: str = "") -> Vertical:
-    """A labelled input with its allowed range beside it and a problem line under it."""
+def field(
+    label: str, widget: Widget, allowed: str = "", field_id: str = "", hint_id: str | None = None
+) -> Vertical:
+    """A labelled input with its allowed range beside it and a problem line under it
+    (`hint_id` names the range's Static, for a field whose hint follows its value)."""
     key = field_id or str(widget.id)
-    row = [widget, Static(allowed, classes="field-allowed")] if allowed else [widget]
+    hint = Static(allowed, classes="field-allowed", id=hint_id)
+    row = [widget, hint] if allowed else [widget]
     return Vertical(
         Label(label, classes="field-label"),
         Horizontal(*row, classes="field-row"),
         Static("", id=f"{key}-problem", classes="field-problem"),
         classes="field",
     )
+
+
+def sensor_hint(sensor: str) -> str:
+    return SENSOR_HINTS.get(sensor, "kept from its files")
 
 
 OUTDATED_MAP = Text("changed since the last map: ctrl+r maps what it pays now", style="dim")
@@ -318,7 +327,8 @@ class ModelEditorScreen(RacerScreen[str | None]):
                         value=values.sensor,
                         id="sensor",
                     ),
-                    "vector trains fastest",
+                    sensor_hint(values.sensor),
+                    hint_id="sensor-hint",
                 )
                 yield field(
                     "Training time limit (minutes)",
@@ -590,6 +600,7 @@ class ModelEditorScreen(RacerScreen[str | None]):
 
     @on(Select.Changed, "#sensor")
     def _sensor_changed(self) -> None:
+        self.query_one("#sensor-hint", Static).update(sensor_hint(str(self._select("sensor"))))
         self._show_camera_randomisation()
         self._set_problem("camera-randomisation", "")
         if "camera" not in str(self._select("sensor")).split("+"):

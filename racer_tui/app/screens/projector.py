@@ -99,7 +99,10 @@ class ProjectorScreen(KioskScreen):
     ProjectorScreen #projector-title-box { width: 1fr; height: auto; }
     ProjectorScreen #projector-title { width: 1fr; text-style: bold; color: $accent; }
     ProjectorScreen #projector-leader { width: auto; height: auto; }
-    ProjectorScreen #projector-leader-name { width: auto; padding: 1 2 0 0; text-style: bold; }
+    ProjectorScreen #projector-leader-name {
+        width: 1fr; padding: 1 2 0 0; text-style: bold;
+        text-wrap: nowrap; text-overflow: ellipsis;  /* a long name never runs under the clock */
+    }
     ProjectorScreen #projector-rows { height: 1fr; padding: 0 2; }
     ProjectorScreen #projector-hint { height: 1; color: $text-muted; padding: 0 2; }
     """

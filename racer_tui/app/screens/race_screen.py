@@ -30,6 +30,7 @@ from racer_tui.app.screens.coach import CoachScreen
 from racer_tui.app.screens.dialogs import ask
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.race_map import CarMarker, RaceMap
+from racer_tui.app.widgets.table_fill import FittedTable
 from racer_tui.text.clocks import clock_text
 from sim.garage.coach_session import coach_race
 from sim.physics.objects.settings import RaceType
@@ -152,7 +153,7 @@ class RaceScreen(PlaybackKeys, RacerScreen[RaceResult | None]):
                 yield Static(Text(race_title(setup)), id="race-title")
                 yield Digits(countdown_text(setup.rules.window_seconds), id="countdown")
                 yield Static(id="race-facts")
-                yield DataTable(id="laps", cursor_type="row", zebra_stripes=True)
+                yield FittedTable(id="laps", cursor_type="row", zebra_stripes=True)
         yield RacerFooter()
 
     def on_mount(self) -> None:

@@ -112,6 +112,9 @@ class BoardFilters(Horizontal):
     BoardFilters { height: auto; }
     BoardFilters > Select { width: 1fr; }
     BoardFilters > #filter-by { max-width: 24; }
+    /* A chosen value wider than its filter ends in an ellipsis on its one line: wrapped,
+       "beginner-oval" read "beginner-ova" over "l", a row the board lost (the host walk). */
+    BoardFilters SelectCurrent Static#label { text-wrap: nowrap; text-overflow: ellipsis; }
     """
 
     @dataclass

@@ -166,9 +166,9 @@ class LineChart(Widget):
         if plot_rows < 1 or plot_cols < 2:
             return lines
         finite = [v for s in self.series for v in s.values if math.isfinite(v)]
-        if not finite:
-            blank = Strip([Segment(self.empty_text[:width], Style(dim=True))])
-            return [*lines, blank]
+        if not finite:  # each line of the reason, as many as the plot has rows for
+            said = self.empty_text.splitlines()[:plot_rows]
+            return [*lines, *(Strip([Segment(line[:width], Style(dim=True))]) for line in said)]
         low, high = min(finite), max(finite)
         if high - low < 1e-9:
             low, high = low - 0.5, high + 0.5

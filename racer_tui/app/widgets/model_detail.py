@@ -214,12 +214,22 @@ class ModelDetail(VerticalScroll):
             if "problem" in evaluation:
                 table.add_row(Text(evaluation["file"]), Text(evaluation["problem"], style="red"))
                 continue
+            name = Text(evaluation["file"])
+            if evaluation.get("before_last_training"):
+                name.append(" (before the last training)", style="yellow")
             table.add_row(
-                Text(evaluation["file"]),
+                name,
                 f"{evaluation['laps_completed']}/{evaluation['trials_run']}",
                 seconds_text(evaluation["best_lap_s"]),
             )
         latest = evaluations[-1]
+        listed: RenderableType = table
+        if latest.get("before_last_training"):
+            retrained = Text(
+                "The model trained after its latest evaluation: press v to evaluate it again.",
+                style="yellow",
+            )
+            listed = Group(table, retrained)
         trials = Table(box=None, padding=(0, 1), show_edge=False, header_style="dim")
         for column in ("trial", "time", "% done", "status"):
             trials.add_column(column, justify="left" if column == "status" else "right")
@@ -230,4 +240,4 @@ class ModelDetail(VerticalScroll):
                 f"{trial.get('completion_percentage', 0):g}",
                 Text(str(trial.get("episode_status", ""))),
             )
-        return Group(table, Text(""), Text("latest trials", style="dim"), trials)
+        return Group(listed, Text(""), Text("latest trials", style="dim"), trials)

@@ -245,7 +245,20 @@ def column_index(event: DataTable.HeaderSelected) -> int:
 
 class FittedTable(DataTable[object]):
     """A DataTable that fits its columns again (see `fill_table`) when its size changes,
-    keeping the racer's cursor and scroll where they were."""
+    keeping the racer's cursor and scroll where they were. Home and End go to the first and
+    last row of a row table, as in any list (Textual's go to the first and last column)."""
+
+    def action_scroll_home(self) -> None:
+        if self.cursor_type == "row":
+            self.action_scroll_top()
+        else:
+            super().action_scroll_home()
+
+    def action_scroll_end(self) -> None:
+        if self.cursor_type == "row":
+            self.action_scroll_bottom()
+        else:
+            super().action_scroll_end()
 
     def on_resize(self, event: events.Resize) -> None:
         filling = _ASKED.get(self)

@@ -321,7 +321,8 @@ def counters(figures: TrainingFigures) -> Text:
     text.append(f" of last {COMPLETION_WINDOW}", style="dim")
     text.append("\neval ", style="dim")
     text.append(
-        f"{evaluation.laps}/{evaluation.trials} laps {evaluation.mean_progress:.0f}%"
+        # Progress, said as such: "5/5 laps 6%" read as a lap rate (the host walk).
+        f"{evaluation.laps}/{evaluation.trials} laps, progress {evaluation.mean_progress:.0f}%"
         if evaluation
         else "-"
     )
@@ -343,7 +344,12 @@ def empty_reason(figures: TrainingFigures, chart_id: str) -> str:
     if figures.ended is not None and figures.ended.kind == "failed":
         return "training failed: see above"  # short: a chart at 60 columns is 28 wide
     if chart_id == "lap-time" and figures.episodes:
-        return "no lap completed yet"
+        # The chart is of training episodes, whose exploring policy may not finish a lap
+        # while the evaluations' greedy one does: said, so the two never seem to disagree.
+        evaluation = figures.evaluation
+        if evaluation is not None and evaluation.best_lap is not None:
+            return f"no training lap yet\nevaluation best {evaluation.best_lap:.2f} s"
+        return "no training lap yet"
     if figures.ended is None and (figures.started is not None or figures.is_starting):
         return "waiting for data…"
     return "no data yet: press t to train"

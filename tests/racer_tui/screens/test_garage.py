@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import io
 import json
 import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
-from textual.widgets import DataTable, Input
+from rich.console import Console
+from textual.screen import Screen
+from textual.widgets import DataTable, Input, Static
 
 from racer_tui.app.application import create_app
 from racer_tui.app.keys_as_delivered import burst, drain
@@ -19,6 +23,7 @@ from racer_tui.app.widgets.model_detail import ModelDetail
 from sim.garage.bundle import read_bundle
 from sim.garage.folder import list_models, open_model
 from sim.garage.options import new_model
+from sim.training.evaluation import evaluate_model
 from tests.racer_tui.screens.tui_helpers import (
     Notifications,
     painted,
@@ -49,6 +54,38 @@ async def test_the_table_lists_models_and_the_detail_follows_the_cursor() -> Non
         await settle(pilot)
         text = painted(detail)
         assert "bob" in text and "lidar" in text
+
+
+async def test_an_evaluation_made_before_the_last_training_is_marked_old() -> None:
+    """A retrained model's evaluation laps are its old policy's: the list and the detail
+    say so (the host walk read a retrained model's old lap as its own)."""
+    folder = trained_model("eva", track="beginner-oval")
+    evaluate_model(folder, trials=1)
+    trained_model("fresh", track="beginner-oval")
+    evaluate_model(open_model("fresh"), trials=1)
+    state = {"state": "finished", "updated_at": "2999-01-01T00:00:00+00:00"}  # trained since
+    folder.training_state_file.write_text(json.dumps(state), encoding="utf-8")
+    app = create_app(start="garage")
+    async with app.run_test(size=(140, 40)) as pilot:
+        await settle(pilot)
+        table = app.screen.query_one("#models", DataTable)
+        best = {table.get_row_at(i)[0].plain: table.get_row_at(i)[-1].plain for i in range(2)}
+        assert best["eva"].endswith(" old") and not best["fresh"].endswith(" old")
+        assert best["eva"].removesuffix(" old") != "-"
+        evaluations = _evaluations_said(app.screen)
+        assert "(before the last training)" in evaluations
+        assert "press v to evaluate it again" in evaluations
+        await pilot.press("down")  # fresh: evaluated after its training
+        await settle(pilot)
+        evaluations = _evaluations_said(app.screen)
+        assert "1/1" in evaluations and "before the last training" not in evaluations
+
+
+def _evaluations_said(screen: Screen[Any]) -> str:
+    """The detail's evaluations section whole (it may be scrolled out of view)."""
+    console = Console(width=200, record=True, file=io.StringIO())
+    console.print(screen.query_one("#detail-evaluations", Static).content)
+    return " ".join(console.export_text().split())
 
 
 async def test_the_list_follows_changes_made_outside_it_and_keeps_the_cursor_on_its_model() -> None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from textual.widgets import DataTable, Input, Select, TabbedContent, TextArea
+from textual.widgets import DataTable, Input, Select, Static, TabbedContent, TextArea
 
 from racer_tui.app.application import create_app
 from racer_tui.app.screens.dialogs import ConfirmDialog
@@ -328,9 +328,13 @@ async def test_camera_randomisation_is_chosen_in_the_editor_for_camera_models() 
         await pilot.press(*"for-my-car")
         field = editor.query_one("#camera-randomisation-field")
         assert not field.display  # the default sensor is the vector state: no camera
+        hint = editor.query_one("#sensor-hint", Static)
+        assert "fastest" in str(hint.content)
         editor.query_one("#sensor", Select).value = "camera"
         await pilot.pause()
         assert field.display
+        # The hint is the camera's now, not the vector state's.
+        assert "real car" in str(hint.content) and "fastest" not in str(hint.content)
         editor.query_one("#camera-randomisation", Input).value = "light,banana"
         await pilot.press("ctrl+s")
         await settle(pilot)

@@ -10,7 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from textual.widgets import DataTable, Input
+from textual.widgets import DataTable, Input, Select
 
 from league.nights import add_entrant, close_night, draw_heats, new_night, run_heats
 from league.opening import open_league
@@ -54,6 +54,22 @@ async def test_the_league_table_keeps_board_and_model_when_narrow(size: tuple[in
         assert "(physical)" in shown  # the second rank 1 says which board it leads
         assert table.virtual_size.width <= table.scrollable_content_region.width
         assert "5 League" in painted(app.screen.query_one(SectionHeader))
+
+
+@pytest.mark.parametrize("size", [(80, 24), (60, 20)], ids=["80x24", "60x20"])
+async def test_a_chosen_track_filter_stays_on_one_line(size: tuple[int, int]) -> None:
+    # The host walk: "beginner-oval" chosen read "beginner-ova" over "l", a row the board lost.
+    a_league_with_a_physical_board()
+    app = create_app(start="league")
+    async with app.run_test(size=size) as pilot:
+        await settle(pilot)
+        track = app.screen.query_one("#filter-track", Select)
+        rows_before = app.screen.query_one("#board", DataTable).region.y
+        track.value = next(value for label, value in track._options if label == "beginner-oval")
+        await settle(pilot)
+        label = [line for line in painted(track).splitlines() if line.strip(" ▊▎▔▁")]
+        assert len(label) == 1 and "beginner-ov" in label[0] and "…" in label[0]
+        assert app.screen.query_one("#board", DataTable).region.y == rows_before
 
 
 async def test_a_hand_timed_race_is_marked_physical_in_the_recorded_races_at_80x24() -> None:

@@ -57,7 +57,8 @@ async def test_a_host_creates_a_season_and_opens_a_night_in_it() -> None:
         name = dialog.query_one("#season-name", Input)
         name.value = "Spring 2025"
         dialog.query_one("#season-points", Input).value = "10,6,3,1"
-        await pilot.press("enter", "enter")  # name, then points: create
+        name.focus()
+        await pilot.press("ctrl+s")  # from the name field, as in every form: create
         await settle(pilot)
         assert showing(app) is nights
         assert "Created season Spring 2025" in notes.text()

@@ -147,7 +147,7 @@ async def test_figures_shown_live_are_the_figures_shown_after_a_restart() -> Non
         # The file's figures while it runs, not the reported car's (0% laps, 30 episodes).
         assert "120 episodes" in " ".join(live_text.split())
         assert "laps 64% of last 50" in live_text
-        assert "eval 5/5 laps 100%" in live_text
+        assert "eval 5/5 laps, progress 100%" in live_text
         assert "Lap complete 78 · Off track 42" in live_text
         watched = screen.figures["ada"]
         # The run ends: the child's clock says 5:02, its state file 5:04 (start-up counts).
@@ -202,7 +202,12 @@ def test_an_empty_chart_says_why_never_waiting_beside_data() -> None:
     assert empty_reason(figures, "reward") == "waiting for data…"
     figures.fold_rows([TrainingEpisode(1.0, 1000, 0, 1000, 1, 1, "training", 50.0, "Off track")])
     # Episodes have ended, none with a lap: the lap-time chart is not waiting, it has none.
-    assert empty_reason(figures, "lap-time") == "no lap completed yet"
+    assert empty_reason(figures, "lap-time") == "no training lap yet"
+    # An evaluation's greedy policy laps while exploring episodes do not: both are said.
+    figures.fold_rows(
+        [TrainingEpisode(2.0, 1000, 0, 11_390, 1, 1, "evaluation", 100.0, "Lap complete")]
+    )
+    assert empty_reason(figures, "lap-time") == "no training lap yet\nevaluation best 11.39 s"
     figures.fold(events.Ended(3.0, "failed", "the reward function raised", 9, 1, 50.0, None))
     assert "failed" in empty_reason(figures, "entropy")
 

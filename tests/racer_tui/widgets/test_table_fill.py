@@ -88,6 +88,19 @@ async def test_the_table_fits_again_when_the_terminal_changes_size() -> None:
         assert table.virtual_size.width <= table.scrollable_content_region.width
 
 
+async def test_home_and_end_go_to_the_first_and_last_row() -> None:
+    # The host walk: Home left the Garage's highlight where it was.
+    app = OneTable()
+    async with app.run_test(size=(60, 12)) as pilot:
+        await pilot.pause()
+        table = app.query_one(FittedTable)
+        table.move_cursor(row=12)
+        await pilot.press("end")
+        assert table.cursor_row == len(ROWS) - 1
+        await pilot.press("home")
+        assert table.cursor_row == 0 and table.scroll_y == 0
+
+
 def test_a_nights_result_of_ten_seconds_or_more_is_never_cut() -> None:
     # A new host's walk at 60x20: "best 10.5…" (the column gave way to 10 characters).
     from racer_tui.app.screens.nights import HEAT_COLUMNS
