@@ -610,6 +610,23 @@ CREATE INDEX head_to_heads_track ON head_to_heads(track_hash, started_at);
 CREATE INDEX head_to_heads_night ON head_to_heads(night_id)
 """
 
+# One shared row per knock-out bracket of a night (league.bracket_records): its format, its
+# seeds (the night's entrant ids, best qualifier first) and its matches' rules. Its matches
+# are head-to-head races naming the night and the match. Not unique per night: two machines
+# may each draw one before they sync, and the first drawn counts.
+BRACKETS = """
+CREATE TABLE brackets (
+    id TEXT PRIMARY KEY,
+    night_id TEXT NOT NULL REFERENCES nights(id),
+    format TEXT NOT NULL,
+    seeds TEXT NOT NULL,
+    rules TEXT NOT NULL,
+    created_at TEXT NOT NULL,
+    content_hash TEXT NOT NULL
+);
+CREATE INDEX brackets_night ON brackets(night_id, created_at)
+"""
+
 MIGRATIONS: tuple[Migration, ...] = (
     Migration("shared league rows", _script(SHARED_TABLES)),
     Migration("local leaderboard cache and race traces", _script(LOCAL_TABLES), True),
@@ -628,6 +645,7 @@ MIGRATIONS: tuple[Migration, ...] = (
     Migration("resets of laps", _script(LAP_RESETS)),
     Migration("policy runtimes of races", _script(POLICY_RUNTIME)),
     Migration("head-to-head races", _script(HEAD_TO_HEADS)),
+    Migration("night brackets", _script(BRACKETS)),
 )
 SCHEMA_VERSION = len(MIGRATIONS)
 

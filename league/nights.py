@@ -19,6 +19,7 @@ from datetime import date, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from league.bracket_records import has_bracket, read_bracket
 from league.errors import LeagueError
 from league.leaderboard import LeaderboardRow
 from league.night_changes import DELETE, WITHDRAW
@@ -251,6 +252,16 @@ def delete_night(league: League, night: Night, made_by: str) -> None:
         _change(league, night, DELETE, night.id, who)
 
 
+def _before_bracket(league: League, night: Night) -> None:
+    """Refuse a change to the qualifying of a night whose bracket is drawn: its standings
+    are the bracket's seeds (call it inside the transaction, after `_open`)."""
+    if has_bracket(league, night.id):
+        raise LeagueError(
+            f"league night {night.name!r} has its bracket drawn: its qualifying is over, so "
+            "entrants and heats stay as they are; race the bracket's matches."
+        )
+
+
 def _open(league: League, night: Night) -> None:
     """Refuse changes to a closed night; asks the database, not a possibly stale `night`
     (another racer-tui may have closed it since), so call it inside the transaction."""
@@ -292,6 +303,7 @@ def add_entrant(league: League, night: Night, racer: str, model: str) -> Entrant
         _check_droa_reward(night, spec)
     with league.transaction():
         _open(league, night)
+        _before_bracket(league, night)
         name = ensure_racer(league, racer)
         duplicate = any(
             entrant.racer.casefold() == name.casefold() and entrant.model == spec
@@ -461,6 +473,7 @@ def draw_heats(league: League, night: Night, seed: int | None = None) -> list[He
         raise LeagueError("--seed must be a whole number from 0 to 2^62.")
     with league.transaction():
         _open(league, night)
+        _before_bracket(league, night)
         raced = _raced(league, night)
         waiting = [entrant for entrant in entrants(league, night) if entrant.id not in raced]
         if not waiting:
@@ -674,6 +687,14 @@ def close_night(
     with league.transaction():
         _open(league, night)
         waiting = len(pending_heats(league, night))
+        drawn = read_bracket(league, night.id)
+        if drawn is not None and drawn.final_order() is None and not force:
+            problem = f"league night {night.name!r} has bracket matches still to race"
+            raise LeagueError(
+                f"{problem}; race them with `racer-tui night match`, or close anyway with "
+                "--force (the night's places are then its qualifying's).",
+                problem=problem,
+            )
         if waiting and not force:
             problem = f"league night {night.name!r} still has {counted(waiting, 'heat')} to run"
             raise LeagueError(

@@ -62,6 +62,7 @@ SHARED_TABLES: dict[str, Children | None] = {
     "heats": None,
     "night_closures": None,
     "night_changes": None,
+    "brackets": None,  # its seeds are the night's entrant ids, as JSON in the row
     "head_to_heads": None,  # its cars and their laps are JSON in the row
     "submissions": Children(
         "submission_laps",

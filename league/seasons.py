@@ -14,6 +14,7 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from league.bracket_records import bracket_places, with_bracket_places
 from league.errors import LeagueError
 from league.leaderboard import Filters, LeaderboardRow, grouped_rows, rank_groups
 from league.racers import check_name
@@ -123,7 +124,9 @@ def night_results(
         return []
     filters = Filters(night_ids=night_ids, local_models=frozenset(local_models))
     rows = grouped_rows(league, filters, None, group_by="night_id, racer")
-    return rank_groups(rows, lambda entry: entry.night_id, night_ids)
+    ranked = rank_groups(rows, lambda entry: entry.night_id, night_ids)
+    # A bracket night's places are its bracket's, once decided: qualifying only seeded it.
+    return with_bracket_places(ranked, bracket_places(league, night_ids))
 
 
 def season_standings(league: League, season: Season) -> list[SeasonStanding]:

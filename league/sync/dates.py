@@ -60,6 +60,7 @@ DATE_FIELD: Final[dict[str, str]] = {
     "heat": "created_at",
     "night_closure": "created_at",
     "night_change": "created_at",
+    "bracket": "created_at",
     "correction": "created_at",
     "submission": "submitted_at",
     "race": "started_at",

@@ -24,6 +24,7 @@ TABLE_OF_KIND: Final[dict[str, str]] = {
     "heat": "heats",
     "night_closure": "night_closures",
     "night_change": "night_changes",
+    "bracket": "brackets",
     "head_to_head": "head_to_heads",
     "submission": "submissions",
     "race": "races",

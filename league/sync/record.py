@@ -40,6 +40,7 @@ KINDS: Final = (
     "heat",
     "night_closure",
     "night_change",
+    "bracket",
     "head_to_head",
     "submission",
     "race",

@@ -22,7 +22,7 @@ from typing import Any, Final
 
 from league.assembler import CONSOLE, DRFC, MAX_TRIALS, RACER_TUI
 from league.assembler import LAP_COLUMNS as SUBMISSION_LAP_COLUMNS
-from league.brackets import MATCH_ID_PATTERN
+from league.brackets import MATCH_ID_PATTERN, MAX_ENTRANTS, MIN_ENTRANTS, Format
 from league.errors import LeagueError
 from league.head_to_heads import MAX_INCIDENTS, lap_from_list
 from league.night_changes import NIGHT_CHANGES
@@ -333,6 +333,13 @@ FIELDS: Final[dict[str, dict[str, Field]]] = {
         "physics": _PHYSICS,
         "runtime": _RUNTIME,
     },
+    "bracket": {
+        "night_id": _t(record_id),
+        "format": _t(one_of(*(form.value for form in Format))),
+        "seeds": _t(json_text),
+        "rules": _t(json_text),
+        "created_at": _t(timestamp),
+    },
     "head_to_head": {
         "track_hash": _t(sha256_hex),
         "rules": _t(json_text),
@@ -567,16 +574,35 @@ def _check_race_result(record_id: str, race: Mapping[str, Any], car: Mapping[str
         raise RecordInvalidError(f"it is not a valid race result ({error})") from None
 
 
-def _check_head_to_head(record: SyncRecord) -> None:
-    """Rules of a head-to-head race; 2 to 6 cars, each a whole car with its race's laps,
-    none quicker than the track allows; incidents between the race's own cars."""
-    body = record.body
+def _head_to_head_rules(text_value: str) -> None:
+    """Rules of a head-to-head race (a bracket's matches are raced under them)."""
     try:
-        rules = rules_from_mapping(json.loads(body["rules"]))
+        rules = rules_from_mapping(json.loads(text_value))
     except (RulesError, AttributeError, TypeError) as error:
         raise _bad("rules", f"are not race rules ({str(error).rstrip('.')})") from None
     if rules.race_type is not RaceType.HEAD_TO_MODEL:
         raise _bad("rules", "are not a head-to-head race's")
+
+
+def _check_bracket(record: SyncRecord) -> None:
+    """A knock-out bracket (league.bracket_records): head-to-head rules for its matches,
+    and 2 to 64 seeds, each an entrant's id, none twice."""
+    body = record.body
+    _head_to_head_rules(body["rules"])
+    seeds = json.loads(body["seeds"])
+    if not isinstance(seeds, list) or not MIN_ENTRANTS <= len(seeds) <= MAX_ENTRANTS:
+        raise _bad("seeds", f"are not a list of {MIN_ENTRANTS} to {MAX_ENTRANTS} entrants")
+    if not all(isinstance(seed, str) and is_valid_id(seed) for seed in seeds):
+        raise _bad("seeds", "hold one that is not an entrant's id")
+    if len(set(seeds)) != len(seeds):
+        raise _bad("seeds", "name an entrant twice")
+
+
+def _check_head_to_head(record: SyncRecord) -> None:
+    """Rules of a head-to-head race; 2 to 6 cars, each a whole car with its race's laps,
+    none quicker than the track allows; incidents between the race's own cars."""
+    body = record.body
+    _head_to_head_rules(body["rules"])
     if body["match_id"] is not None and body["night_id"] is None:
         raise _bad("match_id", "names a bracket match of no night")
     cars = json.loads(body["cars"])
@@ -666,6 +692,7 @@ _SEMANTICS: Final[dict[str, Callable[[SyncRecord], None]]] = {
     "season": _check_season,
     "night": _check_night,
     "race": _check_race,
+    "bracket": _check_bracket,
     "head_to_head": _check_head_to_head,
     "correction": _check_correction,
 }

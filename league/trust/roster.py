@@ -56,6 +56,7 @@ ORGANISER_KINDS: Final = frozenset(
         "heat",
         "night_closure",
         "night_change",
+        "bracket",
         "correction",
         "head_to_head",
     }

@@ -15,7 +15,7 @@ from league.race_types import HEAD_TO_HEAD_BOARD, OPTION_CHOICES, option_name
 from racer_tui.cli.app_launch import AppLaunch
 from racer_tui.cli.league_commands import key_parsers
 from racer_tui.cli.rules_option import HELP as RULES_HELP
-from sim.race.rules import RULE_PRESETS, Verification
+from sim.race.rules import HEAD_TO_HEAD_RULES, RULE_PRESETS, Verification
 from sim.tracks.catalog import DEFAULT_TRACK
 
 if TYPE_CHECKING:
@@ -199,6 +199,30 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
     delete = actions.add_parser("delete", parents=[db], help="delete a night with no heat raced")
     delete.add_argument("night")
     delete.add_argument("--by", help="who deletes it (default: this machine's racer name)")
+    bracket = actions.add_parser(
+        "bracket", parents=[db], help="draw the knock-out bracket from the night's standings"
+    )
+    bracket.add_argument("night")
+    bracket.add_argument(
+        "--size",
+        type=int,
+        metavar="N",
+        help="seed the best N qualifiers (default: every racer with a counting result)",
+    )
+    bracket.add_argument(
+        "--double", action="store_true", help="double elimination: out after a second loss"
+    )
+    bracket.add_argument(
+        "--laps",
+        type=int,
+        default=HEAD_TO_HEAD_RULES.lap_count,
+        metavar="N",
+        help="laps of each match, the first car past the line wins "
+        f"(default: {HEAD_TO_HEAD_RULES.lap_count}, as simapp's head-to-head)",
+    )
+    match = actions.add_parser("match", parents=[db], help="race the bracket's next matches")
+    match.add_argument("night")
+    match.add_argument("--matches", type=int, metavar="N", help="race only the next N matches")
 
 
 def _register_season(commands: Parsers, db: argparse.ArgumentParser) -> None:

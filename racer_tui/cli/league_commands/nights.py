@@ -31,6 +31,7 @@ from league.store import League
 from league.timekeeper.car import PHYSICAL, is_physical
 from racer_tui.cli.app_launch import AppLaunch
 from racer_tui.cli.league_commands.board import garage_model_hashes
+from racer_tui.cli.league_commands.brackets import bracket_command, match_command, print_bracket
 from racer_tui.cli.output import plain_table, print_json, print_table
 from racer_tui.cli.rules_option import rules_option
 from sim.foundation.home import LEAGUE_ENV
@@ -133,6 +134,10 @@ def night_command(league: League, args: argparse.Namespace) -> int:
         return 0
     if action == "close":
         return _night_close(league, night, args)
+    if action == "bracket":
+        return bracket_command(league, night, args)
+    if action == "match":
+        return match_command(league, night, args.matches)
     return _night_show(league, night, "json" if args.json else args.format)
 
 
@@ -275,6 +280,7 @@ def _night_show(league: League, night: Any, kind: str) -> int:
         print_table(table)
     for sentence in uncounted_heats(league, night, models_here):
         print(sentence)
+    print_bracket(league, night)
     return _print_standings(
         league, night, standings, False, f"{night.name}: standings", models_here=models_here
     )

@@ -13,6 +13,7 @@ from typing import Any
 
 from league import nights
 from league.assembler import assemble
+from league.bracket_nights import draw_night_bracket, record_match
 from league.corrections import disqualify_lap, rename_racer
 from league.head_to_heads import record_head_to_head
 from league.seasons import new_season, parse_points
@@ -52,7 +53,8 @@ def _fake_engine(
 
 def host_league(league: League, root: Path) -> None:
     """What a league host's machine holds: a season with a closed night (an entrant
-    withdrawn before the draw), a night deleted before it was held, corrections."""
+    withdrawn before the draw, a bracket of its best two), a night deleted before it was
+    held, corrections."""
     new_season(league, "spring", parse_points("10,6,4"))
     night = nights.new_night(
         league, resolve_track(TRACK), rules=RULES, name="Friday", season="spring"
@@ -65,6 +67,13 @@ def host_league(league: League, root: Path) -> None:
     races = nights.run_heats(
         league, night, resolve_track(TRACK), lambda spec, _track: spec, run_race=_fake_engine
     )
+    # A bracket of the two best qualifiers, its one match won by the first seed: the night's
+    # places stay its qualifying's.
+    drawn = draw_night_bracket(
+        league, night, size=2, rules=replace(HEAD_TO_HEAD_RULES, lap_count=1)
+    )
+    seeds = [drawn.racers[entrant] for entrant in drawn.bracket.seeds]
+    record_match(league, night, "W1-1", head_to_head(*seeds))
     nights.close_night(league, night, "host")
     never_held = nights.new_night(league, resolve_track(TRACK), rules=RULES, name="Saturday")
     nights.delete_night(league, never_held, "host")

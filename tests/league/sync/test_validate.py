@@ -177,6 +177,13 @@ CASES: list[tuple[str, Change, str]] = [
     ("head_to_head", _set("match_id", "W1-1"), "names a bracket match of no night"),
     ("head_to_head", _car("laps", [[1, 9.0]]), "are not lists of a lap's 9 values"),
     ("head_to_head", _set("physics", None), "physics is missing"),
+    ("bracket", _rules({"race_type": "TIME_TRIAL"}), "are not a head-to-head race's"),
+    ("bracket", _set("format", "triple"), "is not one of"),
+    ("bracket", _set("seeds", json.dumps(["01M7YFZPX152TMAJ036HERQM71"])), "2 to 64 entrants"),
+    ("bracket", _set("seeds", json.dumps(["../x", "01M7YFZPX152TMAJ036HERQM71"])), "entrant's id"),
+    ("bracket", _set("seeds", json.dumps(["01M7YFZPX152TMAJ036HERQM71"] * 2)), "entrant twice"),
+    ("bracket", _set("seeds", json.dumps({"a": 1})), "are not a list"),
+    ("bracket", _set("night_id", None), "night_id is"),
     (
         "correction",
         lambda body: body.update(

@@ -1,0 +1,137 @@
+"""Bracket nights: a night's time trials are its qualifying, then its best race a knock-out.
+
+AWS's Virtual Circuit ran head-to-head brackets this way: a qualifying seeds the bracket,
+then models race two at a time and the winner goes on. Here a night is first raced as
+every night is, its heats time trials; once every heat is raced the host draws the bracket
+(`draw_night_bracket`): the night's standings are its seeds, best first (the top `size`
+of them, or every racer with a counting result). Each match is a head-to-head race of its
+two entrants' cars under the bracket's rules, recorded as a head-to-head race naming the
+night and the match (`record_match`); the car first past the line wins it. The bracket's
+final order is then the night's places and season points (league.bracket_records).
+
+A bracket races simulated cars: a physical car's match needs the timekeeper for two cars,
+which is not built yet, so a physical car is refused a seed with a sentence saying so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from league.bracket_records import NightBracket, has_bracket, read_bracket, store_bracket
+from league.brackets import MAX_ENTRANTS, MIN_ENTRANTS, Format, Match
+from league.errors import LeagueError
+from league.head_to_heads import record_head_to_head
+from league.nights import Entrant, Night, entrants, heats, pending_heats, standings
+from league.store import League
+from league.timekeeper.car import is_physical
+from sim.physics.objects.settings import RaceType
+from sim.race.head_to_head import HeadToHeadResult
+from sim.race.rules import HEAD_TO_HEAD_RULES, RaceRules
+
+
+@dataclass(frozen=True)
+class MatchCars:
+    """A match to race: its two entrants, the higher seed first (the front of the grid)."""
+
+    match: Match
+    first: Entrant
+    second: Entrant
+
+
+def draw_night_bracket(
+    league: League,
+    night: Night,
+    *,
+    format: Format = Format.SINGLE,
+    size: int | None = None,
+    rules: RaceRules = HEAD_TO_HEAD_RULES,
+) -> NightBracket:
+    """Seed the night's bracket from its standings and store it (once per night)."""
+    if rules.race_type is not RaceType.HEAD_TO_MODEL:
+        raise LeagueError("a bracket's matches are head-to-head races: give head-to-head rules.")
+    with league.transaction():
+        if night.closed or league.query_one(
+            "SELECT 1 FROM night_closures WHERE night_id = ?", (night.id,)
+        ):
+            raise LeagueError(f"league night {night.name!r} is closed; its results are final.")
+        if has_bracket(league, night.id):
+            raise LeagueError(f"league night {night.name!r} has its bracket drawn already.")
+        waiting = len(pending_heats(league, night))
+        raced = {heat.entrant.id for heat in heats(league, night)}
+        undrawn = [e for e in entrants(league, night) if e.id not in raced]
+        if waiting or undrawn:
+            raise LeagueError(
+                f"league night {night.name!r} is still qualifying ({waiting + len(undrawn)} "
+                "entrants have not raced their heat); run its heats (or withdraw those "
+                "entrants), then draw the bracket."
+            )
+        seeds = _qualified(league, night, size)
+        drawn_id = store_bracket(league, night.id, [e.id for e in seeds], format, rules)
+        drawn = read_bracket(league, night.id)
+    assert drawn is not None and drawn.id == drawn_id
+    return drawn
+
+
+def _qualified(league: League, night: Night, size: int | None) -> list[Entrant]:
+    """The entrants the bracket seeds, best qualifier first."""
+    by_race = {heat.race_id: heat.entrant for heat in heats(league, night) if heat.race_id}
+    placed = [
+        by_race[s.entry.record_id]
+        for s in standings(league, night)
+        if s.position is not None and s.entry.record_id in by_race
+    ]
+    count = len(placed) if size is None else size
+    if not MIN_ENTRANTS <= count <= min(len(placed), MAX_ENTRANTS):
+        raise LeagueError(
+            f"a bracket of {count} needs {count} racers with a counting qualifying result; "
+            f"league night {night.name!r} has {len(placed)} (a bracket takes "
+            f"{MIN_ENTRANTS} to {MAX_ENTRANTS})."
+        )
+    seeds = placed[:count]
+    physical = [e.display_name for e in seeds if is_physical(e.model)]
+    if physical:
+        raise LeagueError(
+            f"{', '.join(physical)} qualified with a physical car, and a bracket races "
+            "simulated cars only for now; draw a smaller bracket (--size) or withdraw the car."
+        )
+    return seeds
+
+
+def next_match(league: League, night: Night) -> MatchCars | None:
+    """The next match to race, with its two entrants; None when the bracket is decided
+    (or there is none)."""
+    drawn = read_bracket(league, night.id)
+    if drawn is None:
+        raise LeagueError(
+            f"league night {night.name!r} has no bracket; draw it once its heats are raced."
+        )
+    match = drawn.next_match()
+    if match is None:
+        return None
+    by_id = {entrant.id: entrant for entrant in entrants(league, night)}
+    a, b = drawn.sides(match)
+    if a not in by_id or b not in by_id:  # withdrawn since: cannot happen from here
+        raise LeagueError(f"match {match.id} of league night {night.name!r} lost an entrant.")
+    return MatchCars(match, by_id[a], by_id[b])
+
+
+def record_match(league: League, night: Night, match_id: str, result: HeadToHeadResult) -> str:
+    """Record `result` as the night's match `match_id`: its two cars must be the match's
+    entrants' (the first past the line wins it). Returns the race's id."""
+    with league.transaction():
+        drawn = read_bracket(league, night.id)
+        if drawn is None:
+            raise LeagueError(f"league night {night.name!r} has no bracket.")
+        match = drawn.bracket.match(match_id)
+        if match_id in drawn.races:
+            raise LeagueError(f"match {match_id} of league night {night.name!r} is raced.")
+        if match not in drawn.bracket.ready(drawn.winners):
+            raise LeagueError(f"match {match_id} cannot be raced yet: who races in it is unknown.")
+        wanted = {drawn.racers[side] for side in drawn.sides(match) if side}
+        racers = {finish.result.racer for finish in result.cars}
+        if len(result.cars) != 2 or racers != wanted:
+            raise LeagueError(
+                f"match {match_id} is {' v '.join(sorted(wanted))}; this race's cars are "
+                f"{', '.join(sorted(racers))}."
+            )
+        return record_head_to_head(league, result, night_id=night.id, match_id=match_id)

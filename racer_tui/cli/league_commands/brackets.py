@@ -1,0 +1,114 @@
+"""`racer-tui night bracket` and `night match`: a night's knock-out bracket from its
+qualifying, and its matches raced headless (league.bracket_nights)."""
+
+from __future__ import annotations
+
+import argparse
+import zlib
+from dataclasses import replace
+
+from rich.text import Text
+
+from league.bracket_nights import draw_night_bracket, next_match, record_match
+from league.bracket_records import NightBracket, read_bracket
+from league.brackets import BYE, Format
+from league.errors import LeagueError
+from league.nights import Entrant, Night, entrants, find_night_track
+from league.store import League
+from racer_tui.cli.output import plain_table, print_table
+from sim.foundation.plural import counted
+from sim.foundation.remedies import RemedyError
+from sim.race.driver import Driver
+from sim.race.head_to_head import Entry, HeadToHeadResult, run_head_to_head
+from sim.race.rules import HEAD_TO_HEAD_RULES, RulesError
+from sim.tracks.track import Track
+from sim.training.drivers import resolve_driver
+
+
+def bracket_command(league: League, night: Night, args: argparse.Namespace) -> int:
+    if args.laps is None or not 1 <= args.laps <= 99:
+        raise RulesError(f"--laps: a match is 1 to 99 laps, not {args.laps}.")
+    rules = replace(HEAD_TO_HEAD_RULES, lap_count=args.laps)
+    form = Format.DOUBLE if args.double else Format.SINGLE
+    drawn = draw_night_bracket(league, night, format=form, size=args.size, rules=rules)
+    kind = "double" if args.double else "single"
+    print(
+        f"Drew {night.name}'s {kind}-elimination bracket of {len(drawn.bracket.seeds)} "
+        f"from its standings; each match {counted(args.laps, 'lap')}, first past the line."
+    )
+    print_bracket(league, night, drawn)
+    return 0
+
+
+def match_command(league: League, night: Night, limit: int | None) -> int:
+    if limit is not None and limit < 1:
+        raise LeagueError(f"--matches must be at least 1, not {limit}.")
+    track = find_night_track(night)
+    drawn = read_bracket(league, night.id)
+    raced = 0
+    while limit is None or raced < limit:
+        cars = next_match(league, night)
+        if cars is None:
+            break
+        assert drawn is not None  # next_match found the bracket
+        result = _race(track, drawn, cars.match.id, cars.first, cars.second)
+        record_match(league, night, cars.match.id, result)
+        raced += 1
+        print(match_line(cars.match.id, result), flush=True)
+    if raced == 0 and next_match(league, night) is None:
+        print(f"{night.name}'s bracket is decided: no match is left to race.")
+    decided = read_bracket(league, night.id)
+    order = decided.final_order() if decided is not None else None
+    if decided is not None and order is not None:
+        shown = {e.id: e.display_name for e in entrants(league, night)}
+        places = ", ".join(f"{k}. {shown.get(e, e)}" for k, e in enumerate(order, start=1))
+        print(f"Champion: {shown.get(order[0], order[0])}. Final order: {places}.")
+        print("Close the night to make it final: `racer-tui night close`.")
+    return 0
+
+
+def _race(track: Track, drawn: NightBracket, match_id: str, *cars: Entrant) -> HeadToHeadResult:
+    drivers: dict[str, Driver] = {}
+    for entrant in cars:
+        if entrant.model not in drivers:  # one model twice: one driver acts for both cars
+            try:
+                drivers[entrant.model] = resolve_driver(entrant.model, track)
+            except RemedyError as error:
+                raise LeagueError(f"cannot race {match_id} with {entrant.car!r}: {error}") from None
+    grid = [Entry(entrant.racer, drivers[entrant.model]) for entrant in cars]
+    # Each match's own seed, the same on every machine: the race replays from its record.
+    seed = zlib.crc32(f"{drawn.id}/{match_id}".encode()) % 2**31
+    return run_head_to_head(track, drawn.rules, grid, seed=seed)
+
+
+def match_line(match_id: str, result: HeadToHeadResult) -> str:
+    winner, loser = result.cars[0], result.cars[1]
+    margin = "" if loser.gap_seconds is None else f" by {loser.gap_seconds:.3f} s"
+    return (
+        f"{match_id}: {winner.result.racer} ({winner.result.model_name}) beat "
+        f"{loser.result.racer} ({loser.result.model_name}){margin}"
+    )
+
+
+def print_bracket(league: League, night: Night, drawn: NightBracket | None = None) -> None:
+    """The bracket's matches: who races whom, and who won."""
+    drawn = drawn or read_bracket(league, night.id)
+    if drawn is None:
+        return
+    shown = {e.id: e.display_name for e in entrants(league, night)}
+    winners = drawn.winners
+
+    def name(side: str | None) -> Text:
+        if side is None:
+            return Text("to be decided", style="dim")
+        return Text("bye", style="dim") if side == BYE else Text(shown.get(side, side))
+
+    table = plain_table(f"{night.name}: bracket")
+    for title in ("match", "racer", "v", "racer", "winner"):
+        table.add_column(title)
+    for match in drawn.bracket.matches:
+        a, b = drawn.sides(match)
+        winner = winners.get(match.id)
+        decided = Text(shown.get(winner, winner)) if winner else Text("-", style="dim")
+        table.add_row(match.id, name(a), "v", name(b), decided)
+    print_table(table)
