@@ -15,18 +15,30 @@ which is not built yet, so a physical car is refused a seed with a sentence sayi
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 
 from league.bracket_records import NightBracket, has_bracket, read_bracket, store_bracket
 from league.brackets import MAX_ENTRANTS, MIN_ENTRANTS, Format, Match
 from league.errors import LeagueError
 from league.head_to_heads import record_head_to_head
-from league.nights import Entrant, Night, entrants, heats, pending_heats, standings
+from league.nights import (
+    Entrant,
+    Night,
+    ResolveDriver,
+    entrants,
+    heats,
+    pending_heats,
+    standings,
+)
 from league.store import League
 from league.timekeeper.car import is_physical
+from sim.foundation.remedies import RemedyError
 from sim.physics.objects.settings import RaceType
-from sim.race.head_to_head import HeadToHeadResult
+from sim.race.driver import Driver
+from sim.race.head_to_head import Entry, HeadToHeadResult
 from sim.race.rules import HEAD_TO_HEAD_RULES, RaceRules
+from sim.tracks.track import Track
 
 
 @dataclass(frozen=True)
@@ -135,3 +147,24 @@ def record_match(league: League, night: Night, match_id: str, result: HeadToHead
                 f"{', '.join(sorted(racers))}."
             )
         return record_head_to_head(league, result, night_id=night.id, match_id=match_id)
+
+
+def match_seed(drawn: NightBracket, match_id: str) -> int:
+    """A match's own seed, the same on every machine (the race replays from its record)."""
+    return zlib.crc32(f"{drawn.id}/{match_id}".encode()) % 2**31
+
+
+def match_entries(cars: MatchCars, track: Track, resolve_driver: ResolveDriver) -> list[Entry]:
+    """The match's grid, the higher seed in front; `resolve_driver(model spec, track)` is
+    the front end's (the league never loads a policy). One model twice is one driver, which
+    acts for both its cars in one batch."""
+    drivers: dict[str, Driver] = {}
+    for entrant in (cars.first, cars.second):
+        if entrant.model not in drivers:
+            try:
+                drivers[entrant.model] = resolve_driver(entrant.model, track)
+            except RemedyError as error:  # one sentence, naming the match
+                raise LeagueError(
+                    f"cannot race {cars.match.id} with {entrant.car!r}: {error}"
+                ) from None
+    return [Entry(entrant.racer, drivers[entrant.model]) for entrant in (cars.first, cars.second)]

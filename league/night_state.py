@@ -1,11 +1,13 @@
 """A league night as the screens show it: the night, its running order, every heat's
-best lap, the entrants not drawn yet, the standings, and the season's once it closes.
+best lap, the entrants not drawn yet, the standings, its bracket once drawn, and the
+season's once it closes.
 Read in one go, in a worker, for the Nights screen and the night's projector alike."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
+from league.bracket_records import NightBracket, read_bracket
 from league.nights import Entrant, Heat, Night, Standing, entrants, get_night, heats, standings
 from league.seasons import SeasonStanding, get_season, season_standings
 from league.store import League
@@ -20,6 +22,8 @@ class NightState:
     standings: list[Standing]
     season_name: str | None
     season: list[SeasonStanding] | None  # once the night is closed and in a season
+    bracket: NightBracket | None = None  # its knock-out, once drawn (league.bracket_nights)
+    names: dict[str, str] = field(default_factory=dict)  # entrant id -> display name
 
 
 def read_night(league: League, night_id: str) -> NightState:
@@ -42,5 +46,8 @@ def read_night(league: League, night_id: str) -> NightState:
     }
     order = heats(league, night)
     in_order = {heat.entrant.id for heat in order}
-    undrawn = [entrant for entrant in entrants(league, night) if entrant.id not in in_order]
-    return NightState(night, order, best_laps, undrawn, table, season_name, season)
+    entered = entrants(league, night)
+    undrawn = [entrant for entrant in entered if entrant.id not in in_order]
+    names = {entrant.id: entrant.display_name for entrant in entered}
+    bracket = read_bracket(league, night_id)
+    return NightState(night, order, best_laps, undrawn, table, season_name, season, bracket, names)

@@ -163,7 +163,7 @@ def _help_text(screen: HelpScreen) -> str:
 
 async def test_help_lists_every_binding_of_every_screen() -> None:
     app = create_app(start="garage")
-    async with app.run_test(size=(140, 150)) as pilot:  # tall: the whole reference shows
+    async with app.run_test(size=(140, 200)) as pilot:  # tall: the whole reference shows
         await pilot.pause()
         await pilot.press("question_mark")
         assert isinstance(app.screen, HelpScreen)

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import ClassVar
 
 from rich import box
+from rich.console import Group
 from rich.table import Table
 from rich.text import Text
 from textual import work
@@ -36,6 +37,7 @@ from league.store import default_db_path
 from racer_tui.app.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
 from racer_tui.app.screens.race_screen import countdown_text
 from racer_tui.app.screens.timekeeper import lap_clock_text
+from racer_tui.app.widgets.bracket_view import bracket_view
 from racer_tui.text.clocks import clock_text
 from sim.foundation.plural import counted
 from sim.physics.labels import PHYSICAL
@@ -260,8 +262,12 @@ class NightProjectorScreen(KioskScreen):
             panel.update(Text("No results yet: the standings fill in as heats end.", style="dim"))
             return
         room = panel.size.height
-        spaced = room == 0 or 2 * len(state.standings) + 2 <= room
         narrow = 0 < panel.size.width < NARROW
+        if state.bracket is not None:  # a bracket night: the bracket first, as it advances
+            table = standings_table(state, self.highlight, False, narrow)
+            panel.update(Group(bracket_view(state.bracket, state.names), Text(""), table))
+            return
+        spaced = room == 0 or 2 * len(state.standings) + 2 <= room
         panel.update(standings_table(state, self.highlight, spaced, narrow))
 
     def _draw_now(self) -> None:
@@ -317,6 +323,20 @@ class NightProjectorScreen(KioskScreen):
         if state.night.closed:
             text.append("The night is over.", style="bold")
             text.append(f"\n{counted(raced, 'heat')} raced · final standings and points below")
+            return text
+        upcoming = state.bracket.next_match() if state.bracket is not None else None
+        if state.bracket is not None and upcoming is not None:
+            a, b = state.bracket.sides(upcoming)
+            text.append("Next up: ", style="bold green")
+            text.append(f"bracket match {upcoming.id}\n")
+            text.append(state.names.get(a or "", "?"), style="bold")
+            text.append("  v  ", style="dim")
+            text.append(state.names.get(b or "", "?"), style="bold")
+            return text
+        if state.bracket is not None:
+            champion = state.bracket.bracket.champion(state.bracket.winners)
+            text.append("The bracket is decided", style="bold")
+            text.append(f"\nChampion: {state.names.get(champion or '', '?')}")
             return text
         if waiting:
             after = waiting[0]

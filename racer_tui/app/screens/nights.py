@@ -26,6 +26,8 @@ from textual.message import Message
 from textual.widgets import Button, DataTable, Input, Label, Select, Static
 from textual.worker import Worker, WorkerState
 
+from league.bracket_nights import MatchCars, draw_night_bracket, next_match, record_match
+from league.bracket_records import read_bracket
 from league.errors import LeagueError
 from league.live_heat import LiveHeatWriter, live_heat_path
 from league.local_racer import HOST_NAME, local_racer_name
@@ -77,10 +79,18 @@ from racer_tui.app.screens.dialogs import (
     show_problem,
 )
 from racer_tui.app.screens.export_path import EXPORT_FORMATS, check_export_path
+from racer_tui.app.screens.head_to_head_screen import HeadToHeadScreen
+from racer_tui.app.screens.night_bracket import (
+    BracketRequest,
+    DrawBracketDialog,
+    MatchReady,
+    match_setup,
+)
 from racer_tui.app.screens.night_projector import NightProjectorScreen
 from racer_tui.app.screens.race_screen import RaceScreen, RaceSetup
 from racer_tui.app.screens.timekeeper import TimekeeperScreen, TimekeeperSetup
 from racer_tui.app.web_pages import WebPages, WebPagesError
+from racer_tui.app.widgets.bracket_view import bracket_view
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.section_header import SectionHeader
 from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table
@@ -90,10 +100,12 @@ from sim.foundation.plural import counted
 from sim.garage.folder import list_models
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import REFERENCE_NAME
+from sim.race.head_to_head import HeadToHeadResult
 from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import (
     DEFAULT_RULES,
+    HEAD_TO_HEAD_RULES,
     RULE_PRESETS,
     RaceRules,
     RankingMethod,
@@ -568,6 +580,13 @@ class NightsScreen(RacerScreen[None]):
         ),
         Binding("p", "projector", "Projector", tooltip="The night on the venue's big screen"),
         Binding(
+            "k",
+            "draw_bracket",
+            "Draw bracket",
+            tooltip="Once the heats are raced: a knock-out seeded by the night's standings",
+            show=False,
+        ),
+        Binding(
             "x",
             "export",
             "Export night",
@@ -660,6 +679,8 @@ class NightsScreen(RacerScreen[None]):
                 yield Static("", id="night-rules")
                 yield Label("Entrants and heats, in running order", classes="field-label")
                 yield FittedTable(id="heats", cursor_type="row", zebra_stripes=True)
+                yield Label("", id="bracket-title", classes="field-label -hidden")
+                yield Static("", id="bracket", classes="-hidden")
                 yield Label("Standings", id="standings-title", classes="field-label")
                 yield Static("", id="standings-note", classes="-hidden")
                 yield FittedTable(id="standings", cursor_type="row", zebra_stripes=True)
@@ -770,6 +791,7 @@ class NightsScreen(RacerScreen[None]):
         text.append(described)
         self.query_one("#night-rules", Static).update(text)
         self._show_heats(state)
+        self._show_bracket(state)
         self._show_standings(state)
 
     def _show_heats(self, state: NightState) -> None:
@@ -799,6 +821,23 @@ class NightsScreen(RacerScreen[None]):
         ids = [entrant.id for _, entrant in self.heat_rows]
         if follow in ids:
             table.move_cursor(row=ids.index(follow))
+
+    def _show_bracket(self, state: NightState) -> None:
+        """The bracket as it stands; before it is drawn, once the heats are all raced on
+        an open night, the key that draws it."""
+        title = self.query_one("#bracket-title", Label)
+        view = self.query_one("#bracket", Static)
+        drawn = state.bracket
+        qualified = bool(state.heats) and not state.undrawn and all(h.race_id for h in state.heats)
+        title.set_class(drawn is None and not (qualified and not state.night.closed), "-hidden")
+        view.set_class(drawn is None, "-hidden")
+        if drawn is None:
+            title.update(Text("Bracket: k draws one from these standings"))
+            return
+        upcoming = drawn.next_match()
+        after = f", next {upcoming.id} (r)" if upcoming and not state.night.closed else ""
+        title.update(Text(f"Bracket ({drawn.bracket.format.value} elimination{after})"))
+        view.update(bracket_view(drawn, state.names))
 
     def _show_standings(self, state: NightState) -> None:
         self._show_night_standings(state)
@@ -992,6 +1031,17 @@ class NightsScreen(RacerScreen[None]):
     def _prepare_heat(self, night: Night) -> None:
         with open_league(self.db_path) as league:
             waiting = pending_heats(league, night)
+            drawn = read_bracket(league, night.id) if not waiting else None
+            if drawn is not None:  # the qualifying is over: the bracket's next match
+                cars = next_match(league, night)
+                if cars is None:
+                    raise LeagueError(
+                        f"{night.name}'s bracket is decided; close the night (c) to make "
+                        "its places final."
+                    )
+                track = find_night_track(night)
+                self.post_message(MatchReady(night, cars, match_setup(drawn, cars, track)))
+                return
             if not waiting:
                 raise LeagueError(
                     f"{night.name} has no drawn heats waiting; add entrants (a) and draw (d)."
@@ -999,6 +1049,52 @@ class NightsScreen(RacerScreen[None]):
             track = find_night_track(night)
             setup = heat_setup(league, night, waiting[0], track, self.db_path)
         self.post_message(HeatReady(night, waiting[0], setup))
+
+    def on_match_ready(self, message: MatchReady) -> None:
+        done = partial(self._match_finished, message.night, message.cars)
+        self.app.push_screen(HeadToHeadScreen(message.setup), done)
+
+    def _match_finished(
+        self, night: Night, cars: MatchCars, result: HeadToHeadResult | None
+    ) -> None:
+        if result is None:
+            self.notify(
+                f"{cars.match.id} was left before its race finished; press r to race it again.",
+                severity="warning",
+                markup=False,
+            )
+            return
+        self._record_match(night, cars, result)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _record_match(self, night: Night, cars: MatchCars, result: HeadToHeadResult) -> None:
+        with open_league(self.db_path) as league:
+            record_match(league, night, cars.match.id, result)
+        winner = result.cars[0].result.racer
+        loser = cars.second if winner == cars.first.racer else cars.first
+        won = cars.first if loser is cars.second else cars.second
+        said = f"Recorded {cars.match.id}: {won.display_name} beat {loser.display_name}."
+        self.post_message(NightChanged(night.id, said))
+
+    def action_draw_bracket(self) -> None:
+        night = self._current("draw its bracket")
+        if night is not None:
+            self.app.push_screen(DrawBracketDialog(), partial(self._bracket_chosen, night))
+
+    def _bracket_chosen(self, night: Night, request: BracketRequest | None) -> None:
+        if request is not None:
+            self._draw_bracket(night, request)
+
+    @work(thread=True, group="nights-change", exit_on_error=False)
+    def _draw_bracket(self, night: Night, request: BracketRequest) -> None:
+        rules = replace(HEAD_TO_HEAD_RULES, lap_count=request.laps)
+        with open_league(self.db_path) as league:
+            drawn = draw_night_bracket(
+                league, night, format=request.format, size=request.size, rules=rules
+            )
+        seeds = counted(len(drawn.bracket.seeds), "racer")
+        said = f"Drew the bracket of {seeds}: r races its first match."
+        self.post_message(NightChanged(night.id, said))
 
     def on_heat_ready(self, message: HeatReady) -> None:
         setup, night, heat = message.setup, message.night, message.heat

@@ -4,22 +4,26 @@ qualifying, and its matches raced headless (league.bracket_nights)."""
 from __future__ import annotations
 
 import argparse
-import zlib
 from dataclasses import replace
 
 from rich.text import Text
 
-from league.bracket_nights import draw_night_bracket, next_match, record_match
+from league.bracket_nights import (
+    MatchCars,
+    draw_night_bracket,
+    match_entries,
+    match_seed,
+    next_match,
+    record_match,
+)
 from league.bracket_records import NightBracket, read_bracket
 from league.brackets import BYE, Format
 from league.errors import LeagueError
-from league.nights import Entrant, Night, entrants, find_night_track
+from league.nights import Night, entrants, find_night_track
 from league.store import League
 from racer_tui.cli.output import plain_table, print_table
 from sim.foundation.plural import counted
-from sim.foundation.remedies import RemedyError
-from sim.race.driver import Driver
-from sim.race.head_to_head import Entry, HeadToHeadResult, run_head_to_head
+from sim.race.head_to_head import HeadToHeadResult, run_head_to_head
 from sim.race.rules import HEAD_TO_HEAD_RULES, RulesError
 from sim.tracks.track import Track
 from sim.training.drivers import resolve_driver
@@ -51,7 +55,7 @@ def match_command(league: League, night: Night, limit: int | None) -> int:
         if cars is None:
             break
         assert drawn is not None  # next_match found the bracket
-        result = _race(track, drawn, cars.match.id, cars.first, cars.second)
+        result = _race(track, drawn, cars)
         record_match(league, night, cars.match.id, result)
         raced += 1
         print(match_line(cars.match.id, result), flush=True)
@@ -67,18 +71,9 @@ def match_command(league: League, night: Night, limit: int | None) -> int:
     return 0
 
 
-def _race(track: Track, drawn: NightBracket, match_id: str, *cars: Entrant) -> HeadToHeadResult:
-    drivers: dict[str, Driver] = {}
-    for entrant in cars:
-        if entrant.model not in drivers:  # one model twice: one driver acts for both cars
-            try:
-                drivers[entrant.model] = resolve_driver(entrant.model, track)
-            except RemedyError as error:
-                raise LeagueError(f"cannot race {match_id} with {entrant.car!r}: {error}") from None
-    grid = [Entry(entrant.racer, drivers[entrant.model]) for entrant in cars]
-    # Each match's own seed, the same on every machine: the race replays from its record.
-    seed = zlib.crc32(f"{drawn.id}/{match_id}".encode()) % 2**31
-    return run_head_to_head(track, drawn.rules, grid, seed=seed)
+def _race(track: Track, drawn: NightBracket, cars: MatchCars) -> HeadToHeadResult:
+    grid = match_entries(cars, track, resolve_driver)
+    return run_head_to_head(track, drawn.rules, grid, seed=match_seed(drawn, cars.match.id))
 
 
 def match_line(match_id: str, result: HeadToHeadResult) -> str:

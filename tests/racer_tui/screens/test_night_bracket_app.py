@@ -1,0 +1,87 @@
+"""A bracket night in the app: once the heats are raced, k draws the bracket on the Nights
+screen, r races its next match live and leaving the race view records it; the Nights
+screen and the projector draw the bracket as it advances."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from textual.pilot import Pilot
+from textual.widgets import Input, Static
+
+from league.bracket_records import read_bracket
+from league.opening import open_league
+from racer_tui.app.application import create_app
+from racer_tui.app.screens.head_to_head_screen import HeadToHeadScreen
+from racer_tui.app.screens.night_bracket import DrawBracketDialog
+from racer_tui.app.screens.night_projector import NightProjectorScreen
+from racer_tui.app.screens.nights import NightsScreen
+from sim.foundation.home import data_home
+from tests.league.test_bracket_nights import qualified_night
+from tests.racer_tui.screens.test_nights import the_nights_screen
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
+
+
+def bracket_text(screen: NightsScreen) -> str:
+    return painted(screen.query_one("#bracket", Static))
+
+
+async def race_the_next_match(pilot: Pilot[Any], nights: NightsScreen) -> None:
+    await pilot.press("r")
+    await wait_for(pilot, lambda: isinstance(pilot.app.screen, HeadToHeadScreen))
+    view = pilot.app.screen
+    assert isinstance(view, HeadToHeadScreen)
+    await pilot.press("e")  # to the end
+    await wait_for(pilot, lambda: view.at_end and view.result is not None)
+    await pilot.press("escape")
+    await wait_for(pilot, lambda: pilot.app.screen is nights)
+    await settle(pilot)
+
+
+async def test_a_host_draws_the_bracket_and_races_it_to_its_champion() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = qualified_night(league)  # dee, cy, bob, ana qualified; eve set no lap
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        nights = await the_nights_screen(pilot)
+        title = nights.query_one("#bracket-title")
+        assert "k draws one from these standings" in painted(title)
+        await pilot.press("k")
+        dialog = app.screen
+        assert isinstance(dialog, DrawBracketDialog)
+        await pilot.press("1", "enter")  # a bracket of one
+        await pilot.press("tab", "enter")  # laps left at 3
+        assert app.screen is dialog
+        assert "Qualifiers is a number from 2 to 64" in painted(dialog.query_one("#problem"))
+        dialog.query_one("#bracket-laps", Input).value = "0"
+        dialog.query_one("#bracket-size", Input).value = "2"
+        await pilot.press("ctrl+s")
+        assert "Laps is a whole number from 1 to 99" in painted(dialog.query_one("#problem"))
+        dialog.query_one("#bracket-laps", Input).value = "1"
+        await pilot.press("ctrl+s")
+        await wait_for(pilot, lambda: "Final" in bracket_text(nights))
+        assert "Drew the bracket of 2 racers" in notes.text()
+        assert "next W1-1 (r)" in painted(title)
+        shown = bracket_text(nights)
+        assert "dee" in shown and "cy" in shown and "ana" not in shown
+
+        await race_the_next_match(pilot, nights)
+        await wait_for(pilot, lambda: "Champion" in bracket_text(nights))
+        assert "Recorded W1-1: dee beat cy." in notes.text()
+        await pilot.press("r")  # nothing is left to race: said, not raced
+        await settle(pilot)
+        assert "bracket is decided; close the night (c)" in notes.text("error")
+
+        await pilot.press("p")
+        projector = app.screen
+        assert isinstance(projector, NightProjectorScreen)
+        await wait_for(pilot, lambda: projector.state is not None)
+        await settle(pilot)
+        board = painted(projector.query_one("#np-standings"))
+        assert "Final" in board and "✓ dee" in board
+        assert "Champion: dee" in painted(projector.query_one("#np-heat"))
+    with open_league() as league:
+        drawn = read_bracket(league, night.id)
+        assert drawn is not None and drawn.final_order() is not None
