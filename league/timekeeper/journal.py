@@ -80,15 +80,17 @@ class HeatJournal:
             self.started_at = heat.started_at
             header = {"format": FORMAT, "heat_id": self.heat_id, "started_at": heat.started_at}
             self._append(header, new=True)
-        self.inputs.append((kind, round(at, 4), lap))
+        # Kept whole (JSON writes a float exactly): rounded, a lap captured at 5.01049 s
+        # read 5.010 live and 5.011 once the heat was resumed (the host walk).
+        self.inputs.append((kind, at, lap))
         self.beat = max(self.beat, at)
-        self._append([kind, round(at, 4), lap])
+        self._append([kind, at, lap])
 
     def heartbeat(self, at: float) -> None:
         """While the race runs: it ran until `at` (written at most every BEAT_SECONDS)."""
         if self.inputs and at - self.beat >= BEAT_SECONDS:
             self.beat = at
-            self._append([BEAT, round(at, 4), None])
+            self._append([BEAT, at, None])
 
     def close(self) -> None:
         if self._file is not None:

@@ -17,6 +17,7 @@ from textual._xterm_parser import XTermParser
 from textual.await_complete import AwaitComplete
 from textual.command import CommandPalette
 from textual.css.query import NoMatches
+from textual.message import Message
 from textual.screen import Screen
 from textual.widgets import DataTable, OptionList
 
@@ -36,6 +37,8 @@ def apply_workarounds() -> None:
         _a_closed_palette_stops_searching()
     if not getattr(XTermParser._sequence_to_key_events, PATCHED, False):
         _escape_and_a_key_in_one_read_are_two_keys()
+    if not getattr(XTermParser.feed, PATCHED, False):
+        _an_escape_before_a_typed_key_is_a_key()
 
 
 def _page_keys_wait_for_lines() -> None:
@@ -174,3 +177,42 @@ def _escape_and_a_key_in_one_read_are_two_keys() -> None:
 
     setattr(sequence_to_key_events, PATCHED, True)
     XTermParser._sequence_to_key_events = sequence_to_key_events  # type: ignore[method-assign]
+
+
+# What an escape sequence's second character can be (CSI, SS3, OSC, DCS, APC, PM, ST, and
+# Esc itself): an Esc before any of these may begin a sequence, and is left to the parser.
+SEQUENCE_STARTS = frozenset("[O]P_^\\\x1b")
+
+
+def _an_escape_before_a_typed_key_is_a_key() -> None:
+    """Textual 8.2.8: an Esc with a typed character after it and another Esc after that, in
+    one read (a host's Esc, `?`, Esc typed quickly), was read as an unknown sequence and
+    given back with the Esc as `^`: the Esc was lost and `^` typed (issue 42's walk saw
+    `^?`). A read is split after such an Esc, and the Esc timed out there, as if the rest
+    had come a moment later: the Esc is a key of its own. The pairs Textual knows as keys
+    (`\x1bb` and `\x1bf`, Option+arrows on macOS) are left whole. No longer needed when
+    `XTermParser().feed("\x1b?\x1b")` gives Esc, `?` and (after a tick) Esc."""
+    original = XTermParser.feed
+
+    def feed(self: XTermParser, data: str) -> Iterable[Message]:
+        start = 0
+        for index in range(len(data) - 1):
+            if data[index] == "\x1b" and _typed_after_escape(data[index : index + 2]):
+                yield from original(self, data[start : index + 1])
+                self._timeout_time = 0.0  # the Esc's wait for more is over: a key
+                yield from self.tick()
+                start = index + 1
+        if start < len(data) or not data:
+            yield from original(self, data[start:])
+
+    setattr(feed, PATCHED, True)
+    XTermParser.feed = feed  # type: ignore[method-assign]
+
+
+def _typed_after_escape(pair: str) -> bool:
+    """`pair` is Esc and a typed character that begins no sequence Textual knows as a key."""
+    second = pair[1]
+    if not second.isprintable() or second in SEQUENCE_STARTS:
+        return False
+    known = ANSI_SEQUENCES_KEYS.get(pair)
+    return known is None or isinstance(known, str)

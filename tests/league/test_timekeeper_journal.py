@@ -49,6 +49,19 @@ def test_a_heat_comes_back_paused_where_its_last_heartbeat_left_it(tmp_path: Pat
     assert again is not None and len(again.heat.laps) == 2
 
 
+def test_a_resumed_heat_keeps_every_lap_to_the_last_digit(tmp_path: Path) -> None:
+    # The host walk: a lap captured live as 0:05.010 read 0:05.011 once the heat came back
+    # (its input times were kept to 0.1 ms). These two inputs' lap reads 6.158 s, and 6.159 s
+    # from times rounded to 0.1 ms.
+    path = tmp_path / "heat.json"
+    inputs = [("start_or_pause", 1.5410462796616011), ("capture", 7.699516073460717)]
+    before = timed(path, inputs, 9.000000001)
+    assert f"{before.lap_records()[0].time_seconds:.3f}" == "6.158"
+    resumed = resume_heat(path, HEAT, RULES)
+    assert resumed is not None
+    assert resumed.heat.lap_records() == before.lap_records()
+
+
 def test_a_heat_whose_race_was_over_comes_back_over_with_its_laps(tmp_path: Path) -> None:
     path = tmp_path / "heat.json"
     inputs = [("start_or_pause", 0.0), ("capture", 9.0), ("capture", 19.5), ("end", 25.0)]

@@ -235,3 +235,16 @@ async def test_escape_and_a_key_read_together_are_both_keys() -> None:
         typed(app, "\x1b[B")
         await drain(pilot)
         assert isinstance(app.screen, LeagueScreen) and app.is_running
+
+
+async def test_enter_escape_help_escape_in_one_read_leaves_the_garage_as_it_was() -> None:
+    # The host walk: `Enter Escape ? Escape` sent at once ended in the model's editor: the
+    # first Esc, with `?` and another Esc behind it, was read as `^`.
+    new_model("one")
+    app = create_app(start="garage")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await drain(pilot)
+        typed(app, "\r\x1b?\x1b")
+        await drain(pilot)
+        assert isinstance(app.screen, GarageScreen)
+        assert app.recent_keys.listed()[-4:] == ["enter", "escape", "question_mark", "escape"]

@@ -3,9 +3,21 @@ leaderboard and the Nights screen's night both ask for one)."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
+from sim.foundation.home import HOME_ENV, data_home
+
 EXPORT_FORMATS = {".csv": "csv", ".json": "json", ".md": "markdown", ".markdown": "markdown"}
+
+
+def export_folder() -> Path:
+    """Where an export dialog proposes to write: the home folder, never the folder the app
+    was started from (a host who started it in a clone wrote into the repository); with
+    RACER_TUI_HOME set, that folder, so a league kept on one drive keeps its files there."""
+    if os.environ.get(HOME_ENV):
+        return data_home()
+    return Path.home()
 
 
 def check_export_path(text: str) -> str | None:

@@ -31,6 +31,7 @@ from racer_tui.app.screens.base import RacerScreen, ScreenJobs, error_message
 from racer_tui.app.screens.coach import CoachScreen
 from racer_tui.app.screens.dialogs import ImportDialog, ImportRequest, InputDialog, ask
 from racer_tui.app.screens.evaluation import EvaluationScreen
+from racer_tui.app.screens.export_path import export_folder
 from racer_tui.app.screens.league_submit import RacerPrompt, submit_model_from
 from racer_tui.app.screens.model_editor import ModelEditorScreen
 from racer_tui.app.screens.race_screen import RaceScreen, RaceSetup
@@ -537,7 +538,7 @@ class GarageScreen(RacerScreen[None]):
         dialog = InputDialog(
             f"Export {folder.name}",
             text,
-            value=str(Path.cwd() / f"{folder.name}{suffix}"),
+            value=str(export_folder() / f"{folder.name}{suffix}"),
             confirm_label="Export",
             paths=True,
         )

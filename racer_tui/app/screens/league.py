@@ -46,7 +46,7 @@ from league.report import Column as ReportColumn
 from racer_tui.app.league_watch import LEAGUE_POLL_SECONDS, LeagueWatch
 from racer_tui.app.screens.base import RacerScreen, push_kept
 from racer_tui.app.screens.dialogs import InputDialog
-from racer_tui.app.screens.export_path import EXPORT_FORMATS, check_export_path
+from racer_tui.app.screens.export_path import EXPORT_FORMATS, check_export_path, export_folder
 from racer_tui.app.screens.nights import NightsScreen
 from racer_tui.app.screens.projector import ProjectorScreen
 from racer_tui.app.screens.races import replay_recorded_race
@@ -448,7 +448,7 @@ class LeagueScreen(RacerScreen[None]):
             "Export the leaderboard",
             "The table as shown (filters and order). The file name's ending chooses the "
             "format: .csv, .json or .md (Markdown).",
-            value=str(Path.cwd() / "leaderboard.csv"),
+            value=str(export_folder() / "leaderboard.csv"),
             confirm_label="Export",
             check=check_export_path,
             paths=True,

@@ -78,7 +78,7 @@ from racer_tui.app.screens.dialogs import (
     ask,
     show_problem,
 )
-from racer_tui.app.screens.export_path import EXPORT_FORMATS, check_export_path
+from racer_tui.app.screens.export_path import EXPORT_FORMATS, check_export_path, export_folder
 from racer_tui.app.screens.head_to_head_screen import HeadToHeadScreen
 from racer_tui.app.screens.night_bracket import (
     BracketRequest,
@@ -98,6 +98,7 @@ from racer_tui.app.widgets.track_label import track_options
 from sim.foundation.atomic import write_text_atomic
 from sim.foundation.plural import counted
 from sim.garage.folder import list_models
+from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import REFERENCE_NAME
 from sim.race.head_to_head import HeadToHeadResult
@@ -544,8 +545,16 @@ def heat_setup(
             live=live,
             journal=HeatJournal(journal_path(league_file or default_db_path(), heat.id), heat.id),
         )
-    table = standings(league, night)
-    leader = table[0].entry if table and table[0].entry.score is not None else None
+    # The leader on this heat's own board: a hand-timed lap is never a simulated heat's
+    # ghost or gap (the host walk saw "gap +4.029" to a physical car's time).
+    leader = next(
+        (
+            s.entry
+            for s in standings(league, night)
+            if s.entry.score is not None and s.entry.physics == CURRENT_PHYSICS
+        ),
+        None,
+    )
     ghost = ghost_lap(race_result(league, leader.record_id)) if leader is not None else None
     return RaceSetup(
         track=track,
@@ -677,7 +686,8 @@ class NightsScreen(RacerScreen[None]):
             # Tab to the standings brings them into view.
             with VerticalScroll(id="night-view", can_focus=False):
                 yield Static("", id="night-rules")
-                yield Label("Entrants and heats, in running order", classes="field-label")
+                # Short: the pane is 36 columns wide at 60x20.
+                yield Label("Heats, in running order", classes="field-label")
                 yield FittedTable(id="heats", cursor_type="row", zebra_stripes=True)
                 yield Label("", id="bracket-title", classes="field-label -hidden")
                 yield Static("", id="bracket", classes="-hidden")
@@ -860,8 +870,8 @@ class NightsScreen(RacerScreen[None]):
     def _show_night_standings(self, state: NightState) -> None:
         table = self.query_one("#standings", DataTable)
         title = self.query_one("#standings-title", Label)
-        closed = "final " if state.night.closed else ""
-        title.update(Text(f"Night standings ({closed}with points)"))
+        closed = "final, " if state.night.closed else ""
+        title.update(Text(f"Standings ({closed}with points)"))
         kinds = {s.entry.physics for s in state.standings}  # each its own League board
         note = self.query_one("#standings-note", Static)
         note.update(Text(MIXED_STANDINGS_NOTE[:1].upper() + MIXED_STANDINGS_NOTE[1:] + "."))
@@ -1295,7 +1305,7 @@ class NightsScreen(RacerScreen[None]):
             "The night's standings with points. The file name's ending chooses the format: "
             ".csv or .md (Markdown) for the standings, .json for the whole night (rules, "
             "entrants, heats and standings).",
-            value=str(Path.cwd() / f"{stem or 'night'}.csv"),
+            value=str(export_folder() / f"{stem or 'night'}.csv"),
             confirm_label="Export",
             check=check_export_path,
             paths=True,

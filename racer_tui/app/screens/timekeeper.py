@@ -98,7 +98,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
     TimekeeperScreen #tk-clocks { height: 4; }
     TimekeeperScreen .tk-clock { width: 1fr; height: 4; }
     TimekeeperScreen #tk-facts { height: 1; }
-    TimekeeperScreen #tk-said { height: auto; max-height: 2; }
+    TimekeeperScreen #tk-said { height: auto; max-height: 3; }  /* whole at 60 columns */
     TimekeeperScreen #tk-body { height: 1fr; }
     TimekeeperScreen #tk-laps { width: 1fr; }
     TimekeeperScreen #tk-keys { width: 24; padding: 0 0 0 2; }
@@ -450,10 +450,12 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         rules = self.setup.rules
         lines = []
         for lap, captured in zip(self.heat.lap_records(), self.heat.laps, strict=True):
+            # One short word each: the column is 6 wide at 60 columns, where a longer one
+            # wrapped onto a line that looked like another lap.
             if not captured.finished:
-                verdict = Text("not finished", style="red")
+                verdict = Text("DNF", style="red")
             elif captured.struck:
-                verdict = Text("struck out", style="red")
+                verdict = Text("struck", style="red")
             elif lap_counts(lap, rules):
                 verdict = Text("✓", style="green")
             else:

@@ -113,6 +113,9 @@ async def test_export_writes_the_table_as_shown(tmp_path: Path) -> None:
         ):
             await pilot.press("x")
             dialog_input = app.screen.query_one("#answer", Input)
+            # Proposed in the racer-tui folder, never the one the app started in (the host
+            # walk: a host who started it in a clone would write into the repository).
+            assert dialog_input.value == str(data_home() / "leaderboard.csv")
             dialog_input.value = str(tmp_path / name)
             await pilot.press("enter")
             await settle(pilot)

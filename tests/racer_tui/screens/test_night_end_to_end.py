@@ -173,9 +173,7 @@ async def test_a_new_host_runs_a_mixed_night_from_opening_to_season_points(
         assert set(season) == {"ada", "[b]bob[/b]", "carol"}
         assert "[b]bob[/b]" in painted(nights.query_one("#season"))
         # The night's own final standings stay on screen above the season's.
-        assert "Night standings (final with points)" in painted(
-            nights.query_one("#standings-title")
-        )
+        assert "Standings (final, with points)" in painted(nights.query_one("#standings-title"))
         tonight = {row[1]: row[-1] for row in table_rows(nights, "#standings")}
         assert tonight == season  # a season's first night: its points are the season's
         await pilot.press("r")  # a closed night takes no more heats

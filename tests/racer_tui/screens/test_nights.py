@@ -67,6 +67,34 @@ def test_a_heat_races_against_the_nights_leader_so_far() -> None:
     assert later.title.startswith("Heat 2: ")
 
 
+def test_a_simulated_heat_never_races_a_hand_timed_lap() -> None:
+    """The host walk: a physical car's 6.521 s, timed by hand, became the next simulated
+    heat's gap (+4.029 s): each heat's ghost and gap are its own board's leader."""
+    from league.races import record_race
+    from racer_tui.app.screens.nights import heat_setup
+    from racer_tui.app.screens.race_screen import RaceSetup
+    from sim.physics.labels import PHYSICAL
+    from tests.league.helpers import race_result
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    oval = resolve_track("beginner-oval")
+    with open_league() as league:
+        night = new_night(league, oval, name="friday")
+        add_entrant(league, night, "zed", "physical")
+        add_entrant(league, night, "ada", "reference")
+        heats = draw_heats(league, night, seed=2)
+        zed = next(heat for heat in heats if heat.entrant.racer == "zed")
+        ada = next(heat for heat in heats if heat.entrant.racer == "ada")
+        hand_timed = replace(race_result("zed", [6.5], track=oval), physics=PHYSICAL)
+        record_race(
+            league, replace(hand_timed, model_name="physical car"), night.id, heat_id=zed.id
+        )
+        assert standings(league, night)[0].entry.racer == "zed"
+        setup = heat_setup(league, night, ada, oval)
+    assert isinstance(setup, RaceSetup)
+    assert setup.ghost is None and setup.leader_seconds is None
+
+
 async def test_running_a_heat_before_the_draw_says_what_to_do() -> None:
     app = create_app(start="league")
     async with app.run_test(size=(100, 30)) as pilot:

@@ -170,7 +170,7 @@ async def test_the_lap_chosen_with_the_arrows_is_struck_out_and_a_new_lap_is_cho
         assert laps.selected == 2  # the newest lap
         await pilot.press("up", "up", "x")
         assert str(keeper.said) == "Lap 1 struck out."
-        assert [row[-1] for row in laps.rows()] == ["struck out", "✓", "✓"]
+        assert [row[-1] for row in laps.rows()] == ["struck", "✓", "✓"]
         assert laps.selected == 0  # it stays on the lap struck out
         watch.now += 10.0
         await pilot.press("l")
@@ -300,7 +300,7 @@ async def test_a_lap_that_did_not_finish_is_not_struck_out_in_name_only() -> Non
         await pilot.press("f")  # lap 2 did not finish: it never counts
         await pilot.press("x")  # the newest lap is selected
         assert str(keeper.said) == ("Lap 2 did not finish, so it never counts; nothing to strike.")
-        assert [row[-1] for row in keeper.query_one(LapList).rows()][-1] == "not finished"
+        assert [row[-1] for row in keeper.query_one(LapList).rows()][-1] == "DNF"
 
 
 async def test_a_lap_faster_than_a_real_car_can_drive_is_not_captured() -> None:
@@ -338,3 +338,25 @@ async def test_two_physical_cars_stay_apart_in_a_narrow_heats_table() -> None:
         assert len(set(cars)) == 2, cars
         assert sorted(car[-1] for car in cars) == ["1", "2"]
         assert all(car.startswith("phys") for car in cars)
+
+
+async def test_the_timekeeper_at_60x20_says_each_lap_and_refusal_whole() -> None:
+    # The host walk at 60x20: "struck out" wrapped "out" onto a line that read as a fourth
+    # lap, and a too-fast lap's sentence lost its end ("…not captured; capture").
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        add_entrant(league, night, "zed", "physical")
+        draw_heats(league, night, seed=1)
+    app = create_app(start="league")
+    async with app.run_test(size=(60, 20)) as pilot:
+        keeper, watch = await the_first_heat_started(pilot)
+        watch.now += 2.0  # quicker than a real car can lap the oval
+        await pilot.press("l")
+        await settle(pilot)
+        said = " ".join(painted(keeper.query_one("#tk-said")).split())
+        assert said.endswith("capture when the car crosses the line.")
+        watch.now += 9.0
+        await pilot.press("l", "x")
+        await settle(pilot)
+        shown = [line for line in painted(keeper.query_one(LapList)).splitlines() if line.strip()]
+        assert len(shown) == 2 and shown[1].rstrip().endswith("struck")  # header, lap 1
