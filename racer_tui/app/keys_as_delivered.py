@@ -11,7 +11,6 @@ not on a clock) until everything queued has been handled.
 from __future__ import annotations
 
 import asyncio
-import time
 import unicodedata
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -19,7 +18,6 @@ from typing import Any
 from textual import events
 from textual._xterm_parser import XTermParser
 from textual.app import App
-from textual.constants import ESCAPE_DELAY
 from textual.keys import REPLACED_KEYS, _character_to_key, _get_unicode_name_from_key
 from textual.pilot import Pilot
 
@@ -59,11 +57,11 @@ def typed(app: App[Any], text: str) -> None:
     character becomes the Key event a terminal driver posts for it (U+202E included, which
     arrives as key `right_to_left_override` with the character itself). An Esc that could
     begin a sequence is read as the parser reads it once the terminal's escape delay passes
-    with nothing more."""
+    with nothing more (the delay is not waited: it is over at once)."""
     parser = XTermParser()
     read = list(parser.feed(text))
-    if "\x1b" in text:
-        time.sleep(ESCAPE_DELAY * 1.5)
+    if parser._timeout_time is not None:  # an Esc waits for what may follow: nothing does
+        parser._timeout_time = 0.0
         read += parser.tick()
     for event in read:
         if isinstance(event, events.Key):

@@ -45,7 +45,7 @@ import psutil
 from textual.pilot import OutOfBounds
 
 from racer_tui.app.application import create_app
-from racer_tui.app.keys_as_delivered import burst, drain, paste
+from racer_tui.app.keys_as_delivered import burst, drain, paste, typed
 from racer_tui.app.screens import training
 from racer_tui.app.screens.kiosk import KioskScreen, LeaveKiosk
 from racer_tui.app.widgets.footer import RacerFooter, screen_keys
@@ -67,6 +67,13 @@ APP_KEYS = ("question_mark", "ctrl+p", "escape", "enter", "f1")
 # Typed text: no `/` or `~` (see the module's note), no q (it quits from a section).
 PRINTABLE = string.ascii_letters.replace("q", "") + string.digits + " -_.,:=+"
 TEXT_PIECES = ("5", "10", "abc", "my-model", "0.5", "reinvent_base", "on", "light,noise=0.5")
+# What a terminal sends, read by Textual's own parser as the app reads it: Esc alone and
+# before keys (a host's Esc then `?` or a digit typed quickly), arrows and F1 as escape
+# sequences, Enter, Backspace, Tab. No q, and none of the control keys that quit or stop.
+TERMINAL_PIECES = (
+    "\x1b", "\x1b", "\x1b[A", "\x1b[B", "\x1b[C", "\x1b[D", "\x1bOP", "\x1b[1;5C",
+    "\r", "\x7f", "\t", "?", "1", "2", "3", "4", "5", "n", "a", "x", "y", "5", "-", " ",
+)  # fmt: skip
 MIN_SIZE = (60, 20)
 MAX_SIZE = (200, 60)
 START_SIZE = (80, 24)
@@ -75,6 +82,7 @@ ACTION_WEIGHTS: dict[str, int] = {
     "key": 44,
     "burst": 24,
     "text": 8,
+    "terminal": 4,
     "paste": 4,
     "click": 12,
     "resize": 3,
@@ -238,9 +246,13 @@ class Monkey:
             burst(app, keys)
             said = " ".join(keys)
         elif kind == "text":
-            typed = self.text()
-            burst(app, list(typed))
-            said = repr(typed)
+            text = self.text()
+            burst(app, list(text))
+            said = repr(text)
+        elif kind == "terminal":
+            sent = "".join(self.rng.choice(TERMINAL_PIECES) for _ in range(self.rng.randint(2, 8)))
+            typed(app, sent)
+            said = repr(sent)
         elif kind == "section":
             # Back to a section, as a racer finds the way: Esc, or the deliberate leave of
             # a venue screen (which Esc does not leave), then a section's key; now and
