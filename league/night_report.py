@@ -5,9 +5,11 @@ the whole night as JSON: rules, entrants, heats and standings."""
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
+from league.bracket_records import NightBracket
+from league.brackets import BYE
 from league.nights import Entrant, Heat, Night, Standing
 from league.race_types import race_type_of
 from league.report import SCORE_TITLES, Column, markdown_escape, seconds, to_csv, to_markdown
@@ -35,9 +37,47 @@ def standings_json(standings: Sequence[Standing]) -> list[dict[str, Any]]:
     ]
 
 
+def bracket_json(drawn: NightBracket, names: Mapping[str, str]) -> dict[str, Any]:
+    """A night's bracket as it stands: its seeds (racers, best first), every match with
+    its two sides (a racer, "bye", or null while not known), winner and race, and the final
+    order once decided. `names`: entrant ids' racers."""
+    winners = drawn.winners
+
+    def side(entrant: str | None) -> str | None:
+        if entrant is None:
+            return None
+        return "bye" if entrant == BYE else names.get(entrant, entrant)
+
+    order = drawn.final_order()
+    return {
+        "format": drawn.bracket.format.value,
+        "rules": drawn.rules.to_dict(),
+        "seeds": [names.get(seed, seed) for seed in drawn.bracket.seeds],
+        "matches": [
+            {
+                "id": match.id,
+                "bracket": match.bracket,
+                "round": match.round,
+                "a": side(drawn.sides(match)[0]),
+                "b": side(drawn.sides(match)[1]),
+                "winner": side(winners.get(match.id)),
+                "race_id": drawn.races[match.id].id if match.id in drawn.races else None,
+            }
+            for match in drawn.bracket.matches
+        ],
+        "final_order": None if order is None else [side(entrant) for entrant in order],
+    }
+
+
 def night_json(
-    night: Night, entrants: Sequence[Entrant], heats: Sequence[Heat], standings: Sequence[Standing]
+    night: Night,
+    entrants: Sequence[Entrant],
+    heats: Sequence[Heat],
+    standings: Sequence[Standing],
+    bracket: NightBracket | None = None,
 ) -> dict[str, Any]:
+    """The whole night; `bracket` its knock-out, once drawn (null before)."""
+    names = {entrant.id: entrant.display_name for entrant in entrants}
     return {
         "id": night.id,
         "name": night.name,
@@ -62,6 +102,7 @@ def night_json(
             for h in heats
         ],
         "standings": standings_json(standings),
+        "bracket": bracket_json(bracket, names) if bracket is not None else None,
     }
 
 
@@ -89,10 +130,13 @@ def night_export(
     heats: Sequence[Heat],
     standings: Sequence[Standing],
     kind: str,
+    *,
+    bracket: NightBracket | None = None,
 ) -> str:
-    """The night as `kind`: json, csv or markdown."""
+    """The night as `kind`: json (with its bracket), csv or markdown."""
     if kind == "json":
-        return json.dumps(night_json(night, entrants, heats, standings), indent=2) + "\n"
+        document = night_json(night, entrants, heats, standings, bracket)
+        return json.dumps(document, indent=2) + "\n"
     columns = standings_columns(night)
     if kind == "csv":
         return to_csv(columns, standings)

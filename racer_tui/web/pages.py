@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from league.bracket_records import read_bracket
 from league.errors import LeagueError
 from league.leaderboard import (
     BY_CHOICES,
@@ -122,7 +123,8 @@ def night_document(league: League, night: Night, local_models: frozenset[str]) -
     """The night as `racer-tui night show --json` writes it, with its rules in words."""
     ranked = standings(league, night, local_models=local_models)
     mark_verification(league, [standing.entry for standing in ranked], local_models)
-    document = night_json(night, entrants(league, night), heats(league, night), ranked)
+    entered, bracket = entrants(league, night), read_bracket(league, night.id)
+    document = night_json(night, entered, heats(league, night), ranked, bracket)
     document["rules_words"] = night.rules.describe()
     # Its season's points so far, as `season show --json` gives them (none: null).
     season = get_season(league, night.season_id) if night.season_id else None

@@ -48,6 +48,12 @@ def test_a_bracket_night_from_qualifying_to_its_champion(
     places = json.loads(out)
     assert places[0]["racer"] == champion and places[0]["position"] == 1
     assert [p["position"] for p in places] == [1, 2, 3]
+    code, out, _ = run_cli(capsys, "night", "show", "Cup", "--json", *db)
+    bracket = json.loads(out)["bracket"]
+    assert bracket["format"] == "single" and bracket["final_order"][0] == champion
+    assert [m["id"] for m in bracket["matches"]] == ["W1-1", "W1-2", "W2-1"]
+    assert "bye" in (bracket["matches"][0]["a"], bracket["matches"][0]["b"])
+    assert bracket["matches"][-1]["winner"] == champion and bracket["matches"][-1]["race_id"]
     code, _, err = run_cli(
         capsys, "night", "add", "Cup", "--racer", "dee", "--model", "reference", *db
     )

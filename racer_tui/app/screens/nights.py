@@ -1321,7 +1321,9 @@ class NightsScreen(RacerScreen[None]):
     def _export(self, state: NightState, path: Path, kind: str) -> None:
         with open_league(self.db_path) as league:
             entrants_now = entrants(league, state.night)
-        text = night_export(state.night, entrants_now, state.heats, state.standings, kind)
+        text = night_export(
+            state.night, entrants_now, state.heats, state.standings, kind, bracket=state.bracket
+        )
         write_text_atomic(path, text)
         self.post_message(NightChanged(state.night.id, f"Wrote {state.night.name} to {path}."))
 

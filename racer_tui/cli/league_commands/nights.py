@@ -11,6 +11,7 @@ from typing import Any
 from rich.text import Text
 
 from league import nights
+from league.bracket_records import read_bracket
 from league.errors import LeagueError
 from league.leaderboard import mark_verification
 from league.local_racer import HOST_NAME, local_racer_name
@@ -260,7 +261,8 @@ def _night_show(league: League, night: Any, kind: str) -> int:
     standings = nights.standings(league, night, local_models=models_here)
     if kind != "table":
         mark_verification(league, [s.entry for s in standings], models_here)
-        print(night_export(night, entrants, heats, standings, kind), end="")
+        drawn = read_bracket(league, night.id)
+        print(night_export(night, entrants, heats, standings, kind, bracket=drawn), end="")
         return 0
     state = "closed" if night.closed else "open"
     print(f"{night.name} ({night.id}) on {night.track_name}, {night.held_on}, {state}.")
