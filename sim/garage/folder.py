@@ -408,7 +408,9 @@ class ModelFolder:
             return ModelStatus.TRAINING
         if not self.has_policy():
             return ModelStatus.UNTRAINED
-        if self.evaluation_files():
+        files = self.evaluation_files()
+        # Evaluated means its policy's laps are known: not when it trained since.
+        if files and self.stale_evaluation(files[-1]) is None:
             return ModelStatus.EVALUATED
         return ModelStatus.TRAINED
 

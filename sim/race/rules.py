@@ -207,7 +207,14 @@ class RaceRules:
         if self.lap_count is not None:
             laps = "1 lap" if self.lap_count == 1 else f"{self.lap_count} laps"
             length = f"race of {laps} within {_clock(self.window_seconds)}"
-        words = f"{length}, {self.penalty_seconds:g} s per off-track, {limit}, ranked by {ranking}"
+        # "no time added" rather than "0 s": as the physical preset says it (the host walk
+        # read the two as different rules).
+        penalty = (
+            f"{self.penalty_seconds:g} s per off-track"
+            if self.penalty_seconds
+            else "no time added per off-track"
+        )
+        words = f"{length}, {penalty}, {limit}, ranked by {ranking}"
         if self.min_laps > 1:
             words = f"{words} once {self.min_laps} laps in a row count"
         if self.reward_rules == DROA_REWARD_RULES:

@@ -282,7 +282,7 @@ def test_a_lap_count_night_races_each_heat_to_its_laps(
     )  # fmt: skip
     assert code == 0, err
     assert "on beginner-oval, 2027-01-08." in out
-    assert "race of 2 laps within 4:00, 0 s per off-track, at most 3 off-tracks" in out
+    assert "race of 2 laps within 4:00, no time added per off-track, at most 3 off-tracks" in out
     for racer in ("ana", "bob"):
         assert cli("add", "Sprint", "--racer", racer, "--model", "reference")[0] == 0
     assert cli("draw", "Sprint")[0] == 0

@@ -87,7 +87,7 @@ def test_list_and_show_as_tables(capsys: pytest.CaptureFixture[str]) -> None:
     run_cli(capsys, "model", "new", "tabled", "--sensor", "LIDAR")
     folder = open_model("tabled")
     add_policy(folder)
-    add_evaluation(folder, lap_ms=9250)
+    add_evaluation(folder, stamp="20250101121000", lap_ms=9250)  # after its training ended
     write_training_state(folder, "finished")
     out = run_cli(capsys, "model", "list")[1]
     assert "tabled" in out and "evaluated" in out and "9.250 s" in out and "lidar" in out

@@ -173,7 +173,7 @@ async def test_the_open_night_dialog_takes_a_preset_and_sets_the_ranking_over_it
         assert app.screen is nights
         shown = " ".join(painted(nights.query_one("#night-rules")).split())  # wrapped at 80
         assert "ranked by best average of 3 consecutive laps" in shown
-        assert "0 s per off-track" in shown  # the physical cars' preset
+        assert "no time added per off-track" in shown  # the physical cars' preset
     with open_league() as league:
         (night,) = list_nights(league)
     assert (night.name, night.rules.ranking) == ("sunday", RankingMethod.BEST_AVERAGE)

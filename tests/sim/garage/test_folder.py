@@ -85,10 +85,15 @@ def test_status_follows_the_models_life(model: ModelFolder) -> None:
     assert model.status() is ModelStatus.TRAINING
     add_policy(model)
     assert model.status() is ModelStatus.TRAINING
-    write_training_state(model, "finished")
+    write_training_state(model, "finished")  # at 12:05
     assert model.status() is ModelStatus.TRAINED
-    add_evaluation(model)
+    add_evaluation(model, stamp="20250101121000")
     assert model.status() is ModelStatus.EVALUATED
+    # Trained again since: its laps are not its policy's, so it is trained, not evaluated.
+    state = json.loads(model.training_state_file.read_text())
+    state["updated_at"] = "2025-01-01T12:20:00+00:00"
+    model.training_state_file.write_text(json.dumps(state))
+    assert model.status() is ModelStatus.TRAINED
 
 
 def test_a_trainer_that_died_is_not_training(model: ModelFolder) -> None:
