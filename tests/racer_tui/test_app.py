@@ -19,7 +19,7 @@ from racer_tui.app.screens.welcome import WelcomeScreen
 from racer_tui.app.widgets.demo_race import DemoRace
 from racer_tui.app.widgets.section_header import HelpHint, SectionTab
 from sim.garage.options import new_model
-from tests.racer_tui.screens.tui_helpers import painted, settle, wait_for
+from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
 
 
 async def test_first_run_opens_the_welcome_screen_with_a_moving_car() -> None:
@@ -137,8 +137,10 @@ async def test_ctrl_q_quits_from_a_screen_pushed_on_a_section() -> None:
         await pilot.press("n")  # the Nights screen, pushed on the League section
         await pilot.pause()
         assert len(app.screen_stack) > 1
+        notes = Notifications(app)
         await pilot.press("q", "1")
         assert isinstance(app.screen, NightsScreen) and app.is_running
+        assert "Esc goes back to the League; from there 1-5 switch sections." in notes.text()
         # Help says so, for the digits as for q (a host pressed 1 here and wondered).
         await pilot.press("question_mark")
         await pilot.pause()

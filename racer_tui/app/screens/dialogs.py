@@ -421,6 +421,9 @@ class ImportDialog(PathNameDialog[WorkT]):
     """A DeepRacer model folder, a .racer-bundle or a car archive, and optionally a name."""
 
     TITLE = "Import a model"
+    # Its two fields framed, with the body and the check box, pushed the buttons out of
+    # view at 60x20 (the host walk): one-row fields below 24 rows.
+    COMPACT_FIELDS_BELOW_ROWS = 24
     BODY = (
         "A DeepRacer model folder (as DeepRacer for Cloud or the console's download lays it "
         "out), a .racer-bundle file from another racer, or a DeepRacer car archive (.tar.gz, "

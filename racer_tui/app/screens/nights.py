@@ -638,6 +638,9 @@ class NightsScreen(RacerScreen[None]):
             show=False,
         ),
         Binding("escape", "leave", "Back"),
+        # The sections' digits work from a section's own screen only (a stray one must not
+        # leave a dialog or a heat): here, where a host tried them, they say so.
+        Binding("1,2,3,4,5", "sections_hint", show=False),
     ]
     AUTO_FOCUS = "#nights"
     DEFAULT_CSS = """
@@ -1085,6 +1088,9 @@ class NightsScreen(RacerScreen[None]):
         won = cars.first if loser is cars.second else cars.second
         said = f"Recorded {cars.match.id}: {won.display_name} beat {loser.display_name}."
         self.post_message(NightChanged(night.id, said))
+
+    def action_sections_hint(self) -> None:
+        self.notify("Esc goes back to the League; from there 1-5 switch sections.")
 
     def action_draw_bracket(self) -> None:
         night = self._current("draw its bracket")
