@@ -91,8 +91,9 @@ def read_bracket(league: League, night_id: str) -> NightBracket | None:
     marks = ", ".join("?" for _ in seeds)
     racers = {
         str(entrant["id"]): str(entrant["racer"])
-        for entrant in league.query(
-            f"SELECT id, racer FROM night_entrants WHERE id IN ({marks})", tuple(seeds)
+        for entrant in league.query(  # the night's own: a pulled record names any id
+            f"SELECT id, racer FROM night_entrants WHERE night_id = ? AND id IN ({marks})",
+            (night_id, *seeds),
         )
     }
     bracket = draw_bracket(seeds, Format(row["format"]))
@@ -137,7 +138,8 @@ def bracket_places(league: League, night_ids: Sequence[str]) -> dict[str, list[s
         drawn = read_bracket(league, night_id)
         order = drawn.final_order() if drawn is not None else None
         if drawn is not None and order is not None:
-            places[night_id] = [drawn.racers[entrant] for entrant in order if entrant != BYE]
+            named = (drawn.racers.get(entrant) for entrant in order if entrant != BYE)
+            places[night_id] = [racer for racer in named if racer is not None]
     return places
 
 

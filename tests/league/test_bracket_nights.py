@@ -10,7 +10,7 @@ import pytest
 
 from league import nights
 from league.bracket_nights import draw_night_bracket, next_match, record_match
-from league.bracket_records import read_bracket
+from league.bracket_records import bracket_places, read_bracket, store_bracket
 from league.brackets import Format
 from league.errors import LeagueError
 from league.seasons import new_season, season_standings
@@ -145,3 +145,18 @@ def test_a_bracket_of_a_chosen_size_takes_the_best_qualifiers(league: League) ->
     race_next(league, night, "higher")
     drawn = read_bracket(league, night.id)
     assert drawn is not None and drawn.final_order() is not None
+
+
+def test_a_bracket_naming_another_nights_entrants_seats_nobody(league: League) -> None:
+    """A record made elsewhere can name any entrant ids: only the night's own are seated,
+    so no race can count for a match of strangers and the night keeps its own places."""
+    night = qualified_night(league)
+    other = nights.new_night(league, resolve_track(TRACK), rules=RaceRules(), name="Other")
+    seeds = [entrant.id for entrant in nights.entrants(league, night)[:2]]
+    with league.transaction():
+        store_bracket(league, other.id, seeds, Format.SINGLE, MATCH_RULES)
+    drawn = read_bracket(league, other.id)
+    assert drawn is not None and drawn.racers == {}
+    assert bracket_places(league, [other.id]) == {}
+    with pytest.raises(LeagueError, match="lost an entrant"):
+        next_match(league, other)

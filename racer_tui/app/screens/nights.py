@@ -1055,6 +1055,11 @@ class NightsScreen(RacerScreen[None]):
                 track = find_night_track(night)
                 self.post_message(MatchReady(night, cars, match_setup(drawn, cars, track)))
                 return
+            if not waiting and heats(league, night):
+                raise LeagueError(
+                    f"{night.name}'s heats are all raced; add entrants (a) and draw (d) for "
+                    "more, draw a bracket from its standings (k), or close it (c)."
+                )
             if not waiting:
                 raise LeagueError(
                     f"{night.name} has no drawn heats waiting; add entrants (a) and draw (d)."
