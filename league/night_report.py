@@ -37,6 +37,13 @@ def standings_json(standings: Sequence[Standing]) -> list[dict[str, Any]]:
     ]
 
 
+def standing_car(standing: Standing) -> str:
+    """The car a night's standing names: a physical car's name (its board's key) marked
+    physical, as the night's entrants are, so it never reads as a garage model's name."""
+    model = standing.entry.model
+    return f"{model} (physical)" if standing.entry.physics == PHYSICAL else model
+
+
 def bracket_json(drawn: NightBracket, names: Mapping[str, str]) -> dict[str, Any]:
     """A night's bracket as it stands: its seeds (racers, best first), every match with
     its two sides (a racer, "bye", or null while not known), winner and race, and the final
@@ -111,7 +118,7 @@ def standings_columns(night: Night) -> list[Column]:
     columns = [
         Column("position", lambda s: "-" if s.position is None else str(s.position), True),
         Column("racer", lambda s: s.entry.display_name),
-        Column("car", lambda s: s.entry.model),
+        Column("car", standing_car),
     ]
     if method is not RankingMethod.BEST_LAP:
         columns.append(Column(SCORE_TITLES[method], lambda s: seconds(s.entry.score), True))

@@ -27,7 +27,7 @@ from league.racers import check_name, display_names, ensure_racer
 from league.races import find_local_track, record_race
 from league.seasons import DEFAULT_POINTS, get_season, night_results
 from league.store import League, now_iso
-from league.timekeeper.car import car_name, is_physical, physical_spec
+from league.timekeeper.car import PHYSICAL, car_name, is_physical, physical_spec
 from league.tracks import ensure_track
 from league.trust.replay import DriverFor, verify_races
 from sim.foundation.ids import new_id
@@ -284,6 +284,10 @@ PHYSICAL_RULES_NOTE = (
     "A physical car is timed by hand: the physical rules (no time added per reset) are "
     "how DeepRacer's own events time one; this night keeps the rules it opened with."
 )
+SIMULATED_UNDER_PHYSICAL_NOTE = (
+    "A simulated car under the physical rules: its off-tracks add no time, as a hand-timed "
+    "car's do, and its laps rank beside theirs on this night."
+)
 TRAINING_NOTE = "{model} is still training: its heat races the policy it has when the heat runs."
 
 
@@ -294,6 +298,9 @@ def entrant_note(model: str, *, training: Collection[str], physical_rules: bool)
         return TRAINING_NOTE.format(model=model)
     if is_physical(model) and not physical_rules:
         return PHYSICAL_RULES_NOTE
+    # Not while "physical" is still being typed (the app's dialog notes as keys come).
+    if physical_rules and model and not PHYSICAL.startswith(model) and not is_physical(model):
+        return SIMULATED_UNDER_PHYSICAL_NOTE
     return ""
 
 

@@ -16,12 +16,13 @@ from functools import partial
 from pathlib import Path
 from typing import Any, ClassVar
 
-from textual import events
+from textual import events, on
 from textual.app import App, ScreenStackError
 from textual.binding import Binding, BindingType
 from textual.command import CommandPalette
 from textual.dom import DOMNode
 from textual.message_pump import MessagePump
+from textual.notifications import Notify
 from textual.screen import Screen
 from textual.widget import AwaitMount, Widget
 from textual.widgets import DataTable
@@ -245,6 +246,17 @@ class RacerTuiApp(App[int]):
             worker.state is WorkerState.RUNNING and worker.group != TRAINING_RUN_GROUP
             for worker in self.workers
         )
+
+    @on(Notify)
+    def _say_it_once(self, message: Notify) -> None:
+        """A sentence already on screen is not stacked again: screens that each open the
+        league said "newer schema" in three identical notes (the host walk)."""
+        new = message.notification
+        if any(
+            (shown.message, shown.title, shown.severity) == (new.message, new.title, new.severity)
+            for shown in self._notifications  # Textual's own: it drops those timed out
+        ):
+            message.prevent_default()  # Textual's handler, which would add it, is skipped
 
     def on_unmount(self) -> None:
         self.collector.stop()

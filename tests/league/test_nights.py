@@ -211,6 +211,7 @@ def test_a_night_of_simulated_and_physical_cars_is_one_ranking(league: League) -
     from dataclasses import replace
 
     from league.leaderboard import Filters, leaderboard
+    from league.night_report import standing_car
     from sim.physics.labels import PHYSICAL
 
     new_season(league, "mixed", parse_points("10,6,4"))
@@ -232,6 +233,9 @@ def test_a_night_of_simulated_and_physical_cars_is_one_ranking(league: League) -
         (2, "ana", 6),
         (3, "cy", 4),
     ]
+    # Named as the night's entrants are: a physical car's name never reads as a model's.
+    # (`race_result` names every result's model "car".)
+    assert [standing_car(s) for s in standings] == ["car (physical)", "car", "car"]
     season = season_standings(league, get_season(league, "mixed"))
     assert [(s.racer, s.points) for s in season] == [("bob", 10), ("ana", 6), ("cy", 4)]
     boards = leaderboard(league, Filters(), method=None)

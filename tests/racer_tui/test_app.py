@@ -292,3 +292,27 @@ async def test_a_failed_import_on_the_welcome_screen_is_said_in_the_dialog(tmp_p
         await pilot.press("escape")
         await settle(pilot)
         assert app.screen is welcome
+
+
+async def test_a_sentence_on_screen_is_not_stacked_and_a_dialogs_notes_leave_its_buttons() -> None:
+    """The host walk: three screens each said the league was too new, three notes high;
+    at 60x20 a note at the bottom covered the dialog's buttons it was about."""
+    from textual.widgets import Button
+    from textual.widgets._toast import Toast  # not exported; its class is the test's subject
+
+    from racer_tui.app.screens.dialogs import InputDialog
+
+    app = create_app(start="league")
+    async with app.run_test(size=(60, 20), notifications=True) as pilot:
+        await settle(pilot)
+        app.push_screen(InputDialog("Rename", "A new name:", confirm_label="Rename"))
+        await settle(pilot)
+        for _ in range(3):
+            app.notify("The league is newer than this racer-tui.", severity="error")
+        app.notify("Something else.")
+        await settle(pilot)
+        toasts = list(app.screen.query(Toast))
+        assert len(toasts) == 2  # the repeated sentence once, the other beside it
+        lowest_note = max(toast.region.bottom for toast in toasts)
+        buttons = app.screen.query(Button)
+        assert lowest_note <= min(button.region.y for button in buttons)

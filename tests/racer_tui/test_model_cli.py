@@ -300,3 +300,26 @@ def test_entering_a_model_still_training_says_so_as_the_app_does(
         capsys, "night", "add", "friday", "--racer", "bo", "--model", "physical:car1", "--db", db
     )
     assert "Note: A physical car is timed by hand" in out
+
+
+def test_a_physical_rules_night_notes_a_simulated_car_and_names_a_physical_car_as_one(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """The host walk: a simulated car entered under the physical rules got no word, and
+    `night show` called a physical car by its bare name, as if it were a garage model."""
+    db = str(tmp_path / "league.db")
+    run_cli(capsys, "night", "new", "--db", db, "--name", "venue", "--rules", "physical")
+    code, out, err = run_cli(
+        capsys, "night", "add", "venue", "--racer", "ana", "--model", "reference", "--db", db
+    )
+    assert code == 0, err
+    assert "Note: A simulated car under the physical rules: its off-tracks add no time" in out
+    code, out, _ = run_cli(
+        capsys, "night", "add", "venue", "--racer", "bo", "--model", "physical:car1", "--db", db
+    )
+    assert "Note:" not in out  # a hand-timed car is what the physical rules are for
+    run_cli(capsys, "night", "draw", "venue", "--db", db)
+    code, out, _ = run_cli(capsys, "night", "show", "venue", "--db", db)
+    assert code == 0
+    heats_row = next(line for line in out.splitlines() if " bo " in line)
+    assert "car1 (physical)" in heats_row

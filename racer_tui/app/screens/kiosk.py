@@ -46,8 +46,9 @@ class LeaveKiosk(RacerModal[bool]):
             yield Label(Text(f"Leave the {self.what}?"), classes="dialog-title")
             yield Static(Text(self.then), classes="dialog-body")
             with Horizontal(classes="dialog-buttons"):
-                yield Button("Leave (y)", id="leave", variant="error")
+                # As every confirmation: staying on the left, the deliberate act right.
                 yield Button("Stay (n)", id="stay", variant="primary")
+                yield Button("Leave (y)", id="leave", variant="error")
 
     def on_mount(self) -> None:
         self.query_one("#stay", Button).focus()  # a stray Enter stays

@@ -326,10 +326,14 @@ def counters(figures: TrainingFigures) -> Text:
         if evaluation
         else "-"
     )
-    text.append("  CPU ", style="dim")
-    text.append(_number(system.cpu_percent if system else None, ".0f", "%"))
-    text.append("  mem ", style="dim")
-    text.append(_number(system.rss_mb if system else None, ",.0f", " MB"))
+    if figures.ended is None:
+        text.append("  CPU ", style="dim")
+        text.append(_number(system.cpu_percent if system else None, ".0f", "%"))
+        text.append("  mem ", style="dim")
+        text.append(_number(system.rss_mb if system else None, ",.0f", " MB"))
+    else:
+        # The process is gone: its last sample read as a live figure (the host walk).
+        text.append("  process ended", style="dim")
     text.append("\nended ", style="dim")
     if figures.statuses:
         parts = [f"{status} {count:,}" for status, count in figures.statuses.most_common()]

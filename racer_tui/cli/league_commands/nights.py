@@ -15,7 +15,7 @@ from league.bracket_records import read_bracket
 from league.errors import LeagueError
 from league.leaderboard import mark_verification
 from league.local_racer import HOST_NAME, local_racer_name
-from league.night_report import night_export, standings_json
+from league.night_report import night_export, standing_car, standings_json
 from league.night_verification import uncounted_heats
 from league.nights import (
     find_night_track,
@@ -270,13 +270,13 @@ def _night_show(league: League, night: Any, kind: str) -> int:
     print(f"Entrants: {len(entrants)}; heats raced: {sum(h.race_id is not None for h in heats)}")
     if heats:
         table = plain_table("Heats")
-        for title in ("heat", "racer", "model", "race"):
+        for title in ("heat", "racer", "car", "race"):
             table.add_column(title)
         for i, heat in enumerate(heats, start=1):
             table.add_row(
                 str(i),
                 Text(heat.entrant.display_name),
-                Text(heat.entrant.model),
+                Text(heat.entrant.car),  # a bundle's file name, not its whole path
                 heat.race_id or "waiting",
             )
         print_table(table)
@@ -305,7 +305,7 @@ def _print_standings(
     table = plain_table(title)
     table.add_column("pos", justify="right")
     table.add_column("racer")
-    table.add_column("model")
+    table.add_column("car")
     table.add_column(SCORE_TITLES[night.rules.ranking], justify="right")
     table.add_column("laps", justify="right")
     table.add_column("off-tracks", justify="right")
@@ -315,7 +315,7 @@ def _print_standings(
         table.add_row(
             "-" if s.position is None else str(s.position),
             Text(s.entry.display_name),
-            Text(s.entry.model),
+            Text(standing_car(s)),
             seconds(s.entry.score),
             str(s.entry.valid_laps),
             str(s.entry.offtracks),

@@ -6,6 +6,7 @@ screen it goes back there."""
 from __future__ import annotations
 
 import pytest
+from textual.widgets import Button
 
 from league.nights import add_entrant, new_night
 from league.opening import open_league
@@ -58,6 +59,9 @@ async def test_the_night_projector_started_alone_opens_nothing_and_quits_when_as
         assert app.screen is projector and not quits
         await pilot.press("ctrl+q")
         assert isinstance(app.screen, LeaveKiosk)
+        # Staying on the left and leaving on the right, as every confirmation in the app.
+        ids = [button.id for button in app.screen.query(Button)]
+        assert ids == ["stay", "leave"]
         await pilot.press("y")
         await pilot.pause()
         assert quits  # the program ends: nothing of the app is left behind it

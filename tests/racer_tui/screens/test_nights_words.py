@@ -9,7 +9,7 @@ from typing import Any
 from textual.app import App, ComposeResult
 from textual.widgets import DataTable, Input, Static
 
-from league.nights import PHYSICAL_RULES_NOTE
+from league.nights import PHYSICAL_RULES_NOTE, SIMULATED_UNDER_PHYSICAL_NOTE
 from league.opening import open_league
 from racer_tui.app.application import create_app
 from racer_tui.app.screens.nights import MIXED_STANDINGS_NOTE, AddEntrantDialog, NightsScreen
@@ -51,6 +51,23 @@ async def test_the_entrant_dialog_warns_of_a_model_still_training_and_of_physica
         model.value = "physical:blue car"
         await pilot.pause()
         assert " ".join(painted(note).split()).startswith(PHYSICAL_RULES_NOTE[:40])
+
+
+async def test_the_entrant_dialog_notes_a_simulated_car_under_the_physical_rules() -> None:
+    dialog = AddEntrantDialog(["ada"], no_add, training=frozenset(), physical_rules=True)
+    app = DialogApp(dialog)
+    async with app.run_test(size=(80, 24)) as pilot:
+        await pilot.pause()
+        model = dialog.query_one("#entrant-model", Input)
+        note = dialog.query_one("#entrant-note", Static)
+        model.value = "reference"
+        await pilot.pause()
+        said = " ".join(painted(note).split())
+        assert said.startswith(SIMULATED_UNDER_PHYSICAL_NOTE[:40])
+        for typed in ("phys", "physical", "physical:blue car"):  # on its way to a real car
+            model.value = typed
+            await pilot.pause()
+            assert painted(note).strip() == "", typed
 
 
 async def test_night_standings_say_when_they_rank_physical_and_simulated_laps_together() -> None:

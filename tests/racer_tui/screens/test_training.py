@@ -169,7 +169,7 @@ async def test_injected_events_reach_the_charts_and_counters() -> None:
         assert charts.query_one("#chart-entropy", LineChart).values == [1.61]
         text = painted(charts)
         assert "Off track 2" in text and "Lap complete 1" in text
-        assert "CPU 97%" in text and "310 MB" in text
+        assert "process ended" in text and "310 MB" not in text  # the run has finished
         assert "reward: 8.0" in text
         assert "finished" in notes.text()
 
@@ -578,6 +578,18 @@ def test_the_counters_count_every_cars_episodes() -> None:
     alone = TrainingFigures()
     alone.fold_rows(sample_rows()[:1])
     assert counters(alone).plain.startswith("1 episode  ")
+
+
+def test_a_finished_run_shows_no_process_figures_as_if_live() -> None:
+    """The host walk: a run that had ended still said its last CPU and memory."""
+    from racer_tui.app.widgets.training_charts import counters
+
+    figures = TrainingFigures()
+    figures.fold(events.System(2.0, 97.0, 310.0))
+    assert "CPU 97%  mem 310 MB" in counters(figures).plain
+    figures.fold(events.Ended(3.0, "finished", "the time limit was reached", 2048, 3, 55.0, None))
+    said = counters(figures).plain
+    assert "process ended" in said and "CPU" not in said and "310" not in said
 
 
 def test_the_agents_eye_view_shows_boxes_that_stand_still_and_says_when_it_cannot() -> None:
