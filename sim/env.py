@@ -27,6 +27,7 @@ import numpy as np
 from sim.deepracer.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, parse_action_space
 from sim.deepracer.vocabulary import EpisodeStatus, normalise_sensors
 from sim.physics.car import DEEPRACER_CAR, CarSpec
+from sim.physics.objects.field import ObjectField
 from sim.physics.objects.settings import RaceSettings
 from sim.physics.simulation import EpisodeRules, TrackSimulation
 from sim.reward.function import load_reward_function, load_reward_source
@@ -59,6 +60,10 @@ class EnvConfig:
     # A camera model's training draws each car a camera every episode (sim.sensors.randomisation);
     # off (the plain render) unless the model asks for it. Only camera models see it.
     camera_randomisation: CameraRandomisation = CameraRandomisation.OFF
+    # Objects a higher floor puts on the track with the cars instead of `race`'s: a
+    # training's opponents, driven by their own models (sim.race.opponents). Given the
+    # cars' simulation, it returns their field.
+    objects_for: Callable[[TrackSimulation], ObjectField] | None = None
 
     @classmethod
     def build(
@@ -111,7 +116,7 @@ class EnvConfig:
         `first_car`, `fleet_cars`: these are cars `first_car`.. of a larger training fleet
         (sim.training.shards); their objects are drawn from `first_car`, so that each part
         of the fleet meets boxes and bots of its own."""
-        return TrackSimulation(
+        sim = TrackSimulation(
             self.track,
             n_cars,
             car=self.car,
@@ -122,6 +127,9 @@ class EnvConfig:
             first_car=first_car,
             fleet_cars=fleet_cars,
         )
+        if self.objects_for is not None:
+            sim.objects = self.objects_for(sim)
+        return sim
 
 
 class StepWatcher(Protocol):

@@ -31,13 +31,16 @@ from rich.text import Text
 from racer_tui.cli.output import print_json, print_table
 from sim.foundation.remedies import RemedyError
 from sim.garage.folder import ModelError, open_model
+from sim.garage.imported import BUNDLE_SUFFIX
 from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb
 from sim.tracks.catalog import resolve_track
 from sim.training import events
 from sim.training.algorithms import check_trainable
+from sim.training.config import training_env_config
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport, evaluate_model
 from sim.training.launcher import TrainingProcess
+from sim.training.opponents import check_opponents
 
 NAMES = ("train", "evaluate")
 
@@ -71,6 +74,15 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         type=int,
         help="processes stepping the cars, each with a fleet of its own, and threads of the "
         "learning step (default: the cores less one, left for the app, at most 8)",
+    )
+    train.add_argument(
+        "--opponent",
+        action="append",
+        default=[],
+        metavar="CAR",
+        help="train among other racers' cars: a garage model, a .racer-bundle file or "
+        "reference, on the track with every training car (repeat for up to 5); instead of "
+        "a head-to-bot model's bot cars",
     )
     train.add_argument("--json", action="store_true", help="stream the JSON events instead")
 
@@ -183,7 +195,7 @@ def _figures_table(figures: Figures) -> Table:
             "memory",
             number(system.rss_mb if system else None, ".0f") + " MB",
         ),
-        ("cars", _fleet(figures.started), "", ""),
+        ("cars", _fleet(figures.started), *_against(figures.started)),
     ]
     for label, value, label2, value2 in rows:
         table.add_row(
@@ -197,6 +209,13 @@ def _fleet(started: events.Started | None) -> str:
         return "-"
     processes = started.processes
     return f"{started.cars} in {processes} process{'' if processes == 1 else 'es'}"
+
+
+def _against(started: events.Started | None) -> tuple[str, str]:
+    """The opponents on the track with every training car, when there are any."""
+    if started is None or not started.opponents:
+        return "", ""
+    return "against", ", ".join(started.opponents)
 
 
 class _Interrupts:
@@ -241,6 +260,8 @@ def _train(args: argparse.Namespace) -> int:
     if problem is not None:
         raise ModelError(problem)
     check_trainable(folder.metadata())  # before a child process starts
+    if args.opponent:  # what the child would refuse, said before it starts
+        check_opponents(training_env_config(folder), args.opponent)
     if folder.is_training() or folder.training_locked():
         raise ModelError(
             f"model {folder.name!r} is already training in another process; stop that one first."
@@ -254,6 +275,10 @@ def _train(args: argparse.Namespace) -> int:
     extra += ["--reward-memory-mb", str(memory_mb)]
     if args.processes is not None:
         extra += ["--processes", str(args.processes)]
+    for opponent in args.opponent:
+        # A bundle by its whole path: the training child may not share this directory.
+        car = str(Path(opponent).resolve()) if opponent.endswith(BUNDLE_SUFFIX) else opponent
+        extra += ["--opponent", car]
     process = TrainingProcess.start(
         str(folder.path), args.minutes, extra, budget_seconds=minutes * 60.0
     )

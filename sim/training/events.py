@@ -47,6 +47,8 @@ class Started:
     max_minutes: float
     pid: int
     processes: int = 1  # simulation processes the cars are spread over (sim.training.shards)
+    # The cars every training car races (sim.training.opponents), as racers name them.
+    opponents: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

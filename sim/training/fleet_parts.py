@@ -27,6 +27,7 @@ from sim.garage.folder import ModelFolder
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
 from sim.training.config import training_env_config
+from sim.training.opponents import with_opponents
 from sim.training.step_record import EndedEpisode, StepRecorder
 
 
@@ -83,6 +84,7 @@ class PartSetup:
     record: bool  # keep step rows for the training log
     discrete: bool
     reward_seconds: float | None  # the reward call limit to install; None: none
+    opponents: tuple[str, ...] = ()  # cars each training car races (sim.training.opponents)
 
 
 @dataclass
@@ -178,7 +180,7 @@ def _build_part(
         )
     # What the reward imports is imported first: its load and first call are timed.
     reward_sandbox.preimport(folder.reward_source())
-    config = training_env_config(folder)
+    config = with_opponents(training_env_config(folder), setup.opponents)
     part = setup.part
     batch = BatchedDeepRacer(
         config, part.cars, setup.seed, first_car=part.first_car, fleet_cars=setup.fleet_cars

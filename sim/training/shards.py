@@ -68,6 +68,7 @@ class ShardedVecEnv(FleetVecEnv):
         seed: int | None = None,
         on_step: Callable[[list[EndedEpisode]], None] | None = None,
         reward_seconds: float | None = None,
+        opponents: tuple[str, ...] = (),
     ) -> None:
         self.config = config
         self.parts = split_fleet(cars, processes)
@@ -90,6 +91,7 @@ class ShardedVecEnv(FleetVecEnv):
                     record=on_step is not None,
                     discrete=discrete,
                     reward_seconds=reward_seconds,
+                    opponents=opponents,
                 )
                 self._remotes.append(_Remote.start(setup))
             for remote in self._remotes:

@@ -45,6 +45,7 @@ from sim.training.errors import describe_failure, failure_remedy
 from sim.training.evaluation import EvaluationReport, run_trials
 from sim.training.fleet_parts import PartError, usable_cores
 from sim.training.logbook import Logbook
+from sim.training.opponents import with_opponents
 from sim.training.policy import (
     PolicyDriver,
     fill_network,
@@ -81,6 +82,9 @@ class RunOptions:
     # The memory the reward function may use in the trainer's own process, beyond the
     # learner's (see `Trainer._contain`); None: no limit (a trainer that runs no racer code).
     reward_memory_mb: int | None = None
+    # Other racers' cars on the track with every training car (sim.training.opponents):
+    # garage models, bundle files or `reference`; none: the model's own race type.
+    opponents: tuple[str, ...] = ()
 
 
 def default_cars(sensors: tuple[str, ...]) -> int:
@@ -137,7 +141,7 @@ class Trainer:
             self.settings = PPOSettings.from_hyperparameters(self.hyperparameters)
         except ValueError as error:
             raise ModelError(f"{folder.hyperparameters_file}: {error}") from None
-        self.config = training_env_config(folder)
+        self.config = with_opponents(training_env_config(folder), self.options.opponents)
         self.processes = self.options.processes
         if self.processes < 1:
             raise ModelError(f"a training needs at least 1 process, not {self.processes}.")
@@ -182,6 +186,7 @@ class Trainer:
                 max_minutes=self.minutes,
                 pid=os.getpid(),
                 processes=self.processes,
+                opponents=tuple(Path(car).name for car in self.options.opponents),
             )
         )
         kind, message = "finished", "the time limit was reached"
@@ -275,6 +280,7 @@ class Trainer:
             seed=self.options.seed,
             on_step=self.logbook.add_step,
             reward_seconds=limit.seconds if limit is not None else None,
+            opponents=self.options.opponents,
         )
         try:
             for pid in sharded.pids:

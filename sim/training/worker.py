@@ -128,6 +128,12 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"memory the reward function may use in each process (default {DEFAULT_MEMORY_MB})",
     )
     parser.add_argument("--die-with-parent", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--opponent",
+        action="append",
+        default=[],
+        help="a car on the track with every training car (repeat for more)",
+    )
     return parser
 
 
@@ -244,6 +250,7 @@ def _train(
             min_samples=args.min_samples,
             max_samples=args.max_samples,
             reward_memory_mb=memory_mb,
+            opponents=tuple(args.opponent),
         )
         import torch  # noqa: PLC0415 (torch: after the run's options are checked)
 

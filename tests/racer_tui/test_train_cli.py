@@ -166,6 +166,10 @@ def test_evaluate_json_on_another_track(
         (("train", "tiny", "--minutes", "0"), "--minutes must be more than 0"),
         (("evaluate", "tiny", "--trials", "0"), "--trials must be between 1 and 100"),
         (("evaluate", "tiny"), "has no trained policy yet"),
+        (
+            ("train", "tiny", "--opponent", "reference"),
+            "--opponent: a model that races among objects needs a camera or a lidar",
+        ),
     ],
 )
 def test_user_errors_are_one_sentence_and_exit_code_2(

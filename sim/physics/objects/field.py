@@ -178,6 +178,23 @@ class ObjectField:
         _, _, foot = self.lanes.centre.project(np.array([[pose.x, pose.y]]))
         self.from_centre[car, i] = math.hypot(pose.x - foot[0, 0], pose.y - foot[0, 1])
 
+    def measure_where_they_stand(self) -> None:
+        """Every object's distance along the centre line, side and distance from it, from
+        where it stands: for cars that drive themselves (a race's rivals, a training's
+        opponents), which no lane places. Left is left of the centre line driving the
+        track's way (simapp: inside the inner half, flipped on a clockwise track, which is
+        the same side)."""
+        cars, count = self.x.shape
+        points = np.column_stack([self.x.reshape(-1), self.y.reshape(-1)])
+        centre = self.lanes.centre
+        segment, t, foot = centre.project(points)
+        relative = points - foot
+        vectors = centre.vectors[segment]
+        cross = vectors[:, 0] * relative[:, 1] - vectors[:, 1] * relative[:, 0]
+        self.distance = centre.arc_length(segment, t).reshape(cars, count)
+        self.left = (cross > 0.0).reshape(cars, count)
+        self.from_centre = np.hypot(relative[:, 0], relative[:, 1]).reshape(cars, count)
+
     def start_pose(self, car: int, s: float) -> ObjectPose | None:
         """Where a car starting at centre-line distance `s` (along the track's rows) stands:
         in the other lane than an object of its within 1 m along the track (simapp's

@@ -95,17 +95,7 @@ class RivalField(ObjectField):
         """Along and across the centre line: only the reward params read it."""
         if self._measured:
             return
-        centre = self.lanes.centre
-        points = np.column_stack([self.x[0], self.y[0]])
-        segment, t, foot = centre.project(points)
-        relative = points - foot
-        vectors = centre.vectors[segment]
-        cross = vectors[:, 0] * relative[:, 1] - vectors[:, 1] * relative[:, 0]
-        self.distance = centre.arc_length(segment, t)[None, :]
-        # Left of the centre line, driving the track's way (simapp: inside the inner half,
-        # flipped on a clockwise track, which is the same side).
-        self.left = (cross > 0.0)[None, :]
-        self.from_centre = np.hypot(relative[:, 0], relative[:, 1])[None, :]
+        self.measure_where_they_stand()
         self._measured = True
 
     def all_params(
