@@ -295,6 +295,13 @@ class TrackSimulation:
         self.fleet.place(car, x, y, yaw, speed)
         self._measure()
 
+    def put_cars(self, cars: Sequence[int], poses: Sequence[tuple[float, float, float]]) -> None:
+        """`put` for several cars, standing, measured once: a training's opponents are put
+        on a grid, or held, many at a step."""
+        for car, (x, y, yaw) in zip(cars, poses, strict=True):
+            self.fleet.place(car, x, y, yaw, 0.0)
+        self._measure()
+
     def reset_all(self) -> None:
         self.reset_cars(range(self.n))
 

@@ -113,8 +113,11 @@ class OpponentField(ObjectField):
         # Opponents that ran into their training car from behind: held from the next step.
         self._struck = np.zeros((cars, count), dtype=bool)
         self._measured = False
+        # Grid places drawn for each opponent, not yet stood on: (car, x, y, heading).
+        self._due: list[list[tuple[int, float, float, float]]] = [[] for _ in drivers]
         for car in range(cars):
             self.draw(car)
+        self._stand_due()
 
     # --- episodes ------------------------------------------------------------------------
     def draw(self, car: int, backwards: bool = False) -> None:
@@ -131,18 +134,33 @@ class OpponentField(ObjectField):
         for k, place in enumerate(others):
             at = (front - place * GRID_GAP) % self.length
             pose = self.lanes.pose(at, Lane.OUTER if place % 2 == 0 else Lane.INNER)
-            sim = self.sims[k]
-            sim.reset_car(car, at)
-            sim.put(car, pose.x, pose.y, pose.heading, 0.0)
-            sim.continue_episode(car, 0.0)
-            self._set(car, k, pose)  # where the training car's start looks for a free lane
+            # Seen (and avoided by the training car's start) now; the opponent's own
+            # simulation stands it there before it next drives, with every car drawn
+            # meanwhile in one measuring pass (`_stand_due`).
+            self._set(car, k, pose)
+            self._due[k].append((car, pose.x, pose.y, pose.heading))
         self.hold_left[car] = 0.0
         self._struck[car] = False
         self.drawn[car] = True
+
+    def _stand_due(self) -> None:
+        """Stand the opponents drawn since the last step on their grid places, each
+        starting its run from there."""
+        if not any(self._due):
+            return
+        for sim, due in zip(self.sims, self._due, strict=True):
+            if not due:
+                continue
+            cars = [car for car, *_ in due]
+            sim.put_cars(cars, [(x, y, heading) for _, x, y, heading in due])
+            for car in cars:
+                sim.continue_episode(car, 0.0)
+            due.clear()
         self._follow()
 
     def advance(self, seconds: float) -> None:
         """Every opponent drives one step on what it sees now, then serves its penalties."""
+        self._stand_due()
         started_held = self.hold_left > 0.0
         for k, (sim, driver) in enumerate(zip(self.sims, self.drivers, strict=True)):
             action = driver.act(sim)
@@ -152,10 +170,12 @@ class OpponentField(ObjectField):
             before_s, before_travelled = sim.s.copy(), sim.travelled.copy()
             before_x, before_y = sim.fleet.x.copy(), sim.fleet.y.copy()
             sim.apply(steering, speed)
-            for car in np.flatnonzero(held).tolist():  # a held car stands where it stopped
-                x, y, yaw = self._hold_pose[car, k].tolist()
-                sim.put(car, x, y, yaw, 0.0)
-                sim.continue_episode(car, float(self._hold_travelled[car, k]))
+            held_cars = np.flatnonzero(held).tolist()
+            if held_cars:  # a held car stands where it stopped
+                poses = [tuple(self._hold_pose[car, k].tolist()) for car in held_cars]
+                sim.put_cars(held_cars, poses)
+                for car in held_cars:
+                    sim.continue_episode(car, float(self._hold_travelled[car, k]))
             for car in np.flatnonzero((sim.terminal != 0) & ~held).tolist():
                 status = sim.status[car]
                 travelled = float(sim.travelled[car])
@@ -213,6 +233,7 @@ class OpponentField(ObjectField):
         hits = self.hits(x, y, yaw, car_spec) & (self.hold_left <= 0.0)
         if not hits.any():
             return crashed
+        self._stand_due()  # "behind" is judged where they stand
         half = self.length / 2.0
         for car, k in np.argwhere(hits).tolist():
             ahead = (float(self.sims[k].s[car]) - float(s[car])) % self.length
