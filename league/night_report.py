@@ -9,6 +9,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from league.bracket_records import NightBracket
+from league.bracket_rounds import bracket_rounds
 from league.brackets import BYE
 from league.nights import Entrant, Heat, Night, Standing
 from league.race_types import race_type_of
@@ -46,8 +47,9 @@ def standing_car(standing: Standing) -> str:
 
 def bracket_json(drawn: NightBracket, names: Mapping[str, str]) -> dict[str, Any]:
     """A night's bracket as it stands: its seeds (racers, best first), every match with
-    its two sides (a racer, "bye", or null while not known), winner and race, and the final
-    order once decided. `names`: entrant ids' racers."""
+    its two sides (a racer, "bye", or null while not known), winner, race and how far the
+    loser finished behind; its rounds as racers name them (league.bracket_rounds), the
+    match to race next, and the final order once decided. `names`: entrant ids' racers."""
     winners = drawn.winners
 
     def side(entrant: str | None) -> str | None:
@@ -55,7 +57,11 @@ def bracket_json(drawn: NightBracket, names: Mapping[str, str]) -> dict[str, Any
             return None
         return "bye" if entrant == BYE else names.get(entrant, entrant)
 
-    order = drawn.final_order()
+    def margin(match_id: str) -> float | None:
+        race = drawn.races.get(match_id)
+        return race.places[-1].gap_seconds if race is not None else None
+
+    order, upcoming = drawn.final_order(), drawn.next_match()
     return {
         "format": drawn.bracket.format.value,
         "rules": drawn.rules.to_dict(),
@@ -69,9 +75,19 @@ def bracket_json(drawn: NightBracket, names: Mapping[str, str]) -> dict[str, Any
                 "b": side(drawn.sides(match)[1]),
                 "winner": side(winners.get(match.id)),
                 "race_id": drawn.races[match.id].id if match.id in drawn.races else None,
+                "margin_seconds": margin(match.id),
             }
             for match in drawn.bracket.matches
         ],
+        "rounds": [
+            {
+                "name": one.title,
+                "bracket": one.part,
+                "matches": [match.id for match in one.matches],
+            }
+            for one in bracket_rounds(drawn)
+        ],
+        "next_match": upcoming.id if upcoming is not None else None,
         "final_order": None if order is None else [side(entrant) for entrant in order],
     }
 
@@ -83,7 +99,9 @@ def night_json(
     standings: Sequence[Standing],
     bracket: NightBracket | None = None,
 ) -> dict[str, Any]:
-    """The whole night; `bracket` its knock-out, once drawn (null before)."""
+    """The whole night; `bracket` its knock-out, once drawn (null before). It is handed
+    to others (a file, the web), so an entrant's bundle or model folder is named by its
+    file name, never its path on the host's disk."""
     names = {entrant.id: entrant.display_name for entrant in entrants}
     return {
         "id": night.id,
@@ -96,14 +114,19 @@ def night_json(
         "race_type": race_type_of(night.rules),
         "rules": night.rules.to_dict(),
         "entrants": [
-            {"id": e.id, "racer": e.display_name, "racer_name": e.racer, "model": e.model}
+            {
+                "id": e.id,
+                "racer": e.display_name,
+                "racer_name": e.racer,
+                "model": e.model_shown,
+            }
             for e in entrants
         ],
         "heats": [
             {
                 "position": h.position,
                 "racer": h.entrant.display_name,
-                "model": h.entrant.model,
+                "model": h.entrant.model_shown,
                 "race_id": h.race_id,
             }
             for h in heats

@@ -74,6 +74,13 @@ class Entrant:
     model: str  # `reference`, a garage model name, or an absolute bundle/folder path
 
     @property
+    def model_shown(self) -> str:
+        """`model` as anything another machine or a visitor reads gives it (an export, the
+        web pages): a bundle or model folder by its file name, never the path on the
+        host's disk, which says who they are and where they keep their files."""
+        return Path(self.model).name if Path(self.model).is_absolute() else self.model
+
+    @property
     def car(self) -> str:
         """The car as every screen and board names it: a garage model by its name, a bundle
         or model folder by its file name (never its whole path), a physical car by its own
@@ -81,7 +88,7 @@ class Entrant:
         if is_physical(self.model):
             name = car_name(self.model)
             return name if name == "physical car" else f"{name} (physical)"
-        return Path(self.model).name if Path(self.model).is_absolute() else self.model
+        return self.model_shown
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,9 @@
 """What the web pages and their JSON show, read from the league as the command line reads
 it: the leaderboard's boards ranked by the one ranking the app and `racer-tui
-leaderboard` use, and a night as `racer-tui night show --json` gives it. The JSON field
-names are those commands' own, so a league's site or bot reads one format whichever it
-asks."""
+leaderboard` use, its head-to-head board as `racer-tui leaderboard --race-type
+head-to-head` gives it, and a night (its bracket too) as `racer-tui night show --json`
+gives it. The JSON field names are those commands' own, so a league's site or bot reads
+one format whichever it asks."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from typing import Any
 
 from league.bracket_records import read_bracket
 from league.errors import LeagueError
+from league.head_to_head_board import HeadToHeadBoard, league_head_to_head_board
 from league.leaderboard import (
     BY_CHOICES,
     Filters,
@@ -56,6 +58,8 @@ class Leaderboard:
     ranking: RankingMethod
     by: str  # the `by` word that chose it: best, average or total
     boards: list[Board]
+    # Head-to-head races rank no laps, so they are on no lap board: who beat whom instead.
+    head_to_head: HeadToHeadBoard
 
     @property
     def ranking_words(self) -> str:
@@ -71,6 +75,7 @@ class Leaderboard:
             "ranking": self.ranking.value,
             "by": self.by,
             "boards": [board.to_json() for board in self.boards],
+            "head_to_head": self.head_to_head.to_json(),
         }
 
 
@@ -84,7 +89,8 @@ def ranking_for(by: str | None) -> tuple[str, RankingMethod]:
 
 def league_leaderboard(league: League, by: str | None, local_models: frozenset[str]) -> Leaderboard:
     """Every board of the league, each ranked by `by` (best lap unless it says otherwise),
-    in the order the app lists them; each row says how far it was verified here."""
+    in the order the app lists them, and the head-to-head board of every head-to-head
+    race; each row says how far it was verified here."""
     word, method = ranking_for(by)
     rows = leaderboard(league, Filters(local_models=local_models), method)
     mark_verification(league, rows, local_models)
@@ -104,7 +110,7 @@ def league_leaderboard(league: League, by: str | None, local_models: frozenset[s
                 rows=leaderboard_json(group, method),
             )
         )
-    return Leaderboard(method, word, boards)
+    return Leaderboard(method, word, boards, league_head_to_head_board(league, local_models))
 
 
 def shown_night(league: League, spec: str | None) -> Night | None:

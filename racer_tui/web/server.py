@@ -177,9 +177,13 @@ def create_web_app(db_path: Path, night: str | None = None) -> Starlette:
                 return render("night.html", night=None)
             ranking = found.rules.ranking
             running = read_live_heat(live_heat_path(db_path, found.id), found.id)
+            document = night_document(league, found, here)
+            drawn = document["bracket"]
             return render(
                 "night.html",
-                night=night_document(league, found, here),
+                night=document,
+                bracket=drawn,
+                matches={match["id"]: match for match in drawn["matches"]} if drawn else {},
                 running_heat=running.heat_number if running is not None else None,
                 # A best lap is a column already: the score needs its own only otherwise.
                 score_column=ranking is not RankingMethod.BEST_LAP,

@@ -381,3 +381,31 @@ def test_an_entrants_car_is_named_the_same_everywhere(tmp_path: Path) -> None:
     assert car("alpha-car") == "alpha-car" and car("reference") == "reference"
     assert car("physical:red-car") == "red-car (physical)"
     assert car("physical") == "physical car"
+
+
+def test_a_night_s_json_names_a_bundle_by_its_file_name_never_its_path(
+    league: League, tmp_path: Path
+) -> None:
+    """`night show --json`, the app's export and the web's /api/night are handed to others:
+    the folder a racer keeps their bundle in is theirs, not the venue's."""
+    import json
+
+    from league.night_report import night_export
+
+    bundle = tmp_path / "ana-private-folder" / "fast.racer-bundle"
+    bundle.parent.mkdir()
+    bundle.write_bytes(b"")  # entering a bundle checks only that its file is there
+    night = nights.new_night(league, resolve_track(TRACK), name="Friday")
+    nights.add_entrant(league, night, "ana", str(bundle))
+    nights.add_entrant(league, night, "bob", "reference")
+    nights.draw_heats(league, night, seed=1)
+    assert nights.entrants(league, night)[0].model == str(bundle)  # kept whole, here
+    parts = (night, nights.entrants(league, night), nights.heats(league, night))
+    text = night_export(*parts, nights.standings(league, night), "json")
+    assert "ana-private-folder" not in text and str(tmp_path) not in text
+    whole = json.loads(text)
+    assert [e["model"] for e in whole["entrants"]] == ["fast.racer-bundle", "reference"]
+    assert {h["racer"]: h["model"] for h in whole["heats"]} == {
+        "ana": "fast.racer-bundle",
+        "bob": "reference",
+    }
