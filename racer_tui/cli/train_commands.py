@@ -31,7 +31,6 @@ from rich.text import Text
 from racer_tui.cli.output import print_json, print_table
 from sim.foundation.remedies import RemedyError
 from sim.garage.folder import ModelError, open_model
-from sim.garage.imported import BUNDLE_SUFFIX
 from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB, check_memory_mb
 from sim.tracks.catalog import resolve_track
@@ -40,7 +39,7 @@ from sim.training.algorithms import check_trainable
 from sim.training.config import training_env_config
 from sim.training.evaluation import DEFAULT_TRIALS, MAX_TRIALS, EvaluationReport, evaluate_model
 from sim.training.launcher import TrainingProcess
-from sim.training.opponents import check_opponents
+from sim.training.opponents import check_opponents, opponent_spec
 
 NAMES = ("train", "evaluate")
 
@@ -276,9 +275,7 @@ def _train(args: argparse.Namespace) -> int:
     if args.processes is not None:
         extra += ["--processes", str(args.processes)]
     for opponent in args.opponent:
-        # A bundle by its whole path: the training child may not share this directory.
-        car = str(Path(opponent).resolve()) if opponent.endswith(BUNDLE_SUFFIX) else opponent
-        extra += ["--opponent", car]
+        extra += ["--opponent", opponent_spec(opponent)]
     process = TrainingProcess.start(
         str(folder.path), args.minutes, extra, budget_seconds=minutes * 60.0
     )

@@ -12,12 +12,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
+from pathlib import Path
 
 from sim.env import EnvConfig
-from sim.garage.folder import ModelError
+from sim.garage.folder import ModelError, open_model
+from sim.garage.imported import BUNDLE_SUFFIX
 from sim.garage.options import blind_to_objects
 from sim.physics.objects.settings import RaceType
 from sim.physics.simulation import TrackSimulation
+from sim.race.driver import REFERENCE_NAME
 from sim.race.opponents import MOST_OPPONENTS, OpponentField
 from sim.training.drivers import RaceSetupError, resolve_driver
 
@@ -42,8 +45,20 @@ def with_opponents(config: EnvConfig, opponents: Sequence[str]) -> EnvConfig:
     return replace(config, race=None, objects_for=field)
 
 
+def opponent_spec(given: str) -> str:
+    """A car as the training child is told it: a bundle by its whole path (the child may
+    not share the directory it was typed in), anything else as typed."""
+    given = given.strip()
+    return str(Path(given).resolve()) if given.endswith(BUNDLE_SUFFIX) else given
+
+
 def check_opponents(config: EnvConfig, opponents: Sequence[str]) -> None:
-    """Refuse, in one sentence, opponents a training cannot have."""
+    """Refuse, in one sentence, opponents a training cannot have: found before any runs,
+    without loading a policy (a policy loads only where it drives)."""
+    for car in opponents:
+        missing = _missing_car(car)
+        if missing is not None:
+            raise ModelError(f"--opponent: {missing}")
     if len(opponents) > MOST_OPPONENTS:
         raise ModelError(
             f"--opponent: a training takes at most {MOST_OPPONENTS} opponents (a race's "
@@ -62,3 +77,18 @@ def check_opponents(config: EnvConfig, opponents: Sequence[str]) -> None:
             "--opponent: opponents drive the track's way round only; turn "
             "ALTERNATE_DRIVING_DIRECTION off in training_params.yaml to train against them."
         )
+
+
+def _missing_car(car: str) -> str | None:
+    """Why `car` names nothing that can drive, or None."""
+    if car == REFERENCE_NAME:
+        return None
+    if car.endswith(BUNDLE_SUFFIX):
+        return None if Path(car).is_file() else f"there is no bundle file {car}."
+    try:
+        folder = open_model(car)
+    except ModelError as error:
+        return str(error)
+    if folder.has_policy() or folder.drives_with_car_archive():
+        return None
+    return f"{folder.name} has no trained policy yet; train it first, then race it."

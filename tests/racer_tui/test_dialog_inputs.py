@@ -21,6 +21,7 @@ from racer_tui.app.screens.dialogs import ImportDialog, InputDialog
 from racer_tui.app.screens.garage import GarageScreen
 from racer_tui.app.screens.nights import NewNightDialog, NewSeasonDialog, NightsScreen
 from racer_tui.app.screens.tracks import TrackImportDialog
+from racer_tui.app.screens.train_dialog import TrainDialog
 from sim.garage.folder import ModelError, ModelFolder, list_models
 from sim.garage.options import new_model
 from tests.racer_tui.screens.tui_helpers import trained_model
@@ -30,7 +31,7 @@ PASTED = "/a/pasted/path with spaces/" * 4
 CLEAR = ["ctrl+a", "ctrl+k"]  # what the racer types first over a suggested value
 
 CASES: dict[str, tuple[str, Callable[[], object], list[str], type[Screen[Any]]]] = {
-    "train budget": ("garage", lambda: new_model("one"), ["t"], InputDialog),
+    "train budget": ("garage", lambda: new_model("one"), ["t"], TrainDialog),
     "clone name": ("garage", lambda: new_model("one"), ["c"], InputDialog),
     "export path": ("garage", lambda: trained_model("one"), ["x"], InputDialog),
     "model import": ("garage", lambda: new_model("one"), ["i"], ImportDialog),
@@ -84,7 +85,7 @@ async def test_the_train_budget_typed_in_the_burst_that_opened_it_is_kept(
         await drain(pilot)
         burst(app, ["t", *typed])
         await drain(pilot)
-        assert isinstance(app.screen, InputDialog)
+        assert isinstance(app.screen, TrainDialog)
         field = app.focused
         assert isinstance(field, Input)
         assert field.value == kept
@@ -110,7 +111,7 @@ async def test_a_key_whose_binding_takes_long_holds_the_keys_after_it(
         await drain(pilot)
         burst(app, ["t", *CLEAR, "1", "2"])
         await drain(pilot)
-        assert isinstance(app.screen, InputDialog)
+        assert isinstance(app.screen, TrainDialog)
         field = app.focused
         assert isinstance(field, Input)
         assert field.value == "12"
@@ -137,8 +138,8 @@ async def test_a_key_typed_as_the_garage_opens_waits_for_its_models(
     async with app.run_test(size=(80, 24)) as pilot:
         burst(app, ["t", *CLEAR, "7"])  # before the list has been read
         await drain(pilot)
-        assert isinstance(app.screen, InputDialog)
-        assert app.screen._title == "Train one"
+        assert isinstance(app.screen, TrainDialog)
+        assert app.screen._name == "one"
         field = app.focused
         assert isinstance(field, Input)
         assert field.value == "7"

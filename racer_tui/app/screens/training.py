@@ -43,8 +43,8 @@ from textual.message import Message
 from textual.widgets import Button, DataTable, Label, Static
 
 from racer_tui.app.screens.base import RacerModal, RacerScreen, error_message
-from racer_tui.app.screens.dialogs import InputDialog
 from racer_tui.app.screens.evaluation import EvaluationScreen
+from racer_tui.app.screens.train_dialog import TrainAnswer, TrainDialog
 from racer_tui.app.widgets.agent_view import AgentView, Observation, observe_at
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.model_detail import status_text
@@ -80,6 +80,7 @@ from sim.physics.objects.world import object_field
 from sim.physics.simulation import LOOK_AHEAD
 from sim.tracks.track import Track
 from sim.training import events
+from sim.training.config import training_env_config
 from sim.training.launcher import (
     STOP_TIMEOUT,
     budget_grace,
@@ -87,6 +88,7 @@ from sim.training.launcher import (
     overran,
     worker_command,
 )
+from sim.training.opponents import check_opponents, opponent_spec
 from sim.training.run_history import read_history
 
 WORKER_MODULE = "sim.training.worker"
@@ -103,6 +105,7 @@ TINY = 70  # below this width the model list narrows
 class TrainingRequest:
     model: str
     minutes: float
+    opponents: tuple[str, ...] = ()  # cars on the track with it (`racer-tui train --opponent`)
 
 
 @dataclass
@@ -592,29 +595,28 @@ class TrainingScreen(RacerScreen[None]):
         except ModelError as error:
             self.notify(error_message(error), severity="error", markup=False)
             return
-        dialog = InputDialog(
-            f"Train {name}",
-            "Time budget in minutes (DeepRacer's stop condition). Training resumes from the "
-            "model's last checkpoint when it has one.",
-            value=f"{minutes:g}",
-            confirm_label="Train",
-            check=_minutes_problem,
+        dialog = TrainDialog(
+            name,
+            minutes,
+            minutes_problem=_minutes_problem,
+            opponents_problem=partial(_opponents_problem, folder),
         )
         self.app.push_screen(dialog, partial(self._budget_given, name))
 
-    def _budget_given(self, name: str, answer: str | None) -> None:
+    def _budget_given(self, name: str, answer: TrainAnswer | None) -> None:
         if answer is not None:
-            self.request_training(name, float(answer))
+            self.request_training(name, answer.minutes, answer.opponents)
 
     def _busy_with(self, name: str) -> bool:
         live = self.live is not None and self.live.model == name
         return live or any(request.model == name for request in self.queue)
 
-    def request_training(self, name: str, minutes: float) -> None:
-        """Train `name` now, or after the trainings already queued."""
+    def request_training(self, name: str, minutes: float, opponents: tuple[str, ...] = ()) -> None:
+        """Train `name` now, or after the trainings already queued (among `opponents`)."""
         if self._busy_with(name):
             return
-        self.queue.append(TrainingRequest(name, minutes))
+        cars = tuple(opponent_spec(car) for car in opponents)
+        self.queue.append(TrainingRequest(name, minutes, cars))
         if self.live is not None:
             self.notify(f"{name} is queued; it trains when {self.live.model} is done.")
         self._start_next()
@@ -653,7 +655,10 @@ class TrainingScreen(RacerScreen[None]):
             log = folder.training_log
             log.write_bytes(b"")  # a new run, a new log
             stderr = tempfile.TemporaryFile()  # noqa: SIM115 - closed when the run ends
-            command = worker_command(request.model, request.minutes, self._options())
+            options = self._options()
+            for car in request.opponents:
+                options += ["--opponent", car]
+            command = worker_command(request.model, request.minutes, options)
             with stderr:
                 with log.open("ab") as out:
                     process = await asyncio.create_subprocess_exec(
@@ -883,6 +888,16 @@ class TrainingScreen(RacerScreen[None]):
 
     def action_reload(self) -> None:
         self.reload()
+
+
+def _opponents_problem(folder: ModelFolder, opponents: tuple[str, ...]) -> str | None:
+    """What keeps `folder` from training among `opponents`, said as the command line does."""
+    try:
+        check_opponents(training_env_config(folder), opponents)
+    except ModelError as error:
+        said = error_message(error).removeprefix("--opponent: ")
+        return said[:1].upper() + said[1:]
+    return None
 
 
 def _minutes_problem(text: str) -> str | None:

@@ -334,6 +334,9 @@ def counters(figures: TrainingFigures) -> Text:
     else:
         # The process is gone: its last sample read as a live figure (the host walk).
         text.append("  process ended", style="dim")
+    if figures.started is not None and figures.started.opponents:  # on the track with it
+        text.append("\nagainst ", style="dim")
+        text.append(", ".join(figures.started.opponents))
     text.append("\nended ", style="dim")
     if figures.statuses:
         parts = [f"{status} {count:,}" for status, count in figures.statuses.most_common()]

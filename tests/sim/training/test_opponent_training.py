@@ -93,8 +93,10 @@ def test_opponents_a_training_cannot_have_are_one_sentence(
     assert "\n" not in str(raised.value) and "Traceback" not in str(raised.value)
 
 
-def test_a_failed_opponent_ends_the_training_in_its_sentence(lidar_model: ModelFolder) -> None:
-    _trainer, stream = _run(lidar_model, replace(TINY, opponents=("nobody-here",)))
-    ended = stream[-1]
-    assert isinstance(ended, events.Ended) and ended.kind == "failed"
-    assert "--opponent" in ended.message and "nobody-here" in ended.message
+def test_a_car_that_is_not_there_is_refused_before_the_training_starts(
+    lidar_model: ModelFolder,
+) -> None:
+    # The worker says a RemedyError from setting up as the run's failure, in its sentence.
+    with pytest.raises(ModelError, match="--opponent: there is no model named 'nobody-here'"):
+        Trainer(lidar_model, print, lambda: True, replace(TINY, opponents=("nobody-here",)))
+    assert not lidar_model.has_policy()
