@@ -29,6 +29,7 @@ from sim.tracks.catalog import resolve_track
 from tests.league.helpers import TRACK, head_to_head_in_order, race_result
 from tests.league.sync.leagues import head_to_head
 from tests.racer_tui.screens.tui_helpers import Notifications, painted, settle, wait_for
+from tests.racer_tui.test_fits_80x24 import LONG_MODEL, LONG_RACER, cut_off
 from tests.racer_tui.test_head_to_head_cli import run_cli
 
 HAIRPIN = "hairpin-circuit"
@@ -290,3 +291,16 @@ async def test_at_60x20_long_names_still_read_apart(three_cars: HeadToHeadResult
         names = [row[6:].split("  ")[0].strip() for row in rows]
         assert len(set(names)) == 3
         assert names[0].startswith("Alexandra Montgom") and names[1].startswith("Alexandra Montgol")
+
+
+@pytest.mark.parametrize("size", [(80, 24), (60, 20)], ids=["80x24", "60x20"])
+async def test_nothing_is_cut_with_the_long_names_real_leagues_have(
+    three_cars: HeadToHeadResult, size: tuple[int, int]
+) -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    record(three_cars, LONG_RACER, "bob", "Chidimma Okonkwo-Adeyemi", models=(LONG_MODEL,) * 3)
+    app = create_app(start="league")
+    async with app.run_test(size=size) as pilot:
+        screen = await league_screen(pilot)
+        assert screen.head_to_head is not None
+        assert cut_off(app) == []
