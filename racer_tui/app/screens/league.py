@@ -197,8 +197,6 @@ class LeagueScreen(RacerScreen[None]):
         Binding("y", "sync", "Sync", tooltip="The shared store: sync, conflicts, quarantine"),
         Binding("ctrl+r", "reload", "Reload", tooltip="Read the league again", show=False),
         Binding("v", "replay_entry", "Replay", tooltip="Replay the entry's race", show=False),
-        # s and r on the head-to-head board, where Sort and Reverse are dim: why.
-        Binding("s,r", "ranked_by_wins", show=False),
     ]
     AUTO_FOCUS = "#board"  # the keys (s, r, arrows) act on the table from the start
     DEFAULT_CSS = """
@@ -458,13 +456,17 @@ class LeagueScreen(RacerScreen[None]):
         self.order = SortOrder(column, reverse)
         self._show()
 
-    def action_ranked_by_wins(self) -> None:
-        """Why the head-to-head board does not sort (its s, r and header clicks)."""
+    def _ranked_by_wins(self) -> bool:
+        """On the head-to-head board, say why it does not sort (True) instead: from its
+        keys, a header click and the command palette alike."""
+        if self.head_to_head is None:
+            return False
         why = NOT_FOR_HEAD_TO_HEAD["sort"]
         self.notify(f"{why[0].upper()}{why[1:]}: s and r sort the lap boards.")
+        return True
 
     def action_sort_next(self) -> None:
-        if not self.titles:
+        if self._ranked_by_wins() or not self.titles:
             return
         # Only the columns the racer can see: a collapsed one would sort out of sight.
         shown = shown_columns(self.query_one("#board", DataTable))
@@ -474,15 +476,13 @@ class LeagueScreen(RacerScreen[None]):
         self.sort_by(keys[(position + 1) % len(keys)])
 
     def action_reverse(self) -> None:
-        self.sort_by(self.order.column, reverse=not self.order.reverse)
+        if not self._ranked_by_wins():
+            self.sort_by(self.order.column, reverse=not self.order.reverse)
 
     @on(DataTable.HeaderSelected, "#board")
     def _header_clicked(self, event: DataTable.HeaderSelected) -> None:
-        if self.head_to_head is not None:
-            self.action_ranked_by_wins()
-            return
         index = column_index(event)
-        if not 0 <= index < len(self.titles):
+        if self._ranked_by_wins() or not 0 <= index < len(self.titles):
             return
         column = SORT_BY_TITLE[self.titles[index]]
         same = column == (self.order.column or Column.RANK)
@@ -493,11 +493,6 @@ class LeagueScreen(RacerScreen[None]):
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         if action == "race_type":
             return len(self.race_types) > 1
-        on_head_to_head = self.head_to_head is not None
-        if action in ("sort_next", "reverse"):  # dim on the head-to-head board (None)
-            return None if on_head_to_head else True
-        if action == "ranked_by_wins":  # where s and r go when those are dim
-            return on_head_to_head
         return True
 
     def action_race_type(self) -> None:
