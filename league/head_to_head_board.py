@@ -1,25 +1,41 @@
-"""The head-to-head board as the command line (`racer-tui leaderboard --race-type
-head-to-head`) and the web pages show it, and its JSON, one format whichever is asked.
+"""The head-to-head board as every front end shows it: `racer-tui leaderboard --race-type
+head-to-head` and the League screen read its rows, columns and JSON from here.
 
 A head-to-head race ranks no laps (league.head_to_heads): its board is each racer's wins
-and losses, car for car, the rival cars they finished ahead of and behind, and how many
-of their starts were in races replayed on this machine (league.trust.standing). A board
-can count only the races this machine can vouch for (`verification`).
+and losses car for car, the rival cars they finished ahead of and behind, the cars (models)
+they raced, and how many of their starts were in races replayed here. A board counts the
+races its verification asks for (every one, or only those this machine could race again or
+has), and a rank is a racer's place on the whole board: naming one racer keeps their rank.
 """
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections import Counter
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from league.head_to_heads import HeadToHeadStanding, head_to_head_board, head_to_head_races
+from league.head_to_heads import (
+    RecordedHeadToHead,
+    head_to_head_board,
+    head_to_head_races,
+    record_between,
+)
+from league.report import Column
 from league.store import League
-from league.tracks import LeagueTrack
-from league.trust.standing import Standing, head_to_head_standings
+from league.trust.standing import ResultStanding, Standing, head_to_head_standings
 from sim.race.rules import Verification
 
-# The standings of the races a board counts, by the verification it asks for.
+# The lap boards' choices that mean nothing on a head-to-head board, and why: the command
+# line refuses them in these words, and the League screen's filters and keys give way
+# with them.
+NOT_FOR_HEAD_TO_HEAD = {
+    "season": "head-to-head races are not on nights' seasons yet",
+    "by": "a head-to-head board ranks by wins, not by laps",
+    "sort": "a head-to-head board is ranked by wins",
+    "reverse": "a head-to-head board is ranked by wins",
+}
+# The standings a board of each verification counts.
 _COUNTED = {
     Verification.ANY: {Standing.REPLAYED, Standing.VERIFIABLE, Standing.UNVERIFIABLE},
     Verification.VERIFIABLE: {Standing.REPLAYED, Standing.VERIFIABLE},
@@ -29,77 +45,131 @@ _COUNTED = {
 
 @dataclass(frozen=True)
 class HeadToHeadRow:
-    rank: int
-    standing: HeadToHeadStanding
-    replayed_starts: int  # of its starts, those in races replayed here
+    """One racer's line on the board."""
 
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "rank": self.rank,
-            "racer": self.standing.racer,
-            "starts": self.standing.starts,
-            "wins": self.standing.wins,
-            "losses": self.standing.losses,
-            "rivals_beaten": self.standing.beaten,
-            "beaten_by": self.standing.beaten_by,
-            "replayed_starts": self.replayed_starts,
-        }
+    rank: int
+    racer: str
+    cars: tuple[str, ...]  # the models they raced, most starts first
+    starts: int
+    wins: int
+    losses: int
+    beaten: int  # rival cars finished behind theirs
+    beaten_by: int  # rival cars finished ahead of theirs
+    replayed_starts: int  # starts in races raced again here with the same result
 
 
 @dataclass(frozen=True)
 class HeadToHeadBoard:
-    track: str | None  # the track's name, for a board of one track
-    races: int  # the races it counts
-    rows: tuple[HeadToHeadRow, ...]  # ranked by wins
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "board": "head-to-head",
-            "track": self.track,
-            "races": self.races,
-            "rows": [row.to_json() for row in self.rows],
-        }
+    races: list[RecordedHeadToHead]  # the races it counts, oldest first
+    rows: list[HeadToHeadRow]
+    standings: dict[str, ResultStanding]  # each counted race's, by its id
 
 
-def league_head_to_head_board(
+def read_head_to_head_board(
     league: League,
-    local_models: Collection[str],
     *,
-    track: LeagueTrack | None = None,
+    track_hash: str | None = None,
     night_id: str | None = None,
-    verification: Verification = Verification.ANY,
     racer: str | None = None,
-    limit: int | None = None,
+    verification: Verification = Verification.ANY,
+    local_models: Collection[str] = (),
 ) -> HeadToHeadBoard:
-    """The board of the league's head-to-head races (on `track`, of one night), counting
-    those `verification` asks for; `racer` (a racer's own name) keeps that racer's row,
-    `limit` the first rows. `local_models`: the garage's model hashes."""
-    races = head_to_head_races(
-        league,
-        track_hash=track.track_hash if track is not None else None,
-        night_id=night_id,
-    )
+    """The board of the recorded head-to-head races on one track or of one night (or all),
+    counting the races `verification` asks for; `racer` (a stored name) keeps only their
+    row. `local_models` are the garage's model hashes, as for the lap boards' standings."""
+    races = head_to_head_races(league, track_hash=track_hash, night_id=night_id)
     standings = head_to_head_standings(league, [race.id for race in races], local_models)
     counted = _COUNTED[verification]
     races = [race for race in races if standings[race.id].standing in counted]
-    replayed = {race.id for race in races if standings[race.id].standing is Standing.REPLAYED}
-    board = head_to_head_board(races)
-    if racer is not None:
-        board = [row for row in board if row.racer == racer]
-    if limit is not None:
-        board = board[:limit]
-    rows = tuple(
+    replayed = [race for race in races if standings[race.id].standing is Standing.REPLAYED]
+    rows = [
         HeadToHeadRow(
-            rank,
-            row,
-            sum(
-                1
-                for race in races
-                if race.id in replayed
-                for place in race.places
-                if place.racer == row.racer
-            ),
+            rank=rank,
+            racer=standing.racer,
+            cars=_cars_of(races, standing.racer),
+            starts=standing.starts,
+            wins=standing.wins,
+            losses=standing.losses,
+            beaten=standing.beaten,
+            beaten_by=standing.beaten_by,
+            replayed_starts=_starts_in(replayed, standing.racer),
         )
-        for rank, row in enumerate(board, start=1)
+        for rank, standing in enumerate(head_to_head_board(races), start=1)
+        if racer is None or standing.racer == racer
+    ]
+    return HeadToHeadBoard(races, rows, {race.id: standings[race.id] for race in races})
+
+
+def _cars_of(races: Sequence[RecordedHeadToHead], racer: str) -> tuple[str, ...]:
+    starts = Counter(
+        place.model_name for race in races for place in race.places if place.racer == racer
     )
-    return HeadToHeadBoard(track.name if track is not None else None, len(races), rows)
+    return tuple(model for model, _ in starts.most_common())  # ties: the first raced first
+
+
+def _starts_in(races: Sequence[RecordedHeadToHead], racer: str) -> int:
+    return sum(1 for race in races for place in race.places if place.racer == racer)
+
+
+def cars_cell(row: HeadToHeadRow) -> str:
+    """ "reference", or "fast-v2 (+1)" for a racer who raced another model as well."""
+    more = len(row.cars) - 1
+    return row.cars[0] + (f" (+{more})" if more else "") if row.cars else "-"
+
+
+# The table's columns, in every format; `racer-tui leaderboard` titles them so too.
+HEAD_TO_HEAD_COLUMNS = (
+    Column("rank", lambda row: str(row.rank), numeric=True),
+    Column("racer", lambda row: row.racer),
+    Column("car", cars_cell),
+    Column("wins", lambda row: str(row.wins), numeric=True),
+    Column("losses", lambda row: str(row.losses), numeric=True),
+    Column("ahead of", lambda row: str(row.beaten), numeric=True),
+    Column("behind", lambda row: str(row.beaten_by), numeric=True),
+    Column("replayed", lambda row: f"{row.replayed_starts} of {row.starts}", numeric=True),
+)
+
+
+def head_to_head_json(board: HeadToHeadBoard, track_name: str | None) -> dict[str, Any]:
+    """The board as one JSON document (`--format json`, and the League screen's export)."""
+    return {
+        "board": "head-to-head",
+        "track": track_name,
+        "races": len(board.races),
+        "rows": [
+            {
+                "rank": row.rank,
+                "racer": row.racer,
+                "cars": list(row.cars),
+                "starts": row.starts,
+                "wins": row.wins,
+                "losses": row.losses,
+                "rivals_beaten": row.beaten,
+                "beaten_by": row.beaten_by,
+                "replayed_starts": row.replayed_starts,
+            }
+            for row in board.rows
+        ],
+    }
+
+
+@dataclass(frozen=True)
+class RivalRecord:
+    rival: str
+    wins: int  # races the racer's better car finished ahead of the rival's
+    losses: int
+
+
+def rival_records(board: HeadToHeadBoard, racer: str) -> list[RivalRecord]:
+    """`racer`'s record against each rival they raced, in the board's order."""
+    raced = {place.racer for race in races_of(board, racer) for place in race.places}
+    return [
+        RivalRecord(rival.racer, *record_between(board.races, racer, rival.racer))
+        for rival in head_to_head_board(board.races)  # every racer's, whoever `rows` keeps
+        if rival.racer in raced and rival.racer != racer
+    ]
+
+
+def races_of(board: HeadToHeadBoard, racer: str) -> list[RecordedHeadToHead]:
+    """The counted races `racer` started in, oldest first."""
+    return [race for race in board.races if any(p.racer == racer for p in race.places)]

@@ -202,10 +202,7 @@ def _place(position: int, car: Mapping[str, Any]) -> CarPlace:
     )
 
 
-def head_to_head_races(
-    league: League, *, track_hash: str | None = None, night_id: str | None = None
-) -> list[RecordedHeadToHead]:
-    """The recorded head-to-head races, oldest first (on one track, or of one night)."""
+def _where(track_hash: str | None, night_id: str | None) -> tuple[str, tuple[str, ...]]:
     where, values = [], []
     if track_hash is not None:
         where.append("track_hash = ?")
@@ -213,11 +210,27 @@ def head_to_head_races(
     if night_id is not None:
         where.append("night_id = ?")
         values.append(night_id)
-    clause = f"WHERE {' AND '.join(where)}" if where else ""
+    return (f"WHERE {' AND '.join(where)}" if where else ""), tuple(values)
+
+
+def has_head_to_heads(
+    league: League, *, track_hash: str | None = None, night_id: str | None = None
+) -> bool:
+    """Whether any head-to-head race is recorded (on one track, or of one night), without
+    reading one: a lap board asks on every read whether to offer the head-to-head board."""
+    clause, values = _where(track_hash, night_id)
+    return league.query_one(f"SELECT 1 FROM {TABLE} {clause} LIMIT 1", values) is not None
+
+
+def head_to_head_races(
+    league: League, *, track_hash: str | None = None, night_id: str | None = None
+) -> list[RecordedHeadToHead]:
+    """The recorded head-to-head races, oldest first (on one track, or of one night)."""
+    clause, values = _where(track_hash, night_id)
     rows = league.query(
         f"SELECT id, track_hash, started_at, seed, clock, cars, night_id, match_id "
         f"FROM {TABLE} {clause} ORDER BY started_at, id",
-        tuple(values),
+        values,
     )
     return [
         RecordedHeadToHead(

@@ -12,7 +12,7 @@ from typing import Any
 
 from league.bracket_records import read_bracket
 from league.errors import LeagueError
-from league.head_to_head_board import HeadToHeadBoard, league_head_to_head_board
+from league.head_to_head_board import HeadToHeadBoard, head_to_head_json, read_head_to_head_board
 from league.leaderboard import (
     BY_CHOICES,
     Filters,
@@ -75,7 +75,7 @@ class Leaderboard:
             "ranking": self.ranking.value,
             "by": self.by,
             "boards": [board.to_json() for board in self.boards],
-            "head_to_head": self.head_to_head.to_json(),
+            "head_to_head": head_to_head_json(self.head_to_head, None),
         }
 
 
@@ -110,7 +110,9 @@ def league_leaderboard(league: League, by: str | None, local_models: frozenset[s
                 rows=leaderboard_json(group, method),
             )
         )
-    return Leaderboard(method, word, boards, league_head_to_head_board(league, local_models))
+    return Leaderboard(
+        method, word, boards, read_head_to_head_board(league, local_models=local_models)
+    )
 
 
 def shown_night(league: League, spec: str | None) -> Night | None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from sim.deepracer.action_space import discrete_grid
@@ -26,6 +27,7 @@ from sim.deepracer.files import (
 )
 from sim.foundation.ids import new_id
 from sim.physics.labels import CURRENT
+from sim.race.head_to_head import HeadToHeadResult
 from sim.race.result import LapRecord, RaceResult
 from sim.race.rules import DEFAULT_RULES, RaceRules, score_laps
 from sim.tracks.catalog import resolve_track
@@ -146,4 +148,30 @@ def race_result(
         scoring=score_laps(laps, rules),
         total_offtracks=sum(lap.offtracks for lap in laps),
         started_at=started_at,
+    )
+
+
+def head_to_head_in_order(
+    race: HeadToHeadResult,
+    *racers: str,
+    models: Sequence[str] = (),
+    started_at: str | None = None,
+) -> HeadToHeadResult:
+    """Another head-to-head race, which `racers` finished in this order: `race`'s first
+    cars (a real race's, so their laps are ones a car can drive), renamed, and `models`
+    their models' names if given. Only a replay would tell it from the race it came from."""
+    cars = tuple(
+        replace(
+            car,
+            position=position,
+            result=replace(
+                car.result,
+                racer=racer,
+                model_name=models[position - 1] if models else car.result.model_name,
+            ),
+        )
+        for position, (car, racer) in enumerate(zip(race.cars, racers, strict=False), start=1)
+    )
+    return replace(
+        race, race_id=new_id(), cars=cars, started_at=started_at or race.started_at, incidents=()
     )

@@ -84,3 +84,17 @@ def test_what_the_board_cannot_take_is_one_sentence(
     )
     assert code == 2 and out == ""
     assert words in err and err.count("\n") == 1
+
+
+def test_a_racer_named_keeps_their_rank_on_the_whole_board(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    board = ("leaderboard", "--race-type", "head-to-head", "--db", db, "--format", "json")
+    code, out, err = run_cli(capsys, *board)
+    assert code == 0, err
+    whole = {row["racer"]: row for row in json.loads(out)["rows"]}
+    for racer, row in whole.items():
+        code, out, err = run_cli(capsys, *board, "--racer", racer)
+        assert code == 0, err
+        assert json.loads(out)["rows"] == [row]  # its rank, cars and counts
+    assert [row["cars"] for row in whole.values()] == [["reference"]] * 3

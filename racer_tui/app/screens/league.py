@@ -3,7 +3,10 @@ with the highlighted entry's detail beside it, export, the projector and league 
 
 Boards of one race type are shown at a time (time trials, object avoidance, head-to-bot
 never share a board): when the chosen track has laps of more than one, a line says which
-race type is shown and t switches to the next.
+race type is shown and t switches to the next. After the lap boards comes the head-to-head
+board when the league has head-to-head races: who beat whom, ranked by wins
+(racer_tui.app.widgets.head_to_head_board), with a racer's record against each rival and
+their races in the detail.
 
 Every database read runs in a thread worker that opens its own connection and posts a
 past-tense message; the formatters for the table cells and the exports are the league's
@@ -13,6 +16,7 @@ own (league.report), so the app, the CLI and the exported files agree.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import partial
 from pathlib import Path
@@ -26,6 +30,7 @@ from textual.containers import Container, VerticalScroll
 from textual.message import Message
 from textual.widgets import DataTable, Static
 
+from league.head_to_head_board import NOT_FOR_HEAD_TO_HEAD, HeadToHeadBoard, HeadToHeadRow
 from league.leaderboard import (
     Column,
     LeaderboardRow,
@@ -34,7 +39,7 @@ from league.leaderboard import (
     sort_rows,
 )
 from league.opening import open_league
-from league.race_types import TIME_TRIAL, board_name, words
+from league.race_types import HEAD_TO_HEAD_BOARD, TIME_TRIAL, board_name, words
 from league.report import (
     SCORE_TITLES,
     leaderboard_columns,
@@ -51,6 +56,7 @@ from racer_tui.app.screens.nights import NightsScreen
 from racer_tui.app.screens.projector import ProjectorScreen
 from racer_tui.app.screens.races import replay_recorded_race
 from racer_tui.app.screens.sync import SyncScreen
+from racer_tui.app.widgets import head_to_head_board as head_to_head_view
 from racer_tui.app.widgets.board_filters import (
     BoardFilters,
     BoardQuery,
@@ -71,6 +77,7 @@ from racer_tui.app.widgets.table_fill import (
     shown_columns,
 )
 from sim.foundation.atomic import write_text_atomic
+from sim.foundation.plain_names import look_alike_key
 from sim.foundation.plural import counted
 from sim.training.drivers import DriversByHash
 
@@ -138,7 +145,10 @@ def race_type_line(view: BoardView) -> Text:
     a time trial, as in a league that races nothing else)."""
     if view.race_types in ([], [TIME_TRIAL]):
         return Text()
-    text = Text.assemble((f"{words(view.race_type).capitalize()} boards", "bold"))
+    if view.race_type == HEAD_TO_HEAD_BOARD:  # one board, ranked by wins: why "by wins"
+        text = Text.assemble(("Head-to-head, ranked by wins", "bold"))
+    else:
+        text = Text.assemble((f"{words(view.race_type).capitalize()} boards", "bold"))
     others = [kind for kind in view.race_types if kind != view.race_type]
     if not others:
         text.append("  (no other race type has laps here)", style="dim")
@@ -179,7 +189,7 @@ class LeagueScreen(RacerScreen[None]):
             "race_type",
             "Race type",
             tooltip="The boards of another race type (time trial, object avoidance, "
-            "head-to-bot) on the chosen track",
+            "head-to-bot, head-to-head) on the chosen track",
         ),
         Binding("x", "export", "Export", tooltip="Write the table as CSV, JSON or Markdown"),
         Binding("n", "nights", "Nights", tooltip="Run a league night: entrants, heats, standings"),
@@ -213,6 +223,9 @@ class LeagueScreen(RacerScreen[None]):
         self.shown_query = BoardQuery()
         self.race_type = TIME_TRIAL  # the host's choice; shown when the track has laps of it
         self.race_types: list[str] = []  # with laps under the filters: what t cycles through
+        # The head-to-head board when it is shown (then `rows` and `ranked` are empty).
+        self.head_to_head: HeadToHeadBoard | None = None
+        self.night_names: dict[str, str] = {}  # the league's nights by id
         self.track_names: dict[str, str] = {}  # the league's tracks by hash
         self.loaded = False
         self._generation = 0
@@ -277,9 +290,13 @@ class LeagueScreen(RacerScreen[None]):
     def _load(self, query: BoardQuery, generation: int) -> None:
 
         with open_league(self.db_path) as league:
-            view = board_view(league, query)
+            view = board_view(league, query, self._models_here())
             mark_verification(league, view.rows, self._models_here())
             options = filter_options(league)
+        if view.head_to_head is not None:
+            # Racers' names are told apart in the table by how they look (table_fill):
+            # the confusables table loads here, not in the table's first layout.
+            look_alike_key("")
         shown = replace(query, race_type=view.race_type)
         self.post_message(BoardLoaded(view, options, shown, generation))
 
@@ -296,15 +313,22 @@ class LeagueScreen(RacerScreen[None]):
         self.loaded = True
         self.query_one(BoardFilters).set_options(message.options)
         self.ranked = message.view.rows
+        kept = self.highlighted_racer  # read before the board it is on goes
+        self.head_to_head = message.view.head_to_head
         self.shown_query = message.query
         self.race_types = message.view.race_types
         self.track_names = {track_hash: name for name, track_hash in message.options.tracks}
+        self.night_names = {night_id: name for name, night_id in message.options.nights}
+        self.query_one(BoardFilters).for_head_to_head(self.head_to_head is not None)
         line = race_type_line(message.view)
         label = self.query_one("#board-race-type", Static)
         label.update(line)
         label.set_class(not line.plain, "-hidden")
         self.refresh_bindings()  # t shows only when there is another race type to show
-        self._show()
+        if self.head_to_head is not None:
+            self._show_head_to_head(self.head_to_head, kept.racer if kept else None)
+        else:
+            self._show()
 
     def _columns(self) -> list[ReportColumn]:
         query = self.shown_query
@@ -369,6 +393,22 @@ class LeagueScreen(RacerScreen[None]):
         table.move_cursor(row=index)
         self._describe(self.rows[index])
 
+    def _show_head_to_head(self, board: HeadToHeadBoard, kept: str | None) -> None:
+        """The head-to-head board, the cursor on racer `kept` if they are still on it."""
+        table = self.query_one("#board", DataTable)
+        self.rows, self.titles = [], []
+        columns, cells = head_to_head_view.board_table(board)
+        fill_table(table, columns, cells)
+        count = len(board.rows)
+        self.query_one(SectionHeader).set_context(counted(count, "racer") if count else "")
+        if not board.rows:
+            self.query_one(EntryDetail).show_message(head_to_head_view.EMPTY)
+            return
+        racers = [row.racer for row in board.rows]
+        index = racers.index(kept) if kept in racers else 0
+        table.move_cursor(row=index)
+        self._describe_racer(board, board.rows[index])
+
     @property
     def highlighted(self) -> LeaderboardRow | None:
         table = self.query_one("#board", DataTable)
@@ -376,10 +416,28 @@ class LeagueScreen(RacerScreen[None]):
             return self.rows[table.cursor_row]
         return None
 
+    @property
+    def highlighted_racer(self) -> HeadToHeadRow | None:
+        """The head-to-head board's highlighted row (None on a lap board)."""
+        table = self.query_one("#board", DataTable)
+        board = self.head_to_head
+        if board is not None and 0 <= table.cursor_row < len(board.rows):
+            return board.rows[table.cursor_row]
+        return None
+
     @on(DataTable.RowHighlighted, "#board")
     def _highlighted(self, event: DataTable.RowHighlighted) -> None:
-        if 0 <= event.cursor_row < len(self.rows):
+        board = self.head_to_head
+        if board is not None:
+            if 0 <= event.cursor_row < len(board.rows):
+                self._describe_racer(board, board.rows[event.cursor_row])
+        elif 0 <= event.cursor_row < len(self.rows):
             self._describe(self.rows[event.cursor_row])
+
+    def _describe_racer(self, board: HeadToHeadBoard, row: HeadToHeadRow) -> None:
+        """From the board as read (every race of it is there): no read of its own."""
+        text = head_to_head_view.describe_racer(board, row, self.track_names, self.night_names)
+        self.query_one(EntryDetail).update(text)
 
     @work(thread=True, exclusive=True, group="league-detail", exit_on_error=False)
     def _describe(self, row: LeaderboardRow) -> None:
@@ -398,8 +456,17 @@ class LeagueScreen(RacerScreen[None]):
         self.order = SortOrder(column, reverse)
         self._show()
 
+    def _ranked_by_wins(self) -> bool:
+        """On the head-to-head board, say why it does not sort (True) instead: from its
+        keys, a header click and the command palette alike."""
+        if self.head_to_head is None:
+            return False
+        why = NOT_FOR_HEAD_TO_HEAD["sort"]
+        self.notify(f"{why[0].upper()}{why[1:]}: s and r sort the lap boards.")
+        return True
+
     def action_sort_next(self) -> None:
-        if not self.titles:
+        if self._ranked_by_wins() or not self.titles:
             return
         # Only the columns the racer can see: a collapsed one would sort out of sight.
         shown = shown_columns(self.query_one("#board", DataTable))
@@ -409,12 +476,13 @@ class LeagueScreen(RacerScreen[None]):
         self.sort_by(keys[(position + 1) % len(keys)])
 
     def action_reverse(self) -> None:
-        self.sort_by(self.order.column, reverse=not self.order.reverse)
+        if not self._ranked_by_wins():
+            self.sort_by(self.order.column, reverse=not self.order.reverse)
 
     @on(DataTable.HeaderSelected, "#board")
     def _header_clicked(self, event: DataTable.HeaderSelected) -> None:
         index = column_index(event)
-        if not 0 <= index < len(self.titles):
+        if self._ranked_by_wins() or not 0 <= index < len(self.titles):
             return
         column = SORT_BY_TITLE[self.titles[index]]
         same = column == (self.order.column or Column.RANK)
@@ -441,14 +509,16 @@ class LeagueScreen(RacerScreen[None]):
     # --- export, projector, nights -------------------------------------------------------
 
     def action_export(self) -> None:
-        if not self.rows:
+        board = self.head_to_head
+        if not (board.rows if board is not None else self.rows):
             self.notify("There is nothing to export: the leaderboard is empty.", severity="warning")
             return
+        name = "head-to-head.csv" if board is not None else "leaderboard.csv"
         dialog = InputDialog(
             "Export the leaderboard",
             "The table as shown (filters and order). The file name's ending chooses the "
             "format: .csv, .json or .md (Markdown).",
-            value=str(export_folder() / "leaderboard.csv"),
+            value=str(export_folder() / name),
             confirm_label="Export",
             check=check_export_path,
             paths=True,
@@ -459,20 +529,22 @@ class LeagueScreen(RacerScreen[None]):
         if path is not None:
             target = Path(path).expanduser()
             kind = EXPORT_FORMATS[target.suffix.lower()]
+            board = self.head_to_head
+            if board is not None:
+                track = self.track_names.get(self.shown_query.track_hash or "")
+                text = partial(head_to_head_view.export_text, board, track, kind)
+                self._export(target, text, len(board.rows))
+                return
             show_track = "track" in self.titles
-            self._export(list(self.rows), self.shown_query, target, kind, show_track)
+            rows = list(self.rows)
+            self._export(
+                target, partial(export_text, rows, self.shown_query, kind, show_track), len(rows)
+            )
 
     @work(thread=True, group="league-export", exit_on_error=False)
-    def _export(
-        self,
-        rows: list[LeaderboardRow],
-        query: BoardQuery,
-        path: Path,
-        kind: str,
-        show_track: bool,
-    ) -> None:
-        write_text_atomic(path, export_text(rows, query, kind, show_track))
-        self.post_message(BoardExported(path, len(rows)))
+    def _export(self, path: Path, text: Callable[[], str], count: int) -> None:
+        write_text_atomic(path, text())
+        self.post_message(BoardExported(path, count))
 
     def on_board_exported(self, message: BoardExported) -> None:
         self.notify(
@@ -480,6 +552,12 @@ class LeagueScreen(RacerScreen[None]):
         )
 
     def action_projector(self) -> None:
+        if self.head_to_head is not None:
+            self.notify(
+                "The projector shows lap boards, not the head-to-head board yet.",
+                severity="warning",
+            )
+            return
         self.app.push_screen(ProjectorScreen(self.shown_query, db_path=self.db_path))
 
     def action_nights(self) -> None:
@@ -489,6 +567,13 @@ class LeagueScreen(RacerScreen[None]):
         push_kept(self.app, f"sync:{self.db_path or ''}", partial(SyncScreen, db_path=self.db_path))
 
     def action_replay_entry(self) -> None:
+        if self.head_to_head is not None:
+            self.notify(
+                "A recorded head-to-head race is not replayed in the app yet; "
+                "racer-tui sync verify races it again.",
+                severity="warning",
+            )
+            return
         row = self.highlighted
         if row is None or row.kind != "race":
             self.notify(

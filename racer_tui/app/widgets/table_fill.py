@@ -26,6 +26,8 @@ from rich.text import Text
 from textual import events
 from textual.widgets import DataTable
 
+from sim.foundation.plain_names import look_alike_key
+
 Cell = str | Text
 
 
@@ -49,6 +51,10 @@ class Col:
     # A model name tells itself from its siblings at either end ("reinvent-2018-v2" and
     # "reinvent-2018-v3"): it loses its middle ("reinv…8-v3"), never its end.
     cuts_middle: bool = False
+    # Names that must never be cut to read as another's ("Alexandra Montgo…" for both
+    # Alexandra Montgomery and Alexandra Montgolfier): shrunk no narrower than every cell
+    # still reads unlike every other, look-alike letters and all.
+    stays_distinct: bool = False
 
 
 ColumnSpec = str | Col
@@ -74,7 +80,7 @@ def fit_widths(
         max(_width(col.label), min(col.shrink_to, width)) if col.shrink_to else width
         for col, width in zip(columns, natural, strict=True)
     ]
-    if least is not None:  # what a column needs whatever its shrink_to (a kept tail)
+    if least is not None:  # what a column needs whatever its shrink_to (a tail, names apart)
         floors = [
             min(width, max(floor, need))
             for floor, need, width in zip(floors, least, natural, strict=True)
@@ -117,6 +123,31 @@ def tail_of(cell: Cell) -> str:
 
 
 HEAD_LEAST = 3  # what a kept tail leaves before it at least: two letters and "…"
+
+
+def distinct_width(cells: Sequence[Cell]) -> int:
+    """The narrowest width at which the cells, each cut to it, still read as different
+    names as they do in full (a reader's eye: sim.foundation.plain_names). A wider cut
+    never joins two names a narrower one keeps apart, so it is searched by halves."""
+    names = {_plain(cell) for cell in cells}
+    apart = len({look_alike_key(name) for name in names})
+
+    def reads_apart(width: int) -> bool:
+        cut = {look_alike_key(_plain(_shortened(name, width))) for name in names}
+        return len(cut) == apart
+
+    low, high = 1, max((_width(name) for name in names), default=1)
+    while low < high:
+        middle = (low + high) // 2
+        if reads_apart(middle):
+            high = middle
+        else:
+            low = middle + 1
+    return high
+
+
+def _plain(cell: Cell) -> str:
+    return cell.plain if isinstance(cell, Text) else cell
 
 
 def _shortened(cell: Cell, width: int, keeps_tail: bool = False, middle: bool = False) -> Cell:
@@ -192,15 +223,22 @@ def fill_table(
     _lay_out(table, filling)
 
 
+def _least(col: Col, cells: Sequence[Cell]) -> int:
+    """What the column needs whatever its `shrink_to` (0: nothing more)."""
+    if col.stays_distinct:
+        return distinct_width(cells)
+    if col.keeps_tail:
+        return max((len(tail_of(cell)) + HEAD_LEAST for cell in cells), default=0)
+    return 0
+
+
 def _lay_out(table: DataTable[object], filling: _Filling) -> None:
     natural = [
         max([_width(col.label), *(_width(row[index]) for row in filling.rows)])
         for index, col in enumerate(filling.columns)
     ]
     least = [
-        max((len(tail_of(row[index])) + HEAD_LEAST for row in filling.rows), default=0)
-        if col.keeps_tail
-        else 0
+        _least(col, [row[index] for row in filling.rows])
         for index, col in enumerate(filling.columns)
     ]
     room = _room(table, len(filling.rows))

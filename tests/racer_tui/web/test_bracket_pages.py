@@ -39,6 +39,7 @@ HEAD_TO_HEAD_JSON = ("leaderboard", "--race-type", "head-to-head", "--format", "
 ROW_FIELDS = [
     "rank",
     "racer",
+    "cars",
     "starts",
     "wins",
     "losses",

@@ -7,7 +7,13 @@ from typing import Any
 
 from textual.app import App, ComposeResult
 
-from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table, fit_widths
+from racer_tui.app.widgets.table_fill import (
+    Col,
+    FittedTable,
+    distinct_width,
+    fill_table,
+    fit_widths,
+)
 from tests.racer_tui.screens.tui_helpers import painted
 
 COLUMNS = (
@@ -109,3 +115,32 @@ def test_a_nights_result_of_ten_seconds_or_more_is_never_cut() -> None:
     natural = [1, 12, 14, len("best 10.569")]
     widths = fit_widths(natural, columns, room=30, padding=1)
     assert widths[3] == len("best 10.569")
+
+
+def test_names_that_must_stay_apart_are_cut_no_shorter_than_tells_them_apart() -> None:
+    montgo = ["Alexandra Montgomery", "Alexandra Montgolfier", "bob"]
+    # "Alexandra Montgo…" would be both: the first letter after it stays.
+    assert distinct_width(montgo) == len("Alexandra Montgom…")
+    # A Cyrillic а reads as a Latin a: "аna-…" and "ana-…" differ in their code points but
+    # look the same, so the first letter after "ana-" stays.
+    assert distinct_width(["\u0430na-fast", "ana-slow"]) == len("ana-f…")
+    assert distinct_width(["ana", "bob"]) == len("a…")  # at 1, both would be "…"
+    assert distinct_width([]) == 1
+
+
+class Montgos(App[None]):
+    def compose(self) -> ComposeResult:
+        yield FittedTable(id="table", cursor_type="row")
+
+    def on_mount(self) -> None:
+        columns = [Col("racer", keep=1, shrink_to=4, collapses=False, stays_distinct=True)]
+        rows = [["Alexandra Montgomery"], ["Alexandra Montgolfier"]]
+        fill_table(self.query_one(FittedTable), [*columns, Col("wins")], [[*r, "3"] for r in rows])
+
+
+async def test_a_table_too_narrow_for_two_names_still_tells_them_apart() -> None:
+    app = Montgos()
+    async with app.run_test(size=(24, 6)) as pilot:
+        await pilot.pause()
+        names = [line.split()[:2] for line in painted(app.query_one(FittedTable)).splitlines()[1:3]]
+        assert names == [["Alexandra", "Montgom…"], ["Alexandra", "Montgol…"]]
