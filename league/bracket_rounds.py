@@ -39,6 +39,12 @@ def round_title(match: Match, rounds: int, form: Format) -> str:
     return f"Round {match.round}"
 
 
+def match_title(drawn: NightBracket, match: Match) -> str:
+    """What the round of one of `drawn`'s matches is called."""
+    rounds = max((m.round for m in drawn.bracket.matches if m.bracket == "winners"), default=1)
+    return round_title(match, rounds, drawn.bracket.format)
+
+
 def bracket_rounds(drawn: NightBracket) -> list[BracketRound]:
     """The rounds to draw as the bracket stands, in the order they are raced: the winners'
     rounds, a double elimination's losers' rounds, then its finals."""

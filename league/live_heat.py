@@ -23,10 +23,10 @@ import contextlib
 import json
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from sim.foundation.atomic import write_text_atomic
 from sim.race.result import LapRecord
@@ -41,6 +41,7 @@ MAX_TEXT = 200
 MAX_LAPS = 200  # a 4-minute heat drives 20-40 laps; a lap-count race at most its count
 MAX_BYTES = 32_768
 STATES = ("ready", "running", "paused", "over")
+Parsed = TypeVar("Parsed")
 
 
 @dataclass(frozen=True)
@@ -88,40 +89,65 @@ def live_heat_path(league_file: Path, night_id: str) -> Path:
 def read_live_heat(path: Path, night_id: str, now: float | None = None) -> LiveHeat | None:
     """The heat running now on night `night_id`, or None: no file, a stale one, or one
     that does not hold what a writer writes."""
+    heat = read_live_file(path, _parse)
+    if heat is None or heat.night_id != night_id or not is_fresh(heat.written_at, now):
+        return None
+    return heat
+
+
+def read_live_file(path: Path, parse: Callable[[Any], Parsed | None]) -> Parsed | None:
+    """What `parse` makes of a live file's JSON, or None: no file, too big, not JSON, or
+    anything `parse` refuses."""
     try:
         with path.open("rb") as handle:
             raw = handle.read(MAX_BYTES + 1)
-        heat = _parse(json.loads(raw)) if len(raw) <= MAX_BYTES else None
+        return parse(json.loads(raw)) if len(raw) <= MAX_BYTES else None
     except Exception:  # untrusted: whatever it holds (deep nesting, a huge number) is
-        return None  # a heat not running, never a crashed projector
-    if heat is None or heat.night_id != night_id:
-        return None
+        return None  # nothing running, never a crashed projector
+
+
+def is_fresh(written_at: float, now: float | None = None) -> bool:
+    """A live file written within `STALE_SECONDS`: older, its writer stopped (closed or
+    killed), or its clock is far off."""
     moment = time.time() if now is None else now
-    if not -STALE_SECONDS < moment - heat.written_at <= STALE_SECONDS:
-        return None  # its writer stopped (closed or killed), or a clock far off
-    return heat
+    return -STALE_SECONDS < moment - written_at <= STALE_SECONDS
+
+
+def write_live_file(path: Path, data: Any) -> bool:
+    """Write a live file whole (atomically); whether it was written. Not synced to disk:
+    the file is worth a second of the race, and a sync could hold up a timekeeper's key."""
+    try:
+        write_text_atomic(path, json.dumps(data, sort_keys=True), durable=False)
+    except OSError:
+        return False
+    return True
+
+
+def remove_live_file(path: Path) -> None:
+    with contextlib.suppress(OSError):  # stale within seconds anyway
+        path.unlink(missing_ok=True)
 
 
 def _parse(data: Any) -> LiveHeat | None:
     if not isinstance(data, dict):
         return None
     texts = ("night_id", "heat_id", "racer", "car", "state")
-    if not all(_text(data.get(key)) for key in texts):
+    if not all(is_shown_text(data.get(key)) for key in texts):
         return None
     if data["state"] not in STATES:
         return None
     counts = ("heat_number", "lap", "offtracks")
-    if not all(_count(data.get(key)) for key in counts):
+    if not all(is_count(data.get(key)) for key in counts):
         return None
     numbers = ("time_left", "lap_time", "written_at")
-    if not all(_number(data.get(key)) for key in numbers):
+    if not all(is_amount(data.get(key)) for key in numbers):
         return None
     best, limit = data.get("best_lap"), data.get("limit")
-    if not (best is None or _number(best)) or not (limit is None or _count(limit)):
+    if not (best is None or is_amount(best)) or not (limit is None or is_count(limit)):
         return None
     laps = _laps(data.get("laps", []))
     car_at = data.get("car_at")
-    if laps is None or not (car_at is None or _place(car_at)):
+    if laps is None or not (car_at is None or is_place(car_at)):
         return None
     fields = {key: data[key] for key in (*texts, *counts, *numbers)}
     return LiveHeat(
@@ -141,9 +167,9 @@ def _laps(value: Any) -> tuple[LiveLap, ...] | None:
         if not (
             isinstance(lap, dict)
             and set(lap) == {"time_seconds", "penalty_seconds", "offtracks", "counts"}
-            and _number(lap["time_seconds"])
-            and _number(lap["penalty_seconds"])
-            and _count(lap["offtracks"])
+            and is_amount(lap["time_seconds"])
+            and is_amount(lap["penalty_seconds"])
+            and is_count(lap["offtracks"])
             and isinstance(lap["counts"], bool)
         ):
             return None
@@ -151,7 +177,7 @@ def _laps(value: Any) -> tuple[LiveLap, ...] | None:
     return tuple(laps)
 
 
-def _place(value: Any) -> bool:
+def is_place(value: Any) -> bool:
     """Metres on a track: finite, and within any track's reach."""
     return (
         isinstance(value, list)
@@ -166,16 +192,16 @@ def _place(value: Any) -> bool:
     )
 
 
-def _text(value: Any) -> bool:
+def is_shown_text(value: Any) -> bool:
     """Text shown on the venue's screen: printable, so no escape sequence reaches it."""
     return isinstance(value, str) and len(value) <= MAX_TEXT and value.isprintable()
 
 
-def _count(value: Any) -> bool:
+def is_count(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and 0 <= value < 1_000_000
 
 
-def _number(value: Any) -> bool:
+def is_amount(value: Any) -> bool:
     return (
         isinstance(value, int | float)
         and not isinstance(value, bool)
@@ -254,17 +280,12 @@ class LiveHeatWriter:
             laps=laps[-MAX_LAPS:],
             car_at=car_at,
         )
-        try:
-            # Not synced to disk: the file is worth a second of the heat, and a sync could
-            # hold up a timekeeper's key.
-            write_text_atomic(self.path, json.dumps(asdict(heat), sort_keys=True), durable=False)
-        except OSError:
+        if not write_live_file(self.path, asdict(heat)):
             return False
         self.heat, self._last_at, self._written = heat, moment, True
         self.writes += 1
         return True
 
     def clear(self) -> None:
-        with contextlib.suppress(OSError):  # stale within seconds anyway
-            self.path.unlink(missing_ok=True)
+        remove_live_file(self.path)
         self._written = False

@@ -20,6 +20,7 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import Digits, Static
 
+from league.live_match import LiveCar, LiveMatchWriter
 from racer_tui.app.playback import PLAYBACK_BINDINGS, PlaybackClock, PlaybackKeys
 from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.screens.race_screen import FRAME_HZ, PANEL_HZ, countdown_text
@@ -51,6 +52,8 @@ class HeadToHeadSetup:
     names: tuple[str, ...]
     entries: Callable[[], Sequence[Entry]]
     seed: int = 0
+    # A night's bracket match: where it is, for the night's projector.
+    live: LiveMatchWriter | None = None
 
 
 def car_labels(names: Sequence[str]) -> list[str]:
@@ -173,6 +176,8 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
         # Freed now rather than with the removed screen's cycle, in a full collection's
         # pause a key could meet (racer_tui.app.long_running).
         self.ticks = []
+        if self.setup.live is not None:
+            self.setup.live.clear()  # the projector goes back to the night
 
     @work(thread=True, exclusive=True, group="head-to-head")
     def _run_race(self) -> None:
@@ -200,10 +205,36 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
         self.query_one(RaceMap).show(None, cars=tuple(self._racing(tick, k) for k in tick.order))
         self.frames += 1
         self._update_panel()
+        self._publish(tick)
         if self.at_end != self._at_end_shown:  # space neither pauses nor resumes now
             self._at_end_shown = self.at_end
             self.finish_shown = self.finish_shown or self.at_end
             self.refresh_bindings()
+
+    def _publish(self, tick: HeadToHeadTick) -> None:
+        """Where the match is, for the night's projector: as it is raced, then its finish
+        (replays stay on this screen)."""
+        live = self.setup.live
+        if live is None:
+            return
+        if self.finish_shown and not self.at_end:  # a replay: the projector keeps the finish
+            live.publish(state="over", clock=live.match.clock, cars=live.match.cars)
+            return
+        place = {k: position for position, k in enumerate(tick.order, start=1)}
+        cars = [
+            LiveCar(
+                racer="",  # the writer keeps the names it was given
+                car="",
+                place=place[k],
+                laps=car.laps_completed,
+                gap=tick.gaps[k],
+                held_for=car.held_for if car.held > 0 else "",
+                finished=car.finished,
+                at=(car.x, car.y),
+            )
+            for k, car in enumerate(tick.cars)
+        ]
+        live.publish(state="over" if self.at_end else "running", clock=tick.clock, cars=cars)
 
     @staticmethod
     def _racing(tick: HeadToHeadTick, k: int) -> RacingCar:

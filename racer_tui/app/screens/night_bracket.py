@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import partial
+from pathlib import Path
 
 from textual import on
 from textual.app import ComposeResult
@@ -15,8 +16,11 @@ from textual.widgets import Button, Input, Label, Static
 
 from league.bracket_nights import MatchCars, match_entries, match_seed
 from league.bracket_records import NightBracket
+from league.bracket_rounds import match_title
 from league.brackets import MAX_ENTRANTS, MIN_ENTRANTS, Format
+from league.live_match import LiveMatchWriter, live_match_path
 from league.nights import Night
+from league.store import default_db_path
 from racer_tui.app.screens.dialogs import FormDialog, show_problem
 from racer_tui.app.screens.form_select import FormSelect
 from racer_tui.app.screens.head_to_head_screen import HeadToHeadSetup
@@ -99,13 +103,26 @@ class MatchReady(Message):
     setup: HeadToHeadSetup
 
 
-def match_setup(drawn: NightBracket, cars: MatchCars, track: Track) -> HeadToHeadSetup:
+def match_setup(
+    drawn: NightBracket, cars: MatchCars, track: Track, league_file: Path | None = None
+) -> HeadToHeadSetup:
     """The race view's setup for a match: the bracket's rules and the match's own seed,
-    the higher seed on the front of the grid."""
+    the higher seed on the front of the grid; it tells the night's projector where the
+    match is."""
+    live = LiveMatchWriter(
+        live_match_path(league_file or default_db_path(), drawn.night_id),
+        night_id=drawn.night_id,
+        match_id=cars.match.id,
+        title=match_title(drawn, cars.match),
+        lap_count=drawn.rules.lap_count,
+        # A bundle by its file name, never its path: the venue sees it.
+        racers=[(entrant.display_name, entrant.car) for entrant in (cars.first, cars.second)],
+    )
     return HeadToHeadSetup(
         track=track,
         rules=drawn.rules,
         names=(cars.first.display_name, cars.second.display_name),
         entries=partial(match_entries, cars, track, resolve_driver),
         seed=match_seed(drawn, cars.match.id),
+        live=live,
     )

@@ -30,6 +30,7 @@ from textual.widgets import Digits, Label, Static
 
 from league.errors import LeagueError
 from league.live_heat import LiveHeat, live_heat_path, read_live_heat
+from league.live_match import LiveMatch, live_match_path, read_live_match
 from league.night_state import NightState, read_night
 from league.opening import open_league
 from league.report import SCORE_TITLES
@@ -148,6 +149,7 @@ class NightProjectorScreen(KioskScreen):
         self.clock: Callable[[], float] = time.time  # a test may drive its own
         self.state: NightState | None = None
         self.live: LiveHeat | None = None
+        self.match: LiveMatch | None = None  # a bracket match racing now
         self.reads = 0
         self.news: Text | None = None
         self.highlight: str | None = None  # the racer of the newest result
@@ -155,6 +157,7 @@ class NightProjectorScreen(KioskScreen):
         self._seen_races: set[str] | None = None  # None: nothing read yet, nothing is new
         self.gone: str | None = None  # why the night cannot be read (deleted since)
         self._live_path = live_heat_path(db_path or default_db_path(), night_id)
+        self._match_path = live_match_path(db_path or default_db_path(), night_id)
 
     def compose(self) -> ComposeResult:
         yield Static(Text("League night"), id="np-title")
@@ -206,6 +209,13 @@ class NightProjectorScreen(KioskScreen):
         if ended or (finished and (self.live is None or self.live.state != "over")):
             self.action_refresh_now()  # its result is in the database now, or soon
         self.live = live
+        match = read_live_match(self._match_path, self.night_id, self.clock())
+        match_over = self.match is not None and (
+            match is None or match.match_id != self.match.match_id or match.state == "over"
+        )
+        if match_over:
+            self.action_refresh_now()  # the bracket advances once the match is recorded
+        self.match = match
         if self.highlight is not None and self.clock() >= self._highlight_until:
             self.highlight = None
             self.news = None
@@ -283,7 +293,12 @@ class NightProjectorScreen(KioskScreen):
             else:
                 heat.update(Text("Reading the night…", style="dim"))
             return
-        if live is not None:
+        if self.match is not None:
+            match = self.match
+            heat.update(match_on_air(match))
+            label.update("Race clock")
+            value = countdown_text(match.clock)
+        elif live is not None:
             heat.update(self._heat_on_air(state, live))
             label.update("Time left" if live.state != "over" else "Best lap")
             value = countdown_text(live.time_left)
@@ -351,3 +366,27 @@ class NightProjectorScreen(KioskScreen):
             return text
         text.append(f"{counted(raced, 'heat')} raced" if raced else "No heats yet", style="bold")
         return text
+
+
+def match_on_air(match: LiveMatch) -> Text:
+    """A bracket match as it is raced: its round, then each car in the running order with
+    its laps, its gap to the leader and the penalty it is serving."""
+    text = Text()
+    racing = match.state == "running"
+    text.append("Racing now: " if racing else "Just finished: ", style="bold green")
+    text.append(f"{match.title} ({match.match_id})\n")
+    for car in match.running_order():
+        text.append(f"{car.place} ", style="bold")
+        text.append(car.racer, style="bold")  # plain text, never markup
+        text.append(f"  {car.car}", style="dim")
+        laps = f"{car.laps}" + (f"/{match.lap_count}" if match.lap_count is not None else "")
+        text.append(f"  laps {laps}")
+        if car.place > 1 and car.gap is not None:
+            text.append(f"  +{car.gap:.2f} s")
+        if car.held_for:
+            text.append(f"  {car.held_for}", style="red")
+        if not racing and car.place == 1:
+            text.append("  won", style="bold green")
+        text.append("\n")
+    text.rstrip()
+    return text

@@ -1053,7 +1053,8 @@ class NightsScreen(RacerScreen[None]):
                         "its places final."
                     )
                 track = find_night_track(night)
-                self.post_message(MatchReady(night, cars, match_setup(drawn, cars, track)))
+                match = match_setup(drawn, cars, track, self.db_path)
+                self.post_message(MatchReady(night, cars, match))
                 return
             if not waiting and heats(league, night):
                 raise LeagueError(

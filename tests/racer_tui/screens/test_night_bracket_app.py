@@ -10,7 +10,9 @@ from textual.pilot import Pilot
 from textual.widgets import Input, Static
 
 from league.bracket_records import read_bracket
+from league.live_match import live_match_path, read_live_match
 from league.opening import open_league
+from league.store import default_db_path
 from racer_tui.app.application import create_app
 from racer_tui.app.screens.head_to_head_screen import HeadToHeadScreen
 from racer_tui.app.screens.night_bracket import DrawBracketDialog
@@ -26,15 +28,23 @@ def bracket_text(screen: NightsScreen) -> str:
     return painted(screen.query_one("#bracket", Static))
 
 
-async def race_the_next_match(pilot: Pilot[Any], nights: NightsScreen) -> None:
+async def race_the_next_match(pilot: Pilot[Any], nights: NightsScreen, night_id: str) -> None:
     await pilot.press("r")
     await wait_for(pilot, lambda: isinstance(pilot.app.screen, HeadToHeadScreen))
     view = pilot.app.screen
     assert isinstance(view, HeadToHeadScreen)
+    # Raced live, it tells the night's projector where it is (another racer-tui, often).
+    path = live_match_path(default_db_path(), night_id)
+    await wait_for(pilot, lambda: read_live_match(path, night_id) is not None)
+    on_air = read_live_match(path, night_id)
+    assert on_air is not None and on_air.title == "Final" and on_air.match_id == "W1-1"
+    assert [car.racer for car in on_air.cars] == ["dee", "cy"]  # the grid: higher seed first
     await pilot.press("e")  # to the end
     await wait_for(pilot, lambda: view.at_end and view.result is not None)
+    await wait_for(pilot, lambda: getattr(read_live_match(path, night_id), "state", "") == "over")
     await pilot.press("escape")
     await wait_for(pilot, lambda: pilot.app.screen is nights)
+    assert not path.exists()  # left: the projector goes back to the night
     await settle(pilot)
 
 
@@ -71,7 +81,7 @@ async def test_a_host_draws_the_bracket_and_races_it_to_its_champion() -> None:
         shown = bracket_text(nights)
         assert "dee" in shown and "cy" in shown and "ana" not in shown
 
-        await race_the_next_match(pilot, nights)
+        await race_the_next_match(pilot, nights, night.id)
         await wait_for(pilot, lambda: "Champion" in bracket_text(nights))
         assert "Recorded W1-1: dee beat cy." in notes.text()
         await pilot.press("r")  # nothing is left to race: said, not raced

@@ -8,8 +8,10 @@ from dataclasses import replace
 from typing import Any
 
 from textual.pilot import Pilot
+from textual.widgets import Digits
 
 from league.live_heat import STALE_SECONDS, LiveHeatWriter, live_heat_path
+from league.live_match import LiveCar, LiveMatchWriter, live_match_path
 from league.nights import (
     Night,
     add_entrant,
@@ -242,3 +244,39 @@ async def test_a_night_of_physical_cars_names_them_without_marking_each() -> Non
         rows = painted(screen.query_one("#np-standings"))
         assert "red racer" in rows and "green machine" in rows
         assert "physical" not in rows
+
+
+async def test_a_bracket_match_is_shown_as_it_is_raced() -> None:
+    night = a_night_with_one_heat_raced()
+    clock = Clock()
+    live = LiveMatchWriter(
+        live_match_path(default_db_path(), night.id),
+        night_id=night.id,
+        match_id="W1-1",
+        title="Final",
+        lap_count=3,
+        racers=[("ana", "reference"), ("[b]bob[/b]", "rival.racer-bundle")],
+    )
+    app = create_app(start="league", projector_night=night.id)
+    async with app.run_test(size=(80, 24)) as pilot:
+        screen = await the_projector(pilot, clock)
+        ana = LiveCar("", "", 2, 1, 0.84, "crash", False, (1.0, 2.0))
+        bob = LiveCar("", "", 1, 2, None, "", False, (3.0, 4.0))
+        live.publish(state="running", clock=75.0, cars=[ana, bob], now=clock.now)
+        screen._read_live()
+        await pilot.pause()
+        now = painted(screen.query_one("#np-heat"))
+        assert "Racing now: Final (W1-1)" in now
+        lines = [line.strip() for line in now.splitlines()]
+        leader = next(i for i, line in enumerate(lines) if "[b]bob[/b]" in line)
+        assert lines[leader].startswith("1 [b]bob[/b]") and "laps 2/3" in lines[leader]
+        assert "+0.84 s" in lines[leader + 1] and "crash" in lines[leader + 1]
+        assert screen.query_one("#np-clock", Digits).value == "1:15"
+        live.publish(state="over", clock=90.0, cars=[ana, bob], now=clock.now + 1)
+        screen._read_live()
+        await pilot.pause()
+        assert "Just finished: Final" in painted(screen.query_one("#np-heat"))
+        live.clear()
+        screen._read_live()
+        await pilot.pause()
+        assert "Final" not in painted(screen.query_one("#np-heat"))  # back to the night
