@@ -38,6 +38,8 @@ from league.live_heat import (
 SUFFIX = ".match.json"
 MOST_CARS = 6  # a head-to-head grid's
 STATES = ("running", "over")
+INCIDENTS_KEPT = 4  # the newest crashes and overtakes, for the venue to read
+INCIDENT_KINDS = ("crash", "overtake")
 
 
 @dataclass(frozen=True)
@@ -52,6 +54,18 @@ class LiveCar:
     held_for: str  # why it stands ("crash", "off track", "reversed"), "" when it drives
     finished: bool  # it has completed the race's laps
     at: tuple[float, float] | None = None  # where it is, metres
+    heading: float = 0.0  # degrees, counter-clockwise from +x
+
+
+@dataclass(frozen=True)
+class LiveIncident:
+    """A crash (`car` ran into `other` from behind) or an overtake (`car` passed `other`);
+    the cars by grid index."""
+
+    clock: float
+    kind: str  # one of INCIDENT_KINDS
+    car: int
+    other: int
 
 
 @dataclass(frozen=True)
@@ -64,6 +78,7 @@ class LiveMatch:
     lap_count: int | None  # laps to win; None: a race for the window
     cars: tuple[LiveCar, ...]  # in grid order
     written_at: float = 0.0  # wall clock (time.time()) of the write
+    incidents: tuple[LiveIncident, ...] = ()  # the newest last, at most INCIDENTS_KEPT
 
     def running_order(self) -> list[LiveCar]:
         return sorted(self.cars, key=lambda car: car.place)
@@ -99,6 +114,9 @@ def _parse(data: Any) -> LiveMatch | None:
     parsed = [_car(car) for car in cars]
     if any(car is None for car in parsed):
         return None
+    incidents = _incidents(data.get("incidents", []), len(cars))
+    if incidents is None:
+        return None
     return LiveMatch(
         night_id=data["night_id"],
         match_id=data["match_id"],
@@ -108,7 +126,25 @@ def _parse(data: Any) -> LiveMatch | None:
         lap_count=lap_count,
         cars=tuple(car for car in parsed if car is not None),
         written_at=float(data["written_at"]),
+        incidents=incidents,
     )
+
+
+def _incidents(data: Any, cars: int) -> tuple[LiveIncident, ...] | None:
+    if not isinstance(data, list) or len(data) > INCIDENTS_KEPT:
+        return None
+    found = []
+    for one in data:
+        if not (
+            isinstance(one, dict)
+            and set(one) == {"clock", "kind", "car", "other"}
+            and is_amount(one["clock"])
+            and one["kind"] in INCIDENT_KINDS
+            and all(is_count(one[key]) and one[key] < cars for key in ("car", "other"))
+        ):
+            return None
+        found.append(LiveIncident(float(one["clock"]), one["kind"], one["car"], one["other"]))
+    return tuple(found)
 
 
 def _car(data: Any) -> LiveCar | None:
@@ -124,7 +160,8 @@ def _car(data: Any) -> LiveCar | None:
     gap, at = data.get("gap"), data.get("at")
     if not (gap is None or is_amount(gap)) or not (at is None or is_place(at)):
         return None
-    if not isinstance(data.get("finished"), bool):
+    heading = data.get("heading", 0.0)
+    if not isinstance(data.get("finished"), bool) or not _angle(heading):
         return None
     return LiveCar(
         racer=data["racer"],
@@ -135,6 +172,16 @@ def _car(data: Any) -> LiveCar | None:
         held_for=held,
         finished=data["finished"],
         at=None if at is None else (float(at[0]), float(at[1])),
+        heading=float(heading),
+    )
+
+
+def _angle(value: Any) -> bool:
+    return (
+        isinstance(value, int | float)
+        and not isinstance(value, bool)
+        and math.isfinite(value)
+        and abs(value) <= 720.0
     )
 
 
@@ -170,7 +217,13 @@ class LiveMatchWriter:
         self._written = False
 
     def publish(
-        self, *, state: str, clock: float, cars: Sequence[LiveCar], now: float | None = None
+        self,
+        *,
+        state: str,
+        clock: float,
+        cars: Sequence[LiveCar],
+        incidents: Sequence[LiveIncident] = (),
+        now: float | None = None,
     ) -> bool:
         """Write the match as it stands if it changed, its cars moved and
         `MOVING_SECONDS` have gone by, or the heartbeat is due; whether it did. `cars` in
@@ -185,12 +238,20 @@ class LiveMatchWriter:
         def standing(match_cars: Sequence[LiveCar]) -> list[tuple[Any, ...]]:
             return [(c.place, c.laps, c.held_for, c.finished) for c in match_cars]
 
-        changed = not self._written or last.state != state or standing(last.cars) != standing(named)
+        kept = tuple(incidents[-INCIDENTS_KEPT:])
+        changed = (
+            not self._written
+            or last.state != state
+            or standing(last.cars) != standing(named)
+            or kept != last.incidents
+        )
         since = moment - self._last_at
         moved = [c.at for c in named] != [c.at for c in last.cars] and since >= MOVING_SECONDS
         if not changed and not moved and since < HEARTBEAT_SECONDS:
             return False
-        match = replace(last, state=state, clock=max(clock, 0.0), cars=named, written_at=moment)
+        match = replace(
+            last, state=state, clock=max(clock, 0.0), cars=named, written_at=moment, incidents=kept
+        )
         if not write_live_file(self.path, asdict(match)):
             return False
         self.match, self._last_at, self._written = match, moment, True

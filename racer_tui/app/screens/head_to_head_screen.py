@@ -20,13 +20,14 @@ from textual.binding import Binding
 from textual.containers import Horizontal, Vertical
 from textual.widgets import Digits, Static
 
-from league.live_match import LiveCar, LiveMatchWriter
+from league.live_match import INCIDENTS_KEPT as INCIDENTS_SENT
+from league.live_match import LiveCar, LiveIncident, LiveMatchWriter
 from racer_tui.app.playback import PLAYBACK_BINDINGS, PlaybackClock, PlaybackKeys
 from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.screens.race_screen import FRAME_HZ, PANEL_HZ, countdown_text
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.race_map import RaceMap, RacingCar
-from racer_tui.text.clocks import clock_text
+from racer_tui.text.clocks import elapsed_text
 from racer_tui.text.head_to_head import incident_sentence
 from sim.race.head_to_head import Entry, HeadToHeadResult, Incident
 from sim.race.head_to_head_ticks import HeadToHeadTick, head_to_head_ticks
@@ -56,6 +57,12 @@ class HeadToHeadSetup:
     live: LiveMatchWriter | None = None
 
 
+def car_colour(grid_index: int) -> str:
+    """A car's colour, by its place on the grid: the same on the race view and the
+    night's projector."""
+    return CAR_COLOURS[grid_index % len(CAR_COLOURS)]
+
+
 def car_labels(names: Sequence[str]) -> list[str]:
     """`#grid name` for each car: two cars of one model are told apart by their grid."""
     return [f"#{k + 1} {name}" for k, name in enumerate(names)]
@@ -72,7 +79,7 @@ def standings_text(tick: HeadToHeadTick, labels: Sequence[str], width: int) -> T
         if place > 1:
             text.append("\n")
         text.append(f"{place} ")
-        text.append(CAR_GLYPH, style=f"bold {CAR_COLOURS[k % len(CAR_COLOURS)]}")
+        text.append(CAR_GLYPH, style=f"bold {car_colour(k)}")
         name = labels[k]
         if len(name) > name_width:
             name = name[: name_width - 1] + "…"
@@ -103,7 +110,7 @@ def incident_lines(incidents: Sequence[Incident], labels: Sequence[str]) -> Text
     for n, incident in enumerate(reversed(incidents[-INCIDENTS_KEPT:])):
         if n:
             text.append("\n")
-        clock = clock_text(incident.clock)[:-4]
+        clock = elapsed_text(incident.clock)
         style = "red" if incident.kind == "crash" else ""
         text.append(f"{clock} ", style="dim")
         text.append(incident_sentence(incident, names), style=style)
@@ -218,7 +225,10 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
         if live is None:
             return
         if self.finish_shown and not self.at_end:  # a replay: the projector keeps the finish
-            live.publish(state="over", clock=live.match.clock, cars=live.match.cars)
+            shown = live.match
+            live.publish(
+                state="over", clock=shown.clock, cars=shown.cars, incidents=shown.incidents
+            )
             return
         place = {k: position for position, k in enumerate(tick.order, start=1)}
         cars = [
@@ -231,15 +241,21 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
                 held_for=car.held_for if car.held > 0 else "",
                 finished=car.finished,
                 at=(car.x, car.y),
+                heading=car.heading,
             )
             for k, car in enumerate(tick.cars)
         ]
-        live.publish(state="over" if self.at_end else "running", clock=tick.clock, cars=cars)
+        incidents = [
+            LiveIncident(one.clock, one.kind, one.car, one.other)
+            for one in self.incidents[-INCIDENTS_SENT:]
+        ]
+        state = "over" if self.at_end else "running"
+        live.publish(state=state, clock=tick.clock, cars=cars, incidents=incidents)
 
     @staticmethod
     def _racing(tick: HeadToHeadTick, k: int) -> RacingCar:
         car = tick.cars[k]
-        return RacingCar(car.x, car.y, car.heading, CAR_COLOURS[k % len(CAR_COLOURS)], car.held > 0)
+        return RacingCar(car.x, car.y, car.heading, car_colour(k), car.held > 0)
 
     @property
     def tick(self) -> HeadToHeadTick | None:

@@ -32,17 +32,22 @@ from league.errors import LeagueError
 from league.live_heat import LiveHeat, live_heat_path, read_live_heat
 from league.live_match import LiveMatch, live_match_path, read_live_match
 from league.night_state import NightState, read_night
+from league.nights import find_night_track
 from league.opening import open_league
 from league.report import SCORE_TITLES
 from league.store import default_db_path
+from racer_tui.app.screens.head_to_head_screen import CAR_GLYPH, car_colour
 from racer_tui.app.screens.kiosk import LEAVE_HINT, KioskScreen, kiosk_bindings
 from racer_tui.app.screens.race_screen import countdown_text
 from racer_tui.app.screens.timekeeper import lap_clock_text
 from racer_tui.app.widgets.bracket_view import bracket_view
-from racer_tui.text.clocks import clock_text
+from racer_tui.app.widgets.race_map import RaceMap, RacingCar
+from racer_tui.text.clocks import clock_text, elapsed_text
+from racer_tui.text.head_to_head import incident_sentence
 from sim.foundation.plural import counted
 from sim.physics.labels import PHYSICAL
 from sim.physics.objects.settings import RaceType
+from sim.race.head_to_head import Incident
 
 POLL_SECONDS = 2.0  # the standings, from the database
 LIVE_SECONDS = 0.5  # the heat in progress, from its file
@@ -139,6 +144,9 @@ class NightProjectorScreen(KioskScreen):
     NightProjectorScreen #np-clock { width: auto; }
     NightProjectorScreen #np-news { height: 1; padding: 0 2; }
     NightProjectorScreen #np-standings { height: 1fr; padding: 0 2; max-width: 120; }
+    NightProjectorScreen #np-map { height: 1fr; padding: 0 2; display: none; }
+    NightProjectorScreen.-match-on-air #np-map { display: block; }
+    NightProjectorScreen.-match-on-air #np-standings { display: none; }
     NightProjectorScreen #np-hint { height: 1; color: $text-muted; padding: 0 2; }
     """
 
@@ -150,6 +158,7 @@ class NightProjectorScreen(KioskScreen):
         self.state: NightState | None = None
         self.live: LiveHeat | None = None
         self.match: LiveMatch | None = None  # a bracket match racing now
+        self._no_track_here = False  # the night's track is not on this machine: no map
         self.reads = 0
         self.news: Text | None = None
         self.highlight: str | None = None  # the racer of the newest result
@@ -168,6 +177,7 @@ class NightProjectorScreen(KioskScreen):
                 yield Digits("-:--", id="np-clock")
         yield Static("", id="np-news")
         yield Static("", id="np-standings")
+        yield RaceMap(id="np-map")  # a bracket match's cars, while it is raced
         yield Static(OPEN_HINT, id="np-hint")
 
     def on_mount(self) -> None:
@@ -293,11 +303,12 @@ class NightProjectorScreen(KioskScreen):
             else:
                 heat.update(Text("Reading the night…", style="dim"))
             return
+        self._draw_match(state)
         if self.match is not None:
             match = self.match
             heat.update(match_on_air(match))
             label.update("Race clock")
-            value = countdown_text(match.clock)
+            value = elapsed_text(match.clock)
         elif live is not None:
             heat.update(self._heat_on_air(state, live))
             label.update("Time left" if live.state != "over" else "Best lap")
@@ -311,6 +322,32 @@ class NightProjectorScreen(KioskScreen):
             value = clock_text(leader.score) if leader and leader.score is not None else "-:--"
         if digits.value != value:
             digits.update(value)
+
+    def _draw_match(self, state: NightState) -> None:
+        """The match's cars on the track, in their race view colours, in the standings'
+        place while it is raced; the bracket and standings again once it is over."""
+        match = self.match
+        racing = match is not None and match.state == "running"
+        racing = racing and self._match_map(state) is not None
+        self.set_class(racing, "-match-on-air")
+        if not racing or match is None:
+            return
+        cars = tuple(
+            RacingCar(car.at[0], car.at[1], car.heading, car_colour(k), bool(car.held_for))
+            for k, car in enumerate(match.cars)
+            if car.at is not None
+        )
+        self.query_one("#np-map", RaceMap).show(None, cars=cars)
+
+    def _match_map(self, state: NightState) -> RaceMap | None:
+        """The map, on the night's track (None when this machine does not have it)."""
+        drawn = self.query_one("#np-map", RaceMap)
+        if drawn.track is None and not self._no_track_here:
+            try:
+                drawn.set_track(find_night_track(state.night))
+            except LeagueError:  # the match is still said in words, above
+                self._no_track_here = True
+        return None if drawn.track is None else drawn
 
     def _heat_on_air(self, state: NightState, live: LiveHeat) -> Text:
         text = Text()
@@ -369,14 +406,17 @@ class NightProjectorScreen(KioskScreen):
 
 
 def match_on_air(match: LiveMatch) -> Text:
-    """A bracket match as it is raced: its round, then each car in the running order with
-    its laps, its gap to the leader and the penalty it is serving."""
+    """A bracket match as it is raced: its round, then each car in the running order in its
+    race view colour, with its laps, its gap to the leader and the penalty it is serving,
+    then the newest crash or overtake."""
     text = Text()
     racing = match.state == "running"
     text.append("Racing now: " if racing else "Just finished: ", style="bold green")
     text.append(f"{match.title} ({match.match_id})\n")
+    grid = {id(car): k for k, car in enumerate(match.cars)}
     for car in match.running_order():
         text.append(f"{car.place} ", style="bold")
+        text.append(f"{CAR_GLYPH} ", style=car_colour(grid[id(car)]))
         text.append(car.racer, style="bold")  # plain text, never markup
         text.append(f"  {car.car}", style="dim")
         laps = f"{car.laps}" + (f"/{match.lap_count}" if match.lap_count is not None else "")
@@ -388,5 +428,12 @@ def match_on_air(match: LiveMatch) -> Text:
         if not racing and car.place == 1:
             text.append("  won", style="bold green")
         text.append("\n")
+    if match.incidents:
+        newest = match.incidents[-1]
+        names = {k: car.racer for k, car in enumerate(match.cars)}
+        sentence = incident_sentence(
+            Incident(newest.clock, newest.kind, newest.car, newest.other), names
+        )
+        text.append(f"{elapsed_text(newest.clock)} {sentence}", style="yellow")
     text.rstrip()
     return text

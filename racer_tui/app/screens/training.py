@@ -50,13 +50,9 @@ from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.model_detail import status_text
 from racer_tui.app.widgets.section_header import SectionHeader
 from racer_tui.app.widgets.table_fill import Col, FittedTable, fill_table
-from racer_tui.app.widgets.training_charts import (
-    MetricsMark,
-    TrainingCharts,
-    TrainingFigures,
-    clock,
-)
+from racer_tui.app.widgets.training_charts import MetricsMark, TrainingCharts, TrainingFigures
 from racer_tui.app.words import said_in_app
+from racer_tui.text.clocks import elapsed_text as clock
 from sim.deepracer.files import (
     DeepRacerFileError,
     TrainingEpisode,

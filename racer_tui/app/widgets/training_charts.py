@@ -32,6 +32,7 @@ from racer_tui.app.jobs import Job, JobState, sentence
 from racer_tui.app.widgets.chart import MAX_POINTS, LineChart
 from racer_tui.app.widgets.job_line import local_clock
 from racer_tui.app.words import said_in_app
+from racer_tui.text.clocks import elapsed_text as clock
 from sim.deepracer.files import TrainingEpisode, TrainingMetrics
 from sim.foundation.plural import counted
 from sim.training import events
@@ -222,11 +223,6 @@ def _number(value: float | None, fmt: str, unit: str = "") -> str:
     if value is None or not math.isfinite(value):
         return "-"
     return format(value, fmt) + unit
-
-
-def clock(seconds: float) -> str:
-    minutes, rest = divmod(int(max(seconds, 0.0)), 60)
-    return f"{minutes}:{rest:02d}"
 
 
 # How a run's ending reads, for each way it can end (events.ENDINGS).

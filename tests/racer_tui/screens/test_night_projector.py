@@ -11,7 +11,7 @@ from textual.pilot import Pilot
 from textual.widgets import Digits
 
 from league.live_heat import STALE_SECONDS, LiveHeatWriter, live_heat_path
-from league.live_match import LiveCar, LiveMatchWriter, live_match_path
+from league.live_match import LiveCar, LiveIncident, LiveMatchWriter, live_match_path
 from league.nights import (
     Night,
     add_entrant,
@@ -25,7 +25,9 @@ from league.opening import open_league
 from league.races import record_race
 from league.store import default_db_path
 from racer_tui.app.application import create_app
+from racer_tui.app.screens.head_to_head_screen import car_colour
 from racer_tui.app.screens.night_projector import HIGHLIGHT_SECONDS, NightProjectorScreen, ordinal
+from racer_tui.app.widgets.race_map import RaceMap
 from sim.foundation.home import data_home
 from sim.physics.labels import PHYSICAL
 from sim.race.rules import RaceRules
@@ -260,22 +262,31 @@ async def test_a_bracket_match_is_shown_as_it_is_raced() -> None:
     app = create_app(start="league", projector_night=night.id)
     async with app.run_test(size=(80, 24)) as pilot:
         screen = await the_projector(pilot, clock)
-        ana = LiveCar("", "", 2, 1, 0.84, "crash", False, (1.0, 2.0))
-        bob = LiveCar("", "", 1, 2, None, "", False, (3.0, 4.0))
-        live.publish(state="running", clock=75.0, cars=[ana, bob], now=clock.now)
+        ana = LiveCar("", "", 2, 1, 0.84, "crash", False, (0.5, 0.3), 90.0)
+        bob = LiveCar("", "", 1, 2, None, "", False, (0.0, -1.0), 0.0)
+        crash = LiveIncident(74.9, "crash", 0, 1)
+        live.publish(state="running", clock=75.0, cars=[ana, bob], incidents=[crash], now=clock.now)
         screen._read_live()
         await pilot.pause()
         now = painted(screen.query_one("#np-heat"))
         assert "Racing now: Final (W1-1)" in now
+        assert "1:14 ana ran into [b]bob[/b] and is held" in now
+        # The cars on the track in the standings' place, in the race view's colours.
+        drawn = screen.query_one("#np-map", RaceMap)
+        assert screen.has_class("-match-on-air") and drawn.display
+        assert not screen.query_one("#np-standings").display
+        assert [car.colour for car in drawn._cars] == [car_colour(0), car_colour(1)]
+        assert drawn._cars[0].held and not drawn._cars[1].held
         lines = [line.strip() for line in now.splitlines()]
         leader = next(i for i, line in enumerate(lines) if "[b]bob[/b]" in line)
-        assert lines[leader].startswith("1 [b]bob[/b]") and "laps 2/3" in lines[leader]
+        assert lines[leader].startswith("1 ■ [b]bob[/b]") and "laps 2/3" in lines[leader]
         assert "+0.84 s" in lines[leader + 1] and "crash" in lines[leader + 1]
-        assert screen.query_one("#np-clock", Digits).value == "1:15"
+        assert screen.query_one("#np-clock", Digits).value == "1:15"  # the race clock, 75 s
         live.publish(state="over", clock=90.0, cars=[ana, bob], now=clock.now + 1)
         screen._read_live()
         await pilot.pause()
         assert "Just finished: Final" in painted(screen.query_one("#np-heat"))
+        assert not screen.has_class("-match-on-air")  # the bracket and standings again
         live.clear()
         screen._read_live()
         await pilot.pause()
