@@ -2,7 +2,8 @@
 
 The heat in progress is not in the league until it ends: the screen running it (the race
 view, or the timekeeper for a physical car) writes where it is to the night's live-heat
-file (`league.live_heat`). One reader per night polls that file and the night's leader
+file (`league.live_heat`), and a bracket match's race view to its live-match file
+(`league.live_match`). One reader per night polls that file and the night's leader
 for every viewer at once, and each viewer's stream sends the newest state when it
 changes (and a comment now and then, so proxies keep the connection open).
 """
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from league.live_heat import LiveHeat, live_heat_path, read_live_heat
+from league.live_match import LiveCar, LiveMatch, live_match_path, read_live_match
 from league.nights import Night, standings
 from league.report import SCORE_TITLES
 from league.store import League
@@ -99,10 +101,39 @@ def night_leader(league: League, night: Night, local_models: frozenset[str]) -> 
     return Leader(ranked[0].entry.display_name, ranked[0].entry.score)
 
 
+def match_json(match: LiveMatch | None, drawing: TrackMap | None) -> dict[str, Any] | None:
+    """A bracket match racing now, as `/api/live` gives it: its round, the race clock and
+    its cars in grid order, each with its place in the drawing; its newest incidents."""
+    if match is None:
+        return None
+
+    def car(one: LiveCar) -> dict[str, Any]:
+        shown = asdict(one)
+        at = one.at
+        shown["at"] = None if at is None else list(at)
+        shown["on_map"] = None if at is None or drawing is None else list(drawing.place(*at))
+        return shown
+
+    return {
+        "match_id": match.match_id,
+        "title": match.title,
+        "state": match.state,
+        "clock": match.clock,
+        "lap_count": match.lap_count,
+        "cars": [car(one) for one in match.cars],
+        "incidents": [asdict(one) for one in match.incidents],
+    }
+
+
 def live_json(
-    night: Night, heat: LiveHeat | None, leader: Leader | None, drawing: TrackMap | None
+    night: Night,
+    heat: LiveHeat | None,
+    leader: Leader | None,
+    drawing: TrackMap | None,
+    match: LiveMatch | None = None,
 ) -> dict[str, Any]:
-    """What `/api/live` answers and each event carries."""
+    """What `/api/live` answers and each event carries: the heat running now, or a bracket
+    match (`match`, null between them)."""
     ranking = night.rules.ranking
     shown: dict[str, Any] | None = None
     if heat is not None:
@@ -129,6 +160,7 @@ def live_json(
         "heat": shown,
         "leader": None if leader is None else asdict(leader),
         "gap_to_leader": gap,
+        "match": match_json(match, drawing),
     }
 
 
@@ -143,6 +175,7 @@ class LiveFeed:
         drawing: TrackMap | None,
     ) -> None:
         self.path = live_heat_path(league_file, night.id)
+        self.match_path = live_match_path(league_file, night.id)
         self.night = night
         self._leader_of = leader
         self.drawing = drawing
@@ -164,7 +197,8 @@ class LiveFeed:
             self._leader = await asyncio.to_thread(self._leader_of)
             self._leader_at = now
         heat = read_live_heat(self.path, self.night.id)
-        payload = json.dumps(live_json(self.night, heat, self._leader, self.drawing))
+        match = read_live_match(self.match_path, self.night.id)
+        payload = json.dumps(live_json(self.night, heat, self._leader, self.drawing, match))
         if payload != self.payload:
             self.payload = payload
             self._event = f"data: {payload}\n\n".encode()

@@ -46,7 +46,68 @@ function showLaps(laps) {
   body.replaceChildren(...rows);
 }
 
+function showMatch(match) {
+  const list = document.getElementById("match-cars");
+  if (list === null) {
+    return;
+  }
+  const names = match.cars.map((car) => car.racer);
+  const ordered = match.cars
+    .map((car, grid) => ({ car, grid }))
+    .sort((a, b) => a.car.place - b.car.place);
+  const items = ordered.map(({ car, grid }) => {
+    const item = document.createElement("li");
+    const swatch = document.createElement("span");
+    swatch.className = "swatch grid-" + grid;
+    item.appendChild(swatch);
+    const laps = match.lap_count === null ? car.laps : car.laps + "/" + match.lap_count;
+    const gap = car.place > 1 && car.gap !== null ? "  +" + car.gap.toFixed(2) + " s" : "";
+    const held = car.held_for ? "  " + car.held_for : "";
+    const won = match.state === "over" && car.place === 1 ? "  won" : "";
+    item.appendChild(document.createTextNode(car.place + " " + car.racer + "  laps " + laps + gap + held + won));
+    return item;
+  });
+  list.replaceChildren(...items);
+  text("match-title", match.title + " (" + match.match_id + ")");
+  text("match-clock", clock(match.clock));
+  const newest = match.incidents.length ? match.incidents[match.incidents.length - 1] : null;
+  text(
+    "match-news",
+    newest === null
+      ? ""
+      : newest.kind === "crash"
+        ? names[newest.car] + " ran into " + names[newest.other] + " and is held"
+        : names[newest.car] + " passed " + names[newest.other],
+  );
+}
+
+function showMatchCars(match) {
+  for (let k = 0; k < 6; k += 1) {
+    const dot = document.getElementById("match-car-" + k);
+    if (dot === null) {
+      continue;
+    }
+    const car = match && k < match.cars.length ? match.cars[k] : null;
+    const place = car ? car.on_map : null;
+    dot.setAttribute("cx", place ? String(place[0]) : "-100");
+    dot.setAttribute("cy", place ? String(place[1]) : "-100");
+  }
+}
+
 function show(live) {
+  const match = live.match;
+  showMatchCars(match);
+  if (match) {
+    document.body.dataset.state = "match";
+    text("racer", match.cars.map((car) => car.racer).join(" v "));
+    text("car", match.title);
+    showMatch(match);
+    const dot = document.getElementById("car-dot");
+    if (dot !== null) {
+      dot.setAttribute("cx", "-100");
+    }
+    return;
+  }
   const heat = live.heat;
   document.body.dataset.state = heat ? heat.state : "none";
   text("racer", heat ? heat.racer : "No heat running");

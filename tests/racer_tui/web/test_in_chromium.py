@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import shutil
 import struct
+import time
 import subprocess
 from html.parser import HTMLParser
 from pathlib import Path
@@ -17,6 +18,7 @@ import pytest
 
 from league import nights
 from league.live_heat import LiveHeatWriter, LiveLap, live_heat_path
+from league.live_match import LiveCar, LiveIncident, LiveMatchWriter, live_match_path
 from league.opening import open_league
 from tests.racer_tui.web.conftest import IMAGE, LONG, SCRIPT, Served
 
@@ -144,6 +146,43 @@ def test_the_live_page_follows_a_heat_from_start_to_finish(served: Served) -> No
     page = _rendered(served.url + "/live")
     assert page.state == "none"
     assert "No heat running" in "".join(page.text)
+
+
+def test_the_live_page_shows_a_bracket_match_car_by_car(served: Served, tmp_path: Path) -> None:
+    with open_league(served.db) as league:
+        [night] = nights.list_nights(league)
+    match = LiveMatchWriter(
+        live_match_path(served.db, night.id),
+        night_id=night.id,
+        match_id="W1-1",
+        title="Final",
+        lap_count=3,
+        racers=[(IMAGE, "reference"), (SCRIPT, "reference")],
+    )
+    cars = [
+        LiveCar("", "", 2, 1, 0.5, "crash", False, (0.5, 0.5), 90.0),
+        LiveCar("", "", 1, 2, None, "", False, (1.0, 0.2), 0.0),
+    ]
+    crash = [LiveIncident(29, "crash", 0, 1)]
+
+    def on_air() -> None:  # written again, as the race view does, so it never goes stale
+        match.publish(state="running", clock=30.0, cars=cars, incidents=crash, now=time.time() + 1)
+
+    on_air()
+    page = _rendered(served.url + "/live")
+    assert page.state == "match"
+    assert not [tag for tag, _ in page.elements if tag in ("img", "iframe", "object")]
+    items = [attrs for tag, attrs in page.elements if tag == "li"]
+    assert len(items) == 2
+    shown = "".join(page.text)
+    assert f"1 {SCRIPT}  laps 2/3" in shown and f"2 {IMAGE}  laps 1/3  +0.50 s  crash" in shown
+    assert f"{IMAGE} ran into {SCRIPT} and is held" in shown
+    for width, height in SIZES:
+        shot = tmp_path / f"match-{width}x{height}.png"
+        on_air()
+        _chromium(served.url + "/live", f"--window-size={width},{height}", f"--screenshot={shot}")
+        assert _png_size(shot) == (width, height)
+    match.clear()
 
 
 def test_names_no_league_would_take_still_render_as_text(served: Served) -> None:

@@ -18,6 +18,7 @@ import pytest
 
 from league import nights
 from league.live_heat import LiveHeatWriter, LiveLap, live_heat_path
+from league.live_match import LiveCar, LiveIncident, LiveMatchWriter, live_match_path
 from league.opening import open_league
 from league.seasons import new_season
 from racer_tui.web.server import CONTENT_SECURITY_POLICY, read_only_league
@@ -151,6 +152,39 @@ def test_the_live_heat_is_served_and_pushed_as_it_changes(served: Served) -> Non
         assert lap == 3
     writer.clear()
     assert json.loads(get(served.url + "/api/live")[2])["heat"] is None
+
+
+def test_a_bracket_match_racing_now_is_served_with_its_cars_on_the_map(served: Served) -> None:
+    with open_league(served.db) as league:
+        [night] = nights.list_nights(league)
+    writer = LiveMatchWriter(
+        live_match_path(served.db, night.id),
+        night_id=night.id,
+        match_id="W1-1",
+        title="Final",
+        lap_count=3,
+        racers=[(IMAGE, "reference"), ("bob", "rival.racer-bundle")],
+    )
+    cars = [
+        LiveCar("", "", 2, 1, 0.5, "crash", False, (0.5, 0.5), 90.0),
+        LiveCar("", "", 1, 2, None, "", False, (1.0, 0.2), 0.0),
+    ]
+    assert writer.publish(
+        state="running", clock=30.0, cars=cars, incidents=[LiveIncident(29.0, "crash", 0, 1)]
+    )
+    live = json.loads(get(served.url + "/api/live")[2])
+    match = live["match"]
+    assert (match["title"], match["match_id"], match["state"]) == ("Final", "W1-1", "running")
+    assert [car["racer"] for car in match["cars"]] == [IMAGE, "bob"]  # grid order
+    assert [car["place"] for car in match["cars"]] == [2, 1]
+    assert all(car["on_map"] is not None for car in match["cars"])  # drawn on the track
+    assert match["incidents"] == [{"clock": 29.0, "kind": "crash", "car": 0, "other": 1}]
+    page = get(served.url + "/live")[2]
+    assert 'id="match-cars"' in page and 'id="match-car-1"' in page
+    # The names reach the page only as data, escaped, for the script to set as text.
+    assert "<img" not in page.split('id="live-now"')[0].split("<main")[-1]
+    writer.clear()
+    assert json.loads(get(served.url + "/api/live")[2])["match"] is None
 
 
 @pytest.mark.parametrize(
