@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import shutil
 import struct
-import time
 import subprocess
+import time
 from html.parser import HTMLParser
 from pathlib import Path
 
