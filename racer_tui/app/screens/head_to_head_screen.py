@@ -24,6 +24,7 @@ from league.live_match import INCIDENTS_KEPT as INCIDENTS_SENT
 from league.live_match import LiveCar, LiveIncident, LiveMatchWriter
 from racer_tui.app.playback import PLAYBACK_BINDINGS, PlaybackClock, PlaybackKeys
 from racer_tui.app.screens.base import RacerScreen, error_message
+from racer_tui.app.screens.dialogs import ask
 from racer_tui.app.screens.race_screen import FRAME_HZ, PANEL_HZ, countdown_text
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.race_map import RaceMap, RacingCar
@@ -53,8 +54,10 @@ class HeadToHeadSetup:
     names: tuple[str, ...]
     entries: Callable[[], Sequence[Entry]]
     seed: int = 0
-    # A night's bracket match: where it is, for the night's projector.
+    # A night's bracket match: where it is, for the night's projector. It is recorded when
+    # the view is left after its finish, and is named ("Final (W2-1)").
     live: LiveMatchWriter | None = None
+    match: str = ""
 
 
 def car_colour(grid_index: int) -> str:
@@ -169,7 +172,13 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
     def title_words(self) -> str:
         laps = self.setup.rules.lap_count
         length = f"{laps} lap{'s' if laps != 1 else ''}" if laps is not None else "most laps"
-        return f"Head-to-head, {length}, on {self.setup.track.name}"
+        race = f"{self.setup.match}: head-to-head" if self.setup.match else "Head-to-head"
+        return f"{race}, {length}, on {self.setup.track.name}"
+
+    @property
+    def records_on_leave(self) -> bool:
+        """A night's match: leaving after its finish records it on the night."""
+        return bool(self.setup.match)
 
     def on_mount(self) -> None:
         self.set_interval(1.0 / FRAME_HZ, self._frame)
@@ -301,7 +310,8 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
             if laps is not None and winner.finished_at is None:  # nobody completed the laps
                 text.append("Time ran out: most laps won.\n", style="yellow")
             text.append(f"{self.labels[winner.car]} won.\n", style="bold green")
-            text.append("r replays, Esc goes back.", style="dim")
+            after = "Esc records it on the night, r replays." if self.records_on_leave else ""
+            text.append(after or "r replays, Esc goes back.", style="dim")
         return text
 
     # --- actions ---------------------------------------------------------------------
@@ -317,4 +327,21 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
         self._frame()
 
     def action_leave(self) -> None:
-        self.dismiss(self.result)
+        if self.records_on_leave and not self.failure and not self.finish_shown:
+            # The simulation may be over long before the room has seen it: a match is
+            # recorded only once its finish was on screen, and leaving sooner is asked.
+            ask(
+                self.app,
+                "Leave the match before its finish?",
+                "It is not recorded, and r on the Nights screen races it again. To record "
+                "it, keep watching, or press e to see its finish at once.",
+                self._leave_answered,
+                confirm_label="Leave unrecorded",
+                cancel_label="Keep watching",
+            )
+            return
+        self.dismiss(self.result if self.finish_shown else None)
+
+    def _leave_answered(self, yes: bool | None) -> None:
+        if yes:
+            self.dismiss(None)

@@ -125,4 +125,5 @@ def match_setup(
         entries=partial(match_entries, cars, track, resolve_driver),
         seed=match_seed(drawn, cars.match.id),
         live=live,
+        match=f"{match_title(drawn, cars.match)} ({cars.match.id})",
     )

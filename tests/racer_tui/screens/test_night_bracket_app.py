@@ -99,3 +99,42 @@ async def test_a_host_draws_the_bracket_and_races_it_to_its_champion() -> None:
     with open_league() as league:
         drawn = read_bracket(league, night.id)
         assert drawn is not None and drawn.final_order() is not None
+
+
+async def test_leaving_a_match_before_its_finish_is_asked_and_records_nothing() -> None:
+    """The host walk: Esc a few seconds into the final recorded the simulation's result,
+    which was over long before the room had seen the race, and crowned a champion."""
+    from dataclasses import replace
+
+    from league.bracket_nights import draw_night_bracket
+    from racer_tui.app.screens.dialogs import ConfirmDialog
+    from sim.race.rules import HEAD_TO_HEAD_RULES
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = qualified_night(league)
+        draw_night_bracket(league, night, size=2, rules=replace(HEAD_TO_HEAD_RULES, lap_count=1))
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        nights = await the_nights_screen(pilot)
+        await pilot.press("r")
+        await wait_for(pilot, lambda: isinstance(app.screen, HeadToHeadScreen))
+        view = app.screen
+        assert isinstance(view, HeadToHeadScreen)
+        assert "Final (W1-1): head-to-head, 1 lap" in painted(view.query_one("#h2h-title"))
+        await wait_for(pilot, lambda: view.result is not None)  # simulated, not yet shown
+        await pilot.press("escape")
+        await wait_for(pilot, lambda: isinstance(app.screen, ConfirmDialog))
+        await pilot.press("n")  # keep watching
+        await wait_for(pilot, lambda: app.screen is view)
+        await pilot.press("escape")
+        await wait_for(pilot, lambda: isinstance(app.screen, ConfirmDialog))
+        await pilot.press("y")  # leave unrecorded
+        await wait_for(pilot, lambda: app.screen is nights)
+        await settle(pilot)
+        assert "left before its race finished" in notes.text("warning")
+        assert "Recorded" not in notes.text()
+    with open_league() as league:
+        drawn = read_bracket(league, night.id)
+        assert drawn is not None and not drawn.races  # nothing recorded: r races it again
