@@ -10,7 +10,8 @@ night and the match (`record_match`); the car first past the line wins it. The b
 final order is then the night's places and season points (league.bracket_records).
 
 A bracket races simulated cars: a physical car's match needs the timekeeper for two cars,
-which is not built yet, so a physical car is refused a seed with a sentence saying so.
+which is not built yet, so the bracket seeds the simulated qualifiers and leaves physical
+cars out (`qualifiers` says which, for the front ends to tell the host).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from league.nights import (
 )
 from league.store import League
 from league.timekeeper.car import is_physical
+from sim.foundation.plural import counted
 from sim.foundation.remedies import RemedyError
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import Driver
@@ -72,11 +74,7 @@ def draw_night_bracket(
         raced = {heat.entrant.id for heat in heats(league, night)}
         undrawn = [e for e in entrants(league, night) if e.id not in raced]
         if waiting or undrawn:
-            raise LeagueError(
-                f"league night {night.name!r} is still qualifying ({waiting + len(undrawn)} "
-                "entrants have not raced their heat); run its heats (or withdraw those "
-                "entrants), then draw the bracket."
-            )
+            raise LeagueError(still_qualifying(night, waiting + len(undrawn)))
         seeds = _qualified(league, night, size)
         drawn_id = store_bracket(league, night.id, [e.id for e in seeds], format, rules)
         drawn = read_bracket(league, night.id)
@@ -84,29 +82,59 @@ def draw_night_bracket(
     return drawn
 
 
-def _qualified(league: League, night: Night, size: int | None) -> list[Entrant]:
-    """The entrants the bracket seeds, best qualifier first."""
+def still_qualifying(night: Night, waiting: int) -> str:
+    """Why `night`'s bracket cannot be drawn yet: `waiting` entrants have not raced."""
+    return (
+        f"league night {night.name!r} is still qualifying ({counted(waiting, 'entrant')} "
+        f"{'has' if waiting == 1 else 'have'} not raced their heat); run its heats (or "
+        "withdraw those entrants), then draw the bracket."
+    )
+
+
+def qualifiers(league: League, night: Night) -> tuple[list[Entrant], list[Entrant]]:
+    """The entrants with a counting qualifying result, best first: those a bracket can
+    seed, and the physical cars it leaves out (a match is a simulated race; the
+    timekeeper times one car at a time)."""
     by_race = {heat.race_id: heat.entrant for heat in heats(league, night) if heat.race_id}
     placed = [
         by_race[s.entry.record_id]
         for s in standings(league, night)
         if s.position is not None and s.entry.record_id in by_race
     ]
+    physical = [entrant for entrant in placed if is_physical(entrant.model)]
+    return [entrant for entrant in placed if entrant not in physical], physical
+
+
+def left_out_note(league: League, night: Night) -> str:
+    """The sentence telling the host which physical cars the bracket left out ("" for
+    none)."""
+    _, physical = qualifiers(league, night)
+    if not physical:
+        return ""
+    names = ", ".join(entrant.display_name for entrant in physical)
+    verb = "is" if len(physical) == 1 else "are"
+    return (
+        f"Physical cars are left out of the bracket ({names} {verb}): its matches are "
+        "simulated races, and the timekeeper times one car at a time."
+    )
+
+
+def _qualified(league: League, night: Night, size: int | None) -> list[Entrant]:
+    """The entrants the bracket seeds, best simulated qualifier first."""
+    placed, physical = qualifiers(league, night)
     count = len(placed) if size is None else size
     if not MIN_ENTRANTS <= count <= min(len(placed), MAX_ENTRANTS):
-        raise LeagueError(
-            f"a bracket of {count} needs {count} racers with a counting qualifying result; "
-            f"league night {night.name!r} has {len(placed)} (a bracket takes "
-            f"{MIN_ENTRANTS} to {MAX_ENTRANTS})."
+        left_out = (
+            f", physical cars left out ({', '.join(e.display_name for e in physical)})"
+            if physical
+            else ""
         )
-    seeds = placed[:count]
-    physical = [e.display_name for e in seeds if is_physical(e.model)]
-    if physical:
         raise LeagueError(
-            f"{', '.join(physical)} qualified with a physical car, and a bracket races "
-            "simulated cars only for now; draw a smaller bracket (--size) or withdraw the car."
+            f"a bracket of {count} needs {count} racers with a counting qualifying result in "
+            f"a simulated car; league night {night.name!r} has {len(placed)}{left_out} (a "
+            f"bracket takes {MIN_ENTRANTS} to {MAX_ENTRANTS})."
         )
-    return seeds
+    return placed[:count]
 
 
 def next_match(league: League, night: Night) -> MatchCars | None:
@@ -124,7 +152,12 @@ def next_match(league: League, night: Night) -> MatchCars | None:
     a, b = drawn.sides(match)
     if a not in by_id or b not in by_id:  # withdrawn since: cannot happen from here
         raise LeagueError(f"match {match.id} of league night {night.name!r} lost an entrant.")
-    return MatchCars(match, by_id[a], by_id[b])
+    # The higher seed starts in front, whichever side the plan puts it on (a losers' round
+    # pairs a dropped winner with a survivor in either order): between cars of one pace
+    # the front of the grid wins, so it is the better qualifier's.
+    seed = {entrant: rank for rank, entrant in enumerate(drawn.bracket.seeds)}
+    first, second = sorted((a, b), key=lambda side: seed.get(side, len(seed)))
+    return MatchCars(match, by_id[first], by_id[second])
 
 
 def record_match(league: League, night: Night, match_id: str, result: HeadToHeadResult) -> str:

@@ -56,7 +56,8 @@ def raced(first: str, second: str, *, winner: str, seed: int = 1) -> HeadToHeadR
 
 
 def race_next(league: League, night: nights.Night, winner_seed: str) -> str:
-    """Race the next match with the racer `winner_seed` winning it; the match's id."""
+    """Race the next match with the racer `winner_seed` winning it (the higher or the
+    lower seed of the two); the match's id."""
     cars = next_match(league, night)
     assert cars is not None
     first, second = cars.first.racer, cars.second.racer
@@ -92,7 +93,7 @@ def test_qualifying_seeds_the_bracket_and_the_final_order_gives_the_points(
     with pytest.raises(LeagueError, match="bracket matches still to race"):
         nights.close_night(league, night, "host")
     assert race_next(league, night, "higher") == "W1-2"
-    assert race_next(league, night, "lower") == "W2-1"
+    assert race_next(league, night, "higher") == "W2-1"  # cy, seed 2, over ana, seed 4
     assert next_match(league, night) is None
 
     drawn_after = read_bracket(league, night.id)
@@ -140,7 +141,7 @@ def test_a_bracket_of_a_chosen_size_takes_the_best_qualifiers(league: League) ->
     # Double elimination of two: cy wins their first race, dee the grand final (both have
     # lost once), and the deciding race decides.
     race_next(league, night, "lower")
-    race_next(league, night, "lower")  # GF: dee (from the losers' side) beats cy
+    race_next(league, night, "higher")  # GF: dee (from the losers' side) beats cy
     assert next_match(league, night) is not None  # both have lost once: the decider
     race_next(league, night, "higher")
     drawn = read_bracket(league, night.id)
@@ -160,3 +161,44 @@ def test_a_bracket_naming_another_nights_entrants_seats_nobody(league: League) -
     assert bracket_places(league, [other.id]) == {}
     with pytest.raises(LeagueError, match="lost an entrant"):
         next_match(league, other)
+
+
+def test_the_higher_seed_starts_in_front_in_every_round(league: League) -> None:
+    """The host walk: a losers' round put the lower seed at the front of the grid, where
+    the car of one pace wins."""
+    night = qualified_night(league)
+    drawn = draw_night_bracket(league, night, format=Format.DOUBLE, rules=MATCH_RULES)
+    seed = {drawn.racers[entrant]: rank for rank, entrant in enumerate(drawn.bracket.seeds)}
+    raced = 0
+    while (cars := next_match(league, night)) is not None:
+        assert seed[cars.first.racer] < seed[cars.second.racer], cars.match.id
+        # The lower seed wins every other race, so the losers' rounds mix the seeds.
+        race_next(league, night, "lower" if raced % 2 == 0 else "higher")
+        raced += 1
+    assert raced >= 6  # a double elimination of four: winners', losers' rounds, finals
+
+
+def test_physical_cars_are_left_out_of_a_bracket_and_the_host_is_told(league: League) -> None:
+    """The host walk: a physical car topping the qualifying made every bracket impossible,
+    and the sentence's way out (a smaller bracket) could not work."""
+    from league.bracket_nights import left_out_note
+    from league.races import record_race
+    from sim.physics.labels import PHYSICAL
+    from tests.league.helpers import race_result
+
+    night = nights.new_night(league, resolve_track(TRACK), rules=RaceRules(), name="Mixed")
+    for racer in ("ana", "bob", "cy"):
+        nights.add_entrant(league, night, racer, "reference")
+    nights.add_entrant(league, night, "cat", "physical:blue")
+    nights.draw_heats(league, night, seed=3)
+    laps = {"ana": [12.0], "bob": [11.5], "cy": [11.0]}
+    nights.run_heats(league, night, resolve_track(TRACK), _resolve, run_race=FakeEngine(laps))
+    [cat] = [heat for heat in nights.heats(league, night) if heat.race_id is None]
+    timed = replace(race_result("cat", [9.0]), physics=PHYSICAL, model_name="blue")
+    record_race(league, timed, night.id, heat_id=cat.id)  # the quickest qualifier
+    with pytest.raises(LeagueError, match=r"has 3, physical cars left out \(cat\)"):
+        draw_night_bracket(league, night, size=4, rules=MATCH_RULES)
+    drawn = draw_night_bracket(league, night, rules=MATCH_RULES)
+    assert [drawn.racers[e] for e in drawn.bracket.seeds] == ["cy", "bob", "ana"]
+    note = left_out_note(league, night)
+    assert note.startswith("Physical cars are left out of the bracket (cat is)")

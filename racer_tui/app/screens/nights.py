@@ -26,7 +26,13 @@ from textual.message import Message
 from textual.widgets import Button, DataTable, Input, Label, Select, Static
 from textual.worker import Worker, WorkerState
 
-from league.bracket_nights import MatchCars, draw_night_bracket, next_match, record_match
+from league.bracket_nights import (
+    MatchCars,
+    draw_night_bracket,
+    left_out_note,
+    next_match,
+    record_match,
+)
 from league.bracket_records import read_bracket
 from league.errors import LeagueError
 from league.live_heat import LiveHeatWriter, live_heat_path
@@ -1114,8 +1120,9 @@ class NightsScreen(RacerScreen[None]):
             drawn = draw_night_bracket(
                 league, night, format=request.format, size=request.size, rules=rules
             )
+            note = left_out_note(league, night)
         seeds = counted(len(drawn.bracket.seeds), "racer")
-        said = f"Drew the bracket of {seeds}: r races its first match."
+        said = f"Drew the bracket of {seeds}: r races its first match. {note}".rstrip()
         self.post_message(NightChanged(night.id, said))
 
     def on_heat_ready(self, message: HeatReady) -> None:

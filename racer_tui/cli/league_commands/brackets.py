@@ -11,6 +11,7 @@ from rich.text import Text
 from league.bracket_nights import (
     MatchCars,
     draw_night_bracket,
+    left_out_note,
     match_entries,
     match_seed,
     next_match,
@@ -40,6 +41,9 @@ def bracket_command(league: League, night: Night, args: argparse.Namespace) -> i
         f"Drew {night.name}'s {kind}-elimination bracket of {len(drawn.bracket.seeds)} "
         f"from its standings; each match {counted(args.laps, 'lap')}, first past the line."
     )
+    note = left_out_note(league, night)
+    if note:
+        print(note)
     print_bracket(league, night, drawn)
     return 0
 
