@@ -53,7 +53,7 @@ from racer_tui.app.removed_widget_clicks import ignore_clicks_on_removed_widgets
 from racer_tui.app.rendered_lines import let_removed_widgets_lines_go, make_strip_caches_lazy
 from racer_tui.app.screens.base import ModelAdded, push_kept
 from racer_tui.app.screens.coach import CoachScreen
-from racer_tui.app.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
+from racer_tui.app.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog, ask
 from racer_tui.app.screens.evaluation import EvaluationScreen
 from racer_tui.app.screens.garage import GarageScreen
 from racer_tui.app.screens.help import HelpScreen, HelpTopic, binding_topics, declared_bindings
@@ -537,7 +537,35 @@ class RacerTuiApp(App[int]):
         await self.action_quit()
 
     async def action_quit(self) -> None:
-        """Quit; with a training running, first ask whether to stop it or keep it running."""
+        """Quit; in the middle of a night's heat or match, first ask (Ctrl+Q quits from any
+        screen, and the host walk quit a timed heat with it); with a training running, then
+        ask whether to stop it or keep it running."""
+        unfinished = next(
+            (
+                words
+                for screen in reversed(self.screen_stack)
+                if (words := getattr(screen, "unfinished_race", ""))
+            ),
+            "",
+        )
+        if not unfinished:
+            self._quit_after_training()
+            return
+
+        def answered(yes: bool | None) -> None:
+            if yes:
+                self._quit_after_training()
+
+        ask(
+            self,
+            "Quit in the middle of the race?",
+            f"{unfinished[:1].upper()}{unfinished[1:]}.",
+            answered,
+            confirm_label="Quit",
+            cancel_label="Keep racing",
+        )
+
+    def _quit_after_training(self) -> None:
         training = self.training_screen()
         model = training.training_here if training is not None else None
         if training is None or model is None:

@@ -326,6 +326,13 @@ class HeadToHeadScreen(PlaybackKeys, RacerScreen[HeadToHeadResult | None]):
         self.refresh_bindings()
         self._frame()
 
+    @property
+    def unfinished_race(self) -> str:
+        """What quitting now would leave unfinished ("" for nothing)."""
+        if self.records_on_leave and not self.failure and not self.finish_shown:
+            return "a bracket match is being raced; it is not recorded, and r races it again"
+        return ""
+
     def action_leave(self) -> None:
         if self.records_on_leave and not self.failure and not self.finish_shown:
             # The simulation may be over long before the room has seen it: a match is

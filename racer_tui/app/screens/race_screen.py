@@ -449,6 +449,13 @@ class RaceScreen(PlaybackKeys, RacerScreen[RaceResult | None]):
         load = partial(coach_race, self.setup.track, result)
         self.app.push_screen(CoachScreen(self.setup.racer, f"lap {best.number}", load))
 
+    @property
+    def unfinished_race(self) -> str:
+        """What quitting now would leave unfinished ("" for nothing)."""
+        if self.setup.record is not None and not self.recording and not self.failure:
+            return "a night's heat is being raced; it is not recorded, and r runs it again"
+        return ""
+
     def action_leave(self) -> None:
         if self.recording == RECORDING:
             self.notify("The heat is being recorded; a moment.", markup=False)

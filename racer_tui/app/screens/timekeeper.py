@@ -162,8 +162,8 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             else f"with {countdown_text(heat.time_left(resumed.at))} left"
         )
 
-        def answered(yes: bool | None) -> None:
-            if yes:
+        def answered(start_again: bool | None) -> None:
+            if not start_again:  # Esc, n or Enter keep what was timed
                 self.heat = heat
                 self._origin = self.clock() - resumed.at
                 self._journal = resumed.journal
@@ -177,14 +177,16 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             else:
                 self._keep_journal(resumed.journal.forget)
 
+        # Starting again throws the timed laps away, so it is the deliberate key (y), and
+        # Esc, n or Enter resume (the host walk lost a heat's laps to an Esc).
         ask(
             self.app,
-            "Resume this heat?",
+            "Start this heat again?",
             f"racer-tui stopped during this heat, {where} and {laps} captured. Resume it "
-            "where it stopped, or start it again from the line?",
+            "where it stopped, or start it again from the line, losing what was timed?",
             answered,
-            confirm_label="Resume",
-            cancel_label="Start again",
+            confirm_label="Start again",
+            cancel_label="Resume",
         )
 
     def on_unmount(self) -> None:
@@ -273,6 +275,13 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             answered,
             confirm_label="End race",
         )
+
+    @property
+    def unfinished_race(self) -> str:
+        """What quitting now would leave unfinished ("" for nothing)."""
+        if self.heat.phase in (Phase.RUNNING, Phase.PAUSED):
+            return "a physical car's heat is being timed; its laps are kept, and r resumes it"
+        return ""
 
     def action_leave(self) -> None:
         heat = self.heat

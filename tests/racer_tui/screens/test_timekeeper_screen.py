@@ -205,10 +205,11 @@ async def test_a_heat_left_by_a_stopped_racer_tui_is_resumed_with_its_laps() -> 
         assert isinstance(question, ConfirmDialog)
         asked = " ".join(painted(question.query_one("#question-body")).split())
         assert "racer-tui stopped during this heat, with 3:45 left and 1 lap captured" in asked
-        # The question's answers are its buttons: resume, or start again from the line.
+        # The question's answers are its buttons: start again from the line (the
+        # deliberate y: it throws the timed laps away), or resume, which Esc does too.
         buttons = {str(button.label) for button in question.query("Button")}
-        assert buttons == {"Resume (y)", "Start again (n)"}
-        await pilot.press("y")
+        assert buttons == {"Start again (y)", "Resume (n)"}
+        await pilot.press("escape")
         await settle(pilot)
         keeper = second.screen
         assert isinstance(keeper, TimekeeperScreen)
@@ -360,3 +361,28 @@ async def test_the_timekeeper_at_60x20_says_each_lap_and_refusal_whole() -> None
         await settle(pilot)
         shown = [line for line in painted(keeper.query_one(LapList)).splitlines() if line.strip()]
         assert len(shown) == 2 and shown[1].rstrip().endswith("struck")  # header, lap 1
+
+
+async def test_quitting_in_the_middle_of_a_timed_heat_is_asked() -> None:
+    """The host walk: Ctrl+Q in the timekeeper quit at once, while Esc asked."""
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        add_entrant(league, night, "dee", "physical:green car")
+        draw_heats(league, night, seed=1)
+    app = create_app(start="league")
+    quits: list[bool] = []
+    app.exit = lambda *args, **kwargs: quits.append(True)  # type: ignore[method-assign]
+    async with app.run_test(size=(80, 24)) as pilot:
+        keeper, _watch = await the_first_heat_started(pilot)
+        await pilot.press("ctrl+q")
+        await settle(pilot)
+        question = app.screen
+        assert isinstance(question, ConfirmDialog)
+        asked = " ".join(painted(question.query_one("#question-body")).split())
+        assert asked.startswith("A physical car's heat is being timed; its laps are kept")
+        await pilot.press("escape")  # keep racing
+        await settle(pilot)
+        assert app.screen is keeper and not quits
+        await pilot.press("ctrl+q", "y")
+        await settle(pilot)
+        assert quits
