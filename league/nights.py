@@ -452,6 +452,14 @@ def model_spec(model: str) -> str:
         folder = open_model(spec)
     except ModelError as error:  # its remedy too: the app names its own keys
         raise LeagueError(str(error), problem=error.problem, fix=error.fix) from None
+    if not (folder.has_policy() or folder.drives_with_car_archive()):
+        # Refused now, not at its heat (the host walk's entrant failed on the night).
+        problem = f"model {folder.name!r} has no trained policy yet"
+        raise LeagueError(
+            f"{problem}; train it (racer-tui train {folder.name}), then enter it.",
+            problem=problem,
+            fix=Fix.TRAIN_MODEL,
+        )
     if folder.path.parent == models_dir():
         return folder.name
     return str(folder.path.resolve())

@@ -158,10 +158,14 @@ def test_a_night_under_droa_s_reward_rules_takes_only_what_droa_takes(league: Le
     rules = rules_from_mapping({"reward_rules": "droa"}, base=DROA_RULES)
     assert "reward functions DeepRacer on AWS would take" in rules.describe()
     night = nights.new_night(league, resolve_track(TRACK), rules=rules)
+    from sim.training.policy import build_network, save_policy
+
     fine = new_model("fine")  # the default template passes DRoA's validator
+    whole = new_model("whole")
+    for trained in (fine, whole):  # a night enters only a model that can drive
+        save_policy(trained.policy_file, build_network(trained.metadata()))
     nights.add_entrant(league, night, "ana", fine.name)
     nights.add_entrant(league, night, "bob", "reference")
-    whole = new_model("whole")
     whole.reward_file.write_text("def reward_function(params):\n    return 1\n")
     with pytest.raises(LeagueError, match=r"refused by DeepRacer on AWS.*non-floating"):
         nights.add_entrant(league, night, "cy", whole.name)

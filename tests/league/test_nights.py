@@ -199,6 +199,14 @@ def test_an_entrant_model_is_checked_when_added(league: League, tmp_path: Path) 
     with pytest.raises(LeagueError, match="no bundle file"):
         nights.add_entrant(league, night, "ana", "missing.racer-bundle")
     folder = model_folder(tmp_path, "by-path")
+    # The host walk: an untrained model was entered, and failed only at its heat.
+    with pytest.raises(LeagueError, match="'by-path' has no trained policy yet; train it"):
+        nights.add_entrant(league, night, "ana", str(folder))
+    from sim.garage.folder import ModelFolder
+    from sim.training.policy import build_network, save_policy
+
+    trained = ModelFolder(folder)
+    save_policy(trained.policy_file, build_network(trained.metadata()))
     entrant = nights.add_entrant(league, night, "ana", str(folder))
     assert entrant.model == str(folder.resolve())
     with pytest.raises(LeagueError, match="already entered"):

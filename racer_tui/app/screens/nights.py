@@ -579,6 +579,14 @@ def heat_setup(
 STOPPED_WITHOUT_RESULT = (WorkerState.ERROR, WorkerState.CANCELLED)
 
 
+def did_not_race(what: str) -> str:
+    """What a heat or match whose car could not be driven needs: r alone fails again."""
+    return (
+        f"{what} did not race: a car could not be driven (the race view said why). Fix the "
+        "car, or withdraw its entrant (w), then r runs it."
+    )
+
+
 class NightsScreen(RacerScreen[None]):
     """The nights on the left; the highlighted night's rules, heats and standings."""
 
@@ -1076,12 +1084,15 @@ class NightsScreen(RacerScreen[None]):
         self.post_message(HeatReady(night, waiting[0], setup))
 
     def on_match_ready(self, message: MatchReady) -> None:
-        done = partial(self._match_finished, message.night, message.cars)
-        self.app.push_screen(HeadToHeadScreen(message.setup), done)
+        view = HeadToHeadScreen(message.setup)
+        self.app.push_screen(view, partial(self._match_finished, message.night, message.cars, view))
 
     def _match_finished(
-        self, night: Night, cars: MatchCars, result: HeadToHeadResult | None
+        self, night: Night, cars: MatchCars, view: HeadToHeadScreen, result: HeadToHeadResult | None
     ) -> None:
+        if view.failure:
+            self.notify(did_not_race(cars.match.id), severity="warning", markup=False)
+            return
         if result is None:
             self.notify(
                 f"{cars.match.id} was left before its race finished; press r to race it again.",
@@ -1134,10 +1145,19 @@ class NightsScreen(RacerScreen[None]):
             # Recorded as its finish is shown: leaving the view records nothing more.
             record = partial(self._record_heat, night, heat)
             screen = RaceScreen(replace(setup, record=record))
-        self.app.push_screen(screen, partial(self._heat_finished, night, heat))
+        self.app.push_screen(screen, partial(self._heat_finished, night, heat, screen))
 
-    def _heat_finished(self, night: Night, heat: Heat, result: RaceResult | None) -> None:
+    def _heat_finished(
+        self,
+        night: Night,
+        heat: Heat,
+        view: RacerScreen[RaceResult | None],
+        result: RaceResult | None,
+    ) -> None:
         if heat.id in self._recorded_heats:
+            return
+        if getattr(view, "failure", None):  # r would fail the same way: say what helps
+            self.notify(did_not_race(f"Heat {heat.position}"), severity="warning", markup=False)
             return
         if result is None:
             self.notify(

@@ -486,3 +486,39 @@ async def test_closing_a_night_that_counts_only_replayed_results_races_its_heats
         assert verdict is not None and verdict[0] == "same"  # raced again before closing
         (standing,) = standings(league, list_nights(league)[0])
         assert standing.entry.racer == "ada"  # replayed here: it counts
+
+
+async def test_a_heat_whose_car_cannot_be_driven_says_what_helps() -> None:
+    """The host walk: after a car that could not be driven, the toast said "press r to run
+    it again", which failed the same way."""
+    import pytest
+
+    from league.errors import LeagueError
+    from racer_tui.app.screens.race_screen import RaceScreen
+    from sim.garage.options import new_model
+    from tests.racer_tui.screens.tui_helpers import trained_model
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    broken = trained_model("red-owl")
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), name="friday")
+        add_entrant(league, night, "dan", "red-owl")
+        draw_heats(league, night, seed=1)
+    broken.policy_file.write_bytes(b"not a policy")  # damaged after it was entered
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        nights = await the_nights_screen(pilot)
+        await pilot.press("r")
+        await wait_for(pilot, lambda: isinstance(app.screen, RaceScreen))
+        view = app.screen
+        assert isinstance(view, RaceScreen)
+        await wait_for(pilot, lambda: view.failure is not None)
+        await pilot.press("escape")
+        await wait_for(pilot, lambda: app.screen is nights)
+        said = notes.text("warning")
+        assert "Heat 1 did not race: a car could not be driven" in said
+        assert "withdraw its entrant (w)" in said and "press r to run it again" not in said
+    # Entering an untrained model is refused at once, in the dialog's words.
+    with open_league() as league, pytest.raises(LeagueError, match="no trained policy yet"):
+        add_entrant(league, night, "eve", new_model("green-owl").name)

@@ -227,14 +227,14 @@ def test_a_double_elimination_draws_its_losers_rounds_and_the_decider_once_neede
 
     # The winners' bracket and the losers' to their ends (ana through the winners', dee
     # through the losers'), then dee beats ana in the grand final: both have lost once.
-    race_on(served, night, "higher", "higher", "higher", "higher", "higher", "lower")
+    race_on(served, night, "higher", "higher", "higher", "lower", "lower", "lower")
     shown = bracket_shown(served, night)
     assert shown.rounds[-2:] == ["Grand final", "Deciding race"]
     assert shown.matches["GF"]["sides"] == [("lost", "ana"), ("won", "✓ dee")]
     assert shown.next == ["GF2"] and shown.champion == ""
     assert shown.next_up == "Next race: dee v ana (Deciding race, GF2)"
 
-    race_on(served, night, "higher")
+    race_on(served, night, "lower")  # dee, the fourth seed, again
     shown = bracket_shown(served, night)
     assert shown.champion == "Champion: dee" and shown.next == []
     assert shown.matches["GF2"]["sides"] == [("won", "✓ dee"), ("lost", "ana")]
