@@ -72,6 +72,12 @@ class KioskScreen(RacerScreen[None]):
         Binding("escape", "stay", "", show=False),  # a key anyone may press: nothing
     ]
     what: ClassVar[str] = "projector"
+    # The host's notes (a training finished, a sync failed) are not the room's: they stay
+    # off the venue's screen (the host walk saw one cover the projector's heading).
+    # (Textual shows its toast rack from code, so its toasts are what the CSS hides.)
+    DEFAULT_CSS = """
+    KioskScreen Toast { visibility: hidden; }
+    """
 
     def check_consume_key(self, key: str, character: str | None) -> bool:
         return True  # the app's keys do not reach past the kiosk

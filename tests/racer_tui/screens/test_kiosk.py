@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import pytest
 from textual.widgets import Button
+from textual.widgets._toast import Toast, ToastRack  # not exported: the test's subject
 
 from league.nights import add_entrant, new_night
 from league.opening import open_league
@@ -85,3 +86,19 @@ async def test_the_league_projector_goes_back_to_the_league_after_asking() -> No
         assert app.screen is projector
         await pilot.press("q", "y")
         assert isinstance(app.screen, LeagueScreen)
+
+
+async def test_the_hosts_notes_stay_off_the_venues_screen() -> None:
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        record_race(league, race_result("ada", [11.0]))
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24), notifications=True) as pilot:
+        await settle(pilot)
+        await pilot.press("p")
+        await settle(pilot)
+        assert isinstance(app.screen, ProjectorScreen)
+        app.notify("Training of blue-fox finished: the time limit was reached.")
+        await settle(pilot)
+        toasts = list(app.screen.query_one(ToastRack).query(Toast))
+        assert toasts and all(not toast.visible for toast in toasts)  # noted, not shown
