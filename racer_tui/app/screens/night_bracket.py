@@ -48,6 +48,11 @@ class DrawBracketDialog(FormDialog[BracketRequest]):
 
     COMPACT_FIELDS_BELOW_ROWS = 30
 
+    def __init__(self, qualified: int = MAX_ENTRANTS) -> None:
+        """`qualified`: the racers the night's standings can seed."""
+        super().__init__()
+        self.qualified = qualified
+
     def compose(self) -> ComposeResult:
         with Vertical(classes="dialog"):
             yield Label("Draw the bracket", classes="dialog-title")
@@ -57,7 +62,7 @@ class DrawBracketDialog(FormDialog[BracketRequest]):
                 "on the night takes no entrants and no draws.",
                 classes="dialog-body",
             )
-            yield Label("Qualifiers (empty: every racer with a counting result)")
+            yield Label(f"Qualifiers, 2 to {min(self.qualified, MAX_ENTRANTS)} (empty: all)")
             yield Input(placeholder="every qualifier", id="bracket-size")
             yield Label("Format")
             yield FormSelect(FORMAT_CHOICES, value=Format.SINGLE.value, id="bracket-format")
@@ -78,12 +83,11 @@ class DrawBracketDialog(FormDialog[BracketRequest]):
         size_text = self.query_one("#bracket-size", Input).value.strip()
         laps_text = self.query_one("#bracket-laps", Input).value.strip()
         problem = None
-        if size_text and not (
-            size_text.isdigit() and MIN_ENTRANTS <= int(size_text) <= MAX_ENTRANTS
-        ):
+        most = min(self.qualified, MAX_ENTRANTS)
+        if size_text and not (size_text.isdigit() and MIN_ENTRANTS <= int(size_text) <= most):
             problem = (
-                f"Qualifiers is a number from {MIN_ENTRANTS} to {MAX_ENTRANTS}, or empty "
-                "for every racer with a counting result."
+                f"Qualifiers is a number from {MIN_ENTRANTS} to {most} (the racers with a "
+                "counting result), or empty for all of them."
             )
         elif not (laps_text.isdigit() and 1 <= int(laps_text) <= MAX_MATCH_LAPS):
             problem = f"Laps is a whole number from 1 to {MAX_MATCH_LAPS}."

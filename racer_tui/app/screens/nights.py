@@ -32,8 +32,10 @@ from league.bracket_nights import (
     left_out_note,
     next_match,
     record_match,
+    still_qualifying,
 )
 from league.bracket_records import read_bracket
+from league.brackets import MIN_ENTRANTS
 from league.errors import LeagueError
 from league.live_heat import LiveHeatWriter, live_heat_path
 from league.local_racer import HOST_NAME, local_racer_name
@@ -74,6 +76,7 @@ from league.seasons import (
 from league.store import League, default_db_path
 from league.timekeeper.car import PHYSICAL, car_name, is_physical
 from league.timekeeper.journal import HeatJournal, journal_path
+from racer_tui.app.jobs import sentence
 from racer_tui.app.league_watch import LEAGUE_POLL_SECONDS, LeagueWatch
 from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.screens.dialogs import (
@@ -105,6 +108,7 @@ from sim.foundation.atomic import write_text_atomic
 from sim.foundation.plural import counted
 from sim.garage.folder import list_models
 from sim.physics.labels import CURRENT as CURRENT_PHYSICS
+from sim.physics.labels import PHYSICAL as HAND_TIMED  # a result's physics, not a car spec
 from sim.physics.objects.settings import RaceType
 from sim.race.driver import REFERENCE_NAME
 from sim.race.head_to_head import HeadToHeadResult
@@ -1008,6 +1012,15 @@ class NightsScreen(RacerScreen[None]):
 
     def action_add_entrant(self) -> None:
         night = self._current("add entrants")
+        if night is not None and self.state is not None and self.state.bracket is not None:
+            # Said before the dialog, not after it was filled in (the host walk).
+            self.notify(
+                f"{night.name}'s bracket is drawn, so its entrants are set; open a new night "
+                "(o) for more racers.",
+                severity="warning",
+                markup=False,
+            )
+            return
         if night is not None:
             folders = [folder for folder in list_models() if folder.has_policy()]
             models = [folder.name for folder in folders]
@@ -1117,8 +1130,29 @@ class NightsScreen(RacerScreen[None]):
 
     def action_draw_bracket(self) -> None:
         night = self._current("draw its bracket")
-        if night is not None:
-            self.app.push_screen(DrawBracketDialog(), partial(self._bracket_chosen, night))
+        state = self.state
+        if night is None or state is None:
+            return
+        # What the league would refuse, said before the dialog is filled in (the host walk).
+        waiting = sum(1 for heat in state.heats if heat.race_id is None) + len(state.undrawn)
+        qualified = sum(
+            1 for s in state.standings if s.position is not None and s.entry.physics != HAND_TIMED
+        )
+        problem = None
+        if state.bracket is not None:
+            problem = f"{night.name}'s bracket is drawn already; r races its next match."
+        elif waiting:
+            problem = sentence(still_qualifying(night, waiting))
+        elif qualified < MIN_ENTRANTS:
+            problem = (
+                f"{night.name} has {counted(qualified, 'racer')} with a counting result in a "
+                f"simulated car; a bracket needs {MIN_ENTRANTS}."
+            )
+        if problem is not None:
+            self.notify(problem, severity="warning", markup=False)
+            return
+        dialog = DrawBracketDialog(qualified)
+        self.app.push_screen(dialog, partial(self._bracket_chosen, night))
 
     def _bracket_chosen(self, night: Night, request: BracketRequest | None) -> None:
         if request is not None:
@@ -1187,6 +1221,16 @@ class NightsScreen(RacerScreen[None]):
     def action_close_night(self) -> None:
         night = self._current("close it")
         if night is None or self.state is None:
+            return
+        drawn = self.state.bracket
+        upcoming = drawn.next_match() if drawn is not None else None
+        if upcoming is not None:  # said before the question, with the key that helps
+            self.notify(
+                f"{night.name} has bracket matches still to race; r races the next "
+                f"({upcoming.id}), and the night closes once the bracket is decided.",
+                severity="warning",
+                markup=False,
+            )
             return
         waiting = sum(1 for heat in self.state.heats if heat.race_id is None)
         extra = (

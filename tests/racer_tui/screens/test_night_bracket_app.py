@@ -68,7 +68,11 @@ async def test_a_host_draws_the_bracket_and_races_it_to_its_champion() -> None:
         await pilot.press("1", "enter")  # a bracket of one
         await pilot.press("tab", "enter")  # laps left at 3
         assert app.screen is dialog
-        assert "Qualifiers is a number from 2 to 64" in painted(dialog.query_one("#problem"))
+        # Four qualified (eve set no lap): a bracket of more is said in the dialog.
+        assert "Qualifiers is a number from 2 to 4" in painted(dialog.query_one("#problem"))
+        dialog.query_one("#bracket-size", Input).value = "5"
+        await pilot.press("ctrl+s")
+        assert app.screen is dialog
         dialog.query_one("#bracket-laps", Input).value = "0"
         dialog.query_one("#bracket-size", Input).value = "2"
         await pilot.press("ctrl+s")
@@ -138,3 +142,47 @@ async def test_leaving_a_match_before_its_finish_is_asked_and_records_nothing() 
     with open_league() as league:
         drawn = read_bracket(league, night.id)
         assert drawn is not None and not drawn.races  # nothing recorded: r races it again
+
+
+async def test_what_the_night_would_refuse_is_said_before_a_dialog_opens() -> None:
+    """The host walk: k, a and c opened their dialog or question, then refused what was
+    filled in."""
+    from dataclasses import replace
+
+    from league.bracket_nights import draw_night_bracket
+    from league.nights import add_entrant
+    from racer_tui.app.screens.dialogs import ConfirmDialog
+    from racer_tui.app.screens.nights import AddEntrantDialog
+    from sim.race.rules import HEAD_TO_HEAD_RULES
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = qualified_night(league)
+        add_entrant(league, night, "fay", "reference")  # entered, not yet drawn
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        nights = await the_nights_screen(pilot)
+        await pilot.press("k")
+        await settle(pilot)
+        assert app.screen is nights
+        assert "is still qualifying (1 entrant has not raced their heat)" in notes.text("warning")
+    with open_league() as league:
+        from league.nights import entrants, withdraw_entrant
+
+        fay = next(e for e in entrants(league, night) if e.racer == "fay")
+        withdraw_entrant(league, night, fay.id, "host")
+        draw_night_bracket(league, night, size=2, rules=replace(HEAD_TO_HEAD_RULES, lap_count=1))
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        notes = Notifications(app)
+        nights = await the_nights_screen(pilot)
+        for key in ("a", "c", "k"):
+            await pilot.press(key)
+            await settle(pilot)
+            assert app.screen is nights, key
+            assert not isinstance(app.screen, AddEntrantDialog | ConfirmDialog | DrawBracketDialog)
+        said = notes.text("warning")
+        assert "bracket is drawn, so its entrants are set" in said
+        assert "has bracket matches still to race; r races the next (W1-1)" in said
+        assert "bracket is drawn already; r races its next match" in said
