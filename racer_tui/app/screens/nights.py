@@ -82,6 +82,7 @@ from racer_tui.app.screens.base import RacerScreen, error_message
 from racer_tui.app.screens.dialogs import (
     FormDialog,
     InputDialog,
+    NameInput,
     NameOrPathSuggester,
     PathSuggester,
     ask,
@@ -222,7 +223,8 @@ class NewNightDialog(FormDialog[NightRequest]):
             yield Label("Track", classes="field-label")
             yield Select(track_options(), value=DEFAULT_TRACK, allow_blank=False, id="night-track")
             with Horizontal(id="night-name-row"):
-                yield Input(placeholder="night name (empty: track and date)", id="night-name")
+                # Names keep what was typed, invisible characters too, for the check to refuse.
+                yield NameInput(placeholder="night name (empty: track and date)", id="night-name")
                 # Anything typed stays as typed: a date the host mistypes is said back to
                 # them as they wrote it, never silently trimmed.
                 yield Input(placeholder="date: today", max_length=10, id="night-date")
@@ -308,10 +310,18 @@ class NewNightDialog(FormDialog[NightRequest]):
             self.query_one("#night-laps", Input).focus()
             return
         season = self.query_one("#night-season", Select).value
+        name = self.query_one("#night-name", Input).value.strip() or None
+        if name is not None:
+            try:  # said here, with the name still there to change (the host walk)
+                name = check_name(name, "night name")
+            except LeagueError as error:
+                show_problem(self.query_one("#problem", Static), sentence(str(error)))
+                self.query_one("#night-name", Input).focus()
+                return
         self.dismiss(
             NightRequest(
                 track=str(self.query_one("#night-track", Select).value),
-                name=self.query_one("#night-name", Input).value.strip() or None,
+                name=name,
                 rules=rules,
                 season_id=None if season is Select.NULL else str(season),
                 held_on=held_on,
@@ -369,7 +379,7 @@ class AddEntrantDialog(FormDialog[str]):
                 "(`physical:NAME` names it); → completes.",
                 classes="dialog-body",
             )
-            yield Input(placeholder="racer name", id="entrant-racer")
+            yield NameInput(placeholder="racer name", id="entrant-racer")
             yield Input(
                 placeholder="reference, a model, a bundle path or physical",
                 suggester=NameOrPathSuggester([REFERENCE_NAME, PHYSICAL, *self._models]),
@@ -461,7 +471,7 @@ class NewSeasonDialog(FormDialog[SeasonRequest]):
                 "Points go to places 1, 2, 3, ... in the order given.",
                 classes="dialog-body",
             )
-            yield Input(placeholder="season name, e.g. Spring 2025", id="season-name")
+            yield NameInput(placeholder="season name, e.g. Spring 2025", id="season-name")
             yield Input(placeholder=f"points by place (empty: {default})", id="season-points")
             yield from self.form_buttons("Create season")
 
@@ -480,7 +490,9 @@ class NewSeasonDialog(FormDialog[SeasonRequest]):
         problem = season_problem(name, points, self._taken)
         if problem is not None:
             show_problem(self.query_one("#problem", Static), problem)
-            self.query_one("#season-name", Input).focus()
+            # Back to the field the sentence is about (the host walk cleared a good name).
+            named = season_problem(name, "", self._taken) is not None
+            self.query_one("#season-name" if named else "#season-points", Input).focus()
             return
         table = parse_points(points) if points.strip() else DEFAULT_POINTS
         self.dismiss(SeasonRequest(name.strip(), table))

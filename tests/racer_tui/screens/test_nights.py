@@ -522,3 +522,37 @@ async def test_a_heat_whose_car_cannot_be_driven_says_what_helps() -> None:
     # Entering an untrained model is refused at once, in the dialog's words.
     with open_league() as league, pytest.raises(LeagueError, match="no trained policy yet"):
         add_entrant(league, night, "eve", new_model("green-owl").name)
+
+
+async def test_a_bad_night_or_season_name_is_said_in_its_dialog_with_what_was_typed() -> None:
+    """The host walk: a 300-character night name closed the dialog with a toast; a right-to-
+    left override was silently dropped from a night's name; after a bad points table the
+    cursor went back to the season's (good) name."""
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        nights = await the_nights_screen(pilot)
+        for typed in ("N" * 300, "Friday\u202eevil"):
+            await pilot.press("o")
+            await settle(pilot)
+            dialog = app.screen
+            name = dialog.query_one("#night-name", Input)
+            name.value = typed  # as a paste gives it (NameInput keeps typed ones too)
+            await pilot.press("ctrl+s")
+            await settle(pilot)
+            assert app.screen is dialog, typed[:10]
+            problem = " ".join(painted(dialog.query_one("#problem")).split())
+            assert "cannot be a night name" in problem and "invisible characters" in problem
+            assert name.value == typed and dialog.focused is name
+            await pilot.press("escape")
+            await settle(pilot)
+        assert app.screen is nights
+        await pilot.press("s")
+        await settle(pilot)
+        season = app.screen
+        season.query_one("#season-name", Input).value = "Spring"
+        season.query_one("#season-points", Input).value = "25,abc"
+        await pilot.press("ctrl+s")
+        await settle(pilot)
+        assert season.focused is season.query_one("#season-points", Input)
+    with open_league() as league:
+        assert list_nights(league) == []
