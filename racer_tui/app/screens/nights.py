@@ -135,7 +135,9 @@ NAME = Col("", keep=3, shrink_to=10, collapses=False)
 # A night's name loses its middle, never its end: "Walk night 2" and "Walk night 3" cut at
 # the end looked like one night ("Walk nigh…" twice at 60x20).
 NIGHT_COLUMNS = (
-    replace(NAME, label="night", cuts_middle=True),
+    # Cut no narrower than every night still reads unlike the others ("Brack…ight" was
+    # both Bracket Night and Bracket Fight at 60x20, in the host walk).
+    replace(NAME, label="night", cuts_middle=True, stays_distinct=True),
     Col("track", keep=1, shrink_to=8),
     Col("state"),
 )

@@ -125,24 +125,25 @@ def tail_of(cell: Cell) -> str:
 HEAD_LEAST = 3  # what a kept tail leaves before it at least: two letters and "…"
 
 
-def distinct_width(cells: Sequence[Cell]) -> int:
-    """The narrowest width at which the cells, each cut to it, still read as different
-    names as they do in full (a reader's eye: sim.foundation.plain_names). A wider cut
-    never joins two names a narrower one keeps apart, so it is searched by halves."""
+def distinct_width(cells: Sequence[Cell], *, middle: bool = False) -> int:
+    """The narrowest width at which the cells, each cut to it (at the end, or in the
+    `middle`), still read as different names as they do in full (a reader's eye:
+    sim.foundation.plain_names). A wider cut never joins two names a narrower one keeps
+    apart, so it is searched by halves."""
     names = {_plain(cell) for cell in cells}
     apart = len({look_alike_key(name) for name in names})
 
     def reads_apart(width: int) -> bool:
-        cut = {look_alike_key(_plain(_shortened(name, width))) for name in names}
+        cut = {look_alike_key(_plain(_shortened(name, width, middle=middle))) for name in names}
         return len(cut) == apart
 
     low, high = 1, max((_width(name) for name in names), default=1)
     while low < high:
-        middle = (low + high) // 2
-        if reads_apart(middle):
-            high = middle
+        halfway = (low + high) // 2
+        if reads_apart(halfway):
+            high = halfway
         else:
-            low = middle + 1
+            low = halfway + 1
     return high
 
 
@@ -226,7 +227,7 @@ def fill_table(
 def _least(col: Col, cells: Sequence[Cell]) -> int:
     """What the column needs whatever its `shrink_to` (0: nothing more)."""
     if col.stays_distinct:
-        return distinct_width(cells)
+        return distinct_width(cells, middle=col.cuts_middle)
     if col.keeps_tail:
         return max((len(tail_of(cell)) + HEAD_LEAST for cell in cells), default=0)
     return 0

@@ -144,3 +144,15 @@ async def test_a_table_too_narrow_for_two_names_still_tells_them_apart() -> None
         await pilot.pause()
         names = [line.split()[:2] for line in painted(app.query_one(FittedTable)).splitlines()[1:3]]
         assert names == [["Alexandra", "Montgom…"], ["Alexandra", "Montgol…"]]
+
+
+def test_names_cut_in_the_middle_stay_apart_when_asked() -> None:
+    """The host walk: "Bracket Night" and "Bracket Fight" both read "Brack…ight" at 60x20."""
+    from racer_tui.app.widgets.table_fill import _shortened  # how a cell is cut
+
+    names = ["Bracket Night", "Bracket Fight"]
+    width = distinct_width(names, middle=True)
+    assert width < len(names[0])
+    cut = {str(_shortened(name, width, middle=True)) for name in names}
+    assert len(cut) == 2
+    assert len({str(_shortened(name, width - 1, middle=True)) for name in names}) == 1
