@@ -69,7 +69,7 @@ class NightGone(Message):
 # What the last line says: the view updates itself while the night runs; once it is
 # closed its standings are final. Short enough for 60 columns.
 OPEN_HINT = f"{LEAVE_HINT} · updates itself as heats run"
-CLOSED_HINT = f"{LEAVE_HINT} · closed: its standings are final"
+CLOSED_HINT = f"{LEAVE_HINT} · the standings are final"
 
 
 @dataclass
@@ -80,12 +80,30 @@ class NightRead(Message):
 NARROW = 70  # below this many columns the gap goes: the names need the room
 
 
+def places_line(state: NightState) -> Text:
+    """The night's places and points in as few lines as they take, where a table has no
+    room: "Places: 1 ana 25 · 2 eve 18 · …"."""
+    text = Text("Places: ", style="bold")
+    for index, standing in enumerate(state.standings):
+        if index:
+            text.append(" · ", style="dim")
+        place = str(standing.position) if standing.position is not None else "-"
+        text.append(f"{place} ")
+        text.append(standing.entry.display_name, style="bold")  # plain text, never markup
+        text.append(f" {standing.points}")
+    return text
+
+
 def standings_table(
-    state: NightState, highlight: str | None, spaced: bool, narrow: bool = False
+    state: NightState,
+    highlight: str | None,
+    spaced: bool,
+    narrow: bool = False,
+    rows: int | None = None,
 ) -> Table:
     """The night's standings in big, spaced rows: one rank per racer (a racer without a
     counting lap is unplaced, '-'), the gap to the leader (not when `narrow`), and the
-    points."""
+    points; at most `rows` rows, the last saying how many more there are."""
     table = Table(box=box.SIMPLE_HEAD, expand=True, padding=(0, 1), show_edge=False)
     table.add_column("#", justify="right", style="bold", width=3)
     table.add_column("racer", ratio=3, no_wrap=True, overflow="ellipsis")
@@ -99,7 +117,10 @@ def standings_table(
     # A night of physical cars only needs no "(physical)" on every row: the mark is for a
     # night that mixes them with simulated ones (and it cut the car's name at 80 columns).
     mixed = len({s.entry.physics == PHYSICAL for s in state.standings}) > 1
-    for index, standing in enumerate(state.standings):
+    shown = state.standings
+    if rows is not None and len(shown) > rows:
+        shown = shown[: max(rows - 1, 0)]
+    for index, standing in enumerate(shown):
         entry = standing.entry
         score = entry.score
         gap = "" if score is None or leader is None or index == 0 else f"+{score - leader:.3f}"
@@ -121,6 +142,9 @@ def standings_table(
         table.add_row(*cells, style=style)
         if spaced:
             table.add_row()  # readable from the back of the room
+    more = len(state.standings) - len(shown)
+    if more:
+        table.add_row("", Text(f"and {more} more", style="dim"))
     return table
 
 
@@ -284,8 +308,20 @@ class NightProjectorScreen(KioskScreen):
         room = panel.size.height
         narrow = 0 < panel.size.width < NARROW
         if state.bracket is not None:  # a bracket night: the bracket first, as it advances
-            table = standings_table(state, self.highlight, False, narrow)
-            panel.update(Group(bracket_view(state.bracket, state.names), Text(""), table))
+            drawn = bracket_view(state.bracket, state.names)
+            # The standings take the rows the bracket leaves (at 60x20 a closed bracket
+            # night showed the table's heading and none of its rows): its title, its
+            # rule and a blank line take three.
+            width = panel.size.width or self.size.width
+            lines = len(
+                self.app.console.render_lines(drawn, self.app.console.options.update_width(width))
+            )
+            rows = None if room == 0 else room - lines - 3
+            if rows is not None and rows < 3:  # no room for a table: the places in a line
+                panel.update(Group(drawn, places_line(state)))
+                return
+            table = standings_table(state, self.highlight, False, narrow, rows)
+            panel.update(Group(drawn, Text(""), table))
             return
         spaced = room == 0 or 2 * len(state.standings) + 2 <= room
         panel.update(standings_table(state, self.highlight, spaced, narrow))

@@ -186,3 +186,30 @@ async def test_what_the_night_would_refuse_is_said_before_a_dialog_opens() -> No
         assert "bracket is drawn, so its entrants are set" in said
         assert "has bracket matches still to race; r races the next (W1-1)" in said
         assert "bracket is drawn already; r races its next match" in said
+
+
+async def test_a_decided_bracket_nights_places_show_at_60x20() -> None:
+    """The host walk: at 60x20 the projector of a bracket night showed the standings'
+    heading and none of its rows."""
+    from dataclasses import replace
+
+    from league.bracket_nights import draw_night_bracket
+    from sim.race.rules import HEAD_TO_HEAD_RULES
+    from tests.league.test_bracket_nights import race_next
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = qualified_night(league)
+        draw_night_bracket(league, night, rules=replace(HEAD_TO_HEAD_RULES, lap_count=1))
+        for _ in range(3):
+            race_next(league, night, "higher")
+    app = create_app(start="league", projector_night=night.id)
+    async with app.run_test(size=(60, 20)) as pilot:
+        await settle(pilot)
+        projector = app.screen
+        assert isinstance(projector, NightProjectorScreen)
+        await wait_for(pilot, lambda: projector.state is not None)
+        await settle(pilot)
+        shown = " ".join(painted(projector.query_one("#np-standings")).split())
+        assert "Champion: dee" in shown
+        assert "Places: 1 dee 25 · 2 cy 18" in shown and "- eve 0" in shown  # all, in a line
