@@ -588,6 +588,7 @@ def heat_setup(
         seed=heat.seed,
         ghost=ghost,
         leader_seconds=leader.score if leader is not None else None,
+        leader_name=leader.display_name if leader is not None else "",
         title=f"Heat {number}: {heat.entrant.display_name} ({entrant.car})",
         live=live,
     )
@@ -877,7 +878,7 @@ class NightsScreen(RacerScreen[None]):
         title.set_class(drawn is None and not (qualified and not state.night.closed), "-hidden")
         view.set_class(drawn is None, "-hidden")
         if drawn is None:
-            title.update(Text("Bracket: k draws one from these standings"))
+            title.update(Text("Bracket: none yet, k draws it"))  # fits 60 columns
             return
         upcoming = drawn.next_match()
         after = f", next {upcoming.id} (r)" if upcoming and not state.night.closed else ""

@@ -58,6 +58,9 @@ class RaceSetup:
     replay: RaceResult | None = None
     ghost: GhostLap | None = None
     leader_seconds: float | None = None  # the leaderboard leader's score, for the gap
+    # Whose score the gap is to: a night's simulated leader may not be its leader (a
+    # physical car's hand-timed lap leads on a board of its own), so it is named.
+    leader_name: str = ""
     title: str = ""
     live: LiveHeatWriter | None = None  # a night's heat: where it is, for the projector
     # A night's heat: records its result on the night (blocking, in the view's worker),
@@ -354,7 +357,8 @@ class RaceScreen(PlaybackKeys, RacerScreen[RaceResult | None]):
         leader = self.setup.leader_seconds
         if best is not None and leader is not None:
             gap = best - leader
-            text.append(f"  gap {gap:+.3f}", style="green" if gap <= 0 else "yellow")
+            to = f" to {self.setup.leader_name}" if self.setup.leader_name else ""
+            text.append(f"  gap {gap:+.3f}{to}", style="green" if gap <= 0 else "yellow")
         text.append("\n")
         if job.state is JobState.DONE:
             text.append("Finished. ", style="bold green")

@@ -64,6 +64,8 @@ def test_a_heat_races_against_the_nights_leader_so_far() -> None:
         later = heat_setup(league, night, second, oval)
     assert isinstance(later, RaceSetup)
     assert later.ghost is not None and later.leader_seconds == leader.entry.score
+    # The gap names whose score it is to: the night's leader on this heat's own board.
+    assert later.leader_name == leader.entry.display_name
     assert later.title.startswith("Heat 2: ")
 
 
