@@ -154,6 +154,11 @@ MIXED_STANDINGS_NOTE = (
     "on a board of their own"
 )
 RACER = replace(NAME, label="racer")
+# league.ranking's order past the score, for standings whose figures read alike.
+TIE_NOTE = (
+    "Equal scores are placed by fewer off-tracks in the scoring laps, then more laps, then "
+    "the earlier result."
+)
 
 
 # --- dialogs ---------------------------------------------------------------------------------
@@ -909,9 +914,13 @@ class NightsScreen(RacerScreen[None]):
         closed = "final, " if state.night.closed else ""
         title.update(Text(f"Standings ({closed}with points)"))
         kinds = {s.entry.physics for s in state.standings}  # each its own League board
+        notes = [sentence(MIXED_STANDINGS_NOTE)] if len(kinds) > 1 else []
+        scores = [s.entry.score for s in state.standings if s.entry.score is not None]
+        if len(scores) != len(set(scores)):  # equal figures, different places: say why
+            notes.append(TIE_NOTE)
         note = self.query_one("#standings-note", Static)
-        note.update(Text(MIXED_STANDINGS_NOTE[:1].upper() + MIXED_STANDINGS_NOTE[1:] + "."))
-        note.set_class(len(kinds) < 2, "-hidden")
+        note.update(Text(" ".join(notes)))
+        note.set_class(not notes, "-hidden")
         score_title = SCORE_TITLES[state.night.rules.ranking]
         rows: list[list[str | Text]] = [
             [

@@ -89,3 +89,36 @@ async def test_night_standings_say_when_they_rank_physical_and_simulated_laps_to
         labels = [str(column.label) for column in heats.columns.values()]
         assert "car" in labels  # who is physical, at 60 columns too
         assert "phys…" in painted(heats)  # the kind first, the car's own end kept
+
+
+async def test_standings_with_equal_scores_say_how_they_are_placed() -> None:
+    """The host walk: two racers with the same figures had different places and points,
+    with nothing saying why."""
+    from league.nights import add_entrant, draw_heats, heats, new_night
+    from league.races import record_race
+    from racer_tui.app.screens.nights import TIE_NOTE
+    from sim.foundation.home import data_home
+    from sim.race.rules import RaceRules
+    from sim.tracks.catalog import resolve_track
+    from tests.league.helpers import race_result
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    rules = RaceRules(window_seconds=60.0)
+    with open_league() as league:
+        night = new_night(league, resolve_track("beginner-oval"), rules=rules, name="tied")
+        for racer in ("ana", "eve"):
+            add_entrant(league, night, racer, "reference")
+        draw_heats(league, night, seed=2)
+        for heat in heats(league, night):
+            result = race_result(heat.entrant.racer, [10.0], rules=rules)
+            record_race(league, result, night.id, heat_id=heat.id)
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        await settle(pilot)
+        await pilot.press("n")
+        await settle(pilot)
+        screen = app.screen
+        assert isinstance(screen, NightsScreen)
+        note = screen.query_one("#standings-note", Static)
+        assert not note.has_class("-hidden")
+        assert TIE_NOTE[:40] in " ".join(str(note.render()).split())
