@@ -692,6 +692,10 @@ class NightsScreen(RacerScreen[None]):
     NightsScreen #night-rules { height: auto; }
     NightsScreen #heats { height: 1fr; min-height: 4; }
     NightsScreen #standings { height: 1fr; min-height: 4; }
+    /* No night: only the sentence saying how to open one (not a deleted night's tables). */
+    NightsScreen.-no-night #night-view .field-label, NightsScreen.-no-night #heats,
+    NightsScreen.-no-night #standings, NightsScreen.-no-night #standings-note,
+    NightsScreen.-no-night #bracket, NightsScreen.-no-night #season { display: none; }
     NightsScreen #season { height: 1fr; min-height: 4; }
     NightsScreen .-hidden { display: none; }
     NightsScreen.-short #heats, NightsScreen.-short #standings, NightsScreen.-short #season {
@@ -787,6 +791,7 @@ class NightsScreen(RacerScreen[None]):
         ]
         table = self.query_one("#nights", DataTable)
         fill_table(table, NIGHT_COLUMNS, rows)
+        self.set_class(not self.nights, "-no-night")
         if not self.nights:
             self.state = self.showing = None
             self.query_one("#night-rules", Static).update(

@@ -370,6 +370,9 @@ async def test_a_host_withdraws_an_entrant_moves_a_heat_and_deletes_an_unheld_ni
         await settle(pilot)
         assert "Deleted friday." in notes.text()
         assert "No league nights yet" in painted(nights.query_one("#night-rules"))
+        # Only that: not the deleted night's headings over empty tables (the host walk).
+        for part in ("#heats", "#standings", "#standings-title"):
+            assert not nights.query_one(part).display, part
     with open_league() as league:
         assert list_nights(league) == []
 
