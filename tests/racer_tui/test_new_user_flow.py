@@ -28,6 +28,7 @@ from racer_tui.app.screens.league import LeagueScreen
 from racer_tui.app.screens.model_editor import ModelEditorScreen
 from racer_tui.app.screens.race_screen import RaceScreen
 from racer_tui.app.screens.races import RacesScreen
+from racer_tui.app.screens.train_dialog import TrainDialog
 from racer_tui.app.screens.training import TrainingScreen
 from racer_tui.app.screens.welcome import WelcomeScreen
 from racer_tui.app.widgets.chart import LineChart
@@ -89,7 +90,7 @@ async def test_a_new_user_goes_from_the_demo_race_to_the_leaderboard(
             # Train it: t asks for the time budget, then the child trains and the charts fill.
             await pilot.press("t")
             await settle(pilot)
-            assert isinstance(app.screen, InputDialog)
+            assert isinstance(app.screen, TrainDialog)
             await pilot.press("ctrl+a", "ctrl+k", *BUDGET_MINUTES, "enter")
             on_top = current_screen(app)
             assert isinstance(on_top, TrainingScreen)

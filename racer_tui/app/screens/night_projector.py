@@ -106,8 +106,9 @@ def standings_table(
     points; at most `rows` rows, the last saying how many more there are."""
     table = Table(box=box.SIMPLE_HEAD, expand=True, padding=(0, 1), show_edge=False)
     table.add_column("#", justify="right", style="bold", width=3)
+    # The car takes a little more: "blue (physical)" was cut beside a half-empty racer.
     table.add_column("racer", ratio=3, no_wrap=True, overflow="ellipsis")
-    table.add_column("car", ratio=3, no_wrap=True, overflow="ellipsis")
+    table.add_column("car", ratio=4, no_wrap=True, overflow="ellipsis")
     table.add_column(SCORE_TITLES[state.night.rules.ranking], justify="right", width=9)
     if not narrow:
         table.add_column("gap", justify="right", width=8)

@@ -34,8 +34,9 @@ def split_opponents(text: str) -> tuple[str, ...]:
 
 
 class TrainDialog(FormDialog[TrainAnswer]):
-    """Minutes, then opponents; Enter in the minutes moves on, in the opponents trains.
-    `minutes_problem` and `opponents_problem` say what is wrong with a field, or None."""
+    """Minutes, then opponents (Tab reaches them); Enter in either field trains, as the
+    budget's Enter always did: most trainings name no opponent. `minutes_problem` and
+    `opponents_problem` say what is wrong with a field, or None."""
 
     COMPACT_FIELDS_BELOW_ROWS = 24  # two fields and their words fit 60x20 one row high
 
@@ -71,11 +72,7 @@ class TrainDialog(FormDialog[TrainAnswer]):
     def on_mount(self) -> None:
         self.focus_first(self.query_one("#minutes", Input))
 
-    @on(Input.Submitted, "#minutes")
-    def _next_field(self) -> None:
-        self.query_one("#opponents", Input).focus()
-
-    @on(Input.Submitted, "#opponents")
+    @on(Input.Submitted)
     @on(Button.Pressed, "#confirm")
     def _confirm(self) -> None:
         minutes = self.query_one("#minutes", Input).value.strip()

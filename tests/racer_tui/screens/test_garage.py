@@ -19,6 +19,7 @@ from racer_tui.app.keys_as_delivered import burst, drain
 from racer_tui.app.screens.dialogs import ConfirmDialog, ImportDialog, InputDialog
 from racer_tui.app.screens.garage import GarageScreen
 from racer_tui.app.screens.race_screen import RaceScreen
+from racer_tui.app.screens.train_dialog import TrainDialog
 from racer_tui.app.widgets.model_detail import ModelDetail
 from sim.garage.bundle import read_bundle
 from sim.garage.folder import list_models, open_model
@@ -433,9 +434,9 @@ async def test_the_train_dialog_offers_the_last_budget_and_refuses_less_than_a_m
         await pilot.press("t")
         await settle(pilot)
         dialog = app.screen
-        assert isinstance(dialog, InputDialog)
-        assert dialog.query_one(Input).value == "7.5"  # not the model's 60 again
-        dialog.query_one(Input).value = "0"
+        assert isinstance(dialog, TrainDialog)
+        assert dialog.query_one("#minutes", Input).value == "7.5"  # not the model's 60 again
+        dialog.query_one("#minutes", Input).value = "0"
         await pilot.press("enter")
         assert app.screen is dialog  # refused in the dialog
         assert "from 1 to 100000 minutes" in str(dialog.query_one("#problem").render())

@@ -181,7 +181,7 @@ async def test_a_new_host_runs_a_mixed_night_from_opening_to_season_points(
         assert "is closed" in notes.text("warning")
         shown = await projector_shows(pilot, nights)
         assert "final standings" in shown and "The night is over" in shown
-        assert "updates itself" not in shown and "its standings are final" in shown
+        assert "updates itself" not in shown and "the standings are final" in shown
 
         await pilot.press("x")  # the final standings with points, for the league's site
         app.screen.query_one("#answer", Input).value = str(tmp_path / "friday.md")

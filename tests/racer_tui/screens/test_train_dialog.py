@@ -47,7 +47,7 @@ async def test_a_model_trains_among_the_cars_named(monkeypatch: pytest.MonkeyPat
         await settle(pilot)
         requested = await _dialog(pilot, monkeypatch)
         await _type(pilot, "#minutes", "3")
-        await pilot.press("enter")  # on to the opponents
+        await pilot.press("tab")  # on to the opponents (Enter in the budget trains)
         assert app.focused is app.screen.query_one("#opponents", Input)
         await _type(pilot, "#opponents", "nobody-here")
         await pilot.press("enter")
