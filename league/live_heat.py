@@ -113,19 +113,42 @@ def is_fresh(written_at: float, now: float | None = None) -> bool:
     return -STALE_SECONDS < moment - written_at <= STALE_SECONDS
 
 
-def write_live_file(path: Path, data: Any) -> bool:
-    """Write a live file whole (atomically); whether it was written. Not synced to disk:
-    the file is worth a second of the race, and a sync could hold up a timekeeper's key."""
-    try:
-        write_text_atomic(path, json.dumps(data, sort_keys=True), durable=False)
-    except OSError:
-        return False
-    return True
+class LiveFile:
+    """One live file's writing, for a heat or a match: when a write is due (a change at
+    once, a moving car every MOVING_SECONDS, otherwise the heartbeat), the write itself,
+    and its removal when the race is left. A failed write never stops the race: the
+    projector is a bonus, the race is not."""
 
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.writes = 0
+        self._last_at = -math.inf
+        self._written = False
 
-def remove_live_file(path: Path) -> None:
-    with contextlib.suppress(OSError):  # stale within seconds anyway
-        path.unlink(missing_ok=True)
+    def due(self, *, changed: bool, moved: bool, now: float) -> bool:
+        since = now - self._last_at
+        return (
+            not self._written
+            or changed
+            or (moved and since >= MOVING_SECONDS)
+            or since >= HEARTBEAT_SECONDS
+        )
+
+    def write(self, data: Any, now: float) -> bool:
+        """Write the file whole (atomically); whether it was written. Not synced to disk:
+        it is worth a second of the race, and a sync could hold up a timekeeper's key."""
+        try:
+            write_text_atomic(self.path, json.dumps(data, sort_keys=True), durable=False)
+        except OSError:
+            return False
+        self._last_at, self._written = now, True
+        self.writes += 1
+        return True
+
+    def clear(self) -> None:
+        with contextlib.suppress(OSError):  # stale within seconds anyway
+            self.path.unlink(missing_ok=True)
+        self._written = False
 
 
 def _parse(data: Any) -> LiveHeat | None:
@@ -219,7 +242,7 @@ class LiveHeatWriter:
     def __init__(
         self, path: Path, *, night_id: str, heat_id: str, heat_number: int, racer: str, car: str
     ) -> None:
-        self.path = path
+        self.file = LiveFile(path)
         self.heat = LiveHeat(
             night_id=night_id,
             heat_id=heat_id,
@@ -234,9 +257,14 @@ class LiveHeatWriter:
             offtracks=0,
             limit=None,
         )
-        self.writes = 0
-        self._last_at = -math.inf
-        self._written = False
+
+    @property
+    def path(self) -> Path:
+        return self.file.path
+
+    @property
+    def writes(self) -> int:
+        return self.file.writes
 
     def publish(
         self,
@@ -256,16 +284,14 @@ class LiveHeatWriter:
         gone by, or the heartbeat is due; whether it did."""
         moment = time.time() if now is None else now
         last = self.heat
-        changed = not self._written or (
-            last.state,
-            last.lap,
-            last.offtracks,
-            last.best_lap,
-            len(last.laps),
-        ) != (state, lap, offtracks, best_lap, len(laps))
-        since = moment - self._last_at
-        moved = car_at != last.car_at and since >= MOVING_SECONDS
-        if not changed and not moved and since < HEARTBEAT_SECONDS:
+        changed = (last.state, last.lap, last.offtracks, last.best_lap, len(last.laps)) != (
+            state,
+            lap,
+            offtracks,
+            best_lap,
+            len(laps),
+        )
+        if not self.file.due(changed=changed, moved=car_at != last.car_at, now=moment):
             return False
         heat = replace(
             last,
@@ -280,12 +306,10 @@ class LiveHeatWriter:
             laps=laps[-MAX_LAPS:],
             car_at=car_at,
         )
-        if not write_live_file(self.path, asdict(heat)):
+        if not self.file.write(asdict(heat), moment):
             return False
-        self.heat, self._last_at, self._written = heat, moment, True
-        self.writes += 1
+        self.heat = heat
         return True
 
     def clear(self) -> None:
-        remove_live_file(self.path)
-        self._written = False
+        self.file.clear()

@@ -22,17 +22,14 @@ from typing import Any
 
 from league.live_heat import (
     FOLDER,
-    HEARTBEAT_SECONDS,
     MAX_TEXT,
-    MOVING_SECONDS,
+    LiveFile,
     is_amount,
     is_count,
     is_fresh,
     is_place,
     is_shown_text,
     read_live_file,
-    remove_live_file,
-    write_live_file,
 )
 
 SUFFIX = ".match.json"
@@ -199,7 +196,7 @@ class LiveMatchWriter:
         lap_count: int | None,
         racers: Sequence[tuple[str, str]],  # (racer, car) in grid order
     ) -> None:
-        self.path = path
+        self.file = LiveFile(path)
         self.match = LiveMatch(
             night_id=night_id,
             match_id=match_id[:MAX_TEXT],
@@ -212,9 +209,10 @@ class LiveMatchWriter:
                 for k, (racer, car) in enumerate(racers)
             ),
         )
-        self.writes = 0
-        self._last_at = -math.inf
-        self._written = False
+
+    @property
+    def path(self) -> Path:
+        return self.file.path
 
     def publish(
         self,
@@ -240,24 +238,18 @@ class LiveMatchWriter:
 
         kept = tuple(incidents[-INCIDENTS_KEPT:])
         changed = (
-            not self._written
-            or last.state != state
-            or standing(last.cars) != standing(named)
-            or kept != last.incidents
+            last.state != state or standing(last.cars) != standing(named) or kept != last.incidents
         )
-        since = moment - self._last_at
-        moved = [c.at for c in named] != [c.at for c in last.cars] and since >= MOVING_SECONDS
-        if not changed and not moved and since < HEARTBEAT_SECONDS:
+        moved = [c.at for c in named] != [c.at for c in last.cars]
+        if not self.file.due(changed=changed, moved=moved, now=moment):
             return False
         match = replace(
             last, state=state, clock=max(clock, 0.0), cars=named, written_at=moment, incidents=kept
         )
-        if not write_live_file(self.path, asdict(match)):
+        if not self.file.write(asdict(match), moment):
             return False
-        self.match, self._last_at, self._written = match, moment, True
-        self.writes += 1
+        self.match = match
         return True
 
     def clear(self) -> None:
-        remove_live_file(self.path)
-        self._written = False
+        self.file.clear()
