@@ -9,10 +9,13 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from typing import Protocol
+from typing import Any, Protocol
 
+from textual.app import App
 from textual.binding import Binding, BindingType
 from textual.notifications import SeverityLevel
+
+from racer_tui.app.screens.dialogs import ask
 
 SPEEDS = (1, 2, 4)
 
@@ -108,6 +111,12 @@ class _PlaybackView(Protocol):
     @property
     def finish_shown(self) -> bool: ...
 
+    @property
+    def unfinished_race(self) -> str: ...
+
+    @property
+    def app(self) -> App[Any]: ...
+
     def refresh_bindings(self) -> None: ...
 
     def notify(
@@ -175,11 +184,27 @@ class PlaybackKeys:
     def action_skip_to_end(self: _PlaybackView) -> None:
         """Jump to the end of the race: to the newest tick worked out, and on with each new
         one until the finish, however long the simulation still takes (space or a speed key
-        goes back to playing it)."""
-        if self.ticks:
-            was_paused = self.clock.paused
-            self.clock.skip_to_end()
-            if was_paused:
-                self.refresh_bindings()
-            self._frame()
-            self._update_panel(force=True)
+        goes back to playing it). A race the room is watching (a night's heat, a bracket
+        match) is asked first: one key would cut its show on every screen."""
+        if not self.ticks or self.clock.to_end:
+            return
+        if self.unfinished_race and not self.finish_shown:
+            ask(
+                self.app,
+                "Show the finish now?",
+                "The race jumps to its finish here and on the venue's screens. Its result "
+                "is the same; the room only misses the rest of the show.",
+                lambda yes: PlaybackKeys._skip_to_end(self) if yes else None,
+                confirm_label="Show the finish",
+                cancel_label="Keep watching",
+            )
+            return
+        PlaybackKeys._skip_to_end(self)
+
+    def _skip_to_end(self: _PlaybackView) -> None:
+        was_paused = self.clock.paused
+        self.clock.skip_to_end()
+        if was_paused:
+            self.refresh_bindings()
+        self._frame()
+        self._update_panel(force=True)

@@ -680,6 +680,12 @@ class NightsScreen(RacerScreen[None]):
         # leave a dialog or a heat): here, where a host tried them, they say so.
         Binding("1,2,3,4,5", "sections_hint", show=False),
     ]
+    # At 60 columns the long labels leave out c and p, the keys a host needs by the end.
+    FOOTER_SHORT_LABELS: ClassVar[dict[str, str]] = {
+        "open_night": "Open",
+        "add_entrant": "Add",
+        "close_night": "Close",
+    }
     AUTO_FOCUS = "#nights"
     DEFAULT_CSS = """
     NightsScreen #nights-body { height: 1fr; }

@@ -15,13 +15,15 @@ the screen's order, disabled ones dim, and on the right the command palette's ke
 there is room. Below `COMPACT_WIDTH` the padding goes, and so does the palette key (the
 header shows it too). Keys that still do not fit are left out by priority rather than cut
 at the edge: a screen's own keys in the order it declares them, and the help key always,
-since the help screen (and the command palette) lists every key. A click on a key presses
-it; hovering shows its tooltip.
+since the help screen (and the command palette) lists every key. Before any key is left
+out, a screen's shorter labels (`FOOTER_SHORT_LABELS`, by action: "Close" for "Close
+night") take the place of the long ones, so a narrow terminal keeps a busy screen's keys.
+A click on a key presses it; hovering shows its tooltip.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from rich.cells import cell_len
@@ -47,6 +49,7 @@ class ShownKey:
     action: str
     enabled: bool
     tooltip: str
+    short: str = ""  # the label where the line is short of room ("": the description)
 
 
 @dataclass(frozen=True)
@@ -65,6 +68,7 @@ def screen_keys(screen: Screen[Any]) -> tuple[tuple[ShownKey, ...], ShownKey | N
     keys: list[ShownKey] = []
     actions: set[str] = set()
     palette: ShownKey | None = None
+    short_labels: dict[str, str] = getattr(screen, "FOOTER_SHORT_LABELS", {})
     for key, (_, binding, enabled, tooltip) in screen.active_bindings.items():
         shown = ShownKey(
             key=binding.key,
@@ -73,6 +77,7 @@ def screen_keys(screen: Screen[Any]) -> tuple[tuple[ShownKey, ...], ShownKey | N
             action=binding.action,
             enabled=enabled,
             tooltip=tooltip or binding.tooltip,
+            short=short_labels.get(binding.action, ""),
         )
         if key == palette_binding:
             palette = shown
@@ -91,7 +96,10 @@ def key_width(key: ShownKey, *, compact: bool) -> int:
 
 
 def fitting(keys: tuple[ShownKey, ...], room: int, *, compact: bool) -> list[ShownKey]:
-    """The keys that fit in `room` cells, by priority (declared order, help always)."""
+    """The keys that fit in `room` cells, by priority (declared order, help always),
+    with their short labels if that is what it takes to keep them all."""
+    if sum(key_width(key, compact=compact) for key in keys) > room:
+        keys = tuple(replace(key, description=key.short or key.description) for key in keys)
     helps = [key for key in keys if key.action.endswith(HELP_ACTION)]
     room -= sum(key_width(key, compact=compact) for key in helps)
     kept: list[ShownKey] = []

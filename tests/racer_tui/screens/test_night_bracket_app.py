@@ -14,6 +14,7 @@ from league.live_match import live_match_path, read_live_match
 from league.opening import open_league
 from league.store import default_db_path
 from racer_tui.app.application import create_app
+from racer_tui.app.screens.dialogs import ConfirmDialog
 from racer_tui.app.screens.head_to_head_screen import HeadToHeadScreen
 from racer_tui.app.screens.night_bracket import DrawBracketDialog
 from racer_tui.app.screens.night_projector import NightProjectorScreen
@@ -39,7 +40,9 @@ async def race_the_next_match(pilot: Pilot[Any], nights: NightsScreen, night_id:
     on_air = read_live_match(path, night_id)
     assert on_air is not None and on_air.title == "Final" and on_air.match_id == "W1-1"
     assert [car.racer for car in on_air.cars] == ["dee", "cy"]  # the grid: higher seed first
-    await pilot.press("e")  # to the end
+    await pilot.press("e")  # to the end, asked: the room is watching
+    assert isinstance(pilot.app.screen, ConfirmDialog)
+    await pilot.press("y")
     await wait_for(pilot, lambda: view.at_end and view.result is not None)
     await wait_for(pilot, lambda: getattr(read_live_match(path, night_id), "state", "") == "over")
     await pilot.press("escape")

@@ -155,7 +155,7 @@ async def test_a_new_host_runs_a_mixed_night_from_opening_to_season_points(
             else:
                 assert isinstance(heat, RaceScreen)
                 await wait_for(pilot, lambda: read_live_heat(live_file, night.id) is not None)
-                await pilot.press("e", "escape")
+                await pilot.press("e", "y", "escape")  # the finish at once, asked
                 await settle(pilot)
             assert app.screen is nights
             assert not live_file.exists()  # the heat is over: the projector shows none

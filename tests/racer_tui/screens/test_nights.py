@@ -421,7 +421,11 @@ async def test_a_heat_is_recorded_as_its_finish_shows_and_never_left_silently() 
         await settle(pilot)
         heat = app.screen
         assert isinstance(heat, RaceScreen)
-        await pilot.press("e")  # its finish at once: recorded while the view stays
+        await pilot.press("e")  # the room is watching: asked before its show is cut
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("n")  # kept watching: nothing jumped
+        assert app.screen is heat and not heat.clock.to_end
+        await pilot.press("e", "y")  # its finish at once: recorded while the view stays
         await settle(pilot)
         assert app.screen is heat and heats_raced() == 1
         assert RECORDED in painted(heat.query_one("#race-facts"))

@@ -24,8 +24,9 @@ from textual.widgets._footer import FooterKey
 from racer_tui.app.application import create_app
 from racer_tui.app.screens.dialogs import ConfirmDialog
 from racer_tui.app.screens.help import HelpScreen
-from racer_tui.app.widgets.footer import RacerFooter
+from racer_tui.app.widgets.footer import RacerFooter, ShownKey, fitting
 from sim.garage.options import new_model
+from tests.racer_tui.screens.test_nights import the_nights_screen
 from tests.racer_tui.screens.tui_helpers import painted, settle
 
 
@@ -239,3 +240,38 @@ async def test_at_80_columns_the_later_keys_give_way_and_help_stays() -> None:
         line = painted(pilot.app.screen.query_one(RacerFooter))
         assert "Delta the last key" in line
         assert line.rstrip().endswith("^p palette")
+
+
+def _key(key: str, description: str, short: str = "") -> ShownKey:
+    action = "app.help" if key == "?" else f"do_{key}"
+    return ShownKey(key, key, description, action, True, "", short)
+
+
+def test_short_labels_keep_every_key_before_any_is_left_out() -> None:
+    """Issue 42's walk: at 60 columns the Nights footer left out c and p, the keys a host
+    needs by the end of a night. Short labels come first; only then do keys give way."""
+    keys = (
+        _key("o", "Open night", "Open"),
+        _key("c", "Close night", "Close"),
+        _key("p", "Projector"),
+        _key("?", "Help"),
+    )
+    wide = fitting(keys, 60, compact=True)
+    assert [key.description for key in wide] == ["Open night", "Close night", "Projector", "Help"]
+    # "o Open night c Close night p Projector ? Help " is 46 cells; the short one is 34.
+    narrow = fitting(keys, 40, compact=True)
+    assert [key.description for key in narrow] == ["Open", "Close", "Projector", "Help"]
+    tight = fitting(keys, 28, compact=True)
+    assert [key.description for key in tight] == ["Open", "Close", "Help"]
+
+
+async def test_the_nights_footer_keeps_close_and_projector_at_60_columns() -> None:
+    app = create_app(start="league")
+    async with app.run_test(size=(60, 20)) as pilot:
+        await the_nights_screen(pilot)
+        line = painted(app.screen.query_one(RacerFooter))
+        assert "c Close" in line and "p Projector" in line and "? Help" in line
+    async with create_app(start="league").run_test(size=(120, 40)) as pilot:
+        await the_nights_screen(pilot)
+        line = painted(pilot.app.screen.query_one(RacerFooter))
+        assert "c Close night" in line  # the long labels wherever they fit
