@@ -9,9 +9,11 @@ two entrants' cars under the bracket's rules, recorded as a head-to-head race na
 night and the match (`record_match`); the car first past the line wins it. The bracket's
 final order is then the night's places and season points (league.bracket_records).
 
-A bracket races simulated cars: a physical car's match needs the timekeeper for two cars,
-which is not built yet, so the bracket seeds the simulated qualifiers and leaves physical
-cars out (`qualifiers` says which, for the front ends to tell the host).
+A bracket races one kind of car: simulated cars race each other in the simulator, and
+physical cars on the real track, each match timed by hand for both cars at once
+(league.timekeeper.match). The host draws it from the night's simulated qualifiers (the
+default) or its physical ones (`physical`); the other kind is left out, and `qualifiers`
+says which, for the front ends to tell the host.
 """
 
 from __future__ import annotations
@@ -51,6 +53,11 @@ class MatchCars:
     first: Entrant
     second: Entrant
 
+    @property
+    def physical(self) -> bool:
+        """Two physical cars: the match is timed by hand on the real track."""
+        return is_physical(self.first.model)
+
 
 def draw_night_bracket(
     league: League,
@@ -59,8 +66,10 @@ def draw_night_bracket(
     format: Format = Format.SINGLE,
     size: int | None = None,
     rules: RaceRules = HEAD_TO_HEAD_RULES,
+    physical: bool = False,
 ) -> NightBracket:
-    """Seed the night's bracket from its standings and store it (once per night)."""
+    """Seed the night's bracket from its standings and store it (once per night): its
+    simulated qualifiers, or its physical ones (`physical`)."""
     if rules.race_type is not RaceType.HEAD_TO_MODEL:
         raise LeagueError("a bracket's matches are head-to-head races: give head-to-head rules.")
     with league.transaction():
@@ -75,7 +84,7 @@ def draw_night_bracket(
         undrawn = [e for e in entrants(league, night) if e.id not in raced]
         if waiting or undrawn:
             raise LeagueError(still_qualifying(night, waiting + len(undrawn)))
-        seeds = _qualified(league, night, size)
+        seeds = _qualified(league, night, size, physical)
         drawn_id = store_bracket(league, night.id, [e.id for e in seeds], format, rules)
         drawn = read_bracket(league, night.id)
     assert drawn is not None and drawn.id == drawn_id
@@ -92,9 +101,8 @@ def still_qualifying(night: Night, waiting: int) -> str:
 
 
 def qualifiers(league: League, night: Night) -> tuple[list[Entrant], list[Entrant]]:
-    """The entrants with a counting qualifying result, best first: those a bracket can
-    seed, and the physical cars it leaves out (a match is a simulated race; the
-    timekeeper times one car at a time)."""
+    """The entrants with a counting qualifying result, best first: the simulated cars and
+    the physical ones (a bracket races one kind)."""
     by_race = {heat.race_id: heat.entrant for heat in heats(league, night) if heat.race_id}
     placed = [
         by_race[s.entry.record_id]
@@ -106,32 +114,54 @@ def qualifiers(league: League, night: Night) -> tuple[list[Entrant], list[Entran
 
 
 def left_out_note(league: League, night: Night) -> str:
-    """The sentence telling the host which physical cars the bracket left out ("" for
-    none)."""
-    _, physical = qualifiers(league, night)
-    if not physical:
+    """The sentence telling the host which cars the night's bracket left out, the other
+    kind than it races ("" for none, or no bracket)."""
+    drawn = read_bracket(league, night.id)
+    if drawn is None:
         return ""
-    names = ", ".join(entrant.display_name for entrant in physical)
-    verb = "is" if len(physical) == 1 else "are"
+    simulated, physical = qualifiers(league, night)
+    racing_physical = bracket_is_physical(league, night)
+    left = simulated if racing_physical else physical
+    if not left:
+        return ""
+    names = ", ".join(entrant.display_name for entrant in left)
+    verb = "is" if len(left) == 1 else "are"
+    if racing_physical:
+        return (
+            f"Simulated cars are left out of the bracket ({names} {verb}): its matches are "
+            "raced by physical cars on the real track."
+        )
     return (
         f"Physical cars are left out of the bracket ({names} {verb}): its matches are "
-        "simulated races, and the timekeeper times one car at a time."
+        "simulated races (draw it from the physical cars to race them on the track)."
     )
 
 
-def _qualified(league: League, night: Night, size: int | None) -> list[Entrant]:
-    """The entrants the bracket seeds, best simulated qualifier first."""
-    placed, physical = qualifiers(league, night)
+def bracket_is_physical(league: League, night: Night) -> bool:
+    """Whether the night's bracket races physical cars (its seeds are)."""
+    drawn = read_bracket(league, night.id)
+    if drawn is None or not drawn.bracket.seeds:
+        return False
+    by_id = {entrant.id: entrant for entrant in entrants(league, night)}
+    first = by_id.get(drawn.bracket.seeds[0])
+    return first is not None and is_physical(first.model)
+
+
+def _qualified(league: League, night: Night, size: int | None, physical: bool) -> list[Entrant]:
+    """The entrants the bracket seeds, best qualifier of its kind first."""
+    simulated, physical_cars = qualifiers(league, night)
+    placed, others = (physical_cars, simulated) if physical else (simulated, physical_cars)
+    kind, other = ("physical", "simulated") if physical else ("simulated", "physical")
     count = len(placed) if size is None else size
     if not MIN_ENTRANTS <= count <= min(len(placed), MAX_ENTRANTS):
         left_out = (
-            f", physical cars left out ({', '.join(e.display_name for e in physical)})"
-            if physical
+            f", {other} cars left out ({', '.join(e.display_name for e in others)})"
+            if others
             else ""
         )
         raise LeagueError(
             f"a bracket of {count} needs {count} racers with a counting qualifying result in "
-            f"a simulated car; league night {night.name!r} has {len(placed)}{left_out} (a "
+            f"a {kind} car; league night {night.name!r} has {len(placed)}{left_out} (a "
             f"bracket takes {MIN_ENTRANTS} to {MAX_ENTRANTS})."
         )
     return placed[:count]

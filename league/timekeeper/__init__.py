@@ -7,5 +7,6 @@ pause together, Capture Lap, Car Reset counted against the lap in progress (a la
 resets than the rules allow does not count), undo of a false finish or a reset too many,
 did-not-finish, and a race that ends at the first capture after its time is up (the lap in
 progress when the clock reaches zero may still be finished). `heat` is the state machine;
-`feed` reads an automatic timer's lines.
+`match` times two physical cars of a bracket match at once; `journal` keeps either's
+inputs so a stopped racer-tui resumes it; `feed` reads an automatic timer's lines.
 """

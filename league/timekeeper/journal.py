@@ -17,6 +17,9 @@ leaves at most a torn last line, which is ignored; nothing is synced to disk, wh
 killed process does not need. Times are seconds since the heat's first input, on its own
 timekeeper's clock. A file that cannot be read, or does not replay, is no journal: the
 heat starts afresh, as it did before journals.
+
+A physical bracket match (league.timekeeper.match) keeps the same journal: its header says
+how many cars it has, and each input line names its car as a fourth item.
 """
 
 from __future__ import annotations
@@ -26,9 +29,11 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any, BinaryIO, Protocol
 
 from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat
+from league.timekeeper.match import TimekeptMatch
+from sim.race.head_to_head import MAX_CARS, MIN_CARS
 from sim.race.rules import RaceRules
 
 FORMAT = 1
@@ -52,6 +57,24 @@ _INPUTS: dict[str, Callable[[TimekeptHeat, float, int | None], str]] = {
     "end": lambda heat, at, _: heat.end(at),
 }
 INPUTS = tuple(_INPUTS)
+# A match's inputs: those about one car name it (`car`, its grid index).
+_MATCH_INPUTS: dict[str, Callable[[TimekeptMatch, float, int | None, int], str]] = {
+    "start_or_pause": lambda match, at, _, __: match.start_or_pause(at),
+    "capture": lambda match, at, _, car: match.capture(car, at),
+    "reset": lambda match, at, _, car: match.reset(car, at),
+    "undo_reset": lambda match, at, _, car: match.undo_reset(car, at),
+    "undo_capture": lambda match, at, _, car: match.undo_capture(car, at),
+    "retire": lambda match, at, _, car: match.retire(car, at),
+    "strike": lambda match, at, lap, car: match.strike(car, lap or 0, at),
+    "end": lambda match, at, _, __: match.end(at),
+}
+MATCH_INPUTS = tuple(_MATCH_INPUTS)
+
+Input = tuple[str, float, int | None, int | None]  # kind, at, lap, car (a match's)
+
+
+class _Timed(Protocol):
+    started_at: str
 
 
 def journal_path(league_file: Path, heat_id: str) -> Path:
@@ -63,34 +86,59 @@ def take_input(heat: TimekeptHeat, kind: str, at: float, lap: int | None = None)
     return _INPUTS[kind](heat, at, lap)
 
 
+def take_match_input(
+    match: TimekeptMatch, kind: str, at: float, lap: int | None = None, car: int = 0
+) -> str:
+    """Give `match` one input (about car `car`, where it is about one); what it says, or
+    TimekeeperError when the match refuses it."""
+    return _MATCH_INPUTS[kind](match, at, lap, car)
+
+
 @dataclass
 class HeatJournal:
     """The inputs one heat took, appended to `path` as they come."""
 
     path: Path
-    heat_id: str
+    heat_id: str  # a match's: its night's id and its own, "<night id>-W1-1"
     started_at: str = ""  # the heat's own start, wall time (TimekeptHeat.started_at)
-    inputs: list[tuple[str, float, int | None]] = field(default_factory=list)
+    inputs: list[Input] = field(default_factory=list)
     beat: float = 0.0  # how long the heat had been going at the last heartbeat
+    cars: int | None = None  # a match's cars; None for a heat's one
     _file: BinaryIO | None = field(default=None, repr=False)
 
-    def took(self, kind: str, at: float, heat: TimekeptHeat, lap: int | None = None) -> None:
-        """Note an input the heat has just taken (never one it refused)."""
+    def took(
+        self,
+        kind: str,
+        at: float,
+        heat: _Timed,
+        lap: int | None = None,
+        car: int | None = None,
+    ) -> None:
+        """Note an input the heat (or match) has just taken (never one it refused); a
+        match's names its car, or 0 for one about every car."""
         if self._file is None and not self.inputs:  # the heat's first input: a new file
             self.started_at = heat.started_at
-            header = {"format": FORMAT, "heat_id": self.heat_id, "started_at": heat.started_at}
+            header: dict[str, object] = {
+                "format": FORMAT,
+                "heat_id": self.heat_id,
+                "started_at": heat.started_at,
+            }
+            if self.cars is not None:
+                header["cars"] = self.cars
             self._append(header, new=True)
+        if self.cars is not None and car is None:
+            car = 0
         # Kept whole (JSON writes a float exactly): rounded, a lap captured at 5.01049 s
         # read 5.010 live and 5.011 once the heat was resumed (the host walk).
-        self.inputs.append((kind, at, lap))
+        self.inputs.append((kind, at, lap, car))
         self.beat = max(self.beat, at)
-        self._append([kind, at, lap])
+        self._append([kind, at, lap] if car is None else [kind, at, lap, car])
 
     def heartbeat(self, at: float) -> None:
         """While the race runs: it ran until `at` (written at most every BEAT_SECONDS)."""
         if self.inputs and at - self.beat >= BEAT_SECONDS:
             self.beat = at
-            self._append([BEAT, at, None])
+            self._append([BEAT, at, None] if self.cars is None else [BEAT, at, None, 0])
 
     def close(self) -> None:
         if self._file is not None:
@@ -137,9 +185,11 @@ def resume_heat(
     journal = _read(path, heat_id)
     if journal is None or not journal.inputs:
         return None
+    if journal.cars is not None:
+        return None  # a match's journal (`resume_match`)
     heat = TimekeptHeat(rules)
     try:
-        for kind, at, lap in journal.inputs:
+        for kind, at, lap, _ in journal.inputs:
             take_input(heat, kind, at, lap)
     except TimekeeperError:
         return None  # not what this heat's rules and inputs make: not this heat's journal
@@ -150,6 +200,48 @@ def resume_heat(
     heat.started_at = journal.started_at or heat.started_at
     heat.floor_seconds = floor_seconds
     return Resumed(heat, journal, at, stopped)
+
+
+@dataclass(frozen=True)
+class ResumedMatch:
+    """A match rebuilt from its journal, stopped where the journal ends."""
+
+    match: TimekeptMatch
+    journal: HeatJournal
+    at: float
+    stopped: bool
+
+    def accept(self) -> None:
+        if self.stopped:
+            self.journal.took("start_or_pause", self.at, self.match)
+
+
+def resume_match(
+    path: Path,
+    match_key: str,
+    rules: RaceRules,
+    cars: int,
+    *,
+    floor_seconds: float | None = None,
+) -> ResumedMatch | None:
+    """The match `match_key` (its journal's `heat_id`) as its journal left it, or None, as
+    `resume_heat` says."""
+    journal = _read(path, match_key)
+    if journal is None or not journal.inputs or journal.cars != cars:
+        return None
+    match = TimekeptMatch(rules, cars)
+    try:
+        for kind, at, lap, car in journal.inputs:
+            take_match_input(match, kind, at, lap, car or 0)
+    except TimekeeperError:
+        return None
+    at = max(journal.beat, journal.inputs[-1][1])
+    stopped = match.phase is Phase.RUNNING
+    if stopped:
+        take_match_input(match, "start_or_pause", at)
+    match.started_at = journal.started_at or match.started_at
+    match.floor_seconds = floor_seconds
+    return ResumedMatch(match, journal, at, stopped)
 
 
 def _read(path: Path, heat_id: str) -> HeatJournal | None:
@@ -174,21 +266,33 @@ def _parse(items: list[Any], path: Path, heat_id: str) -> HeatJournal | None:
         return None
     if header.get("heat_id") != heat_id or not isinstance(header.get("started_at"), str):
         return None
-    parsed: list[tuple[str, float, int | None]] = []
+    cars = header.get("cars")
+    if cars is not None and (not _whole(cars) or not MIN_CARS <= cars <= MAX_CARS):
+        return None
+    kinds = _INPUTS if cars is None else _MATCH_INPUTS
+    parsed: list[Input] = []
     last = 0.0
     for item in rest:
-        if not isinstance(item, list) or len(item) != 3:
+        if not isinstance(item, list) or len(item) != (3 if cars is None else 4):
             return None
-        kind, at, lap = item
-        if (kind not in _INPUTS and kind != BEAT) or not _seconds(at) or at < last:
+        kind, at, lap = item[:3]
+        car: int | None = None
+        if cars is not None:
+            if not (_whole(item[3]) and 0 <= item[3] < cars):
+                return None
+            car = item[3]
+        if (kind not in kinds and kind != BEAT) or not _seconds(at) or at < last:
             return None
-        if lap is not None and (isinstance(lap, bool) or not isinstance(lap, int)):
+        if lap is not None and not _whole(lap):
             return None
         last = float(at)
         if kind != BEAT:
-            parsed.append((kind, last, lap))
-    journal = HeatJournal(path, heat_id, header["started_at"][:40], parsed, last)
-    return journal
+            parsed.append((kind, last, lap, car))
+    return HeatJournal(path, heat_id, header["started_at"][:40], parsed, last, cars)
+
+
+def _whole(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def _seconds(value: Any) -> bool:

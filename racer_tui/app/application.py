@@ -58,6 +58,7 @@ from racer_tui.app.screens.evaluation import EvaluationScreen
 from racer_tui.app.screens.garage import GarageScreen
 from racer_tui.app.screens.help import HelpScreen, HelpTopic, binding_topics, declared_bindings
 from racer_tui.app.screens.league import LeagueScreen
+from racer_tui.app.screens.match_timekeeper import MatchTimekeeperScreen
 from racer_tui.app.screens.model_editor import ModelEditorScreen
 from racer_tui.app.screens.night_projector import NightProjectorScreen
 from racer_tui.app.screens.nights import AddEntrantDialog, NewNightDialog, NightsScreen
@@ -89,6 +90,7 @@ OTHER_SCREENS: tuple[tuple[str, type[DOMNode]], ...] = (
     ("Race view", RaceScreen),
     ("League nights", NightsScreen),
     ("Timekeeper (a physical car's heat)", TimekeeperScreen),
+    ("Timekeeper of a bracket match (two physical cars)", MatchTimekeeperScreen),
     ("Night projector", NightProjectorScreen),
     ("Evaluation", EvaluationScreen),
     ("Coach (a lap against the limit lap)", CoachScreen),

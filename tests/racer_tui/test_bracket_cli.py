@@ -58,3 +58,22 @@ def test_a_bracket_night_from_qualifying_to_its_champion(
         capsys, "night", "add", "Cup", "--racer", "dee", "--model", "reference", *db
     )
     assert code == 2 and "closed" in err
+
+
+def test_a_physical_bracket_is_drawn_here_and_timed_in_the_app(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    from league.opening import open_league
+    from tests.league.test_physical_brackets import physical_night
+
+    with open_league(tmp_path / "league.db") as league:
+        physical_night(league)
+    db = ("--db", str(tmp_path / "league.db"))
+    code, out, err = run_cli(capsys, "night", "bracket", "Garage", "--physical", *db)
+    assert code == 0, err
+    assert "bracket of 4 physical cars" in out and "the first to finish, penalties added" in out
+    assert "Simulated cars are left out of the bracket (eve, fay are)" in out
+    code, _, err = run_cli(capsys, "night", "match", "Garage", *db)
+    assert code == 2
+    assert "match W1-1 is between physical cars (ana v dan)" in err
+    assert "time it on the real track in the app's Nights screen (r)" in err

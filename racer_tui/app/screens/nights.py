@@ -90,6 +90,7 @@ from racer_tui.app.screens.dialogs import (
 )
 from racer_tui.app.screens.export_path import EXPORT_FORMATS, check_export_path, export_folder
 from racer_tui.app.screens.head_to_head_screen import HeadToHeadScreen
+from racer_tui.app.screens.match_timekeeper import MatchTimekeeperScreen, MatchTimekeeperSetup
 from racer_tui.app.screens.night_bracket import (
     BracketRequest,
     DrawBracketDialog,
@@ -1132,13 +1133,22 @@ class NightsScreen(RacerScreen[None]):
         self.post_message(HeatReady(night, waiting[0], setup))
 
     def on_match_ready(self, message: MatchReady) -> None:
-        view = HeadToHeadScreen(message.setup)
+        setup = message.setup
+        view = (
+            MatchTimekeeperScreen(setup)
+            if isinstance(setup, MatchTimekeeperSetup)
+            else HeadToHeadScreen(setup)
+        )
         self.app.push_screen(view, partial(self._match_finished, message.night, message.cars, view))
 
     def _match_finished(
-        self, night: Night, cars: MatchCars, view: HeadToHeadScreen, result: HeadToHeadResult | None
+        self,
+        night: Night,
+        cars: MatchCars,
+        view: HeadToHeadScreen | MatchTimekeeperScreen,
+        result: HeadToHeadResult | None,
     ) -> None:
-        if view.failure:
+        if isinstance(view, HeadToHeadScreen) and view.failure:
             self.notify(did_not_race(cars.match.id), severity="warning", markup=False)
             return
         if result is None:
@@ -1154,6 +1164,9 @@ class NightsScreen(RacerScreen[None]):
     def _record_match(self, night: Night, cars: MatchCars, result: HeadToHeadResult) -> None:
         with open_league(self.db_path) as league:
             record_match(league, night, cars.match.id, result)
+        # Recorded: a physical match has nothing left to resume.
+        key = f"{night.id}-{cars.match.id}"
+        journal_path(self.db_path or default_db_path(), key).unlink(missing_ok=True)
         winner = result.cars[0].result.racer
         loser = cars.second if winner == cars.first.racer else cars.first
         won = cars.first if loser is cars.second else cars.second
@@ -1170,23 +1183,24 @@ class NightsScreen(RacerScreen[None]):
             return
         # What the league would refuse, said before the dialog is filled in (the host walk).
         waiting = sum(1 for heat in state.heats if heat.race_id is None) + len(state.undrawn)
-        qualified = sum(
-            1 for s in state.standings if s.position is not None and s.entry.physics != HAND_TIMED
-        )
+        counting = [s for s in state.standings if s.position is not None]
+        qualified = sum(1 for s in counting if s.entry.physics != HAND_TIMED)
+        physical = len(counting) - qualified
         problem = None
         if state.bracket is not None:
             problem = f"{night.name}'s bracket is drawn already; r races its next match."
         elif waiting:
             problem = sentence(still_qualifying(night, waiting))
-        elif qualified < MIN_ENTRANTS:
+        elif max(qualified, physical) < MIN_ENTRANTS:
             problem = (
                 f"{night.name} has {counted(qualified, 'racer')} with a counting result in a "
-                f"simulated car; a bracket needs {MIN_ENTRANTS}."
+                f"simulated car and {physical} in a physical one; a bracket races one kind, "
+                f"and needs {MIN_ENTRANTS}."
             )
         if problem is not None:
             self.notify(problem, severity="warning", markup=False)
             return
-        dialog = DrawBracketDialog(qualified)
+        dialog = DrawBracketDialog(qualified, physical)
         self.app.push_screen(dialog, partial(self._bracket_chosen, night))
 
     def _bracket_chosen(self, night: Night, request: BracketRequest | None) -> None:
@@ -1198,7 +1212,12 @@ class NightsScreen(RacerScreen[None]):
         rules = replace(HEAD_TO_HEAD_RULES, lap_count=request.laps)
         with open_league(self.db_path) as league:
             drawn = draw_night_bracket(
-                league, night, format=request.format, size=request.size, rules=rules
+                league,
+                night,
+                format=request.format,
+                size=request.size,
+                rules=rules,
+                physical=request.physical,
             )
             note = left_out_note(league, night)
         seeds = counted(len(drawn.bracket.seeds), "racer")

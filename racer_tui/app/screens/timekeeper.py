@@ -28,8 +28,7 @@ from league.live_heat import LiveHeatWriter, live_laps
 from league.timekeeper.feed import TIMER_ENV, FeedError, Trigger, follow, parse_trigger
 from league.timekeeper.heat import Phase, TimekeeperError, TimekeptHeat, physical_floor
 from league.timekeeper.journal import HeatJournal, Resumed, resume_heat, take_input
-from racer_tui.app.screens.base import RacerScreen
-from racer_tui.app.screens.dialogs import ask
+from racer_tui.app.screens.hand_timing import HandTimedScreen, lap_lines
 from racer_tui.app.screens.race_screen import countdown_text
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.lap_list import LapList
@@ -74,7 +73,7 @@ def car_hash(car: str) -> str:
     return "physical-" + hashlib.sha256(car.encode()).hexdigest()[:16]
 
 
-class TimekeeperScreen(RacerScreen[RaceResult | None]):
+class TimekeeperScreen(HandTimedScreen[RaceResult | None]):
     """Race time left and the lap in progress in big digits, the laps so far, and a key for
     everything the timekeeper does."""
 
@@ -119,7 +118,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         # The heat runs on its own time: seconds since its first input (`_heat_time`), so
         # its journal replays it in another racer-tui exactly.
         self._origin: float | None = None
-        self._journal = setup.journal
+        self.journal = setup.journal
 
     def compose(self) -> ComposeResult:
         setup = self.setup
@@ -145,7 +144,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         timer = self.setup.timer if self.setup.timer is not None else os.environ.get(TIMER_ENV)
         if timer:
             self._follow_timer(timer)
-        journal = self._journal
+        journal = self.journal
         if journal is not None:
             resumed = resume_heat(
                 journal.path, journal.heat_id, self.setup.rules, floor_seconds=self.floor_seconds
@@ -155,44 +154,31 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
 
     def _offer_to_resume(self, resumed: Resumed) -> None:
         heat = resumed.heat
-        laps = counted(len(heat.laps), "lap")
         where = (
             "with its race over"
             if heat.phase is Phase.OVER
             else f"with {countdown_text(heat.time_left(resumed.at))} left"
         )
 
-        def answered(start_again: bool | None) -> None:
-            if not start_again:  # Esc, n or Enter keep what was timed
-                self.heat = heat
-                self._origin = self.clock() - resumed.at
-                self._journal = resumed.journal
-                self._keep_journal(resumed.accept)
-                self._say(
-                    f"Resumed. {RECORD_WITH_ESC}"
-                    if heat.phase is Phase.OVER
-                    else "Resumed, paused: Space starts the clocks when the car is on the track."
-                )
-                self._draw()
-            else:
-                self._keep_journal(resumed.journal.forget)
+        def take_it_up() -> None:
+            self.heat = heat
+            self._origin = self.clock() - resumed.at
+            self.journal = resumed.journal
+            self.keep_journal(resumed.accept)
+            self._say(
+                f"Resumed. {RECORD_WITH_ESC}"
+                if heat.phase is Phase.OVER
+                else "Resumed, paused: Space starts the clocks when the car is on the track."
+            )
+            self._draw()
 
-        # Starting again throws the timed laps away, so it is the deliberate key (y), and
-        # Esc, n or Enter resume (the host walk lost a heat's laps to an Esc).
-        ask(
-            self.app,
-            "Start this heat again?",
-            f"racer-tui stopped during this heat, {where} and {laps} captured. Resume it "
-            "where it stopped, or start it again from the line, losing what was timed?",
-            answered,
-            confirm_label="Start again",
-            cancel_label="Resume",
-        )
+        laps = counted(len(heat.laps), "lap")
+        self.offer_to_resume(where, laps, take_it_up, resumed.journal.forget)
 
     def on_unmount(self) -> None:
         self._stop_feed.set()
-        if self._journal is not None:
-            self._journal.close()  # the file stays: the heat may be resumed
+        if self.journal is not None:
+            self.journal.close()  # the file stays: the heat may be resumed
         if self.setup.live is not None:
             self.setup.live.clear()  # the heat is no longer running here
 
@@ -262,18 +248,10 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         if self.heat.phase is Phase.READY:
             self._say("The race has not started; Space starts it.", error=True)
             return
-        moment = self.clock()  # the race ends when e was pressed, not when answered
-
-        def answered(yes: bool | None) -> None:
-            if yes:
-                self._input("end", moment)
-
-        ask(
-            self.app,
-            "End the race?",
+        self.ask_to_end(
+            self.clock(),  # the race ends when e was pressed, not when answered
+            lambda moment: self._input("end", moment),
             "The lap in progress does not count. The laps captured so far make the result.",
-            answered,
-            confirm_label="End race",
         )
 
     @property
@@ -301,21 +279,7 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             self.dismiss(None)
             return
 
-        def answered(yes: bool | None) -> None:
-            if yes:
-                journal = self._journal
-                if journal is not None:
-                    self._keep_journal(journal.forget)  # given up: nothing to resume
-                self.dismiss(None)
-
-        ask(
-            self.app,
-            "Leave this heat?",
-            "Its laps so far are not recorded; the heat can be run again.",
-            answered,
-            confirm_label="Leave unrecorded",
-            cancel_label="Keep timing",
-        )
+        self.ask_to_leave()
 
     # --- drawing ----------------------------------------------------------------------
 
@@ -336,27 +300,13 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         except TimekeeperError as error:
             self._say(str(error), error=True)
         else:
-            journal = self._journal
+            journal = self.journal
             if journal is not None:
-                self._keep_journal(lambda: journal.took(kind, at, self.heat, lap))
+                self.keep_journal(lambda: journal.took(kind, at, self.heat, lap))
             if self.heat.phase is Phase.OVER and not was_over:
                 said = f"{said} {RECORD_WITH_ESC}"
             self._say(said)
         self._draw()
-
-    def _keep_journal(self, write: Callable[[], None]) -> None:
-        """Write to the heat's journal; if the disk refuses, say so once and time on
-        without it: a journal is a safety net, never a reason to stop a heat."""
-        try:
-            write()
-        except OSError as error:
-            self._journal = None
-            self.notify(
-                f"This heat's journal cannot be written ({error.strerror or error}): the "
-                "timing goes on, but if racer-tui stops, this heat cannot be resumed.",
-                severity="warning",
-                markup=False,
-            )
 
     def _say(self, text: str, *, error: bool = False) -> None:
         self.said = Text(text, style="bold red" if error else "")
@@ -385,9 +335,9 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
             digits = self.query_one(selector, Digits)
             if digits.value != value:
                 digits.update(value)
-        journal = self._journal
+        journal = self.journal
         if journal is not None and heat.phase is Phase.RUNNING:
-            self._keep_journal(lambda: journal.heartbeat(now))
+            self.keep_journal(lambda: journal.heartbeat(now))
         if self.setup.live is not None:
             self.setup.live.publish(
                 state=heat.phase.value,
@@ -456,25 +406,6 @@ class TimekeeperScreen(RacerScreen[RaceResult | None]):
         the selection where it was."""
         flags = tuple(lap.struck for lap in self.heat.laps)
         added = len(flags) > len(self._laps_shown or ())
-        rules = self.setup.rules
-        lines = []
-        for lap, captured in zip(self.heat.lap_records(), self.heat.laps, strict=True):
-            # One short word each: the column is 6 wide at 60 columns, where a longer one
-            # wrapped onto a line that looked like another lap.
-            if not captured.finished:
-                verdict = Text("DNF", style="red")
-            elif captured.struck:
-                verdict = Text("struck", style="red")
-            elif lap_counts(lap, rules):
-                verdict = Text("✓", style="green")
-            else:
-                verdict = Text("✗ resets", style="red")
-            cells = (
-                str(lap.number),
-                clock_text(lap.time_seconds),
-                clock_text(lap.raw_seconds),
-                str(lap.offtracks),
-            )
-            lines.append((cells, verdict))
+        lines = lap_lines(self.heat.lap_records(), self.heat.laps, self.setup.rules)
         self.query_one(LapList).show(lines, select_last=added)
         self._laps_shown = flags

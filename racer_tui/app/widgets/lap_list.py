@@ -26,6 +26,8 @@ COLUMNS: tuple[tuple[str, int], ...] = (
     ("Resets", 7),
     ("Counts", 0),
 )
+RAW_COLUMN = 2
+FULL_WIDTH = sum(width for _, width in COLUMNS) + len("✗ resets")
 
 
 class LapList(Widget, can_focus=True):
@@ -33,7 +35,7 @@ class LapList(Widget, can_focus=True):
     (`selected`). The header counts the laps above and below the ones that fit."""
 
     DEFAULT_CSS = """
-    LapList { height: 1fr; }
+    LapList { height: 1fr; text-wrap: nowrap; text-overflow: ellipsis; }
     LapList > .lap-list--header { text-style: bold; }
     LapList > .lap-list--selected { background: $block-cursor-background; }
     LapList:focus > .lap-list--selected { text-style: bold; }
@@ -93,14 +95,17 @@ class LapList(Widget, can_focus=True):
         rows = self._rows()
         start = self.top = self._first_shown(rows)
         text = Text(no_wrap=True, overflow="ellipsis")
-        text.append(_line(tuple(title for title, _ in COLUMNS[:-1]), Text(COLUMNS[-1][0])))
+        # Narrower than every column and a verdict (a match's two lists at 60 columns):
+        # the raw time goes, the time with penalties and the verdict stay.
+        drop = (RAW_COLUMN,) if self.size.width < FULL_WIDTH else ()
+        text.append(_line(tuple(title for title, _ in COLUMNS[:-1]), Text(COLUMNS[-1][0]), drop))
         text.stylize(header_style)
         above, below = start, max(len(self.lines) - start - rows, 0)
         if above or below:  # laps that do not fit: say so, and which way they are
             text.append(f"  ↑{above} ↓{below}", style="dim")
         for index in range(start, min(start + rows, len(self.lines))):
             cells, verdict = self.lines[index]
-            line = _line(cells, verdict)
+            line = _line(cells, verdict, drop)
             if index == self.selected:
                 line.pad_right(max(self.size.width - line.cell_len, 0))
                 line.stylize(selected_style)
@@ -119,9 +124,10 @@ class LapList(Widget, can_focus=True):
         return max(top, 0)
 
 
-def _line(cells: tuple[str, ...], last: Text) -> Text:
+def _line(cells: tuple[str, ...], last: Text, drop: tuple[int, ...] = ()) -> Text:
     line = Text()
-    for cell, (_, width) in zip(cells, COLUMNS, strict=False):
-        line.append(cell.rjust(width - 1) + " ")
+    for index, (cell, (_, width)) in enumerate(zip(cells, COLUMNS, strict=False)):
+        if index not in drop:
+            line.append(cell.rjust(width - 1) + " ")
     line.append(last)
     return line

@@ -213,6 +213,11 @@ def _register_night(commands: Parsers, db: argparse.ArgumentParser) -> None:
         "--double", action="store_true", help="double elimination: out after a second loss"
     )
     bracket.add_argument(
+        "--physical",
+        action="store_true",
+        help="seed the physical cars: each match timed by hand on the real track, in the app",
+    )
+    bracket.add_argument(
         "--laps",
         type=int,
         default=HEAD_TO_HEAD_RULES.lap_count,

@@ -35,11 +35,15 @@ def bracket_command(league: League, night: Night, args: argparse.Namespace) -> i
         raise RulesError(f"--laps: a match is 1 to 99 laps, not {args.laps}.")
     rules = replace(HEAD_TO_HEAD_RULES, lap_count=args.laps)
     form = Format.DOUBLE if args.double else Format.SINGLE
-    drawn = draw_night_bracket(league, night, format=form, size=args.size, rules=rules)
+    drawn = draw_night_bracket(
+        league, night, format=form, size=args.size, rules=rules, physical=args.physical
+    )
     kind = "double" if args.double else "single"
+    cars = "physical cars, " if args.physical else ""
+    won = "the first to finish, penalties added" if args.physical else "first past the line"
     print(
         f"Drew {night.name}'s {kind}-elimination bracket of {len(drawn.bracket.seeds)} "
-        f"from its standings; each match {counted(args.laps, 'lap')}, first past the line."
+        f"{cars}from its standings; each match {counted(args.laps, 'lap')}, {won}."
     )
     note = left_out_note(league, night)
     if note:
@@ -58,6 +62,12 @@ def match_command(league: League, night: Night, limit: int | None) -> int:
         cars = next_match(league, night)
         if cars is None:
             break
+        if cars.physical:
+            raise LeagueError(
+                f"match {cars.match.id} is between physical cars ({cars.first.display_name} v "
+                f"{cars.second.display_name}): time it on the real track in the app's Nights "
+                "screen (r), a lap key for each car."
+            )
         assert drawn is not None  # next_match found the bracket
         result = _race(track, drawn, cars)
         record_match(league, night, cars.match.id, result)

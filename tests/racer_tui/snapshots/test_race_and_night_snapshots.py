@@ -101,6 +101,37 @@ def test_timekeeper_part_way(snap_compare: Compare, size: tuple[int, int]) -> No
 
 
 @SIZES
+def test_match_timekeeper_part_way(snap_compare: Compare, size: tuple[int, int]) -> None:
+    """A physical bracket match, both cars a lap done (car 2 with a reset), 3.3 s into the
+    second; car 2's laps chosen."""
+    from league.timekeeper.match import MatchCar
+    from racer_tui.app.screens.match_timekeeper import (
+        MatchTimekeeperScreen,
+        MatchTimekeeperSetup,
+    )
+
+    setup = MatchTimekeeperSetup(
+        track=resolve_track("reinvent_base"),
+        rules=replace(HEAD_TO_HEAD_RULES, lap_count=2),
+        cars=(MatchCar("[b]Ada[/b]", "red", "physical-red"), MatchCar("bo", "blue", "p-b")),
+        names=("[b]Ada[/b]", "bo"),
+        title="Final (W1-1)",
+    )
+    keeper = MatchTimekeeperScreen(setup)
+    moments = iter([0.0, 4.0, 10.0, 12.0, 12.0])
+
+    async def laps(pilot: Pilot[Any]) -> None:
+        for key in ("space", "w", "1", "2", "tab"):
+            now = next(moments)
+            keeper.clock = lambda now=now: now
+            await pilot.press(key)
+        keeper.clock = lambda: 13.3
+        await pilot.pause(0.2)  # the clocks redraw at 10 Hz
+
+    assert snap_compare(OneScreenApp(keeper), terminal_size=size, run_before=laps)
+
+
+@SIZES
 def test_night_projector_with_a_heat_running(snap_compare: Compare, size: tuple[int, int]) -> None:
     """Two heats raced, the second just now (highlighted), the third on the track."""
     from tests.racer_tui.screens.test_night_projector import (
