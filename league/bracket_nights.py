@@ -19,7 +19,7 @@ says which, for the front ends to tell the host.
 from __future__ import annotations
 
 import zlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from league.bracket_records import NightBracket, has_bracket, read_bracket, store_bracket
 from league.brackets import MAX_ENTRANTS, MIN_ENTRANTS, Format, Match
@@ -57,6 +57,16 @@ class MatchCars:
     def physical(self) -> bool:
         """Two physical cars: the match is timed by hand on the real track."""
         return is_physical(self.first.model)
+
+
+def bracket_rules(night: Night, laps: int, *, physical: bool = False) -> RaceRules:
+    """Every match's rules: simapp's head-to-head over `laps` laps; a physical bracket's
+    resets cost what the night's rules say (the `physical` preset adds no time), since
+    its cars are timed as the night's heats were."""
+    rules = replace(HEAD_TO_HEAD_RULES, lap_count=laps)
+    if physical:
+        rules = replace(rules, penalty_seconds=night.rules.penalty_seconds)
+    return rules
 
 
 def draw_night_bracket(
@@ -126,14 +136,15 @@ def left_out_note(league: League, night: Night) -> str:
         return ""
     names = ", ".join(entrant.display_name for entrant in left)
     verb = "is" if len(left) == 1 else "are"
+    after = " They are placed after the bracket's racers, in their qualifying order."
     if racing_physical:
         return (
             f"Simulated cars are left out of the bracket ({names} {verb}): its matches are "
-            "raced by physical cars on the real track."
+            f"raced by physical cars on the real track.{after}"
         )
     return (
         f"Physical cars are left out of the bracket ({names} {verb}): its matches are "
-        "simulated races (draw it from the physical cars to race them on the track)."
+        f"simulated races (draw it from the physical cars to race them on the track).{after}"
     )
 
 

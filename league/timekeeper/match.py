@@ -14,7 +14,8 @@ Where a physical match departs from a simulated one (sim.race.head_to_head), and
   the timekeeper ends it. Time up ends each car at its next capture, as in a heat.
 - **The order:** cars that completed the race's laps by race time; then the others by laps
   completed, then by the race time of their last lap. In a race for the window (no lap
-  count): most laps, then the best lap, as in a simulated race.
+  count): most laps, then the best lap, as in a simulated race. A car that retires
+  forfeits: it is behind every car that did not.
 - **No incidents:** the host times laps and resets; who touched whom is not recorded.
 """
 
@@ -111,7 +112,9 @@ class TimekeptMatch:
 
     def undo_capture(self, car: int, now: float) -> str:
         """The car's last capture was a false finish: its lap goes on (a match that this
-        capture ended is open again, paused)."""
+        capture ended is open again, paused). A retired car's laps stand."""
+        if car in self.retired:
+            raise TimekeeperError(f"Car {car + 1} is retired: its completed laps stand.")
         return self._input(car, now, lambda heat: heat.undo_capture(now))
 
     def retire(self, car: int, now: float) -> str:
@@ -158,10 +161,12 @@ class TimekeptMatch:
         return count is not None and self.cars[car].laps_completed() >= count
 
     def running_order(self) -> list[int]:
-        """The cars' grid indexes, leader first (see the module's docstring)."""
+        """The cars' grid indexes, leader first (see the module's docstring); a retired car
+        forfeits: it is behind every car that did not retire."""
 
         def key(k: int) -> tuple[float, ...]:
             heat = self.cars[k]
+            retired = 1 if k in self.retired else 0
             time = self.race_time(k)
             time_key = time if time is not None else float("inf")
             if self.rules.lap_count is None:
@@ -169,20 +174,22 @@ class TimekeptMatch:
                     (lap.time_seconds for lap in heat.lap_records() if lap.valid),
                     default=float("inf"),
                 )
-                return (-heat.laps_completed(), best, k)
-            return (0 if self.finished(k) else 1, -heat.laps_completed(), time_key, k)
+                return (retired, -heat.laps_completed(), best, k)
+            return (retired, 0 if self.finished(k) else 1, -heat.laps_completed(), time_key, k)
 
         return sorted(range(len(self.cars)), key=key)
 
     def gap_seconds(self, leader: int, car: int) -> float | None:
         """How long after the leader the car completed its latest lap (their race times at
-        that lap); None for a car with no lap, or one the leader did not complete."""
+        that lap); None for a car with no lap, one the leader did not complete, or one it
+        completed first (the leader has passed it since: how far behind is not timed)."""
         if car == leader:
             return 0.0
         theirs, leaders = self._lap_times(car), self._lap_times(leader)
         if not theirs or len(leaders) < len(theirs):
             return None
-        return round(theirs[-1] - leaders[len(theirs) - 1], 3)
+        gap = round(theirs[-1] - leaders[len(theirs) - 1], 3)
+        return gap if gap >= 0.0 else None
 
     def result(self, track: Track, cars: list[MatchCar]) -> HeadToHeadResult:
         """The match as a head-to-head result, timed on a physical track."""
@@ -251,8 +258,12 @@ class TimekeptMatch:
             raise TimekeeperError("The race was ended; nothing more is timed.")
         clock = self.race_clock(now)
         was = self.phase
+        try:
+            said = give(heat)
+        except TimekeeperError as error:  # which car it is about, in a match of two
+            raise TimekeeperError(f"Car {car + 1}: {error}") from None
         # A car's laps done end its own race, not the match's.
-        said = give(heat).replace("laps done: race over.", "laps done: finished.")
+        said = said.replace("laps done: race over.", "laps done: finished.")
         # A car whose capture was taken back, or whose lap was struck, stopped its clocks
         # in its own heat; in a race still running it drove on all the while.
         if self.phase is Phase.RUNNING and heat.phase is Phase.PAUSED:

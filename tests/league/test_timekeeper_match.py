@@ -89,13 +89,17 @@ def test_a_false_finish_taken_back_races_on_with_the_others() -> None:
 def test_a_retired_car_keeps_its_laps_and_ranks_behind_a_finisher() -> None:
     match = raced([("start_or_pause", 0.0, 0), ("capture", 10.0, 0), ("capture", 11.0, 1)])
     assert match.retire(0, 15.0) == "Car 1: retired: its completed laps stand."
-    with pytest.raises(TimekeeperError, match="over already"):
+    with pytest.raises(TimekeeperError, match="Car 1: Its race is over already"):
         match.retire(0, 16.0)
+    # The walk: u after a retire took back a lap the car had driven.
+    with pytest.raises(TimekeeperError, match="Car 1 is retired: its completed laps stand"):
+        match.undo_capture(0, 16.0)
+    assert match.running_order() == [1, 0]  # it forfeits: behind, with a lap more
     match.capture(1, 22.0)
     said = match.capture(1, 33.0)
     assert said.endswith("Every car is done: race over.")
     assert match.running_order() == [1, 0]
-    assert match.gap_seconds(1, 0) == pytest.approx(-1.0)  # it was ahead after one lap
+    assert match.gap_seconds(1, 0) is None  # it was ahead after one lap: not a gap
     result = match.result(resolve_track("reinvent_base"), CARS)
     assert [finish.laps_completed for finish in result.cars] == [3, 1]
     assert result.cars[1].finished_at is None

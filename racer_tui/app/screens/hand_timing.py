@@ -6,24 +6,64 @@ each car's laps the same way."""
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from rich.text import Text
+from textual import events
 
 from league.timekeeper.heat import CapturedLap
 from league.timekeeper.journal import HeatJournal
 from racer_tui.app.screens.base import RacerScreen, ResultT
-from racer_tui.app.screens.dialogs import ask
+from racer_tui.app.screens.dialogs import ConfirmDialog, ask
 from racer_tui.text.clocks import clock_text
 from sim.race.result import LapRecord
 from sim.race.rules import RaceRules, lap_counts
+
+
+class TimingQuestion(ConfirmDialog):
+    """A question asked while cars are on the track: the lap and reset keys still time
+    them under it (a car crossing the line while the host reads "End the race?" is still
+    a lap), every other key answers the question as any question's do."""
+
+    def __init__(
+        self,
+        timing: HandTimedScreen[Any],
+        title: str,
+        message: str,
+        confirm_label: str,
+        cancel_label: str,
+    ) -> None:
+        super().__init__(title, message, confirm_label, cancel_label)
+        self.timing = timing
+
+    async def on_key(self, event: events.Key) -> None:
+        action = self.timing.TIMING_KEYS.get(event.key)
+        if action is not None:
+            event.stop()
+            event.prevent_default()
+            await self.timing.run_action(action)
 
 
 class HandTimedScreen(RacerScreen[ResultT]):
     """A screen timing physical cars by hand, with its journal (None: none kept)."""
 
     RACE_WORD: ClassVar[str] = "heat"  # what the host times: "heat" or "match"
+    # The keys that time a car (key: action), which work under this screen's questions.
+    TIMING_KEYS: ClassVar[dict[str, str]] = {}
     journal: HeatJournal | None = None
+
+    def ask_while_timing(
+        self,
+        title: str,
+        message: str,
+        answered: Callable[[bool | None], None],
+        *,
+        confirm_label: str,
+        cancel_label: str = "Cancel",
+    ) -> None:
+        """Ask a yes-or-no question in a dialog under which the timing keys still work."""
+        dialog = TimingQuestion(self, title, message, confirm_label, cancel_label)
+        self.app.push_screen(dialog, answered)
 
     def keep_journal(self, write: Callable[[], None]) -> None:
         """Write to the journal; if the disk refuses, say so once and time on without it:
@@ -57,7 +97,7 @@ class HandTimedScreen(RacerScreen[ResultT]):
         word = self.RACE_WORD
         ask(
             self.app,
-            f"Start this {word} again?",
+            "Throw away what was timed and start again?",
             f"racer-tui stopped during this {word}, {where} and {laps} captured. Resume it "
             "where it stopped, or start it again from the line, losing what was timed?",
             answered,
@@ -72,7 +112,7 @@ class HandTimedScreen(RacerScreen[ResultT]):
             if yes:
                 end(moment)
 
-        ask(self.app, "End the race?", what_counts, answered, confirm_label="End race")
+        self.ask_while_timing("End the race?", what_counts, answered, confirm_label="End race")
 
     def ask_to_leave(self) -> None:
         """Leaving a race being timed records nothing: asked first."""
@@ -85,10 +125,10 @@ class HandTimedScreen(RacerScreen[ResultT]):
                 self.dismiss(None)
 
         word = self.RACE_WORD
-        ask(
-            self.app,
+        self.ask_while_timing(
             f"Leave this {word}?",
-            f"Its laps so far are not recorded; the {word} can be timed again.",
+            f"Its laps so far are thrown away: nothing is recorded, and r times the {word} "
+            "again from the line.",
             answered,
             confirm_label="Leave unrecorded",
             cancel_label="Keep timing",

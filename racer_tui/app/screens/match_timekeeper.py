@@ -27,7 +27,6 @@ from league.timekeeper.feed import TIMER_ENV
 from league.timekeeper.heat import Phase, TimekeeperError, physical_floor
 from league.timekeeper.journal import HeatJournal, ResumedMatch, resume_match, take_match_input
 from league.timekeeper.match import MatchCar, TimekeptMatch
-from racer_tui.app.screens.dialogs import ask
 from racer_tui.app.screens.hand_timing import HandTimedScreen, lap_lines
 from racer_tui.app.screens.head_to_head_screen import car_colour
 from racer_tui.app.screens.race_screen import countdown_text
@@ -62,6 +61,12 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
     resets and race time, with a lap key and a reset key each."""
 
     RACE_WORD = "match"
+    TIMING_KEYS: ClassVar[dict[str, str]] = {
+        "1": "capture(0)",
+        "2": "capture(1)",
+        "q": "reset(0)",
+        "w": "reset(1)",
+    }
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("space", "start_pause", "Start/pause", priority=True),
         Binding("1", "capture(0)", "Lap car 1", priority=True),
@@ -210,8 +215,7 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
             if yes:
                 self._input("retire", moment, car=car)
 
-        ask(
-            self.app,
+        self.ask_while_timing(
             f"Retire car {car + 1} ({self.setup.names[car]})?",
             "It is out of the race with the laps it completed; the lap in progress is not a "
             "lap. The other car races on.",
@@ -298,21 +302,32 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
         self.query_one("#mt-said", Static).update(self.said)
 
     def _keys_text(self) -> Text:
+        """Every key, in two lines that fit 60 columns: the race's keys, then those that act
+        on the car Tab chose (wrapped text broke "f" from "retire" at 80)."""
         text = Text()
-        for keys, what in (
-            ("1 2", "lap"),
-            ("q w", "reset"),
-            ("Space", "start/pause"),
-            ("Tab", "car"),
-            ("u", "undo lap"),
-            ("R", "undo reset"),
-            ("f", "retire"),
-            ("x", "strike"),
-            ("e", "end"),
-            ("Esc", "record"),
+        for line, keys in enumerate(
+            (
+                (
+                    ("1 2", "lap"),
+                    ("q w", "reset"),
+                    ("Space", "start/pause"),
+                    ("e", "end"),
+                    ("Esc", "record"),
+                ),
+                (
+                    ("Tab", "car:"),
+                    ("u", "undo lap"),
+                    ("R", "undo reset"),
+                    ("f", "retire"),
+                    ("x", "strike"),
+                ),
+            )
         ):
-            text.append(keys, style="bold")
-            text.append(f" {what}  ")
+            if line:
+                text.append("\n")
+            for key, what in keys:
+                text.append(key, style="bold")
+                text.append(f" {what}  ")
         return text
 
     def _now(self) -> float:
@@ -366,6 +381,10 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
         if any(heat.laps for heat in self.match.cars):
             state.append("\nleading: ")
             state.append(self.setup.names[order[0]], style="bold")
+        penalty = self.setup.rules.penalty_seconds
+        state.append(
+            f"\n{penalty:g} s added a reset" if penalty else "\nresets add no time", style="dim"
+        )
         self.query_one("#mt-state", Static).update(state)
         for k, name in enumerate(self.setup.names):
             label = Text()
@@ -398,7 +417,7 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
         order = match.running_order()
         gap = match.gap_seconds(order[0], k)
         if k != order[0] and gap is not None:
-            text.append(f"  {gap:+.1f} s")
+            text.append(f"  +{gap:.2f} s")
         return text
 
     def _fill_laps(self, k: int) -> None:

@@ -77,6 +77,16 @@ class DrawBracketDialog(FormDialog[BracketRequest]):
         """The qualifiers of the kind chosen."""
         return self.physical if self._chosen_kind() == "physical" else self.simulated
 
+    def _left_out(self) -> str:
+        """The other kind's qualifiers, too few for a bracket of their own ("": none)."""
+        racing = self._chosen_kind()
+        other, count = (
+            ("Simulated", self.simulated) if racing == "physical" else ("Physical", self.physical)
+        )
+        if not count:
+            return ""
+        return f"{other} cars ({count}) are left out: a bracket races one kind of car."
+
     def _chosen_kind(self) -> str:
         if len(self.kinds) < 2 or not self.is_mounted:
             return self.kinds[0][1] if self.kinds else "simulated"
@@ -95,6 +105,8 @@ class DrawBracketDialog(FormDialog[BracketRequest]):
             if len(self.kinds) > 1:
                 yield Label("Cars")
                 yield FormSelect(self.kinds, value=self.kinds[0][1], id="bracket-kind")
+            elif left_out := self._left_out():
+                yield Static(left_out, classes="dialog-body")
             yield Label(self._size_label(), id="bracket-size-label")
             yield Input(placeholder="every qualifier", id="bracket-size")
             yield Label("Format")
@@ -104,10 +116,15 @@ class DrawBracketDialog(FormDialog[BracketRequest]):
             yield from self.form_buttons("Draw")
 
     def _size_label(self) -> str:
-        return f"Qualifiers, 2 to {min(self.qualified, MAX_ENTRANTS)} (empty: all)"
+        most = min(self.qualified, MAX_ENTRANTS)
+        kind = self._chosen_kind().capitalize()
+        if most == MIN_ENTRANTS:
+            return f"{kind} qualifiers: {MIN_ENTRANTS} (empty: both)"
+        return f"{kind} qualifiers, {MIN_ENTRANTS} to {most} (empty: all)"
 
     def on_mount(self) -> None:
-        self.focus_first(self.query_one("#bracket-size", Input))
+        first = self.query("#bracket-kind") or self.query("#bracket-size")
+        self.focus_first(first.first())
 
     @on(FormSelect.Changed, "#bracket-kind")
     def _kind_chosen(self) -> None:

@@ -115,6 +115,10 @@ def standings_table(
     table.add_column("laps", justify="right", width=4)
     table.add_column("pts", justify="right", width=4)
     leader = state.standings[0].entry.score if state.standings else None
+    # Once a bracket has placed the night, its champion's qualifying lap is no yardstick:
+    # a gap to it went negative ("+-1.610") for a quicker qualifier the bracket ranks below.
+    if state.bracket is not None and state.bracket.final_order() is not None:
+        leader = None
     # A night of physical cars only needs no "(physical)" on every row: the mark is for a
     # night that mixes them with simulated ones (and it cut the car's name at 80 columns).
     mixed = len({s.entry.physics == PHYSICAL for s in state.standings}) > 1
@@ -124,7 +128,11 @@ def standings_table(
     for index, standing in enumerate(shown):
         entry = standing.entry
         score = entry.score
-        gap = "" if score is None or leader is None or index == 0 else f"+{score - leader:.3f}"
+        gap = (
+            f"+{score - leader:.3f}"
+            if score is not None and leader is not None and index and score >= leader
+            else ""
+        )
         car = entry.model
         if mixed and entry.physics == PHYSICAL and PHYSICAL not in car.casefold():
             car += f" ({PHYSICAL})"

@@ -28,6 +28,7 @@ from textual.worker import Worker, WorkerState
 
 from league.bracket_nights import (
     MatchCars,
+    bracket_rules,
     draw_night_bracket,
     left_out_note,
     next_match,
@@ -118,7 +119,6 @@ from sim.race.replay import ghost_lap
 from sim.race.result import RaceResult
 from sim.race.rules import (
     DEFAULT_RULES,
-    HEAD_TO_HEAD_RULES,
     RULE_PRESETS,
     RaceRules,
     RankingMethod,
@@ -1209,7 +1209,7 @@ class NightsScreen(RacerScreen[None]):
 
     @work(thread=True, group="nights-change", exit_on_error=False)
     def _draw_bracket(self, night: Night, request: BracketRequest) -> None:
-        rules = replace(HEAD_TO_HEAD_RULES, lap_count=request.laps)
+        rules = bracket_rules(night, request.laps, physical=request.physical)
         with open_league(self.db_path) as league:
             drawn = draw_night_bracket(
                 league,

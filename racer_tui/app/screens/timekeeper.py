@@ -92,6 +92,7 @@ class TimekeeperScreen(HandTimedScreen[RaceResult | None]):
         Binding("x", "strike", "Strike lap", tooltip="strike a lap", show=False),
         Binding("escape", "leave", "Back", tooltip="record / back", show=False),
     ]
+    TIMING_KEYS: ClassVar[dict[str, str]] = {"l": "capture", "r": "reset"}
     DEFAULT_CSS = """
     TimekeeperScreen #tk-title { text-style: bold; height: 1; }
     TimekeeperScreen #tk-clocks { height: 4; }

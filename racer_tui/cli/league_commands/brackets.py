@@ -4,12 +4,12 @@ qualifying, and its matches raced headless (league.bracket_nights)."""
 from __future__ import annotations
 
 import argparse
-from dataclasses import replace
 
 from rich.text import Text
 
 from league.bracket_nights import (
     MatchCars,
+    bracket_rules,
     draw_night_bracket,
     left_out_note,
     match_entries,
@@ -25,7 +25,7 @@ from league.store import League
 from racer_tui.cli.output import plain_table, print_table
 from sim.foundation.plural import counted
 from sim.race.head_to_head import HeadToHeadResult, run_head_to_head
-from sim.race.rules import HEAD_TO_HEAD_RULES, RulesError
+from sim.race.rules import RulesError
 from sim.tracks.track import Track
 from sim.training.drivers import resolve_driver
 
@@ -33,7 +33,7 @@ from sim.training.drivers import resolve_driver
 def bracket_command(league: League, night: Night, args: argparse.Namespace) -> int:
     if args.laps is None or not 1 <= args.laps <= 99:
         raise RulesError(f"--laps: a match is 1 to 99 laps, not {args.laps}.")
-    rules = replace(HEAD_TO_HEAD_RULES, lap_count=args.laps)
+    rules = bracket_rules(night, args.laps, physical=args.physical)
     form = Format.DOUBLE if args.double else Format.SINGLE
     drawn = draw_night_bracket(
         league, night, format=form, size=args.size, rules=rules, physical=args.physical
@@ -81,7 +81,8 @@ def match_command(league: League, night: Night, limit: int | None) -> int:
         shown = {e.id: e.display_name for e in entrants(league, night)}
         places = ", ".join(f"{k}. {shown.get(e, e)}" for k, e in enumerate(order, start=1))
         print(f"Champion: {shown.get(order[0], order[0])}. Final order: {places}.")
-        print("Close the night to make it final: `racer-tui night close`.")
+        if not night.closed:
+            print("Close the night to make it final: `racer-tui night close`.")
     return 0
 
 

@@ -41,6 +41,16 @@ async def draw_physical_bracket(pilot: Pilot[Any], nights: NightsScreen) -> None
     await wait_for(pilot, lambda: pilot.app.screen is nights)
 
 
+async def nine_seconds_in(pilot: Pilot[Any]) -> tuple[MatchTimekeeperScreen, Stopwatch]:
+    """The physical bracket drawn on a fresh night and its first match 9 s in."""
+    nights = await the_nights_screen(pilot)
+    await draw_physical_bracket(pilot, nights)
+    keeper, watch = await the_match(pilot)
+    await pilot.press("space")
+    watch.now += 9.0
+    return keeper, watch
+
+
 async def the_match(pilot: Pilot[Any]) -> tuple[MatchTimekeeperScreen, Stopwatch]:
     await pilot.press("r")
     await wait_for(pilot, lambda: isinstance(pilot.app.screen, MatchTimekeeperScreen))
@@ -66,7 +76,7 @@ async def test_a_physical_match_is_timed_for_both_cars_and_recorded() -> None:
         assert "Final (W1-1): ana v bob" in painted(keeper.query_one("#mt-title"))
         await pilot.press("space")
         watch.now += 4.0
-        await pilot.press("w")  # bob off the track: 2 s on his time
+        await pilot.press("w")  # bob off the track: the night's 3 s on his time
         watch.now += 6.0
         await pilot.press("2", "1")  # both cross the line at 10 s
         live = live_match_path(default_db_path(), night.id)
@@ -98,11 +108,7 @@ async def test_a_match_cut_short_by_a_killed_app_resumes_with_its_laps() -> None
         physical_night(league)
     app = create_app(start="league")
     async with app.run_test(size=(80, 24)) as pilot:
-        nights = await the_nights_screen(pilot)
-        await draw_physical_bracket(pilot, nights)
-        keeper, watch = await the_match(pilot)
-        await pilot.press("space")
-        watch.now += 9.0
+        keeper, _ = await nine_seconds_in(pilot)
         await pilot.press("1")
         await pilot.press("tab", "u")  # car 2 chosen: it has no lap to take back
         assert "no lap" in painted(keeper.query_one("#mt-said")).lower()
@@ -120,3 +126,49 @@ async def test_a_match_cut_short_by_a_killed_app_resumes_with_its_laps() -> None
         assert keeper.match.phase.value == "paused"
         assert [len(heat.laps) for heat in keeper.match.cars] == [1, 0]
         assert "Resumed, paused" in painted(keeper.query_one("#mt-said"))
+
+
+async def test_a_lap_under_a_question_is_still_a_lap() -> None:
+    """The walk: a reset pressed while "Leave this match?" was up was lost; a car crossing
+    the line while the host reads a question is still timed."""
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        physical_night(league)
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        keeper, _ = await nine_seconds_in(pilot)
+        await pilot.press("e")
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("1", "w")  # under the question: car 1's lap, car 2's reset
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("n")
+        assert app.screen is keeper
+        assert len(keeper.match.cars[0].laps) == 1 and keeper.match.cars[1].resets == 1
+        # The night's own cost of a reset (its league rules: 3 s), not head-to-head's 2 s.
+        assert "3 s added a reset" in painted(keeper.query_one("#mt-state"))
+
+
+def test_a_decided_bracket_shows_no_gap_to_its_champions_qualifying_lap() -> None:
+    """The walk: after bob won the final, ana (quicker in qualifying, placed second)
+    showed "+-0.500" on the projector."""
+    from rich.console import Console
+
+    from league.bracket_nights import draw_night_bracket, next_match, record_match
+    from league.night_state import read_night
+    from racer_tui.app.screens.night_projector import standings_table
+    from tests.league.test_physical_brackets import MATCH_RULES, timed_match
+
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = physical_night(league)
+        draw_night_bracket(league, night, size=2, rules=MATCH_RULES, physical=True)
+        cars = next_match(league, night)
+        assert cars is not None
+        record_match(league, night, cars.match.id, timed_match("ana", "bob", "bob"))
+        state = read_night(league, night.id)
+    console = Console(width=100, record=True)
+    console.print(standings_table(state, None, spaced=False))
+    shown = console.export_text()
+    assert "+-" not in shown
+    lines = [line for line in shown.splitlines() if "bob" in line or "ana" in line]
+    assert lines[0].split()[:2] == ["1", "bob"] and "+" not in lines[1]
