@@ -361,7 +361,7 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
                 place=order.index(k) + 1,
                 laps=heat.laps_completed(),
                 gap=None if k == leader else match.gap_seconds(leader, k),
-                held_for="",
+                held_for="retired" if k in match.retired else "",
                 finished=match.finished(k),
             )
             for k, heat in enumerate(match.cars)

@@ -172,3 +172,30 @@ def test_a_decided_bracket_shows_no_gap_to_its_champions_qualifying_lap() -> Non
     assert "+-" not in shown
     lines = [line for line in shown.splitlines() if "bob" in line or "ana" in line]
     assert lines[0].split()[:2] == ["1", "bob"] and "+" not in lines[1]
+
+
+async def test_a_retired_car_forfeits_on_every_screen() -> None:
+    """The walk: after f, y the retired car still showed as leading, and the projector
+    never said it was out."""
+    data_home().mkdir(parents=True, exist_ok=True)
+    with open_league() as league:
+        night = physical_night(league)
+    app = create_app(start="league")
+    async with app.run_test(size=(80, 24)) as pilot:
+        keeper, watch = await nine_seconds_in(pilot)
+        await pilot.press("1", "f")  # car 1 (the chosen car) a lap up, then out
+        assert isinstance(app.screen, ConfirmDialog)
+        await pilot.press("y")
+        await settle(pilot)
+        assert "leading: bob" in painted(keeper.query_one("#mt-state"))
+        assert painted(keeper.query_one("#mt-facts-0")).startswith("Retired")
+        live = live_match_path(default_db_path(), night.id)
+
+        def car_1_on_the_projector() -> str | None:
+            match = read_live_match(live, night.id)
+            return None if match is None else match.cars[0].held_for
+
+        watch.now += 1.0
+        await wait_for(pilot, lambda: car_1_on_the_projector() == "retired")
+        await pilot.press("u")  # its laps stand
+        assert "Car 1 is retired" in painted(keeper.query_one("#mt-said"))
