@@ -28,6 +28,7 @@ from league.races import LAP_COLUMNS, OPTIONAL_LAP_COLUMNS, check_possible_laps,
 from league.store import League, record_body
 from league.tracks import ensure_track
 from sim.foundation.ids import content_hash, is_valid_id
+from sim.physics.labels import PHYSICAL
 from sim.physics.objects.settings import RaceType
 from sim.race.head_to_head import CarFinish, HeadToHeadResult, Incident
 
@@ -188,13 +189,15 @@ class RecordedHeadToHead:
         return self.places[0].racer
 
 
-def _place(position: int, car: Mapping[str, Any]) -> CarPlace:
+def _place(position: int, car: Mapping[str, Any], *, hand_timed: bool = False) -> CarPlace:
     laps = [lap_from_list(values) for values in car["laps"]]
     valid = [lap["time_seconds"] for lap in laps if lap["valid"]]
+    model = str(car["model_name"])
     return CarPlace(
         position=position,
         racer=str(car["racer"]),
-        model_name=str(car["model_name"]),
+        # A physical car is named as the lap boards name it: "red" is not a model.
+        model_name=f"{model} ({PHYSICAL})" if hand_timed else model,
         laps_completed=int(car["laps_completed"]),
         finished_at=car["finished_at"],
         gap_seconds=car["gap_seconds"],
@@ -228,7 +231,7 @@ def head_to_head_races(
     """The recorded head-to-head races, oldest first (on one track, or of one night)."""
     clause, values = _where(track_hash, night_id)
     rows = league.query(
-        f"SELECT id, track_hash, started_at, seed, clock, cars, night_id, match_id "
+        f"SELECT id, track_hash, started_at, seed, clock, cars, night_id, match_id, physics "
         f"FROM {TABLE} {clause} ORDER BY started_at, id",
         values,
     )
@@ -240,7 +243,7 @@ def head_to_head_races(
             seed=row["seed"],
             clock=row["clock"],
             places=tuple(
-                _place(position, car)
+                _place(position, car, hand_timed=row["physics"] == PHYSICAL)
                 for position, car in enumerate(json.loads(row["cars"]), start=1)
             ),
             night_id=row["night_id"],

@@ -112,3 +112,18 @@ def test_a_simulated_match_result_is_not_a_physical_match(league: League) -> Non
     assert cars is not None and not cars.physical
     with pytest.raises(LeagueError, match="this race's cars are ana, bob"):
         record_match(league, night, cars.match.id, timed_match("ana", "bob", "ana"))
+
+
+def test_a_physical_car_is_named_so_on_the_head_to_head_board(league: League) -> None:
+    from league.head_to_head_board import cars_cell, read_head_to_head_board
+
+    night = physical_night(league)
+    draw_night_bracket(league, night, size=2, rules=MATCH_RULES, physical=True)
+    cars = next_match(league, night)
+    assert cars is not None
+    record_match(league, night, cars.match.id, timed_match("ana", "bob", "bob"))
+    board = read_head_to_head_board(league, night_id=night.id)
+    assert [(row.racer, cars_cell(row)) for row in board.rows] == [
+        ("bob", "blue (physical)"),
+        ("ana", "red (physical)"),
+    ]
