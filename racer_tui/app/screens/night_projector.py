@@ -171,7 +171,8 @@ class NightProjectorScreen(KioskScreen):
         height: auto; max-height: 2; padding: 0 2; text-style: bold; color: $accent;
     }
     NightProjectorScreen #np-now { height: 5; padding: 0 2; }
-    NightProjectorScreen #np-heat { width: 1fr; height: 5; padding: 1 1 0 0; }  /* a cell from the clock */
+    /* A cell between the heat's lines and the clock: a match's gap ran into its digits. */
+    NightProjectorScreen #np-heat { width: 1fr; height: 5; padding: 1 1 0 0; }
     NightProjectorScreen #np-clock-box { width: auto; height: 5; }
     NightProjectorScreen #np-clock-label { width: 100%; text-align: right; color: $text-muted; }
     NightProjectorScreen #np-clock { width: auto; }
