@@ -205,15 +205,15 @@ class TimekeptHeat:
         self.phase = Phase.OVER
         return "Race over."
 
-    def run_on(self, now: float, clock: float) -> None:
-        """Running again at race clock `clock`: in a match, a car whose false finish (taken
-        back) or struck lap stopped its clocks while the other cars raced on drove on all
-        the while."""
+    def run_on(self, now: float, clock: float, *, running: bool = True) -> None:
+        """Stopped at race clock `clock`, or running from it (`running`): in a match, a car
+        whose false finish (taken back) or struck lap stopped its clocks while the other
+        cars raced on drove on all the while."""
         if self.phase is not Phase.PAUSED:
             raise TimekeeperError("Only a stopped car can run on.")
         self._clock = clock
-        self._since = now
-        self.phase = Phase.RUNNING
+        self._since = now if running else None
+        self.phase = Phase.RUNNING if running else Phase.PAUSED
 
     # --- what it adds up to ---------------------------------------------------------------
 

@@ -31,6 +31,8 @@ from sim.race.result import RaceResult, now_iso
 from sim.race.rules import RaceRules
 from sim.tracks.track import Track
 
+_RACING = (Phase.RUNNING, Phase.PAUSED)  # a car still in the race, running or paused
+
 
 @dataclass(frozen=True)
 class MatchCar:
@@ -265,11 +267,15 @@ class TimekeptMatch:
         # A car's laps done end its own race, not the match's.
         said = said.replace("laps done: race over.", "laps done: finished.")
         # A car whose capture was taken back, or whose lap was struck, stopped its clocks
-        # in its own heat; in a race still running it drove on all the while.
-        if self.phase is Phase.RUNNING and heat.phase is Phase.PAUSED:
-            heat.run_on(now, clock)
-            said = said.replace("the race is open again, paused", "it races on")
-            said = said.replace("The race is open again, paused", "It races on")
+        # in its own heat; while the others race (or stand paused) it drove on all the
+        # while, so its clock is theirs.
+        others = [h for h in self.cars if h is not heat and h.phase in _RACING]
+        if heat.phase is Phase.PAUSED and others:
+            running = any(h.phase is Phase.RUNNING for h in others)
+            heat.run_on(now, clock, running=running)
+            if running:
+                said = said.replace("the race is open again, paused", "it races on")
+                said = said.replace("The race is open again, paused", "It races on")
         elif was is not Phase.OVER and self.phase is Phase.OVER:
             said = f"{said.rstrip()} Every car is done: race over."
         return f"Car {car + 1}: {said}"

@@ -179,3 +179,19 @@ def test_a_match_comes_back_from_its_journal_paused(tmp_path: Path) -> None:
     text = path.read_text()
     path.write_text(text.replace('"capture", 10.0, null, 1', '"capture", 10.0, null, 5'))
     assert resume_match(path, key, RULES, 2) is None
+
+
+def test_a_false_finish_taken_back_while_paused_keeps_the_race_clock() -> None:
+    """Car 1 "finished" at 30 s; the host paused at 33 s and then took the capture back:
+    its lap ran on until the pause, and goes on with the others' clock when they start."""
+    match = raced(
+        [("start_or_pause", 0.0, 0)]
+        + [("capture", 10.0 * lap, 0) for lap in (1, 2, 3)]
+        + [("capture", 11.0, 1), ("start_or_pause", 33.0, 0)]
+    )
+    match.undo_capture(0, 40.0)
+    assert match.phase is Phase.PAUSED
+    assert match.cars[0].race_clock(40.0) == 33.0 == match.cars[1].race_clock(40.0)
+    match.start_or_pause(50.0)
+    match.capture(0, 52.0)  # 35 s of race time: its third lap took 15 s
+    assert match.race_time(0) == 35.0
