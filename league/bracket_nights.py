@@ -127,10 +127,10 @@ def left_out_note(league: League, night: Night) -> str:
     """The sentence telling the host which cars the night's bracket left out, the other
     kind than it races ("" for none, or no bracket)."""
     drawn = read_bracket(league, night.id)
-    if drawn is None:
+    if drawn is None or not drawn.bracket.seeds:
         return ""
     simulated, physical = qualifiers(league, night)
-    racing_physical = bracket_is_physical(league, night)
+    racing_physical = drawn.bracket.seeds[0] in {entrant.id for entrant in physical}
     left = simulated if racing_physical else physical
     if not left:
         return ""

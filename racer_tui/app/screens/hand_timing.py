@@ -15,7 +15,9 @@ from league.timekeeper.heat import CapturedLap
 from league.timekeeper.journal import HeatJournal
 from racer_tui.app.screens.base import RacerScreen, ResultT
 from racer_tui.app.screens.dialogs import ConfirmDialog, ask
+from racer_tui.app.screens.race_screen import countdown_text
 from racer_tui.text.clocks import clock_text
+from sim.foundation.plural import counted
 from sim.race.result import LapRecord
 from sim.race.rules import RaceRules, lap_counts
 
@@ -81,10 +83,18 @@ class HandTimedScreen(RacerScreen[ResultT]):
             )
 
     def offer_to_resume(
-        self, where: str, laps: str, resumed: Callable[[], None], forget: Callable[[], None]
+        self,
+        time_left: float | None,
+        laps: int,
+        resumed: Callable[[], None],
+        forget: Callable[[], None],
     ) -> None:
-        """Ask whether to resume the race a stopped racer-tui left (`where` it stopped,
-        `laps` captured): `resumed` takes it up, `forget` throws it away."""
+        """Ask whether to resume the race a stopped racer-tui left, with `time_left`
+        (None: its race was over) and `laps` captured: `resumed` takes it up, `forget`
+        throws it away."""
+        where = (
+            "with its race over" if time_left is None else f"with {countdown_text(time_left)} left"
+        )
 
         def answered(start_again: bool | None) -> None:
             if start_again:
@@ -98,7 +108,8 @@ class HandTimedScreen(RacerScreen[ResultT]):
         ask(
             self.app,
             "Throw away what was timed and start again?",
-            f"racer-tui stopped during this {word}, {where} and {laps} captured. Resume it "
+            f"racer-tui stopped during this {word}, {where} and {counted(laps, 'lap')} "
+            "captured. Resume it "
             "where it stopped, or start it again from the line, losing what was timed?",
             answered,
             confirm_label="Start again",

@@ -34,7 +34,6 @@ from racer_tui.app.screens.timekeeper import CLOCK_HZ, car_hash, lap_clock_text
 from racer_tui.app.widgets.footer import RacerFooter
 from racer_tui.app.widgets.lap_list import LapList
 from racer_tui.text.clocks import clock_text
-from sim.foundation.plural import counted
 from sim.race.head_to_head import HeadToHeadResult
 from sim.race.rules import RaceRules
 from sim.tracks.track import Track
@@ -106,6 +105,7 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
         self._origin: float | None = None  # the match runs on its own time, as a heat does
         self.journal = setup.journal
         self._laps_shown: list[tuple[bool, ...] | None] = [None] * len(setup.cars)
+        self._facts_shown: list[Text | None] = [None] * len(setup.cars)
 
     def compose(self) -> ComposeResult:
         setup = self.setup
@@ -157,11 +157,6 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
 
     def _offer_to_resume(self, resumed: ResumedMatch) -> None:
         match = resumed.match
-        where = (
-            "with its race over"
-            if match.phase is Phase.OVER
-            else f"with {countdown_text(match.time_left(resumed.at))} left"
-        )
 
         def take_it_up() -> None:
             self.match = match
@@ -175,8 +170,14 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
             )
             self._draw()
 
-        laps = counted(sum(len(heat.laps) for heat in match.cars), "lap")
-        self.offer_to_resume(where, laps, take_it_up, resumed.journal.forget)
+        over = match.phase is Phase.OVER
+        time_left = None if over else match.time_left(resumed.at)
+        self.offer_to_resume(
+            time_left,
+            sum(len(heat.laps) for heat in match.cars),
+            take_it_up,
+            resumed.journal.forget,
+        )
 
     # --- keys -------------------------------------------------------------------------
 
@@ -341,7 +342,12 @@ class MatchTimekeeperScreen(HandTimedScreen[HeadToHeadResult | None]):
         if digits.value != left:
             digits.update(left)
         for k in range(len(self.setup.cars)):
-            self.query_one(f"#mt-facts-{k}", Static).update(self._facts(k, now))
+            # Ten times a second: a repaint only when what it says has changed (never
+            # while the clocks stand still).
+            facts = self._facts(k, now)
+            if facts != self._facts_shown[k]:
+                self._facts_shown[k] = facts
+                self.query_one(f"#mt-facts-{k}", Static).update(facts)
         journal = self.journal
         if journal is not None and match.phase is Phase.RUNNING:
             self.keep_journal(lambda: journal.heartbeat(now))

@@ -155,11 +155,6 @@ class TimekeeperScreen(HandTimedScreen[RaceResult | None]):
 
     def _offer_to_resume(self, resumed: Resumed) -> None:
         heat = resumed.heat
-        where = (
-            "with its race over"
-            if heat.phase is Phase.OVER
-            else f"with {countdown_text(heat.time_left(resumed.at))} left"
-        )
 
         def take_it_up() -> None:
             self.heat = heat
@@ -173,8 +168,9 @@ class TimekeeperScreen(HandTimedScreen[RaceResult | None]):
             )
             self._draw()
 
-        laps = counted(len(heat.laps), "lap")
-        self.offer_to_resume(where, laps, take_it_up, resumed.journal.forget)
+        over = heat.phase is Phase.OVER
+        time_left = None if over else heat.time_left(resumed.at)
+        self.offer_to_resume(time_left, len(heat.laps), take_it_up, resumed.journal.forget)
 
     def on_unmount(self) -> None:
         self._stop_feed.set()
