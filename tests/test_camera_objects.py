@@ -375,6 +375,21 @@ def test_solids_are_checked(camera: Camera, reinvent: Track) -> None:
         camera.render([0.0, 1.0], [0.0, 1.0], [0.0, 0.0], solids=good)
 
 
+def test_solids_moved_elsewhere_draw_as_solids_built_there(camera: Camera, reinvent: Track) -> None:
+    pose = start_pose(reinvent)
+    here = solids(ahead_of(pose, 1.2, 0.1, 0.3), size=(0.3235, 0.1961, 0.2))
+    there = ahead_of(pose, 0.9, -0.15, -0.4)
+    frame(camera, pose, here)  # its drawing worked out and kept, then moved
+    moved = here.placed_at([[there[0]]], [[there[1]]], [[there[2]]])
+    built = solids(there, size=(0.3235, 0.1961, 0.2))
+    assert np.array_equal(frame(camera, pose, moved), frame(camera, pose, built))
+    assert not np.array_equal(frame(camera, pose, moved), frame(camera, pose, here))
+    with pytest.raises(ValueError, match="NaN"):
+        here.placed_at([[np.nan]], [[0.0]], [[0.0]])
+    with pytest.raises(ValueError, match="shape"):
+        here.placed_at([0.0, 1.0], [0.0, 1.0], [0.0, 0.0])
+
+
 def test_sees_none_only_when_the_frame_would_not_show_the_object(
     camera: Camera, reinvent: Track
 ) -> None:

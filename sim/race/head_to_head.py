@@ -188,7 +188,7 @@ class HeadToHeadRace:
             TrackSimulation(track, 1, car=car, rules=RACE_EPISODE_RULES, seed=seed)
             for _ in range(n)
         ]
-        self.grid = Grid.of([sim.fleet for sim in self.sims])
+        self.grid = Grid.of([sim.fleet for sim in self.sims], track)
         self.cars = [CarInRace(index, entry) for index, entry in enumerate(entries)]
         self._line_up()
         self.rivals = [RivalField(track, k, self.grid) for k in range(n)]
@@ -291,22 +291,26 @@ class HeadToHeadRace:
                 sim.apply(action.steering_deg[:1], action.speed[:1])
         start = self.clock
         self.steps += 1
-        for rivals in self.rivals:
-            rivals.follow()
+        self._follow()
         self._update_standing()
-        crashes = {car.index: self.rivals[car.index].crashed_into(self.car_spec) for car in driving}
+        crashes = self.grid.crashes([car.index for car in driving], self.car_spec)
         for car in self.cars:
             if car.hold_left > 0.0:
                 self._hold(car)
             else:
                 self._judge(car, start, before[car.index], crashes[car.index])
-        for rivals in self.rivals:
-            rivals.follow()  # where the put-back cars stand now
+        self._follow()  # where the put-back cars stand now
         self._update_standing()
         for car in self.cars:
             self._record(car)
         self._note_overtakes()
         self._reach.append(np.maximum(self._reach[-1], self.grid.standing))
+
+    def _follow(self) -> None:
+        """Every car's rivals where the other cars stand now."""
+        poses = self.grid.poses()
+        for rivals in self.rivals:
+            rivals.follow(poses)
 
     def _actions(self, driving: list[CarInRace]) -> dict[int, DriverAction]:
         """Each driving car's action; a driver that can (`act_many`: a policy) acts for

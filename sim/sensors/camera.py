@@ -177,6 +177,21 @@ class Solids:
         for name, array in zip(_SIZES, sizes, strict=True):
             object.__setattr__(self, name, array)
 
+    def placed_at(self, x: ArrayLike, y: ArrayLike, heading: ArrayLike) -> Solids:
+        """The same objects standing elsewhere (arrays shaped as `x`): a race's moving cars
+        are drawn anew every frame, and only their places need checking."""
+        x, y, heading = (np.asarray(a, dtype=np.float64) for a in (x, y, heading))
+        if not (x.shape == y.shape == heading.shape == self.x.shape):
+            raise ValueError("solids' x, y and heading must keep their (n_cars, k) shape")
+        if not math.isfinite(float(x.sum() + y.sum() + heading.sum())):
+            raise ValueError("a solid's place holds NaN or infinity")
+        moved = object.__new__(Solids)
+        fields = {**self.__dict__, "x": x, "y": y, "heading": heading}
+        fields.pop("_spheres", None)
+        fields.pop("_boxes", None)
+        moved.__dict__.update(fields)
+        return moved
+
     @property
     def cars(self) -> int:
         """How many cars the objects are laid out for (rows of `x`)."""
@@ -189,16 +204,30 @@ class Solids:
         n, k = self.x.shape
         middle = np.empty((n, 4, k))
         middle[:, 0], middle[:, 1], middle[:, 2], middle[:, 3] = self.x, self.y, self.height / 2, 1
-        return middle, np.sqrt(self.length**2 + self.width**2 + self.height**2) / 2
+        return middle, self._radius
+
+    # What depends on the sizes alone is kept when the solids move (`placed_at`).
+    @functools.cached_property
+    def _radius(self) -> NDArray[np.float64]:
+        radius: NDArray[np.float64] = np.sqrt(self.length**2 + self.width**2 + self.height**2) / 2
+        return radius
+
+    @functools.cached_property
+    def _half(self) -> NDArray[np.float64]:
+        half = np.empty((len(self.length), 2))
+        half[:, 0], half[:, 1] = self.length, self.width
+        return half / 2
 
     @functools.cached_property
     def _boxes(self) -> _Boxes:
         """The objects' corners, footprints and axes in world coordinates."""
         n, k = self.x.shape
-        half = np.stack([self.length, self.width], axis=1) / 2
-        along = np.stack([np.cos(self.heading), np.sin(self.heading)], axis=-1)
-        axes = np.stack([along, along[..., ::-1] * _FLIP], axis=2)
-        centre = np.stack([self.x, self.y], axis=-1)
+        half = self._half
+        cos, sin = np.cos(self.heading), np.sin(self.heading)
+        axes = np.empty((n, k, 2, 2))  # along the length (cos, sin), across it (-sin, cos)
+        axes[..., 0, 0], axes[..., 0, 1], axes[..., 1, 0], axes[..., 1, 1] = cos, sin, -sin, cos
+        centre = np.empty((n, k, 2))
+        centre[..., 0], centre[..., 1] = self.x, self.y
         # From the centre half the length along, half the width across, and up.
         reach = (axes * half[:, :, None])[..., None]  # (n, k, 2, 2, 1)
         corners = np.ones((n, k, 4, 8))
@@ -533,8 +562,10 @@ class Camera:
         # that of its footprint's nearest point from the lens. (Checked against ray
         # casting for objects half a metre or more apart; two closer together, near the
         # car, can come out in the wrong order for a few pixels along an edge.)
-        gap = np.hypot(*np.maximum(np.abs(lens_uv) - half, 0.0).T)
-        order = np.lexsort((-gap, car))
+        order = None  # one object per car (a race's rival, mostly): none can overlap
+        if count > 1 and not bool((car[1:] != car[:-1]).all()):
+            gap = np.hypot(*np.maximum(np.abs(lens_uv) - half, 0.0).T)
+            order = np.lexsort((-gap, car))
         self._paint(out, runs, tones, car=car, first=first, order=order)
 
     def _paint(
@@ -545,29 +576,33 @@ class Camera:
         *,
         car: NDArray[np.intp],
         first: NDArray[np.intp],
-        order: NDArray[np.intp],
+        order: NDArray[np.intp] | None,
     ) -> None:
         """Paints objects' runs of rows into their cars' frames, objects in `order` (by
-        car, farthest first): `runs` (2 * parts, V, span) holds each part's (side, or side,
-        top, side) first and past-the-end rows per column of the object's window, which
-        begins at column `first`, and `tones` (parts, V) the parts' tones.
+        car, farthest first; None when no car has two objects): `runs` (2 * parts, V, span)
+        holds each part's (side, or side, top, side) first and past-the-end rows per column
+        of the object's window, which begins at column `first`, and `tones` (parts, V) the
+        parts' tones.
 
         All pixels go through one flat index, in layers: the farthest object of each car,
         then the next farthest and so on (objects of one layer belong to different cars,
         so cannot overlap)."""
         height, width = self.shape
-        cars = car[order]
-        rank = np.arange(len(order)) - np.searchsorted(cars, cars)  # within its car
-        by_layer = np.argsort(rank, kind="stable")
-        order, rank = order[by_layer], rank[by_layer]
-        start, stop = runs[0::2, order], runs[1::2, order]  # (parts, V, span)
+        rank = None
+        if order is not None:
+            cars = car[order]
+            rank = np.arange(len(order)) - np.searchsorted(cars, cars)  # within its car
+            by_layer = np.argsort(rank, kind="stable")
+            order, rank = order[by_layer], rank[by_layer]
+            runs, tones, car, first = runs[:, order], tones[:, order], car[order], first[order]
+        start, stop = runs[0::2], runs[1::2]  # (parts, V, span)
         lengths = (stop - start).transpose(1, 0, 2).ravel()  # by object, part, column
         ends = np.add.accumulate(lengths)
         total = int(ends[-1])
         if not total:
             return
         # Each run's pixels, a row apart down its column of the frames flattened.
-        offset = car[order] * (height * width) + first[order]
+        offset = car * (height * width) + first
         origin = start.transpose(1, 0, 2) * width + (
             offset[:, None, None] + self._columns[: runs.shape[2]]
         )
@@ -575,14 +610,14 @@ class Camera:
         if len(self._steps) < total:
             self._steps = np.arange(0, 2 * total * width, width)
         index += self._steps[:total]
-        parts = ends.reshape(len(order), -1, runs.shape[2])[:, :, -1]  # (V, parts)
-        tones = tones[:, order].T
+        parts = ends.reshape(len(car), -1, runs.shape[2])[:, :, -1]  # (V, parts)
+        tones = tones.T
         tone = tones.flat[0]
         uniform = bool((tones == tone).all())
         if not uniform:
             values = np.repeat(tones.ravel(), np.diff(parts.ravel(), prepend=0))
         frames = out.reshape(-1)
-        layers = parts[:-1, -1][np.diff(rank) > 0].tolist()
+        layers = [] if rank is None else parts[:-1, -1][np.diff(rank) > 0].tolist()
         for low, high in itertools.pairwise([0, *layers, total]):
             frames[index[low:high]] = tone if uniform else values[low:high]
 

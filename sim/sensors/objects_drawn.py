@@ -2,7 +2,9 @@
 
 An object field only knows where its objects stand; drawing them is the camera's business.
 Objects that stand still are one `Solids` until they are placed again, so the drawing is
-kept per field and rebuilt only when the field's `placed` count or the cars asked change.
+kept per field and rebuilt only when the field's `placed` count or the cars asked change;
+objects that move every step (a race's other cars) keep their sizes and tones and only
+take their new places.
 """
 
 from __future__ import annotations
@@ -27,6 +29,10 @@ def object_solids(field: ObjectField, cars: NDArray[np.intp]) -> Solids:
     kept = _DRAWN.get(field)
     if kept is not None and kept[0] == key:
         return kept[1]
+    if kept is not None and kept[0][1] == key[1]:  # the same cars' objects, moved
+        solids = kept[1].placed_at(field.x[cars], field.y[cars], field.heading[cars])
+        _DRAWN[field] = (key, solids)
+        return solids
     shape, k = field.shape, field.count
     side, top = (
         (scene.BOT_CAR_SIDE, scene.BOT_CAR_TOP) if shape.is_car else (scene.BOX_SIDE, scene.BOX_TOP)

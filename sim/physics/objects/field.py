@@ -69,11 +69,47 @@ class ObjectShape:
     height: float
     is_car: bool = False  # a bot car (the camera draws it darker than a box)
 
+    def reach(self, car_spec: CarSpec) -> float:
+        """How far apart a car's centre and this object's can be while touching: both
+        half-diagonals (a quick test before `corners_inside`)."""
+        car = math.hypot(car_spec.length / 2.0, car_spec.width / 2.0)
+        return car + math.hypot(self.crash_length, self.crash_width) / 2
+
 
 BOX_SHAPE: Final = ObjectShape(BOX_LENGTH, BOX_WIDTH, BOX_MODEL_LENGTH, BOX_MODEL_WIDTH, BOX_HEIGHT)
 BOT_CAR_SHAPE: Final = ObjectShape(
     BOT_CAR_LENGTH, BOT_CAR_WIDTH, BOT_CAR_LENGTH, BOT_CAR_WIDTH, BOT_CAR_HEIGHT, is_car=True
 )
+
+
+Poses = tuple[FloatArray, FloatArray, FloatArray]  # x, y and heading (radians)
+
+
+def corners_inside(
+    car_spec: CarSpec, cars: Poses, shape: ObjectShape, objects: Poses
+) -> NDArray[np.bool_]:
+    """DeepRacer's crash test: (cars, objects), a corner of car i's footprint inside the
+    crash rectangle of its object j. `cars` are (cars,) arrays, `objects` (cars, objects)
+    ones: each car's own objects. Elementwise only, so a pair's answer is the same however
+    many others are tested with it (a race's replay judges it so again)."""
+    x, y, yaw = cars
+    object_x, object_y, heading = objects
+    half_l, half_w = car_spec.length / 2.0, car_spec.width / 2.0
+    corners = np.array([[half_l, half_w], [half_l, -half_w], [-half_l, half_w], [-half_l, -half_w]])
+    cos, sin = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    # (cars, 4) corner positions in the world.
+    cx = x[:, None] + corners[:, 0] * cos - corners[:, 1] * sin
+    cy = y[:, None] + corners[:, 0] * sin + corners[:, 1] * cos
+    # Into each object's frame: (cars, objects, 4).
+    dx = cx[:, None, :] - object_x[:, :, None]
+    dy = cy[:, None, :] - object_y[:, :, None]
+    bc, bs = np.cos(heading)[:, :, None], np.sin(heading)[:, :, None]
+    along = dx * bc + dy * bs
+    across = -dx * bs + dy * bc
+    inside = (np.abs(along) <= shape.crash_length / 2.0) & (
+        np.abs(across) <= shape.crash_width / 2.0
+    )
+    return np.asarray(inside.any(axis=2))
 
 
 class ObjectField:
@@ -211,11 +247,9 @@ class ObjectField:
     ) -> NDArray[np.bool_]:
         """(cars, objects): a corner of the car's footprint inside the object's crash
         rectangle."""
-        half_l, half_w = car_spec.length / 2.0, car_spec.width / 2.0
-        shape = self.shape
         # Nothing can touch unless the centres are within both half-diagonals: most steps
         # of a race end here, for a few numpy calls.
-        reach = math.hypot(half_l, half_w) + math.hypot(shape.crash_length, shape.crash_width) / 2
+        reach = self.shape.reach(car_spec)
         if len(x) == 1:  # a race's one car: plain floats beat numpy's per-call costs
             cx, cy, limit = float(x[0]), float(y[0]), reach * reach
             if all(
@@ -230,38 +264,14 @@ class ObjectField:
                 return near
             if len(close) < len(x):  # the full test only for the cars near an object
                 hits = np.zeros_like(near)
-                hits[close] = self._hits_of(close, x[close], y[close], yaw[close], car_spec)
+                hits[close] = corners_inside(
+                    car_spec,
+                    (x[close], y[close], yaw[close]),
+                    self.shape,
+                    (self.x[close], self.y[close], self.heading[close]),
+                )
                 return hits
-        return self._hits_of(slice(None), x, y, yaw, car_spec)
-
-    def _hits_of(
-        self,
-        cars: slice | NDArray[np.intp],
-        x: FloatArray,
-        y: FloatArray,
-        yaw: FloatArray,
-        car_spec: CarSpec,
-    ) -> NDArray[np.bool_]:
-        half_l, half_w = car_spec.length / 2.0, car_spec.width / 2.0
-        corners = np.array(
-            [[half_l, half_w], [half_l, -half_w], [-half_l, half_w], [-half_l, -half_w]]
-        )
-        cos, sin = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
-        # (cars, 4) corner positions in the world.
-        cx = x[:, None] + corners[:, 0] * cos - corners[:, 1] * sin
-        cy = y[:, None] + corners[:, 0] * sin + corners[:, 1] * cos
-        # Into each object's frame: (cars, objects, 4).
-        dx = cx[:, None, :] - self.x[cars][:, :, None]
-        dy = cy[:, None, :] - self.y[cars][:, :, None]
-        heading = self.heading[cars]
-        bc, bs = np.cos(heading)[:, :, None], np.sin(heading)[:, :, None]
-        along = dx * bc + dy * bs
-        across = -dx * bs + dy * bc
-        shape = self.shape
-        inside = (np.abs(along) <= shape.crash_length / 2.0) & (
-            np.abs(across) <= shape.crash_width / 2.0
-        )
-        return np.asarray(inside.any(axis=2))
+        return corners_inside(car_spec, (x, y, yaw), self.shape, (self.x, self.y, self.heading))
 
     def crashed(
         self, x: FloatArray, y: FloatArray, yaw: FloatArray, s: FloatArray, car_spec: CarSpec

@@ -35,11 +35,13 @@ from numpy.typing import NDArray
 
 from sim.foundation.arrays import FloatArray
 from sim.physics.car import CarSpec, Fleet
-from sim.physics.objects.field import BOT_CAR_SHAPE, ObjectField
+from sim.physics.objects.field import BOT_CAR_SHAPE, ObjectField, corners_inside
 from sim.tracks.track import Track
 
 # simapp gives racing cars the bot cars' rectangle (`ObstacleDimensions.BOT_CAR_DIMENSION`).
 RIVAL_SHAPE = BOT_CAR_SHAPE
+# Every car's x, y and heading (radians), in grid order.
+CarPoses = tuple[list[float], list[float], list[float]]
 
 
 @dataclass
@@ -47,6 +49,7 @@ class Grid:
     """What every car's field shares: the cars, where each is in the race, who is held."""
 
     fleets: Sequence[Fleet]  # one car each, in grid order
+    track_length: float
     # Metres from the start line, laps included (the running order; modulo the track's
     # length, where each car is on it: which of two cars that touch is behind).
     standing: FloatArray
@@ -54,9 +57,59 @@ class Grid:
     ghost: NDArray[np.bool_]
 
     @classmethod
-    def of(cls, fleets: Sequence[Fleet]) -> Grid:
+    def of(cls, fleets: Sequence[Fleet], track: Track) -> Grid:
         count = len(fleets)
-        return cls(list(fleets), np.zeros(count), np.zeros(count, dtype=bool))
+        return cls(list(fleets), track.length, np.zeros(count), np.zeros(count, dtype=bool))
+
+    def poses(self) -> CarPoses:
+        """Where every car stands now: x, y and heading lists, in grid order."""
+        fleets = self.fleets
+        return (
+            [float(fleet.x[0]) for fleet in fleets],
+            [float(fleet.y[0]) for fleet in fleets],
+            [float(fleet.yaw[0]) for fleet in fleets],
+        )
+
+    def crashes(self, drivers: Sequence[int], car_spec: CarSpec) -> dict[int, list[int]]:
+        """For each car in `drivers`, the cars it ran into from behind this step (grid
+        indices): a corner of it inside their rectangle, neither of them held, it behind
+        them on the track. Every pair is judged in one pass: a race's cars are mostly apart,
+        and the close pairs share one crash test."""
+        x, y, yaw = self.poses()
+        limit = RIVAL_SHAPE.reach(car_spec) ** 2
+        ghost = self.ghost.tolist()
+        pairs = [
+            (me, other)
+            for me in drivers
+            if not ghost[me]
+            for other in range(len(x))
+            if other != me
+            and not ghost[other]
+            and (x[me] - x[other]) ** 2 + (y[me] - y[other]) ** 2 <= limit
+        ]
+        found: dict[int, list[int]] = {me: [] for me in drivers}
+        if not pairs:
+            return found
+        mine, theirs = (np.array(side, dtype=np.intp) for side in zip(*pairs, strict=True))
+        table = np.array([x, y, yaw])
+        hits = corners_inside(
+            car_spec,
+            (table[0, mine], table[1, mine], table[2, mine]),
+            RIVAL_SHAPE,
+            (table[0, theirs, None], table[1, theirs, None], table[2, theirs, None]),
+        )[:, 0]
+        for (me, other), hit in zip(pairs, hits.tolist(), strict=True):
+            if hit and self.behind(me, other):
+                found[me].append(other)
+        return found
+
+    def behind(self, me: int, other: int) -> bool:
+        """Car `me` is behind car `other` on the track, the short way round: laps do not
+        count, so a car that runs into the one it is lapping is the car behind, and so is
+        a car just short of the line that runs into one just past it."""
+        length = self.track_length  # the race's standing is measured along it
+        ahead = (float(self.standing[other]) - float(self.standing[me])) % length
+        return 0.0 < ahead < length / 2.0
 
 
 class RivalField(ObjectField):
@@ -69,25 +122,27 @@ class RivalField(ObjectField):
         super().__init__(track, cars - 1, 1, RIVAL_SHAPE)
         self.index = index
         self.grid = grid
-        self.others = np.array([j for j in range(cars) if j != index])
-        self._placed_at: tuple[float, ...] = ()
+        self._others = [j for j in range(cars) if j != index]
+        self._placed_at: list[float] = []
         self._measured = False
         self.follow()
 
     def draw(self, car: int, backwards: bool = False) -> None:
         self.follow()
 
-    def follow(self) -> None:
-        """The objects where the other cars are now."""
-        fleets = [self.grid.fleets[j] for j in self.others.tolist()]
-        x = [float(fleet.x[0]) for fleet in fleets]
-        y = [float(fleet.y[0]) for fleet in fleets]
-        heading = [float(fleet.yaw[0]) for fleet in fleets]
-        poses = (*x, *y, *heading)
-        if poses == self._placed_at:
+    def follow(self, poses: CarPoses | None = None) -> None:
+        """The objects where the other cars are now (`poses`: the grid's, read once for
+        every car's field)."""
+        x, y, heading = self.grid.poses() if poses is None else poses
+        others = self._others
+        placed = [x[j] for j in others] + [y[j] for j in others] + [heading[j] for j in others]
+        if placed == self._placed_at:
             return  # nobody moved (every car held): the camera keeps its drawing
-        self._placed_at = poses
-        self.x, self.y, self.heading = np.array([x]), np.array([y]), np.array([heading])
+        self._placed_at = placed
+        count = len(others)
+        self.x = np.array([placed[:count]])
+        self.y = np.array([placed[count : 2 * count]])
+        self.heading = np.array([placed[2 * count :]])
         self.placed += 1  # the camera draws them anew
         self._measured = False
 
@@ -115,23 +170,5 @@ class RivalField(ObjectField):
         return np.zeros(len(x), dtype=bool)
 
     def crashed_into(self, car_spec: CarSpec) -> list[int]:
-        """The cars this car ran into from behind this step (grid indices): a corner of it
-        inside their rectangle, neither of them held, it behind them on the track."""
-        grid, me = self.grid, self.index
-        if grid.ghost[me]:
-            return []
-        fleet = grid.fleets[me]
-        hits = self.hits(fleet.x, fleet.y, fleet.yaw, car_spec)[0]
-        return [
-            int(other)
-            for other, hit in zip(self.others.tolist(), hits.tolist(), strict=True)
-            if hit and not grid.ghost[other] and self.behind(other)
-        ]
-
-    def behind(self, other: int) -> bool:
-        """This car is behind car `other` on the track, the short way round: laps do not
-        count, so a car that runs into the one it is lapping is the car behind, and so is
-        a car just short of the line that runs into one just past it."""
-        length = self._track.length  # the race's standing is measured along it
-        ahead = (float(self.grid.standing[other]) - float(self.grid.standing[self.index])) % length
-        return 0.0 < ahead < length / 2.0
+        """The cars this car ran into from behind this step (`Grid.crashes`)."""
+        return self.grid.crashes([self.index], car_spec)[self.index]

@@ -126,7 +126,7 @@ def test_only_the_car_behind_is_held_after_a_crash(track: Track) -> None:
 
 def test_the_crash_rule_judges_the_car_behind_and_never_a_held_car(track: Track) -> None:
     sims = [TrackSimulation(track, 1) for _ in range(2)]
-    grid = Grid.of([sim.fleet for sim in sims])
+    grid = Grid.of([sim.fleet for sim in sims], track)
     sims[0].reset_car(0, 1.0)
     x, y, yaw = float(sims[0].fleet.x[0]), float(sims[0].fleet.y[0]), float(sims[0].fleet.yaw[0])
     sims[1].put(0, x - 0.2 * math.cos(yaw), y - 0.2 * math.sin(yaw), yaw)  # nose to tail
@@ -153,6 +153,37 @@ def test_the_crash_rule_judges_the_car_behind_and_never_a_held_car(track: Track)
         .crashed(sims[0].fleet.x, sims[0].fleet.y, sims[0].fleet.yaw, sims[0].s, DEEPRACER_CAR)
         .any()
     )
+
+
+def test_one_pass_over_the_grid_judges_every_car_as_its_own_objects_would(
+    track: Track,
+) -> None:
+    """`Grid.crashes` tests only the pairs close enough to touch, all in one go; each car's
+    answer is the crash test against all of its rivals as objects, held cars left out."""
+    rng = np.random.default_rng(4)
+    sims = [TrackSimulation(track, 1) for _ in range(4)]
+    grid = Grid.of([sim.fleet for sim in sims], track)
+    fields = [RivalField(track, k, grid) for k in range(4)]
+    crashes_seen = 0
+    for _ in range(300):
+        for sim in sims:  # four cars within a car's length or two of each other
+            sim.put(0, 1.0 + rng.normal(0, 0.2), 0.5 + rng.normal(0, 0.2), rng.uniform(-3, 3))
+        grid.standing = rng.uniform(0.0, track.length, 4)
+        grid.ghost = rng.random(4) < 0.2
+        expected = {}
+        for me, field in enumerate(fields):
+            field.follow()
+            fleet = grid.fleets[me]
+            hits = field.hits(fleet.x, fleet.y, fleet.yaw, DEEPRACER_CAR)[0].tolist()
+            others = [j for j in range(4) if j != me]
+            expected[me] = [
+                other
+                for other, hit in zip(others, hits, strict=True)
+                if hit and not grid.ghost[me] and not grid.ghost[other] and grid.behind(me, other)
+            ]
+        assert grid.crashes(range(4), DEEPRACER_CAR) == expected
+        crashes_seen += sum(len(found) for found in expected.values())
+    assert crashes_seen > 50
 
 
 def test_each_car_senses_the_other_as_simapp_lists_it(track: Track) -> None:
