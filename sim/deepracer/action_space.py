@@ -7,6 +7,7 @@ Steering is -30..+30 degrees (positive = left), speed 0.1..4 m/s.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -70,9 +71,12 @@ class ActionSpace:
         raw = np.clip(np.asarray(actions, dtype=np.float64).reshape(-1, 2), -1.0, 1.0)
         return _scale(raw[:, 0], self.steering_range), _scale(raw[:, 1], self.speed_range)
 
-    @property
+    @functools.cached_property
     def _table(self) -> FloatArray:
-        return np.array([[a.steering_angle, a.speed] for a in self.actions], dtype=np.float64)
+        # Built once: every step of a race looks its actions up in it.
+        table = np.array([[a.steering_angle, a.speed] for a in self.actions], dtype=np.float64)
+        table.flags.writeable = False
+        return table
 
     def to_metadata(self) -> list[dict[str, float | int]] | dict[str, dict[str, float]]:
         """The `action_space` value for model_metadata.json."""

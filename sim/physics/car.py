@@ -315,6 +315,21 @@ class Fleet:
     # --- actions -------------------------------------------------------------------------
     def set_targets(self, steering_deg: FloatArray, speed: FloatArray) -> None:
         """Actions are targets: clipped to the car's limits, reached with lag in `step`."""
+        single = self.n == 1 and isinstance(steering_deg, np.ndarray)
+        if (
+            single
+            and steering_deg.dtype == np.float64
+            and getattr(speed, "dtype", None) == np.float64
+        ):
+            # A race's one car: the same arithmetic in plain floats (math.radians and
+            # np.radians both multiply by pi / 180), without numpy's per-call costs.
+            steering = math.radians(float(steering_deg[0]))
+            limit = self._max_steer
+            self.target_steering[0] = min(max(steering, -limit), limit) + self._steering_offset
+            spec = self.spec
+            wanted = min(max(float(speed[0]), spec.min_speed), spec.max_speed)
+            self.target_speed[0] = wanted * spec.speed_gain
+            return
         # np.minimum/np.maximum: np.clip's result at a fraction of its per-call overhead.
         self.target_steering[:] = (
             np.minimum(np.maximum(np.radians(steering_deg), -self._max_steer), self._max_steer)

@@ -40,7 +40,7 @@ from sim.physics.objects.placement import Lanes
 from sim.physics.objects.rivals import Grid, RivalField
 from sim.physics.objects.settings import Lane
 from sim.physics.resets import put_back
-from sim.physics.simulation import Outcome, TrackSimulation, let_other_threads_run
+from sim.physics.simulation import TrackSimulation, let_other_threads_run
 from sim.race.driver import Driver, DriverAction
 from sim.race.engine import RACE_EPISODE_RULES
 from sim.race.result import LapRecord, RaceResult, completed_lap, now_iso
@@ -349,8 +349,10 @@ class HeadToHeadRace:
         """What the step did to a car that was driving, in DeepRacer's precedence: a lap
         completed, then a crash, then off track, then turned round."""
         sim = self.sims[car.index]
-        status = sim.status[0] if sim.terminal[0] != Outcome.RUNNING else None
         car.status = IN_PROGRESS
+        if not sim.terminal[0] and not crashed_into:
+            return  # most steps: it drove on
+        status = sim.status[0] if sim.terminal[0] else None
         if status == EpisodeStatus.LAP_COMPLETE:
             car.status = LAP_COMPLETE
             self._lap_complete(car, start, before.travelled)

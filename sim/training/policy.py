@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import itertools
 import json
 import math
 import platform
@@ -545,9 +546,16 @@ class PolicyDriver:
             obs: Any = {key: _batched([part[key] for part in observed]) for key in observed[0]}
         else:
             obs = _batched(observed)
-        actions = self._actions_of(obs)
-        counts = np.cumsum([sim.n for sim in sims])[:-1]
-        return [self._driver_action(part) for part in np.split(actions, counts)]
+        whole = self._driver_action(self._actions_of(obs))
+        ends = list(itertools.accumulate(sim.n for sim in sims))
+        return [
+            DriverAction(
+                steering_deg=whole.steering_deg[start:end],
+                speed=whole.speed[start:end],
+                action_index=whole.action_index[start:end],
+            )
+            for start, end in itertools.pairwise([0, *ends])
+        ]
 
     def _driver_action(self, actions: NDArray[Any]) -> DriverAction:
         space = self.metadata.action_space
