@@ -234,6 +234,5 @@ def _vector_state_one(sim: TrackSimulation) -> np.ndarray:
         dx, dy = px - x, py - y
         values.append((dx * cos_yaw + dy * sin_yaw) / _LOOK_AHEAD_SCALE)
         values.append((-dx * sin_yaw + dy * cos_yaw) / _LOOK_AHEAD_SCALE)
-    out = np.array([values], dtype=np.float32)
-    np.clip(out, -5.0, 5.0, out=out)
-    return out
+    # Clipped before the float32 rounding, which cannot cross +-5 (both are float32s).
+    return np.array([[min(max(value, -5.0), 5.0) for value in values]], dtype=np.float32)
