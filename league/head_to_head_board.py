@@ -3,7 +3,8 @@ head-to-head` and the League screen read its rows, columns and JSON from here.
 
 A head-to-head race ranks no laps (league.head_to_heads): its board is each racer's wins
 and losses car for car, the rival cars they finished ahead of and behind, the cars (models)
-they raced, and how many of their starts were in races replayed here. A board counts the
+they raced, and how many of their starts were in races replayed here (of those a replay
+could check: a physical car's are timed by hand). A board counts the
 races its verification asks for (every one, or only those this machine could race again or
 has), and a rank is a racer's place on the whole board: naming one racer keeps their rank.
 """
@@ -56,6 +57,18 @@ class HeadToHeadRow:
     beaten: int  # rival cars finished behind theirs
     beaten_by: int  # rival cars finished ahead of theirs
     replayed_starts: int  # starts in races raced again here with the same result
+    hand_timed_starts: int = 0  # physical cars' starts, timed by hand: never replayed
+
+    @property
+    def replayable_starts(self) -> int:
+        return self.starts - self.hand_timed_starts
+
+    @property
+    def replayed_cell(self) -> str:
+        """ "2 of 3" (of the starts a replay could check), or "hand-timed" when none could."""
+        if not self.replayable_starts:
+            return "hand-timed"
+        return f"{self.replayed_starts} of {self.replayable_starts}"
 
 
 @dataclass(frozen=True)
@@ -93,6 +106,9 @@ def read_head_to_head_board(
             beaten=standing.beaten,
             beaten_by=standing.beaten_by,
             replayed_starts=_starts_in(replayed, standing.racer),
+            hand_timed_starts=_starts_in(
+                [race for race in races if race.hand_timed], standing.racer
+            ),
         )
         for rank, standing in enumerate(head_to_head_board(races), start=1)
         if racer is None or standing.racer == racer
@@ -126,7 +142,7 @@ HEAD_TO_HEAD_COLUMNS = (
     Column("losses", lambda row: str(row.losses), numeric=True),
     Column("ahead of", lambda row: str(row.beaten), numeric=True),
     Column("behind", lambda row: str(row.beaten_by), numeric=True),
-    Column("replayed", lambda row: f"{row.replayed_starts} of {row.starts}", numeric=True),
+    Column("replayed", lambda row: row.replayed_cell, numeric=True),
 )
 
 
@@ -147,6 +163,7 @@ def head_to_head_json(board: HeadToHeadBoard, track_name: str | None) -> dict[st
                 "rivals_beaten": row.beaten,
                 "beaten_by": row.beaten_by,
                 "replayed_starts": row.replayed_starts,
+                "hand_timed_starts": row.hand_timed_starts,
             }
             for row in board.rows
         ],

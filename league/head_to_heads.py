@@ -183,6 +183,7 @@ class RecordedHeadToHead:
     places: tuple[CarPlace, ...]  # in finishing order
     night_id: str | None
     match_id: str | None
+    hand_timed: bool = False  # physical cars timed by hand: nothing to replay
 
     @property
     def winner(self) -> str:
@@ -248,6 +249,7 @@ def head_to_head_races(
             ),
             night_id=row["night_id"],
             match_id=row["match_id"],
+            hand_timed=row["physics"] == PHYSICAL,
         )
         for row in rows
     ]

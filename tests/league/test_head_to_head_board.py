@@ -89,6 +89,7 @@ def test_the_json_document_and_the_csv_share_the_rows(raced: League) -> None:
         "rivals_beaten": 4,
         "beaten_by": 1,
         "replayed_starts": 0,
+        "hand_timed_starts": 0,
     }
     lines = to_csv(HEAD_TO_HEAD_COLUMNS, board.rows).splitlines()
     assert lines[0] == "rank,racer,car,wins,losses,ahead of,behind,replayed"

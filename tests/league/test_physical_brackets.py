@@ -115,7 +115,15 @@ def test_a_simulated_match_result_is_not_a_physical_match(league: League) -> Non
 
 
 def test_a_physical_car_is_named_so_on_the_head_to_head_board(league: League) -> None:
-    from league.head_to_head_board import cars_cell, read_head_to_head_board
+    """Named as the lap boards name it, and its starts counted as timed by hand, never as
+    starts a replay has yet to check."""
+    from league.head_to_head_board import (
+        HEAD_TO_HEAD_COLUMNS,
+        cars_cell,
+        head_to_head_json,
+        read_head_to_head_board,
+    )
+    from racer_tui.app.widgets.head_to_head_board import describe_racer
 
     night = physical_night(league)
     draw_night_bracket(league, night, size=2, rules=MATCH_RULES, physical=True)
@@ -127,3 +135,9 @@ def test_a_physical_car_is_named_so_on_the_head_to_head_board(league: League) ->
         ("bob", "blue (physical)"),
         ("ana", "red (physical)"),
     ]
+    replayed = next(column for column in HEAD_TO_HEAD_COLUMNS if column.title == "replayed")
+    assert [replayed.cell(row) for row in board.rows] == ["hand-timed", "hand-timed"]
+    assert [row["hand_timed_starts"] for row in head_to_head_json(board, None)["rows"]] == [1, 1]
+    detail = describe_racer(board, board.rows[0], {}, {}).plain
+    assert "1 start hand-timed (physical cars are not replayed)" in detail
+    assert "replayed here" not in detail

@@ -89,9 +89,7 @@ def describe_racer(
         f"behind {row.beaten_by}\n",
         style="dim",
     )
-    text.append(
-        f"{row.replayed_starts} of {counted(row.starts, 'start')} replayed here\n", style="dim"
-    )
+    text.append(_replayed_line(row) + "\n", style="dim")
     text.append("cars: ", style="dim")
     text.append(", ".join(row.cars) + "\n")
 
@@ -149,3 +147,13 @@ def _race_lines(
         text.append(f"\n    {standing.standing}: {standing.why}", style="dim")
     text.append("\n")
     return text
+
+
+def _replayed_line(row: HeadToHeadRow) -> str:
+    """ "2 of 3 starts replayed here", with the physical starts named apart: a car timed by
+    hand on a real track has no model to replay."""
+    hand = row.hand_timed_starts
+    if not row.replayable_starts:
+        return f"{counted(hand, 'start')} hand-timed (physical cars are not replayed)"
+    line = f"{row.replayed_starts} of {counted(row.replayable_starts, 'start')} replayed here"
+    return line + (f", {hand} hand-timed" if hand else "")

@@ -46,6 +46,7 @@ ROW_FIELDS = [
     "rivals_beaten",
     "beaten_by",
     "replayed_starts",
+    "hand_timed_starts",
 ]
 
 
