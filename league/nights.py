@@ -298,12 +298,16 @@ SIMULATED_UNDER_PHYSICAL_NOTE = (
 TRAINING_NOTE = "{model} is still training: its heat races the policy it has when the heat runs."
 
 
-def entrant_note(model: str, *, training: Collection[str], physical_rules: bool) -> str:
+def entrant_note(
+    model: str, *, training: Collection[str], physical_rules: bool, physical_entered: bool = False
+) -> str:
     """The note on entering `model` ("" for none): `training` names the garage models
-    training now; `physical_rules`, whether the night races under the physical preset."""
+    training now; `physical_rules`, whether the night races under the physical preset;
+    `physical_entered`, whether a physical car is on the night already (its note was said
+    then, and is not said again for every car of a fleet)."""
     if model in training:
         return TRAINING_NOTE.format(model=model)
-    if is_physical(model) and not physical_rules:
+    if is_physical(model) and not physical_rules and not physical_entered:
         return PHYSICAL_RULES_NOTE
     # Not while "physical" is still being typed (the app's dialog notes as keys come).
     if physical_rules and model and not PHYSICAL.startswith(model) and not is_physical(model):

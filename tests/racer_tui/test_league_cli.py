@@ -323,6 +323,29 @@ def test_a_host_withdraws_moves_and_deletes_from_the_command_line(
     assert json.loads(out) == []
 
 
+def test_night_add_says_the_physical_rules_note_for_the_first_physical_car_only(
+    capsys: pytest.CaptureFixture[str], db: str
+) -> None:
+    """A fleet of physical cars entered one by one heard the same note for each (the host
+    walk); it is said once, for the first."""
+    from league.nights import PHYSICAL_RULES_NOTE
+
+    def notes(racer: str, model: str) -> list[str]:
+        code, out, err = run_cli(
+            capsys, "night", "add", "Fri", "--racer", racer, "--model", model, "--db", db
+        )
+        assert code == 0, err
+        return [line for line in out.splitlines() if line.startswith("Note: ")]
+
+    assert (
+        run_cli(capsys, "night", "new", "--track", "beginner-oval", "--name", "Fri", "--db", db)[0]
+        == 0
+    )
+    assert notes("ana", "reference") == []
+    assert notes("bob", "physical:red") == [f"Note: {PHYSICAL_RULES_NOTE}"]
+    assert notes("cy", "physical:blue") == []
+
+
 def test_a_night_run_killed_mid_way_keeps_its_heats_and_runs_the_rest(tmp_path: Path) -> None:
     """Each heat is recorded in one transaction as it finishes: a killed `night run`
     leaves whole heats and waiting ones, and running it again finishes the night."""

@@ -99,10 +99,12 @@ def night_command(league: League, args: argparse.Namespace) -> int:
     if action == "add":
         entrant = nights.add_entrant(league, night, args.racer, args.model)
         print(f"Entered {entrant.racer} with {entrant.model} ({entrant.id}).")
+        others = [e for e in nights.entrants(league, night) if e.id != entrant.id]
         note = nights.entrant_note(
             entrant.model,
             training={folder.name for folder in list_models() if folder.is_training()},
             physical_rules=night.rules == preset_rules(PHYSICAL),
+            physical_entered=any(is_physical(other.model) for other in others),
         )
         if note:
             print(f"Note: {note}")
