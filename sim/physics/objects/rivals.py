@@ -10,8 +10,9 @@ A head-to-head race drives each car in a simulation of its own, with the time tr
 one-car physics (the same laps a car drives alone), and couples them here: car i's objects
 are the other cars, in grid order (simapp registers the racing agents first, in index
 order, and leaves the car's own name out), wherever those cars are. The race moves every
-car first and then judges crashes (`RivalField.crashed_into`), so no car is judged against
-where another was before the step; a simulation never judges a crash with a rival itself.
+car first and then judges crashes (`Grid.crashes`, every pair at once), so no car is
+judged against where another was before the step; a simulation never judges a crash with a
+rival itself.
 
 What simapp does with a crash between two racing cars, and so the race:
 - only the car whose progress is lower (the car behind) crashed; the car in front drives on
