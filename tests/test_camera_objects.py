@@ -251,6 +251,41 @@ def test_each_car_sees_its_own_objects_and_a_batch_equals_one_car_at_a_time(
     assert np.array_equal(out, frames)
 
 
+def test_one_cars_one_object_draws_as_it_does_in_a_batch(camera: Camera, reinvent: Track) -> None:
+    """A two-car race's rival goes through a plain-float path (one car, one object); it
+    must draw what the batched path draws, to the bit: near and far, ahead, beside and
+    behind the lens, seen from above its top (a low box) and from below it (a bot car),
+    and with the lens inside it."""
+    rng = np.random.default_rng(46)
+    start = start_pose(reinvent)
+    drawn = 0
+    for case in range(400):
+        pose = ahead_of(start, rng.uniform(-1.0, 3.0), rng.uniform(-0.4, 0.4))
+        pose = (pose[0], pose[1], pose[2] + rng.normal(0.0, 0.3))
+        reach = 0.0 if case % 50 == 0 else rng.uniform(-0.5, 2.5)  # now and then: inside
+        place = ahead_of(pose, reach, rng.normal(0.0, 0.4), rng.uniform(-math.pi, math.pi))
+        size = (BOX, BOT_CAR, (0.3, 0.3, 0.05))[case % 3]  # the last seen from above
+        lone = solids(place, size=size)
+        # A second car with an object of its own takes the batched path for both.
+        other = ahead_of(start, 1.0)
+        pair = Solids(
+            x=np.array([[place[0]], [other[0] + 0.5]]),
+            y=np.array([[place[1]], [other[1]]]),
+            heading=np.array([[place[2]], [other[2]]]),
+            length=lone.length,
+            width=lone.width,
+            height=lone.height,
+            side_tone=lone.side_tone,
+            top_tone=lone.top_tone,
+        )
+        poses = [pose, other]
+        batch = camera.render(*(np.array([p[i] for p in poses]) for i in range(3)), solids=pair)
+        alone = frame(camera, pose, lone)
+        assert np.array_equal(alone, batch[0]), f"case {case}"
+        drawn += int(not np.array_equal(alone, frame(camera, pose)))
+    assert drawn > 150  # most cases put the object in view
+
+
 def test_a_box_passed_close_by_fills_the_side_of_the_view_without_garbage(
     camera: Camera, reinvent: Track
 ) -> None:

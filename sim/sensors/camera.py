@@ -369,6 +369,18 @@ class Camera:
         self._turn_cos = self._project[:, :2]
         self._turn_sin = self._project[:, 1::-1] * _FLIP
         self._lens_drop = -spec.mount_height * self._project[:, 2]  # the lens above the ground
+        # The same numbers per projection row as plain floats (`_draw_lone_solid`): the
+        # cosine's parts, the sine's, the up column and the lens's drop.
+        self._projection_rows = [
+            (*turn_cos, *turn_sin, up, drop)
+            for turn_cos, turn_sin, up, drop in zip(
+                self._turn_cos.tolist(),
+                self._turn_sin.tolist(),
+                self._project[:, 2].tolist(),
+                self._lens_drop.tolist(),
+                strict=True,
+            )
+        ]
         self._all_columns = np.array([0.0, width])[:, None]
         self._columns = np.arange(width)
         self._pixel_centres = self._columns + 0.5
@@ -496,6 +508,10 @@ class Camera:
         here than its arithmetic, hence the terse style."""
         height, width = self.shape
         k = solids.x.shape[1]
+        if table.shape[1] == 1 and k == 1:  # a two-car race's rival: plain floats first
+            car_x, car_y, car_yaw = table[:, 0].tolist()
+            self._draw_lone_solid(car_x, car_y, car_yaw, solids, out)
+            return
         # Per car, the map from homogeneous world coordinates to homogeneous pixel ones
         # (X, Y, Z: column X / Z, row Y / Z, depth Z): into the car's frame from the lens,
         # then through the lens.
@@ -567,6 +583,83 @@ class Camera:
             gap = np.hypot(*np.maximum(np.abs(lens_uv) - half, 0.0).T)
             order = np.lexsort((-gap, car))
         self._paint(out, runs, tones, car=car, first=first, order=order)
+
+    def _draw_lone_solid(
+        self, car_x: float, car_y: float, car_yaw: float, solids: Solids, out: UInt8Array
+    ) -> None:
+        """`_draw_solids` for one car and one object (a two-car race's rival) in plain
+        floats up to the runs: the same operations on each number in the same order, so
+        the same frame to the bit (tests hold it to the batched path), without numpy's
+        per-call costs on arrays of a dozen numbers. Culling alone may add up in another
+        order: it only skips objects that no pixel centre can see."""
+        height, width = self.shape
+        # numpy's cosine and sine, as the batched path takes them: another machine's libm
+        # need not round alike.
+        cos, sin = np.cos(car_yaw - _QUARTER_TURN).tolist()
+        lens_x = car_x + self.spec.mount_forward * cos
+        lens_y = car_y + self.spec.mount_forward * sin
+        to_pixels = []
+        for cos_x, cos_y, sin_x, sin_y, up, drop in self._projection_rows:
+            along_x, along_y = cos * cos_x + sin * sin_x, cos * cos_y + sin * sin_y
+            to_pixels.append((along_x, along_y, up, drop - (along_x * lens_x + along_y * lens_y)))
+        object_x, object_y = float(solids.x[0, 0]), float(solids.y[0, 0])
+        object_height = float(solids.height[0])
+        middle = (object_x, object_y, object_height / 2, 1.0)
+        seen = [sum(a * b for a, b in zip(row, middle, strict=True)) for row in to_pixels]
+        radius = float(solids._radius[0])
+        for side in self._frustum_sides.tolist():
+            if sum(a * b for a, b in zip(side, seen, strict=True)) <= -radius:
+                return
+        # The object's corners as `Solids._boxes` works them out, then through the lens.
+        heading = solids.heading[0, 0]
+        half_l, half_w = float(solids._half[0, 0]), float(solids._half[0, 1])
+        axis_cos, axis_sin = np.cos(heading).item(), np.sin(heading).item()
+        reach = ((axis_cos * half_l, axis_sin * half_l), (-axis_sin * half_w, axis_cos * half_w))
+        pixels: list[list[float]] = [[], [], []]  # X, Y, Z of corner j
+        for _, along, across, up in _CORNER_ROWS:
+            x = object_x + reach[0][0] * along + reach[1][0] * across
+            y = object_y + reach[0][1] * along + reach[1][1] * across
+            z = object_height * up
+            for row, (m_x, m_y, m_z, m_w) in zip(pixels, to_pixels, strict=True):
+                row.append(m_x * x + m_y * y + m_z * z + m_w)
+        depth = pixels[2]
+        ahead = min(depth) > 0
+        if ahead:
+            columns = [column / z for column, z in zip(pixels[0], depth, strict=True)]
+            low, high = float(math.floor(min(columns))), float(math.ceil(max(columns)))
+        else:  # a corner behind the lens: any column may show it
+            low, high = 0.0, float(width)
+        low, high = min(max(low, 0.0), width), min(max(high, 0.0), width)
+        span = int(high - low)
+        if span <= 0:
+            return
+        first = int(min(low, width - span))
+        centres = np.add(self._pixel_centres[:span], first, dtype=np.float64)[None, :]
+        offset_x, offset_y = lens_x - object_x, lens_y - object_y
+        region = 0
+        for (u_x, u_y), half, weight in zip(
+            ((axis_cos, axis_sin), (-axis_sin, axis_cos)), (half_l, half_w), (6, 2), strict=True
+        ):
+            lens_u = u_x * offset_x + u_y * offset_y
+            region += ((lens_u >= -half) + (lens_u > half)) * weight
+        above = self.spec.mount_height > object_height
+        ends = np.array(
+            [[[[row[j]] for j in edge] for edge in _OUTLINES[region + above]] for row in pixels]
+        )
+        start, end = _runs(ends, centres, height)
+        side = solids.side_tone[:1]
+        if above:
+            top = np.array(
+                [[[[row[j]] for j in edge] for edge in _TOP_OUTLINE[:, :, 0]] for row in pixels]
+            )
+            lid_start, lid_end = _runs(top, centres, height)
+            lid_start = np.clip(lid_start, start, end)
+            lid_end = np.clip(lid_end, lid_start, end)
+            runs = np.array([start, lid_start, lid_start, lid_end, lid_end, end])
+            tones = np.array([side, solids.top_tone[:1], side])
+        else:
+            runs, tones = np.array([start, end]), side[None]
+        self._paint(out, runs, tones, car=_FIRST, first=np.array([first]), order=None)
 
     def _paint(
         self,
@@ -728,6 +821,7 @@ _WALL_TONES = np.array(
 )
 # cos(yaw - these) = (cos yaw, sin yaw) in one call.
 _QUARTER_TURN = np.array([0.0, math.pi / 2])
+_FIRST = np.zeros(1, dtype=np.intp)  # a lone car's index
 # Columns of `Camera._car_terms`. Per wall (low x, low y, high x, high y) the factors of
 # the bearing's ahead and left parts are a = (-cos, -sin, cos, sin) and
 # b = (sin, -cos, -sin, cos), times how steeply that wall's top rises per unit of them.
@@ -743,6 +837,7 @@ _NEAREST = 14
 # top four above them.
 _FOOTPRINT = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)]
 _CORNERS = np.array([(1.0, u, v, z) for z in (0.0, 1.0) for u, v in _FOOTPRINT])
+_CORNER_ROWS: list[list[float]] = _CORNERS.tolist()
 
 
 def _outline(u: int, v: int, above: bool) -> list[int]:
