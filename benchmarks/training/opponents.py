@@ -1,8 +1,9 @@
 """Does training among a rival's model make a model beat it? Issue 46's check of training
 against an opponent (`racer-tui train MODEL --opponent CAR`).
 
-    python -m benchmarks.training.opponents [--seeds 10] [--minutes 3] [--laps 3]
-                                            [--track reinvent_base] [--json] [--keep FOLDER]
+    python -m benchmarks.training.opponents [--seeds 10] [--first-seed 1] [--minutes 3]
+                                            [--laps 3] [--track reinvent_base] [--json]
+                                            [--keep FOLDER]
 
 For each seed S, two fresh models of one spec (vector state and sector lidar, 10 actions
 from the racing line, the racing_line reward), each trained for the same minutes on one
@@ -160,6 +161,9 @@ def _print(result: dict[str, Any]) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
     parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument(
+        "--first-seed", type=int, default=1, help="seeds run from it on (more evidence: 11)"
+    )
     parser.add_argument("--minutes", type=float, default=3.0)
     parser.add_argument("--laps", type=int, default=3)
     parser.add_argument("--track", default="reinvent_base")
@@ -167,7 +171,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--keep", help="keep the models in this data folder")
     args = parser.parse_args(argv)
     with bench_home(args.keep):
-        result = run(range(1, args.seeds + 1), args.minutes, args.track, args.laps)
+        seeds = range(args.first_seed, args.first_seed + args.seeds)
+        result = run(seeds, args.minutes, args.track, args.laps)
     print_result(result, args.json, _print)
     return 0
 
