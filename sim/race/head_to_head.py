@@ -37,7 +37,7 @@ from sim.foundation.ids import new_id
 from sim.foundation.remedies import RemedyError
 from sim.physics.car import DEEPRACER_CAR, STEP_SECONDS, CarSpec
 from sim.physics.objects.placement import Lanes
-from sim.physics.objects.rivals import Grid, RivalField
+from sim.physics.objects.rivals import CarPoses, Grid, RivalField
 from sim.physics.objects.settings import Lane
 from sim.physics.resets import put_back
 from sim.physics.simulation import TrackSimulation, let_other_threads_run
@@ -291,9 +291,9 @@ class HeadToHeadRace:
                 sim.apply(action.steering_deg[:1], action.speed[:1])
         start = self.clock
         self.steps += 1
-        self._follow()
+        poses = self._follow()
         self._update_standing()
-        crashes = self.grid.crashes([car.index for car in driving], self.car_spec)
+        crashes = self.grid.crashes([car.index for car in driving], self.car_spec, poses)
         for car in self.cars:
             if car.hold_left > 0.0:
                 self._hold(car)
@@ -306,11 +306,12 @@ class HeadToHeadRace:
         self._note_overtakes()
         self._reach.append(np.maximum(self._reach[-1], self.grid.standing))
 
-    def _follow(self) -> None:
-        """Every car's rivals where the other cars stand now."""
+    def _follow(self) -> CarPoses:
+        """Every car's rivals where the other cars stand now (those poses, returned)."""
         poses = self.grid.poses()
         for rivals in self.rivals:
             rivals.follow(poses)
+        return poses
 
     def _actions(self, driving: list[CarInRace]) -> dict[int, DriverAction]:
         """Each driving car's action; a driver that can (`act_many`: a policy) acts for

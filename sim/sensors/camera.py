@@ -364,6 +364,7 @@ class Camera:
         # The same distances straight from a point (ahead, left, up) of the lens, as plain
         # floats for `sees_none`.
         self._side_rows = (self._frustum_sides @ self._project).tolist()
+        self._frustum_rows: list[list[float]] = self._frustum_sides.tolist()
         # Turning world (x, y) by the car's yaw, then projecting: the cosine's part and the
         # sine's (ahead = x cos + y sin, left = y cos - x sin).
         self._turn_cos = self._project[:, :2]
@@ -607,8 +608,8 @@ class Camera:
         middle = (object_x, object_y, object_height / 2, 1.0)
         seen = [sum(a * b for a, b in zip(row, middle, strict=True)) for row in to_pixels]
         radius = float(solids._radius[0])
-        for side in self._frustum_sides.tolist():
-            if sum(a * b for a, b in zip(side, seen, strict=True)) <= -radius:
+        for plane in self._frustum_rows:
+            if sum(a * b for a, b in zip(plane, seen, strict=True)) <= -radius:
                 return
         # The object's corners as `Solids._boxes` works them out, then through the lens.
         heading = solids.heading[0, 0]

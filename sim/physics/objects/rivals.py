@@ -71,12 +71,14 @@ class Grid:
             [float(fleet.yaw[0]) for fleet in fleets],
         )
 
-    def crashes(self, drivers: Sequence[int], car_spec: CarSpec) -> dict[int, list[int]]:
+    def crashes(
+        self, drivers: Sequence[int], car_spec: CarSpec, poses: CarPoses | None = None
+    ) -> dict[int, list[int]]:
         """For each car in `drivers`, the cars it ran into from behind this step (grid
         indices): a corner of it inside their rectangle, neither of them held, it behind
         them on the track. Every pair is judged in one pass: a race's cars are mostly apart,
-        and the close pairs share one crash test."""
-        x, y, yaw = self.poses()
+        and the close pairs share one crash test. `poses`: the grid's, if read already."""
+        x, y, yaw = self.poses() if poses is None else poses
         limit = RIVAL_SHAPE.reach(car_spec) ** 2
         ghost = self.ghost.tolist()
         pairs = [
