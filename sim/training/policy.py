@@ -201,6 +201,9 @@ class PolicyNetwork(nn.Module):
         # Camera observations come as `camera_frames` made them (the PPO update's), not as
         # the Observer's uint8 frames.
         self.frames_prepared = False
+        # The convolutions in bfloat16 (the PPO update's, on CPUs with bf16 in hardware:
+        # `native_bf16`); acting, evaluations and races always run float32.
+        self.bf16_convolutions = False
 
     # --- the forward pieces the trainer and the driver share --------------------------------
     def camera_frames(self, frames: torch.Tensor) -> torch.Tensor:
@@ -213,6 +216,11 @@ class PolicyNetwork(nn.Module):
         pooled: torch.Tensor = self.camera[0](image)
         return pooled
 
+    def prepared_camera_shape(self) -> tuple[int, int, int]:
+        """One frame's shape as `camera_frames` leaves it, channels last."""
+        shape = self.spec.input_shapes[self.spec.sensors.index("camera")]
+        return (shape[0] // CAMERA_POOL, shape[1] // CAMERA_POOL, shape[2])
+
     def features(self, obs: Observation) -> torch.Tensor:
         parts: list[torch.Tensor] = []
         for sensor in self.spec.sensors:
@@ -224,7 +232,15 @@ class PolicyNetwork(nn.Module):
                 pooled = (
                     value.permute(0, 3, 1, 2) if self.frames_prepared else self.camera_frames(value)
                 )
-                for layer in list(self.camera)[1:]:
+                layers = list(self.camera)[1:]
+                if self.bf16_convolutions:
+                    dense = 3  # Flatten, Linear, ReLU: float32 from there on
+                    with torch.autocast("cpu", dtype=torch.bfloat16):
+                        for layer in layers[:-dense]:
+                            pooled = layer(pooled)
+                    pooled = pooled.float()
+                    layers = layers[-dense:]
+                for layer in layers:
                     pooled = layer(pooled)
                 parts.append(pooled)
             elif sensor == "lidar":
@@ -252,6 +268,14 @@ class PolicyNetwork(nn.Module):
         if self.spec.action_kind == "discrete":
             return params.argmax(dim=1)
         return params.clamp(-1.0, 1.0)
+
+
+def native_bf16() -> bool:
+    """Whether this CPU computes bfloat16 in hardware (AVX512-BF16 or AMX). Elsewhere oneDNN
+    emulates it, slower than float32, so the update keeps float32 there."""
+    checks = ("_is_avx512_bf16_supported", "_is_amx_tile_supported")
+    # Private to torch.cpu, so looked up with a default: a torch without them says no.
+    return any(bool(getattr(torch.cpu, name, lambda: False)()) for name in checks)
 
 
 def init_weights(network: PolicyNetwork) -> None:

@@ -33,11 +33,27 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.buffers import DictRolloutBuffer, RolloutBuffer
 from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import ActorCriticPolicy
-from torch.nn import functional
 
 from sim.deepracer.files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_TYPE
 from sim.training.logbook import FinishedEpisode
-from sim.training.policy import NetworkSpec, PolicyNetwork, init_weights, observation_tensors
+from sim.training.policy import (
+    NetworkSpec,
+    PolicyNetwork,
+    init_weights,
+    native_bf16,
+    observation_tensors,
+)
+from sim.training.ppo_loss import (
+    FIGURES,
+    LossSettings,
+    Minibatch,
+    accumulate_gradients,
+    action_distribution,
+    evaluate_actions,
+    normalized_advantages,
+    slice_samples,
+    value_loss,
+)
 from sim.training.vec_env import FleetVecEnv
 
 LOSS_TYPES = ("huber", "mean squared error")
@@ -101,9 +117,7 @@ class RacerPolicy(ActorCriticPolicy):
         return data
 
     def _distribution(self, params: torch.Tensor) -> Distribution:
-        if self.spec.action_kind == "discrete":
-            return self.action_dist.proba_distribution(action_logits=params)
-        return self.action_dist.proba_distribution(params, self.net.log_std)
+        return action_distribution(self.net, self.action_dist, params)
 
     def forward(
         self, obs: Any, deterministic: bool = False
@@ -118,9 +132,7 @@ class RacerPolicy(ActorCriticPolicy):
     def evaluate_actions(
         self, obs: Any, actions: torch.Tensor
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:
-        features = self.net.features(obs)
-        distribution = self._distribution(self.net.action_parameters(features))
-        return self.net.value(features), distribution.log_prob(actions), distribution.entropy()
+        return evaluate_actions(self.net, self.action_dist, obs, actions)
 
     def get_distribution(self, obs: Any) -> Distribution:
         return self._distribution(self.net.action_parameters(self.net.features(obs)))
@@ -156,6 +168,8 @@ class RacerPPO(PPO):
     # Threads of the update: the simulation processes wait while it runs, so their cores
     # are free; a camera network's update is most of a training's time (sim.training.shards).
     update_threads: int = 1
+    # The update's convolutions in bfloat16 (`make_ppo` decides; PolicyNetwork says how).
+    bf16_update: bool = False
 
     @staticmethod
     def _wrap_env(env: Any, verbose: int = 0, monitor_wrapper: bool = True) -> Any:
@@ -176,9 +190,7 @@ class RacerPPO(PPO):
 
     def value_loss(self, values: torch.Tensor, returns: torch.Tensor) -> torch.Tensor:
         """DeepRacer's value loss: Huber (smooth L1, delta 1) or mean squared error."""
-        if self.loss_type == "huber":
-            return functional.smooth_l1_loss(values, returns)
-        return functional.mse_loss(values, returns)
+        return value_loss(values, returns, self.loss_type)
 
     # --- learning ------------------------------------------------------------------------
     def train(self) -> None:
@@ -197,54 +209,49 @@ class RacerPPO(PPO):
             group["lr"] = float(self.lr_schedule(self._current_progress_remaining))
         schedule = self.clip_range
         clip = float(schedule(self._current_progress_remaining) if callable(schedule) else schedule)
-        discrete = isinstance(self.action_space, spaces.Discrete)
-        totals = np.zeros(5)
-        batches = 0
-        with _frames_prepared(self.network, self.rollout_buffer):
-            batches = self._epochs(clip, discrete, totals)
+        settings = LossSettings(
+            clip=clip,
+            ent_coef=float(self.ent_coef),
+            vf_coef=float(self.vf_coef),
+            loss_type=self.loss_type,
+            normalize_advantage=bool(self.normalize_advantage),
+            discrete=isinstance(self.action_space, spaces.Discrete),
+        )
+        with _update_mode(self.network, self.rollout_buffer, self.bf16_update):
+            totals, batches = self._epochs(settings)
         self._n_updates += self.n_epochs
         means = totals / max(batches, 1)
         self.last_update = UpdateStats(*(float(value) for value in means))
 
-    def _epochs(self, clip: float, discrete: bool, totals: np.ndarray) -> int:
-        """DeepRacer's epochs over the rollout; the number of minibatches."""
+    def _epochs(self, settings: LossSettings) -> tuple[np.ndarray, int]:
+        """DeepRacer's epochs over the rollout in this process: the `FIGURES` summed over
+        minibatches, and how many there were."""
+        totals = np.zeros(len(FIGURES))
         batches = 0
+        pieces = slice_samples(self.network)
         for _ in range(self.n_epochs):
             for batch in self.rollout_buffer.get(self.batch_size):
-                actions = batch.actions.long().flatten() if discrete else batch.actions
-                values, log_prob, entropy = self.policy.evaluate_actions(
-                    batch.observations, actions
+                samples = Minibatch.of(
+                    batch.observations,
+                    actions=batch.actions,
+                    old_log_prob=batch.old_log_prob,
+                    advantages=normalized_advantages(
+                        batch.advantages, settings.normalize_advantage
+                    ),
+                    returns=batch.returns,
+                    discrete=settings.discrete,
                 )
-                values = values.flatten()
-                assert entropy is not None  # both of our distributions have one
-                advantages = batch.advantages
-                if self.normalize_advantage and len(advantages) > 1:
-                    advantages = (advantages - advantages.mean()) / (advantages.std() + 1e-8)
-                log_ratio = log_prob - batch.old_log_prob
-                ratio = torch.exp(log_ratio)
-                clipped = torch.clamp(ratio, 1.0 - clip, 1.0 + clip)
-                policy_loss = -torch.min(advantages * ratio, advantages * clipped).mean()
-                value_loss = self.value_loss(values, batch.returns)
-                entropy_mean = entropy.mean()
-                loss = policy_loss - self.ent_coef * entropy_mean + self.vf_coef * value_loss
                 self.policy.optimizer.zero_grad()
-                loss.backward()  # type: ignore[no-untyped-call]
-                torch.nn.utils.clip_grad_norm_(
-                    self.policy.parameters(), self.max_grad_norm, foreach=True
-                )
-                self.policy.optimizer.step()
-                with torch.no_grad():
-                    approx_kl = ((ratio - 1.0) - log_ratio).mean()
-                    clip_fraction = ((ratio - 1.0).abs() > clip).float().mean()
-                totals += [
-                    float(entropy_mean.detach()),
-                    float(policy_loss.detach()),
-                    float(value_loss.detach()),
-                    float(approx_kl),
-                    float(clip_fraction),
-                ]
+                evaluate = self.policy.evaluate_actions
+                totals += accumulate_gradients(evaluate, samples, len(samples), settings, pieces)
+                self._step()
                 batches += 1
-        return batches
+        return totals, batches
+
+    def _step(self) -> None:
+        """One optimizer step on the minibatch's gradients, clipped as DeepRacer clips."""
+        torch.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm, foreach=True)
+        self.policy.optimizer.step()
 
     # --- gathering experience ----------------------------------------------------------------
     def start_rollouts(self) -> None:
@@ -324,6 +331,18 @@ class RacerPPO(PPO):
 
 # Frames prepared at a time for the update (floats before pooling take 4 bytes a pixel).
 PREPARE_FRAMES = 512
+
+
+@contextmanager
+def _update_mode(net: PolicyNetwork, buffer: RolloutBuffer, bf16: bool) -> Iterator[None]:
+    """The network as the update runs it: frames prepared once, and the convolutions in
+    bfloat16 where `bf16` (acting and races always run float32)."""
+    net.bf16_convolutions = bf16 and net.camera is not None
+    try:
+        with _frames_prepared(net, buffer):
+            yield
+    finally:
+        net.bf16_convolutions = False
 
 
 @contextmanager
@@ -433,4 +452,5 @@ def make_ppo(
         )
     model.loss_type = settings.loss_type
     model.update_threads = update_threads
+    model.bf16_update = spec.conv != () and native_bf16()
     return model

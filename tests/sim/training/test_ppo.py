@@ -13,7 +13,7 @@ from torch.nn import functional
 from sim.deepracer.action_space import discrete_grid
 from sim.deepracer.files import ModelMetadata, default_hyperparameters
 from sim.env import EnvConfig
-from sim.training import ppo
+from sim.training import ppo_loss
 from sim.training.policy import network_spec
 from sim.training.ppo import PPOSettings, RacerPPO, make_ppo
 from sim.training.vec_env import BatchedVecEnv
@@ -79,7 +79,7 @@ def loss_calls(monkeypatch: pytest.MonkeyPatch) -> Iterator[dict[str, int]]:
         return wrapper
 
     for name in calls:
-        monkeypatch.setattr(ppo.functional, name, counting(name))
+        monkeypatch.setattr(ppo_loss.functional, name, counting(name))
     yield calls
 
 

@@ -12,31 +12,14 @@ import numpy as np
 import pytest
 import torch
 
-from sim.deepracer.action_space import discrete_grid
-from sim.deepracer.files import ModelMetadata, default_hyperparameters
-from sim.env import EnvConfig
 from sim.training import ppo
-from sim.training.policy import network_spec
-from sim.training.ppo import PPOSettings, RacerPPO, make_ppo
-from sim.training.vec_env import BatchedVecEnv
-
-
-def _collected(sensors: tuple[str, ...]) -> RacerPPO:
-    metadata = ModelMetadata(discrete_grid(30.0, 3, 2.0, 1), sensors)
-    hyperparameters = default_hyperparameters()
-    hyperparameters.update(batch_size=16, num_epochs=2)
-    config = EnvConfig.build("hairpin-circuit", metadata.action_space, sensors)
-    settings = PPOSettings.from_hyperparameters(hyperparameters)
-    model = make_ppo(BatchedVecEnv(config, 2), network_spec(metadata), settings, max_samples=48)
-    model.start_rollouts()
-    model.collect(episodes_wanted=100, min_samples=48, max_samples=48)
-    return model
+from tests.sim.training.rollouts import collected
 
 
 def _updated(sensors: tuple[str, ...], prepared: bool, monkeypatch: pytest.MonkeyPatch) -> Any:
     torch.manual_seed(3)
     np.random.seed(3)  # the minibatches' order (SB3 draws it from numpy's generator)
-    model = _collected(sensors)
+    model = collected(sensors, batch_size=16)
     if not prepared:
 
         @contextlib.contextmanager
@@ -60,5 +43,5 @@ def test_the_update_is_the_same_to_the_bit(
     for name, value in before.items():
         assert torch.equal(value, after[name]), name
     # And the update moved the weights: the comparison compared something.
-    untrained = _collected(sensors).network.state_dict()
+    untrained = collected(sensors, batch_size=16).network.state_dict()
     assert any(not torch.equal(untrained[name], value) for name, value in after.items())
