@@ -42,6 +42,7 @@ from sim.training.policy import (
     init_weights,
     native_bf16,
     observation_tensors,
+    pooled_frames,
 )
 from sim.training.ppo_loss import (
     FIGURES,
@@ -278,8 +279,7 @@ class RacerPPO(PPO):
         dones = np.zeros(n, dtype=bool)
         steps = 0
         while steps < max_steps:
-            with torch.no_grad():
-                actions, values, log_probs = self.policy(observation_tensors(self._obs))
+            actions, values, log_probs = self._acting(self._obs)
             actions_np = actions.numpy()
             env_actions = (
                 actions_np if discrete else np.clip(actions_np, -1.0, 1.0).astype(np.float32)
@@ -292,11 +292,8 @@ class RacerPPO(PPO):
                 info = details[car]
                 if infos[car].get("TimeLimit.truncated"):
                     # Cut by the step limit, not ended: bootstrap from the value there.
-                    terminal = observation_tensors(
-                        _batch_of_one(infos[car]["terminal_observation"])
-                    )
-                    with torch.no_grad():
-                        rewards[car] += self.gamma * float(self.policy.predict_values(terminal)[0])
+                    terminal = _batch_of_one(infos[car]["terminal_observation"])
+                    rewards[car] += self.gamma * float(self._values(terminal)[0])
                 finished.append(
                     FinishedEpisode(
                         car=car,
@@ -322,20 +319,29 @@ class RacerPPO(PPO):
             if len(finished) >= episodes_wanted and steps >= min_steps:
                 break
         _truncate(buffer, steps)
-        with torch.no_grad():
-            last_values = self.policy.predict_values(observation_tensors(self._obs))
+        last_values = self._values(self._obs)
         buffer.compute_returns_and_advantage(last_values=last_values, dones=dones)
         self.num_timesteps += steps * n
         return Rollout(steps=steps * n, episodes=finished)
 
+    # A training's forward passes read camera frames pooled once (`_pooled`), as its update
+    # reads them.
+    def _acting(self, obs: Any) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Sampled actions, values and log-probabilities for the cars' observations."""
+        with torch.no_grad(), _pooled_input(self.network):
+            acted: tuple[torch.Tensor, torch.Tensor, torch.Tensor] = self.policy(
+                observation_tensors(_pooled(self.network, obs))
+            )
+        return acted
 
-# Frames prepared at a time for the update (floats before pooling take 4 bytes a pixel).
-PREPARE_FRAMES = 512
+    def _values(self, obs: Any) -> torch.Tensor:
+        with torch.no_grad(), _pooled_input(self.network):
+            return self.policy.predict_values(observation_tensors(_pooled(self.network, obs)))
 
 
 @contextmanager
 def _update_mode(net: PolicyNetwork, buffer: RolloutBuffer, bf16: bool) -> Iterator[None]:
-    """The network as the update runs it: frames prepared once, and the convolutions in
+    """The network as the update runs it: frames pooled once, and the convolutions in
     bfloat16 where `bf16` (acting and races always run float32)."""
     net.bf16_convolutions = bf16 and net.camera is not None
     try:
@@ -347,31 +353,31 @@ def _update_mode(net: PolicyNetwork, buffer: RolloutBuffer, bf16: bool) -> Itera
 
 @contextmanager
 def _frames_prepared(net: PolicyNetwork, buffer: RolloutBuffer) -> Iterator[None]:
-    """For the update, the buffer's camera frames as the camera network's weightless first
-    steps make them (`PolicyNetwork.camera_frames`), once for the whole rollout instead of
-    once per minibatch of every epoch (they were a quarter of a camera training's time:
-    docs/camera-learner-profile.md). The same operations on the same frames: the update is
-    the same to the bit (tests/sim/training/test_prepared_frames.py). The buffer keeps
-    them until the next rollout's `reset`."""
+    """For the update, the buffer's camera frames pooled as the collection's forward passes
+    pooled them (`pooled_frames`), once for the whole rollout instead of once per minibatch
+    of every epoch (they were a quarter of a camera training's time:
+    docs/camera-learner-profile.md). The buffer keeps them until the next rollout's
+    `reset`."""
     if net.camera is None:
         yield
         return
-    dict_obs = isinstance(buffer.observations, dict)
-    stored = buffer.observations["camera"] if dict_obs else buffer.observations
-    assert isinstance(stored, np.ndarray)
-    frames = torch.as_tensor(stored.reshape(-1, *stored.shape[-3:]))
-    with torch.no_grad():
-        prepared = torch.cat(
-            [  # channels last again, as pooling left them (see `PolicyNetwork.features`)
-                net.camera_frames(frames[start : start + PREPARE_FRAMES]).permute(0, 2, 3, 1)
-                for start in range(0, len(frames), PREPARE_FRAMES)
-            ]
-        ).numpy()
-    prepared = prepared.reshape(*stored.shape[:-3], *prepared.shape[1:])
-    if dict_obs:
-        buffer.observations["camera"] = prepared
-    else:
-        buffer.observations = prepared
+    buffer.observations = _pooled(net, buffer.observations)
+    with _pooled_input(net):
+        yield
+
+
+def _pooled(net: PolicyNetwork, obs: Any) -> Any:
+    """Observations with their camera frames as `pooled_frames` makes them."""
+    if net.camera is None:
+        return obs
+    if isinstance(obs, dict):
+        return {**obs, "camera": pooled_frames(obs["camera"])}
+    return pooled_frames(obs)
+
+
+@contextmanager
+def _pooled_input(net: PolicyNetwork) -> Iterator[None]:
+    """The network reads camera frames as `_pooled` gives them (`frames_prepared`)."""
     net.frames_prepared = True
     try:
         yield
