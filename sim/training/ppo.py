@@ -279,7 +279,8 @@ class RacerPPO(PPO):
         dones = np.zeros(n, dtype=bool)
         steps = 0
         while steps < max_steps:
-            actions, values, log_probs = self._acting(self._obs)
+            pooled = _pooled(self.network, self._obs)  # what acting reads and the buffer keeps
+            actions, values, log_probs = self._acting(pooled)
             actions_np = actions.numpy()
             env_actions = (
                 actions_np if discrete else np.clip(actions_np, -1.0, 1.0).astype(np.float32)
@@ -306,7 +307,7 @@ class RacerPPO(PPO):
                 self._episode_rewards[car] = 0.0
                 self._episodes_by_car[car] += 1
             buffer.add(
-                self._obs,
+                pooled,
                 actions_np.reshape(n, -1) if not discrete else actions_np.reshape(n, 1),
                 rewards,
                 self._starts,
@@ -326,11 +327,11 @@ class RacerPPO(PPO):
 
     # A training's forward passes read camera frames pooled once (`_pooled`), as its update
     # reads them.
-    def _acting(self, obs: Any) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """Sampled actions, values and log-probabilities for the cars' observations."""
+    def _acting(self, pooled: Any) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Sampled actions, values and log-probabilities for the cars' pooled observations."""
         with torch.no_grad(), _pooled_input(self.network):
             acted: tuple[torch.Tensor, torch.Tensor, torch.Tensor] = self.policy(
-                observation_tensors(_pooled(self.network, obs))
+                observation_tensors(pooled)
             )
         return acted
 
@@ -353,17 +354,44 @@ def _update_mode(net: PolicyNetwork, buffer: RolloutBuffer, bf16: bool) -> Itera
 
 @contextmanager
 def _frames_prepared(net: PolicyNetwork, buffer: RolloutBuffer) -> Iterator[None]:
-    """For the update, the buffer's camera frames pooled as the collection's forward passes
-    pooled them (`pooled_frames`), once for the whole rollout instead of once per minibatch
-    of every epoch (they were a quarter of a camera training's time:
-    docs/camera-learner-profile.md). The buffer keeps them until the next rollout's
-    `reset`."""
+    """For the update: the buffer keeps camera frames as the collection pooled them
+    (`pooled_buffer`), so the epochs start at the first convolution (torch's conversion and
+    pooling, redone for every minibatch of every epoch, were a quarter of a camera
+    training's time: docs/camera-learner-profile.md)."""
     if net.camera is None:
         yield
         return
-    buffer.observations = _pooled(net, buffer.observations)
     with _pooled_input(net):
         yield
+
+
+def pooled_buffer(model: RacerPPO) -> RolloutBuffer:
+    """A rollout buffer for the model that keeps camera frames pooled (`pooled_frames`): a
+    quarter of the raw frames' memory, and nothing left to prepare for the update."""
+    space = model.observation_space
+    pooled: spaces.Space[Any]
+    if isinstance(space, spaces.Dict):
+        pooled = spaces.Dict({key: _pooled_space(key, sub) for key, sub in space.spaces.items()})
+    else:
+        pooled = _pooled_space("camera", space)
+    buffer: RolloutBuffer = type(model.rollout_buffer)(
+        model.n_steps,
+        pooled,
+        model.action_space,
+        device=model.device,
+        gamma=model.gamma,
+        gae_lambda=model.gae_lambda,
+        n_envs=model.n_envs,
+    )
+    return buffer
+
+
+def _pooled_space(sensor: str, space: spaces.Space[Any]) -> spaces.Space[Any]:
+    if sensor != "camera":
+        return space
+    assert space.shape is not None
+    sample = pooled_frames(np.zeros((1, *space.shape), dtype=np.uint8))
+    return spaces.Box(0.0, 1.0, sample.shape[1:], dtype=np.float32)
 
 
 def _pooled(net: PolicyNetwork, obs: Any) -> Any:
@@ -459,4 +487,6 @@ def make_ppo(
     model.loss_type = settings.loss_type
     model.update_threads = update_threads
     model.bf16_update = spec.conv != () and native_bf16()
+    if spec.conv:
+        model.rollout_buffer = pooled_buffer(model)
     return model

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from sim.training import ppo_loss
+from sim.training import ppo, ppo_loss
 from sim.training.ppo import RacerPPO
 from sim.training.ppo_loss import LossSettings, Minibatch, slice_loss
 from tests.sim.training.rollouts import collected
@@ -65,7 +65,7 @@ def test_the_slices_shares_of_the_loss_add_up_to_the_minibatchs_mean_loss() -> N
         discrete=True,
     )
     evaluate = model.policy.evaluate_actions
-    with torch.no_grad():
+    with torch.no_grad(), ppo._pooled_input(model.network):  # the buffer's frames are pooled
         whole, whole_figures = slice_loss(evaluate, samples, 20, settings)
         first, first_figures = slice_loss(evaluate, samples.part(0, 7), 20, settings)
         rest, rest_figures = slice_loss(evaluate, samples.part(7, 20), 20, settings)

@@ -1,6 +1,6 @@
-"""A training pools its camera frames in numpy (`pooled_frames`), once a step for acting
-and once a rollout for the update: within a float32 unit of the network's own pooling,
-which races keep, and the same inputs for acting and for the update."""
+"""A training pools its camera frames in numpy (`pooled_frames`) once a step, for acting
+and for the rollout buffer the update reads: within a float32 unit of the network's own
+pooling, which races keep, and the same inputs for acting and for the update."""
 
 from __future__ import annotations
 
@@ -54,7 +54,7 @@ def test_the_update_reads_the_inputs_acting_read(sensors: tuple[str, ...]) -> No
                 batch.observations, batch.actions.long().flatten()
             )
         camera = buffer.observations["camera"] if len(sensors) > 1 else buffer.observations
-        assert camera.shape[-3:] == (60, 80, 1)  # pooled once, before the epochs
+        assert camera.shape[-3:] == (60, 80, 1)  # kept pooled: a quarter of the raw frames
     # Batches of other sizes may round their last bit otherwise.
     torch.testing.assert_close(log_prob, batch.old_log_prob, rtol=0, atol=1e-6)
     assert not model.network.frames_prepared  # races read the Observer's frames again
