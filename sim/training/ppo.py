@@ -218,7 +218,7 @@ class RacerPPO(PPO):
             normalize_advantage=bool(self.normalize_advantage),
             discrete=isinstance(self.action_space, spaces.Discrete),
         )
-        with _update_mode(self.network, self.rollout_buffer, self.bf16_update):
+        with _training_mode(self.network, self.bf16_update):
             totals, batches = self._epochs(settings)
         self._n_updates += self.n_epochs
         means = totals / max(batches, 1)
@@ -329,40 +329,15 @@ class RacerPPO(PPO):
     # reads them.
     def _acting(self, pooled: Any) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """Sampled actions, values and log-probabilities for the cars' pooled observations."""
-        with torch.no_grad(), _pooled_input(self.network):
+        with torch.no_grad(), _training_mode(self.network, self.bf16_update):
             acted: tuple[torch.Tensor, torch.Tensor, torch.Tensor] = self.policy(
                 observation_tensors(pooled)
             )
         return acted
 
     def _values(self, obs: Any) -> torch.Tensor:
-        with torch.no_grad(), _pooled_input(self.network):
+        with torch.no_grad(), _training_mode(self.network, self.bf16_update):
             return self.policy.predict_values(observation_tensors(_pooled(self.network, obs)))
-
-
-@contextmanager
-def _update_mode(net: PolicyNetwork, buffer: RolloutBuffer, bf16: bool) -> Iterator[None]:
-    """The network as the update runs it: frames pooled once, and the convolutions in
-    bfloat16 where `bf16` (acting and races always run float32)."""
-    net.bf16_convolutions = bf16 and net.camera is not None
-    try:
-        with _frames_prepared(net, buffer):
-            yield
-    finally:
-        net.bf16_convolutions = False
-
-
-@contextmanager
-def _frames_prepared(net: PolicyNetwork, buffer: RolloutBuffer) -> Iterator[None]:
-    """For the update: the buffer keeps camera frames as the collection pooled them
-    (`pooled_buffer`), so the epochs start at the first convolution (torch's conversion and
-    pooling, redone for every minibatch of every epoch, were a quarter of a camera
-    training's time: docs/camera-learner-profile.md)."""
-    if net.camera is None:
-        yield
-        return
-    with _pooled_input(net):
-        yield
 
 
 def pooled_buffer(model: RacerPPO) -> RolloutBuffer:
@@ -404,13 +379,18 @@ def _pooled(net: PolicyNetwork, obs: Any) -> Any:
 
 
 @contextmanager
-def _pooled_input(net: PolicyNetwork) -> Iterator[None]:
-    """The network reads camera frames as `_pooled` gives them (`frames_prepared`)."""
+def _training_mode(net: PolicyNetwork, bf16: bool) -> Iterator[None]:
+    """The network as a training runs it, acting and updating alike: camera frames as
+    `_pooled` gives them (the buffer keeps them so, `pooled_buffer`), and the convolutions
+    in bfloat16 where `bf16`. Evaluations and races run it as it is: float32, the
+    Observer's frames."""
     net.frames_prepared = True
+    net.bf16_convolutions = bf16 and net.camera is not None
     try:
         yield
     finally:
         net.frames_prepared = False
+        net.bf16_convolutions = False
 
 
 def _batch_of_one(obs: Any) -> Any:

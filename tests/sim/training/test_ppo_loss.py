@@ -65,7 +65,7 @@ def test_the_slices_shares_of_the_loss_add_up_to_the_minibatchs_mean_loss() -> N
         discrete=True,
     )
     evaluate = model.policy.evaluate_actions
-    with torch.no_grad(), ppo._pooled_input(model.network):  # the buffer's frames are pooled
+    with torch.no_grad(), ppo._training_mode(model.network, bf16=False):
         whole, whole_figures = slice_loss(evaluate, samples, 20, settings)
         first, first_figures = slice_loss(evaluate, samples.part(0, 7), 20, settings)
         rest, rest_figures = slice_loss(evaluate, samples.part(7, 20), 20, settings)
@@ -76,7 +76,7 @@ def test_the_slices_shares_of_the_loss_add_up_to_the_minibatchs_mean_loss() -> N
     assert whole_figures[2] == pytest.approx(float(huber), rel=1e-5)  # the minibatch's mean
 
 
-def test_bfloat16_convolutions_stay_inside_the_update(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_bfloat16_convolutions_stay_inside_a_training(monkeypatch: pytest.MonkeyPatch) -> None:
     """Forced on (whatever this CPU has): the update stays close to float32's, and after it
     the network acts in float32 again, as races and replays need."""
     exact, _, _ = _updated(monkeypatch, slices=8)

@@ -45,9 +45,8 @@ def test_the_update_reads_the_inputs_acting_read(sensors: tuple[str, ...]) -> No
     torch.manual_seed(3)
     np.random.seed(3)
     model = collected(sensors, batch_size=16)
-    model.bf16_update = False
     buffer = model.rollout_buffer
-    with ppo._update_mode(model.network, buffer, bf16=False):
+    with ppo._training_mode(model.network, model.bf16_update):  # as acting ran it
         batch = next(buffer.get(None))
         with torch.no_grad():
             _, log_prob, _ = model.policy.evaluate_actions(
@@ -57,4 +56,5 @@ def test_the_update_reads_the_inputs_acting_read(sensors: tuple[str, ...]) -> No
         assert camera.shape[-3:] == (60, 80, 1)  # kept pooled: a quarter of the raw frames
     # Batches of other sizes may round their last bit otherwise.
     torch.testing.assert_close(log_prob, batch.old_log_prob, rtol=0, atol=1e-6)
-    assert not model.network.frames_prepared  # races read the Observer's frames again
+    # Races read the Observer's frames again, in float32.
+    assert not model.network.frames_prepared and not model.network.bf16_convolutions
