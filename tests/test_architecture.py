@@ -28,6 +28,8 @@ TORCH_ALLOWED = {
     "sim.training.checkpoint",
     "sim.training.policy",
     "sim.training.ppo",
+    # The PPO update's loss, over SB3's distributions.
+    "sim.training.ppo_loss",
     # The learner's side of a fleet over processes (its parts, fleet_parts, stay light).
     "sim.training.shards",
     "sim.training.trainer",

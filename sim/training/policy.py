@@ -201,8 +201,8 @@ class PolicyNetwork(nn.Module):
         # Camera observations come as `pooled_frames` made them (a training's), not as the
         # Observer's uint8 frames.
         self.frames_prepared = False
-        # The convolutions in bfloat16 (the PPO update's, on CPUs with bf16 in hardware:
-        # `native_bf16`); acting, evaluations and races always run float32.
+        # The convolutions in bfloat16 (a training's forward passes, on CPUs with bf16 in
+        # hardware: `native_bf16`); evaluations and races always run float32.
         self.bf16_convolutions = False
 
     # --- the forward pieces the trainer and the driver share --------------------------------
@@ -265,8 +265,8 @@ class PolicyNetwork(nn.Module):
 
 def pooled_frames(frames: NDArray[Any]) -> NDArray[np.float32]:
     """The camera network's weightless first steps as a training takes them, in numpy:
-    frames (..., height, width, channels) of 0-255 values (the Observer's uint8, or the
-    float32 copies SB3's rollout buffer keeps) as floats in [0, 1], pooled as the network's
+    frames (..., height, width, channels) of 0-255 values (the Observer's uint8, or float32
+    copies of them) as floats in [0, 1], pooled as the network's
     first layer pools, channels last. Within a float32 unit of `PolicyNetwork.camera_frames`
     (it sums each pool's pixels exactly, then scales once), and about 20 times faster on a
     CPU core than torch's conversion and pooling, which were a fifth of a camera training.
@@ -287,7 +287,7 @@ def pooled_frames(frames: NDArray[Any]) -> NDArray[np.float32]:
 
 def native_bf16() -> bool:
     """Whether this CPU computes bfloat16 in hardware (AVX512-BF16 or AMX). Elsewhere oneDNN
-    emulates it, slower than float32, so the update keeps float32 there."""
+    emulates it, slower than float32, so a training keeps float32 there."""
     checks = ("_is_avx512_bf16_supported", "_is_amx_tile_supported")
     # Private to torch.cpu, so looked up with a default: a torch without them says no.
     return any(bool(getattr(torch.cpu, name, lambda: False)()) for name in checks)
