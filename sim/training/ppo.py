@@ -169,8 +169,9 @@ class RacerPPO(PPO):
     # Threads of the update: the simulation processes wait while it runs, so their cores
     # are free; a camera network's update is most of a training's time (sim.training.shards).
     update_threads: int = 1
-    # The update's convolutions in bfloat16 (`make_ppo` decides; PolicyNetwork says how).
-    bf16_update: bool = False
+    # A training's convolutions, acting and updating, in bfloat16 (`make_ppo` decides;
+    # PolicyNetwork says how).
+    bf16_training: bool = False
 
     @staticmethod
     def _wrap_env(env: Any, verbose: int = 0, monitor_wrapper: bool = True) -> Any:
@@ -218,7 +219,7 @@ class RacerPPO(PPO):
             normalize_advantage=bool(self.normalize_advantage),
             discrete=isinstance(self.action_space, spaces.Discrete),
         )
-        with _training_mode(self.network, self.bf16_update):
+        with _training_mode(self.network, self.bf16_training):
             totals, batches = self._epochs(settings)
         self._n_updates += self.n_epochs
         means = totals / max(batches, 1)
@@ -230,6 +231,7 @@ class RacerPPO(PPO):
         totals = np.zeros(len(FIGURES))
         batches = 0
         pieces = slice_samples(self.network)
+        evaluate = self.policy.evaluate_actions
         for _ in range(self.n_epochs):
             for batch in self.rollout_buffer.get(self.batch_size):
                 samples = Minibatch.of(
@@ -243,7 +245,6 @@ class RacerPPO(PPO):
                     discrete=settings.discrete,
                 )
                 self.policy.optimizer.zero_grad()
-                evaluate = self.policy.evaluate_actions
                 totals += accumulate_gradients(evaluate, samples, len(samples), settings, pieces)
                 self._step()
                 batches += 1
@@ -329,14 +330,14 @@ class RacerPPO(PPO):
     # reads them.
     def _acting(self, pooled: Any) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """Sampled actions, values and log-probabilities for the cars' pooled observations."""
-        with torch.no_grad(), _training_mode(self.network, self.bf16_update):
+        with torch.no_grad(), _training_mode(self.network, self.bf16_training):
             acted: tuple[torch.Tensor, torch.Tensor, torch.Tensor] = self.policy(
                 observation_tensors(pooled)
             )
         return acted
 
     def _values(self, obs: Any) -> torch.Tensor:
-        with torch.no_grad(), _training_mode(self.network, self.bf16_update):
+        with torch.no_grad(), _training_mode(self.network, self.bf16_training):
             return self.policy.predict_values(observation_tensors(_pooled(self.network, obs)))
 
 
@@ -466,7 +467,7 @@ def make_ppo(
         )
     model.loss_type = settings.loss_type
     model.update_threads = update_threads
-    model.bf16_update = spec.conv != () and native_bf16()
+    model.bf16_training = spec.conv != () and native_bf16()
     if spec.conv:
         model.rollout_buffer = pooled_buffer(model)
     return model

@@ -37,7 +37,7 @@ Evaluate = Callable[[Observation, torch.Tensor], tuple[torch.Tensor, torch.Tenso
 
 @dataclass(frozen=True)
 class LossSettings:
-    """What the loss needs besides the samples (plain data: helpers receive it)."""
+    """What the loss needs besides the samples."""
 
     clip: float
     ent_coef: float
@@ -64,7 +64,7 @@ def normalized_advantages(advantages: torch.Tensor, normalize: bool) -> torch.Te
 
 
 def slice_samples(network: PolicyNetwork) -> int | None:
-    """Samples to compute at a time in a process; None: the whole share at once."""
+    """Samples to compute at a time; None: the whole minibatch at once."""
     if network.camera is None:
         return None
     return CAMERA_SLICE_SAMPLES_BF16 if network.bf16_convolutions else CAMERA_SLICE_SAMPLES
@@ -167,12 +167,13 @@ def accumulate_gradients(
     samples: Minibatch,
     size: int,
     settings: LossSettings,
-    slice_samples: int | None,
+    at_a_time: int | None,
 ) -> np.ndarray:
     """Add `samples`' share of a `size`-sample minibatch's loss gradient to the parameters'
-    gradients, `slice_samples` at a time; their share of the `FIGURES`."""
+    gradients, `at_a_time` samples at a time (None: all at once); their share of the
+    `FIGURES`."""
     figures = np.zeros(len(FIGURES))
-    step = slice_samples or max(len(samples), 1)
+    step = at_a_time or max(len(samples), 1)
     for start in range(0, len(samples), step):
         piece = samples.part(start, start + step)
         loss, piece_figures = slice_loss(evaluate, piece, size, settings)

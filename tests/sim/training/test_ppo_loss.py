@@ -1,6 +1,6 @@
 """The PPO update takes a camera model's minibatches in slices, and its convolutions in
 bfloat16 on CPUs that have it: the slices must add up to the whole minibatch's update, and
-the bfloat16 must stay inside the update."""
+the bfloat16 must stay inside a training."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ def _collected() -> RacerPPO:
 
 def _updated(monkeypatch: pytest.MonkeyPatch, slices: int, bf16: bool = False) -> Any:
     model = _collected()
-    model.bf16_update = bf16
+    model.bf16_training = bf16
     monkeypatch.setattr(ppo_loss, "CAMERA_SLICE_SAMPLES", slices)
     monkeypatch.setattr(ppo_loss, "CAMERA_SLICE_SAMPLES_BF16", slices)
     np.random.seed(6)
