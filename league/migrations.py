@@ -579,7 +579,7 @@ ALTER TABLE submission_laps ADD COLUMN immobilized INTEGER;
 ALTER TABLE submission_laps ADD COLUMN reversals INTEGER
 """
 
-# Version 16: the policy runtime that drove a race (sim.training.policy.policy_runtime): a
+# Version 16: the policy runtime that drove a race (sim.training.runtimes): a
 # race is judged by replay only where policies compute as they did. NULL for the reference
 # driver, a physical car and every race recorded before, and left out of their records
 # then. A replay's verdict keeps this machine's runtime when it had one to compare.

@@ -27,6 +27,10 @@ TORCH_ALLOWED = {
     "sim.car_archive.policy",
     "sim.training.checkpoint",
     "sim.training.policy",
+    # A trained policy as a race driver, its numpy actor and its runtimes (torch loads them).
+    "sim.training.policy_driver",
+    "sim.training.numpy_policy",
+    "sim.training.runtimes",
     "sim.training.ppo",
     # The PPO update's loss, over SB3's distributions.
     "sim.training.ppo_loss",

@@ -19,14 +19,15 @@ from sim.sensors.randomisation.perturbation import CameraPerturbation
 
 if TYPE_CHECKING:
     from sim.garage.folder import ModelFolder
-    from sim.training.policy import PolicyDriver
+    from sim.training.policy_driver import PolicyDriver
 
 
 def perturbed_driver(
     folder: ModelFolder, perturbation: CameraPerturbation, *, noise_seed: int = 0
 ) -> PolicyDriver:
     """The driver of a garage model's policy whose camera sees through `perturbation`."""
-    from sim.training.policy import PolicyDriver, load_policy
+    from sim.training.policy import load_policy
+    from sim.training.policy_driver import PolicyDriver
 
     class PerturbedPolicyDriver(PolicyDriver):
         """`PolicyDriver` whose observations come through a perturbed camera."""

@@ -71,7 +71,8 @@ def policy_driver(track: Track, sensor: str) -> Driver | None:
         import torch
 
         from sim.deepracer.files import ModelMetadata
-        from sim.training.policy import PolicyDriver, build_network
+        from sim.training.policy import build_network
+        from sim.training.policy_driver import PolicyDriver
     except ImportError:
         return None
     # One thread: a batch of one is too small to share between cores.

@@ -226,7 +226,7 @@ def physics(value: Any, field: str) -> None:
 
 # Which simulator timed the laps (sim.physics.labels); absent in records made before.
 _PHYSICS = Field("TEXT", physics, nullable=True, optional=True)
-# The policy runtime that drove a race (sim.training.policy); absent for the reference
+# The policy runtime that drove a race (sim.training.runtimes); absent for the reference
 # driver, a physical car and races recorded before.
 _RUNTIME = Field("TEXT", text(MAX_RUNTIME_LENGTH), nullable=True, optional=True)
 # A submission's race type when it is not a time trial (league.race_types); absent in time

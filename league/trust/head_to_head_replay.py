@@ -33,7 +33,7 @@ from league.trust.replay import (
     unverified,
 )
 from league.trust.standing import other_numerics
-from sim.race.driver import Driver
+from sim.race.driver import Driver, driver_under
 from sim.race.head_to_head import Entry, run_head_to_head
 
 KIND = "head_to_head"
@@ -77,6 +77,7 @@ def _verify(race_id: str, body: dict[str, Any], driver_for: DriverFor) -> Verdic
         return unverifiable(setup)
     track, rules = setup
     drivers: dict[str, Driver] = {}  # one driver per model: it acts for its cars together
+    drivers_then: dict[tuple[str, str], Driver] = {}  # by model and recorded runtime
     entries: list[Entry] = []
     for car in sorted(cars, key=lambda car: int(car["car"])):
         model = str(car["model_hash"])
@@ -93,8 +94,15 @@ def _verify(race_id: str, body: dict[str, Any], driver_for: DriverFor) -> Verdic
             drivers[model] = found
         driver = drivers[model]
         recorded, here = str(car.get("runtime") or ""), str(getattr(driver, "runtime", ""))
-        if recorded and recorded != here:
-            return unverifiable(other_numerics(recorded, here))
+        if recorded:  # judged only under the runtime that drove it, as a time trial is
+            if (model, recorded) not in drivers_then:
+                found_then = driver_under(driver, recorded)
+                if found_then is None:
+                    return unverifiable(other_numerics(recorded, here))
+                drivers_then[model, recorded] = found_then
+            # One driver per model and runtime: a model's cars act in one batch, as they
+            # did when the race was driven.
+            driver = drivers_then[model, recorded]
         entries.append(Entry(str(car["racer"]), driver))
     result = run_head_to_head(track, rules, entries, seed=int(body["seed"]))
     order, claimed_order = [c.car for c in result.cars], [int(car["car"]) for car in cars]

@@ -5,9 +5,9 @@ deterministic, so any machine holding the model can run the race again and compa
 A race whose laps come out differently was not driven as it claims: it is taken out of
 the league and held in quarantine with the first lap that differs. A race that cannot
 be re-run here (its model or track is not on this machine, it was timed by another
-version of the simulator, or its policy computed with another machine's numerics:
-`sim.training.policy.policy_runtime`) is unverifiable here and says why: nothing vouches
-for its laps but its racer's signature. Each verdict is remembered per race and content
+version of the simulator, or its policy computed with numerics this machine does not
+have: `sim.training.runtimes`) is unverifiable here and says why: nothing vouches for its
+laps but its racer's signature. Each verdict is remembered per race and content
 (`sync_replays`), so a second run re-races only what is new or was unverifiable.
 
 The driver comes from the caller (`DriverFor`): running a trained model needs torch,
@@ -28,7 +28,7 @@ from league.sync.local import STORE_SETTING, get_setting
 from league.sync.record import Seal, SyncRecord
 from league.trust.standing import other_numerics
 from sim.physics.labels import BEFORE_VERSIONING, CURRENT, PHYSICAL
-from sim.race.driver import Driver
+from sim.race.driver import Driver, driver_under
 from sim.race.engine import run_race
 from sim.race.rules import RaceRules, RulesError, rules_from_mapping
 from sim.tracks.catalog import find_track_by_hash, resolve_track
@@ -132,11 +132,15 @@ def _verify(league: League, race_id: str, driver_for: DriverFor) -> Verdict:
             " (racer-tui sync fetch-bundle installs it, if its racer shared it)",
         )
     # Another CPU's kernels may turn a near tie between two actions the other way: a race
-    # is judged only under the policy runtime that drove it (races recorded before runtimes
-    # were are judged as they always were).
+    # is judged only under the policy runtime that drove it, which may be an earlier
+    # version than races take now (races recorded before runtimes were are judged as they
+    # always were).
     recorded, here = str(body.get("runtime") or ""), str(getattr(driver, "runtime", ""))
-    if recorded and recorded != here:
-        return replace(unverifiable(other_numerics(recorded, here)), runtime_here=here)
+    if recorded:
+        driver_then = driver_under(driver, recorded)
+        if driver_then is None:
+            return replace(unverifiable(other_numerics(recorded, here)), runtime_here=here)
+        driver, here = driver_then, recorded
     result = run_race(track, rules, driver, racer=racer, seed=int(body["seed"]), keep_trace=False)
     claimed = body["laps"]
     outcome, detail = compare_laps(claimed, [lap.to_json() for lap in result.laps])

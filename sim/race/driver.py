@@ -55,6 +55,18 @@ class Driver(Protocol):
         ...
 
 
+def driver_under(driver: Driver, runtime: str) -> Driver | None:
+    """`driver` as it drove a race recorded under the policy runtime named `runtime`
+    (`sim.training.runtimes`: a policy can drive under each version this machine has), or
+    None when it cannot drive so here. A driver that drives one way only is itself when
+    that way is the runtime."""
+    under = getattr(driver, "under", None)
+    if callable(under):
+        found: Driver | None = under(runtime)
+        return found
+    return driver if getattr(driver, "runtime", "") == runtime else None
+
+
 class ReferenceRaceDriver:
     """The no-learning reference driver (racing line at the grip limit) as a `Driver`.
 

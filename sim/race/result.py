@@ -31,7 +31,7 @@ from sim.race.trace import RaceTrace
 
 RESULT_FORMAT = 1
 MAX_LAPS = 10_000
-MAX_RUNTIME_LENGTH = 100  # a policy runtime's name (sim.training.policy): about 35 now
+MAX_RUNTIME_LENGTH = 100  # a policy runtime's name (sim.training.runtimes): about 40 now
 _HASH = re.compile(r"[\w:.\-]{1,200}")
 
 
@@ -150,7 +150,7 @@ class RaceResult:
     trace: RaceTrace | None = None
     physics: str = CURRENT  # the simulator's physics (sim.physics.labels): lap times of
     # different physics are never ranked together
-    runtime: str = ""  # the policy runtime that drove it (policy_runtime); "": none
+    runtime: str = ""  # the policy runtime that drove it (sim.training.runtimes); "": none
 
     # --- league.ranking.Rankable ---------------------------------------------------------
     @property

@@ -42,7 +42,7 @@ def resolve_driver(spec: str, track: Track) -> Driver:
     try:
         if spec.endswith(BUNDLE_SUFFIX):
             bundle = read_bundle(Path(spec))
-            return _policy_driver(spec, lambda policy: policy.driver_for_bundle(bundle))
+            return _policy_driver(spec, lambda drivers: drivers.driver_for_bundle(bundle))
         folder = open_model(spec)
         return model_driver(folder)
     except (ModelError, DeepRacerFileError) as error:
@@ -52,7 +52,7 @@ def resolve_driver(spec: str, track: Track) -> Driver:
 def model_driver(folder: ModelFolder) -> Driver:
     """A garage model's trained policy as a driver (torch is imported now: the app builds
     it inside a race's worker). A problem is a RaceSetupError naming the model."""
-    return _policy_driver(folder.name, lambda policy: policy.driver_for_model(folder))
+    return _policy_driver(folder.name, lambda drivers: drivers.driver_for_model(folder))
 
 
 class DriversByHash:
@@ -88,12 +88,12 @@ class DriversByHash:
 def _policy_driver(spec: str, build: Callable[[ModuleType], Driver]) -> Driver:
     """Load torch and the policy only now: the reference path never pays for them."""
     try:
-        from sim.training import policy  # noqa: PLC0415 (torch: only when a trained model races)
+        from sim.training import policy_driver  # noqa: PLC0415 (torch: only when a trained model races)
     except ImportError as error:
         raise RaceSetupError(
             f"cannot race {spec!r}: running a trained policy needs torch ({error})."
         ) from None
     try:
-        return build(policy)
+        return build(policy_driver)
     except PolicyError as error:
         raise RaceSetupError.about(error, f"cannot race {spec!r}: ") from None

@@ -378,7 +378,7 @@ def evaluate_model(
     """Evaluate a garage model's policy (or `driver`) and write DRfC's evaluation files:
     `metrics/EvaluationMetrics-<stamp>.json` and its sim-trace,
     `evaluation-<stamp>/evaluation-simtrace/0-iteration.csv`."""
-    from sim.training.policy import driver_for_model  # noqa: PLC0415 (torch: only when a model is evaluated)
+    from sim.training.policy_driver import driver_for_model  # noqa: PLC0415 (torch: only when a model is evaluated)
 
     chosen = track if track is not None else folder.track()
     trace = TrialTrace()

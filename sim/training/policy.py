@@ -1,11 +1,11 @@
-"""The policy network of a model, its tensor-only file, and the driver that races it.
+"""The policy network of a model and its tensor-only file.
 
 One network class serves training (wrapped by `sim.training.ppo.RacerPolicy`), evaluation
-and races, so the weights in `policy.safetensors` are exactly what was trained. The
-network is always rebuilt from `model_metadata.json` (sensors, action space, network size)
-and only then filled with tensors: a policy file is data, never code. Every tensor name,
-shape and dtype is checked, and the architecture facts written in the file's metadata
-must match the rebuilt network.
+and races (`sim.training.policy_driver`), so the weights in `policy.safetensors` are
+exactly what was trained. The network is always rebuilt from `model_metadata.json`
+(sensors, action space, network size) and only then filled with tensors: a policy file is
+data, never code. Every tensor name, shape and dtype is checked, and the architecture
+facts written in the file's metadata must match the rebuilt network.
 
 Layout: each sensor is encoded (a small CNN for the camera, scaled values for lidar and
 the vector state), the encodings are concatenated, and two MLPs read them: the policy
@@ -15,18 +15,14 @@ continuous one) and the value function.
 
 from __future__ import annotations
 
-import functools
-import hashlib
 import itertools
 import json
 import math
-import platform
 import struct
-import weakref
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import torch
@@ -35,31 +31,16 @@ from safetensors import SafetensorError
 from safetensors.torch import load, save
 from torch import nn
 
-from sim.car_archive.archive import read_car_archive
-from sim.car_archive.driver import CarArchiveDriver
-from sim.car_archive.errors import CarModelError
-from sim.deepracer.action_space import discrete_grid
 from sim.deepracer.files import NEURAL_NETWORKS, ModelMetadata
 from sim.foundation.atomic import write_bytes_atomic
-from sim.foundation.remedies import Fix
-from sim.garage.folder import ModelError
-from sim.physics.simulation import TrackSimulation
-from sim.race.driver import Driver, DriverAction
-from sim.sensors.observations import VECTOR_SIZE, Observer, SensorOptions
+from sim.sensors.observations import VECTOR_SIZE, SensorOptions
 from sim.training.errors import PolicyError
-
-if TYPE_CHECKING:
-    from sim.garage.bundle import Bundle
-    from sim.garage.folder import ModelFolder
 
 __all__ = [
     "NetworkSpec",
-    "PolicyDriver",
     "PolicyError",
     "PolicyNetwork",
     "build_network",
-    "driver_for_bundle",
-    "driver_for_model",
     "load_policy",
     "policy_bytes",
     "save_policy",
@@ -459,7 +440,7 @@ def check_tensors(
             raise PolicyError(f"{where}: tensor {name} holds NaN or infinite values.")
 
 
-# --- driving -------------------------------------------------------------------------------
+# --- observations as tensors --------------------------------------------------------------
 
 
 def observation_tensors(obs: Any) -> Observation:
@@ -467,252 +448,3 @@ def observation_tensors(obs: Any) -> Observation:
     if isinstance(obs, dict):
         return {key: torch.as_tensor(value) for key, value in obs.items()}
     return torch.as_tensor(obs)
-
-
-class NumpyActor:
-    """The deterministic actor of a camera-free network as a few numpy matrix products.
-
-    For one car per step, torch's per-call overhead is most of the cost of a tiny MLP;
-    this is the same arithmetic as `PolicyNetwork.act` (a test holds them equal) at a
-    fraction of the time. Weights are copied once, so later training does not show here.
-    """
-
-    def __init__(self, network: PolicyNetwork) -> None:
-        if network.camera is not None:
-            raise ValueError("camera networks run in torch")
-        self.spec = network.spec
-        self.layers = [
-            (layer.weight.detach().numpy().T.astype(np.float64), layer.bias.detach().numpy())
-            for layer in network.policy_mlp
-            if isinstance(layer, nn.Linear)
-        ]
-        head = network.action_head
-        self.head = (head.weight.detach().numpy().T.astype(np.float64), head.bias.detach().numpy())
-
-    def act(self, obs: Any) -> NDArray[Any]:
-        parts = []
-        for sensor in self.spec.sensors:
-            value = np.asarray(obs[sensor] if isinstance(obs, dict) else obs, dtype=np.float64)
-            value = value.reshape(len(value), -1)
-            parts.append(value / self.spec.lidar_range if sensor == "lidar" else value)
-        x = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
-        for weight, bias in self.layers:
-            x = np.tanh(x @ weight + bias)
-        out = x @ self.head[0] + self.head[1]
-        if self.spec.action_kind == "discrete":
-            return np.asarray(out.argmax(axis=1))
-        return np.asarray(np.clip(out, -1.0, 1.0), dtype=np.float32)
-
-
-def _batched(parts: Sequence[NDArray[Any]]) -> NDArray[Any]:
-    """Several cars' observations as one batch, laid out as one car's is. A one-channel
-    camera's frames come with their channel axis added last (`Observer`: stride 0), which
-    torch pools as a plain NCHW image; concatenated whole, their channel axis had stride 1,
-    torch took the batch for channels-last and pooled it 8 times slower (0.34 ms against
-    0.04 ms a step in a two-car race)."""
-    if parts[0].ndim == 4 and parts[0].shape[-1] == 1:
-        return np.concatenate([part[..., 0] for part in parts])[..., None]
-    return np.concatenate(parts)
-
-
-class PolicyDriver:
-    """A trained policy as a race `Driver`: deterministic, one action per car.
-
-    Inference calls the network directly (no SB3 `predict` loop; numpy for camera-free
-    networks), so a 4-minute race with a vector or lidar model simulates in well under a
-    second. `live=True` keeps reading the torch network (the trainer's evaluations, while
-    its weights change); otherwise the weights are fixed when the driver is made.
-    """
-
-    def __init__(
-        self,
-        network: PolicyNetwork,
-        metadata: ModelMetadata,
-        *,
-        name: str,
-        content_hash: str,
-        sensor_options: SensorOptions | None = None,
-        live: bool = False,
-    ) -> None:
-        # A batch of one observation is too small to share between cores: extra torch
-        # threads only add synchronisation (several times slower on a busy 2-core machine),
-        # wherever the race runs (the CLI, the app's workers, a league night).
-        torch.set_num_threads(1)
-        self.network = network.eval()
-        self._fast = None if live or network.camera is not None else NumpyActor(network)
-        self.metadata = metadata
-        self.name = name
-        self.content_hash = content_hash
-        self._options = sensor_options or SensorOptions()
-        # The numerics it drives with: recorded on its races, which verification by replay
-        # judges only under the same (`policy_runtime`).
-        self.runtime = policy_runtime()
-        # One Observer per simulation it drives in: a head-to-head race gives each car a
-        # simulation of its own, and one model may drive several of them.
-        self._observers: weakref.WeakKeyDictionary[TrackSimulation, Observer] = (
-            weakref.WeakKeyDictionary()
-        )
-
-    def reset(self, sim: TrackSimulation) -> None:
-        self._observers[sim] = Observer(sim, self.metadata.sensors, self._options)
-
-    def _observe(self, sim: TrackSimulation) -> Any:
-        observer = self._observers.get(sim)
-        if observer is None:
-            self.reset(sim)
-            observer = self._observers[sim]
-        return observer.observe()
-
-    def _actions_of(self, obs: Any) -> NDArray[Any]:
-        if self._fast is not None:
-            return self._fast.act(obs)
-        with torch.inference_mode():
-            actions = self.network.act(observation_tensors(obs))
-        return actions.numpy()
-
-    def actions(self, sim: TrackSimulation) -> NDArray[Any]:
-        """Raw policy actions for every car: indices, or (N, 2) normalised values."""
-        return self._actions_of(self._observe(sim))
-
-    def act(self, sim: TrackSimulation) -> DriverAction:
-        return self._driver_action(self.actions(sim))
-
-    def act_many(self, sims: Sequence[TrackSimulation]) -> list[DriverAction]:
-        """`act` for several simulations (a head-to-head race's cars of this model), their
-        observations in one batch: one forward pass for all of them."""
-        observed = [self._observe(sim) for sim in sims]
-        if isinstance(observed[0], dict):
-            obs: Any = {key: _batched([part[key] for part in observed]) for key in observed[0]}
-        else:
-            obs = _batched(observed)
-        whole = self._driver_action(self._actions_of(obs))
-        ends = list(itertools.accumulate(sim.n for sim in sims))
-        return [
-            DriverAction(
-                steering_deg=whole.steering_deg[start:end],
-                speed=whole.speed[start:end],
-                action_index=whole.action_index[start:end],
-            )
-            for start, end in itertools.pairwise([0, *ends])
-        ]
-
-    def _driver_action(self, actions: NDArray[Any]) -> DriverAction:
-        space = self.metadata.action_space
-        steering, speed = space.targets(actions)
-        if space.kind == "discrete":
-            index = np.asarray(actions, dtype=np.int64).reshape(-1)
-        else:
-            index = np.full(len(actions), -1, dtype=np.int64)
-        return DriverAction(
-            steering_deg=np.asarray(steering, dtype=np.float64),
-            speed=np.asarray(speed, dtype=np.float64),
-            action_index=index,
-        )
-
-
-def driver_for_model(folder: ModelFolder) -> Driver:
-    """The driver for a garage model's `policy.safetensors`, or for the car archive it was
-    imported from (`sim.car_export`)."""
-    if folder.drives_with_car_archive():
-        try:
-            archive = read_car_archive(folder.car_archive_file)
-            return CarArchiveDriver(archive, name=folder.name, content_hash=folder.content_hash())
-        except CarModelError as error:
-            raise ModelError(f"model {folder.name!r}: {error}") from None
-    if not folder.has_policy():
-        problem = f"model {folder.name!r} has no trained policy yet"
-        raise PolicyError(
-            f"{problem}; train it first with `racer-tui train {folder.name}`.",
-            problem=problem,
-            fix=Fix.TRAIN_MODEL,
-        )
-    metadata = folder.metadata()
-    network = load_policy(folder.policy_file, metadata)
-    return PolicyDriver(network, metadata, name=folder.name, content_hash=folder.content_hash())
-
-
-def driver_for_bundle(bundle: Bundle) -> PolicyDriver:
-    """The driver for an exported model bundle (its tensors only; nothing is executed)."""
-    network = load_policy(bundle.policy_bytes, bundle.metadata)
-    return PolicyDriver(
-        network, bundle.metadata, name=bundle.name, content_hash=bundle.content_hash
-    )
-
-
-# --- the policy runtime ------------------------------------------------------------------
-# The policy runtime: the numerics this machine's policies compute with.
-#
-# A race replays exactly only where its policy computes exactly as it did. The libraries
-# pick their kernels by the CPU: oneDNN's convolutions by its instruction set, OpenBLAS's
-# matrix products by core type, numpy's ufuncs by its SIMD level, and an ARM machine takes
-# other kernels again. Their results differ in the last bits (measured on this project's
-# AMD EPYC: a camera network's outputs under oneDNN's SSE4.1 against AVX2, and a vector
-# network's under OpenBLAS's Prescott kernels against Haswell's, and under numpy without
-# AVX2), and a last bit can turn a near tie between two actions, and the race with it.
-# (Torch's own capability level, DEFAULT against AVX2, changed a fresh network's random
-# weights here, not a loaded network's outputs.)
-#
-# So the runtime is named by what it computes: a fixed camera network and a fixed vector
-# network (the paths races take: torch for a camera, numpy for the rest), run on fixed
-# inputs laid out as races lay them out, and the bits of their outputs hashed. Two machines
-# with the same name compute a race's policy the same; a race is recorded with the name,
-# and verification by replay judges a race only under the runtime that drove it.
-
-# The camera races use: some kernels are picked by the size of what they work on.
-_PROBE_CAMERA = SensorOptions()
-_PROBE_ACTIONS = discrete_grid(30.0, 5, 3.0, 2)
-
-
-def _fill(network: torch.nn.Module) -> None:
-    """Fixed weights, the same on every machine: numpy's PCG64 gives the same doubles
-    everywhere (torch's own generator does not: its CPU capability changes them)."""
-    rng = np.random.Generator(np.random.PCG64(47))
-    with torch.no_grad():
-        for parameter in network.parameters():
-            values = (rng.random(parameter.numel()) - 0.5) * 0.4
-            parameter.copy_(torch.from_numpy(values).reshape(parameter.shape).to(parameter.dtype))
-
-
-def _camera_bits() -> bytes:
-    network = build_network(ModelMetadata(_PROBE_ACTIONS, ("camera",)), _PROBE_CAMERA).eval()
-    _fill(network)
-    height, width = _PROBE_CAMERA.camera_height, _PROBE_CAMERA.camera_width
-    pattern = (np.arange(2 * height * width, dtype=np.int64) * 37 % 251).astype(np.uint8)
-    # As the Observer gives them: frames with their one channel added last (stride 0); one
-    # car's (a time trial) and two cars' (a head-to-head race's batch).
-    bits = b""
-    for cars in (1, 2):
-        frames = pattern[: cars * height * width].reshape(cars, height, width)[..., None]
-        with torch.inference_mode():
-            params, values = network(observation_tensors(frames))
-        bits += params.numpy().tobytes() + values.numpy().tobytes()
-    return bits
-
-
-def _vector_bits() -> bytes:
-    network = build_network(ModelMetadata(_PROBE_ACTIONS, ("vector",))).eval()
-    _fill(network)
-    actor = NumpyActor(network)
-    size = int(actor.layers[0][0].shape[0])
-    x = np.sin(np.arange(4 * size, dtype=np.float64)).reshape(4, size)
-    for weight, bias in actor.layers:
-        x = np.tanh(x @ weight + bias)
-    out = x @ actor.head[0] + actor.head[1]
-    return np.ascontiguousarray(out).tobytes()
-
-
-@functools.cache
-def policy_runtime() -> str:
-    """This machine's policy runtime: `torch 2.13.0 x86_64 <12 hex digits>`, the digits a
-    hash of the probe networks' output bits, worked out on one thread as policies drive
-    (`PolicyDriver`): the thread count is part of the numerics too."""
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        # Building the probes draws torch's random weights: the generator is put back, so
-        # a seeded training draws the same numbers whether or not a probe ran first.
-        with torch.random.fork_rng(devices=[]):
-            digest = hashlib.sha256(_camera_bits() + _vector_bits()).hexdigest()[:12]
-    finally:
-        torch.set_num_threads(threads)
-    return f"torch {torch.__version__.split('+')[0]} {platform.machine()} {digest}"

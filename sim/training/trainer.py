@@ -46,14 +46,8 @@ from sim.training.evaluation import EvaluationReport, run_trials
 from sim.training.fleet_parts import PartError, usable_cores
 from sim.training.logbook import Logbook
 from sim.training.opponents import with_opponents
-from sim.training.policy import (
-    PolicyDriver,
-    fill_network,
-    network_spec,
-    open_tensors,
-    policy_data,
-    save_policy,
-)
+from sim.training.policy import fill_network, network_spec, open_tensors, policy_data, save_policy
+from sim.training.policy_driver import PolicyDriver
 from sim.training.ppo import PPOSettings, Rollout, make_ppo
 from sim.training.run_history import RunHistory
 from sim.training.shards import ShardedVecEnv

@@ -18,7 +18,8 @@ from sim.sensors.observations import Observer
 from sim.sensors.randomisation.perturbation import PLAIN, CameraPerturbation, draw_perturbation
 from sim.sensors.randomisation.settings import CameraRandomisation
 from sim.training.evaluation import run_trials
-from sim.training.policy import build_network, driver_for_model, save_policy
+from sim.training.policy import build_network, save_policy
+from sim.training.policy_driver import driver_for_model
 
 
 def test_the_benchmarks_pictures_lie_outside_what_training_draws() -> None:

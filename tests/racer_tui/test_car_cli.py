@@ -18,7 +18,7 @@ from sim.race.engine import run_race
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
-from sim.training.policy import driver_for_model
+from sim.training.policy_driver import driver_for_model
 from tests.conftest import SHARED_DEEPRACER
 from tests.racer_tui.test_league_cli import run_cli, wide_terminal  # noqa: F401 (autouse)
 from tests.sim.car_export.graphs import one_sentence

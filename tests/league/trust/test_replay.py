@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import json
 import os
+import platform
 import subprocess
 import sys
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
+import torch
 
 from league.opening import open_league
 from league.races import race_result, record_race
@@ -28,7 +30,9 @@ from sim.race.result import RaceResult
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
 from sim.training.drivers import DriversByHash
-from sim.training.policy import build_network, policy_runtime, save_policy
+from sim.training.policy import build_network, save_policy
+from sim.training.policy_driver import PolicyDriver
+from sim.training.runtimes import TORCH_CAMERA, VERSIONS, policy_runtime, policy_runtimes
 
 RULES = RaceRules(window_seconds=40.0)
 
@@ -167,7 +171,7 @@ def _camera_model_race(racer: str) -> tuple[RaceResult, str]:
 
 def test_a_race_is_judged_only_under_the_policy_runtime_that_drove_it(tmp_path: Path) -> None:
     result, runtime = _camera_model_race("ana")
-    assert result.runtime == runtime and runtime.startswith("torch ")
+    assert result.runtime == runtime and runtime.startswith("v2 numpy ")
     other = replace(result, result_id=new_id(), runtime="torch 2.13.0 arm64 0123456789ab")
     with open_league(tmp_path / "league.db") as league:
         here = record_race(league, result)
@@ -196,11 +200,37 @@ def test_a_reference_race_has_no_runtime_and_keeps_its_record_as_before(tmp_path
         assert race_result(league, race_id).runtime == ""
 
 
-def _cli(*args: str, isa: str) -> str:
-    """racer-tui in a process of its own with oneDNN held to instruction set `isa`."""
+def test_a_race_driven_under_an_earlier_runtime_version_replays_under_it(
+    tmp_path: Path,
+) -> None:
+    """Races recorded before runtime version 2 (camera networks in torch) keep replaying
+    exactly: the replay drives the model under the version its record names, though the
+    garage's driver drives under the current one; a false claim under it is still found."""
+    folder = new_model("cam", sensors=["camera"], track="hairpin-circuit")
+    save_policy(folder.policy_file, build_network(folder.metadata()))
+    track = resolve_track("hairpin-circuit")
+    driver = DriversByHash()(folder.content_hash(), track)
+    assert isinstance(driver, PolicyDriver) and driver.runtime == policy_runtime()
+    then = driver.under(policy_runtimes()[TORCH_CAMERA])
+    assert then is not None
+    old = run_race(track, RULES, then, racer="ana", seed=5)
+    assert old.runtime == policy_runtimes()[TORCH_CAMERA]
+    # A lap it never drove, claimed under the same runtime.
+    extra = run_race(track, RULES, reference_driver(track), racer="x", seed=5).laps[0]
+    claimed = replace(old, result_id=new_id(), racer="mallory", laps=(*old.laps, extra))
+    with open_league(tmp_path / "league.db") as league:
+        honest, forged = record_race(league, old), record_race(league, claimed)
+        verdicts = {v.race_id: v for v in verify_races(league, DriversByHash())}
+    assert verdicts[honest].outcome == "same"
+    assert verdicts[honest].runtime_here == policy_runtimes()[TORCH_CAMERA]
+    assert verdicts[forged].outcome == "differs"
+
+
+def _run(*args: str, env: dict[str, str]) -> str:
+    """A Python module run in a process of its own, under `env`'s kernel levels."""
     done = subprocess.run(
-        [sys.executable, "-m", "racer_tui.cli.main", *args],
-        env={**os.environ, "ONEDNN_MAX_CPU_ISA": isa},
+        [sys.executable, "-m", *args],
+        env={**os.environ, **env},
         capture_output=True,
         text=True,
         timeout=300,
@@ -210,26 +240,52 @@ def _cli(*args: str, isa: str) -> str:
     return done.stdout
 
 
+def _kernel_levels() -> list[dict[str, str]]:
+    """Each kernel level torch offers on this machine (ATEN_CPU_CAPABILITY, up to its
+    own), and oneDNN's convolutions and OpenBLAS's products held to their oldest x86
+    kernels (the libraries a policy computes with)."""
+    order = ["default", "avx2", "avx512"]
+    best = torch.backends.cpu.get_cpu_capability().lower()
+    levels = [{"ATEN_CPU_CAPABILITY": level} for level in order[: order.index(best) + 1]]
+    if platform.machine() in {"x86_64", "AMD64"}:
+        levels += [{"ONEDNN_MAX_CPU_ISA": "SSE41"}, {"OPENBLAS_CORETYPE": "Prescott"}]
+    return levels
+
+
 @pytest.mark.slow
-def test_a_camera_race_replays_exactly_under_the_kernels_that_drove_it(tmp_path: Path) -> None:
-    """Recorded under two of the kernel levels this machine offers (oneDNN's convolutions
-    on SSE4.1, and on the best it has): each replays the same under its own level, and is
-    unverifiable, never withdrawn, under the other."""
+def test_camera_races_replay_exactly_under_each_kernel_level_that_has_their_runtime(
+    tmp_path: Path,
+) -> None:
+    """A camera race of each runtime version, replayed under each kernel level: the same
+    wherever the level computes the runtime that drove it, unverifiable (never withdrawn)
+    wherever it does not."""
     folder = new_model("cam", sensors=["camera"], track="hairpin-circuit")
     save_policy(folder.policy_file, build_network(folder.metadata()))
-    db = str(tmp_path / "league.db")
-    race = ["--race", "cam", "--track", "hairpin-circuit", "--window", "20", "--record"]
-    for isa in ("SSE41", "ALL"):
-        _cli(*race, "--racer", f"ana-{isa.lower()}", "--db", db, isa=isa)
-    with open_league(Path(db)) as league:
-        rows = league.query("SELECT racer, runtime FROM races")
-    runtimes = {row["racer"]: row["runtime"] for row in rows}
-    assert runtimes["ana-sse41"] != runtimes["ana-all"]  # the level is in the runtime
-    for isa in ("SSE41", "ALL"):
-        verdicts = json.loads(_cli("sync", "verify", "--again", "--db", db, "--json", isa=isa))
-        outcomes = {verdict["racer"]: verdict["outcome"] for verdict in verdicts}
-        own = f"ana-{isa.lower()}"
-        other = "ana-all" if isa == "SSE41" else "ana-sse41"
-        assert outcomes == {own: "same", other: "unverifiable"}
-    with open_league(Path(db)) as league:
-        assert len(league.query("SELECT id FROM races")) == 2
+    track = resolve_track("hairpin-circuit")
+    driver = DriversByHash()(folder.content_hash(), track)
+    assert isinstance(driver, PolicyDriver)
+    drivers = {version: driver.under(policy_runtimes()[version]) for version in VERSIONS}
+    db = tmp_path / "league.db"
+    with open_league(db) as league:
+        raced = {
+            record_race(league, run_race(track, RULES, found, racer=f"v{version}", seed=5))
+            for version, found in drivers.items()
+            if found is not None
+        }
+    assert len(raced) == len(VERSIONS)
+    names_of_levels = []
+    for env in _kernel_levels():
+        names = json.loads(_run("sim.training.runtimes", env=env))
+        names_of_levels.append(set(names.values()))
+        verify = ("racer_tui.cli.main", "sync", "verify", "--again", "--db", str(db), "--json")
+        outcomes = {v["racer"]: v["outcome"] for v in json.loads(_run(*verify, env=env))}
+        for version in VERSIONS:
+            expected = "same" if policy_runtimes()[version] in names.values() else "unverifiable"
+            assert outcomes[f"v{version}"] == expected, (env, version)
+    # The machine's own level computes both; oneDNN's oldest convolutions give version 1
+    # another name (measured on x86 machines), so a level that is not the race's is met.
+    assert names_of_levels[0] >= set(policy_runtimes().values())
+    if platform.machine() in {"x86_64", "AMD64"}:
+        assert policy_runtimes()[TORCH_CAMERA] not in names_of_levels[-2]
+    with open_league(db) as league:
+        assert len(league.query("SELECT id FROM races")) == len(VERSIONS)

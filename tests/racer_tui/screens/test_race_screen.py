@@ -25,7 +25,7 @@ from sim.race.engine import RaceTick, run_race
 from sim.race.replay import ghost_lap
 from sim.race.rules import RaceRules
 from sim.tracks.catalog import resolve_track
-from sim.training.policy import driver_for_model
+from sim.training.policy_driver import driver_for_model
 from tests.racer_tui.screens.tui_helpers import wait_for
 
 SHORT = RaceRules(window_seconds=20.0)

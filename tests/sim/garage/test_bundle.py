@@ -110,10 +110,11 @@ def test_export_needs_a_trained_policy(model: ModelFolder, tmp_path: Path) -> No
 
 def test_a_real_trained_policy_round_trips_and_drives(tmp_path: Path) -> None:
     policy = pytest.importorskip("sim.training.policy")
+    policy_driver = pytest.importorskip("sim.training.policy_driver")
     folder = new_model("driver")
     policy.save_policy(folder.policy_file, policy.build_network(folder.metadata()))
     bundle = read_bundle(export_bundle(folder, tmp_path / "driver"))
-    driver = policy.driver_for_bundle(bundle)
+    driver = policy_driver.driver_for_bundle(bundle)
     assert driver.content_hash == folder.content_hash()
     assert driver.name == "driver"
 

@@ -16,7 +16,7 @@ from sim.garage.frozen_graph import frozen_graph
 from sim.garage.importing import import_model
 from sim.tracks.catalog import resolve_track
 from sim.training.evaluation import run_trials
-from sim.training.policy import driver_for_model
+from sim.training.policy_driver import driver_for_model
 from tests.sim.car_export.graphs import METADATA, camera_policy_graph
 
 

@@ -195,7 +195,8 @@ def test_policy_races_are_deterministic() -> None:
     pytest.importorskip("torch")
     from sim.deepracer.action_space import discrete_grid
     from sim.deepracer.files import ModelMetadata
-    from sim.training.policy import PolicyDriver, build_network
+    from sim.training.policy import build_network
+    from sim.training.policy_driver import PolicyDriver
 
     metadata = ModelMetadata(discrete_grid(30.0, 5, 3.0, 2), ("vector",))
     network = build_network(metadata)

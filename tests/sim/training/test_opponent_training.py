@@ -14,7 +14,8 @@ from sim.race.opponents import OpponentField
 from sim.training import events
 from sim.training.config import training_env_config
 from sim.training.opponents import with_opponents
-from sim.training.policy import PolicyDriver, build_network, save_policy
+from sim.training.policy import build_network, save_policy
+from sim.training.policy_driver import PolicyDriver
 from sim.training.trainer import RunOptions, Trainer
 from sim.training.vec_env import BatchedVecEnv
 

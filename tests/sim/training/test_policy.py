@@ -5,28 +5,35 @@ from __future__ import annotations
 import pickle
 import struct
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 import torch
 from safetensors.torch import save
 
-from sim.deepracer.action_space import FULL_RANGE_CONTINUOUS, discrete_grid
-from sim.deepracer.files import ModelMetadata
+from sim.deepracer.action_space import FULL_RANGE_CONTINUOUS, ActionSpace, discrete_grid
+from sim.deepracer.files import NEURAL_NETWORKS, ModelMetadata
 from sim.garage.folder import ModelFolder
 from sim.physics.simulation import TrackSimulation
 from sim.sensors.observations import SensorOptions
 from sim.tracks.catalog import resolve_track
+from sim.training.numpy_policy import NumpyActor
 from sim.training.policy import (
-    PolicyDriver,
     PolicyError,
-    _batched,
     build_network,
-    driver_for_model,
     load_policy,
+    observation_tensors,
     policy_bytes,
-    policy_runtime,
     save_policy,
+)
+from sim.training.policy_driver import PolicyDriver, _batched, driver_for_model
+from sim.training.runtimes import (
+    NUMPY_CAMERA,
+    TORCH_CAMERA,
+    policy_runtime,
+    policy_runtimes,
+    runtime_version,
 )
 
 DISCRETE = ModelMetadata(discrete_grid(30.0, 5, 3.0, 2), ("vector",))
@@ -163,7 +170,7 @@ def test_driver_for_model_names_the_car_by_its_content_hash(model: ModelFolder) 
 
 def test_a_bundle_drives_with_the_weights_it_carries(model: ModelFolder, tmp_path: Path) -> None:
     from sim.garage.bundle import export_bundle, read_bundle
-    from sim.training.policy import driver_for_bundle
+    from sim.training.policy_driver import driver_for_bundle
 
     network = build_network(model.metadata())
     save_policy(model.policy_file, network)
@@ -179,8 +186,6 @@ def test_a_bundle_drives_with_the_weights_it_carries(model: ModelFolder, tmp_pat
     ids=["discrete", "lidar", "lidar+vector"],
 )
 def test_the_numpy_actor_drives_exactly_like_the_network(metadata: ModelMetadata) -> None:
-    from sim.training.policy import NumpyActor, observation_tensors
-
     network = build_network(metadata)
     with torch.no_grad():
         for parameter in network.parameters():
@@ -200,14 +205,55 @@ def test_the_numpy_actor_drives_exactly_like_the_network(metadata: ModelMetadata
         assert np.allclose(got, expected, atol=1e-5)
 
 
-def test_several_cars_act_in_one_batch_laid_out_as_one_cars_frames() -> None:
+@pytest.mark.parametrize("network_size", NEURAL_NETWORKS)
+@pytest.mark.parametrize(
+    ("sensors", "action_space"),
+    [
+        (("camera",), discrete_grid(30.0, 5, 3.0, 2)),
+        (("camera", "lidar"), FULL_RANGE_CONTINUOUS),
+    ],
+    ids=["camera", "camera+lidar"],
+)
+@pytest.mark.parametrize("cars", [1, 3])
+def test_the_numpy_actor_computes_a_camera_network_as_torch_does(
+    network_size: str, sensors: tuple[str, ...], action_space: ActionSpace, cars: int
+) -> None:
+    """The same function in another order of sums (runtime version 2): outputs within
+    float32 rounding of torch's, for every network size, alone and in a batch, with the
+    Observer's one-channel frames (channel axis added last) and a copy laid out plainly."""
+    metadata = ModelMetadata(action_space, sensors, neural_network=network_size)
+    options = SensorOptions(camera_width=128, camera_height=90)  # odd sizes: pools crop
+    network = build_network(metadata, options)
+    with torch.no_grad():
+        for parameter in network.parameters():
+            parameter.normal_(0.0, 0.1)
+    rng = np.random.default_rng(cars)
+    frames = rng.integers(0, 256, (cars, 90, 128), dtype=np.uint8)[..., None]
+    for camera in (frames, np.ascontiguousarray(frames)):
+        obs: Any = camera
+        if "lidar" in sensors:
+            obs = {"camera": camera, "lidar": rng.uniform(0.1, 2.0, (cars, 64)).astype(np.float32)}
+        with torch.inference_mode():
+            expected = network.action_parameters(network.features(observation_tensors(obs)))
+        got = NumpyActor(network).action_parameters(obs)
+        scale = float(expected.abs().max())
+        assert np.allclose(got, expected.numpy(), rtol=0.0, atol=1e-5 * scale)
+
+
+@pytest.mark.parametrize("version", [TORCH_CAMERA, NUMPY_CAMERA])
+def test_several_cars_act_in_one_batch_laid_out_as_one_cars_frames(version: int) -> None:
     """A head-to-head model drives its cars in one forward pass: the batch keeps a single
     car's frame layout (the channel axis added last), so torch takes the same plain path
-    for it, and each car gets the action it would get alone."""
+    for it (runtime version 1), and each car gets the action it would get alone, under
+    each runtime version."""
     track = resolve_track("reinvent_base")
     metadata = ModelMetadata(discrete_grid(30.0, 5, 3.0, 2), ("camera",))
     driver = PolicyDriver(
-        build_network(metadata), metadata, name="cam", content_hash="cam", live=False
+        build_network(metadata),
+        metadata,
+        name="cam",
+        content_hash="cam",
+        runtime_version=version,
     )
     sims = [TrackSimulation(track, 1, seed=k) for k in range(3)]
     for k, sim in enumerate(sims):
@@ -224,13 +270,43 @@ def test_several_cars_act_in_one_batch_laid_out_as_one_cars_frames() -> None:
         assert np.array_equal(many.steering_deg, single.steering_deg)
 
 
-def test_the_policy_runtime_is_stable_and_leaves_torchs_generator_alone() -> None:
-    policy_runtime.cache_clear()
+def test_the_policy_runtimes_are_stable_and_leave_torchs_generator_alone() -> None:
+    policy_runtimes.cache_clear()
     torch.manual_seed(3)
     expected = torch.rand(4)
     torch.manual_seed(3)
-    name = policy_runtime()
+    names = policy_runtimes()
     assert torch.equal(torch.rand(4), expected)  # a seeded training draws the same
-    assert name.startswith(f"torch {torch.__version__.split('+')[0]} ")
-    policy_runtime.cache_clear()
-    assert policy_runtime() == name  # the same numerics, the same name
+    assert sorted(names) == [TORCH_CAMERA, NUMPY_CAMERA]
+    # Version 1 is named as runtimes were before they had versions, so the races recorded
+    # then are still found here; version 2 says its number and its library.
+    assert names[TORCH_CAMERA].startswith(f"torch {torch.__version__.split('+')[0]} ")
+    assert names[NUMPY_CAMERA].startswith(f"v2 numpy {np.__version__} ")
+    assert policy_runtime() == names[NUMPY_CAMERA]  # races take the current version
+    policy_runtimes.cache_clear()
+    assert policy_runtimes() == names  # the same numerics, the same names
+    assert runtime_version(names[TORCH_CAMERA]) == TORCH_CAMERA
+    assert runtime_version("torch 2.13.0 arm64 0123456789ab") is None
+
+
+def test_a_camera_policy_drives_under_each_runtime_version_it_is_asked_for() -> None:
+    track = resolve_track("reinvent_base")
+    metadata = ModelMetadata(discrete_grid(30.0, 5, 3.0, 2), ("camera",))
+    network = build_network(metadata)
+    driver = PolicyDriver(network, metadata, name="cam", content_hash="cam")
+    assert driver.runtime == policy_runtimes()[NUMPY_CAMERA]
+    assert driver.under(driver.runtime) is driver
+    assert driver.under("torch 2.13.0 arm64 0123456789ab") is None  # not this machine's
+    then = driver.under(policy_runtimes()[TORCH_CAMERA])
+    assert then is not None and then.runtime == policy_runtimes()[TORCH_CAMERA]
+    assert (then.name, then.content_hash) == (driver.name, driver.content_hash)
+    sim = TrackSimulation(track, 1, seed=2)
+    sim.reset_car(0, 3.0)
+    frames = then._observe(sim)
+    with torch.inference_mode():
+        in_torch = network.act(observation_tensors(frames)).numpy()
+    # Version 1 drives a camera network in torch, as races recorded then were driven.
+    assert np.array_equal(then.actions(sim), in_torch)
+    # The trainer's evaluations read the live network: version 1 too.
+    live = PolicyDriver(network, metadata, name="cam", content_hash="cam", live=True)
+    assert live.runtime == policy_runtimes()[TORCH_CAMERA]
