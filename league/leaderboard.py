@@ -70,6 +70,9 @@ class LeaderboardRow:
     # Its standing here (league.trust.standing: replayed, verifiable, unverifiable), once
     # `mark_verification` has worked it out; "" until then.
     verification: str = ""
+    # The policy runtime that drove a race (sim.training.runtimes), filled in with its
+    # standing; "" for a submission, the reference driver, a physical car, or until then.
+    runtime: str = ""
 
 
 @dataclass(frozen=True)
@@ -281,10 +284,40 @@ def _verification_clause(league: League, filters: Filters) -> tuple[str, list[An
 def mark_verification(
     league: League, rows: Sequence[LeaderboardRow], local_models: Collection[str] = ()
 ) -> None:
-    """Fill in each row's standing here (`verification`), for the rows a board shows."""
-    found = result_standings(league, [row.record_id for row in rows], local_models)
+    """Fill in each row's standing here (`verification`) and the policy runtime that drove
+    it (`runtime`), for the rows a board shows."""
+    ids = [row.record_id for row in rows]
+    found = result_standings(league, ids, local_models)
+    runtimes = {
+        str(race_id): str(runtime)
+        for race_id, runtime in league.query(
+            "SELECT id, runtime FROM races WHERE runtime IS NOT NULL "
+            "AND id IN (SELECT value FROM json_each(?))",
+            (json.dumps(ids),),
+        )
+    }
     for row in rows:
         row.verification = found[row.record_id].standing.value
+        row.runtime = runtimes.get(row.record_id, "")
+
+
+def board_runtimes(rows: Sequence[LeaderboardRow]) -> list[str]:
+    """The policy runtimes the rows' races were driven under (`mark_verification` fills
+    them in). More than one on a board compares policies computed with different numerics,
+    which can decide a near tie between two actions differently: a board says so."""
+    return sorted({row.runtime for row in rows if row.runtime})
+
+
+def mixed_runtimes(rows: Sequence[LeaderboardRow]) -> str | None:
+    """The sentence a board prints under itself when its races were driven under more than
+    one policy runtime; None when under one or none."""
+    runtimes = board_runtimes(rows)
+    if len(runtimes) < 2:
+        return None
+    return (
+        f"These races were driven under {len(runtimes)} policy runtimes "
+        f"({'; '.join(runtimes)}): their policies computed with different numerics."
+    )
 
 
 def _rows(league: League, sql: str, params: Sequence[Any]) -> list[LeaderboardRow]:

@@ -94,6 +94,9 @@ def leaderboard_json(rows: Sequence[LeaderboardRow], method: RankingMethod) -> l
             # replayed, verifiable or unverifiable here (league.trust.standing); None when
             # the front end did not work it out.
             "verification": row.verification or None,
+            # The policy runtime that drove a race (sim.training.runtimes); None for the
+            # rest, or when the front end did not work it out.
+            "runtime": row.runtime or None,
         }
         for row in rows
     ]

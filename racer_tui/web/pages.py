@@ -21,6 +21,7 @@ from league.leaderboard import (
     leaderboard,
     mark_verification,
     method_for,
+    mixed_runtimes,
 )
 from league.night_report import night_json
 from league.nights import Night, entrants, get_night, heats, list_nights, standings
@@ -42,6 +43,9 @@ class Board:
     race_type: str
     physics: str
     rows: list[dict[str, Any]]  # leaderboard_json's rows, in rank order
+    # What the board says when its races were driven under several policy runtimes
+    # (league.leaderboard.mixed_runtimes); None when it has nothing to say.
+    runtimes_note: str | None = None
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -49,6 +53,7 @@ class Board:
             "track": self.track,
             "race_type": self.race_type,
             "physics": self.physics,
+            "runtimes_note": self.runtimes_note,
             "rows": self.rows,
         }
 
@@ -108,6 +113,7 @@ def league_leaderboard(league: League, by: str | None, local_models: frozenset[s
                 race_type=first.race_type,
                 physics=first.physics,
                 rows=leaderboard_json(group, method),
+                runtimes_note=mixed_runtimes(group),
             )
         )
     return Leaderboard(

@@ -34,6 +34,7 @@ from league.head_to_head_board import NOT_FOR_HEAD_TO_HEAD, HeadToHeadBoard, Hea
 from league.leaderboard import (
     Column,
     LeaderboardRow,
+    board_runtimes,
     mark_verification,
     several_boards,
     sort_rows,
@@ -158,6 +159,19 @@ def race_type_line(view: BoardView) -> Text:
     if len(others) > 1:
         text.append(f" ({len(view.race_types)} race types here)", style="dim")
     return text
+
+
+def runtimes_line(rows: list[LeaderboardRow]) -> Text:
+    """Says so when the shown races were driven under more than one policy runtime
+    (`board_runtimes`); each row's detail names its own. Empty otherwise."""
+    runtimes = board_runtimes(rows)
+    if len(runtimes) < 2:
+        return Text()
+    # Short enough for one line at 60 columns; a row's detail names its own runtime.
+    return Text(
+        f"{len(runtimes)} policy runtimes here: their numerics differ",
+        style="yellow",
+    )
 
 
 @dataclass
@@ -320,7 +334,10 @@ class LeagueScreen(RacerScreen[None]):
         self.track_names = {track_hash: name for name, track_hash in message.options.tracks}
         self.night_names = {night_id: name for name, night_id in message.options.nights}
         self.query_one(BoardFilters).for_head_to_head(self.head_to_head is not None)
-        line = race_type_line(message.view)
+        parts = [
+            part for part in (race_type_line(message.view), runtimes_line(self.ranked)) if part
+        ]
+        line = Text("\n").join(parts)
         label = self.query_one("#board-race-type", Static)
         label.update(line)
         label.set_class(not line.plain, "-hidden")

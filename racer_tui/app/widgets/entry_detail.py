@@ -131,6 +131,8 @@ def render_entry(row: LeaderboardRow, breakdown: EntryBreakdown) -> Text:
     standing = STANDING_WORDS.get(row.verification)
     if standing is not None:
         text.append(f"{standing}\n", style="dim")
+    if row.runtime:  # its policy's numerics (sim.training.runtimes)
+        text.append(f"policy runtime {row.runtime}\n", style="dim")
     if breakdown.has_trace:
         text.append("v replays this race\n", style="italic")
     if not breakdown.found:

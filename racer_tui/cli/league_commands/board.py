@@ -19,6 +19,7 @@ from league.leaderboard import (
     leaderboard,
     mark_verification,
     method_for,
+    mixed_runtimes,
     race_types_on,
     several_boards,
     sort_rows,
@@ -174,6 +175,9 @@ def show_leaderboard(league: League, args: argparse.Namespace) -> int:
         groups = [rows] if single else list(boards.values())
         for group in groups:
             _print_board(group, columns if single else _without_track(columns), shown_method)
+            note = mixed_runtimes(group)
+            if note is not None:
+                print(note)
     return 0
 
 
