@@ -114,7 +114,7 @@ class _CameraPass:
         # last, so the dense weights' columns are put in that order instead.
         weight = dense.weight.detach().numpy()
         weight = weight.reshape(-1, last, rows, columns).transpose(2, 3, 1, 0)
-        self.dense = np.ascontiguousarray(weight.reshape(rows * columns * last, -1))
+        self.dense = weight.reshape(rows * columns * last, -1).copy()  # its own, C order
         self.dense_bias = dense.bias.detach().numpy().astype(np.float32)
         self.flat = source.reshape(batch, -1)
         self.features = np.empty((batch, self.dense.shape[1]), dtype=np.float32)
@@ -148,12 +148,15 @@ class NumpyActor:
     def __init__(self, network: PolicyNetwork) -> None:
         self.spec = network.spec
         self.layers = [
-            (layer.weight.detach().numpy().T.astype(np.float64), layer.bias.detach().numpy())
+            (layer.weight.detach().numpy().T.astype(np.float64), layer.bias.detach().numpy().copy())
             for layer in network.policy_mlp
             if isinstance(layer, nn.Linear)
         ]
         head = network.action_head
-        self.head = (head.weight.detach().numpy().T.astype(np.float64), head.bias.detach().numpy())
+        self.head = (
+            head.weight.detach().numpy().T.astype(np.float64),
+            head.bias.detach().numpy().copy(),
+        )
         self._camera = network.camera
         self._camera_shape = next(
             (

@@ -1,9 +1,8 @@
 """A trained policy as a race `Driver`, and the drivers of garage models and bundles.
 
 A driver drives with one policy runtime (`sim.training.runtimes`): the current version
-for races, version 1 for the trainer's evaluations (they read the live torch network),
-and whichever version drove a recorded race when verification by replay runs it again
-(`under`).
+for races and the trainer's evaluations, and whichever version drove a recorded race when
+verification by replay runs it again (`under`).
 """
 
 from __future__ import annotations
@@ -52,9 +51,9 @@ class PolicyDriver:
 
     Inference calls the network directly (no SB3 `predict` loop), in numpy
     (`NumpyActor`): a 4-minute race with a vector or lidar model simulates in well under a
-    second. Under runtime version 1 a camera network runs in torch, as it did then.
-    `live=True` keeps reading the torch network (the trainer's evaluations, while its
-    weights change: version 1); otherwise the weights are fixed when the driver is made.
+    second. Under runtime version 1 a camera network runs in torch, as it did then. The
+    numpy actor's weights are fixed when the driver is made: the trainer makes one for each
+    evaluation, of the weights of the moment.
     """
 
     def __init__(
@@ -65,7 +64,6 @@ class PolicyDriver:
         name: str,
         content_hash: str,
         sensor_options: SensorOptions | None = None,
-        live: bool = False,
         runtime_version: int = CURRENT_RUNTIME,
     ) -> None:
         # A batch of one observation is too small to share between cores: extra threads
@@ -74,8 +72,8 @@ class PolicyDriver:
         torch.set_num_threads(1)
         one_blas_thread()
         self.network = network.eval()
-        self.version = TORCH_CAMERA if live else runtime_version
-        in_torch = live or (network.camera is not None and self.version == TORCH_CAMERA)
+        self.version = runtime_version
+        in_torch = network.camera is not None and self.version == TORCH_CAMERA
         self._fast = None if in_torch else NumpyActor(network)
         self.metadata = metadata
         self.name = name

@@ -18,11 +18,10 @@ only under the runtime that drove it.
 
 The paths themselves are versioned, as the physics is. Every version stays here, so a
 race keeps replaying under the one that drove it on any machine that has it:
-- version 1, `torch ...`: camera networks in torch (oneDNN), the rest in numpy. Every race
-  recorded before version 2, and the trainer's own evaluations (they read the live
-  network).
+- version 1, `torch ...`: camera networks in torch (oneDNN), the rest in numpy: every race
+  recorded before version 2.
 - version 2, `v2 numpy ...`: camera networks in numpy too (`NumpyActor`), about three times
-  faster at a batch of one. Races since issue 47.
+  faster at a batch of one: races and the trainer's evaluations since issue 47.
 """
 
 from __future__ import annotations

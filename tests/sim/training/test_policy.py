@@ -307,6 +307,12 @@ def test_a_camera_policy_drives_under_each_runtime_version_it_is_asked_for() -> 
         in_torch = network.act(observation_tensors(frames)).numpy()
     # Version 1 drives a camera network in torch, as races recorded then were driven.
     assert np.array_equal(then.actions(sim), in_torch)
-    # The trainer's evaluations read the live network: version 1 too.
-    live = PolicyDriver(network, metadata, name="cam", content_hash="cam", live=True)
-    assert live.runtime == policy_runtimes()[TORCH_CAMERA]
+    # Version 2's weights are the network's when the driver was made (the trainer makes
+    # one per evaluation), though the network trains on.
+    actor = NumpyActor(network)
+    before = actor.action_parameters(frames)
+    with torch.no_grad():
+        for parameter in network.parameters():
+            parameter.add_(0.5)
+    assert np.array_equal(actor.action_parameters(frames), before)
+    assert not np.array_equal(NumpyActor(network).action_parameters(frames), before)
