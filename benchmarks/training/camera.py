@@ -8,7 +8,8 @@ and on N, a 4-minute camera race, and how close to the limit 15 minutes of train
   camera`) trains for `--seconds` in the real training child on 1 process, then on
   `--processes` (never side by side), as `benchmarks.training.processes` does.
 - **The race:** a 4-minute race of an untrained default camera policy on reinvent_base, as
-  `benchmarks.sim.race` times it.
+  `benchmarks.sim.race` times it, under the current policy runtime and, in the same run,
+  under version 1 (torch's camera path, every camera race's before version 2).
 - **The 15-minute figure** (left out with `--no-line`): a fresh camera model that takes its
   actions and reward from the track's line (`--actions-from-line --reward racing_line`)
   trains `--minutes` on one process, and 5 evaluation trials follow: its best and mean
@@ -58,14 +59,22 @@ def _steps(seconds: float, processes: int) -> dict[str, Any]:
     }
 
 
-def _race() -> float:
+def _races() -> tuple[float, float]:
+    """The race under the current policy runtime, and under version 1 (torch: how every
+    camera race was driven before version 2) in the same run, the same policy."""
     from benchmarks.sim.race import policy_driver, time_race
     from sim.tracks.catalog import resolve_track
+    from sim.training.policy_driver import PolicyDriver
+    from sim.training.runtimes import TORCH_CAMERA, policy_runtime
 
     track = resolve_track(TRACK)
     driver = policy_driver(track, "camera")
-    assert driver is not None  # the training benchmarks need torch anyway
-    return time_race("camera", track, lambda: driver, 240.0, 2).wall_seconds
+    assert isinstance(driver, PolicyDriver)  # the training benchmarks need torch anyway
+    then = driver.under(policy_runtime(TORCH_CAMERA))
+    assert then is not None
+    now_s = time_race("camera", track, lambda: driver, 240.0, 2).wall_seconds
+    then_s = time_race("camera", track, lambda: then, 240.0, 2).wall_seconds
+    return now_s, then_s
 
 
 def _line(minutes: float) -> dict[str, Any]:
@@ -106,7 +115,9 @@ def run(
 ) -> dict[str, Any]:
     result: dict[str, Any] = {"before": before, "processes": processes, "seconds": seconds}
     result["training"] = _steps(seconds, processes)
-    result["race_seconds"] = round(_race(), 3)
+    now_s, then_s = _races()
+    result["race_seconds"] = round(now_s, 3)
+    result["race_seconds_runtime_1"] = round(then_s, 3)
     result["line"] = _line(minutes) if minutes is not None else None
     steps_before = float(before["steps_per_second_1"])
     result["steps_ratio_to_before"] = round(
@@ -141,6 +152,13 @@ def _print(result: dict[str, Any]) -> None:
         f"{before['race_seconds']:.2f} s",
         f"{result['race_seconds']:.2f} s",
         f"< {TARGET_RACE_SECONDS:g} s",
+    )
+    then = result["race_seconds_runtime_1"]
+    table.add_row(
+        "  same, torch runtime 1",
+        "",
+        f"{then:.2f} s ({then / max(result['race_seconds'], 1e-9):.2f}x)",
+        "",
     )
     line = result["line"]
     if line is not None:

@@ -20,6 +20,7 @@ def test_the_table_shows_before_now_and_the_issues_targets(
         "seconds": 120.0,
         "training": {"steps_per_second_1": 633.0, "steps_per_second_2": 950.0, "ratio": 1.5},
         "race_seconds": 3.31,
+        "race_seconds_runtime_1": 7.91,
         "steps_ratio_to_before": 1.5,
         "line": {
             "minutes": 15.0,
@@ -39,6 +40,8 @@ def test_the_table_shows_before_now_and_the_issues_targets(
         "2.46 s",
         "3.31 s",
         "< 1 s",
+        "same, torch runtime 1",
+        "7.91 s (2.39x)",
         "+7.8%",
         "+6.1% (5/5 laps)",
         "aim +5%",
