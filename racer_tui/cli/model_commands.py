@@ -485,6 +485,7 @@ TRAINING_LABELS = {
     "message": "last message",
     "problem": "problem",
     "physics": "car it learnt",
+    "numerics": "trained in",
 }
 
 

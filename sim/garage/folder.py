@@ -93,6 +93,11 @@ TRAINING_LOCK_FILE = ".training.lock"
 TRAINING_LOG_FILE = "training-log.jsonl"
 TRAINING_HISTORY_FILE = "training-history.jsonl"
 TRAINING_STATES = ("running", "stopped", "finished", "failed")
+# How a training computes a policy (sim.training.ppo.training_numerics), recorded on the
+# model as the physics it learnt is.
+FLOAT32 = "float32"
+BF16_CONVOLUTIONS = "bfloat16 convolutions"
+TRAINING_NUMERICS = (FLOAT32, BF16_CONVOLUTIONS)
 MAX_REWARD_BYTES = 1_000_000
 MAX_TRAINING_STATE_BYTES = 64_000
 MAX_MINUTES = 100_000.0  # training_params.yaml's MAX_MINUTES limit
@@ -380,10 +385,22 @@ class ModelFolder:
         state = self.training_state()
         physics = None if state is None else state.get("physics")
         if physics is None:
-            physics = self._kept_summary_physics()  # a model installed from a bundle
+            physics = self._kept_summary_value("physics")  # a model installed from a bundle
         return str(physics) if is_physics(physics) else BEFORE_VERSIONING
 
-    def _kept_summary_physics(self) -> object:
+    def trained_numerics(self) -> str | None:
+        """How its training computed the policy (one of `TRAINING_NUMERICS`: float32, or
+        bfloat16 convolutions on a CPU with bfloat16 in hardware), or None when untrained,
+        a car archive's, or trained before numerics were recorded."""
+        if not self.has_policy() or self.drives_with_car_archive():
+            return None
+        state = self.training_state()
+        numerics = None if state is None else state.get("numerics")
+        if numerics is None:
+            numerics = self._kept_summary_value("numerics")  # installed from a bundle
+        return numerics if isinstance(numerics, str) and numerics in TRAINING_NUMERICS else None
+
+    def _kept_summary_value(self, key: str) -> object:
         kept = self.path / TRAINING_SUMMARY_FILE
         try:
             if kept.stat().st_size > MAX_TRAINING_STATE_BYTES:
@@ -391,7 +408,7 @@ class ModelFolder:
             data = json.loads(kept.read_text(encoding="utf-8"))
         except (OSError, UnicodeDecodeError, json.JSONDecodeError):
             return None
-        return data.get("physics") if isinstance(data, dict) else None
+        return data.get(key) if isinstance(data, dict) else None
 
     def is_training(self) -> bool:
         """A trainer says it is running and its process is alive."""

@@ -48,6 +48,8 @@ def training_summary(folder: ModelFolder) -> dict[str, Any]:
         "fix": None,
         # The car the policy learnt (sim.physics.labels); travels with a bundle's summary.
         "physics": folder.trained_physics(),
+        # How its training computed it (float32, bfloat16 convolutions); travels too.
+        "numerics": folder.trained_numerics(),
     }
     if state is not None:
         for key in ("state", "updated_at", "message", "problem", "fix"):

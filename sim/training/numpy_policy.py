@@ -75,6 +75,8 @@ class _Convolution:
             matrix = np.ones((batch, rows * columns, size + 1), dtype=np.float32)
             self.patches = matrix[:, :, :size].reshape(shape)
             self.matrix = matrix
+        # The patches must be written into the matrix itself (reshape would copy silently).
+        assert np.shares_memory(self.patches, matrix)
         # Rows in the patches' order (tap row, tap column, channel), then the bias.
         kernel_rows = weight.transpose(2, 3, 1, 0).reshape(size, out) * np.float32(scale)
         bias = layer.bias.detach().numpy()  # type: ignore[union-attr]

@@ -35,6 +35,7 @@ from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import ActorCriticPolicy
 
 from sim.deepracer.files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_TYPE
+from sim.garage.folder import BF16_CONVOLUTIONS, FLOAT32
 from sim.training.logbook import FinishedEpisode
 from sim.training.policy import (
     NetworkSpec,
@@ -429,6 +430,13 @@ def _truncate(buffer: RolloutBuffer, steps: int) -> None:
     buffer.full = True
 
 
+def training_numerics(spec: NetworkSpec) -> str:
+    """How a training on this machine computes the network `spec` describes: bfloat16
+    convolutions for a camera where the CPU has bfloat16 in hardware, float32 otherwise.
+    Recorded on the model, as the physics it learnt is (`ModelFolder.trained_numerics`)."""
+    return BF16_CONVOLUTIONS if spec.conv and native_bf16() else FLOAT32
+
+
 def make_ppo(
     env: FleetVecEnv,
     spec: NetworkSpec,
@@ -467,7 +475,7 @@ def make_ppo(
         )
     model.loss_type = settings.loss_type
     model.update_threads = update_threads
-    model.bf16_training = spec.conv != () and native_bf16()
+    model.bf16_training = training_numerics(spec) == BF16_CONVOLUTIONS
     if spec.conv:
         model.rollout_buffer = pooled_buffer(model)
     return model

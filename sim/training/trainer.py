@@ -48,7 +48,7 @@ from sim.training.logbook import Logbook
 from sim.training.opponents import with_opponents
 from sim.training.policy import fill_network, network_spec, open_tensors, policy_data, save_policy
 from sim.training.policy_driver import PolicyDriver
-from sim.training.ppo import PPOSettings, Rollout, make_ppo
+from sim.training.ppo import PPOSettings, Rollout, make_ppo, training_numerics
 from sim.training.run_history import RunHistory
 from sim.training.shards import ShardedVecEnv
 from sim.training.vec_env import BatchedVecEnv, FleetVecEnv
@@ -563,6 +563,8 @@ class Trainer:
             "fix": fix.name if fix is not None else "",
             # The car the policy learnt to drive: the Garage says when today's differs.
             "physics": CURRENT_PHYSICS,
+            # The numerics it learnt with (sim.training.ppo.training_numerics).
+            "numerics": training_numerics(network_spec(self.metadata, SensorOptions())),
             "budget_minutes": self.minutes,  # offered again for the next run
         }
         write_text_atomic(self.folder.training_state_file, json.dumps(document, indent=2) + "\n")

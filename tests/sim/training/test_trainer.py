@@ -7,8 +7,10 @@ import json
 import torch
 
 from sim.garage.folder import ModelFolder
+from sim.sensors.observations import SensorOptions
 from sim.training import events
-from sim.training.policy import build_network, load_policy, save_policy
+from sim.training.policy import build_network, load_policy, network_spec, save_policy
+from sim.training.ppo import training_numerics
 from sim.training.trainer import RunOptions, Trainer
 
 TINY = RunOptions(minutes=5, cars=4, seed=0, min_samples=32, max_samples=64, evaluation_seconds=0)
@@ -50,6 +52,9 @@ def test_a_stopped_run_leaves_state_metrics_and_a_checkpoint(model: ModelFolder)
     }  # fmt: skip
     assert (model.checkpoints_dir / "latest.safetensors").is_file()
     assert model.training_metrics_file.is_file() and model.has_policy()
+    # The numerics it trained in, as this machine trains this network: recorded on the model.
+    expected = training_numerics(network_spec(model.metadata(), SensorOptions()))
+    assert state["numerics"] == expected == model.trained_numerics()
     again = _run(model, updates=1)
     started = again[0]
     assert isinstance(started, events.Started) and started.resumed_from == "checkpoint"
