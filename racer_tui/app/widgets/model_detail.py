@@ -192,6 +192,8 @@ class ModelDetail(VerticalScroll):
         table.add_row("time trained", _plain(seconds_text(summary.get("training_seconds"))))
         if summary.get("steps") is not None:
             table.add_row("steps", _plain(summary["steps"]))
+        if summary.get("numerics"):  # float32, or bfloat16 convolutions (model show's too)
+            table.add_row("trained in", _plain(summary["numerics"]))
         if summary.get("state"):
             table.add_row("last run", _plain(summary["state"]))
         if summary.get("message"):
