@@ -92,8 +92,10 @@ class PolicyDriver:
         """This policy driving with the runtime named `runtime` (a recorded race's), or
         None when this machine has no runtime of that name."""
         version = runtime_version(runtime)
-        if version is None or version == self.version:
-            return None if version is None else self
+        if version is None:
+            return None
+        if version == self.version:
+            return self
         return PolicyDriver(
             self.network,
             self.metadata,
