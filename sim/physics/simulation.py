@@ -175,7 +175,9 @@ class TrackSimulation:
         self.foot = np.zeros((n, 2))
         self.distance_from_center = np.zeros(n)
         self.left_of_center = np.zeros(n, dtype=bool)
-        self.track_width = np.zeros(n)
+        self._track_width = np.zeros(n)
+        # Where one car's road is to be measured across, until someone asks (`track_width`).
+        self._width_due: tuple[float, float] | None = None
         self.wheels_on = np.ones((n, 4), dtype=bool)
         self._t = np.zeros(n)  # fraction along `segment` of the centre-line foot
         # Cars driving against the track's row order this episode (alternate direction).
@@ -377,7 +379,7 @@ class TrackSimulation:
         # Across the road at the centre-line point, as simapp's get_nearest_points does.
         _, _, inner_foot = track.inner_border.project(foot)
         _, _, outer_foot = track.outer_border.project(foot)
-        self.track_width = np.hypot(*(outer_foot - inner_foot).T)
+        self._track_width = np.hypot(*(outer_foot - inner_foot).T)
         wheels = fleet.wheel_positions().reshape(-1, 2)
         self.wheels_on = track.on_road(wheels).reshape(self.n, 4)
         self._measure_objects()
@@ -456,12 +458,11 @@ class TrackSimulation:
         x, y, yaw = float(fleet.x[0]), float(fleet.y[0]), float(fleet.yaw[0])
         cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
         ax, ay = x + LOOK_AHEAD * cos_yaw, y + LOOK_AHEAD * sin_yaw
-        centre, inner, outer = self._point_projectors
+        centre = self.centre_projector
         seg, t, fx, fy = centre.project(ax, ay)
         rel_x, rel_y = ax - fx, ay - fy
         vec_x, vec_y = centre.vectors[seg]
-        _, _, ix, iy = inner.project(fx, fy)
-        _, _, ox, oy = outer.project(fx, fy)
+        self._width_due = (fx, fy)
         self.ahead = np.array([[ax, ay]])
         self.segment = np.array([seg], dtype=np.intp)
         self._t = np.array([t])
@@ -470,7 +471,6 @@ class TrackSimulation:
         self.distance_from_center = np.array([math.hypot(rel_x, rel_y)])
         cross = vec_x * rel_y - vec_y * rel_x
         self.left_of_center = np.array([(-cross if self._any_reverse else cross) > 0.0])
-        self.track_width = np.array([math.hypot(ox - ix, oy - iy)])
         wheel_x = [x + fwd * cos_yaw - left * sin_yaw for fwd, left in self._wheel_offsets]
         wheel_y = [y + fwd * sin_yaw + left * cos_yaw for fwd, left in self._wheel_offsets]
         self.wheels_on = np.asarray(
@@ -498,6 +498,23 @@ class TrackSimulation:
         self.terminal[0] = outcome
 
     # --- what the reward function and observers see ----------------------------------------
+    @property
+    def track_width(self) -> FloatArray:
+        """(N,) width of the road across the centre-line point nearest each car's
+        look-ahead point, as simapp's `get_nearest_points` measures it.
+
+        One car's is measured when first asked for after a step: a race's camera or
+        lidar driver never asks, and the two border projections were a tenth of its
+        physics. The same numbers either way."""
+        if self._width_due is not None:
+            fx, fy = self._width_due
+            _, inner, outer = self._point_projectors
+            _, _, ix, iy = inner.project(fx, fy)
+            _, _, ox, oy = outer.project(fx, fy)
+            self._track_width = np.array([math.hypot(ox - ix, oy - iy)])
+            self._width_due = None
+        return self._track_width
+
     @property
     def progress(self) -> FloatArray:
         """Percent of a lap covered since the episode started, 0..100 (for display)."""

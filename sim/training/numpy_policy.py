@@ -43,7 +43,11 @@ def one_blas_thread() -> None:
 
 
 class _Convolution:
-    """One convolution and its ReLU over a channels-last buffer, into another."""
+    """One convolution and its ReLU over a channels-last buffer, into another.
+
+    The ReLUs take their maximum against an array of zeros, not the scalar 0: the same
+    values to the bit (-0.0 and NaN included), and numpy's array-against-array loop is
+    four times quicker at these sizes (1.9 against 7.1 µs for the first layer's)."""
 
     def __init__(self, source: Array, layer: nn.Conv2d, scale: float) -> None:
         batch, height, width, channels = source.shape
@@ -83,11 +87,12 @@ class _Convolution:
         self.weight = np.ascontiguousarray(np.vstack([kernel_rows, bias]), dtype=np.float32)
         self.output = np.empty((batch, rows, columns, out), dtype=np.float32)
         self._flat_output = self.output.reshape(batch, rows * columns, out)
+        self._zeros = np.zeros_like(self._flat_output)
 
     def __call__(self) -> None:
         np.copyto(self.patches, self.patches_of_source)
         np.matmul(self.matrix, self.weight, out=self._flat_output)
-        np.maximum(self._flat_output, 0.0, out=self._flat_output)
+        np.maximum(self._flat_output, self._zeros, out=self._flat_output)
 
 
 class _CameraPass:
@@ -120,6 +125,7 @@ class _CameraPass:
         self.dense_bias = dense.bias.detach().numpy().astype(np.float32)
         self.flat = source.reshape(batch, -1)
         self.features = np.empty((batch, self.dense.shape[1]), dtype=np.float32)
+        self._zeros = np.zeros_like(self.features)
 
     def __call__(self, frames: Array) -> Array:
         pool, rows, columns = self.pool, self.rows, self.columns
@@ -135,7 +141,7 @@ class _CameraPass:
             layer()
         np.matmul(self.flat, self.dense, out=self.features)
         np.add(self.features, self.dense_bias, out=self.features)
-        np.maximum(self.features, 0.0, out=self.features)
+        np.maximum(self.features, self._zeros, out=self.features)
         return self.features
 
 
