@@ -325,6 +325,18 @@ class PointProjector:
     def arc_length(self, seg: int, t: float) -> float:
         return self.cumulative[seg] + t * self.lengths[seg]
 
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
+    def distance_sq(self, seg: int, x: float, y: float) -> float:
+        """The squared distance from (x, y) to segment `seg`."""
+        (sx, sy), (vx, vy) = self.starts[seg], self.vectors[seg]
+        t = ((x - sx) * vx + (y - sy) * vy) * self._inv_len_sq[seg]
+        t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+        dx, dy = x - sx - vx * t, y - sy - vy * t
+        return dx * dx + dy * dy
+
     def project(self, x: float, y: float) -> tuple[int, float, float, float]:
         """(segment, fraction along it, foot x, foot y) of the nearest point to (x, y)."""
         grid = self._grid
