@@ -521,7 +521,7 @@ class TrackSimulation:
             outcome = Outcome.LAP_COMPLETE
         elif self.fleet.crashed[0] or self.hit_object[0]:
             outcome = Outcome.CRASHED
-        elif not self.wheels_on[0].any():
+        elif self.wheels_on is not _ALL_WHEELS_ON and not self.wheels_on[0].any():
             outcome = Outcome.OFF_TRACK
         elif self._still[0] >= rules.immobilized_steps:
             outcome = Outcome.IMMOBILIZED

@@ -813,7 +813,8 @@ class Camera:
         rise = ahead[:, :, None] * self._bearing_ahead
         rise += left[:, :, None] * self._bearing_left
         wall = rise.argmax(axis=1)
-        return _WALL_TONES[wall], rise.max(axis=1).astype(np.float32)
+        # maximum.reduce is what ndarray.max runs, without its Python wrapper.
+        return _WALL_TONES[wall], np.maximum.reduce(rise, axis=1).astype(np.float32)
 
 
 _BACKGROUND = np.uint8(scene.BACKGROUND)
