@@ -124,6 +124,10 @@ class Trainer:
         if problem is not None:
             raise ModelError(problem)
         check_trainable(self.metadata)  # a sac model is refused, never trained as PPO
+        # The network it trains, and the numerics this machine trains it in (recorded in
+        # every state written, as the physics is).
+        self.spec = network_spec(self.metadata, SensorOptions())
+        self.numerics = training_numerics(self.spec)
         self.hyperparameters = folder.hyperparameters()
         params = folder.training_params()
         minutes = self.options.minutes if self.options.minutes is not None else params.max_minutes
@@ -213,10 +217,9 @@ class Trainer:
         )
         self.env = self._fleet()
         env = self.env
-        spec = network_spec(self.metadata, SensorOptions())
         self.model = make_ppo(
             env,
-            spec,
+            self.spec,
             self.settings,
             max_samples=self.max_samples,
             seed=self.options.seed,
@@ -563,8 +566,7 @@ class Trainer:
             "fix": fix.name if fix is not None else "",
             # The car the policy learnt to drive: the Garage says when today's differs.
             "physics": CURRENT_PHYSICS,
-            # The numerics it learnt with (sim.training.ppo.training_numerics).
-            "numerics": training_numerics(network_spec(self.metadata, SensorOptions())),
+            "numerics": self.numerics,  # sim.training.ppo.training_numerics
             "budget_minutes": self.minutes,  # offered again for the next run
         }
         write_text_atomic(self.folder.training_state_file, json.dumps(document, indent=2) + "\n")
