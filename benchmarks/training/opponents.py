@@ -3,11 +3,11 @@ against an opponent (`racer-tui train MODEL --opponent CAR`).
 
     python -m benchmarks.training.opponents [--seeds 10] [--first-seed 1] [--minutes 3]
                                             [--laps 3] [--track reinvent_base] [--json]
-                                            [--keep FOLDER]
+                                            [--keep FOLDER] [--reward racing_line]
 
 For each seed S, two fresh models of one spec (vector state and sector lidar, 10 actions
-from the racing line, the racing_line reward), each trained for the same minutes on one
-core with training seed S:
+from the racing line, one reward: `--reward`, a template or a file), each trained for the
+same minutes on one core with training seed S:
 - "alone-S" trains alone on the track: the rival's published model;
 - "among-S" trains with alone-S on the track as its opponent, as a racer preparing for a
   bracket against it would.
@@ -88,7 +88,9 @@ def _race(item: Seed, track_name: str, laps: int) -> None:
         item.races.append((grid[0], grid[result.winner.car]))
 
 
-def run(seeds: Sequence[int], minutes: float, track_name: str, laps: int) -> dict[str, Any]:
+def run(
+    seeds: Sequence[int], minutes: float, track_name: str, laps: int, reward: str = "racing_line"
+) -> dict[str, Any]:
     from sim.garage.options import new_model
 
     items = [Seed(seed) for seed in seeds]
@@ -99,7 +101,7 @@ def run(seeds: Sequence[int], minutes: float, track_name: str, laps: int) -> dic
                 track=track_name,
                 sensors=SENSORS,
                 actions_from_line=10,
-                reward="racing_line",
+                reward=reward,
             )
     # The rivals first: each among-S trains against its finished alone-S.
     parallel = train_side_by_side(items, lambda item: _train_alone(item, minutes))
@@ -112,6 +114,7 @@ def run(seeds: Sequence[int], minutes: float, track_name: str, laps: int) -> dic
         "track": track_name,
         "minutes": minutes,
         "laps": laps,
+        "reward": reward,
         "side_by_side": parallel,
         "seeds": [
             {
@@ -169,10 +172,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--track", default="reinvent_base")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--keep", help="keep the models in this data folder")
+    parser.add_argument(
+        "--reward", default="racing_line", help="both models' reward: a template or a file"
+    )
     args = parser.parse_args(argv)
     with bench_home(args.keep):
         seeds = range(args.first_seed, args.first_seed + args.seeds)
-        result = run(seeds, args.minutes, args.track, args.laps)
+        result = run(seeds, args.minutes, args.track, args.laps, args.reward)
     print_result(result, args.json, _print)
     return 0
 
