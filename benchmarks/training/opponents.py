@@ -31,6 +31,7 @@ from benchmarks.training.runs import (
     train_model,
     train_side_by_side,
 )
+from sim.foundation.remedies import RemedyError
 
 SENSORS = ("vector", "sector_lidar")
 TARGET = "among-S ahead of alone-S in more than half of the races"
@@ -178,7 +179,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     with bench_home(args.keep):
         seeds = range(args.first_seed, args.first_seed + args.seeds)
-        result = run(seeds, args.minutes, args.track, args.laps, args.reward)
+        try:
+            result = run(seeds, args.minutes, args.track, args.laps, args.reward)
+        except RemedyError as error:  # a reward or track it cannot take: said in a sentence
+            parser.error(str(error))
     print_result(result, args.json, _print)
     return 0
 
