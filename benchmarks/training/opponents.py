@@ -89,9 +89,9 @@ def _race(item: Seed, track_name: str, laps: int) -> None:
         item.races.append((grid[0], grid[result.winner.car]))
 
 
-def run(
-    seeds: Sequence[int], minutes: float, track_name: str, laps: int, reward: str = "racing_line"
-) -> dict[str, Any]:
+def new_pairs(seeds: Sequence[int], track_name: str, reward: str) -> list[Seed]:
+    """alone-S and among-S, fresh, for each seed (a reward or track the garage cannot take
+    raises its RemedyError here, before any training)."""
     from sim.garage.options import new_model
 
     items = [Seed(seed) for seed in seeds]
@@ -104,6 +104,12 @@ def run(
                 actions_from_line=10,
                 reward=reward,
             )
+    return items
+
+
+def run(
+    items: Sequence[Seed], minutes: float, track_name: str, laps: int, reward: str
+) -> dict[str, Any]:
     # The rivals first: each among-S trains against its finished alone-S.
     parallel = train_side_by_side(items, lambda item: _train_alone(item, minutes))
     train_side_by_side(items, lambda item: _train_among(item, minutes))
@@ -180,9 +186,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     with bench_home(args.keep):
         seeds = range(args.first_seed, args.first_seed + args.seeds)
         try:
-            result = run(seeds, args.minutes, args.track, args.laps, args.reward)
+            items = new_pairs(seeds, args.track, args.reward)
         except RemedyError as error:  # a reward or track it cannot take: said in a sentence
             parser.error(str(error))
+        result = run(items, args.minutes, args.track, args.laps, args.reward)
     print_result(result, args.json, _print)
     return 0
 
