@@ -226,10 +226,31 @@ def test_a_race_driven_under_an_earlier_runtime_version_replays_under_it(
     assert verdicts[forged].outcome == "differs"
 
 
+# One process a level says both what it computes (`python -m sim.training.runtimes`'s
+# names) and what `sync verify --again` finds there: the kernel levels are fixed when the
+# libraries load, and a process each would load torch twice a level.
+_RUNTIMES_THEN_VERIFY = """
+import json, sys
+from racer_tui.cli.main import main
+from sim.training.runtimes import policy_runtimes
+print(json.dumps(policy_runtimes()), flush=True)
+sys.exit(main(["sync", "verify", "--again", "--db", sys.argv[1], "--json"]))
+"""
+
+
+def _runtimes_and_verdicts(
+    db: Path, env: dict[str, str]
+) -> tuple[dict[str, str], list[dict[str, str]]]:
+    """This machine's runtime names and the league's verdicts, under `env`'s kernel levels."""
+    names, verdicts = _run("-c", _RUNTIMES_THEN_VERIFY, str(db), env=env).split("\n", 1)
+    return json.loads(names), json.loads(verdicts)
+
+
 def _run(*args: str, env: dict[str, str]) -> str:
-    """A Python module run in a process of its own, under `env`'s kernel levels."""
+    """Python run in a process of its own (`args` after `python`), under `env`'s kernel
+    levels."""
     done = subprocess.run(
-        [sys.executable, "-m", *args],
+        [sys.executable, *args],
         env={**os.environ, **env},
         capture_output=True,
         text=True,
