@@ -38,6 +38,9 @@ from tests.sim.car_export.graphs import one_sentence
 
 ov = pytest.importorskip("openvino", reason="the car extra (OpenVINO) is not installed")
 
+# Importing TensorFlow takes a worker about 15 s: its tests share one (`--dist loadgroup`).
+IN_TENSORFLOW_S_WORKER = pytest.mark.xdist_group("tensorflow")
+
 CAMERA = "main_level/agent/main/online/network_0/FRONT_FACING_CAMERA/FRONT_FACING_CAMERA"
 LIDAR = "main_level/agent/main/online/network_0/LIDAR/LIDAR"
 POLICY = "main_level/agent/main/online/network_1/ppo_head_0/policy"
@@ -167,6 +170,7 @@ def test_openvino_runs_the_exported_graph_as_the_policy_drives(
         np.testing.assert_allclose(got.sum(axis=1), 1.0, atol=1e-5)
 
 
+@IN_TENSORFLOW_S_WORKER
 def test_a_decisive_policy_chooses_the_same_actions_through_openvino(
     models: dict[str, ModelFolder], tmp_path: Path
 ) -> None:
@@ -207,6 +211,7 @@ def tensorflow_outputs(archive: Path, feeds: dict[str, np.ndarray]) -> np.ndarra
             return np.asarray(session.run(output, feed_dict=inputs))
 
 
+@IN_TENSORFLOW_S_WORKER
 @pytest.mark.parametrize("kind", ["discrete", "continuous", "lidar"])
 def test_tensorflow_runs_the_exported_graph_as_the_policy_drives(
     models: dict[str, ModelFolder], tmp_path: Path, kind: str
