@@ -37,6 +37,7 @@ from sim.reward.errors import RewardFunctionError
 from sim.reward.limit import DEFAULT_SECONDS as DEFAULT_REWARD_SECONDS
 from sim.reward.sandbox import DEFAULT_MEMORY_MB
 from sim.training import events
+from sim.training.allocator import keep_freed_memory
 from sim.training.errors import describe_failure, failure_remedy
 
 EXIT_FAILED = 1
@@ -170,6 +171,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     os.environ[reward_sandbox.MEMORY_ENV] = str(memory_mb)
     reward_sandbox.set_memory_budget(memory_mb)  # held to while the file loads, here too
     reward_sandbox.become_subreaper()
+    # Before any update: its buffers are then reused, not faulted in again (2 threads wait
+    # on each other's faults). Where the allocator cannot, it trains as before.
+    keep_freed_memory()
     reward_guard.guard_reward_calls()
     warnings.filterwarnings("ignore")  # library chatter must not reach the racer
     try:
