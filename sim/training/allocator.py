@@ -8,7 +8,7 @@ so every allocation faults its pages in again. With the update on two threads (a
 
 Kept instead: allocations below `HEAP_BELOW` come from the heap, and the heap is given back
 only past `GIVE_BACK_PAST` of free memory. The process holds more for it: a one-minute
-2-process camera training's trainer ended at 759 MB resident against 620 MB, well within the
+2-process camera training's trainer ended at 759 MB resident against 620 MB, within the
 learner's memory margin (`sim.training.trainer.LEARNER_BASE_MB` beyond its rollout).
 
 Measured on a 2-core AMD EPYC, one-minute trainings of a fresh camera model on 2 processes,
