@@ -32,6 +32,8 @@ TORCH_ALLOWED = {
     "sim.training.numpy_policy",
     "sim.training.runtimes",
     "sim.training.ppo",
+    # A training's acting, in the trainer and in a camera model's simulation processes.
+    "sim.training.actor",
     # The PPO update's loss, over SB3's distributions.
     "sim.training.ppo_loss",
     # The learner's side of a fleet over processes (its parts, fleet_parts, stay light).

@@ -1,9 +1,10 @@
 """One part of a training fleet in a process of its own: what it is, how it is set up, and
 the simulation process's life (sim.training.shards joins the parts into one fleet).
 
-Torch-free on purpose: a simulation process imports this module and the simulator, never
-the learner's torch and stable-baselines3 (a second or more of start-up, and hundreds of
-megabytes, in every process).
+Torch-free on purpose: a simulation process imports this module and the simulator, and
+torch (a second or more of start-up, and hundreds of megabytes) only where it acts for its
+cars: a camera model's training, whose forward passes are worth a core's share
+(sim.training.actor).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import traceback
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -26,9 +27,13 @@ from sim.foundation.remedies import RemedyError
 from sim.garage.folder import ModelFolder
 from sim.reward import guard as reward_guard
 from sim.reward import sandbox as reward_sandbox
+from sim.training.acting import Acting
 from sim.training.config import training_env_config
 from sim.training.opponents import with_opponents
 from sim.training.step_record import EndedEpisode, StepRecorder
+
+if TYPE_CHECKING:
+    from sim.training.actor import ActorSetup, PolicyActor
 
 
 def usable_cores() -> int:
@@ -85,6 +90,13 @@ class PartSetup:
     discrete: bool
     reward_seconds: float | None  # the reward call limit to install; None: none
     opponents: tuple[str, ...] = ()  # cars each training car races (sim.training.opponents)
+    acting: ActorSetup | None = None  # the process acts for its cars (None: the trainer does)
+
+
+# What a part's own forward passes may add to its process's memory besides the reward's
+# budget: a step's activations are a few MB for a fleet's cars; the rest is headroom for
+# torch's own buffers.
+ACTING_MB = 256
 
 
 @dataclass
@@ -98,6 +110,19 @@ class PartStep:
     infos: list[StepInfo]
     finals: dict[int, Any]  # the final observation of each car whose episode ended
     ended: list[EndedEpisode]
+    acting: Acting | None = None  # the part's acting on `obs`, where the part acts
+
+    def truncated_finals(self) -> dict[int, Any]:
+        """The final observations of the cars whose episodes the step limit cut."""
+        return {car: final for car, final in self.finals.items() if self.truncated[car]}
+
+    def acted_on(self, actor: PolicyActor) -> PartStep:
+        """The step with the part's acting on it, sent without its frames: the acting holds
+        the observations as the trainer keeps them."""
+        acting = actor.act(self.obs, self.truncated_finals())
+        return PartStep(
+            None, self.rewards, self.terminated, self.truncated, self.infos, {}, self.ended, acting
+        )
 
     @classmethod
     def of(cls, batch: BatchedDeepRacer, step: Any, recorder: StepRecorder | None) -> PartStep:
@@ -133,20 +158,30 @@ def serve_part(connection: Connection, setup: PartSetup) -> None:
     try:
         try:
             batch, recorder = _build_part(connection, setup)
+            actor = None if setup.acting is None else _actor(setup, batch)
             status = reward_sandbox.close_off_files(ModelFolder(Path(setup.folder)).reward_file)
             if status != "applied":  # recorded in the training's log
                 print(f"reward function's files not closed off: {status}", file=sys.stderr)
-            reward_sandbox.limit_memory(memory_mb)
+            reward_sandbox.limit_memory(memory_mb, learner_mb=ACTING_MB if actor else 0)
             connection.send(("ready", None))
         except BaseException as error:
             _send_error(connection, error)
             return
-        _serve(connection, batch, recorder)
+        _serve(connection, batch, recorder, actor)
     finally:
         reward_sandbox.end_descendants()
 
 
-def _serve(connection: Connection, batch: BatchedDeepRacer, recorder: StepRecorder | None) -> None:
+def _serve(
+    connection: Connection,
+    batch: BatchedDeepRacer,
+    recorder: StepRecorder | None,
+    actor: PolicyActor | None,
+) -> None:
+    """Answer the trainer: "reset"; "step" with the cars' actions; and where the part
+    acts, "act" with the policy's weights (acting on the cars' current observations) and
+    "step_act" (a step, then acting on its observations)."""
+    latest: Any = None  # the cars' current observations
     while True:
         try:
             kind, value = connection.recv()
@@ -155,10 +190,20 @@ def _serve(connection: Connection, batch: BatchedDeepRacer, recorder: StepRecord
         if kind == "close":
             return
         try:
+            reply: Any
             if kind == "reset":
-                reply: Any = batch.reset()
+                reply = latest = batch.reset()
+            elif kind == "act":
+                assert actor is not None and latest is not None, "the part acts after a reset"
+                actor.load(value)
+                reply = actor.act(latest)
             else:
-                reply = PartStep.of(batch, batch.step(value), recorder)
+                step = PartStep.of(batch, batch.step(value), recorder)
+                latest = step.obs
+                if kind == "step_act":
+                    assert actor is not None, "the part was set up without acting"
+                    step = step.acted_on(actor)
+                reply = step
             connection.send(("ok", reply))
         except BaseException as error:
             _send_error(connection, error)
@@ -190,6 +235,15 @@ def _build_part(
         recorder = StepRecorder(part.cars, discrete=setup.discrete, first_car=part.first_car)
         batch.watcher = recorder
     return batch, recorder
+
+
+def _actor(setup: PartSetup, batch: BatchedDeepRacer) -> PolicyActor:
+    from sim.training.actor import PolicyActor  # noqa: PLC0415 (torch: only where the part acts)
+
+    assert setup.acting is not None
+    return PolicyActor.copy_for(
+        setup.acting, batch.observation_space, batch.action_space, setup.part.cars, setup.seed
+    )
 
 
 def _send_error(connection: Connection, error: BaseException) -> None:

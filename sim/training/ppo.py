@@ -21,8 +21,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,13 +35,13 @@ from stable_baselines3.common.policies import ActorCriticPolicy
 
 from sim.deepracer.files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_TYPE
 from sim.garage.folder import BF16_CONVOLUTIONS, FLOAT32
+from sim.training.actor import PolicyActor, sampled, training_mode
 from sim.training.logbook import FinishedEpisode
 from sim.training.policy import (
     NetworkSpec,
     PolicyNetwork,
     init_weights,
     native_bf16,
-    observation_tensors,
     pooled_frames,
 )
 from sim.training.ppo_loss import (
@@ -124,11 +123,7 @@ class RacerPolicy(ActorCriticPolicy):
     def forward(
         self, obs: Any, deterministic: bool = False
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        features = self.net.features(obs)
-        distribution = self._distribution(self.net.action_parameters(features))
-        actions = distribution.get_actions(deterministic=deterministic)
-        log_prob = distribution.log_prob(actions)
-        values = self.net.value(features)
+        actions, values, log_prob = sampled(self.net, self.action_dist, obs, deterministic)
         return actions.reshape((-1, *(self.action_space.shape or ()))), values, log_prob
 
     def evaluate_actions(
@@ -220,7 +215,7 @@ class RacerPPO(PPO):
             normalize_advantage=bool(self.normalize_advantage),
             discrete=isinstance(self.action_space, spaces.Discrete),
         )
-        with _training_mode(self.network, self.bf16_training):
+        with training_mode(self.network, self.bf16_training):
             totals, batches = self._epochs(settings)
         self._n_updates += self.n_epochs
         means = totals / max(batches, 1)
@@ -259,7 +254,8 @@ class RacerPPO(PPO):
     # --- gathering experience ----------------------------------------------------------------
     def start_rollouts(self) -> None:
         """Reset every car; call once before the first `collect`."""
-        self._obs: Any = self.batched_env.reset()
+        self.batched_env.reset()
+        self._actor = PolicyActor(self.network, self.policy.action_dist, self.bf16_training)
         self._starts = np.ones(self.n_envs, dtype=bool)
         self._episode_rewards = np.zeros(self.n_envs)
         self._episodes_by_car = np.zeros(self.n_envs, dtype=np.int64)
@@ -275,28 +271,22 @@ class RacerPPO(PPO):
         _resize(buffer, max_steps)
         buffer.reset()
         self.policy.set_training_mode(False)
-        space = env.config.action_space
-        discrete = space.kind == "discrete"
+        discrete = env.config.action_space.kind == "discrete"
         finished: list[FinishedEpisode] = []
         dones = np.zeros(n, dtype=bool)
+        # The weights have changed since the last rollout: every car acts again on the
+        # observation it stands at (the fleet's simulation processes get the new weights).
+        acting = env.act(self._actor)
         steps = 0
         while steps < max_steps:
-            pooled = _pooled(self.network, self._obs)  # what acting reads and the buffer keeps
-            actions, values, log_probs = self._acting(pooled)
-            actions_np = actions.numpy()
-            env_actions = (
-                actions_np if discrete else np.clip(actions_np, -1.0, 1.0).astype(np.float32)
-            )
-            new_obs, rewards, dones, infos = env.step(env_actions)
+            rewards, dones, following = env.step_and_act(acting, self._actor)
             details = env.last_infos
-            rewards = rewards.astype(np.float32)
             self._episode_rewards += rewards
+            for car, value in following.final_values.items():
+                # Cut by the step limit, not ended: bootstrap from the value there.
+                rewards[car] += self.gamma * value
             for car in np.flatnonzero(dones).tolist():
                 info = details[car]
-                if infos[car].get("TimeLimit.truncated"):
-                    # Cut by the step limit, not ended: bootstrap from the value there.
-                    terminal = _batch_of_one(infos[car]["terminal_observation"])
-                    rewards[car] += self.gamma * float(self._values(terminal)[0])
                 finished.append(
                     FinishedEpisode(
                         car=car,
@@ -309,37 +299,25 @@ class RacerPPO(PPO):
                 self._episode_rewards[car] = 0.0
                 self._episodes_by_car[car] += 1
             buffer.add(
-                pooled,
-                actions_np.reshape(n, -1) if not discrete else actions_np.reshape(n, 1),
+                acting.pooled,
+                acting.actions.reshape(n, -1) if not discrete else acting.actions.reshape(n, 1),
                 rewards,
                 self._starts,
-                values,
-                log_probs,
+                torch.as_tensor(acting.values),
+                torch.as_tensor(acting.log_probs),
             )
-            self._obs = new_obs
+            acting = following
             self._starts = dones
             steps += 1
             if len(finished) >= episodes_wanted and steps >= min_steps:
                 break
         _truncate(buffer, steps)
-        last_values = self._values(self._obs)
-        buffer.compute_returns_and_advantage(last_values=last_values, dones=dones)
+        # The last observations' values, from the weights the rollout was collected with.
+        buffer.compute_returns_and_advantage(
+            last_values=torch.as_tensor(acting.values), dones=dones
+        )
         self.num_timesteps += steps * n
         return Rollout(steps=steps * n, episodes=finished)
-
-    # A training's forward passes read camera frames pooled once (`_pooled`), as its update
-    # reads them.
-    def _acting(self, pooled: Any) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-        """Sampled actions, values and log-probabilities for the cars' pooled observations."""
-        with torch.no_grad(), _training_mode(self.network, self.bf16_training):
-            acted: tuple[torch.Tensor, torch.Tensor, torch.Tensor] = self.policy(
-                observation_tensors(pooled)
-            )
-        return acted
-
-    def _values(self, obs: Any) -> torch.Tensor:
-        with torch.no_grad(), _training_mode(self.network, self.bf16_training):
-            return self.policy.predict_values(observation_tensors(_pooled(self.network, obs)))
 
 
 def pooled_buffer(model: RacerPPO) -> RolloutBuffer:
@@ -369,36 +347,6 @@ def _pooled_space(sensor: str, space: spaces.Space[Any]) -> spaces.Space[Any]:
     assert space.shape is not None
     sample = pooled_frames(np.zeros((1, *space.shape), dtype=np.uint8))
     return spaces.Box(0.0, 1.0, sample.shape[1:], dtype=np.float32)
-
-
-def _pooled(net: PolicyNetwork, obs: Any) -> Any:
-    """Observations with their camera frames as `pooled_frames` makes them."""
-    if net.camera is None:
-        return obs
-    if isinstance(obs, dict):
-        return {**obs, "camera": pooled_frames(obs["camera"])}
-    return pooled_frames(obs)
-
-
-@contextmanager
-def _training_mode(net: PolicyNetwork, bf16: bool) -> Iterator[None]:
-    """The network as a training runs it, acting and updating alike: camera frames as
-    `_pooled` gives them (the buffer keeps them so, `pooled_buffer`), and the convolutions
-    in bfloat16 where `bf16`. Evaluations and races run it as it is: float32, the
-    Observer's frames."""
-    net.frames_prepared = True
-    net.bf16_convolutions = bf16 and net.camera is not None
-    try:
-        yield
-    finally:
-        net.frames_prepared = False
-        net.bf16_convolutions = False
-
-
-def _batch_of_one(obs: Any) -> Any:
-    if isinstance(obs, dict):
-        return {key: value[None, ...] for key, value in obs.items()}
-    return obs[None, ...]
 
 
 _BUFFER_ARRAYS = (

@@ -15,12 +15,17 @@ cars' order, so the learner and the training log see one fleet:
   meet different ones (and a split fleet among them is not the whole one's draw);
 - episodes are numbered, metered and traced by the trainer's one `Logbook`.
 
+Acting: for a camera model, each simulation process acts for its own cars with a copy of
+the policy (sim.training.actor), the weights sent at the start of each rollout, so the
+forward passes run on every core; for other sensors the trainer acts for the whole fleet
+(its network is small) and the simulation processes stay free of torch.
+
 Where it stops scaling: every step waits for the slowest part (parts are kept even), the
-policy's forward pass for the whole fleet and the PPO update run in the trainer's process
-alone, and each step pickles the parts' observations through a pipe (a camera frame is
-19 kB a car). A simulation process builds its own config from the model folder, as a
-DRfC worker reads the model from its bucket: nothing but the folder's path, numbers and
-actions crosses the pipe to it, and only plain data comes back.
+PPO update runs in the trainer's process alone, and each step pickles the parts'
+observations through a pipe (a camera frame is 19 kB a car). A simulation process builds
+its own config from the model folder, as a DRfC worker reads the model from its bucket:
+nothing but the folder's path, numbers, actions and the policy's weights crosses the pipe
+to it, and only plain data comes back.
 
 A simulation process ends when the trainer closes it, and on its own when the trainer's
 end of the pipe closes (the trainer died): it never outlives a training.
@@ -38,6 +43,8 @@ from typing import Any
 import numpy as np
 
 from sim.env import BatchedDeepRacer, EnvConfig
+from sim.training.acting import Acting, joined_observations
+from sim.training.actor import ActorSetup, PolicyActor
 from sim.training.fleet_parts import (
     PartError,
     PartSetup,
@@ -56,7 +63,8 @@ class ShardedVecEnv(FleetVecEnv):
 
     `folder` is the model folder the config was read from (the other processes read it
     again); `record` keeps every step's rows and hands each step's ended episodes, in the
-    cars' order, to `on_step` (the trainer's `Logbook.add_step`)."""
+    cars' order, to `on_step` (the trainer's `Logbook.add_step`); with `acting`, the
+    simulation processes act for their cars in `step_and_act`."""
 
     def __init__(
         self,
@@ -69,8 +77,10 @@ class ShardedVecEnv(FleetVecEnv):
         on_step: Callable[[list[EndedEpisode]], None] | None = None,
         reward_seconds: float | None = None,
         opponents: tuple[str, ...] = (),
+        acting: ActorSetup | None = None,
     ) -> None:
         self.config = config
+        self._remote_acting = acting is not None
         self.parts = split_fleet(cars, processes)
         self._on_step = on_step
         discrete = config.action_space.kind == "discrete"
@@ -92,6 +102,7 @@ class ShardedVecEnv(FleetVecEnv):
                     discrete=discrete,
                     reward_seconds=reward_seconds,
                     opponents=opponents,
+                    acting=acting,
                 )
                 self._remotes.append(_Remote.start(setup))
             for remote in self._remotes:
@@ -101,6 +112,7 @@ class ShardedVecEnv(FleetVecEnv):
             raise
         super().__init__(cars, self.batch.observation_space, self.batch.action_space)
         self._actions: np.ndarray | None = None
+        self._own_latest: Any = None  # this process's cars' current observations
         self.last_infos = []
 
     @property
@@ -115,36 +127,71 @@ class ShardedVecEnv(FleetVecEnv):
     def reset(self) -> Any:
         for remote in self._remotes:
             remote.send(("reset", None))
-        own = self.batch.reset()
-        return _joined([own, *(remote.receive() for remote in self._remotes)])
+        self._own_latest = self.batch.reset()
+        self.latest = joined_observations(
+            [self._own_latest, *(remote.receive() for remote in self._remotes)]
+        )
+        return self.latest
+
+    def act(self, actor: PolicyActor) -> Acting:
+        if not self._remote_acting:
+            return super().act(actor)
+        weights = actor.weights()
+        for remote in self._remotes:
+            remote.send(("act", weights))
+        own = actor.act(self._own_latest)
+        return Acting.joined([own, *(remote.receive() for remote in self._remotes)])
+
+    def step_and_act(
+        self, acting: Acting, actor: PolicyActor
+    ) -> tuple[np.ndarray, np.ndarray, Acting]:
+        if not self._remote_acting:
+            return super().step_and_act(acting, actor)
+        actions = acting.env_actions(self.config.action_space.kind == "discrete")
+        own = self._own_step(actions, "step_act")
+        own_acting = actor.act(own.obs, own.truncated_finals())
+        results = [own, *(remote.receive() for remote in self._remotes)]
+        _, rewards, dones = self._gathered(results)
+        parts = [own_acting, *(result.acting for result in results[1:])]
+        assert all(part is not None for part in parts), "every simulation process acts"
+        return rewards, dones, Acting.joined([part for part in parts if part is not None])
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = actions
-        for remote, part in zip(self._remotes, self.parts[1:], strict=True):
-            remote.send(("step", actions[part.first_car : part.first_car + part.cars]))
 
     def step_wait(self) -> tuple[Any, np.ndarray, np.ndarray, list[dict[str, Any]]]:
         assert self._actions is not None, "step_async must come first"
-        own_cars = self.parts[0].cars
-        own = self.batch.step(self._actions[:own_cars])
-        results = [PartStep.of(self.batch, own, self._recorder)]
+        results = [self._own_step(self._actions, "step")]
         results += [remote.receive() for remote in self._remotes]
-        self.last_infos = [info for result in results for info in result.infos]
-        if self._on_step is not None:
-            self._on_step([episode for result in results for episode in result.ended])
-        dones = np.concatenate([r.terminated | r.truncated for r in results])
-        truncated_all = np.concatenate([r.truncated for r in results])
+        truncated, rewards, dones = self._gathered(results)
         finals: list[Any] = [None] * self.num_envs
         for result, part in zip(results, self.parts, strict=True):
             for car, final in result.finals.items():
                 finals[part.first_car + car] = final
-        rewards_all = np.concatenate([r.rewards for r in results]).astype(np.float32)
-        return (
-            _joined([r.obs for r in results]),
-            rewards_all,
-            dones,
-            sb3_infos(dones, truncated_all, finals),
-        )
+        self.latest = joined_observations([r.obs for r in results])
+        return self.latest, rewards, dones, sb3_infos(dones, truncated, finals)
+
+    def _own_step(self, actions: np.ndarray, kind: str) -> PartStep:
+        """Send each simulation process its cars' actions (a message of `kind`), then step
+        this process's cars meanwhile."""
+        for remote, part in zip(self._remotes, self.parts[1:], strict=True):
+            remote.send((kind, actions[part.first_car : part.first_car + part.cars]))
+        own = self.batch.step(actions[: self.parts[0].cars])
+        step = PartStep.of(self.batch, own, self._recorder)
+        self._own_latest = step.obs
+        return step
+
+    def _gathered(self, results: list[PartStep]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The parts' step as one fleet's: its infos noted and its ended episodes logged;
+        which cars the step limit cut, the rewards (float32) and which cars' episodes
+        ended."""
+        self.last_infos = [info for result in results for info in result.infos]
+        if self._on_step is not None:
+            self._on_step([episode for result in results for episode in result.ended])
+        truncated = np.concatenate([r.truncated for r in results])
+        dones = np.concatenate([r.terminated for r in results]) | truncated
+        rewards = np.concatenate([r.rewards for r in results]).astype(np.float32)
+        return truncated, rewards, dones
 
     def close(self) -> None:
         """End the simulation processes (waiting a little for each, then terminating)."""
@@ -204,12 +251,3 @@ class _Remote:
         if self.process.is_alive():
             self.process.terminate()
             self.process.join(JOIN_SECONDS)
-
-
-def _joined(parts: list[Any]) -> Any:
-    """The parts' observations as one fleet's (a dict of arrays per sensor, or one array)."""
-    if len(parts) == 1:
-        return parts[0]
-    if isinstance(parts[0], dict):
-        return {key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
-    return np.concatenate(parts)

@@ -30,7 +30,7 @@ import psutil
 import torch
 
 from sim.foundation.atomic import write_text_atomic
-from sim.garage.folder import ModelError, ModelFolder
+from sim.garage.folder import BF16_CONVOLUTIONS, ModelError, ModelFolder
 from sim.physics.labels import CURRENT as CURRENT_PHYSICS
 from sim.physics.simulation import reversed_track
 from sim.reward import limit as reward_limit
@@ -38,6 +38,7 @@ from sim.reward import sandbox as reward_sandbox
 from sim.sensors.observations import SensorOptions
 from sim.tracks.track import Track
 from sim.training import events
+from sim.training.actor import ActorSetup
 from sim.training.algorithms import check_trainable
 from sim.training.checkpoint import BEST, LATEST, Progress, load_checkpoint, save_checkpoint
 from sim.training.config import training_env_config
@@ -278,6 +279,7 @@ class Trainer:
             on_step=self.logbook.add_step,
             reward_seconds=limit.seconds if limit is not None else None,
             opponents=self.options.opponents,
+            acting=self._part_acting(),
         )
         try:
             for pid in sharded.pids:
@@ -291,6 +293,15 @@ class Trainer:
                 "training again, with --processes 1 if it keeps happening"
             ) from None
         return sharded
+
+    def _part_acting(self) -> ActorSetup | None:
+        """How the simulation processes act for their cars: a camera network's forward
+        passes are a third of its collection, so each process runs its own cars'; a
+        network without one is small, the trainer runs it for every car, and the
+        simulation processes need no torch."""
+        if not self.spec.conv:
+            return None
+        return ActorSetup(self.spec, training_numerics(self.spec) == BF16_CONVOLUTIONS)
 
     def _ended(self, kind: str, message: str, failure: BaseException | None = None) -> events.Ended:
         problem, fix = failure_remedy(failure) if failure is not None else ("", None)

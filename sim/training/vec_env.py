@@ -16,14 +16,37 @@ import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
 from sim.env import BatchedDeepRacer, EnvConfig, StepInfo
+from sim.training.acting import Acting
+from sim.training.actor import PolicyActor
 
 
 class FleetVecEnv(VecEnv):
     """N cars of one config as N SB3 environments with automatic resets; after each step
-    `last_infos` holds every car's status, progress and steps."""
+    `last_infos` holds every car's status, progress and steps.
+
+    A training steps it with `act` and `step_and_act`: a fleet decides where its acting
+    runs (sim.training.shards lets its simulation processes act for their cars)."""
 
     config: EnvConfig
     last_infos: list[StepInfo]
+    latest: Any = None  # every car's current observation (from `reset`, then each step)
+
+    def act(self, actor: PolicyActor) -> Acting:
+        """Every car's action for the observation it stands at (after `reset`)."""
+        return actor.act(self.latest)
+
+    def step_and_act(self, acting: Acting, actor: PolicyActor) -> tuple[Any, Any, Acting]:
+        """Step every car with `acting`'s actions, then act on the new observations: the
+        step's rewards (float32) and ends, and the acting for the next step (holding the
+        values of the final observations where the step limit cut an episode)."""
+        discrete = self.config.action_space.kind == "discrete"
+        obs, rewards, dones, infos = self.step(acting.env_actions(discrete))
+        finals = {
+            car: infos[car]["terminal_observation"]
+            for car in np.flatnonzero(dones).tolist()
+            if infos[car]["TimeLimit.truncated"]
+        }
+        return rewards, dones, actor.act(obs, finals)
 
     def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
         if attr_name == "render_mode":  # the cars are drawn by racer-tui, not by gymnasium
@@ -61,7 +84,8 @@ class BatchedVecEnv(FleetVecEnv):
         self.last_infos = []
 
     def reset(self) -> Any:
-        return self.batch.reset()
+        self.latest = self.batch.reset()
+        return self.latest
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = actions
@@ -72,6 +96,7 @@ class BatchedVecEnv(FleetVecEnv):
         self.last_infos = infos
         dones = terminated | truncated
         infos_out = sb3_infos(dones, truncated, self.batch.final_observations)
+        self.latest = obs
         return obs, rewards.astype(np.float32), dones, infos_out
 
     def close(self) -> None:

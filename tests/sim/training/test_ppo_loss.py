@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from sim.training import ppo, ppo_loss
+from sim.training import actor, ppo_loss
 from sim.training.ppo import RacerPPO
 from sim.training.ppo_loss import LossSettings, Minibatch, slice_loss
 from tests.sim.training.rollouts import collected
@@ -65,7 +65,7 @@ def test_the_slices_shares_of_the_loss_add_up_to_the_minibatchs_mean_loss() -> N
         discrete=True,
     )
     evaluate = model.policy.evaluate_actions
-    with torch.no_grad(), ppo._training_mode(model.network, bf16=False):
+    with torch.no_grad(), actor.training_mode(model.network, bf16=False):
         whole, whole_figures = slice_loss(evaluate, samples, 20, settings)
         first, first_figures = slice_loss(evaluate, samples.part(0, 7), 20, settings)
         rest, rest_figures = slice_loss(evaluate, samples.part(7, 20), 20, settings)

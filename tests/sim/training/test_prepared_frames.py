@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from sim.training import ppo
+from sim.training import actor
 from sim.training.policy import PolicyNetwork, pooled_frames
 from tests.sim.training.rollouts import collected
 
@@ -46,7 +46,7 @@ def test_the_update_reads_the_inputs_acting_read(sensors: tuple[str, ...]) -> No
     np.random.seed(3)
     model = collected(sensors, batch_size=16)
     buffer = model.rollout_buffer
-    with ppo._training_mode(model.network, model.bf16_training):  # as acting ran it
+    with actor.training_mode(model.network, model.bf16_training):  # as acting ran it
         batch = next(buffer.get(None))
         with torch.no_grad():
             _, log_prob, _ = model.policy.evaluate_actions(

@@ -9,16 +9,21 @@ from typing import Any
 import numpy as np
 import psutil
 import pytest
+import torch
+from stable_baselines3.common.distributions import make_proba_distribution
 
 from sim.garage.folder import ModelFolder
 from sim.garage.options import new_model
 from sim.reward.errors import RewardFunctionError
 from sim.training import events
+from sim.training.actor import ActorSetup, PolicyActor, training_mode
 from sim.training.config import training_env_config
 from sim.training.errors import describe_failure
 from sim.training.fleet_parts import FleetPart, PartError, split_fleet
 from sim.training.launcher import TrainingProcess
 from sim.training.logbook import Logbook
+from sim.training.policy import PolicyNetwork, init_weights, network_spec, observation_tensors
+from sim.training.ppo_loss import evaluate_actions
 from sim.training.shards import ShardedVecEnv
 from sim.training.trainer import RunOptions, Trainer
 from sim.training.vec_env import BatchedVecEnv, FleetVecEnv
@@ -100,6 +105,48 @@ def test_a_fleet_split_over_three_processes_steps_and_logs_as_the_whole_fleet(
         assert files[0][0].read_bytes() == files[1][0].read_bytes()
 
 
+def test_a_camera_fleets_simulation_processes_act_for_their_cars_with_the_trainers_weights() -> (
+    None
+):
+    model = new_model("acting", sensors=["camera"])
+    config = training_env_config(model)
+    spec = network_spec(model.metadata())
+    split = ShardedVecEnv(config, model.path, 4, 2, acting=ActorSetup(spec, bf16=False))
+    whole = BatchedVecEnv(config, 4)
+    network = PolicyNetwork(spec)
+    init_weights(network)
+    actor = PolicyActor(network, make_proba_distribution(whole.action_space), bf16=False)
+    try:
+        whole.reset()
+        split.reset()
+        acting = split.act(actor)
+        here = whole.act(actor)
+        assert _same(acting.pooled, here.pooled)
+        assert np.allclose(acting.values, here.values, atol=1e-5)
+        with torch.no_grad():  # the other process's cars were set the trainer's weights
+            network.value_head.bias += 0.5
+        again = split.act(actor)
+        assert np.allclose(again.values, acting.values + 0.5, atol=1e-5)
+        with torch.no_grad(), training_mode(network, bf16=False):
+            _, log_probs, _ = evaluate_actions(
+                network,
+                make_proba_distribution(whole.action_space),
+                observation_tensors(again.pooled),
+                torch.as_tensor(again.actions),
+            )
+        assert np.allclose(again.log_probs, log_probs.numpy(), atol=1e-5)
+        for step in range(40):
+            rewards, dones, following = split.step_and_act(again, actor)
+            rewards_here, dones_here, here = whole.step_and_act(again, actor)
+            assert np.array_equal(rewards, rewards_here) and np.array_equal(dones, dones_here)
+            assert _same(following.pooled, here.pooled), f"step {step}"
+            assert np.allclose(following.values, here.values, atol=1e-5)
+            assert following.final_values.keys() == here.final_values.keys()
+            again = following
+    finally:
+        split.close()
+
+
 def test_a_simulation_process_that_fails_raises_its_own_error_in_the_trainer() -> None:
     model = new_model("broken")
     good_config = training_env_config(model)  # read before the file breaks
@@ -118,7 +165,9 @@ def test_a_simulation_process_that_fails_raises_its_own_error_in_the_trainer() -
         split.close()
 
 
-def test_a_training_on_two_processes_drives_both_and_ends_them(model: ModelFolder) -> None:
+@pytest.mark.parametrize("sensor", ["vector", "camera"])
+def test_a_training_on_two_processes_drives_both_and_ends_them(sensor: str) -> None:
+    model = new_model(f"two-{sensor}", sensors=[sensor])
     stream: list[events.Event] = []
     simulators: list[psutil.Process] = []
 
@@ -126,9 +175,11 @@ def test_a_training_on_two_processes_drives_both_and_ends_them(model: ModelFolde
         if isinstance(event, events.Started):
             assert isinstance(trainer.env, ShardedVecEnv)
             simulators.extend(psutil.Process(pid) for pid in trainer.env.pids)
-            # A simulation process never loads the learner's torch (start-up and memory).
+            # A simulation process loads torch (start-up and memory) only to act for its
+            # cars: where the network reads a camera.
             mapped = [m.path for p in simulators for m in p.memory_maps()]
-            assert mapped and not [path for path in mapped if "torch" in path]
+            assert mapped
+            assert any("torch" in path for path in mapped) == (sensor == "camera")
         stream.append(event)
 
     def stop() -> bool:
