@@ -30,6 +30,7 @@ from sim.reward import sandbox as reward_sandbox
 from sim.training.acting import Acting
 from sim.training.config import training_env_config
 from sim.training.opponents import with_opponents
+from sim.training.shared_frames import SharedFrames
 from sim.training.step_record import EndedEpisode, StepRecorder
 
 if TYPE_CHECKING:
@@ -116,10 +117,10 @@ class PartStep:
         """The final observations of the cars whose episodes the step limit cut."""
         return {car: final for car, final in self.finals.items() if self.truncated[car]}
 
-    def acted_on(self, actor: PolicyActor) -> PartStep:
-        """The step with the part's acting on it, sent without its frames: the acting holds
-        the observations as the trainer keeps them."""
-        acting = actor.act(self.obs, self.truncated_finals())
+    def acted_on(self, actor: PolicyActor, frames: SharedFrames) -> PartStep:
+        """The step with the part's acting on it, to send without the observations: the
+        acting's pooled frames go through `frames`, and the trainer needs no others."""
+        acting = frames.put(actor.act(self.obs, self.truncated_finals()))
         return PartStep(
             None, self.rewards, self.terminated, self.truncated, self.infos, {}, self.ended, acting
         )
@@ -138,12 +139,13 @@ class PartError(RemedyError):
     ended; `str()` is one sentence for the racer."""
 
 
-def serve_part(connection: Connection, setup: PartSetup) -> None:
+def serve_part(connection: Connection, setup: PartSetup, frames: SharedFrames | None) -> None:
     """A simulation process's life: build the part, then answer reset and step until told
     to close or until the trainer's end of the pipe closes. It runs the racer's reward
     function, contained (sim.reward.sandbox): a memory limit, no process, thread or signal
     from a reward call, Landlock (read Python's files and the model's folder, write
-    nowhere), and whatever is left under it ends with it."""
+    nowhere), and whatever is left under it ends with it. Where it acts for its cars, its
+    pooled frames go to the trainer through `frames`."""
     # Ctrl+C in a terminal reaches the whole process group: the trainer decides when its
     # parts stop, and closes them.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -158,7 +160,7 @@ def serve_part(connection: Connection, setup: PartSetup) -> None:
     try:
         try:
             batch, recorder = _build_part(connection, setup)
-            actor = None if setup.acting is None else _actor(setup, batch)
+            actor = None if setup.acting is None or frames is None else _actor(setup, batch)
             status = reward_sandbox.close_off_files(ModelFolder(Path(setup.folder)).reward_file)
             if status != "applied":  # recorded in the training's log
                 print(f"reward function's files not closed off: {status}", file=sys.stderr)
@@ -167,7 +169,7 @@ def serve_part(connection: Connection, setup: PartSetup) -> None:
         except BaseException as error:
             _send_error(connection, error)
             return
-        _serve(connection, batch, recorder, actor)
+        _serve(connection, batch, recorder, actor, frames)
     finally:
         reward_sandbox.end_descendants()
 
@@ -177,6 +179,7 @@ def _serve(
     batch: BatchedDeepRacer,
     recorder: StepRecorder | None,
     actor: PolicyActor | None,
+    frames: SharedFrames | None,
 ) -> None:
     """Answer the trainer: "reset"; "step" with the cars' actions; and where the part
     acts, "act" with the policy's weights (acting on the cars' current observations) and
@@ -194,15 +197,15 @@ def _serve(
             if kind == "reset":
                 reply = latest = batch.reset()
             elif kind == "act":
-                assert actor is not None and latest is not None, "the part acts after a reset"
+                assert actor and frames and latest is not None, "the part acts after a reset"
                 actor.load(value)
-                reply = actor.act(latest)
+                reply = frames.put(actor.act(latest))
             else:
                 step = PartStep.of(batch, batch.step(value), recorder)
                 latest = step.obs
                 if kind == "step_act":
-                    assert actor is not None, "the part was set up without acting"
-                    step = step.acted_on(actor)
+                    assert actor and frames, "the part was set up without acting"
+                    step = step.acted_on(actor, frames)
                 reply = step
             connection.send(("ok", reply))
         except BaseException as error:

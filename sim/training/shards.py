@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 
 from sim.env import BatchedDeepRacer, EnvConfig
 from sim.training.acting import Acting, joined_observations
@@ -52,6 +53,8 @@ from sim.training.fleet_parts import (
     serve_part,
     split_fleet,
 )
+from sim.training.policy import pooled_frames
+from sim.training.shared_frames import SharedFrames
 from sim.training.step_record import EndedEpisode, StepRecorder
 from sim.training.vec_env import FleetVecEnv, sb3_infos
 
@@ -91,6 +94,8 @@ class ShardedVecEnv(FleetVecEnv):
             self._recorder = StepRecorder(own.cars, discrete=discrete)
             self.batch.watcher = self._recorder
         self._remotes: list[_Remote] = []
+        # Parts that act for their cars hand their pooled frames over in shared memory.
+        frames_shape = None if acting is None else _pooled_camera(self.batch.observation_space)
         try:
             for part in self.parts[1:]:
                 setup = PartSetup(
@@ -104,7 +109,8 @@ class ShardedVecEnv(FleetVecEnv):
                     opponents=opponents,
                     acting=acting,
                 )
-                self._remotes.append(_Remote.start(setup))
+                frames = None if frames_shape is None else (part.cars, frames_shape)
+                self._remotes.append(_Remote.start(setup, frames))
             for remote in self._remotes:
                 remote.receive()  # "ready", or the part's error raised here
         except BaseException:
@@ -140,7 +146,7 @@ class ShardedVecEnv(FleetVecEnv):
         for remote in self._remotes:
             remote.send(("act", weights))
         own = actor.act(self._own_latest)
-        return Acting.joined([own, *(remote.receive() for remote in self._remotes)])
+        return Acting.joined([own, *(remote.receive_acting() for remote in self._remotes)])
 
     def step_and_act(
         self, acting: Acting, actor: PolicyActor
@@ -152,9 +158,11 @@ class ShardedVecEnv(FleetVecEnv):
         own_acting = actor.act(own.obs, own.truncated_finals())
         results = [own, *(remote.receive() for remote in self._remotes)]
         _, rewards, dones = self._gathered(results)
-        parts = [own_acting, *(result.acting for result in results[1:])]
-        assert all(part is not None for part in parts), "every simulation process acts"
-        return rewards, dones, Acting.joined([part for part in parts if part is not None])
+        parts = [own_acting]
+        for remote, result in zip(self._remotes, results[1:], strict=True):
+            assert result.acting is not None, "every simulation process acts"
+            parts.append(remote.with_frames(result.acting))
+        return rewards, dones, Acting.joined(parts)
 
     def step_async(self, actions: np.ndarray) -> None:
         self._actions = actions
@@ -203,22 +211,33 @@ class ShardedVecEnv(FleetVecEnv):
 class _Remote:
     """The trainer's end of one simulation process."""
 
-    def __init__(self, process: Any, connection: Connection) -> None:
+    def __init__(self, process: Any, connection: Connection, frames: SharedFrames | None) -> None:
         self.process = process
         self.connection = connection
+        self.frames = frames  # where the part puts its pooled frames, if it acts
 
     @classmethod
-    def start(cls, setup: PartSetup) -> _Remote:
+    def start(cls, setup: PartSetup, frames: tuple[int, tuple[int, ...]] | None) -> _Remote:
+        """Start the part's process; `frames`: (cars, a pooled frame's shape) when it acts."""
         # spawn, not fork: the trainer has torch's threads running, which fork would copy
         # half-alive into the child.
         context = multiprocessing.get_context("spawn")
+        shared = None if frames is None else SharedFrames.allocate(context, *frames)
         ours, theirs = context.Pipe()
         process = context.Process(
-            target=serve_part, args=(theirs, setup), name="racer-tui-sim", daemon=True
+            target=serve_part, args=(theirs, setup, shared), name="racer-tui-sim", daemon=True
         )
         process.start()
         theirs.close()  # the child holds its end: our copy would hide its death from us
-        return cls(process, ours)
+        return cls(process, ours, shared)
+
+    def receive_acting(self) -> Acting:
+        """The part's answer to "act", its frames copied in."""
+        return self.with_frames(self.receive())
+
+    def with_frames(self, acting: Acting) -> Acting:
+        assert self.frames is not None, "the part was set up without acting"
+        return self.frames.take(acting)
 
     def send(self, message: tuple[str, Any]) -> None:
         try:
@@ -251,3 +270,11 @@ class _Remote:
         if self.process.is_alive():
             self.process.terminate()
             self.process.join(JOIN_SECONDS)
+
+
+def _pooled_camera(space: Any) -> tuple[int, ...]:
+    """A car's camera frame's shape as `pooled_frames` makes it (parts act only for
+    networks that read a camera: sim.training.trainer)."""
+    camera = space.spaces["camera"] if isinstance(space, spaces.Dict) else space
+    assert camera.shape is not None and camera.dtype == np.uint8, "acting parts read a camera"
+    return tuple(pooled_frames(np.zeros((1, *camera.shape), dtype=np.uint8)).shape[1:])

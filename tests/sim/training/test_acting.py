@@ -3,6 +3,8 @@ the values PPO bootstraps from where the step limit cuts an episode."""
 
 from __future__ import annotations
 
+import multiprocessing
+import pickle
 from dataclasses import replace
 from typing import Any
 
@@ -20,6 +22,7 @@ from sim.training.actor import PolicyActor, pooled_observations, training_mode
 from sim.training.policy import PolicyNetwork, init_weights, network_spec, observation_tensors
 from sim.training.ppo import PPOSettings, make_ppo
 from sim.training.ppo_loss import evaluate_actions
+from sim.training.shared_frames import SharedFrames
 from sim.training.vec_env import BatchedVecEnv
 
 CARS = 3
@@ -103,3 +106,26 @@ def test_a_rollout_bootstraps_a_cut_episode_from_the_value_where_it_was_cut() ->
     for car in range(CARS):
         bootstrap = model.gamma * last[car] if car in last else 0.0
         assert stored[car] == pytest.approx(raw[STEP_LIMIT - 1][car] + bootstrap, abs=1e-5)
+
+
+@pytest.mark.parametrize("sensors", [("camera",), ("camera", "lidar")])
+def test_a_parts_frames_cross_in_shared_memory_and_come_back_the_same(
+    sensors: tuple[str, ...],
+) -> None:
+    rng = np.random.default_rng(5)
+    frames = rng.random((CARS, 60, 80, 1), dtype=np.float32)
+    pooled: Any = frames
+    if "lidar" in sensors:
+        pooled = {"camera": frames, "lidar": rng.random((CARS, 64), dtype=np.float32)}
+    acting = Acting(pooled, np.arange(CARS), np.zeros(CARS, np.float32), np.zeros(CARS))
+    shared = SharedFrames.allocate(multiprocessing.get_context("spawn"), CARS, (60, 80, 1))
+    sent = shared.put(acting)
+    left = sent.pooled["camera"] if isinstance(sent.pooled, dict) else sent.pooled
+    assert left is None  # the frames do not go through the pipe
+    back = shared.take(pickle.loads(pickle.dumps(sent)))
+    # The part's next answer writes the memory again: the trainer's frames are its own copy.
+    shared.put(Acting(np.zeros_like(frames), acting.actions, acting.values, acting.log_probs))
+    got = back.pooled["camera"] if isinstance(back.pooled, dict) else back.pooled
+    assert np.array_equal(got, frames)
+    if isinstance(pooled, dict):
+        assert np.array_equal(back.pooled["lidar"], pooled["lidar"])
