@@ -155,6 +155,7 @@ class ShardedVecEnv(FleetVecEnv):
             return super().step_and_act(acting, actor)
         actions = acting.env_actions(self.config.action_space.kind == "discrete")
         own = self._own_step(actions, "step_act")
+        self.latest = None  # the other parts' observations stay in their processes
         own_acting = actor.act(own.obs, own.truncated_finals())
         results = [own, *(remote.receive() for remote in self._remotes)]
         _, rewards, dones = self._gathered(results)

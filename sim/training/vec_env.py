@@ -29,13 +29,17 @@ class FleetVecEnv(VecEnv):
 
     config: EnvConfig
     last_infos: list[StepInfo]
-    latest: Any = None  # every car's current observation (from `reset`, then each step)
+    # Every car's current observation (from `reset`, then each step), where this process
+    # has them all.
+    latest: Any = None
 
     def act(self, actor: PolicyActor) -> Acting:
         """Every car's action for the observation it stands at (after `reset`)."""
         return actor.act(self.latest)
 
-    def step_and_act(self, acting: Acting, actor: PolicyActor) -> tuple[Any, Any, Acting]:
+    def step_and_act(
+        self, acting: Acting, actor: PolicyActor
+    ) -> tuple[np.ndarray, np.ndarray, Acting]:
         """Step every car with `acting`'s actions, then act on the new observations: the
         step's rewards (float32) and ends, and the acting for the next step (holding the
         values of the final observations where the step limit cut an episode)."""
