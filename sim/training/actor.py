@@ -4,7 +4,7 @@ The trainer acts with the network it is training. A simulation process of a came
 training acts for its own cars with a copy (sim.training.shards): the trainer sends the
 weights at the start of every rollout, so every action of a rollout still comes from the
 weights being trained and PPO stays DeepRacer's synchronous one, while the forward passes,
-a third of a camera training's collection, run on every core instead of the trainer's.
+about half of a camera training's collection, run on every core instead of the trainer's.
 """
 
 from __future__ import annotations

@@ -296,7 +296,7 @@ class Trainer:
 
     def _part_acting(self) -> ActorSetup | None:
         """How the simulation processes act for their cars: a camera network's forward
-        passes are a third of its collection, so each process runs its own cars'; a
+        passes are about half of its collection, so each process runs its own cars'; a
         network without one is small, the trainer runs it for every car, and the
         simulation processes need no torch."""
         if not self.spec.conv:
