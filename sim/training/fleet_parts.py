@@ -15,7 +15,7 @@ import pickle
 import signal
 import sys
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -121,9 +121,7 @@ class PartStep:
         """The step with the part's acting on it, to send without the observations: the
         acting's pooled frames go through `frames`, and the trainer needs no others."""
         acting = frames.put(actor.act(self.obs, self.truncated_finals()))
-        return PartStep(
-            None, self.rewards, self.terminated, self.truncated, self.infos, {}, self.ended, acting
-        )
+        return replace(self, obs=None, finals={}, acting=acting)
 
     @classmethod
     def of(cls, batch: BatchedDeepRacer, step: Any, recorder: StepRecorder | None) -> PartStep:

@@ -266,6 +266,11 @@ def pooled_frames(frames: NDArray[Any]) -> NDArray[np.float32]:
     return pooled
 
 
+def pooled_frame_shape(frame_shape: tuple[int, ...]) -> tuple[int, ...]:
+    """The shape `pooled_frames` gives one frame of `frame_shape` (height, width, channels)."""
+    return tuple(pooled_frames(np.zeros((1, *frame_shape), dtype=np.uint8)).shape[1:])
+
+
 def native_bf16() -> bool:
     """Whether this CPU computes bfloat16 in hardware (AVX512-BF16 or AMX). Elsewhere oneDNN
     emulates it, slower than float32, so a training keeps float32 there."""

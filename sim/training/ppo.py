@@ -42,7 +42,7 @@ from sim.training.policy import (
     PolicyNetwork,
     init_weights,
     native_bf16,
-    pooled_frames,
+    pooled_frame_shape,
 )
 from sim.training.ppo_loss import (
     FIGURES,
@@ -345,8 +345,7 @@ def _pooled_space(sensor: str, space: spaces.Space[Any]) -> spaces.Space[Any]:
     if sensor != "camera":
         return space
     assert space.shape is not None
-    sample = pooled_frames(np.zeros((1, *space.shape), dtype=np.uint8))
-    return spaces.Box(0.0, 1.0, sample.shape[1:], dtype=np.float32)
+    return spaces.Box(0.0, 1.0, pooled_frame_shape(space.shape), dtype=np.float32)
 
 
 _BUFFER_ARRAYS = (

@@ -22,10 +22,11 @@ forward passes run on every core; for other sensors the trainer acts for the who
 
 Where it stops scaling: every step waits for the slowest part (parts are kept even), the
 PPO update runs in the trainer's process alone, and each step pickles the parts'
-observations through a pipe (a camera frame is 19 kB a car). A simulation process builds
-its own config from the model folder, as a DRfC worker reads the model from its bucket:
-nothing but the folder's path, numbers, actions and the policy's weights crosses the pipe
-to it, and only plain data comes back.
+observations through a pipe (a camera frame is 19 kB a car; a part that acts hands its
+pooled frames over in shared memory instead, sim.training.shared_frames). A simulation
+process builds its own config from the model folder, as a DRfC worker reads the model from
+its bucket: nothing but the folder's path, numbers, actions and the policy's weights
+crosses the pipe to it, and only plain data comes back.
 
 A simulation process ends when the trainer closes it, and on its own when the trainer's
 end of the pipe closes (the trainer died): it never outlives a training.
@@ -53,7 +54,7 @@ from sim.training.fleet_parts import (
     serve_part,
     split_fleet,
 )
-from sim.training.policy import pooled_frames
+from sim.training.policy import pooled_frame_shape
 from sim.training.shared_frames import SharedFrames
 from sim.training.step_record import EndedEpisode, StepRecorder
 from sim.training.vec_env import FleetVecEnv, sb3_infos
@@ -274,8 +275,8 @@ class _Remote:
 
 
 def _pooled_camera(space: Any) -> tuple[int, ...]:
-    """A car's camera frame's shape as `pooled_frames` makes it (parts act only for
-    networks that read a camera: sim.training.trainer)."""
+    """A car's pooled camera frame's shape (parts act only for networks that read a
+    camera: sim.training.trainer)."""
     camera = space.spaces["camera"] if isinstance(space, spaces.Dict) else space
     assert camera.shape is not None and camera.dtype == np.uint8, "acting parts read a camera"
-    return tuple(pooled_frames(np.zeros((1, *camera.shape), dtype=np.uint8)).shape[1:])
+    return pooled_frame_shape(camera.shape)
