@@ -36,6 +36,8 @@ TORCH_ALLOWED = {
     "sim.training.actor",
     # The PPO update's loss, over SB3's distributions.
     "sim.training.ppo_loss",
+    # The update's minibatches in shares, one thread each.
+    "sim.training.minibatch_shares",
     # The learner's side of a fleet over processes (its parts, fleet_parts, stay light).
     "sim.training.shards",
     "sim.training.trainer",

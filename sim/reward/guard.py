@@ -241,3 +241,8 @@ def own_thread(name: str) -> None:
     _own_threads.update(
         thread.ident for thread in threading.enumerate() if thread.name == name and thread.ident
     )
+
+
+def is_own_thread(ident: int) -> bool:
+    """Whether the thread `ident` counts as racer-tui's own (never refused as racer code)."""
+    return ident in _own_threads

@@ -37,6 +37,7 @@ from sim.deepracer.files import ADAM_EPSILON, GAE_LAMBDA, PPO_CLIP, SIMAPP_LOSS_
 from sim.garage.folder import BF16_CONVOLUTIONS, FLOAT32
 from sim.training.actor import PolicyActor, sampled, training_mode
 from sim.training.logbook import FinishedEpisode
+from sim.training.minibatch_shares import MinibatchShares
 from sim.training.policy import (
     NetworkSpec,
     PolicyNetwork,
@@ -48,7 +49,6 @@ from sim.training.ppo_loss import (
     FIGURES,
     LossSettings,
     Minibatch,
-    accumulate_gradients,
     action_distribution,
     evaluate_actions,
     normalized_advantages,
@@ -193,15 +193,23 @@ class RacerPPO(PPO):
     # --- learning ------------------------------------------------------------------------
     def train(self) -> None:
         """The clipped PPO update over the rollout buffer; stats in `last_update`."""
-        torch.set_num_threads(self.update_threads)
+        shares = self._shares()
+        # A camera network's update takes `update_threads` threads of its own, each with one
+        # core's kernels (sim.training.minibatch_shares); a small network's, torch's threads.
+        torch.set_num_threads(1 if shares.threads > 1 else self.update_threads)
         try:
-            self._update()
+            with shares.running():
+                self._update(shares)
         finally:
             # Collection runs one small forward pass a step: one thread, the cores are the
             # simulation's.
             torch.set_num_threads(1)
 
-    def _update(self) -> None:
+    def _shares(self) -> MinibatchShares:
+        threads = self.update_threads if self.network.camera is not None else 1
+        return MinibatchShares(self.network, self.policy.action_dist, threads)
+
+    def _update(self, shares: MinibatchShares) -> None:
         self.policy.set_training_mode(True)
         for group in self.policy.optimizer.param_groups:  # DeepRacer's lr is constant
             group["lr"] = float(self.lr_schedule(self._current_progress_remaining))
@@ -216,18 +224,17 @@ class RacerPPO(PPO):
             discrete=isinstance(self.action_space, spaces.Discrete),
         )
         with training_mode(self.network, self.bf16_training):
-            totals, batches = self._epochs(settings)
+            totals, batches = self._epochs(settings, shares)
         self._n_updates += self.n_epochs
         means = totals / max(batches, 1)
         self.last_update = UpdateStats(*(float(value) for value in means))
 
-    def _epochs(self, settings: LossSettings) -> tuple[np.ndarray, int]:
+    def _epochs(self, settings: LossSettings, shares: MinibatchShares) -> tuple[np.ndarray, int]:
         """DeepRacer's epochs over the rollout in this process: the `FIGURES` summed over
         minibatches, and how many there were."""
         totals = np.zeros(len(FIGURES))
         batches = 0
         pieces = slice_samples(self.network)
-        evaluate = self.policy.evaluate_actions
         for _ in range(self.n_epochs):
             for batch in self.rollout_buffer.get(self.batch_size):
                 samples = Minibatch.of(
@@ -240,8 +247,7 @@ class RacerPPO(PPO):
                     returns=batch.returns,
                     discrete=settings.discrete,
                 )
-                self.policy.optimizer.zero_grad()
-                totals += accumulate_gradients(evaluate, samples, len(samples), settings, pieces)
+                totals += shares.gradients(samples, settings, pieces)
                 self._step()
                 batches += 1
         return totals, batches

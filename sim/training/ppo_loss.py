@@ -8,12 +8,13 @@ train faster a sample (docs/camera-learner-profile.md).
 A slice's loss is its sums divided by the whole minibatch's size, and its advantages are
 normalised over the whole minibatch, so the slices' gradients add up to the gradient of the
 minibatch's mean loss: the same update however it is sliced, up to the order of float
-additions. The five figures an update reports (`FIGURES`) add up the same way.
+additions. The five figures an update reports (`FIGURES`) add up the same way, and so do
+the shares of a minibatch that threads compute side by side (sim.training.minibatch_shares).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -162,21 +163,29 @@ def slice_loss(
     return loss, figures
 
 
-def accumulate_gradients(
+def share_gradients(
     evaluate: Evaluate,
     samples: Minibatch,
     size: int,
     settings: LossSettings,
+    *,
     at_a_time: int | None,
-) -> np.ndarray:
-    """Add `samples`' share of a `size`-sample minibatch's loss gradient to the parameters'
-    gradients, `at_a_time` samples at a time (None: all at once); their share of the
-    `FIGURES`."""
+    parameters: Sequence[torch.Tensor],
+) -> tuple[list[torch.Tensor | None], np.ndarray]:
+    """`samples`' share of a `size`-sample minibatch's loss gradient with respect to
+    `parameters` (None for one the loss does not reach), computed `at_a_time` samples at a
+    time (None: all at once) and added slice by slice; their share of the `FIGURES`."""
     figures = np.zeros(len(FIGURES))
+    gradients: list[torch.Tensor | None] = [None] * len(parameters)
     step = at_a_time or max(len(samples), 1)
     for start in range(0, len(samples), step):
-        piece = samples.part(start, start + step)
-        loss, piece_figures = slice_loss(evaluate, piece, size, settings)
-        loss.backward()  # type: ignore[no-untyped-call]
+        loss, piece_figures = slice_loss(
+            evaluate, samples.part(start, start + step), size, settings
+        )
+        pieces = torch.autograd.grad(loss, parameters, allow_unused=True)
+        for index, piece in enumerate(pieces):
+            if piece is not None:
+                total = gradients[index]
+                gradients[index] = piece if total is None else total.add_(piece)
         figures += piece_figures
-    return figures
+    return gradients, figures

@@ -4,12 +4,14 @@ the bfloat16 must stay inside a training."""
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 import numpy as np
 import pytest
 import torch
 
+from sim.reward import guard as reward_guard
 from sim.training import actor, ppo_loss
 from sim.training.ppo import RacerPPO
 from sim.training.ppo_loss import LossSettings, Minibatch, slice_loss
@@ -24,9 +26,12 @@ def _collected() -> RacerPPO:
     return collected(SENSORS, batch_size=24)
 
 
-def _updated(monkeypatch: pytest.MonkeyPatch, slices: int, bf16: bool = False) -> Any:
+def _updated(
+    monkeypatch: pytest.MonkeyPatch, slices: int, bf16: bool = False, threads: int = 1
+) -> Any:
     model = _collected()
     model.bf16_training = bf16
+    model.update_threads = threads
     monkeypatch.setattr(ppo_loss, "CAMERA_SLICE_SAMPLES", slices)
     monkeypatch.setattr(ppo_loss, "CAMERA_SLICE_SAMPLES_BF16", slices)
     np.random.seed(6)
@@ -97,3 +102,33 @@ def test_bfloat16_convolutions_stay_inside_a_training(monkeypatch: pytest.Monkey
     assert float32.dtype == bf16.dtype == torch.float32
     assert not torch.equal(float32, bf16)
     torch.testing.assert_close(bf16, float32, rtol=0.05, atol=0.02)
+
+
+def test_a_minibatch_in_shares_on_threads_makes_the_update_of_one_thread(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    one, one_figures, _ = _updated(monkeypatch, slices=5)
+    threads: set[int] = set()
+    guarded: set[bool] = set()
+    real = ppo_loss.slice_loss
+
+    def noting_the_thread(*args: Any, **kwargs: Any) -> Any:
+        threads.add(threading.get_ident())
+        guarded.add(
+            threading.current_thread() is threading.main_thread()
+            or reward_guard.is_own_thread(threading.get_ident())
+        )
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(ppo_loss, "slice_loss", noting_the_thread)
+    two, two_figures, _ = _updated(monkeypatch, slices=5, threads=2)  # shares of 15 and 9
+    assert len(threads) == 2  # both shares of each minibatch ran, each in its own thread
+    assert guarded == {True}  # the reward guard never takes the update's thread for racer code
+    for name, value in one.items():
+        # Only the order of float additions differs.
+        torch.testing.assert_close(two[name], value, rtol=1e-4, atol=1e-6)
+    for field in ("entropy", "policy_loss", "value_loss", "approx_kl", "clip_fraction"):
+        assert getattr(two_figures, field) == pytest.approx(
+            getattr(one_figures, field), rel=1e-4, abs=1e-7
+        )
+    assert torch.get_num_threads() == 1  # collection's forward passes stay on one thread
