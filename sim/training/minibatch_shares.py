@@ -46,8 +46,9 @@ class MinibatchShares:
     def __init__(self, network: PolicyNetwork, template: Distribution, threads: int) -> None:
         self.network = network
         self.threads = max(1, threads)
-        # A distribution object keeps the last distribution it made: one per share.
-        self._templates = [template, *(copy.deepcopy(template) for _ in range(self.threads - 1))]
+        # A distribution object keeps the last distribution it made (assigned, never changed
+        # in place): a shallow copy per share keeps the shares' apart.
+        self._templates = [template, *(copy.copy(template) for _ in range(self.threads - 1))]
         self._parameters = [value for value in network.parameters() if value.requires_grad]
         self._pool: ThreadPoolExecutor | None = None
 
@@ -72,17 +73,20 @@ class MinibatchShares:
         """Set the parameters' gradients to those of `samples`' mean loss (the whole
         minibatch); its `ppo_loss.FIGURES`."""
         size = len(samples)
-        bounds = _share_bounds(size, self.threads, at_a_time)
+        parts = [
+            samples.part(start, end) for start, end in _share_bounds(size, self.threads, at_a_time)
+        ]
         futures: list[Future[tuple[Gradients, np.ndarray]]] = []
         if self._pool is not None:
             futures = [
-                self._pool.submit(
-                    self._share, index, samples.part(start, end), size, settings, at_a_time
-                )
-                for index, (start, end) in enumerate(bounds[1:], start=1)
+                self._pool.submit(self._share, index, part, size, settings, at_a_time)
+                for index, part in enumerate(parts[1:], start=1)
             ]
-        start, end = bounds[0]
-        results = [self._share(0, samples.part(start, end), size, settings, at_a_time)]
+        # This thread's share, or outside `running` every share, one after another.
+        here = parts[: len(parts) - len(futures)]
+        results = [
+            self._share(index, part, size, settings, at_a_time) for index, part in enumerate(here)
+        ]
         results += [future.result() for future in futures]
         figures = np.zeros_like(results[0][1])
         for parameter, *shares in zip(

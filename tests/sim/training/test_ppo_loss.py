@@ -13,8 +13,9 @@ import torch
 
 from sim.reward import guard as reward_guard
 from sim.training import actor, ppo_loss
+from sim.training.minibatch_shares import MinibatchShares
 from sim.training.ppo import RacerPPO
-from sim.training.ppo_loss import LossSettings, Minibatch, slice_loss
+from sim.training.ppo_loss import LossSettings, Minibatch, normalized_advantages, slice_loss
 from tests.sim.training.rollouts import collected
 
 SENSORS = ("camera", "lidar")
@@ -132,3 +133,30 @@ def test_a_minibatch_in_shares_on_threads_makes_the_update_of_one_thread(
             getattr(one_figures, field), rel=1e-4, abs=1e-7
         )
     assert torch.get_num_threads() == 1  # collection's forward passes stay on one thread
+
+
+def test_shares_outside_their_threads_are_all_computed_in_the_calling_thread() -> None:
+    model = _collected()
+    batch = next(model.rollout_buffer.get(24))
+    settings = LossSettings(0.2, 0.01, 0.5, "huber", normalize_advantage=True, discrete=True)
+    samples = Minibatch.of(
+        batch.observations,
+        actions=batch.actions,
+        old_log_prob=batch.old_log_prob,
+        advantages=normalized_advantages(batch.advantages, normalize=True),
+        returns=batch.returns,
+        discrete=True,
+    )
+    network = model.network
+    gradients: list[list[torch.Tensor | None]] = []
+    figures = []
+    with actor.training_mode(network, bf16=False):
+        for threads in (1, 2):
+            shares = MinibatchShares(network, model.policy.action_dist, threads)
+            figures.append(shares.gradients(samples, settings, at_a_time=5))
+            gradients.append([value.grad for value in network.parameters()])
+    reached = [(one, two) for one, two in zip(*gradients, strict=True) if one is not None]
+    assert reached and all(two is not None for _, two in reached)
+    for one, two in reached:
+        torch.testing.assert_close(two, one, rtol=1e-4, atol=1e-7)
+    np.testing.assert_allclose(figures[1], figures[0], rtol=1e-4, atol=1e-8)
