@@ -41,6 +41,18 @@ def _updated(
     return weights, model.last_update, model
 
 
+def _first_minibatch(model: RacerPPO, size: int, settings: LossSettings) -> Minibatch:
+    batch = next(model.rollout_buffer.get(size))
+    return Minibatch.of(
+        batch.observations,
+        actions=batch.actions,
+        old_log_prob=batch.old_log_prob,
+        advantages=normalized_advantages(batch.advantages, settings.normalize_advantage),
+        returns=batch.returns,
+        discrete=settings.discrete,
+    )
+
+
 def test_a_minibatch_in_slices_makes_the_update_of_the_whole_minibatch(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -60,16 +72,8 @@ def test_a_minibatch_in_slices_makes_the_update_of_the_whole_minibatch(
 
 def test_the_slices_shares_of_the_loss_add_up_to_the_minibatchs_mean_loss() -> None:
     model = _collected()
-    batch = next(model.rollout_buffer.get(20))
     settings = LossSettings(0.2, 0.01, 0.5, "huber", normalize_advantage=False, discrete=True)
-    samples = Minibatch.of(
-        batch.observations,
-        actions=batch.actions,
-        old_log_prob=batch.old_log_prob,
-        advantages=batch.advantages,
-        returns=batch.returns,
-        discrete=True,
-    )
+    samples = _first_minibatch(model, 20, settings)
     evaluate = model.policy.evaluate_actions
     with torch.no_grad(), actor.training_mode(model.network, bf16=False):
         whole, whole_figures = slice_loss(evaluate, samples, 20, settings)
@@ -137,16 +141,8 @@ def test_a_minibatch_in_shares_on_threads_makes_the_update_of_one_thread(
 
 def test_shares_outside_their_threads_are_all_computed_in_the_calling_thread() -> None:
     model = _collected()
-    batch = next(model.rollout_buffer.get(24))
     settings = LossSettings(0.2, 0.01, 0.5, "huber", normalize_advantage=True, discrete=True)
-    samples = Minibatch.of(
-        batch.observations,
-        actions=batch.actions,
-        old_log_prob=batch.old_log_prob,
-        advantages=normalized_advantages(batch.advantages, normalize=True),
-        returns=batch.returns,
-        discrete=True,
-    )
+    samples = _first_minibatch(model, 24, settings)
     network = model.network
     gradients: list[list[torch.Tensor | None]] = []
     figures = []
