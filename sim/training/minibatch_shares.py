@@ -113,10 +113,13 @@ class MinibatchShares:
 
 def _share_bounds(size: int, shares: int, at_a_time: int | None) -> list[tuple[int, int]]:
     """`size` samples in `shares` contiguous runs as even as whole slices of `at_a_time`
-    allow (so one share is the slices a single thread takes); never an empty share but the
-    first."""
+    allow (so one share is the slices a single thread takes), or as even as samples allow
+    where the minibatch has fewer slices than shares (DeepRacer's batch of 64, say); never an
+    empty share but the first."""
     unit = at_a_time or 1
     slices = -(-size // unit)
+    if slices < shares:
+        unit, slices = 1, size
     count = max(1, min(shares, slices))
     per, larger = divmod(slices, count)
     bounds, first = [], 0

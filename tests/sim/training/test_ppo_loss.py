@@ -109,10 +109,11 @@ def test_bfloat16_convolutions_stay_inside_a_training(monkeypatch: pytest.Monkey
     torch.testing.assert_close(bf16, float32, rtol=0.05, atol=0.02)
 
 
+@pytest.mark.parametrize("slices", [5, 64])  # shares of 15 and 9; of 12 and 12
 def test_a_minibatch_in_shares_on_threads_makes_the_update_of_one_thread(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, slices: int
 ) -> None:
-    one, one_figures, _ = _updated(monkeypatch, slices=5)
+    one, one_figures, _ = _updated(monkeypatch, slices=slices)
     threads: set[int] = set()
     guarded: set[bool] = set()
     real = ppo_loss.slice_loss
@@ -126,7 +127,7 @@ def test_a_minibatch_in_shares_on_threads_makes_the_update_of_one_thread(
         return real(*args, **kwargs)
 
     monkeypatch.setattr(ppo_loss, "slice_loss", noting_the_thread)
-    two, two_figures, _ = _updated(monkeypatch, slices=5, threads=2)  # shares of 15 and 9
+    two, two_figures, _ = _updated(monkeypatch, slices=slices, threads=2)
     assert len(threads) == 2  # both shares of each minibatch ran, each in its own thread
     assert guarded == {True}  # the reward guard never takes the update's thread for racer code
     for name, value in one.items():
