@@ -33,7 +33,13 @@ from stable_baselines3.common.distributions import Distribution
 
 from sim.reward import guard as reward_guard
 from sim.training.policy import PolicyNetwork
-from sim.training.ppo_loss import LossSettings, Minibatch, evaluate_actions, share_gradients
+from sim.training.ppo_loss import (
+    LossSettings,
+    Minibatch,
+    add_gradients,
+    evaluate_actions,
+    share_gradients,
+)
 
 THREAD_NAME = "racer-tui-update"
 
@@ -88,13 +94,13 @@ class MinibatchShares:
             self._share(index, part, size, settings, at_a_time) for index, part in enumerate(here)
         ]
         results += [future.result() for future in futures]
-        figures = np.zeros_like(results[0][1])
-        for parameter, *shares in zip(
-            self._parameters, *(grads for grads, _ in results), strict=True
-        ):
-            parameter.grad = _added(shares)
-        for _, share_figures in results:
+        # The shares added into the first, in the shares' order.
+        gradients, figures = results[0]
+        for more, share_figures in results[1:]:
+            add_gradients(gradients, more)
             figures += share_figures
+        for parameter, gradient in zip(self._parameters, gradients, strict=True):
+            parameter.grad = gradient
         return figures
 
     def _share(
@@ -128,15 +134,6 @@ def _share_bounds(size: int, shares: int, at_a_time: int | None) -> list[tuple[i
         bounds.append((first, end))
         first = end
     return bounds
-
-
-def _added(shares: list[torch.Tensor | None]) -> torch.Tensor | None:
-    """The shares' gradients of one parameter added in the shares' order."""
-    total: torch.Tensor | None = None
-    for share in shares:
-        if share is not None:
-            total = share if total is None else total.add_(share)
-    return total
 
 
 def _own_thread() -> None:

@@ -182,10 +182,14 @@ def share_gradients(
         loss, piece_figures = slice_loss(
             evaluate, samples.part(start, start + step), size, settings
         )
-        pieces = torch.autograd.grad(loss, parameters, allow_unused=True)
-        for index, piece in enumerate(pieces):
-            if piece is not None:
-                total = gradients[index]
-                gradients[index] = piece if total is None else total.add_(piece)
+        add_gradients(gradients, torch.autograd.grad(loss, parameters, allow_unused=True))
         figures += piece_figures
     return gradients, figures
+
+
+def add_gradients(totals: list[torch.Tensor | None], pieces: Sequence[torch.Tensor | None]) -> None:
+    """Add `pieces` (None: no gradient) into `totals`, parameter by parameter, in place."""
+    for index, piece in enumerate(pieces):
+        if piece is not None:
+            total = totals[index]
+            totals[index] = piece if total is None else total.add_(piece)
