@@ -9,7 +9,10 @@ O(log n), then the point is projected onto the three segments around it.
 from __future__ import annotations
 
 import bisect
+import hashlib
 import math
+import threading
+from collections import OrderedDict
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -43,6 +46,22 @@ _GRID_BAND = 1.0
 # build it at once.
 _GRID_AFTER = 2000
 _NEIGHBOURS = np.arange(-2, 3)
+# Built grids, kept for the process by the polyline they were built for: every race, heat
+# and replay loads its track afresh (a new Track, new projectors), and building a track's
+# three lines' grids again cost 0.1-0.25 s a race. A grid follows from its polyline's
+# points alone, so one built for the same points is the same grid. Bounded: a few tracks'
+# lines (a big track's grid is about 0.8 MB), the least recently used going first.
+_GRIDS_KEPT = 16
+_built_grids: OrderedDict[bytes, NDArray[np.intp]] = OrderedDict()
+_built_grids_lock = threading.Lock()
+
+
+def _polyline_key(points: FloatArray) -> bytes:
+    """The identity of a polyline's points, for the grid cache."""
+    contiguous = np.ascontiguousarray(points, dtype=np.float64)
+    digest = hashlib.blake2b(contiguous.tobytes(), digest_size=20)
+    digest.update(repr(contiguous.shape).encode())
+    return digest.digest()
 
 
 def segment_lengths(points: FloatArray) -> FloatArray:
@@ -66,6 +85,7 @@ class _LookupGrid:
     ) -> None:
         self._tree = tree
         self._owners = owners
+        self._key = _polyline_key(points)
         self.segments = segments
         self.closed = closed
         self.origin = points.min(axis=0) - _GRID_MARGIN
@@ -77,16 +97,41 @@ class _LookupGrid:
     def due(self, count: int) -> NDArray[np.intp] | None:
         """The grid once `count` more points make it worth building; None until then."""
         if self.cells is None:
+            self.cells = self._kept()  # built already for these points: no reason to wait
+        if self.cells is None:
             self.queries += count
             if self.queries >= _GRID_AFTER:
-                self.cells = self._build()
+                self.cells = self._kept_or_built()
         return self.cells
 
     def built(self) -> NDArray[np.intp]:
         """The grid, built now if it has not been."""
         if self.cells is None:
-            self.cells = self._build()
+            self.cells = self._kept_or_built()
         return self.cells
+
+    def _kept_or_built(self) -> NDArray[np.intp]:
+        """The grid the process built for these points, or a new one (kept, read-only:
+        every projector of the same points shares it)."""
+        cells = self._kept()
+        if cells is not None:
+            return cells
+        # Built outside the lock: two threads building the same grid build equal ones.
+        cells = self._build()
+        cells.flags.writeable = False
+        with _built_grids_lock:
+            _built_grids[self._key] = cells
+            _built_grids.move_to_end(self._key)
+            while len(_built_grids) > _GRIDS_KEPT:
+                _built_grids.popitem(last=False)
+        return cells
+
+    def _kept(self) -> NDArray[np.intp] | None:
+        with _built_grids_lock:
+            cells = _built_grids.get(self._key)
+            if cells is not None:
+                _built_grids.move_to_end(self._key)
+            return cells
 
     def _build(self) -> NDArray[np.intp]:
         """Nearest segment per cell, or -1 where the exact tree search must decide."""
