@@ -129,9 +129,12 @@ class LazyCache:
             return _AbsentCache(self, strip)
 
     def __set__(self, strip: Strip, cache: Any) -> None:
-        if isinstance(cache, FIFOCache) and not cache:
-            self.__delete__(strip)  # Textual's constructor: keep none until one is needed
-        else:
+        # An empty cache is Textual's constructor (the one place it sets these): keep none
+        # until one is needed. Nothing is deleted for it: the slot is not set yet there,
+        # and deleting an unset slot raises, seven times a line, which was a noticeable
+        # part of drawing a screen. Were an empty cache ever set over a made one, the made
+        # one stays: its answers stay true, a line never changes.
+        if not (isinstance(cache, FIFOCache) and not cache):
             self.slot.__set__(strip, cache)
 
     def __delete__(self, strip: Strip) -> None:

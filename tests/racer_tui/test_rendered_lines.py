@@ -80,8 +80,12 @@ def test_a_cache_textual_sets_with_content_is_kept() -> None:
     filled[(0, 1)] = strip
     strip._crop_cache = filled
     assert strip._crop_cache is filled
-    strip._crop_cache = FIFOCache(16)  # an empty one is kept as none
-    assert made_caches(strip) == set()
+    fresh = line()
+    fresh._crop_cache = FIFOCache(16)  # an empty one (Textual's constructor) is kept as none
+    assert made_caches(fresh) == set()
+    # An empty one set over a made one changes nothing: the made one's answers stay true.
+    strip._crop_cache = FIFOCache(16)
+    assert strip._crop_cache is filled and strip.crop(0, 1) is strip
 
 
 def test_it_is_idempotent_and_keeps_textuals_sizes() -> None:
