@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import contextlib
+import gc
+import itertools
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -16,6 +18,31 @@ SHARED_DEEPRACER = REPO_ROOT.parent / "shared" / "deepracer"
 
 textual_idle.install()
 textual_css.install()
+
+# A test process holds what every test before it imported and kept (torch, Textual, the
+# app's modules and caches): a million objects, which every full collection walked again.
+# That was about a tenth of the suite's time. What has lived through a collection is frozen
+# out of collection (`gc.freeze`) after collecting and then every few tests: garbage made
+# since is collected as usual, and the frozen stays, as it would have in any case: it was
+# alive. (An object frozen while alive and left in a cycle later is never freed: a little
+# memory for the rest of the process, against minutes of the suite.)
+FREEZE_EVERY_TESTS = 10
+_tests_run = itertools.count(1)
+
+
+def _collect_and_freeze() -> None:
+    gc.collect()
+    gc.freeze()
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    _collect_and_freeze()
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_runtest_teardown(item: pytest.Item, nextitem: pytest.Item | None) -> None:
+    if next(_tests_run) % FREEZE_EVERY_TESTS == 0:
+        _collect_and_freeze()
 
 
 @pytest.fixture(autouse=True)

@@ -50,6 +50,13 @@ class Cycle:
         self.me = self
 
 
+@pytest.fixture(autouse=True)
+def nothing_frozen() -> None:
+    """The process as the app finds it at start: the suite's own freezing (tests/conftest.py)
+    undone, so what these tests see frozen is the app's doing."""
+    gc.unfreeze()
+
+
 @pytest.fixture
 def collector() -> Iterator[tuple[IdleCollector, Clock]]:
     clock = Clock()
