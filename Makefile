@@ -24,7 +24,15 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e ".[dev,car]"
 	touch $(STAMP)
 
+# racer-tui's own modules byte-compiled as pip compiles what it installs (an editable
+# install compiles nothing): where PYTHONDONTWRITEBYTECODE is set, every process would
+# compile them again, 0.3 s of each start that imports the trainer, the app and the league.
+# Only what changed is compiled again (0.1 s when nothing has).
+SOURCES := racer_tui sim league tracks benchmarks tests
+COMPILE := $(BIN)/python -m compileall -q $(SOURCES)
+
 run: $(APP_STAMP)
+	$(COMPILE)
 	$(BIN)/racer-tui $(ARGS)
 
 lint: $(STAMP)
@@ -39,6 +47,7 @@ lint: $(STAMP)
 # loadgroup: tests marked with one xdist_group run in one worker (TensorFlow's tests, so
 # only one worker spends 15 s importing it).
 test: lint
+	$(COMPILE)
 	$(BIN)/pytest -n 3 --dist loadgroup -q
 
 bench: $(APP_STAMP)

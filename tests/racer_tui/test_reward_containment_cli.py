@@ -51,10 +51,15 @@ def test_reward_check_holds_the_function_to_the_memory_asked_for(
     capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:
     reward = tmp_path / "reward.py"
-    reward.write_text("def reward_function(params):\n    return len(bytearray(10**8)) / 1e8\n")
+    # 100 MB, taken on the first call and kept (a check calls the function hundreds of
+    # times: filling 100 MB anew at each call cost seconds, and proved no more).
+    reward.write_text(
+        "kept = []\n\n\ndef reward_function(params):\n"
+        "    if not kept:\n        kept.append(bytearray(10**8))\n    return 1.0\n"
+    )
     code, err = run_cli(capsys, "reward", "check", str(reward), "--reward-memory-mb", "32")
     assert code == 2
-    assert f"{reward} line 2: reward_function used more than 32 MB of memory" in err
+    assert f"{reward} line 6: reward_function used more than 32 MB of memory" in err
     code, _ = run_cli(capsys, "reward", "check", str(reward), "--reward-memory-mb", "200")
     assert code == 0
 
